@@ -1,0 +1,37 @@
+# The commands the README names. Each target sets up what is missing first:
+# an OpenCL platform (Debian's PoCL), the virtual environment, and the package with its test extras.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+
+.PHONY: setup opencl test bench clean
+
+setup: opencl $(STAMP)
+
+# An OpenCL platform is an ICD file in /etc/OpenCL/vendors; without one, install PoCL from Debian.
+opencl:
+	@if ls /etc/OpenCL/vendors/*.icd >/dev/null 2>&1; then :; \
+	elif [ "$$(id -u)" = 0 ]; then \
+		echo "No OpenCL platform found: installing Debian's pocl-opencl-icd"; \
+		apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y pocl-opencl-icd; \
+	else \
+		echo "No OpenCL platform found. Install PoCL, then run make again:"; \
+		echo "    sudo apt-get update && sudo apt-get install -y pocl-opencl-icd"; \
+		exit 1; \
+	fi
+
+$(STAMP): pyproject.toml
+	@[ -x $(PY) ] || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	@touch $(STAMP)
+
+test: setup
+	$(PY) -m pytest -q
+
+bench: setup
+	$(PY) benchmarks/primitives.py
+
+clean:
+	rm -rf $(VENV) build dist *.egg-info .pytest_cache .hypothesis

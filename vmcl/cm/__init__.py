@@ -1,0 +1,10 @@
+"""The Connection Machine primitives as OpenCL kernel families.
+
+Seed section "Powerful primitive operations": NEWS communication (:mod:`news`), the router (:mod:`router`),
+scans and grid-scans (:mod:`scan`), distance doubling (:mod:`doubling`), global reductions and histograms
+(:mod:`reduce`) and the binomial Gaussian of "Zero-crossings" (:mod:`filters`).
+"""
+
+from vmcl.cm import scan
+
+__all__ = ["scan"]

@@ -1,0 +1,195 @@
+"""The Machine: one OpenCL context and in-order queue standing in for the Connection Machine.
+
+Seed section "Our computational engine: The Connection Machine". Each CM processor becomes one OpenCL
+work-item; the host (the CM's front end) enqueues whole-field operations. The Machine owns what every
+module shares: the device choice, the program and kernel caches (a kernels/*.cl file is built once per
+set of -D defines), a pool of device buffers so repeated calls reuse memory, and optional per-kernel
+timings.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+import warnings
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyopencl as cl
+import pyopencl.array as cl_array
+import pyopencl.tools as cl_tools
+
+INSTALL_HINT = (
+    "No OpenCL platform found. vmcl needs an OpenCL driver; on Debian or Ubuntu install PoCL with\n"
+    "    sudo apt-get update && sudo apt-get install -y pocl-opencl-icd\n"
+    "(or run `make setup`, which does it when run as root). Any vendor's OpenCL driver works too."
+)
+
+
+class NoOpenCLPlatformError(RuntimeError):
+    """Raised when no OpenCL platform or no matching device is available."""
+
+
+def kernels_dir() -> Path:
+    """The folder holding the OpenCL sources: inside an installed wheel, else the checkout's kernels/."""
+    here = Path(__file__).resolve().parent
+    for candidate in (here / "_kernels", here.parent / "kernels"):
+        if (candidate / "vmcl.h").is_file():
+            return candidate
+    raise FileNotFoundError(f"vmcl's OpenCL kernels were not found in {here / '_kernels'} or {here.parent / 'kernels'}")
+
+
+def _platforms() -> list[cl.Platform]:
+    try:
+        platforms = cl.get_platforms()
+    except (cl.LogicError, cl.RuntimeError) as error:
+        # pyopencl reports an absent ICD loader target as PLATFORM_NOT_FOUND_KHR.
+        raise NoOpenCLPlatformError(f"{INSTALL_HINT}\n(OpenCL said: {error})") from None
+    if not platforms:
+        raise NoOpenCLPlatformError(INSTALL_HINT)
+    return platforms
+
+
+def list_devices() -> list[cl.Device]:
+    """Every OpenCL device of every platform, GPUs first, in platform order otherwise."""
+    devices = [device for platform in _platforms() for device in platform.get_devices()]
+    return sorted(devices, key=lambda d: 0 if d.type & cl.device_type.GPU else 1)
+
+
+def _choose_device(device: cl.Device | str | None) -> cl.Device:
+    if isinstance(device, cl.Device):
+        return device
+    if device is not None and not isinstance(device, str):
+        raise TypeError(f"device must be a pyopencl.Device, a name substring or None, got {type(device).__name__}")
+    wanted = device if device is not None else os.environ.get("VMCL_DEVICE") or None
+    devices = list_devices()
+    if not devices:
+        raise NoOpenCLPlatformError(INSTALL_HINT)
+    if wanted is None:
+        return devices[0]
+    needle = wanted.lower()
+    for candidate in devices:
+        if needle in candidate.name.lower() or needle in candidate.platform.name.lower():
+            return candidate
+    names = ", ".join(f"{d.platform.name} / {d.name}" for d in devices)
+    raise NoOpenCLPlatformError(f"no OpenCL device matches {wanted!r} (VMCL_DEVICE or device=); available: {names}")
+
+
+class Machine:
+    """An OpenCL device with a context, an in-order queue, program/kernel caches and a buffer pool.
+
+    Parameters
+    ----------
+    device : pyopencl.Device or str, optional
+        The device, or a case-insensitive substring of its platform or device name. Default: the
+        ``VMCL_DEVICE`` environment variable, else the first device, GPUs before CPUs.
+    profile : bool
+        Record the device time of every kernel launched through :meth:`launch`; see :meth:`timings`.
+
+    Notes
+    -----
+    Programs are compiled on first use, never at construction, and cached per (file, defines).
+    """
+
+    def __init__(self, device: cl.Device | str | None = None, *, profile: bool = False) -> None:
+        self.device = _choose_device(device)
+        self.context = cl.Context([self.device])
+        properties = cl.command_queue_properties.PROFILING_ENABLE if profile else 0
+        self.queue = cl.CommandQueue(self.context, properties=properties)
+        self.profile = profile
+        self.pool = cl_tools.MemoryPool(cl_tools.ImmediateAllocator(self.queue))
+        self._programs: dict[tuple, cl.Program] = {}
+        self._kernels: dict[tuple, cl.Kernel] = {}
+        self._events: list[tuple[str, cl.Event]] = []
+        self._lock = threading.Lock()
+        self.is_cpu = bool(self.device.type & cl.device_type.CPU)
+        self.compute_units = self.device.max_compute_units
+
+    def __repr__(self) -> str:
+        return f"Machine({self.device.platform.name} / {self.device.name})"
+
+    # -- programs and kernels -------------------------------------------------------------------
+
+    def program(self, family: str, **defines: Any) -> cl.Program:
+        """The built program of kernels/<family>.cl for these -D defines (built once, then cached)."""
+        key = (family, tuple(sorted(defines.items())))
+        with self._lock:
+            program = self._programs.get(key)
+            if program is None:
+                folder = kernels_dir()
+                source = (folder / f"{family}.cl").read_text()
+                options = [f"-I{folder}"] + [f"-D{name}={value}" for name, value in key[1]]
+                with warnings.catch_warnings():
+                    # PoCL logs harmless notes (e.g. on AVX vector ABIs) for successful builds.
+                    warnings.simplefilter("ignore", cl.CompilerWarning)
+                    program = cl.Program(self.context, source).build(options=options)
+                self._programs[key] = program
+        return program
+
+    def kernel(self, family: str, name: str, **defines: Any) -> cl.Kernel:
+        """A cached kernel object: fetched from its program once per (family, name, defines)."""
+        key = (family, name, tuple(sorted(defines.items())))
+        kernel = self._kernels.get(key)
+        if kernel is None:
+            kernel = cl.Kernel(self.program(family, **defines), name)
+            self._kernels[key] = kernel
+        return kernel
+
+    def launch(self, kernel: cl.Kernel, global_size: tuple[int, ...], *args: Any,
+               local_size: tuple[int, ...] | None = None) -> cl.Event:
+        """Enqueue ``kernel`` over ``global_size`` work-items; device arrays are passed by their buffer."""
+        values = [a.base_data if isinstance(a, cl_array.Array) else a for a in args]
+        event = kernel(self.queue, global_size, local_size, *values)
+        if self.profile:
+            self._events.append((kernel.function_name, event))
+        return event
+
+    # -- memory -----------------------------------------------------------------------------------
+
+    def empty(self, shape: tuple[int, ...] | int, dtype: Any) -> cl_array.Array:
+        """An uninitialised device array from the pool (memory of freed arrays is reused)."""
+        return cl_array.Array(self.queue, shape, np.dtype(dtype), allocator=self.pool)
+
+    def to_device(self, array: np.ndarray) -> cl_array.Array:
+        """Copy a host array to a pooled device array (C order)."""
+        array = np.ascontiguousarray(array)
+        device_array = self.empty(array.shape, array.dtype)
+        device_array.set(array, queue=self.queue)
+        return device_array
+
+    def finish(self) -> None:
+        self.queue.finish()
+
+    # -- timings --------------------------------------------------------------------------------
+
+    def timings(self, *, reset: bool = True) -> dict[str, dict[str, float]]:
+        """Per-kernel device time since the last reset: {name: {"calls": n, "total_ms": t, "mean_ms": m}}.
+
+        Only available with ``profile=True``; waits for the queue to drain.
+        """
+        if not self.profile:
+            raise RuntimeError("timings() needs a Machine created with profile=True")
+        self.queue.finish()
+        totals: dict[str, list[float]] = defaultdict(lambda: [0, 0.0])
+        for name, event in self._events:
+            entry = totals[name]
+            entry[0] += 1
+            entry[1] += (event.profile.end - event.profile.start) * 1e-6
+        if reset:
+            self._events.clear()
+        return {name: {"calls": n, "total_ms": t, "mean_ms": t / n} for name, (n, t) in sorted(totals.items())}
+
+
+_default: Machine | None = None
+_default_lock = threading.Lock()
+
+
+def default_machine() -> Machine:
+    """The process-wide Machine, created on first use (so importing vmcl compiles nothing)."""
+    global _default
+    with _default_lock:
+        if _default is None:
+            _default = Machine()
+        return _default
