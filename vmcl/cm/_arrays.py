@@ -95,6 +95,8 @@ def type_defines(dtype: np.dtype) -> dict[str, Any]:
         return {"T": "float", "T_IS_FLOAT": 1}
     if dtype == np.int32:
         return {"T": "int", "T_IS_FLOAT": 0}
+    if dtype == np.uint8:
+        return {"T": "uchar", "T_IS_FLOAT": 0}
     raise TypeError(f"no kernel type for dtype {dtype}")
 
 

@@ -1,0 +1,51 @@
+"""NEWS communication: every processor of the grid reads its neighbour (dx, dy) away, all at once.
+
+Seed section "The Connection Machine": the NEWS network connects each processor to its neighbours in
+the four cardinal directions of a grid; accesses are made in the same direction for all processors.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+
+from vmcl.cm._arrays import ArrayLike, field, machine_for, result, type_defines
+from vmcl.machine import Machine
+
+Border = Literal["zero", "clamp", "wrap"]
+BORDERS = {"zero": 0, "clamp": 1, "wrap": 2}
+
+
+def shift(x: ArrayLike, dx: int, dy: int, *, border: Border = "zero", machine: Machine | None = None) -> ArrayLike:
+    """The field moved ``dx`` pixels to the right and ``dy`` down: ``out[y, x] = x[y - dy, x - dx]``.
+
+    Parameters
+    ----------
+    x : ndarray or pyopencl.array.Array, 2-D (H, W) or 3-D (planes, H, W); uint8, int32 or float32
+        A 3-D stack is shifted along its last two axes, plane by plane.
+    dx, dy : int
+        The displacement; any integer (beyond the field's size, "zero" gives zeros and "wrap" wraps).
+    border : {"zero", "clamp", "wrap"}
+        What a pixel gets whose source lies outside the field: 0, the nearest edge pixel, or the pixel
+        on the opposite side (``np.roll`` semantics).
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    Same type, shape and dtype as ``x``.
+    """
+    machine = machine_for(machine)
+    data, host = field(x, "x", machine, ndims=(2, 3), dtypes=(np.uint8, np.int32, np.float32))
+    for name, value in (("dx", dx), ("dy", dy)):
+        if not isinstance(value, (int, np.integer)) or isinstance(value, bool):
+            raise TypeError(f"{name} must be an integer, got {type(value).__name__}")
+    if border not in BORDERS:
+        raise ValueError(f"border must be one of {sorted(BORDERS)}, got {border!r}")
+    height, width = data.shape[-2:]
+    planes = data.size // (height * width)
+    out = machine.empty(data.shape, data.dtype)
+    kernel = machine.kernel("news", "shift", BORDER=BORDERS[border], **type_defines(data.dtype))
+    machine.launch(kernel, (width, height, planes), data, out, np.int64(width), np.int64(height),
+                   np.int64(dx), np.int64(dy))
+    return result(out, host)

@@ -1,0 +1,144 @@
+"""Global reductions and histograms of a field.
+
+Seed section "The Connection Machine": the machine returns to the host the global maximum, minimum,
+sum, logical AND and logical OR of a field. Histograms, global or per tile, serve the noise estimate of
+"Edge detection" (Noise Estimation), where the paper had "success with ... local histograms".
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+import numpy as np
+import pyopencl as cl
+
+from vmcl.cm._arrays import ArrayLike, field, machine_for, result, type_defines
+from vmcl.machine import Machine
+
+ReduceOp = Literal["sum", "max", "min", "and", "or"]
+_OPS = {"sum": 0, "max": 1, "min": 2, "and": 4, "or": 5}
+_CHUNK = 1 << 16
+_DTYPES = (np.uint8, np.int32, np.float32)
+_ANY_NDIM = tuple(range(0, 33))
+
+
+def reduce(x: ArrayLike, op: ReduceOp = "sum", *, machine: Machine | None = None):
+    """Reduce a whole field to one value.
+
+    Parameters
+    ----------
+    x : ndarray or pyopencl.array.Array of any shape; bool, uint8, int32 or float32
+        Narrower host integers are widened exactly (bool to uint8 values 0/1, others to int32).
+    op : {"sum", "max", "min", "and", "or"}
+        "and" and "or" are logical: non-zero counts as true.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    For host input a NumPy scalar: sum gives int64 for integer fields (no overflow) and float32 for
+    float32 fields; max and min keep the dtype; and/or give bool. For device input the same value as a
+    0-d device array (int64, float32, the dtype, or uint8 0/1 for and/or), so it can stay on the device.
+
+    Notes
+    -----
+    Deterministic: chunks of 65536 elements are reduced serially, then the chunk results in order. Float
+    sums use Kahan compensation in each chunk and across chunks. NaN propagates through "sum" but is
+    ignored by "max" and "min" (OpenCL's fmax/fmin rule).
+    """
+    machine = machine_for(machine)
+    if op not in _OPS:
+        raise ValueError(f"op must be one of {sorted(_OPS)}, got {op!r}")
+    source = x.astype(np.uint8) if isinstance(x, np.ndarray) and x.dtype == np.bool_ else x
+    data, host = field(source, "x", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
+    defines = type_defines(data.dtype)
+    if op == "sum":
+        accumulator = np.dtype(np.float32) if data.dtype == np.float32 else np.dtype(np.int64)
+    elif op in ("and", "or"):
+        accumulator = np.dtype(np.uint8)
+    else:
+        accumulator = data.dtype
+    acc_name = {np.dtype(np.float32): "float", np.dtype(np.int64): "long", np.dtype(np.uint8): "uchar",
+                np.dtype(np.int32): "int"}[accumulator]
+    defines.update(OP=_OPS[op], ACC=acc_name)
+    n = data.size
+    count = math.ceil(n / _CHUNK)
+    partial = machine.empty(count, accumulator)
+    compensation = machine.empty(count, accumulator)
+    out = machine.empty((), accumulator)
+    machine.launch(machine.kernel("reduce", "reduce_chunks", **defines), (count,), data, partial, compensation,
+                   np.int64(n), np.int64(_CHUNK))
+    machine.launch(machine.kernel("reduce", "reduce_partials", **defines), (1,), partial, compensation, out,
+                   np.int64(count))
+    if not host:
+        return out
+    value = out.get()[()]
+    return np.bool_(value) if op in ("and", "or") else value
+
+
+def histogram(x: ArrayLike, bins: int, range: tuple[float, float], *, tile: tuple[int, int] | None = None,
+              machine: Machine | None = None) -> ArrayLike:
+    """Counts of values in ``bins`` equal bins over ``range``, for the whole field or per tile.
+
+    Parameters
+    ----------
+    x : ndarray or pyopencl.array.Array; uint8, int32 or float32
+        Any shape for the global histogram; 2-D (H, W) when ``tile`` is given.
+    bins : int
+        Number of bins (1 to what the device's local memory holds, 4096 or more on every device seen).
+    range : (lo, hi)
+        lo < hi, finite. Bin of v: floor((v - lo) * bins / (hi - lo)) in float32, with v == hi in the last
+        bin; values outside [lo, hi] and NaN are not counted. This is ``np.histogram``'s rule except that
+        the bin index is computed in float32, so a value within float32 rounding of an inner edge may
+        land in the neighbouring bin.
+    tile : (th, tw), optional
+        Per-tile histograms over tiles of th x tw pixels, row-major from the top left; tiles at the right
+        and bottom edges hold what is left (smaller tiles).
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    int32 counts: shape (bins,), or (ceil(H/th), ceil(W/tw), bins) with ``tile``. Host in, host out.
+    """
+    machine = machine_for(machine)
+    source = x.astype(np.uint8) if isinstance(x, np.ndarray) and x.dtype == np.bool_ else x
+    data, host = field(source, "x", machine, ndims=(2,) if tile is not None else _ANY_NDIM,
+                       dtypes=_DTYPES)
+    if not isinstance(bins, (int, np.integer)) or isinstance(bins, bool):
+        raise TypeError(f"bins must be an integer, got {type(bins).__name__}")
+    local_bins = machine.device.local_mem_size // 4 - 16
+    if not 1 <= bins <= local_bins:
+        raise ValueError(f"bins must be between 1 and {local_bins} on this device, got {bins}")
+    try:
+        lo, hi = (float(v) for v in range)
+    except (TypeError, ValueError):
+        raise TypeError(f"range must be a pair of numbers (lo, hi), got {range!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ValueError(f"range must be finite with lo < hi, got {range!r}")
+    if tile is None:
+        width = data.shape[-1]
+        height = data.size // width
+        # Bands of rows, each counted by one work-group and added into the single histogram.
+        band = max(1, math.ceil(height / (machine.compute_units * 8)))
+        th, tw, accumulate = band, width, True
+    else:
+        if (not isinstance(tile, tuple) or len(tile) != 2
+                or not all(isinstance(t, (int, np.integer)) and t >= 1 for t in tile)):
+            raise ValueError(f"tile must be a pair of positive integers (th, tw), got {tile!r}")
+        height, width = data.shape
+        th, tw, accumulate = int(tile[0]), int(tile[1]), False
+    tiles_y, tiles_x = math.ceil(height / th), math.ceil(width / tw)
+    shape = (bins,) if accumulate else (tiles_y, tiles_x, bins)
+    out = machine.empty(shape, np.int32)
+    defines = dict(OP=0, ACC="int", **type_defines(data.dtype))
+    if accumulate:
+        machine.launch(machine.kernel("reduce", "zero_int", **defines), (bins,), out, np.int64(bins))
+    local = 1 if machine.is_cpu else min(256, machine.device.max_work_group_size)
+    scale = np.float32(bins) / (np.float32(hi) - np.float32(lo))
+    kernel = machine.kernel("reduce", "histogram_tiles", **defines)
+    machine.launch(kernel, (tiles_y * tiles_x * local,), data, out, cl.LocalMemory(4 * bins),
+                   np.int64(width), np.int64(height), np.int64(th), np.int64(tw), np.int64(tiles_x),
+                   np.float32(lo), np.float32(hi), np.float32(scale), np.int32(bins), np.int32(accumulate),
+                   local_size=(local,))
+    return result(out, host)
+
