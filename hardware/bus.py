@@ -1,0 +1,269 @@
+"""The host's end of UNET: one master, up to 31 micros, over any pyserial port.
+
+Poggio et al., "The MIT Vision Machine", section "The Eye-Head system": the micros on UNET are slaves
+that "speak when spoken to"; the host is the single master. The Bus sends one request at a time (a
+lock makes it safe to share between threads), waits for the matching reply, and retries a bounded
+number of times with the same sequence number, as a Modbus RTU master does after a timeout. The micro
+answers a retry from its memory of its last (sequence, reply), so a command never runs twice
+(hardware/PROTOCOL.md). A broadcast (address 0) is sent and never waited for, as in Dynamixel 2.0.
+
+Ports come from ``serial.serial_for_url``, so a device path (``/dev/ttyUSB0``), a pty, any pyserial
+URL (``rfc2217://``, ``socket://``) and the simulator (``sim://``, hardware.protocol_sim) all work.
+"""
+
+from __future__ import annotations
+
+import random
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+import serial
+
+from .commands import FAULT_BIT, Cmd, Error
+from .errors import (
+    BadLength,
+    Busy,
+    CorruptFrame,
+    DeviceError,
+    Fault,
+    MotionTimeout,
+    NotHomed,
+    OutOfRange,
+    Timeout,
+    UnknownCommand,
+)
+from .protocol import BROADCAST, MAX_ADDRESS, Frame, Parser, encode_request
+
+__all__ = ["Clock", "WallClock", "BusStats", "Bus", "open_port", "register_sim_handler"]
+
+
+class Clock(Protocol):
+    """What the Bus needs of a clock: the wall clock for real ports, the virtual one for ``sim://``."""
+
+    def monotonic(self) -> float: ...
+
+    def sleep(self, seconds: float) -> None: ...
+
+
+class WallClock:
+    """The wall clock."""
+
+    monotonic = staticmethod(time.monotonic)
+    sleep = staticmethod(time.sleep)
+
+
+def register_sim_handler() -> None:
+    """Make ``sim://`` URLs known to ``serial.serial_for_url``: add this package to
+    ``serial.protocol_handler_packages``, where pyserial looks for the module ``protocol_sim``
+    (hardware.protocol_sim). Idempotent; `open_port` calls it."""
+    if "hardware" not in serial.protocol_handler_packages:
+        serial.protocol_handler_packages.append("hardware")
+
+
+def open_port(url: str, *, baudrate: int = 115200) -> serial.SerialBase:
+    """Open a serial port or pyserial URL, ``sim://`` included (registered here, explicitly).
+
+    Parameters
+    ----------
+    url : str
+        A device (``/dev/ttyUSB0``, ``COM3``, a pty path) or a URL (``sim://?seed=1``, ``socket://...``).
+    baudrate : int
+        Bits per second; the eye-head runs at 115200 by default.
+    """
+    if not isinstance(url, str) or not url:
+        raise TypeError(f"url must be a non-empty str, got {url!r}")
+    register_sim_handler()
+    return serial.serial_for_url(url, baudrate=baudrate, timeout=0)
+
+
+_DEVICE_ERRORS: dict[int, tuple[type[DeviceError], str]] = {
+    Error.BUSY: (Busy, "the axis is busy homing; wait for it, or stop it first"),
+    Error.UNKNOWN_COMMAND: (UnknownCommand, "unknown command; is the right kind of micro at this address?"),
+    Error.BAD_LENGTH: (BadLength, "bad payload length; host and firmware disagree on the protocol version"),
+    Error.OUT_OF_RANGE: (OutOfRange, "argument out of range (beyond the soft limits?); nothing moved"),
+    Error.NOT_HOMED: (NotHomed, "the axis is not homed; home it first"),
+    Error.FAULT: (Fault, "a fault is latched; clear it (clear_fault) or home the axis"),
+}
+
+
+@dataclass
+class BusStats:
+    """Counters of what happened on the bus since it was opened."""
+
+    requests: int = 0
+    broadcasts: int = 0
+    retries: int = 0
+    failures: int = 0
+    stale_replies: int = 0
+
+    def as_dict(self) -> dict[str, int]:
+        return dict(self.__dict__)
+
+
+class Bus:
+    """The UNET master.
+
+    Parameters
+    ----------
+    port : str or serial.SerialBase
+        A URL or device for `open_port`, or a port already open (then the Bus does not close it).
+    baudrate : int
+        Used when `port` is a URL or device.
+    timeout : float
+        Seconds to wait for each reply.
+    retries : int
+        How many times to resend a request that got no valid reply.
+    clock : Clock, optional
+        The clock timeouts are measured on; by default the port's own ``clock`` attribute when it has
+        one (the simulator's virtual clock), else the wall clock.
+
+    Attributes
+    ----------
+    port : serial.SerialBase
+    stats : BusStats
+    """
+
+    def __init__(
+        self,
+        port: str | serial.SerialBase = "sim://",
+        *,
+        baudrate: int = 115200,
+        timeout: float = 0.05,
+        retries: int = 3,
+        clock: Clock | None = None,
+    ) -> None:
+        if not isinstance(timeout, (int, float)) or not 0.0 < timeout < 60.0:
+            raise ValueError(f"timeout must be a number of seconds in (0, 60), got {timeout!r}")
+        if not isinstance(retries, int) or isinstance(retries, bool) or not 0 <= retries <= 100:
+            raise ValueError(f"retries must be an int in 0..100, got {retries!r}")
+        self._owns_port = isinstance(port, str)
+        self.port = open_port(port, baudrate=baudrate) if isinstance(port, str) else port
+        self.clock: Clock = clock or getattr(self.port, "clock", None) or WallClock()
+        self.timeout = float(timeout)
+        self.retries = retries
+        self.stats = BusStats()
+        self._parser = Parser()
+        self._lock = threading.RLock()
+        # A fresh host starts its sequence numbers at random, so a micro's memory of the last request
+        # of a previous host session is not mistaken for a retry of this session's first request.
+        start = random.SystemRandom().randrange(256)
+        self._seq = dict.fromkeys(range(MAX_ADDRESS + 1), start)
+
+    def __enter__(self) -> Bus:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Close the port, if the Bus opened it."""
+        if self._owns_port:
+            self.port.close()
+
+    def sleep(self, seconds: float) -> None:
+        """Sleep on the bus's clock (virtual time on the simulator)."""
+        self.clock.sleep(seconds)
+
+    def request(self, addr: int, cmd: int, payload: bytes = b"", *, who: str | None = None) -> Frame:
+        """Send a request to micro `addr` and return its reply.
+
+        Parameters
+        ----------
+        addr : int
+            1..31.
+        cmd : int
+            Command code (hardware.commands.Cmd).
+        payload : bytes
+            Packed arguments.
+        who : str, optional
+            How to name the micro in error messages.
+
+        Returns
+        -------
+        Frame
+            The reply, whose status reports success.
+
+        Raises
+        ------
+        Timeout
+            No reply after ``retries + 1`` attempts.
+        CorruptFrame
+            Only corrupted replies after ``retries + 1`` attempts.
+        DeviceError
+            The micro refused the command (a subclass per error code).
+        """
+        if not isinstance(addr, int) or isinstance(addr, bool) or not 1 <= addr <= MAX_ADDRESS:
+            raise ValueError(f"addr must be an int in 1..{MAX_ADDRESS} (0 is broadcast), got {addr!r}")
+        who = who or f"micro {addr}"
+        with self._lock:
+            seq = self._seq[addr] = (self._seq[addr] + 1) & 0xFF
+            frame = encode_request(addr, seq, cmd, payload)
+            self.stats.requests += 1
+            corrupt_before = self._parser.crc_errors + self._parser.dropped
+            for attempt in range(self.retries + 1):
+                if attempt:
+                    self.stats.retries += 1
+                self.port.write(frame)
+                reply = self._await(addr, seq, cmd)
+                if reply is not None:
+                    break
+            else:
+                self.stats.failures += 1
+                what = f"{who} (address {addr}) gave no valid reply to {_name(cmd)} in {self.retries + 1} tries"
+                if self._parser.crc_errors + self._parser.dropped > corrupt_before:
+                    raise CorruptFrame(f"{what}: replies came back corrupted; check wiring, baud rate, noise")
+                raise Timeout(f"{what} ({self.timeout * 1000:.0f} ms each); is it powered, wired, at that address?")
+        code = reply.status & ~FAULT_BIT
+        if code != Error.OK:
+            kind, advice = _DEVICE_ERRORS.get(code, (DeviceError, f"error code {code}"))
+            raise kind(f"{who} refused {_name(cmd)}: {advice}", code=code, fault_latched=bool(reply.status & FAULT_BIT))
+        return reply
+
+    def _await(self, addr: int, seq: int, cmd: int) -> Frame | None:
+        deadline = self.clock.monotonic() + self.timeout
+        port, parser = self.port, self._parser
+        while (remaining := deadline - self.clock.monotonic()) > 0.0:
+            port.timeout = remaining
+            chunk = port.read(max(parser.bytes_needed(), port.in_waiting))
+            found = None
+            for frame in parser.feed(chunk):
+                if found is None and frame.is_reply and (frame.addr, frame.seq, frame.cmd) == (addr, seq, cmd):
+                    found = frame
+                else:
+                    self.stats.stale_replies += 1
+            if found is not None:
+                return found
+        return None
+
+    def broadcast(self, cmd: int, payload: bytes = b"") -> None:
+        """Send `cmd` to every micro at once. No micro answers a broadcast, so this returns as soon as
+        the frame is on the wire; it cannot report whether anyone heard it."""
+        with self._lock:
+            seq = self._seq[BROADCAST] = (self._seq[BROADCAST] + 1) & 0xFF
+            self.port.write(encode_request(BROADCAST, seq, cmd, payload))
+            self.port.flush()
+            self.stats.broadcasts += 1
+
+    def wait_for(self, done: Callable[[], bool], *, timeout: float, what: str, interval: float = 0.02) -> None:
+        """Poll `done` every `interval` seconds (on the bus's clock) until it returns True.
+
+        Raises
+        ------
+        MotionTimeout
+            `done` was still False after `timeout` seconds.
+        """
+        deadline = self.clock.monotonic() + timeout
+        while not done():
+            if self.clock.monotonic() >= deadline:
+                raise MotionTimeout(f"{what} did not finish within {timeout:g} s; it may be obstructed")
+            self.clock.sleep(interval)
+
+
+def _name(cmd: int) -> str:
+    try:
+        return Cmd(cmd).name
+    except ValueError:
+        return f"command 0x{cmd:02x}"

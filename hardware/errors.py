@@ -1,0 +1,101 @@
+"""The exceptions of the eye-head driver.
+
+Two families, after the split every proven servo protocol makes (Dynamixel 2.0 status packets, Modbus RTU
+exception replies, the FLIR pan-tilt units' error replies): a CommError means the bytes did not make it
+(nothing is known about whether a command ran), a DeviceError means a micro answered and refused or
+reported a fault (the command did not run). Every message says what to do next.
+
+Reference: Poggio et al., "The MIT Vision Machine", section "The Eye-Head system".
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "HardwareError",
+    "CommError",
+    "Timeout",
+    "CorruptFrame",
+    "DeviceError",
+    "Busy",
+    "UnknownCommand",
+    "BadLength",
+    "OutOfRange",
+    "NotHomed",
+    "Fault",
+    "MotionTimeout",
+]
+
+
+class HardwareError(Exception):
+    """Base class of every error the eye-head driver raises (apart from ValueError/TypeError for bad
+    arguments)."""
+
+
+class CommError(HardwareError):
+    """No valid reply came back: the micro may or may not have acted on the request."""
+
+
+class Timeout(CommError):
+    """A micro did not answer within the reply timeout, after every retry."""
+
+
+class CorruptFrame(CommError):
+    """Replies came back, but every one failed its CRC or was cut short, after every retry."""
+
+
+class DeviceError(HardwareError):
+    """A micro answered and refused the command, or reports a latched fault.
+
+    Attributes
+    ----------
+    code : int
+        The error code from the reply's STATUS byte (bits 0..6).
+    fault_latched : bool
+        Bit 7 of the STATUS byte: the micro has a latched fault.
+    """
+
+    def __init__(self, message: str, *, code: int = 0, fault_latched: bool = False) -> None:
+        super().__init__(message)
+        self.code = code
+        self.fault_latched = fault_latched
+
+
+class Busy(DeviceError):
+    """The axis is homing; wait for it to finish or send STOP."""
+
+
+class UnknownCommand(DeviceError):
+    """The micro does not implement the command: the wrong kind of micro is at that address."""
+
+
+class BadLength(DeviceError):
+    """The payload length does not match the command: host and firmware disagree on the protocol."""
+
+
+class OutOfRange(DeviceError, ValueError):
+    """A target outside the soft limits (checked on the host, and again in the micro); nothing moved.
+
+    It is also a ValueError, since it is an argument the caller can correct.
+    """
+
+
+class NotHomed(DeviceError):
+    """The axis has not been calibrated since power-up: home it first."""
+
+
+class Fault(DeviceError):
+    """A latched fault (limit switch, stall, emergency stop, watchdog) refuses motion until cleared.
+
+    Attributes
+    ----------
+    flags : int
+        The axis flags (see hardware.commands.Flag) that describe the fault, 0 when not known.
+    """
+
+    def __init__(self, message: str, *, code: int = 0, fault_latched: bool = True, flags: int = 0) -> None:
+        super().__init__(message, code=code, fault_latched=fault_latched)
+        self.flags = flags
+
+
+class MotionTimeout(HardwareError):
+    """An axis was still moving when the host stopped waiting for it."""

@@ -1,0 +1,214 @@
+"""The eye-head: pan and tilt joints carrying two eyes, one object, stopped safely on any exit.
+
+Poggio et al., "The MIT Vision Machine", section "The Eye-Head system": "the head moves the eyes as a
+unit, while allowing the eyes to point independently"; three micros on UNET drive it (steppers,
+galvanometers, lenses). Head opens the bus, checks with PING that each micro is of the expected kind
+(Dynamixel 2.0 style), reads the joints' soft limits (as the ROS driver of the FLIR pan-tilt units
+does), and can arm each micro's watchdog. As a context manager it stops every motor when the block
+ends; when the block ends with an exception it broadcasts an emergency stop, which needs no reply and
+therefore works even when the exception was a communication failure.
+
+Example
+-------
+>>> with Head("sim://?seed=1") as head:
+...     head.home()
+...     head.move(pan=30.0, tilt=-10.0)
+...     round(head.pan.position, 3)
+30.0
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .bus import Bus
+from .commands import GALVO_ADDR, LENS_ADDR, STEPPER_ADDR, Cmd, Flag
+from .errors import CommError
+from .eye import Eye, EyeStatus
+from .joint import Joint, JointStatus
+from .micros import GalvoMicro, LensMicro, Micro, StepperMicro
+
+__all__ = ["Head", "HeadStatus"]
+
+_HOME_TIMEOUT = 60.0  # seconds: a sweep of both joints to the switch, the creep, and back to 0
+_MOVE_TIMEOUT = 20.0
+
+
+@dataclass(frozen=True)
+class HeadStatus:
+    """Every axis of the head, in physical units."""
+
+    pan: JointStatus
+    tilt: JointStatus
+    left: EyeStatus
+    right: EyeStatus
+
+    def __str__(self) -> str:
+        return f"pan   {self.pan}\ntilt  {self.tilt}\nleft  {self.left}\nright {self.right}"
+
+
+class Head:
+    """The pan/tilt head with its two eyes.
+
+    Parameters
+    ----------
+    port : str or Bus
+        A serial device, pyserial URL or ``sim://`` URL (default: the simulator), or an open Bus
+        (then Head does not close it).
+    baudrate, timeout, retries : optional
+        Passed to the Bus when `port` is a string.
+    stepper, galvo, lens : int
+        The micros' addresses.
+    watchdog : float, optional
+        Arm every micro's watchdog: if the host is silent this many seconds, motion stops and a fault
+        latches.
+
+    Attributes
+    ----------
+    bus : Bus
+    pan, tilt : Joint
+    left, right : Eye
+    micros : tuple of Micro
+    """
+
+    def __init__(
+        self,
+        port: str | Bus = "sim://",
+        *,
+        baudrate: int = 115200,
+        timeout: float = 0.05,
+        retries: int = 3,
+        stepper: int = STEPPER_ADDR,
+        galvo: int = GALVO_ADDR,
+        lens: int = LENS_ADDR,
+        watchdog: float | None = None,
+    ) -> None:
+        self._owns_bus = not isinstance(port, Bus)
+        self.bus = Bus(port, baudrate=baudrate, timeout=timeout, retries=retries) if self._owns_bus else port
+        try:
+            self.stepper = StepperMicro(self.bus, stepper)
+            self.galvo = GalvoMicro(self.bus, galvo)
+            self.lens = LensMicro(self.bus, lens)
+            self.micros: tuple[Micro, ...] = (self.stepper, self.galvo, self.lens)
+            for micro in self.micros:
+                micro.check_kind()
+            self.pan = Joint(self.stepper, 0, "pan")
+            self.tilt = Joint(self.stepper, 1, "tilt")
+            self.left = Eye(self.galvo, self.lens, 0, "left")
+            self.right = Eye(self.galvo, self.lens, 1, "right")
+            if watchdog is not None:
+                for micro in self.micros:
+                    micro.set_watchdog(watchdog)
+        except BaseException:
+            self.close()
+            raise
+
+    def __repr__(self) -> str:
+        return f"Head(port={self.bus.port.port!r})"
+
+    def __enter__(self) -> Head:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: object) -> None:
+        try:
+            if exc_type is None:
+                try:
+                    self.stop()
+                except CommError:
+                    self.estop()
+                    raise
+            else:
+                self.estop()
+        finally:
+            self.close()
+
+    def close(self) -> None:
+        """Close the bus, if Head opened it."""
+        if self._owns_bus:
+            self.bus.close()
+
+    @property
+    def joints(self) -> tuple[Joint, Joint]:
+        return self.pan, self.tilt
+
+    @property
+    def eyes(self) -> tuple[Eye, Eye]:
+        return self.left, self.right
+
+    def wait(self, *, timeout: float = _MOVE_TIMEOUT) -> None:
+        """Wait until every joint, mirror and lens is at rest.
+
+        Raises
+        ------
+        Fault
+            A fault latched on the way (limit, stall, estop, watchdog).
+        MotionTimeout
+            Still moving after `timeout` seconds.
+        """
+        parts = (*self.joints, *self.eyes)
+        self.bus.wait_for(lambda: all([part.settled() for part in parts]), timeout=timeout, what="the head")
+
+    def home(self, *, wait: bool = True) -> None:
+        """Calibrate everything: each joint on its limit switch and index pulse (ending at 0 degrees),
+        each lens on its home sensors; centre the mirrors."""
+        for joint in self.joints:
+            joint.home()
+        for eye in self.eyes:
+            eye.home_lens()
+            eye.set_mirrors(0.0, 0.0)
+        if wait:
+            self.wait(timeout=_HOME_TIMEOUT)
+
+    def move(self, pan: float | None = None, tilt: float | None = None, *, wait: bool = True) -> None:
+        """Move the joints to `pan` and `tilt` degrees (None leaves a joint where it is).
+
+        Both targets are checked against the soft limits before either joint is told to move, so an
+        out-of-travel request moves nothing.
+        """
+        moves = [(joint, joint.counts(angle)) for joint, angle in zip(self.joints, (pan, tilt)) if angle is not None]
+        for joint, counts in moves:
+            joint.micro.move_to(joint.axis, counts)
+        if wait:
+            self.wait()
+
+    def stop(self, *, wait: bool = True) -> None:
+        """Bring every motor to rest, decelerating; no fault latches."""
+        for micro in self.micros:
+            micro.stop()
+        if wait:
+            self.bus.wait_for(
+                lambda: not any([m.status() & Flag.MOVING for m in self.micros]), timeout=_MOVE_TIMEOUT, what="stop"
+            )
+
+    def estop(self) -> None:
+        """Emergency stop: broadcast ESTOP (every micro stops every axis at once and latches
+        FAULT_ESTOP; `clear_faults` or `home` to go on). Sent twice, since nobody answers a broadcast."""
+        for _ in range(2):
+            self.bus.broadcast(Cmd.ESTOP)
+
+    def clear_faults(self) -> None:
+        """Clear the latched faults of every micro."""
+        for micro in self.micros:
+            micro.clear_fault()
+
+    def status(self) -> HeadStatus:
+        return HeadStatus(self.pan.status(), self.tilt.status(), self.left.status(), self.right.status())
+
+    def vergence(self) -> float:
+        """The angle between the eyes' lines of sight in the horizontal plane, degrees: the left eye's
+        azimuth minus the right eye's (positive when they converge)."""
+        left, right = self.left.status(), self.right.status()
+        return left.azimuth - right.azimuth
+
+    def fixate(self, distance: float, *, baseline: float = 0.3, wait: bool = True) -> None:
+        """Converge both eyes symmetrically on a point straight ahead at `distance` metres, with the
+        eyes `baseline` metres apart."""
+        for name, value in (("distance", distance), ("baseline", baseline)):
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+                raise ValueError(f"{name} must be a positive number of metres, got {value!r}")
+        half = math.degrees(math.atan2(baseline / 2.0, distance))
+        self.left.point(half, 0.0)
+        self.right.point(-half, 0.0)
+        if wait:
+            self.wait()

@@ -1,0 +1,108 @@
+"""A joint of the head (pan or tilt) in degrees: soft limits, homing, moves, waiting for rest.
+
+Poggio et al., "The MIT Vision Machine", section "The Eye-Head system": pan 180 degrees left to right,
+tilt 90 degrees from vertical-down to horizontal, stepper motors through harmonic drives, calibrated by
+a limit switch and the encoder's index pulse. As in the ROS driver of the FLIR/Directed Perception
+pan-tilt units, the host reads the soft limits from the micro at start-up and refuses an out-of-travel
+target before sending anything; the micro checks again.
+
+Angles: pan 0 is straight ahead, positive to the right; tilt 0 is horizontal, -90 is vertical-down.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+from .commands import FAULT_FLAGS, Flag, describe
+from .errors import Fault, OutOfRange
+from .micros import StepperMicro
+from .physics import COUNTS_PER_DEGREE
+
+__all__ = ["Joint", "JointStatus", "COUNTS_PER_DEGREE"]
+
+
+class JointStatus(NamedTuple):
+    """A joint's state: position and target in degrees, encoder count, flags."""
+
+    position: float
+    target: float
+    encoder: int
+    flags: Flag
+
+    def __str__(self) -> str:
+        return f"{self.position:+8.3f} deg (target {self.target:+8.3f}), {describe(self.flags)}"
+
+
+class Joint:
+    """One joint of the head.
+
+    Parameters
+    ----------
+    micro : StepperMicro
+    axis : int
+        0 pan, 1 tilt.
+    name : str
+
+    Attributes
+    ----------
+    limits : tuple of float
+        The soft limits in degrees, as read from the micro.
+    """
+
+    def __init__(self, micro: StepperMicro, axis: int, name: str) -> None:
+        self.micro = micro
+        self.axis = axis
+        self.name = name
+        low, high = micro.limits(axis)
+        self._count_limits = (low, high)
+        self.limits = (low / COUNTS_PER_DEGREE, high / COUNTS_PER_DEGREE)
+
+    def __repr__(self) -> str:
+        return f"Joint({self.name!r}, limits={self.limits})"
+
+    def counts(self, degrees: float) -> int:
+        """The encoder count of `degrees`, refused (OutOfRange) beyond the soft limits."""
+        if not isinstance(degrees, (int, float)) or isinstance(degrees, bool):
+            raise TypeError(f"{self.name} must be a number of degrees, got {type(degrees).__name__}")
+        if not math.isfinite(degrees):
+            raise ValueError(f"{self.name} must be finite, got {degrees!r}")
+        counts = round(degrees * COUNTS_PER_DEGREE)
+        low, high = self._count_limits
+        if not low <= counts <= high:
+            raise OutOfRange(
+                f"{self.name} {degrees:g} deg is outside its travel [{self.limits[0]:g}, {self.limits[1]:g}] deg;"
+                " nothing moved"
+            )
+        return counts
+
+    def status(self) -> JointStatus:
+        s = self.micro.axis_status(self.axis)
+        return JointStatus(s.encoder / COUNTS_PER_DEGREE, s.target / COUNTS_PER_DEGREE, s.encoder, s.flags)
+
+    @property
+    def position(self) -> float:
+        """Where the joint is now, degrees (from the encoder)."""
+        return self.status().position
+
+    def home(self) -> None:
+        """Start homing (seek the limit switch, then the index pulse, then go to 0); clears faults."""
+        self.micro.home(self.axis)
+
+    def move_to(self, degrees: float) -> None:
+        """Start a move to `degrees`; `settled` or Head.wait tells when it has arrived."""
+        self.micro.move_to(self.axis, self.counts(degrees))
+
+    def set_profile(self, speed: float, acceleration: float) -> None:
+        """Set the top speed (degrees/s) and acceleration (degrees/s^2) of later moves."""
+        for name, value in (("speed", speed), ("acceleration", acceleration)):
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+                raise ValueError(f"{name} must be a positive number, got {value!r}")
+        self.micro.set_profile(self.axis, round(speed * COUNTS_PER_DEGREE), round(acceleration * COUNTS_PER_DEGREE))
+
+    def settled(self) -> bool:
+        """True once the joint is at rest and not homing; raises Fault if a fault has latched."""
+        flags = self.micro.axis_status(self.axis).flags
+        if flags & FAULT_FLAGS:
+            raise Fault(f"{self.name}: {describe(flags)}; clear_fault() or home()", flags=int(flags))
+        return not flags & (Flag.MOVING | Flag.HOMING)
