@@ -1,0 +1,227 @@
+"""vmcl.datasets: format round trips, and the documented values of the shared data sets."""
+
+import struct
+
+import numpy as np
+import pytest
+
+from vmcl import datasets
+
+# --------------------------------------------------------------------------------------------- formats
+
+
+def test_flo_round_trip_is_bit_exact(tmp_path):
+    rng = np.random.default_rng(3)
+    flow = rng.normal(scale=20, size=(7, 5, 2)).astype(np.float32)
+    flow[2, 3] = np.nan
+    path = tmp_path / "a.flo"
+    datasets.write_flo(path, flow)
+    data = path.read_bytes()
+    assert struct.unpack("<fii", data[:12]) == (202021.25, 5, 7)
+    # u, v interleaved row by row: the second float of the payload is v at (0, 0).
+    assert struct.unpack("<ff", data[12:20]) == (flow[0, 0, 0], flow[0, 0, 1])
+    back = datasets.read_flo(path)
+    assert back.dtype == np.float32
+    assert np.array_equal(back, flow, equal_nan=True)
+    assert np.isnan(back[2, 3]).all() and np.isfinite(np.delete(back.reshape(-1, 2), 13, axis=0)).all()
+
+
+def test_flo_real_file_round_trips_byte_for_byte(datasets_root, tmp_path):
+    source = datasets_root / "middlebury_flow" / "RubberWhale" / "flow10.flo"
+    copy = tmp_path / "copy.flo"
+    datasets.write_flo(copy, datasets.read_flo(source, raw=True))
+    assert copy.read_bytes() == source.read_bytes()
+
+
+def test_flo_bad_input(tmp_path):
+    with pytest.raises(FileNotFoundError, match="nope.flo"):
+        datasets.read_flo(tmp_path / "nope.flo")
+    bad = tmp_path / "bad.flo"
+    bad.write_bytes(struct.pack("<fii", 1.0, 2, 2) + bytes(32))
+    with pytest.raises(ValueError, match="bad tag"):
+        datasets.read_flo(bad)
+    bad.write_bytes(struct.pack("<fii", 202021.25, 3, 2) + bytes(32))
+    with pytest.raises(ValueError, match="60 bytes, file has 44"):
+        datasets.read_flo(bad)
+    with pytest.raises(ValueError, match=r"\(H, W, 2\)"):
+        datasets.write_flo(tmp_path / "x.flo", np.zeros((2, 2)))
+
+
+def test_pfm_hand_made_file(tmp_path):
+    # 3 wide, 2 high, little endian; rows stored bottom first; inf means unknown.
+    path = tmp_path / "d.pfm"
+    path.write_bytes(b"Pf\n3 2\n-1.0\n" + struct.pack("<6f", 4, 5, float("inf"), 1, 2, 3))
+    disparity = datasets.read_disparity(path)
+    assert np.array_equal(disparity, np.array([[1, 2, 3], [4, 5, np.nan]], np.float32), equal_nan=True)
+    big_endian = tmp_path / "b.pfm"
+    big_endian.write_bytes(b"Pf\n1 1\n1.0\n" + struct.pack(">f", 2.5))
+    assert datasets.read_pfm(big_endian)[0, 0] == 2.5
+    copy = tmp_path / "c.pfm"
+    datasets.write_pfm(copy, disparity)
+    assert copy.read_bytes() == path.read_bytes()
+    with pytest.raises(ValueError, match="scale"):
+        datasets.read_disparity(path, scale=8)
+
+
+def test_pgm_disparity_scale_and_unknown(tmp_path):
+    path = tmp_path / "d.pgm"
+    path.write_bytes(b"P5\n2 2\n255\n" + bytes([0, 16, 40, 255]))
+    disparity = datasets.read_disparity(path, scale=16)
+    assert np.array_equal(disparity, np.array([[np.nan, 1.0], [2.5, 255 / 16]], np.float32), equal_nan=True)
+    with pytest.raises(ValueError, match="scale must be a positive number"):
+        datasets.read_disparity(path)
+    with pytest.raises(FileNotFoundError, match="missing.pgm"):
+        datasets.read_disparity(tmp_path / "missing.pgm", scale=8)
+    not_image = tmp_path / "x.png"
+    not_image.write_bytes(b"not an image")
+    with pytest.raises(ValueError, match="cannot decode"):
+        datasets.read_image(not_image)
+
+
+# --------------------------------------------------------------------------------------------- stereo
+
+
+def test_tsukuba_documented_values(datasets_root):
+    pair = datasets.load_stereo("tsukuba", datasets_root)
+    assert pair.left.shape == pair.right.shape == (288, 384, 3)
+    assert pair.left.dtype == np.uint8
+    assert pair.disparity.shape == (288, 384)
+    assert np.count_nonzero(np.isnan(pair.disparity)) == 22_896
+    assert pair.disparity_range == (5.0, 14.0)
+    counts = {name: int(mask.sum()) for name, mask in pair.masks.items()}
+    assert counts == {"nonocc": 85_438, "all": 87_696, "disc": 15_790}
+    # The 'all' mask excludes exactly the unknown pixels.
+    assert np.array_equal(pair.masks["all"], np.isfinite(pair.disparity))
+    # The 2001 copy of the ground truth says the same thing.
+    pgm = datasets.read_disparity(
+        datasets_root / "middlebury_stereo_2001/tsukuba/truedisp.row3.col3.pgm", scale=16
+    )
+    assert np.array_equal(pgm, pair.disparity, equal_nan=True)
+
+
+@pytest.mark.parametrize(
+    ("name", "shape", "unknown", "masks", "low", "high"),
+    [
+        ("venus", (383, 434), 0, (147_513, 150_282, 10_540), 3.0, 19.75),
+        ("teddy", (375, 450), 3_406, (147_651, 165_344, 40_517), 12.5, 52.75),
+    ],
+)
+def test_v2_scenes_documented_values(datasets_root, name, shape, unknown, masks, low, high):
+    pair = datasets.load_stereo(name, datasets_root)
+    assert pair.disparity.shape == shape and pair.left.shape == (*shape, 3)
+    assert np.count_nonzero(np.isnan(pair.disparity)) == unknown
+    assert tuple(int(pair.masks[m].sum()) for m in ("nonocc", "all", "disc")) == masks
+    assert pair.disparity_range == (low, high)
+
+
+def test_2001_scenes_without_masks(datasets_root):
+    sawtooth = datasets.load_stereo("Sawtooth", datasets_root)
+    assert sawtooth.disparity.shape == (380, 434) and sawtooth.masks == {}
+    assert sawtooth.disparity_range == (3.875, 17.875)
+    scene_map = datasets.load_stereo("map", datasets_root)
+    assert scene_map.left.shape == (216, 284) and scene_map.left.ndim == 2
+    assert scene_map.disparity_range == (4.375, 28.125)
+    with pytest.raises(ValueError, match="unknown stereo scene 'cones'.*tsukuba"):
+        datasets.load_stereo("cones", datasets_root)
+
+
+def test_stereo_convention_by_warping(datasets_root):
+    """I_left(x, y) = I_right(x - d, y) on the venus ground truth."""
+    pair = datasets.load_stereo("venus", datasets_root)
+    left = pair.left.astype(np.float64).mean(axis=-1)
+    right = pair.right.astype(np.float64).mean(axis=-1)
+    ys, xs = np.nonzero(pair.masks["nonocc"])
+    source = np.rint(xs - pair.disparity[ys, xs]).astype(int)
+    keep = (source >= 0) & (source < left.shape[1])
+    right_sign = np.abs(left[ys, xs] - right[ys, np.clip(source, 0, left.shape[1] - 1)])[keep].mean()
+    wrong = np.rint(xs + pair.disparity[ys, xs]).astype(int)
+    keep_w = wrong < left.shape[1]
+    wrong_sign = np.abs(left[ys, xs] - right[ys, np.minimum(wrong, left.shape[1] - 1)])[keep_w].mean()
+    assert right_sign < 6 < 3 * right_sign < wrong_sign
+
+
+# --------------------------------------------------------------------------------------------- flow
+
+
+@pytest.mark.parametrize(
+    ("name", "shape", "unknown"),
+    [
+        ("Dimetrodon", (388, 584), 10_772),
+        ("Grove2", (480, 640), 0),
+        ("Hydrangea", (388, 584), 14_880),
+        ("RubberWhale", (388, 584), 3_622),
+        ("Venus", (380, 420), 0),
+    ],
+)
+def test_middlebury_flow_documented_values(datasets_root, name, shape, unknown):
+    pair = datasets.load_flow(name, datasets_root)
+    assert pair.flow.shape == (*shape, 2) and pair.flow.dtype == np.float32
+    assert pair.frame0.shape == pair.frame1.shape == shape
+    assert np.count_nonzero(~pair.mask) == unknown
+    assert np.array_equal(pair.mask, np.isfinite(pair.flow).all(axis=-1))
+
+
+def test_flow_ranges_and_colour(datasets_root):
+    venus = datasets.load_flow("venus", datasets_root)
+    assert np.all(venus.flow[..., 1] == 0)
+    assert float(venus.flow[..., 0].min()) == pytest.approx(-9.38, abs=0.01)
+    colour = datasets.load_flow("RubberWhale", datasets_root, colour=True)
+    assert colour.frame0.shape == (388, 584, 3)
+    with pytest.raises(ValueError, match="only for RubberWhale"):
+        datasets.load_flow("Grove2", datasets_root, colour=True)
+
+
+def test_yosemite_sky_excluded(datasets_root):
+    pair = datasets.load_flow("yosemite", datasets_root)
+    assert pair.flow.shape == (252, 316, 2)
+    assert np.isfinite(pair.flow).all()
+    assert np.count_nonzero(~pair.mask) == 20_721
+    assert float(np.abs(pair.flow).max()) == pytest.approx(3.887, abs=0.001)
+
+
+def test_flow_convention_by_warping(datasets_root):
+    """frame0(x, y) = frame1(x + u, y + v) on RubberWhale."""
+    pair = datasets.load_flow("RubberWhale", datasets_root)
+    f0, f1 = pair.frame0.astype(np.float64), pair.frame1.astype(np.float64)
+    ys, xs = np.nonzero(pair.mask)
+    h, w = f0.shape
+
+    def error(sign):
+        xt = np.clip(np.rint(xs + sign * pair.flow[ys, xs, 0]).astype(int), 0, w - 1)
+        yt = np.clip(np.rint(ys + sign * pair.flow[ys, xs, 1]).astype(int), 0, h - 1)
+        return np.abs(f0[ys, xs] - f1[yt, xt]).mean()
+
+    assert error(+1) < 2.0 < 2 * error(+1) < error(-1)
+
+
+# --------------------------------------------------------------------------------------------- BSDS
+
+
+def test_bsds_test_split(datasets_root):
+    bsds = datasets.load_bsds(datasets_root)
+    assert [image.name for image in bsds.images] == [
+        "100007", "100039", "100099", "10081", "101027", "101084", "102062", "103006", "103029", "103078",
+    ]
+    for image in bsds.images:
+        assert image.image.shape in ((321, 481, 3), (481, 321, 3))
+        k = image.boundaries.shape[0]
+        assert 5 <= k <= 8
+        assert image.boundaries.shape == (k, *image.image.shape[:2]) == image.segmentations.shape
+        assert image.boundaries.dtype == bool and image.segmentations.min() >= 1
+    assert bsds.expected == {}
+
+
+def test_bsds_golden_split(datasets_root):
+    golden = datasets.load_bsds(datasets_root, split="golden")
+    assert [image.name for image in golden.images] == ["2018", "3063", "5096", "6046", "8068"]
+    assert golden.expected["ods_f"] == 0.704628 and golden.expected["ois_f"] == 0.708698
+    assert all(0 <= image.edge_map.min() and image.edge_map.max() <= 1 for image in golden.images)
+    with pytest.raises(ValueError, match="split"):
+        datasets.load_bsds(datasets_root, split="train")
+
+
+def test_missing_root_names_the_path(tmp_path):
+    with pytest.raises(FileNotFoundError, match=str(tmp_path)):
+        datasets.load_stereo("tsukuba", tmp_path)
+    with pytest.raises(FileNotFoundError, match="bsds500"):
+        datasets.load_bsds(tmp_path)
