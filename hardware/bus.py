@@ -18,7 +18,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import serial
 
@@ -37,7 +37,10 @@ from .errors import (
 )
 from .protocol import BROADCAST, MAX_ADDRESS, Frame, Parser, encode_request
 
-__all__ = ["Clock", "WallClock", "BusStats", "Bus", "open_port", "register_sim_handler"]
+if TYPE_CHECKING:
+    from typing_extensions import Self
+
+__all__ = ["Bus", "BusStats", "Clock", "WallClock", "open_port", "register_sim_handler"]
 
 
 class Clock(Protocol):
@@ -152,7 +155,7 @@ class Bus:
         start = random.SystemRandom().randrange(256)
         self._seq = dict.fromkeys(range(MAX_ADDRESS + 1), start)
 
-    def __enter__(self) -> Bus:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -212,14 +215,22 @@ class Bus:
                     break
             else:
                 self.stats.failures += 1
-                what = f"{who} (address {addr}) gave no valid reply to {_name(cmd)} in {self.retries + 1} tries"
+                what = (
+                    f"{who} (address {addr}) gave no valid reply to {_name(cmd)} in {self.retries + 1} tries"
+                )
                 if self._parser.crc_errors + self._parser.dropped > corrupt_before:
                     raise CorruptFrame(f"{what}: replies came back corrupted; check wiring, baud rate, noise")
-                raise Timeout(f"{what} ({self.timeout * 1000:.0f} ms each); is it powered, wired, at that address?")
+                raise Timeout(
+                    f"{what} ({self.timeout * 1000:.0f} ms each); is it powered, wired, at that address?"
+                )
         code = reply.status & ~FAULT_BIT
         if code != Error.OK:
             kind, advice = _DEVICE_ERRORS.get(code, (DeviceError, f"error code {code}"))
-            raise kind(f"{who} refused {_name(cmd)}: {advice}", code=code, fault_latched=bool(reply.status & FAULT_BIT))
+            raise kind(
+                f"{who} refused {_name(cmd)}: {advice}",
+                code=code,
+                fault_latched=bool(reply.status & FAULT_BIT),
+            )
         return reply
 
     def _await(self, addr: int, seq: int, cmd: int) -> Frame | None:
@@ -230,7 +241,11 @@ class Bus:
             chunk = port.read(max(parser.bytes_needed(), port.in_waiting))
             found = None
             for frame in parser.feed(chunk):
-                if found is None and frame.is_reply and (frame.addr, frame.seq, frame.cmd) == (addr, seq, cmd):
+                if (
+                    found is None
+                    and frame.is_reply
+                    and (frame.addr, frame.seq, frame.cmd) == (addr, seq, cmd)
+                ):
                     found = frame
                 else:
                     self.stats.stale_replies += 1
@@ -247,7 +262,9 @@ class Bus:
             self.port.flush()
             self.stats.broadcasts += 1
 
-    def wait_for(self, done: Callable[[], bool], *, timeout: float, what: str, interval: float = 0.02) -> None:
+    def wait_for(
+        self, done: Callable[[], bool], *, timeout: float, what: str, interval: float = 0.02
+    ) -> None:
         """Poll `done` every `interval` seconds (on the bus's clock) until it returns True.
 
         Raises

@@ -16,20 +16,20 @@ import struct
 from enum import IntEnum, IntFlag
 
 __all__ = [
-    "Cmd",
-    "Kind",
-    "Error",
-    "Flag",
     "FAULT_BIT",
     "FAULT_FLAGS",
-    "LayoutError",
-    "pack",
-    "unpack",
-    "PROTOCOL_VERSION",
-    "describe",
-    "STEPPER_ADDR",
     "GALVO_ADDR",
     "LENS_ADDR",
+    "PROTOCOL_VERSION",
+    "STEPPER_ADDR",
+    "Cmd",
+    "Error",
+    "Flag",
+    "Kind",
+    "LayoutError",
+    "describe",
+    "pack",
+    "unpack",
 ]
 
 PROTOCOL_VERSION = 1
@@ -111,6 +111,7 @@ _WORDS = {
 def describe(flags: int) -> str:
     """Flags in words, e.g. ``"homed, FAULT: stalled"``; ``"idle"`` when none is set."""
     return ", ".join(word for flag, word in _WORDS.items() if flags & flag) or "idle"
+
 
 # (request layout, reply layout) as little-endian struct formats.
 _LAYOUTS: dict[Cmd, tuple[str, str]] = {

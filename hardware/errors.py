@@ -11,18 +11,18 @@ Reference: Poggio et al., "The MIT Vision Machine", section "The Eye-Head system
 from __future__ import annotations
 
 __all__ = [
-    "HardwareError",
+    "BadLength",
+    "Busy",
     "CommError",
-    "Timeout",
     "CorruptFrame",
     "DeviceError",
-    "Busy",
-    "UnknownCommand",
-    "BadLength",
-    "OutOfRange",
-    "NotHomed",
     "Fault",
+    "HardwareError",
     "MotionTimeout",
+    "NotHomed",
+    "OutOfRange",
+    "Timeout",
+    "UnknownCommand",
 ]
 
 

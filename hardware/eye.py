@@ -24,14 +24,14 @@ from .micros import GalvoMicro, LensMicro
 from .physics import GALVO_RANGE_MDEG, LENS_COUNTS
 
 __all__ = [
+    "FOCUS_M",
+    "F_NUMBER",
+    "MIRROR_RANGE",
+    "ZOOM_MM",
     "Eye",
     "EyeStatus",
     "line_of_sight",
     "mirror_angles",
-    "ZOOM_MM",
-    "FOCUS_M",
-    "F_NUMBER",
-    "MIRROR_RANGE",
 ]
 
 ZOOM_MM = (12.5, 75.0)
@@ -178,7 +178,9 @@ class Eye:
         """Start homing zoom, focus and iris on their home sensors."""
         self.lens.home(self.index)
 
-    def set_lens(self, *, zoom: float | None = None, focus: float | None = None, iris: float | None = None) -> None:
+    def set_lens(
+        self, *, zoom: float | None = None, focus: float | None = None, iris: float | None = None
+    ) -> None:
         """Start moving the lens: `zoom` focal length in mm, `focus` distance in m (``math.inf`` for
         infinity), `iris` f-number. Settings left as None stay where they are."""
         if zoom is None and focus is None and iris is None:

@@ -21,7 +21,18 @@ import math
 from collections import Counter
 from collections.abc import Callable, Sequence
 
-from .commands import FAULT_BIT, FAULT_FLAGS, PROTOCOL_VERSION, Cmd, Error, Flag, Kind, LayoutError, pack, unpack
+from .commands import (
+    FAULT_BIT,
+    FAULT_FLAGS,
+    PROTOCOL_VERSION,
+    Cmd,
+    Error,
+    Flag,
+    Kind,
+    LayoutError,
+    pack,
+    unpack,
+)
 from .physics import (
     GALVO_RANGE_MDEG,
     LENS_COUNTS,
@@ -33,17 +44,17 @@ from .physics import (
 from .protocol import BROADCAST, Frame, encode_reply
 
 __all__ = [
-    "Refused",
-    "MicroFirmware",
-    "StepperAxis",
-    "StepperFirmware",
-    "LensAxis",
-    "LensFirmware",
-    "GalvoEye",
-    "GalvoFirmware",
-    "VMAX_LIMIT",
     "ACCEL_LIMIT",
     "STALL_COUNTS",
+    "VMAX_LIMIT",
+    "GalvoEye",
+    "GalvoFirmware",
+    "LensAxis",
+    "LensFirmware",
+    "MicroFirmware",
+    "Refused",
+    "StepperAxis",
+    "StepperFirmware",
 ]
 
 VMAX_LIMIT = 60_000  # counts/s: about 53 degrees/s at the joint
@@ -274,7 +285,9 @@ class StepperAxis(_Axis):
             self.latch(Flag.FAULT_STALL)
             return
         # Homing drives onto the negative switch on purpose; anything else that reaches a switch is a fault.
-        if (self.mech.switch_pos and self.vel > 0.0) or (self.mech.switch_neg and self.vel < 0.0 and not self.phase):
+        if (self.mech.switch_pos and self.vel > 0.0) or (
+            self.mech.switch_neg and self.vel < 0.0 and not self.phase
+        ):
             self.latch(Flag.FAULT_LIMIT)
             return
         if self.phase == "seek" and self.mech.switch_neg:

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from .bus import Bus
 from .commands import GALVO_ADDR, LENS_ADDR, STEPPER_ADDR, Cmd, Flag
@@ -28,6 +29,9 @@ from .errors import CommError
 from .eye import Eye, EyeStatus
 from .joint import Joint, JointStatus
 from .micros import GalvoMicro, LensMicro, Micro, StepperMicro
+
+if TYPE_CHECKING:
+    from typing_extensions import Self
 
 __all__ = ["Head", "HeadStatus"]
 
@@ -107,7 +111,7 @@ class Head:
     def __repr__(self) -> str:
         return f"Head(port={self.bus.port.port!r})"
 
-    def __enter__(self) -> Head:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: object) -> None:
@@ -147,7 +151,7 @@ class Head:
             Still moving after `timeout` seconds.
         """
         parts = (*self.joints, *self.eyes)
-        self.bus.wait_for(lambda: all([part.settled() for part in parts]), timeout=timeout, what="the head")
+        self.bus.wait_for(lambda: all(part.settled() for part in parts), timeout=timeout, what="the head")
 
     def home(self, *, wait: bool = True) -> None:
         """Calibrate everything: each joint on its limit switch and index pulse (ending at 0 degrees),
@@ -166,7 +170,11 @@ class Head:
         Both targets are checked against the soft limits before either joint is told to move, so an
         out-of-travel request moves nothing.
         """
-        moves = [(joint, joint.counts(angle)) for joint, angle in zip(self.joints, (pan, tilt)) if angle is not None]
+        moves = [
+            (joint, joint.counts(angle))
+            for joint, angle in zip(self.joints, (pan, tilt))
+            if angle is not None
+        ]
         for joint, counts in moves:
             joint.micro.move_to(joint.axis, counts)
         if wait:
@@ -178,7 +186,9 @@ class Head:
             micro.stop()
         if wait:
             self.bus.wait_for(
-                lambda: not any([m.status() & Flag.MOVING for m in self.micros]), timeout=_MOVE_TIMEOUT, what="stop"
+                lambda: not any(m.status() & Flag.MOVING for m in self.micros),
+                timeout=_MOVE_TIMEOUT,
+                what="stop",
             )
 
     def estop(self) -> None:

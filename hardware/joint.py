@@ -19,7 +19,7 @@ from .errors import Fault, OutOfRange
 from .micros import StepperMicro
 from .physics import COUNTS_PER_DEGREE
 
-__all__ = ["Joint", "JointStatus", "COUNTS_PER_DEGREE"]
+__all__ = ["COUNTS_PER_DEGREE", "Joint", "JointStatus"]
 
 
 class JointStatus(NamedTuple):
@@ -98,7 +98,9 @@ class Joint:
         for name, value in (("speed", speed), ("acceleration", acceleration)):
             if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
                 raise ValueError(f"{name} must be a positive number, got {value!r}")
-        self.micro.set_profile(self.axis, round(speed * COUNTS_PER_DEGREE), round(acceleration * COUNTS_PER_DEGREE))
+        self.micro.set_profile(
+            self.axis, round(speed * COUNTS_PER_DEGREE), round(acceleration * COUNTS_PER_DEGREE)
+        )
 
     def settled(self) -> bool:
         """True once the joint is at rest and not homing; raises Fault if a fault has latched."""

@@ -15,7 +15,7 @@ from .bus import Bus
 from .commands import Cmd, Flag, Kind, LayoutError, pack, unpack
 from .errors import BadLength, UnknownCommand
 
-__all__ = ["Micro", "StepperMicro", "GalvoMicro", "LensMicro", "AxisStatus", "GalvoStatus", "LensStatus"]
+__all__ = ["AxisStatus", "GalvoMicro", "GalvoStatus", "LensMicro", "LensStatus", "Micro", "StepperMicro"]
 
 
 class AxisStatus(NamedTuple):
@@ -75,7 +75,9 @@ class Micro:
         try:
             return unpack(cmd, reply.payload, reply=True)
         except LayoutError as exc:
-            raise BadLength(f"{self.name} sent a malformed {cmd.name} reply ({exc}); firmware version mismatch?")
+            raise BadLength(
+                f"{self.name} sent a malformed {cmd.name} reply ({exc}); firmware version mismatch?"
+            )
 
     def ping(self) -> tuple[Kind | int, int]:
         """The micro's kind and protocol version."""

@@ -17,18 +17,18 @@ import math
 from dataclasses import dataclass
 
 __all__ = [
-    "COUNTS_PER_MOTOR_REV",
-    "GEAR_RATIO",
     "COUNTS_PER_DEGREE",
-    "JointGeometry",
+    "COUNTS_PER_MOTOR_REV",
+    "GALVO_RANGE_MDEG",
+    "GEAR_RATIO",
+    "LENS_COUNTS",
     "PAN",
     "TILT",
-    "trapezoid_step",
-    "StepperMechanism",
-    "LensMechanism",
-    "LENS_COUNTS",
     "GalvoMirror",
-    "GALVO_RANGE_MDEG",
+    "JointGeometry",
+    "LensMechanism",
+    "StepperMechanism",
+    "trapezoid_step",
 ]
 
 COUNTS_PER_MOTOR_REV = 4096  # a 1024-line quadrature encoder on the motor shaft
@@ -194,8 +194,14 @@ class LensMechanism:
     reversal. A home sensor sees the ring below `home_edge`.
     """
 
-    def __init__(self, motor: float, *, backlash: float = 12.0, home_edge: float = 0.0,
-                 travel: float = LENS_COUNTS + 100.0) -> None:
+    def __init__(
+        self,
+        motor: float,
+        *,
+        backlash: float = 12.0,
+        home_edge: float = 0.0,
+        travel: float = LENS_COUNTS + 100.0,
+    ) -> None:
         self.motor = float(motor)
         self.ring = float(motor)
         self.backlash = backlash

@@ -19,16 +19,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 __all__ = [
-    "SYNC",
     "BROADCAST",
     "MAX_ADDRESS",
     "MAX_PAYLOAD",
     "REPLY_BIT",
-    "crc16",
+    "SYNC",
     "Frame",
-    "encode_request",
-    "encode_reply",
     "Parser",
+    "crc16",
+    "encode_reply",
+    "encode_request",
 ]
 
 SYNC = 0xA5

@@ -67,7 +67,9 @@ class Serial(SerialBase):
             # pyserial would block for ever; nothing can arrive unless the host has sent something.
             data = self.world.host_read(size, None)
             if not data:
-                raise SerialException("sim:// read with timeout=None and nothing on its way: it would block for ever")
+                raise SerialException(
+                    "sim:// read with timeout=None and nothing on its way: it would block for ever"
+                )
             return data
         return self.world.host_read(size, self._timeout)
 

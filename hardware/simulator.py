@@ -35,7 +35,15 @@ from dataclasses import dataclass, fields
 from urllib.parse import parse_qsl, urlsplit
 
 from .commands import GALVO_ADDR, LENS_ADDR, STEPPER_ADDR
-from .firmware import GalvoEye, GalvoFirmware, LensAxis, LensFirmware, MicroFirmware, StepperAxis, StepperFirmware
+from .firmware import (
+    GalvoEye,
+    GalvoFirmware,
+    LensAxis,
+    LensFirmware,
+    MicroFirmware,
+    StepperAxis,
+    StepperFirmware,
+)
 from .physics import COUNTS_PER_DEGREE, LENS_COUNTS, PAN, TILT, JointGeometry, LensMechanism, StepperMechanism
 from .protocol import BROADCAST, MAX_ADDRESS, Parser
 
@@ -249,7 +257,9 @@ class World:
         if tamper:
             data = tamper.popleft()(data)
         delay, slots = self.faults.apply(data, self._fault_rng)
-        line, free = (self._to_host, self._rx_free) if direction == "reply" else (self._to_micros, self._tx_free)
+        line, free = (
+            (self._to_host, self._rx_free) if direction == "reply" else (self._to_micros, self._tx_free)
+        )
         start = max(ready, free) + delay
         for i, byte in enumerate(slots):
             if byte is not None:
