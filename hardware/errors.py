@@ -10,6 +10,9 @@ Reference: Poggio et al., "The MIT Vision Machine", section "The Eye-Head system
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
+
 __all__ = [
     "BadLength",
     "Busy",
@@ -99,3 +102,14 @@ class Fault(DeviceError):
 
 class MotionTimeout(HardwareError):
     """An axis was still moving when the host stopped waiting for it."""
+
+
+@contextmanager
+def naming(what: str) -> Iterator[None]:
+    """Prefix the message of a DeviceError raised inside the block with `what` (an axis or eye name),
+    keeping its class and attributes."""
+    try:
+        yield
+    except DeviceError as exc:
+        exc.args = (f"{what}: {exc}", *exc.args[1:])
+        raise

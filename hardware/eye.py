@@ -19,7 +19,7 @@ import math
 from typing import NamedTuple
 
 from .commands import FAULT_FLAGS, Flag, describe
-from .errors import Fault, OutOfRange
+from .errors import Fault, NotHomed, OutOfRange, naming
 from .micros import GalvoMicro, LensMicro
 from .physics import GALVO_RANGE_MDEG, LENS_COUNTS
 
@@ -124,7 +124,8 @@ def iris_counts(f_number: float) -> int:
 
 
 class EyeStatus(NamedTuple):
-    """An eye's state in physical units (angles in degrees)."""
+    """An eye's state in physical units (angles in degrees); the lens values are NaN until the lens
+    has been homed."""
 
     mirror_x: float
     mirror_y: float
@@ -136,10 +137,12 @@ class EyeStatus(NamedTuple):
     flags: Flag
 
     def __str__(self) -> str:
+        lens = "lens not homed"
+        if not math.isnan(self.zoom_mm):
+            lens = f"zoom {self.zoom_mm:.1f} mm, focus {self.focus_m:.2f} m, F{self.f_number:.1f}"
         return (
             f"gaze ({self.azimuth:+.3f}, {self.elevation:+.3f}) deg, mirrors ({self.mirror_x:+.3f}, "
-            f"{self.mirror_y:+.3f}) deg, zoom {self.zoom_mm:.1f} mm, focus {self.focus_m:.2f} m, "
-            f"F{self.f_number:.1f}, {describe(self.flags)}"
+            f"{self.mirror_y:+.3f}) deg, {lens}, {describe(self.flags)}"
         )
 
 
@@ -168,7 +171,8 @@ class Eye:
         """Start turning the mirrors to `x`, `y` degrees."""
         for name, value in (("x", x), ("y", y)):
             _check_range(f"{self.name} mirror {name}", value, -MIRROR_RANGE, MIRROR_RANGE, "degrees")
-        self.galvo.set_angles(self.index, round(x * 1000), round(y * 1000))
+        with naming(f"{self.name} eye"):
+            self.galvo.set_angles(self.index, round(x * 1000), round(y * 1000))
 
     def point(self, azimuth: float, elevation: float) -> None:
         """Start turning the line of sight to (`azimuth`, `elevation`) degrees."""
@@ -176,7 +180,8 @@ class Eye:
 
     def home_lens(self) -> None:
         """Start homing zoom, focus and iris on their home sensors."""
-        self.lens.home(self.index)
+        with naming(f"{self.name} lens"):
+            self.lens.home(self.index)
 
     def set_lens(
         self, *, zoom: float | None = None, focus: float | None = None, iris: float | None = None
@@ -185,21 +190,27 @@ class Eye:
         infinity), `iris` f-number. Settings left as None stay where they are."""
         if zoom is None and focus is None and iris is None:
             raise ValueError("give at least one of zoom (mm), focus (m), iris (f-number)")
-        current = self.lens.get(self.index)
         counts = (
-            current.zoom if zoom is None else zoom_counts(zoom),
-            current.focus if focus is None else focus_counts(focus),
-            current.iris if iris is None else iris_counts(iris),
+            None if zoom is None else zoom_counts(zoom),
+            None if focus is None else focus_counts(focus),
+            None if iris is None else iris_counts(iris),
         )
-        self.lens.set_counts(self.index, *counts)
+        with naming(f"{self.name} lens"):
+            current = self.lens.get(self.index)
+            if not current.flags & Flag.HOMED:
+                raise NotHomed("not homed; home it first (Head.home or Eye.home_lens)")
+            self.lens.set_counts(self.index, *(c if n is None else n for c, n in zip(current[:3], counts)))
 
     def status(self) -> EyeStatus:
         g = self.galvo.get(self.index)
         lens = self.lens.get(self.index)
         x, y = g.x / 1000.0, g.y / 1000.0
-        zoom = ZOOM_MM[0] + lens.zoom / _TOP * (ZOOM_MM[1] - ZOOM_MM[0])
-        focus = FOCUS_M[0] * _TOP / lens.focus if lens.focus > 0 else math.inf
-        f_number = F_NUMBER[0] * (F_NUMBER[1] / F_NUMBER[0]) ** (lens.iris / _TOP)
+        if lens.flags & Flag.HOMED:
+            zoom = ZOOM_MM[0] + lens.zoom / _TOP * (ZOOM_MM[1] - ZOOM_MM[0])
+            focus = FOCUS_M[0] * _TOP / lens.focus if lens.focus > 0 else math.inf
+            f_number = F_NUMBER[0] * (F_NUMBER[1] / F_NUMBER[0]) ** (lens.iris / _TOP)
+        else:
+            zoom = focus = f_number = math.nan
         return EyeStatus(x, y, *line_of_sight(x, y), zoom, focus, f_number, g.flags | lens.flags)
 
     def settled(self) -> bool:

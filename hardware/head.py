@@ -4,9 +4,9 @@ Poggio et al., "The MIT Vision Machine", section "The Eye-Head system": "the hea
 unit, while allowing the eyes to point independently"; three micros on UNET drive it (steppers,
 galvanometers, lenses). Head opens the bus, checks with PING that each micro is of the expected kind
 (Dynamixel 2.0 style), reads the joints' soft limits (as the ROS driver of the FLIR pan-tilt units
-does), and can arm each micro's watchdog. As a context manager it stops every motor when the block
-ends; when the block ends with an exception it broadcasts an emergency stop, which needs no reply and
-therefore works even when the exception was a communication failure.
+does), and can arm each micro's watchdog. As a context manager it stops every motor however the block
+ends, an exception included: a decelerating STOP to each micro, confirmed by polling until nothing
+moves; if the micros do not answer, an emergency stop by broadcast, which needs no reply.
 
 Example
 -------
@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 from .bus import Bus
 from .commands import GALVO_ADDR, LENS_ADDR, STEPPER_ADDR, Cmd, Flag
-from .errors import CommError
+from .errors import HardwareError
 from .eye import Eye, EyeStatus
 from .joint import Joint, JointStatus
 from .micros import GalvoMicro, LensMicro, Micro, StepperMicro
@@ -116,14 +116,12 @@ class Head:
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: object) -> None:
         try:
+            self.stop()
+        except HardwareError:
+            # The micros did not confirm the stop; an emergency stop needs no reply.
+            self.estop()
             if exc_type is None:
-                try:
-                    self.stop()
-                except CommError:
-                    self.estop()
-                    raise
-            else:
-                self.estop()
+                raise
         finally:
             self.close()
 
@@ -154,8 +152,9 @@ class Head:
         self.bus.wait_for(lambda: all(part.settled() for part in parts), timeout=timeout, what="the head")
 
     def home(self, *, wait: bool = True) -> None:
-        """Calibrate everything: each joint on its limit switch and index pulse (ending at 0 degrees),
-        each lens on its home sensors; centre the mirrors."""
+        """Clear every latched fault and calibrate everything: each joint on its limit switch and index
+        pulse (ending at 0 degrees), each lens on its home sensors; centre the mirrors."""
+        self.clear_faults()
         for joint in self.joints:
             joint.home()
         for eye in self.eyes:
@@ -176,7 +175,7 @@ class Head:
             if angle is not None
         ]
         for joint, counts in moves:
-            joint.micro.move_to(joint.axis, counts)
+            joint.move_to_counts(counts)
         if wait:
             self.wait()
 

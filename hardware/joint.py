@@ -15,7 +15,7 @@ import math
 from typing import NamedTuple
 
 from .commands import FAULT_FLAGS, Flag, describe
-from .errors import Fault, OutOfRange
+from .errors import Fault, OutOfRange, naming
 from .micros import StepperMicro
 from .physics import COUNTS_PER_DEGREE
 
@@ -31,7 +31,10 @@ class JointStatus(NamedTuple):
     flags: Flag
 
     def __str__(self) -> str:
-        return f"{self.position:+8.3f} deg (target {self.target:+8.3f}), {describe(self.flags)}"
+        where = f"{self.position:+8.3f} deg (target {self.target:+8.3f})"
+        if not self.flags & Flag.HOMED:
+            where = f"not homed, {self.encoder:+d} counts from power-up"
+        return f"{where}, {describe(self.flags)}"
 
 
 class Joint:
@@ -87,20 +90,27 @@ class Joint:
 
     def home(self) -> None:
         """Start homing (seek the limit switch, then the index pulse, then go to 0); clears faults."""
-        self.micro.home(self.axis)
+        with naming(self.name):
+            self.micro.home(self.axis)
 
     def move_to(self, degrees: float) -> None:
         """Start a move to `degrees`; `settled` or Head.wait tells when it has arrived."""
-        self.micro.move_to(self.axis, self.counts(degrees))
+        self.move_to_counts(self.counts(degrees))
+
+    def move_to_counts(self, counts: int) -> None:
+        """Start a move to encoder count `counts` (the micro checks its soft limits)."""
+        with naming(self.name):
+            self.micro.move_to(self.axis, counts)
 
     def set_profile(self, speed: float, acceleration: float) -> None:
         """Set the top speed (degrees/s) and acceleration (degrees/s^2) of later moves."""
         for name, value in (("speed", speed), ("acceleration", acceleration)):
             if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
                 raise ValueError(f"{name} must be a positive number, got {value!r}")
-        self.micro.set_profile(
-            self.axis, round(speed * COUNTS_PER_DEGREE), round(acceleration * COUNTS_PER_DEGREE)
-        )
+        with naming(self.name):
+            self.micro.set_profile(
+                self.axis, round(speed * COUNTS_PER_DEGREE), round(acceleration * COUNTS_PER_DEGREE)
+            )
 
     def settled(self) -> bool:
         """True once the joint is at rest and not homing; raises Fault if a fault has latched."""

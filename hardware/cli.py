@@ -1,0 +1,160 @@
+"""``vmcl-head``: drive the eye-head from the command line (the simulator unless --port says otherwise).
+
+Poggio et al., "The MIT Vision Machine", section "The Eye-Head system". Commands run in order, in one
+session, so that a freshly powered head (or simulator) can be homed and moved in one call::
+
+    vmcl-head home move 30 -10 point left 5 2 lens left zoom=50 focus=2 iris=4 status
+    vmcl-head --port /dev/ttyUSB0 estop
+
+Exit status: 0 done; 1 the head or the line failed (a fault, a timeout, a port that would not open);
+2 a usage or input error (unknown command, bad number, target beyond the travel: nothing moved).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Callable
+from typing import TextIO
+
+import serial
+
+from .errors import HardwareError
+from .head import Head
+
+__all__ = ["UsageError", "main", "parse_commands"]
+
+USAGE = """commands (run in order):
+  status                          print every axis
+  home                            clear faults, calibrate joints and lenses, centre the mirrors
+  move PAN TILT                   joint angles, degrees (pan 0 ahead, + right; tilt 0 level, -90 down)
+  point EYE AZIMUTH ELEVATION     EYE is left or right; gaze angles, degrees
+  lens EYE [zoom=MM] [focus=M] [iris=F]   focal length mm, focus distance m (or inf), f-number
+  estop                           emergency stop of every micro (clear with home)"""
+
+Step = Callable[[Head, TextIO], None]
+
+
+class UsageError(ValueError):
+    """A command line that cannot be run as written."""
+
+
+def _number(word: str, what: str) -> float:
+    try:
+        value = float(word)
+    except ValueError:
+        raise UsageError(f"{what} must be a number, got {word!r}") from None
+    if math.isnan(value):
+        raise UsageError(f"{what} must be a number, got {word!r}")
+    return value
+
+
+def _eye(head: Head, name: str):
+    return head.left if name == "left" else head.right
+
+
+def _take(words: list[str], n: int, command: str, usage: str) -> list[str]:
+    if len(words) < n:
+        raise UsageError(f"{command} needs {usage}")
+    taken = words[:n]
+    del words[:n]
+    return taken
+
+
+def parse_commands(words: list[str]) -> list[Step]:
+    """Turn the command words into steps, checking everything that can be checked without the head.
+
+    Raises
+    ------
+    UsageError
+        Unknown command, missing or malformed argument.
+    """
+    words = list(words)
+    steps: list[Step] = []
+    if not words:
+        raise UsageError("no command given")
+    while words:
+        command = words.pop(0)
+        if command == "status":
+            steps.append(lambda head, out: print(head.status(), file=out))
+        elif command == "home":
+            steps.append(lambda head, out: (head.home(), print("homed", file=out)))
+        elif command == "move":
+            pan, tilt = (_number(w, a) for w, a in zip(_take(words, 2, "move", "PAN TILT"), ("PAN", "TILT")))
+            steps.append(lambda head, out, p=pan, t=tilt: head.move(pan=p, tilt=t))
+        elif command == "point":
+            eye, az, el = _take(words, 3, "point", "EYE AZIMUTH ELEVATION")
+            if eye not in ("left", "right"):
+                raise UsageError(f"EYE must be left or right, got {eye!r}")
+            azimuth, elevation = _number(az, "AZIMUTH"), _number(el, "ELEVATION")
+
+            def point(head: Head, out: TextIO, e=eye, a=azimuth, b=elevation) -> None:
+                _eye(head, e).point(a, b)
+                head.wait()
+
+            steps.append(point)
+        elif command == "lens":
+            (eye,) = _take(words, 1, "lens", "EYE and at least one of zoom=MM focus=M iris=F")
+            if eye not in ("left", "right"):
+                raise UsageError(f"EYE must be left or right, got {eye!r}")
+            settings: dict[str, float] = {}
+            while words and "=" in words[0]:
+                key, _, value = words.pop(0).partition("=")
+                if key not in ("zoom", "focus", "iris") or key in settings:
+                    raise UsageError(f"lens takes zoom=MM, focus=M and iris=F once each, got {key!r}")
+                settings[key] = _number(value, key)
+            if not settings:
+                raise UsageError("lens needs at least one of zoom=MM focus=M iris=F")
+
+            def lens(head: Head, out: TextIO, e=eye, kw=settings) -> None:
+                _eye(head, e).set_lens(**kw)
+                head.wait()
+
+            steps.append(lens)
+        elif command == "estop":
+            steps.append(
+                lambda head, out: (head.estop(), print("emergency stop sent to every micro", file=out))
+            )
+        else:
+            raise UsageError(f"unknown command {command!r}")
+    return steps
+
+
+def main(argv: list[str] | None = None, *, out: TextIO | None = None) -> int:
+    """Run ``vmcl-head``; returns the exit status."""
+    out = out or sys.stdout
+    parser = argparse.ArgumentParser(
+        prog="vmcl-head",
+        description="Drive the Vision Machine eye-head (default: the simulator).",
+        epilog=USAGE,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--port", default="sim://", help="serial device or URL (default: sim://)")
+    parser.add_argument("--baud", type=int, default=115200, help="baud rate (default: 115200)")
+    parser.add_argument("--timeout", type=float, default=0.05, help="reply timeout, seconds (default: 0.05)")
+    parser.add_argument("commands", nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+
+    def fail(message: str, status: int) -> int:
+        print(f"vmcl-head: error: {message}", file=sys.stderr)
+        return status
+
+    try:
+        steps = parse_commands(args.commands)
+    except UsageError as exc:
+        return fail(f"{exc} (see vmcl-head --help)", 2)
+    try:
+        with Head(args.port, baudrate=args.baud, timeout=args.timeout) as head:
+            for step in steps:
+                step(head, out)
+    except (ValueError, TypeError) as exc:
+        return fail(str(exc), 2)
+    except HardwareError as exc:
+        return fail(str(exc), 1)
+    except (serial.SerialException, OSError) as exc:
+        return fail(f"cannot use port {args.port!r}: {exc}", 1)
+    return 0
