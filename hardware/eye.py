@@ -211,7 +211,9 @@ class Eye:
             f_number = F_NUMBER[0] * (F_NUMBER[1] / F_NUMBER[0]) ** (lens.iris / _TOP)
         else:
             zoom = focus = f_number = math.nan
-        return EyeStatus(x, y, *line_of_sight(x, y), zoom, focus, f_number, g.flags | lens.flags)
+        # The mirrors never need homing, so the eye counts as homed when its lens is.
+        flags = (g.flags & ~Flag.HOMED) | lens.flags
+        return EyeStatus(x, y, *line_of_sight(x, y), zoom, focus, f_number, flags)
 
     def settled(self) -> bool:
         """True once mirrors and lens are at rest; raises Fault if a fault has latched."""

@@ -175,8 +175,9 @@ class Parser:
 
     Feed it bytes as they arrive, in pieces of any size; it returns each frame whose header is plausible
     and whose CRC checks. After a bad header or a bad CRC it drops only the sync byte and rescans from
-    the next byte, so a real frame that follows garbage (or a frame cut short) is still found. It never
-    raises on any input.
+    the next byte, so a real frame that follows garbage (or a frame cut short) is still found; a
+    complete frame found beyond an incomplete one is taken at once (the incomplete one was garbage). It
+    never raises on any input.
 
     Attributes
     ----------
@@ -207,35 +208,68 @@ class Parser:
                 del buf[:start]
             if len(buf) < _HEADER:
                 break
-            addr_byte, seq, length = buf[1], buf[2], buf[3]
-            if not _header_valid(addr_byte, length):
-                self._drop_sync()
+            length = buf[3]
+            if not _header_valid(buf[1], length):
+                self._drop(1)
                 continue
             end = _HEADER + length
             if len(buf) < end + _CRC:
-                break
-            if crc16(memoryview(buf)[:end]) != buf[end] | buf[end + 1] << 8:
-                self.crc_errors += 1
-                self._drop_sync()
+                # A false sync byte in garbage can announce a body longer than what follows; a complete
+                # frame further on proves it false, and need not wait for bytes that may never come.
+                later = self._complete_frame_after(1)
+                if later is None:
+                    break
+                self._drop(later)
                 continue
-            body = bytes(buf[_HEADER:end])
-            if addr_byte & REPLY_BIT:
-                frames.append(Frame(addr_byte & ~REPLY_BIT, seq, body[1], body[2:], body[0]))
-            else:
-                frames.append(Frame(addr_byte, seq, body[0], body[1:]))
+            if not self._crc_ok(0, end):
+                self.crc_errors += 1
+                self._drop(1)
+                continue
+            frames.append(self._decode(end))
             del buf[: end + _CRC]
         return frames
 
-    def _drop_sync(self) -> None:
-        self.dropped += 1
-        del self._buf[:1]
+    def _crc_ok(self, start: int, end: int) -> bool:
+        buf = self._buf
+        return crc16(memoryview(buf)[start:end]) == buf[end] | buf[end + 1] << 8
+
+    def _complete_frame_after(self, first: int) -> int | None:
+        buf = self._buf
+        j = buf.find(SYNC, first)
+        while 0 <= j <= len(buf) - _MIN_REQUEST:
+            if _header_valid(buf[j + 1], buf[j + 3]):
+                end = j + _HEADER + buf[j + 3]
+                if end + _CRC <= len(buf) and self._crc_ok(j, end):
+                    return j
+            j = buf.find(SYNC, j + 1)
+        return None
+
+    def _decode(self, end: int) -> Frame:
+        buf = self._buf
+        addr_byte, seq = buf[1], buf[2]
+        body = bytes(buf[_HEADER:end])
+        if addr_byte & REPLY_BIT:
+            return Frame(addr_byte & ~REPLY_BIT, seq, body[1], body[2:], body[0])
+        return Frame(addr_byte, seq, body[0], body[1:])
+
+    def _drop(self, count: int) -> None:
+        self.dropped += count
+        del self._buf[:count]
 
     def bytes_needed(self) -> int:
-        """The fewest further bytes that could complete a frame (at least 1): how much to read next."""
+        """The fewest further bytes that could complete a frame (at least 1): how much to read next,
+        so that a blocking read never waits for more than the shortest frame that may be under way."""
         buf = self._buf
-        if len(buf) < _HEADER:
-            return max(1, _MIN_REQUEST - len(buf))
-        return max(1, _HEADER + buf[3] + _CRC - len(buf))
+        needs = []
+        j = buf.find(SYNC)
+        while j >= 0:
+            have = len(buf) - j
+            if have < _HEADER:
+                needs.append(_MIN_REQUEST - have)
+            elif _header_valid(buf[j + 1], buf[j + 3]):
+                needs.append(_HEADER + buf[j + 3] + _CRC - have)
+            j = buf.find(SYNC, j + 1)
+        return max(1, min(needs, default=_MIN_REQUEST))
 
     def reset(self) -> None:
         """Forget any partial frame."""
