@@ -14,6 +14,7 @@ real firmware would. Lengths are counts of the encoder (steppers) or of the lens
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 __all__ = [
@@ -132,20 +133,43 @@ class StepperMechanism:
     position : float
         Where the joint is at power-up, in counts from the joint's zero.
     jitter : callable
-        ``jitter()`` returns the scatter, in counts, of a switch's closing point each time it closes.
+        ``jitter()`` returns the scatter, in counts, of a switch's closing (or opening) point, drawn
+        anew each time the switch closes (or opens).
+
+    Attributes
+    ----------
+    geometry : JointGeometry
+        Replace it (``dataclasses.replace``) to move a switch, as a knocked switch or an obstacle would.
+    position : float
+        The joint's true position, counts from its zero.
+    jammed : bool
+        Set it to hold the joint still whatever the motor does (a stall).
     """
 
-    def __init__(self, geometry: JointGeometry, position: float, jitter) -> None:
+    def __init__(self, geometry: JointGeometry, position: float, jitter: Callable[[], float]) -> None:
         self.geometry = geometry
         self.position = float(position)
         self.jammed = False
         self._jitter = jitter
         self.switch_neg = position <= geometry.switch_neg
         self.switch_pos = position >= geometry.switch_pos
-        self._close_neg = geometry.switch_neg + jitter()
-        self._close_pos = geometry.switch_pos + jitter()
-        self._open_neg = geometry.switch_neg + geometry.hysteresis + jitter()
-        self._open_pos = geometry.switch_pos - geometry.hysteresis + jitter()
+        # Each closing and opening point scatters a little about its nominal place, as a real switch's do.
+        self._scatter = {edge: jitter() for edge in ("close_neg", "open_neg", "close_pos", "open_pos")}
+
+    def _edge(self, edge: str) -> float:
+        g = self.geometry
+        nominal = {
+            "close_neg": g.switch_neg,
+            "open_neg": g.switch_neg + g.hysteresis,
+            "close_pos": g.switch_pos,
+            "open_pos": g.switch_pos - g.hysteresis,
+        }[edge]
+        return nominal + self._scatter[edge]
+
+    def _crossed(self, edge: str, beyond: bool) -> bool:
+        if beyond:
+            self._scatter[edge] = self._jitter()
+        return beyond
 
     def drive(self, commanded: float) -> tuple[float, float]:
         """The motor is stepped to `commanded` counts; the joint follows unless jammed or at a stop.
@@ -160,19 +184,14 @@ class StepperMechanism:
         if not self.jammed:
             self.position = min(g.hard_max, max(g.hard_min, commanded))
         p = self.position
-        # Each closing and opening point scatters a little, as a real switch's do.
-        if self.switch_neg and p >= self._open_neg:
-            self.switch_neg = False
-            self._open_neg = g.switch_neg + g.hysteresis + self._jitter()
-        elif not self.switch_neg and p <= self._close_neg:
-            self.switch_neg = True
-            self._close_neg = g.switch_neg + self._jitter()
-        if self.switch_pos and p <= self._open_pos:
-            self.switch_pos = False
-            self._open_pos = g.switch_pos - g.hysteresis + self._jitter()
-        elif not self.switch_pos and p >= self._close_pos:
-            self.switch_pos = True
-            self._close_pos = g.switch_pos + self._jitter()
+        if self.switch_neg:
+            self.switch_neg = not self._crossed("open_neg", p >= self._edge("open_neg"))
+        else:
+            self.switch_neg = self._crossed("close_neg", p <= self._edge("close_neg"))
+        if self.switch_pos:
+            self.switch_pos = not self._crossed("open_pos", p <= self._edge("open_pos"))
+        else:
+            self.switch_pos = self._crossed("close_pos", p >= self._edge("close_pos"))
         return before, p
 
     def index_between(self, before: float, after: float) -> int | None:

@@ -1,0 +1,189 @@
+"""The host's Bus over the simulated UNET: retries, timeouts, exactly-once execution, broadcast."""
+
+import threading
+import time
+
+import pytest
+import serial
+
+from hardware.bus import Bus, open_port, register_sim_handler
+from hardware.commands import FAULT_BIT, Cmd, Flag, pack, unpack
+from hardware.errors import BadLength, CorruptFrame, Fault, Timeout, UnknownCommand
+from hardware.protocol import encode_request
+
+STEPPER, GALVO, LENS = 1, 2, 3
+
+
+@pytest.fixture
+def bus():
+    with Bus("sim://?seed=1", timeout=0.05, retries=3) as bus:
+        yield bus
+
+
+def flip(index: int):
+    def change(frame: bytes) -> bytes:
+        corrupted = bytearray(frame)
+        corrupted[index] ^= 0x10
+        return bytes(corrupted)
+
+    return change
+
+
+def test_sim_handler_is_registered_once_and_serves_serial_for_url():
+    register_sim_handler()
+    register_sim_handler()
+    assert serial.protocol_handler_packages.count("hardware") == 1
+    port = serial.serial_for_url("sim://?seed=2", baudrate=115200, timeout=0.05)
+    port.write(encode_request(GALVO, 1, Cmd.PING))
+    assert port.read(10)[4:8] == bytes((0x00, Cmd.PING, 2, 1))  # status OK, PING, kind galvo, version 1
+    port.close()
+
+
+def test_corrupted_reply_is_retried_and_answered_from_memory(bus):
+    world = bus.port.world
+    world.tamper("reply", flip(6))
+    assert unpack(Cmd.PING, bus.request(GALVO, Cmd.PING).payload, reply=True) == (2, 1)
+    assert bus.stats.retries == 1
+    assert world.galvo.executed[Cmd.PING] == 1
+
+
+@pytest.mark.parametrize("where", [1, 2, 4, 5, 8, 10])
+def test_corrupted_request_is_retried_and_runs_exactly_once(bus, where):
+    world = bus.port.world
+    world.tamper("request", flip(where))
+    bus.request(GALVO, Cmd.GALVO_SET, pack(Cmd.GALVO_SET, 0, 1000, -1000))
+    assert bus.stats.retries == 1
+    assert world.galvo.executed[Cmd.GALVO_SET] == 1
+    assert [m.target for m in world.galvo.axes[0].mirrors] == [1000.0, -1000.0]
+
+
+def test_lost_reply_is_retried_and_the_command_runs_exactly_once(bus):
+    world = bus.port.world
+    world.tamper("reply", lambda frame: b"")
+    world.tamper("reply", lambda frame: frame[:5])  # and the second reply cut short
+    bus.request(STEPPER, Cmd.HOME, pack(Cmd.HOME, 0))
+    assert bus.stats.retries == 2
+    assert world.stepper.executed[Cmd.HOME] == 1
+
+
+def test_garbage_before_a_reply_is_skipped_without_a_retry(bus):
+    world = bus.port.world
+    garbage = bytes((0x00, 0xA5, 0x81, 0x00, 0x20, 0xA5, 0x17, 0xFF, 0xA5))
+    world.tamper("reply", lambda frame: garbage + frame)
+    assert unpack(Cmd.PING, bus.request(LENS, Cmd.PING).payload, reply=True) == (3, 1)
+    assert bus.stats.retries == 0
+
+
+def test_a_duplicated_reply_is_discarded_as_stale_by_the_next_request(bus):
+    world = bus.port.world
+    world.tamper("reply", lambda frame: frame + frame)
+    bus.request(LENS, Cmd.PING)
+    reply = bus.request(LENS, Cmd.STATUS)
+    assert reply.cmd == Cmd.STATUS
+    assert bus.stats.stale_replies == 1
+
+
+def test_absent_micro_times_out_within_a_bounded_time():
+    with Bus("sim://?absent=3", timeout=0.05, retries=3) as bus:
+        world = bus.port.world
+        start, wall = world.now, time.monotonic()
+        with pytest.raises(Timeout, match=r"address 3\).*PING in 4 tries"):
+            bus.request(LENS, Cmd.PING)
+        elapsed = world.now - start
+        assert 4 * 0.05 <= elapsed <= 4 * (0.05 + 7 * world.byte_time) + 1e-9
+        assert time.monotonic() - wall < 1.0
+        assert bus.stats.failures == 1
+
+
+def test_only_corrupted_replies_raise_corrupt_frame(bus):
+    world = bus.port.world
+    for _ in range(4):
+        world.tamper("reply", flip(7))
+    with pytest.raises(CorruptFrame, match="corrupted"):
+        bus.request(GALVO, Cmd.PING)
+
+
+def test_broadcast_is_not_awaited_and_every_micro_acts_on_it(bus):
+    world = bus.port.world
+    start = world.now
+    bus.broadcast(Cmd.ESTOP)
+    # Exactly the time to put the 7-byte frame on the wire (flush), no reply timeout.
+    assert world.now - start == pytest.approx(7 * world.byte_time)
+    for micro in (world.stepper, world.galvo, world.lens):
+        assert micro.executed[Cmd.ESTOP] == 1
+        assert all(axis.latched & Flag.FAULT_ESTOP for axis in micro.axes)
+    world.sleep(0.1)
+    assert bus.port.in_waiting == 0
+
+
+def test_device_errors_map_to_exceptions_with_the_fault_bit(bus):
+    with pytest.raises(UnknownCommand, match="LENS_GET"):
+        bus.request(STEPPER, Cmd.LENS_GET, pack(Cmd.LENS_GET, 0))
+    with pytest.raises(BadLength, match="GALVO_SET"):
+        bus.request(GALVO, Cmd.GALVO_SET, b"\x00")
+    bus.request(GALVO, Cmd.ESTOP)
+    reply = bus.request(GALVO, Cmd.STATUS)
+    assert reply.status == FAULT_BIT
+    with pytest.raises(Fault) as info:
+        bus.request(GALVO, Cmd.GALVO_SET, pack(Cmd.GALVO_SET, 0, 0, 0))
+    assert info.value.fault_latched
+
+
+def test_random_faults_on_the_wire_never_run_a_command_twice():
+    url = "sim://?seed=7&drop=0.005&corrupt=0.005&duplicate=0.005&truncate=0.01&delay=0.01&lag=0.02"
+    with Bus(url, timeout=0.05, retries=5) as bus:
+        world = bus.port.world
+        for i in range(300):
+            bus.request(GALVO, Cmd.GALVO_SET, pack(Cmd.GALVO_SET, i % 2, i, -i))
+        assert world.galvo.executed[Cmd.GALVO_SET] == 300
+        assert bus.stats.retries > 0
+        assert bus.stats.failures == 0
+        assert [m.target for m in world.galvo.axes[1].mirrors] == [299.0, -299.0]
+
+
+def test_bus_is_safe_to_share_between_threads(bus):
+    errors = []
+
+    def hammer(addr: int, kind: int) -> None:
+        try:
+            for _ in range(100):
+                assert unpack(Cmd.PING, bus.request(addr, Cmd.PING).payload, reply=True)[0] == kind
+        except Exception as exc:  # noqa: BLE001 - handed to the main thread
+            errors.append(exc)
+
+    threads = [threading.Thread(target=hammer, args=(addr, addr)) for addr in (1, 2, 3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert errors == []
+    assert bus.stats.requests == 300
+
+
+def test_sequence_numbers_advance_per_address_and_retries_reuse_them(bus):
+    world = bus.port.world
+    seen = []
+    world.tamper("request", lambda frame: seen.append(frame[2]) or frame)
+    world.tamper("request", lambda frame: seen.append(frame[2]) or b"")
+    world.tamper("request", lambda frame: seen.append(frame[2]) or frame)
+    bus.request(GALVO, Cmd.PING)
+    bus.request(GALVO, Cmd.PING)
+    assert seen[1] == seen[2] == (seen[0] + 1) % 256
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [({"timeout": 0}, "timeout"), ({"timeout": "1"}, "timeout"), ({"retries": -1}, "retries")],
+)
+def test_bus_rejects_bad_settings_by_name(kwargs, name):
+    with pytest.raises(ValueError, match=name):
+        Bus("sim://", **kwargs)
+
+
+def test_bad_addresses_and_urls_are_rejected_by_name(bus):
+    with pytest.raises(ValueError, match="addr"):
+        bus.request(0, Cmd.PING)
+    with pytest.raises(TypeError, match="url"):
+        open_port(None)
+    with pytest.raises(ValueError, match="unknown sim:// parameter 'drops'"):
+        open_port("sim://?drops=0.1")
