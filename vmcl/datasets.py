@@ -94,7 +94,7 @@ def _single_channel(path) -> np.ndarray:
     """A grey map, also when stored as three identical channels (as several Middlebury PNGs are)."""
     image = read_image(path)
     if image.ndim == 3:
-        if not (np.array_equal(image[..., 0], image[..., 1]) and np.array_equal(image[..., 0], image[..., 2])):
+        if not (image == image[..., :1]).all():
             raise ValueError(f"{path} has three different channels; expected a single-channel map")
         image = image[..., 0]
     return image

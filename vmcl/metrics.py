@@ -673,8 +673,10 @@ def detection_scores(predicted, truth, *, tolerance: float = 1.0) -> DetectionSc
     if not np.isfinite(tolerance) or tolerance < 0:
         raise ValueError(f"tolerance must be a finite number >= 0, got {tolerance}")
     n_predicted, n_true = int(predicted.sum()), int(truth.sum())
-    precision = np.count_nonzero(predicted & _within(truth, tolerance)) / n_predicted if n_predicted else np.nan
-    recall = np.count_nonzero(truth & _within(predicted, tolerance)) / n_true if n_true else np.nan
+    found_predicted = np.count_nonzero(predicted & _within(truth, tolerance))
+    found_truth = np.count_nonzero(truth & _within(predicted, tolerance))
+    precision = found_predicted / n_predicted if n_predicted else np.nan
+    recall = found_truth / n_true if n_true else np.nan
     f = float(_f_measure(precision, recall)) if n_predicted and n_true else float("nan")
     return DetectionScores(float(precision), float(recall), f, n_predicted, n_true)
 

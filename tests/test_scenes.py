@@ -1,0 +1,254 @@
+"""vmcl.scenes: the rendered images agree with their own ground truth, and with hand-computed geometry."""
+
+import cv2
+import numpy as np
+import pytest
+
+from vmcl import scenes
+from vmcl.scenes import Body, Camera, Face, Label, Light, Mark, Texture, World
+
+SIZE = (256, 256)
+X_AXIS, Y_AXIS = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)
+
+
+@pytest.fixture(scope="module")
+def rendered():
+    return {name: scenes.render(scenes.preset(name, shape=SIZE), seed=5) for name in scenes.PRESETS}
+
+
+def _warp(image, dx, dy):
+    h, w = dx.shape
+    xs, ys = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
+    return cv2.remap(image, xs + dx, ys + dy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
+def _world(*bodies, light=None, shape=(128, 128)):
+    return World(Camera(shape, float(shape[1]), 0.15), light or Light(ambient=0.3), bodies)
+
+
+def _wall(z=10.0, **kwargs):
+    return Body((Face((0.0, 0.0, z), X_AXIS, Y_AXIS, None, kwargs.pop("colour", (0.6, 0.6, 0.6)), **kwargs),))
+
+
+# --------------------------------------------------------------------------------------------- geometry
+
+
+@pytest.mark.parametrize("name", scenes.PRESETS)
+def test_stereo_warp_reproduces_left(rendered, name):
+    """I_left(x, y) = I_right(x - d, y) on pixels the right camera sees."""
+    scene = rendered[name]
+    warped = _warp(scene.right, -scene.disparity, np.zeros_like(scene.disparity))
+    value_range = float(np.ptp(scene.left))
+    seen = ~scene.occluded_stereo
+    assert np.abs(warped - scene.left)[seen].mean() < 0.01 * value_range
+    # The wrong sign is far worse, so the test can fail.
+    wrong = _warp(scene.right, scene.disparity, np.zeros_like(scene.disparity))
+    assert np.abs(wrong - scene.left)[seen].mean() > 0.02 * value_range
+
+
+@pytest.mark.parametrize("name", scenes.PRESETS)
+def test_flow_warp_reproduces_left(rendered, name):
+    """I_t(x, y) = I_t+1(x + u, y + v) on pixels still seen at t + 1."""
+    scene = rendered[name]
+    warped = _warp(scene.left_next, scene.flow[..., 0], scene.flow[..., 1])
+    seen = ~scene.occluded_motion
+    assert np.abs(warped - scene.left)[seen].mean() < 0.01 * float(np.ptp(scene.left))
+
+
+def test_depth_disparity_focal_baseline(rendered):
+    scene = rendered["cues"]
+    assert scene.focal == 256.0 and scene.baseline == 0.15
+    assert np.allclose(scene.disparity * scene.depth, scene.focal * scene.baseline, rtol=1e-6)
+    # The wall is the plane z = 6, the plate z = 4.5.
+    wall, plate = scene.bodies == 0, scene.bodies == 1
+    assert np.allclose(scene.depth[wall], 6.0, rtol=1e-6) and np.allclose(scene.depth[plate], 4.5, rtol=1e-6)
+    assert np.allclose(scene.disparity[wall], 256 * 0.15 / 6, rtol=1e-6)
+
+
+def test_flow_hand_computed(rendered):
+    # cues: static rig, the plate (z = 4.5) moves 0.1 to the right.
+    cues = rendered["cues"]
+    plate = cues.bodies == 1
+    assert np.allclose(cues.flow[plate], (256 * 0.1 / 4.5, 0.0), atol=1e-4)
+    assert np.abs(cues.flow[cues.bodies == 0]).max() == 0.0
+    # blocks: the rig pans 0.04 to the right; the wall z = 8 is static, so it moves left in the image.
+    blocks = rendered["blocks"]
+    wall = blocks.bodies == 0
+    assert np.allclose(blocks.flow[wall], (-256 * 0.04 / 8, 0.0), atol=1e-4)
+
+
+def test_occlusion_masks_hand_computed(rendered):
+    scene = rendered["cues"]
+    d_wall, d_plate = 256 * 0.15 / 6, 256 * 0.15 / 4.5
+    row = 128
+    occluded = np.flatnonzero(scene.occluded_stereo[row])
+    # Left border: x - d < 0 for x < 6.4; left of the plate (its edge at x = 178.7) a strip of width
+    # d_plate - d_wall = 2.13 px, i.e. x in [176.57, 178.7).
+    assert occluded.tolist() == list(range(7)) + [177, 178]
+    assert 178.7 - (d_plate - d_wall) == pytest.approx(176.567, abs=1e-3)
+    # The plate moves 5.69 px right: wall pixels 247..252 (right of its edge at 246.97) get covered.
+    assert np.flatnonzero(scene.occluded_motion[row]).tolist() == list(range(247, 253))
+
+
+@pytest.mark.parametrize("shape", [(64, 64), (97, 131), (1024, 1024)])
+def test_any_size_same_world(shape):
+    scene = scenes.render(scenes.preset("cues", shape=shape))
+    h, w = shape
+    assert scene.left.shape == scene.right.shape == scene.left_next.shape == (h, w, 3)
+    assert scene.flow.shape == (h, w, 2)
+    assert scene.line_h.shape == (h, w - 1) and scene.line_v.shape == (h - 1, w)
+    assert scene.left.dtype == np.float32 and scene.labels.dtype == np.uint8
+    # Focal length = width: the wall's disparity is 0.025 of the width at every size.
+    assert np.nanmin(scene.disparity) == pytest.approx(0.025 * w, rel=1e-6)
+    assert np.isfinite(scene.left).all()
+
+
+def test_seeded_and_deterministic():
+    world = scenes.preset("blocks", shape=(96, 96))
+    a, b = scenes.render(world, seed=3, noise=0.01), scenes.render(world, seed=3, noise=0.01)
+    for field in ("left", "right", "left_next", "albedo", "flow", "labels"):
+        assert np.array_equal(getattr(a, field), getattr(b, field), equal_nan=True)
+    other = scenes.render(world, seed=4, noise=0.01)
+    assert not np.array_equal(a.albedo, other.albedo)
+    assert np.array_equal(a.depth, other.depth) and np.array_equal(a.labels, other.labels)
+
+
+def test_noise_level():
+    world = scenes.preset("shadows", shape=SIZE)
+    clean, noisy = scenes.render(world, seed=1), scenes.render(world, seed=1, noise=0.02)
+    residual = noisy.left - clean.left
+    assert residual.std() == pytest.approx(0.02, rel=0.02)
+    assert abs(residual.mean()) < 1e-3
+    assert not np.array_equal(noisy.left - clean.left, noisy.right - clean.right)
+
+
+# --------------------------------------------------------------------------------------------- image model
+
+
+@pytest.mark.parametrize("name", ["shadows", "blocks"])
+def test_image_model_and_constant_hue(rendered, name):
+    """I = k E rho exactly, so H = R / (R + G) is constant in each albedo region despite E."""
+    scene = rendered[name]
+    model = scene.light_colour * scene.illumination[..., None] * scene.albedo
+    assert np.array_equal(model, scene.left)
+    hue = scene.left[..., 0] / (scene.left[..., 0] + scene.left[..., 1])
+    for region in np.unique(scene.regions):
+        inside = scene.regions == region
+        h = hue[inside]
+        assert (h.max() - h.min()) / h.mean() < 0.01
+    # ... while the illumination changes: by shading, gradient and shadow.
+    assert scene.shadow.any()
+    assert np.ptp(scene.illumination) / np.max(scene.illumination) > 0.5
+
+
+def test_shadows_preset_strong_gradient(rendered):
+    scene = rendered["shadows"]
+    wall = scene.surfaces == 0
+    for region in np.unique(scene.regions[wall]):
+        brightness = scene.left[scene.regions == region].sum(axis=-1)
+        assert np.ptp(brightness) / brightness.max() > 0.3
+    assert (scene.labels == Label.SHADOW).sum() > 100 and not (scene.labels == Label.SPECULAR).any()
+
+
+def test_specular_highlight_breaks_the_model_only_where_it_shines():
+    world = scenes.preset("blocks", shape=SIZE, specular=True)
+    scene = scenes.render(world, seed=5)
+    matte = scenes.render(scenes.preset("blocks", shape=SIZE), seed=5)
+    shines = scene.specular > 0
+    assert shines.sum() > 1000 and (scene.labels == Label.SPECULAR).sum() > 20
+    assert np.array_equal(scene.left[~shines], matte.left[~shines])
+    expected = scene.light_colour * (scene.illumination[..., None] * scene.albedo + scene.specular[..., None])
+    assert np.array_equal(expected, scene.left)
+
+
+# --------------------------------------------------------------------------------------------- labels
+
+
+def test_shadow_boundary_is_shadow_not_albedo():
+    # A plate at z = 3 in front of a flat wall at z = 5, light from the upper left.
+    plate = Body((Face((-0.5, -0.5, 3.0), X_AXIS, Y_AXIS, (1.0, 1.0), (0.8, 0.8, 0.8)),))
+    direction = np.array([-0.3, -0.3, -1.0])
+    scene = scenes.render(_world(_wall(5.0), plate, light=Light(tuple(direction), ambient=0.3)))
+    # The shadow is the plate moved along -L by 2 / 1.0 * (0.3, 0.3): x, y in [-0.5, 0.5] + 0.6 on the wall.
+    cx = 63.5
+    lo, hi = cx + 128 * 0.1 / 5, cx + 128 * 1.1 / 5
+    ys, xs = np.nonzero(scene.shadow)
+    assert xs.min() == np.ceil(lo) and xs.max() == np.floor(hi)
+    assert ys.max() == np.floor(hi)
+    boundary = scene.labels == Label.SHADOW
+    assert boundary.sum() > 50
+    assert not np.isin(scene.labels, [Label.ALBEDO, Label.TEXTURE]).any()
+    # Right edge of the shadow: the site between x = floor(hi) and x + 1 labels its left pixel.
+    row = int(np.floor(hi)) - 2
+    assert scene.line_h[row, int(np.floor(hi))] == Label.SHADOW
+    assert scene.labels[row, int(np.floor(hi))] == Label.SHADOW
+
+
+def test_fold_is_orientation():
+    # Panels from x = -1 to the crease at x = 0 (z = 4) and back to x = 1, in front of a wall.
+    panels = scenes.fold((-1.0, -1.0, 5.0), (0.0, -1.0, 4.0), (1.0, -1.0, 5.0), 2.0, colour=(0.7, 0.6, 0.5))
+    scene = scenes.render(_world(_wall(10.0), Body(panels)))
+    # The crease projects to x = cx = 63.5: the site between columns 63 and 64 carries the label, on 63.
+    rows = np.arange(50, 78)
+    assert (scene.line_h[rows, 63] == Label.ORIENTATION).all()
+    assert (scene.labels[rows, 63] == Label.ORIENTATION).all()
+    orientation = np.argwhere(scene.labels == Label.ORIENTATION)
+    assert set(orientation[:, 1]) == {63}
+    assert (scene.labels[np.isin(scene.bodies, [1]) & (scene.labels > 0)] != Label.ALBEDO).all()
+
+
+def test_occluding_contour_is_depth_on_the_nearer_pixel():
+    plate = Body((Face((-0.5, -0.5, 4.0), X_AXIS, Y_AXIS, (1.0, 1.0), (0.6, 0.6, 0.6)),))
+    scene = scenes.render(_world(_wall(8.0), plate, light=Light(ambient=1.0)))  # no shadow
+    # Edges at x = 63.5 -+ 128 * 0.5 / 4 = 47.5 and 79.5: the plate's pixels are 48..79.
+    row = 64
+    assert np.flatnonzero(scene.bodies[row] == 1).tolist() == list(range(48, 80))
+    assert scene.line_h[row, 47] == scene.line_h[row, 79] == Label.DEPTH
+    assert scene.labels[row, 48] == scene.labels[row, 79] == Label.DEPTH
+    assert scene.labels[row, 47] == scene.labels[row, 80] == Label.NONE
+    assert set(np.unique(scene.labels)) == {Label.NONE, Label.DEPTH}
+
+
+def test_marks_albedo_texture_and_invisible():
+    blobs = Texture("blobs", 0.4, 0.5, size=0.05)
+    other = Texture("blobs", 0.8, 0.5, size=0.05)
+    marks = (
+        Mark("rect", (-3.0, -1.0, -1.5, 1.0), (0.2, 0.5, 0.7)),  # another colour: albedo
+        Mark("rect", (-0.75, -1.0, 0.75, 1.0), (0.6, 0.6, 0.6), other),  # same colour, other texture
+        Mark("rect", (1.5, -1.0, 3.0, 1.0), (0.6, 0.6, 0.6)),  # same colour and texture: invisible
+    )
+    scene = scenes.render(_world(_wall(10.0, texture=blobs, marks=marks)))
+    row = 64
+    # Mark edges at x = 63.5 + 12.8 s: -3 -> 25.1, -1.5 -> 44.3, -0.75 -> 53.9, 0.75 -> 73.1, 1.5 -> 82.7.
+    labelled = {int(x): Label(scene.labels[row, x]).name for x in np.flatnonzero(scene.labels[row])}
+    assert labelled == {25: "ALBEDO", 44: "ALBEDO", 53: "TEXTURE", 73: "TEXTURE"}
+    assert len(np.unique(scene.regions)) == 4
+
+
+# --------------------------------------------------------------------------------------------- bad input
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="unknown preset 'nope'"):
+        scenes.preset("nope")
+    with pytest.raises(ValueError, match="64..1024"):
+        scenes.preset("blocks", shape=(63, 64))
+    with pytest.raises(ValueError, match="64..1024"):
+        scenes.preset("blocks", shape=(64, 2048))
+    world = scenes.preset("blocks", shape=(64, 64))
+    with pytest.raises(ValueError, match="noise"):
+        scenes.render(world, noise=-0.1)
+    with pytest.raises(ValueError, match="seed"):
+        scenes.render(world, seed=-1)
+    with pytest.raises(TypeError, match="World"):
+        scenes.render("blocks")
+    with pytest.raises(ValueError, match="orthonormal"):
+        Face((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.5, 1.0, 0.0), None, (0.5, 0.5, 0.5))
+    with pytest.raises(ValueError, match="contrast"):
+        Texture("noise", 1.0, 1.0)
+    with pytest.raises(ValueError, match="6 \\* size <= scale"):
+        Texture("blobs", 1.0, 0.5, size=0.2)
+    with pytest.raises(ValueError, match="colour must be in \\[0, 1\\]"):
+        Face((0.0, 0.0, 1.0), X_AXIS, Y_AXIS, None, (1.5, 0.5, 0.5))
+    with pytest.raises(ValueError, match="rect or 'disc'|'rect' or 'disc'"):
+        Mark("triangle", (0.0, 0.0, 1.0), (0.5, 0.5, 0.5))
