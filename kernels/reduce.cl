@@ -101,10 +101,3 @@ __kernel void histogram_tiles(__global const T *x, __global int *out, __local in
         }
     }
 }
-
-/* Zero an int buffer (pyopencl's fill is slow on PoCL). */
-__kernel void zero_int(__global int *x, long n)
-{
-    long i = get_global_id(0);
-    if (i < n) x[i] = 0;
-}

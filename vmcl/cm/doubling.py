@@ -24,7 +24,7 @@ import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as _reduce
 from vmcl.cm._arrays import ArrayLike, field, machine_for, result
-from vmcl.cm.scan import scan_rows_into
+from vmcl.cm.scan import exclusive_sum_into
 from vmcl.machine import Machine
 
 LabelMethod = Literal["doubling", "iterative"]
@@ -187,7 +187,6 @@ def _relabel(machine: Machine, labels: cl_array.Array) -> cl_array.Array:
     n = labels.size
     roots, ids, out = (machine.empty(labels.shape, np.int32) for _ in range(3))
     machine.launch(machine.kernel("doubling", "mark_roots"), (n,), labels, roots, np.int64(n))
-    flat = dict(T="int", T_IS_FLOAT=0, OP=0, SEGMENTED=0, EXCLUSIVE=1)
-    scan_rows_into(machine, roots.reshape(n), None, ids.reshape(n), flat)
+    exclusive_sum_into(machine, roots.reshape(n), ids.reshape(n))
     machine.launch(machine.kernel("doubling", "relabel"), (n,), labels, ids, out, np.int64(n))
     return out

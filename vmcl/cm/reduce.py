@@ -132,7 +132,7 @@ def histogram(x: ArrayLike, bins: int, range: tuple[float, float], *, tile: tupl
     out = machine.empty(shape, np.int32)
     defines = dict(OP=0, ACC="int", **type_defines(data.dtype))
     if accumulate:
-        machine.launch(machine.kernel("reduce", "zero_int", **defines), (bins,), out, np.int64(bins))
+        cl.enqueue_fill_buffer(machine.queue, out.base_data, np.int32(0), 0, out.nbytes)
     local = 1 if machine.is_cpu else min(256, machine.device.max_work_group_size)
     scale = np.float32(bins) / (np.float32(hi) - np.float32(lo))
     kernel = machine.kernel("reduce", "histogram_tiles", **defines)

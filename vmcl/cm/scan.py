@@ -138,6 +138,12 @@ def column_groups(width: int) -> list[tuple[int, int, int]]:
     return [group for group in groups if group[2]]
 
 
+def exclusive_sum_into(machine: Machine, counts: cl_array.Array, out: cl_array.Array) -> None:
+    """Exclusive plus-scan of a flat int32 device array into ``out``: offsets from counts."""
+    scan_rows_into(machine, counts.reshape(counts.size), None, out.reshape(out.size),
+                   dict(type_defines(np.dtype(np.int32)), OP=OPS["plus"], SEGMENTED=0, EXCLUSIVE=1))
+
+
 def _scan_cols(machine: Machine, data: cl_array.Array, flags: cl_array.Array | None,
                out: cl_array.Array, defines: dict) -> None:
     height, width = data.shape[-2], data.shape[-1]
