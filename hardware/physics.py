@@ -101,8 +101,8 @@ def trapezoid_step(
 ) -> tuple[float, float]:
     """Advance a trapezoidal (accelerate, cruise, decelerate) profile by `dt`.
 
-    The velocity moves towards the fastest speed from which the axis can still stop at `target`
-    (``sqrt(2 * accel * distance)``, capped at `vmax`) by at most ``accel * dt``; a step on that braking
+    The velocity moves by at most ``accel * dt`` towards the fastest speed from which the axis can still
+    stop at `target` (about ``sqrt(2 * accel * distance)``, capped at `vmax`); a step on that braking
     curve that would reach or pass the target lands exactly on it, at rest, so an axis always ends on
     its target count.
 
@@ -112,12 +112,15 @@ def trapezoid_step(
         The new position and velocity.
     """
     remaining = target - pos
-    desired = math.copysign(min(vmax, math.sqrt(2.0 * accel * abs(remaining))), remaining)
     change = accel * dt
+    # The braking curve of the discrete profile: from speed n * change, braking by `change` a step
+    # covers n (n + 1) / 2 * change * dt, the continuous sqrt(2 * accel * d) in the limit of small dt.
+    braking = change * (math.sqrt(0.25 + 2.0 * abs(remaining) / (change * dt)) - 0.5)
+    desired = math.copysign(min(vmax, braking), remaining)
     vel += max(-change, min(change, desired - vel))
     step = vel * dt
-    # Land only when on the braking curve: a retarget closer than the stopping distance overshoots and
-    # comes back, as a real axis must.
+    # Land when this step reaches the target on the braking curve. A retarget closer than the stopping
+    # distance is far above the curve, so it overshoots and comes back, as a real axis must.
     on_curve = abs(vel) <= abs(desired) + change
     if on_curve and (remaining == 0.0 or step / remaining >= 1.0):
         return float(target), 0.0
