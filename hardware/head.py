@@ -149,7 +149,13 @@ class Head:
             Still moving after `timeout` seconds.
         """
         parts = (*self.joints, *self.eyes)
-        self.bus.wait_for(lambda: all(part.settled() for part in parts), timeout=timeout, what="the head")
+
+        def settled() -> bool:
+            # Ask every part each time: a fault anywhere shows at once, and every micro's watchdog is fed.
+            states = [part.settled() for part in parts]
+            return all(states)
+
+        self.bus.wait_for(settled, timeout=timeout, what="the head")
 
     def home(self, *, wait: bool = True) -> None:
         """Clear every latched fault and calibrate everything: each joint on its limit switch and index

@@ -43,6 +43,9 @@ class Serial(SerialBase):
         self.world = World.from_url(self._port, baudrate=self._baudrate)
         self.is_open = True
 
+    def close(self) -> None:
+        self.is_open = False
+
     @property
     def clock(self) -> World:
         return self.world

@@ -7,7 +7,7 @@ byte protocol (hardware.protocol), so the host code under test is exactly the co
 Time is virtual. It advances only when the host waits: reading the port (until the bytes it wants have
 arrived, or its timeout has passed), flushing it, or sleeping through `World.sleep`. Every byte takes
 10 bit times on the wire at the port's baud rate; a micro answers `turnaround` seconds after the last
-byte of a request; axes move in steps of at most 1 ms. A run is therefore fast and, for a given seed,
+byte of a request; each micro's control loop moves its axes on a 1 kHz tick. A run is therefore fast and, for a given seed,
 repeats to the bit.
 
 The wire is a 4-wire multi-drop line (RS-422/RS-485 full duplex), as pyserial sees it: every micro hears
@@ -148,6 +148,7 @@ class World:
         self.byte_time = 10.0 / baudrate
         self.turnaround = turnaround
         self.now = 0.0
+        self._ticks = 0
         self._fault_rng = random.Random(f"{seed}/faults")
         mech_rng = random.Random(f"{seed}/mechanics")
 
@@ -227,16 +228,17 @@ class World:
         self._run_physics(t)
 
     def _run_physics(self, until: float) -> None:
-        # Physics runs lazily: only a micro acting on a request, or the end of an advance, needs the
-        # axes brought up to date, in steps of at most _TICK.
-        span = until - self.now
-        if span > 0.0:
+        # Each micro runs its control loop on a 1 kHz timer, as real firmware does: the axes move on
+        # that fixed grid of ticks, and a request is served with the state of the last tick before it.
+        # Ticks run lazily, when a request arrives or an advance ends.
+        last = math.floor(until / _TICK + 1e-9)
+        if last > self._ticks:
             for micro in self.micros.values():
                 if micro.busy:
-                    n = math.ceil(span / _TICK - 1e-9)
-                    for i in range(1, n + 1):
-                        micro.tick(self.now + span * i / n, span / n)
-            self.now = until
+                    for k in range(self._ticks + 1, last + 1):
+                        micro.tick(k * _TICK, _TICK)
+            self._ticks = last
+        self.now = max(self.now, until)
 
     def _deliver(self, byte: int, arrival: float) -> None:
         for frame in self._parser.feed(bytes((byte,))):

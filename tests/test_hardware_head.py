@@ -1,0 +1,319 @@
+"""The Head in physical units over the simulator: homing, travel, limits, faults, stops, the eyes."""
+
+import dataclasses
+import math
+
+import pytest
+
+from hardware.commands import FAULT_FLAGS, Cmd, Flag
+from hardware.errors import Fault, NotHomed, OutOfRange, UnknownCommand
+from hardware.eye import line_of_sight, mirror_angles
+from hardware.head import Head
+from hardware.physics import COUNTS_PER_DEGREE, PAN, TILT
+
+
+def open_head(url="sim://?seed=1", **kwargs):
+    return Head(url, **kwargs)
+
+
+@pytest.fixture(scope="module")
+def homed():
+    """One homed head for the tests that only move it (homing takes 11 s of virtual time)."""
+    with open_head() as head:
+        head.home()
+        yield head
+
+
+def world_of(head):
+    return head.bus.port.world
+
+
+def at_rest(world):
+    return not any(axis.moving for micro in world.micros.values() for axis in micro.axes)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_homing_finds_the_same_encoder_zero_from_any_start(seed):
+    zeros = {"pan": set(), "tilt": set()}
+    starts = [-92.5, -91.05, -90.9, -45.0, 0.0, 37.0, 89.9, 92.5]
+    for start in starts:
+        tilt = min(max(start, -92.5), 2.5)
+        with open_head(f"sim://?seed={seed}&pan={start}&tilt={tilt}") as head:
+            head.home()
+            world = world_of(head)
+            for name, axis in zip(("pan", "tilt"), world.stepper.axes):
+                zeros[name].add(axis.zero)
+                assert axis.encoder == 0
+                assert abs(axis.mech.position) <= 1
+            assert head.pan.position == 0.0
+            assert head.tilt.position == 0.0
+    # The encoder zero is where the joint's true zero is, to the count, whatever the start.
+    for name in zeros:
+        assert max(zeros[name]) - min(zeros[name]) <= 1, name
+        assert abs(next(iter(zeros[name]))) <= 1
+
+
+def test_full_sweeps_reach_both_soft_limits_within_one_count(homed):
+    world = world_of(homed)
+    for joint, axis, geometry in zip(homed.joints, world.stepper.axes, (PAN, TILT)):
+        low, high = joint.limits
+        for angle, count in ((low, geometry.soft_min), (high, geometry.soft_max), (low, geometry.soft_min)):
+            homed.move(**{joint.name: angle})
+            assert abs(joint.status().encoder - count) <= 1
+            assert abs(axis.mech.position - count) <= 1
+            assert not axis.latched
+    assert homed.pan.limits == (-90.0, 90.0)
+    assert homed.tilt.limits == (-90.0, 0.0)
+    homed.move(pan=0.0, tilt=0.0)
+
+
+def test_move_reaches_angles_to_the_encoder_resolution(homed):
+    homed.move(pan=33.3, tilt=-12.5)
+    assert homed.pan.position == pytest.approx(33.3, abs=0.5 / COUNTS_PER_DEGREE)
+    assert homed.tilt.position == pytest.approx(-12.5, abs=0.5 / COUNTS_PER_DEGREE)
+    homed.move(pan=0.0, tilt=0.0)
+
+
+def test_out_of_travel_move_is_refused_on_the_host_and_nothing_moves(homed):
+    world = world_of(homed)
+    before = [axis.mech.position for axis in world.stepper.axes]
+    requests = homed.bus.stats.requests
+    with pytest.raises(OutOfRange, match=r"tilt 5 deg is outside its travel \[-90, 0\] deg; nothing moved"):
+        homed.move(pan=45.0, tilt=5.0)  # the pan target is fine, but neither joint may move
+    assert homed.bus.stats.requests == requests
+    world.sleep(1.0)
+    assert [axis.mech.position for axis in world.stepper.axes] == before
+
+
+def test_out_of_travel_move_is_refused_by_the_micro_too(homed):
+    world = world_of(homed)
+    before = world.stepper.axes[0].mech.position
+    with pytest.raises(OutOfRange, match="pan: stepper micro refused MOVE_TO"):
+        homed.pan.move_to_counts(PAN.soft_max + 1)
+    world.sleep(1.0)
+    assert world.stepper.axes[0].mech.position == before
+    assert world.stepper.executed[Cmd.MOVE_TO] > 0
+
+
+def test_move_before_homing_raises_not_homed_and_nothing_moves():
+    with open_head("sim://?seed=3&pan=10&tilt=-20") as head:
+        world = world_of(head)
+        with pytest.raises(NotHomed, match="pan: .*not homed"):
+            head.move(pan=30.0)
+        with pytest.raises(NotHomed, match="left lens: not homed"):
+            head.left.set_lens(zoom=50.0)
+        world.sleep(1.0)
+        assert world.stepper.axes[0].mech.position == pytest.approx(10 * COUNTS_PER_DEGREE)
+        assert at_rest(world)
+
+
+def test_limit_hit_stops_the_axis_and_latches_until_cleared_or_homed():
+    with open_head("sim://?seed=4") as head:
+        head.home()
+        world = world_of(head)
+        pan = world.stepper.axes[0]
+        # A limit switch knocked 60 degrees inwards, as an obstacle would be.
+        pan.mech.geometry = dataclasses.replace(PAN, switch_pos=round(30 * COUNTS_PER_DEGREE))
+        with pytest.raises(Fault, match="pan: .*FAULT: limit switch hit"):
+            head.move(pan=60.0)
+        stopped = pan.mech.position
+        assert 30 * COUNTS_PER_DEGREE <= stopped < 31 * COUNTS_PER_DEGREE
+        with pytest.raises(Fault, match="fault is latched"):
+            head.move(pan=0.0)  # latched: even a move away is refused
+        head.tilt.move_to(-10.0)  # the other joint is not affected
+        head.clear_faults()
+        with pytest.raises(Fault, match="limit switch hit"):
+            head.move(pan=50.0)  # still on the switch, moving further in: latches again
+        assert pan.mech.position == pytest.approx(stopped, abs=50)
+        head.clear_faults()
+        head.move(pan=0.0)  # moving away from the switch is fine once cleared
+        assert head.pan.position == 0.0
+        with pytest.raises(Fault, match="limit switch hit"):
+            head.move(pan=45.0)
+        pan.mech.geometry = PAN  # the obstacle removed
+        head.home()  # homing clears the latch too
+        assert not pan.latched
+        head.move(pan=25.0)
+        assert head.pan.position == pytest.approx(25.0, abs=1e-3)
+
+
+def test_stall_stops_the_axis_and_latches_until_cleared():
+    with open_head("sim://?seed=5") as head:
+        head.home()
+        world = world_of(head)
+        tilt = world.stepper.axes[1]
+        head.move(tilt=-80.0, wait=False)
+        world.sleep(0.5)
+        tilt.mech.jammed = True
+        with pytest.raises(Fault, match="tilt: .*FAULT: stalled"):
+            head.wait()
+        jammed_at = tilt.mech.position
+        assert tilt.latched == Flag.FAULT_STALL
+        assert not tilt.moving
+        with pytest.raises(Fault):
+            head.move(tilt=-60.0)
+        tilt.mech.jammed = False
+        head.clear_faults()
+        head.move(tilt=-60.0)
+        assert head.tilt.position == pytest.approx(-60.0, abs=1e-3)
+        assert jammed_at != tilt.mech.position
+
+
+def start_everything(head):
+    head.move(pan=80.0, tilt=-80.0, wait=False)
+    head.left.point(20.0, 10.0)
+    head.right.set_lens(zoom=75.0, focus=1.2, iris=16.0)
+
+
+def test_exception_inside_with_head_stops_every_motor():
+    head = open_head("sim://?seed=6")
+    world = world_of(head)
+    head.home()
+    with pytest.raises(RuntimeError, match="vision crashed"), head:
+        start_everything(head)
+        world.sleep(0.005)
+        assert not at_rest(world)
+        raise RuntimeError("vision crashed")
+    assert at_rest(world)
+    world.sleep(1.0)
+    assert at_rest(world)
+    assert world.stepper.axes[0].mech.position < 80 * COUNTS_PER_DEGREE
+    assert not any(axis.latched for micro in world.micros.values() for axis in micro.axes)
+    assert not head.bus.port.is_open
+
+
+def test_exception_with_silent_micros_falls_back_to_emergency_stop():
+    head = open_head("sim://?seed=6")
+    world = world_of(head)
+    head.home()
+    with pytest.raises(RuntimeError), head:
+        start_everything(head)
+        for _ in range(50):
+            world.tamper("reply", lambda frame: b"")  # every reply lost from here on
+        raise RuntimeError("boom")
+    assert at_rest(world)
+    assert all(axis.latched & Flag.FAULT_ESTOP for micro in world.micros.values() for axis in micro.axes)
+
+
+def test_leaving_with_head_normally_stops_every_motor_too():
+    with open_head("sim://?seed=6") as head:
+        world = world_of(head)
+        head.home()
+        start_everything(head)
+    assert at_rest(world)
+
+
+def test_watchdog_stops_motion_when_the_host_goes_silent():
+    with open_head("sim://?seed=7", watchdog=0.25) as head:
+        head.home()
+        world = world_of(head)
+        head.move(pan=-85.0, wait=False)
+        head.bus.sleep(1.0)  # the host does nothing for a second
+        pan = world.stepper.axes[0]
+        assert not pan.moving
+        assert pan.mech.position > -80 * COUNTS_PER_DEGREE
+        assert pan.latched & Flag.FAULT_WATCHDOG
+        with pytest.raises(Fault, match="watchdog"):
+            head.wait()
+        head.clear_faults()
+        head.move(pan=-85.0)  # polling while it waits keeps the watchdog fed
+        assert head.pan.position == pytest.approx(-85.0, abs=1e-3)
+
+
+def test_estop_stops_everything_at_once_and_home_recovers():
+    with open_head("sim://?seed=8") as head:
+        head.home()
+        world = world_of(head)
+        start_everything(head)
+        world.sleep(0.2)
+        head.estop()
+        assert at_rest(world)
+        status = head.status()
+        assert status.pan.flags & Flag.FAULT_ESTOP and status.right.flags & Flag.FAULT_ESTOP
+        head.home()
+        assert not head.status().pan.flags & FAULT_FLAGS
+
+
+def test_wrong_micro_at_an_address_is_reported_at_start_up():
+    with pytest.raises(UnknownCommand, match="address 2: expected the stepper micro, found a galvo micro"):
+        Head("sim://", stepper=2, galvo=1)
+
+
+def test_mirror_geometry_is_coupled_and_inverted_exactly():
+    assert line_of_sight(1.0, 0.0) == pytest.approx((2.0, 0.0))
+    assert line_of_sight(0.0, 1.0) == pytest.approx((0.0, 2.0))
+    az, el = line_of_sight(8.0, 8.0)
+    assert abs(az - 16.0) > 0.2  # the second mirror sees a beam the first has turned
+    for azimuth in (-18.0, -5.0, 0.0, 7.5, 18.0):
+        for elevation in (-18.0, 0.0, 3.0, 18.0):
+            assert line_of_sight(*mirror_angles(azimuth, elevation)) == pytest.approx(
+                (azimuth, elevation), abs=1e-9
+            )
+    with pytest.raises(OutOfRange, match="beyond"):
+        mirror_angles(30.0, 0.0)
+
+
+def test_pointing_and_lens_in_physical_units(homed):
+    homed.left.point(12.0, -6.0)
+    homed.left.set_lens(zoom=50.0, focus=2.0, iris=5.6)
+    homed.wait()
+    status = homed.left.status()
+    assert (status.azimuth, status.elevation) == pytest.approx((12.0, -6.0), abs=0.003)
+    assert status.zoom_mm == pytest.approx(50.0, abs=62.5 / 4095)
+    assert status.focus_m == pytest.approx(2.0, rel=2e-3)
+    assert status.f_number == pytest.approx(5.6, rel=2e-3)
+    homed.left.set_lens(focus=math.inf)
+    homed.wait()
+    assert homed.left.status().focus_m == math.inf
+    assert homed.left.status().zoom_mm == pytest.approx(50.0, abs=62.5 / 4095)
+
+
+def test_lens_lands_on_the_same_ring_position_from_either_side(homed):
+    ring = world_of(homed).lens.axes[4].mech  # right eye, focus
+    rings = []
+    for start in (1.3, 100.0):
+        homed.right.set_lens(focus=start)
+        homed.wait()
+        homed.right.set_lens(focus=3.0)
+        homed.wait()
+        rings.append(ring.ring)
+    assert rings[0] == rings[1]
+
+
+def test_fixate_sets_the_vergence(homed):
+    homed.fixate(1.0, baseline=0.3)
+    assert homed.vergence() == pytest.approx(2 * math.degrees(math.atan(0.15)), abs=0.005)
+    homed.fixate(1e9)
+    assert homed.vergence() == pytest.approx(0.0, abs=0.005)
+
+
+@pytest.mark.parametrize(
+    ("call", "error", "message"),
+    [
+        (lambda h: h.move(pan="10"), TypeError, "pan must be a number"),
+        (lambda h: h.move(tilt=math.nan), ValueError, "tilt must be finite"),
+        (lambda h: h.left.set_lens(), ValueError, "at least one of zoom"),
+        (lambda h: h.left.set_lens(zoom=100.0), OutOfRange, r"zoom must be in \[12.5, 75\] mm"),
+        (lambda h: h.left.set_lens(iris=1.0), OutOfRange, "iris"),
+        (lambda h: h.right.set_mirrors(0.0, 11.0), OutOfRange, "right mirror y"),
+        (lambda h: h.left.point(40.0, 0.0), OutOfRange, "beyond"),
+        (lambda h: h.fixate(-1.0), ValueError, "distance"),
+        (lambda h: h.pan.set_profile(0.0, 10.0), ValueError, "speed"),
+        (lambda h: h.stepper.set_watchdog(100.0), ValueError, "period"),
+    ],
+)
+def test_bad_arguments_are_refused_by_name(homed, call, error, message):
+    with pytest.raises(error, match=message):
+        call(homed)
+
+
+def test_profile_changes_the_speed(homed):
+    world = world_of(homed)
+    homed.pan.set_profile(10.0, 100.0)
+    start = world.now
+    homed.move(pan=20.0)
+    slow = world.now - start
+    homed.pan.set_profile(44.0, 88.0)
+    start = world.now
+    homed.move(pan=0.0)
+    assert slow > 2.0 > world.now - start
