@@ -48,9 +48,9 @@ def test_homing_finds_the_same_encoder_zero_from_any_start(seed):
             assert head.pan.position == 0.0
             assert head.tilt.position == 0.0
     # The encoder zero is where the joint's true zero is, to the count, whatever the start.
-    for name in zeros:
-        assert max(zeros[name]) - min(zeros[name]) <= 1, name
-        assert abs(next(iter(zeros[name]))) <= 1
+    for name, found in zeros.items():
+        assert max(found) - min(found) <= 1, name
+        assert abs(next(iter(found))) <= 1
 
 
 def test_full_sweeps_reach_both_soft_limits_within_one_count(homed):
@@ -242,8 +242,8 @@ def test_wrong_micro_at_an_address_is_reported_at_start_up():
 def test_mirror_geometry_is_coupled_and_inverted_exactly():
     assert line_of_sight(1.0, 0.0) == pytest.approx((2.0, 0.0))
     assert line_of_sight(0.0, 1.0) == pytest.approx((0.0, 2.0))
-    az, el = line_of_sight(8.0, 8.0)
-    assert abs(az - 16.0) > 0.2  # the second mirror sees a beam the first has turned
+    azimuth, _ = line_of_sight(8.0, 8.0)
+    assert abs(azimuth - 16.0) > 0.2  # the second mirror sees a beam the first has turned
     for azimuth in (-18.0, -5.0, 0.0, 7.5, 18.0):
         for elevation in (-18.0, 0.0, 3.0, 18.0):
             assert line_of_sight(*mirror_angles(azimuth, elevation)) == pytest.approx(
