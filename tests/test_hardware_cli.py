@@ -1,0 +1,105 @@
+"""The vmcl-head command line, against the simulator."""
+
+import io
+import re
+
+import pytest
+
+from hardware.cli import main
+
+
+def run(argv):
+    out = io.StringIO()
+    return main(argv, out=out), out.getvalue()
+
+
+def test_a_sequence_of_commands_runs_in_one_session(capsys):
+    status, out = run(
+        [
+            "home",
+            "move",
+            "30",
+            "-10",
+            "point",
+            "left",
+            "5",
+            "2",
+            "lens",
+            "right",
+            "zoom=50",
+            "focus=inf",
+            "iris=4",
+            "status",
+        ]
+    )
+    assert status == 0
+    assert out.startswith("homed\n")
+    assert "pan    +30.000 deg" in out
+    assert "tilt   -10.000 deg" in out
+    assert re.search(r"left  gaze \(\+(4\.99\d|5\.00\d), \+(1\.99\d|2\.00\d)\) deg", out)
+    assert "zoom 50.0 mm, focus inf m, F4.0" in out
+    assert capsys.readouterr().err == ""
+
+
+def test_status_of_a_fresh_head_says_not_homed():
+    status, out = run(["--port", "sim://?seed=2", "status"])
+    assert status == 0
+    assert out.startswith("pan   not homed, +0 counts from power-up, idle\ntilt  not homed")
+    assert out.count("lens not homed") == 2
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        ([], "no command given"),
+        (["frob"], "unknown command 'frob'"),
+        (["move", "30"], "move needs PAN TILT"),
+        (["move", "x", "1"], "PAN must be a number, got 'x'"),
+        (["move", "nan", "1"], "PAN must be a number"),
+        (["point", "middle", "1", "2"], "EYE must be left or right"),
+        (["lens", "left"], "lens needs at least one of"),
+        (["lens", "left", "zoom=1", "zoom=2"], "once each"),
+        (["lens", "left", "aperture=2"], "got 'aperture'"),
+        (["home", "move", "100", "0"], "pan 100 deg is outside its travel"),
+        (["home", "lens", "left", "zoom=5"], r"zoom must be in \[12.5, 75\] mm"),
+        (["--port", "sim://?nope=1", "status"], "unknown sim:// parameter 'nope'"),
+    ],
+)
+def test_usage_and_input_errors_exit_2_with_one_line(capsys, argv, message):
+    status, _ = run(argv)
+    err = capsys.readouterr().err
+    assert status == 2
+    assert err.startswith("vmcl-head: error: ")
+    assert err.count("\n") == 1
+    assert re.search(message, err)
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["move", "10", "0"], "pan: stepper micro refused MOVE_TO: the axis is not homed"),
+        (["--port", "sim://?absent=2", "status"], "galvo micro (address 2) gave no valid reply to PING"),
+        (["--port", "/dev/does-not-exist", "status"], "cannot use port '/dev/does-not-exist'"),
+    ],
+)
+def test_hardware_errors_exit_1_with_one_line(capsys, argv, message):
+    status, _ = run(argv)
+    err = capsys.readouterr().err
+    assert status == 1
+    assert message in err
+    assert err.count("\n") == 1
+
+
+def test_estop_latches_a_fault_everywhere_and_home_clears_it():
+    status, out = run(["home", "estop", "status"])
+    assert status == 0
+    assert "emergency stop sent" in out
+    assert out.count("FAULT: emergency stop") == 4
+    status, out = run(["estop", "home", "status"])
+    assert status == 0
+    assert "FAULT" not in out
+
+
+def test_help_exits_0(capsys):
+    assert main(["--help"]) == 0
+    assert "move PAN TILT" in capsys.readouterr().out
