@@ -1,5 +1,7 @@
 """UNET framing: the CRC, encoding, and the resynchronising parser (hardware.protocol, hardware.commands)."""
 
+import doctest
+import importlib
 import random
 
 import pytest
@@ -209,3 +211,10 @@ def test_seeded_random_streams_with_many_faults_yield_only_sent_frames():
     decoded = {Parser().feed(f)[0] for f in sent}
     assert got and all(f in decoded for f in got)
     assert len(got) > 2000 - 400 - 50
+
+
+@pytest.mark.parametrize("module", ["hardware", "hardware.protocol", "hardware.head"])
+def test_docstring_examples_run(module):
+    failures, tried = doctest.testmod(importlib.import_module(module))
+    assert tried > 0
+    assert failures == 0
