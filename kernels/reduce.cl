@@ -34,6 +34,7 @@ __kernel void reduce_chunks(__global const T *x, __global ACC *partial, __global
                             long n, long chunk)
 {
     long g = get_global_id(0);
+    if (g * chunk >= n) return;
     long begin = g * chunk, end = min(begin + chunk, n);
     ACC acc = IDENTITY;
 #if KAHAN

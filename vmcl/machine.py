@@ -87,18 +87,26 @@ class Machine:
         ``VMCL_DEVICE`` environment variable, else the first device, GPUs before CPUs.
     profile : bool
         Record the device time of every kernel launched through :meth:`launch`; see :meth:`timings`.
+    local_size : int, optional
+        Work-group size along the first dimension for every launch that does not fix its own (the
+        global size is rounded up to a multiple; kernels ignore the extra work-items). Default: the
+        driver's choice. Results never depend on it; tests use it to prove that.
 
     Notes
     -----
     Programs are compiled on first use, never at construction, and cached per (file, defines).
     """
 
-    def __init__(self, device: cl.Device | str | None = None, *, profile: bool = False) -> None:
+    def __init__(self, device: cl.Device | str | None = None, *, profile: bool = False,
+                 local_size: int | None = None) -> None:
+        if local_size is not None and (not isinstance(local_size, int) or local_size < 1):
+            raise ValueError(f"local_size must be a positive integer or None, got {local_size!r}")
         self.device = _choose_device(device)
         self.context = cl.Context([self.device])
         properties = cl.command_queue_properties.PROFILING_ENABLE if profile else 0
         self.queue = cl.CommandQueue(self.context, properties=properties)
         self.profile = profile
+        self.local_size = local_size
         self.pool = cl_tools.MemoryPool(cl_tools.ImmediateAllocator(self.queue))
         self._programs: dict[tuple, cl.Program] = {}
         self._kernels: dict[tuple, cl.Kernel] = {}
@@ -141,6 +149,9 @@ class Machine:
                local_size: tuple[int, ...] | None = None) -> cl.Event:
         """Enqueue ``kernel`` over ``global_size`` work-items; device arrays are passed by their buffer."""
         values = [a.base_data if isinstance(a, cl_array.Array) else a for a in args]
+        if local_size is None and self.local_size is not None:
+            local_size = (self.local_size,) + (1,) * (len(global_size) - 1)
+            global_size = (-(-global_size[0] // self.local_size) * self.local_size,) + tuple(global_size[1:])
         event = kernel(self.queue, global_size, local_size, *values)
         if self.profile:
             self._events.append((kernel.function_name, event))

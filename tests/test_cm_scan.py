@@ -1,0 +1,124 @@
+"""Scans and grid-scans against a NumPy oracle: every operator, both variants, segments, exclusive."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from oracles import scan as scan_oracle
+from vmcl.cm.scan import scan
+
+OPS = ["plus", "max", "min", "copy"]
+METHODS = ["work_efficient", "hillis_steele"]
+# 1 x 1, 1 x N, N x 1, primes and non-powers of two, and lines long enough to be cut into chunks.
+SHAPES = [(1,), (2,), (97,), (20011,), (1, 1), (1, 257), (257, 1), (13, 31), (3, 5, 17), (2, 9001), (9001, 2),
+          (5, 48, 33)]
+
+
+def _data(shape, dtype, rng):
+    if dtype == np.int32:
+        return rng.integers(-50, 50, shape).astype(np.int32)
+    return rng.standard_normal(shape).astype(np.float32)
+
+
+def _check(got, expected, x, op, axis):
+    assert got.dtype == expected.dtype and got.shape == expected.shape
+    if op == "plus" and x.dtype == np.float32:
+        # Chunked float sums round differently from a serial loop: bound by the running magnitude.
+        magnitude = np.cumsum(np.abs(x.astype(np.float64)), axis=axis)
+        np.testing.assert_array_less(np.abs(got - expected), 1e-6 * magnitude + 1e-6)
+    else:
+        np.testing.assert_array_equal(got, expected)
+
+
+@pytest.mark.parametrize("shape", SHAPES, ids=str)
+@pytest.mark.parametrize("dtype", [np.int32, np.float32], ids=["int32", "float32"])
+@pytest.mark.parametrize("method", METHODS)
+def test_scan_matches_oracle(shape, dtype, method, machine):
+    rng = np.random.default_rng(hash((shape, method)) % 2**32)
+    x = _data(shape, dtype, rng)
+    segments = rng.random(shape) < 0.05
+    for axis in ([-1] if len(shape) == 1 else [-1, -2]):
+        for op in OPS:
+            for exclusive in (False, True):
+                for seg in (None, segments):
+                    got = scan(x, op=op, axis=axis, exclusive=exclusive, segments=seg, method=method,
+                               machine=machine)
+                    expected = scan_oracle(x, op, axis, exclusive, seg)
+                    _check(got, expected, x, op, axis)
+
+
+@settings(max_examples=40, deadline=None)
+@given(height=st.integers(1, 70), width=st.integers(1, 70), axis=st.sampled_from([-1, -2]),
+       op=st.sampled_from(OPS), exclusive=st.booleans(), method=st.sampled_from(METHODS),
+       density=st.sampled_from([0.0, 0.1, 0.5]), seed=st.integers(0, 2**31))
+def test_scan_hypothesis(height, width, axis, op, exclusive, method, density, seed, machine):
+    rng = np.random.default_rng(seed)
+    x = rng.integers(-1000, 1000, (height, width)).astype(np.int32)
+    segments = rng.random(x.shape) < density
+    got = scan(x, op=op, axis=axis, exclusive=exclusive, segments=segments, method=method, machine=machine)
+    np.testing.assert_array_equal(got, scan_oracle(x, op, axis, exclusive, segments))
+
+
+@pytest.mark.parametrize("axis", [-1, -2])
+def test_large_field_2048(axis, machine):
+    rng = np.random.default_rng(5)
+    x = rng.integers(-100, 100, (2048, 2048)).astype(np.int32)
+    np.testing.assert_array_equal(scan(x, axis=axis, machine=machine), np.cumsum(x, axis=axis, dtype=np.int32))
+    np.testing.assert_array_equal(scan(x, op="max", axis=axis, machine=machine), np.maximum.accumulate(x, axis=axis))
+
+
+def test_long_1d_float_scan_is_no_less_accurate_than_numpy(machine):
+    x = np.random.default_rng(2).random(1 << 22).astype(np.float32)
+    exact = np.cumsum(x.astype(np.float64))
+    ours = np.max(np.abs(scan(x, machine=machine) - exact) / exact)
+    numpys = np.max(np.abs(np.cumsum(x) - exact) / exact)
+    assert ours <= numpys and ours < 5e-5
+
+
+def test_variants_agree_and_repeat_bit_for_bit(machine, machine_with_local_size):
+    rng = np.random.default_rng(9)
+    x = rng.standard_normal((301, 517)).astype(np.float32)
+    segments = rng.random(x.shape) < 0.01
+    for axis in (-1, -2):
+        reference = scan(x, axis=axis, segments=segments, machine=machine)
+        np.testing.assert_array_equal(scan(x, axis=axis, segments=segments, machine=machine), reference)
+        np.testing.assert_array_equal(
+            scan(x, axis=axis, segments=segments, machine=machine_with_local_size), reference)
+        exact = scan(x, op="max", axis=axis, segments=segments, machine=machine)
+        np.testing.assert_array_equal(
+            scan(x, op="max", axis=axis, segments=segments, method="hillis_steele", machine=machine), exact)
+
+
+def test_device_in_device_out(machine):
+    x = np.arange(20, dtype=np.int32).reshape(4, 5)
+    device = machine.to_device(x)
+    out = scan(device, machine=machine)
+    assert not isinstance(out, np.ndarray)
+    np.testing.assert_array_equal(out.get(), np.cumsum(x, axis=1))
+
+
+def test_narrow_integers_are_widened_exactly(machine):
+    x = np.array([[250, 10, 3]], np.uint8)
+    got = scan(x, machine=machine)
+    assert got.dtype == np.int32
+    np.testing.assert_array_equal(got, [[250, 260, 263]])
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    (dict(x=np.zeros((2, 2, 2, 2), np.float32)), ValueError, "x must have"),
+    (dict(x=np.zeros(5, np.float64)), TypeError, "x must have dtype"),
+    (dict(x=np.zeros((0, 3), np.float32)), ValueError, "x must not be empty"),
+    (dict(x=[1, 2, 3]), TypeError, "x must be a NumPy array"),
+    (dict(x=np.zeros(5, np.float32), axis=-2), ValueError, "axis=-2 is out of range"),
+    (dict(x=np.zeros((3, 3), np.float32), axis=2), ValueError, "axis=2 is out of range"),
+    (dict(x=np.zeros(5, np.float32), op="times"), ValueError, "op must be one of"),
+    (dict(x=np.zeros(5, np.float32), method="fast"), ValueError, "method must be one of"),
+    (dict(x=np.zeros(5, np.float32), segments=np.zeros(4, bool)), ValueError, "segments must have the data's shape"),
+    (dict(x=np.zeros(5, np.float32), segments=np.zeros(5, np.float32)), TypeError, "segments must be boolean"),
+    (dict(x=np.zeros(5, np.float32), exclusive=1), TypeError, "exclusive must be a bool"),
+])
+def test_bad_input_is_named(kwargs, error, match, machine):
+    x = kwargs.pop("x")
+    with pytest.raises(error, match=match):
+        scan(x, machine=machine, **kwargs)

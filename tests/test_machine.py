@@ -1,0 +1,105 @@
+"""The Machine: device choice, program and kernel caches, buffer pool, timings, packaging."""
+
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pyopencl as cl
+import pytest
+
+import vmcl
+from vmcl import machine as machine_module
+from vmcl.cm.scan import scan
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_import_compiles_nothing():
+    code = "import vmcl, vmcl.cm.scan, vmcl.machine as m; print(m._default is None)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "True"
+
+
+def test_default_machine_is_created_once():
+    assert vmcl.default_machine() is vmcl.default_machine()
+
+
+def test_device_chosen_by_name_substring(monkeypatch, machine):
+    name = machine.device.name
+    monkeypatch.setenv("VMCL_DEVICE", name[: max(3, len(name) // 2)].upper())
+    assert vmcl.Machine().device.int_ptr == machine.device.int_ptr
+    platform = machine.device.platform.name
+    assert vmcl.Machine(platform.lower()).device.platform.name == platform
+
+
+def test_unknown_device_lists_the_available_ones(monkeypatch, machine):
+    monkeypatch.setenv("VMCL_DEVICE", "no-such-device-anywhere")
+    with pytest.raises(vmcl.NoOpenCLPlatformError, match=machine.device.name[:10]):
+        vmcl.Machine()
+
+
+def test_missing_platform_says_how_to_install(monkeypatch):
+    monkeypatch.setattr(cl, "get_platforms", lambda: [])
+    with pytest.raises(vmcl.NoOpenCLPlatformError, match="apt-get install -y pocl-opencl-icd"):
+        vmcl.Machine()
+
+
+def test_device_argument_type_is_checked():
+    with pytest.raises(TypeError, match="device"):
+        vmcl.Machine(3)
+
+
+def test_kernels_are_cached_per_defines(machine):
+    a = machine.kernel("news", "shift", T="float", BORDER=0)
+    assert machine.kernel("news", "shift", BORDER=0, T="float") is a
+    assert machine.kernel("news", "shift", T="float", BORDER=1) is not a
+    assert machine.program("news", T="float", BORDER=0) is machine.program("news", BORDER=0, T="float")
+
+
+def test_buffer_pool_reuses_memory(machine):
+    first = machine.empty((256, 256), np.float32)
+    pointer = first.base_data.int_ptr
+    del first
+    again = machine.empty((256, 256), np.float32)
+    assert again.base_data.int_ptr == pointer
+
+
+def test_profiling_reports_each_kernel():
+    profiled = vmcl.Machine(profile=True)
+    scan(np.ones((64, 64), np.float32), machine=profiled)
+    scan(np.ones((64, 64), np.float32), axis=-2, machine=profiled)
+    times = profiled.timings()
+    assert times["scan_rows"]["calls"] == 1 and times["scan_cols"]["calls"] >= 1
+    assert all(entry["total_ms"] >= 0 for entry in times.values())
+    assert profiled.timings() == {}
+
+
+def test_timings_need_profiling(machine):
+    with pytest.raises(RuntimeError, match="profile=True"):
+        machine.timings()
+
+
+def test_local_size_is_checked():
+    with pytest.raises(ValueError, match="local_size"):
+        vmcl.Machine(local_size=0)
+
+
+def test_kernels_ship_in_the_wheel(tmp_path):
+    # The wheel must carry kernels/ (as vmcl/_kernels) so an installed vmcl finds its OpenCL sources.
+    subprocess.run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps", "--no-build-isolation",
+                    "-q", "-w", str(tmp_path)], check=True, capture_output=True)
+    wheel = next(tmp_path.glob("vmcl-*.whl"))
+    names = set(zipfile.ZipFile(wheel).namelist())
+    for source in (ROOT / "kernels").glob("*.[ch]*"):
+        assert f"vmcl/_kernels/{source.name}" in names
+    assert "hardware/__init__.py" in names
+
+
+def test_kernels_dir_prefers_the_installed_copy(tmp_path, monkeypatch):
+    installed = tmp_path / "vmcl"
+    (installed / "_kernels").mkdir(parents=True)
+    (installed / "_kernels" / "vmcl.h").write_text("")
+    monkeypatch.setattr(machine_module, "__file__", str(installed / "machine.py"))
+    assert machine_module.kernels_dir() == installed / "_kernels"
