@@ -102,9 +102,6 @@ class BusStats:
     failures: int = 0
     stale_replies: int = 0
 
-    def as_dict(self) -> dict[str, int]:
-        return dict(self.__dict__)
-
 
 class Bus:
     """The UNET master.

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Callable, Sequence
+from typing import cast
 
 from .commands import (
     FAULT_BIT,
@@ -80,6 +81,10 @@ class _Axis:
 
     @property
     def moving(self) -> bool:
+        raise NotImplementedError
+
+    @property
+    def flags(self) -> Flag:
         raise NotImplementedError
 
     def step(self, dt: float) -> None:
@@ -358,7 +363,7 @@ class StepperFirmware(MicroFirmware):
         }
 
     def axis(self, index: int) -> StepperAxis:
-        return super().axis(index)  # type: ignore[return-value]
+        return cast(StepperAxis, super().axis(index))
 
     def _home(self, index: int) -> tuple[int, ...]:
         self.axis(index).home()
@@ -478,7 +483,7 @@ class LensFirmware(MicroFirmware):
     def _lens(self, eye: int) -> list[LensAxis]:
         if eye > 1:
             raise Refused(Error.OUT_OF_RANGE)
-        return self.axes[3 * eye : 3 * eye + 3]  # type: ignore[return-value]
+        return cast(list[LensAxis], self.axes[3 * eye : 3 * eye + 3])
 
     def _home(self, eye: int) -> tuple[int, ...]:
         for axis in self._lens(eye):
@@ -543,17 +548,20 @@ class GalvoFirmware(MicroFirmware):
     def commands(self) -> dict[int, Callable[..., tuple[int, ...]]]:
         return {Cmd.GALVO_SET: self._set, Cmd.GALVO_GET: self._get}
 
+    def axis(self, index: int) -> GalvoEye:
+        return cast(GalvoEye, super().axis(index))
+
     def _set(self, eye: int, x: int, y: int) -> tuple[int, ...]:
         pair = self.axis(eye)
         pair.require_no_fault()
         if max(abs(x), abs(y)) > GALVO_RANGE_MDEG:
             raise Refused(Error.OUT_OF_RANGE)
-        for mirror, angle in zip(pair.mirrors, (x, y)):  # type: ignore[attr-defined]
+        for mirror, angle in zip(pair.mirrors, (x, y)):
             mirror.target = float(angle)
         return ()
 
     def _get(self, eye: int) -> tuple[int, ...]:
         pair = self.axis(eye)
-        angles = tuple(round(m.angle) for m in pair.mirrors)  # type: ignore[attr-defined]
-        targets = tuple(round(m.target) for m in pair.mirrors)  # type: ignore[attr-defined]
-        return (*angles, *targets, int(pair.flags))  # type: ignore[attr-defined]
+        angles = tuple(round(m.angle) for m in pair.mirrors)
+        targets = tuple(round(m.target) for m in pair.mirrors)
+        return (*angles, *targets, int(pair.flags))

@@ -270,7 +270,3 @@ class Parser:
                 needs.append(_HEADER + buf[j + 3] + _CRC - have)
             j = buf.find(SYNC, j + 1)
         return max(1, min(needs, default=_MIN_REQUEST))
-
-    def reset(self) -> None:
-        """Forget any partial frame."""
-        self._buf.clear()
