@@ -129,7 +129,7 @@ def test_noise_level():
 def test_image_model_and_constant_hue(rendered, name):
     """I = k E rho exactly, so H = R / (R + G) is constant in each albedo region despite E."""
     scene = rendered[name]
-    model = scene.light_colour * scene.illumination[..., None] * scene.albedo
+    model = scene.light_colour * (scene.illumination[..., None] * scene.albedo)
     assert np.array_equal(model, scene.left)
     hue = scene.left[..., 0] / (scene.left[..., 0] + scene.left[..., 1])
     for region in np.unique(scene.regions):

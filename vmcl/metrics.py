@@ -547,7 +547,9 @@ def evaluate_boundaries(
     ground_truths : sequence of sequences of (H, W) arrays
         Per image, the annotators' 0/1 boundary maps.
     thresholds : int or sequence of float
-        As in :func:`boundary_counts` (the benchmark's default is 99).
+        As in :func:`boundary_counts`. The default, 99, is the benchmark's; each threshold costs about
+        0.1 s of matching per annotator on a 321 x 481 image (10 BSDS images at 5 thresholds: about
+        30 s on 2 cores), so a quick check may use fewer.
     max_dist : float
         Match distance as a fraction of the image diagonal.
     thin : bool

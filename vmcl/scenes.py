@@ -1004,7 +1004,8 @@ def _blocks(px, light: Light) -> tuple[tuple[Body, ...], Light, Motion]:
     wall = Face((0.0, 0.0, 8.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), None, (0.62, 0.56, 0.48),
                 Texture("noise", px(6, 8), 0.35),
                 (Mark("rect", (0.6, -3.2, 3.2, -1.4), (0.25, 0.45, 0.7)),
-                 Mark("disc", (-2.3, -2.2, 0.9), (0.75, 0.3, 0.25))))
+                 Mark("disc", (-2.3, -2.2, 0.9), (0.75, 0.3, 0.25),
+                      Texture("gradient", 0.6, 0.4, angle=0.5))))
     c, s = math.cos(0.7), math.sin(0.7)
     slanted = Face((-2.3, -1.5, 5.0), (c, 0.0, s), (0.0, 1.0, 0.0), (1.6, 3.0), (0.55, 0.6, 0.7),
                    Texture("stripes", px(12, 5.5), 0.3),
@@ -1057,7 +1058,8 @@ def _shadows(px, light: Light) -> tuple[tuple[Body, ...], Light, Motion]:
                   marks=((Mark("rect", (0.0, 0.0, 0.79, 0.8), (0.8, 0.5, 0.2)),),
                          (Mark("rect", (0.0, 0.8, 0.79, 1.6), (0.75, 0.3, 0.5)),)))
     plate = Face((-1.5, -1.1, 4.2), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (1.0, 1.0), (0.9, 0.85, 0.6))
-    light = Light((-0.35, -0.45, -0.82), light.colour, 0.3, (-0.22, 0.05, 0.0), (-3.5, 0.0, 0.0),
+    # A warm light: k^nu is not white, and H = R / (R + G) is still constant in each region.
+    light = Light((-0.35, -0.45, -0.82), (1.0, 0.92, 0.8), 0.3, (-0.22, 0.05, 0.0), (-3.5, 0.0, 0.0),
                   light.specular, light.shininess)
     bodies = (Body((wall,), name="mondrian wall"), Body(panels, name="fold"),
               Body((plate,), Motion((0.05, 0.02, 0.0)), name="shadow caster"))
@@ -1105,15 +1107,16 @@ def preset(name: str, *, shape: tuple[int, int] = (256, 256), specular: bool = F
     Parameters
     ----------
     name : str
-        - "blocks": a textured back wall with painted marks, a slanted striped plane, a fold, and a
-          box (blob texture) in front that occludes the plane and casts a shadow; the box moves and
-          turns, the rig pans. Every label occurs.
+        - "blocks": a back wall of random dots with painted marks (one with a smooth gradient), a
+          slanted striped plane, a fold, and a box (blob texture) in front that occludes the plane and
+          casts a shadow; the box moves and turns, the rig pans. Every label but TEXTURE occurs
+          (SPECULAR with ``specular=True``).
         - "corridor": floor, walls and end wall of one corridor open to the sky (orientation edges at
           its corners), doors and posters as marks, a crate hovering above the floor, the shadows of
           the crate and of a wall on the floor; the rig walks forward (expanding flow) and turns.
-        - "shadows": for colour: a Mondrian of flat colours on a wall and on a fold, a strong
-          illumination gradient, shading, and a plate casting a shadow across several colours; no
-          texture.
+        - "shadows": for colour: a Mondrian of flat colours on a wall and on a fold under a warm
+          light, a strong illumination gradient (brightness varies by more than 30% inside every wall
+          region), shading, and a plate casting a shadow across several colours; no texture.
         - "textures": a mosaic of blob textures of different densities (one colour, mean albedo
           equal), on a fronto-parallel wall; region edges are TEXTURE.
         - "cues": boundaries seen by one cue each: an isoluminant colour region (ALBEDO), a region of
