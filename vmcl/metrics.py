@@ -20,6 +20,7 @@ them, so that vmcl's numbers can be set beside published ones:
 
 from __future__ import annotations
 
+import multiprocessing
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -555,7 +556,8 @@ def evaluate_boundaries(
     thin : bool
         Thin thresholded maps before matching.
     workers : int
-        Processes evaluating images in parallel (1: in this process).
+        Processes evaluating images in parallel (1: in this process). Workers are spawned, which
+        costs about a second each to start.
 
     Returns
     -------
@@ -585,7 +587,8 @@ def evaluate_boundaries(
     if workers == 1:
         per_image = [_counts_of(job) for job in jobs]
     else:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        # Spawned, not forked: a forked child of a process holding an OpenCL context can deadlock.
+        with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
             per_image = list(pool.map(_counts_of, jobs))
     levels = per_image[0].thresholds
     total = np.sum([[c.matched_truth, c.total_truth, c.matched_predicted, c.total_predicted]
