@@ -1,0 +1,57 @@
+"""box_sum: window sums by grid-scans, against prefix sums in float64 / int64."""
+
+import numpy as np
+import pytest
+
+from oracles import box_sum as box_oracle
+from vmcl.cm.scan import box_sum
+
+SHAPES = [(1,), (23,), (1, 1), (1, 19), (19, 1), (31, 17), (40, 37), (3, 40, 37), (2, 1, 50)]
+
+
+@pytest.mark.parametrize("shape", SHAPES, ids=str)
+@pytest.mark.parametrize("radius", [0, 1, 4, 25])
+def test_matches_prefix_sum_oracle(shape, radius, machine):
+    rng = np.random.default_rng(len(shape) * 100 + radius)
+    full = (-1,) if len(shape) == 1 else (-2, -1)
+    for axes in ([full] if len(shape) == 1 else [full, (-1,), (-2,)]):
+        x = rng.integers(-1000, 1000, shape).astype(np.int32)
+        np.testing.assert_array_equal(box_sum(x, radius, axes=axes, machine=machine),
+                                      box_oracle(x, radius, axes).astype(np.int32))
+        f = rng.random(shape).astype(np.float32)
+        np.testing.assert_allclose(box_sum(f, radius, axes=axes, machine=machine), box_oracle(f, radius, axes),
+                                   rtol=2e-6, atol=2e-5)
+
+
+def test_large_field_and_any_local_size(machine, machine_with_local_size):
+    x = np.random.default_rng(3).integers(0, 256, (2048, 2048)).astype(np.int32)
+    expected = box_oracle(x, 15).astype(np.int32)
+    np.testing.assert_array_equal(box_sum(x, 15, machine=machine), expected)
+    small = x[:300, :301]
+    np.testing.assert_array_equal(box_sum(small, 7, machine=machine_with_local_size),
+                                  box_oracle(small, 7).astype(np.int32))
+
+
+def test_float_error_stays_small_on_long_lines(machine):
+    # The running window adds and subtracts along 4096 pixels: the drift must stay at rounding level.
+    x = np.random.default_rng(4).random((4, 4096)).astype(np.float32)
+    got = box_sum(x, 30, machine=machine)
+    assert np.max(np.abs(got - box_oracle(x, 30)) / box_oracle(x, 30)) < 1e-5
+
+
+def test_window_counts_with_zero_border(machine):
+    counts = box_sum(np.ones((5, 6), np.int32), 1, machine=machine)
+    np.testing.assert_array_equal(counts[0], [4, 6, 6, 6, 6, 4])
+    np.testing.assert_array_equal(counts[2], [6, 9, 9, 9, 9, 6])
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    (dict(radius=-1), ValueError, "radius must be >= 0"),
+    (dict(radius=1.5), TypeError, "radius must be an integer"),
+    (dict(radius=1, axes=()), ValueError, "axes must be a non-empty tuple"),
+    (dict(radius=1, axes=(-1, -1)), ValueError, "must not repeat"),
+    (dict(radius=1, axes=(0,)), ValueError, "axes=0 is not supported"),
+])
+def test_bad_input_is_named(kwargs, error, match, machine):
+    with pytest.raises(error, match=match):
+        box_sum(np.zeros((2, 3, 4), np.float32), machine=machine, **kwargs)

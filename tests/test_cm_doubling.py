@@ -1,0 +1,153 @@
+"""Distance doubling: list ranking, ring principals, and connected components against scipy."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import ndimage
+
+from vmcl.cm.doubling import label, principal, rank
+
+STRUCTURE = {4: ndimage.generate_binary_structure(2, 1), 8: ndimage.generate_binary_structure(2, 2)}
+
+
+def _lists(rng, n, count):
+    """Random disjoint lists over 0..n-1: next pointers, and the rank and tail of every node."""
+    order = rng.permutation(n)
+    cuts = np.sort(rng.choice(np.arange(1, n), size=min(count, n) - 1, replace=False)) if n > 1 else []
+    nxt, ranks, tails = np.full(n, -1, np.int32), np.zeros(n, np.int32), np.zeros(n, np.int32)
+    for piece in np.split(order, cuts):
+        nxt[piece[:-1]] = piece[1:]
+        ranks[piece] = np.arange(len(piece))[::-1]
+        tails[piece] = piece[-1]
+    return nxt, ranks, tails
+
+
+def _rings(rng, n, count):
+    nxt, _, _ = _lists(rng, n, count)
+    heads = np.setdiff1d(np.arange(n), nxt[nxt >= 0])
+    tails = np.flatnonzero(nxt < 0)
+    ring_of_tail = {}
+    for head in heads:  # close every list into a ring: tail -> head
+        node = head
+        while nxt[node] >= 0:
+            node = nxt[node]
+        ring_of_tail[node] = head
+    for tail in tails:
+        nxt[tail] = ring_of_tail[tail]
+    expected_principal, expected_distance = np.zeros(n, np.int32), np.zeros(n, np.int32)
+    for head in heads:
+        members = [head]
+        while nxt[members[-1]] != head:
+            members.append(nxt[members[-1]])
+        top = members.index(max(members))
+        members = members[top:] + members[:top]
+        expected_principal[members] = members[0]
+        expected_distance[members] = np.arange(len(members))
+    return nxt, expected_principal, expected_distance
+
+
+@pytest.mark.parametrize("n, count", [(1, 1), (2, 1), (17, 3), (1000, 1), (5000, 40)])
+def test_list_ranking(n, count, machine):
+    nxt, ranks, tails = _lists(np.random.default_rng(n), n, count)
+    got_rank, got_tail = rank(nxt, machine=machine)
+    np.testing.assert_array_equal(got_rank, ranks)
+    np.testing.assert_array_equal(got_tail, tails)
+
+
+@pytest.mark.parametrize("n, count", [(1, 1), (2, 1), (8, 1), (999, 1), (5000, 37)])
+def test_ring_principal_and_distance(n, count, machine, machine_with_local_size):
+    nxt, expected_principal, expected_distance = _rings(np.random.default_rng(n + 1), n, count)
+    for m in (machine, machine_with_local_size):
+        got_principal, got_distance = principal(nxt, machine=m)
+        np.testing.assert_array_equal(got_principal, expected_principal)
+        np.testing.assert_array_equal(got_distance, expected_distance)
+
+
+def _check_labels(mask, connectivity, labels):
+    reference, count = ndimage.label(mask, STRUCTURE[connectivity])
+    flat = reference.ravel()
+    assert np.all((labels.ravel() < 0) == (flat == 0))
+    maxima = ndimage.maximum(np.arange(mask.size), flat, index=np.arange(1, count + 1)).astype(np.int64)
+    np.testing.assert_array_equal(labels.ravel()[flat > 0], maxima[flat[flat > 0] - 1])
+
+
+@settings(max_examples=40, deadline=None)
+@given(height=st.integers(1, 60), width=st.integers(1, 60), density=st.sampled_from([0.2, 0.5, 0.6, 0.9]),
+       connectivity=st.sampled_from([4, 8]), seed=st.integers(0, 2**31))
+def test_label_is_the_max_address_of_each_component(height, width, density, connectivity, seed, machine):
+    mask = np.random.default_rng(seed).random((height, width)) < density
+    doubled = label(mask, connectivity=connectivity, machine=machine)
+    _check_labels(mask, connectivity, doubled)
+    np.testing.assert_array_equal(label(mask, connectivity=connectivity, method="iterative", machine=machine),
+                                  doubled)
+
+
+@pytest.mark.parametrize("connectivity", [4, 8])
+def test_relabel_numbers_components_by_principal(connectivity, machine):
+    mask = np.random.default_rng(7).random((300, 211)) < 0.55
+    principals = label(mask, connectivity=connectivity, machine=machine)
+    numbered = label(mask, connectivity=connectivity, relabel=True, machine=machine)
+    order = np.unique(principals[principals >= 0])
+    expected = np.zeros(mask.shape, np.int32)
+    expected[principals >= 0] = np.searchsorted(order, principals[principals >= 0]) + 1
+    np.testing.assert_array_equal(numbered, expected)
+
+
+def spiral(size, corridor=1):
+    """A square spiral of walls and gaps ``corridor`` pixels wide: one component whose path from the
+    outside to the centre is about size**2 / (2 * corridor) pixels long, the worst case for spreading
+    activation."""
+    cells = size // corridor
+    drawn = np.zeros((cells, cells), bool)
+    y = x = 0
+    drawn[0, 0] = True
+    directions = [(0, 1), (1, 0), (0, -1), (-1, 0)]
+    heading, turns = 0, 0
+
+    def free(cy, cx):
+        return 0 <= cy < cells and 0 <= cx < cells and not drawn[cy, cx]
+
+    while turns < 2:
+        dy, dx = directions[heading]
+        ahead = (y + 2 * dy, x + 2 * dx)
+        beyond_ok = not (0 <= ahead[0] < cells and 0 <= ahead[1] < cells) or not drawn[ahead]
+        if free(y + dy, x + dx) and beyond_ok:
+            y, x = y + dy, x + dx
+            drawn[y, x] = True
+            turns = 0
+        else:
+            heading, turns = (heading + 1) % 4, turns + 1
+    mask = np.kron(drawn, np.ones((corridor, corridor), bool))
+    return np.pad(mask, ((0, size - mask.shape[0]), (0, size - mask.shape[1])))
+
+
+def test_spiral_is_one_component(machine):
+    mask = spiral(256)
+    reference, count = ndimage.label(mask, STRUCTURE[4])
+    assert count == 1
+    _check_labels(mask, 4, label(mask, connectivity=4, machine=machine))
+
+
+def test_large_random_field_and_repeatability(machine, machine_with_local_size):
+    mask = np.random.default_rng(8).random((2048, 2048)) < 0.5
+    labels = label(mask, machine=machine)
+    _check_labels(mask, 8, labels)
+    np.testing.assert_array_equal(label(mask, machine=machine), labels)
+    small = mask[:200, :333]
+    np.testing.assert_array_equal(label(small, machine=machine_with_local_size), label(small, machine=machine))
+
+
+@pytest.mark.parametrize("call, error, match", [
+    (lambda m: rank(np.array([1, 5], np.int32), machine=m), ValueError, r"next must hold addresses in \[-1, 1\]"),
+    (lambda m: principal(np.array([1, 1], np.int32), machine=m), ValueError, "permutation"),
+    (lambda m: principal(np.array([-1, 0], np.int32), machine=m), ValueError, "next must hold addresses"),
+    (lambda m: rank(np.zeros(0, np.int32), machine=m), ValueError, "next must not be empty"),
+    (lambda m: label(np.zeros((3, 3), bool), connectivity=6, machine=m), ValueError, "connectivity must be 4 or 8"),
+    (lambda m: label(np.zeros(3, bool), machine=m), ValueError, "mask must have 2 dimensions"),
+    (lambda m: label(np.zeros((3, 3), np.float32), machine=m), TypeError, "mask must have dtype"),
+    (lambda m: label(np.zeros((3, 3), bool), method="fast", machine=m), ValueError, "method must be"),
+])
+def test_bad_input_is_named(call, error, match, machine):
+    with pytest.raises(error, match=match):
+        call(machine)

@@ -1,0 +1,97 @@
+"""Global reductions and histograms against NumPy."""
+
+import numpy as np
+import pytest
+
+from vmcl.cm.reduce import histogram, reduce
+
+
+@pytest.mark.parametrize("shape", [(1,), (7,), (1, 1), (31, 17), (3, 5, 7), (2048, 2048)], ids=str)
+def test_reductions_match_numpy(shape, machine):
+    rng = np.random.default_rng(0)
+    ints = rng.integers(-10**6, 10**6, shape).astype(np.int32)
+    assert reduce(ints, "sum", machine=machine) == ints.sum(dtype=np.int64)
+    assert reduce(ints, "max", machine=machine) == ints.max()
+    assert reduce(ints, "min", machine=machine) == ints.min()
+    flags = ints > 0
+    assert reduce(flags, "and", machine=machine) == flags.all()
+    assert reduce(flags, "or", machine=machine) == flags.any()
+    floats = rng.standard_normal(shape).astype(np.float32)
+    exact = floats.astype(np.float64).sum()
+    assert abs(float(reduce(floats, "sum", machine=machine)) - exact) <= 1e-6 * np.abs(floats).sum() + 1e-6
+    assert reduce(floats, "max", machine=machine) == floats.max()
+    assert reduce(floats, "min", machine=machine) == floats.min()
+
+
+def test_float_sum_is_compensated(machine):
+    # 2**24 followed by ones: a naive float32 loop stalls at 2**24 (adding 1 rounds back down); Kahan
+    # summation gives the exact sum rounded to float32.
+    x = np.ones(1 << 20, np.float32)
+    x[0] = 2**24
+    assert reduce(x, "sum", machine=machine) == np.float32(2**24 + (1 << 20) - 1)
+
+
+def test_logical_results_and_empty_field(machine):
+    assert reduce(np.ones((3, 3), bool), "and", machine=machine) == np.True_
+    assert reduce(np.zeros(4, np.uint8), "or", machine=machine) == np.False_
+    with pytest.raises(ValueError, match="x must not be empty"):
+        reduce(np.zeros(0, np.float32), machine=machine)
+    with pytest.raises(ValueError, match="op must be one of"):
+        reduce(np.zeros(3, np.float32), "mean", machine=machine)
+
+
+def test_device_result_stays_on_device(machine):
+    out = reduce(machine.to_device(np.arange(10, dtype=np.int32)), "sum", machine=machine)
+    assert not isinstance(out, np.ndarray) and out.get()[()] == 45
+
+
+def test_same_bits_every_run_and_local_size(machine, machine_with_local_size):
+    x = np.random.default_rng(1).standard_normal(300_001).astype(np.float32)
+    first = reduce(x, machine=machine)
+    assert reduce(x, machine=machine) == first and reduce(x, machine=machine_with_local_size) == first
+
+
+def _float32_rule(x, bins, lo, hi):
+    v = x.astype(np.float32).ravel()
+    v = v[(v >= np.float32(lo)) & (v <= np.float32(hi))]
+    scale = np.float32(bins) / (np.float32(hi) - np.float32(lo))
+    index = np.minimum(np.floor((v - np.float32(lo)) * scale).astype(np.int64), bins - 1)
+    return np.bincount(index, minlength=bins)
+
+
+def test_histogram_matches_numpy_on_integers(machine):
+    image = np.random.default_rng(2).integers(0, 256, (512, 300)).astype(np.uint8)
+    np.testing.assert_array_equal(histogram(image, 256, (0, 256), machine=machine),
+                                  np.histogram(image, 256, (0, 256))[0])
+
+
+def test_histogram_float_rule_nan_and_outside(machine, machine_with_local_size):
+    x = np.random.default_rng(3).standard_normal((300, 401)).astype(np.float32)
+    x[0, :10] = np.nan
+    expected = _float32_rule(x, 37, -2.0, 2.5)
+    np.testing.assert_array_equal(histogram(x, 37, (-2.0, 2.5), machine=machine), expected)
+    np.testing.assert_array_equal(histogram(x, 37, (-2.0, 2.5), machine=machine_with_local_size), expected)
+    assert abs(expected.sum() - np.sum((x >= -2) & (x <= 2.5))) == 0
+
+
+def test_tiled_histograms(machine):
+    image = np.random.default_rng(4).integers(0, 256, (250, 130)).astype(np.uint8)
+    tiles = histogram(image, 16, (0, 256), tile=(64, 50), machine=machine)
+    assert tiles.shape == (4, 3, 16)
+    for ty in range(4):
+        for tx in range(3):
+            block = image[ty * 64:(ty + 1) * 64, tx * 50:(tx + 1) * 50]
+            np.testing.assert_array_equal(tiles[ty, tx], np.histogram(block, 16, (0, 256))[0])
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    (dict(bins=0, range=(0, 1)), ValueError, "bins must be between"),
+    (dict(bins=4, range=(1, 1)), ValueError, "lo < hi"),
+    (dict(bins=4, range=(0, np.inf)), ValueError, "finite"),
+    (dict(bins=4, range="ab"), TypeError, "range must be a pair"),
+    (dict(bins=4, range=(0, 1), tile=(0, 4)), ValueError, "tile must be a pair"),
+    (dict(bins=2.5, range=(0, 1)), TypeError, "bins must be an integer"),
+])
+def test_histogram_bad_input_is_named(kwargs, error, match, machine):
+    with pytest.raises(error, match=match):
+        histogram(np.zeros((4, 4), np.float32), machine=machine, **kwargs)

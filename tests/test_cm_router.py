@@ -1,0 +1,89 @@
+"""The router: get against fancy indexing, send against np.ufunc.at and a sequential loop."""
+
+import numpy as np
+import pytest
+
+from vmcl.cm.router import get, send
+
+UFUNC_AT = {"sum": np.add, "max": np.maximum, "min": np.minimum, "and": np.bitwise_and, "or": np.bitwise_or}
+
+
+def _send_oracle(values, address, size, combine, fill=0):
+    """A sequential loop over the senders in index order: the definition of the result."""
+    out = np.full(size, fill, values.dtype)
+    seen = np.zeros(size, bool)
+    for v, a in zip(values.ravel(), address.ravel()):
+        if combine == "overwrite" or not seen[a]:
+            out[a] = v
+        else:
+            out[a] = UFUNC_AT[combine](out[a], v)
+        seen[a] = True
+    return out
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.int32, np.float32])
+def test_get_matches_fancy_indexing(dtype, machine, machine_with_local_size):
+    rng = np.random.default_rng(0)
+    field = (rng.random((37, 41)) * 200).astype(dtype)
+    address = rng.integers(0, field.size, (13, 17)).astype(np.int32)
+    np.testing.assert_array_equal(get(field, address, machine=machine), field.ravel()[address])
+    np.testing.assert_array_equal(get(field, address, machine=machine_with_local_size), field.ravel()[address])
+
+
+CASES = [(c, d) for c in ("overwrite", "sum", "max", "min", "and", "or") for d in (np.uint8, np.int32, np.float32)
+         if not (c in ("and", "or") and d == np.float32)]
+
+
+@pytest.mark.parametrize("combine, dtype", CASES)
+def test_send_matches_sequential_loop(combine, dtype, machine):
+    rng = np.random.default_rng(1)
+    values = (rng.standard_normal(3000) * 50).astype(dtype) if dtype == np.float32 \
+        else rng.integers(0, 200, 3000).astype(dtype)
+    address = rng.integers(0, 500, 3000).astype(np.int32)
+    np.testing.assert_array_equal(send(values, address, size=500, combine=combine, fill=7, machine=machine),
+                                  _send_oracle(values, address, 500, combine, fill=7))
+
+
+def test_float_sum_equals_np_add_at_bit_for_bit(machine, machine_with_local_size):
+    rng = np.random.default_rng(2)
+    values = rng.standard_normal(200_000).astype(np.float32)
+    address = rng.integers(0, 1000, 200_000).astype(np.int32)
+    expected = np.zeros(1000, np.float32)
+    np.add.at(expected, address, values)
+    np.testing.assert_array_equal(send(values, address, size=1000, combine="sum", machine=machine), expected)
+    np.testing.assert_array_equal(send(values, address, size=1000, combine="sum", machine=machine_with_local_size),
+                                  expected)
+
+
+def test_every_sender_to_one_destination(machine):
+    values = np.random.default_rng(3).standard_normal(100_000).astype(np.float32)
+    expected = np.zeros(1, np.float32)
+    np.add.at(expected, np.zeros(100_000, np.intp), values)
+    np.testing.assert_array_equal(send(values, np.zeros(100_000, np.int32), size=1, combine="sum", machine=machine),
+                                  expected)
+
+
+def test_permutation_round_trip_and_shape(machine):
+    rng = np.random.default_rng(4)
+    field = rng.random((64, 48)).astype(np.float32)
+    permutation = rng.permutation(field.size).astype(np.int32)
+    scattered = send(field.ravel(), permutation, size=field.shape, machine=machine)
+    assert scattered.shape == field.shape
+    np.testing.assert_array_equal(get(scattered, permutation, machine=machine), field.ravel())
+
+
+@pytest.mark.parametrize("call, error, match", [
+    (lambda m: get(np.zeros(5, np.float32), np.array([5], np.int32), machine=m), ValueError, r"address must lie in \[0, 4\]"),
+    (lambda m: get(np.zeros(5, np.float32), np.array([-1], np.int32), machine=m), ValueError, "address must lie"),
+    (lambda m: get(np.zeros(5, np.float32), np.array([1.0]), machine=m), TypeError, "address must have dtype"),
+    (lambda m: get(np.zeros(0, np.float32), np.array([0], np.int32), machine=m), ValueError, "field must not be empty"),
+    (lambda m: send(np.zeros(3, np.float32), np.zeros(4, np.int32), size=2, machine=m), ValueError, "shape of values"),
+    (lambda m: send(np.zeros(3, np.float32), np.zeros(3, np.int32), size=0, machine=m), ValueError, "size must be"),
+    (lambda m: send(np.zeros(3, np.float32), np.zeros(3, np.int32), size=2, combine="and", machine=m), TypeError,
+     "needs integer values"),
+    (lambda m: send(np.zeros(3, np.float32), np.zeros(3, np.int32), size=2, combine="mean", machine=m), ValueError,
+     "combine must be one of"),
+])
+def test_bad_input_is_named(call, error, match, machine):
+    with pytest.raises(error, match=match):
+        call(machine)
