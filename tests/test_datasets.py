@@ -4,6 +4,9 @@ import struct
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 
 from vmcl import datasets
 
@@ -24,6 +27,19 @@ def test_flo_round_trip_is_bit_exact(tmp_path):
     assert back.dtype == np.float32
     assert np.array_equal(back, flow, equal_nan=True)
     assert np.isnan(back[2, 3]).all() and np.isfinite(np.delete(back.reshape(-1, 2), 13, axis=0)).all()
+
+
+@settings(max_examples=30, deadline=None)
+@given(arrays(np.float32, st.tuples(st.integers(1, 9), st.integers(1, 9), st.just(2)),
+              elements=st.floats(-1e6, 1e6, width=32) | st.just(np.nan)))
+def test_flo_round_trip_any_shape(tmp_path_factory, flow):
+    path = tmp_path_factory.mktemp("flo") / "f.flo"
+    datasets.write_flo(path, flow)
+    back = datasets.read_flo(path)
+    # A vector with one NaN component is unknown as a whole.
+    expected = flow.copy()
+    expected[np.isnan(flow).any(axis=-1)] = np.nan
+    assert back.shape == flow.shape and np.array_equal(back, expected, equal_nan=True)
 
 
 def test_flo_real_file_round_trips_byte_for_byte(datasets_root, tmp_path):

@@ -141,6 +141,22 @@ def test_image_model_and_constant_hue(rendered, name):
     assert np.ptp(scene.illumination) / np.max(scene.illumination) > 0.5
 
 
+@pytest.mark.parametrize(
+    ("name", "expected"),
+    [
+        ("blocks", {Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.SHADOW}),
+        ("corridor", {Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.SHADOW}),
+        ("shadows", {Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.SHADOW}),
+        ("textures", {Label.TEXTURE}),
+        ("cues", {Label.DEPTH, Label.ALBEDO, Label.TEXTURE}),
+    ],
+)
+def test_presets_have_their_documented_labels(rendered, name, expected):
+    labels = rendered[name].labels
+    assert set(np.unique(labels).tolist()) - {0} == expected
+    assert all((labels == label).sum() > 50 for label in expected)
+
+
 def test_shadows_preset_strong_gradient(rendered):
     scene = rendered["shadows"]
     wall = scene.surfaces == 0

@@ -429,8 +429,11 @@ def boundary_counts(
     P. Arbelaez, M. Maire, C. Fowlkes and J. Malik, "Contour detection and hierarchical image
     segmentation", IEEE TPAMI 33(5):898-916, 2011.
     """
-    from pyEdgeEval import correspond_pixels
-    from pyEdgeEval.preprocess.thin import binary_thin
+    try:
+        from pyEdgeEval import correspond_pixels
+        from pyEdgeEval.preprocess.thin import binary_thin
+    except ImportError as error:
+        raise ImportError("BSDS boundary matching needs pyEdgeEval: pip install pyEdgeEval") from error
 
     pb = _edge_map(edge_map)
     truths = _truth_boundaries(ground_truths, pb.shape)
