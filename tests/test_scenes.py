@@ -157,6 +157,24 @@ def test_presets_have_their_documented_labels(rendered, name, expected):
     assert all((labels == label).sum() > 50 for label in expected)
 
 
+def test_single_cue_boundaries(rendered):
+    """textures: equal mean albedo in every region; cues: each boundary changes one cue only."""
+    mosaic = rendered["textures"]
+    means = [mosaic.albedo[mosaic.regions == r].mean() for r in np.unique(mosaic.regions)]
+    assert np.ptp(means) < 0.01 * np.mean(means)
+    cues = rendered["cues"]
+    assert np.all(cues.illumination == 1.0) and not cues.shadow.any()
+    luminance = cues.albedo @ np.array([0.299, 0.587, 0.114], np.float32)
+    hue = cues.albedo[..., 0] / (cues.albedo[..., 0] + cues.albedo[..., 1])
+    wall, tint, sparse = (cues.regions == r for r in np.unique(cues.regions[cues.bodies == 0]))
+    plate = cues.bodies == 1
+    grey = luminance[wall].mean()
+    for other in (tint, sparse, plate):
+        assert luminance[other].mean() == pytest.approx(grey, rel=0.01)
+    assert np.all(hue[wall] == 0.5) and np.all(hue[plate] == 0.5) and np.all(hue[tint] > 0.6)
+    assert np.ptp(cues.depth[~plate]) == 0 and np.all(cues.depth[plate] < cues.depth[~plate].min())
+
+
 def test_shadows_preset_strong_gradient(rendered):
     scene = rendered["shadows"]
     wall = scene.surfaces == 0
