@@ -3,9 +3,10 @@
 The seed paper's learning stage estimates parameters "from a set of examples in which data and desired
 solution are given ... at least initially, synthetic images" (section "Learning and parameter
 estimation"), and its labelling stage classifies each discontinuity as an occluding (depth),
-orientation, albedo (mark), shadow or specular edge (section "Labeling discontinuities"). This module
-renders such examples: small worlds of textured, painted planar faces under one light, ray cast per
-pixel in vectorised NumPy, with the physical cause of every pixel known.
+orientation, albedo (mark), shadow or specular edge (section "Labeling the physical origin of edges",
+"Physical discontinuities"). This module renders such examples: small worlds of textured, painted
+planar faces under one light, ray cast per pixel in vectorised NumPy, with the physical cause of every
+pixel known.
 
 Image model (section "Color", after Hurlbert and Poggio): with the specular term off, every pixel obeys
 
@@ -41,7 +42,8 @@ albedo of a region achromatically and are not labelled.
 
 References
 ----------
-T. Poggio and staff, "The MIT Vision Machine", Proc. DARPA Image Understanding Workshop, 1988.
+T. Poggio, J. Little, E. Gamble, W. Gillett, D. Geiger, D. Weinshall et al., "The MIT Vision Machine",
+Proc. DARPA Image Understanding Workshop, 1988.
 A. Hurlbert and T. Poggio, "A network for image segmentation using color", NIPS 1988.
 E. Gamble, D. Geiger, T. Poggio and D. Weinshall, "Integration of vision modules and labeling of surface
 discontinuities", IEEE SMC 19(6), 1989.
@@ -79,7 +81,7 @@ _EPS = 1e-5  # relative slack of segment tests, so a point never hides itself
 
 
 class Label(IntEnum):
-    """Physical cause of a discontinuity (seed paper, "Labeling discontinuities").
+    """Physical cause of a discontinuity (seed paper, "Labeling the physical origin of edges").
 
     TEXTURE is an albedo edge between regions of equal colour that differ only in texture; merge it
     with ALBEDO for the paper's five classes.
@@ -673,8 +675,8 @@ class _Regions:
             looks_of_face = [(face.colour, None)] + [(mk.colour, mk.texture) for mk in face.marks]
             for m, (colour, texture) in enumerate(looks_of_face):
                 # A mark without its own texture continues its face's pattern: same texture, same key.
-                own = (texture, _seed_key(seed, k, m))
-                item = (face.texture, _seed_key(seed, k, 0)) if texture is None else own
+                own = texture is not None
+                item = (texture if own else face.texture, _seed_key(seed, k, m if own else 0))
                 look = seen.setdefault(item, len(seen))
                 if look == len(textures):
                     textures.append(item)
