@@ -1,5 +1,7 @@
 """NumPy oracles for the Connection Machine primitives, written for clarity, not speed."""
 
+import itertools
+
 import numpy as np
 
 UFUNCS = {"plus": np.add, "max": np.maximum, "min": np.minimum}
@@ -17,7 +19,7 @@ def scan_line(line, op, exclusive, starts):
     bounds = list(np.flatnonzero(starts)) + [len(line)]
     if bounds[0] != 0:
         bounds.insert(0, 0)
-    for a, b in zip(bounds[:-1], bounds[1:]):
+    for a, b in itertools.pairwise(bounds):
         seg = line[a:b]
         inclusive = np.full_like(seg, seg[0]) if op == "copy" else UFUNCS[op].accumulate(seg)
         if exclusive:

@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
-
 from oracles import box_sum as box_oracle
+
 from vmcl.cm.scan import box_sum
 
 SHAPES = [(1,), (23,), (1, 1), (1, 19), (19, 1), (31, 17), (40, 37), (3, 40, 37), (2, 1, 50)]
@@ -46,11 +46,11 @@ def test_window_counts_with_zero_border(machine):
 
 
 @pytest.mark.parametrize("kwargs, error, match", [
-    (dict(radius=-1), ValueError, "radius must be >= 0"),
-    (dict(radius=1.5), TypeError, "radius must be an integer"),
-    (dict(radius=1, axes=()), ValueError, "axes must be a non-empty tuple"),
-    (dict(radius=1, axes=(-1, -1)), ValueError, "must not repeat"),
-    (dict(radius=1, axes=(0,)), ValueError, "axes=0 is not supported"),
+    ({"radius": -1}, ValueError, "radius must be >= 0"),
+    ({"radius": 1.5}, TypeError, "radius must be an integer"),
+    ({"radius": 1, "axes": ()}, ValueError, "axes must be a non-empty tuple"),
+    ({"radius": 1, "axes": (-1, -1)}, ValueError, "must not repeat"),
+    ({"radius": 1, "axes": (0,)}, ValueError, "axes=0 is not supported"),
 ])
 def test_bad_input_is_named(kwargs, error, match, machine):
     with pytest.raises(error, match=match):

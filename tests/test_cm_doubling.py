@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 from scipy import ndimage
 
 from vmcl.cm.doubling import label, principal, rank
+from vmcl.patterns import spiral
 
 STRUCTURE = {4: ndimage.generate_binary_structure(2, 1), 8: ndimage.generate_binary_structure(2, 2)}
 
@@ -94,39 +95,15 @@ def test_relabel_numbers_components_by_principal(connectivity, machine):
     np.testing.assert_array_equal(numbered, expected)
 
 
-def spiral(size, corridor=1):
-    """A square spiral of walls and gaps ``corridor`` pixels wide: one component whose path from the
-    outside to the centre is about size**2 / (2 * corridor) pixels long, the worst case for spreading
-    activation."""
-    cells = size // corridor
-    drawn = np.zeros((cells, cells), bool)
-    y = x = 0
-    drawn[0, 0] = True
-    directions = [(0, 1), (1, 0), (0, -1), (-1, 0)]
-    heading, turns = 0, 0
-
-    def free(cy, cx):
-        return 0 <= cy < cells and 0 <= cx < cells and not drawn[cy, cx]
-
-    while turns < 2:
-        dy, dx = directions[heading]
-        ahead = (y + 2 * dy, x + 2 * dx)
-        beyond_ok = not (0 <= ahead[0] < cells and 0 <= ahead[1] < cells) or not drawn[ahead]
-        if free(y + dy, x + dx) and beyond_ok:
-            y, x = y + dy, x + dx
-            drawn[y, x] = True
-            turns = 0
-        else:
-            heading, turns = (heading + 1) % 4, turns + 1
-    mask = np.kron(drawn, np.ones((corridor, corridor), bool))
-    return np.pad(mask, ((0, size - mask.shape[0]), (0, size - mask.shape[1])))
-
-
-def test_spiral_is_one_component(machine):
-    mask = spiral(256)
-    reference, count = ndimage.label(mask, STRUCTURE[4])
-    assert count == 1
+@pytest.mark.parametrize("corridor", [1, 3])
+def test_spiral_is_one_component(corridor, machine):
+    mask = spiral(256, corridor=corridor)
+    _reference, count = ndimage.label(mask, STRUCTURE[4])
+    assert count == 1 and mask.sum() > 256**2 // 3
     _check_labels(mask, 4, label(mask, connectivity=4, machine=machine))
+    small = spiral(40, corridor=corridor)
+    np.testing.assert_array_equal(label(small, connectivity=4, method="iterative", machine=machine),
+                                  label(small, connectivity=4, machine=machine))
 
 
 def test_large_random_field_and_repeatability(machine, machine_with_local_size):

@@ -85,12 +85,12 @@ def test_tiled_histograms(machine):
 
 
 @pytest.mark.parametrize("kwargs, error, match", [
-    (dict(bins=0, range=(0, 1)), ValueError, "bins must be between"),
-    (dict(bins=4, range=(1, 1)), ValueError, "lo < hi"),
-    (dict(bins=4, range=(0, np.inf)), ValueError, "finite"),
-    (dict(bins=4, range="ab"), TypeError, "range must be a pair"),
-    (dict(bins=4, range=(0, 1), tile=(0, 4)), ValueError, "tile must be a pair"),
-    (dict(bins=2.5, range=(0, 1)), TypeError, "bins must be an integer"),
+    ({"bins": 0, "range": (0, 1)}, ValueError, "bins must be between"),
+    ({"bins": 4, "range": (1, 1)}, ValueError, "lo < hi"),
+    ({"bins": 4, "range": (0, np.inf)}, ValueError, "finite"),
+    ({"bins": 4, "range": "ab"}, TypeError, "range must be a pair"),
+    ({"bins": 4, "range": (0, 1), "tile": (0, 4)}, ValueError, "tile must be a pair"),
+    ({"bins": 2.5, "range": (0, 1)}, TypeError, "bins must be an integer"),
 ])
 def test_histogram_bad_input_is_named(kwargs, error, match, machine):
     with pytest.raises(error, match=match):

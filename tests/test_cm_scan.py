@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from oracles import scan as scan_oracle
+
 from vmcl.cm.scan import scan
 
 OPS = ["plus", "max", "min", "copy"]
@@ -106,17 +106,17 @@ def test_narrow_integers_are_widened_exactly(machine):
 
 
 @pytest.mark.parametrize("kwargs, error, match", [
-    (dict(x=np.zeros((2, 2, 2, 2), np.float32)), ValueError, "x must have"),
-    (dict(x=np.zeros(5, np.float64)), TypeError, "x must have dtype"),
-    (dict(x=np.zeros((0, 3), np.float32)), ValueError, "x must not be empty"),
-    (dict(x=[1, 2, 3]), TypeError, "x must be a NumPy array"),
-    (dict(x=np.zeros(5, np.float32), axis=-2), ValueError, "axis=-2 is out of range"),
-    (dict(x=np.zeros((3, 3), np.float32), axis=2), ValueError, "axis=2 is out of range"),
-    (dict(x=np.zeros(5, np.float32), op="times"), ValueError, "op must be one of"),
-    (dict(x=np.zeros(5, np.float32), method="fast"), ValueError, "method must be one of"),
-    (dict(x=np.zeros(5, np.float32), segments=np.zeros(4, bool)), ValueError, "segments must have the data's shape"),
-    (dict(x=np.zeros(5, np.float32), segments=np.zeros(5, np.float32)), TypeError, "segments must be boolean"),
-    (dict(x=np.zeros(5, np.float32), exclusive=1), TypeError, "exclusive must be a bool"),
+    ({"x": np.zeros((2, 2, 2, 2), np.float32)}, ValueError, "x must have"),
+    ({"x": np.zeros(5, np.float64)}, TypeError, "x must have dtype"),
+    ({"x": np.zeros((0, 3), np.float32)}, ValueError, "x must not be empty"),
+    ({"x": [1, 2, 3]}, TypeError, "x must be a NumPy array"),
+    ({"x": np.zeros(5, np.float32), "axis": -2}, ValueError, "axis=-2 is out of range"),
+    ({"x": np.zeros((3, 3), np.float32), "axis": 2}, ValueError, "axis=2 is out of range"),
+    ({"x": np.zeros(5, np.float32), "op": "times"}, ValueError, "op must be one of"),
+    ({"x": np.zeros(5, np.float32), "method": "fast"}, ValueError, "method must be one of"),
+    ({"x": np.zeros(5, np.float32), "segments": np.zeros(4, bool)}, ValueError, "segments must have the data's shape"),
+    ({"x": np.zeros(5, np.float32), "segments": np.zeros(5, np.float32)}, TypeError, "segments must be boolean"),
+    ({"x": np.zeros(5, np.float32), "exclusive": 1}, TypeError, "exclusive must be a bool"),
 ])
 def test_bad_input_is_named(kwargs, error, match, machine):
     x = kwargs.pop("x")

@@ -41,7 +41,7 @@ def test_unknown_device_lists_the_available_ones(monkeypatch, machine):
 
 
 def test_missing_platform_says_how_to_install(monkeypatch):
-    monkeypatch.setattr(cl, "get_platforms", lambda: [])
+    monkeypatch.setattr(cl, "get_platforms", list)
     with pytest.raises(vmcl.NoOpenCLPlatformError, match="apt-get install -y pocl-opencl-icd"):
         vmcl.Machine()
 

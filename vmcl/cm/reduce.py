@@ -20,7 +20,7 @@ ReduceOp = Literal["sum", "max", "min", "and", "or"]
 _OPS = {"sum": 0, "max": 1, "min": 2, "and": 4, "or": 5}
 _CHUNK = 1 << 16
 _DTYPES = (np.uint8, np.int32, np.float32)
-_ANY_NDIM = tuple(range(0, 33))
+_ANY_NDIM = tuple(range(33))
 
 
 def reduce(x: ArrayLike, op: ReduceOp = "sum", *, machine: Machine | None = None):

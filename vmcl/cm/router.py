@@ -13,8 +13,8 @@ from typing import Literal
 import numpy as np
 import pyopencl as cl
 
-from vmcl.cm import reduce as _reduce
 from vmcl.cm import _arrays
+from vmcl.cm import reduce as _reduce
 from vmcl.cm._arrays import ArrayLike, machine_for, result, type_defines
 from vmcl.cm.scan import exclusive_sum_into
 from vmcl.machine import Machine

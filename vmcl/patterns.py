@@ -1,0 +1,50 @@
+"""Binary test patterns whose structure is known exactly, for the primitives' tests and benchmarks.
+
+The spiral is the worst case of the seed's "Edge detection" (Canny hysteresis): spreading activation
+needs O(m) steps for a chain of m pixels, distance doubling O(log m).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+_HEADINGS = ((0, 1), (1, 0), (0, -1), (-1, 0))
+
+
+def spiral(size: int, *, corridor: int = 1) -> np.ndarray:
+    """A square spiral of walls and gaps ``corridor`` pixels wide: one 4-connected component.
+
+    Parameters
+    ----------
+    size : int
+        The mask is size x size (size >= corridor).
+    corridor : int
+        Width of the wall and of the gap between turns.
+
+    Returns
+    -------
+    bool array (size, size). The wall's path from the outer corner to the centre is about
+    size**2 / (2 * corridor) pixels long.
+    """
+    if not isinstance(size, (int, np.integer)) or not isinstance(corridor, (int, np.integer)):
+        raise TypeError("size and corridor must be integers")
+    if corridor < 1 or size < corridor:
+        raise ValueError(f"need 1 <= corridor <= size, got size={size}, corridor={corridor}")
+    cells = size // corridor
+    drawn = np.zeros((cells, cells), bool)
+    y = x = heading = turns = 0
+    drawn[0, 0] = True
+    # Walk like a turtle, turning right whenever the next step would touch the wall already drawn
+    # (a cell two steps ahead must be free too, which keeps a one-cell gap); stop when no turn helps.
+    while turns < 2:
+        dy, dx = _HEADINGS[heading]
+        ny, nx, ay, ax = y + dy, x + dx, y + 2 * dy, x + 2 * dx
+        step_free = 0 <= ny < cells and 0 <= nx < cells and not drawn[ny, nx]
+        beyond_free = not (0 <= ay < cells and 0 <= ax < cells) or not drawn[ay, ax]
+        if step_free and beyond_free:
+            y, x, turns = ny, nx, 0
+            drawn[y, x] = True
+        else:
+            heading, turns = (heading + 1) % 4, turns + 1
+    mask = np.kron(drawn, np.ones((corridor, corridor), bool))
+    return np.pad(mask, ((0, size - mask.shape[0]), (0, size - mask.shape[1])))
