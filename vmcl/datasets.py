@@ -330,6 +330,12 @@ def load_stereo(name: str, root) -> StereoPair:
     Tsukuba's disparities are for the pair (col3, col4), scale 16, with 22,896 unknown border pixels;
     teddy's are quarter size, scale 4.
 
+    Examples
+    --------
+    >>> pair = load_stereo("tsukuba", "../shared/datasets")  # doctest: +SKIP
+    >>> pair.disparity_range, int(pair.masks["nonocc"].sum())  # doctest: +SKIP
+    ((5.0, 14.0), 85438)
+
     References
     ----------
     D. Scharstein and R. Szeliski, IJCV 47:7-42, 2002 (tsukuba, venus, sawtooth, map) and CVPR 2003

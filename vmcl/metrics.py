@@ -146,6 +146,14 @@ def evaluate_disparity(
     A pixel without an output is bad at every threshold, so a sparse method cannot look better by
     abstaining; the density is reported beside the rates, as Middlebury does.
 
+    Examples
+    --------
+    >>> import numpy as np
+    >>> truth = np.array([[1.0, 2.0], [3.0, np.nan]])
+    >>> scores = evaluate_disparity(np.array([[1.2, 4.0], [np.nan, 0.0]]), truth)
+    >>> scores.bad[1.0], scores.density, scores.mae
+    (0.6666666666666666, 0.6666666666666666, 1.1)
+
     References
     ----------
     D. Scharstein and R. Szeliski, "A taxonomy and evaluation of dense two-frame stereo correspondence

@@ -907,7 +907,16 @@ def render(world: World, *, seed: int = 0, noise: float = 0.0) -> Scene:
     -----
     Each pixel's ray is cast against every face (culled by the face's projected bounding box); shadows
     and occlusions are exact segment tests against the faces. A 512 x 512 scene with ten faces
-    renders in well under a second.
+    renders in about 0.3 s on two cores (benchmarks/results/ground_truth.md).
+
+    Examples
+    --------
+    >>> from vmcl import scenes
+    >>> scene = scenes.render(scenes.preset("blocks", shape=(128, 128)), seed=0)
+    >>> scene.left.shape, scene.disparity.dtype
+    ((128, 128, 3), dtype('float32'))
+    >>> bool((scene.labels == scenes.Label.SHADOW).any())
+    True
     """
     if not isinstance(world, World):
         raise TypeError(f"world must be a World (see vmcl.scenes.preset), got {type(world).__name__}")
