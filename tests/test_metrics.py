@@ -195,3 +195,17 @@ def test_label_scores_per_label():
     assert scores[3].precision == 0.0 and math.isnan(scores[3].recall)
     with pytest.raises(TypeError, match="integer label map"):
         metrics.label_scores(predicted.astype(float), truth)
+
+
+def test_device_arrays_are_accepted(machine):
+    truth = np.array([[1.0, 2.0, 3.0], [4.0, NAN, 6.0]], np.float32)
+    estimate = np.array([[1.2, 2.7, 4.5], [NAN, 9.0, 1.0]], np.float32)
+    host = metrics.evaluate_disparity(estimate, truth)
+    device = metrics.evaluate_disparity(machine.to_device(estimate), machine.to_device(truth))
+    assert device == host
+    flow = np.zeros((2, 3, 2), np.float32)
+    assert metrics.evaluate_flow(machine.to_device(flow), flow).epe == 0.0
+    labels = np.zeros((8, 8), np.int32)
+    labels[:, 3] = 1
+    scores = metrics.label_scores(machine.to_device(labels), labels)
+    assert scores[1].precision == scores[1].recall == 1.0

@@ -3,7 +3,8 @@
 Every module of the Vision Machine is measured against ground truth (seed paper, "Learning and parameter
 estimation": parameters are estimated "from a set of examples in which data and desired solution are
 given"). The figures computed here are the ones the literature reports, computed the way it computes
-them, so that vmcl's numbers can be set beside published ones:
+them, so that vmcl's numbers can be set beside published ones (device arrays are accepted and copied
+to the host):
 
 - stereo: Middlebury "bad pixels" at 0.5, 1, 2 and 4 px, pixels without an output counted as bad and the
   output density reported beside, plus mean absolute and RMS error on the pixels that have an output
@@ -26,6 +27,7 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
+import pyopencl.array as cl_array
 from scipy import ndimage
 
 __all__ = [
@@ -52,8 +54,13 @@ BAD_PIXEL_THRESHOLDS: tuple[float, ...] = (0.5, 1.0, 2.0, 4.0)
 # --------------------------------------------------------------------------------------------- validation
 
 
+def _host(array) -> np.ndarray:
+    """A NumPy view of the input; a device array (pyopencl) is copied to the host first."""
+    return np.asarray(array.get() if isinstance(array, cl_array.Array) else array)
+
+
 def _as_float_field(array, name: str, *, ndim: int) -> np.ndarray:
-    array = np.asarray(array)
+    array = _host(array)
     if array.dtype == bool or not np.issubdtype(array.dtype, np.number):
         raise TypeError(f"{name} must be a numeric array, got dtype {array.dtype}")
     if array.ndim != ndim:
@@ -67,7 +74,7 @@ def _as_float_field(array, name: str, *, ndim: int) -> np.ndarray:
 
 
 def _as_mask(mask, name: str, shape: tuple[int, ...]) -> np.ndarray:
-    mask = np.asarray(mask)
+    mask = _host(mask)
     if mask.dtype != bool:
         raise TypeError(f"{name} must be a boolean array, got dtype {mask.dtype}")
     if mask.shape != shape:
@@ -287,7 +294,7 @@ def evaluate_flow(flow, ground_truth, *, mask=None) -> FlowScores:
     """
     epe = endpoint_error(flow, ground_truth)
     aae = angular_error(flow, ground_truth)
-    truth = np.asarray(ground_truth, dtype=np.float64)
+    truth = _host(ground_truth).astype(np.float64)
     evaluated = _evaluated(truth, mask, np.isfinite(truth).all(axis=-1))
     has_output = evaluated & np.isfinite(epe)
     n = int(np.count_nonzero(evaluated))
@@ -370,7 +377,7 @@ def _thresholds(thresholds) -> np.ndarray:
 
 
 def _edge_map(edge_map) -> np.ndarray:
-    edge_map = np.asarray(edge_map)
+    edge_map = _host(edge_map)
     if edge_map.dtype == bool:
         return edge_map.astype(np.float64)
     edge_map = _as_float_field(edge_map, "edge_map", ndim=2)
@@ -380,7 +387,7 @@ def _edge_map(edge_map) -> np.ndarray:
 
 
 def _truth_boundaries(ground_truths, shape: tuple[int, int]) -> list[np.ndarray]:
-    truths = [np.asarray(g) for g in ground_truths]
+    truths = [_host(g) for g in ground_truths]
     if not truths:
         raise ValueError("ground_truths must hold at least one annotator's boundary map")
     for k, g in enumerate(truths):
@@ -594,7 +601,8 @@ def evaluate_boundaries(
     if workers < 1:
         raise ValueError(f"workers must be at least 1, got {workers}")
     kwargs = {"thresholds": thresholds, "max_dist": max_dist, "thin": thin}
-    jobs = [(e, g, kwargs) for e, g in zip(edge_maps, ground_truths)]
+    # Host copies: a worker process cannot receive device arrays.
+    jobs = [(_host(e), [_host(t) for t in g], kwargs) for e, g in zip(edge_maps, ground_truths)]
     if workers == 1:
         per_image = [_counts_of(job) for job in jobs]
     else:
@@ -682,7 +690,7 @@ def detection_scores(predicted, truth, *, tolerance: float = 1.0) -> DetectionSc
     pixel. It is the usual measure for labelled discontinuities on synthetic scenes, where the truth is
     one pixel thick and the question is whether each kind of discontinuity was found at all.
     """
-    predicted = np.asarray(predicted)
+    predicted = _host(predicted)
     if predicted.dtype != bool or predicted.ndim != 2:
         raise TypeError(f"predicted must be a 2-D boolean array, got {predicted.dtype} {predicted.shape}")
     truth = _as_mask(truth, "truth", predicted.shape)
@@ -720,8 +728,8 @@ def label_scores(
     dict of int to DetectionScores
         For each label l, :func:`detection_scores` of ``predicted == l`` against ``truth == l``.
     """
-    predicted = np.asarray(predicted)
-    truth = np.asarray(truth)
+    predicted = _host(predicted)
+    truth = _host(truth)
     for name, array in (("predicted", predicted), ("truth", truth)):
         if not np.issubdtype(array.dtype, np.integer) or array.ndim != 2:
             raise TypeError(f"{name} must be a 2-D integer label map, got {array.dtype} {array.shape}")
