@@ -103,6 +103,14 @@ def test_any_size_same_world(shape):
     assert np.isfinite(scene.left).all()
 
 
+@pytest.mark.parametrize("name", scenes.PRESETS)
+@pytest.mark.parametrize("shape", [(64, 1024), (1024, 64)])
+def test_every_pixel_sees_a_surface(name, shape):
+    scene = scenes.render(scenes.preset(name, shape=shape))
+    assert np.isfinite(scene.left).all() and np.isfinite(scene.depth).all()
+    assert (scene.bodies >= 0).all() and (scene.regions >= 0).all()
+
+
 def test_seeded_and_deterministic():
     world = scenes.preset("blocks", shape=(96, 96))
     a, b = scenes.render(world, seed=3, noise=0.01), scenes.render(world, seed=3, noise=0.01)
