@@ -14,42 +14,62 @@
 #elif OP == OP_MAX
 #define IDENTITY ((ACC)T_LOWEST)
 #define COMBINE(a, b) max((a), (b))
-#elif OP == OP_MIN
-#define IDENTITY ((ACC)T_HIGHEST)
+#elif OP == OP_MIN || OP == OP_AND
+#define IDENTITY ((ACC)(OP == OP_AND ? 1 : T_HIGHEST))
 #define COMBINE(a, b) min((a), (b))
-#elif OP == OP_AND
-#define IDENTITY ((ACC)1)
-#define COMBINE(a, b) ((ACC)((a) && (b)))
 #elif OP == OP_OR
 #define IDENTITY ((ACC)0)
-#define COMBINE(a, b) ((ACC)((a) || (b)))
+#define COMBINE(a, b) max((a), (b))
+#endif
+
+/* Logical AND and OR are min and max over truth values 0/1. */
+#define ACCV VCAT(ACC, 16)
+#if OP == OP_AND || OP == OP_OR
+#define LOAD16(p) (VCAT(convert_, ACCV)(vload16(0, (p)) != (VCAT(T, 16))0) & (ACCV)1)
+#define LOAD1(p) ((ACC)(*(p) != 0))
+#else
+#define LOAD16(p) VCAT(convert_, ACCV)(vload16(0, (p)))
+#define LOAD1(p) ((ACC)*(p))
 #endif
 
 /* Float sums use Kahan's compensated summation, so the result stays within a few ulps of the exact sum
  * however many elements there are; everything else accumulates directly. */
 #define KAHAN (OP == OP_PLUS && T_IS_FLOAT)
 
-/* Reduce elements [begin, end) of x, writing the chunk result (and its compensation) to partial[g]. */
+#if KAHAN
+#define KAHAN_ADD(acc, c, v) { __typeof__(acc) y_ = (v) - (c); __typeof__(acc) t_ = (acc) + y_; \
+                               (c) = (t_ - (acc)) - y_; (acc) = t_; }
+#endif
+
+/* Reduce elements [begin, end) of x, writing the chunk result (and its compensation) to partial[g].
+ * Sixteen lanes accumulate side by side (sixteen independent chains, one vector load per step), then
+ * fold in lane order, so the result does not depend on the device. */
 __kernel void reduce_chunks(__global const T *x, __global ACC *partial, __global ACC *compensation,
                             long n, long chunk)
 {
     long g = get_global_id(0);
     if (g * chunk >= n) return;
     long begin = g * chunk, end = min(begin + chunk, n);
-    ACC acc = IDENTITY;
+    long vec_end = begin + (end - begin) / 16 * 16;
+    ACCV lanes = (ACCV)IDENTITY;
+    ACC acc = IDENTITY, c = 0;
 #if KAHAN
-    ACC c = 0;
-    for (long i = begin; i < end; i++) {
-        ACC y = (ACC)x[i] - c;
-        ACC t = acc + y;
-        c = (t - acc) - y;
-        acc = t;
-    }
-    compensation[g] = c;
+    ACCV lane_c = (ACCV)0;
+    for (long i = begin; i < vec_end; i += 16) KAHAN_ADD(lanes, lane_c, LOAD16(x + i))
+    ACC lane_acc[16], lane_comp[16];
+    vstore16(lanes, 0, lane_acc);
+    vstore16(lane_c, 0, lane_comp);
+    for (int j = 0; j < 16; j++) KAHAN_ADD(acc, c, lane_acc[j] - lane_comp[j])
+    for (long i = vec_end; i < end; i++) KAHAN_ADD(acc, c, LOAD1(x + i))
 #else
-    for (long i = begin; i < end; i++) acc = COMBINE(acc, (ACC)x[i]);
+    for (long i = begin; i < vec_end; i += 16) lanes = COMBINE(lanes, LOAD16(x + i));
+    ACC lane_acc[16];
+    vstore16(lanes, 0, lane_acc);
+    for (int j = 0; j < 16; j++) acc = COMBINE(acc, lane_acc[j]);
+    for (long i = vec_end; i < end; i++) acc = COMBINE(acc, LOAD1(x + i));
 #endif
     partial[g] = acc;
+    compensation[g] = c;
 }
 
 /* One work-item folds the chunk results in order. */
@@ -60,12 +80,7 @@ __kernel void reduce_partials(__global const ACC *partial, __global const ACC *c
     ACC acc = IDENTITY;
 #if KAHAN
     ACC c = 0;
-    for (long g = 0; g < count; g++) {
-        ACC y = (partial[g] - compensation[g]) - c;
-        ACC t = acc + y;
-        c = (t - acc) - y;
-        acc = t;
-    }
+    for (long g = 0; g < count; g++) KAHAN_ADD(acc, c, partial[g] - compensation[g])
 #else
     for (long g = 0; g < count; g++) acc = COMBINE(acc, partial[g]);
 #endif
@@ -75,7 +90,8 @@ __kernel void reduce_partials(__global const ACC *partial, __global const ACC *c
 /* Histogram of tile g of a (H, W) field cut into tiles of th x tw (edge tiles may be smaller): bin
  * floor((v - lo) * scale) for lo <= v <= hi (v == hi and rounding up to `bins` both go to the last
  * bin); values outside [lo, hi] and NaN are not counted. The work-group counts into local memory, then
- * writes its tile's row of `out` (per-tile mode) or adds it into the one histogram (accumulate). */
+ * writes its tile's row of `out` (per-tile mode) or adds it into the one histogram (accumulate).
+ * SHARED_COUNTS = 0 (work-groups of one work-item) counts with plain increments. */
 __kernel void histogram_tiles(__global const T *x, __global int *out, __local int *counts,
                               long W, long H, long th, long tw, long tiles_x,
                               float lo, float hi, float scale, int bins, int accumulate)
@@ -86,11 +102,18 @@ __kernel void histogram_tiles(__global const T *x, __global int *out, __local in
     barrier(CLK_LOCAL_MEM_FENCE);
     long y0 = (g / tiles_x) * th, x0 = (g % tiles_x) * tw;
     long rows = min(th, H - y0), cols = min(tw, W - x0);
-    for (long k = lid; k < rows * cols; k += size) {
-        float v = (float)x[(y0 + k / cols) * W + x0 + k % cols];
-        if (v >= lo && v <= hi) {
-            int b = (int)floor((v - lo) * scale);
-            atomic_inc(&counts[min(b, bins - 1)]);
+    for (long r = 0; r < rows; r++) {
+        __global const T *row = x + (y0 + r) * W + x0;
+        for (long c = lid; c < cols; c += size) {
+            float v = (float)row[c];
+            if (v >= lo && v <= hi) {
+                int b = min((int)floor((v - lo) * scale), bins - 1);
+#if SHARED_COUNTS
+                atomic_inc(&counts[b]);
+#else
+                counts[b]++;
+#endif
+            }
         }
     }
     barrier(CLK_LOCAL_MEM_FENCE);

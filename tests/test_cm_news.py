@@ -47,3 +47,12 @@ def test_large_field_any_local_size(machine, machine_with_local_size):
 def test_bad_input_is_named(args, kwargs, error, match, machine):
     with pytest.raises(error, match=match):
         shift(*args, machine=machine, **kwargs)
+
+
+def test_copy_yardstick_copies_every_element(machine):
+    # benchmarks/primitives.py measures bandwidth with this kernel; it must copy tails too.
+    source = np.arange(1000003, dtype=np.float32)
+    target = machine.empty(source.shape, np.float32)
+    kernel = machine.kernel("news", "copy", T="float", BORDER=0, VEC=16)
+    machine.launch(kernel, (-(-source.size // 16),), machine.to_device(source), target, np.int64(source.size))
+    np.testing.assert_array_equal(target.get(), source)

@@ -87,3 +87,14 @@ def test_permutation_round_trip_and_shape(machine):
 def test_bad_input_is_named(call, error, match, machine):
     with pytest.raises(error, match=match):
         call(machine)
+
+
+def test_large_field_2048(machine):
+    rng = np.random.default_rng(5)
+    field = rng.random((2048, 2048)).astype(np.float32)
+    address = rng.integers(0, field.size, field.size).astype(np.int32)
+    np.testing.assert_array_equal(get(field, address, machine=machine), field.ravel()[address])
+    expected = np.zeros(field.size, np.float32)
+    np.add.at(expected, address, field.ravel())
+    np.testing.assert_array_equal(send(field.ravel(), address, size=field.size, combine="sum", machine=machine),
+                                  expected)

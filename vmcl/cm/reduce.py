@@ -18,7 +18,7 @@ from vmcl.machine import Machine
 
 ReduceOp = Literal["sum", "max", "min", "and", "or"]
 _OPS = {"sum": 0, "max": 1, "min": 2, "and": 4, "or": 5}
-_CHUNK = 1 << 16
+_MIN_CHUNK = 1024
 _DTYPES = (np.uint8, np.int32, np.float32)
 _ANY_NDIM = tuple(range(33))
 
@@ -42,8 +42,9 @@ def reduce(x: ArrayLike, op: ReduceOp = "sum", *, machine: Machine | None = None
 
     Notes
     -----
-    Deterministic: chunks of 65536 elements are reduced serially, then the chunk results in order. Float
-    sums use Kahan compensation in each chunk and across chunks. NaN propagates through "sum" but is
+    Deterministic on a given device: each chunk is reduced in sixteen lanes folded in lane order, then the
+    chunk results in order (the chunk size follows the device's compute units, so a float sum may differ
+    in the last bits between devices). Float sums use Kahan compensation throughout. NaN propagates through "sum" but is
     ignored by "max" and "min" (OpenCL's fmax/fmin rule).
     """
     machine = machine_for(machine)
@@ -62,12 +63,14 @@ def reduce(x: ArrayLike, op: ReduceOp = "sum", *, machine: Machine | None = None
                 np.dtype(np.int32): "int"}[accumulator]
     defines.update(OP=_OPS[op], ACC=acc_name)
     n = data.size
-    count = math.ceil(n / _CHUNK)
+    # Enough chunks for every compute unit, each a multiple of 16 (the kernel's vector width).
+    chunk = max(_MIN_CHUNK, -(-math.ceil(n / (machine.compute_units * 16)) // 16) * 16)
+    count = math.ceil(n / chunk)
     partial = machine.empty(count, accumulator)
     compensation = machine.empty(count, accumulator)
     out = machine.empty((), accumulator)
     machine.launch(machine.kernel("reduce", "reduce_chunks", **defines), (count,), data, partial, compensation,
-                   np.int64(n), np.int64(_CHUNK))
+                   np.int64(n), np.int64(chunk))
     machine.launch(machine.kernel("reduce", "reduce_partials", **defines), (1,), partial, compensation, out,
                    np.int64(count))
     if not host:
@@ -130,10 +133,11 @@ def histogram(x: ArrayLike, bins: int, range: tuple[float, float], *, tile: tupl
     tiles_y, tiles_x = math.ceil(height / th), math.ceil(width / tw)
     shape = (bins,) if accumulate else (tiles_y, tiles_x, bins)
     out = machine.empty(shape, np.int32)
-    defines = dict(OP=0, ACC="int", **type_defines(data.dtype))
+    local = 1 if machine.is_cpu else min(256, machine.device.max_work_group_size)
+    # A one-work-item group counts without atomics (a CPU runs each group on one thread anyway).
+    defines = dict(OP=0, ACC="int", SHARED_COUNTS=int(local > 1), **type_defines(data.dtype))
     if accumulate:
         cl.enqueue_fill_buffer(machine.queue, out.base_data, np.int32(0), 0, out.nbytes)
-    local = 1 if machine.is_cpu else min(256, machine.device.max_work_group_size)
     scale = np.float32(bins) / (np.float32(hi) - np.float32(lo))
     kernel = machine.kernel("reduce", "histogram_tiles", **defines)
     machine.launch(kernel, (tiles_y * tiles_x * local,), data, out, cl.LocalMemory(4 * bins),

@@ -1,0 +1,425 @@
+/* mrf.cl: line-process Markov Random Fields, seed sections "The integration stage and MRF", "MRF
+ * models", "Organization of integration" and "Algorithms: Deterministic and stochastic".
+ *
+ * Energy (equations (10)-(12); vmcl/mrf/energy.py is its NumPy twin and documents it in full):
+ *   U(f, l) = sum_i w_i |f_i - g_i|^2                       w_i = alpha * gamma_i (0: no data)
+ *           + sum_<ij> rho(f_i, f_j) (1 - l_ij)             rho = |f_i - f_j|^2 (smooth) or kappa [f_i != f_j]
+ *           + sum_<ij> l_ij b_ij                            b: central clique, lowered by brightness edges
+ *           + sum_vertices table[arms]                      the four line sites meeting at a lattice corner
+ *           + par * sum l l'                                parallel neighbours (doubled lines)
+ *
+ * Layout: f and g are H x W x NCOMP interleaved; line fields are padded to H x W: lh[y, x] lies between
+ * pixels (y, x) and (y, x + 1) (last column unused), lv[y, x] between (y, x) and (y + 1, x) (last row
+ * unused). The vertex (y, x), for 0 <= y < H - 1 and 0 <= x < W - 1, is the corner shared by pixels
+ * (y, x), (y, x + 1), (y + 1, x), (y + 1, x + 1); its arms are up = lh[y, x] (bit 0), down = lh[y + 1, x]
+ * (bit 1), left = lv[y, x] (bit 2), right = lv[y, x + 1] (bit 3). Border corners have no clique, so a
+ * line pays nothing where it leaves the image.
+ *
+ * Colouring (a coding in Besag's sense): a site's conditional depends only on sites it shares a clique
+ * with. For f those are its 4-neighbours (and the lines, fixed while f is updated): the checkerboard
+ * (x + y) & 1 gives two colours. A line site shares cliques with the other arms of its two end vertices
+ * and with its two parallel neighbours; lh[y, x] meets lh[y +- 1, x] and lh[y, x +- 1] (other parity)
+ * and lv sites of both parities, so the lines take four colours: (type, (x + y) & 1) with type 0 = lh,
+ * 1 = lv. Sites of one colour are conditionally independent given the rest, so updating them at once
+ * is exactly a sequence of single-site updates.
+ *
+ * Defines: NCOMP (1..4 components sharing one line process), KIND (0 smooth, 1 constant), NLEVELS
+ * (the levels of the constant kind), MODE (0 heat-bath sample, 1 conditional mode (ICM), 2 mean field).
+ */
+#include "vmcl.h"
+#include "philox.h"
+
+#define MODE_SAMPLE 0
+#define MODE_ICM 1
+#define MODE_MEAN 2
+
+#define PHASE_F 0u
+#define PHASE_LINES 1u
+
+inline uint4 draw(uint site, uint sweep, uint phase, uint2 key)
+{
+    return philox4x32_10((uint4)(site, sweep, phase, 0u), key);
+}
+
+/* rho(f_i, f_j): the smoothness cost of the bond between two pixels when no line breaks it. */
+inline float bond_cost(__global const float *f, long i, long j, float kappa)
+{
+#if KIND == 0
+    float s = 0.0f;
+    for (int c = 0; c < NCOMP; ++c) {
+        float d = f[i * NCOMP + c] - f[j * NCOMP + c];
+        s += d * d;
+    }
+    return s;
+#else
+    return f[i] != f[j] ? kappa : 0.0f;
+#endif
+}
+
+/* Expected change of a vertex clique's potential when the arm at `bit` turns on, the other three arms
+ * (bits ba, bb, bc) being on with probabilities pa, pb, pc: the exact table difference for 0/1 arms,
+ * the mean-field expectation for line expectations. */
+inline float vertex_delta(__constant float *table, int bit, int ba, float pa, int bb, float pb, int bc,
+                          float pc)
+{
+    float total = 0.0f;
+    for (int m = 0; m < 8; ++m) {
+        int a = m & 1, b = (m >> 1) & 1, c = (m >> 2) & 1;
+        float p = (a ? pa : 1.0f - pa) * (b ? pb : 1.0f - pb) * (c ? pc : 1.0f - pc);
+        if (p == 0.0f) continue;
+        int rest = (a << ba) | (b << bb) | (c << bc);
+        total += p * (table[rest | (1 << bit)] - table[rest]);
+    }
+    return total;
+}
+
+/* ---------------------------------------------------------------------------------- preparation */
+
+/* Clean data: NaN components (no value) become weight 0. w = alpha * confidence (1 when absent).
+ * f0 holds the data where it has weight and NaN elsewhere, for the fill below. */
+__kernel void prepare(__global const float *data, __global const float *confidence, int has_confidence,
+                      float alpha, __global float *g, __global float *w, __global float *f0, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    long i = y * W + x;
+    float weight = has_confidence ? confidence[i] : 1.0f;
+    for (int c = 0; c < NCOMP; ++c)
+        if (!isfinite(data[i * NCOMP + c])) weight = 0.0f;
+    w[i] = alpha * weight;
+    for (int c = 0; c < NCOMP; ++c) {
+        float v = weight > 0.0f ? data[i * NCOMP + c] : 0.0f;
+        g[i * NCOMP + c] = v;
+        f0[i * NCOMP + c] = weight > 0.0f ? v : NAN;
+    }
+}
+
+/* One step of a jump fill of the starting field where there is no data: an empty pixel takes the mean
+ * of the filled pixels among its 8 neighbours at distance `step`. Steps 1, 2, 4, ... reach any gap in
+ * log2 of its size; the samplers then forget the start. */
+__kernel void fill_step(__global const float *in, __global float *out, long step, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    long i = y * W + x;
+    if (!isnan(in[i * NCOMP])) {
+        for (int c = 0; c < NCOMP; ++c) out[i * NCOMP + c] = in[i * NCOMP + c];
+        return;
+    }
+    float sum[NCOMP];
+    for (int c = 0; c < NCOMP; ++c) sum[c] = 0.0f;
+    int n = 0;
+    for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+            long xx = x + dx * step, yy = y + dy * step;
+            if ((dx == 0 && dy == 0) || xx < 0 || yy < 0 || xx >= W || yy >= H) continue;
+            long j = yy * W + xx;
+            if (isnan(in[j * NCOMP])) continue;
+            for (int c = 0; c < NCOMP; ++c) sum[c] += in[j * NCOMP + c];
+            ++n;
+        }
+    for (int c = 0; c < NCOMP; ++c) out[i * NCOMP + c] = n ? sum[c] / (float)n : NAN;
+}
+
+/* The start of the constant kind: the nearest level (NaN, where nothing was filled, to level 0). */
+__kernel void quantise(__global float *f, __constant float *levels, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    long i = y * W + x;
+    float v = f[i], best = levels[0];
+    for (int k = 1; k < NLEVELS; ++k)
+        if (fabs(levels[k] - v) < fabs(best - v)) best = levels[k];
+    f[i] = best;
+}
+
+/* Central line costs (equation (12)): b = beta * (line_cost - edge_gain * e), e = 1 where a brightness
+ * edge pixel lies on either side of the site; with require_edge, +inf (the line is forbidden) where no
+ * edge pixel lies within `radius` (Chebyshev) of either pixel. Unused padded sites get +inf. */
+inline float edge_near(__global const uchar *edges, long x, long y, long radius, long W, long H)
+{
+    for (long yy = max(y - radius, 0L); yy <= min(y + radius, H - 1); ++yy)
+        for (long xx = max(x - radius, 0L); xx <= min(x + radius, W - 1); ++xx)
+            if (edges[yy * W + xx]) return 1.0f;
+    return 0.0f;
+}
+
+__kernel void line_costs(__global const uchar *edges, int has_edges, float cost, float gain,
+                         int require_edge, long radius, __global float *bh, __global float *bv, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    long i = y * W + x;
+    for (int type = 0; type < 2; ++type) {
+        long x2 = x + (type == 0), y2 = y + (type == 1);
+        float b = INFINITY;
+        if (x2 < W && y2 < H) {
+            b = cost;
+            if (has_edges) {
+                long j = y2 * W + x2;
+                if (edges[i] || edges[j]) b -= gain;
+                else if (require_edge && !edge_near(edges, x, y, radius, W, H)
+                         && !edge_near(edges, x2, y2, radius, W, H))
+                    b = INFINITY;
+            }
+        }
+        (type == 0 ? bh : bv)[i] = b;
+    }
+}
+
+__kernel void set_value(__global float *a, float value, long n)
+{
+    long i = get_global_id(0);
+    if (i < n) a[i] = value;
+}
+
+/* ------------------------------------------------------------------------------------ f updates */
+
+/* f at the sites of one checkerboard colour: heat bath (the conditional is Gaussian for the smooth kind,
+ * discrete over the levels for the constant kind), its mode (ICM) or, with line expectations, the
+ * mean-field fixed point. A smooth site with no data and all four bonds broken has no conditional and
+ * keeps its value. */
+__kernel void f_update(__global float *f, __global const float *g, __global const float *w,
+                       __global const float *lh, __global const float *lv, __constant float *levels,
+                       float kappa, float T, uint sweep, uint2 key, int colour, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H || ((x + y) & 1) != colour) return;
+    long i = y * W + x;
+    long nb[4];
+    float keep[4];
+    int n = 0;
+    if (x > 0) { nb[n] = i - 1; keep[n++] = 1.0f - lh[i - 1]; }
+    if (x < W - 1) { nb[n] = i + 1; keep[n++] = 1.0f - lh[i]; }
+    if (y > 0) { nb[n] = i - W; keep[n++] = 1.0f - lv[i - W]; }
+    if (y < H - 1) { nb[n] = i + W; keep[n++] = 1.0f - lv[i]; }
+#if KIND == 0
+    float a = w[i], b[NCOMP];
+    for (int c = 0; c < NCOMP; ++c) b[c] = w[i] * g[i * NCOMP + c];
+    for (int k = 0; k < n; ++k) {
+        a += keep[k];
+        for (int c = 0; c < NCOMP; ++c) b[c] += keep[k] * f[nb[k] * NCOMP + c];
+    }
+    if (a <= 0.0f) return;
+#if MODE == MODE_SAMPLE
+    uint4 r = draw((uint)i, sweep, PHASE_F, key);
+    float u[4] = {philox_uniform(r.x), philox_uniform(r.y), philox_uniform(r.z), philox_uniform(r.w)};
+    float sd = sqrt(T / (2.0f * a));
+    for (int c = 0; c < NCOMP; ++c) {
+        /* Box-Muller: words (0, 1) give components 0 and 1, words (2, 3) components 2 and 3. */
+        float radius = sqrt(-2.0f * log(u[c & 2]));
+        float angle = 2.0f * M_PI_F * u[(c & 2) + 1];
+        float normal = radius * ((c & 1) ? sin(angle) : cos(angle));
+        f[i * NCOMP + c] = b[c] / a + sd * normal;
+    }
+#else
+    for (int c = 0; c < NCOMP; ++c) f[i * NCOMP + c] = b[c] / a;
+#endif
+#else
+    float energy[NLEVELS];
+    float lowest = INFINITY;
+    int best = 0;
+    for (int k = 0; k < NLEVELS; ++k) {
+        float d = levels[k] - g[i];
+        float e = w[i] * d * d;
+        for (int m = 0; m < n; ++m) e += levels[k] != f[nb[m]] ? kappa * keep[m] : 0.0f;
+        energy[k] = e;
+        if (e < lowest) { lowest = e; best = k; }
+    }
+#if MODE == MODE_SAMPLE
+    float total = 0.0f;
+    for (int k = 0; k < NLEVELS; ++k) {
+        energy[k] = exp(-(energy[k] - lowest) / T);
+        total += energy[k];
+    }
+    float target = philox_uniform(draw((uint)i, sweep, PHASE_F, key).x) * total;
+    best = NLEVELS - 1;
+    for (int k = 0; k < NLEVELS - 1; ++k) {
+        target -= energy[k];
+        if (target < 0.0f) { best = k; break; }
+    }
+#endif
+    f[i] = levels[best];
+#endif
+}
+
+/* Mean field for the constant kind: q[i, k] is the probability that pixel i takes level k; the Potts
+ * interaction is replaced by its expectation kappa (1 - q_j(k)) under the neighbour's distribution. */
+__kernel void q_update(__global float *q, __global const float *g, __global const float *w,
+                       __global const float *lh, __global const float *lv, __constant float *levels,
+                       float kappa, float T, int colour, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H || ((x + y) & 1) != colour) return;
+    long i = y * W + x;
+    long nb[4];
+    float keep[4];
+    int n = 0;
+    if (x > 0) { nb[n] = i - 1; keep[n++] = 1.0f - lh[i - 1]; }
+    if (x < W - 1) { nb[n] = i + 1; keep[n++] = 1.0f - lh[i]; }
+    if (y > 0) { nb[n] = i - W; keep[n++] = 1.0f - lv[i - W]; }
+    if (y < H - 1) { nb[n] = i + W; keep[n++] = 1.0f - lv[i]; }
+    float energy[NLEVELS];
+    float lowest = INFINITY;
+    for (int k = 0; k < NLEVELS; ++k) {
+        float d = levels[k] - g[i];
+        float e = w[i] * d * d;
+        for (int m = 0; m < n; ++m) e += kappa * keep[m] * (1.0f - q[nb[m] * NLEVELS + k]);
+        energy[k] = e;
+        lowest = min(lowest, e);
+    }
+    float total = 0.0f;
+    for (int k = 0; k < NLEVELS; ++k) {
+        energy[k] = exp(-(energy[k] - lowest) / T);
+        total += energy[k];
+    }
+    for (int k = 0; k < NLEVELS; ++k) q[i * NLEVELS + k] = energy[k] / total;
+}
+
+/* q from a field of levels: all the mass on the pixel's own level. */
+__kernel void q_init(__global float *q, __global const float *f, __constant float *levels, long n)
+{
+    long i = get_global_id(0);
+    if (i >= n) return;
+    for (int k = 0; k < NLEVELS; ++k) q[i * NLEVELS + k] = levels[k] == f[i] ? 1.0f : 0.0f;
+}
+
+/* The field of the most probable level of each pixel (mean field) or of the most frequent one (MPM). */
+__kernel void levels_mode(__global const float *weights, __global float *f, __constant float *levels, long n)
+{
+    long i = get_global_id(0);
+    if (i >= n) return;
+    int best = 0;
+    for (int k = 1; k < NLEVELS; ++k)
+        if (weights[i * NLEVELS + k] > weights[i * NLEVELS + best]) best = k;
+    f[i] = levels[best];
+}
+
+/* --------------------------------------------------------------------------------- line updates */
+
+/* Line sites of colour (type, parity): heat bath from the exact conditional, its mode (ICM), or the
+ * mean-field expectation sigma(-dE / T) with the neighbours' expectations in the cliques. dE is the
+ * energy of l = 1 minus that of l = 0 over every clique that holds the site: the broken bond, the
+ * central cost, both end vertices and both parallel pairs (the seed's warning: non-central cliques count). */
+__kernel void line_update(__global float *lh, __global float *lv, __global const float *f,
+                          __global const float *q, __global const float *bh, __global const float *bv,
+                          __constant float *table, float parallel, float kappa, float T, uint sweep,
+                          uint2 key, int colour, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    int type = colour >> 1;
+    if (x >= W || y >= H || ((x + y) & 1) != (colour & 1)) return;
+    if ((type == 0 && x >= W - 1) || (type == 1 && y >= H - 1)) return;
+    long i = y * W + x, j = type == 0 ? i + 1 : i + W;
+#if KIND == 1 && MODE == MODE_MEAN
+    float same = 0.0f;
+    for (int k = 0; k < NLEVELS; ++k) same += q[i * NLEVELS + k] * q[j * NLEVELS + k];
+    float bond = kappa * (1.0f - same);
+#else
+    float bond = bond_cost(f, i, j, kappa);
+#endif
+    float dE;
+    if (type == 0) {
+        dE = bh[i] - bond;
+        if (y > 0)
+            dE += vertex_delta(table, 1, 0, lh[i - W], 2, lv[i - W], 3, lv[i - W + 1]);
+        if (y < H - 1)
+            dE += vertex_delta(table, 0, 1, lh[i + W], 2, lv[i], 3, lv[i + 1]);
+        if (x > 0) dE += parallel * lh[i - 1];
+        if (x + 1 < W - 1) dE += parallel * lh[i + 1];
+    } else {
+        dE = bv[i] - bond;
+        if (x > 0)
+            dE += vertex_delta(table, 3, 0, lh[i - 1], 1, lh[i + W - 1], 2, lv[i - 1]);
+        if (x < W - 1)
+            dE += vertex_delta(table, 2, 0, lh[i], 1, lh[i + W], 3, lv[i + 1]);
+        if (y > 0) dE += parallel * lv[i - W];
+        if (y + 1 < H - 1) dE += parallel * lv[i + W];
+    }
+    __global float *l = type == 0 ? lh : lv;
+#if MODE == MODE_SAMPLE
+    float u = philox_uniform(draw((uint)i, sweep, PHASE_LINES + (uint)type, key).x);
+    l[i] = u * (1.0f + exp(dE / T)) < 1.0f ? 1.0f : 0.0f;
+#elif MODE == MODE_ICM
+    l[i] = dE < 0.0f ? 1.0f : 0.0f;
+#else
+    l[i] = 1.0f / (1.0f + exp(dE / T));
+#endif
+}
+
+/* ------------------------------------------------------------------------ estimates and energy */
+
+/* Marroquin's estimators: running sums of f (smooth) or level counts (constant) and of the lines. */
+__kernel void accumulate(__global const float *f, __global const float *lh, __global const float *lv,
+                         __global float *sum_f, __global float *sum_h, __global float *sum_v,
+                         __constant float *levels, long n)
+{
+    long i = get_global_id(0);
+    if (i >= n) return;
+#if KIND == 0
+    for (int c = 0; c < NCOMP; ++c) sum_f[i * NCOMP + c] += f[i * NCOMP + c];
+#else
+    for (int k = 0; k < NLEVELS; ++k)
+        if (levels[k] == f[i]) sum_f[i * NLEVELS + k] += 1.0f;
+#endif
+    sum_h[i] += lh[i];
+    sum_v[i] += lv[i];
+}
+
+/* a / count for the posterior mean; lines on where their marginal exceeds 1/2 (count 1 thresholds
+ * mean-field expectations). */
+__kernel void scale_and_threshold(__global float *sum_f, __global float *sum_h, __global float *sum_v,
+                                  float count, int scale_f, long n)
+{
+    long i = get_global_id(0);
+    if (i >= n) return;
+    if (scale_f)
+        for (int c = 0; c < NCOMP; ++c) sum_f[i * NCOMP + c] /= count;
+    sum_h[i] = sum_h[i] > 0.5f * count ? 1.0f : 0.0f;
+    sum_v[i] = sum_v[i] > 0.5f * count ? 1.0f : 0.0f;
+}
+
+/* Each pixel's share of U(f, l) for 0/1 lines: its data term, its right and down bonds and line sites,
+ * the vertex below-right of it and the parallel pairs to its right (lh) and below (lv). */
+__kernel void site_energy(__global const float *f, __global const float *g, __global const float *w,
+                          __global const float *lh, __global const float *lv, __global const float *bh,
+                          __global const float *bv, __constant float *table, float parallel, float kappa,
+                          __global float *out, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    long i = y * W + x;
+    float e = 0.0f;
+    for (int c = 0; c < NCOMP; ++c) {
+        float d = f[i * NCOMP + c] - g[i * NCOMP + c];
+        e += w[i] * d * d;
+    }
+    if (x < W - 1) e += lh[i] != 0.0f ? bh[i] : bond_cost(f, i, i + 1, kappa);
+    if (y < H - 1) e += lv[i] != 0.0f ? bv[i] : bond_cost(f, i, i + W, kappa);
+    if (x < W - 1 && y < H - 1) {
+        int arms = (lh[i] != 0.0f) | ((lh[i + W] != 0.0f) << 1) | ((lv[i] != 0.0f) << 2)
+                 | ((lv[i + 1] != 0.0f) << 3);
+        e += table[arms];
+    }
+    if (x + 1 < W - 1 && lh[i] != 0.0f && lh[i + 1] != 0.0f) e += parallel;
+    if (y + 1 < H - 1 && lv[i] != 0.0f && lv[i + W] != 0.0f) e += parallel;
+    out[i] = e;
+}
+
+/* Padded H x W line fields to the public shapes: lh to H x (W - 1), lv to (H - 1) x W. */
+__kernel void unpad(__global const float *lh, __global const float *lv, __global uchar *line_h,
+                    __global uchar *line_v, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    if (x < W - 1) line_h[y * (W - 1) + x] = lh[y * W + x] != 0.0f;
+    if (y < H - 1) line_v[y * W + x] = lv[y * W + x] != 0.0f;
+}
+
+/* Raw Philox4x32-10 blocks for the known-answer test: out[k] = philox(counters[k], keys[k]). */
+__kernel void philox_blocks(__global const uint4 *counters, __global const uint2 *keys, __global uint4 *out,
+                            long n)
+{
+    long k = get_global_id(0);
+    if (k < n) out[k] = philox4x32_10(counters[k], keys[k]);
+}
