@@ -1,0 +1,333 @@
+"""The line-process energy: parameters, the clique table of the line prior, and the energy on the host.
+
+Seed sections "MRF models" and "Organization of integration", equations (10) to (12). A field f (depth,
+disparity, a flow vector, hue, texture density) on the pixel lattice is restored from data g while a
+line process l on the dual lattice marks where the smoothness assumption breaks:
+
+.. math::
+
+    U(f, l) = \\sum_i \\alpha \\gamma_i |f_i - g_i|^2
+            + \\sum_{<ij>} \\rho(f_i, f_j) (1 - l_{ij})
+            + \\sum_{<ij>} l_{ij} b_{ij}
+            + \\beta \\sum_{v} V(l_{up}, l_{down}, l_{left}, l_{right})
+            + \\beta c_{par} \\sum_{\\parallel} l l'
+
+- data: gamma_i is the confidence of g_i (0 where there is no data, as for sparse stereo);
+- smoothness over 4-neighbours: rho = |f_i - f_j|^2 for the piecewise smooth kind (equation (11), the
+  weak membrane), rho = kappa [f_i != f_j] for the piecewise constant kind (a Potts prior over discrete
+  levels, as in Marroquin, Mitter and Poggio 1987);
+- central cliques: a line site costs b_ij = beta (line - edge_gain e_ij), where e_ij = 1 when a
+  brightness edge pixel lies on either side of the site (equation (12): V(l, e) = g(e, V_C(l)) lowers
+  the cost of a line at a brightness edge); with ``require_edge`` a line with no edge pixel within
+  ``edge_radius`` of either side is forbidden (b = +inf);
+- vertex cliques: the four line sites meeting at a corner of four pixels, with potentials by
+  configuration (empty 0, end, continuation, turn, T-junction, crossing: the :class:`LinePrior` table);
+- parallel cliques: two parallel line sites one pixel apart (doubled lines).
+
+The seed notes that "the assignment of zero energy values to the non-central cliques ... is wrong": every
+clique that holds a line site (its central clique, both end vertices, both parallel pairs, the bond it
+breaks) enters that site's conditional, which is derived from this one energy; the tests check the
+sampler's conditionals against exact enumeration of it.
+
+Line fields follow vmcl.scenes: ``line_h`` (H, W - 1) lies between (y, x) and (y, x + 1) (a vertical
+segment of boundary), ``line_v`` (H - 1, W) between (y, x) and (y + 1, x). A corner (vertex) exists for
+0 <= y < H - 1, 0 <= x < W - 1; lines leaving the image pay no end cost at the border.
+
+References
+----------
+S. Geman and D. Geman, "Stochastic relaxation, Gibbs distributions, and the Bayesian restoration of
+images", IEEE PAMI 6(6):721-741, 1984.
+J. Marroquin, S. Mitter and T. Poggio, "Probabilistic solution of ill-posed problems in computational
+vision", J. Amer. Statist. Assoc. 82(397):76-89, 1987.
+E. Gamble and T. Poggio, "Visual integration and detection of discontinuities: the key role of intensity
+edges", MIT AI Memo 970, 1987.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+KINDS = ("smooth", "constant")
+
+
+def _check_finite(owner: object, names: tuple[str, ...], *, positive: tuple[str, ...] = ()) -> None:
+    for name in names:
+        value = getattr(owner, name)
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise TypeError(f"{type(owner).__name__}.{name} must be a number, got {type(value).__name__}")
+        if not math.isfinite(value):
+            raise ValueError(f"{type(owner).__name__}.{name} must be finite, got {value}")
+        if name in positive and value <= 0:
+            raise ValueError(f"{type(owner).__name__}.{name} must be > 0, got {value}")
+
+
+@dataclass(frozen=True)
+class LinePrior:
+    """Clique potentials of the line process, in units of ``Params.beta``.
+
+    Parameters
+    ----------
+    line : float
+        Central clique: the cost of one line site (before brightness edges lower it).
+    end : float
+        A vertex with one line: an end. An isolated segment pays ``line + 2 end``.
+    continuation : float
+        A vertex with two collinear lines (straight continuation): cheap.
+    turn : float
+        A vertex with two perpendicular lines (a corner).
+    junction : float
+        A vertex with three lines (a T-junction).
+    crossing : float
+        A vertex with four lines.
+    parallel : float
+        Two parallel line sites one pixel apart (a doubled line).
+
+    Notes
+    -----
+    The defaults make continuation cheap and ends, isolated segments, doubled lines and crossings
+    costly, the prior the seed describes ("continuous, non-intersecting, and rarely isolated"). They are
+    the values the presets were measured with (see :mod:`vmcl.mrf.presets`).
+    """
+
+    line: float = 1.0
+    end: float = 0.5
+    continuation: float = 0.0
+    turn: float = 0.25
+    junction: float = 0.75
+    crossing: float = 1.5
+    parallel: float = 1.0
+
+    def __post_init__(self) -> None:
+        _check_finite(self, tuple(f.name for f in fields(self)))
+
+    def table(self) -> np.ndarray:
+        """The 16 vertex potentials (units of beta), indexed by up | down << 1 | left << 2 | right << 3."""
+        table = np.zeros(16, np.float64)
+        for arms in range(1, 16):
+            up, down, left, right = (arms >> k & 1 for k in range(4))
+            count = up + down + left + right
+            if count == 1:
+                table[arms] = self.end
+            elif count == 2:
+                table[arms] = self.continuation if (up and down) or (left and right) else self.turn
+            elif count == 3:
+                table[arms] = self.junction
+            else:
+                table[arms] = self.crossing
+        return table
+
+
+@dataclass(frozen=True)
+class Params:
+    """Parameters of the energy and of the solvers. Temperatures are in the energy's units.
+
+    Parameters
+    ----------
+    alpha : float
+        Weight of the data term (with Gaussian noise of standard deviation sigma at T = 1 the posterior
+        is exact for alpha = 1 / (2 sigma^2)).
+    beta : float
+        Scale of the line prior: a line site costs ``beta * prior.line`` and breaks a bond whose
+        smoothness cost exceeds about that.
+    prior : LinePrior
+        The clique table.
+    kappa : float
+        Potts cost of two different neighbouring levels (constant kind).
+    levels : int or tuple of float
+        The constant kind's levels: a count, spread evenly over the range of the data, or the levels.
+    edge_gain : float
+        How much a brightness edge lowers a line site's cost, in units of beta (equation (12)).
+    require_edge : bool
+        Forbid lines with no brightness edge pixel within ``edge_radius`` pixels (only with edges).
+    edge_radius : int
+        Chebyshev radius for ``require_edge``.
+    t0, t_factor, sweeps, quench : float, float, int, int
+        Annealing: ``sweeps`` Gibbs sweeps at T = t0 * t_factor**k, then ``quench`` ICM sweeps.
+    mpm_temperature, burn_in, samples : float, int, int
+        MPM (Marroquin's estimator): ``burn_in`` sweeps, then ``samples`` sweeps averaged, at one T.
+    mf_t0, mf_factor, mf_steps, mf_iterations : float, float, int, int
+        Mean field: ``mf_steps`` temperatures mf_t0 * mf_factor**k, ``mf_iterations`` sweeps at each.
+    icm_sweeps : int
+        ICM sweeps.
+    """
+
+    alpha: float = 1.0
+    beta: float = 1.0
+    prior: LinePrior = field(default_factory=LinePrior)
+    kappa: float = 1.0
+    levels: int | tuple[float, ...] = 32
+    edge_gain: float = 0.5
+    require_edge: bool = False
+    edge_radius: int = 1
+    t0: float = 4.0
+    t_factor: float = 0.95
+    sweeps: int = 100
+    quench: int = 10
+    mpm_temperature: float = 1.0
+    burn_in: int = 50
+    samples: int = 100
+    mf_t0: float = 4.0
+    mf_factor: float = 0.8
+    mf_steps: int = 15
+    mf_iterations: int = 5
+    icm_sweeps: int = 30
+
+    def __post_init__(self) -> None:
+        _check_finite(self, ("alpha", "beta", "kappa", "edge_gain", "t0", "t_factor", "mpm_temperature",
+                             "mf_t0", "mf_factor"),
+                      positive=("t0", "t_factor", "mpm_temperature", "mf_t0", "mf_factor"))
+        if not isinstance(self.prior, LinePrior):
+            raise TypeError(f"Params.prior must be a LinePrior, got {type(self.prior).__name__}")
+        for name in ("alpha", "beta", "kappa"):
+            if getattr(self, name) < 0:
+                raise ValueError(f"Params.{name} must be >= 0, got {getattr(self, name)}")
+        for name in ("edge_radius", "sweeps", "quench", "burn_in", "samples", "mf_steps", "mf_iterations",
+                     "icm_sweeps"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+                raise ValueError(f"Params.{name} must be an integer >= 0, got {value!r}")
+        if self.t_factor > 1 or self.mf_factor > 1:
+            raise ValueError("Params.t_factor and Params.mf_factor must be in (0, 1]: temperatures fall")
+        if isinstance(self.levels, (int, np.integer)) and not isinstance(self.levels, bool):
+            if not 2 <= self.levels <= 64:
+                raise ValueError(f"Params.levels must be a count in 2..64 or a tuple of levels, got {self.levels}")
+        else:
+            levels = np.asarray(self.levels, np.float64)
+            if levels.ndim != 1 or not 2 <= levels.size <= 64 or not np.all(np.isfinite(levels)) \
+                    or np.unique(levels).size != levels.size:
+                raise ValueError(f"Params.levels must be 2..64 distinct finite values, got {self.levels!r}")
+
+    def vertex_table(self) -> np.ndarray:
+        """beta times the vertex potentials, float64 (16,)."""
+        return self.beta * self.prior.table()
+
+
+def resolve_levels(params: Params, low: float, high: float) -> np.ndarray:
+    """The constant kind's levels as float32: the given ones, or a count spread over [low, high]."""
+    if isinstance(params.levels, (int, np.integer)):
+        if not high > low:
+            high = low + 1.0
+        return np.linspace(low, high, int(params.levels)).astype(np.float32)
+    return np.asarray(params.levels, np.float32)
+
+
+def line_costs(shape: tuple[int, int], edges: np.ndarray | None, params: Params) -> tuple[np.ndarray, np.ndarray]:
+    """Central clique costs b of every line site: ((H, W - 1), (H - 1, W)) float64, +inf where forbidden.
+
+    Parameters
+    ----------
+    shape : (int, int)
+        (H, W) of the pixel lattice.
+    edges : (H, W) array or None
+        Brightness edge pixels (non-zero: an edge), e.g. from Canny.
+    params : Params
+
+    Returns
+    -------
+    (b_h, b_v)
+    """
+    height, width = shape
+    base = params.beta * params.prior.line
+    b_h = np.full((height, width - 1), base)
+    b_v = np.full((height - 1, width), base)
+    if edges is None:
+        return b_h, b_v
+    e = np.asarray(edges) != 0
+    gain = params.beta * params.edge_gain
+    at_h = e[:, :-1] | e[:, 1:]
+    at_v = e[:-1, :] | e[1:, :]
+    b_h -= gain * at_h
+    b_v -= gain * at_v
+    if params.require_edge:
+        near = _dilate(e, params.edge_radius)
+        b_h[~(near[:, :-1] | near[:, 1:])] = np.inf
+        b_v[~(near[:-1, :] | near[1:, :])] = np.inf
+    return b_h, b_v
+
+
+def _dilate(mask: np.ndarray, radius: int) -> np.ndarray:
+    """True within Chebyshev distance ``radius`` of a True pixel (the image does not wrap)."""
+    height, width = mask.shape
+    padded = np.pad(mask, radius)
+    out = np.zeros_like(mask)
+    for dy in range(2 * radius + 1):
+        for dx in range(2 * radius + 1):
+            out |= padded[dy:dy + height, dx:dx + width]
+    return out
+
+
+def energy(f: np.ndarray, line_h: np.ndarray, line_v: np.ndarray, *, data: np.ndarray,
+           confidence: np.ndarray | None = None, edges: np.ndarray | None = None, kind: str = "smooth",
+           params: Params | None = None) -> float:
+    """U(f, l) of any configuration, in float64 on the host (the oracle of the kernels).
+
+    Parameters
+    ----------
+    f : (H, W) or (H, W, C) array
+        The field.
+    line_h, line_v : (H, W - 1) and (H - 1, W) arrays
+        The line process (non-zero: a line).
+    data : array of f's shape
+        The data g; NaN where there is none (weight 0).
+    confidence : (H, W) array, optional
+        gamma, >= 0; default 1 wherever the data is finite.
+    edges : (H, W) array, optional
+        Brightness edge pixels.
+    kind : {"smooth", "constant"}
+    params : Params, optional
+
+    Returns
+    -------
+    float
+        +inf when a forbidden line is on.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> g = np.zeros((2, 3)); g[:, 2] = 2.0
+    >>> lh = np.zeros((2, 2), bool); lv = np.zeros((1, 3), bool)
+    >>> energy(g, lh, lv, data=g)  # two bonds of (2 - 0)^2, no lines
+    8.0
+    >>> lh[0, 1] = True  # one line site (cost 1) instead of a bond, ending at the corner (0, 1)
+    >>> energy(g, lh, lv, data=g)
+    5.5
+
+    References
+    ----------
+    S. Geman and D. Geman, IEEE PAMI 6(6):721-741, 1984 (line processes).
+    """
+    params = Params() if params is None else params
+    if kind not in KINDS:
+        raise ValueError(f"kind must be 'smooth' or 'constant', got {kind!r}")
+    g = np.asarray(data, np.float64)
+    f = np.asarray(f, np.float64)
+    if f.shape != g.shape or f.ndim not in (2, 3):
+        raise ValueError(f"f must have the data's shape (H, W) or (H, W, C), got {f.shape} and {g.shape}")
+    if f.ndim == 2:
+        f, g = f[..., None], g[..., None]
+    height, width = f.shape[:2]
+    lh = np.asarray(line_h) != 0
+    lv = np.asarray(line_v) != 0
+    if lh.shape != (height, width - 1) or lv.shape != (height - 1, width):
+        raise ValueError(f"line_h and line_v must have shapes {(height, width - 1)} and {(height - 1, width)}, "
+                         f"got {lh.shape} and {lv.shape}")
+    finite = np.all(np.isfinite(g), axis=2)
+    gamma = np.ones((height, width)) if confidence is None else np.asarray(confidence, np.float64)
+    w = params.alpha * np.where(finite, gamma, 0.0)
+    total = float(np.sum(w * np.sum((f - np.where(finite[..., None], g, 0.0)) ** 2, axis=2)))
+    if kind == "smooth":
+        bond_h = np.sum((f[:, 1:] - f[:, :-1]) ** 2, axis=2)
+        bond_v = np.sum((f[1:] - f[:-1]) ** 2, axis=2)
+    else:
+        bond_h = params.kappa * np.any(f[:, 1:] != f[:, :-1], axis=2)
+        bond_v = params.kappa * np.any(f[1:] != f[:-1], axis=2)
+    b_h, b_v = line_costs((height, width), edges, params)
+    total += float(np.sum(np.where(lh, b_h, bond_h)) + np.sum(np.where(lv, b_v, bond_v)))
+    arms = (lh[:-1, :].astype(int) | lh[1:, :] << 1 | lv[:, :-1] << 2 | lv[:, 1:] << 3)
+    total += float(np.sum(params.vertex_table()[arms]))
+    doubled = np.sum(lh[:, :-1] & lh[:, 1:]) + np.sum(lv[:-1, :] & lv[1:, :])
+    total += float(params.beta * params.prior.parallel * doubled)
+    return total

@@ -1,0 +1,151 @@
+"""The device state of one restoration: data, weights, field, line process, clique costs; one sweep.
+
+Seed section "Algorithms: Deterministic and stochastic". Every solver (annealing, MPM, mean field, ICM)
+is a schedule of the same sweep: f at the two checkerboard colours, then the line sites at their four
+colours (kernels/mrf.cl documents the coding), each phase one launch of one work-item per site. A sweep
+is enqueued back to back; nothing is read back until the solver has finished.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pyopencl as cl
+import pyopencl.array as cl_array
+from pyopencl import cltypes
+
+from vmcl.cm import reduce as cm_reduce
+from vmcl.machine import Machine
+from vmcl.mrf.energy import Params, resolve_levels
+
+MODES = {"sample": 0, "icm": 1, "mean": 2}
+# (phase, colour): f at the checkerboard's two colours, then the line sites' four colours.
+SWEEP_ORDER = (("f", 0), ("f", 1), ("lines", 0), ("lines", 1), ("lines", 2), ("lines", 3))
+
+
+def philox_key(seed: int) -> np.ndarray:
+    """The Philox key of a 64-bit seed: (low word, high word)."""
+    return cltypes.make_uint2(seed & 0xFFFFFFFF, seed >> 32)
+
+
+class Lattice:
+    """Device buffers of a restoration and the kernels that update them.
+
+    Parameters
+    ----------
+    machine : Machine
+    data : device array, float32, (H, W) or (H, W, C)
+    confidence : device float32 (H, W) or None
+    edges : device uint8 (H, W) or None
+    kind : {"smooth", "constant"}
+    params : Params
+    """
+
+    def __init__(self, machine: Machine, data: cl_array.Array, confidence: cl_array.Array | None,
+                 edges: cl_array.Array | None, kind: str, params: Params) -> None:
+        self.machine = machine
+        self.params = params
+        self.kind = kind
+        self.height, self.width = data.shape[:2]
+        self.ncomp = 1 if data.ndim == 2 else data.shape[2]
+        self.n = self.height * self.width
+        self.grid = (self.width, self.height)
+        self.dims = (np.int64(self.width), np.int64(self.height))
+        shape = data.shape
+        empty = machine.empty
+        self.g, self.f = empty(shape, np.float32), empty(shape, np.float32)
+        self.w = empty((self.height, self.width), np.float32)
+        self.lh, self.lv = empty(self.n, np.float32), empty(self.n, np.float32)
+        self.bh, self.bv = empty(self.n, np.float32), empty(self.n, np.float32)
+        self.table = machine.to_device(params.vertex_table().astype(np.float32))
+        self.parallel = np.float32(params.beta * params.prior.parallel)
+        self.kappa = np.float32(params.kappa)
+        self.nlevels = 1
+        self.levels = machine.to_device(np.zeros(1, np.float32))
+        self._prepare(data, confidence)
+        if kind == "constant":
+            low = float(cm_reduce.reduce(self.f, "min", machine=machine).get())
+            high = float(cm_reduce.reduce(self.f, "max", machine=machine).get())
+            self.nlevels = int(resolve_levels(params, low, high).size)
+            self.levels = machine.to_device(resolve_levels(params, low, high))
+            machine.launch(self.kernel("quantise"), self.grid, self.f, self.levels, *self.dims)
+        self.f_start = self.f.copy(queue=machine.queue)
+        machine.launch(self.kernel("line_costs"), self.grid, edges, np.int32(edges is not None),
+                       np.float32(params.beta * params.prior.line), np.float32(params.beta * params.edge_gain),
+                       np.int32(params.require_edge), np.int64(params.edge_radius), self.bh, self.bv,
+                       *self.dims)
+        self.reset()
+
+    def kernel(self, name: str, mode: str = "icm") -> Any:
+        return self.machine.kernel("mrf", name, NCOMP=self.ncomp, KIND=int(self.kind == "constant"),
+                                   NLEVELS=self.nlevels, MODE=MODES[mode])
+
+    def _prepare(self, data: cl_array.Array, confidence: cl_array.Array | None) -> None:
+        """Clean data and weights, and the starting field: the data, its gaps filled by a jump fill."""
+        scratch = self.machine.empty(data.shape, np.float32)
+        self.machine.launch(self.kernel("prepare"), self.grid, data, confidence, np.int32(confidence is not None),
+                            np.float32(self.params.alpha), self.g, self.w, scratch, *self.dims)
+        fill = self.kernel("fill_step")
+        source, target = scratch, self.f
+        steps = 1 + int(np.ceil(np.log2(max(self.height, self.width))))
+        for k in range(steps):
+            self.machine.launch(fill, self.grid, source, target, np.int64(1 << k), *self.dims)
+            source, target = target, source
+        if source is not self.f:
+            self.copy(self.f, source)
+
+    def copy(self, target: cl_array.Array, source: cl_array.Array) -> None:
+        cl.enqueue_copy(self.machine.queue, target.data, source.data, byte_count=source.nbytes)
+
+    def set_value(self, array: cl_array.Array, value: float) -> None:
+        self.machine.launch(self.kernel("set_value"), (array.size,), array, np.float32(value),
+                            np.int64(array.size))
+
+    def reset(self) -> None:
+        """Back to the start: f from the filled data, no lines."""
+        self.copy(self.f, self.f_start)
+        self.set_value(self.lh, 0.0)
+        self.set_value(self.lv, 0.0)
+
+    def sweep(self, mode: str, temperature: float, index: int, key: np.ndarray,
+              order: tuple[tuple[str, int], ...] = SWEEP_ORDER, q: cl_array.Array | None = None) -> None:
+        """Enqueue one sweep: every site once, colour by colour in ``order``.
+
+        ``mode`` is "sample" (heat bath at ``temperature``), "icm" (conditional modes) or "mean" (mean
+        field at ``temperature``; the constant kind then updates the level distributions ``q``).
+        ``index`` numbers the sweep in the random stream.
+        """
+        temperature = np.float32(temperature)
+        index = np.uint32(index)
+        f_kernel = self.kernel("q_update" if q is not None else "f_update", mode)
+        lines = self.kernel("line_update", mode)
+        for phase, colour in order:
+            if phase == "f" and q is not None:
+                self.machine.launch(f_kernel, self.grid, q, self.g, self.w, self.lh, self.lv, self.levels,
+                                    self.kappa, temperature, np.int32(colour), *self.dims)
+            elif phase == "f":
+                self.machine.launch(f_kernel, self.grid, self.f, self.g, self.w, self.lh, self.lv, self.levels,
+                                    self.kappa, temperature, index, key, np.int32(colour), *self.dims)
+            else:
+                self.machine.launch(lines, self.grid, self.lh, self.lv, self.f, q, self.bh, self.bv, self.table,
+                                    self.parallel, self.kappa, temperature, index, key, np.int32(colour),
+                                    *self.dims)
+
+    def site_energy(self) -> cl_array.Array:
+        """Each pixel's share of U(f, l) (lines read as on where non-zero), float32 (H, W)."""
+        out = self.machine.empty((self.height, self.width), np.float32)
+        self.machine.launch(self.kernel("site_energy"), self.grid, self.f, self.g, self.w, self.lh, self.lv,
+                            self.bh, self.bv, self.table, self.parallel, self.kappa, out, *self.dims)
+        return out
+
+    def energy(self) -> float:
+        """U(f, l), summed in a fixed order with compensation (one scalar read back)."""
+        return float(cm_reduce.reduce(self.site_energy(), "sum", machine=self.machine).get())
+
+    def lines(self) -> tuple[cl_array.Array, cl_array.Array]:
+        """The line process in the public shapes: uint8 (H, W - 1) and (H - 1, W)."""
+        line_h = self.machine.empty((self.height, self.width - 1), np.uint8)
+        line_v = self.machine.empty((self.height - 1, self.width), np.uint8)
+        self.machine.launch(self.kernel("unpad"), self.grid, self.lh, self.lv, line_h, line_v, *self.dims)
+        return line_h, line_v
