@@ -1036,10 +1036,10 @@ def _corridor(px, light: Light) -> tuple[tuple[Body, ...], Light, Motion]:
     # Open to the sky: under a distant light a roof would put the whole corridor in its shadow.
     x, top, floor, near, far = 1.5, -3.5, 1.1, -1.0, 16.0
     length, height = far - near, floor - top
-    noise = Texture("noise", 0.3, 0.3)
+    noise = Texture("noise", px(10, 6), 0.3)
     faces = (
         Face((-x, floor, near), (1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (2 * x, length), (0.55, 0.5, 0.45),
-             Texture("noise", 0.2, 0.4), (Mark("rect", (1.1, 0.0, 1.9, length), (0.6, 0.2, 0.2)),)),
+             Texture("noise", px(8, 6), 0.4), (Mark("rect", (1.1, 0.0, 1.9, length), (0.6, 0.2, 0.2)),)),
         Face((-x, top, near), (0.0, 0.0, 1.0), (0.0, 1.0, 0.0), (length, height), (0.7, 0.68, 0.6), noise,
              (Mark("rect", (5.0, 2.5, 6.0, height), (0.45, 0.3, 0.2)),
               Mark("rect", (10.0, 2.5, 10.8, height), (0.45, 0.3, 0.2)))),
@@ -1134,8 +1134,9 @@ def preset(name: str, *, shape: tuple[int, int] = (256, 256), specular: bool = F
           sparser blobs (TEXTURE), and a plate in front with the wall's colour and texture statistics
           (DEPTH; it also moves); ambient light only.
     shape : (int, int)
-        Image height and width, each 64..1024. The world is the same at every size: the focal length
-        is the width in pixels, and texture elements keep their size in pixels at their reference depth.
+        Image height and width, each 64..1024. The geometry is the same at every size (the focal
+        length is the width in pixels), while texture elements keep their size in pixels at a
+        reference depth, so their pixel statistics do not change with the size.
     specular : bool
         Add a Blinn-Phong highlight (strength 0.5, shininess 60); off, the image model holds exactly.
 
@@ -1145,8 +1146,10 @@ def preset(name: str, *, shape: tuple[int, int] = (256, 256), specular: bool = F
 
     Notes
     -----
-    World units are metres for intuition: the stereo baseline is 0.15, so disparities span about
-    0.02 to 0.04 of the image width, and flows a few per cent of it.
+    World units are metres for intuition; the stereo baseline is 0.15. As fractions of the image
+    width W, disparities span 0.019-0.043 W (blocks), 0.003-0.068 W (corridor), 0.021-0.036 W
+    (shadows), 0.025 W (textures) and 0.025-0.033 W (cues); the largest flow is about 0.08 W
+    (corridor) and at most 0.025 W elsewhere.
     """
     builders = {"blocks": _blocks, "corridor": _corridor, "shadows": _shadows, "textures": _textures,
                 "cues": _cues}
