@@ -12,23 +12,48 @@
 #if T_IS_FLOAT
 #define ACC float
 #define NORMALISE(s) ((s) * 0.0625f)
+#define TO_T(v) (v)
+#elif defined(T_IS_UCHAR)
+/* Integers: add, then shift with rounding to nearest (ties up). 16 * 255 fits an int. */
+#define ACC int
+#define NORMALISE(s) (((s) + 8) >> 4)
+#define TO_T(v) VCAT(convert_, T16)(v)
 #else
-/* Integers: add, then shift with rounding to nearest (ties up); long holds 16 * INT_MAX. */
+/* long holds 16 * INT_MAX. */
 #define ACC long
 #define NORMALISE(s) (((s) + 8) >> 4)
+#define TO_T(v) VCAT(convert_, T16)(v)
 #endif
+#define T16 VCAT(T, 16)
+#define ACC16 VCAT(ACC, 16)
+#define LOAD(p) VCAT(convert_, ACC16)(vload16(0, (p)))
 
+/* Sum of one mask row: [1 2 1] around the 16 pixels from p. */
+#define ROW16(p) (LOAD((p) - 1) + 2 * LOAD(p) + LOAD((p) + 1))
+#define ROW1(r, x) ((ACC)(r)[max(x - 1, 0L)] + 2 * (ACC)(r)[x] + (ACC)(r)[min(x + 1, W - 1)])
+
+/* Work-item (k, y, p) smooths pixels [16k, 16k + 16) of row y of plane p: one vector step in the
+ * interior, pixel by pixel where the window meets the left or right border (or the row ends). */
 __kernel void binomial_pass(__global const T *in, __global T *out, long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1), p = get_global_id(2);
-    if (x >= W || y >= H) return;
-    long xl = max(x - 1, 0L), xr = min(x + 1, W - 1);
-    long yu = max(y - 1, 0L), yd = min(y + 1, H - 1);
-    __global const T *up = in + IDX3(0, yu, p, W, H);
+    long k = get_global_id(0), y = get_global_id(1), p = get_global_id(2);
+    long x0 = k * 16;
+    if (x0 >= W || y >= H) return;
+    __global const T *up = in + IDX3(0, max(y - 1, 0L), p, W, H);
     __global const T *mid = in + IDX3(0, y, p, W, H);
-    __global const T *down = in + IDX3(0, yd, p, W, H);
-    ACC s = (ACC)up[xl] + 2 * (ACC)up[x] + (ACC)up[xr]
-          + 2 * ((ACC)mid[xl] + 2 * (ACC)mid[x] + (ACC)mid[xr])
-          + (ACC)down[xl] + 2 * (ACC)down[x] + (ACC)down[xr];
-    out[IDX3(x, y, p, W, H)] = (T)NORMALISE(s);
+    __global const T *down = in + IDX3(0, min(y + 1, H - 1), p, W, H);
+    __global T *target = out + IDX3(0, y, p, W, H);
+    if (x0 >= 1 && x0 + 17 <= W) {
+        ACC16 s = ROW16(up + x0) + 2 * ROW16(mid + x0) + ROW16(down + x0);
+#if T_IS_FLOAT
+        vstore16(NORMALISE(s), 0, target + x0);
+#else
+        vstore16(TO_T(NORMALISE(s)), 0, target + x0);
+#endif
+    } else {
+        for (long x = x0; x < min(x0 + 16, W); x++) {
+            ACC s = ROW1(up, x) + 2 * ROW1(mid, x) + ROW1(down, x);
+            target[x] = (T)NORMALISE(s);
+        }
+    }
 }

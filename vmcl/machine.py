@@ -147,11 +147,16 @@ class Machine:
 
     def launch(self, kernel: cl.Kernel, global_size: tuple[int, ...], *args: Any,
                local_size: tuple[int, ...] | None = None) -> cl.Event:
-        """Enqueue ``kernel`` over ``global_size`` work-items; device arrays are passed by their buffer."""
+        """Enqueue ``kernel`` over ``global_size`` work-items; device arrays are passed by their buffer.
+
+        With a local size (the call's, else the Machine's), the global size is rounded up to a multiple
+        of it; every vmcl kernel checks its ids against the field's bounds, so the extra work-items idle.
+        """
         values = [a.base_data if isinstance(a, cl_array.Array) else a for a in args]
         if local_size is None and self.local_size is not None:
             local_size = (self.local_size,) + (1,) * (len(global_size) - 1)
-            global_size = (-(-global_size[0] // self.local_size) * self.local_size,) + tuple(global_size[1:])
+        if local_size is not None:
+            global_size = tuple(-(-g // size) * size for g, size in zip(global_size, local_size))
         event = kernel(self.queue, global_size, local_size, *values)
         if self.profile:
             self._events.append((kernel.function_name, event))

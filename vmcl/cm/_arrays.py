@@ -6,6 +6,7 @@ the device between stages. Inputs are checked at the door with errors that name 
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import numpy as np
@@ -26,6 +27,21 @@ def machine_for(machine: Machine | None) -> Machine:
     return machine if machine is not None else default_machine()
 
 
+@functools.cache
+def _dtypes(dtypes: tuple) -> tuple[np.dtype, ...]:
+    return tuple(np.dtype(t) for t in dtypes)
+
+
+class _DtypeNames:
+    """The accepted dtypes as text, formatted only when an error message needs them."""
+
+    def __init__(self, accepted: tuple[np.dtype, ...]) -> None:
+        self.accepted = accepted
+
+    def __str__(self) -> str:
+        return " or ".join(str(d) for d in self.accepted)
+
+
 def field(x: Any, name: str, machine: Machine, *, ndims: tuple[int, ...],
           dtypes: tuple[type, ...] = (np.int32, np.float32)) -> tuple[cl_array.Array, bool]:
     """Check ``x`` and return it as a device array with whether it came from the host.
@@ -34,8 +50,8 @@ def field(x: Any, name: str, machine: Machine, *, ndims: tuple[int, ...],
     that dtype is accepted; device arrays must already have an accepted dtype, since converting them
     would hide a copy.
     """
-    accepted = tuple(np.dtype(t) for t in dtypes)
-    names = " or ".join(str(d) for d in accepted)
+    accepted = _dtypes(dtypes)
+    names = _DtypeNames(accepted)
     if isinstance(x, cl_array.Array):
         if x.context != machine.context:
             raise ValueError(f"{name} lives on another OpenCL context than the machine's ({machine!r})")
