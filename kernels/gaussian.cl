@@ -25,10 +25,10 @@
 
 /* The grey value of pixel x of an input row: RGB becomes a weighted sum (weights from the host). */
 #if CHANNELS == 3
-#define GREY(row, x, w) ((w).x * (float)(row)[3 * (x)] + (w).y * (float)(row)[3 * (x) + 1] \
-                         + (w).z * (float)(row)[3 * (x) + 2])
+#define GREY(row, at, w) ((w).x * (float)(row)[3 * (at)] + (w).y * (float)(row)[3 * (at) + 1] \
+                          + (w).z * (float)(row)[3 * (at) + 2])
 #else
-#define GREY(row, x, w) ((float)(row)[x])
+#define GREY(row, at, w) ((float)(row)[at])
 #endif
 
 __kernel void to_grey(__global const IN_T *in, __global float *out, float4 weights, long W, long H)
