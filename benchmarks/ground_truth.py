@@ -36,7 +36,9 @@ def _machine() -> str:
         names = [line.split(":", 1)[1].strip() for line in cpuinfo.read_text().splitlines()
                  if line.startswith("model name")]
         model = names[0] if names else model
-    return f"{model}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}, NumPy {np.__version__}"
+    load = f", load average {os.getloadavg()[0]:.1f} at the start (the machine is shared)"
+    return (f"{model}, {os.cpu_count()} logical CPUs, Python {platform.python_version()}, "
+            f"NumPy {np.__version__}{load}")
 
 
 def _timed(call, repeats: int) -> tuple[float, float]:
