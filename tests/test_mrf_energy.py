@@ -1,0 +1,122 @@
+"""The kernel's energy equals the NumPy energy; the clique table; bad input is named."""
+
+import numpy as np
+import pytest
+
+from vmcl import mrf
+from vmcl.mrf.energy import LinePrior, Params, line_costs
+from vmcl.mrf.lattice import Lattice
+
+
+def _padded(line, shape):
+    out = np.zeros(shape, np.float32)
+    out[:line.shape[0], :line.shape[1]] = line
+    return out.ravel()
+
+
+def _lattice(machine, data, confidence, edges, kind, params):
+    to = machine.to_device
+    return Lattice(machine, to(data.astype(np.float32)),
+                   None if confidence is None else to(confidence.astype(np.float32)),
+                   None if edges is None else to(edges.astype(np.uint8)), kind, params)
+
+
+CASES = [  # (shape, kind, with confidence, with edges, require_edge)
+    ((9, 13), "smooth", False, False, False),
+    ((16, 11), "smooth", True, True, False),
+    ((8, 8, 2), "smooth", True, True, True),
+    ((12, 10), "constant", True, True, False),
+    ((2, 2), "smooth", False, False, False),
+]
+
+
+@pytest.mark.parametrize("shape, kind, with_confidence, with_edges, require", CASES, ids=str)
+def test_kernel_energy_equals_numpy(shape, kind, with_confidence, with_edges, require, machine):
+    rng = np.random.default_rng(sum(shape))
+    height, width = shape[:2]
+    params = Params(alpha=0.7, beta=1.3, kappa=2.0, levels=(0.0, 1.0, 2.5),
+                    prior=LinePrior(line=1.0, end=0.4, continuation=0.1, turn=0.3, junction=0.8, crossing=1.7,
+                                    parallel=0.9),
+                    edge_gain=0.6, require_edge=require, edge_radius=1)
+    data = rng.normal(0, 2, shape).astype(np.float32)
+    data[rng.random(shape[:2]) < 0.2] = np.nan
+    confidence = rng.random((height, width)) if with_confidence else None
+    edges = rng.random((height, width)) < (0.04 if require else 0.3) if with_edges else None
+    lattice = _lattice(machine, data, confidence, edges, kind, params)
+    b_h, b_v = line_costs((height, width), edges, params)
+    for trial in range(5):
+        if kind == "constant":
+            f = rng.choice(np.float32([0.0, 1.0, 2.5]), shape)
+        else:
+            f = rng.normal(0, 2, shape).astype(np.float32)
+        # Lines only where allowed: a forbidden line on gives +inf, checked below.
+        line_h = (rng.random((height, width - 1)) < 0.4) & np.isfinite(b_h)
+        line_v = (rng.random((height - 1, width)) < 0.4) & np.isfinite(b_v)
+        lattice.f.set(f)
+        lattice.lh.set(_padded(line_h, (height, width)))
+        lattice.lv.set(_padded(line_v, (height, width)))
+        expected = mrf.energy(f, line_h, line_v, data=data, confidence=confidence, edges=edges, kind=kind,
+                              params=params)
+        assert lattice.energy() == pytest.approx(expected, rel=2e-5, abs=1e-4), trial
+    if require:
+        forbidden = ~np.isfinite(b_h)
+        assert forbidden.any()
+        assert mrf.energy(f, line_h | forbidden, line_v, data=data, confidence=confidence, edges=edges,
+                          params=params) == np.inf
+
+
+def test_vertex_table_classes():
+    prior = LinePrior(end=1, continuation=2, turn=3, junction=4, crossing=5)
+    table = prior.table()
+    up, down, left, right = 1, 2, 4, 8
+    assert table[0] == 0
+    assert [table[a] for a in (up, down, left, right)] == [1] * 4
+    assert table[up | down] == table[left | right] == 2
+    assert [table[a] for a in (up | left, up | right, down | left, down | right)] == [3] * 4
+    assert [table[15 ^ a] for a in (up, down, left, right)] == [4] * 4
+    assert table[15] == 5
+
+
+def test_edges_lower_and_forbid_line_costs():
+    edges = np.zeros((5, 6), bool)
+    edges[2, 3] = True
+    params = Params(beta=2.0, edge_gain=0.25, require_edge=True, edge_radius=1)
+    b_h, b_v = line_costs((5, 6), edges, params)
+    assert b_h[2, 2] == b_h[2, 3] == b_v[1, 3] == b_v[2, 3] == 2.0 * 0.75
+    assert b_h[1, 1] == 2.0  # no edge on either side, one within the radius
+    assert b_h[0, 0] == np.inf and b_v[4 - 1, 0] == np.inf
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    ({"data": np.zeros(5)}, ValueError, "data must have 2 or 3 dimensions"),
+    ({"data": np.zeros((1, 5))}, ValueError, "at least 2 x 2"),
+    ({"data": np.zeros((4, 4, 5))}, ValueError, "C in 1..4"),
+    ({"data": np.zeros((4, 4), complex)}, TypeError, "data must be a real array"),
+    ({"data": np.zeros((4, 4)), "confidence": np.ones((4, 5))}, ValueError, "confidence must have"),
+    ({"data": np.zeros((4, 4)), "confidence": -np.ones((4, 4))}, ValueError, "confidence must be finite"),
+    ({"data": np.zeros((4, 4)), "edges": np.ones((4, 4), np.float32)}, TypeError, "edges must be boolean"),
+    ({"data": np.zeros((4, 4)), "kind": "plate"}, ValueError, "kind must be"),
+    ({"data": np.zeros((4, 4)), "method": "sa"}, ValueError, "method must be"),
+    ({"data": np.zeros((4, 4)), "seed": -1}, ValueError, "seed must be"),
+    ({"data": np.zeros((4, 4)), "params": {"alpha": 1}}, TypeError, "params must be"),
+    ({"data": np.zeros((4, 4, 2)), "kind": "constant"}, ValueError, "scalar data"),
+    ({"data": np.full((4, 4), np.nan)}, ValueError, "no value"),
+    ({"data": np.zeros((4, 4)), "confidence": np.zeros((4, 4))}, ValueError, "no value"),
+])
+def test_bad_input_is_named(kwargs, error, match, machine):
+    with pytest.raises(error, match=match):
+        mrf.restore(machine=machine, **kwargs)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"alpha": -1.0}, "alpha must be >= 0"),
+    ({"t0": 0.0}, "t0 must be > 0"),
+    ({"t_factor": 1.5}, "temperatures fall"),
+    ({"sweeps": 2.5}, "sweeps must be an integer"),
+    ({"levels": 1}, "levels must be a count"),
+    ({"levels": (1.0, 1.0)}, "distinct"),
+    ({"beta": float("nan")}, "beta must be finite"),
+])
+def test_bad_params_are_named(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        Params(**kwargs)
