@@ -1,5 +1,4 @@
-/* edges.cl: Canny's detector and zero crossings, seed section "Edge detection". One work-item per pixel
- * (per CM processor) except the threshold rule, which runs one work-item per histogram (per tile).
+/* edges.cl: Canny's detector and zero crossings, seed section "Edge detection".
  *
  *   gradient            directional derivatives of the smoothed image (Sobel) and their magnitude
  *   nms_classify        non-maximum suppression fused with the double threshold: 0 none, 1 weak, 3 strong
@@ -11,11 +10,18 @@
  *   histogram_thresholds  quantiles of gradient-magnitude histograms (the noise estimate)
  *   zero_crossings      sign changes of a Laplacian-of-Gaussian field between 4-neighbours
  *
- * Defines: INTERPOLATE (1: the gradient magnitude is interpolated between the two neighbours on each
- * side, 0: the nearest of the 8 directions), LOCAL (1: thresholds per tile, interpolated between tile
- * centres; 0: one pair), CLEAR_MARKS (1: nms_classify also zeroes the marks of the labelling path),
- * WITH_DIRECTION (1: gradient also writes the direction).
+ * As in gaussian.cl, work-item (k, y) stands for the VEC pixels [k * VEC, (k + 1) * VEC) of row y (16 on
+ * CPUs, 1 on GPUs): one vector step inside the image, pixel by pixel where the 3 x 3 window meets a
+ * border. Each per-pixel rule is written once as a macro over the operand type, so the vector and the
+ * border paths compute the same operations in the same order; the ?: and comparison operators act per
+ * lane on vectors.
+ *
+ * Defines: VEC (1|16); INTERPOLATE (1: the gradient magnitude is interpolated between the two
+ * neighbours on each side, 0: the nearest of the 8 directions); LOCAL (1: thresholds per tile,
+ * interpolated between tile centres; 0: one pair); CLEAR_MARKS (1: nms_classify also zeroes the marks of
+ * the labelling path); WITH_DIRECTION (1: gradient also writes the direction).
  */
+#define T float
 #include "vmcl.h"
 
 #ifndef INTERPOLATE
@@ -31,34 +37,62 @@
 #define WITH_DIRECTION 0
 #endif
 
-#define AT(f, xx, yy) ((f)[(yy) * W + (xx)])
+#if VEC == 1
+#define VUCHAR uchar
+#define VCHAR char
+#define ANY(v) (v)
+#else
+#define VUCHAR VCAT(uchar, VEC)
+#define VCHAR VCAT(char, VEC)
+#define ANY(v) any(v)
+#endif
+#define TO_VUCHAR(v) VCAT(convert_, VUCHAR)(v)
+#define TO_VCHAR(v) VCAT(convert_, VCHAR)(v)
+
 #define WEAK 1
 #define STRONG 3
 
-/* Sobel derivatives at (x, y), borders clamped: gx along x (columns), gy along y (rows, downwards). */
-inline float2 sobel(__global const float *s, long x, long y, long W, long H)
-{
-    long xl = max(x - 1, 0L), xr = min(x + 1, W - 1), yu = max(y - 1, 0L), yd = min(y + 1, H - 1);
-    float gx = (AT(s, xr, yu) + 2.0f * AT(s, xr, y) + AT(s, xr, yd))
-             - (AT(s, xl, yu) + 2.0f * AT(s, xl, y) + AT(s, xl, yd));
-    float gy = (AT(s, xl, yd) + 2.0f * AT(s, x, yd) + AT(s, xr, yd))
-             - (AT(s, xl, yu) + 2.0f * AT(s, x, yu) + AT(s, xr, yu));
-    return (float2)(gx, gy);
-}
+/* Rows y-1, y, y+1 (clamped) of a field, and whether the VEC pixels from x0 have both x-neighbours. */
+#define ROWS(f, type)                                                                      \
+    __global const type *f##_u = f + max(y - 1, 0L) * W;                                   \
+    __global const type *f##_m = f + y * W;                                                \
+    __global const type *f##_d = f + min(y + 1, H - 1) * W;
+#define INTERIOR (x0 >= 1 && x0 + VEC + 1 <= W)
+/* Neighbour (dx, dy) of the VEC pixels from x0 (vector path), or of pixel x, clamped (border path). */
+#define NV(f, dx, dy) VLOAD((dy) < 0 ? f##_u + x0 + (dx) : (dy) > 0 ? f##_d + x0 + (dx) : f##_m + x0 + (dx))
+#define NS(f, dx, dy) ((dy) < 0 ? f##_u : (dy) > 0 ? f##_d : f##_m)[clamp(x + (dx), 0L, W - 1)]
 
-__kernel void gradient(__global const float *smoothed, __global float *magnitude, __global float *direction,
+/* Sobel derivatives: gx along x (columns), gy along y (rows, downwards). */
+#define SOBEL_X(N) ((N(1, -1) + 2.0f * N(1, 0) + N(1, 1)) - (N(-1, -1) + 2.0f * N(-1, 0) + N(-1, 1)))
+#define SOBEL_Y(N) ((N(-1, 1) + 2.0f * N(0, 1) + N(1, 1)) - (N(-1, -1) + 2.0f * N(0, -1) + N(1, -1)))
+
+#define SV(dx, dy) NV(s, dx, dy)
+#define SS(dx, dy) NS(s, dx, dy)
+
+__kernel void gradient(__global const float *s, __global float *magnitude, __global float *direction,
                        long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    float2 g = sobel(smoothed, x, y, W, H);
-    magnitude[y * W + x] = sqrt(g.x * g.x + g.y * g.y);
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    ROWS(s, float)
+    if (INTERIOR) {
+        VT gx = SOBEL_X(SV), gy = SOBEL_Y(SV);
+        VSTORE(sqrt(gx * gx + gy * gy), magnitude + y * W + x0);
 #if WITH_DIRECTION
-    direction[y * W + x] = atan2(g.y, g.x);
+        VSTORE(atan2(gy, gx), direction + y * W + x0);
 #endif
+        return;
+    }
+    for (long x = x0; x < min(x0 + VEC, W); x++) {
+        float gx = SOBEL_X(SS), gy = SOBEL_Y(SS);
+        magnitude[y * W + x] = sqrt(gx * gx + gy * gy);
+#if WITH_DIRECTION
+        direction[y * W + x] = atan2(gy, gx);
+#endif
+    }
 }
 
-/* The (low, high) pair that applies at (x, y): one pair, or bilinear between the centres of TILE x TILE
+/* The (low, high) pair that applies at (x, y): one pair, or bilinear between the centres of tile x tile
  * tiles (clamped beyond the outer centres), so thresholds change smoothly from tile to tile. */
 inline float2 thresholds_at(__global const float *thr, long x, long y, long tile, long tiles_x, long tiles_y)
 {
@@ -78,91 +112,106 @@ inline float2 thresholds_at(__global const float *thr, long x, long y, long tile
 #endif
 }
 
+/* Non-maximum suppression: is m at least the magnitude on both sides along the gradient (ties kept)?
+ * With interpolation the gradient falls between an axis neighbour (weight 1 - w) and a diagonal one
+ * (weight w) on each side; the case split and ties follow scikit-image's bilinear rule, so both keep the
+ * same pixels. Without, the two neighbours of the nearest of the 4 axes and diagonals (sectors of 45
+ * degrees) are compared directly: "it may not be crucial to use interpolation". n_<dx><dy> is the
+ * magnitude at neighbour (dx, dy), m standing for -1 and p for +1. Defined for the float vector (F, I)
+ * = (VT, VIT) and for float (float, int). */
 #if INTERPOLATE
-/* Is m at least the magnitude interpolated at both neighbours along the gradient? The gradient direction
- * falls between an axis neighbour (weight 1 - w) and a diagonal one (weight w) on each side; the case
- * split and the ties (<=) follow scikit-image's bilinear suppression so both keep the same pixels. */
-inline int is_maximum(__global const float *M, float m, float gx, float gy, long x, long y, long W)
-{
-    float ax = fabs(gx), ay = fabs(gy), w, plus, minus;
-    if ((gy > 0.0f) == (gx > 0.0f)) {
-        if (ay > ax) {
-            w = ax / ay;
-            plus = AT(M, x + 1, y + 1) * w + AT(M, x, y + 1) * (1.0f - w);
-            minus = AT(M, x - 1, y - 1) * w + AT(M, x, y - 1) * (1.0f - w);
-        } else {
-            w = ay / ax;
-            plus = AT(M, x + 1, y + 1) * w + AT(M, x + 1, y) * (1.0f - w);
-            minus = AT(M, x - 1, y - 1) * w + AT(M, x - 1, y) * (1.0f - w);
-        }
-    } else {
-        if (ay < ax) {
-            w = ay / ax;
-            plus = AT(M, x + 1, y - 1) * w + AT(M, x + 1, y) * (1.0f - w);
-            minus = AT(M, x - 1, y + 1) * w + AT(M, x - 1, y) * (1.0f - w);
-        } else {
-            w = ax / ay;
-            plus = AT(M, x + 1, y - 1) * w + AT(M, x, y - 1) * (1.0f - w);
-            minus = AT(M, x - 1, y + 1) * w + AT(M, x, y + 1) * (1.0f - w);
-        }
+#define DEFINE_IS_MAXIMUM(NAME, F, I)                                                      \
+    __attribute__((always_inline)) inline I NAME(F m, F gx, F gy, F n_mm, F n_0m, F n_pm, F n_m0, F n_p0, F n_mp, F n_0p, F n_pp) \
+    {                                                                                      \
+        F ax = fabs(gx), ay = fabs(gy);                                                    \
+        I same = (gy > 0.0f) == (gx > 0.0f);                                               \
+        I ymajor = same ? ay > ax : ay >= ax;                                              \
+        F w = ymajor ? ax / ay : ay / ax;                                                  \
+        F diag_plus = same ? n_pp : n_pm, diag_minus = same ? n_mm : n_mp;                 \
+        F axis_plus = ymajor ? (same ? n_0p : n_0m) : n_p0;                                \
+        F axis_minus = ymajor ? (same ? n_0m : n_0p) : n_m0;                               \
+        return (diag_plus * w + axis_plus * (1.0f - w) <= m) && (diag_minus * w + axis_minus * (1.0f - w) <= m); \
     }
-    return plus <= m && minus <= m;
-}
 #else
-/* Without interpolation: the neighbours of the nearest of the four axes and diagonals (sectors of 45
- * degrees around each), compared directly, "it may not be crucial to use interpolation". */
-inline int is_maximum(__global const float *M, float m, float gx, float gy, long x, long y, long W)
-{
-    const float tan22 = 0.41421356f;
-    float ax = fabs(gx), ay = fabs(gy);
-    long dx, dy;
-    if (ay <= tan22 * ax) {
-        dx = 1; dy = 0;
-    } else if (ax <= tan22 * ay) {
-        dx = 0; dy = 1;
-    } else {
-        dx = 1; dy = (gx > 0.0f) == (gy > 0.0f) ? 1 : -1;
+#define DEFINE_IS_MAXIMUM(NAME, F, I)                                                      \
+    __attribute__((always_inline)) inline I NAME(F m, F gx, F gy, F n_mm, F n_0m, F n_pm, F n_m0, F n_p0, F n_mp, F n_0p, F n_pp) \
+    {                                                                                      \
+        const float tan22 = 0.41421356f;                                                   \
+        F ax = fabs(gx), ay = fabs(gy);                                                    \
+        I horizontal = ay <= tan22 * ax;                                                   \
+        I vertical = !horizontal && ax <= tan22 * ay;                                      \
+        I same = (gy > 0.0f) == (gx > 0.0f);                                               \
+        F plus = horizontal ? n_p0 : vertical ? n_0p : same ? n_pp : n_pm;                 \
+        F minus = horizontal ? n_m0 : vertical ? n_0m : same ? n_mm : n_mp;                \
+        return plus <= m && minus <= m;                                                    \
     }
-    return AT(M, x + dx, y + dy) <= m && AT(M, x - dx, y - dy) <= m;
-}
 #endif
+DEFINE_IS_MAXIMUM(is_maximum_v, VT, VIT)
+DEFINE_IS_MAXIMUM(is_maximum_s, float, int)
+#define NEIGHBOURS(M) M(-1, -1), M(0, -1), M(1, -1), M(-1, 0), M(1, 0), M(-1, 1), M(0, 1), M(1, 1)
 
-/* State of every pixel: 3 strong (a maximum at or above high), 1 weak (a maximum at or above low and
- * above 0), 0 otherwise; the outermost ring is 0, its neighbours lying outside the image. Bit 0 is the
- * mask that gets labelled, and every non-zero state has it: the labeller combines mask bytes with
- * bitwise operators, so 1 and 2 would not count as touching. */
-__kernel void nms_classify(__global const float *smoothed, __global const float *magnitude,
-                           __global const float *thr, __global uchar *state, __global uchar *marks,
-                           long tile, long tiles_x, long tiles_y, long W, long H)
+/* State: 3 strong (a maximum at or above high), 1 weak (a maximum at or above low and above 0), 0
+ * otherwise. Bit 0 is the mask that gets labelled, and every non-zero state has it: the labeller
+ * combines mask bytes with bitwise operators, so 1 and 2 would not count as touching. */
+#define CLASSIFY(I, keep, m, low, high) \
+    ((keep) && (m) >= (low) && (m) > 0.0f ? ((m) >= (high) ? (I)STRONG : (I)WEAK) : (I)0)
+
+#define MV(dx, dy) NV(mag, dx, dy)
+#define MS(dx, dy) NS(mag, dx, dy)
+
+/* The outermost ring of pixels is 0: their neighbours lie outside the image. */
+__kernel void nms_classify(__global const float *s, __global const float *mag, __global const float *thr,
+                           __global uchar *state, __global uchar *marks, long tile, long tiles_x, long tiles_y,
+                           long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    long i = y * W + x;
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    long i0 = y * W + x0;
 #if CLEAR_MARKS
-    marks[i] = 0;
+    for (long x = x0; x < min(x0 + VEC, W); x++) marks[y * W + x] = 0;
 #endif
-    uchar c = 0;
-    if (x > 0 && y > 0 && x + 1 < W && y + 1 < H) {
-        float m = magnitude[i];
-        float2 t = thresholds_at(thr, x, y, tile, tiles_x, tiles_y);
-        if (m >= t.x && m > 0.0f) {
-            float2 g = sobel(smoothed, x, y, W, H);
-            if (is_maximum(magnitude, m, g.x, g.y, x, y, W)) c = m >= t.y ? STRONG : WEAK;
+    ROWS(s, float)
+    ROWS(mag, float)
+    int inner_row = y > 0 && y + 1 < H;
+    if (INTERIOR && inner_row) {
+        VT m = VLOAD(mag + i0), gx = SOBEL_X(SV), gy = SOBEL_Y(SV);
+#if LOCAL
+        float lows[VEC], highs[VEC];
+        for (int j = 0; j < VEC; j++) {
+            float2 t = thresholds_at(thr, x0 + j, y, tile, tiles_x, tiles_y);
+            lows[j] = t.x;
+            highs[j] = t.y;
         }
+        VT low = VLOAD(lows), high = VLOAD(highs);
+#else
+        VT low = (VT)thr[0], high = (VT)thr[1];
+#endif
+        VIT keep = is_maximum_v(m, gx, gy, NEIGHBOURS(MV));
+        VSTORE(TO_VUCHAR(CLASSIFY(VIT, keep, m, low, high)), state + i0);
+        return;
     }
-    state[i] = c;
+    for (long x = x0; x < min(x0 + VEC, W); x++) {
+        uchar c = 0;
+        if (inner_row && x > 0 && x + 1 < W) {
+            float m = mag[y * W + x], gx = SOBEL_X(SS), gy = SOBEL_Y(SS);
+            float2 t = thresholds_at(thr, x, y, tile, tiles_x, tiles_y);
+            c = CLASSIFY(int, is_maximum_s(m, gx, gy, NEIGHBOURS(MS)), m, t.x, t.y);
+        }
+        state[y * W + x] = c;
+    }
 }
 
-/* The state of a field under two thresholds, for hysteresis on its own (NaN counts as below both). */
+/* The states of any field under two thresholds, for hysteresis on its own (NaN counts as below both). */
 __kernel void double_threshold(__global const float *v, __global uchar *state, __global uchar *marks,
                                float low, float high, long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    long i = y * W + x;
-    float value = v[i];
-    marks[i] = 0;
-    state[i] = value >= high ? STRONG : (value >= low ? WEAK : 0);
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    for (long x = x0; x < min(x0 + VEC, W); x++) {
+        float value = v[y * W + x];
+        marks[y * W + x] = 0;
+        state[y * W + x] = value >= high ? STRONG : (value >= low ? WEAK : 0);
+    }
 }
 
 /* Every strong pixel tells its component's principal (label = the largest address in the component)
@@ -170,41 +219,56 @@ __kernel void double_threshold(__global const float *v, __global uchar *state, _
  * concurrent stores of the same value need neither buckets nor atomics. */
 __kernel void mark_strong(__global const uchar *state, __global const int *label, __global uchar *marks, long n)
 {
-    long i = get_global_id(0);
-    if (i < n && state[i] == STRONG) marks[label[i]] = 1;
+    long i0 = get_global_id(0) * VEC;
+    for (long i = i0; i < min(i0 + VEC, n); i++)
+        if (state[i] == STRONG) marks[label[i]] = 1;
 }
 
 /* Every pixel reads its principal's mark (the router's get). */
 __kernel void keep_marked(__global const int *label, __global const uchar *marks, __global uchar *edges, long n)
 {
-    long i = get_global_id(0);
-    if (i >= n) return;
-    int l = label[i];
-    edges[i] = l >= 0 ? marks[l] : 0;
+    long i0 = get_global_id(0) * VEC;
+    for (long i = i0; i < min(i0 + VEC, n); i++) {
+        int l = label[i];
+        edges[i] = l >= 0 ? marks[l] : 0;
+    }
 }
 
 /* One synchronous step of spreading activation: a weak pixel next to an edge pixel (8-neighbours)
- * becomes an edge pixel. `changed` is set (a plain store of 1) when any pixel did. */
+ * becomes an edge pixel; `changed` is set (a plain store of 1) when any pixel did. Off the image the
+ * neighbours repeat the edge pixels, which adds no edge pixel that is not already a neighbour. */
+#define IS_STRONG(v) ((v) == (uchar)STRONG)
+#define GROWN(N, c)                                                                        \
+    ((c) == (uchar)WEAK && (IS_STRONG(N(-1, -1)) || IS_STRONG(N(0, -1)) || IS_STRONG(N(1, -1)) \
+                            || IS_STRONG(N(-1, 0)) || IS_STRONG(N(1, 0)) || IS_STRONG(N(-1, 1)) \
+                            || IS_STRONG(N(0, 1)) || IS_STRONG(N(1, 1))))
+#define GV(dx, dy) NV(in, dx, dy)
+#define GS(dx, dy) NS(in, dx, dy)
+
 __kernel void grow_step(__global const uchar *in, __global uchar *out, __global int *changed, long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    long i = y * W + x;
-    uchar c = in[i];
-    if (c == WEAK) {
-        long xl = max(x - 1, 0L), xr = min(x + 1, W - 1), yu = max(y - 1, 0L), yd = min(y + 1, H - 1);
-        for (long yy = yu; yy <= yd && c == WEAK; yy++)
-            for (long xx = xl; xx <= xr; xx++)
-                if (AT(in, xx, yy) == STRONG) { c = STRONG; break; }
-        if (c == STRONG) *changed = 1;
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    ROWS(in, uchar)
+    if (INTERIOR) {
+        VUCHAR c = VLOAD(in_m + x0);
+        VCHAR grown = GROWN(GV, c);
+        VSTORE(grown ? (VUCHAR)STRONG : c, out + y * W + x0);
+        if (ANY(grown)) *changed = 1;
+        return;
     }
-    out[i] = c;
+    for (long x = x0; x < min(x0 + VEC, W); x++) {
+        uchar c = in_m[x];
+        int grown = GROWN(GS, c);
+        out[y * W + x] = grown ? STRONG : c;
+        if (grown) *changed = 1;
+    }
 }
 
 __kernel void strong_pixels(__global const uchar *state, __global uchar *edges, long n)
 {
-    long i = get_global_id(0);
-    if (i < n) edges[i] = state[i] == STRONG;
+    long i0 = get_global_id(0) * VEC;
+    for (long i = i0; i < min(i0 + VEC, n); i++) edges[i] = state[i] == STRONG;
 }
 
 /* One work-item per histogram (tile): thresholds (rule.z * q(rule.x), rule.w * q(rule.y)), where q(f) is
@@ -248,31 +312,39 @@ __kernel void set_thresholds(__global float *thr, float low, float high)
  * slope is the gradient magnitude of the field (central differences); sign is the brightness polarity
  * across the crossing along x (the field has the sign of the Laplacian, which falls where brightness
  * rises): +1 dark to bright going right, -1 bright to dark, 0 for a crossing with no x component. */
-inline int nearer_side(float c, float q)
-{
-    int opposite = (c > 0.0f && q < 0.0f) || (c < 0.0f && q > 0.0f);
-    return opposite && (fabs(c) < fabs(q) || (fabs(c) == fabs(q) && c > 0.0f));
-}
+#define OPPOSITE(a, b) (((a) > 0.0f && (b) < 0.0f) || ((a) < 0.0f && (b) > 0.0f))
+#define NEARER(c, q) (OPPOSITE(c, q) && (fabs(c) < fabs(q) || (fabs(c) == fabs(q) && (c) > 0.0f)))
+#define CROSSING(c, l, r, u, d)                                                            \
+    ((c) == 0.0f ? OPPOSITE(l, r) || OPPOSITE(u, d)                                        \
+                 : NEARER(c, l) || NEARER(c, r) || NEARER(c, u) || NEARER(c, d))
+
+#define FV(dx, dy) NV(f, dx, dy)
+#define FS(dx, dy) NS(f, dx, dy)
 
 __kernel void zero_crossings(__global const float *f, __global uchar *mask, __global char *sign,
                              __global float *slope, float min_slope, long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    long i = y * W + x;
-    float c = f[i];
-    float l = AT(f, max(x - 1, 0L), y), r = AT(f, min(x + 1, W - 1), y);
-    float u = AT(f, x, max(y - 1, 0L)), d = AT(f, x, min(y + 1, H - 1));
-    int crossing;
-    if (c == 0.0f)
-        crossing = (l > 0.0f && r < 0.0f) || (l < 0.0f && r > 0.0f) || (u > 0.0f && d < 0.0f)
-                   || (u < 0.0f && d > 0.0f);
-    else
-        crossing = nearer_side(c, l) || nearer_side(c, r) || nearer_side(c, u) || nearer_side(c, d);
-    float dx = 0.5f * (r - l), dy = 0.5f * (d - u);
-    float s = sqrt(dx * dx + dy * dy);
-    int keep = crossing && s >= min_slope;
-    mask[i] = keep;
-    slope[i] = keep ? s : 0.0f;
-    sign[i] = keep ? (dx < 0.0f ? 1 : (dx > 0.0f ? -1 : 0)) : 0;
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    ROWS(f, float)
+    if (INTERIOR) {
+        VT c = FV(0, 0), l = FV(-1, 0), r = FV(1, 0), u = FV(0, -1), d = FV(0, 1);
+        VT dx = 0.5f * (r - l), dy = 0.5f * (d - u);
+        VT s = sqrt(dx * dx + dy * dy);
+        VIT keep = CROSSING(c, l, r, u, d) && s >= min_slope;
+        long i0 = y * W + x0;
+        VSTORE(TO_VUCHAR(keep ? (VIT)1 : (VIT)0), mask + i0);
+        VSTORE(keep ? s : (VT)0.0f, slope + i0);
+        VSTORE(TO_VCHAR(keep ? (dx < 0.0f ? (VIT)1 : dx > 0.0f ? (VIT)-1 : (VIT)0) : (VIT)0), sign + i0);
+        return;
+    }
+    for (long x = x0; x < min(x0 + VEC, W); x++) {
+        float c = FS(0, 0), l = FS(-1, 0), r = FS(1, 0), u = FS(0, -1), d = FS(0, 1);
+        float dx = 0.5f * (r - l), dy = 0.5f * (d - u);
+        float s = sqrt(dx * dx + dy * dy);
+        int keep = CROSSING(c, l, r, u, d) && s >= min_slope;
+        mask[y * W + x] = keep;
+        slope[y * W + x] = keep ? s : 0.0f;
+        sign[y * W + x] = keep ? (dx < 0.0f ? 1 : (dx > 0.0f ? -1 : 0)) : 0;
+    }
 }

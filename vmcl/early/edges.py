@@ -32,7 +32,16 @@ import pyopencl.array as cl_array
 from vmcl.cm import doubling as _doubling
 from vmcl.cm._arrays import ArrayLike, field, machine_for, result
 from vmcl.early import noise as _noise
-from vmcl.early.filters import DOG_RATIO, _check_sigma, _image, _laplacian, _separable
+from vmcl.early.filters import (
+    DOG_RATIO,
+    _check_sigma,
+    _image,
+    _kernel,
+    _laplacian,
+    _launch_flat,
+    _launch_rows,
+    _separable,
+)
 from vmcl.machine import Machine
 
 Hysteresis = Literal["doubling", "iterative"]
@@ -119,8 +128,8 @@ def zero_crossings(image: ArrayLike, *, sigma: float, method: Literal["log", "do
     mask = machine.empty(response.shape, np.uint8)
     sign = machine.empty(response.shape, np.int8)
     slope = machine.empty(response.shape, np.float32)
-    machine.launch(machine.kernel("edges", "zero_crossings"), size, response, mask, sign, slope,
-                   np.float32(min_slope), *map(np.int64, size))
+    _launch_rows(machine, _kernel(machine, "edges", "zero_crossings"), *size, response, mask, sign, slope,
+                 np.float32(min_slope), *map(np.int64, size))
     return ZeroCrossings(_mask_out(mask, host), result(sign, host), result(slope, host), result(response, host))
 
 
@@ -141,22 +150,22 @@ def _hysteresis(machine: Machine, state: cl_array.Array, marks: cl_array.Array |
     edges = machine.empty(state.shape, np.uint8)
     if method == "doubling":
         labels = _doubling.label(state, connectivity=8, method="doubling", machine=machine)
-        machine.launch(machine.kernel("edges", "mark_strong"), (n,), state, labels, marks, np.int64(n))
-        machine.launch(machine.kernel("edges", "keep_marked"), (n,), labels, marks, edges, np.int64(n))
+        _launch_flat(machine, _kernel(machine, "edges", "mark_strong"), n, state, labels, marks, np.int64(n))
+        _launch_flat(machine, _kernel(machine, "edges", "keep_marked"), n, labels, marks, edges, np.int64(n))
         return edges
     size = _xy(state)
-    step = machine.kernel("edges", "grow_step")
+    step = _kernel(machine, "edges", "grow_step")
     spare = machine.empty(state.shape, np.uint8)
     changed = machine.empty(1, np.int32)
     current = state
     while True:
         cl.enqueue_fill_buffer(machine.queue, changed.base_data, np.int32(0), 0, changed.nbytes)
         for _ in range(_CHECK_EVERY):
-            machine.launch(step, size, current, spare, changed, *map(np.int64, size))
+            _launch_rows(machine, step, *size, current, spare, changed, *map(np.int64, size))
             current, spare = spare, current
         if not changed.get(queue=machine.queue)[0]:
             break
-    machine.launch(machine.kernel("edges", "strong_pixels"), (n,), current, edges, np.int64(n))
+    _launch_flat(machine, _kernel(machine, "edges", "strong_pixels"), n, current, edges, np.int64(n))
     return edges
 
 
@@ -198,8 +207,8 @@ def hysteresis_threshold(image: ArrayLike, *, low_threshold: float, high_thresho
     data, host = field(image, "image", machine, ndims=(2,), dtypes=(np.float32,))
     size = _xy(data)
     state, marks = machine.empty(data.shape, np.uint8), machine.empty(data.shape, np.uint8)
-    machine.launch(machine.kernel("edges", "double_threshold"), size, data, state, marks, np.float32(low),
-                   np.float32(high), *map(np.int64, size))
+    _launch_rows(machine, _kernel(machine, "edges", "double_threshold"), *size, data, state, marks,
+                 np.float32(low), np.float32(high), *map(np.int64, size))
     return _mask_out(_hysteresis(machine, state, marks, method), host)
 
 
@@ -215,10 +224,11 @@ def _threshold_value(value, name: str, use_quantiles: bool) -> float | None:
 def _thresholds(machine: Machine, magnitude: cl_array.Array, low: float | None, high: float | None,
                 use_quantiles: bool, noise: str) -> tuple[cl_array.Array, tuple[int, int], bool]:
     """Device (low, high) pairs for nms_classify, their tile grid, and whether they vary by tile."""
-    ratio = _noise.NOISE_LOW / _noise.NOISE_HIGH
+    ratio = _noise.CANNY_LOW / _noise.CANNY_HIGH
     if low is None and high is None:
         local = noise == "local"
-        pairs, tiles = _noise.threshold_field(machine, magnitude, _noise.noise_rule(), local=local)
+        rule = _noise.noise_rule(_noise.CANNY_LOW, _noise.CANNY_HIGH)
+        pairs, tiles = _noise.threshold_field(machine, magnitude, rule, local=local)
         return pairs, tiles, local
     if use_quantiles:
         rule = (low if low is not None else high, high if high is not None else low,
@@ -228,7 +238,7 @@ def _thresholds(machine: Machine, magnitude: cl_array.Array, low: float | None, 
     low = high * ratio if low is None else low
     high = low / ratio if high is None else high
     pairs = machine.empty((1, 1, 2), np.float32)
-    machine.launch(machine.kernel("edges", "set_thresholds"), (1,), pairs, np.float32(low), np.float32(high))
+    machine.launch(_kernel(machine, "edges", "set_thresholds"), (1,), pairs, np.float32(low), np.float32(high))
     return pairs, (1, 1), False
 
 
@@ -248,8 +258,8 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     low_threshold, high_threshold : float, optional
         Hysteresis thresholds on the gradient magnitude, in the input's units (see Notes), with
         low <= high. Both None: from the noise estimate (:mod:`vmcl.early.noise`): with s the noise
-        scale, median(|grad|) / sqrt(2 ln 2), low = 2 s and high = 4.1 s. One None: it keeps that
-        rule's ratio (low = high * 2 / 4.1) to the one given.
+        scale, median(|grad|) / sqrt(2 ln 2), low = 3 s and high = 6 s. One None: it keeps that
+        rule's ratio (low = high / 2) to the one given.
     use_quantiles : bool
         Thresholds given are quantiles in [0, 1] of the gradient magnitudes of the whole image (from a
         4096-bin histogram, within max / 4096 of ``np.percentile``).
@@ -316,16 +326,16 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     dims = tuple(map(np.int64, size))
     magnitude = machine.empty(smoothed.shape, np.float32)
     direction = machine.empty(smoothed.shape, np.float32) if return_gradient else magnitude
-    machine.launch(machine.kernel("edges", "gradient", WITH_DIRECTION=int(return_gradient)), size, smoothed,
-                   magnitude, direction, *dims)
+    _launch_rows(machine, _kernel(machine, "edges", "gradient", WITH_DIRECTION=int(return_gradient)), *size,
+                 smoothed, magnitude, direction, *dims)
     pairs, tiles, local = _thresholds(machine, magnitude, low, high, use_quantiles, noise)
     state = machine.empty(smoothed.shape, np.uint8)
     doubling = hysteresis == "doubling"
     marks = machine.empty(smoothed.shape, np.uint8) if doubling else state
-    classify = machine.kernel("edges", "nms_classify", INTERPOLATE=int(bool(interpolate)), LOCAL=int(local),
-                              CLEAR_MARKS=int(doubling))
-    machine.launch(classify, size, smoothed, magnitude, pairs, state, marks, np.int64(_noise.TILE),
-                   np.int64(tiles[1]), np.int64(tiles[0]), *dims)
+    classify = _kernel(machine, "edges", "nms_classify", INTERPOLATE=int(bool(interpolate)), LOCAL=int(local),
+                       CLEAR_MARKS=int(doubling))
+    _launch_rows(machine, classify, *size, smoothed, magnitude, pairs, state, marks, np.int64(_noise.TILE),
+                 np.int64(tiles[1]), np.int64(tiles[0]), *dims)
     edges = _mask_out(_hysteresis(machine, state, marks if doubling else None, hysteresis), host)
     if return_gradient:
         return edges, result(magnitude, host), result(direction, host)

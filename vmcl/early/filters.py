@@ -61,10 +61,6 @@ def _image(image, machine: Machine) -> tuple[cl_array.Array, bool]:
     return data, host
 
 
-def _input_defines(data: cl_array.Array) -> dict:
-    return {"IN_T": _IN_TYPES[data.dtype], "CHANNELS": 3 if data.ndim == 3 else 1}
-
-
 def _grey_weights() -> np.ndarray:
     return cltypes.make_float4(*GREY_WEIGHTS, 0.0)
 
@@ -90,6 +86,31 @@ def binomial_passes(sigma: float) -> int:
     return max(1, round(2.0 * sigma * sigma))
 
 
+def _vec(machine: Machine) -> int:
+    """Pixels per work-item: 16 on CPUs (their SIMD lanes see contiguous loads), 1 on GPUs."""
+    return 16 if machine.is_cpu else 1
+
+
+def _kernel(machine: Machine, family: str, name: str, **defines) -> cl.Kernel:
+    return machine.kernel(family, name, VEC=_vec(machine), **defines)
+
+
+def _launch_rows(machine: Machine, kernel: cl.Kernel, width: int, height: int, *args) -> None:
+    """Launch over (row chunks of VEC pixels, rows). On CPUs, work-groups of 64 chunks along a row
+    (measured faster on PoCL than the driver's choice; the global size is rounded up to them)."""
+    chunks = -(-width // _vec(machine))
+    if machine.is_cpu and machine.local_size is None:
+        local = min(64, chunks)
+        machine.launch(kernel, (-(-chunks // local) * local, height), *args, local_size=(local, 1))
+    else:
+        machine.launch(kernel, (chunks, height), *args)
+
+
+def _launch_flat(machine: Machine, kernel: cl.Kernel, n: int, *args) -> None:
+    """Launch over chunks of VEC elements of a flat field."""
+    machine.launch(kernel, (-(-n // _vec(machine)),), *args)
+
+
 def _upload(machine: Machine, array: np.ndarray) -> cl_array.Array:
     """A small host array on the device without waiting: a blocking write would drain the queue."""
     device = machine.empty(array.shape, array.dtype)
@@ -108,13 +129,15 @@ def _separable(machine: Machine, data: cl_array.Array, sigmas: tuple[float, ...]
         taps[plane, pad:pad + len(t)] = t
     planes = len(sigmas)
     taps_device = _upload(machine, taps)
+    if data.ndim == 3:
+        data = _grey(machine, data)
     rows = machine.empty((planes, height, width), np.float32)
     out = machine.empty((height, width), np.float32)
-    size = (width, height)
-    machine.launch(machine.kernel("gaussian", "gauss_rows", PLANES=planes, **_input_defines(data)), size,
-                   data, rows, taps_device, np.int32(radius), _grey_weights(), np.int64(width), np.int64(height))
-    machine.launch(machine.kernel("gaussian", "gauss_cols", PLANES=planes), size, rows, out, taps_device,
-                   np.int32(radius), np.int64(width), np.int64(height))
+    dims = (np.int64(width), np.int64(height))
+    _launch_rows(machine, _kernel(machine, "gaussian", "gauss_rows", PLANES=planes, IN_T=_IN_TYPES[data.dtype]),
+                 width, height, data, rows, taps_device, np.int32(radius), *dims)
+    _launch_rows(machine, _kernel(machine, "gaussian", "gauss_cols", PLANES=planes), width, height, rows, out,
+                 taps_device, np.int32(radius), *dims)
     return out
 
 
@@ -123,8 +146,9 @@ def _grey(machine: Machine, data: cl_array.Array) -> cl_array.Array:
         return data
     height, width = data.shape[:2]
     out = machine.empty((height, width), np.float32)
-    machine.launch(machine.kernel("gaussian", "to_grey", **_input_defines(data)), (width, height), data, out,
-                   _grey_weights(), np.int64(width), np.int64(height))
+    _launch_rows(machine, _kernel(machine, "gaussian", "to_grey", IN_T=_IN_TYPES[data.dtype],
+                                  CHANNELS=3 if data.ndim == 3 else 1),
+                 width, height, data, out, _grey_weights(), np.int64(width), np.int64(height))
     return out
 
 
@@ -139,8 +163,8 @@ def _smooth(machine: Machine, data: cl_array.Array, sigma: float, method: str) -
 def _laplacian(machine: Machine, smoothed: cl_array.Array) -> cl_array.Array:
     height, width = smoothed.shape
     out = machine.empty((height, width), np.float32)
-    machine.launch(machine.kernel("gaussian", "laplacian"), (width, height), smoothed, out, np.int64(width),
-                   np.int64(height))
+    _launch_rows(machine, _kernel(machine, "gaussian", "laplacian"), width, height, smoothed, out,
+                 np.int64(width), np.int64(height))
     return out
 
 
