@@ -7,6 +7,7 @@ edges; :func:`energy` evaluates the energy of any configuration on the host.
 """
 
 from vmcl.mrf.energy import LinePrior, Params, energy
+from vmcl.mrf.presets import preset
 from vmcl.mrf.restore import Restoration, boundary_map, restore
 
-__all__ = ["LinePrior", "Params", "Restoration", "boundary_map", "energy", "restore"]
+__all__ = ["LinePrior", "Params", "Restoration", "boundary_map", "energy", "preset", "restore"]

@@ -1,7 +1,7 @@
 """The device state of one restoration: data, weights, field, line process, clique costs; one sweep.
 
 Seed section "Algorithms: Deterministic and stochastic". Every solver (annealing, MPM, mean field, ICM)
-is a schedule of the same sweep: f at the two checkerboard colours, then the line sites at their four
+is a schedule of the same sweep: the line sites at their four colours, then f at the two checkerboard
 colours (kernels/mrf.cl documents the coding), each phase one launch of one work-item per site. A sweep
 is enqueued back to back; nothing is read back until the solver has finished.
 """
@@ -20,8 +20,9 @@ from vmcl.machine import Machine
 from vmcl.mrf.energy import Params, resolve_levels
 
 MODES = {"sample": 0, "icm": 1, "mean": 2}
-# (phase, colour): f at the checkerboard's two colours, then the line sites' four colours.
-SWEEP_ORDER = (("f", 0), ("f", 1), ("lines", 0), ("lines", 1), ("lines", 2), ("lines", 3))
+# (phase, colour): the line sites' four colours, then f at the checkerboard's two colours. Lines go first
+# so that the first sweep sees the data's jumps before the smoothing of f has flattened them.
+SWEEP_ORDER = (("lines", 0), ("lines", 1), ("lines", 2), ("lines", 3), ("f", 0), ("f", 1))
 
 
 def philox_key(seed: int) -> np.ndarray:
