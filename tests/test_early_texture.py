@@ -49,7 +49,7 @@ def _edges_oracle(d, radius, edge_threshold):
     before = np.where(along_x, p[1:-1, :-2], p[:-2, 1:-1])
     after = np.where(along_x, p[1:-1, 2:], p[2:, 1:-1])
     gap = np.minimum(np.abs(m - before), np.abs(m - after))
-    ties = (gap > 0) & (gap <= 1e-6 * m)  # near ties: rounding (fma or not) decides them
+    ties = (gap > 0) & (gap <= 1e-5 * m)  # near ties: rounding (fma or not) decides them
     return (m > before) & (m >= after) & (m > edge_threshold), ties
 
 
