@@ -1,0 +1,246 @@
+"""The stereo matcher: a NumPy oracle on random features, and quality on scenes with exact ground truth."""
+
+import math
+
+import numpy as np
+import pytest
+from oracles import box_sum as box_oracle
+from scipy import ndimage
+
+from vmcl import scenes
+from vmcl.early.stereo import match, match_features
+from vmcl.scenes import Body, Camera, Face, Light, Texture, World
+
+DENSE_EDGES = {"low_threshold": 0.6, "high_threshold": 0.85, "use_quantiles": True}
+
+
+def _oracle(left, right, la, ra, d_min, d_max, patch, compatible, tolerance=math.radians(20), min_score=0.3,
+            bimodal=0.3, dip=0.8, min_votes=3.0):
+    """The matcher written plainly: planes, window sums, the sequential selection, one suppression round."""
+    _height, width = left.shape
+    r, f32 = patch // 2, np.float32
+    nl, nr = (box_oracle(m.astype(np.float32), r).astype(f32) for m in (left, right))
+    best_s = np.full(left.shape, -np.inf, f32)
+    best_d = np.full(left.shape, np.iinfo(np.int32).min)
+    peak, valley, second = np.zeros(left.shape, f32), np.full(left.shape, np.inf, f32), np.zeros(left.shape, f32)
+    for d in range(d_min, d_max + 1):
+        plane = np.zeros(left.shape, bool)
+        shifted = np.zeros(left.shape, bool)
+        attr = np.zeros_like(ra)
+        if d >= 0:
+            shifted[:, d:], attr[:, d:] = right[:, :width - d], ra[:, :width - d]
+        else:
+            shifted[:, :d], attr[:, :d] = right[:, -d:], ra[:, -d:]
+        if compatible == "direction":
+            diff = np.abs(la - attr)
+            ok = np.minimum(diff, f32(2 * np.pi) - diff) <= f32(tolerance)
+        else:
+            ok = la == attr
+        plane = left & shifted & ok
+        votes = box_oracle(plane.astype(np.float32), r).astype(f32)
+        nr_d = np.zeros(left.shape, f32)
+        if d >= 0:
+            nr_d[:, d:] = nr[:, :width - d]
+        else:
+            nr_d[:, :d] = nr[:, -d:]
+        eligible = f32(0.5) * (nl + nr_d)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            score = np.where(eligible > 0, votes / eligible, f32(0)).astype(f32)
+        for y, x in zip(*np.nonzero(left)):
+            if plane[y, x] and score[y, x] > best_s[y, x]:
+                best_s[y, x], best_d[y, x] = score[y, x], d
+            v = votes[y, x]
+            if valley[y, x] <= f32(dip) * min(peak[y, x], v):
+                second[y, x] = max(second[y, x], min(peak[y, x], v))
+            if v > peak[y, x]:
+                peak[y, x], valley[y, x] = v, np.inf
+            else:
+                valley[y, x] = min(valley[y, x], v)
+    disparity = np.full(left.shape, np.nan, np.float32)
+    out_of_range = np.zeros(left.shape, bool)
+    discontinuity = left & (peak >= min_votes) & (second >= f32(bimodal) * peak)
+    unset = np.iinfo(np.int32).min
+    for y, x in zip(*np.nonzero(left)):
+        s, d = best_s[y, x], best_d[y, x]
+        matched = d != unset
+        out_of_range[y, x] = not matched or s < min_score
+        keep = matched and s >= min_score
+        for xo in range(max(0, x - (d_max - d_min)), min(width - 1, x + d_max - d_min) + 1):
+            if not keep:
+                break
+            if xo == x or not left[y, xo] or best_d[y, xo] == unset or best_s[y, xo] < min_score:
+                continue
+            here, there = x - d, xo - best_d[y, xo]
+            stronger = best_s[y, xo] > s or (best_s[y, xo] == s and xo < x)
+            if stronger and (there == here or (xo - x) * (there - here) < 0):
+                keep = False
+        if keep:
+            disparity[y, x] = d
+    return disparity, out_of_range, discontinuity
+
+
+@pytest.mark.parametrize("compatible", ["direction", "sign"])
+@pytest.mark.parametrize("variant", ["running", "table"])
+def test_matches_numpy_oracle(compatible, variant, machine):
+    rng = np.random.default_rng(0 if compatible == "sign" else 1)
+    shape = (23, 41)
+    left, right = rng.random(shape) < 0.3, rng.random(shape) < 0.3
+    if compatible == "direction":
+        la, ra = (rng.uniform(-np.pi, np.pi, shape).astype(np.float32) for _ in range(2))
+    else:
+        la, ra = (rng.choice(np.array([-1, 1], np.int8), shape) for _ in range(2))
+    got = match_features(left, right, la, ra, d_min=-2, d_max=5, compatible=compatible, patch=5,
+                         direction_tolerance=math.radians(60), variant=variant, machine=machine)
+    disparity, out_of_range, discontinuity = _oracle(left, right, la, ra, -2, 5, 5, compatible,
+                                                     tolerance=math.radians(60))
+    np.testing.assert_array_equal(got.disparity, disparity)
+    np.testing.assert_array_equal(got.out_of_range, out_of_range)
+    np.testing.assert_array_equal(got.discontinuity, discontinuity)
+    assert np.isfinite(disparity).sum() > 20
+
+
+def _pair(name, noise=0.01):
+    scene = scenes.render(scenes.preset(name, shape=(256, 256)), seed=0, noise=noise)
+    return scene, int(np.floor(np.nanmin(scene.disparity))), int(np.ceil(np.nanmax(scene.disparity)))
+
+
+@pytest.mark.parametrize("name", ["blocks", "corridor"])
+def test_edge_matches_on_scenes(name, machine):
+    scene, d_min, d_max = _pair(name)
+    found = match(scene.left, scene.right, d_min=d_min, d_max=d_max, machine=machine)
+    from vmcl.early.edges import canny
+
+    visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
+    edges = canny(scene.left, sigma=2.0, machine=machine) & visible
+    matched = np.isfinite(found.disparity) & visible
+    within = np.abs(found.disparity - scene.disparity)[matched] <= 1
+    assert within.mean() >= 0.90
+    assert matched.sum() / edges.sum() >= 0.70
+
+
+def test_variants_and_local_sizes_agree(machine, machine_with_local_size):
+    scene, d_min, d_max = _pair("blocks")
+    left, right = scene.left[:96, :128], scene.right[:96, :128]
+    reference = match(left, right, d_min=d_min, d_max=d_max, machine=machine)
+    for variant, m in (("table", machine), ("running", machine_with_local_size)):
+        other = match(left, right, d_min=d_min, d_max=d_max, variant=variant, machine=m)
+        np.testing.assert_array_equal(other.disparity, reference.disparity)
+        np.testing.assert_array_equal(other.discontinuity, reference.discontinuity)
+
+
+def test_out_of_range_flag_catches_edges_beyond_the_range(machine):
+    scene, d_min, d_max = _pair("corridor")
+    middle = (d_min + d_max) // 2
+    visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
+    for low, high in ((d_min, middle), (middle, d_max)):
+        found = match(scene.left, scene.right, d_min=low, d_max=high, machine=machine)
+        outside = found.features & visible & ((scene.disparity < low - 0.5) | (scene.disparity > high + 0.5))
+        inside = found.features & visible & (scene.disparity >= low) & (scene.disparity <= high)
+        assert outside.sum() > 100
+        assert found.out_of_range[outside].mean() >= 0.80
+        assert found.out_of_range[inside].mean() < 0.10
+
+
+def two_planes(size=256):
+    """A textured plate 3 m away in front of a textured wall at 8 m: disparities 12.8 and 4.8 px."""
+    def px(pixels, depth):
+        return pixels * depth / size
+    wall = Face((-3.0, -3.0, 8.0), (1, 0, 0), (0, 1, 0), None, (0.6, 0.55, 0.5), Texture("noise", px(4, 8), 0.4))
+    plate = Face((-0.6, -0.6, 3.0), (1, 0, 0), (0, 1, 0), (1.2, 1.2), (0.5, 0.6, 0.55), Texture("noise", px(4, 3), 0.4))
+    world = World(Camera((size, size), float(size), 0.15), Light(), (Body((wall,)), Body((plate,))))
+    return scenes.render(world, seed=1, noise=0.01)
+
+
+def test_bimodal_votes_flag_depth_discontinuities(machine):
+    scene = two_planes()
+    found = match(scene.left, scene.right, d_min=2, d_max=16, patch=15, machine=machine, **DENSE_EDGES)
+    depth_edges = scene.labels == scenes.Label.DEPTH
+    reachable = depth_edges & ndimage.binary_dilation(found.features, iterations=2)
+    flagged = ndimage.binary_dilation(found.discontinuity, iterations=2)
+    assert flagged[reachable].mean() >= 0.60
+    near_edges = ndimage.binary_dilation(depth_edges, iterations=7)
+    assert near_edges[found.discontinuity].mean() >= 0.80
+
+
+def test_barriers_keep_support_on_one_surface(machine):
+    scene = two_planes()
+    depth_edges = scene.labels == scenes.Label.DEPTH
+    near = ndimage.binary_dilation(depth_edges, iterations=6) & ~scene.occluded_stereo
+    accuracy, flags = [], []
+    for barriers in (None, ndimage.binary_dilation(depth_edges)):
+        found = match(scene.left, scene.right, d_min=2, d_max=16, barriers=barriers, machine=machine, **DENSE_EDGES)
+        matched = np.isfinite(found.disparity) & near
+        accuracy.append(np.mean(np.abs(found.disparity - scene.disparity)[matched] <= 1))
+        flags.append(found.discontinuity.sum())
+    assert accuracy[1] > accuracy[0] + 0.01 and accuracy[1] >= 0.97
+    assert flags[1] < flags[0]
+
+
+def test_barrier_windows_match_oracle(machine):
+    from vmcl.early.stereo import _Support
+
+    rng = np.random.default_rng(5)
+    planes = (rng.random((3, 17, 29)) < 0.5).astype(np.float32)
+    barrier = rng.random((17, 29)) < 0.1
+    support = _Support(machine, 2, machine.to_device(barrier.astype(np.uint8)), (17, 29))
+    got = support.sum(machine.to_device(planes)).get()
+    expected = np.zeros_like(planes)
+    for axis_rows in (True, False):
+        source = planes if axis_rows else expected.copy()
+        out = np.zeros_like(planes)
+        lines = barrier if axis_rows else barrier.T
+        data = source if axis_rows else np.swapaxes(source, 1, 2)
+        result = np.zeros_like(data)
+        for line in range(lines.shape[0]):
+            walls = lines[line]
+            run = np.cumsum(np.r_[True, walls[1:] | walls[:-1]])  # run id: a wall is a run of its own
+            for t in range(len(walls)):
+                same = np.flatnonzero(run == run[t])
+                lo, hi = max(t - 2, same[0]), min(t + 2, same[-1])
+                result[:, line, t] = data[:, line, lo:hi + 1].sum(axis=1)
+        out = result if axis_rows else np.swapaxes(result, 1, 2)
+        expected = out
+    np.testing.assert_allclose(got, expected)
+
+
+def test_intensity_variant_is_dense_and_accurate(machine):
+    scene, d_min, d_max = _pair("blocks")
+    found = match(scene.left, scene.right, d_min=d_min, d_max=d_max, features="intensity", machine=machine)
+    visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
+    matched = np.isfinite(found.disparity) & visible
+    assert matched.sum() / visible.sum() >= 0.85
+    assert np.mean(np.abs(found.disparity - scene.disparity)[matched] <= 1) >= 0.90
+
+
+def test_negative_evidence_is_measured_against_the_plain_score(machine):
+    scene, d_min, d_max = _pair("blocks")
+    visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
+    plain = match(scene.left, scene.right, d_min=d_min, d_max=d_max, machine=machine)
+    negative = match(scene.left, scene.right, d_min=d_min, d_max=d_max, negative_evidence=1.0, machine=machine)
+    assert not np.array_equal(plain.score, negative.score, equal_nan=True)
+    for found in (plain, negative):
+        matched = np.isfinite(found.disparity) & visible
+        assert np.mean(np.abs(found.disparity - scene.disparity)[matched] <= 1) >= 0.90
+
+
+@pytest.mark.parametrize("kwargs, error, pattern", [
+    ({"right": np.zeros((32, 30), np.float32)}, ValueError, "same shape"),
+    ({"d_min": 5, "d_max": 2}, ValueError, "must not exceed"),
+    ({"d_min": 0, "d_max": 40}, ValueError, "wider than the image"),
+    ({"right": np.zeros((32, 32, 3), np.float32)}, ValueError, "same shape"),
+    ({"patch": 4}, ValueError, "odd integer"),
+    ({"features": "sift"}, ValueError, "features must be one of"),
+    ({"variant": "fast"}, ValueError, "variant must be"),
+    ({"d_min": 1.5}, TypeError, "d_min must be an integer"),
+])
+def test_bad_input_is_named(kwargs, error, pattern, machine):
+    arguments = {"left": np.zeros((32, 32), np.float32), "right": np.zeros((32, 32), np.float32),
+                 "d_min": 0, "d_max": 8}
+    arguments.update(kwargs)
+    with pytest.raises(error, match=pattern):
+        match(arguments.pop("left"), arguments.pop("right"), machine=machine, **arguments)
+
+
+def test_grey_and_colour_mix_is_refused(machine):
+    with pytest.raises(ValueError, match="both be grey or both be colour|same shape"):
+        match(np.zeros((32, 32), np.float32), np.zeros((32, 32, 3), np.float32), d_min=0, d_max=4, machine=machine)
