@@ -14,7 +14,7 @@ from vmcl.scenes import Body, Camera, Face, Light, Texture, World
 DENSE_EDGES = {"low_threshold": 0.6, "high_threshold": 0.85, "use_quantiles": True}
 
 
-def _oracle(left, right, la, ra, d_min, d_max, patch, compatible, tolerance=math.radians(20), min_score=0.3,
+def _oracle(left, right, la, ra, d_min, d_max, patch, compatible, tolerance=0.35, min_score=0.3,
             bimodal=0.3, dip=0.8, min_votes=3.0):
     """The matcher written plainly: planes, window sums, the sequential selection, one suppression round."""
     _height, width = left.shape
