@@ -244,3 +244,21 @@ def test_bad_input_is_named(kwargs, error, pattern, machine):
 def test_grey_and_colour_mix_is_refused(machine):
     with pytest.raises(ValueError, match="both be grey or both be colour|same shape"):
         match(np.zeros((32, 32), np.float32), np.zeros((32, 32, 3), np.float32), d_min=0, d_max=4, machine=machine)
+
+
+@pytest.mark.parametrize("name", ["tsukuba", "venus", "teddy"])
+def test_edge_matches_beat_stereobm_on_middlebury(name, datasets_root, machine):
+    import cv2
+
+    from vmcl.datasets import load_stereo
+
+    pair = load_stereo(name, datasets_root)
+    d_max = int(np.ceil(pair.disparity_range[1])) + 2
+    found = match(pair.left, pair.right, d_min=0, d_max=d_max, machine=machine)
+    grey = [cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) for image in (pair.left, pair.right)]
+    block = cv2.StereoBM_create(numDisparities=-(-(d_max + 1) // 16) * 16, blockSize=15).compute(*grey) / 16.0
+    block[block < 0] = np.nan
+    at = np.isfinite(found.disparity) & pair.masks["nonocc"]
+    ours = np.mean(np.abs(found.disparity - pair.disparity)[at] > 1)
+    theirs = np.mean(~(np.abs(block - pair.disparity)[at] <= 1))
+    assert at.sum() > 1000 and ours <= theirs
