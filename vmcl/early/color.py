@@ -53,6 +53,7 @@ import pyopencl.array as cl_array
 
 from vmcl.cm._arrays import ArrayLike, field, machine_for, result
 from vmcl.early import noise as _noise
+from vmcl.early.filters import _kernel, _launch_flat, _launch_rows
 from vmcl.machine import Machine
 
 MIN_INTENSITY = 0.05
@@ -229,8 +230,8 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
     shape = (height, width)
     hue_field, valid, z = (machine.empty(shape, np.float32), machine.empty(shape, np.uint8),
                            machine.empty(shape, np.float32))
-    machine.launch(machine.kernel("color", "hue_gradient", IN_T=_IN_TYPES[data.dtype]), (width, height),
-                   data, hue_field, valid, z, np.float32(least), np.int64(width), np.int64(height))
+    _launch_rows(machine, _kernel(machine, "color", "hue_gradient", IN_T=_IN_TYPES[data.dtype]), width, height,
+                 data, hue_field, valid, z, np.float32(least), np.int64(width), np.int64(height))
     if threshold is None:
         pairs, _ = _noise.threshold_field(machine, z, _noise.noise_rule(), local=False)
         floor = _noise.NOISE_HIGH * NOISE_FLOOR * _FULL_SCALE[data.dtype]
@@ -238,6 +239,6 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
         pairs, floor = z, float(threshold)
     edges = machine.empty(shape, np.uint8)
     n = height * width
-    machine.launch(machine.kernel("color", "hue_edges", FIXED=int(threshold is not None)), (n,), z, pairs,
-                   edges, np.float32(floor), np.int64(n))
+    _launch_flat(machine, _kernel(machine, "color", "hue_edges", FIXED=int(threshold is not None)), n, z, pairs,
+                 edges, np.float32(floor), np.int64(n))
     return AlbedoEdges(_mask_out(edges, host), result(hue_field, host), _mask_out(valid, host))
