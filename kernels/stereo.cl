@@ -103,6 +103,23 @@ inline float cell_score(float votes, float nl, float nr, float area, float negat
 /* Per-pixel statistics of the right image at x - d: eligible edges, or the intensity sums. */
 #define RIGHT_AT(arr, xr) ((xr) >= 0 && (xr) < W ? (arr)[y * W + (xr)] : 0.0f)
 
+/* Scores cell (x, y, d) from its summed votes and folds it into the pixel's selection; `own` is the
+ * cell's own plane value p(x, y, d). */
+inline void fold_cell(Selection *s, long x, long y, long W, int d, float votes, float own,
+                      __global const float *nl, __global const float *nr, __global const float *sl,
+                      __global const float *sll, __global const float *sr, __global const float *srr,
+                      float area, float negative, float dip)
+{
+    long i = y * W + x, xr = x - d;
+    float score = cell_score(votes, nl[i], RIGHT_AT(nr, xr), area, negative, sl[i], sll[i], RIGHT_AT(sr, xr),
+                             RIGHT_AT(srr, xr));
+#if FEATURES == FEATURES_INTENSITY
+    consider(s, d, score, score, xr >= 0, dip);
+#else
+    consider(s, d, votes, score, own > 0.0f, dip);
+#endif
+}
+
 inline void finish(Selection s, long i, __global float *best_score, __global int *best_d, __global float *peaks)
 {
     best_score[i] = s.best_score;
@@ -126,17 +143,9 @@ __kernel void select_table(__global const float *votes, __global const float *pl
     Selection s = fresh();
     if (left[i]) {
         for (long k = 0; k < D; k++) {
-            int d = d_min + (int)k;
-            long xr = x - d;
             size_t cell = (k * H + y) * W + x;
-            float v = votes[cell];
-            float score = cell_score(v, nl[i], RIGHT_AT(nr, xr), area, negative, sl[i], sll[i],
-                                     RIGHT_AT(sr, xr), RIGHT_AT(srr, xr));
-#if FEATURES == FEATURES_INTENSITY
-            consider(&s, d, score, score, xr >= 0, dip);
-#else
-            consider(&s, d, v, score, planes[cell] > 0.0f, dip);
-#endif
+            fold_cell(&s, x, y, W, d_min + (int)k, votes[cell], planes[cell], nl, nr, sl, sll, sr, srr, area,
+                      negative, dip);
         }
     }
     finish(s, i, best_score, best_d, peaks);
@@ -161,17 +170,7 @@ __kernel void select_running(__global const float *votes, __global const float *
         s.valley = peaks[3 * i + 1];
         s.second = peaks[3 * i + 2];
     }
-    if (left[i]) {
-        long xr = x - d;
-        float v = votes[i];
-        float score = cell_score(v, nl[i], RIGHT_AT(nr, xr), area, negative, sl[i], sll[i],
-                                 RIGHT_AT(sr, xr), RIGHT_AT(srr, xr));
-#if FEATURES == FEATURES_INTENSITY
-        consider(&s, d, score, score, xr >= 0, dip);
-#else
-        consider(&s, d, v, score, plane[i] > 0.0f, dip);
-#endif
-    }
+    if (left[i]) fold_cell(&s, x, y, W, d, votes[i], plane[i], nl, nr, sl, sll, sr, srr, area, negative, dip);
     finish(s, i, best_score, best_d, peaks);
 }
 
