@@ -143,12 +143,21 @@ def test_photo_mosaic_edges_are_found(machine):
     assert metrics.detection_scores(got.edges, _boundaries(regions), tolerance=3).recall >= 0.80
 
 
-@pytest.mark.xfail(strict=True, reason="measured 3.9 (brick/grass), 4.2 (brick/gravel), 2.0 (grass/gravel): "
-                   "grass and gravel blobs vary too much in size and contrast for one threshold")
+# The photographs' densities drift across each photo (light, focus), so PARAMS leaves them 2 to 4
+# within-region deviations apart. What separates them (measured 2026-11-22 with this module): a coarse
+# scale twice the fine one ("slightly coarser", as the seed paper puts it), a threshold of 10 grey levels
+# and a radius of 48, which averages the drift out. Separations (brick/grass, brick/gravel,
+# grass/gravel): 12.9, 10.0, 7.0 here; 3.9, 4.2, 2.0 with PARAMS and threshold 20. Around this setting
+# the smallest of the three is 6.0 (threshold 8), 5.5 (12), 6.0 (coarse_sigma 3), 4.9 (coarse_sigma 4),
+# 6.2 (radius 40) and 5.0 (radius 32). The edge candidates of this setting recall 99.9% of the boundaries.
+PHOTO_PARAMS = {"fine_sigma": 1.0, "coarse_sigma": 2.0, "threshold": 10.0, "radius": 48}
+
+
 def test_photo_mosaic_densities_separate(machine):
     mosaic, regions = _photo_mosaic()
-    d = texture.density(mosaic, threshold=MOSAIC_THRESHOLD, machine=machine, **PARAMS)
-    assert min(_separations(d, regions, [(0, 1), (0, 2), (1, 2)], PARAMS["radius"])) > 5
+    d = texture.density(mosaic, machine=machine, **PHOTO_PARAMS)
+    separations = _separations(d, regions, [(0, 1), (0, 2), (1, 2)], PHOTO_PARAMS["radius"])
+    assert min(separations) > 5
 
 
 def test_plain_contrast_step_is_no_texture(machine):
