@@ -1,0 +1,333 @@
+"""Motion: votes and winners against NumPy oracles, translations, scenes with ground truth, the arcsine
+law, and real sequences where ../shared/datasets is present."""
+
+import cv2
+import numpy as np
+import pyopencl.array as cl_array
+import pytest
+from oracles import box_sum as box_oracle
+from scipy import ndimage
+
+from vmcl import scenes
+from vmcl.datasets import FLOW_SCENES, load_flow
+from vmcl.early import edges, filters, motion
+from vmcl.metrics import endpoint_error, evaluate_flow
+
+
+def texture(shape, shift=(0.0, 0.0), seed=0, waves=40):
+    """A smooth random texture, sums of sinusoids (wavelengths 5-16 px), sampled at (x - u, y - v): the
+    frame that follows ``texture(shape)`` under the flow (u, v), exactly, for any sub-pixel shift."""
+    rng = np.random.default_rng(seed)
+    angle = rng.uniform(0, np.pi, waves)
+    k = 2 * np.pi / rng.uniform(5, 16, waves)
+    phase = rng.uniform(0, 2 * np.pi, waves)
+    y, x = np.mgrid[: shape[0], : shape[1]].astype(np.float64)
+    x, y = x - shift[0], y - shift[1]
+    arg = k[:, None, None] * (np.cos(angle)[:, None, None] * x + np.sin(angle)[:, None, None] * y) + phase[:, None, None]
+    image = np.cos(arg).sum(axis=0)
+    return (128 + 20 * image).astype(np.float32)
+
+
+def oracle_features(frame, features):
+    sigma = motion.DEFAULT_SIGMA[features]
+    if features == "brightness":
+        return filters.gaussian(frame, sigma=sigma, method="exact")
+    if features == "edges":
+        low, high = motion.EDGE_QUANTILES
+        return edges.canny(frame, sigma=sigma, low_threshold=low, high_threshold=high, use_quantiles=True)
+    return filters.laplacian_of_gaussian(frame, sigma=sigma)
+
+
+def oracle_votes(f0, f1, delta, radius, features):
+    """Every displacement's comparison (frame 1 clamped at the border), summed over the patch."""
+    height, width = f0.shape
+    ys, xs = np.mgrid[:height, :width]
+    planes = []
+    for vy in range(-delta, delta + 1):
+        for vx in range(-delta, delta + 1):
+            g = f1[np.clip(ys + vy, 0, height - 1), np.clip(xs + vx, 0, width - 1)]
+            if features in ("brightness", "log"):
+                cost = (f0.astype(np.float64) - g) ** 2
+            elif features == "sign_log":
+                cost = ((f0 >= 0) != (g >= 0)).astype(np.int64)
+            else:
+                cost = ((f0 != 0) != (g != 0)).astype(np.int64)
+            planes.append(box_oracle(cost, radius))
+    return np.stack(planes)
+
+
+def oracle_winner(table, delta):
+    """The smallest vote; ties to the smaller |v|^2, then to the first displacement in raster order."""
+    n = 2 * delta + 1
+    d = np.arange(n * n)
+    order = np.lexsort((d, (d % n - delta) ** 2 + (d // n - delta) ** 2))
+    return order[np.argmin(table[order], axis=0)]
+
+
+def winner_index(flow, delta):
+    """Displacement index of an integer flow (0 where there is none)."""
+    n = 2 * delta + 1
+    flow = np.nan_to_num(flow)
+    return (np.rint(flow[..., 1]).astype(int) + delta) * n + np.rint(flow[..., 0]).astype(int) + delta
+
+
+def interior(shape, border):
+    mask = np.zeros(shape, bool)
+    mask[border:-border, border:-border] = True
+    return mask
+
+
+@pytest.fixture(scope="module")
+def pair():
+    return texture((40, 52)), texture((40, 52), shift=(1.6, -0.7))
+
+
+@pytest.mark.parametrize("features", motion.FEATURES)
+def test_votes_match_oracle(pair, features):
+    frame0, frame1 = pair
+    table = motion.votes(frame0, frame1, delta=2, patch=5, features=features)
+    expected = oracle_votes(oracle_features(frame0, features), oracle_features(frame1, features), 2, 2, features)
+    assert table.shape == (25, 40, 52)
+    if table.dtype == np.int32:
+        np.testing.assert_array_equal(table, expected)
+    else:
+        np.testing.assert_allclose(table, expected, rtol=1e-4, atol=1e-2)
+
+
+@pytest.mark.parametrize("features", ["brightness", "sign_log", "edges"])
+def test_winner_and_subpixel_match_oracle(pair, features):
+    frame0, frame1 = pair
+    table = motion.votes(frame0, frame1, delta=2, patch=5, features=features)
+    result = motion.flow(frame0, frame1, delta=2, patch=5, features=features, speed_penalty=0.0)
+    integer = motion.flow(frame0, frame1, delta=2, patch=5, features=features, speed_penalty=0.0, subpixel=False)
+    known = np.isfinite(result.flow[..., 0])
+    assert known.sum() > (50 if features == "edges" else 0.9 * known.size)
+    winner = oracle_winner(table, 2)
+    np.testing.assert_array_equal(winner_index(integer.flow, 2)[known], winner[known])
+    # The parabola through the winner and its neighbours along x (u) and y (v).
+    table = table.astype(np.float64)
+    planes = np.arange(table.shape[1] * table.shape[2])
+    best = table.reshape(25, -1)[winner.ravel(), planes]
+    for axis, step in ((0, 1), (1, 5)):
+        column = (winner % 5) if axis == 0 else (winner // 5)
+        lo = np.where(column > 0, table.reshape(25, -1)[np.clip(winner.ravel() - step, 0, 24), planes].reshape(winner.shape), np.inf)
+        hi = np.where(column < 4, table.reshape(25, -1)[np.clip(winner.ravel() + step, 0, 24), planes].reshape(winner.shape), np.inf)
+        best2 = best.reshape(winner.shape)
+        curvature = lo - 2 * best2 + hi
+        with np.errstate(invalid="ignore", divide="ignore"):
+            offset = np.where(np.isfinite(curvature) & (curvature > 0),
+                              np.clip(0.5 * (lo - hi) / curvature, -0.5, 0.5), 0.0)
+        np.testing.assert_allclose(result.flow[..., axis][known] - integer.flow[..., axis][known], offset[known],
+                                   atol=2e-3)
+
+
+def test_penalised_winner_is_the_penalised_minimum(pair):
+    frame0, frame1 = pair
+    penalty = 0.02
+    table = motion.votes(frame0, frame1, delta=3, patch=7).astype(np.float64)
+    f0 = oracle_features(frame0, "brightness").astype(np.float64)
+    count = box_oracle(np.ones_like(f0), 3)
+    contrast = box_oracle(f0 * f0, 3) - box_oracle(f0, 3) ** 2 / count
+    d = np.arange(49)
+    norm = ((d % 7 - 3) ** 2 + (d // 7 - 3) ** 2)[:, None, None]
+    key = table + penalty * contrast * norm
+    result = motion.flow(frame0, frame1, delta=3, patch=7, speed_penalty=penalty, subpixel=False)
+    chosen = np.take_along_axis(key, winner_index(result.flow, 3)[None], axis=0)[0]
+    assert np.all(chosen <= key.min(axis=0) + 1e-4 * contrast)
+    assert np.any(winner_index(result.flow, 3) != oracle_winner(table, 3))  # the prior does act
+
+
+def test_scores_match_their_definitions(pair):
+    frame0, frame1 = pair
+    signs = motion.flow(frame0, frame1, delta=2, patch=5, features="sign_log", subpixel=False)
+    table = motion.votes(frame0, frame1, delta=2, patch=5, features="sign_log")
+    vote = np.take_along_axis(table, winner_index(signs.flow, 2)[None], axis=0)[0]
+    count = box_oracle(np.ones(frame0.shape), 2)
+    np.testing.assert_allclose(signs.score, 1 - 2 * vote / count, atol=1e-6)
+
+    bright = motion.flow(frame0, frame1, delta=2, patch=5, subpixel=False, speed_penalty=0.0)
+    f0, f1 = (oracle_features(f, "brightness").astype(np.float64) for f in (frame0, frame1))
+    contrast0 = box_oracle(f0 * f0, 2) - box_oracle(f0, 2) ** 2 / count
+    contrast1 = box_oracle(f1 * f1, 2) - box_oracle(f1, 2) ** 2 / count
+    u, v = (np.rint(bright.flow[..., k]).astype(int) for k in (0, 1))
+    ys, xs = np.mgrid[: f0.shape[0], : f0.shape[1]]
+    ys1, xs1 = np.clip(ys + v, 0, f0.shape[0] - 1), np.clip(xs + u, 0, f0.shape[1] - 1)
+    vote = np.take_along_axis(motion.votes(frame0, frame1, delta=2, patch=5), winner_index(bright.flow, 2)[None], 0)[0]
+    expected = 1 - vote / (contrast0 + contrast1[ys1, xs1])
+    np.testing.assert_allclose(bright.score, expected, atol=2e-3)
+    assert np.nanmin(bright.score) < 0.99 < np.nanmax(bright.score) <= 1.0
+
+
+@pytest.mark.parametrize("method", motion.METHODS)
+def test_same_bits_at_any_local_size(pair, machine, machine_with_local_size, method):
+    frame0, frame1 = pair
+    kwargs = {"delta": 3, "patch": 5, "method": method, "levels": 2}
+    reference = motion.flow(frame0, frame1, machine=machine, **kwargs)
+    for result in (motion.flow(frame0, frame1, machine=machine_with_local_size, **kwargs),
+                   motion.flow(frame0, frame1, machine=machine, **kwargs)):
+        for got, want in zip((result.flow, result.score, result.boundaries),
+                             (reference.flow, reference.score, reference.boundaries)):
+            np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize("features", motion.FEATURES)
+def test_running_maximum_equals_full_table(features):
+    frame0 = np.asarray(scenes.render(scenes.preset("textures", shape=(64, 64)), seed=2).left)
+    frame1 = np.roll(frame0, (1, -2), axis=(0, 1))
+    running = motion.flow(frame0, frame1, delta=3, patch=7, features=features, method="running")
+    table = motion.flow(frame0, frame1, delta=3, patch=7, features=features, method="table")
+    np.testing.assert_array_equal(running.flow, table.flow)
+    np.testing.assert_array_equal(running.score, table.score)
+
+
+@pytest.mark.parametrize("shift", [(3, -2), (-4, 1), (0, 4)])
+def test_integer_translation(shift):
+    frame0, frame1 = texture((64, 80)), texture((64, 80), shift=shift)
+    result = motion.flow(frame0, frame1, delta=4, patch=7)
+    truth = np.broadcast_to(np.array(shift, np.float32), frame0.shape + (2,))
+    error = endpoint_error(result.flow, truth)[interior(frame0.shape, 8)]
+    assert np.isfinite(error).all()
+    assert error.mean() < 0.1
+
+
+@pytest.mark.parametrize("shift", [(1.3, -0.6), (-2.5, 0.25), (0.4, 3.3)])
+def test_subpixel_translation(shift):
+    frame0, frame1 = texture((64, 80), seed=1), texture((64, 80), shift=shift, seed=1)
+    result = motion.flow(frame0, frame1, delta=4, patch=9)
+    truth = np.broadcast_to(np.array(shift, np.float32), frame0.shape + (2,))
+    error = endpoint_error(result.flow, truth)[interior(frame0.shape, 9)]
+    assert error.mean() < 0.25
+
+
+def test_pyramid_finds_motion_beyond_delta():
+    shift = (9.4, -6.7)
+    frame0, frame1 = texture((112, 160), seed=3), texture((112, 160), shift=shift, seed=3)
+    truth = np.broadcast_to(np.array(shift, np.float32), frame0.shape + (2,))
+    # The coarsest level's patch spans 36 pixels, and beyond 10 of the border the match leaves the frame.
+    inside = interior(frame0.shape, 32)
+    flat = endpoint_error(motion.flow(frame0, frame1, delta=3, patch=9).flow, truth)[inside]
+    pyramid = endpoint_error(motion.flow(frame0, frame1, delta=3, patch=9, levels=3).flow, truth)[inside]
+    assert flat.mean() > 3
+    assert pyramid.mean() < 0.25
+
+
+@pytest.fixture(scope="module")
+def blocks():
+    return scenes.render(scenes.preset("blocks", shape=(128, 192)), seed=1)
+
+
+def test_scene_flow_and_motion_boundaries(blocks):
+    scene = blocks
+    result = motion.flow(scene.left, scene.left_next, delta=4, patch=11)
+    truth = scene.flow
+    evaluated = ~scene.occluded_motion & np.isfinite(truth).all(axis=-1) & interior(truth.shape[:2], 6)
+    scores = evaluate_flow(result.flow, truth, mask=evaluated)
+    assert scores.density > 0.99
+    assert scores.epe < 0.5
+    # True motion boundaries: 4-neighbours whose flows differ by more than a pixel (or one has none).
+    filled = np.nan_to_num(truth, nan=1e3)
+    jump_x = np.hypot(*(filled[:, 1:] - filled[:, :-1]).transpose(2, 0, 1)) > 1
+    jump_y = np.hypot(*(filled[1:] - filled[:-1]).transpose(2, 0, 1)) > 1
+    boundary = np.zeros(truth.shape[:2], bool)
+    boundary[:, 1:] |= jump_x
+    boundary[:, :-1] |= jump_x
+    boundary[1:] |= jump_y
+    boundary[:-1] |= jump_y
+    boundary &= interior(boundary.shape, 6)
+    near_mask = ndimage.binary_dilation(result.boundaries, np.ones((5, 5), bool))
+    recall = (near_mask & boundary).sum() / boundary.sum()
+    assert recall >= 0.6
+    assert result.boundaries.mean() < 0.25  # evidence, not everything
+
+
+def test_feature_variants_agree():
+    scene = scenes.render(scenes.preset("textures", shape=(128, 128)), seed=3)
+    bright = motion.flow(scene.left, scene.left_next, delta=3, patch=11)
+    signs = motion.flow(scene.left, scene.left_next, delta=3, patch=11, features="sign_log")
+    inside = interior((128, 128), 8)
+    both = inside & np.isfinite(bright.flow[..., 0]) & np.isfinite(signs.flow[..., 0])
+    assert both.sum() > 0.8 * inside.sum()
+    close = endpoint_error(bright.flow, signs.flow)[both] <= 0.5
+    assert close.mean() >= 0.9
+
+
+@pytest.mark.parametrize("correlation", [-0.9, -0.5, 0.0, 0.3, 0.7, 0.95])
+def test_sign_correlation_follows_arcsine_law(correlation):
+    rng = np.random.default_rng(7)
+    f, h = (ndimage.gaussian_filter(rng.standard_normal((512, 512)), 1.0) for _ in range(2))
+    f, h = f / f.std(), h / h.std()
+    g = correlation * f + np.sqrt(1 - correlation**2) * h
+    measured = motion.sign_correlation(f.astype(np.float32), g.astype(np.float32))
+    assert abs(measured - motion.arcsine_law(correlation)) < 0.02
+
+
+def test_sign_correlation_of_known_signs(machine):
+    f = np.array([1.0, -2.0, 0.0, 3.0], np.float32)
+    g = np.array([2.0, 1.0, 0.5, -1.0], np.float32)
+    assert motion.sign_correlation(f, g) == 0.0  # agree, disagree, agree (0 counts as +), disagree
+    assert motion.sign_correlation(machine.to_device(f), machine.to_device(f)) == 1.0
+
+
+def test_dtypes_and_device_arrays(pair, machine):
+    frame0, frame1 = (np.clip(f, 0, 255).astype(np.uint8) for f in pair)
+    reference = motion.flow(frame0, frame1, delta=2, patch=5)
+    as_float = motion.flow(frame0.astype(np.float64), frame1.astype(np.float32), delta=2, patch=5)
+    rgb = motion.flow(np.repeat(frame0[..., None], 3, -1), np.repeat(frame1[..., None], 3, -1), delta=2, patch=5)
+    on_device = motion.flow(machine.to_device(frame0), machine.to_device(frame1), delta=2, patch=5)
+    assert isinstance(on_device.flow, cl_array.Array) and on_device.boundaries.dtype == np.uint8
+    np.testing.assert_array_equal(as_float.flow, reference.flow)
+    np.testing.assert_array_equal(on_device.flow.get(), reference.flow)
+    np.testing.assert_allclose(rgb.flow, reference.flow, atol=0.02)
+    assert reference.flow.shape == frame0.shape + (2,) and reference.boundaries.dtype == np.bool_
+
+
+def test_bad_input(pair, machine):
+    frame0, frame1 = pair
+    with pytest.raises(ValueError, match="same shape"):
+        motion.flow(frame0, frame1[:, :-1], delta=2, patch=5)
+    with pytest.raises(ValueError, match="delta"):
+        motion.flow(frame0, frame1, delta=0, patch=5)
+    with pytest.raises(ValueError, match="delta"):
+        motion.flow(frame0, frame1, delta=40, patch=5)
+    with pytest.raises(ValueError, match="patch"):
+        motion.flow(frame0, frame1, delta=2, patch=0)
+    with pytest.raises(ValueError, match="patch"):
+        motion.flow(frame0, frame1, delta=2, patch=4)
+    with pytest.raises(ValueError, match="patch"):
+        motion.flow(frame0, frame1, delta=2, patch=41)
+    with pytest.raises(ValueError, match="levels"):
+        motion.flow(frame0, frame1, delta=2, patch=5, levels=5)
+    with pytest.raises(TypeError, match="delta"):
+        motion.flow(frame0, frame1, delta=2.0, patch=5)
+    bad = frame0.copy()
+    bad[3, 3] = np.nan
+    with pytest.raises(ValueError, match="frame1"):
+        motion.flow(frame0, bad, delta=2, patch=5)
+    with pytest.raises(TypeError, match="frame0"):
+        motion.flow(frame0.tolist(), frame1, delta=2, patch=5)
+    with pytest.raises(TypeError, match="both"):
+        motion.flow(frame0, machine.to_device(frame1), delta=2, patch=5)
+    with pytest.raises(ValueError, match="features"):
+        motion.flow(frame0, frame1, delta=2, patch=5, features="colour")
+    with pytest.raises(ValueError, match="method"):
+        motion.flow(frame0, frame1, delta=2, patch=5, method="fast")
+    with pytest.raises(ValueError, match="speed_penalty"):
+        motion.flow(frame0, frame1, delta=2, patch=5, speed_penalty=-1.0)
+    with pytest.raises(ValueError, match="frame0"):
+        motion.flow(frame0[..., None].repeat(2, -1), frame1[..., None].repeat(2, -1), delta=2, patch=5)
+    with pytest.raises(ValueError, match="same shape"):
+        motion.sign_correlation(frame0, frame1[:, :-1])
+
+
+BEST = {"delta": 6, "patch": 15, "levels": 2}
+"""vmcl's best configuration on the real sequences (benchmarks/results/motion.md)."""
+
+
+def test_real_sequences_beat_farneback(datasets_root):
+    ours, farneback = [], []
+    for name in FLOW_SCENES:
+        pair = load_flow(name, datasets_root)
+        ours.append(evaluate_flow(motion.flow(pair.frame0, pair.frame1, **BEST).flow, pair.flow, mask=pair.mask).epe)
+        theirs = cv2.calcOpticalFlowFarneback(pair.frame0, pair.frame1, None, 0.5, 3, 15, 3, 5, 1.2, 0)
+        farneback.append(evaluate_flow(theirs, pair.flow, mask=pair.mask).epe)
+    assert np.mean(ours) < np.mean(farneback)

@@ -1,0 +1,479 @@
+"""Motion: optical flow by patchwise comparison of two frames over a range of displacements.
+
+Seed section "Motion" (Bulthoff, Little and Poggio). The flow is assumed locally constant, and small,
+within (+-delta, +-delta). For every displacement v = (vx, vy) of the range, every processor compares
+frame 0 at (x, y) with frame 1 at (x + vx, y + vy) (a squared difference of brightness or of the
+Laplacian of a Gaussian, or the "exclusive or" of binary maps: the sign of the LoG, or edges); the
+comparisons are summed over the patch around each pixel with scans (:func:`vmcl.cm.scan.box_sum`), a
+vote for a patch of surface moving with v; and the winner per pixel is chosen by "non-maximum
+suppression across velocities", done as a running extremum during the iteration over displacements so
+that "no actual table of summed differences over displacements need be constructed" (the faithful
+table variant is kept for comparison). A low normalised score at the chosen displacement marks
+occlusions and motion boundaries. Beyond the paper: a sub-pixel parabola fit and a coarse-to-fine
+pyramid for motions larger than delta.
+
+The paper's theorem on why edge- and intensity-based variants agree, the correlation of the signs of two
+zero-mean jointly normal fields being (2 / pi) arcsin of their correlation, is :func:`arcsine_law`, and
+:func:`sign_correlation` measures the left side on the machine.
+
+References
+----------
+H. H. Bulthoff, J. J. Little and T. Poggio, "A parallel algorithm for real-time computation of optical
+flow", Nature 337:549-553, 1989.
+J. J. Little, H. H. Bulthoff and T. Poggio, "Parallel optical flow using local voting", Proc. ICCV,
+1988.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import pyopencl.array as cl_array
+
+from vmcl.cm import reduce as _reduce
+from vmcl.cm import scan
+from vmcl.cm._arrays import ArrayLike, field, machine_for
+from vmcl.early import edges as _edges
+from vmcl.early import filters as _filters
+from vmcl.machine import Machine
+
+Features = Literal["brightness", "log", "sign_log", "edges"]
+Method = Literal["running", "table"]
+
+FEATURES = ("brightness", "log", "sign_log", "edges")
+METHODS = ("running", "table")
+
+DEFAULT_SIGMA = {"brightness": 1.0, "log": 2.0, "sign_log": 2.0, "edges": 1.5}
+"""Gaussian width (pixels) of each feature map when ``sigma`` is None."""
+
+EDGE_QUANTILES = (0.7, 0.9)
+"""Canny's hysteresis thresholds for the "edges" features, as quantiles of the gradient magnitude: a
+fixed share of the image is edge whatever its contrast (the noise rule finds none in clean renderings)."""
+
+SPEED_PENALTY = 1e-3
+"""Default slow-motion prior of the squared-difference features (see :func:`flow`)."""
+
+PYRAMID_SIGMA = 1.0
+"""Gaussian smoothing before each halving of the pyramid."""
+
+BOUNDARY_SCORE = {"brightness": 0.9, "log": 0.9, "sign_log": float(2 / np.pi * np.arcsin(0.9)), "edges": 0.5}
+"""Default ``boundary_score`` per feature: the sign correlation's is the arcsine law's image of 0.9."""
+
+_COMPARE = {"brightness": 0, "log": 0, "sign_log": 1, "edges": 2}
+_IMAGE_DTYPES = (np.uint8, np.uint16, np.float32)
+
+
+@dataclass(frozen=True)
+class FlowResult:
+    """What :func:`flow` returns (NumPy arrays, or device arrays for device input).
+
+    Attributes
+    ----------
+    flow : float32 (H, W, 2)
+        (u, v) with ``frame0(x, y) = frame1(x + u, y + v)``; NaN where there is no estimate.
+    score : float32 (H, W)
+        The normalised score of the chosen displacement, 1 for a perfect match (see :func:`flow`);
+        NaN where there is no estimate.
+    boundaries : bool (H, W); uint8 0/1 on the device
+        Pixels with an estimate whose score is below ``boundary_score``: the paper's evidence of
+        occlusions and motion discontinuities.
+    """
+
+    flow: ArrayLike
+    score: ArrayLike
+    boundaries: ArrayLike
+
+
+def _frames(frame0, frame1, machine: Machine) -> tuple[cl_array.Array, cl_array.Array, bool]:
+    devices = []
+    for name, frame in (("frame0", frame0), ("frame1", frame1)):
+        if isinstance(frame, np.ndarray) and frame.dtype.kind == "f":
+            if not np.isfinite(frame).all():
+                raise ValueError(f"{name} must not contain NaN or infinite values")
+            frame = frame.astype(np.float32)
+            if not np.isfinite(frame).all():
+                raise ValueError(f"{name} has values beyond float32's range")
+        data, host = field(frame, name, machine, ndims=(2, 3), dtypes=_IMAGE_DTYPES)
+        if data.ndim == 3 and data.shape[2] != 3:
+            raise ValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {data.shape}")
+        devices.append((data, host))
+    (d0, host0), (d1, host1) = devices
+    if host0 != host1:
+        raise TypeError("frame0 and frame1 must both be NumPy arrays or both device arrays")
+    if d0.shape != d1.shape:
+        raise ValueError(f"frame0 and frame1 must have the same shape, got {d0.shape} and {d1.shape}")
+    return d0, d1, host0
+
+
+def _positive_int(value, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be an integer, got {type(value).__name__}")
+    if value < 1:
+        raise ValueError(f"{name} must be >= 1, got {value}")
+    return int(value)
+
+
+def _number(value, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be finite, got {value}")
+    return float(value)
+
+
+def _check(shape: tuple[int, ...], delta, patch, features, sigma, levels: int = 1) -> tuple[int, int, float]:
+    """(delta, patch radius, sigma) after checking them against the coarsest level's size."""
+    delta = _positive_int(delta, "delta")
+    patch = _positive_int(patch, "patch")
+    if patch % 2 == 0:
+        raise ValueError(f"patch must be odd (a window centred on the pixel), got {patch}")
+    if features not in FEATURES:
+        raise ValueError(f"features must be one of {FEATURES}, got {features!r}")
+    sigma = _number(DEFAULT_SIGMA[features] if sigma is None else sigma, "sigma")
+    if sigma <= 0:
+        raise ValueError(f"sigma must be > 0, got {sigma}")
+    side = min(shape[:2])
+    if patch > side:
+        raise ValueError(f"patch ({patch}) is larger than the image ({shape[0]} x {shape[1]})")
+    if delta >= side:
+        raise ValueError(f"delta ({delta}) must be smaller than the image ({shape[0]} x {shape[1]})")
+    coarsest = min(-(-n // 2 ** (levels - 1)) for n in shape[:2])
+    if patch > coarsest or delta >= coarsest:
+        raise ValueError(f"levels={levels} halves the image to a side of {coarsest} pixels, smaller than "
+                         f"patch ({patch}) or delta + 1 ({delta + 1}); use fewer levels")
+    return delta, patch // 2, sigma
+
+
+def _features(machine: Machine, image: cl_array.Array, features: str, sigma: float) -> cl_array.Array:
+    """The feature map on the device: float32 brightness or LoG (also for its sign), uint8 edges."""
+    if features == "brightness":
+        return _filters.gaussian(image, sigma=sigma, method="exact", machine=machine)
+    if features == "edges":
+        low, high = EDGE_QUANTILES
+        return _edges.canny(image, sigma=sigma, low_threshold=low, high_threshold=high, use_quantiles=True,
+                            machine=machine)
+    return _filters.laplacian_of_gaussian(image, sigma=sigma, machine=machine)
+
+
+def _defines(feature_map: cl_array.Array, features: str) -> dict:
+    compare = _COMPARE[features]
+    return {"F_T": "uchar" if feature_map.dtype == np.uint8 else "float",
+            "V_T": "float" if compare == 0 else "int", "COMPARE": compare}
+
+
+def _vote_dtype(defines: dict) -> type:
+    return np.float32 if defines["V_T"] == "float" else np.int32
+
+
+def _groups(machine: Machine, width: int) -> list[tuple[int, int, int]]:
+    """(VEC, first column, work-items) per launch: on CPUs 16 pixels per work-item (SIMD lanes see
+    contiguous loads) and the remainder one by one, as the column scans do; on GPUs one pixel each."""
+    return scan.column_groups(width) if machine.is_cpu else [(1, 0, width)]
+
+
+def _costs(machine: Machine, f0, f1, delta: int, first: int, planes: int, defines: dict) -> cl_array.Array:
+    """The comparison planes of displacements first .. first + planes - 1."""
+    height, width = f0.shape
+    out = machine.empty((planes, height, width), _vote_dtype(defines))
+    for vec, col0, count in _groups(machine, width):
+        machine.launch(machine.kernel("motion", "cost", VEC=vec, **defines), (count, height), f0, f1, out,
+                       np.int64(width), np.int64(height), np.int64(col0), np.int64(count), np.int32(delta),
+                       np.int32(first), np.int32(planes))
+    return out
+
+
+def _table(machine: Machine, f0, f1, delta: int, radius: int, defines: dict) -> cl_array.Array:
+    n = 2 * delta + 1
+    return scan.box_sum(_costs(machine, f0, f1, delta, 0, n * n, defines), radius, machine=machine)
+
+
+def _moments(machine: Machine, f0, f1, radius: int, defines: dict) -> cl_array.Array:
+    """Box sums that normalise the votes: of f and f**2 in both frames (squared differences), of the
+    edge maps (XOR); the sign comparison needs none and gets a placeholder."""
+    if defines["COMPARE"] == _COMPARE["sign_log"]:
+        return f0
+    height, width = f0.shape
+    planes = 4 if defines["COMPARE"] == _COMPARE["brightness"] else 2
+    raw = machine.empty((planes, height, width), np.float32)
+    machine.launch(machine.kernel("motion", "moments", **defines), (width, height), f0, f1, raw,
+                   np.int64(width), np.int64(height))
+    return scan.box_sum(raw, radius, machine=machine)
+
+
+def _winner(machine: Machine, f0, f1, moments, delta: int, radius: int, penalty: float, method: str,
+            defines: dict):
+    """Per pixel: the winning vote, its displacement index and the votes of its four neighbours."""
+    height, width = f0.shape
+    n = 2 * delta + 1
+    best = machine.empty((height, width), _vote_dtype(defines))
+    index = machine.empty((2, height, width), np.int32)
+    neigh = machine.empty((4, height, width), np.float32)
+    state = (best, index, neigh, np.int64(width), np.int64(height))
+    params = (np.int32(delta), np.int32(radius), np.float32(penalty))
+    groups = _groups(machine, width)
+    if method == "table":
+        table = _table(machine, f0, f1, delta, radius, defines)
+        for vec, col0, count in groups:
+            machine.launch(machine.kernel("motion", "winner_table", VEC=vec, **defines), (count, height), table,
+                           moments, *state, np.int64(col0), np.int64(count), *params)
+        return best, index, neigh
+    previous = None
+    for row in range(n):
+        votes_row = scan.box_sum(_costs(machine, f0, f1, delta, row * n, n, defines), radius,
+                                 machine=machine)
+        for vec, col0, count in groups:
+            machine.launch(machine.kernel("motion", "vote_running", VEC=vec, **defines), (count, height),
+                           votes_row, previous if previous is not None else votes_row, moments, *state,
+                           np.int64(col0), np.int64(count), *params, np.int32(row))
+        previous = votes_row
+    return best, index, neigh
+
+
+def _level(machine: Machine, f0, f1, pred, delta: int, radius: int, features: str, penalty: float,
+           method: str, subpixel: bool, threshold: float):
+    """Flow, score and boundaries of one pyramid level from its feature maps."""
+    height, width = f0.shape
+    defines = _defines(f0, features)
+    moments = _moments(machine, f0, f1, radius, defines)
+    best, index, neigh = _winner(machine, f0, f1, moments, delta, radius, penalty, method, defines)
+    flow_out = machine.empty((height, width, 2), np.float32)
+    score = machine.empty((height, width), np.float32)
+    boundaries = machine.empty((height, width), np.uint8)
+    machine.launch(machine.kernel("motion", "finish", VEC=1, PREDICT=int(pred is not None), **defines),
+                   (width, height), best, index, neigh, pred if pred is not None else neigh, moments, f0, flow_out,
+                   score, boundaries, np.int64(width), np.int64(height), np.int32(delta), np.int32(radius), np.float32(penalty),
+                   np.int32(bool(subpixel)), np.float32(threshold))
+    return flow_out, score, boundaries
+
+
+def _pyramid(machine: Machine, frame: cl_array.Array, levels: int) -> list[cl_array.Array]:
+    """The frame and its successive halvings (Gaussian of PYRAMID_SIGMA, then every other pixel)."""
+    images = [frame]
+    for _ in range(levels - 1):
+        smooth = _filters.gaussian(images[-1], sigma=PYRAMID_SIGMA, method="exact", machine=machine)
+        height, width = smooth.shape
+        half = machine.empty((-(-height // 2), -(-width // 2)), np.float32)
+        machine.launch(machine.kernel("motion", "decimate"), (half.shape[1], half.shape[0]), smooth, half,
+                       np.int64(width), np.int64(height), np.int64(half.shape[1]), np.int64(half.shape[0]))
+        images.append(half)
+    return images
+
+
+def _warp(machine: Machine, f1: cl_array.Array, coarse: cl_array.Array, features: str):
+    """Frame 1's features warped by the doubled, interpolated coarse flow, and that prediction."""
+    height, width = f1.shape
+    warped = machine.empty(f1.shape, f1.dtype)
+    pred = machine.empty((height, width, 2), np.float32)
+    machine.launch(machine.kernel("motion", "warp", **_defines(f1, features)), (width, height), f1, coarse, warped,
+                   pred, np.int64(width), np.int64(height), np.int64(coarse.shape[1]), np.int64(coarse.shape[0]))
+    return warped, pred
+
+
+def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, features: Features = "brightness",
+         subpixel: bool = True, levels: int = 1, sigma: float | None = None, speed_penalty: float = SPEED_PENALTY,
+         method: Method = "running", boundary_score: float | None = None, machine: Machine | None = None) -> FlowResult:
+    """Optical flow by patchwise comparison over the displacements (-delta..delta)^2.
+
+    Parameters
+    ----------
+    frame0, frame1 : ndarray or pyopencl.array.Array, (H, W) grey or (H, W, 3) RGB
+        The frames at t and t + 1, same shape; uint8, uint16 or float (float64 is converted to float32;
+        device arrays must be uint8, uint16 or float32). RGB becomes grey with
+        :data:`vmcl.early.filters.GREY_WEIGHTS` (ITU-R BT.709: 0.2125 R + 0.7154 G + 0.0721 B).
+    delta : int
+        The displacement range, >= 1 and smaller than the image: (2 delta + 1)^2 displacements.
+    patch : int
+        Width of the square patch over which comparisons are summed; odd, 1 .. min(H, W).
+    features : {"brightness", "log", "sign_log", "edges"}
+        What is compared: the Gaussian-smoothed brightness, or its Laplacian (squared differences);
+        the sign of the Laplacian of a Gaussian, or Canny's edges (:func:`vmcl.early.edges.canny`, with
+        the thresholds :data:`EDGE_QUANTILES`) (exclusive or of binary maps).
+    subpixel : bool
+        Refine each displacement by the vertex of the parabola through the winning vote and its two
+        neighbours, along x and along y (no refinement along an axis where the winner lies on the
+        border of the range, or the votes are collinear; at most half a pixel).
+    levels : int
+        Coarse-to-fine pyramid levels. Level k + 1 is level k smoothed by a Gaussian of
+        :data:`PYRAMID_SIGMA` and halved; the flow found at a level, doubled and interpolated
+        bilinearly (0 where it has no estimate), predicts the flow one level finer, where the search
+        covers delta around the prediction, so motions up to about delta (2**levels - 1) are found.
+        1: no pyramid.
+    sigma : float, optional
+        Gaussian width of the feature maps in pixels; default :data:`DEFAULT_SIGMA` per feature.
+    speed_penalty : float
+        A prior for slow motion, >= 0, for the squared-difference features: every vote gains
+        ``speed_penalty * C0 * (vx**2 + vy**2)`` (C0 below). It settles the aperture problem, where a
+        patch of one orientation has votes along it that differ only by rounding, on the slowest
+        candidate; 0 is the paper's plain minimum. Binary votes are exact integers and take none.
+    method : {"running", "table"}
+        "running" (default, the paper's simplification): displacements are visited a row (fixed vy) at
+        a time and each pixel keeps its best so far, so only two rows of votes exist at once.
+        "table" (faithful): all (2 delta + 1)^2 vote planes are built, then the winner is chosen.
+        Identical results.
+    boundary_score : float, optional
+        Pixels with an estimate and a normalised score below this are marked in ``boundaries``;
+        default :data:`BOUNDARY_SCORE` per feature.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    FlowResult
+        (flow, score, boundaries): NumPy arrays for NumPy input, device arrays for device input.
+
+    Notes
+    -----
+    The winner minimises the vote; ties go to the smaller ``vx**2 + vy**2``, then to the first
+    displacement in raster order (vy major), so textureless patches report zero motion and results do
+    not depend on the work-group size. Frame 1 is read with clamped coordinates (the edge pixel
+    repeats) and patches that reach over the border sum fewer pixels.
+
+    Normalised scores, 1 for a perfect match:
+
+    - squared differences: ``1 - vote / (C0 + C1)``, C the patch's contrast ``sum (f - mean)**2`` in
+      frame 0 around (x, y) and in frame 1 around (x + vx, y + vy); about 0 for unrelated patches, and
+      below where the brightness differs. No estimate (NaN) where frame 0's patch is flat (C0 below
+      1e-5 of ``sum f**2``).
+    - sign of the LoG: ``1 - 2 disagreements / n``, the correlation of the signs over the patch's n
+      pixels; by the arcsine law, ``sin(pi / 2 * score)`` estimates the correlation of the LoG fields.
+    - edges: ``1 - XOR / (n0 + n1)`` = 2 common / (n0 + n1) with n0, n1 the edge pixels of the two
+      patches (Dice's coefficient). Estimates only at frame 0's edge pixels (the paper's sparse flow).
+
+    With levels > 1, frame 1's features are warped by the prediction (bilinearly; edges: nearest
+    pixel) before the search, which is then for the residual around it. Device frames are not checked for NaN (that would need a read back).
+
+    References
+    ----------
+    H. H. Bulthoff, J. J. Little and T. Poggio, "A parallel algorithm for real-time computation of
+    optical flow", Nature 337:549-553, 1989.
+    J. J. Little, H. H. Bulthoff and T. Poggio, "Parallel optical flow using local voting", Proc. ICCV,
+    1988.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vmcl.early.motion import flow
+    >>> rng = np.random.default_rng(0)
+    >>> frame0 = rng.random((48, 64), np.float32)
+    >>> frame1 = np.roll(frame0, (1, 2), axis=(0, 1))  # moves 2 right, 1 down
+    >>> result = flow(frame0, frame1, delta=3, patch=7, subpixel=False)
+    >>> result.flow[24, 32].tolist()
+    [2.0, 1.0]
+    """
+    machine = machine_for(machine)
+    d0, d1, host = _frames(frame0, frame1, machine)
+    levels = _positive_int(levels, "levels")
+    delta, radius, sigma = _check(d0.shape, delta, patch, features, sigma, levels)
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    boundary_score = _number(BOUNDARY_SCORE[features] if boundary_score is None else boundary_score,
+                             "boundary_score")
+    speed_penalty = _number(speed_penalty, "speed_penalty")
+    if speed_penalty < 0:
+        raise ValueError(f"speed_penalty must be >= 0, got {speed_penalty}")
+    pyramids = [_pyramid(machine, d, levels) for d in (d0, d1)]
+    coarse = None
+    for image0, image1 in zip(reversed(pyramids[0]), reversed(pyramids[1])):
+        f0 = _features(machine, image0, features, sigma)
+        f1 = _features(machine, image1, features, sigma)
+        pred = None
+        if coarse is not None:
+            f1, pred = _warp(machine, f1, coarse, features)
+        flow_out, score, boundaries = _level(machine, f0, f1, pred, delta, radius, features, speed_penalty,
+                                             method, subpixel, boundary_score)
+        coarse = flow_out
+    if host:
+        return FlowResult(flow_out.get(), score.get(), boundaries.get().view(np.bool_))
+    return FlowResult(flow_out, score, boundaries)
+
+
+def votes(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, features: Features = "brightness",
+          sigma: float | None = None, machine: Machine | None = None) -> ArrayLike:
+    """The full table of votes: the patch sum of the comparisons at every displacement.
+
+    Parameters
+    ----------
+    frame0, frame1, delta, patch, features, sigma, machine
+        As for :func:`flow`.
+
+    Returns
+    -------
+    ((2 delta + 1)**2, H, W) array: float32 sums of squared differences (brightness, log) or int32
+    counts of disagreeing pixels (sign_log, edges). Plane ``(vy + delta) * (2 delta + 1) + vx + delta``
+    holds displacement (vx, vy). NumPy for NumPy input, a device array for device input.
+
+    Notes
+    -----
+    This is the table the faithful variant of :func:`flow` builds; the winner per pixel is the
+    smallest vote (ties as in :func:`flow`).
+
+    References
+    ----------
+    H. H. Bulthoff, J. J. Little and T. Poggio, "A parallel algorithm for real-time computation of
+    optical flow", Nature 337:549-553, 1989.
+    """
+    machine = machine_for(machine)
+    d0, d1, host = _frames(frame0, frame1, machine)
+    delta, radius, sigma = _check(d0.shape, delta, patch, features, sigma)
+    f0 = _features(machine, d0, features, sigma)
+    f1 = _features(machine, d1, features, sigma)
+    table = _table(machine, f0, f1, delta, radius, _defines(f0, features))
+    return table.get() if host else table
+
+
+def sign_correlation(f: ArrayLike, g: ArrayLike, *, machine: Machine | None = None) -> float:
+    """The correlation of the signs of two fields: the mean of sign(f) sign(g), with sign(0) = +1.
+
+    Parameters
+    ----------
+    f, g : ndarray or pyopencl.array.Array, same shape, float32
+        Fields (zero-mean ones for the arcsine law).
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    float
+        In [-1, 1]; a scalar read back to the host for either kind of input.
+
+    Notes
+    -----
+    For zero-mean jointly normal f and g with correlation R, the expectation is
+    ``arcsine_law(R) = (2 / pi) arcsin R`` (the paper's theorem), so ``sin(pi / 2 * rho)`` recovers R
+    from the sign bits alone.
+
+    References
+    ----------
+    H. H. Bulthoff, J. J. Little and T. Poggio, "A parallel algorithm for real-time computation of
+    optical flow", Nature 337:549-553, 1989.
+    """
+    machine = machine_for(machine)
+    fd, _ = field(f, "f", machine, ndims=(1, 2, 3), dtypes=(np.float32,))
+    gd, _ = field(g, "g", machine, ndims=(1, 2, 3), dtypes=(np.float32,))
+    if fd.shape != gd.shape:
+        raise ValueError(f"f and g must have the same shape, got {fd.shape} and {gd.shape}")
+    agreement = machine.empty(fd.shape, np.int32)
+    machine.launch(machine.kernel("motion", "sign_agreement"), (fd.size,), fd, gd, agreement, np.int64(fd.size))
+    total = _reduce.reduce(agreement, "sum", machine=machine)
+    return int(total.get()) / fd.size
+
+
+def arcsine_law(correlation):
+    """``(2 / pi) arcsin(R)``: the correlation of the signs of zero-mean jointly normal fields of correlation R.
+
+    Parameters
+    ----------
+    correlation : float or ndarray
+        R in [-1, 1].
+
+    Returns
+    -------
+    float or ndarray
+
+    References
+    ----------
+    H. H. Bulthoff, J. J. Little and T. Poggio, "A parallel algorithm for real-time computation of
+    optical flow", Nature 337:549-553, 1989 (the theorem in the seed paper's section "Motion").
+    """
+    return 2.0 / np.pi * np.arcsin(correlation)
