@@ -56,21 +56,26 @@ inline float bond_cost(__global const float *f, long i, long j, float kappa)
 #endif
 }
 
-/* Expected change of a vertex clique's potential when the arm at `bit` turns on, the other three arms
- * (bits ba, bb, bc) being on with probabilities pa, pb, pc: the exact table difference for 0/1 arms,
- * the mean-field expectation for line expectations. */
+/* Change of a vertex clique's potential when the arm at `bit` turns on, the other three arms (bits ba,
+ * bb, bc) being pa, pb, pc: the table difference for 0/1 arms (sampling, ICM), its expectation with the
+ * arms on independently with probabilities pa, pb, pc (mean field). */
 inline float vertex_delta(__constant float *table, int bit, int ba, float pa, int bb, float pb, int bc,
                           float pc)
 {
-    float total = 0.0f;
+#if MODE != MODE_MEAN
+    int rest = ((pa != 0.0f) << ba) | ((pb != 0.0f) << bb) | ((pc != 0.0f) << bc);
+    return table[rest | (1 << bit)] - table[rest];
+#else
+    /* The expectation is multilinear in (pa, pb, pc): trilinear interpolation of the 8 corner values. */
+    float d[8];
     for (int m = 0; m < 8; ++m) {
-        int a = m & 1, b = (m >> 1) & 1, c = (m >> 2) & 1;
-        float p = (a ? pa : 1.0f - pa) * (b ? pb : 1.0f - pb) * (c ? pc : 1.0f - pc);
-        if (p == 0.0f) continue;
-        int rest = (a << ba) | (b << bb) | (c << bc);
-        total += p * (table[rest | (1 << bit)] - table[rest]);
+        int rest = ((m & 1) << ba) | (((m >> 1) & 1) << bb) | (((m >> 2) & 1) << bc);
+        d[m] = table[rest | (1 << bit)] - table[rest];
     }
-    return total;
+    float d0 = mix(mix(d[0], d[1], pa), mix(d[2], d[3], pa), pb);
+    float d1 = mix(mix(d[4], d[5], pa), mix(d[6], d[7], pa), pb);
+    return mix(d0, d1, pc);
+#endif
 }
 
 /* ---------------------------------------------------------------------------------- preparation */
@@ -173,6 +178,22 @@ __kernel void set_value(__global float *a, float value, long n)
     if (i < n) a[i] = value;
 }
 
+/* The four neighbours of pixel i at clamped indices, with the weights 1 - l of their bonds; a missing
+ * neighbour gets weight 0. No branches, so the compiler can vectorise across work-items. */
+inline void neighbours(__global const float *lh, __global const float *lv, int x, int y, int i, int W, int H,
+                       int *nb, float *keep)
+{
+    nb[0] = x > 0 ? i - 1 : i;
+    nb[1] = x < W - 1 ? i + 1 : i;
+    nb[2] = y > 0 ? i - W : i;
+    nb[3] = y < H - 1 ? i + W : i;
+    float left = lh[nb[0]], up = lv[nb[2]];
+    keep[0] = x > 0 ? 1.0f - left : 0.0f;
+    keep[1] = x < W - 1 ? 1.0f - lh[i] : 0.0f;
+    keep[2] = y > 0 ? 1.0f - up : 0.0f;
+    keep[3] = y < H - 1 ? 1.0f - lv[i] : 0.0f;
+}
+
 /* ------------------------------------------------------------------------------------ f updates */
 
 /* f at the sites of one checkerboard colour: heat bath (the conditional is Gaussian for the smooth kind,
@@ -181,37 +202,40 @@ __kernel void set_value(__global float *a, float value, long n)
  * keeps its value. */
 __kernel void f_update(__global float *f, __global const float *g, __global const float *w,
                        __global const float *lh, __global const float *lv, __constant float *levels,
-                       float kappa, float T, uint sweep, uint2 key, int colour, long W, long H)
+                       float kappa, float T, uint sweep, uint2 key, int colour, long W_, long H_)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H || ((x + y) & 1) != colour) return;
-    long i = y * W + x;
-    long nb[4];
+    int W = (int)W_, H = (int)H_, y = get_global_id(1);
+    int x = 2 * (int)get_global_id(0) + ((y + colour) & 1);
+    if (x >= W || y >= H) return;
+    int i = y * W + x;
+    int nb[4];
     float keep[4];
-    int n = 0;
-    if (x > 0) { nb[n] = i - 1; keep[n++] = 1.0f - lh[i - 1]; }
-    if (x < W - 1) { nb[n] = i + 1; keep[n++] = 1.0f - lh[i]; }
-    if (y > 0) { nb[n] = i - W; keep[n++] = 1.0f - lv[i - W]; }
-    if (y < H - 1) { nb[n] = i + W; keep[n++] = 1.0f - lv[i]; }
+    neighbours(lh, lv, x, y, i, W, H, nb, keep);
 #if KIND == 0
     float a = w[i], b[NCOMP];
     for (int c = 0; c < NCOMP; ++c) b[c] = w[i] * g[i * NCOMP + c];
-    for (int k = 0; k < n; ++k) {
+    for (int k = 0; k < 4; ++k) {
         a += keep[k];
         for (int c = 0; c < NCOMP; ++c) b[c] += keep[k] * f[nb[k] * NCOMP + c];
     }
     if (a <= 0.0f) return;
 #if MODE == MODE_SAMPLE
     uint4 r = draw((uint)i, sweep, PHASE_F, key);
-    float u[4] = {philox_uniform(r.x), philox_uniform(r.y), philox_uniform(r.z), philox_uniform(r.w)};
     float sd = sqrt(T / (2.0f * a));
-    for (int c = 0; c < NCOMP; ++c) {
-        /* Box-Muller: words (0, 1) give components 0 and 1, words (2, 3) components 2 and 3. */
-        float radius = sqrt(-2.0f * log(u[c & 2]));
-        float angle = 2.0f * M_PI_F * u[(c & 2) + 1];
-        float normal = radius * ((c & 1) ? sin(angle) : cos(angle));
-        f[i * NCOMP + c] = b[c] / a + sd * normal;
-    }
+    /* Box-Muller: words (x, y) give the normals of components 0 and 1, words (z, w) of 2 and 3. */
+    float radius = native_sqrt(-2.0f * native_log(philox_uniform(r.x))), angle = 2.0f * M_PI_F * philox_uniform(r.y);
+    f[i * NCOMP] = b[0] / a + sd * radius * native_cos(angle);
+#if NCOMP > 1
+    f[i * NCOMP + 1] = b[1] / a + sd * radius * sin(angle);
+#endif
+#if NCOMP > 2
+    radius = sqrt(-2.0f * log(philox_uniform(r.z)));
+    angle = 2.0f * M_PI_F * philox_uniform(r.w);
+    f[i * NCOMP + 2] = b[2] / a + sd * radius * native_cos(angle);
+#endif
+#if NCOMP > 3
+    f[i * NCOMP + 3] = b[3] / a + sd * radius * sin(angle);
+#endif
 #else
     for (int c = 0; c < NCOMP; ++c) f[i * NCOMP + c] = b[c] / a;
 #endif
@@ -222,7 +246,7 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
     for (int k = 0; k < NLEVELS; ++k) {
         float d = levels[k] - g[i];
         float e = w[i] * d * d;
-        for (int m = 0; m < n; ++m) e += levels[k] != f[nb[m]] ? kappa * keep[m] : 0.0f;
+        for (int m = 0; m < 4; ++m) e += levels[k] != f[nb[m]] ? kappa * keep[m] : 0.0f;
         energy[k] = e;
         if (e < lowest) { lowest = e; best = k; }
     }
@@ -247,24 +271,21 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
  * interaction is replaced by its expectation kappa (1 - q_j(k)) under the neighbour's distribution. */
 __kernel void q_update(__global float *q, __global const float *g, __global const float *w,
                        __global const float *lh, __global const float *lv, __constant float *levels,
-                       float kappa, float T, int colour, long W, long H)
+                       float kappa, float T, int colour, long W_, long H_)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H || ((x + y) & 1) != colour) return;
-    long i = y * W + x;
-    long nb[4];
+    int W = (int)W_, H = (int)H_, y = get_global_id(1);
+    int x = 2 * (int)get_global_id(0) + ((y + colour) & 1);
+    if (x >= W || y >= H) return;
+    int i = y * W + x;
+    int nb[4];
     float keep[4];
-    int n = 0;
-    if (x > 0) { nb[n] = i - 1; keep[n++] = 1.0f - lh[i - 1]; }
-    if (x < W - 1) { nb[n] = i + 1; keep[n++] = 1.0f - lh[i]; }
-    if (y > 0) { nb[n] = i - W; keep[n++] = 1.0f - lv[i - W]; }
-    if (y < H - 1) { nb[n] = i + W; keep[n++] = 1.0f - lv[i]; }
+    neighbours(lh, lv, x, y, i, W, H, nb, keep);
     float energy[NLEVELS];
     float lowest = INFINITY;
     for (int k = 0; k < NLEVELS; ++k) {
         float d = levels[k] - g[i];
         float e = w[i] * d * d;
-        for (int m = 0; m < n; ++m) e += kappa * keep[m] * (1.0f - q[nb[m] * NLEVELS + k]);
+        for (int m = 0; m < 4; ++m) e += kappa * keep[m] * (1.0f - q[nb[m] * NLEVELS + k]);
         energy[k] = e;
         lowest = min(lowest, e);
     }
@@ -300,51 +321,73 @@ __kernel void levels_mode(__global const float *weights, __global float *f, __co
 /* Line sites of colour (type, parity): heat bath from the exact conditional, its mode (ICM), or the
  * mean-field expectation sigma(-dE / T) with the neighbours' expectations in the cliques. dE is the
  * energy of l = 1 minus that of l = 0 over every clique that holds the site: the broken bond, the
- * central cost, both end vertices and both parallel pairs (the seed's warning: non-central cliques count). */
-__kernel void line_update(__global float *lh, __global float *lv, __global const float *f,
-                          __global const float *q, __global const float *bh, __global const float *bv,
-                          __constant float *table, float parallel, float kappa, float T, uint sweep,
-                          uint2 key, int colour, long W, long H)
+ * central cost, both end vertices and both parallel pairs (the seed's warning: non-central cliques count).
+ * Neighbours are read at clamped indices and masked, without branches, so the compiler can vectorise
+ * across work-items. */
+inline float line_bond(__global const float *f, __global const float *q, int i, int j, float kappa)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    int type = colour >> 1;
-    if (x >= W || y >= H || ((x + y) & 1) != (colour & 1)) return;
-    if ((type == 0 && x >= W - 1) || (type == 1 && y >= H - 1)) return;
-    long i = y * W + x, j = type == 0 ? i + 1 : i + W;
 #if KIND == 1 && MODE == MODE_MEAN
     float same = 0.0f;
     for (int k = 0; k < NLEVELS; ++k) same += q[i * NLEVELS + k] * q[j * NLEVELS + k];
-    float bond = kappa * (1.0f - same);
+    return kappa * (1.0f - same);
 #else
-    float bond = bond_cost(f, i, j, kappa);
+    return bond_cost(f, i, j, kappa);
 #endif
-    float dE;
-    if (type == 0) {
-        dE = bh[i] - bond;
-        if (y > 0)
-            dE += vertex_delta(table, 1, 0, lh[i - W], 2, lv[i - W], 3, lv[i - W + 1]);
-        if (y < H - 1)
-            dE += vertex_delta(table, 0, 1, lh[i + W], 2, lv[i], 3, lv[i + 1]);
-        if (x > 0) dE += parallel * lh[i - 1];
-        if (x + 1 < W - 1) dE += parallel * lh[i + 1];
-    } else {
-        dE = bv[i] - bond;
-        if (x > 0)
-            dE += vertex_delta(table, 3, 0, lh[i - 1], 1, lh[i + W - 1], 2, lv[i - 1]);
-        if (x < W - 1)
-            dE += vertex_delta(table, 2, 0, lh[i], 1, lh[i + W], 3, lv[i + 1]);
-        if (y > 0) dE += parallel * lv[i - W];
-        if (y + 1 < H - 1) dE += parallel * lv[i + W];
-    }
-    __global float *l = type == 0 ? lh : lv;
-#if MODE == MODE_SAMPLE
-    float u = philox_uniform(draw((uint)i, sweep, PHASE_LINES + (uint)type, key).x);
-    l[i] = u * (1.0f + exp(dE / T)) < 1.0f ? 1.0f : 0.0f;
-#elif MODE == MODE_ICM
+}
+
+inline void line_set(__global float *l, int i, float dE, float T, uint sweep, uint phase, uint2 key)
+{
+#if MODE == MODE_ICM
     l[i] = dE < 0.0f ? 1.0f : 0.0f;
 #else
-    l[i] = 1.0f / (1.0f + exp(dE / T));
+    /* Clamped so that a forbidden line (dE = +inf) gets probability e^-80, never NaN from native_exp. */
+    float odds = native_exp(clamp(dE / T, -80.0f, 80.0f));
+#if MODE == MODE_SAMPLE
+    float u = philox_uniform(draw((uint)i, sweep, phase, key).x);
+    l[i] = u * (1.0f + odds) < 1.0f ? 1.0f : 0.0f;
+#else
+    l[i] = 1.0f / (1.0f + odds);
 #endif
+#endif
+}
+
+/* lh sites (between (y, x) and (y, x + 1)) with (x + y) & 1 == parity. */
+__kernel void line_h_update(__global float *lh, __global const float *lv, __global const float *f,
+                            __global const float *q, __global const float *bh, __constant float *table,
+                            float parallel, float kappa, float T, uint sweep, uint2 key, int parity, long W_,
+                            long H_)
+{
+    int W = (int)W_, H = (int)H_, y = get_global_id(1);
+    int x = 2 * (int)get_global_id(0) + ((y + parity) & 1);
+    if (x >= W - 1 || y >= H) return;
+    int i = y * W + x;
+    int above = y > 0 ? i - W : i, below = y < H - 1 ? i + W : i;
+    float dE = bh[i] - line_bond(f, q, i, i + 1, kappa);
+    float top = vertex_delta(table, 1, 0, lh[above], 2, lv[above], 3, lv[above + 1]);
+    float bottom = vertex_delta(table, 0, 1, lh[below], 2, lv[i], 3, lv[i + 1]);
+    dE += (y > 0 ? top : 0.0f) + (y < H - 1 ? bottom : 0.0f);
+    float left = lh[x > 0 ? i - 1 : i];
+    dE += parallel * ((x > 0 ? left : 0.0f) + (x + 1 < W - 1 ? lh[i + 1] : 0.0f));
+    line_set(lh, i, dE, T, sweep, PHASE_LINES, key);
+}
+
+/* lv sites (between (y, x) and (y + 1, x)) with (x + y) & 1 == parity. */
+__kernel void line_v_update(__global const float *lh, __global float *lv, __global const float *f,
+                            __global const float *q, __global const float *bv, __constant float *table,
+                            float parallel, float kappa, float T, uint sweep, uint2 key, int parity, long W_,
+                            long H_)
+{
+    int W = (int)W_, H = (int)H_, y = get_global_id(1);
+    int x = 2 * (int)get_global_id(0) + ((y + parity) & 1);
+    if (x >= W || y >= H - 1) return;
+    int i = y * W + x;
+    int left = x > 0 ? i - 1 : i, up = y > 0 ? i - W : i;
+    float dE = bv[i] - line_bond(f, q, i, i + W, kappa);
+    float west = vertex_delta(table, 3, 0, lh[left], 1, lh[left + W], 2, lv[left]);
+    float east = vertex_delta(table, 2, 0, lh[i], 1, lh[i + W], 3, lv[i + 1]);
+    dE += (x > 0 ? west : 0.0f) + (x < W - 1 ? east : 0.0f);
+    dE += parallel * ((y > 0 ? lv[up] : 0.0f) + (y + 1 < H - 1 ? lv[i + W] : 0.0f));
+    line_set(lv, i, dE, T, sweep, PHASE_LINES + 1u, key);
 }
 
 /* ------------------------------------------------------------------------ estimates and energy */
