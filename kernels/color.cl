@@ -8,6 +8,8 @@
  *
  *   hue            H (or the chromaticity pair r / (r+g+b), g / (r+g+b)) and its validity
  *   hue_gradient   H, its validity and its noise-normalised gradient, in one pass over the RGB image
+ *   hue_histogram  histograms of the normalised gradient over 1/16-octave bins, one per band of rows
+ *   hue_threshold  the noise rule's threshold from the median of those histograms
  *   hue_edges      albedo-edge candidates: the normalised gradient above a threshold
  *
  * A pixel is valid when its three channels are finite and the denominator (R + G, or R + G + B for the
@@ -137,18 +139,65 @@ __kernel void hue_gradient(__global const IN_T *rgb, __global float *hue, __glob
     }
 }
 
-/* Candidates where z exceeds the threshold: thr[1], the noise rule's high threshold, or the floor if
- * that is larger (FIXED == 0); the floor alone (FIXED == 1). NaN never passes. Work-item i stands for
- * elements [i * VEC, (i + 1) * VEC). */
-__kernel void hue_edges(__global const float *z, __global const float *thr, __global uchar *edges,
-                        float floor_threshold, long n)
+/* The noise estimate needs the median of z over the valid pixels, whose range is unknown until z is
+ * computed. Rather than read z's maximum back to the host for the range of linear bins, the histogram
+ * bins z by its float bit pattern: the exponent and the KEY_BITS leading mantissa bits, bins 1/16 of an
+ * octave wide from the smallest float to infinity. That is a relative resolution of 6% at every scale,
+ * where linear bins over [0, max] can be wider than the median itself when a few strong edges set the
+ * maximum. Work-item b counts rows [b * rows, (b + 1) * rows) serially (contiguous reads) into its own
+ * histogram, so counts are exact and need no atomics. NaN (pixels without a valid neighbourhood) is not
+ * counted; z >= 0, so the sign bit is 0. */
+#define KEY_BITS 4
+#define KEY_SHIFT (23 - KEY_BITS)
+#define KEY_BINS ((0x7F800000u >> KEY_SHIFT) + 1) /* the last bin holds infinity */
+
+__kernel void hue_histogram(__global const float *z, __global int *counts, long rows, long W, long H)
+{
+    long b = get_global_id(0), y0 = b * rows;
+    if (y0 >= H) return;
+    __global int *h = counts + b * KEY_BINS;
+    for (uint k = 0; k < KEY_BINS; k++) h[k] = 0;
+    for (long i = y0 * W, end = min(y0 + rows, H) * W; i < end; i++) {
+        float v = z[i];
+        if (!isnan(v)) h[as_uint(v) >> KEY_SHIFT]++;
+    }
+}
+
+/* One work-item: threshold[0] = max(factor * median, floor_threshold), the median being np.median's
+ * order statistic (N - 1) / 2 with the values of a bin spread evenly across it (bin k covers
+ * [as_float(k << KEY_SHIFT), as_float((k + 1) << KEY_SHIFT))). With no valid pixel, the floor. */
+__kernel void hue_threshold(__global const int *counts, __global float *threshold, long bands, float factor,
+                            float floor_threshold)
+{
+    if (get_global_id(0) != 0) return;
+    long total = 0;
+    for (long i = 0; i < bands * KEY_BINS; i++) total += counts[i];
+    float median = 0.0f, p = 0.5f * (float)(total - 1);
+    long below = 0;
+    for (uint k = 0; k < KEY_BINS && total > 0; k++) {
+        long c = 0;
+        for (long b = 0; b < bands; b++) c += counts[b * KEY_BINS + k];
+        if (c > 0 && (float)(below + c) > p) {
+            float lo = as_float(k << KEY_SHIFT), hi = as_float((k + 1) << KEY_SHIFT);
+            median = lo + (p - (float)below + 0.5f) / (float)c * (hi - lo);
+            break;
+        }
+        below += c;
+    }
+    threshold[0] = fmax(factor * median, floor_threshold);
+}
+
+/* Candidates where z exceeds the threshold: threshold[0] from hue_threshold (FIXED == 0) or the host's
+ * fixed_threshold (FIXED == 1). NaN never passes. Work-item i stands for elements [i * VEC, (i + 1) * VEC). */
+__kernel void hue_edges(__global const float *z, __global const float *threshold, __global uchar *edges,
+                        float fixed_threshold, long n)
 {
     long i0 = get_global_id(0) * VEC;
     if (i0 >= n) return;
 #if FIXED
-    float t = floor_threshold;
+    float t = fixed_threshold;
 #else
-    float t = fmax(thr[1], floor_threshold);
+    float t = threshold[0];
 #endif
 #if VEC == 16
     if (i0 + 16 <= n) {

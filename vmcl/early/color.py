@@ -35,6 +35,13 @@ NOISE_HIGH = 4.1 (:data:`vmcl.early.noise.NOISE_HIGH`). The two differences shar
 of the pixels pass (measured on 512 x 512 pixels; an exact Rayleigh law would pass 2e-4). Shadow and
 shading edges change E only, so H does not step there.
 
+The median comes from a histogram of z on the device, as in :mod:`vmcl.early.noise`, but with bins of
+1/16 of an octave (:data:`HISTOGRAM_BINS`, by z's float exponent and leading mantissa bits) instead of
+4096 linear bins over [0, max z]: they need no range, so nothing is read back to the host, and their
+resolution follows the median rather than the largest edge. Within a bin the values are taken as spread
+evenly: measured within 2.3e-4 of ``np.median`` on Gaussian noise (deviations 0.002 to 0.05), and
+within 1% on 8-bit images, whose z clusters on a few quantised values (0.9% on the "shadows" scene).
+
 References
 ----------
 A. Hurlbert and T. Poggio, "A network for image segmentation using color", Advances in Neural
@@ -61,6 +68,10 @@ MIN_INTENSITY = 0.05
 
 NOISE_FLOOR = 1.0 / (255.0 * math.sqrt(12.0))
 """Smallest noise deviation the edge rule assumes, as a share of the full scale: 8-bit quantisation."""
+
+HISTOGRAM_BINS = (0x7F800000 >> 19) + 1
+"""Bins of the noise estimate's histogram of z: 1/16 of an octave each, from 0 to infinity (color.cl)."""
+_MEDIAN_OF_RAYLEIGH = math.sqrt(2.0 * math.log(2.0))
 
 _IN_TYPES = {np.dtype(np.uint8): "uchar", np.dtype(np.uint16): "ushort", np.dtype(np.float32): "float"}
 _FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0, np.dtype(np.float32): 1.0}
@@ -200,8 +211,8 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
     Notes
     -----
     A candidate marks the pixel on the left of (or above) the step, the pixel :mod:`vmcl.scenes`
-    labels. Pixels next to a non-valid one are never candidates. Without a threshold, the maximum of
-    z is read back to the host once (for the histogram's range).
+    labels. Pixels next to a non-valid one are never candidates. The kernels are enqueued back to back
+    with no wait (the noise estimate stays on the device).
 
     References
     ----------
@@ -233,12 +244,22 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
     _launch_rows(machine, _kernel(machine, "color", "hue_gradient", IN_T=_IN_TYPES[data.dtype]), width, height,
                  data, hue_field, valid, z, np.float32(least), np.int64(width), np.int64(height))
     if threshold is None:
-        pairs, _ = _noise.threshold_field(machine, z, _noise.noise_rule(), local=False)
-        floor = _noise.NOISE_HIGH * NOISE_FLOOR * _FULL_SCALE[data.dtype]
+        # Bands of rows, each histogrammed by one work-item: enough of them to keep every core busy.
+        bands = min(height, 8 * machine.compute_units)
+        rows = -(-height // bands)
+        bands = -(-height // rows)
+        counts = machine.empty((bands, HISTOGRAM_BINS), np.int32)
+        machine.launch(_kernel(machine, "color", "hue_histogram"), (bands,), z, counts, np.int64(rows),
+                       np.int64(width), np.int64(height))
+        estimated = machine.empty((1,), np.float32)
+        machine.launch(_kernel(machine, "color", "hue_threshold"), (1,), counts, estimated, np.int64(bands),
+                       np.float32(_noise.NOISE_HIGH / _MEDIAN_OF_RAYLEIGH),
+                       np.float32(_noise.NOISE_HIGH * NOISE_FLOOR * _FULL_SCALE[data.dtype]))
+        fixed = 0.0
     else:
-        pairs, floor = z, float(threshold)
+        estimated, fixed = z, float(threshold)
     edges = machine.empty(shape, np.uint8)
     n = height * width
-    _launch_flat(machine, _kernel(machine, "color", "hue_edges", FIXED=int(threshold is not None)), n, z, pairs,
-                 edges, np.float32(floor), np.int64(n))
+    _launch_flat(machine, _kernel(machine, "color", "hue_edges", FIXED=int(threshold is not None)), n, z, estimated,
+                 edges, np.float32(fixed), np.int64(n))
     return AlbedoEdges(_mask_out(edges, host), result(hue_field, host), _mask_out(valid, host))
