@@ -223,9 +223,12 @@ def write_table(bench: Bench, path: Path) -> None:
         (f"Measured {datetime.datetime.now().strftime('%Y-%m-%d %H:%M')} on {m.device.platform.name} / "
         f"{m.device.name} ({m.device.max_compute_units} compute units), host {platform.processor() or platform.machine()}, "
         f"Python {platform.python_version()}, NumPy {np.__version__}, OpenCV {cv2.__version__}."),
-        ("vmcl: device in, device out, Python call and queue.finish() included; baselines: NumPy in and out. "
+        ("vmcl ms: device in, device out, Python call and queue.finish() included (wall clock); device ms: "
+        "the kernels alone (profiling events, mean); baselines: NumPy in and out (wall clock). Bandwidths "
+        "use device times, the copy kernel's included, and count the bytes read plus written once. "
         f"Medians of {bench.repeat} runs (Hillis-Steele and per-tile loops: 3; the iterative spiral: 1). "
-        "Speed-up = baseline ms / vmcl ms (above 1: vmcl is faster)."),
+        "Speed-up = baseline ms / vmcl ms (above 1: vmcl is faster). The machine is shared: other "
+        "processes ran beside this benchmark, so compare within the table."),
         "",
         "| " + " | ".join(header) + " |",
         "|" + "---|" * len(header),
