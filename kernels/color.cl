@@ -189,7 +189,8 @@ __kernel void hue_threshold(__global const int *counts, __global float *threshol
 }
 
 /* Candidates where z exceeds the threshold: threshold[0] from hue_threshold (FIXED == 0) or the host's
- * fixed_threshold (FIXED == 1). NaN never passes. Work-item i stands for elements [i * VEC, (i + 1) * VEC). */
+ * fixed_threshold (FIXED == 1). NaN never passes. Work-item i stands for elements [i * VEC,
+ * (i + 1) * VEC). */
 __kernel void hue_edges(__global const float *z, __global const float *threshold, __global uchar *edges,
                         float fixed_threshold, long n)
 {

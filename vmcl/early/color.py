@@ -241,8 +241,9 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
     shape = (height, width)
     hue_field, valid, z = (machine.empty(shape, np.float32), machine.empty(shape, np.uint8),
                            machine.empty(shape, np.float32))
-    _launch_rows(machine, _kernel(machine, "color", "hue_gradient", IN_T=_IN_TYPES[data.dtype]), width, height,
-                 data, hue_field, valid, z, np.float32(least), np.int64(width), np.int64(height))
+    gradient = _kernel(machine, "color", "hue_gradient", IN_T=_IN_TYPES[data.dtype])
+    _launch_rows(machine, gradient, width, height, data, hue_field, valid, z, np.float32(least),
+                 np.int64(width), np.int64(height))
     if threshold is None:
         # Bands of rows, each histogrammed by one work-item: enough of them to keep every core busy.
         bands = min(height, 8 * machine.compute_units)
@@ -260,6 +261,6 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
         estimated, fixed = z, float(threshold)
     edges = machine.empty(shape, np.uint8)
     n = height * width
-    _launch_flat(machine, _kernel(machine, "color", "hue_edges", FIXED=int(threshold is not None)), n, z, estimated,
-                 edges, np.float32(fixed), np.int64(n))
+    _launch_flat(machine, _kernel(machine, "color", "hue_edges", FIXED=int(threshold is not None)), n, z,
+                 estimated, edges, np.float32(fixed), np.int64(n))
     return AlbedoEdges(_mask_out(edges, host), result(hue_field, host), _mask_out(valid, host))
