@@ -1,0 +1,184 @@
+"""Integration: the cues' line processes, coupled to brightness edges, meet in one labelled map.
+
+Seed sections "The Vision Machine System" (figure 1) and "Organization of integration". Each cue (depth
+from stereo, motion, colour, texture) is restored by its own line-process MRF whose line sites cost less
+at brightness edges (equation (12), :func:`vmcl.mrf.restore` with ``edges=``); this module puts their
+line processes on the pixel grid and records, at every pixel, which cues support a discontinuity there
+and whether a brightness edge lies on it (:class:`Cue` bits). The label of a supported pixel is its
+physical reading (a :class:`vmcl.scenes.Label` code): a jump of depth or motion is an occluding contour
+(DEPTH), a change of hue an albedo edge (ALBEDO), a change of texture alone a texture boundary
+(TEXTURE). The labelled pixels are the paper's "cartoon" of the scene. :func:`boundary` turns one line
+process into a pixel map, the barriers that feed the integration back to the stereo matcher (the seed's
+"feedback from the results of integration into the matching stage").
+
+NumPy in gives NumPy out; device arrays in give device arrays out (uint8 0/1 maps), so the pipeline
+keeps every field on the device.
+
+References
+----------
+E. Gamble and T. Poggio, "Visual integration and detection of discontinuities: the key role of intensity
+edges", MIT AI Memo 970, 1987.
+E. Gamble, D. Geiger, T. Poggio and D. Weinshall, "Integration of vision modules and labeling of surface
+discontinuities", IEEE SMC 19(6):1576-1581, 1989.
+T. Poggio et al., "The MIT Vision Machine", Proc. DARPA Image Understanding Workshop, 177-198, 1988.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from enum import IntFlag
+from typing import NamedTuple
+
+import numpy as np
+import pyopencl.array as cl_array
+
+from vmcl.cm._arrays import ArrayLike, machine_for
+from vmcl.machine import Machine
+from vmcl.scenes import Label
+
+
+class Cue(IntFlag):
+    """Bits of the support map: the cues whose line process marks a pixel, and the brightness edges."""
+
+    DEPTH = 1
+    MOTION = 2
+    COLOUR = 4
+    TEXTURE = 8
+    BRIGHTNESS = 16
+
+
+CUES = ("depth", "motion", "colour", "texture")
+"""The cues with a line process, in the order of their :class:`Cue` bits."""
+
+CUE_BITS = Cue.DEPTH | Cue.MOTION | Cue.COLOUR | Cue.TEXTURE
+"""The bits that make a pixel a discontinuity of the cartoon (brightness alone does not)."""
+
+_DEFINES = {"BIT_DEPTH": int(Cue.DEPTH), "BIT_MOTION": int(Cue.MOTION), "BIT_COLOUR": int(Cue.COLOUR),
+            "BIT_TEXTURE": int(Cue.TEXTURE), "BIT_BRIGHTNESS": int(Cue.BRIGHTNESS),
+            "LABEL_DEPTH": int(Label.DEPTH), "LABEL_ALBEDO": int(Label.ALBEDO),
+            "LABEL_TEXTURE": int(Label.TEXTURE)}
+
+
+class Integration(NamedTuple):
+    """What :func:`integrate` returns (NumPy arrays, or device arrays for device input).
+
+    Attributes
+    ----------
+    support : uint8 (H, W)
+        OR of the :class:`Cue` bits of the cues marking each pixel (and BRIGHTNESS on edge pixels).
+    labels : uint8 (H, W)
+        :class:`vmcl.scenes.Label` code of each discontinuity pixel (0 elsewhere): DEPTH where depth or
+        motion supports it, else ALBEDO where colour does, else TEXTURE where texture does.
+    """
+
+    support: ArrayLike
+    labels: ArrayLike
+
+
+def _lines(line_h: ArrayLike, line_v: ArrayLike, name: str, machine: Machine,
+           shape: tuple[int, int] | None) -> tuple[cl_array.Array, cl_array.Array, tuple[int, int]]:
+    """Both line fields of one cue on the device as uint8, and the pixel shape they imply."""
+    fields = []
+    for array, which in ((line_h, "line_h"), (line_v, "line_v")):
+        if isinstance(array, np.ndarray):
+            if array.ndim != 2 or array.dtype not in (np.bool_, np.uint8):
+                raise ValueError(f"{name} {which} must be a 2-D bool or uint8 array, got {array.dtype} {array.shape}")
+            array = machine.to_device(array.astype(np.uint8, copy=False))
+        elif not isinstance(array, cl_array.Array) or array.dtype != np.uint8 or array.ndim != 2:
+            raise TypeError(f"{name} {which} must be a 2-D uint8 device array or a NumPy array")
+        fields.append(array)
+    h, v = fields
+    implied = (h.shape[0], h.shape[1] + 1)
+    if v.shape != (implied[0] - 1, implied[1]):
+        raise ValueError(f"{name}: line_h {h.shape} and line_v {v.shape} are not the two line fields of one image")
+    if shape is not None and implied != shape:
+        raise ValueError(f"{name}: line fields of a {implied} image, expected {shape}")
+    return h, v, implied
+
+
+def boundary(line_h: ArrayLike, line_v: ArrayLike, *, machine: Machine | None = None) -> ArrayLike:
+    """A line process as a pixel map: (y, x) is on when the site to its right or below it is on.
+
+    Parameters
+    ----------
+    line_h, line_v : (H, W - 1) and (H - 1, W) arrays, bool or uint8 (device arrays: uint8)
+        The line fields, as :func:`vmcl.mrf.restore` returns them.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    (H, W) bool for NumPy input; uint8 0/1 device array for device input. The same map as
+    :func:`vmcl.mrf.boundary_map`, computed on the device.
+    """
+    machine = machine_for(machine)
+    host = isinstance(line_h, np.ndarray)
+    h, v, (height, width) = _lines(line_h, line_v, "lines", machine, None)
+    out = machine.empty((height, width), np.uint8)
+    kernel = machine.kernel("integrate", "boundary", **_DEFINES)
+    machine.launch(kernel, (width, height), h, v, out, np.int64(width), np.int64(height))
+    return out.get().astype(bool) if host else out
+
+
+def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayLike | None = None,
+              shape: tuple[int, int] | None = None, machine: Machine | None = None) -> Integration:
+    """Combine the cues' line processes and the brightness edges into the labelled discontinuity map.
+
+    Parameters
+    ----------
+    lines : mapping of cue name to (line_h, line_v)
+        Any subset of :data:`CUES` ("depth", "motion", "colour", "texture"); each value as
+        :func:`boundary` takes it. Cues left out support nothing.
+    edges : (H, W) array, optional
+        Brightness edges, non-zero on edge pixels (device arrays: uint8); they set the BRIGHTNESS bit.
+    shape : (int, int), optional
+        The image's (H, W); required when neither lines nor edges are given.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    Integration
+        (support, labels): NumPy for NumPy input, device arrays when any input is a device array.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> line_h = np.zeros((4, 3), bool); line_h[:, 1] = True    # a vertical line between x = 1 and 2
+    >>> out = integrate({"colour": (line_h, np.zeros((3, 4), bool))})
+    >>> out.labels[0].tolist(), int(out.support[0, 1])
+    ([0, 3, 0, 0], 4)
+    """
+    machine = machine_for(machine)
+    unknown = set(lines) - set(CUES)
+    if unknown:
+        raise ValueError(f"lines has unknown cues {sorted(unknown)}; cues are {', '.join(CUES)}")
+    inputs = [a for pair in lines.values() for a in pair] + ([edges] if edges is not None else [])
+    host = all(isinstance(a, np.ndarray) for a in inputs)
+    present = 0
+    buffers = []
+    for bit, name in zip((Cue.DEPTH, Cue.MOTION, Cue.COLOUR, Cue.TEXTURE), CUES):
+        if name in lines:
+            h, v, shape = _lines(*lines[name], name, machine, shape)
+            present |= bit
+            buffers += [h, v]
+        else:
+            buffers += [None, None]
+    if edges is not None:
+        if isinstance(edges, np.ndarray):
+            edges = machine.to_device((edges != 0).astype(np.uint8))
+        if edges.dtype != np.uint8 or edges.ndim != 2 or (shape is not None and edges.shape != shape):
+            raise ValueError(f"edges must be a uint8 (H, W) field of the lines' shape {shape}, got "
+                             f"{edges.dtype} {edges.shape}")
+        shape = edges.shape
+        present |= Cue.BRIGHTNESS
+    if shape is None:
+        raise ValueError("integrate needs lines, edges or a shape")
+    height, width = shape
+    placeholder = machine.empty(1, np.uint8)  # never read: its cue's bit is not in `present`
+    buffers = [placeholder if b is None else b for b in buffers]
+    support, labels = machine.empty(shape, np.uint8), machine.empty(shape, np.uint8)
+    kernel = machine.kernel("integrate", "integrate", **_DEFINES)
+    machine.launch(kernel, (width, height), *buffers, placeholder if edges is None else edges,
+                   np.int32(present), support, labels, np.int64(width), np.int64(height))
+    if host:
+        return Integration(support.get(), labels.get())
+    return Integration(support, labels)

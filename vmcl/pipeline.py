@@ -1,0 +1,521 @@
+"""The Vision Machine: images in, the cartoon of labelled discontinuities and the dense fields out.
+
+Seed sections "The Vision Machine System" (figure 1) and "Organization of integration". The images go
+through the early modules independently: Canny's brightness edges (:mod:`vmcl.early.edges`), stereo
+(:mod:`vmcl.early.stereo`), motion (:mod:`vmcl.early.motion`), colour (:mod:`vmcl.early.color`) and texture
+(:mod:`vmcl.early.texture`). Each cue's measurements, noisy and for stereo sparse, are restored by a
+line-process MRF coupled to the brightness edges (:func:`vmcl.mrf.restore`), which makes them dense and
+finds their discontinuities at once; :mod:`vmcl.integrate` puts the line processes together into the
+labelled map. The depth discontinuities of this first pass are fed back to the stereo matcher (the seed's
+"feedback from the results of integration into the matching stage"): its support windows stop at them
+in a second pass, which the depth MRF restores again.
+
+Any subset of inputs works: one image gives edges, colour (when RGB) and texture; a right image adds
+stereo; a next frame adds motion. Every field stays on the device from the one upload of each image to
+the one download of each output; :class:`Result` holds the NumPy fields with the wall time of every stage
+and, on a profiling Machine, the device time of every kernel.
+
+References
+----------
+T. Poggio et al., "The MIT Vision Machine", Proc. DARPA Image Understanding Workshop, 177-198, 1988.
+E. Gamble, D. Geiger, T. Poggio and D. Weinshall, "Integration of vision modules and labeling of surface
+discontinuities", IEEE SMC 19(6):1576-1581, 1989.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+import time
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vmcl import integrate as _integrate
+from vmcl.early import color, edges, motion, stereo, texture
+from vmcl.machine import Machine
+from vmcl.mrf import Params, preset, restore
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # the same parser, before it joined the standard library
+    import tomli as tomllib
+
+# Full scale of each accepted integer dtype: images are computed as float32 in [0, 1].
+_FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
+
+
+@dataclass(frozen=True)
+class EdgesConfig:
+    """Canny's brightness edges, the edges every cue's MRF is coupled to.
+
+    Parameters
+    ----------
+    sigma : float
+        Gaussian smoothing in pixels (the paper uses Canny "at a coarser resolution" for the MRFs).
+    low_threshold, high_threshold : float, optional
+        Hysteresis thresholds on the gradient magnitude (image in [0, 1]); None: the noise rule.
+    use_quantiles : bool
+        The thresholds are quantiles of the gradient magnitudes.
+    """
+
+    sigma: float = 2.0
+    low_threshold: float | None = None
+    high_threshold: float | None = None
+    use_quantiles: bool = False
+
+
+@dataclass(frozen=True)
+class StereoConfig:
+    """The Drumheller-Poggio matcher (:func:`vmcl.early.stereo.match`) and the feedback pass.
+
+    Parameters
+    ----------
+    enabled : bool
+    d_min, d_max : int, optional
+        Disparity range; None: 0 and ``ceil(max_disparity * W)``.
+    max_disparity : float
+        The default d_max as a share of the image width.
+    features, patch, sigma, low_threshold, high_threshold, use_quantiles
+        As :func:`vmcl.early.stereo.match` takes them. The defaults match Canny edges chosen by
+        quantile (60% and 85%), which keeps textured surfaces matched where the noise rule sees none.
+    feedback : bool
+        Match again with support windows stopped at the first pass's depth discontinuities.
+    """
+
+    enabled: bool = True
+    d_min: int | None = None
+    d_max: int | None = None
+    max_disparity: float = 0.05
+    features: str = "canny"
+    patch: int = 11
+    sigma: float = 2.0
+    low_threshold: float | None = 0.6
+    high_threshold: float | None = 0.85
+    use_quantiles: bool = True
+    feedback: bool = True
+
+
+@dataclass(frozen=True)
+class MotionConfig:
+    """Patchwise optical flow (:func:`vmcl.early.motion.flow`); parameters as it takes them."""
+
+    enabled: bool = True
+    delta: int = 4
+    patch: int = 11
+    levels: int = 2
+    features: str = "brightness"
+
+
+@dataclass(frozen=True)
+class ColourConfig:
+    """Hurlbert-Poggio hue (:func:`vmcl.early.color.albedo_edges`); used when the left image is RGB.
+
+    Parameters
+    ----------
+    enabled : bool
+    threshold : float, optional
+        On the noise-normalised hue gradient; None: the noise rule.
+    """
+
+    enabled: bool = True
+    threshold: float | None = None
+
+
+@dataclass(frozen=True)
+class TextureConfig:
+    """Blob-texton density (:func:`vmcl.early.texture.texture_edges`); parameters as it takes them.
+
+    ``threshold`` is in the units of images scaled to [0, 1].
+    """
+
+    enabled: bool = True
+    fine_sigma: float = 1.0
+    coarse_sigma: float = 4.0
+    threshold: float = 0.08
+    radius: int = 24
+
+
+@dataclass(frozen=True)
+class MrfConfig:
+    """The line-process MRF restoring each cue (:func:`vmcl.mrf.restore`).
+
+    Parameters
+    ----------
+    method : {"icm", "meanfield", "mpm", "anneal"}
+        The solver for every cue. "icm" is the fastest; "meanfield" (Geiger and Girosi) reaches lower
+        energies in about forty times the sweeps.
+    seed : int
+        Keys the random numbers of "anneal" and "mpm".
+    depth, flow, colour, texture : mapping of str to value
+        Overrides of :func:`vmcl.mrf.preset`'s measured Params per cue (field names of
+        :class:`vmcl.mrf.Params`, e.g. ``{"beta": 3.0}``).
+    """
+
+    method: str = "icm"
+    seed: int = 0
+    depth: Mapping[str, Any] = field(default_factory=dict)
+    flow: Mapping[str, Any] = field(default_factory=dict)
+    colour: Mapping[str, Any] = field(default_factory=dict)
+    texture: Mapping[str, Any] = field(default_factory=dict)
+
+    def params(self, cue: str) -> Params:
+        """The preset Params of ``cue`` with this configuration's overrides."""
+        overrides = dict(getattr(self, cue))
+        known = {f.name for f in dataclasses.fields(Params)}
+        unknown = sorted(set(overrides) - known)
+        if unknown:
+            raise ValueError(f"unknown key mrf.{cue}.{unknown[0]}: Params has {', '.join(sorted(known))}")
+        return dataclasses.replace(preset(cue), **overrides)
+
+
+_SECTIONS = {"edges": EdgesConfig, "stereo": StereoConfig, "motion": MotionConfig, "colour": ColourConfig,
+             "texture": TextureConfig, "mrf": MrfConfig}
+
+
+@dataclass(frozen=True)
+class Config:
+    """Everything the machine can be told, with documented defaults; see each section's class.
+
+    Load one from TOML with :meth:`from_toml` (sections ``[edges]``, ``[stereo]``, ``[motion]``,
+    ``[colour]``, ``[texture]``, ``[mrf]`` and ``[mrf.depth]`` ... for Params overrides); unknown keys
+    are refused with a ValueError naming them.
+
+    Examples
+    --------
+    >>> Config.from_dict({"stereo": {"d_max": 16}, "mrf": {"method": "icm"}}).stereo.d_max
+    16
+    """
+
+    edges: EdgesConfig = field(default_factory=EdgesConfig)
+    stereo: StereoConfig = field(default_factory=StereoConfig)
+    motion: MotionConfig = field(default_factory=MotionConfig)
+    colour: ColourConfig = field(default_factory=ColourConfig)
+    texture: TextureConfig = field(default_factory=TextureConfig)
+    mrf: MrfConfig = field(default_factory=MrfConfig)
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> Config:
+        """A Config from nested mappings; a key that names nothing raises ValueError."""
+        sections = {}
+        for name, entries in values.items():
+            if name not in _SECTIONS:
+                raise ValueError(f"unknown config section {name!r}; sections are {', '.join(_SECTIONS)}")
+            if not isinstance(entries, Mapping):
+                raise TypeError(f"config section {name!r} must be a table of keys")
+            known = {f.name for f in dataclasses.fields(_SECTIONS[name])}
+            for key in entries:
+                if key not in known:
+                    raise ValueError(f"unknown config key {name}.{key}; {name} has {', '.join(sorted(known))}")
+            sections[name] = _SECTIONS[name](**entries)
+        config = cls(**sections)
+        for cue in ("depth", "flow", "colour", "texture"):
+            config.mrf.params(cue)  # refuse bad Params overrides now, not mid-run
+        return config
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> Config:
+        """Read a Config from a TOML file (raises ValueError on bad TOML or keys, OSError if unreadable)."""
+        try:
+            values = tomllib.loads(Path(path).read_text())
+        except tomllib.TOMLDecodeError as error:
+            raise ValueError(f"{path}: not valid TOML ({error})") from None
+        return cls.from_dict(values)
+
+    def to_dict(self) -> dict[str, dict[str, Any]]:
+        """The configuration as nested plain values (for the report)."""
+        return {name: {k: (dict(v) if isinstance(v, Mapping) else v)
+                       for k, v in dataclasses.asdict(getattr(self, name)).items()} for name in _SECTIONS}
+
+
+@dataclass
+class Result:
+    """What :meth:`VisionMachine.run` returns: host (NumPy) fields, the cartoon and the timings.
+
+    Fields a run had no input for are None. Line processes follow :mod:`vmcl.scenes`: ``line_h`` is
+    (H, W - 1), ``line_v`` (H - 1, W).
+
+    Attributes
+    ----------
+    image : float32 (H, W) or (H, W, 3)
+        The left image in [0, 1], as the machine saw it.
+    edges : bool (H, W)
+        Canny's brightness edges.
+    hue, colour_edges : float32 (H, W) (NaN where not valid), bool (H, W)
+        The hue H = R / (R + G) and its albedo-edge candidates (RGB input only).
+    density, texture_edges : float32 (H, W), bool (H, W)
+        Texton density and its edge candidates.
+    sparse_disparity : float32 (H, W)
+        The matcher's disparities (of the feedback pass when there is one), NaN where none.
+    first_pass_disparity : float32 (H, W)
+        The matcher's disparities before feedback (None without feedback).
+    stereo_discontinuity : bool (H, W)
+        Features whose votes were bimodal over d.
+    disparity : float32 (H, W)
+        Dense disparity: the depth MRF's restoration.
+    raw_flow, flow : float32 (H, W, 2)
+        The motion module's flow (NaN where none) and its MRF restoration.
+    restored : dict of str to ndarray
+        Each cue's restored field: "depth" (= disparity), "flow" (= flow), "colour", "texture".
+    lines : dict of str to (line_h, line_v)
+        Each cue's line process (bool).
+    support : uint8 (H, W)
+        :class:`vmcl.integrate.Cue` bits: which cues put a discontinuity at each pixel.
+    labels : uint8 (H, W)
+        The cartoon: :class:`vmcl.scenes.Label` codes of the discontinuity pixels.
+    stages : dict of str to float
+        Wall time of each stage in ms, in the order run (device work included: each stage ends with
+        the queue drained).
+    kernels : dict of str to dict
+        Per-kernel device time, as :meth:`vmcl.Machine.timings` gives it (empty without profiling).
+    config : Config
+    notes : list of str
+        What the run could not do (e.g. no stereo match to restore).
+    """
+
+    image: np.ndarray
+    edges: np.ndarray
+    support: np.ndarray
+    labels: np.ndarray
+    config: Config
+    hue: np.ndarray | None = None
+    colour_edges: np.ndarray | None = None
+    density: np.ndarray | None = None
+    texture_edges: np.ndarray | None = None
+    sparse_disparity: np.ndarray | None = None
+    first_pass_disparity: np.ndarray | None = None
+    stereo_discontinuity: np.ndarray | None = None
+    disparity: np.ndarray | None = None
+    raw_flow: np.ndarray | None = None
+    flow: np.ndarray | None = None
+    restored: dict[str, np.ndarray] = field(default_factory=dict)
+    lines: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    stages: dict[str, float] = field(default_factory=dict)
+    kernels: dict[str, dict[str, float]] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def discontinuities(self) -> np.ndarray:
+        """bool (H, W): the integrated discontinuity map, pixels that some cue's line process marks."""
+        return (self.support & int(_integrate.CUE_BITS)) != 0
+
+    @property
+    def total_ms(self) -> float:
+        """Wall time of the whole run in ms."""
+        return sum(self.stages.values())
+
+
+def as_image(array: Any, name: str) -> np.ndarray:
+    """An input image as float32 in [0, 1]: (H, W) grey or (H, W, 3) RGB; uint8, uint16 or float.
+
+    Raises ValueError or TypeError naming ``name`` for anything else (wrong shape, NaN, too small).
+    """
+    if not isinstance(array, np.ndarray):
+        raise TypeError(f"{name} must be a NumPy array, got {type(array).__name__}")
+    if array.ndim not in (2, 3) or (array.ndim == 3 and array.shape[2] != 3):
+        raise ValueError(f"{name} must be (H, W) grey or (H, W, 3) RGB, got shape {array.shape}")
+    if min(array.shape[:2]) < 16:
+        raise ValueError(f"{name} must be at least 16 x 16 pixels, got {array.shape[:2]}")
+    if array.dtype in _FULL_SCALE:
+        return (array.astype(np.float32) / np.float32(_FULL_SCALE[array.dtype]))
+    if array.dtype.kind != "f":
+        raise TypeError(f"{name} must be uint8, uint16 or float, got {array.dtype}")
+    if not np.isfinite(array).all():
+        raise ValueError(f"{name} has NaN or infinite pixels")
+    return np.ascontiguousarray(array, np.float32)
+
+
+class VisionMachine:
+    """The integrated machine of figure 1: early modules, MRF restoration per cue, integration.
+
+    Parameters
+    ----------
+    config : Config, optional
+        Default: ``Config()``.
+    machine : vmcl.Machine, optional
+        Default: a new profiling Machine (per-kernel timings in every Result).
+
+    Examples
+    --------
+    >>> from vmcl import scenes
+    >>> scene = scenes.render(scenes.preset("cues", shape=(64, 64)), seed=0)
+    >>> result = VisionMachine().run(scene.left, scene.right)  # doctest: +SKIP
+    >>> result.disparity.shape, sorted(result.lines)  # doctest: +SKIP
+    ((64, 64), ['colour', 'depth', 'texture'])
+    """
+
+    def __init__(self, config: Config | None = None, *, machine: Machine | None = None) -> None:
+        if config is not None and not isinstance(config, Config):
+            raise TypeError(f"config must be a vmcl.pipeline.Config, got {type(config).__name__}")
+        if machine is not None and not isinstance(machine, Machine):
+            raise TypeError(f"machine must be a vmcl.Machine, got {type(machine).__name__}")
+        self.config = config or Config()
+        self.machine = machine or Machine(profile=True)
+
+    def stages(self, *, right: bool, next: bool, rgb: bool) -> list[str]:
+        """The names of the stages :meth:`run` goes through for these inputs, in order."""
+        c = self.config
+        stereo_on, motion_on = right and c.stereo.enabled, next and c.motion.enabled
+        colour_on, texture_on = rgb and c.colour.enabled, c.texture.enabled
+        names = ["upload", "edges"]
+        names += ["colour"] * colour_on + ["texture"] * texture_on + ["stereo"] * stereo_on + ["motion"] * motion_on
+        names += ["mrf depth"] * stereo_on
+        names += ["feedback"] * (stereo_on and c.stereo.feedback)
+        names += ["mrf flow"] * motion_on + ["mrf colour"] * colour_on + ["mrf texture"] * texture_on
+        return names + ["integrate", "download"]
+
+    def run(self, left: np.ndarray, right: np.ndarray | None = None, next: np.ndarray | None = None, *,
+            progress: Callable[[str], None] | None = None) -> Result:
+        """Run the machine on one image, a stereo pair, and/or the next frame of the left view.
+
+        Parameters
+        ----------
+        left : (H, W) or (H, W, 3) array, uint8, uint16 or float
+            The left view at t (floats are taken as they are, in [0, 1] for the default thresholds).
+        right : array of left's shape and type, optional
+            The right view at t, rectified (rows are epipolar lines): adds stereo.
+        next : array of left's shape and type, optional
+            The left view at t + 1: adds motion.
+        progress : callable, optional
+            Called with each stage's name (see :meth:`stages`) when the stage ends.
+
+        Returns
+        -------
+        Result
+
+        Raises
+        ------
+        ValueError, TypeError
+            Bad images (shape, dtype, NaN, sizes that differ) or a configuration the modules refuse.
+        """
+        image = as_image(left, "left")
+        others = {}
+        for name, array in (("right", right), ("next", next)):
+            if array is not None:
+                others[name] = as_image(array, name)
+                if others[name].shape != image.shape:
+                    raise ValueError(f"{name} has shape {others[name].shape}, left has {image.shape}: "
+                                     "the images must have the same size and channels")
+        return _Run(self, image, others, progress).result
+
+
+class _Run:
+    """One run of the machine: the stages in order, each timed, the fields kept on the device."""
+
+    def __init__(self, vm: VisionMachine, image: np.ndarray, others: dict[str, np.ndarray],
+                 progress: Callable[[str], None] | None) -> None:
+        self.m, self.c = vm.machine, vm.config
+        self.progress = progress
+        self.stages: dict[str, float] = {}
+        self.notes: list[str] = []
+        if self.m.profile:
+            self.m.timings(reset=True)  # only this run's kernels
+        width = image.shape[1]
+        rgb = image.ndim == 3
+        names = vm.stages(right="right" in others, next="next" in others, rgb=rgb)
+        device: dict[str, Any] = {}
+        out: dict[str, Any] = {}
+        with self.stage("upload"):
+            left = self.m.to_device(image)
+            others_d = {name: self.m.to_device(array) for name, array in others.items()}
+        with self.stage("edges"):
+            e = self.c.edges
+            device["edges"] = edges.canny(left, sigma=e.sigma, low_threshold=e.low_threshold,
+                                          high_threshold=e.high_threshold, use_quantiles=e.use_quantiles,
+                                          machine=self.m)
+        brightness = device["edges"]
+        if "colour" in names:
+            with self.stage("colour"):
+                found = color.albedo_edges(left, threshold=self.c.colour.threshold, machine=self.m)
+                device["hue"], device["colour_edges"] = found.hue, found.edges
+        if "texture" in names:
+            with self.stage("texture"):
+                t = self.c.texture
+                found = texture.texture_edges(left, fine_sigma=t.fine_sigma, coarse_sigma=t.coarse_sigma,
+                                              threshold=t.threshold, radius=t.radius, machine=self.m)
+                device["density"], device["texture_edges"] = found.density, found.edges
+        if "stereo" in names:
+            with self.stage("stereo"):
+                matched = self.match(left, others_d["right"], width, None)
+                device["sparse_disparity"] = matched.disparity
+                device["stereo_discontinuity"] = matched.discontinuity
+        if "motion" in names:
+            with self.stage("motion"):
+                mc = self.c.motion
+                device["raw_flow"] = motion.flow(left, others_d["next"], delta=mc.delta, patch=mc.patch,
+                                                 levels=mc.levels, features=mc.features, machine=self.m).flow
+        lines = {}
+        if "mrf depth" in names:
+            with self.stage("mrf depth"):
+                found = self.restore("depth", device["sparse_disparity"], brightness, device)
+                if found is not None:
+                    lines["depth"] = found
+            if "feedback" in names and "depth" in lines:
+                with self.stage("feedback"):
+                    barriers = _integrate.boundary(*lines["depth"], machine=self.m)
+                    device["first_pass_disparity"] = device["sparse_disparity"]
+                    matched = self.match(left, others_d["right"], width, barriers)
+                    device["sparse_disparity"] = matched.disparity
+                    device["stereo_discontinuity"] = matched.discontinuity
+                    lines["depth"] = self.restore("depth", matched.disparity, brightness, device) or lines["depth"]
+        for cue, data, kind in (("flow", "raw_flow", "smooth"), ("colour", "hue", "constant"),
+                                ("texture", "density", "constant")):
+            if f"mrf {cue}" in names:
+                with self.stage(f"mrf {cue}"):
+                    found = self.restore(cue, device[data], brightness, device, kind=kind)
+                    if found is not None:
+                        lines["motion" if cue == "flow" else cue] = found
+        with self.stage("integrate"):
+            device["support"], device["labels"] = _integrate.integrate(lines, edges=brightness, machine=self.m)
+        with self.stage("download"):
+            for name, array in device.items():
+                out[name] = array.get()
+            out["lines"] = {cue: (h.get().astype(bool), v.get().astype(bool)) for cue, (h, v) in lines.items()}
+        self.result = self.collect(image, out)
+
+    @contextmanager
+    def stage(self, name: str) -> Iterator[None]:
+        start = time.perf_counter()
+        yield
+        self.m.finish()  # a stage's time includes its device work
+        self.stages[name] = (time.perf_counter() - start) * 1e3
+        if self.progress is not None:
+            self.progress(name)
+
+    def match(self, left, right, width: int, barriers) -> stereo.StereoMatch:
+        s = self.c.stereo
+        d_min = 0 if s.d_min is None else s.d_min
+        d_max = math.ceil(s.max_disparity * width) if s.d_max is None else s.d_max
+        return stereo.match(left, right, d_min=d_min, d_max=d_max, features=s.features, patch=s.patch,
+                            sigma=s.sigma, low_threshold=s.low_threshold, high_threshold=s.high_threshold,
+                            use_quantiles=s.use_quantiles, barriers=barriers, machine=self.m)
+
+    def restore(self, cue: str, data, brightness, device: dict, *, kind: str = "smooth"):
+        """Restore one cue coupled to the brightness edges; keeps its field, returns its lines."""
+        try:
+            found = restore(data, edges=brightness, kind=kind, method=self.c.mrf.method,
+                            params=self.c.mrf.params(cue), seed=self.c.mrf.seed, machine=self.m)
+        except ValueError as error:
+            # The one refusal a good run can meet: the module found nothing (no match, no flow, no
+            # valid hue) for the MRF to restore. The cue is then absent from the result.
+            if "nothing to restore" not in str(error):
+                raise
+            self.notes.append(f"{cue}: the early module gave no data, so no {cue} field or discontinuities")
+            return None
+        device[f"restored_{cue}"] = found.field
+        return found.line_h, found.line_v
+
+    def collect(self, image: np.ndarray, out: dict[str, Any]) -> Result:
+        restored = {cue: out.pop(f"restored_{cue}") for cue in ("depth", "flow", "colour", "texture")
+                    if f"restored_{cue}" in out}
+        as_bool = ("edges", "colour_edges", "texture_edges", "stereo_discontinuity")
+        fields = {name: (value.astype(bool) if name in as_bool else value) for name, value in out.items()}
+        kernels = self.m.timings(reset=True) if self.m.profile else {}
+        return Result(image=image, config=self.c, restored=restored, disparity=restored.get("depth"),
+                      flow=restored.get("flow"), stages=self.stages, kernels=kernels, notes=self.notes,
+                      **fields)
