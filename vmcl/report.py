@@ -1,0 +1,272 @@
+"""Pictures of a Vision Machine run a person reads at a glance, and the single-file HTML report.
+
+Seed section "The Vision Machine System": the machine's output is "a 'cartoon' of the original scene"
+(its labelled discontinuities) "along with interpolated depth, motion, texture, and color fields". The
+report shows exactly those: the cartoon coloured by the cue that supports each discontinuity over the
+faded image, the dense disparity colour-mapped with a scale bar, the flow in the Middlebury colour wheel
+(hue = direction, saturation = speed; Baker et al. 2011), the hue and texture fields, then the
+parameters and the timing table. Images are NumPy RGB uint8; files are PNGs, and report.html holds them
+inline (base64) so it can be mailed or archived as one file.
+
+References
+----------
+S. Baker, D. Scharstein, J. P. Lewis, S. Roth, M. J. Black and R. Szeliski, "A database and evaluation
+methodology for optical flow", IJCV 92(1):1-31, 2011 (the colour wheel).
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from vmcl.integrate import Cue
+from vmcl.pipeline import Result
+
+CUE_COLOURS = {Cue.DEPTH: (230, 40, 40), Cue.MOTION: (250, 150, 20), Cue.COLOUR: (40, 110, 240),
+               Cue.TEXTURE: (30, 180, 60)}
+"""RGB of each cue in the cartoon; a pixel several cues support takes the first in this order."""
+
+BRIGHTNESS_ONLY = (200, 200, 200)
+"""RGB of brightness edges no cue supports (drawn under the cues)."""
+
+_BAR = 28  # height in pixels of the colour scale under the disparity map
+
+
+def _grey(image: np.ndarray) -> np.ndarray:
+    """float (H, W) in [0, 1] from a grey or RGB float image (BT.709 luma, as vmcl.early.filters)."""
+    if image.ndim == 3:
+        image = image @ np.array([0.2125, 0.7154, 0.0721], np.float32)
+    return np.clip(image, 0.0, 1.0)
+
+
+def _to_uint8(rgb: np.ndarray) -> np.ndarray:
+    return np.clip(np.round(rgb), 0, 255).astype(np.uint8)
+
+
+def disparity_image(disparity: np.ndarray, *, vmin: float | None = None, vmax: float | None = None) -> np.ndarray:
+    """Disparity colour-mapped (turbo: near is red, far is blue) with a labelled scale bar underneath.
+
+    Parameters
+    ----------
+    disparity : (H, W) float array, NaN where unknown (drawn black)
+    vmin, vmax : float, optional
+        The range of the colour map; default the finite values' range.
+
+    Returns
+    -------
+    uint8 RGB (H + 28, W, 3)
+    """
+    finite = np.isfinite(disparity)
+    low = float(np.nanmin(disparity)) if vmin is None and finite.any() else (vmin or 0.0)
+    high = float(np.nanmax(disparity)) if vmax is None and finite.any() else (vmax or 1.0)
+    span = max(high - low, 1e-6)
+    width = disparity.shape[1]
+    scaled = np.where(finite, (disparity - low) / span, 0.0)
+    codes = _to_uint8(np.clip(scaled, 0, 1) * 255)
+    picture = cv2.cvtColor(cv2.applyColorMap(codes, cv2.COLORMAP_TURBO), cv2.COLOR_BGR2RGB)
+    picture[~finite] = 0
+    bar = np.full((_BAR, width, 3), 255, np.uint8)
+    ramp = _to_uint8(np.linspace(0, 255, width))[None, :].repeat(10, axis=0)
+    bar[2:12] = cv2.cvtColor(cv2.applyColorMap(ramp, cv2.COLORMAP_TURBO), cv2.COLOR_BGR2RGB)
+    for fraction, align in ((0.0, 0), (0.5, 1), (1.0, 2)):
+        text = f"{low + fraction * span:.1f}" + (" px" if fraction == 1.0 else "")
+        (tw, _), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, 0.35, 1)
+        x = [1, (width - tw) // 2, width - tw - 1][align]
+        cv2.putText(bar, text, (max(x, 0), _BAR - 4), cv2.FONT_HERSHEY_SIMPLEX, 0.35, (0, 0, 0), 1, cv2.LINE_AA)
+    return np.concatenate([picture, bar], axis=0)
+
+
+def _colour_wheel() -> np.ndarray:
+    """The Middlebury wheel's 55 colours: red-yellow-green-cyan-blue-magenta in 15/6/4/11/13/6 steps."""
+    segments = ((15, (255, 0, 0), (255, 255, 0)), (6, (255, 255, 0), (0, 255, 0)), (4, (0, 255, 0), (0, 255, 255)),
+                (11, (0, 255, 255), (0, 0, 255)), (13, (0, 0, 255), (255, 0, 255)), (6, (255, 0, 255), (255, 0, 0)))
+    rows = []
+    for steps, start, end in segments:
+        t = np.arange(steps)[:, None] / steps
+        rows.append(np.array(start) * (1 - t) + np.array(end) * t)
+    return np.concatenate(rows) / 255.0
+
+
+def flow_image(flow: np.ndarray, *, max_flow: float | None = None) -> np.ndarray:
+    """Flow in the Middlebury colour wheel: hue is the direction, saturation the speed; NaN is black.
+
+    Parameters
+    ----------
+    flow : (H, W, 2) float array, (u, v) with x right and y down
+    max_flow : float, optional
+        The speed drawn fully saturated; default the largest finite speed.
+
+    Returns
+    -------
+    uint8 RGB (H, W, 3), with the wheel itself drawn in the top-left corner as the key.
+    """
+    u, v = flow[..., 0], flow[..., 1]
+    known = np.isfinite(u) & np.isfinite(v)
+    speed = np.hypot(np.where(known, u, 0), np.where(known, v, 0))
+    scale = max(float(speed.max()) if max_flow is None else max_flow, 1e-6)
+    picture = _wheel_colours(np.where(known, u, 0) / scale, np.where(known, v, 0) / scale)
+    picture[~known] = 0
+    size = min(48, *flow.shape[:2]) // 2 * 2
+    if size >= 16:
+        y, x = (np.mgrid[:size, :size] - (size - 1) / 2) / (size / 2)
+        key = _wheel_colours(x, y)
+        key[np.hypot(x, y) > 1] = 255
+        picture[:size, :size] = key
+    return picture
+
+
+def _wheel_colours(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    wheel = _colour_wheel()
+    n = len(wheel)
+    radius = np.minimum(np.hypot(u, v), 1.0)
+    angle = np.arctan2(-v, -u) / np.pi  # Baker et al.'s convention
+    position = (angle + 1) / 2 * (n - 1)
+    k0 = np.floor(position).astype(int)
+    k1 = (k0 + 1) % n
+    f = (position - k0)[..., None]
+    colour = (1 - f) * wheel[k0] + f * wheel[k1]
+    colour = 1 - radius[..., None] * (1 - colour)  # slow motion fades to white
+    return _to_uint8(colour * 255)
+
+
+def cartoon_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
+    """The cartoon: discontinuities coloured by their cue (:data:`CUE_COLOURS`) over the faded image.
+
+    Parameters
+    ----------
+    image : float (H, W) or (H, W, 3) in [0, 1]
+    support : uint8 (H, W), :class:`vmcl.integrate.Cue` bits (:attr:`vmcl.pipeline.Result.support`)
+
+    Returns
+    -------
+    uint8 RGB (H, W, 3)
+    """
+    faded = 255 * (0.55 + 0.4 * _grey(image))  # light grey: the coloured lines carry the picture
+    picture = _to_uint8(np.repeat(faded[..., None], 3, axis=2))
+    picture[(support & Cue.BRIGHTNESS) != 0] = BRIGHTNESS_ONLY
+    painted = np.zeros(support.shape, bool)
+    for cue, colour in CUE_COLOURS.items():
+        here = ((support & cue) != 0) & ~painted
+        picture[here] = colour
+        painted |= here
+    return picture
+
+
+def field_image(values: np.ndarray) -> np.ndarray:
+    """A scalar field (hue, texture density) as grey levels over its finite range; NaN is black."""
+    finite = np.isfinite(values)
+    if not finite.any():
+        return np.zeros(values.shape + (3,), np.uint8)
+    low, high = float(values[finite].min()), float(values[finite].max())
+    scaled = np.where(finite, (values - low) / max(high - low, 1e-6), 0.0)
+    return np.repeat(_to_uint8(scaled * 255)[..., None], 3, axis=2)
+
+
+def images(result: Result) -> dict[str, np.ndarray]:
+    """The report's pictures of a run, by file stem, in the order the report shows them."""
+    out = {"cartoon": cartoon_image(result.image, result.support),
+           "input": _to_uint8(255 * np.repeat(_grey(result.image)[..., None], 3, axis=2)
+                              if result.image.ndim == 2 else 255 * np.clip(result.image, 0, 1))}
+    if result.disparity is not None:
+        finite = result.disparity[np.isfinite(result.disparity)]
+        span = (float(finite.min()), float(finite.max())) if finite.size else (None, None)
+        out["disparity"] = disparity_image(result.disparity, vmin=span[0], vmax=span[1])
+        out["sparse_disparity"] = disparity_image(result.sparse_disparity, vmin=span[0], vmax=span[1])
+    if result.flow is not None:
+        out["flow"] = flow_image(result.flow)
+    if result.hue is not None:
+        out["hue"] = field_image(result.restored.get("colour", result.hue))
+    if result.density is not None:
+        out["texture"] = field_image(result.restored.get("texture", result.density))
+    out["edges"] = cartoon_image(result.image, np.where(result.edges, int(Cue.BRIGHTNESS), 0).astype(np.uint8))
+    return out
+
+
+_CAPTIONS = {
+    "cartoon": "The cartoon: discontinuities by cue (red depth, orange motion, blue colour, green texture; "
+               "grey: brightness edges no cue supports) over the faded image",
+    "input": "The left image",
+    "disparity": "Dense disparity (the depth MRF's restoration), pixels; near is red",
+    "sparse_disparity": "The matcher's sparse disparities, same scale",
+    "flow": "Optical flow (the flow MRF's restoration), Middlebury colour wheel; key top left",
+    "hue": "Hue H = R / (R + G), restored as piecewise constant",
+    "texture": "Texton density, restored as piecewise constant",
+    "edges": "Canny's brightness edges",
+}
+
+
+def encode_png(rgb: np.ndarray) -> bytes:
+    """PNG bytes of an RGB uint8 image."""
+    ok, data = cv2.imencode(".png", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+    if not ok:
+        raise RuntimeError("OpenCV could not encode a PNG")
+    return data.tobytes()
+
+
+def _table(header: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+    head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>" for row in rows)
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def write_report(result: Result, folder: str | Path, *, title: str = "Vision Machine run",
+                 evaluation: Mapping[str, Sequence[Sequence[object]]] | None = None) -> dict[str, Path]:
+    """Write the run's PNGs and report.html (images inline) into ``folder`` (created if missing).
+
+    Parameters
+    ----------
+    result : Result
+    folder : str or Path
+    title : str
+    evaluation : mapping of table title to rows, optional
+        Tables shown first (e.g. scores against ground truth); each table's first row is its header.
+
+    Returns
+    -------
+    dict of str to Path
+        Every file written, by stem ("report" for the HTML).
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = {}
+    figures = []
+    for stem, picture in images(result).items():
+        data = encode_png(picture)
+        path = folder / f"{stem}.png"
+        path.write_bytes(data)
+        written[stem] = path
+        inline = base64.b64encode(data).decode("ascii")
+        figures.append(f'<figure><img alt="{stem}" src="data:image/png;base64,{inline}">'
+                       f"<figcaption>{html.escape(_CAPTIONS[stem])}</figcaption></figure>")
+    sections = [f"<h1>{html.escape(title)}</h1>",
+                (f"<p>{result.image.shape[1]} x {result.image.shape[0]} pixels, "
+                 f"{html.escape(', '.join(result.stages))}; {result.total_ms:.0f} ms in all.</p>")]
+    sections += [f"<p class=note>{html.escape(note)}</p>" for note in result.notes]
+    for name, rows in (evaluation or {}).items():
+        header, *body = rows
+        sections.append(f"<h2>{html.escape(name)}</h2>" + _table(header, body))
+    sections.append("<h2>Fields</h2>" + "".join(figures))
+    stage_rows = [(name, f"{ms:.1f}") for name, ms in result.stages.items()] + [("total", f"{result.total_ms:.1f}")]
+    sections.append("<h2>Time per stage</h2>" + _table(("stage", "wall ms"), stage_rows))
+    if result.kernels:
+        ranked = sorted(result.kernels.items(), key=lambda item: -item[1]["total_ms"])
+        rows = [(name, t["calls"], f"{t['total_ms']:.2f}", f"{t['mean_ms']:.3f}") for name, t in ranked]
+        sections.append("<h2>Device time per kernel</h2>" + _table(("kernel", "calls", "total ms", "mean ms"), rows))
+    params = [(f"{section}.{key}", value) for section, entries in result.config.to_dict().items()
+              for key, value in entries.items()]
+    sections.append("<h2>Parameters</h2>" + _table(("parameter", "value"), params))
+    page = ("<!DOCTYPE html><html lang=en><head><meta charset=utf-8>"
+            f"<title>{html.escape(title)}</title><style>"
+            "body{font-family:sans-serif;margin:2em;max-width:80em}figure{display:inline-block;margin:0 1em 1em 0;"
+            "vertical-align:top;max-width:32em}img{max-width:100%;image-rendering:pixelated}"
+            "table{border-collapse:collapse;margin-bottom:1em}td,th{border:1px solid #ccc;padding:2px 8px;"
+            "text-align:left}.note{color:#a40}</style></head><body>" + "".join(sections) + "</body></html>")
+    path = folder / "report.html"
+    path.write_text(page, encoding="utf-8")
+    written["report"] = path
+    return written
