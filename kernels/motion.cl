@@ -149,27 +149,26 @@ inline FLV slowness(__global const float *moments, float penalty, long x0, long 
 #endif
 }
 
+/* The key each winner minimises. Squared differences: the penalised vote; equal keys go to the first
+ * displacement visited (raster order), which takes equal sums of squared differences, in practice a
+ * flat patch, and that has no estimate. Binary votes: vote * (2 delta^2 + 1) + |v|^2, exact integers, so
+ * ties go to the smaller |v|^2 and then to the first visited. One comparison per displacement either way:
+ * a second one for ties doubled the time of the whole update on PoCL. */
 #if COMPARE == CMP_SQUARED
-#define PENALISED(v, norm) ((v) + slow * (float)(norm))
+#define KEY(v, norm) ((v) + slow * (float)(norm))
 #else
-#define PENALISED(v, norm) (v)
+#define KEY(v, norm) ((v) * (2 * delta * delta + 1) + (norm))
 #endif
 
-inline int norm2(int d, int n, int delta)
-{
-    int vx = d % n - delta, vy = d / n - delta;
-    return vx * vx + vy * vy;
-}
-
-/* Each pixel's winner so far: its penalised vote, displacement index and |v|^2. */
+/* Each pixel's winner so far: its key and displacement index. */
 typedef struct {
-    VV vote;
-    IV index, norm;
+    VV key;
+    IV index;
 } Winner;
 
 inline Winner no_winner(void)
 {
-    Winner w = {(VV)V_HIGHEST, (IV)(-1), (IV)INT_MAX};
+    Winner w = {(VV)V_HIGHEST, (IV)(-1)};
     return w;
 }
 
@@ -191,13 +190,14 @@ inline void visit_row(Winner *w, __global const V_T *cur, __global const V_T *pr
 {
     int vy = row - delta;
     for (int c = 0; c < n; c++) {
-        int vx = c - delta, norm = vx * vx + vy * vy;
-        VV v = PENALISED(VLOAD(cur + c * plane + i), norm);
-        IV better = (v < w->vote) | ((v == w->vote) & ((IV)norm < w->norm));
-        w->vote = select(w->vote, v, better);
+        int vx = c - delta;
+        VV key = KEY(VLOAD(cur + c * plane + i), vx * vx + vy * vy);
+        IV better = key < w->key;
+        w->key = select(w->key, key, better);
         w->index = select(w->index, (IV)(row * n + c), better);
-        w->norm = select(w->norm, (IV)norm, better);
     }
+    /* Only lanes whose winner lies in this row or the one before have neighbours to record. */
+    if (!ANY(w->index >= (IV)((row - 1) * n))) return;
     int winner[VEC];
     float slows[VEC];
     VSTORE(w->index, winner);
@@ -218,15 +218,13 @@ inline void visit_row(Winner *w, __global const V_T *cur, __global const V_T *pr
     }
 }
 
-inline void store(Winner *w, __global V_T *best, __global int *index, size_t i, size_t plane)
+inline void store(Winner *w, __global V_T *best, __global int *index, size_t i)
 {
-    VSTORE(w->vote, best + i);
+    VSTORE(w->key, best + i);
     VSTORE(w->index, index + i);
-    VSTORE(w->norm, index + plane + i);
 }
 
-/* Row `row` of vote planes updates the winners kept in best, index (planes: index, |v|^2, which would
- * otherwise need integer division, which has no SIMD instruction on CPUs) and neigh (row 0 starts them). */
+/* Row `row` of vote planes updates the winners kept in best (keys), index and neigh (row 0 starts them). */
 __kernel void vote_running(__global const V_T *cur, __global const V_T *prev, __global const float *moments,
                            __global V_T *best, __global int *index, __global float *neigh, long W, long H,
                            long col0, long count, int delta, int r, float penalty, int row)
@@ -238,12 +236,11 @@ __kernel void vote_running(__global const V_T *cur, __global const V_T *prev, __
     int n = 2 * delta + 1;
     Winner w = no_winner();
     if (row > 0) {
-        w.vote = VLOAD(best + i);
+        w.key = VLOAD(best + i);
         w.index = VLOAD(index + i);
-        w.norm = VLOAD(index + plane + i);
     }
     visit_row(&w, cur, prev, neigh, i, plane, n, delta, row, slowness(moments, penalty, x0, y, W, H, r));
-    store(&w, best, index, i, plane);
+    store(&w, best, index, i);
 }
 
 /* The winners from the full table of n * n vote planes, row by row as vote_running visits them. */
@@ -261,7 +258,7 @@ __kernel void winner_table(__global const V_T *table, __global const float *mome
     for (int row = 0; row < n; row++)
         visit_row(&w, table + row * n * plane, table + (row > 0 ? row - 1 : 0) * n * plane, neigh, i, plane, n,
                   delta, row, slow);
-    store(&w, best, index, i, plane);
+    store(&w, best, index, i);
 }
 
 /* Squared differences: planes f0, f0^2, f1, f1^2 (patch means and contrasts after box sums). XOR: planes
@@ -310,20 +307,24 @@ __kernel void finish(__global const V_T *best, __global const int *index, __glob
     int2 v = (int2)(bi % n - delta, bi / n - delta);
     long x1 = clamp(x + v.x, 0L, W - 1), y1 = clamp(y + v.y, 0L, H - 1);
     size_t j = y1 * W + x1;
-    float penalised = (float)best[i];
     float count = window_count((int)x, y, W, H, r);
+    int norm = v.x * v.x + v.y * v.y;
 #if COMPARE == CMP_SQUARED
+    float penalised = best[i];
     float c0 = contrast(moments[i], moments[plane + i], count);
     float c1 = contrast(moments[2 * plane + j], moments[3 * plane + j], window_count((int)x1, y1, W, H, r));
-    float vote = penalised - penalty * c0 * (float)norm2(bi, n, delta);
+    float vote = penalised - penalty * c0 * (float)norm;
     bool known = c0 > FLAT * moments[plane + i];
     float s = 1.0f - vote / (c0 + c1);
-#elif COMPARE == CMP_SIGN
+#else
+    float penalised = (float)((best[i] - norm) / (2 * delta * delta + 1));
+#if COMPARE == CMP_SIGN
     bool known = true;
     float s = 1.0f - 2.0f * penalised / count;
 #else
     bool known = f0[i] != 0;
     float s = 1.0f - penalised / (moments[i] + moments[plane + j]);
+#endif
 #endif
     float2 w = convert_float2(v);
 #if PREDICT

@@ -57,7 +57,8 @@ def oracle_votes(f0, f1, delta, radius, features):
 
 
 def oracle_winner(table, delta):
-    """The smallest vote; ties to the smaller |v|^2, then to the first displacement in raster order."""
+    """The smallest vote; ties to the smaller |v|^2, then to the first displacement in raster order (the
+    rule for binary votes; float votes of textures do not tie)."""
     n = 2 * delta + 1
     d = np.arange(n * n)
     order = np.lexsort((d, (d % n - delta) ** 2 + (d // n - delta) ** 2))

@@ -140,6 +140,9 @@ def _check(shape: tuple[int, ...], delta, patch, features, sigma, levels: int = 
         raise ValueError(f"patch ({patch}) is larger than the image ({shape[0]} x {shape[1]})")
     if delta >= side:
         raise ValueError(f"delta ({delta}) must be smaller than the image ({shape[0]} x {shape[1]})")
+    if _COMPARE[features] and patch**2 * (2 * delta**2 + 1) >= 2**31:
+        raise ValueError(f"patch ({patch}) and delta ({delta}) are too large for the integer keys of binary "
+                         f"votes: patch**2 * (2 delta**2 + 1) must stay below 2**31")
     coarsest = min(-(-n // 2 ** (levels - 1)) for n in shape[:2])
     if patch > coarsest or delta >= coarsest:
         raise ValueError(f"levels={levels} halves the image to a side of {coarsest} pixels, smaller than "
@@ -209,7 +212,7 @@ def _winner(machine: Machine, f0, f1, moments, delta: int, radius: int, penalty:
     height, width = f0.shape
     n = 2 * delta + 1
     best = machine.empty((height, width), _vote_dtype(defines))
-    index = machine.empty((2, height, width), np.int32)
+    index = machine.empty((height, width), np.int32)
     neigh = machine.empty((4, height, width), np.float32)
     state = (best, index, neigh, np.int64(width), np.int64(height))
     params = (np.int32(delta), np.int32(radius), np.float32(penalty))
@@ -325,9 +328,11 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
 
     Notes
     -----
-    The winner minimises the vote; ties go to the smaller ``vx**2 + vy**2``, then to the first
-    displacement in raster order (vy major), so textureless patches report zero motion and results do
-    not depend on the work-group size. Frame 1 is read with clamped coordinates (the edge pixel
+    The winner minimises the vote (squared differences: plus the speed penalty). Binary votes are
+    exact integers, and their ties go to the smaller ``vx**2 + vy**2``, then to the first displacement
+    in raster order (vy major). Squared differences tie exactly only in degenerate cases (a flat patch,
+    which has no estimate; equal raw votes differ by the penalty), and then go to the first in raster
+    order. Results do not depend on the work-group size. Frame 1 is read with clamped coordinates (the edge pixel
     repeats) and patches that reach over the border sum fewer pixels.
 
     Normalised scores, 1 for a perfect match:
