@@ -33,13 +33,10 @@
 #define MODE_ICM 1
 #define MODE_MEAN 2
 
+/* Counter word 2: which colour of the sweep drew the block (f colours 0, 1; line colours 2 to 5), so
+ * the groups of different colours, which share (row, group) numbers, never share random words. */
 #define PHASE_F 0u
-#define PHASE_LINES 1u
-
-inline uint4 draw(uint site, uint sweep, uint phase, uint2 key)
-{
-    return philox4x32_10((uint4)(site, sweep, phase, 0u), key);
-}
+#define PHASE_LINES 2u
 
 /* rho(f_i, f_j): the smoothness cost of the bond between two pixels when no line breaks it. */
 inline float bond_cost(__global const float *f, long i, long j, float kappa)
@@ -196,17 +193,14 @@ inline void neighbours(__global const float *lh, __global const float *lv, int x
 
 /* ------------------------------------------------------------------------------------ f updates */
 
-/* f at the sites of one checkerboard colour: heat bath (the conditional is Gaussian for the smooth kind,
- * discrete over the levels for the constant kind), its mode (ICM) or, with line expectations, the
- * mean-field fixed point. A smooth site with no data and all four bonds broken has no conditional and
- * keeps its value. */
-__kernel void f_update(__global float *f, __global const float *g, __global const float *w,
-                       __global const float *lh, __global const float *lv, __constant float *levels,
-                       float kappa, float T, uint sweep, uint2 key, int colour, long W_, long H_)
+/* f at one site: heat bath (the conditional is Gaussian for the smooth kind, discrete over the levels
+ * for the constant kind), its mode (ICM) or, with line expectations, the mean-field fixed point. `z`
+ * holds NCOMP standard normals (smooth kind), `u` a uniform (constant kind). A smooth site with no data
+ * and all four bonds broken has no conditional and keeps its value. */
+inline void f_site(__global float *f, __global const float *g, __global const float *w,
+                   __global const float *lh, __global const float *lv, __constant float *levels, float kappa,
+                   float T, int x, int y, int W, int H, const float *z, float u)
 {
-    int W = (int)W_, H = (int)H_, y = get_global_id(1);
-    int x = 2 * (int)get_global_id(0) + ((y + colour) & 1);
-    if (x >= W || y >= H) return;
     int i = y * W + x;
     int nb[4];
     float keep[4];
@@ -220,22 +214,8 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
     }
     if (a <= 0.0f) return;
 #if MODE == MODE_SAMPLE
-    uint4 r = draw((uint)i, sweep, PHASE_F, key);
     float sd = sqrt(T / (2.0f * a));
-    /* Box-Muller: words (x, y) give the normals of components 0 and 1, words (z, w) of 2 and 3. */
-    float radius = native_sqrt(-2.0f * native_log(philox_uniform(r.x))), angle = 2.0f * M_PI_F * philox_uniform(r.y);
-    f[i * NCOMP] = b[0] / a + sd * radius * native_cos(angle);
-#if NCOMP > 1
-    f[i * NCOMP + 1] = b[1] / a + sd * radius * sin(angle);
-#endif
-#if NCOMP > 2
-    radius = sqrt(-2.0f * log(philox_uniform(r.z)));
-    angle = 2.0f * M_PI_F * philox_uniform(r.w);
-    f[i * NCOMP + 2] = b[2] / a + sd * radius * native_cos(angle);
-#endif
-#if NCOMP > 3
-    f[i * NCOMP + 3] = b[3] / a + sd * radius * sin(angle);
-#endif
+    for (int c = 0; c < NCOMP; ++c) f[i * NCOMP + c] = b[c] / a + sd * z[c];
 #else
     for (int c = 0; c < NCOMP; ++c) f[i * NCOMP + c] = b[c] / a;
 #endif
@@ -256,7 +236,7 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
         energy[k] = exp(-(energy[k] - lowest) / T);
         total += energy[k];
     }
-    float target = philox_uniform(draw((uint)i, sweep, PHASE_F, key).x) * total;
+    float target = u * total;
     best = NLEVELS - 1;
     for (int k = 0; k < NLEVELS - 1; ++k) {
         target -= energy[k];
@@ -265,6 +245,46 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
 #endif
     f[i] = levels[best];
 #endif
+}
+
+/* A work-item updates SITES sites of one colour along a row, x = 2 (SITES gx + k) + ((y + colour) & 1),
+ * and keys its Philox blocks by its group (y * groups + gx): one block of four words serves four sites,
+ * so the generator's cost is shared (the counter still names the sites, whatever the local size). */
+#define SITES 4
+#define GROUPS(W) ((((W) + 1) / 2 + SITES - 1) / SITES)
+
+/* f at the pixels of one checkerboard colour; the smooth kind draws its normals by Box-Muller, two per
+ * pair of words, NCOMP blocks per group (counter word 3 numbers the block). */
+__kernel void f_update(__global float *f, __global const float *g, __global const float *w,
+                       __global const float *lh, __global const float *lv, __constant float *levels,
+                       float kappa, float T, uint sweep, uint2 key, int colour, long W_, long H_)
+{
+    int W = (int)W_, H = (int)H_, y = get_global_id(1), group = get_global_id(0), groups = GROUPS(W);
+    if (group >= groups || y >= H) return;
+    float z[SITES * NCOMP], u[SITES];
+    for (int k = 0; k < SITES; ++k) u[k] = 0.0f;
+    for (int k = 0; k < SITES * NCOMP; ++k) z[k] = 0.0f;
+#if MODE == MODE_SAMPLE && KIND == 0
+    for (int block = 0; block < NCOMP; ++block) {
+        uint4 r = philox4x32_10((uint4)((uint)(y * groups + group), sweep, PHASE_F + colour, (uint)block), key);
+        float r0 = native_sqrt(-2.0f * native_log(philox_uniform(r.x))), a0 = 2.0f * M_PI_F * philox_uniform(r.y);
+        float r1 = native_sqrt(-2.0f * native_log(philox_uniform(r.z))), a1 = 2.0f * M_PI_F * philox_uniform(r.w);
+        z[4 * block] = r0 * native_cos(a0);
+        z[4 * block + 1] = r0 * native_sin(a0);
+        z[4 * block + 2] = r1 * native_cos(a1);
+        z[4 * block + 3] = r1 * native_sin(a1);
+    }
+#elif MODE == MODE_SAMPLE
+    uint4 r = philox4x32_10((uint4)((uint)(y * groups + group), sweep, PHASE_F + colour, 0u), key);
+    u[0] = philox_uniform(r.x);
+    u[1] = philox_uniform(r.y);
+    u[2] = philox_uniform(r.z);
+    u[3] = philox_uniform(r.w);
+#endif
+    for (int k = 0; k < SITES; ++k) {
+        int x = 2 * (SITES * group + k) + ((y + colour) & 1);
+        if (x < W) f_site(f, g, w, lh, lv, levels, kappa, T, x, y, W, H, z + k * NCOMP, u[k]);
+    }
 }
 
 /* Mean field for the constant kind: q[i, k] is the probability that pixel i takes level k; the Potts
@@ -335,7 +355,7 @@ inline float line_bond(__global const float *f, __global const float *q, int i, 
 #endif
 }
 
-inline void line_set(__global float *l, int i, float dE, float T, uint sweep, uint phase, uint2 key)
+inline void line_set(__global float *l, int i, float dE, float T, float u)
 {
 #if MODE == MODE_ICM
     l[i] = dE < 0.0f ? 1.0f : 0.0f;
@@ -343,7 +363,6 @@ inline void line_set(__global float *l, int i, float dE, float T, uint sweep, ui
     /* Clamped so that a forbidden line (dE = +inf) gets probability e^-80, never NaN from native_exp. */
     float odds = native_exp(clamp(dE / T, -80.0f, 80.0f));
 #if MODE == MODE_SAMPLE
-    float u = philox_uniform(draw((uint)i, sweep, phase, key).x);
     l[i] = u * (1.0f + odds) < 1.0f ? 1.0f : 0.0f;
 #else
     l[i] = 1.0f / (1.0f + odds);
@@ -351,15 +370,11 @@ inline void line_set(__global float *l, int i, float dE, float T, uint sweep, ui
 #endif
 }
 
-/* lh sites (between (y, x) and (y, x + 1)) with (x + y) & 1 == parity. */
-__kernel void line_h_update(__global float *lh, __global const float *lv, __global const float *f,
-                            __global const float *q, __global const float *bh, __constant float *table,
-                            float parallel, float kappa, float T, uint sweep, uint2 key, int parity, long W_,
-                            long H_)
+/* dE of the lh site (y, x), between (y, x) and (y, x + 1). */
+inline float line_h_delta(__global const float *lh, __global const float *lv, __global const float *f,
+                          __global const float *q, __global const float *bh, __constant float *table,
+                          float parallel, float kappa, int x, int y, int W, int H)
 {
-    int W = (int)W_, H = (int)H_, y = get_global_id(1);
-    int x = 2 * (int)get_global_id(0) + ((y + parity) & 1);
-    if (x >= W - 1 || y >= H) return;
     int i = y * W + x;
     int above = y > 0 ? i - W : i, below = y < H - 1 ? i + W : i;
     float dE = bh[i] - line_bond(f, q, i, i + 1, kappa);
@@ -367,27 +382,47 @@ __kernel void line_h_update(__global float *lh, __global const float *lv, __glob
     float bottom = vertex_delta(table, 0, 1, lh[below], 2, lv[i], 3, lv[i + 1]);
     dE += (y > 0 ? top : 0.0f) + (y < H - 1 ? bottom : 0.0f);
     float left = lh[x > 0 ? i - 1 : i];
-    dE += parallel * ((x > 0 ? left : 0.0f) + (x + 1 < W - 1 ? lh[i + 1] : 0.0f));
-    line_set(lh, i, dE, T, sweep, PHASE_LINES, key);
+    return dE + parallel * ((x > 0 ? left : 0.0f) + (x + 1 < W - 1 ? lh[i + 1] : 0.0f));
 }
 
-/* lv sites (between (y, x) and (y + 1, x)) with (x + y) & 1 == parity. */
-__kernel void line_v_update(__global const float *lh, __global float *lv, __global const float *f,
-                            __global const float *q, __global const float *bv, __constant float *table,
-                            float parallel, float kappa, float T, uint sweep, uint2 key, int parity, long W_,
-                            long H_)
+/* dE of the lv site (y, x), between (y, x) and (y + 1, x). */
+inline float line_v_delta(__global const float *lh, __global const float *lv, __global const float *f,
+                          __global const float *q, __global const float *bv, __constant float *table,
+                          float parallel, float kappa, int x, int y, int W, int H)
 {
-    int W = (int)W_, H = (int)H_, y = get_global_id(1);
-    int x = 2 * (int)get_global_id(0) + ((y + parity) & 1);
-    if (x >= W || y >= H - 1) return;
     int i = y * W + x;
     int left = x > 0 ? i - 1 : i, up = y > 0 ? i - W : i;
     float dE = bv[i] - line_bond(f, q, i, i + W, kappa);
     float west = vertex_delta(table, 3, 0, lh[left], 1, lh[left + W], 2, lv[left]);
     float east = vertex_delta(table, 2, 0, lh[i], 1, lh[i + W], 3, lv[i + 1]);
     dE += (x > 0 ? west : 0.0f) + (x < W - 1 ? east : 0.0f);
-    dE += parallel * ((y > 0 ? lv[up] : 0.0f) + (y + 1 < H - 1 ? lv[i + W] : 0.0f));
-    line_set(lv, i, dE, T, sweep, PHASE_LINES + 1u, key);
+    return dE + parallel * ((y > 0 ? lv[up] : 0.0f) + (y + 1 < H - 1 ? lv[i + W] : 0.0f));
+}
+
+/* The line sites of one colour: type 0 (lh) or 1 (lv), (x + y) & 1 == parity; SITES per work-item. */
+__kernel void line_update(__global float *lh, __global float *lv, __global const float *f,
+                          __global const float *q, __global const float *bh, __global const float *bv,
+                          __constant float *table, float parallel, float kappa, float T, uint sweep,
+                          uint2 key, int colour, long W_, long H_)
+{
+    int W = (int)W_, H = (int)H_, y = get_global_id(1), group = get_global_id(0), groups = GROUPS(W);
+    int type = colour >> 1, parity = colour & 1;
+    if (group >= groups || y >= H - type) return;
+    float u[SITES] = {0.0f, 0.0f, 0.0f, 0.0f};
+#if MODE == MODE_SAMPLE
+    uint4 r = philox4x32_10((uint4)((uint)(y * groups + group), sweep, PHASE_LINES + colour, 0u), key);
+    u[0] = philox_uniform(r.x);
+    u[1] = philox_uniform(r.y);
+    u[2] = philox_uniform(r.z);
+    u[3] = philox_uniform(r.w);
+#endif
+    for (int k = 0; k < SITES; ++k) {
+        int x = 2 * (SITES * group + k) + ((y + parity) & 1);
+        if (type == 0 && x < W - 1)
+            line_set(lh, y * W + x, line_h_delta(lh, lv, f, q, bh, table, parallel, kappa, x, y, W, H), T, u[k]);
+        else if (type == 1 && x < W)
+            line_set(lv, y * W + x, line_v_delta(lh, lv, f, q, bv, table, parallel, kappa, x, y, W, H), T, u[k]);
+    }
 }
 
 /* ------------------------------------------------------------------------ estimates and energy */

@@ -2,8 +2,8 @@
  *
  * Salmon, Moraes, Dror and Shaw, "Parallel random numbers: as easy as 1, 2, 3", SC 2011 (Random123).
  * A work-item draws four 32-bit words from a 128-bit counter and a 64-bit key with no state: keyed by
- * (seed) and counted by (site, sweep, phase), a stochastic kernel gives the same bits for the same seed
- * whatever the local size, the launch order or the device. Checked against Random123's known-answer
+ * the seed and counted by (sites, sweep, colour, block), a stochastic kernel gives the same bits for the
+ * same seed whatever the local size or the launch order (mrf.cl shares one block among four sites). Checked against Random123's known-answer
  * vectors (tests/kat_vectors, "philox4x32 10") in tests/test_mrf_philox.py.
  */
 #ifndef PHILOX_H

@@ -52,8 +52,10 @@ class Lattice:
         self.ncomp = 1 if data.ndim == 2 else data.shape[2]
         self.n = self.height * self.width
         self.grid = (self.width, self.height)
-        # Colour launches: one work-item per site of the colour, half a row each.
+        # Colour launches: q_update takes one site of the colour per work-item (half a row), f_update and
+        # line_update four (kernels/mrf.cl, SITES).
         self.half_grid = ((self.width + 1) // 2, self.height)
+        self.group_grid = (((self.width + 1) // 2 + 3) // 4, self.height)
         self.dims = (np.int64(self.width), np.int64(self.height))
         shape = data.shape
         empty = machine.empty
@@ -122,19 +124,18 @@ class Lattice:
         temperature = np.float32(temperature)
         index = np.uint32(index)
         f_kernel = self.kernel("q_update" if q is not None else "f_update", mode)
-        lines = (self.kernel("line_h_update", mode), self.kernel("line_v_update", mode))
+        lines = self.kernel("line_update", mode)
         for phase, colour in order:
             if phase == "f" and q is not None:
                 self.machine.launch(f_kernel, self.half_grid, q, self.g, self.w, self.lh, self.lv, self.levels,
                                     self.kappa, temperature, np.int32(colour), *self.dims)
             elif phase == "f":
-                self.machine.launch(f_kernel, self.half_grid, self.f, self.g, self.w, self.lh, self.lv, self.levels,
+                self.machine.launch(f_kernel, self.group_grid, self.f, self.g, self.w, self.lh, self.lv, self.levels,
                                     self.kappa, temperature, index, key, np.int32(colour), *self.dims)
             else:
-                costs = self.bh if colour < 2 else self.bv
-                self.machine.launch(lines[colour >> 1], self.half_grid, self.lh, self.lv, self.f, q, costs,
+                self.machine.launch(lines, self.group_grid, self.lh, self.lv, self.f, q, self.bh, self.bv,
                                     self.table, self.parallel, self.kappa, temperature, index, key,
-                                    np.int32(colour & 1), *self.dims)
+                                    np.int32(colour), *self.dims)
 
     def site_energy(self) -> cl_array.Array:
         """Each pixel's share of U(f, l) (lines read as on where non-zero), float32 (H, W)."""
