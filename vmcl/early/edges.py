@@ -106,7 +106,10 @@ def zero_crossings(image: ArrayLike, *, sigma: float, method: Literal["log", "do
     A crossing lies between 4-neighbours of strictly opposite signs; the one of the two nearer zero is
     marked (the positive one on a tie), so lines are one pixel thick and within half a pixel of the
     interpolated crossing. A pixel that is exactly 0 is marked when its neighbours on either side along
-    x or along y have opposite signs; runs of exact zeros (flat regions) mark nothing.
+    x or along y have opposite signs; runs of exact zeros mark nothing. The Laplacian of a Gaussian is
+    exactly 0 where the image is flat; the difference of Gaussians is not (its two smoothings round
+    differently, leaving about 1e-7 of the image's range), so on synthetic images with flat regions a
+    ``min_slope`` of a small fraction of the contrast keeps that residue from crossing zero.
 
     References
     ----------
