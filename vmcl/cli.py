@@ -1,0 +1,448 @@
+"""The ``vmcl`` command: run the Vision Machine, write its report, measure it on the field's data sets.
+
+Seed section "The Vision Machine System": images in, the cartoon of labelled discontinuities and the
+dense fields out (:mod:`vmcl.pipeline`, :mod:`vmcl.report`).
+
+    vmcl demo [--out DIR] [--data SCENE|motorcycle] [--size N]
+    vmcl run LEFT [RIGHT] [--next NEXT] [--config C.toml] --out DIR
+    vmcl eval stereo|flow|edges --data DIR
+    vmcl info
+
+Bad input (a missing or unreadable file, images of different sizes, a bad configuration key) prints one
+line and exits with status 2. Outputs are written into a hidden temporary folder beside ``--out`` and
+renamed into place at the end, so a folder under that name is always a finished one. Stages that take
+time show a progress bar on stderr (tqdm); ``--quiet`` keeps only the results.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import dataclasses
+import math
+import os
+import shutil
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterator, Sequence
+from pathlib import Path
+
+import numpy as np
+
+EXIT_BAD_INPUT = 2
+
+SCENES = ("blocks", "corridor", "shadows", "textures", "cues")
+
+
+class BadInput(Exception):
+    """Input the command refuses: reported as one line, exit status 2."""
+
+
+@contextlib.contextmanager
+def _progress(args: argparse.Namespace, total: int, what: str) -> Iterator[Callable[[str], None]]:
+    """A tqdm bar of ``total`` steps on stderr (none with --quiet); yields the step callback."""
+    if args.quiet:
+        yield lambda name: None
+        return
+    from tqdm import tqdm
+
+    with tqdm(total=total, desc=what, unit="stage", file=sys.stderr, leave=False) as bar:
+        def step(name: str) -> None:
+            bar.set_postfix_str(name)
+            bar.update()
+        yield step
+
+
+@contextlib.contextmanager
+def _atomic_folder(out: Path) -> Iterator[Path]:
+    """A temporary folder beside ``out`` that replaces it when the block succeeds, else vanishes."""
+    out = out.resolve()
+    if out.exists() and not out.is_dir():
+        raise BadInput(f"--out {out} exists and is not a folder")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    except OSError as error:
+        raise BadInput(f"cannot write into {out.parent}: {error.strerror}") from None
+    try:
+        yield work
+        if out.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
+            os.replace(out, old / out.name)
+            os.replace(work, out)
+            shutil.rmtree(old)
+        else:
+            os.replace(work, out)
+    finally:
+        if work.exists():
+            shutil.rmtree(work)
+
+
+def _read(path: str, what: str) -> np.ndarray:
+    from vmcl.datasets import read_image
+
+    try:
+        return read_image(path)
+    except FileNotFoundError:
+        raise BadInput(f"{what} image {path}: no such file") from None
+    except (ValueError, OSError) as error:
+        raise BadInput(f"{what} image {path}: cannot be read as an image ({error})") from None
+
+
+def _config(path: str | None):
+    from vmcl.pipeline import Config
+
+    if path is None:
+        return Config()
+    try:
+        return Config.from_toml(path)
+    except FileNotFoundError:
+        raise BadInput(f"config {path}: no such file") from None
+    except (ValueError, TypeError, OSError) as error:
+        raise BadInput(f"config {path}: {error}") from None
+
+
+def _run_machine(vm, args, left, right=None, next_=None):
+    from vmcl.pipeline import as_image
+
+    rgb = as_image(left, "left").ndim == 3
+    total = len(vm.stages(right=right is not None, next=next_ is not None, rgb=rgb))
+    with _progress(args, total, "vision machine") as step:
+        return vm.run(left, right, next_, progress=step)
+
+
+def _print_table(title: str, rows: Sequence[Sequence[object]]) -> None:
+    header, *body = rows
+    widths = [max(len(str(row[i])) for row in rows) for i in range(len(header))]
+    print(title)
+    for row in (header, *body):
+        print("  " + "  ".join(str(c).ljust(w) for c, w in zip(row, widths)))
+
+
+def _fmt(value: float, digits: int = 3) -> str:
+    return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.{digits}f}"
+
+
+# -- demo ----------------------------------------------------------------------------------------------
+
+def _demo_inputs(args) -> tuple[str, dict, dict]:
+    """(title, images, ground truth) for the demo's data."""
+    if args.data == "motorcycle":
+        try:
+            from skimage import data
+        except ImportError:
+            raise BadInput("--data motorcycle needs scikit-image (pip install scikit-image)") from None
+        left, right, disparity = data.stereo_motorcycle()
+        truth = {"disparity": np.where(np.isfinite(disparity), disparity, np.nan).astype(np.float32)}
+        return "Middlebury Motorcycle (scikit-image)", {"left": left, "right": right}, truth
+    from vmcl import scenes
+
+    scene = scenes.render(scenes.preset(args.data, shape=(args.size, args.size)), seed=0, noise=0.01)
+    visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
+    moving = ~scene.occluded_motion & np.isfinite(scene.flow).all(axis=-1)
+    truth = {"disparity": np.where(visible, scene.disparity, np.nan), "flow": np.where(moving[..., None], scene.flow, np.nan),
+             "labels": scene.labels}
+    return (f"vmcl.scenes '{args.data}' at {args.size} x {args.size}",
+            {"left": scene.left, "right": scene.right, "next": scene.left_next}, truth)
+
+
+def evaluation_tables(result, truth: dict) -> dict[str, list[tuple]]:
+    """Tables of the run's scores against whatever ground truth there is (for the terminal and report)."""
+    from vmcl import metrics
+    from vmcl.scenes import Label
+
+    tables = {}
+    if "labels" in truth:
+        rows = [("discontinuities", "precision", "recall", "F", "true px")]
+        overall = metrics.detection_scores(result.discontinuities, truth["labels"] > 0, tolerance=1)
+        rows.append(("all (integrated)", _fmt(overall.precision), _fmt(overall.recall), _fmt(overall.f), overall.n_true))
+        for label, score in metrics.label_scores(result.labels, truth["labels"], tolerance=1).items():
+            rows.append((Label(label).name.lower(), _fmt(score.precision), _fmt(score.recall), _fmt(score.f),
+                         score.n_true))
+        tables["Discontinuities within 1 px"] = rows
+    if "disparity" in truth and result.disparity is not None:
+        rows = [("disparity", "bad 0.5", "bad 1", "bad 2", "density")]
+        known = np.isfinite(truth["disparity"])
+        for name, field in (("dense (MRF)", result.disparity), ("sparse (matcher)", result.sparse_disparity)):
+            s = metrics.evaluate_disparity(field, truth["disparity"], mask=known)
+            rows.append((name, _fmt(s.bad[0.5]), _fmt(s.bad[1.0]), _fmt(s.bad[2.0]), _fmt(s.density)))
+        tables["Disparity (share of bad pixels)"] = rows
+    if "flow" in truth and result.flow is not None:
+        rows = [("flow", "EPE px", "AAE deg", "density")]
+        known = np.isfinite(truth["flow"]).all(axis=-1)
+        for name, field in (("restored (MRF)", result.flow), ("raw (motion module)", result.raw_flow)):
+            s = metrics.evaluate_flow(field, truth["flow"], mask=known)
+            rows.append((name, _fmt(s.epe), _fmt(s.aae, 2), _fmt(s.density)))
+        tables["Optical flow"] = rows
+    return tables
+
+
+def _demo(args) -> int:
+    from vmcl.pipeline import VisionMachine
+    from vmcl.report import write_report
+
+    title, inputs, truth = _demo_inputs(args)
+    config = _config(args.config)
+    if args.data == "motorcycle" and config.stereo.d_max is None:
+        known = truth["disparity"][np.isfinite(truth["disparity"])]
+        stereo = dataclasses.replace(config.stereo, d_min=int(known.min()), d_max=int(np.ceil(known.max())))
+        config = dataclasses.replace(config, stereo=stereo)
+    vm = VisionMachine(config)
+    result = _run_machine(vm, args, inputs["left"], inputs.get("right"), inputs.get("next"))
+    tables = evaluation_tables(result, truth)
+    print(f"{title}: {result.total_ms:.0f} ms")
+    for name, rows in tables.items():
+        _print_table(name, rows)
+    with _atomic_folder(Path(args.out)) as work:
+        write_report(result, work, title=f"Vision Machine demo: {title}", evaluation=tables)
+    print(f"report: {Path(args.out) / 'report.html'}")
+    return 0
+
+
+# -- run -----------------------------------------------------------------------------------------------
+
+def _run(args) -> int:
+    from vmcl.pipeline import VisionMachine
+    from vmcl.report import write_report
+
+    config = _config(args.config)
+    left = _read(args.left, "left")
+    right = _read(args.right, "right") if args.right else None
+    next_ = _read(args.next, "next") if args.next else None
+    for name, image in (("right", right), ("next", next_)):
+        if image is not None and image.shape != left.shape:
+            raise BadInput(f"{name} image is {image.shape[1]} x {image.shape[0]}"
+                           f"{'' if image.ndim == left.ndim else ' ' + ('RGB' if image.ndim == 3 else 'grey')}, "
+                           f"left is {left.shape[1]} x {left.shape[0]}{' RGB' if left.ndim == 3 else ' grey'}: "
+                           "the images must have the same size and channels")
+    vm = VisionMachine(config)
+    result = _run_machine(vm, args, left, right, next_)
+    with _atomic_folder(Path(args.out)) as work:
+        write_report(result, work, title=f"Vision Machine: {Path(args.left).name}")
+        np.savez_compressed(work / "fields.npz", **_fields(result))
+    print(f"{result.total_ms:.0f} ms; report: {Path(args.out) / 'report.html'}")
+    return 0
+
+
+def _fields(result) -> dict[str, np.ndarray]:
+    """The run's fields as named arrays for fields.npz."""
+    names = ("edges", "support", "labels", "hue", "density", "sparse_disparity", "disparity", "raw_flow", "flow")
+    out = {name: getattr(result, name) for name in names if getattr(result, name) is not None}
+    for cue, (line_h, line_v) in result.lines.items():
+        out[f"{cue}_line_h"], out[f"{cue}_line_v"] = line_h, line_v
+    return out
+
+
+# -- eval ----------------------------------------------------------------------------------------------
+
+def _eval(args) -> int:
+    root = Path(args.data)
+    if not root.is_dir():
+        raise BadInput(f"--data {root}: no such folder (the layout of ../shared/datasets)")
+    return {"stereo": _eval_stereo, "flow": _eval_flow, "edges": _eval_edges}[args.benchmark](args, root)
+
+
+def _only(**sections):
+    """A Config with the cues not named switched off (an evaluation runs what it measures)."""
+    from vmcl.pipeline import ColourConfig, Config, MotionConfig, StereoConfig, TextureConfig
+
+    return Config(stereo=sections.get("stereo", StereoConfig(enabled=False)),
+                  motion=sections.get("motion", MotionConfig(enabled=False)),
+                  colour=ColourConfig(enabled=False), texture=TextureConfig(enabled=False))
+
+
+def _timed(function, *args, **kwargs):
+    """``function(*args, **kwargs)`` and its wall time in ms."""
+    start = time.perf_counter()
+    value = function(*args, **kwargs)
+    return value, (time.perf_counter() - start) * 1e3
+
+
+def _eval_stereo(args, root: Path) -> int:
+    import cv2
+
+    from vmcl import metrics
+    from vmcl.datasets import STEREO_SCENES, load_stereo
+    from vmcl.pipeline import StereoConfig, VisionMachine
+
+    rows = [("scene", "method", "bad 1 nonocc", "bad 2 nonocc", "bad 1 all", "density", "ms")]
+    names = [n for n in STEREO_SCENES if (root / "middlebury_stereo_v2eval" / n).is_dir()
+             or (root / "middlebury_stereo_2001" / n).is_dir()]
+    if not names:
+        raise BadInput(f"--data {root}: no Middlebury stereo scene found")
+    with _progress(args, len(names), "stereo") as step:
+        for name in names:
+            pair = load_stereo(name, root)
+            grey = [cv2.cvtColor(im, cv2.COLOR_RGB2GRAY) if im.ndim == 3 else im for im in (pair.left, pair.right)]
+            d_max = int(np.ceil(pair.disparity_range[1]))
+            numdisp = -(-(d_max + 1) // 16) * 16
+            vm = VisionMachine(_only(stereo=StereoConfig(d_min=0, d_max=d_max)))
+            vm.run(pair.left, pair.right)  # builds the kernels: the timed run below is the steady state
+            ours, ms = _timed(vm.run, pair.left, pair.right)
+            bm = cv2.StereoBM_create(numDisparities=numdisp, blockSize=11)
+            sgbm = cv2.StereoSGBM_create(0, numdisp, 5, P1=8 * 25, P2=32 * 25, uniquenessRatio=10, mode=cv2.STEREO_SGBM_MODE_SGBM)
+            methods = [("vmcl dense (MRF)", ours.disparity, ms), ("vmcl sparse", ours.sparse_disparity, ms)]
+            for label, matcher in (("OpenCV StereoBM", bm), ("OpenCV StereoSGBM", sgbm)):
+                raw, ms_cv = _timed(matcher.compute, *grey)
+                methods.append((label, np.where(raw >= 0, raw / 16.0, np.nan).astype(np.float32), ms_cv))
+            for label, disparity, took in methods:
+                nonocc = metrics.evaluate_disparity(disparity, pair.disparity, mask=pair.masks.get("nonocc"))
+                every = metrics.evaluate_disparity(disparity, pair.disparity, mask=pair.masks.get("all"))
+                rows.append((name, label, _fmt(nonocc.bad[1.0]), _fmt(nonocc.bad[2.0]), _fmt(every.bad[1.0]),
+                             _fmt(nonocc.density), f"{took:.0f}"))
+            step(name)
+    _print_table("Stereo (Middlebury; share of bad pixels, missing outputs counted bad)", rows)
+    return 0
+
+
+def _eval_flow(args, root: Path) -> int:
+    import cv2
+
+    from vmcl import metrics
+    from vmcl.datasets import FLOW_SCENES, load_flow
+    from vmcl.pipeline import MotionConfig, VisionMachine
+
+    names = [n for n in FLOW_SCENES if (root / "middlebury_flow" / n).is_dir() or (root / n.lower()).is_dir()]
+    if not names:
+        raise BadInput(f"--data {root}: no Middlebury flow sequence found")
+    rows = [("sequence", "method", "EPE px", "AAE deg", "density", "ms")]
+    with _progress(args, len(names), "flow") as step:
+        for name in names:
+            try:
+                pair = load_flow(name, root)
+            except FileNotFoundError:
+                step(name)
+                continue
+            grey = [cv2.cvtColor(f, cv2.COLOR_RGB2GRAY) if f.ndim == 3 else f for f in (pair.frame0, pair.frame1)]
+            vm = VisionMachine(_only(motion=MotionConfig(levels=3)))
+            vm.run(pair.frame0, next=pair.frame1)
+            ours, ms = _timed(vm.run, pair.frame0, next=pair.frame1)
+            methods = [("vmcl (MRF)", ours.flow, ms), ("vmcl raw", ours.raw_flow, ms)]
+            farneback, ms_f = _timed(cv2.calcOpticalFlowFarneback, *grey, None, 0.5, 4, 15, 3, 5, 1.2, 0)
+            methods.append(("OpenCV Farneback", farneback, ms_f))
+            dis = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM)
+            dis_flow, ms_d = _timed(dis.calc, *grey, None)
+            methods.append(("OpenCV DIS", dis_flow, ms_d))
+            for label, field, took in methods:
+                s = metrics.evaluate_flow(field, pair.flow, mask=pair.mask)
+                rows.append((name, label, _fmt(s.epe), _fmt(s.aae, 2), _fmt(s.density), f"{took:.0f}"))
+            step(name)
+    _print_table("Optical flow (Middlebury; average endpoint and angular errors)", rows)
+    return 0
+
+
+def _eval_edges(args, root: Path) -> int:
+    import cv2
+
+    from vmcl import metrics
+    from vmcl.datasets import load_bsds
+    from vmcl.pipeline import Config, TextureConfig, VisionMachine
+
+    try:
+        bsds = load_bsds(root)
+    except FileNotFoundError as error:
+        raise BadInput(f"--data {root}: no BSDS500 test images ({error})") from None
+    vm = VisionMachine(Config(texture=TextureConfig(enabled=True)))
+    maps: dict[str, list] = {"vmcl cartoon (integrated)": [], "vmcl Canny (brightness edges)": [],
+                             "OpenCV Canny": []}
+    times = dict.fromkeys(maps, 0.0)
+    with _progress(args, len(bsds.images), "edges") as step:
+        for item in bsds.images:
+            result, ms = _timed(vm.run, item.image)
+            maps["vmcl cartoon (integrated)"].append(result.discontinuities | result.edges)
+            maps["vmcl Canny (brightness edges)"].append(result.edges)
+            times["vmcl cartoon (integrated)"] += ms
+            grey = cv2.cvtColor(item.image, cv2.COLOR_RGB2GRAY)
+            edges, ms_cv = _timed(cv2.Canny, cv2.GaussianBlur(grey, (0, 0), 2.0), 25, 50)
+            maps["OpenCV Canny"].append(edges > 0)
+            times["OpenCV Canny"] += ms_cv
+            step(item.name)
+    truths = [item.boundaries for item in bsds.images]
+    rows = [("method", "ODS F", "precision", "recall", "ms per image")]
+    for label, edge_maps in maps.items():
+        s = metrics.evaluate_boundaries([m.astype(np.float32) for m in edge_maps], truths, thresholds=[0.5])
+        took = times[label] or times["vmcl cartoon (integrated)"]
+        rows.append((label, _fmt(s.ods_f), _fmt(s.ods_precision), _fmt(s.ods_recall), f"{took / len(truths):.0f}"))
+    _print_table(f"Boundaries (BSDS500, {len(truths)} test images; binary maps, one threshold)", rows)
+    return 0
+
+
+# -- info ----------------------------------------------------------------------------------------------
+
+def _info(args) -> int:
+    import pyopencl as cl
+
+    import vmcl
+    from vmcl.machine import NoOpenCLPlatformError, kernels_dir, list_devices
+
+    print(f"vmcl {vmcl.__version__}; pyopencl {cl.VERSION_TEXT}")
+    try:
+        devices = list_devices()
+        chosen = vmcl.default_machine().device
+    except NoOpenCLPlatformError as error:
+        print(f"vmcl: {error}", file=sys.stderr)
+        return 1
+    for device in devices:
+        mark = "*" if device == chosen else " "
+        kind = cl.device_type.to_string(device.type)
+        print(f" {mark} {device.platform.name} / {device.name} ({kind}, {device.max_compute_units} "
+                   f"compute units, {device.global_mem_size // 2**20} MiB)")
+    print(f"chosen (*): VMCL_DEVICE={os.environ.get('VMCL_DEVICE', '')!r}, else the first (GPUs first)")
+    print(f"kernel sources: {kernels_dir()}")
+    cache = os.environ.get("POCL_CACHE_DIR") or Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "pocl" / "kcache"
+    print(f"kernel binary cache: {cache} (PoCL's; other drivers keep their own)")
+    return 0
+
+
+# -- the parser ----------------------------------------------------------------------------------------
+
+def parser() -> argparse.ArgumentParser:
+    """The command's argument parser."""
+    top = argparse.ArgumentParser(prog="vmcl", description="The MIT Vision Machine on OpenCL.")
+    commands = top.add_subparsers(dest="command", required=True)
+    quiet = argparse.ArgumentParser(add_help=False)
+    quiet.add_argument("--quiet", "-q", action="store_true", help="no progress bars")
+
+    demo = commands.add_parser("demo", parents=[quiet], help="run the machine on a scene and write the report")
+    demo.add_argument("--out", default="vmcl-demo", help="output folder (default: vmcl-demo)")
+    demo.add_argument("--data", default="blocks", choices=(*SCENES, "motorcycle"),
+                      help="a vmcl.scenes preset (default: blocks) or scikit-image's Middlebury Motorcycle pair")
+    demo.add_argument("--size", type=int, default=256, help="scene size in pixels (64..1024, default 256)")
+    demo.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config)")
+
+    run = commands.add_parser("run", parents=[quiet], help="run the machine on image files")
+    run.add_argument("left", help="left image (any file OpenCV reads)")
+    run.add_argument("right", nargs="?", help="right image of a rectified pair: adds stereo")
+    run.add_argument("--next", help="the left view's next frame: adds motion")
+    run.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config)")
+    run.add_argument("--out", required=True, help="output folder")
+
+    evaluate = commands.add_parser("eval", parents=[quiet], help="benchmarks beside OpenCV's baselines")
+    evaluate.add_argument("benchmark", choices=("stereo", "flow", "edges"))
+    evaluate.add_argument("--data", required=True, help="data sets folder laid out as ../shared/datasets")
+
+    commands.add_parser("info", parents=[quiet], help="OpenCL platforms and devices, the kernel cache")
+    return top
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``vmcl`` console script; returns the exit status."""
+    args = parser().parse_args(argv)
+    if args.command == "demo" and not 64 <= args.size <= 1024:
+        print("vmcl: error: --size must be within 64..1024", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    handler = {"demo": _demo, "run": _run, "eval": _eval, "info": _info}[args.command]
+    try:
+        return handler(args)
+    except BadInput as error:
+        print(f"vmcl: error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except (ValueError, TypeError) as error:
+        # The library refuses bad input with a sentence naming the argument (vmcl's convention).
+        print(f"vmcl: error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    sys.exit(main())
