@@ -65,6 +65,7 @@ inline float vertex_delta(__constant float *table, int bit, int ba, float pa, in
 #else
     /* The expectation is multilinear in (pa, pb, pc): trilinear interpolation of the 8 corner values. */
     float d[8];
+#pragma unroll
     for (int m = 0; m < 8; ++m) {
         int rest = ((m & 1) << ba) | (((m >> 1) & 1) << bb) | (((m >> 2) & 1) << bc);
         d[m] = table[rest | (1 << bit)] - table[rest];
