@@ -171,6 +171,13 @@ def _vote_dtype(defines: dict) -> type:
     return np.float32 if defines["V_T"] == "float" else np.int32
 
 
+def _launch(machine: Machine, kernel, size: tuple[int, int], *args) -> None:
+    """A launch over (work-items along a row, rows): on CPUs in work-groups of up to 64 along the row,
+    unless the Machine fixes a local size (PoCL's own choice ran the per-pixel kernels about half as fast)."""
+    local = (min(64, size[0]), 1) if machine.is_cpu and machine.local_size is None else None
+    machine.launch(kernel, size, *args, local_size=local)
+
+
 def _groups(machine: Machine, width: int) -> list[tuple[int, int, int]]:
     """(VEC, first column, work-items) per launch: on CPUs 16 pixels per work-item (SIMD lanes see
     contiguous loads) and the remainder one by one, as the column scans do; on GPUs one pixel each."""
@@ -182,7 +189,7 @@ def _costs(machine: Machine, f0, f1, delta: int, first: int, planes: int, define
     height, width = f0.shape
     out = machine.empty((planes, height, width), _vote_dtype(defines))
     for vec, col0, count in _groups(machine, width):
-        machine.launch(machine.kernel("motion", "cost", VEC=vec, **defines), (count, height), f0, f1, out,
+        _launch(machine, machine.kernel("motion", "cost", VEC=vec, **defines), (count, height), f0, f1, out,
                        np.int64(width), np.int64(height), np.int64(col0), np.int64(count), np.int32(delta),
                        np.int32(first), np.int32(planes))
     return out
@@ -201,7 +208,7 @@ def _moments(machine: Machine, f0, f1, radius: int, defines: dict) -> cl_array.A
     height, width = f0.shape
     planes = 4 if defines["COMPARE"] == _COMPARE["brightness"] else 2
     raw = machine.empty((planes, height, width), np.float32)
-    machine.launch(machine.kernel("motion", "moments", **defines), (width, height), f0, f1, raw,
+    _launch(machine, machine.kernel("motion", "moments", **defines), (width, height), f0, f1, raw,
                    np.int64(width), np.int64(height))
     return scan.box_sum(raw, radius, machine=machine)
 
@@ -220,7 +227,7 @@ def _winner(machine: Machine, f0, f1, moments, delta: int, radius: int, penalty:
     if method == "table":
         table = _table(machine, f0, f1, delta, radius, defines)
         for vec, col0, count in groups:
-            machine.launch(machine.kernel("motion", "winner_table", VEC=vec, **defines), (count, height), table,
+            _launch(machine, machine.kernel("motion", "winner_table", VEC=vec, **defines), (count, height), table,
                            moments, *state, np.int64(col0), np.int64(count), *params)
         return best, index, neigh
     previous = None
@@ -228,7 +235,7 @@ def _winner(machine: Machine, f0, f1, moments, delta: int, radius: int, penalty:
         votes_row = scan.box_sum(_costs(machine, f0, f1, delta, row * n, n, defines), radius,
                                  machine=machine)
         for vec, col0, count in groups:
-            machine.launch(machine.kernel("motion", "vote_running", VEC=vec, **defines), (count, height),
+            _launch(machine, machine.kernel("motion", "vote_running", VEC=vec, **defines), (count, height),
                            votes_row, previous if previous is not None else votes_row, moments, *state,
                            np.int64(col0), np.int64(count), *params, np.int32(row))
         previous = votes_row
@@ -245,7 +252,7 @@ def _level(machine: Machine, f0, f1, pred, delta: int, radius: int, features: st
     flow_out = machine.empty((height, width, 2), np.float32)
     score = machine.empty((height, width), np.float32)
     boundaries = machine.empty((height, width), np.uint8)
-    machine.launch(machine.kernel("motion", "finish", VEC=1, PREDICT=int(pred is not None), **defines),
+    _launch(machine, machine.kernel("motion", "finish", VEC=1, PREDICT=int(pred is not None), **defines),
                    (width, height), best, index, neigh, pred if pred is not None else neigh, moments, f0, flow_out,
                    score, boundaries, np.int64(width), np.int64(height), np.int32(delta), np.int32(radius), np.float32(penalty),
                    np.int32(bool(subpixel)), np.float32(threshold))
@@ -259,7 +266,7 @@ def _pyramid(machine: Machine, frame: cl_array.Array, levels: int) -> list[cl_ar
         smooth = _filters.gaussian(images[-1], sigma=PYRAMID_SIGMA, method="exact", machine=machine)
         height, width = smooth.shape
         half = machine.empty((-(-height // 2), -(-width // 2)), np.float32)
-        machine.launch(machine.kernel("motion", "decimate"), (half.shape[1], half.shape[0]), smooth, half,
+        _launch(machine, machine.kernel("motion", "decimate"), (half.shape[1], half.shape[0]), smooth, half,
                        np.int64(width), np.int64(height), np.int64(half.shape[1]), np.int64(half.shape[0]))
         images.append(half)
     return images
@@ -270,7 +277,7 @@ def _warp(machine: Machine, f1: cl_array.Array, coarse: cl_array.Array, features
     height, width = f1.shape
     warped = machine.empty(f1.shape, f1.dtype)
     pred = machine.empty((height, width, 2), np.float32)
-    machine.launch(machine.kernel("motion", "warp", **_defines(f1, features)), (width, height), f1, coarse, warped,
+    _launch(machine, machine.kernel("motion", "warp", **_defines(f1, features)), (width, height), f1, coarse, warped,
                    pred, np.int64(width), np.int64(height), np.int64(coarse.shape[1]), np.int64(coarse.shape[0]))
     return warped, pred
 
