@@ -220,6 +220,10 @@ __kernel void double_threshold(__global const float *v, __global uchar *state, _
 __kernel void mark_strong(__global const uchar *state, __global const int *label, __global uchar *marks, long n)
 {
     long i0 = get_global_id(0) * VEC;
+#if VEC > 1
+    /* Strong pixels are few: most chunks are done after one vector compare. */
+    if (i0 + VEC <= n && !any(VLOAD(state + i0) == (VUCHAR)STRONG)) return;
+#endif
     for (long i = i0; i < min(i0 + VEC, n); i++)
         if (state[i] == STRONG) marks[label[i]] = 1;
 }
@@ -228,6 +232,12 @@ __kernel void mark_strong(__global const uchar *state, __global const int *label
 __kernel void keep_marked(__global const int *label, __global const uchar *marks, __global uchar *edges, long n)
 {
     long i0 = get_global_id(0) * VEC;
+#if VEC > 1
+    if (i0 + VEC <= n && !any(VLOAD(label + i0) >= 0)) {
+        VSTORE((VUCHAR)0, edges + i0);
+        return;
+    }
+#endif
     for (long i = i0; i < min(i0 + VEC, n); i++) {
         int l = label[i];
         edges[i] = l >= 0 ? marks[l] : 0;
