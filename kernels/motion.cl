@@ -5,7 +5,7 @@
  *                 batch of displacements: one row of them, or all
  *   vote_running  the paper's "non-maximum suppression across velocities" done during the iteration
  *                 over displacements: each pixel's winner is updated by one row of vote planes (fixed
- *                 vy) at a time, so no table over all displacements exists
+ *                 vy) at a time, so no table over all displacements exists (three rows at most)
  *   winner_table  the same suppression over the full table of votes (the faithful variant); both run
  *                 visit_row, so they agree bit for bit
  *   moments       the fields whose box sums normalise the winning vote
@@ -20,10 +20,9 @@
  * [col0 + k VEC, col0 + (k + 1) VEC) of row y: VEC = 16 on CPUs, whose SIMD lanes then see contiguous
  * loads, 1 on GPUs; the host launches the width's remainder with VEC = 1.
  *
- * Displacement index d = (vy + delta) n + (vx + delta), n = 2 delta + 1 (raster order, vy major). The
- * winner minimises the (penalised) vote; ties go to the smaller |v|^2, then to the smaller d, so a
- * textureless patch reports zero motion and nothing depends on the work-group size. Frame 1 is read
- * with clamped coordinates (the edge pixel repeats), so every displacement has a vote at every pixel.
+ * Displacement index d = (vy + delta) n + (vx + delta), n = 2 delta + 1 (vy major). The winner minimises
+ * a key (see KEY); nothing depends on the work-group size. Frame 1 is read with clamped coordinates (the
+ * edge pixel repeats), so every displacement has a vote at every pixel.
  *
  * Defines: F_T (float|uchar), the feature type; V_T (float|int), the vote type; COMPARE: 0 squared
  * difference (brightness, LoG), 1 disagreement of signs (sign of the LoG), 2 XOR of binary maps (edges);
@@ -149,11 +148,11 @@ inline FLV slowness(__global const float *moments, float penalty, long x0, long 
 #endif
 }
 
-/* The key each winner minimises. Squared differences: the penalised vote; equal keys go to the first
- * displacement visited (raster order), which takes equal sums of squared differences, in practice a
- * flat patch, and that has no estimate. Binary votes: vote * (2 delta^2 + 1) + |v|^2, exact integers, so
- * ties go to the smaller |v|^2 and then to the first visited. One comparison per displacement either way:
- * a second one for ties doubled the time of the whole update on PoCL. */
+/* The key each winner minimises; equal keys go to the first displacement visited (rows out from vy = 0,
+ * see row_of; vx ascending within a row). Squared differences: the penalised vote (equal keys need equal
+ * sums of squared differences, in practice a flat patch, which has no estimate). Binary votes:
+ * vote * (2 delta^2 + 1) + |v|^2, exact integers, so ties go to the smaller |v|^2 first. One comparison
+ * per displacement either way: a second one for ties doubled the time of the whole update on PoCL. */
 #if COMPARE == CMP_SQUARED
 #define KEY(v, norm) ((v) + slow * (float)(norm))
 #else
@@ -179,14 +178,28 @@ inline float neighbour(V_T raw, float slow, int c, int row, int delta)
     return (float)raw + (COMPARE == CMP_SQUARED ? slow * (float)(vx * vx + vy * vy) : 0.0f);
 }
 
-/* Visit row `row` of displacements, n vote planes at `cur` (the previous row's at `prev`), then record
- * the penalised votes of the winners' neighbouring displacements for the parabola fit in the planes of
- * `neigh`: left, right (vx -+ 1), up, down (vy -+ 1), NONE outside the range. A winner found in this row
- * gets all four (down NONE until the next row); a winner from the previous row that nothing here beat
- * gets its down neighbour. Lanes are visited one by one for these reads: only the few pixels whose
- * winner moved need them, and vector lanes cannot index different planes. */
-inline void visit_row(Winner *w, __global const V_T *cur, __global const V_T *prev, __global float *neigh,
-                      size_t i, size_t plane, int n, int delta, int row, FLV slow)
+/* Row `row` of the displacements, visited s-th: rows go out from vy = 0 (delta, delta - 1, delta + 1,
+ * delta - 2, ...), so the winner of a small motion is found early and rarely moves afterwards. The row
+ * next to it on the side of vy = 0 (its "inward" row) was visited one or two steps before. */
+inline int row_of(int s, int delta)
+{
+    int k = (s + 1) / 2;
+    return s % 2 ? delta - k : delta + k;
+}
+
+inline int inward_of(int row, int delta)
+{
+    return row < delta ? row + 1 : row > delta ? row - 1 : -1;
+}
+
+/* Visit row `row`, n vote planes at `cur` (its inward row's at `in`, when inward >= 0), then record the
+ * keys of the winners' neighbouring displacements for the parabola fit in the planes of `neigh`: left,
+ * right (vx -+ 1), up, down (vy -+ 1), NONE outside the range. A winner found in this row gets left,
+ * right and its inward neighbour, and waits for the outward one; a winner in the inward row gets this
+ * row's vote as its outward neighbour. Lanes are visited one by one for these reads: few pixels need
+ * them once the winners settle, and vector lanes cannot index different planes. */
+inline void visit_row(Winner *w, __global const V_T *cur, __global const V_T *in, __global float *neigh,
+                      size_t i, size_t plane, int n, int delta, int row, int inward, FLV slow, int record)
 {
     int vy = row - delta;
     for (int c = 0; c < n; c++) {
@@ -196,24 +209,33 @@ inline void visit_row(Winner *w, __global const V_T *cur, __global const V_T *pr
         w->key = select(w->key, key, better);
         w->index = select(w->index, (IV)(row * n + c), better);
     }
-    /* Only lanes whose winner lies in this row or the one before have neighbours to record. */
-    if (!ANY(w->index >= (IV)((row - 1) * n))) return;
+    IV here = (w->index >= (IV)(row * n)) & (w->index < (IV)(row * n + n));
+    IV there = (w->index >= (IV)(inward * n)) & (w->index < (IV)(inward * n + n)) & (IV)(inward >= 0 ? -1 : 0);
+    if (!record || !ANY(here | there)) return;
     int winner[VEC];
     float slows[VEC];
     VSTORE(w->index, winner);
     VSTORE(slow, slows);
+    size_t inward_slot = (inward < row ? 2 : 3) * plane, outward_slot = (inward < row ? 3 : 2) * plane;
     for (int l = 0; l < VEC; l++) {
         size_t at = i + l;
-        int c = winner[l] - row * n;
+        int c = winner[l] - row * n, from_inward = winner[l] - inward * n;
         float sl = slows[l];
-        if (c >= 0) {
+        if (c >= 0 && c < n) {
             __global const V_T *v = cur + c * plane + at;
             neigh[at] = c > 0 ? neighbour(v[-(long)plane], sl, c - 1, row, delta) : NONE;
             neigh[plane + at] = c < n - 1 ? neighbour(v[plane], sl, c + 1, row, delta) : NONE;
-            neigh[2 * plane + at] = row > 0 ? neighbour(prev[c * plane + at], sl, c, row - 1, delta) : NONE;
-            neigh[3 * plane + at] = NONE;
-        } else if (c >= -n) {
-            neigh[3 * plane + at] = neighbour(cur[(c + n) * plane + at], sl, c + n, row, delta);
+            if (inward >= 0) {
+                neigh[inward_slot + at] = neighbour(in[c * plane + at], sl, c, inward, delta);
+                neigh[outward_slot + at] = NONE;
+            } else {
+                neigh[2 * plane + at] = NONE;
+                neigh[3 * plane + at] = NONE;
+            }
+        } else if (inward >= 0 && from_inward >= 0 && from_inward < n) {
+            /* This row is the winner's outward neighbour: above it if this row is the smaller. */
+            neigh[(row < inward ? 2 : 3) * plane + at] = neighbour(cur[from_inward * plane + at], sl, from_inward, row,
+                                                                    delta);
         }
     }
 }
@@ -224,29 +246,30 @@ inline void store(Winner *w, __global V_T *best, __global int *index, size_t i)
     VSTORE(w->index, index + i);
 }
 
-/* Row `row` of vote planes updates the winners kept in best (keys), index and neigh (row 0 starts them). */
-__kernel void vote_running(__global const V_T *cur, __global const V_T *prev, __global const float *moments,
+/* The s-th row visited updates the winners kept in best (keys), index and neigh (s = 0 starts them). */
+__kernel void vote_running(__global const V_T *cur, __global const V_T *in, __global const float *moments,
                            __global V_T *best, __global int *index, __global float *neigh, long W, long H,
-                           long col0, long count, int delta, int r, float penalty, int row)
+                           long col0, long count, int delta, int r, float penalty, int record, int s)
 {
     long k = get_global_id(0), y = get_global_id(1);
     if (k >= count || y >= H) return;
     long x0 = col0 + k * VEC;
     size_t i = y * W + x0, plane = W * H;
-    int n = 2 * delta + 1;
+    int n = 2 * delta + 1, row = row_of(s, delta);
     Winner w = no_winner();
-    if (row > 0) {
+    if (s > 0) {
         w.key = VLOAD(best + i);
         w.index = VLOAD(index + i);
     }
-    visit_row(&w, cur, prev, neigh, i, plane, n, delta, row, slowness(moments, penalty, x0, y, W, H, r));
+    visit_row(&w, cur, in, neigh, i, plane, n, delta, row, inward_of(row, delta),
+              slowness(moments, penalty, x0, y, W, H, r), record);
     store(&w, best, index, i);
 }
 
-/* The winners from the full table of n * n vote planes, row by row as vote_running visits them. */
+/* The winners from the full table of n * n vote planes, rows in the order vote_running visits them. */
 __kernel void winner_table(__global const V_T *table, __global const float *moments, __global V_T *best,
                            __global int *index, __global float *neigh, long W, long H, long col0, long count,
-                           int delta, int r, float penalty)
+                           int delta, int r, float penalty, int record)
 {
     long k = get_global_id(0), y = get_global_id(1);
     if (k >= count || y >= H) return;
@@ -255,9 +278,11 @@ __kernel void winner_table(__global const V_T *table, __global const float *mome
     int n = 2 * delta + 1;
     FLV slow = slowness(moments, penalty, x0, y, W, H, r);
     Winner w = no_winner();
-    for (int row = 0; row < n; row++)
-        visit_row(&w, table + row * n * plane, table + (row > 0 ? row - 1 : 0) * n * plane, neigh, i, plane, n,
-                  delta, row, slow);
+    for (int s = 0; s < n; s++) {
+        int row = row_of(s, delta), inward = inward_of(row, delta);
+        visit_row(&w, table + row * n * plane, table + max(inward, 0) * n * plane, neigh, i, plane, n, delta, row,
+                  inward, slow, record);
+    }
     store(&w, best, index, i);
 }
 

@@ -57,11 +57,14 @@ def oracle_votes(f0, f1, delta, radius, features):
 
 
 def oracle_winner(table, delta):
-    """The smallest vote; ties to the smaller |v|^2, then to the first displacement in raster order (the
-    rule for binary votes; float votes of textures do not tie)."""
+    """The smallest vote; ties to the smaller |v|^2, then to the first visited: rows of fixed vy in the
+    order 0, -1, +1, -2, +2, ..., vx ascending (the rule for binary votes; textures' float votes do not
+    tie)."""
     n = 2 * delta + 1
     d = np.arange(n * n)
-    order = np.lexsort((d, (d % n - delta) ** 2 + (d // n - delta) ** 2))
+    vy, vx = d // n - delta, d % n - delta
+    visit = (2 * np.abs(vy) - (vy < 0)) * n + vx
+    order = np.lexsort((visit, vx**2 + vy**2))
     return order[np.argmin(table[order], axis=0)]
 
 

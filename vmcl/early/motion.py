@@ -213,32 +213,39 @@ def _moments(machine: Machine, f0, f1, radius: int, defines: dict) -> cl_array.A
     return scan.box_sum(raw, radius, machine=machine)
 
 
+def _rows(delta: int) -> list[int]:
+    """Rows of displacements (vy + delta) in the order they are visited: out from vy = 0, as row_of in
+    kernels/motion.cl, so a small motion's winner is found first and rarely moves afterwards."""
+    return [delta + (s + 1) // 2 * (-1 if s % 2 else 1) for s in range(2 * delta + 1)]
+
+
 def _winner(machine: Machine, f0, f1, moments, delta: int, radius: int, penalty: float, method: str,
-            defines: dict):
-    """Per pixel: the winning vote, its displacement index and the votes of its four neighbours."""
+            subpixel: bool, defines: dict):
+    """Per pixel: the winning key, its displacement index and the keys of its four neighbours."""
     height, width = f0.shape
     n = 2 * delta + 1
     best = machine.empty((height, width), _vote_dtype(defines))
     index = machine.empty((height, width), np.int32)
     neigh = machine.empty((4, height, width), np.float32)
     state = (best, index, neigh, np.int64(width), np.int64(height))
-    params = (np.int32(delta), np.int32(radius), np.float32(penalty))
+    params = (np.int32(delta), np.int32(radius), np.float32(penalty), np.int32(bool(subpixel)))
     groups = _groups(machine, width)
     if method == "table":
         table = _table(machine, f0, f1, delta, radius, defines)
         for vec, col0, count in groups:
             _launch(machine, machine.kernel("motion", "winner_table", VEC=vec, **defines), (count, height), table,
-                           moments, *state, np.int64(col0), np.int64(count), *params)
+                    moments, *state, np.int64(col0), np.int64(count), *params)
         return best, index, neigh
-    previous = None
-    for row in range(n):
-        votes_row = scan.box_sum(_costs(machine, f0, f1, delta, row * n, n, defines), radius,
-                                 machine=machine)
+    visited: dict[int, cl_array.Array] = {}
+    for step, row in enumerate(_rows(delta)):
+        votes_row = scan.box_sum(_costs(machine, f0, f1, delta, row * n, n, defines), radius, machine=machine)
+        inward = visited.get(row + 1 if row < delta else row - 1, votes_row)
         for vec, col0, count in groups:
             _launch(machine, machine.kernel("motion", "vote_running", VEC=vec, **defines), (count, height),
-                           votes_row, previous if previous is not None else votes_row, moments, *state,
-                           np.int64(col0), np.int64(count), *params, np.int32(row))
-        previous = votes_row
+                    votes_row, inward, moments, *state, np.int64(col0), np.int64(count), *params, np.int32(step))
+        # A row's inward row was visited one or two steps before it: keep the last two.
+        visited = {r: v for r, v in visited.items() if r in _rows(delta)[max(step - 1, 0):step]}
+        visited[row] = votes_row
     return best, index, neigh
 
 
@@ -248,7 +255,7 @@ def _level(machine: Machine, f0, f1, pred, delta: int, radius: int, features: st
     height, width = f0.shape
     defines = _defines(f0, features)
     moments = _moments(machine, f0, f1, radius, defines)
-    best, index, neigh = _winner(machine, f0, f1, moments, delta, radius, penalty, method, defines)
+    best, index, neigh = _winner(machine, f0, f1, moments, delta, radius, penalty, method, subpixel, defines)
     flow_out = machine.empty((height, width, 2), np.float32)
     score = machine.empty((height, width), np.float32)
     boundaries = machine.empty((height, width), np.uint8)
@@ -320,7 +327,8 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
         candidate; 0 is the paper's plain minimum. Binary votes are exact integers and take none.
     method : {"running", "table"}
         "running" (default, the paper's simplification): displacements are visited a row (fixed vy) at
-        a time and each pixel keeps its best so far, so only two rows of votes exist at once.
+        a time, out from vy = 0, and each pixel keeps its best so far, so at most three rows of votes
+        exist at once.
         "table" (faithful): all (2 delta + 1)^2 vote planes are built, then the winner is chosen.
         Identical results.
     boundary_score : float, optional
@@ -335,11 +343,11 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
 
     Notes
     -----
-    The winner minimises the vote (squared differences: plus the speed penalty). Binary votes are
-    exact integers, and their ties go to the smaller ``vx**2 + vy**2``, then to the first displacement
-    in raster order (vy major). Squared differences tie exactly only in degenerate cases (a flat patch,
-    which has no estimate; equal raw votes differ by the penalty), and then go to the first in raster
-    order. Results do not depend on the work-group size. Frame 1 is read with clamped coordinates (the edge pixel
+    The winner minimises the vote (squared differences: plus the speed penalty). Ties go to the first
+    displacement visited: rows of fixed vy in the order 0, -1, +1, -2, +2, ..., vx ascending within a
+    row; binary votes, exact integers, first prefer the smaller ``vx**2 + vy**2``. (Squared differences
+    tie exactly only in degenerate cases: a flat patch, which has no estimate; equal raw votes differ by
+    the penalty.) Results do not depend on the work-group size. Frame 1 is read with clamped coordinates (the edge pixel
     repeats) and patches that reach over the border sum fewer pixels.
 
     Normalised scores, 1 for a perfect match:
