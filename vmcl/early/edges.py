@@ -71,8 +71,8 @@ class ZeroCrossings(NamedTuple):
     response: ArrayLike
 
 
-def _xy(field: cl_array.Array) -> tuple[int, int]:
-    height, width = field.shape
+def _xy(array: cl_array.Array) -> tuple[int, int]:
+    height, width = array.shape
     return width, height
 
 
@@ -334,6 +334,7 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     pairs, tiles, local = _thresholds(machine, magnitude, low, high, use_quantiles, noise)
     state = machine.empty(smoothed.shape, np.uint8)
     doubling = hysteresis == "doubling"
+    # Spreading activation needs no marks; without CLEAR_MARKS the kernel never touches its marks argument.
     marks = machine.empty(smoothed.shape, np.uint8) if doubling else state
     classify = _kernel(machine, "edges", "nms_classify", INTERPOLATE=int(bool(interpolate)), LOCAL=int(local),
                        CLEAR_MARKS=int(doubling))
