@@ -147,9 +147,10 @@ class MrfConfig:
 
     Parameters
     ----------
-    method : {"icm", "meanfield", "mpm", "anneal"}
-        The solver for every cue. "icm" is the fastest; "meanfield" (Geiger and Girosi) reaches lower
-        energies in about forty times the sweeps.
+    method : {"meanfield", "icm", "mpm", "anneal"}
+        The solver for every cue. "meanfield" (Geiger and Girosi, the default) finds the
+        discontinuities; "icm" is about twenty times faster but leaves many spurious lines in the
+        piecewise-constant cues (benchmarks/results/pipeline.md).
     seed : int
         Keys the random numbers of "anneal" and "mpm".
     depth, flow, colour, texture : mapping of str to value
@@ -157,7 +158,7 @@ class MrfConfig:
         :class:`vmcl.mrf.Params`, e.g. ``{"beta": 3.0}``).
     """
 
-    method: str = "icm"
+    method: str = "meanfield"
     seed: int = 0
     depth: Mapping[str, Any] = field(default_factory=dict)
     flow: Mapping[str, Any] = field(default_factory=dict)
@@ -463,11 +464,12 @@ class _Run:
                     device["sparse_disparity"] = matched.disparity
                     device["stereo_discontinuity"] = matched.discontinuity
                     lines["depth"] = self.restore("depth", matched.disparity, brightness, device) or lines["depth"]
-        for cue, data, kind in (("flow", "raw_flow", "smooth"), ("colour", "hue", "constant"),
-                                ("texture", "density", "constant")):
+        for cue, data, coupling, kind in (("flow", "raw_flow", "edges", "smooth"),
+                                          ("colour", "hue", "colour_edges", "constant"),
+                                          ("texture", "density", "texture_edges", "constant")):
             if f"mrf {cue}" in names:
                 with self.stage(f"mrf {cue}"):
-                    found = self.restore(cue, device[data], brightness, device, kind=kind)
+                    found = self.restore(cue, device[data], device[coupling], device, kind=kind)
                     if found is not None:
                         lines["motion" if cue == "flow" else cue] = found
         with self.stage("integrate"):
@@ -495,11 +497,22 @@ class _Run:
                             sigma=s.sigma, low_threshold=s.low_threshold, high_threshold=s.high_threshold,
                             use_quantiles=s.use_quantiles, barriers=barriers, machine=self.m)
 
-    def restore(self, cue: str, data, brightness, device: dict, *, kind: str = "smooth"):
-        """Restore one cue coupled to the brightness edges; keeps its field, returns its lines."""
+    def restore(self, cue: str, data, coupling, device: dict, *, kind: str = "smooth"):
+        """Restore one cue coupled to an edge field; keeps its field, returns its lines.
+
+        Depth and flow are coupled to the brightness edges (equation (12)). Colour and texture are
+        coupled to their own module's candidates with lines allowed only near them: the boundaries
+        these cues exist for are the ones brightness misses (isoluminant colour, equal mean
+        brightness), and inside a texture brightness edges are everywhere, so there the brightness
+        coupling would license lines at every texton (measured on the "cues" scene, mean field: hue
+        lines at precision 0.27 coupled to brightness, 0.94 coupled to the candidates).
+        """
+        params = self.c.mrf.params(cue)
+        if kind == "constant":
+            params = dataclasses.replace(params, require_edge=True)
         try:
-            found = restore(data, edges=brightness, kind=kind, method=self.c.mrf.method,
-                            params=self.c.mrf.params(cue), seed=self.c.mrf.seed, machine=self.m)
+            found = restore(data, edges=coupling, kind=kind, method=self.c.mrf.method,
+                            params=params, seed=self.c.mrf.seed, machine=self.m)
         except ValueError as error:
             # The one refusal a good run can meet: the module found nothing (no match, no flow, no
             # valid hue) for the MRF to restore. The cue is then absent from the result.

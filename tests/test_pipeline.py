@@ -1,0 +1,174 @@
+"""The integrated machine: configuration, input subsets, device residency, and end-to-end quality on
+vmcl.scenes (seed sections "The Vision Machine System" and "Organization of integration")."""
+
+import numpy as np
+import pytest
+
+from vmcl import metrics, scenes
+from vmcl.integrate import Cue, boundary, integrate
+from vmcl.mrf import boundary_map
+from vmcl.pipeline import Config, VisionMachine
+
+
+@pytest.fixture(scope="module")
+def cues_scene():
+    return scenes.render(scenes.preset("cues", shape=(256, 256)), seed=0, noise=0.01)
+
+
+@pytest.fixture(scope="module")
+def cues_run(cues_scene, machine):
+    s = cues_scene
+    return VisionMachine(machine=machine).run(s.left, s.right, s.left_next)
+
+
+@pytest.fixture(scope="module")
+def small_scene():
+    return scenes.render(scenes.preset("blocks", shape=(64, 64)), seed=0, noise=0.01)
+
+
+# -- configuration ---------------------------------------------------------------------------------
+
+def test_config_from_toml_overrides_defaults_and_presets(tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text('[stereo]\nd_max = 20\nfeedback = false\n[mrf]\nmethod = "icm"\n[mrf.depth]\nbeta = 3.0\n')
+    config = Config.from_toml(path)
+    assert config.stereo.d_max == 20 and not config.stereo.feedback and config.mrf.method == "icm"
+    assert config.mrf.params("depth").beta == 3.0
+    assert config.mrf.params("flow") == Config().mrf.params("flow")
+    assert config.to_dict()["stereo"]["d_max"] == 20
+
+
+@pytest.mark.parametrize("text, message", [("[stereo]\nd_maxx = 3\n", "stereo.d_maxx"),
+                                           ("[stero]\n", "stero"),
+                                           ("[mrf.depth]\nbetta = 1.0\n", "mrf.depth.betta"),
+                                           ("[stereo\n", "not valid TOML")])
+def test_bad_config_is_refused_naming_the_key(tmp_path, text, message):
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=message):
+        Config.from_toml(path)
+
+
+# -- inputs ----------------------------------------------------------------------------------------
+
+def test_one_grey_image_gives_edges_and_texture_only(small_scene, machine):
+    grey = small_scene.left.mean(axis=2)
+    result = VisionMachine(machine=machine).run(grey)
+    assert result.edges.shape == grey.shape and result.edges.dtype == bool
+    assert result.density is not None and result.hue is None
+    assert result.disparity is None and result.flow is None
+    assert set(result.lines) <= {"texture"}
+    assert list(result.stages) == ["upload", "edges", "texture", "mrf texture", "integrate", "download"]
+
+
+def test_each_input_adds_its_cues(small_scene, machine):
+    s = small_scene
+    vm = VisionMachine(Config.from_dict({"mrf": {"method": "icm"}}), machine=machine)
+    single = vm.run(s.left)
+    assert single.hue is not None and single.disparity is None and single.flow is None
+    pair = vm.run(s.left, s.right)
+    assert pair.disparity.shape == (64, 64) and np.isfinite(pair.disparity).all()
+    assert pair.first_pass_disparity is not None and pair.flow is None
+    moving = vm.run(s.left, next=s.left_next)
+    assert moving.flow.shape == (64, 64, 2) and moving.disparity is None
+    uint8 = vm.run(np.round(s.left * 255).clip(0, 255).astype(np.uint8))
+    assert uint8.image.dtype == np.float32 and uint8.image.max() <= 1
+
+
+def test_bad_images_are_refused(small_scene, machine):
+    vm = VisionMachine(machine=machine)
+    with pytest.raises(ValueError, match="right has shape"):
+        vm.run(small_scene.left, small_scene.right[:32])
+    with pytest.raises(ValueError, match="NaN"):
+        vm.run(np.full((32, 32), np.nan, np.float32))
+    with pytest.raises(ValueError, match="grey or"):
+        vm.run(np.zeros((32, 32, 4), np.float32))
+    with pytest.raises(TypeError, match="uint8, uint16 or float"):
+        vm.run(np.zeros((32, 32), np.int64))
+
+
+def test_fields_stay_on_the_device(small_scene, machine, monkeypatch):
+    """One upload per image and one download per output: no host round trip between stages."""
+    import pyopencl.array as cl_array
+
+    gets, sets = [], []
+    original_get, original_set = cl_array.Array.get, cl_array.Array.set
+    monkeypatch.setattr(cl_array.Array, "get", lambda self, *a, **k: gets.append(self.size) or original_get(self, *a, **k))
+    monkeypatch.setattr(cl_array.Array, "set", lambda self, *a, **k: sets.append(self.size) or original_set(self, *a, **k))
+    s = small_scene
+    VisionMachine(machine=machine).run(s.left, s.right, s.left_next)
+    pixels = 64 * 64
+    assert sum(size >= 3 * pixels for size in sets) == 3  # the three images, once each
+    large_gets = [size for size in gets if size >= pixels // 2]
+    # Fields read back: the downloads at the end (edges, hue, colour edges, density, texture edges,
+    # sparse and first-pass disparity, discontinuity flags, raw flow, four restored fields, support,
+    # labels and eight line fields). Everything else read back is a scalar (thresholds, energies).
+    assert len(large_gets) <= 25
+
+
+def test_timings_per_stage_and_kernel(small_scene):
+    s = small_scene
+    result = VisionMachine().run(s.left, s.right)  # its own profiling Machine
+    assert result.stages["stereo"] > 0 and result.total_ms >= sum(result.stages.values()) - 1e-6
+    assert any(name.startswith("stereo") or "box" in name for name in result.kernels)
+    assert all(entry["total_ms"] >= 0 for entry in result.kernels.values())
+
+
+# -- integration -----------------------------------------------------------------------------------
+
+def test_integrate_matches_boundary_maps_and_labels(machine):
+    rng = np.random.default_rng(1)
+    lines = {cue: (rng.random((9, 12)) < 0.1, rng.random((8, 13)) < 0.1) for cue in ("depth", "colour", "texture")}
+    edges = rng.random((9, 13)) < 0.2
+    support, labels = integrate(lines, edges=edges, machine=machine)
+    maps = {cue: boundary_map(*pair) for cue, pair in lines.items()}
+    expected = (maps["depth"] * Cue.DEPTH + maps["colour"] * Cue.COLOUR + maps["texture"] * Cue.TEXTURE
+                + edges * Cue.BRIGHTNESS)
+    np.testing.assert_array_equal(support, expected)
+    want = np.where(maps["depth"], scenes.Label.DEPTH,
+                    np.where(maps["colour"], scenes.Label.ALBEDO, np.where(maps["texture"], scenes.Label.TEXTURE, 0)))
+    np.testing.assert_array_equal(labels, want)
+    np.testing.assert_array_equal(boundary(*lines["depth"], machine=machine), maps["depth"])
+
+
+# -- end to end on the "cues" scene (256 x 256) ----------------------------------------------------
+
+def test_dense_disparity_bad_1_below_5_percent(cues_scene, cues_run):
+    visible = ~cues_scene.occluded_stereo & np.isfinite(cues_scene.disparity)
+    scores = metrics.evaluate_disparity(cues_run.disparity, cues_scene.disparity, mask=visible)
+    assert scores.density == 1.0
+    assert scores.bad[1.0] < 0.05  # measured 0.014
+
+
+def test_flow_epe_below_half_a_pixel(cues_scene, cues_run):
+    known = ~cues_scene.occluded_motion & np.isfinite(cues_scene.flow).all(axis=-1)
+    scores = metrics.evaluate_flow(cues_run.flow, cues_scene.flow, mask=known)
+    assert scores.density == 1.0
+    assert scores.epe < 0.5  # measured 0.48 (the motion module's own: 0.54)
+
+
+def test_colour_only_boundary_is_found_by_colour_alone(cues_scene, cues_run):
+    """The isoluminant boundary: colour's lines find it, brightness and the other cues do not."""
+    albedo = cues_scene.labels == scenes.Label.ALBEDO
+    colour = boundary_map(*cues_run.lines["colour"])
+    assert metrics.detection_scores(colour, albedo, tolerance=1).recall >= 0.8  # measured 1.0
+    assert metrics.detection_scores(cues_run.edges, albedo, tolerance=1).recall < 0.2
+    for cue in ("depth", "texture"):
+        assert metrics.detection_scores(boundary_map(*cues_run.lines[cue]), albedo, tolerance=1).recall < 0.2
+    assert metrics.label_scores(cues_run.labels, cues_scene.labels, tolerance=1)[scenes.Label.ALBEDO].recall >= 0.8
+
+
+@pytest.mark.xfail(strict=True, reason="measured at 256 x 256: texture-only recall 0.35 within 1 px (0.67 within "
+                   "3 px; the density's 49-px windows blur the boundary, and the candidates of vmcl.early.texture "
+                   "reach 0.48 within 1 px); depth-only recall 0.38 (the depth MRF preset draws about 30 line "
+                   "sites on sparse matches with 2 px jumps, the motion MRF finds 0.37 of the plate's outline)")
+def test_integration_recalls_every_single_cue_boundary(cues_scene, cues_run):
+    scores = metrics.label_scores(cues_run.labels, cues_scene.labels, tolerance=1)
+    assert min(scores[label].recall for label in (scenes.Label.DEPTH, scenes.Label.ALBEDO, scenes.Label.TEXTURE)) >= 0.8
+
+
+@pytest.mark.xfail(strict=True, reason="measured F 0.30 (precision 0.20, recall 0.59) within 1 px: the texture and "
+                   "motion line processes are poorly localised and the depth one nearly empty; see the recall test")
+def test_integrated_discontinuities_f_at_least_0_8(cues_scene, cues_run):
+    scores = metrics.detection_scores(cues_run.discontinuities, cues_scene.labels > 0, tolerance=1)
+    assert scores.f >= 0.8
