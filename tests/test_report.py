@@ -1,0 +1,82 @@
+"""The report opens: its HTML parses, every inline image decodes, and the pictures mean what they say."""
+
+import base64
+from html.parser import HTMLParser
+
+import cv2
+import numpy as np
+import pytest
+
+from vmcl import scenes
+from vmcl.integrate import Cue
+from vmcl.pipeline import Config, VisionMachine
+from vmcl.report import CUE_COLOURS, cartoon_image, disparity_image, flow_image, write_report
+
+
+class _Images(HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.sources, self.tags = [], []
+
+    def handle_starttag(self, tag, attrs):
+        self.tags.append(tag)
+        if tag == "img":
+            self.sources.append(dict(attrs)["src"])
+
+
+@pytest.fixture(scope="module")
+def run():
+    s = scenes.render(scenes.preset("blocks", shape=(64, 64)), seed=0, noise=0.01)
+    return VisionMachine(Config.from_dict({"mrf": {"method": "icm"}})).run(s.left, s.right, s.left_next)
+
+
+def test_report_parses_and_every_inline_image_decodes(run, tmp_path):
+    written = write_report(run, tmp_path, evaluation={"scores": [("name", "value"), ("bad 1", "0.01")]})
+    page = written["report"].read_text(encoding="utf-8")
+    parser = _Images()
+    parser.feed(page)
+    parser.close()
+    assert {"html", "body", "table", "img"} <= set(parser.tags)
+    assert len(parser.sources) == len(written) - 1 == 8  # every PNG is inline too
+    for source in parser.sources:
+        prefix, data = source.split(",", 1)
+        assert prefix == "data:image/png;base64"
+        picture = cv2.imdecode(np.frombuffer(base64.b64decode(data), np.uint8), cv2.IMREAD_COLOR)
+        assert picture is not None and picture.shape[1] == 64
+    for stem, path in written.items():
+        if stem != "report":
+            assert cv2.imread(str(path)) is not None
+    assert "stereo.d_max" in page and "mrf colour" in page and "bad 1" in page
+
+
+def test_flow_wheel_directions_and_speed():
+    flow = np.zeros((64, 64, 2), np.float32)
+    flow[:, :32, 0] = 2.0  # right
+    flow[:, 32:, 1] = -2.0  # up
+    flow[60:, :] = 0.0  # still
+    flow[0, 0] = np.nan
+    picture = flow_image(flow, max_flow=2.0)
+    np.testing.assert_array_equal(picture[50, 20], [255, 0, 0])  # right is red, as in Baker et al.
+    assert picture[50, 50, 2] > 200 and picture[50, 50, 0] < 120  # up is blue-violet
+    np.testing.assert_array_equal(picture[62, 10], [255, 255, 255])  # no motion is white
+
+
+def test_disparity_scale_runs_from_far_to_near():
+    disparity = np.tile(np.linspace(2.0, 10.0, 64, dtype=np.float32), (32, 1))
+    disparity[0, 0] = np.nan
+    picture = disparity_image(disparity)
+    assert picture.shape == (32 + 28, 64, 3)
+    assert picture[16, 63, 0] > picture[16, 63, 2] and picture[16, 0, 2] > picture[16, 0, 0]  # near red, far blue
+    np.testing.assert_array_equal(picture[0, 0], [0, 0, 0])
+
+
+def test_cartoon_colours_each_cue_over_the_faded_image():
+    image = np.zeros((8, 8), np.float32)
+    support = np.zeros((8, 8), np.uint8)
+    support[1, 1] = Cue.COLOUR
+    support[2, 2] = Cue.DEPTH | Cue.COLOUR
+    support[3, 3] = Cue.BRIGHTNESS
+    picture = cartoon_image(image, support)
+    assert tuple(picture[1, 1]) == CUE_COLOURS[Cue.COLOUR]
+    assert tuple(picture[2, 2]) == CUE_COLOURS[Cue.DEPTH]
+    assert picture[0, 0, 0] == picture[0, 0, 1] > 100  # faded, grey
