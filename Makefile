@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: setup opencl test bench clean
+.PHONY: setup opencl demo test bench clean
 
 setup: opencl $(STAMP)
 
@@ -27,11 +27,16 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[test]'
 	@touch $(STAMP)
 
+# The main job: render a scene, run the whole machine, print its scores and write vmcl-demo/report.html.
+demo: setup
+	$(VENV)/bin/vmcl demo --out vmcl-demo
+
 test: setup
 	$(PY) -m pytest -q
 
 bench: setup
 	$(PY) benchmarks/primitives.py
+	$(PY) benchmarks/pipeline.py
 
 clean:
-	rm -rf $(VENV) build dist *.egg-info .pytest_cache .hypothesis
+	rm -rf $(VENV) vmcl-demo build dist *.egg-info .pytest_cache .hypothesis
