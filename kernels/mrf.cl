@@ -21,7 +21,8 @@
  * and with its two parallel neighbours; lh[y, x] meets lh[y +- 1, x] and lh[y, x +- 1] (other parity)
  * and lv sites of both parities, so the lines take four colours: (type, (x + y) & 1) with type 0 = lh,
  * 1 = lv. Sites of one colour are conditionally independent given the rest, so updating them at once
- * is exactly a sequence of single-site updates.
+ * is exactly a sequence of single-site updates. A launch covers one colour, SITES (4) of its sites per
+ * work-item along a row; a sweep runs the four line colours, then the two f colours (lattice.py).
  *
  * Defines: NCOMP (1..4 components sharing one line process), KIND (0 smooth, 1 constant), NLEVELS
  * (the levels of the constant kind), MODE (0 heat-bath sample, 1 conditional mode (ICM), 2 mean field).
