@@ -72,8 +72,9 @@ class Lattice:
         if kind == "constant":
             low = float(cm_reduce.reduce(self.f, "min", machine=machine).get())
             high = float(cm_reduce.reduce(self.f, "max", machine=machine).get())
-            self.nlevels = int(resolve_levels(params, low, high).size)
-            self.levels = machine.to_device(resolve_levels(params, low, high))
+            levels = resolve_levels(params, low, high)
+            self.nlevels = int(levels.size)
+            self.levels = machine.to_device(levels)
             machine.launch(self.kernel("quantise"), self.grid, self.f, self.levels, *self.dims)
         self.f_start = self.f.copy(queue=machine.queue)
         machine.launch(self.kernel("line_costs"), self.grid, edges, np.int32(edges is not None),
