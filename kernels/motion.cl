@@ -159,6 +159,14 @@ inline FLV slowness(__global const float *moments, float penalty, long x0, long 
 #define KEY(v, norm) ((v) * (2 * delta * delta + 1) + (norm))
 #endif
 
+/* What the parabola is fitted to: the penalised votes, whose minimum the winner is; binary votes as they
+ * are (their keys' tie-break term would bend the parabola). */
+#if COMPARE == CMP_SQUARED
+#define FIT(raw, key) (key)
+#else
+#define FIT(raw, key) TO_FLV(raw)
+#endif
+
 /* Each pixel's winner so far: its key and displacement index. */
 typedef struct {
     VV key;
@@ -169,13 +177,6 @@ inline Winner no_winner(void)
 {
     Winner w = {(VV)V_HIGHEST, (IV)(-1)};
     return w;
-}
-
-/* The penalised vote, as a float, of the displacement in column c of row `row`. */
-inline float neighbour(V_T raw, float slow, int c, int row, int delta)
-{
-    int vx = c - delta, vy = row - delta;
-    return (float)raw + (COMPARE == CMP_SQUARED ? slow * (float)(vx * vx + vy * vy) : 0.0f);
 }
 
 /* Row `row` of the displacements, visited s-th: rows go out from vy = 0 (delta, delta - 1, delta + 1,
@@ -192,52 +193,49 @@ inline int inward_of(int row, int delta)
     return row < delta ? row + 1 : row > delta ? row - 1 : -1;
 }
 
-/* Visit row `row`, n vote planes at `cur` (its inward row's at `in`, when inward >= 0), then record the
+/* Keep `field` where mask is clear and take `value` where it is set, in plane p of neigh. */
+#define MASKED_STORE(p, value, mask) VSTORE(select(VLOAD(neigh + (p) * plane + i), (value), (mask)), neigh + (p) * plane + i)
+
+/* Visit row `row`, n vote planes at `cur` (its inward row's at `in`, when inward >= 0), and record the
  * keys of the winners' neighbouring displacements for the parabola fit in the planes of `neigh`: left,
  * right (vx -+ 1), up, down (vy -+ 1), NONE outside the range. A winner found in this row gets left,
  * right and its inward neighbour, and waits for the outward one; a winner in the inward row gets this
- * row's vote as its outward neighbour. Lanes are visited one by one for these reads: few pixels need
- * them once the winners settle, and vector lanes cannot index different planes. */
+ * row's key at its column as its outward neighbour. All of it by selects as the columns pass: as fast on
+ * PoCL as reading the winners' columns lane by lane afterwards, and without branches. */
 inline void visit_row(Winner *w, __global const V_T *cur, __global const V_T *in, __global float *neigh,
                       size_t i, size_t plane, int n, int delta, int row, int inward, FLV slow, int record)
 {
-    int vy = row - delta;
+    int vy = row - delta, vyi = inward - delta;
+    IV entering = w->index, fresh = (IV)0;
+    FLV left = (FLV)NONE, right = (FLV)NONE, inner = (FLV)NONE, outer = (FLV)NONE, last = (FLV)NONE;
     for (int c = 0; c < n; c++) {
         int vx = c - delta;
-        VV key = KEY(VLOAD(cur + c * plane + i), vx * vx + vy * vy);
+        VV raw = VLOAD(cur + c * plane + i), key = KEY(raw, vx * vx + vy * vy);
         IV better = key < w->key;
         w->key = select(w->key, key, better);
         w->index = select(w->index, (IV)(row * n + c), better);
-    }
-    IV here = (w->index >= (IV)(row * n)) & (w->index < (IV)(row * n + n));
-    IV there = (w->index >= (IV)(inward * n)) & (w->index < (IV)(inward * n + n)) & (IV)(inward >= 0 ? -1 : 0);
-    if (!record || !ANY(here | there)) return;
-    int winner[VEC];
-    float slows[VEC];
-    VSTORE(w->index, winner);
-    VSTORE(slow, slows);
-    size_t inward_slot = (inward < row ? 2 : 3) * plane, outward_slot = (inward < row ? 3 : 2) * plane;
-    for (int l = 0; l < VEC; l++) {
-        size_t at = i + l;
-        int c = winner[l] - row * n, from_inward = winner[l] - inward * n;
-        float sl = slows[l];
-        if (c >= 0 && c < n) {
-            __global const V_T *v = cur + c * plane + at;
-            neigh[at] = c > 0 ? neighbour(v[-(long)plane], sl, c - 1, row, delta) : NONE;
-            neigh[plane + at] = c < n - 1 ? neighbour(v[plane], sl, c + 1, row, delta) : NONE;
+        if (record) {
+            FLV k = FIT(raw, key);
+            right = select(select(right, k, fresh), (FLV)NONE, better);
+            left = select(left, last, better);
             if (inward >= 0) {
-                neigh[inward_slot + at] = neighbour(in[c * plane + at], sl, c, inward, delta);
-                neigh[outward_slot + at] = NONE;
-            } else {
-                neigh[2 * plane + at] = NONE;
-                neigh[3 * plane + at] = NONE;
+                VV raw_in = VLOAD(in + c * plane + i);
+                inner = select(inner, FIT(raw_in, KEY(raw_in, vx * vx + vyi * vyi)), better);
+                outer = select(outer, k, entering == (IV)(inward * n + c));
             }
-        } else if (inward >= 0 && from_inward >= 0 && from_inward < n) {
-            /* This row is the winner's outward neighbour: above it if this row is the smaller. */
-            neigh[(row < inward ? 2 : 3) * plane + at] = neighbour(cur[from_inward * plane + at], sl, from_inward, row,
-                                                                    delta);
+            fresh = better;
+            last = k;
         }
     }
+    if (!record) return;
+    IV here = (w->index >= (IV)(row * n)) & (w->index < (IV)(row * n + n));
+    IV there = (w->index >= (IV)(inward * n)) & (w->index < (IV)(inward * n + n)) & (IV)(inward >= 0 ? -1 : 0);
+    if (!ANY(here | there)) return;
+    int inward_slot = inward < row ? 2 : 3, outward_slot = 5 - inward_slot;
+    MASKED_STORE(0, left, here);
+    MASKED_STORE(1, right, here);
+    MASKED_STORE(inward_slot, inner, here);
+    MASKED_STORE(outward_slot, select((FLV)NONE, outer, there), here | there);
 }
 
 inline void store(Winner *w, __global V_T *best, __global int *index, size_t i)
