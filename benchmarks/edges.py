@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import os
 import platform
 import statistics
 import time
@@ -125,6 +126,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=RESULTS / "edges.md")
     args = parser.parse_args()
     machine = vmcl.Machine(profile=True)
+    load = os.getloadavg()[0]
     rows, figures = [], {}
     for side in (512, 1024):
         table, figures[side] = canny_table(machine, side, args.repeat)
@@ -149,7 +151,8 @@ def main() -> None:
         (f"Full Canny, smoothing included: sigma {SIGMA}, thresholds {LOW:g} / {HIGH:g} on Sobel magnitudes of the "
         "8-bit camera image resized to the size (the noise-threshold rows estimate their own). Wall-clock "
         f"medians of {args.repeat} rounds, the calls of a size taken in alternation. The machine is shared with "
-        "other engineers running tests: compare ratios within this run."),
+        f"other engineers running tests (1-minute load average {load:.1f} on {os.cpu_count()} cores at the start): compare "
+        "ratios within this run."),
         "",
         verdict,
         "",
