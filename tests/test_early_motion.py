@@ -11,6 +11,7 @@ from scipy import ndimage
 from vmcl import scenes
 from vmcl.datasets import FLOW_SCENES, load_flow
 from vmcl.early import edges, filters, motion
+from vmcl.early.sign_correlation import arcsine_law, sign_correlation
 from vmcl.metrics import endpoint_error, evaluate_flow
 
 
@@ -261,15 +262,15 @@ def test_sign_correlation_follows_arcsine_law(correlation):
     f, h = (ndimage.gaussian_filter(rng.standard_normal((512, 512)), 1.0) for _ in range(2))
     f, h = f / f.std(), h / h.std()
     g = correlation * f + np.sqrt(1 - correlation**2) * h
-    measured = motion.sign_correlation(f.astype(np.float32), g.astype(np.float32))
-    assert abs(measured - motion.arcsine_law(correlation)) < 0.02
+    measured = sign_correlation(f.astype(np.float32), g.astype(np.float32))
+    assert abs(measured - arcsine_law(correlation)) < 0.02
 
 
 def test_sign_correlation_of_known_signs(machine):
     f = np.array([1.0, -2.0, 0.0, 3.0], np.float32)
     g = np.array([2.0, 1.0, 0.5, -1.0], np.float32)
-    assert motion.sign_correlation(f, g) == 0.0  # agree, disagree, agree (0 counts as +), disagree
-    assert motion.sign_correlation(machine.to_device(f), machine.to_device(f)) == 1.0
+    assert sign_correlation(f, g) == 0.0  # agree, disagree, agree (0 counts as +), disagree
+    assert sign_correlation(machine.to_device(f), machine.to_device(f)) == 1.0
 
 
 def test_dtypes_and_device_arrays(pair, machine):
@@ -320,7 +321,9 @@ def test_bad_input(pair, machine):
     with pytest.raises(ValueError, match="frame0"):
         motion.flow(frame0[..., None].repeat(2, -1), frame1[..., None].repeat(2, -1), delta=2, patch=5)
     with pytest.raises(ValueError, match="same shape"):
-        motion.sign_correlation(frame0, frame1[:, :-1])
+        sign_correlation(frame0, frame1[:, :-1])
+    with pytest.raises(ValueError, match="g must not contain NaN"):
+        sign_correlation(frame0, bad)
 
 
 BEST = {"delta": 6, "patch": 15, "levels": 2}

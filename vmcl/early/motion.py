@@ -12,9 +12,8 @@ table variant is kept for comparison). A low normalised score at the chosen disp
 occlusions and motion boundaries. Beyond the paper: a sub-pixel parabola fit and a coarse-to-fine
 pyramid for motions larger than delta.
 
-The paper's theorem on why edge- and intensity-based variants agree, the correlation of the signs of two
-zero-mean jointly normal fields being (2 / pi) arcsin of their correlation, is :func:`arcsine_law`, and
-:func:`sign_correlation` measures the left side on the machine.
+The paper's theorem on why edge- and intensity-based variants agree is
+:mod:`vmcl.early.sign_correlation`.
 
 References
 ----------
@@ -33,11 +32,11 @@ from typing import Literal
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm import reduce as _reduce
 from vmcl.cm import scan
 from vmcl.cm._arrays import ArrayLike, field, machine_for
 from vmcl.early import edges as _edges
 from vmcl.early import filters as _filters
+from vmcl.early.sign_correlation import arcsine_law
 from vmcl.machine import Machine
 
 Features = Literal["brightness", "log", "sign_log", "edges"]
@@ -59,7 +58,7 @@ SPEED_PENALTY = 1e-3
 PYRAMID_SIGMA = 1.0
 """Gaussian smoothing before each halving of the pyramid."""
 
-BOUNDARY_SCORE = {"brightness": 0.9, "log": 0.9, "sign_log": float(2 / np.pi * np.arcsin(0.9)), "edges": 0.5}
+BOUNDARY_SCORE = {"brightness": 0.9, "log": 0.9, "sign_log": float(arcsine_law(0.9)), "edges": 0.5}
 """Default ``boundary_score`` per feature: the sign correlation's is the arcsine law's image of 0.9."""
 
 _COMPARE = {"brightness": 0, "log": 0, "sign_log": 1, "edges": 2}
@@ -190,8 +189,8 @@ def _costs(machine: Machine, f0, f1, delta: int, first: int, planes: int, define
     out = machine.empty((planes, height, width), _vote_dtype(defines))
     for vec, col0, count in _groups(machine, width):
         _launch(machine, machine.kernel("motion", "cost", VEC=vec, **defines), (count, height), f0, f1, out,
-                       np.int64(width), np.int64(height), np.int64(col0), np.int64(count), np.int32(delta),
-                       np.int32(first), np.int32(planes))
+                np.int64(width), np.int64(height), np.int64(col0), np.int64(count), np.int32(delta),
+                np.int32(first), np.int32(planes))
     return out
 
 
@@ -209,7 +208,7 @@ def _moments(machine: Machine, f0, f1, radius: int, defines: dict) -> cl_array.A
     planes = 4 if defines["COMPARE"] == _COMPARE["brightness"] else 2
     raw = machine.empty((planes, height, width), np.float32)
     _launch(machine, machine.kernel("motion", "moments", **defines), (width, height), f0, f1, raw,
-                   np.int64(width), np.int64(height))
+            np.int64(width), np.int64(height))
     return scan.box_sum(raw, radius, machine=machine)
 
 
@@ -236,15 +235,16 @@ def _winner(machine: Machine, f0, f1, moments, delta: int, radius: int, penalty:
             _launch(machine, machine.kernel("motion", "winner_table", VEC=vec, **defines), (count, height), table,
                     moments, *state, np.int64(col0), np.int64(count), *params)
         return best, index, neigh
+    rows = _rows(delta)
     visited: dict[int, cl_array.Array] = {}
-    for step, row in enumerate(_rows(delta)):
+    for step, row in enumerate(rows):
         votes_row = scan.box_sum(_costs(machine, f0, f1, delta, row * n, n, defines), radius, machine=machine)
         inward = visited.get(row + 1 if row < delta else row - 1, votes_row)
         for vec, col0, count in groups:
             _launch(machine, machine.kernel("motion", "vote_running", VEC=vec, **defines), (count, height),
                     votes_row, inward, moments, *state, np.int64(col0), np.int64(count), *params, np.int32(step))
         # A row's inward row was visited one or two steps before it: keep the last two.
-        visited = {r: v for r, v in visited.items() if r in _rows(delta)[max(step - 1, 0):step]}
+        visited = {r: v for r, v in visited.items() if r in rows[max(step - 1, 0):step]}
         visited[row] = votes_row
     return best, index, neigh
 
@@ -260,9 +260,9 @@ def _level(machine: Machine, f0, f1, pred, delta: int, radius: int, features: st
     score = machine.empty((height, width), np.float32)
     boundaries = machine.empty((height, width), np.uint8)
     _launch(machine, machine.kernel("motion", "finish", VEC=1, PREDICT=int(pred is not None), **defines),
-                   (width, height), best, index, neigh, pred if pred is not None else neigh, moments, f0, flow_out,
-                   score, boundaries, np.int64(width), np.int64(height), np.int32(delta), np.int32(radius), np.float32(penalty),
-                   np.int32(bool(subpixel)), np.float32(threshold))
+            (width, height), best, index, neigh, pred if pred is not None else neigh, moments, f0, flow_out, score,
+            boundaries, np.int64(width), np.int64(height), np.int32(delta), np.int32(radius), np.float32(penalty),
+            np.int32(bool(subpixel)), np.float32(threshold))
     return flow_out, score, boundaries
 
 
@@ -274,7 +274,7 @@ def _pyramid(machine: Machine, frame: cl_array.Array, levels: int) -> list[cl_ar
         height, width = smooth.shape
         half = machine.empty((-(-height // 2), -(-width // 2)), np.float32)
         _launch(machine, machine.kernel("motion", "decimate"), (half.shape[1], half.shape[0]), smooth, half,
-                       np.int64(width), np.int64(height), np.int64(half.shape[1]), np.int64(half.shape[0]))
+                np.int64(width), np.int64(height), np.int64(half.shape[1]), np.int64(half.shape[0]))
         images.append(half)
     return images
 
@@ -284,14 +284,15 @@ def _warp(machine: Machine, f1: cl_array.Array, coarse: cl_array.Array, features
     height, width = f1.shape
     warped = machine.empty(f1.shape, f1.dtype)
     pred = machine.empty((height, width, 2), np.float32)
-    _launch(machine, machine.kernel("motion", "warp", **_defines(f1, features)), (width, height), f1, coarse, warped,
-                   pred, np.int64(width), np.int64(height), np.int64(coarse.shape[1]), np.int64(coarse.shape[0]))
+    _launch(machine, machine.kernel("motion", "warp", **_defines(f1, features)), (width, height), f1, coarse,
+            warped, pred, np.int64(width), np.int64(height), np.int64(coarse.shape[1]), np.int64(coarse.shape[0]))
     return warped, pred
 
 
 def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, features: Features = "brightness",
-         subpixel: bool = True, levels: int = 1, sigma: float | None = None, speed_penalty: float = SPEED_PENALTY,
-         method: Method = "running", boundary_score: float | None = None, machine: Machine | None = None) -> FlowResult:
+         subpixel: bool = True, levels: int = 1, sigma: float | None = None,
+         speed_penalty: float = SPEED_PENALTY, method: Method = "running", boundary_score: float | None = None,
+         machine: Machine | None = None) -> FlowResult:
     """Optical flow by patchwise comparison over the displacements (-delta..delta)^2.
 
     Parameters
@@ -441,59 +442,3 @@ def votes(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featu
     f1 = _features(machine, d1, features, sigma)
     table = _table(machine, f0, f1, delta, radius, _defines(f0, features))
     return table.get() if host else table
-
-
-def sign_correlation(f: ArrayLike, g: ArrayLike, *, machine: Machine | None = None) -> float:
-    """The correlation of the signs of two fields: the mean of sign(f) sign(g), with sign(0) = +1.
-
-    Parameters
-    ----------
-    f, g : ndarray or pyopencl.array.Array, same shape, float32
-        Fields (zero-mean ones for the arcsine law).
-    machine : vmcl.Machine, optional
-
-    Returns
-    -------
-    float
-        In [-1, 1]; a scalar read back to the host for either kind of input.
-
-    Notes
-    -----
-    For zero-mean jointly normal f and g with correlation R, the expectation is
-    ``arcsine_law(R) = (2 / pi) arcsin R`` (the paper's theorem), so ``sin(pi / 2 * rho)`` recovers R
-    from the sign bits alone.
-
-    References
-    ----------
-    H. H. Bulthoff, J. J. Little and T. Poggio, "A parallel algorithm for real-time computation of
-    optical flow", Nature 337:549-553, 1989.
-    """
-    machine = machine_for(machine)
-    fd, _ = field(f, "f", machine, ndims=(1, 2, 3), dtypes=(np.float32,))
-    gd, _ = field(g, "g", machine, ndims=(1, 2, 3), dtypes=(np.float32,))
-    if fd.shape != gd.shape:
-        raise ValueError(f"f and g must have the same shape, got {fd.shape} and {gd.shape}")
-    agreement = machine.empty(fd.shape, np.int32)
-    machine.launch(machine.kernel("motion", "sign_agreement"), (fd.size,), fd, gd, agreement, np.int64(fd.size))
-    total = _reduce.reduce(agreement, "sum", machine=machine)
-    return int(total.get()) / fd.size
-
-
-def arcsine_law(correlation):
-    """``(2 / pi) arcsin(R)``: the correlation of the signs of zero-mean jointly normal fields of correlation R.
-
-    Parameters
-    ----------
-    correlation : float or ndarray
-        R in [-1, 1].
-
-    Returns
-    -------
-    float or ndarray
-
-    References
-    ----------
-    H. H. Bulthoff, J. J. Little and T. Poggio, "A parallel algorithm for real-time computation of
-    optical flow", Nature 337:549-553, 1989 (the theorem in the seed paper's section "Motion").
-    """
-    return 2.0 / np.pi * np.arcsin(correlation)
