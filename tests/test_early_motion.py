@@ -109,17 +109,17 @@ def test_winner_and_subpixel_match_oracle(pair, features):
     assert known.sum() > (50 if features == "edges" else 0.9 * known.size)
     winner = oracle_winner(table, 2)
     np.testing.assert_array_equal(winner_index(integer.flow, 2)[known], winner[known])
-    # The parabola through the winner and its neighbours along x (u) and y (v).
-    table = table.astype(np.float64)
-    planes = np.arange(table.shape[1] * table.shape[2])
-    best = table.reshape(25, -1)[winner.ravel(), planes]
-    for axis, step in ((0, 1), (1, 5)):
-        column = (winner % 5) if axis == 0 else (winner // 5)
-        lo = np.where(column > 0, table.reshape(25, -1)[np.clip(winner.ravel() - step, 0, 24), planes].reshape(winner.shape), np.inf)
-        hi = np.where(column < 4, table.reshape(25, -1)[np.clip(winner.ravel() + step, 0, 24), planes].reshape(winner.shape), np.inf)
-        best2 = best.reshape(winner.shape)
-        curvature = lo - 2 * best2 + hi
-        with np.errstate(invalid="ignore", divide="ignore"):
+    # The parabola through the winner and its neighbours along x (u) and y (v); none at the range's edge.
+    votes = table.astype(np.float64)
+
+    def vote_at(d, valid):
+        return np.where(valid, np.take_along_axis(votes, np.clip(d, 0, 24)[None], axis=0)[0], np.inf)
+
+    best = vote_at(winner, True)
+    for axis, step, position in ((0, 1, winner % 5), (1, 5, winner // 5)):
+        lo, hi = vote_at(winner - step, position > 0), vote_at(winner + step, position < 4)
+        curvature = lo - 2 * best + hi
+        with np.errstate(invalid="ignore"):
             offset = np.where(np.isfinite(curvature) & (curvature > 0),
                               np.clip(0.5 * (lo - hi) / curvature, -0.5, 0.5), 0.0)
         np.testing.assert_allclose(result.flow[..., axis][known] - integer.flow[..., axis][known], offset[known],
