@@ -126,7 +126,7 @@ inline float2 thresholds_at(__global const float *thr, long x, long y, long tile
         F ax = fabs(gx), ay = fabs(gy);                                                    \
         I same = (gy > 0.0f) == (gx > 0.0f);                                               \
         I ymajor = same ? ay > ax : ay >= ax;                                              \
-        F w = ymajor ? ax / ay : ay / ax;                                                  \
+        F w = min(ax, ay) / max(ax, ay); /* the minor over the major component */         \
         F diag_plus = same ? n_pp : n_pm, diag_minus = same ? n_mm : n_mp;                 \
         F axis_plus = ymajor ? (same ? n_0p : n_0m) : n_p0;                                \
         F axis_minus = ymajor ? (same ? n_0m : n_0p) : n_m0;                               \
