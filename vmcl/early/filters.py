@@ -22,6 +22,7 @@ V. Torre and T. Poggio, "On edge detection", IEEE TPAMI 8(2):147-163, 1986.
 from __future__ import annotations
 
 import math
+import weakref
 from typing import Literal
 
 import numpy as np
@@ -111,24 +112,30 @@ def _launch_flat(machine: Machine, kernel: cl.Kernel, n: int, *args) -> None:
     machine.launch(kernel, (-(-n // _vec(machine)),), *args)
 
 
-def _upload(machine: Machine, array: np.ndarray) -> cl_array.Array:
-    """A small host array on the device without waiting: a blocking write would drain the queue."""
-    device = machine.empty(array.shape, array.dtype)
-    cl.enqueue_copy(machine.queue, device.base_data, array, is_blocking=False)
-    return device
+_TAPS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _taps(machine: Machine, sigmas: tuple[float, ...]) -> tuple[cl_array.Array, int]:
+    """The packed taps of one or two widths on the device, and their common radius. Uploaded once per
+    machine and widths: a write to the device waits for the queue to drain, which a pipeline that keeps
+    its fields on the device must not do on every call."""
+    cache = _TAPS.setdefault(machine, {})
+    if sigmas not in cache:
+        radius = max(int(TRUNCATE * s + 0.5) for s in sigmas)
+        taps = np.zeros((len(sigmas), 2 * radius + 1), np.float32)
+        for plane, s in enumerate(sigmas):
+            t = gaussian_taps(s)
+            pad = radius - len(t) // 2
+            taps[plane, pad:pad + len(t)] = t
+        cache[sigmas] = (machine.to_device(taps), radius)
+    return cache[sigmas]
 
 
 def _separable(machine: Machine, data: cl_array.Array, sigmas: tuple[float, ...]) -> cl_array.Array:
     """Exact separable Gaussian of the grey image; with two widths, the first smoothing minus the second."""
     height, width = data.shape[:2]
-    radius = max(int(TRUNCATE * s + 0.5) for s in sigmas)
-    taps = np.zeros((len(sigmas), 2 * radius + 1), np.float32)
-    for plane, s in enumerate(sigmas):
-        t = gaussian_taps(s)
-        pad = radius - len(t) // 2
-        taps[plane, pad:pad + len(t)] = t
     planes = len(sigmas)
-    taps_device = _upload(machine, taps)
+    taps_device, radius = _taps(machine, sigmas)
     if data.ndim == 3:
         data = _grey(machine, data)
     rows = machine.empty((planes, height, width), np.float32)
