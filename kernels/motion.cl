@@ -200,37 +200,40 @@ inline int inward_of(int row, int delta)
  * keys of the winners' neighbouring displacements for the parabola fit in the planes of `neigh`: left,
  * right (vx -+ 1), up, down (vy -+ 1), NONE outside the range. A winner found in this row gets left,
  * right and its inward neighbour, and waits for the outward one; a winner in the inward row gets this
- * row's key at its column as its outward neighbour. All of it by selects as the columns pass: as fast on
- * PoCL as reading the winners' columns lane by lane afterwards, and without branches. */
+ * row's key at its column as its outward neighbour. The neighbours are read by a second pass over the
+ * row's planes, still in cache, only where some lane needs them: once the winners settle, most rows
+ * skip it (recording during the first pass made the whole update twice as slow on PoCL). */
 inline void visit_row(Winner *w, __global const V_T *cur, __global const V_T *in, __global float *neigh,
                       size_t i, size_t plane, int n, int delta, int row, int inward, FLV slow, int record)
 {
     int vy = row - delta, vyi = inward - delta;
-    IV entering = w->index, fresh = (IV)0;
-    FLV left = (FLV)NONE, right = (FLV)NONE, inner = (FLV)NONE, outer = (FLV)NONE, last = (FLV)NONE;
+    IV entering = w->index;
     for (int c = 0; c < n; c++) {
         int vx = c - delta;
-        VV raw = VLOAD(cur + c * plane + i), key = KEY(raw, vx * vx + vy * vy);
+        VV key = KEY(VLOAD(cur + c * plane + i), vx * vx + vy * vy);
         IV better = key < w->key;
         w->key = select(w->key, key, better);
         w->index = select(w->index, (IV)(row * n + c), better);
-        if (record) {
-            FLV k = FIT(raw, key);
-            right = select(select(right, k, fresh), (FLV)NONE, better);
-            left = select(left, last, better);
-            if (inward >= 0) {
-                VV raw_in = VLOAD(in + c * plane + i);
-                inner = select(inner, FIT(raw_in, KEY(raw_in, vx * vx + vyi * vyi)), better);
-                outer = select(outer, k, entering == (IV)(inward * n + c));
-            }
-            fresh = better;
-            last = k;
-        }
     }
     if (!record) return;
     IV here = (w->index >= (IV)(row * n)) & (w->index < (IV)(row * n + n));
     IV there = (w->index >= (IV)(inward * n)) & (w->index < (IV)(inward * n + n)) & (IV)(inward >= 0 ? -1 : 0);
     if (!ANY(here | there)) return;
+    IV column = w->index - (IV)(row * n), column_in = entering - (IV)(inward * n);
+    FLV left = (FLV)NONE, right = (FLV)NONE, inner = (FLV)NONE, outer = (FLV)NONE;
+    for (int c = 0; c < n; c++) {
+        int vx = c - delta;
+        VV raw = VLOAD(cur + c * plane + i);
+        FLV k = FIT(raw, KEY(raw, vx * vx + vy * vy));
+        left = select(left, k, column == (IV)(c + 1));
+        right = select(right, k, column == (IV)(c - 1));
+        outer = select(outer, k, column_in == (IV)c);
+        IV at = column == (IV)c;
+        if (inward >= 0 && ANY(at)) {
+            VV raw_in = VLOAD(in + c * plane + i);
+            inner = select(inner, FIT(raw_in, KEY(raw_in, vx * vx + vyi * vyi)), at);
+        }
+    }
     int inward_slot = inward < row ? 2 : 3, outward_slot = 5 - inward_slot;
     MASKED_STORE(0, left, here);
     MASKED_STORE(1, right, here);
