@@ -153,10 +153,12 @@ __kernel void label_strips(__global const uchar *mask, __global int *label, long
                 /* Most pixels need no merge; deciding that without a branch spares the CPU a
                  * mispredicted jump on every pixel of a noisy mask. */
                 long i = y * W + x, below = i + W;
-                int left = x > 0 ? mask[i - 1] : 0, down_left = x > 0 ? mask[below - 1] : 0;
-                int down_right = x + 1 < W ? mask[below + 1] : 0;
-                int need = mask[i] & (CONNECTIVITY == 8 ? ((!left & (down_left | mask[below])) | (down_right & !mask[below]))
-                                                        : (mask[below] & !(left & down_left)));
+                /* Masks may hold any non-zero value: bitwise logic needs 0/1. */
+                int here = mask[i] != 0, down = mask[below] != 0;
+                int left = x > 0 && mask[i - 1], down_left = x > 0 && mask[below - 1];
+                int down_right = x + 1 < W && mask[below + 1];
+                int need = here & (CONNECTIVITY == 8 ? ((!left & (down_left | down)) | (down_right & !down))
+                                                     : (down & !(left & down_left)));
                 if (need) merge_below_alone(mask, label, x, y, W);
             }
         }

@@ -85,6 +85,16 @@ def test_label_is_the_max_address_of_each_component(height, width, density, conn
 
 
 @pytest.mark.parametrize("connectivity", [4, 8])
+def test_any_non_zero_value_is_foreground(connectivity, machine):
+    rng = np.random.default_rng(11)
+    mask = rng.random((64, 48)) < 0.6
+    values = np.where(mask, rng.integers(1, 256, mask.shape), 0).astype(np.uint8)
+    np.testing.assert_array_equal(label(values, connectivity=connectivity, machine=machine),
+                                  label(mask, connectivity=connectivity, machine=machine))
+    _check_labels(mask, connectivity, label(values, connectivity=connectivity, machine=machine))
+
+
+@pytest.mark.parametrize("connectivity", [4, 8])
 def test_relabel_numbers_components_by_principal(connectivity, machine):
     mask = np.random.default_rng(7).random((300, 211)) < 0.55
     principals = label(mask, connectivity=connectivity, machine=machine)
