@@ -10,8 +10,9 @@
  *                 visit_row, so they agree bit for bit
  *   moments       the fields whose box sums normalise the winning vote
  *   finish        winner -> flow (with the sub-pixel parabola), normalised score, discontinuity mask
- *   decimate, warp      the coarse-to-fine pyramid: half-size images, and frame 1's features warped by
- *                 the doubled coarse flow, so that the finer search is for the residual
+ *   decimate, flow_planes, mean_flow, warp   the coarse-to-fine pyramid: half-size images, the coarse
+ *                 flow averaged over the patch, and frame 1's features warped by it, doubled, so that
+ *                 the finer search is for the residual
  *   sign_agreement      +1 where two fields have the same sign, -1 elsewhere (the sign-correlation theorem)
  *
  * The patch sums themselves are vmcl.cm.scan.box_sum's grid-scans over stacks of vote planes.
@@ -371,6 +372,29 @@ __kernel void decimate(__global const float *in, __global float *out, long W, lo
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W2 || y >= H2) return;
     out[y * W2 + x] = in[min(2 * y, H - 1) * W + min(2 * x, W - 1)];
+}
+
+/* A flow field as planes u, v, known (NaN counts as unknown, 0 in u and v), for box sums. */
+__kernel void flow_planes(__global const float2 *flow, __global float *out, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    size_t i = y * W + x, plane = W * H;
+    float2 f = flow[i];
+    bool known = all(isfinite(f));
+    out[i] = known ? f.x : 0.0f;
+    out[plane + i] = known ? f.y : 0.0f;
+    out[2 * plane + i] = known;
+}
+
+/* The mean of the known flow over each patch, from the box sums of flow_planes; NaN where none is known. */
+__kernel void mean_flow(__global const float *sums, __global float2 *out, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    size_t i = y * W + x, plane = W * H;
+    float count = sums[2 * plane + i];
+    out[i] = count > 0.0f ? (float2)(sums[i], sums[plane + i]) / count : (float2)(NAN);
 }
 
 /* Bilinear interpolation of a W x H field of VALUE_T at (x, y), clamped to the field. */
