@@ -4,7 +4,8 @@ Run: python benchmarks/motion.py [--repeat 11] [--out benchmarks/results/motion.
 
 Speed: at RubberWhale's size (584 x 388, its two grey frames), vmcl's flow (delta 4, patch 7: the
 running-maximum variant with and without sub-pixel refinement and with a 2-level pyramid, the full-table
-variant; and delta 6, patch 15, the configuration of the quality test) against
+variant; delta 6, patch 15; and the sign of the LoG at delta 4, patch 21, 2 levels, the configuration of
+the quality test) against
 cv2.calcOpticalFlowFarneback (pyr 0.5, levels 3, win 15, iters 3, poly 5 / 1.2) and cv2.DISOpticalFlow
 (MEDIUM). vmcl figures are device arrays in and out, the Python call
 and a final queue.finish() included; OpenCV's are NumPy in and out. All are taken in alternation, one of
@@ -38,15 +39,16 @@ RESULTS = Path(__file__).resolve().parent / "results"
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets"
 
 SPEED = {"delta": 4, "patch": 7}
-BEST = {"delta": 6, "patch": 15}
+FLAT = {"delta": 6, "patch": 15}
+BEST = {"delta": 4, "patch": 21, "levels": 2, "features": "sign_log"}
 CONFIGS = {
     "vmcl delta 4 patch 7": SPEED,
+    "vmcl delta 6 patch 15": FLAT,
+    "vmcl delta 6 patch 15, no sub-pixel": dict(FLAT, subpixel=False),
     "vmcl delta 4 patch 15, 2 levels": {"delta": 4, "patch": 15, "levels": 2},
-    "vmcl delta 6 patch 15, 2 levels": dict(BEST, levels=2),
-    "vmcl delta 6 patch 15": BEST,
-    "vmcl delta 6 patch 15, no sub-pixel": dict(BEST, subpixel=False),
-    "vmcl delta 6 patch 15 log": dict(BEST, features="log"),
-    "vmcl delta 6 patch 15 sign_log": dict(BEST, features="sign_log"),
+    "vmcl delta 4 patch 21, 2 levels, log": dict(BEST, features="log"),
+    "vmcl delta 4 patch 21, 1 level, sign_log": dict(BEST, levels=1),
+    "vmcl delta 4 patch 21, 2 levels, sign_log": BEST,
 }
 
 
@@ -84,7 +86,8 @@ def speed(machine: vmcl.Machine, pair, repeat: int) -> tuple[list[str], dict]:
         "vmcl running maximum, delta 4, patch 7, no sub-pixel": lambda: motion.flow(f0, f1, **SPEED,
                                                                                     subpixel=False,
                                                                                     machine=machine),
-        "vmcl delta 6, patch 15": lambda: motion.flow(f0, f1, **BEST, machine=machine),
+        "vmcl delta 6, patch 15": lambda: motion.flow(f0, f1, **FLAT, machine=machine),
+        "vmcl sign_log, delta 4, patch 21, 2 levels": lambda: motion.flow(f0, f1, **BEST, machine=machine),
         "cv2 Farneback": lambda: farneback(pair.frame0, pair.frame1),
         "cv2 DIS MEDIUM": lambda: dis(pair.frame0, pair.frame1),
     }

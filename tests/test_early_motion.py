@@ -327,7 +327,7 @@ def test_bad_input(pair, machine):
         sign_correlation(frame0, bad)
 
 
-BEST = {"delta": 6, "patch": 15, "levels": 2}
+BEST = {"delta": 4, "patch": 21, "levels": 2, "features": "sign_log"}
 """vmcl's best configuration on the real sequences (benchmarks/results/motion.md)."""
 
 
