@@ -1,6 +1,6 @@
 """Benchmark of the motion module (patch-correlation optical flow) against OpenCV, in one run.
 
-Run: python benchmarks/motion.py [--repeat 11] [--out benchmarks/results/motion.md]
+Run: python benchmarks/motion.py [--repeat 21] [--out benchmarks/results/motion.md]
 
 Speed: at RubberWhale's size (584 x 388, its two grey frames), vmcl's flow (delta 4, patch 7: the
 running-maximum variant with and without sub-pixel refinement and with a 2-level pyramid, the full-table
@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import os
 import platform
 import statistics
 import sys
@@ -155,12 +156,13 @@ def synthetic() -> list[str]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=11)
+    parser.add_argument("--repeat", type=int, default=21)
     parser.add_argument("--out", type=Path, default=RESULTS / "motion.md")
     args = parser.parse_args()
     if not DATA.is_dir():
         sys.exit(f"evaluation data not found at {DATA.resolve()}")
     machine = vmcl.default_machine()
+    load = os.getloadavg()[0]
     pair = load_flow("RubberWhale", DATA)
     speed_lines, medians = speed(machine, pair, args.repeat)
     breakdown = kernel_breakdown(pair, args.repeat)
@@ -182,7 +184,8 @@ def main() -> None:
         ("vmcl: device arrays in and out, Python call and queue.finish() included; OpenCV: NumPy in and out, "
         "two threads. Farneback: pyr 0.5, levels 3, win 15, iters 3, poly 5 / 1.2. The methods ran in "
         f"alternation, one of each per round, medians of {args.repeat} rounds. The machine is shared with "
-        "other jobs and its load drifts: compare within this table only."),
+        f"other jobs and its load drifts (1-minute load average {load:.1f} on {os.cpu_count()} cores when "
+        "this run began): compare within this table only."),
         "",
         *speed_lines,
         "",
