@@ -55,8 +55,8 @@
 #endif
 #define NONE INFINITY
 
-/* Vectors of VEC features, votes, floats and ints; masks are IV (all bits set = true for VEC > 1,
- * 1 for VEC = 1: select() and the ANY below read both). */
+/* Vectors of VEC (1 or 16) features, votes, floats and ints; masks are IV (all bits set = true for
+ * VEC = 16, 1 for VEC = 1: select() and the ANY below read both). */
 #if VEC == 1
 #define FV F_T
 #define VV V_T
@@ -70,13 +70,7 @@
 #define FLV VCAT(float, VEC)
 #define IV VCAT(int, VEC)
 #define ANY(m) any(m)
-#if VEC == 16
 #define LANES ((int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
-#elif VEC == 8
-#define LANES ((int8)(0, 1, 2, 3, 4, 5, 6, 7))
-#elif VEC == 4
-#define LANES ((int4)(0, 1, 2, 3))
-#endif
 #endif
 #define TO_VV(v) VCAT(convert_, VV)(v)
 #define TO_FLV(v) VCAT(convert_, FLV)(v)
@@ -106,7 +100,8 @@ inline FV shifted(__global const F_T *f1, long x0, long y, int vx, int vy, long 
 }
 
 /* Plane p of `out` holds displacement d0 + p. */
-__kernel void cost(__global const F_T *f0, __global const F_T *f1, __global V_T *out, long W, long H, long col0, long count, int delta, int d0, int planes)
+__kernel void cost(__global const F_T *f0, __global const F_T *f1, __global V_T *out, long W, long H, long col0,
+                   long count, int delta, int d0, int planes)
 {
     long k = get_global_id(0), y = get_global_id(1);
     if (k >= count || y >= H) return;
@@ -194,8 +189,9 @@ inline int inward_of(int row, int delta)
     return row < delta ? row + 1 : row > delta ? row - 1 : -1;
 }
 
-/* Keep `field` where mask is clear and take `value` where it is set, in plane p of neigh. */
-#define MASKED_STORE(p, value, mask) VSTORE(select(VLOAD(neigh + (p) * plane + i), (value), (mask)), neigh + (p) * plane + i)
+/* Plane p of neigh takes `value` where mask is set and keeps its own elsewhere. */
+#define MASKED_STORE(p, value, mask) \
+    VSTORE(select(VLOAD(neigh + (p) * plane + i), (value), (mask)), neigh + (p) * plane + i)
 
 /* Visit row `row`, n vote planes at `cur` (its inward row's at `in`, when inward >= 0), and record the
  * keys of the winners' neighbouring displacements for the parabola fit in the planes of `neigh`: left,
