@@ -332,21 +332,22 @@ __kernel void finish(__global const V_T *best, __global const int *index, __glob
     size_t j = y1 * W + x1;
     float count = window_count((int)x, y, W, H, r);
     int norm = v.x * v.x + v.y * v.y;
+    /* fitted: the value at the winner of what the parabola is fitted to (see FIT). */
 #if COMPARE == CMP_SQUARED
-    float penalised = best[i];
+    float fitted = best[i];
     float c0 = contrast(moments[i], moments[plane + i], count);
     float c1 = contrast(moments[2 * plane + j], moments[3 * plane + j], window_count((int)x1, y1, W, H, r));
-    float vote = penalised - penalty * c0 * (float)norm;
+    float vote = fitted - penalty * c0 * (float)norm;
     bool known = c0 > FLAT * moments[plane + i];
     float s = 1.0f - vote / (c0 + c1);
 #else
-    float penalised = (float)((best[i] - norm) / (2 * delta * delta + 1));
+    float fitted = (float)((best[i] - norm) / (2 * delta * delta + 1)), vote = fitted;
 #if COMPARE == CMP_SIGN
     bool known = true;
-    float s = 1.0f - 2.0f * penalised / count;
+    float s = 1.0f - 2.0f * vote / count;
 #else
     bool known = f0[i] != 0;
-    float s = 1.0f - penalised / (moments[i] + moments[plane + j]);
+    float s = 1.0f - vote / (moments[i] + moments[plane + j]);
 #endif
 #endif
     float2 w = convert_float2(v);
@@ -354,8 +355,8 @@ __kernel void finish(__global const V_T *best, __global const int *index, __glob
     w += pred[i];
 #endif
     if (subpixel)
-        w += (float2)(parabola(neigh[i], penalised, neigh[plane + i]),
-                      parabola(neigh[2 * plane + i], penalised, neigh[3 * plane + i]));
+        w += (float2)(parabola(neigh[i], fitted, neigh[plane + i]),
+                      parabola(neigh[2 * plane + i], fitted, neigh[3 * plane + i]));
     flow[i] = known ? w : (float2)(NAN);
     score[i] = known ? s : NAN;
     boundary[i] = known && s < threshold;
