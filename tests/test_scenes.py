@@ -294,3 +294,11 @@ def test_bad_input():
         Face((0.0, 0.0, 1.0), X_AXIS, Y_AXIS, None, (1.5, 0.5, 0.5))
     with pytest.raises(ValueError, match="rect or 'disc'|'rect' or 'disc'"):
         Mark("triangle", (0.0, 0.0, 1.0), (0.5, 0.5, 0.5))
+
+
+@pytest.mark.parametrize("width", [80, 160, 320])
+def test_presets_build_at_widths_where_blob_sizes_round(width):
+    # 6 * size == scale in pixels becomes 6 * size > scale by one ulp in world units at these widths.
+    for name in scenes.PRESETS:
+        world = scenes.preset(name, shape=(128, width))
+        assert world.camera.shape == (128, width) and world.bodies

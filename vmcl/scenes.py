@@ -158,7 +158,8 @@ class Texture:
             raise ValueError(f"texture scale must be positive, got {self.scale}")
         if not 0 <= self.contrast < 1:
             raise ValueError(f"texture contrast must be in [0, 1), got {self.contrast}")
-        fits = self.size > 0 and 6 * self.size <= self.scale and 0 <= self.fill <= 1
+        # The relative slack admits 6 * size == scale computed in floating point (the presets use it).
+        fits = self.size > 0 and 6 * self.size <= self.scale * (1 + 1e-9) and 0 <= self.fill <= 1
         if self.kind == "blobs" and not fits:
             raise ValueError("blobs need size > 0, 6 * size <= scale and fill in [0, 1]")
 
