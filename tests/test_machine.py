@@ -103,3 +103,12 @@ def test_kernels_dir_prefers_the_installed_copy(tmp_path, monkeypatch):
     (installed / "_kernels" / "vmcl.h").write_text("")
     monkeypatch.setattr(machine_module, "__file__", str(installed / "machine.py"))
     assert machine_module.kernels_dir() == installed / "_kernels"
+
+
+def test_row_local_size_groups_rows_on_cpus(machine):
+    if machine.is_cpu:
+        assert machine.row_local_size((1000, 7)) == (64, 1)
+        assert machine.row_local_size((5, 7, 2)) == (5, 1, 1)
+    else:
+        assert machine.row_local_size((1000, 7)) is None
+    assert vmcl.Machine(machine.device, local_size=7).row_local_size((1000, 7)) is None

@@ -162,6 +162,17 @@ class Machine:
             self._events.append((kernel.function_name, event))
         return event
 
+    def row_local_size(self, global_size: tuple[int, ...]) -> tuple[int, ...] | None:
+        """The work-group shape for a launch whose first dimension runs along image rows.
+
+        On CPU devices, groups of up to 64 work-items along the row: on PoCL they ran row kernels 1.8x
+        to 2x faster than the driver's own choice (binomial filter, motion). Elsewhere, or when the
+        Machine fixes ``local_size``, None (the driver's or the Machine's choice).
+        """
+        if not self.is_cpu or self.local_size is not None:
+            return None
+        return (min(64, global_size[0]),) + (1,) * (len(global_size) - 1)
+
     # -- memory -----------------------------------------------------------------------------------
 
     def empty(self, shape: tuple[int, ...] | int, dtype: Any) -> cl_array.Array:

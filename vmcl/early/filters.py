@@ -97,14 +97,9 @@ def _kernel(machine: Machine, family: str, name: str, **defines) -> cl.Kernel:
 
 
 def _launch_rows(machine: Machine, kernel: cl.Kernel, width: int, height: int, *args) -> None:
-    """Launch over (row chunks of VEC pixels, rows). On CPUs, work-groups of 64 chunks along a row
-    (measured faster on PoCL than the driver's choice; the global size is rounded up to them)."""
-    chunks = -(-width // _vec(machine))
-    if machine.is_cpu and machine.local_size is None:
-        local = min(64, chunks)
-        machine.launch(kernel, (-(-chunks // local) * local, height), *args, local_size=(local, 1))
-    else:
-        machine.launch(kernel, (chunks, height), *args)
+    """Launch over (row chunks of VEC pixels, rows), in the Machine's work-groups for row kernels."""
+    size = (-(-width // _vec(machine)), height)
+    machine.launch(kernel, size, *args, local_size=machine.row_local_size(size))
 
 
 def _launch_flat(machine: Machine, kernel: cl.Kernel, n: int, *args) -> None:

@@ -172,10 +172,8 @@ def _vote_dtype(defines: dict) -> type:
 
 
 def _launch(machine: Machine, kernel, size: tuple[int, int], *args) -> None:
-    """A launch over (work-items along a row, rows): on CPUs in work-groups of up to 64 along the row,
-    unless the Machine fixes a local size (PoCL's own choice ran the per-pixel kernels about half as fast)."""
-    local = (min(64, size[0]), 1) if machine.is_cpu and machine.local_size is None else None
-    machine.launch(kernel, size, *args, local_size=local)
+    """A launch over (work-items along a row, rows), in the Machine's work-groups for row kernels."""
+    machine.launch(kernel, size, *args, local_size=machine.row_local_size(size))
 
 
 def _groups(machine: Machine, width: int) -> list[tuple[int, int, int]]:
