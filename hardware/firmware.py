@@ -222,30 +222,18 @@ class MicroFirmware:
                     axis.latch(Flag.FAULT_WATCHDOG, at_once=False)
 
 
-class StepperAxis(_Axis):
-    """One joint's controller: trapezoidal profiles closed on the encoder, homing, limits, stalls.
+class _MotorAxis(_Axis):
+    """An axis driven to a target count with homing: what the stepper and lens controllers share."""
 
-    Homing (HOME): seek the negative limit switch fast, back off slowly until it opens, creep on to the
-    next index pulse, where the encoder is set to the factory-calibrated count; then move to count 0.
-    The index pulse, not the switch, fixes the zero, which is why homing repeats to the count.
-    """
-
-    def __init__(self, mech: StepperMechanism, *, vmax: float = 50_000.0, accel: float = 100_000.0) -> None:
+    def __init__(self, position: float) -> None:
         super().__init__()
-        self.mech = mech
-        # The encoder counter powers up at 0 wherever the joint happens to be.
-        self.zero = math.floor(mech.position)
-        self.pos = mech.position - self.zero
+        # The counter powers up at 0 wherever the axis happens to be.
+        self.zero = math.floor(position)
+        self.pos = position - self.zero
         self.vel = 0.0
         self.target = self.pos
-        self.vmax = vmax
-        self.accel = accel
         self.homed = False
         self.phase: str | None = None
-
-    @property
-    def encoder(self) -> int:
-        return math.floor(self.mech.position) - self.zero
 
     @property
     def moving(self) -> bool:
@@ -260,6 +248,30 @@ class StepperAxis(_Axis):
             flags |= Flag.HOMED
         if self.phase:
             flags |= Flag.HOMING
+        return flags
+
+
+class StepperAxis(_MotorAxis):
+    """One joint's controller: trapezoidal profiles closed on the encoder, homing, limits, stalls.
+
+    Homing (HOME): seek the negative limit switch fast, back off slowly until it opens, creep on to the
+    next index pulse, where the encoder is set to the factory-calibrated count; then move to count 0.
+    The index pulse, not the switch, fixes the zero, which is why homing repeats to the count.
+    """
+
+    def __init__(self, mech: StepperMechanism, *, vmax: float = 50_000.0, accel: float = 100_000.0) -> None:
+        super().__init__(mech.position)
+        self.mech = mech
+        self.vmax = vmax
+        self.accel = accel
+
+    @property
+    def encoder(self) -> int:
+        return math.floor(self.mech.position) - self.zero
+
+    @property
+    def flags(self) -> Flag:
+        flags = super().flags
         if self.mech.switch_neg:
             flags |= Flag.LIMIT_NEG
         if self.mech.switch_pos:
@@ -389,7 +401,7 @@ class StepperFirmware(MicroFirmware):
         return g.soft_min, g.soft_max
 
 
-class LensAxis(_Axis):
+class LensAxis(_MotorAxis):
     """One lens axis's controller. Every move ends travelling upwards, so the gear lash is always taken
     up the same way and a count means the same ring position whichever side it was approached from."""
 
@@ -397,34 +409,13 @@ class LensAxis(_Axis):
     _OVERSHOOT = 40  # more than the backlash
 
     def __init__(self, mech: LensMechanism) -> None:
-        super().__init__()
+        super().__init__(mech.motor)
         self.mech = mech
-        self.zero = math.floor(mech.motor)
-        self.pos = mech.motor - self.zero
-        self.vel = 0.0
-        self.target = self.pos
         self._final: int | None = None
-        self.homed = False
-        self.phase: str | None = None
 
     @property
     def count(self) -> int:
         return round(self.mech.motor - self.zero)
-
-    @property
-    def moving(self) -> bool:
-        return self.vel != 0.0 or self.pos != self.target
-
-    @property
-    def flags(self) -> Flag:
-        flags = self.latched
-        if self.moving:
-            flags |= Flag.MOVING
-        if self.homed:
-            flags |= Flag.HOMED
-        if self.phase:
-            flags |= Flag.HOMING
-        return flags
 
     def step(self, dt: float) -> None:
         if not self.moving:
