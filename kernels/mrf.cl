@@ -277,11 +277,7 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
         z[4 * block + 3] = r1 * native_sin(a1);
     }
 #elif MODE == MODE_SAMPLE
-    uint4 r = philox4x32_10((uint4)((uint)(y * groups + group), sweep, PHASE_F + colour, 0u), key);
-    u[0] = philox_uniform(r.x);
-    u[1] = philox_uniform(r.y);
-    u[2] = philox_uniform(r.z);
-    u[3] = philox_uniform(r.w);
+    philox_uniforms((uint4)((uint)(y * groups + group), sweep, PHASE_F + colour, 0u), key, u);
 #endif
     for (int k = 0; k < SITES; ++k) {
         int x = 2 * (SITES * group + k) + ((y + colour) & 1);
@@ -412,11 +408,7 @@ __kernel void line_update(__global float *lh, __global float *lv, __global const
     if (group >= groups || y >= H - type) return;
     float u[SITES] = {0.0f, 0.0f, 0.0f, 0.0f};
 #if MODE == MODE_SAMPLE
-    uint4 r = philox4x32_10((uint4)((uint)(y * groups + group), sweep, PHASE_LINES + colour, 0u), key);
-    u[0] = philox_uniform(r.x);
-    u[1] = philox_uniform(r.y);
-    u[2] = philox_uniform(r.z);
-    u[3] = philox_uniform(r.w);
+    philox_uniforms((uint4)((uint)(y * groups + group), sweep, PHASE_LINES + colour, 0u), key, u);
 #endif
     for (int k = 0; k < SITES; ++k) {
         int x = 2 * (SITES * group + k) + ((y + parity) & 1);

@@ -39,4 +39,14 @@ inline float philox_uniform(uint word)
     return ((float)(word >> 8) + 0.5f) * 0x1.0p-24f;
 }
 
+/* The four uniforms of one Philox block, into u[0..3]. */
+inline void philox_uniforms(uint4 counter, uint2 key, float *u)
+{
+    uint4 r = philox4x32_10(counter, key);
+    u[0] = philox_uniform(r.x);
+    u[1] = philox_uniform(r.y);
+    u[2] = philox_uniform(r.z);
+    u[3] = philox_uniform(r.w);
+}
+
 #endif
