@@ -69,12 +69,10 @@ __kernel void list_init(__global const int *next, __global int *pointer, __globa
 
 /* Path halving on the way up: each visited pixel is re-pointed at its grandparent, the pointer-jumping
  * step of distance doubling, so repeated finds shorten the trees geometrically. Racing writers only
- * ever store an ancestor, which keeps every pointer valid and leading upward.
- *
- * Merging links the smaller root under the larger. Defined twice: for labels other work-items may be
- * merging in at the same time (volatile, the link a compare-and-swap retried if the root moved), and for
- * a work-item alone in its trees (plain loads and stores, which the compiler may keep in registers). */
-#define UNION_FIND(SUFFIX, QUALIFIER, LINK)                                                \
+ * ever store an ancestor, which keeps every pointer valid and leading upward. Defined twice: for labels
+ * other work-items may be changing at the same time (volatile), and for a work-item alone in its trees
+ * (plain loads and stores, which the compiler may keep in registers). */
+#define FIND_ROOT(SUFFIX, QUALIFIER)                                                       \
     inline int find_root##SUFFIX(QUALIFIER int *label, int a)                              \
     {                                                                                      \
         int parent = label[a];                                                             \
@@ -85,52 +83,52 @@ __kernel void list_init(__global const int *next, __global int *pointer, __globa
             parent = grandparent;                                                          \
         }                                                                                  \
         return a;                                                                          \
-    }                                                                                      \
-    inline void merge##SUFFIX(QUALIFIER int *label, int a, int b)                          \
-    {                                                                                      \
-        for (;;) {                                                                         \
-            a = find_root##SUFFIX(label, a);                                               \
-            b = find_root##SUFFIX(label, b);                                               \
-            if (a == b) return;                                                            \
-            if (a < b) { int t = a; a = b; b = t; }                                        \
-            if (LINK) return;                                                              \
-        }                                                                                  \
     }
 
-UNION_FIND(_shared, __global volatile, atomic_cmpxchg(&label[b], b, a) == b)
-UNION_FIND(_alone, __global, (label[b] = a, 1))
+FIND_ROOT(_shared, __global volatile)
+FIND_ROOT(_alone, __global)
 
-/* Merges pixel (x, y)'s run with the runs touching it in the row below. Runs are already trees, so only
- * the pixels where the set of touching lower runs changes need to merge: a run's first pixel with each
- * lower neighbour that starts a new lower run, the pixels after it only where a new lower run begins
- * below-right (8-connectivity) or directly below (4-connectivity). */
+/* Merges the trees of a and b where other work-items merge too: the smaller root is linked under the
+ * larger by compare-and-swap, retried if that root moved meanwhile. */
+inline void merge_shared(__global volatile int *label, int a, int b)
+{
+    for (;;) {
+        a = find_root_shared(label, a);
+        b = find_root_shared(label, b);
+        if (a == b) return;
+        if (a < b) { int t = a; a = b; b = t; }
+        if (atomic_cmpxchg(&label[b], b, a) == b) return;
+    }
+}
+
+/* Links two roots of a work-item's own trees, the smaller under the larger; returns the union's root. */
+inline int link_alone(__global int *label, int a, int b)
+{
+    if (a == b) return a;
+    int high = max(a, b);
+    label[min(a, b)] = high;
+    return high;
+}
+
+/* Which runs of the row below pixel i = (x, y) must merge with its run (bit 0: below-left, bit 1:
+ * below, bit 2: below-right). Runs are already trees, so only the pixels where the set of touching
+ * lower runs changes need to merge: a run's first pixel with each lower neighbour that starts a new
+ * lower run, the pixels after it only where a new lower run begins below-right (8-connectivity) or
+ * directly below (4-connectivity). Computed without branches (most pixels need nothing, and a noisy
+ * mask would mispredict a branch on every pixel); any non-zero mask value is foreground. */
+inline int merge_targets(__global const uchar *mask, long x, long i, long W)
+{
+    long below = i + W;
+    int here = mask[i] != 0, down = mask[below] != 0;
+    int left = x > 0 && mask[i - 1], down_left = x > 0 && mask[below - 1];
 #if CONNECTIVITY == 8
-#define MERGE_NEIGHBOURS(MERGE)                                                            \
-    int down_right = x + 1 < W && mask[below + 1];                                         \
-    if (!left) {                                                                           \
-        if (down_left) MERGE(label, i, below - 1);                                         \
-        if (down && !down_left) MERGE(label, i, below);                                    \
-    }                                                                                      \
-    if (down_right && !down) MERGE(label, i, below + 1);
+    int down_right = x + 1 < W && mask[below + 1];
+    int targets = (!left & down_left) | ((!left & down & !down_left) << 1) | ((down_right & !down) << 2);
 #else
-#define MERGE_NEIGHBOURS(MERGE)                                                            \
-    if (down && !(left && down_left)) MERGE(label, i, below);
+    int targets = (down & !(left & down_left)) << 1;
 #endif
-#define MERGE_BELOW(SUFFIX, QUALIFIER)                                                     \
-    inline void merge_below##SUFFIX(__global const uchar *mask, QUALIFIER int *label,      \
-                                    long x, long y, long W)                                \
-    {                                                                                      \
-        int i = (int)(y * W + x);                                                          \
-        if (!mask[i]) return;                                                              \
-        int below = (int)(i + W);                                                          \
-        int left = x > 0 && mask[i - 1];                                                   \
-        int down = mask[below];                                                            \
-        int down_left = x > 0 && mask[below - 1];                                          \
-        MERGE_NEIGHBOURS(merge##SUFFIX)                                                    \
-    }
-
-MERGE_BELOW(_shared, __global volatile)
-MERGE_BELOW(_alone, __global)
+    return here ? targets : 0;
+}
 
 /* Work-item s labels the strip of rows [s*rows, (s+1)*rows) on its own, from its bottom row up: per row,
  * every foreground pixel first points at the right end of its horizontal run (the run's largest address,
@@ -149,17 +147,21 @@ __kernel void label_strips(__global const uchar *mask, __global int *label, long
             label[i] = end;
         }
         if (y + 1 < min(y0 + rows, H)) {
+            /* cur: the root of the run being walked, found at its first merge and kept up to date by
+             * the merges themselves (the strip is this work-item's alone), so each merge costs one find
+             * (the row below's) instead of two. */
+            int cur = -1;
             for (long x = 0; x < W; x++) {
-                /* Most pixels need no merge; deciding that without a branch spares the CPU a
-                 * mispredicted jump on every pixel of a noisy mask. */
-                long i = y * W + x, below = i + W;
-                /* Masks may hold any non-zero value: bitwise logic needs 0/1. */
-                int here = mask[i] != 0, down = mask[below] != 0;
-                int left = x > 0 && mask[i - 1], down_left = x > 0 && mask[below - 1];
-                int down_right = x + 1 < W && mask[below + 1];
-                int need = here & (CONNECTIVITY == 8 ? ((!left & (down_left | down)) | (down_right & !down))
-                                                     : (down & !(left & down_left)));
-                if (need) merge_below_alone(mask, label, x, y, W);
+                long i = y * W + x;
+                int targets = merge_targets(mask, x, i, W);
+                cur = mask[i] ? cur : -1;
+                if (targets) {
+                    if (cur < 0) cur = find_root_alone(label, (int)i);
+                    int below = (int)(i + W);
+                    if (targets & 1) cur = link_alone(label, cur, find_root_alone(label, below - 1));
+                    if (targets & 2) cur = link_alone(label, cur, find_root_alone(label, below));
+                    if (targets & 4) cur = link_alone(label, cur, find_root_alone(label, below + 1));
+                }
             }
         }
     }
@@ -170,7 +172,12 @@ __kernel void label_merge_strips(__global const uchar *mask, __global volatile i
                                  long rows)
 {
     long x = get_global_id(0), y = (get_global_id(1) + 1) * rows - 1;
-    if (x < W && y + 1 < H) merge_below_shared(mask, label, x, y, W);
+    if (x >= W || y + 1 >= H) return;
+    long i = y * W + x;
+    int targets = merge_targets(mask, x, i, W);
+    for (int t = 0; t < 3; t++) {
+        if (targets & (1 << t)) merge_shared(label, (int)i, (int)(i + W + t - 1));
+    }
 }
 
 /* Every pixel jumps to its root. One work-item per row: the pixels of a run share a pointer, so the root
