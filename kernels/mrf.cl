@@ -21,8 +21,8 @@
  * and with its two parallel neighbours; lh[y, x] meets lh[y +- 1, x] and lh[y, x +- 1] (other parity)
  * and lv sites of both parities, so the lines take four colours: (type, (x + y) & 1) with type 0 = lh,
  * 1 = lv. Sites of one colour are conditionally independent given the rest, so updating them at once
- * is exactly a sequence of single-site updates. A launch covers one colour, SITES (4) of its sites per
- * work-item along a row; a sweep runs the four line colours, then the two f colours (lattice.py).
+ * is exactly a sequence of single-site updates. A launch covers one colour, SITES (16) of its sites per
+ * work-item along a row as vector lanes; a sweep runs the four line colours, then the two f colours (lattice.py).
  *
  * Defines: NCOMP (1..4 components sharing one line process), KIND (0 smooth, 1 constant), NLEVELS
  * (the levels of the constant kind), MODE (0 heat-bath sample, 1 conditional mode (ICM), 2 mean field).
@@ -51,29 +51,6 @@ inline float bond_cost(__global const float *f, long i, long j, float kappa)
     return s;
 #else
     return f[i] != f[j] ? kappa : 0.0f;
-#endif
-}
-
-/* Change of a vertex clique's potential when the arm at `bit` turns on, the other three arms (bits ba,
- * bb, bc) being pa, pb, pc: the table difference for 0/1 arms (sampling, ICM), its expectation with the
- * arms on independently with probabilities pa, pb, pc (mean field). */
-inline float vertex_delta(__constant float *table, int bit, int ba, float pa, int bb, float pb, int bc,
-                          float pc)
-{
-#if MODE != MODE_MEAN
-    int rest = ((pa != 0.0f) << ba) | ((pb != 0.0f) << bb) | ((pc != 0.0f) << bc);
-    return table[rest | (1 << bit)] - table[rest];
-#else
-    /* The expectation is multilinear in (pa, pb, pc): trilinear interpolation of the 8 corner values. */
-    float d[8];
-#pragma unroll
-    for (int m = 0; m < 8; ++m) {
-        int rest = ((m & 1) << ba) | (((m >> 1) & 1) << bb) | (((m >> 2) & 1) << bc);
-        d[m] = table[rest | (1 << bit)] - table[rest];
-    }
-    float d0 = mix(mix(d[0], d[1], pa), mix(d[2], d[3], pa), pb);
-    float d1 = mix(mix(d[4], d[5], pa), mix(d[6], d[7], pa), pb);
-    return mix(d0, d1, pc);
 #endif
 }
 
@@ -249,40 +226,98 @@ inline void f_site(__global float *f, __global const float *g, __global const fl
 #endif
 }
 
-/* A work-item updates SITES sites of one colour along a row, x = 2 (SITES gx + k) + ((y + colour) & 1),
- * and keys its Philox blocks by its group (y * groups + gx): one block of four words serves four sites,
- * so the generator's cost is shared (the counter still names the sites, whatever the local size). */
-#define SITES 4
+/* A work-item updates SITES (16) sites of one colour along a row, x = 2 (SITES gx + k) + ((y + colour) & 1),
+ * k = 0..15, as float16 lanes in straight-line vector code (no per-site branches: masks and select), and
+ * keys its Philox blocks by its group (y * groups + gx, block number in counter word 3): four blocks,
+ * computed together on uint4 lanes, give the 16 uniforms of 16 sites (the counter still names the
+ * sites, whatever the local size). Sites past the row's end are computed and not stored. */
+#define SITES 16
 #define GROUPS(W) ((((W) + 1) / 2 + SITES - 1) / SITES)
+#define LANES ((int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
 
-/* f at the pixels of one checkerboard colour; the smooth kind draws its normals by Box-Muller, two per
- * pair of words, NCOMP blocks per group (counter word 3 numbers the block). */
+/* p[start + stride k], k = 0..15: two contiguous vector loads for the stride 2 of a colour when they
+ * lie inside the n floats of the buffer, else a gather at clamped indices (values that lanes outside
+ * the lattice get are masked by the callers). */
+inline float16 load_sites(__global const float *p, int start, int stride, int n)
+{
+    if (stride == 2 && start >= 0 && start + 2 * SITES <= n) {
+        float16 a = vload16(0, p + start), b = vload16(0, p + start + 16);
+        return (float16)(a.even, b.even);
+    }
+    float t[SITES];
+#pragma unroll
+    for (int k = 0; k < SITES; ++k) t[k] = p[clamp(start + stride * k, 0, n - 1)];
+    return vload16(0, t);
+}
+
+/* p[start + 2 k] = v lane k for the lanes with x0 + 2 k < limit. */
+inline void store_sites(__global float *p, int start, float16 v, int x0, int limit)
+{
+    float t[SITES];
+    vstore16(v, 0, t);
+#pragma unroll
+    for (int k = 0; k < SITES; ++k)
+        if (x0 + 2 * k < limit) p[start + 2 * k] = t[k];
+}
+
+#define ZERO16 ((float16)(0.0f))
+#define MASK16(c) ((c) ? (int16)(-1) : (int16)(0))
+
+/* f at the pixels of one checkerboard colour. Smooth kind: the Gaussian conditional (heat bath), its
+ * mean (ICM, mean field), NCOMP components each from four blocks (counter word 3: 4 c + j) whose 16
+ * uniforms give 16 normals by Box-Muller (radii from words 0, 1, angles from words 2, 3); a site with no
+ * data and all four bonds broken keeps its value. Constant kind: f_site, four sites per block. */
 __kernel void f_update(__global float *f, __global const float *g, __global const float *w,
                        __global const float *lh, __global const float *lv, __constant float *levels,
                        float kappa, float T, uint sweep, uint2 key, int colour, long W_, long H_)
 {
     int W = (int)W_, H = (int)H_, y = get_global_id(1), group = get_global_id(0), groups = GROUPS(W);
     if (group >= groups || y >= H) return;
-    float z[SITES * NCOMP], u[SITES];
-    for (int k = 0; k < SITES; ++k) u[k] = 0.0f;
-    for (int k = 0; k < SITES * NCOMP; ++k) z[k] = 0.0f;
-#if MODE == MODE_SAMPLE && KIND == 0
-    for (int block = 0; block < NCOMP; ++block) {
-        uint4 r = philox4x32_10((uint4)((uint)(y * groups + group), sweep, PHASE_F + colour, (uint)block), key);
-        float r0 = native_sqrt(-2.0f * native_log(philox_uniform(r.x))), a0 = 2.0f * M_PI_F * philox_uniform(r.y);
-        float r1 = native_sqrt(-2.0f * native_log(philox_uniform(r.z))), a1 = 2.0f * M_PI_F * philox_uniform(r.w);
-        z[4 * block] = r0 * native_cos(a0);
-        z[4 * block + 1] = r0 * native_sin(a0);
-        z[4 * block + 2] = r1 * native_cos(a1);
-        z[4 * block + 3] = r1 * native_sin(a1);
-    }
-#elif MODE == MODE_SAMPLE
-    philox_uniforms((uint4)((uint)(y * groups + group), sweep, PHASE_F + colour, 0u), key, u);
+    int n = W * H, x0 = 2 * SITES * group + ((y + colour) & 1), base = y * W + x0;
+#if KIND == 0
+    int16 xs = x0 + 2 * LANES;
+    float16 wi = load_sites(w, base, 2, n);
+    float16 keep0 = select(ZERO16, 1.0f - load_sites(lh, base - 1, 2, n), xs > 0);
+    float16 keep1 = select(ZERO16, 1.0f - load_sites(lh, base, 2, n), xs < W - 1);
+    float16 keep2 = y > 0 ? 1.0f - load_sites(lv, base - W, 2, n) : ZERO16;
+    float16 keep3 = y < H - 1 ? 1.0f - load_sites(lv, base, 2, n) : ZERO16;
+    float16 a = wi + keep0 + keep1 + keep2 + keep3;
+    int16 frozen = a <= 0.0f;
+#if MODE == MODE_SAMPLE
+    float16 sd = sqrt(T / (2.0f * a));
 #endif
-    for (int k = 0; k < SITES; ++k) {
-        int x = 2 * (SITES * group + k) + ((y + colour) & 1);
-        if (x < W) f_site(f, g, w, lh, lv, levels, kappa, T, x, y, W, H, z + k * NCOMP, u[k]);
+    for (int c = 0; c < NCOMP; ++c) {
+        int nf = n * NCOMP, s = 2 * NCOMP;
+        float16 old = load_sites(f, base * NCOMP + c, s, nf);
+        float16 b = wi * load_sites(g, base * NCOMP + c, s, nf);
+        b += keep0 * load_sites(f, (base - 1) * NCOMP + c, s, nf);
+        b += keep1 * load_sites(f, (base + 1) * NCOMP + c, s, nf);
+        b += keep2 * load_sites(f, (base - W) * NCOMP + c, s, nf);
+        b += keep3 * load_sites(f, (base + W) * NCOMP + c, s, nf);
+        float16 value = b / a;
+#if MODE == MODE_SAMPLE
+        float16 u = philox_uniforms16((uint)(y * groups + group), sweep, PHASE_F + colour, 4u * c, key);
+        float8 radius = native_sqrt(-2.0f * native_log(u.lo)), angle = 2.0f * M_PI_F * u.hi;
+        value += sd * (float16)(radius * native_cos(angle), radius * native_sin(angle));
+#endif
+        float t[SITES];
+        vstore16(select(value, old, frozen), 0, t);
+#pragma unroll
+        for (int k = 0; k < SITES; ++k)
+            if (x0 + 2 * k < W) f[(base + 2 * k) * NCOMP + c] = t[k];
     }
+#else
+    for (int part = 0; part < SITES / 4; ++part) {
+        float u[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+#if MODE == MODE_SAMPLE
+        philox_uniforms((uint4)((uint)(y * groups + group), sweep, PHASE_F + colour, (uint)part), key, u);
+#endif
+        for (int k = 0; k < 4; ++k) {
+            int x = x0 + 2 * (4 * part + k);
+            if (x < W) f_site(f, g, w, lh, lv, levels, kappa, T, x, y, W, H, 0, u[k]);
+        }
+    }
+#endif
 }
 
 /* Mean field for the constant kind: q[i, k] is the probability that pixel i takes level k; the Potts
@@ -342,62 +377,60 @@ __kernel void levels_mode(__global const float *weights, __global float *f, __co
  * central cost, both end vertices and both parallel pairs (the seed's warning: non-central cliques count).
  * Neighbours are read at clamped indices and masked, without branches, so the compiler can vectorise
  * across work-items. */
-inline float line_bond(__global const float *f, __global const float *q, int i, int j, float kappa)
+/* Change of a vertex clique's potential when the arm at `bit` turns on, the other three arms (bits ba,
+ * bb, bc) being pa, pb, pc, on 16 sites: vertex_corners gives the 8 table differences d[m] over the
+ * other arms' states (m: bit 0 arm a, bit 1 b, bit 2 c), vertex_delta16 picks one by select for 0/1 arms
+ * (sampling, ICM), or takes its expectation with the arms on independently with probabilities pa, pb, pc
+ * (mean field; multilinear, so trilinear interpolation of the 8 corners). */
+inline void vertex_corners(__constant float *table, int bit, int ba, int bb, int bc, float *d)
+{
+#pragma unroll
+    for (int m = 0; m < 8; ++m) {
+        int rest = ((m & 1) << ba) | (((m >> 1) & 1) << bb) | (((m >> 2) & 1) << bc);
+        d[m] = table[rest | (1 << bit)] - table[rest];
+    }
+}
+
+inline float16 vertex_delta16(const float *d, float16 pa, float16 pb, float16 pc)
+{
+#if MODE != MODE_MEAN
+    int16 ma = pa != 0.0f, mb = pb != 0.0f, mc = pc != 0.0f;
+    float16 e0 = select((float16)(d[0]), (float16)(d[1]), ma), e1 = select((float16)(d[2]), (float16)(d[3]), ma);
+    float16 e2 = select((float16)(d[4]), (float16)(d[5]), ma), e3 = select((float16)(d[6]), (float16)(d[7]), ma);
+    return select(select(e0, e1, mb), select(e2, e3, mb), mc);
+#else
+    float16 d0 = mix(mix((float16)(d[0]), (float16)(d[1]), pa), mix((float16)(d[2]), (float16)(d[3]), pa), pb);
+    float16 d1 = mix(mix((float16)(d[4]), (float16)(d[5]), pa), mix((float16)(d[6]), (float16)(d[7]), pa), pb);
+    return mix(d0, d1, pc);
+#endif
+}
+
+/* line_bond on 16 sites: pixels base + 2 k and base + 2 k + step. */
+inline float16 line_bond16(__global const float *f, __global const float *q, int base, int step, int n,
+                           float kappa)
 {
 #if KIND == 1 && MODE == MODE_MEAN
-    float same = 0.0f;
-    for (int k = 0; k < NLEVELS; ++k) same += q[i * NLEVELS + k] * q[j * NLEVELS + k];
+    float16 same = ZERO16;
+    for (int k = 0; k < NLEVELS; ++k)
+        same += load_sites(q, base * NLEVELS + k, 2 * NLEVELS, n * NLEVELS)
+              * load_sites(q, (base + step) * NLEVELS + k, 2 * NLEVELS, n * NLEVELS);
     return kappa * (1.0f - same);
+#elif KIND == 0
+    float16 s = ZERO16;
+    for (int c = 0; c < NCOMP; ++c) {
+        float16 d = load_sites(f, base * NCOMP + c, 2 * NCOMP, n * NCOMP)
+                  - load_sites(f, (base + step) * NCOMP + c, 2 * NCOMP, n * NCOMP);
+        s += d * d;
+    }
+    return s;
 #else
-    return bond_cost(f, i, j, kappa);
+    return select(ZERO16, (float16)(kappa), load_sites(f, base, 2, n) != load_sites(f, base + step, 2, n));
 #endif
 }
 
-inline void line_set(__global float *l, int i, float dE, float T, float u)
-{
-#if MODE == MODE_ICM
-    l[i] = dE < 0.0f ? 1.0f : 0.0f;
-#else
-    /* Clamped so that a forbidden line (dE = +inf) gets probability e^-80, never NaN from native_exp. */
-    float odds = native_exp(clamp(dE / T, -80.0f, 80.0f));
-#if MODE == MODE_SAMPLE
-    l[i] = u * (1.0f + odds) < 1.0f ? 1.0f : 0.0f;
-#else
-    l[i] = 1.0f / (1.0f + odds);
-#endif
-#endif
-}
-
-/* dE of the lh site (y, x), between (y, x) and (y, x + 1). */
-inline float line_h_delta(__global const float *lh, __global const float *lv, __global const float *f,
-                          __global const float *q, __global const float *bh, __constant float *table,
-                          float parallel, float kappa, int x, int y, int W, int H)
-{
-    int i = y * W + x;
-    int above = y > 0 ? i - W : i, below = y < H - 1 ? i + W : i;
-    float dE = bh[i] - line_bond(f, q, i, i + 1, kappa);
-    float top = vertex_delta(table, 1, 0, lh[above], 2, lv[above], 3, lv[above + 1]);
-    float bottom = vertex_delta(table, 0, 1, lh[below], 2, lv[i], 3, lv[i + 1]);
-    dE += (y > 0 ? top : 0.0f) + (y < H - 1 ? bottom : 0.0f);
-    float left = lh[x > 0 ? i - 1 : i];
-    return dE + parallel * ((x > 0 ? left : 0.0f) + (x + 1 < W - 1 ? lh[i + 1] : 0.0f));
-}
-
-/* dE of the lv site (y, x), between (y, x) and (y + 1, x). */
-inline float line_v_delta(__global const float *lh, __global const float *lv, __global const float *f,
-                          __global const float *q, __global const float *bv, __constant float *table,
-                          float parallel, float kappa, int x, int y, int W, int H)
-{
-    int i = y * W + x;
-    int left = x > 0 ? i - 1 : i, up = y > 0 ? i - W : i;
-    float dE = bv[i] - line_bond(f, q, i, i + W, kappa);
-    float west = vertex_delta(table, 3, 0, lh[left], 1, lh[left + W], 2, lv[left]);
-    float east = vertex_delta(table, 2, 0, lh[i], 1, lh[i + W], 3, lv[i + 1]);
-    dE += (x > 0 ? west : 0.0f) + (x < W - 1 ? east : 0.0f);
-    return dE + parallel * ((y > 0 ? lv[up] : 0.0f) + (y + 1 < H - 1 ? lv[i + W] : 0.0f));
-}
-
-/* The line sites of one colour: type 0 (lh) or 1 (lv), (x + y) & 1 == parity; SITES per work-item. */
+/* The line sites of one colour: type 0 (lh) or 1 (lv), (x + y) & 1 == parity; SITES per work-item as
+ * float16 lanes. Heat bath: l = 1 with probability 1 / (1 + e^(dE / T)) (clamped so that a forbidden
+ * line, dE = +inf, gets e^-80, never NaN from native_exp); ICM: dE < 0; mean field: the probability. */
 __kernel void line_update(__global float *lh, __global float *lv, __global const float *f,
                           __global const float *q, __global const float *bh, __global const float *bv,
                           __constant float *table, float parallel, float kappa, float T, uint sweep,
@@ -406,17 +439,49 @@ __kernel void line_update(__global float *lh, __global float *lv, __global const
     int W = (int)W_, H = (int)H_, y = get_global_id(1), group = get_global_id(0), groups = GROUPS(W);
     int type = colour >> 1, parity = colour & 1;
     if (group >= groups || y >= H - type) return;
-    float u[SITES] = {0.0f, 0.0f, 0.0f, 0.0f};
-#if MODE == MODE_SAMPLE
-    philox_uniforms((uint4)((uint)(y * groups + group), sweep, PHASE_LINES + colour, 0u), key, u);
-#endif
-    for (int k = 0; k < SITES; ++k) {
-        int x = 2 * (SITES * group + k) + ((y + parity) & 1);
-        if (type == 0 && x < W - 1)
-            line_set(lh, y * W + x, line_h_delta(lh, lv, f, q, bh, table, parallel, kappa, x, y, W, H), T, u[k]);
-        else if (type == 1 && x < W)
-            line_set(lv, y * W + x, line_v_delta(lh, lv, f, q, bv, table, parallel, kappa, x, y, W, H), T, u[k]);
+    int n = W * H, x0 = 2 * SITES * group + ((y + parity) & 1), base = y * W + x0;
+    int16 xs = x0 + 2 * LANES;
+    float da[8], db[8];
+    float16 dE;
+    if (type == 0) {
+        /* lh (y, x), between (y, x) and (y, x + 1): vertices above (arm down) and below (arm up). */
+        vertex_corners(table, 1, 0, 2, 3, da);
+        vertex_corners(table, 0, 1, 2, 3, db);
+        dE = load_sites(bh, base, 2, n) - line_bond16(f, q, base, 1, n, kappa);
+        float16 top = vertex_delta16(da, load_sites(lh, base - W, 2, n), load_sites(lv, base - W, 2, n),
+                                     load_sites(lv, base - W + 1, 2, n));
+        float16 bottom = vertex_delta16(db, load_sites(lh, base + W, 2, n), load_sites(lv, base, 2, n),
+                                        load_sites(lv, base + 1, 2, n));
+        dE += (y > 0 ? top : ZERO16) + (y < H - 1 ? bottom : ZERO16);
+        float16 left = select(ZERO16, load_sites(lh, base - 1, 2, n), xs > 0);
+        float16 right = select(ZERO16, load_sites(lh, base + 1, 2, n), xs + 1 < W - 1);
+        dE += parallel * (left + right);
+    } else {
+        /* lv (y, x), between (y, x) and (y + 1, x): vertices left (arm right) and right (arm left). */
+        vertex_corners(table, 3, 0, 1, 2, da);
+        vertex_corners(table, 2, 0, 1, 3, db);
+        dE = load_sites(bv, base, 2, n) - line_bond16(f, q, base, W, n, kappa);
+        float16 west = vertex_delta16(da, load_sites(lh, base - 1, 2, n), load_sites(lh, base + W - 1, 2, n),
+                                      load_sites(lv, base - 1, 2, n));
+        float16 east = vertex_delta16(db, load_sites(lh, base, 2, n), load_sites(lh, base + W, 2, n),
+                                      load_sites(lv, base + 1, 2, n));
+        dE += select(ZERO16, west, xs > 0) + select(ZERO16, east, xs < W - 1);
+        float16 up = y > 0 ? load_sites(lv, base - W, 2, n) : ZERO16;
+        float16 down = y + 1 < H - 1 ? load_sites(lv, base + W, 2, n) : ZERO16;
+        dE += parallel * (up + down);
     }
+#if MODE == MODE_ICM
+    float16 l = select(ZERO16, (float16)(1.0f), dE < 0.0f);
+#else
+    float16 odds = native_exp(clamp(dE / T, -80.0f, 80.0f));
+#if MODE == MODE_SAMPLE
+    float16 u = philox_uniforms16((uint)(y * groups + group), sweep, PHASE_LINES + colour, 0u, key);
+    float16 l = select(ZERO16, (float16)(1.0f), u * (1.0f + odds) < 1.0f);
+#else
+    float16 l = 1.0f / (1.0f + odds);
+#endif
+#endif
+    store_sites(type == 0 ? lh : lv, base, l, x0, W - 1 + type);
 }
 
 /* ------------------------------------------------------------------------ estimates and energy */
@@ -488,10 +553,25 @@ __kernel void unpad(__global const float *lh, __global const float *lv, __global
     if (y < H - 1) line_v[y * W + x] = lv[y * W + x] != 0.0f;
 }
 
-/* Raw Philox4x32-10 blocks for the known-answer test: out[k] = philox(counters[k], keys[k]). */
+/* Raw Philox4x32-10 blocks for the known-answer test: out[k] = philox(counters[k], keys[k]); with
+ * `lanes`, the same blocks four at a time through philox4x32_10_x4 (k a multiple of 4 below n). */
 __kernel void philox_blocks(__global const uint4 *counters, __global const uint2 *keys, __global uint4 *out,
                             long n)
 {
     long k = get_global_id(0);
     if (k < n) out[k] = philox4x32_10(counters[k], keys[k]);
+}
+
+__kernel void philox_blocks4(__global const uint4 *counters, uint2 key, __global uint4 *out, long n)
+{
+    long k = 4 * get_global_id(0);
+    if (k + 3 >= n) return;
+    uint4 a = counters[k], b = counters[k + 1], c = counters[k + 2], d = counters[k + 3];
+    uint4 w0 = (uint4)(a.x, b.x, c.x, d.x), w1 = (uint4)(a.y, b.y, c.y, d.y);
+    uint4 w2 = (uint4)(a.z, b.z, c.z, d.z), w3 = (uint4)(a.w, b.w, c.w, d.w);
+    philox4x32_10_x4(&w0, &w1, &w2, &w3, key);
+    out[k] = (uint4)(w0.x, w1.x, w2.x, w3.x);
+    out[k + 1] = (uint4)(w0.y, w1.y, w2.y, w3.y);
+    out[k + 2] = (uint4)(w0.z, w1.z, w2.z, w3.z);
+    out[k + 3] = (uint4)(w0.w, w1.w, w2.w, w3.w);
 }

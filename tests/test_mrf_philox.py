@@ -1,6 +1,7 @@
 """Philox4x32-10 in kernels/philox.h against Random123's known-answer vectors."""
 
 import numpy as np
+from pyopencl import cltypes
 
 # Random123 tests/kat_vectors, rows "philox4x32 10": counter[4], key[2], expected[4].
 KAT = [
@@ -36,3 +37,17 @@ def test_words_are_uniform(machine):
     bits = (words[:, None] >> np.arange(32, dtype=np.uint32)) & 1
     share = bits.mean(axis=0)
     assert np.all(np.abs(share - 0.5) < 5 * 0.5 / np.sqrt(words.size))
+
+
+def test_four_lane_rounds_match_scalar_blocks(machine):
+    """philox4x32_10_x4 (four blocks on uint4 lanes, as the samplers draw them) gives the scalar blocks."""
+    n = 1 << 12
+    counters = np.random.default_rng(3).integers(0, 1 << 32, (n, 4), dtype=np.uint64).astype(np.uint32)
+    counters[:len(KAT)] = [c for c, _, _ in KAT]
+    key = np.uint32([0xA4093822, 0x299F31D0])
+    expected = _blocks(machine, counters, np.tile(key, (n, 1)))
+    out = machine.empty((n, 4), np.uint32)
+    kernel = machine.kernel("mrf", "philox_blocks4", NCOMP=1, KIND=0, NLEVELS=1, MODE=0)
+    machine.launch(kernel, (n // 4,), machine.to_device(counters), cltypes.make_uint2(*key), out, np.int64(n))
+    np.testing.assert_array_equal(out.get(), expected)
+    assert tuple(expected[2]) == KAT[2][2]  # the third counter's block under the third vector's key

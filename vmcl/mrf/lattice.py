@@ -53,9 +53,9 @@ class Lattice:
         self.n = self.height * self.width
         self.grid = (self.width, self.height)
         # Colour launches: q_update takes one site of the colour per work-item (half a row), f_update and
-        # line_update four (kernels/mrf.cl, SITES).
+        # line_update sixteen, as vector lanes (kernels/mrf.cl, SITES).
         self.half_grid = ((self.width + 1) // 2, self.height)
-        self.group_grid = (((self.width + 1) // 2 + 3) // 4, self.height)
+        self.group_grid = (((self.width + 1) // 2 + 15) // 16, self.height)
         self.dims = (np.int64(self.width), np.int64(self.height))
         shape = data.shape
         empty = machine.empty
