@@ -103,13 +103,25 @@ class StereoConfig:
 
 @dataclass(frozen=True)
 class MotionConfig:
-    """Patchwise optical flow (:func:`vmcl.early.motion.flow`); parameters as it takes them."""
+    """Patchwise optical flow (:func:`vmcl.early.motion.flow`) and its weight in the MRF stage.
+
+    Parameters
+    ----------
+    enabled : bool
+    delta, patch, levels, features
+        As :func:`vmcl.early.motion.flow` takes them.
+    confidence_floor : float, optional
+        The flow MRF weighs each estimate by :func:`vmcl.early.motion.confidence` of its score with
+        this floor (in the features' score units; 0.7 was measured with "brightness"); None: every
+        estimate weighs 1.
+    """
 
     enabled: bool = True
     delta: int = 4
     patch: int = 11
     levels: int = 2
     features: str = "brightness"
+    confidence_floor: float | None = 0.7
 
 
 @dataclass(frozen=True)
@@ -435,6 +447,7 @@ class _Run:
         names = vm.stages(right="right" in others, next="next" in others, rgb=rgb)
         device: dict[str, Any] = {}
         out: dict[str, Any] = {}
+        weights: dict[str, Any] = {}  # each cue's MRF data confidence, where its module gives one
         with self.stage("upload"):
             left = self.m.to_device(image)
             others_d = {name: self.m.to_device(array) for name, array in others.items()}
@@ -462,8 +475,11 @@ class _Run:
         if "motion" in names:
             with self.stage("motion"):
                 mc = self.c.motion
-                device["raw_flow"] = motion.flow(left, others_d["next"], delta=mc.delta, patch=mc.patch,
-                                                 levels=mc.levels, features=mc.features, machine=self.m).flow
+                found = motion.flow(left, others_d["next"], delta=mc.delta, patch=mc.patch, levels=mc.levels,
+                                    features=mc.features, machine=self.m)
+                device["raw_flow"] = found.flow
+                if mc.confidence_floor is not None:
+                    weights["flow"] = motion.confidence(found.score, floor=mc.confidence_floor, machine=self.m)
         lines = {}
         if "mrf depth" in names:
             with self.stage("mrf depth"):
@@ -483,7 +499,8 @@ class _Run:
                                           ("texture", "density", "texture_edges", "constant")):
             if f"mrf {cue}" in names:
                 with self.stage(f"mrf {cue}"):
-                    found = self.restore(cue, device[data], device[coupling], device, kind=kind)
+                    found = self.restore(cue, device[data], device[coupling], device, kind=kind,
+                                         confidence=weights.get(cue))
                     if found is not None:
                         lines["motion" if cue == "flow" else cue] = found
         with self.stage("integrate"):
@@ -511,7 +528,7 @@ class _Run:
                             sigma=s.sigma, low_threshold=s.low_threshold, high_threshold=s.high_threshold,
                             use_quantiles=s.use_quantiles, barriers=barriers, machine=self.m)
 
-    def restore(self, cue: str, data, coupling, device: dict, *, kind: str = "smooth"):
+    def restore(self, cue: str, data, coupling, device: dict, *, kind: str = "smooth", confidence=None):
         """Restore one cue coupled to an edge field; keeps its field, returns its lines.
 
         Depth and flow are coupled to the brightness edges (equation (12)). Colour and texture are
@@ -525,7 +542,7 @@ class _Run:
         if kind == "constant":
             params = dataclasses.replace(params, require_edge=True)
         try:
-            found = restore(data, edges=coupling, kind=kind, method=self.c.mrf.method,
+            found = restore(data, confidence=confidence, edges=coupling, kind=kind, method=self.c.mrf.method,
                             params=params, seed=self.c.mrf.seed, machine=self.m)
         except ValueError as error:
             # The one refusal a good run can meet: the module found nothing (no match, no flow, no
