@@ -169,7 +169,8 @@ class MrfConfig:
         "fast" (default): mean field at 6 temperatures falling from 2 by a factor 0.6, two sweeps each,
         then 2 ICM sweeps (14 sweeps). On the "cues" scene at 256 x 256 it ran a frame in 0.90 s
         against 12.3 s with the presets' own 110-sweep schedules, with the same quality within noise
-        (dense bad-1 1.7% against 1.4%, flow EPE 0.43 px both, integrated F 0.26 against 0.29).
+        (dense bad-1 1.7% against 1.4%, flow EPE 0.43 px both, integrated F 0.26 against 0.29; measured
+        before the flow's confidence weights).
         "preset": each cue's preset schedule.
     depth, flow, colour, texture : mapping of str to value
         Overrides of :func:`vmcl.mrf.preset`'s measured Params per cue (field names of
