@@ -1,29 +1,46 @@
 /* stereo.cl: the Drumheller-Poggio matcher with the Vision Machine's improvements, seed section "Stereo".
  *
- * One work-item per (x, y, d) cell builds the potential match planes; support is the box sum of each
- * plane (vmcl.cm.scan.box_sum, or the barrier-aware sum below); one work-item per pixel selects the
- * winner. The table variant keeps every plane; the running variant folds each plane into the winner as
- * it is made. Both call consider() in the same order of d, so they give identical results.
+ * Table variant: one work-item per (x, y, d) cell builds the potential match planes; support is the box
+ * sum of each plane (vmcl.cm.scan.box_sum, or the barrier-aware sum below); one work-item per pixel
+ * selects the winner over the whole table. Running variant, edges (match_edges): the support of a left
+ * feature is summed from the features of its window as it is needed, 16 disparities at a time, and
+ * folded into the winner at once; no plane is ever stored. Running variant, intensity: each plane is
+ * summed and folded into the winners as it is made. Every path folds the disparities in increasing d
+ * with the same rules and the same float expressions, so the variants give identical results.
  *
- * Defines: FEATURES (0 edges with gradient direction, 1 zero crossings with sign, 2 intensity) and ATTR_T,
- * the type of the feature attribute (float direction or brightness, char sign).
+ * Feature attributes are 16-bit codes (feature_codes): a gradient direction as a fraction of a turn,
+ * 65536 steps (two codes are compatible when their circular distance is at most the tolerance, in the
+ * same steps), or a zero crossing's sign (tolerance 0: equal signs). Intensity keeps float brightness.
+ *
+ * Defines: FEATURES (0 edges with gradient direction, 1 zero crossings with sign, 2 intensity), ATTR_T
+ * (ushort codes, float brightness), and for feature_codes SOURCE_T (float direction, char sign).
  */
 #include "vmcl.h"
+
+/* Scores are compared across kernels bit for bit: no fused multiply-adds anywhere. */
+#pragma OPENCL FP_CONTRACT OFF
 
 #define FEATURES_EDGES 0
 #define FEATURES_SIGN 1
 #define FEATURES_INTENSITY 2
 #ifndef ATTR_T
-#define ATTR_T float
+#define ATTR_T ushort
 #endif
 
-/* p(x, y, d) = 1 where the left feature at (x, y) has a compatible right feature at (x - d, y): gradient
- * directions within `tolerance` radians (edges), or the same sign (zero crossings). For intensity the
- * plane holds the product L(x, y) * R(x - d, y) (0 where x - d is outside), the numerator of the
- * correlation. Planes are float32 so that their box sums (exact below 2^24) feed the score directly. */
+/* Two feature codes are compatible when their circular distance (mod 65536) is at most `tolerance`. */
+inline int compatible(ushort a, ushort b, int tolerance)
+{
+    ushort diff = a - b;
+    return min(diff, (ushort)(0 - diff)) <= tolerance;
+}
+
+/* p(x, y, d) = 1 where the left feature at (x, y) has a compatible right feature at (x - d, y). For
+ * intensity the plane holds the product L(x, y) * R(x - d, y) (0 where x - d is outside), the numerator
+ * of the correlation. Planes are float32 so that their box sums (exact below 2^24) feed the score
+ * directly. */
 __kernel void match_planes(__global const uchar *left, __global const uchar *right,
                            __global const ATTR_T *left_attr, __global const ATTR_T *right_attr,
-                           __global float *planes, long W, long H, long D, int d_min, float tolerance)
+                           __global float *planes, long W, long H, long D, int d_min, int tolerance)
 {
     long x = get_global_id(0), y = get_global_id(1), k = get_global_id(2);
     if (x >= W || y >= H || k >= D) return;
@@ -33,17 +50,7 @@ __kernel void match_planes(__global const uchar *left, __global const uchar *rig
 #if FEATURES == FEATURES_INTENSITY
     planes[cell] = inside ? left_attr[i] * right_attr[y * W + xr] : 0.0f;
 #else
-    float p = 0.0f;
-    if (inside && left[i] && right[y * W + xr]) {
-#if FEATURES == FEATURES_EDGES
-        float diff = fabs(left_attr[i] - right_attr[y * W + xr]);
-        diff = min(diff, 2.0f * M_PI_F - diff);
-        p = diff <= tolerance;
-#else
-        p = left_attr[i] == right_attr[y * W + xr];
-#endif
-    }
-    planes[cell] = p;
+    planes[cell] = inside && left[i] && right[y * W + xr] && compatible(left_attr[i], right_attr[y * W + xr], tolerance);
 #endif
 }
 
@@ -62,17 +69,21 @@ inline Selection fresh(void)
     return s;
 }
 
-/* Folds plane d into the selection: `votes` is the box-summed support, `score` the normalised one, and
- * `own` whether the pixel itself matches on this plane. Ties keep the smaller d (planes come in
- * increasing d). Bimodality is followed as the planes arrive: a later plane and the highest one before
- * it form two peaks when the votes between them dip to `dip` times the lower of the two or less; the
- * strongest such pair is kept (its lower peak, `second`). */
-inline void consider(Selection *s, int d, float votes, float score, int own, float dip)
+/* The winner: the best score among planes where the pixel itself matches (`own`); ties keep the
+ * smaller d, since planes come in increasing d. */
+inline void choose(Selection *s, int d, float score, int own)
 {
     if (own && score > s->best_score) {
         s->best_score = score;
         s->best_d = d;
     }
+}
+
+/* Bimodality, followed as the planes arrive: a later plane and the highest one before it form two peaks
+ * when the votes between them dip to `dip` times the lower of the two or less; the strongest such pair
+ * is kept (its lower peak, `second`). */
+inline void follow_peaks(Selection *s, float votes, float dip)
+{
     if (s->valley <= dip * min(s->peak, votes)) s->second = max(s->second, min(s->peak, votes));
     if (votes > s->peak) {
         s->peak = votes;
@@ -80,6 +91,13 @@ inline void consider(Selection *s, int d, float votes, float score, int own, flo
     } else {
         s->valley = min(s->valley, votes);
     }
+}
+
+/* Folds plane d into the selection: `votes` is the summed support, `score` the normalised one. */
+inline void consider(Selection *s, int d, float votes, float score, int own, float dip)
+{
+    choose(s, d, score, own);
+    follow_peaks(s, votes, dip);
 }
 
 /* The normalised score of cell (x, y, d). Edges: the share of the edges eligible in the two patches
@@ -100,21 +118,32 @@ inline float cell_score(float votes, float nl, float nr, float area, float negat
 #endif
 }
 
-/* Per-pixel statistics of the right image at x - d: eligible edges, or the intensity sums. */
+/* Per-pixel statistics of the right image at x - d (0 outside the image). */
 #define RIGHT_AT(arr, xr) ((xr) >= 0 && (xr) < W ? (arr)[y * W + (xr)] : 0.0f)
+
+/* The normalised score of cell (x, y, d) from its summed votes and the patch statistics, a stack of
+ * planes: edges (nl, nr), eligible edges in the left and right patches; intensity (sl, sll, sr, srr),
+ * the sums of L, L^2, R and R^2. Left planes are read at x, right planes at x - d. */
+inline float stats_score(__global const float *stats, long x, long y, long W, long H, int d, float votes,
+                         float area, float negative)
+{
+    long i = y * W + x, xr = x - d, n = W * H;
+#if FEATURES == FEATURES_INTENSITY
+    return cell_score(votes, 0.0f, 0.0f, area, negative, stats[i], stats[n + i], RIGHT_AT(stats + 2 * n, xr),
+                      RIGHT_AT(stats + 3 * n, xr));
+#else
+    return cell_score(votes, stats[i], RIGHT_AT(stats + n, xr), area, negative, 0.0f, 0.0f, 0.0f, 0.0f);
+#endif
+}
 
 /* Scores cell (x, y, d) from its summed votes and folds it into the pixel's selection; `own` is the
  * cell's own plane value p(x, y, d). */
-inline void fold_cell(Selection *s, long x, long y, long W, int d, float votes, float own,
-                      __global const float *nl, __global const float *nr, __global const float *sl,
-                      __global const float *sll, __global const float *sr, __global const float *srr,
-                      float area, float negative, float dip)
+inline void fold_cell(Selection *s, long x, long y, long W, long H, int d, float votes, float own,
+                      __global const float *stats, float area, float negative, float dip)
 {
-    long i = y * W + x, xr = x - d;
-    float score = cell_score(votes, nl[i], RIGHT_AT(nr, xr), area, negative, sl[i], sll[i], RIGHT_AT(sr, xr),
-                             RIGHT_AT(srr, xr));
+    float score = stats_score(stats, x, y, W, H, d, votes, area, negative);
 #if FEATURES == FEATURES_INTENSITY
-    consider(s, d, score, score, xr >= 0, dip);
+    consider(s, d, score, score, x - d >= 0, dip);
 #else
     consider(s, d, votes, score, own > 0.0f, dip);
 #endif
@@ -131,10 +160,7 @@ inline void finish(Selection s, long i, __global float *best_score, __global int
 
 /* Table variant: one work-item per pixel walks the summed planes of the whole table. */
 __kernel void select_table(__global const float *votes, __global const float *planes, __global const uchar *left,
-                           __global const float *nl, __global const float *nr,
-                           __global const float *sl, __global const float *sll,
-                           __global const float *sr, __global const float *srr,
-                           __global float *best_score, __global int *best_d, __global float *peaks,
+                           __global const float *stats, __global float *best_score, __global int *best_d, __global float *peaks,
                            long W, long H, long D, int d_min, float area, float negative, float dip)
 {
     long x = get_global_id(0), y = get_global_id(1);
@@ -144,8 +170,7 @@ __kernel void select_table(__global const float *votes, __global const float *pl
     if (left[i]) {
         for (long k = 0; k < D; k++) {
             size_t cell = (k * H + y) * W + x;
-            fold_cell(&s, x, y, W, d_min + (int)k, votes[cell], planes[cell], nl, nr, sl, sll, sr, srr, area,
-                      negative, dip);
+            fold_cell(&s, x, y, W, H, d_min + (int)k, votes[cell], planes[cell], stats, area, negative, dip);
         }
     }
     finish(s, i, best_score, best_d, peaks);
@@ -153,10 +178,7 @@ __kernel void select_table(__global const float *votes, __global const float *pl
 
 /* Running variant: plane k (already summed) is folded into every pixel's selection; no table. */
 __kernel void select_running(__global const float *votes, __global const float *plane, __global const uchar *left,
-                             __global const float *nl, __global const float *nr,
-                             __global const float *sl, __global const float *sll,
-                             __global const float *sr, __global const float *srr,
-                             __global float *best_score, __global int *best_d, __global float *peaks,
+                             __global const float *stats, __global float *best_score, __global int *best_d, __global float *peaks,
                              long W, long H, int d, int first, float area, float negative, float dip)
 {
     long x = get_global_id(0), y = get_global_id(1);
@@ -170,7 +192,7 @@ __kernel void select_running(__global const float *votes, __global const float *
         s.valley = peaks[3 * i + 1];
         s.second = peaks[3 * i + 2];
     }
-    if (left[i]) fold_cell(&s, x, y, W, d, votes[i], plane[i], nl, nr, sl, sll, sr, srr, area, negative, dip);
+    if (left[i]) fold_cell(&s, x, y, W, H, d, votes[i], plane[i], stats, area, negative, dip);
     finish(s, i, best_score, best_d, peaks);
 }
 
@@ -251,24 +273,277 @@ __kernel void clipped_window(__global const float *prefix, __global const int *f
     out[plane + i] = upper - lower;
 }
 
-/* Feature masks as float32 counts, and squared brightness, for the patch statistics. */
-__kernel void mask_to_float(__global const uchar *mask, __global float *out, long n)
+/* The features both matchers compare, from the feature detector's masks and attributes, for the left
+ * and right images at once, 16 pixels per work-item: each feature's 16-bit code (SOURCE_T float: the
+ * gradient direction rounded to 1/65536 of a turn; char: the sign), its mask, dropping Canny edges
+ * whose gradient lies within `min_angle` codes of vertical, that is edges that close to horizontal (they
+ * carry no horizontal disparity: the aperture problem along a scanline), and the masks again as float32
+ * counts, planes 0 and 1 of `counts`, whose patch sums are the eligible features. */
+#define TURN 10430.378350470453f /* 65536 / (2 pi) */
+#ifndef SOURCE_T
+#define SOURCE_T float
+#endif
+#define SOURCE16 VCAT(SOURCE_T, 16)
+
+inline void code_lanes(uchar16 mask, SOURCE16 attribute, float min_angle, uchar16 *feature, ushort16 *code,
+                       float16 *count)
 {
-    long i = get_global_id(0);
-    if (i < n) out[i] = mask[i] ? 1.0f : 0.0f;
+#if SOURCE_T_IS_FLOAT
+    ushort16 c = convert_ushort16(convert_int16(rint(attribute * TURN)) & 0xFFFF);
+    /* |angle mod pi - pi / 2| in codes: the gradient's distance from vertical. */
+    float16 from_vertical = fabs(convert_float16(convert_int16(c & (ushort16)0x7FFF) - 16384));
+    int16 keep = convert_int16(mask) != 0 && from_vertical >= min_angle;
+#else
+    ushort16 c = as_ushort16(convert_short16(attribute));
+    int16 keep = convert_int16(mask) != 0;
+#endif
+    *code = c;
+    *feature = convert_uchar16(keep & 1);
+    *count = keep ? 1.0f : 0.0f;
 }
 
-__kernel void square(__global const float *x, __global float *out, long n)
+inline void code_side(__global const uchar *mask, __global const SOURCE_T *attribute, __global uchar *feature,
+                      __global ushort *code, __global float *count, float min_angle, long i0, long n)
 {
-    long i = get_global_id(0);
-    if (i < n) out[i] = x[i] * x[i];
+    uchar16 f;
+    ushort16 c;
+    float16 k;
+    if (i0 + 16 <= n) {
+        code_lanes(vload16(0, mask + i0), vload16(0, attribute + i0), min_angle, &f, &c, &k);
+        vstore16(f, 0, feature + i0);
+        vstore16(c, 0, code + i0);
+        vstore16(k, 0, count + i0);
+        return;
+    }
+    uchar m[16] = {0}, fs[16];
+    SOURCE_T a[16] = {0};
+    ushort cs[16];
+    float ks[16];
+    for (long i = i0; i < n; i++) {
+        m[i - i0] = mask[i];
+        a[i - i0] = attribute[i];
+    }
+    code_lanes(vload16(0, m), vload16(0, a), min_angle, &f, &c, &k);
+    vstore16(f, 0, fs);
+    vstore16(c, 0, cs);
+    vstore16(k, 0, ks);
+    for (long i = i0; i < n; i++) {
+        feature[i] = fs[i - i0];
+        code[i] = cs[i - i0];
+        count[i] = ks[i - i0];
+    }
 }
 
-/* Edges within asin(min_cos)... of horizontal carry no horizontal disparity (the aperture problem along
- * a scanline): they are not features. direction is the gradient's angle, so |cos| measures how far the
- * gradient leans towards x. */
-__kernel void drop_horizontal(__global uchar *mask, __global const float *direction, float min_cos, long n)
+__kernel void feature_codes(__global const uchar *left, __global const uchar *right,
+                            __global const SOURCE_T *left_attr, __global const SOURCE_T *right_attr,
+                            __global uchar *left_features, __global uchar *right_features,
+                            __global ushort *left_codes, __global ushort *right_codes, __global float *counts,
+                            float min_angle, long n)
+{
+    long i0 = get_global_id(0) * 16;
+    if (i0 >= n) return;
+    code_side(left, left_attr, left_features, left_codes, counts, min_angle, i0, n);
+    code_side(right, right_attr, right_features, right_codes, counts + n, min_angle, i0, n);
+}
+
+/* The planes whose patch sums the intensity score needs: L, L^2, R and R^2 (plane k at stack + k n). */
+__kernel void intensity_moments(__global const float *left, __global const float *right, __global float *stack,
+                                long n)
 {
     long i = get_global_id(0);
-    if (i < n && mask[i] && fabs(cos(direction[i])) < min_cos) mask[i] = 0;
+    if (i >= n) return;
+    float l = left[i], r = right[i];
+    stack[i] = l;
+    stack[n + i] = l * l;
+    stack[2 * n + i] = r;
+    stack[3 * n + i] = r * r;
+}
+
+/* ---- Running variant for edge features: support summed where it is used, no planes ----
+ *
+ * p(x, y, d) is non-zero only at left features, and only left features are ever selected, so the
+ * support of a left feature (x, y) is the sum, over the left features (x', y') of its window, of their
+ * potential matches p(x', y', d): one work-item per run of SPAN pixels of a row visits its features,
+ * sums their windows' matches 16 disparities at a time (short16 lanes, one AVX2 register), and folds
+ * the lanes into the selection in increasing d. Lane j of a group holds d = top - j, so the right
+ * pixels x - d of the 16 lanes are contiguous and ascending. */
+#define SPAN 16
+#define LANE_INDEX(T) ((T)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
+
+/* -1 where the left feature at (x, y) with code `a` has a compatible right feature at x - d, for the
+ * lanes d = top - j; 0 elsewhere, and for d > d_max or x - d outside the image. */
+__attribute__((always_inline)) inline short16 match_lanes(__global const uchar *right, __global const ushort *right_code, long row, long W,
+                           long x, ushort a, int top, int d_max, int tolerance)
+{
+    long x0 = x - top;
+    if (x0 >= 0 && x0 + 15 < W) {
+        ushort16 diff = (ushort16)a - vload16(0, right_code + row + x0);
+        short16 near = min(diff, (ushort16)0 - diff) <= (ushort16)tolerance;
+        short16 present = convert_short16(vload16(0, right + row + x0)) != (short16)0;
+        return near & present & (LANE_INDEX(short16) >= (short16)max(top - d_max, 0));
+    }
+    short lanes[16];
+    for (int j = 0; j < 16; j++) {
+        long xr = x0 + j;
+        lanes[j] = -(top - j <= d_max && xr >= 0 && xr < W && right[row + xr]
+                     && compatible(a, right_code[row + xr], tolerance));
+    }
+    return vload16(0, lanes);
+}
+
+/* The window of (x, y): rows [y - r, y + r] and, on each row y', columns [x - r, x + r], each clipped
+ * to the image and, with barriers, to the barrier-free run through (x, y) along the column and through
+ * (x, y') along row y' (rows first, then columns: the sums _Support makes). */
+#define WINDOW_ROWS(lo, hi)                                                                \
+    long lo = max(y - r, 0L), hi = min(y + r, H - 1);                                      \
+    if (clipped) {                                                                         \
+        lo = max(lo, (long)col_first[i]);                                                  \
+        hi = min(hi, (long)col_last[i]);                                                   \
+    }
+#define WINDOW_COLS(yw, lo, hi)                                                            \
+    long lo = max(x - r, 0L), hi = min(x + r, W - 1);                                      \
+    if (clipped) {                                                                         \
+        lo = max(lo, (long)row_first[yw * W + x]);                                         \
+        hi = min(hi, (long)row_last[yw * W + x]);                                          \
+    }
+
+/* The 16 lanes d = top - j of a right-image field at row y, x - d (0 outside the image). */
+__attribute__((always_inline)) inline float16 right_lanes(__global const float *field, long row, long W, long x, int top)
+{
+    long x0 = x - top;
+    if (x0 >= 0 && x0 + 15 < W) return vload16(0, field + row + x0);
+    float lanes[16];
+    for (int j = 0; j < 16; j++) lanes[j] = x0 + j >= 0 && x0 + j < W ? field[row + x0 + j] : 0.0f;
+    return vload16(0, lanes);
+}
+
+/* Folds the 16 lanes d = top - j of a group into the selection, as consider() would one d after the
+ * other in increasing d: the best score among the lanes where the pixel matches itself (the first, in
+ * d, of equal scores) replaces the running best only when higher; the vote peaks are followed lane by
+ * lane. The scores are cell_score()'s expression on vectors, which rounds the same. */
+__attribute__((always_inline)) inline void fold_lanes(Selection *s, short16 votes, short16 own, __global const float *stats, long x, long y,
+                       long W, long H, int top, int d_max, float area, float negative, float dip)
+{
+    long i = y * W + x;
+    float16 v = convert_float16(votes);
+    float16 eligible = 0.5f * (stats[i] + right_lanes(stats + W * H, y * W, W, x, top));
+    float16 score = (v - negative * (eligible - v) * eligible / area) / eligible;
+    int16 matches = convert_int16(own) != 0;
+    score = eligible <= 0.0f ? 0.0f : score;
+    float16 candidates = matches ? score : -INFINITY;
+    float8 m8 = fmax(candidates.lo, candidates.hi);
+    float4 m4 = fmax(m8.lo, m8.hi);
+    float2 m2 = fmax(m4.lo, m4.hi);
+    float best = fmax(m2.x, m2.y);
+    if (best > s->best_score) {
+        int16 at = matches && score == best ? LANE_INDEX(int16) : -1;
+        int8 a8 = max(at.lo, at.hi);
+        int4 a4 = max(a8.lo, a8.hi);
+        int2 a2 = max(a4.lo, a4.hi);
+        s->best_score = best;
+        s->best_d = top - max(a2.x, a2.y);
+    }
+    float counts[16];
+    vstore16(v, 0, counts);
+    for (int j = 15; j >= max(top - d_max, 0); j--) follow_peaks(s, counts[j], dip);
+}
+
+#define PASS_GROUPS 8 /* groups of 16 disparities summed in one pass over a window */
+
+__kernel void match_edges_clipped(__global const uchar *left, __global const uchar *right,
+                          __global const ushort *left_code, __global const ushort *right_code,
+                          __global const float *stats, __global const int *row_first,
+                          __global const int *row_last, __global const int *col_first,
+                          __global const int *col_last, int clipped,
+                          __global float *best_score, __global int *best_d, __global float *peaks,
+                          long W, long H, int d_min, int d_max, long r, int tolerance, float area,
+                          float negative, float dip)
+{
+    long x_first = get_global_id(0) * SPAN, y = get_global_id(1);
+    if (x_first >= W || y >= H) return;
+    for (long x = x_first; x < min(x_first + SPAN, W); x++) {
+        long i = y * W + x;
+        if (!left[i]) continue;
+        WINDOW_ROWS(y_lo, y_hi)
+        Selection s = fresh();
+        for (int first = d_min; first <= d_max; first += 16 * PASS_GROUPS) {
+            int groups = min(PASS_GROUPS, (d_max - first) / 16 + 1);
+            short16 votes[PASS_GROUPS], own[PASS_GROUPS];
+            for (int g = 0; g < groups; g++) votes[g] = own[g] = 0;
+            for (long yw = y_lo; yw <= y_hi; yw++) {
+                WINDOW_COLS(yw, x_lo, x_hi)
+                for (long xw = x_lo; xw <= x_hi; xw++) {
+                    if (!left[yw * W + xw]) continue;
+                    ushort a = left_code[yw * W + xw];
+                    int centre = xw == x && yw == y;
+                    for (int g = 0; g < groups; g++) {
+                        short16 p = match_lanes(right, right_code, yw * W, W, xw, a, first + 16 * g + 15, d_max,
+                                                tolerance);
+                        votes[g] -= p;
+                        if (centre) own[g] = p;
+                    }
+                }
+            }
+            for (int g = 0; g < groups; g++)
+                fold_lanes(&s, votes[g], own[g], stats, x, y, W, H, first + 16 * g + 15, d_max, area, negative,
+                           dip);
+        }
+        finish(s, i, best_score, best_d, peaks);
+    }
+}
+
+/* Without barriers the window is a square, and its sum separates: one work-item per band of BAND rows
+ * keeps, for every column x and group of 16 disparities, the column sum of p over rows [y - r, y + r]
+ * (in `sums`, its own W x groups short16 lanes), adding the features of the row that enters and
+ * subtracting those of the row that leaves as y advances (the O(1) box filter), so each feature's
+ * matches are computed about twice instead of once per feature of its window. A left feature's
+ * support is then the sum of the 2r + 1 column sums around it. */
+inline void slide_row(__global short16 *sums, __global const uchar *left, __global const uchar *right,
+                      __global const ushort *left_code, __global const ushort *right_code, long W, long yw,
+                      int d_min, int d_max, int groups, int tolerance, int entering)
+{
+    for (long x = 0; x < W; x++) {
+        if (!left[yw * W + x]) continue;
+        ushort a = left_code[yw * W + x];
+        for (int g = 0; g < groups; g++) {
+            short16 p = match_lanes(right, right_code, yw * W, W, x, a, d_min + 16 * g + 15, d_max, tolerance);
+            sums[g * W + x] += entering ? -p : p;
+        }
+    }
+}
+
+__kernel void match_edges(__global const uchar *left, __global const uchar *right,
+                          __global const ushort *left_code, __global const ushort *right_code,
+                          __global const float *stats, __global short16 *scratch,
+                          __global float *best_score, __global int *best_d, __global float *peaks,
+                          long W, long H, long band, int d_min, int d_max, long r, int tolerance, float area,
+                          float negative, float dip)
+{
+    long y0 = get_global_id(0) * band;
+    if (y0 >= H) return;
+    int groups = (d_max - d_min) / 16 + 1;
+    __global short16 *sums = scratch + get_global_id(0) * W * groups;
+    for (long k = 0; k < W * groups; k++) sums[k] = 0;
+    /* The column sums of the row before the band, rows [y0 - 1 - r, y0 - 1 + r]; each step then adds
+     * row y + r and takes away row y - r - 1. */
+    for (long yw = max(y0 - r - 1, 0L); yw < min(y0 + r, H); yw++)
+        slide_row(sums, left, right, left_code, right_code, W, yw, d_min, d_max, groups, tolerance, 1);
+    for (long y = y0; y < min(y0 + band, H); y++) {
+        if (y + r < H) slide_row(sums, left, right, left_code, right_code, W, y + r, d_min, d_max, groups, tolerance, 1);
+        if (y - r - 1 >= 0)
+            slide_row(sums, left, right, left_code, right_code, W, y - r - 1, d_min, d_max, groups, tolerance, 0);
+        for (long x = 0; x < W; x++) {
+            long i = y * W + x;
+            if (!left[i]) continue;
+            Selection s = fresh();
+            for (int g = 0; g < groups; g++) {
+                int top = d_min + 16 * g + 15;
+                short16 votes = 0;
+                for (long xw = max(x - r, 0L); xw <= min(x + r, W - 1); xw++) votes += sums[g * W + xw];
+                short16 own = match_lanes(right, right_code, y * W, W, x, left_code[i], top, d_max, tolerance);
+                fold_lanes(&s, votes, own, stats, x, y, W, H, top, d_max, area, negative, dip);
+            }
+            finish(s, i, best_score, best_d, peaks);
+        }
+    }
 }

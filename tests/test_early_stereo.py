@@ -14,6 +14,11 @@ from vmcl.scenes import Body, Camera, Face, Light, Texture, World
 DENSE_EDGES = {"low_threshold": 0.6, "high_threshold": 0.85, "use_quantiles": True}
 
 
+def _direction_codes(direction):
+    """Gradient directions as the matcher compares them: rounded to 1/65536 of a turn, mod 65536."""
+    return np.rint(direction.astype(np.float32) * np.float32(65536 / (2 * np.pi))).astype(np.int64) % 65536
+
+
 def _oracle(left, right, la, ra, d_min, d_max, patch, compatible, tolerance=0.35, min_score=0.3,
             bimodal=0.3, dip=0.8, min_votes=3.0):
     """The matcher written plainly: planes, window sums, the sequential selection, one suppression round."""
@@ -32,8 +37,8 @@ def _oracle(left, right, la, ra, d_min, d_max, patch, compatible, tolerance=0.35
         else:
             shifted[:, :d], attr[:, :d] = right[:, -d:], ra[:, -d:]
         if compatible == "direction":
-            diff = np.abs(la - attr)
-            ok = np.minimum(diff, f32(2 * np.pi) - diff) <= f32(tolerance)
+            diff = (_direction_codes(la) - _direction_codes(attr)) % 65536
+            ok = np.minimum(diff, 65536 - diff) <= math.floor(tolerance * 65536 / (2 * np.pi))
         else:
             ok = la == attr
         plane = left & shifted & ok
@@ -79,24 +84,60 @@ def _oracle(left, right, la, ra, d_min, d_max, patch, compatible, tolerance=0.35
     return disparity, out_of_range, discontinuity
 
 
-@pytest.mark.parametrize("compatible", ["direction", "sign"])
-@pytest.mark.parametrize("variant", ["running", "table"])
-def test_matches_numpy_oracle(compatible, variant, machine):
-    rng = np.random.default_rng(0 if compatible == "sign" else 1)
-    shape = (23, 41)
+def _random_features(rng, shape, compatible):
+    """Random left and right feature masks (30% of pixels) with random directions or signs."""
     left, right = rng.random(shape) < 0.3, rng.random(shape) < 0.3
     if compatible == "direction":
         la, ra = (rng.uniform(-np.pi, np.pi, shape).astype(np.float32) for _ in range(2))
     else:
         la, ra = (rng.choice(np.array([-1, 1], np.int8), shape) for _ in range(2))
-    got = match_features(left, right, la, ra, d_min=-2, d_max=5, compatible=compatible, patch=5,
+    return left, right, la, ra
+
+
+@pytest.mark.parametrize("compatible", ["direction", "sign"])
+@pytest.mark.parametrize("variant", ["running", "table"])
+@pytest.mark.parametrize("shape, d_min, d_max", [((23, 41), -2, 5), ((29, 97), -3, 37)])
+def test_matches_numpy_oracle(compatible, variant, shape, d_min, d_max, machine):
+    """Several groups of 16 disparities, a partial last one, and right pixels off both image borders."""
+    rng = np.random.default_rng(0 if compatible == "sign" else 1)
+    left, right, la, ra = _random_features(rng, shape, compatible)
+    got = match_features(left, right, la, ra, d_min=d_min, d_max=d_max, compatible=compatible, patch=5,
                          direction_tolerance=math.radians(60), variant=variant, machine=machine)
-    disparity, out_of_range, discontinuity = _oracle(left, right, la, ra, -2, 5, 5, compatible,
+    disparity, out_of_range, discontinuity = _oracle(left, right, la, ra, d_min, d_max, 5, compatible,
                                                      tolerance=math.radians(60))
     np.testing.assert_array_equal(got.disparity, disparity)
     np.testing.assert_array_equal(got.out_of_range, out_of_range)
     np.testing.assert_array_equal(got.discontinuity, discontinuity)
-    assert np.isfinite(disparity).sum() > 20
+    assert np.isfinite(disparity).sum() > 20 and discontinuity.sum() > 0
+
+
+@pytest.mark.parametrize("compatible", ["direction", "sign"])
+def test_variants_agree_with_barriers(compatible, machine):
+    """The running variant sums clipped windows itself; the table sums its planes with _Support."""
+    rng = np.random.default_rng(3)
+    shape = (37, 61)
+    left, right, la, ra = _random_features(rng, shape, compatible)
+    barriers = rng.random(shape) < 0.08
+    found = [match_features(left, right, la, ra, d_min=-3, d_max=20, compatible=compatible, patch=7,
+                            barriers=barriers, direction_tolerance=math.radians(60), variant=variant,
+                            machine=machine) for variant in ("table", "running")]
+    for name in ("disparity", "score", "out_of_range", "discontinuity"):
+        np.testing.assert_array_equal(getattr(found[1], name), getattr(found[0], name))
+    assert np.isfinite(found[0].disparity).sum() > 50
+
+
+def test_features_drop_edges_near_horizontal(machine):
+    """The left features are Canny's edges less those within horizontal_tolerance of horizontal,
+    judged on the direction codes (the gradient's distance from vertical, in 1/65536 turns)."""
+    from vmcl.early.edges import canny
+
+    scene, d_min, d_max = _pair("corridor")
+    edges, _, direction = canny(scene.left, sigma=2.0, return_gradient=True, machine=machine)
+    from_vertical = np.abs((_direction_codes(direction) % 32768) - 16384)
+    found = match(scene.left, scene.right, d_min=d_min, d_max=d_max, horizontal_tolerance=25.0, machine=machine)
+    expected = edges & (from_vertical >= np.float32(25.0 * 65536 / 360))
+    np.testing.assert_array_equal(found.features, expected)
+    assert 0 < expected.sum() < edges.sum()
 
 
 def _pair(name, noise=0.01):
@@ -232,6 +273,8 @@ def test_negative_evidence_is_measured_against_the_plain_score(machine):
     ({"features": "sift"}, ValueError, "features must be one of"),
     ({"variant": "fast"}, ValueError, "variant must be"),
     ({"d_min": 1.5}, TypeError, "d_min must be an integer"),
+    ({"patch": 183, "variant": "running"}, ValueError, "16 bits"),
+    ({"direction_tolerance": -0.1}, ValueError, "direction_tolerance"),
 ])
 def test_bad_input_is_named(kwargs, error, pattern, machine):
     arguments = {"left": np.zeros((32, 32), np.float32), "right": np.zeros((32, 32), np.float32),

@@ -1,9 +1,13 @@
 """Stereo: the Drumheller-Poggio matcher on the OpenCL machine, with the Vision Machine's improvements.
 
 Seed section "Stereo": features of the two (registered) images are compared on potential match planes
-p(x, y, d), one per disparity; each plane is summed over a patch (the local support, computed with
-grid-scans in time independent of the patch) and the winner of every left feature is chosen under the
-uniqueness and ordering constraints. The improvements the paper lists are here: Canny edges whose
+p(x, y, d), one per disparity; each plane is summed over a patch (the local support) and the winner of
+every left feature is chosen under the uniqueness and ordering constraints. The faithful "table"
+variant builds every plane and sums it with grid-scans in time independent of the patch; the default
+"running" variant uses that p is non-zero only at left features and only their support is ever
+selected: it sums each left feature's support from the features of its window when it needs it (the
+column sums of a band of rows slid down the image, as a box filter does) and folds it into the
+winner at once, building no plane. The improvements the paper lists are here: Canny edges whose
 gradient directions must agree (improvement 2), support normalised by the number of edges eligible to
 match in the two patches (improvement 3), low normalised scores marking areas outside the disparity
 range, bimodal vote histograms marking depth discontinuities, and support that stops at discontinuity
@@ -37,6 +41,9 @@ Features = Literal["canny", "dog", "intensity"]
 Variant = Literal["running", "table"]
 _FEATURES = {"canny": 0, "dog": 1, "intensity": 2}
 _TABLE_BYTES = 256 << 20  # the largest table of match planes the default variant builds
+_BAND = 16  # rows per work-item of match_edges (at least)
+_MAX_RUNNING_PATCH = 181  # (2r + 1)^2 votes fit the running variant's int16 lanes
+_SPAN = 16  # pixels of a row per work-item of match_edges (SPAN in kernels/stereo.cl)
 
 
 @dataclass
@@ -98,10 +105,12 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
         Canny's thresholds (default: from its noise estimate, which assumes most of the image is not
         edge; on densely textured images give quantiles, e.g. 0.6 and 0.85 with ``use_quantiles``).
     direction_tolerance : float
-        Radians.
+        Radians, >= 0. Directions are compared as 16-bit codes, rounded to 1/65536 of a turn, and the
+        tolerance is rounded down to whole codes.
     horizontal_tolerance : float
-        Degrees: Canny edges closer than this to horizontal are not features, since along a scanline
-        they cannot say where they match (the aperture problem). 0 keeps every edge.
+        Degrees: Canny edges closer than this to horizontal (their gradient direction's code closer to
+        vertical) are not features, since along a scanline they cannot say where they match (the
+        aperture problem). 0 keeps every edge.
     min_score : float
         Features whose best normalised score is below it are flagged out of range and left unmatched.
     bimodal, dip, min_votes : float
@@ -116,11 +125,13 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
         Discontinuity lines (from the integration stage, or ground truth): support windows stop at them,
         along rows and then along columns.
     variant : {"table", "running"}, optional
-        "table": the faithful version, every plane kept (4 bytes per cell), then the selection.
-        "running": each plane is summed and folded into the winners as it is made, no table; more
-        launches, so slower (teddy, 64 disparities: 192 against 118 ms on the benchmark machine), but
-        its memory does not grow with the range. Identical results. Default: the table when it takes
-        at most 256 MiB, else running.
+        "table": the faithful version, every plane built (4 bytes per cell) and box-summed, then the
+        selection walks the table. "running": no plane is stored. For edges and zero crossings, each
+        left feature's support is summed from the features of its window, 16 disparities at a time,
+        and folded into its winner at once (with barriers, over its clipped window directly); for
+        intensity, each plane is summed and folded into the winners as it is made. Identical results.
+        Default: running for edges and zero crossings (patch <= 181, the votes' 16-bit range); for
+        intensity the table when it takes at most 256 MiB, else running.
 
     Returns
     -------
@@ -140,9 +151,9 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
         raise ValueError(f"features must be one of {sorted(_FEATURES)}, got {features!r}")
     if (left.ndim == 3) != (right.ndim == 3):
         raise ValueError("left and right must both be grey or both be colour")
-    maps = _feature_maps(machine, left, right, features, sigma, low_threshold, high_threshold,
-                         use_quantiles, math.sin(math.radians(horizontal_tolerance)))
-    found = _match_maps(machine, maps, features, d_min=d_min, d_max=d_max, patch=patch,
+    maps = _feature_maps(machine, left, right, features, sigma, low_threshold, high_threshold, use_quantiles)
+    min_angle = horizontal_tolerance * 65536 / 360 if features == "canny" else 0.0
+    found = _match_maps(machine, maps, features, min_angle=min_angle, d_min=d_min, d_max=d_max, patch=patch,
                         direction_tolerance=direction_tolerance, min_score=min_score, bimodal=bimodal, dip=dip,
                         min_votes=min_votes, negative_evidence=negative_evidence, barriers=barriers, variant=variant)
     return _deliver(found, isinstance(left, np.ndarray))
@@ -181,7 +192,7 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
             raise ValueError(f"{name}_attribute must have the shape of {name}")
     _pair(maps["left"], maps["right"])
     _check_range(d_min, d_max, patch, maps["left"].shape[1])
-    found = _match_maps(machine, maps, features, d_min=d_min, d_max=d_max, patch=patch,
+    found = _match_maps(machine, maps, features, min_angle=0.0, d_min=d_min, d_max=d_max, patch=patch,
                         direction_tolerance=direction_tolerance, min_score=min_score, bimodal=bimodal, dip=dip,
                         min_votes=min_votes, negative_evidence=negative_evidence, barriers=barriers, variant=variant)
     return _deliver(found, host)
@@ -206,16 +217,25 @@ def _deliver(found: list, host: bool) -> StereoMatch:
     return StereoMatch(disparity, score, features, out_of_range, discontinuity)
 
 
-def _match_maps(machine: Machine, maps: dict, features: str, *, d_min, d_max, patch, direction_tolerance,
+def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min, d_max, patch, direction_tolerance,
                 min_score, bimodal, dip, min_votes, negative_evidence, barriers, variant) -> list:
     """Planes, support, selection and suppression on device feature maps; returns the device outputs."""
     height, width = maps["left"].shape
+    depth = d_max - d_min + 1
     if variant is None:
-        variant = "table" if (d_max - d_min + 1) * height * width * 4 <= _TABLE_BYTES else "running"
+        if features == "intensity":
+            variant = "table" if depth * height * width * 4 <= _TABLE_BYTES else "running"
+        else:
+            variant = "running" if patch <= _MAX_RUNNING_PATCH else "table"
     if variant not in ("running", "table"):
         raise ValueError(f"variant must be 'running' or 'table', got {variant!r}")
+    if variant == "running" and features != "intensity" and patch > _MAX_RUNNING_PATCH:
+        raise ValueError(f"the running variant counts votes in 16 bits: patch must be <= {_MAX_RUNNING_PATCH}, "
+                         f"got {patch} (use variant='table')")
     if negative_evidence < 0:
         raise ValueError(f"negative_evidence must be >= 0, got {negative_evidence}")
+    if not direction_tolerance >= 0:
+        raise ValueError(f"direction_tolerance must be >= 0 radians, got {direction_tolerance}")
     radius = patch // 2
     if barriers is not None:
         if isinstance(barriers, np.ndarray) and barriers.dtype == np.bool_:
@@ -226,22 +246,41 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, d_min, d_max, pa
     else:
         barrier = None
     support = _Support(machine, radius, barrier, (height, width))
-    stats = _statistics(machine, maps, support, features)
-    depth = d_max - d_min + 1
+    if features == "intensity":
+        common = (maps["left"], maps["right"], maps["left_attr"], maps["right_attr"])
+        stats = support.sum(_moments(machine, maps))
+        tolerance = np.int32(0)
+    else:
+        *common, counts = _codes(machine, maps, features, min_angle)
+        stats = support.sum(counts)
+        tolerance = np.int32(direction_code(direction_tolerance) if features == "canny" else 0)
     selection = [machine.empty((height, width), np.float32), machine.empty((height, width), np.int32),
                  machine.empty((height, width, 3), np.float32)]
-    defines = {"FEATURES": _FEATURES[features], "ATTR_T": "char" if features == "dog" else "float"}
+    defines = {"FEATURES": _FEATURES[features], "ATTR_T": "float" if features == "intensity" else "ushort"}
     area = np.float32(patch * patch)
     dims = (np.int64(width), np.int64(height))
-    common = (maps["left"], maps["right"], maps["left_attr"], maps["right_attr"])
     build = machine.kernel("stereo", "match_planes", **defines)
-    tolerance = np.float32(direction_tolerance)
-    if variant == "table":
+    if variant == "running" and features != "intensity" and barrier is not None:
+        machine.launch(machine.kernel("stereo", "match_edges_clipped", **defines), (-(-width // _SPAN), height),
+                       *common, stats, *support.window_bounds(), np.int32(1), *selection, *dims,
+                       np.int32(d_min), np.int32(d_max), np.int64(radius), tolerance, area,
+                       np.float32(negative_evidence), np.float32(dip))
+    elif variant == "running" and features != "intensity":
+        # Each band keeps a short16 column sum per column and group of 16 disparities; taller bands
+        # when many of them would need more than _TABLE_BYTES.
+        band_bytes = width * (-(-depth // 16)) * 32
+        band = max(_BAND, -(-height // max(1, _TABLE_BYTES // band_bytes)))
+        bands = -(-height // band)
+        scratch = machine.empty(bands * band_bytes // 2, np.int16)
+        machine.launch(machine.kernel("stereo", "match_edges", **defines), (bands,), *common, stats, scratch,
+                       *selection, *dims, np.int64(band), np.int32(d_min), np.int32(d_max), np.int64(radius),
+                       tolerance, area, np.float32(negative_evidence), np.float32(dip))
+    elif variant == "table":
         planes = machine.empty((depth, height, width), np.float32)
         machine.launch(build, (width, height, depth), *common, planes, *dims, np.int64(depth), np.int32(d_min),
                        tolerance)
         machine.launch(machine.kernel("stereo", "select_table", **defines), (width, height), support.sum(planes),
-                       planes, maps["left"], *stats, *selection, *dims, np.int64(depth), np.int32(d_min), area,
+                       planes, common[0], stats, *selection, *dims, np.int64(depth), np.int32(d_min), area,
                        np.float32(negative_evidence), np.float32(dip))
     else:
         plane = machine.empty((1, height, width), np.float32)
@@ -249,23 +288,53 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, d_min, d_max, pa
         for k in range(depth):
             machine.launch(build, (width, height, 1), *common, plane, *dims, np.int64(1), np.int32(d_min + k),
                            tolerance)
-            machine.launch(fold, (width, height), support.sum(plane), plane, maps["left"], *stats, *selection,
+            machine.launch(fold, (width, height), support.sum(plane), plane, common[0], stats, *selection,
                            *dims, np.int32(d_min + k), np.int32(k == 0), area, np.float32(negative_evidence),
                            np.float32(dip))
     outputs = [machine.empty((height, width), np.float32), machine.empty((height, width), np.float32),
                machine.empty((height, width), np.uint8), machine.empty((height, width), np.uint8)]
-    machine.launch(machine.kernel("stereo", "suppress", **defines), (width, height), maps["left"], selection[0],
+    machine.launch(machine.kernel("stereo", "suppress", **defines), (width, height), common[0], selection[0],
                    selection[1], selection[2], *outputs, *dims, np.int32(d_min), np.int32(d_max),
                    np.float32(min_score if features != "intensity" else -np.inf), np.float32(bimodal),
                    np.float32(min_votes))
     disparity, score, out_of_range, discontinuity = outputs
-    return [disparity, score, maps["left"], out_of_range, discontinuity]
+    return [disparity, score, common[0], out_of_range, discontinuity]
 
 
+def direction_code(angle: float) -> int:
+    """An angle in radians as a count of 1/65536 turns, the unit feature codes compare directions in
+    (the tolerance: rounded down, so a code distance within it is an angle within it, up to the codes'
+    own rounding of half a step, 0.0027 degrees)."""
+    return min(int(math.floor(angle * 65536 / (2 * math.pi))), 32768)
 
 
-def _feature_maps(machine: Machine, left, right, features: str, sigma: float, low, high, quantiles: bool,
-                  min_cos: float) -> dict:
+def _codes(machine: Machine, maps: dict, features: str, min_angle: float) -> list:
+    """The left and right feature masks and 16-bit codes both matchers compare, and the masks as a
+    (2, H, W) float32 stack of counts (kernels/stereo.cl, feature_codes); edges whose gradient lies within
+    ``min_angle`` (in 1/65536 turns) of vertical are dropped."""
+    height, width = maps["left"].shape
+    n = height * width
+    out = [machine.empty((height, width), np.uint8), machine.empty((height, width), np.uint8),
+           machine.empty((height, width), np.uint16), machine.empty((height, width), np.uint16),
+           machine.empty((2, height, width), np.float32)]
+    source = {"SOURCE_T": "char", "SOURCE_T_IS_FLOAT": 0} if features == "dog" else {"SOURCE_T": "float",
+                                                                                    "SOURCE_T_IS_FLOAT": 1}
+    machine.launch(machine.kernel("stereo", "feature_codes", **source), (-(-n // 16),), maps["left"], maps["right"],
+                   maps["left_attr"], maps["right_attr"], *out, np.float32(min_angle), np.int64(n))
+    return out
+
+
+def _moments(machine: Machine, maps: dict) -> cl_array.Array:
+    """The planes whose patch sums the intensity score needs: L, L^2, R and R^2 as one (4, H, W) stack."""
+    height, width = maps["left"].shape
+    n = height * width
+    stack = machine.empty((4, height, width), np.float32)
+    machine.launch(machine.kernel("stereo", "intensity_moments"), (n,), maps["left_attr"], maps["right_attr"],
+                   stack, np.int64(n))
+    return stack
+
+
+def _feature_maps(machine: Machine, left, right, features: str, sigma: float, low, high, quantiles: bool) -> dict:
     """Left and right feature masks (uint8) and attributes (direction, sign, or brightness) on the device."""
     maps = {}
     for side, image in (("left", left), ("right", right)):
@@ -274,9 +343,6 @@ def _feature_maps(machine: Machine, left, right, features: str, sigma: float, lo
         if features == "canny":
             edges, _, direction = canny(image, sigma=sigma, low_threshold=low, high_threshold=high,
                                         use_quantiles=quantiles, return_gradient=True, machine=machine)
-            if min_cos > 0:
-                machine.launch(machine.kernel("stereo", "drop_horizontal"), (edges.size,), edges, direction,
-                               np.float32(min_cos), np.int64(edges.size))
             maps[side], maps[side + "_attr"] = edges, direction
         elif features == "dog":
             crossings = zero_crossings(image, sigma=sigma, method="dog", machine=machine)
@@ -308,6 +374,14 @@ class _Support:
                                barrier, first, last, np.int64(width), np.int64(height), np.int32(along_rows))
                 self.bounds[along_rows] = (first, last)
 
+    def window_bounds(self) -> tuple[cl_array.Array, ...]:
+        """(first, last) of every pixel's barrier-free run along its row, then along its column, for
+        kernels that clip windows themselves; without barriers, placeholders they never read."""
+        if self.barrier is None:
+            unused = self.machine.empty(1, np.int32)
+            return (unused,) * 4
+        return (*self.bounds[1], *self.bounds[0])
+
     def sum(self, planes: cl_array.Array) -> cl_array.Array:
         """Sum every plane of a (D, H, W) float32 stack over the support window."""
         if self.barrier is None:
@@ -324,26 +398,3 @@ class _Support:
                            out, np.int64(width), np.int64(height), np.int64(self.radius), np.int32(along_rows))
             data = out
         return data
-
-
-def _statistics(machine: Machine, maps: dict, support: _Support, features: str) -> list:
-    """Per-pixel patch sums the score needs: (nl, nr, sl, sll, sr, srr). Edges: eligible edges in the
-    left and right patches; intensity: the sums of L, L^2, R and R^2. Unused entries are zeros."""
-    height, width = maps["left"].shape
-    zeros = _filled(machine, (height, width), np.float32, 0)
-    n = np.int64(height * width)
-    sums = []
-    for side in ("left", "right"):
-        if features == "intensity":
-            values = maps[side + "_attr"]
-            squares = machine.empty((1, height, width), np.float32)
-            machine.launch(machine.kernel("stereo", "square"), (height * width,), values, squares, n)
-            sums += [support.sum(values.reshape(1, height, width)).reshape(height, width),
-                     support.sum(squares).reshape(height, width)]
-        else:
-            counts = machine.empty((1, height, width), np.float32)
-            machine.launch(machine.kernel("stereo", "mask_to_float"), (height * width,), maps[side], counts, n)
-            sums.append(support.sum(counts).reshape(height, width))
-    if features == "intensity":
-        return [zeros, zeros, *sums]
-    return [*sums, zeros, zeros, zeros, zeros]
