@@ -61,26 +61,32 @@ __kernel void list_init(__global const int *next, __global int *pointer, __globa
 }
 
 /* --- connected components ------------------------------------------------------------------------
- * Union-find in which every pointer leads to a larger address: a pixel starts as its own root, and a
- * merge links the smaller root under the larger (compare-and-swap, retried if the root moved). Roots
- * are thus the largest address of their tree, and once all merges are done every component is one
- * tree whose root is its largest address, whatever order the merges ran in: the result is
- * deterministic. Finding a root follows pointers; the final pass jumps every pixel to its root. */
+ * Union-find over runs: maximal horizontal stretches of foreground within a row. Row y's runs take the
+ * run indices y * slots, y * slots + 1, ... in order along the row, so run indices follow raster order
+ * and the run holding a component's largest flat address is its run of largest index. Every pointer
+ * leads to a larger run index: a run starts as its own root, and a merge links the smaller root under
+ * the larger. Roots are thus the largest run of their tree, and once all merges are done every
+ * component is one tree whose root is its last run in raster order, whatever order the merges ran in:
+ * the result is deterministic. Runs rather than pixels, because a run's pixels are connected without
+ * any merge: a random 50% field has a quarter as many runs as pixels, and a strip's trees fit in cache.
+ * Finding a root follows pointers; the final pass gives every pixel its run's root's last address.
+ *
+ * bounds[2r] is the flat address of run r's first pixel, bounds[2r + 1] one past its last pixel. */
 
-/* Path halving on the way up: each visited pixel is re-pointed at its grandparent, the pointer-jumping
+/* Path halving on the way up: each visited run is re-pointed at its grandparent, the pointer-jumping
  * step of distance doubling, so repeated finds shorten the trees geometrically. Racing writers only
- * ever store an ancestor, which keeps every pointer valid and leading upward. Defined twice: for labels
+ * ever store an ancestor, which keeps every pointer valid and leading upward. Defined twice: for trees
  * other work-items may be changing at the same time (volatile), and for a work-item alone in its trees
  * (plain loads and stores, which the compiler may keep in registers). */
 #define FIND_ROOT(SUFFIX, QUALIFIER)                                                       \
-    inline int find_root##SUFFIX(QUALIFIER int *label, int a)                              \
+    inline int find_root##SUFFIX(QUALIFIER int *parent, int a)                             \
     {                                                                                      \
-        int parent = label[a];                                                             \
-        while (parent != a) {                                                              \
-            int grandparent = label[parent];                                               \
-            if (grandparent != parent) label[a] = grandparent;                             \
-            a = parent;                                                                    \
-            parent = grandparent;                                                          \
+        int up = parent[a];                                                                \
+        while (up != a) {                                                                  \
+            int grandparent = parent[up];                                                  \
+            if (grandparent != up) parent[a] = grandparent;                                \
+            a = up;                                                                        \
+            up = grandparent;                                                              \
         }                                                                                  \
         return a;                                                                          \
     }
@@ -90,117 +96,177 @@ FIND_ROOT(_alone, __global)
 
 /* Merges the trees of a and b where other work-items merge too: the smaller root is linked under the
  * larger by compare-and-swap, retried if that root moved meanwhile. */
-inline void merge_shared(__global volatile int *label, int a, int b)
+inline void merge_shared(__global volatile int *parent, int a, int b)
 {
     for (;;) {
-        a = find_root_shared(label, a);
-        b = find_root_shared(label, b);
+        a = find_root_shared(parent, a);
+        b = find_root_shared(parent, b);
         if (a == b) return;
         if (a < b) { int t = a; a = b; b = t; }
-        if (atomic_cmpxchg(&label[b], b, a) == b) return;
+        if (atomic_cmpxchg(&parent[b], b, a) == b) return;
     }
 }
 
-/* Links two roots of a work-item's own trees, the smaller under the larger; returns the union's root. */
-inline int link_alone(__global int *label, int a, int b)
+/* Writes the bounds of row y's runs from run `first` on and returns their number. Without branches (a
+ * noisy mask would mispredict one at most pixels): every pixel stores its address at the next free
+ * bound, and the count of bounds moves on only where the mask changes, so only those addresses stay.
+ * The store after the last bound lands on a spare int, hence slots = W / 2 + 1 runs per row. */
+inline int find_runs(__global const uchar *mask, __global int *bounds, long y, long W, int first)
 {
-    if (a == b) return a;
-    int high = max(a, b);
-    label[min(a, b)] = high;
-    return high;
+    __global int *row_bounds = bounds + 2 * (long)first;
+    int row = (int)(y * W), changes = 0, previous = 0;
+    for (int x = 0; x < W; x++) {
+        int here = mask[row + x] != 0;
+        row_bounds[changes] = row + x;
+        changes += here ^ previous;
+        previous = here;
+    }
+    row_bounds[changes] = row + (int)W;  /* the end of a run that reaches the row's end */
+    return (changes + previous) / 2;
 }
 
-/* Which runs of the row below pixel i = (x, y) must merge with its run (bit 0: below-left, bit 1:
- * below, bit 2: below-right). Runs are already trees, so only the pixels where the set of touching
- * lower runs changes need to merge: a run's first pixel with each lower neighbour that starts a new
- * lower run, the pixels after it only where a new lower run begins below-right (8-connectivity) or
- * directly below (4-connectivity). Computed without branches (most pixels need nothing, and a noisy
- * mask would mispredict a branch on every pixel); any non-zero mask value is foreground. */
-inline int merge_targets(__global const uchar *mask, long x, long i, long W)
+/* Runs of rows y and y + 1 touch where they share a column, or with 8-connectivity a corner. The
+ * kernels that merge two rows walk both rows' runs together, like merging two sorted lists: at each
+ * step the upper run a and the lower run b merge if they touch, then whichever ends first is done, as it
+ * cannot touch the other row's next run (both, when they end together). So every touching pair meets
+ * once, in at most as many steps as the two rows have runs. */
+#define DIAGONAL (CONNECTIVITY == 8)
+
+typedef struct {
+    bool touch, a_done, b_done;  /* whether a and b touch; whether the walk leaves a, b behind */
+} RunPair;
+
+inline RunPair compare_runs(__global const int *bounds, int a, int b, int W)
 {
-    long below = i + W;
-    int here = mask[i] != 0, down = mask[below] != 0;
-    int left = x > 0 && mask[i - 1], down_left = x > 0 && mask[below - 1];
-#if CONNECTIVITY == 8
-    int down_right = x + 1 < W && mask[below + 1];
-    int targets = (!left & down_left) | ((!left & down & !down_left) << 1) | ((down_right & !down) << 2);
-#else
-    int targets = (down & !(left & down_left)) << 1;
-#endif
-    return here ? targets : 0;
+    int start_a = bounds[2 * (long)a], end_a = bounds[2 * (long)a + 1];
+    int start_b = bounds[2 * (long)b] - W, end_b = bounds[2 * (long)b + 1] - W;  /* moved up a row */
+    RunPair pair = {start_b < end_a + DIAGONAL && end_b + DIAGONAL > start_a, end_a <= end_b, end_b <= end_a};
+    return pair;
+}
+
+/* The root of a run in trees that are this work-item's alone, re-pointing the run at it. In the strips'
+ * trees nearly every run is at most two steps below its root, so two dependent loads find it without a
+ * branch that could mispredict, and only the rare deeper run takes the loop. */
+inline int find_root_shallow(__global int *parent, int a)
+{
+    int up = parent[parent[a]];
+    if (parent[up] != up) up = find_root_alone(parent, up);
+    parent[a] = up;
+    return up;
 }
 
 /* Work-item s labels the strip of rows [s*rows, (s+1)*rows) on its own, from its bottom row up: per row,
- * every foreground pixel first points at the right end of its horizontal run (the run's largest address,
- * so its root; right to left), then the row's runs merge with those below them. Going up means a new
- * row's roots (smaller addresses) hang under the existing larger roots, which keeps the trees shallow;
- * strips keep the memory walk sequential. Strip borders are merged by label_merge_strips. */
-__kernel void label_strips(__global const uchar *mask, __global int *label, long W, long H, long rows)
+ * the runs are found, then merged with the touching runs of the row below. Going up means a new row's
+ * runs (smaller indices) hang under the existing larger roots, which keeps the trees shallow. The walk
+ * carries the roots of its current upper and lower run, so a run touching several others is looked up
+ * once, and no branch follows the noisy data: a pair that does not touch points the larger root at
+ * itself instead of linking, the upper run's pointer is stored at every step (the last store, its
+ * final root, wins), and the lower run's root is looked up at every step, moved on or not. Strip
+ * borders are merged by label_merge_strips. */
+__kernel void label_strips(__global const uchar *mask, __global int *bounds, __global int *counts,
+                           __global int *parent, long W, long H, long rows, long slots)
 {
     long y0 = get_global_id(0) * rows;
     if (y0 >= H) return;
+    int lower_count = 0;  /* the strip's bottom row has no runs below it in the strip */
     for (long y = min(y0 + rows, H) - 1; y >= y0; y--) {
-        int end = -1;
-        for (long x = W - 1; x >= 0; x--) {
-            int i = (int)(y * W + x);
-            end = mask[i] ? (end < 0 ? i : end) : -1;
-            label[i] = end;
+        int first = (int)(y * slots), count = find_runs(mask, bounds, y, W, first);
+        counts[y] = count;
+        int a = first, a_end = first + count, b = first + (int)slots, b_end = b + lower_count;
+        int root_a = a, root_b = b < b_end ? find_root_shallow(parent, b) : -1;
+        while (a < a_end && b < b_end) {
+            RunPair pair = compare_runs(bounds, a, b, (int)W);
+            int high = max(root_a, root_b);
+            parent[pair.touch ? min(root_a, root_b) : high] = high;
+            root_a = pair.touch ? high : root_a;
+            parent[a] = root_a;
+            a += pair.a_done;
+            b += pair.b_done;
+            root_a = pair.a_done ? a : root_a;
+            root_b = find_root_shallow(parent, min(b, b_end - 1));  /* unused once b reaches b_end */
         }
-        if (y + 1 < min(y0 + rows, H)) {
-            /* cur: the root of the run being walked, found at its first merge and kept up to date by
-             * the merges themselves (the strip is this work-item's alone), so each merge costs one find
-             * (the row below's) instead of two. */
-            int cur = -1;
-            for (long x = 0; x < W; x++) {
-                long i = y * W + x;
-                int targets = merge_targets(mask, x, i, W);
-                cur = mask[i] ? cur : -1;
-                if (targets) {
-                    if (cur < 0) cur = find_root_alone(label, (int)i);
-                    int below = (int)(i + W);
-                    if (targets & 1) cur = link_alone(label, cur, find_root_alone(label, below - 1));
-                    if (targets & 2) cur = link_alone(label, cur, find_root_alone(label, below));
-                    if (targets & 4) cur = link_alone(label, cur, find_root_alone(label, below + 1));
-                }
-            }
+        for (; a < a_end; a++) {  /* past the lower row's last run: the rest are their own roots */
+            parent[a] = root_a;
+            root_a = a + 1;
         }
+        lower_count = count;
     }
 }
 
 /* The last row of every strip but the last merges with the first row of the strip below. */
-__kernel void label_merge_strips(__global const uchar *mask, __global volatile int *label, long W, long H,
-                                 long rows)
+__kernel void label_merge_strips(__global const int *bounds, __global const int *counts,
+                                 __global volatile int *parent, long W, long H, long rows, long slots)
 {
-    long x = get_global_id(0), y = (get_global_id(1) + 1) * rows - 1;
-    if (x >= W || y + 1 >= H) return;
-    long i = y * W + x;
-    int targets = merge_targets(mask, x, i, W);
-    for (int t = 0; t < 3; t++) {
-        if (targets & (1 << t)) merge_shared(label, (int)i, (int)(i + W + t - 1));
+    long y = (get_global_id(0) + 1) * rows - 1;
+    if (y + 1 >= H) return;
+    int a = (int)(y * slots), a_end = a + counts[y], b = a + (int)slots, b_end = b + counts[y + 1];
+    while (a < a_end && b < b_end) {
+        RunPair pair = compare_runs(bounds, a, b, (int)W);
+        if (pair.touch) merge_shared(parent, a, b);
+        a += pair.a_done;
+        b += pair.b_done;
     }
 }
 
-/* Every pixel jumps to its root. One work-item per row: the pixels of a run share a pointer, so the root
- * found for one serves the rest of the run. Other rows' work-items may re-point pixels of this row's
- * trees meanwhile, but only ever at an ancestor, so plain (non-volatile) accesses stay correct. */
-__kernel void label_flatten(__global int *label, long W, long H)
+/* Every pixel gets its component's label, the last address of its run's root. One work-item per row:
+ * first every run finds its root (consecutive runs often share a parent, and then one find serves
+ * them) and keeps the label in run_label; then the row's pixels are written without branches, each
+ * taking the label of the run counted so far or -1. Other rows' work-items may re-point runs of this
+ * row's trees meanwhile, but only ever at an ancestor, so plain (non-volatile) accesses stay correct. */
+__kernel void label_flatten(__global const uchar *mask, __global const int *bounds,
+                            __global const int *counts, __global int *parent, __global int *run_label,
+                            __global int *label, long W, long H, long slots)
 {
     long y = get_global_id(0);
     if (y >= H) return;
-    int previous = -1, root = -1;
-    for (long i = y * W; i < (y + 1) * W; i++) {
-        int own = label[i];
-        if (own >= 0 && own != previous) {
-            previous = own;
-            root = find_root_alone(label, own);
+    int first = (int)(y * slots), count = counts[y];
+    int previous = -1, root = -1, value = -1;
+    for (int a = first; a < first + count; a++) {
+        int up = parent[a];
+        if (up != previous) {
+            previous = up;
+            root = find_root_alone(parent, up);
+            value = bounds[2 * (long)root + 1] - 1;
             /* Point the whole path at the root, so later finds in this tree take one step. */
-            for (int k = own; k != root;) {
-                int up = label[k];
-                label[k] = root;
-                k = up;
+            for (int k = up; k != root;) {
+                int next = parent[k];
+                parent[k] = root;
+                k = next;
             }
         }
-        label[i] = own < 0 ? own : root;
+        parent[a] = root;
+        run_label[a] = value;
+    }
+    /* ended: runs of the row that end before pixel x, so a foreground pixel's run is first + ended (for
+     * a background pixel that may be the slot after the row's runs, read but not used). */
+    __global const uchar *row_mask = mask + y * W;
+    __global const int *row_labels = run_label + first;
+    __global int *row_out = label + y * W;
+    int x = 0, ended = 0, previous_here = 0;
+#ifdef __ENDIAN_LITTLE__
+    /* Eight pixels at a time, pixel x + j as byte j of a ulong holding 1 where it is foreground: the
+     * ends of runs are bytes that follow a foreground byte, and one multiplication by 0x0101...01 sums
+     * them up to every byte. */
+    const ulong ones = 0x0101010101010101UL, low7 = 0x7f7f7f7f7f7f7f7fUL;
+    for (; x + 8 <= W; x += 8) {
+        ulong bytes = as_ulong(vload8(0, row_mask + x));
+        ulong here = ((((bytes & low7) + low7) | bytes) >> 7) & ones;  /* any non-zero byte is 1 */
+        ulong ends = ((here << 8) | (ulong)previous_here) & ~here;
+        ulong ended_by = ends * ones;
+        int8 run = (int8)ended + convert_int8(as_uchar8(ended_by));
+        int8 own = (int8)(row_labels[run.s0], row_labels[run.s1], row_labels[run.s2], row_labels[run.s3],
+                          row_labels[run.s4], row_labels[run.s5], row_labels[run.s6], row_labels[run.s7]);
+        vstore8(select((int8)(-1), own, convert_int8(as_uchar8(here)) != 0), 0, row_out + x);
+        ended += (int)(ended_by >> 56);
+        previous_here = (int)(here >> 56);
+    }
+#endif
+    for (; x < W; x++) {
+        int here = row_mask[x] != 0;
+        ended += previous_here & !here;
+        previous_here = here;
+        int own = row_labels[ended];
+        row_out[x] = here ? own : -1;
     }
 }
 

@@ -85,6 +85,16 @@ def test_label_is_the_max_address_of_each_component(height, width, density, conn
 
 
 @pytest.mark.parametrize("connectivity", [4, 8])
+@pytest.mark.parametrize("height, width", [(1, 1), (1, 63), (63, 1), (70, 129), (130, 64)])
+def test_rows_with_the_most_runs(height, width, connectivity, machine):
+    """Checkerboards and stripes fill rows with runs of one pixel, ceil(width / 2) of them, which is as
+    many as a row can hold: diagonal chains with 8-connectivity, isolated pixels or lines with 4."""
+    y, x = np.mgrid[:height, :width]
+    for mask in ((x + y) % 2 == 0, (x + y) % 2 == 1, x % 2 == 0, y % 2 == 0):
+        _check_labels(mask, connectivity, label(mask, connectivity=connectivity, machine=machine))
+
+
+@pytest.mark.parametrize("connectivity", [4, 8])
 def test_any_non_zero_value_is_foreground(connectivity, machine):
     rng = np.random.default_rng(11)
     mask = rng.random((64, 48)) < 0.6

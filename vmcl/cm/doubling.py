@@ -12,6 +12,8 @@ References
 J. C. Wyllie, "The complexity of parallel computations", Cornell TR 79-387, 1979.
 O. Playne and K. Hawick, "A new algorithm for parallel connected-component labelling on GPUs",
 IEEE TPDS 29(6), 2018 (the union-find with pointer jumping used by :func:`label`).
+L. He, Y. Chao and K. Suzuki, "A run-based two-scan labeling algorithm", IEEE TIP 17(5), 2008 (runs,
+not pixels, as the elements of the union-find).
 """
 
 from __future__ import annotations
@@ -122,12 +124,14 @@ def label(mask: ArrayLike, *, connectivity: int = 8, relabel: bool = False, meth
         principal, and background gets -1. True: components are numbered 1..k in the order of their
         principals' addresses, background 0.
     method : {"doubling", "iterative"}
-        "doubling" (default): union-find in which every pointer leads to a larger address; merges
-        follow pointers to the roots and link the smaller root under the larger (integer
-        compare-and-swap), and a last pass jumps every pixel to its root: three passes over the field
-        whatever its shape. "iterative": the paper's O(m) spreading activation, every pixel taking the
-        largest label among its neighbours until nothing changes (m = the longest path inside a
-        component); the flag is read back every 16 passes.
+        "doubling" (default): union-find over the rows' runs (horizontal stretches of foreground,
+        numbered in raster order) in which every pointer leads to a larger run; merges follow
+        pointers to the roots and link the smaller root under the larger (integer compare-and-swap
+        where work-items share trees), so a component's root is its last run, and a last pass gives
+        every pixel the last address of its run's root: three passes whatever the field's shape.
+        "iterative": the paper's O(m) spreading activation, every pixel taking the largest label
+        among its neighbours until nothing changes (m = the longest path inside a component); the
+        flag is read back every 16 passes.
     machine : vmcl.Machine, optional
 
     Returns
@@ -144,21 +148,10 @@ def label(mask: ArrayLike, *, connectivity: int = 8, relabel: bool = False, meth
         raise ValueError(f"method must be 'doubling' or 'iterative', got {method!r}")
     if data.size >= 2**31:
         raise ValueError(f"mask must have fewer than 2**31 pixels, got shape {data.shape}")
-    height, width = data.shape
     n = data.size
     labels = machine.empty(data.shape, np.int32)
     if method == "doubling":
-        # CPUs get a few tall strips (each labelled serially, like a sequential labeller); GPUs get one
-        # row per strip, so every row is a work-item.
-        rows = max(1, math.ceil(height / (machine.compute_units * 8))) if machine.is_cpu else 1
-        strips = math.ceil(height / rows)
-        machine.launch(machine.kernel("doubling", "label_strips", CONNECTIVITY=connectivity), (strips,),
-                       data, labels, np.int64(width), np.int64(height), np.int64(rows), local_size=(1,))
-        if strips > 1:
-            machine.launch(machine.kernel("doubling", "label_merge_strips", CONNECTIVITY=connectivity),
-                           (width, strips - 1), data, labels, np.int64(width), np.int64(height), np.int64(rows))
-        machine.launch(machine.kernel("doubling", "label_flatten", CONNECTIVITY=connectivity), (height,), labels,
-                       np.int64(width), np.int64(height))
+        _union_runs(machine, data, labels, connectivity)
     else:
         machine.launch(machine.kernel("doubling", "label_init", CONNECTIVITY=connectivity), (n,), data, labels,
                        np.int64(n))
@@ -166,6 +159,31 @@ def label(mask: ArrayLike, *, connectivity: int = 8, relabel: bool = False, meth
     if relabel:
         labels = _relabel(machine, labels)
     return result(labels, host)
+
+
+def _union_runs(machine: Machine, mask: cl_array.Array, labels: cl_array.Array, connectivity: int) -> None:
+    """Writes the "doubling" labels of ``mask`` into ``labels``: runs found and merged per strip, strip
+    borders merged, then every pixel given its run's root's last address."""
+    height, width = mask.shape
+    # Row y's runs take the run indices y * slots onwards; a row has at most ceil(W / 2) runs, and the
+    # kernel that finds them writes one int past their bounds.
+    slots = width // 2 + 1
+    # Raw pooled buffers: the kernels alone see them, and a pyopencl Array costs ~30 us a call to make.
+    int32 = np.dtype(np.int32).itemsize
+    bounds, counts, parent, run_label = (machine.pool.allocate(size * int32) for size in
+                                         (2 * height * slots, height, height * slots, height * slots))
+    # CPUs get a few tall strips (each labelled serially, like a sequential labeller); GPUs get one
+    # row per strip, so every row is a work-item.
+    rows = max(1, math.ceil(height / (machine.compute_units * 8))) if machine.is_cpu else 1
+    strips = math.ceil(height / rows)
+    sizes = np.int64(width), np.int64(height)
+    machine.launch(machine.kernel("doubling", "label_strips", CONNECTIVITY=connectivity), (strips,),
+                   mask, bounds, counts, parent, *sizes, np.int64(rows), np.int64(slots), local_size=(1,))
+    if strips > 1:
+        machine.launch(machine.kernel("doubling", "label_merge_strips", CONNECTIVITY=connectivity),
+                       (strips - 1,), bounds, counts, parent, *sizes, np.int64(rows), np.int64(slots))
+    machine.launch(machine.kernel("doubling", "label_flatten", CONNECTIVITY=connectivity), (height,),
+                   mask, bounds, counts, parent, run_label, labels, *sizes, np.int64(slots))
 
 
 def _propagate(machine: Machine, labels: cl_array.Array, connectivity: int) -> cl_array.Array:
