@@ -12,13 +12,31 @@
  */
 #include "vmcl.h"
 
-/* One row of the row pass: chain K slides over the row starting at bK. */
-#define ROW_STEP(K)                                                                        \
+/* Output j's window is x[j - r .. j + r]: step j adds x[j + r], entering it, and subtracts x[j - r - 1],
+ * leaving it, where those exist. Which of them exist changes only at j = n - r (enters_end: nothing
+ * enters from there on) and j = r + 1 (leaves_start), so a pass walks the up to four stretches between
+ * those points with a loop each, STEP(enter, leave) being one step at j with no bounds test. The only
+ * cost that grows with r is then the r warm-up loads before step 0, which are cheaper than steps; a
+ * single loop over n + r steps, each testing all three bounds, made a larger r cost r full steps. */
+#define WINDOW_WALK(STEP, n)                                                               \
     {                                                                                      \
-        if (i < n) w##K += x[b##K + i];                                                    \
-        if (i > 2 * r) w##K -= x[b##K + i - 2 * r - 1];                                    \
-        if (i >= r) out[b##K + i - r] = w##K;                                              \
+        long enters_end = max((n) - r, 0L), leaves_start = min(r + 1, (n));                \
+        long j = 0;                                                                        \
+        for (; j < min(enters_end, leaves_start); j++) { STEP(1, 0) }                      \
+        for (; j < enters_end; j++) { STEP(1, 1) }                                         \
+        for (; j < leaves_start; j++) { STEP(0, 0) }                                       \
+        for (; j < (n); j++) { STEP(0, 1) }                                                \
     }
+
+/* One step of row chain K, which slides over the row starting at bK. */
+#define ROW_STEP(K, ENTER, LEAVE)                                                          \
+    {                                                                                      \
+        if (ENTER) w##K += x[b##K + j + r];                                                \
+        if (LEAVE) w##K -= x[b##K + j - r - 1];                                            \
+        out[b##K + j] = w##K;                                                              \
+    }
+#define ROWS_STEP(ENTER, LEAVE) \
+    ROW_STEP(0, ENTER, LEAVE) ROW_STEP(1, ENTER, LEAVE) ROW_STEP(2, ENTER, LEAVE) ROW_STEP(3, ENTER, LEAVE)
 
 /* Work-item g slides along rows 4g .. 4g+3 (interleaved: four independent chains hide the latency of
  * the dependent adds). Rows past the last are clamped to it and write the same values again. */
@@ -29,10 +47,22 @@ __kernel void box_rows(__global const T *x, __global T *out, long n, long lines,
     long b0 = first * n, b1 = min(first + 1, lines - 1) * n;
     long b2 = min(first + 2, lines - 1) * n, b3 = min(first + 3, lines - 1) * n;
     T w0 = 0, w1 = 0, w2 = 0, w3 = 0;
-    for (long i = 0; i < n + r; i++) {
-        ROW_STEP(0) ROW_STEP(1) ROW_STEP(2) ROW_STEP(3)
+    for (long i = 0; i < min(r, n); i++) {  /* warm-up: x[0 .. r - 1], output 0's window before step 0 */
+        w0 += x[b0 + i];
+        w1 += x[b1 + i];
+        w2 += x[b2 + i];
+        w3 += x[b3 + i];
     }
+    WINDOW_WALK(ROWS_STEP, n)
 }
+
+/* One step down the columns, VEC at a time; row i of the columns starts at base + i * W. */
+#define COLS_STEP(ENTER, LEAVE)                                                            \
+    {                                                                                      \
+        if (ENTER) w += VLOAD(x + base + (size_t)(j + r) * W);                             \
+        if (LEAVE) w -= VLOAD(x + base + (size_t)(j - r - 1) * W);                         \
+        VSTORE(w, out + base + (size_t)j * W);                                             \
+    }
 
 /* Work-item (k, p) slides down columns [col0 + k*VEC, col0 + (k+1)*VEC) of plane p, VEC at a time so
  * every row step is one contiguous vector access. */
@@ -42,9 +72,6 @@ __kernel void box_cols(__global const T *x, __global T *out, long W, long H, lon
     if (k >= n_vec) return;
     size_t base = (size_t)p * H * W + col0 + k * VEC;
     VT w = (VT)0;
-    for (long i = 0; i < H + r; i++) {
-        if (i < H) w += VLOAD(x + base + (size_t)i * W);
-        if (i > 2 * r) w -= VLOAD(x + base + (size_t)(i - 2 * r - 1) * W);
-        if (i >= r) VSTORE(w, out + base + (size_t)(i - r) * W);
-    }
+    for (long i = 0; i < min(r, H); i++) w += VLOAD(x + base + (size_t)i * W);  /* warm-up, as in box_rows */
+    WINDOW_WALK(COLS_STEP, H)
 }
