@@ -434,14 +434,3 @@ __kernel void sign_agreement(__global const float *f, __global const float *g, _
     if (i >= size) return;
     out[i] = (f[i] >= 0) == (g[i] >= 0) ? 1 : -1;
 }
-
-/* The flow's weight as data of the MRF stage: 0 where the score is at or below `floor` or there is no
- * estimate, rising linearly to 1 at a perfect match. Patches that barely match (no texture, occlusion)
- * then give the restoration no pull, so its line process stops drawing boundaries around their noise. */
-__kernel void score_confidence(__global const float *score, __global float *out, float floor, long size)
-{
-    long i = get_global_id(0);
-    if (i >= size) return;
-    float s = score[i];
-    out[i] = isfinite(s) ? clamp((s - floor) / (1.0f - floor), 0.0f, 1.0f) : 0.0f;
-}

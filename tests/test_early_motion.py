@@ -334,21 +334,6 @@ def test_bad_input(pair, machine):
         sign_correlation(frame0, bad)
 
 
-def test_confidence_ramps_from_the_floor_to_a_perfect_match(machine):
-    score = np.array([[np.nan, -0.5, 0.0, 0.7], [0.75, 0.85, 0.999, 1.0]], np.float32)
-    expected = np.nan_to_num(np.clip((score.astype(np.float64) - 0.7) / 0.3, 0, 1))
-    np.testing.assert_allclose(motion.confidence(score, floor=0.7, machine=machine), expected, atol=1e-6)
-    on_device = motion.confidence(machine.to_device(score), floor=0.0, machine=machine)
-    assert isinstance(on_device, cl_array.Array)
-    np.testing.assert_allclose(on_device.get(), np.nan_to_num(np.clip(score, 0, 1)), atol=1e-6)
-    for floor, error in ((1.0, ValueError), (-0.1, ValueError), (float("nan"), ValueError), ("0.5", TypeError)):
-        with pytest.raises(error, match="floor"):
-            motion.confidence(score, floor=floor, machine=machine)
-    with pytest.raises(TypeError, match="score"):
-        motion.confidence(np.zeros((2, 4), np.int32), floor=0.5, machine=machine)
-    with pytest.raises(ValueError, match="score"):
-        motion.confidence(score[0], floor=0.5, machine=machine)
-
 BEST = {"delta": 4, "patch": 21, "levels": 2, "features": "sign_log"}
 """vmcl's best configuration on the real sequences (benchmarks/results/motion.md)."""
 

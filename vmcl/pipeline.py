@@ -39,7 +39,7 @@ import numpy as np
 from vmcl import integrate as _integrate
 from vmcl.early import color, edges, motion, stereo, texture
 from vmcl.machine import Machine
-from vmcl.mrf import Params, preset, restore
+from vmcl.mrf import Params, backfill, preset, restore, score_confidence
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -86,6 +86,15 @@ class StereoConfig:
         quantile (60% and 85%), which keeps textured surfaces matched where the noise rule sees none.
     feedback : bool
         Match again with support windows stopped at the first pass's depth discontinuities.
+    backfill : bool
+        Also match every pixel by intensity (``features="intensity"``, the same patch) and let those
+        matches fill the gaps between the feature matches in the depth MRF's data
+        (:func:`vmcl.mrf.backfill`), weighed by :func:`vmcl.mrf.score_confidence` of their normalised
+        cross-correlation with ``backfill_floor`` and ``backfill_weight``. It halves the dense bad-1
+        rate on Middlebury (see :func:`vmcl.mrf.backfill`).
+    backfill_floor, backfill_weight : float
+        Intensity matches whose correlation is at or below the floor weigh 0; a perfect one weighs
+        ``backfill_weight`` (the feature matches weigh 1).
     """
 
     enabled: bool = True
@@ -99,6 +108,9 @@ class StereoConfig:
     high_threshold: float | None = 0.85
     use_quantiles: bool = True
     feedback: bool = True
+    backfill: bool = True
+    backfill_floor: float = 0.9
+    backfill_weight: float = 0.2
 
 
 @dataclass(frozen=True)
@@ -111,7 +123,7 @@ class MotionConfig:
     delta, patch, levels, features
         As :func:`vmcl.early.motion.flow` takes them.
     confidence_floor : float, optional
-        The flow MRF weighs each estimate by :func:`vmcl.early.motion.confidence` of its score with
+        The flow MRF weighs each estimate by :func:`vmcl.mrf.score_confidence` of its score with
         this floor (in the features' score units; 0.7 was measured with "brightness"); None: every
         estimate weighs 1.
     """
@@ -472,6 +484,8 @@ class _Run:
             with self.stage("stereo"):
                 matched = self.match(left, others_d["right"], width, None)
                 device["sparse_disparity"] = matched.disparity
+                dense = self.dense_match(left, others_d["right"], width)
+                depth_data = self.depth_data(matched, dense)
                 device["stereo_discontinuity"] = matched.discontinuity
         if "motion" in names:
             with self.stage("motion"):
@@ -480,11 +494,11 @@ class _Run:
                                     features=mc.features, machine=self.m)
                 device["raw_flow"] = found.flow
                 if mc.confidence_floor is not None:
-                    weights["flow"] = motion.confidence(found.score, floor=mc.confidence_floor, machine=self.m)
+                    weights["flow"] = score_confidence(found.score, floor=mc.confidence_floor, machine=self.m)
         lines = {}
         if "mrf depth" in names:
             with self.stage("mrf depth"):
-                found = self.restore("depth", device["sparse_disparity"], brightness, device)
+                found = self.restore("depth", *depth_data, brightness, device)
                 if found is not None:
                     lines["depth"] = found
             if "feedback" in names and "depth" in lines:
@@ -494,14 +508,15 @@ class _Run:
                     matched = self.match(left, others_d["right"], width, barriers)
                     device["sparse_disparity"] = matched.disparity
                     device["stereo_discontinuity"] = matched.discontinuity
-                    lines["depth"] = self.restore("depth", matched.disparity, brightness, device) or lines["depth"]
+                    depth_data = self.depth_data(matched, dense)
+                    lines["depth"] = self.restore("depth", *depth_data, brightness, device) or lines["depth"]
         for cue, data, coupling, kind in (("flow", "raw_flow", "edges", "smooth"),
                                           ("colour", "hue", "colour_edges", "constant"),
                                           ("texture", "density", "texture_edges", "constant")):
             if f"mrf {cue}" in names:
                 with self.stage(f"mrf {cue}"):
-                    found = self.restore(cue, device[data], device[coupling], device, kind=kind,
-                                         confidence=weights.get(cue))
+                    found = self.restore(cue, device[data], weights.get(cue), device[coupling], device,
+                                         kind=kind)
                     if found is not None:
                         lines["motion" if cue == "flow" else cue] = found
         with self.stage("integrate"):
@@ -521,15 +536,37 @@ class _Run:
         if self.progress is not None:
             self.progress(name)
 
-    def match(self, left, right, width: int, barriers) -> stereo.StereoMatch:
+    def match(self, left, right, width: int, barriers, *, features: str | None = None) -> stereo.StereoMatch:
         s = self.c.stereo
         d_min = 0 if s.d_min is None else s.d_min
         d_max = math.ceil(s.max_disparity * width) if s.d_max is None else s.d_max
-        return stereo.match(left, right, d_min=d_min, d_max=d_max, features=s.features, patch=s.patch,
-                            sigma=s.sigma, low_threshold=s.low_threshold, high_threshold=s.high_threshold,
-                            use_quantiles=s.use_quantiles, barriers=barriers, machine=self.m)
+        features = features or s.features
+        # Canny's thresholds mean nothing to the intensity matcher, which matches every pixel.
+        thresholds = {} if features == "intensity" else dict(
+            low_threshold=s.low_threshold, high_threshold=s.high_threshold, use_quantiles=s.use_quantiles)
+        return stereo.match(left, right, d_min=d_min, d_max=d_max, features=features, patch=s.patch,
+                            sigma=s.sigma, barriers=barriers, machine=self.m, **thresholds)
 
-    def restore(self, cue: str, data, coupling, device: dict, *, kind: str = "smooth", confidence=None):
+    def dense_match(self, left, right, width: int) -> tuple[Any, Any] | None:
+        """The intensity matches and their weights for :meth:`depth_data`, or None without backfill.
+
+        Matched once, without barriers: in the feedback pass, cutting the correlation windows at the
+        first pass's lines left too few pixels to correlate (on "cues", dense bad-1 3.9% became 15%).
+        """
+        s = self.c.stereo
+        if not s.backfill or s.features == "intensity":
+            return None
+        dense = self.match(left, right, width, None, features="intensity")
+        return dense.disparity, score_confidence(dense.score, floor=s.backfill_floor, weight=s.backfill_weight,
+                                                 machine=self.m)
+
+    def depth_data(self, matched: stereo.StereoMatch, dense: tuple[Any, Any] | None) -> tuple[Any, Any]:
+        """The depth MRF's data and confidence: the feature matches, backfilled by intensity matches."""
+        if dense is None:
+            return matched.disparity, None
+        return backfill(matched.disparity, *dense, machine=self.m)
+
+    def restore(self, cue: str, data, confidence, coupling, device: dict, *, kind: str = "smooth"):
         """Restore one cue coupled to an edge field; keeps its field, returns its lines.
 
         Depth and flow are coupled to the brightness edges (equation (12)). Colour and texture are

@@ -426,43 +426,6 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     return FlowResult(flow_out, score, boundaries)
 
 
-def confidence(score: ArrayLike, *, floor: float, machine: Machine | None = None) -> ArrayLike:
-    """The flow's weight as data of the MRF stage (``confidence=`` of :func:`vmcl.mrf.restore`).
-
-    Parameters
-    ----------
-    score : float32 (H, W) array or device array
-        :attr:`FlowResult.score` (NaN where there is no estimate).
-    floor : float
-        In [0, 1): scores at or below it weigh 0, rising linearly to 1 at a perfect match (score 1).
-        In the units of the features' score (see :func:`flow`).
-    machine : vmcl.Machine, optional
-
-    Returns
-    -------
-    float32 (H, W) in [0, 1], 0 where there is no estimate: NumPy for NumPy input, else a device array.
-
-    Notes
-    -----
-    Where a patch barely matches (too little texture, an occlusion) its winner is close to random; with
-    full weight the restoration follows that noise and its line process outlines it. On the "cues"
-    scene at 256 x 256 (brightness features, mean field), floor 0.7 cut the motion line sites from 1737
-    to 429 pixels, raised their precision within 1 px from 0.07 to 0.28 at the same recall of the
-    moving plate's outline, and lowered the restored flow's endpoint error from 0.43 to 0.24 px
-    (corridor: 0.73 to 0.47 px; blocks: 0.55 to 0.50 px).
-    """
-    machine = machine_for(machine)
-    data, host = field(score, "score", machine, ndims=(2,), dtypes=(np.float32,))
-    floor = _number(floor, "floor")
-    if not 0 <= floor < 1:
-        raise ValueError(f"floor must be in [0, 1), got {floor}")
-    out = machine.empty(data.shape, np.float32)
-    if data.size:
-        machine.launch(machine.kernel("motion", "score_confidence"), (data.size,),
-                       data, out, np.float32(floor), np.int64(data.size))
-    return out.get() if host else out
-
-
 def votes(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, features: Features = "brightness",
           sigma: float | None = None, machine: Machine | None = None) -> ArrayLike:
     """The full table of votes: the patch sum of the comparisons at every displacement.

@@ -1,0 +1,124 @@
+"""The MRF stage's data and confidence from the early modules' measurements.
+
+Seed section "Organization of integration": the results of stereo and motion "are typically noisy and
+sparse", and the MRF restores them. :func:`vmcl.mrf.restore` weighs each datum by a confidence gamma_i;
+this module derives it from what the modules report. :func:`score_confidence` turns a matching score into
+a weight, so that patches which barely match (no texture, an occlusion) pull the restoration nowhere.
+:func:`backfill` keeps a sparse, precise measurement (edge matches) where it exists and fills its gaps with
+a dense, weaker one (intensity matches) at that one's own confidence.
+
+NumPy in gives NumPy out; device arrays in give device arrays out.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from vmcl.cm._arrays import ArrayLike, field, machine_for
+from vmcl.machine import Machine
+
+
+def _unit_interval(value, name: str, *, closed_above: bool) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
+    value = float(value)
+    inside = 0 <= value <= 1 if closed_above else 0 <= value < 1
+    if not math.isfinite(value) or not inside:
+        raise ValueError(f"{name} must be in [0, {'1]' if closed_above else '1)'}, got {value}")
+    return value
+
+
+def score_confidence(score: ArrayLike, *, floor: float, weight: float = 1.0,
+                     machine: Machine | None = None) -> ArrayLike:
+    """Weights from matching scores: ``weight * clamp((score - floor) / (1 - floor), 0, 1)``.
+
+    Parameters
+    ----------
+    score : float32 (H, W) array or device array
+        A normalised matching score, 1 for a perfect match (:attr:`vmcl.early.motion.FlowResult.score`,
+        :attr:`vmcl.early.stereo.StereoMatch.score`); NaN where there is no measurement.
+    floor : float
+        In [0, 1): scores at or below it weigh 0, rising linearly to ``weight`` at score 1.
+    weight : float
+        In [0, 1]: the weight of a perfect match.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    float32 (H, W), 0 where there is no score.
+
+    Notes
+    -----
+    Measured on the "cues" scene at 256 x 256 (brightness features, mean field): weighing the flow by
+    its score with floor 0.7 cut the motion line sites from 1737 to 429 pixels, raised their precision
+    within 1 px from 0.07 to 0.28 at the same recall of the moving plate's outline, and lowered the
+    restored flow's endpoint error from 0.43 to 0.24 px (corridor: 0.73 to 0.47 px; blocks: 0.55 to
+    0.50 px).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> score_confidence(np.array([[np.nan, 0.5, 0.85, 1.0]], np.float32), floor=0.7).round(2).tolist()
+    [[0.0, 0.0, 0.5, 1.0]]
+    """
+    machine = machine_for(machine)
+    scores, host = field(score, "score", machine, ndims=(2,), dtypes=(np.float32,))
+    floor = _unit_interval(floor, "floor", closed_above=False)
+    weight = _unit_interval(weight, "weight", closed_above=True)
+    gamma = machine.empty(scores.shape, np.float32)
+    if scores.size:
+        machine.launch(machine.kernel("mrf_data", "score_confidence"), (scores.size,), scores, gamma,
+                       np.float32(floor), np.float32(weight), np.int64(scores.size))
+    return gamma.get() if host else gamma
+
+
+def backfill(primary: ArrayLike, secondary: ArrayLike, secondary_confidence: ArrayLike, *,
+             machine: Machine | None = None) -> tuple[ArrayLike, ArrayLike]:
+    """Data and confidence for :func:`vmcl.mrf.restore`: the primary measurement, its gaps filled.
+
+    Parameters
+    ----------
+    primary, secondary : float32 (H, W) or (H, W, C) arrays or device arrays, the same shape
+        Two measurements of one cue, NaN where there is none (a pixel has one when all its components
+        are finite).
+    secondary_confidence : float32 (H, W)
+        The secondary's weights, e.g. from :func:`score_confidence`.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    (data, confidence)
+        The primary (confidence 1) where it has a measurement, elsewhere the secondary with its
+        confidence. NumPy for NumPy input, device arrays when any input is one.
+
+    Notes
+    -----
+    The pipeline fills the stereo edge matches (a few per cent of the pixels) with the dense intensity
+    matches whose normalised cross-correlation exceeds 0.9, at weight up to 0.2. Measured with the
+    mean-field depth restoration, dense bad-1 rate on Middlebury nonocc: tsukuba 20.3% to 11.8%, venus
+    13.5% to 6.8%, teddy 46.6% to 18.3%; on vmcl.scenes (256 x 256): blocks 10.8% to 6.8%, while "cues",
+    whose regular blob lattice the intensity matcher half-fits near the plate, went from 1.8% to 3.9%.
+    """
+    machine = machine_for(machine)
+    host = all(isinstance(a, np.ndarray) for a in (primary, secondary, secondary_confidence))
+    first, _ = field(primary, "primary", machine, ndims=(2, 3), dtypes=(np.float32,))
+    second, _ = field(secondary, "secondary", machine, ndims=(2, 3), dtypes=(np.float32,))
+    gamma2, _ = field(secondary_confidence, "secondary_confidence", machine, ndims=(2,), dtypes=(np.float32,))
+    if second.shape != first.shape:
+        raise ValueError(f"secondary has shape {second.shape}, primary has {first.shape}")
+    if gamma2.shape != first.shape[:2]:
+        raise ValueError(f"secondary_confidence must have shape {first.shape[:2]}, got {gamma2.shape}")
+    ncomp = first.shape[2] if first.ndim == 3 else 1
+    if not 1 <= ncomp <= 4:
+        raise ValueError(f"primary must have 1 to 4 components per pixel, got {ncomp}")
+    data = machine.empty(first.shape, np.float32)
+    gamma = machine.empty(first.shape[:2], np.float32)
+    pixels = gamma.size
+    if pixels:
+        machine.launch(machine.kernel("mrf_data", "backfill", NCOMP=ncomp), (pixels,), first, second, gamma2,
+                       data, gamma, np.int64(pixels))
+    if host:
+        return data.get(), gamma.get()
+    return data, gamma
