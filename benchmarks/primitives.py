@@ -61,16 +61,16 @@ class Bench:
         self.kernel_ms = sum(t["total_ms"] for t in self.machine.timings().values()) / (repeat + 1)
         return wall
 
-    def interleaved(self, runs: dict) -> dict:
-        """Device runs taken in alternation, one of each per round: {key: (median wall ms, median device
-        ms)}, so drift in the machine's load hits every key alike."""
+    def interleaved(self, runs: dict, rounds: int | None = None) -> dict:
+        """Device runs taken in alternation, one of each per round (default --repeat rounds): {key: (median
+        wall ms, median device ms)}, so drift in the machine's load hits every key alike."""
         times = {key: [] for key in runs}
         device = {key: [] for key in runs}
         for run in runs.values():
             run()
         self.machine.finish()
         self.machine.timings()
-        for _ in range(self.repeat):
+        for _ in range(rounds or self.repeat):
             for key, run in runs.items():
                 start = time.perf_counter()
                 run()
@@ -132,8 +132,11 @@ def per_size(bench: Bench, side: int, rng: np.random.Generator) -> None:
     bench.add(label, "box_sum r=15", ours, "cv2.boxFilter 31x31",
               bench.host(lambda: cv2.boxFilter(host, -1, (31, 31), normalize=False, borderType=cv2.BORDER_CONSTANT)),
               stream)
-    # Radius 2 and radius 30 alternate run by run, so drift in the machine's load hits both alike.
-    by_radius = bench.interleaved({r: (lambda r=r: scan.box_sum(dev, r, machine=m)) for r in (2, 30)})
+    # Radius 2 and radius 30 alternate run by run, so drift in the machine's load hits both alike; the
+    # growth is a difference of a few per cent, so it takes more rounds than the other rows (with 15,
+    # runs on a busy machine scattered from -25% to +11%; with 40, five runs from -12% to +6%).
+    by_radius = bench.interleaved({r: (lambda r=r: scan.box_sum(dev, r, machine=m)) for r in (2, 30)},
+                                  rounds=max(bench.repeat, 40))
     for radius, (ours_r, bench.kernel_ms) in by_radius.items():
         bench.add(label, f"box_sum r={radius} (interleaved)", ours_r, f"cv2.boxFilter {2 * radius + 1}^2",
                   bench.host(lambda r=radius: cv2.boxFilter(host, -1, (2 * r + 1,) * 2, normalize=False,
