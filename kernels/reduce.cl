@@ -91,11 +91,17 @@ __kernel void reduce_partials(__global const ACC *partial, __global const ACC *c
  * floor((v - lo) * scale) for lo <= v <= hi (v == hi and rounding up to `bins` both go to the last
  * bin); values outside [lo, hi] and NaN are not counted. The work-group counts into local memory, then
  * writes its tile's row of `out` (per-tile mode) or adds it into the one histogram (accumulate).
- * SHARED_COUNTS = 0 (work-groups of one work-item) counts with plain increments. */
+ * SHARED_COUNTS = 0 (work-groups of one work-item) counts with plain increments. TO_TOP = 1 takes hi
+ * from top[0], a maximum computed on the device (lo + 1 when it is not above lo), and scale from it as
+ * the host would, so the host never waits for the range; otherwise `top` is not read. */
 __kernel void histogram_tiles(__global const T *x, __global int *out, __local int *counts,
-                              long W, long H, long th, long tw, long tiles_x,
+                              __global const float *top, long W, long H, long th, long tw, long tiles_x,
                               float lo, float hi, float scale, int bins, int accumulate)
 {
+#if TO_TOP
+    hi = top[0] > lo ? top[0] : lo + 1.0f;
+    scale = (float)bins / (hi - lo);
+#endif
     long g = get_group_id(0);
     int lid = get_local_id(0), size = get_local_size(0);
     for (int b = lid; b < bins; b += size) counts[b] = 0;

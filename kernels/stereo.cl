@@ -84,13 +84,13 @@ inline void choose(Selection *s, int d, float score, int own)
  * is kept (its lower peak, `second`). */
 inline void follow_peaks(Selection *s, float votes, float dip)
 {
-    if (s->valley <= dip * min(s->peak, votes)) s->second = max(s->second, min(s->peak, votes));
-    if (votes > s->peak) {
-        s->peak = votes;
-        s->valley = INFINITY;
-    } else {
-        s->valley = min(s->valley, votes);
-    }
+    /* Selects, not branches: over a run of planes the outcomes follow the noisy votes, and mispredicted
+     * branches cost the running variant more than all its arithmetic. */
+    float lower = min(s->peak, votes);
+    s->second = s->valley <= dip * lower ? max(s->second, lower) : s->second;
+    int rises = votes > s->peak;
+    s->valley = rises ? INFINITY : min(s->valley, votes);
+    s->peak = rises ? votes : s->peak;
 }
 
 /* Folds plane d into the selection: `votes` is the summed support, `score` the normalised one. */
@@ -200,37 +200,70 @@ __kernel void select_running(__global const float *votes, __global const float *
  * winner on its row claims the same right pixel with a higher score (ties: the smaller x keeps it), or
  * reverses the left-right order with it (the forbidden zone) with a higher score. Flags: out of range
  * where the best score is below `min_score`; discontinuity where the weaker of two dip-separated vote
- * peaks reaches `bimodal` times the highest. */
+ * peaks reaches `bimodal` times the highest. One work-item per run of SPAN pixels of a row; each winner
+ * looks at its rivals 16 at a time. The winners' fields are read only at left features. */
+#define SPAN 16
+#define LANE_INDEX(T) ((T)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
+
+/* Whether any of the 16 pixels from xo0 (features `present`, winners od with scores os) is a stronger
+ * winner than (x, d, s) that claims its right pixel or lies in its forbidden zone. */
+__attribute__((always_inline)) inline int overruled(int16 present, int16 od, float16 os, int xo0, int x, int d,
+                                                    float s, float min_score)
+{
+    int16 xo = xo0 + LANE_INDEX(int16);
+    int16 rival = present && od != INT_MIN && os >= min_score && xo != x;
+    int16 there = xo - (rival ? od : 0), here = (int16)(x - d);
+    int16 stronger = os > s || (os == s && xo < x);
+    int16 reversed = (xo > x && there < here) || (xo < x && there > here);
+    return any(rival && stronger && (there == here || reversed));
+}
+
 __kernel void suppress(__global const uchar *left, __global const float *best_score, __global const int *best_d,
                        __global const float *peaks, __global float *disparity, __global float *score,
                        __global uchar *out_of_range, __global uchar *discontinuity,
                        long W, long H, int d_min, int d_max, float min_score, float bimodal, float min_votes)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    long i = y * W + x;
-    float s = best_score[i];
-    int d = best_d[i];
-    int matched = left[i] && d != INT_MIN;
-    int low = matched && s < min_score;
-    float peak = peaks[3 * i], second = peaks[3 * i + 2];
-    discontinuity[i] = left[i] && peak >= min_votes && second >= bimodal * peak;
-    out_of_range[i] = left[i] && (!matched || low);
-    int keep = matched && !low;
-    long span = d_max - d_min;
-    for (long xo = max(0L, x - span); keep && xo <= min(W - 1, x + span); xo++) {
-        if (xo == x || !left[y * W + xo]) continue;
-        int od = best_d[y * W + xo];
-        float os = best_score[y * W + xo];
-        if (od == INT_MIN || os < min_score) continue;
-        long here = x - d, there = xo - od;
-        int stronger = os > s || (os == s && xo < x);
-        int same_target = there == here;
-        int reversed = (xo - x) * (there - here) < 0;
-        if (stronger && (same_target || reversed)) keep = 0;
+    long x_first = get_global_id(0) * SPAN, y = get_global_id(1);
+    if (x_first >= W || y >= H) return;
+    __global const uchar *row = left + y * W;
+    for (long x = x_first; x < min(x_first + SPAN, W); x++) {
+        long i = y * W + x;
+        if (!row[x]) {
+            disparity[i] = score[i] = NAN;
+            out_of_range[i] = discontinuity[i] = 0;
+            continue;
+        }
+        float s = best_score[i];
+        int d = best_d[i];
+        int matched = d != INT_MIN;
+        int low = matched && s < min_score;
+        float peak = peaks[3 * i], second = peaks[3 * i + 2];
+        discontinuity[i] = peak >= min_votes && second >= bimodal * peak;
+        out_of_range[i] = !matched || low;
+        int keep = matched && !low;
+        /* A rival at xo with a winner in [d_min, d_max] targets xo - od: to the right it can reach x - d
+         * or less only from xo <= x + d_max - d, to the left x - d or more only from xo >= x - d + d_min. */
+        long hi = min(W - 1, x + d_max - d);
+        for (long xo = max(0L, x - d + d_min); keep && xo <= hi; xo += 16) {
+            if (xo + 15 <= hi) {
+                uchar16 present = vload16(0, row + xo);
+                if (!any(present != (uchar16)0)) continue;
+                keep = !overruled(convert_int16(present) != 0, vload16(0, best_d + y * W + xo),
+                                  vload16(0, best_score + y * W + xo), (int)xo, (int)x, d, s, min_score);
+                continue;
+            }
+            int present[16] = {0}, od[16] = {0};
+            float os[16] = {0.0f};
+            for (long k = xo; k <= hi; k++) {
+                present[k - xo] = -(row[k] != 0);
+                od[k - xo] = best_d[y * W + k];
+                os[k - xo] = best_score[y * W + k];
+            }
+            keep = !overruled(vload16(0, present), vload16(0, od), vload16(0, os), (int)xo, (int)x, d, s, min_score);
+        }
+        disparity[i] = keep ? (float)d : NAN;
+        score[i] = matched ? s : NAN;
     }
-    disparity[i] = keep ? (float)d : NAN;
-    score[i] = matched ? s : NAN;
 }
 
 /* Barrier-aware window sums (the support mask): along each line the window of a pixel stops at the
@@ -367,9 +400,6 @@ __kernel void intensity_moments(__global const float *left, __global const float
  * sums their windows' matches 16 disparities at a time (short16 lanes, one AVX2 register), and folds
  * the lanes into the selection in increasing d. Lane j of a group holds d = top - j, so the right
  * pixels x - d of the 16 lanes are contiguous and ascending. */
-#define SPAN 16
-#define LANE_INDEX(T) ((T)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
-
 /* -1 where the left feature at (x, y) with code `a` has a compatible right feature at x - d, for the
  * lanes d = top - j; 0 elsewhere, and for d > d_max or x - d outside the image. */
 __attribute__((always_inline)) inline short16 match_lanes(__global const uchar *right, __global const ushort *right_code, long row, long W,
@@ -445,7 +475,9 @@ __attribute__((always_inline)) inline void fold_lanes(Selection *s, short16 vote
     }
     float counts[16];
     vstore16(v, 0, counts);
-    for (int j = 15; j >= max(top - d_max, 0); j--) follow_peaks(s, counts[j], dip);
+    Selection peaks = *s;
+    for (int j = 15; j >= max(top - d_max, 0); j--) follow_peaks(&peaks, counts[j], dip);
+    *s = peaks;
 }
 
 #define PASS_GROUPS 8 /* groups of 16 disparities summed in one pass over a window */

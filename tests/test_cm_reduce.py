@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from vmcl.cm.reduce import histogram, reduce
+from vmcl.cm.reduce import histogram, histogram_to_top, reduce
 
 
 @pytest.mark.parametrize("shape", [(1,), (7,), (1, 1), (31, 17), (3, 5, 7), (2048, 2048)], ids=str)
@@ -82,6 +82,20 @@ def test_tiled_histograms(machine):
         for tx in range(3):
             block = image[ty * 64:(ty + 1) * 64, tx * 50:(tx + 1) * 50]
             np.testing.assert_array_equal(tiles[ty, tx], np.histogram(block, 16, (0, 256))[0])
+
+
+@pytest.mark.parametrize("tile", [None, (64, 50)])
+def test_histogram_to_a_top_on_the_device_matches_the_host_range(tile, machine):
+    """The range [0, max] read on the device gives the bins of the host range (0, max), and [0, 1] for a
+    field of zeros (the noise estimate's rule)."""
+    x = np.random.default_rng(5).gamma(2.0, 3.0, (250, 130)).astype(np.float32)
+    for field in (x, np.zeros_like(x)):
+        device = machine.to_device(field)
+        top = reduce(device, "max", machine=machine)
+        hi = float(field.max()) if field.max() > 0 else 1.0
+        got = histogram_to_top(device, 4096, top, tile=tile, machine=machine).get()
+        np.testing.assert_array_equal(got, histogram(field, 4096, (0.0, hi), tile=tile, machine=machine))
+        assert got.sum() == field.size
 
 
 @pytest.mark.parametrize("kwargs, error, match", [

@@ -12,6 +12,7 @@ from typing import Literal
 
 import numpy as np
 import pyopencl as cl
+import pyopencl.array as cl_array
 
 from vmcl.cm._arrays import ArrayLike, field, machine_for, result, type_defines
 from vmcl.machine import Machine
@@ -104,6 +105,51 @@ def histogram(x: ArrayLike, bins: int, range: tuple[float, float], *, tile: tupl
     int32 counts: shape (bins,), or (ceil(H/th), ceil(W/tw), bins) with ``tile``. Host in, host out.
     """
     machine = machine_for(machine)
+    data, host = _histogram_field(x, bins, tile, machine)
+    try:
+        lo, hi = (float(v) for v in range)
+    except (TypeError, ValueError):
+        raise TypeError(f"range must be a pair of numbers (lo, hi), got {range!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ValueError(f"range must be finite with lo < hi, got {range!r}")
+    return result(_count(machine, data, bins, lo, hi, None, tile), host)
+
+
+def histogram_to_top(x: cl_array.Array, bins: int, top: cl_array.Array, *, lo: float = 0.0,
+                     tile: tuple[int, int] | None = None, machine: Machine | None = None) -> cl_array.Array:
+    """:func:`histogram` over [lo, top], where ``top`` is a float32 device scalar (a field's maximum from
+    :func:`reduce`, say), read on the device: the host never waits for it.
+
+    Parameters
+    ----------
+    x : pyopencl.array.Array; uint8, int32 or float32
+        As for :func:`histogram`.
+    bins : int
+    top : 0-d or 1-element float32 pyopencl.array.Array
+        The upper end of the range; when it is not above ``lo`` (a field of zeros), the range is
+        [lo, lo + 1].
+    lo : float
+        Finite.
+    tile, machine
+        As for :func:`histogram`.
+
+    Returns
+    -------
+    int32 device counts, as :func:`histogram` returns them; the bins are those :func:`histogram` gives
+    for the range (lo, hi) with hi the value of ``top``.
+    """
+    machine = machine_for(machine)
+    if not isinstance(x, cl_array.Array):
+        raise TypeError(f"x must be a pyopencl.array.Array, got {type(x).__name__}")
+    if not isinstance(top, cl_array.Array) or top.dtype != np.float32 or top.size != 1:
+        raise TypeError("top must be a one-element float32 pyopencl.array.Array")
+    if not math.isfinite(lo):
+        raise ValueError(f"lo must be finite, got {lo}")
+    data, _ = _histogram_field(x, bins, tile, machine)
+    return _count(machine, data, bins, float(lo), float(lo) + 1.0, top, tile)
+
+
+def _histogram_field(x, bins, tile, machine: Machine) -> tuple[cl_array.Array, bool]:
     source = x.astype(np.uint8) if isinstance(x, np.ndarray) and x.dtype == np.bool_ else x
     data, host = field(source, "x", machine, ndims=(2,) if tile is not None else _ANY_NDIM,
                        dtypes=_DTYPES)
@@ -112,12 +158,15 @@ def histogram(x: ArrayLike, bins: int, range: tuple[float, float], *, tile: tupl
     local_bins = machine.device.local_mem_size // 4 - 16
     if not 1 <= bins <= local_bins:
         raise ValueError(f"bins must be between 1 and {local_bins} on this device, got {bins}")
-    try:
-        lo, hi = (float(v) for v in range)
-    except (TypeError, ValueError):
-        raise TypeError(f"range must be a pair of numbers (lo, hi), got {range!r}") from None
-    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-        raise ValueError(f"range must be finite with lo < hi, got {range!r}")
+    if tile is not None and (not isinstance(tile, tuple) or len(tile) != 2
+                             or not all(isinstance(t, (int, np.integer)) and t >= 1 for t in tile)):
+        raise ValueError(f"tile must be a pair of positive integers (th, tw), got {tile!r}")
+    return data, host
+
+
+def _count(machine: Machine, data: cl_array.Array, bins: int, lo: float, hi: float,
+           top: cl_array.Array | None, tile) -> cl_array.Array:
+    """The histogram kernel over [lo, hi], or over [lo, top] read on the device when ``top`` is given."""
     if tile is None:
         width = data.shape[-1]
         height = data.size // width
@@ -125,9 +174,6 @@ def histogram(x: ArrayLike, bins: int, range: tuple[float, float], *, tile: tupl
         band = max(1, math.ceil(height / (machine.compute_units * 8)))
         th, tw, accumulate = band, width, True
     else:
-        if (not isinstance(tile, tuple) or len(tile) != 2
-                or not all(isinstance(t, (int, np.integer)) and t >= 1 for t in tile)):
-            raise ValueError(f"tile must be a pair of positive integers (th, tw), got {tile!r}")
         height, width = data.shape
         th, tw, accumulate = int(tile[0]), int(tile[1]), False
     tiles_y, tiles_x = math.ceil(height / th), math.ceil(width / tw)
@@ -135,14 +181,14 @@ def histogram(x: ArrayLike, bins: int, range: tuple[float, float], *, tile: tupl
     out = machine.empty(shape, np.int32)
     local = 1 if machine.is_cpu else min(256, machine.device.max_work_group_size)
     # A one-work-item group counts without atomics (a CPU runs each group on one thread anyway).
-    defines = dict(OP=0, ACC="int", SHARED_COUNTS=int(local > 1), **type_defines(data.dtype))
+    defines = dict(OP=0, ACC="int", SHARED_COUNTS=int(local > 1), TO_TOP=int(top is not None),
+                   **type_defines(data.dtype))
     if accumulate:
         cl.enqueue_fill_buffer(machine.queue, out.base_data, np.int32(0), 0, out.nbytes)
     scale = np.float32(bins) / (np.float32(hi) - np.float32(lo))
     kernel = machine.kernel("reduce", "histogram_tiles", **defines)
     machine.launch(kernel, (tiles_y * tiles_x * local,), data, out, cl.LocalMemory(4 * bins),
-                   np.int64(width), np.int64(height), np.int64(th), np.int64(tw), np.int64(tiles_x),
-                   np.float32(lo), np.float32(hi), np.float32(scale), np.int32(bins), np.int32(accumulate),
-                   local_size=(local,))
-    return result(out, host)
-
+                   top if top is not None else out, np.int64(width), np.int64(height), np.int64(th),
+                   np.int64(tw), np.int64(tiles_x), np.float32(lo), np.float32(hi), np.float32(scale),
+                   np.int32(bins), np.int32(accumulate), local_size=(local,))
+    return out

@@ -298,7 +298,8 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     with ``skimage.feature.canny(..., mode="nearest")``. Borders repeat the edge pixel; the outermost
     ring of pixels is never an edge. Weak pixels are maxima >= low and > 0, strong ones maxima >= high.
 
-    When thresholds come from histograms, the magnitude's maximum is read back to the host once per call.
+    When thresholds come from histograms, their range (the magnitude's maximum) stays on the device: the
+    host does not wait for the device anywhere in a call with device input.
 
     References
     ----------

@@ -73,18 +73,17 @@ def threshold_field(machine: Machine, magnitude: cl_array.Array, rule: tuple[flo
     """Device thresholds (low, high) from histograms of ``magnitude``: ``rule = (f_low, f_high, k_low,
     k_high)`` gives ``k * quantile(f)``. Returns the pairs, shape (tiles_y, tiles_x, 2), and the tiles.
 
-    Reads the field's maximum back to the host (the histograms' range): one wait per call.
+    The histograms span [0, max] with the field's maximum kept on the device, so the host never waits.
     """
-    top = float(_reduce.reduce(magnitude, "max", machine=machine).get())
-    hi = top if top > 0 else 1.0
+    top = _reduce.reduce(magnitude, "max", machine=machine)
     tile = (TILE, TILE) if local else None
-    hist = _reduce.histogram(magnitude, BINS, (0.0, hi), tile=tile, machine=machine)
+    hist = _reduce.histogram_to_top(magnitude, BINS, top, tile=tile, machine=machine)
     height, width = magnitude.shape
     tiles = (math.ceil(height / TILE), math.ceil(width / TILE)) if local else (1, 1)
     out = machine.empty(tiles + (2,), np.float32)
     count = tiles[0] * tiles[1]
-    machine.launch(_kernel(machine, "edges", "histogram_thresholds"), (count,), hist, out, np.int32(BINS),
-                   np.float32(0.0), np.float32(hi / BINS), cltypes.make_float4(*rule), np.int64(count))
+    machine.launch(_kernel(machine, "edges", "histogram_thresholds"), (count,), hist, out, np.int32(BINS), top,
+                   cltypes.make_float4(*rule), np.int64(count))
     return out, tiles
 
 

@@ -177,8 +177,8 @@ def texture_edges(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, t
 
     Notes
     -----
-    The outermost ring of pixels is never a candidate. Without ``edge_threshold``, the gradient's
-    maximum is read back to the host once (for the histogram's range).
+    The outermost ring of pixels is never a candidate. Without ``edge_threshold``, the histogram's range
+    (the gradient's maximum) stays on the device.
 
     References
     ----------
