@@ -293,7 +293,8 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
                            np.float32(dip))
     outputs = [machine.empty((height, width), np.float32), machine.empty((height, width), np.float32),
                machine.empty((height, width), np.uint8), machine.empty((height, width), np.uint8)]
-    machine.launch(machine.kernel("stereo", "suppress", **defines), (width, height), common[0], selection[0],
+    machine.launch(machine.kernel("stereo", "suppress", **defines), (-(-width // _SPAN), height), common[0],
+                   selection[0],
                    selection[1], selection[2], *outputs, *dims, np.int32(d_min), np.int32(d_max),
                    np.float32(min_score if features != "intensity" else -np.inf), np.float32(bimodal),
                    np.float32(min_votes))
