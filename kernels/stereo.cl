@@ -310,8 +310,8 @@ __kernel void clipped_window(__global const float *prefix, __global const int *f
  * and right images at once, 16 pixels per work-item: each feature's 16-bit code (SOURCE_T float: the
  * gradient direction rounded to 1/65536 of a turn; char: the sign), its mask, dropping Canny edges
  * whose gradient lies within `min_angle` codes of vertical, that is edges that close to horizontal (they
- * carry no horizontal disparity: the aperture problem along a scanline), and the masks again as float32
- * counts, planes 0 and 1 of `counts`, whose patch sums are the eligible features. */
+ * carry no horizontal disparity: the aperture problem along a scanline), and with WITH_COUNTS the masks
+ * again as float32 counts, planes 0 and 1 of `counts`, whose patch sums are the eligible features. */
 #define TURN 10430.378350470453f /* 65536 / (2 pi) */
 #ifndef SOURCE_T
 #define SOURCE_T float
@@ -345,7 +345,9 @@ inline void code_side(__global const uchar *mask, __global const SOURCE_T *attri
         code_lanes(vload16(0, mask + i0), vload16(0, attribute + i0), min_angle, &f, &c, &k);
         vstore16(f, 0, feature + i0);
         vstore16(c, 0, code + i0);
+#if WITH_COUNTS
         vstore16(k, 0, count + i0);
+#endif
         return;
     }
     uchar m[16] = {0}, fs[16];
@@ -363,7 +365,9 @@ inline void code_side(__global const uchar *mask, __global const SOURCE_T *attri
     for (long i = i0; i < n; i++) {
         feature[i] = fs[i - i0];
         code[i] = cs[i - i0];
+#if WITH_COUNTS
         count[i] = ks[i - i0];
+#endif
     }
 }
 
@@ -451,12 +455,10 @@ __attribute__((always_inline)) inline float16 right_lanes(__global const float *
  * other in increasing d: the best score among the lanes where the pixel matches itself (the first, in
  * d, of equal scores) replaces the running best only when higher; the vote peaks are followed lane by
  * lane. The scores are cell_score()'s expression on vectors, which rounds the same. */
-__attribute__((always_inline)) inline void fold_lanes(Selection *s, short16 votes, short16 own, __global const float *stats, long x, long y,
-                       long W, long H, int top, int d_max, float area, float negative, float dip)
+__attribute__((always_inline)) inline void fold_lanes(Selection *s, short16 votes, short16 own, float16 eligible,
+                                                      int top, int d_max, float area, float negative, float dip)
 {
-    long i = y * W + x;
     float16 v = convert_float16(votes);
-    float16 eligible = 0.5f * (stats[i] + right_lanes(stats + W * H, y * W, W, x, top));
     float16 score = (v - negative * (eligible - v) * eligible / area) / eligible;
     int16 matches = convert_int16(own) != 0;
     score = eligible <= 0.0f ? 0.0f : score;
@@ -516,20 +518,24 @@ __kernel void match_edges_clipped(__global const uchar *left, __global const uch
                     }
                 }
             }
-            for (int g = 0; g < groups; g++)
-                fold_lanes(&s, votes[g], own[g], stats, x, y, W, H, first + 16 * g + 15, d_max, area, negative,
-                           dip);
+            for (int g = 0; g < groups; g++) {
+                int top = first + 16 * g + 15;
+                float16 eligible = 0.5f * (stats[i] + right_lanes(stats + W * H, y * W, W, x, top));
+                fold_lanes(&s, votes[g], own[g], eligible, top, d_max, area, negative, dip);
+            }
         }
         finish(s, i, best_score, best_d, peaks);
     }
 }
 
-/* Without barriers the window is a square, and its sum separates: one work-item per band of BAND rows
+/* Without barriers the window is a square, and its sum separates: one work-item per band of rows
  * keeps, for every column x and group of 16 disparities, the column sum of p over rows [y - r, y + r]
  * (in `sums`, its own W x groups short16 lanes), adding the features of the row that enters and
  * subtracting those of the row that leaves as y advances (the O(1) box filter), so each feature's
  * matches are computed about twice instead of once per feature of its window. A left feature's
- * support is then the sum of the 2r + 1 column sums around it. */
+ * support is then the sum of the 2r + 1 column sums around it. The eligible features are counted the
+ * same way: column counts of left and right features, and on each row their prefix sums, whose
+ * differences are the window counts (the box sums the other paths read from `stats`, to the bit). */
 inline void slide_row(__global short16 *sums, __global const uchar *left, __global const uchar *right,
                       __global const ushort *left_code, __global const ushort *right_code, long W, long yw,
                       int d_min, int d_max, int groups, int tolerance, int entering)
@@ -544,36 +550,84 @@ inline void slide_row(__global short16 *sums, __global const uchar *left, __glob
     }
 }
 
+/* Adds (or takes away) row yw's features to the column counts of one image. */
+inline void tally_row(__global int *columns, __global const uchar *features, long W, long yw, int sign)
+{
+    for (long x = 0; x < W; x++) columns[x] += features[yw * W + x] ? sign : 0;
+}
+
+/* prefix[k] = columns[0] + ... + columns[k - 1]: window counts are differences of two entries. */
+inline void prefix_sums(__global const int *columns, __global int *prefix, long W)
+{
+    int total = 0;
+    prefix[0] = 0;
+    for (long x = 0; x < W; x++) prefix[x + 1] = total += columns[x];
+}
+
+/* The window count around x (columns [x - r, x + r] clipped to the image) from the prefix sums. */
+inline int window_count(__global const int *prefix, long W, long x, long r)
+{
+    return prefix[min(x + r + 1, W)] - prefix[max(x - r, 0L)];
+}
+
+/* The right features' window counts at x - d for the 16 lanes d = top - j (0 outside the image). */
+inline float16 right_counts(__global const int *prefix, long W, long x, int top, long r)
+{
+    long x0 = x - top;
+    if (x0 - r >= 0 && x0 + 15 + r + 1 <= W)
+        return convert_float16(vload16(0, prefix + x0 + r + 1) - vload16(0, prefix + x0 - r));
+    float lanes[16];
+    for (int j = 0; j < 16; j++) lanes[j] = x0 + j >= 0 && x0 + j < W ? (float)window_count(prefix, W, x0 + j, r) : 0.0f;
+    return vload16(0, lanes);
+}
+
 __kernel void match_edges(__global const uchar *left, __global const uchar *right,
                           __global const ushort *left_code, __global const ushort *right_code,
-                          __global const float *stats, __global short16 *scratch,
+                          __global short16 *scratch, __global int *tallies,
                           __global float *best_score, __global int *best_d, __global float *peaks,
                           long W, long H, long band, int d_min, int d_max, long r, int tolerance, float area,
                           float negative, float dip)
 {
-    long y0 = get_global_id(0) * band;
+    long b = get_global_id(0), y0 = b * band;
     if (y0 >= H) return;
     int groups = (d_max - d_min) / 16 + 1;
-    __global short16 *sums = scratch + get_global_id(0) * W * groups;
+    __global short16 *sums = scratch + b * W * groups;
+    __global int *left_columns = tallies + b * 4 * (W + 1), *right_columns = left_columns + W + 1;
+    __global int *left_prefix = right_columns + W + 1, *right_prefix = left_prefix + W + 1;
     for (long k = 0; k < W * groups; k++) sums[k] = 0;
+    for (long x = 0; x < W; x++) left_columns[x] = right_columns[x] = 0;
     /* The column sums of the row before the band, rows [y0 - 1 - r, y0 - 1 + r]; each step then adds
      * row y + r and takes away row y - r - 1. */
-    for (long yw = max(y0 - r - 1, 0L); yw < min(y0 + r, H); yw++)
+    for (long yw = max(y0 - r - 1, 0L); yw < min(y0 + r, H); yw++) {
         slide_row(sums, left, right, left_code, right_code, W, yw, d_min, d_max, groups, tolerance, 1);
+        tally_row(left_columns, left, W, yw, 1);
+        tally_row(right_columns, right, W, yw, 1);
+    }
     for (long y = y0; y < min(y0 + band, H); y++) {
-        if (y + r < H) slide_row(sums, left, right, left_code, right_code, W, y + r, d_min, d_max, groups, tolerance, 1);
-        if (y - r - 1 >= 0)
+        if (y + r < H) {
+            slide_row(sums, left, right, left_code, right_code, W, y + r, d_min, d_max, groups, tolerance, 1);
+            tally_row(left_columns, left, W, y + r, 1);
+            tally_row(right_columns, right, W, y + r, 1);
+        }
+        if (y - r - 1 >= 0) {
             slide_row(sums, left, right, left_code, right_code, W, y - r - 1, d_min, d_max, groups, tolerance, 0);
+            tally_row(left_columns, left, W, y - r - 1, -1);
+            tally_row(right_columns, right, W, y - r - 1, -1);
+        }
+        prefix_sums(left_columns, left_prefix, W);
+        prefix_sums(right_columns, right_prefix, W);
         for (long x = 0; x < W; x++) {
             long i = y * W + x;
             if (!left[i]) continue;
             Selection s = fresh();
+            float nl = (float)window_count(left_prefix, W, x, r);
             for (int g = 0; g < groups; g++) {
                 int top = d_min + 16 * g + 15;
                 short16 votes = 0;
                 for (long xw = max(x - r, 0L); xw <= min(x + r, W - 1); xw++) votes += sums[g * W + xw];
                 short16 own = match_lanes(right, right_code, y * W, W, x, left_code[i], top, d_max, tolerance);
-                fold_lanes(&s, votes, own, stats, x, y, W, H, top, d_max, area, negative, dip);
+                fold_lanes(&s, votes, own, 0.5f * (nl + right_counts(right_prefix, W, x, top, r)), top, d_max,
+                           area, negative, dip);
             }
             finish(s, i, best_score, best_d, peaks);
         }

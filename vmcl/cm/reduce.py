@@ -170,8 +170,9 @@ def _count(machine: Machine, data: cl_array.Array, bins: int, lo: float, hi: flo
     if tile is None:
         width = data.shape[-1]
         height = data.size // width
-        # Bands of rows, each counted by one work-group and added into the single histogram.
-        band = max(1, math.ceil(height / (machine.compute_units * 8)))
+        # Bands of rows, each counted by one work-group and added into the single histogram; on a CPU
+        # two per core, since each band also clears and adds a whole histogram.
+        band = max(1, math.ceil(height / (machine.compute_units * (2 if machine.is_cpu else 8))))
         th, tw, accumulate = band, width, True
     else:
         height, width = data.shape

@@ -31,7 +31,7 @@ import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm import scan
-from vmcl.cm._arrays import ArrayLike, machine_for, result
+from vmcl.cm._arrays import ArrayLike, machine_for
 from vmcl.cm._arrays import field as device_field
 from vmcl.early.edges import canny, zero_crossings
 from vmcl.early.filters import gaussian
@@ -211,10 +211,14 @@ def _check_range(d_min, d_max, patch, width: int) -> None:
 
 
 def _deliver(found: list, host: bool) -> StereoMatch:
-    disparity, score, features, out_of_range, discontinuity = (result(f, host) for f in found)
-    if host:
-        features, out_of_range, discontinuity = (f.astype(bool) for f in (features, out_of_range, discontinuity))
-    return StereoMatch(disparity, score, features, out_of_range, discontinuity)
+    if not host:
+        return StereoMatch(*found)
+    # All five copies queued at once, one wait: the first would otherwise wait for the whole match and
+    # each further one for its own round trip.
+    copies = [f.get_async() for f in found]
+    cl.wait_for_events([event for _, event in copies])
+    disparity, score, features, out_of_range, discontinuity = (array for array, _ in copies)
+    return StereoMatch(disparity, score, *(f.view(np.bool_) for f in (features, out_of_range, discontinuity)))
 
 
 def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min, d_max, patch, direction_tolerance,
@@ -246,13 +250,15 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
     else:
         barrier = None
     support = _Support(machine, radius, barrier, (height, width))
+    # The square windows of the running edge matcher count eligible features themselves.
+    sliding = variant == "running" and features != "intensity" and barrier is None
     if features == "intensity":
         common = (maps["left"], maps["right"], maps["left_attr"], maps["right_attr"])
         stats = support.sum(_moments(machine, maps))
         tolerance = np.int32(0)
     else:
-        *common, counts = _codes(machine, maps, features, min_angle)
-        stats = support.sum(counts)
+        *common, counts = _codes(machine, maps, features, min_angle, counts=not sliding)
+        stats = None if sliding else support.sum(counts)
         tolerance = np.int32(direction_code(direction_tolerance) if features == "canny" else 0)
     selection = [machine.empty((height, width), np.float32), machine.empty((height, width), np.int32),
                  machine.empty((height, width, 3), np.float32)]
@@ -260,19 +266,20 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
     area = np.float32(patch * patch)
     dims = (np.int64(width), np.int64(height))
     build = machine.kernel("stereo", "match_planes", **defines)
-    if variant == "running" and features != "intensity" and barrier is not None:
+    if variant == "running" and features != "intensity" and not sliding:
         machine.launch(machine.kernel("stereo", "match_edges_clipped", **defines), (-(-width // _SPAN), height),
                        *common, stats, *support.window_bounds(), np.int32(1), *selection, *dims,
                        np.int32(d_min), np.int32(d_max), np.int64(radius), tolerance, area,
                        np.float32(negative_evidence), np.float32(dip))
-    elif variant == "running" and features != "intensity":
+    elif sliding:
         # Each band keeps a short16 column sum per column and group of 16 disparities; taller bands
         # when many of them would need more than _TABLE_BYTES.
         band_bytes = width * (-(-depth // 16)) * 32
         band = max(_BAND, -(-height // max(1, _TABLE_BYTES // band_bytes)))
         bands = -(-height // band)
         scratch = machine.empty(bands * band_bytes // 2, np.int16)
-        machine.launch(machine.kernel("stereo", "match_edges", **defines), (bands,), *common, stats, scratch,
+        tallies = machine.empty(bands * 4 * (width + 1), np.int32)
+        machine.launch(machine.kernel("stereo", "match_edges", **defines), (bands,), *common, scratch, tallies,
                        *selection, *dims, np.int64(band), np.int32(d_min), np.int32(d_max), np.int64(radius),
                        tolerance, area, np.float32(negative_evidence), np.float32(dip))
     elif variant == "table":
@@ -309,20 +316,21 @@ def direction_code(angle: float) -> int:
     return min(int(math.floor(angle * 65536 / (2 * math.pi))), 32768)
 
 
-def _codes(machine: Machine, maps: dict, features: str, min_angle: float) -> list:
-    """The left and right feature masks and 16-bit codes both matchers compare, and the masks as a
-    (2, H, W) float32 stack of counts (kernels/stereo.cl, feature_codes); edges whose gradient lies within
-    ``min_angle`` (in 1/65536 turns) of vertical are dropped."""
+def _codes(machine: Machine, maps: dict, features: str, min_angle: float, *, counts: bool) -> list:
+    """The left and right feature masks and 16-bit codes both matchers compare, and with ``counts`` the
+    masks as a (2, H, W) float32 stack of counts, else None (kernels/stereo.cl, feature_codes); edges whose
+    gradient lies within ``min_angle`` (in 1/65536 turns) of vertical are dropped."""
     height, width = maps["left"].shape
     n = height * width
     out = [machine.empty((height, width), np.uint8), machine.empty((height, width), np.uint8),
-           machine.empty((height, width), np.uint16), machine.empty((height, width), np.uint16),
-           machine.empty((2, height, width), np.float32)]
+           machine.empty((height, width), np.uint16), machine.empty((height, width), np.uint16)]
+    stack = machine.empty((2, height, width), np.float32) if counts else None
     source = {"SOURCE_T": "char", "SOURCE_T_IS_FLOAT": 0} if features == "dog" else {"SOURCE_T": "float",
                                                                                     "SOURCE_T_IS_FLOAT": 1}
-    machine.launch(machine.kernel("stereo", "feature_codes", **source), (-(-n // 16),), maps["left"], maps["right"],
-                   maps["left_attr"], maps["right_attr"], *out, np.float32(min_angle), np.int64(n))
-    return out
+    machine.launch(machine.kernel("stereo", "feature_codes", WITH_COUNTS=int(counts), **source), (-(-n // 16),),
+                   maps["left"], maps["right"], maps["left_attr"], maps["right_attr"], *out,
+                   stack if counts else out[0], np.float32(min_angle), np.int64(n))
+    return [*out, stack]
 
 
 def _moments(machine: Machine, maps: dict) -> cl_array.Array:
