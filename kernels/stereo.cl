@@ -458,6 +458,12 @@ __attribute__((always_inline)) inline float16 right_lanes(__global const float *
 __attribute__((always_inline)) inline void fold_lanes(Selection *s, short16 votes, short16 own, float16 eligible,
                                                       int top, int d_max, float area, float negative, float dip)
 {
+    /* No votes on any lane: the pixel matches itself on none (its own match is a vote), and every lane
+     * leaves the peaks as they are but the valley, which drops to 0. */
+    if (!any(votes != (short16)0)) {
+        s->valley = 0.0f;
+        return;
+    }
     float16 v = convert_float16(votes);
     float16 score = (v - negative * (eligible - v) * eligible / area) / eligible;
     int16 matches = convert_int16(own) != 0;
