@@ -41,7 +41,7 @@ Features = Literal["canny", "dog", "intensity"]
 Variant = Literal["running", "table"]
 _FEATURES = {"canny": 0, "dog": 1, "intensity": 2}
 _TABLE_BYTES = 256 << 20  # the largest table of match planes the default variant builds
-_BAND = 16  # rows per work-item of match_edges (at least)
+_BAND = 32  # rows per work-item of match_edges (at least)
 _MAX_RUNNING_PATCH = 181  # (2r + 1)^2 votes fit the running variant's int16 lanes
 _SPAN = 16  # pixels of a row per work-item of match_edges (SPAN in kernels/stereo.cl)
 
