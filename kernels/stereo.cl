@@ -455,15 +455,19 @@ __attribute__((always_inline)) inline float16 right_lanes(__global const float *
  * other in increasing d: the best score among the lanes where the pixel matches itself (the first, in
  * d, of equal scores) replaces the running best only when higher; the vote peaks are followed lane by
  * lane. The scores are cell_score()'s expression on vectors, which rounds the same. */
+/* Folds a group without votes on any lane, and says whether it was one: the pixel matches itself on
+ * none of its planes (its own match is a vote), and each lane leaves the peaks as they are but the
+ * valley, which drops to 0. */
+__attribute__((always_inline)) inline int fold_silent(Selection *s, short16 votes)
+{
+    if (any(votes != (short16)0)) return 0;
+    s->valley = 0.0f;
+    return 1;
+}
+
 __attribute__((always_inline)) inline void fold_lanes(Selection *s, short16 votes, short16 own, float16 eligible,
                                                       int top, int d_max, float area, float negative, float dip)
 {
-    /* No votes on any lane: the pixel matches itself on none (its own match is a vote), and every lane
-     * leaves the peaks as they are but the valley, which drops to 0. */
-    if (!any(votes != (short16)0)) {
-        s->valley = 0.0f;
-        return;
-    }
     float16 v = convert_float16(votes);
     float16 score = (v - negative * (eligible - v) * eligible / area) / eligible;
     int16 matches = convert_int16(own) != 0;
@@ -526,6 +530,7 @@ __kernel void match_edges_clipped(__global const uchar *left, __global const uch
             }
             for (int g = 0; g < groups; g++) {
                 int top = first + 16 * g + 15;
+                if (fold_silent(&s, votes[g])) continue;
                 float16 eligible = 0.5f * (stats[i] + right_lanes(stats + W * H, y * W, W, x, top));
                 fold_lanes(&s, votes[g], own[g], eligible, top, d_max, area, negative, dip);
             }
@@ -540,8 +545,8 @@ __kernel void match_edges_clipped(__global const uchar *left, __global const uch
  * subtracting those of the row that leaves as y advances (the O(1) box filter), so each feature's
  * matches are computed about twice instead of once per feature of its window. A left feature's
  * support is then the sum of the 2r + 1 column sums around it. The eligible features are counted the
- * same way: column counts of left and right features, and on each row their prefix sums, whose
- * differences are the window counts (the box sums the other paths read from `stats`, to the bit). */
+ * same way: column counts of left and right features, summed over the window where a feature needs
+ * them (the box sums the other paths read from `stats`, to the bit). */
 /* Features are a few per cent of a row: rows are scanned 16 pixels at a time, and a run without any
  * is passed over in one vector compare. `x` runs over the features of row `row` of `mask`. */
 #define FOR_FEATURES(mask, row, W, x)                                                      \
@@ -574,28 +579,25 @@ inline void tally_row(__global int *columns, __global const uchar *features, lon
     for (; x < W; x++) columns[x] += features[yw * W + x] ? sign : 0;
 }
 
-/* prefix[k] = columns[0] + ... + columns[k - 1]: window counts are differences of two entries. */
-inline void prefix_sums(__global const int *columns, __global int *prefix, long W)
+/* The window count around x (columns [x - r, x + r] clipped to the image) from the column counts. */
+inline int window_count(__global const int *columns, long W, long x, long r)
 {
-    int total = 0;
-    prefix[0] = 0;
-    for (long x = 0; x < W; x++) prefix[x + 1] = total += columns[x];
-}
-
-/* The window count around x (columns [x - r, x + r] clipped to the image) from the prefix sums. */
-inline int window_count(__global const int *prefix, long W, long x, long r)
-{
-    return prefix[min(x + r + 1, W)] - prefix[max(x - r, 0L)];
+    int count = 0;
+    for (long xw = max(x - r, 0L); xw <= min(x + r, W - 1); xw++) count += columns[xw];
+    return count;
 }
 
 /* The right features' window counts at x - d for the 16 lanes d = top - j (0 outside the image). */
-inline float16 right_counts(__global const int *prefix, long W, long x, int top, long r)
+inline float16 right_counts(__global const int *columns, long W, long x, int top, long r)
 {
     long x0 = x - top;
-    if (x0 - r >= 0 && x0 + 15 + r + 1 <= W)
-        return convert_float16(vload16(0, prefix + x0 + r + 1) - vload16(0, prefix + x0 - r));
+    if (x0 - r >= 0 && x0 + 15 + r < W) {
+        int16 count = 0;
+        for (long k = -r; k <= r; k++) count += vload16(0, columns + x0 + k);
+        return convert_float16(count);
+    }
     float lanes[16];
-    for (int j = 0; j < 16; j++) lanes[j] = x0 + j >= 0 && x0 + j < W ? (float)window_count(prefix, W, x0 + j, r) : 0.0f;
+    for (int j = 0; j < 16; j++) lanes[j] = x0 + j >= 0 && x0 + j < W ? (float)window_count(columns, W, x0 + j, r) : 0.0f;
     return vload16(0, lanes);
 }
 
@@ -610,8 +612,7 @@ __kernel void match_edges(__global const uchar *left, __global const uchar *righ
     if (y0 >= H) return;
     int groups = (d_max - d_min) / 16 + 1;
     __global short16 *sums = scratch + b * W * groups;
-    __global int *left_columns = tallies + b * 4 * (W + 1), *right_columns = left_columns + W + 1;
-    __global int *left_prefix = right_columns + W + 1, *right_prefix = left_prefix + W + 1;
+    __global int *left_columns = tallies + b * 2 * W, *right_columns = left_columns + W;
     for (long k = 0; k < W * groups; k++) sums[k] = 0;
     for (long x = 0; x < W; x++) left_columns[x] = right_columns[x] = 0;
     /* The column sums of the row before the band, rows [y0 - 1 - r, y0 - 1 + r]; each step then adds
@@ -632,18 +633,17 @@ __kernel void match_edges(__global const uchar *left, __global const uchar *righ
             tally_row(left_columns, left, W, y - r - 1, -1);
             tally_row(right_columns, right, W, y - r - 1, -1);
         }
-        prefix_sums(left_columns, left_prefix, W);
-        prefix_sums(right_columns, right_prefix, W);
         FOR_FEATURES(left, y, W, x) {
             long i = y * W + x;
             Selection s = fresh();
-            float nl = (float)window_count(left_prefix, W, x, r);
+            float nl = (float)window_count(left_columns, W, x, r);
             for (int g = 0; g < groups; g++) {
                 int top = d_min + 16 * g + 15;
                 short16 votes = 0;
                 for (long xw = max(x - r, 0L); xw <= min(x + r, W - 1); xw++) votes += sums[g * W + xw];
+                if (fold_silent(&s, votes)) continue;
                 short16 own = match_lanes(right, right_code, y * W, W, x, left_code[i], top, d_max, tolerance);
-                fold_lanes(&s, votes, own, 0.5f * (nl + right_counts(right_prefix, W, x, top, r)), top, d_max,
+                fold_lanes(&s, votes, own, 0.5f * (nl + right_counts(right_columns, W, x, top, r)), top, d_max,
                            area, negative, dip);
             }
             finish(s, i, best_score, best_d, peaks);

@@ -278,7 +278,7 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
         band = max(_BAND, -(-height // max(1, _TABLE_BYTES // band_bytes)))
         bands = -(-height // band)
         scratch = machine.empty(bands * band_bytes // 2, np.int16)
-        tallies = machine.empty(bands * 4 * (width + 1), np.int32)
+        tallies = machine.empty(bands * 2 * width, np.int32)
         machine.launch(machine.kernel("stereo", "match_edges", **defines), (bands,), *common, scratch, tallies,
                        *selection, *dims, np.int64(band), np.int32(d_min), np.int32(d_max), np.int64(radius),
                        tolerance, area, np.float32(negative_evidence), np.float32(dip))
