@@ -226,6 +226,14 @@ __kernel void suppress(__global const uchar *left, __global const float *best_sc
     long x_first = get_global_id(0) * SPAN, y = get_global_id(1);
     if (x_first >= W || y >= H) return;
     __global const uchar *row = left + y * W;
+    if (x_first + 16 <= W && !any(vload16(0, row + x_first) != (uchar16)0)) {
+        long i = y * W + x_first;
+        vstore16((float16)NAN, 0, disparity + i);
+        vstore16((float16)NAN, 0, score + i);
+        vstore16((uchar16)0, 0, out_of_range + i);
+        vstore16((uchar16)0, 0, discontinuity + i);
+        return;
+    }
     for (long x = x_first; x < min(x_first + SPAN, W); x++) {
         long i = y * W + x;
         if (!row[x]) {
