@@ -66,6 +66,24 @@ def test_buffer_pool_reuses_memory(machine):
     assert again.base_data.int_ptr == pointer
 
 
+@pytest.mark.parametrize("shape, dtype", [((375, 450), np.float32), ((3, 4, 5), np.uint8), (7, np.int32),
+                                          ((), np.float32), ((0, 3), np.int16), ((2, 1, 9), np.uint16)])
+def test_empty_arrays_are_pyopencl_arrays_of_that_layout(shape, dtype, machine):
+    """Machine.empty builds arrays through pyopencl's fast constructor: the layout its general one gives."""
+    import pyopencl.array as cl_array
+
+    fast, general = machine.empty(shape, dtype), cl_array.Array(machine.queue, shape, dtype, allocator=machine.pool)
+    for attribute in ("shape", "strides", "dtype", "size", "nbytes", "queue", "context"):
+        assert getattr(fast, attribute) == getattr(general, attribute), attribute
+    assert fast.flags.c_contiguous == general.flags.c_contiguous
+    if fast.size:
+        host = np.arange(fast.size).astype(dtype).reshape(shape)
+        fast.set(host)
+        np.testing.assert_array_equal(fast.get(), host)
+    with pytest.raises(ValueError, match="invalid shape"):
+        machine.empty((3, -1), dtype)
+
+
 def test_profiling_reports_each_kernel():
     profiled = vmcl.Machine(profile=True)
     scan(np.ones((64, 64), np.float32), machine=profiled)

@@ -9,6 +9,7 @@ timings.
 
 from __future__ import annotations
 
+import math
 import os
 import threading
 import warnings
@@ -176,8 +177,24 @@ class Machine:
     # -- memory -----------------------------------------------------------------------------------
 
     def empty(self, shape: tuple[int, ...] | int, dtype: Any) -> cl_array.Array:
-        """An uninitialised device array from the pool (memory of freed arrays is reused)."""
-        return cl_array.Array(self.queue, shape, np.dtype(dtype), allocator=self.pool)
+        """An uninitialised C-contiguous device array from the pool (memory of freed arrays is reused).
+
+        Built through pyopencl's fast constructor with the shape checked and the strides computed here:
+        its general one spent about 20 us of host time per array on NumPy checks, and a Canny or stereo
+        call makes dozens, on a host thread that shares the CPU with the device's.
+        """
+        dtype = np.dtype(dtype)
+        shape = (shape,) if isinstance(shape, (int, np.integer)) else tuple(shape)
+        if not all(isinstance(n, (int, np.integer)) and n >= 0 for n in shape):
+            raise ValueError(f"invalid shape {shape}: dimensions must be integers >= 0")
+        shape = tuple(int(n) for n in shape)
+        strides, step = [], dtype.itemsize
+        for n in reversed(shape):
+            strides.append(step)
+            step *= max(1, n)
+        size = math.prod(shape)
+        return cl_array.Array(None, shape, dtype, allocator=self.pool, strides=tuple(reversed(strides)),
+                              _fast=True, _size=size, _context=self.context, _queue=self.queue)
 
     def to_device(self, array: np.ndarray) -> cl_array.Array:
         """Copy a host array to a pooled device array (C order)."""
