@@ -112,6 +112,7 @@ class Machine:
         self._programs: dict[tuple, cl.Program] = {}
         self._kernels: dict[tuple, cl.Kernel] = {}
         self._events: list[tuple[str, cl.Event]] = []
+        self._layouts: dict[tuple, tuple] = {}  # (shape, dtype) -> (shape, dtype, strides, size) for empty()
         self._lock = threading.Lock()
         self.is_cpu = bool(self.device.type & cl.device_type.CPU)
         self.compute_units = self.device.max_compute_units
@@ -183,18 +184,22 @@ class Machine:
         its general one spent about 20 us of host time per array on NumPy checks, and a Canny or stereo
         call makes dozens, on a host thread that shares the CPU with the device's.
         """
-        dtype = np.dtype(dtype)
-        shape = (shape,) if isinstance(shape, (int, np.integer)) else tuple(shape)
-        if not all(isinstance(n, (int, np.integer)) and n >= 0 for n in shape):
-            raise ValueError(f"invalid shape {shape}: dimensions must be integers >= 0")
-        shape = tuple(int(n) for n in shape)
-        strides, step = [], dtype.itemsize
-        for n in reversed(shape):
-            strides.append(step)
-            step *= max(1, n)
-        size = math.prod(shape)
-        return cl_array.Array(None, shape, dtype, allocator=self.pool, strides=tuple(reversed(strides)),
-                              _fast=True, _size=size, _context=self.context, _queue=self.queue)
+        key = (tuple(shape) if isinstance(shape, list) else shape, dtype)
+        layout = self._layouts.get(key)
+        if layout is None:
+            dtype = np.dtype(dtype)
+            dims = (shape,) if isinstance(shape, (int, np.integer)) else tuple(shape)
+            if not all(isinstance(n, (int, np.integer)) and n >= 0 for n in dims):
+                raise ValueError(f"invalid shape {dims}: dimensions must be integers >= 0")
+            dims = tuple(int(n) for n in dims)
+            strides, step = [], dtype.itemsize
+            for n in reversed(dims):
+                strides.append(step)
+                step *= max(1, n)
+            layout = self._layouts[key] = (dims, dtype, tuple(reversed(strides)), math.prod(dims))
+        dims, dtype, strides, size = layout
+        return cl_array.Array(None, dims, dtype, allocator=self.pool, strides=strides, _fast=True, _size=size,
+                              _context=self.context, _queue=self.queue)
 
     def to_device(self, array: np.ndarray) -> cl_array.Array:
         """Copy a host array to a pooled device array (C order)."""
