@@ -1,13 +1,15 @@
 """Stereo benchmark: the edge matcher against OpenCV's block matchers, speed and quality, in one run.
 
-Run: python benchmarks/stereo.py [--data ../shared/datasets] [--repeat 5] [--out benchmarks/results/stereo.md]
+Run: python benchmarks/stereo.py [--data ../shared/datasets] [--repeat 15] [--out benchmarks/results/stereo.md]
 
 Speed: at teddy's size (450 x 375) with 64 disparities, the whole matcher (Canny on both images
 included, NumPy in and out) in its running-maximum and full-table variants, against cv2.StereoBM
-(block 15) and cv2.StereoSGBM (3WAY). Quality: on the Middlebury v2 evaluation scenes, the bad-pixel
-rate at 1 px on the nonocc mask at the pixels vmcl matched, the share of left edge pixels matched, and
-StereoBM's bad-pixel rate at the same pixels (a pixel StereoBM leaves without a value counts as bad).
-The machine is shared and noisy: compare ratios within one run.
+(block 15) and cv2.StereoSGBM (3WAY), timed in interleaved rounds (one call of each per round, medians
+over the rounds) so that a change in the machine's load falls on every method alike; then the device
+time of each kernel of the running variant. Quality: on the Middlebury v2 evaluation scenes, the
+bad-pixel rate at 1 px on the nonocc mask at the pixels vmcl matched, the share of left edge pixels
+matched, and StereoBM's bad-pixel rate at the same pixels (a pixel StereoBM leaves without a value
+counts as bad). The machine is shared and noisy: compare ratios within one run.
 """
 
 from __future__ import annotations
@@ -31,14 +33,16 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENES = ("tsukuba", "venus", "teddy")
 
 
-def median_ms(run, repeat: int) -> float:
-    run()
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        run()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times) * 1e3
+def interleaved_ms(runs: dict, repeat: int) -> list[tuple[str, float]]:
+    """Median ms of each named call over ``repeat`` rounds that call each once, after one warm-up round."""
+    times = {name: [] for name in runs}
+    for round_ in range(repeat + 1):
+        for name, run in runs.items():
+            start = time.perf_counter()
+            run()
+            if round_:
+                times[name].append(time.perf_counter() - start)
+    return [(name, statistics.median(t) * 1e3) for name, t in times.items()]
 
 
 def grey(image: np.ndarray) -> np.ndarray:
@@ -55,14 +59,28 @@ def block_matchers(left: np.ndarray, right: np.ndarray, disparities: int):
 def speed(pair, repeat: int) -> list[tuple[str, float]]:
     left, right = grey(pair.left), grey(pair.right)
     bm, sgbm = block_matchers(left, right, 64)
-    rows = [(f"vmcl.match canny, {variant}", median_ms(lambda v=variant: match(left, right, d_min=0, d_max=63,
-                                                                            variant=v), repeat))
-            for variant in ("running", "table")]
-    rows.append(("vmcl.match intensity (NCC), running",
-                 median_ms(lambda: match(left, right, d_min=0, d_max=63, features="intensity"), repeat)))
-    rows.append(("cv2.StereoBM block 15", median_ms(lambda: bm.compute(left, right), repeat)))
-    rows.append(("cv2.StereoSGBM 3WAY", median_ms(lambda: sgbm.compute(left, right), repeat)))
-    return rows
+    runs = {f"vmcl.match canny, {variant}": (lambda v=variant: match(left, right, d_min=0, d_max=63, variant=v))
+            for variant in ("running", "table")}
+    runs["vmcl.match intensity (NCC), table"] = lambda: match(left, right, d_min=0, d_max=63,
+                                                               features="intensity", variant="table")
+    runs["cv2.StereoBM block 15"] = lambda: bm.compute(left, right)
+    runs["cv2.StereoSGBM 3WAY"] = lambda: sgbm.compute(left, right)
+    return interleaved_ms(runs, repeat)
+
+
+def kernel_times(pair, repeat: int) -> list[tuple[str, int, float]]:
+    """(kernel, launches per call, median device ms per call) of the running edge matcher."""
+    left, right = grey(pair.left), grey(pair.right)
+    machine = vmcl.Machine(profile=True)
+    match(left, right, d_min=0, d_max=63, machine=machine)
+    machine.timings()
+    per_call = {}
+    for _ in range(repeat):
+        match(left, right, d_min=0, d_max=63, machine=machine)
+        for name, entry in machine.timings().items():
+            per_call.setdefault(name, []).append((entry["calls"], entry["total_ms"]))
+    rows = [(name, calls[0][0], statistics.median(ms for _, ms in calls)) for name, calls in per_call.items()]
+    return sorted(rows, key=lambda row: -row[2])
 
 
 def quality(pair) -> dict:
@@ -88,7 +106,7 @@ def quality(pair) -> dict:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=ROOT.parent / "shared" / "datasets")
-    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--repeat", type=int, default=15)
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "stereo.md")
     args = parser.parse_args(argv)
     if not (args.data / "middlebury_stereo_v2eval").is_dir():
@@ -100,10 +118,16 @@ def main(argv: list[str] | None = None) -> int:
     reference = dict(timings)["cv2.StereoBM block 15"]
     lines = ["# Stereo: vmcl's edge matcher against OpenCV", "",
              (f"Measured {datetime.datetime.now():%Y-%m-%d %H:%M} on {machine.device.platform.name} / "
-             f"{machine.device.name}. NumPy images in and out; medians of {args.repeat} runs."), "",
+             f"{machine.device.name}. NumPy images in and out; medians of {args.repeat} interleaved rounds."), "",
              "## Speed at teddy's size (450 x 375), 64 disparities, Canny included", "",
              "| method | ms | x StereoBM |", "|---|---|---|"]
     lines += [f"| {name} | {ms:.1f} | {ms / reference:.1f} |" for name, ms in timings]
+    kernels = kernel_times(teddy, args.repeat)
+    lines += ["", "## Device time per kernel, vmcl.match canny, running (profiled machine, medians)", "",
+              f"Sum {sum(ms for *_, ms in kernels):.2f} ms (the wall time above adds the host's share: "
+              "Python, the two uploads and the copies back).", "",
+              "| kernel | launches | ms |", "|---|---|---|"]
+    lines += [f"| {name} | {calls} | {ms:.3f} |" for name, calls, ms in kernels]
     lines += ["", "## Quality on Middlebury v2 (nonocc mask, at the pixels vmcl matched)", ""]
     rows = [quality(load_stereo(name, args.data)) for name in SCENES]
     header = list(rows[0])
