@@ -124,8 +124,8 @@ def main(argv: list[str] | None = None) -> int:
     lines += [f"| {name} | {ms:.1f} | {ms / reference:.1f} |" for name, ms in timings]
     kernels = kernel_times(teddy, args.repeat)
     lines += ["", "## Device time per kernel, vmcl.match canny, running (profiled machine, medians)", "",
-              f"Sum {sum(ms for *_, ms in kernels):.2f} ms (the wall time above adds the host's share: "
-              "Python, the two uploads and the copies back).", "",
+              (f"Sum {sum(ms for *_, ms in kernels):.2f} ms (the wall time above adds the host's share: "
+               "Python, the two uploads and the copies back)."), "",
               "| kernel | launches | ms |", "|---|---|---|"]
     lines += [f"| {name} | {calls} | {ms:.3f} |" for name, calls, ms in kernels]
     lines += ["", "## Quality on Middlebury v2 (nonocc mask, at the pixels vmcl matched)", ""]

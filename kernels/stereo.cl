@@ -50,7 +50,8 @@ __kernel void match_planes(__global const uchar *left, __global const uchar *rig
 #if FEATURES == FEATURES_INTENSITY
     planes[cell] = inside ? left_attr[i] * right_attr[y * W + xr] : 0.0f;
 #else
-    planes[cell] = inside && left[i] && right[y * W + xr] && compatible(left_attr[i], right_attr[y * W + xr], tolerance);
+    planes[cell] = inside && left[i] && right[y * W + xr]
+                   && compatible(left_attr[i], right_attr[y * W + xr], tolerance);
 #endif
 }
 
@@ -160,7 +161,8 @@ inline void finish(Selection s, long i, __global float *best_score, __global int
 
 /* Table variant: one work-item per pixel walks the summed planes of the whole table. */
 __kernel void select_table(__global const float *votes, __global const float *planes, __global const uchar *left,
-                           __global const float *stats, __global float *best_score, __global int *best_d, __global float *peaks,
+                           __global const float *stats, __global float *best_score, __global int *best_d,
+                           __global float *peaks,
                            long W, long H, long D, int d_min, float area, float negative, float dip)
 {
     long x = get_global_id(0), y = get_global_id(1);
@@ -176,9 +178,11 @@ __kernel void select_table(__global const float *votes, __global const float *pl
     finish(s, i, best_score, best_d, peaks);
 }
 
-/* Running variant: plane k (already summed) is folded into every pixel's selection; no table. */
+/* Running variant for intensity: plane k (already summed) is folded into every pixel's selection;
+ * no table. */
 __kernel void select_running(__global const float *votes, __global const float *plane, __global const uchar *left,
-                             __global const float *stats, __global float *best_score, __global int *best_d, __global float *peaks,
+                             __global const float *stats, __global float *best_score, __global int *best_d,
+                             __global float *peaks,
                              long W, long H, int d, int first, float area, float negative, float dip)
 {
     long x = get_global_id(0), y = get_global_id(1);
@@ -408,14 +412,17 @@ __kernel void intensity_moments(__global const float *left, __global const float
  *
  * p(x, y, d) is non-zero only at left features, and only left features are ever selected, so the
  * support of a left feature (x, y) is the sum, over the left features (x', y') of its window, of their
- * potential matches p(x', y', d): one work-item per run of SPAN pixels of a row visits its features,
- * sums their windows' matches 16 disparities at a time (short16 lanes, one AVX2 register), and folds
- * the lanes into the selection in increasing d. Lane j of a group holds d = top - j, so the right
- * pixels x - d of the 16 lanes are contiguous and ascending. */
+ * potential matches p(x', y', d). Matches are made 16 disparities at a time (a group: short16 lanes,
+ * one AVX2 register) and folded into the selection in increasing d. Lane j of a group holds
+ * d = top - j, so the right pixels x - d of the 16 lanes are contiguous and ascending. match_edges
+ * slides column sums down bands of rows (square windows); match_edges_clipped sums each feature's
+ * window directly (windows cut by barriers). */
+
 /* -1 where the left feature at (x, y) with code `a` has a compatible right feature at x - d, for the
  * lanes d = top - j; 0 elsewhere, and for d > d_max or x - d outside the image. */
-__attribute__((always_inline)) inline short16 match_lanes(__global const uchar *right, __global const ushort *right_code, long row, long W,
-                           long x, ushort a, int top, int d_max, int tolerance)
+__attribute__((always_inline)) inline short16 match_lanes(__global const uchar *right,
+                                                          __global const ushort *right_code, long row, long W,
+                                                          long x, ushort a, int top, int d_max, int tolerance)
 {
     long x0 = x - top;
     if (x0 >= 0 && x0 + 15 < W) {
@@ -433,24 +440,9 @@ __attribute__((always_inline)) inline short16 match_lanes(__global const uchar *
     return vload16(0, lanes);
 }
 
-/* The window of (x, y): rows [y - r, y + r] and, on each row y', columns [x - r, x + r], each clipped
- * to the image and, with barriers, to the barrier-free run through (x, y) along the column and through
- * (x, y') along row y' (rows first, then columns: the sums _Support makes). */
-#define WINDOW_ROWS(lo, hi)                                                                \
-    long lo = max(y - r, 0L), hi = min(y + r, H - 1);                                      \
-    if (clipped) {                                                                         \
-        lo = max(lo, (long)col_first[i]);                                                  \
-        hi = min(hi, (long)col_last[i]);                                                   \
-    }
-#define WINDOW_COLS(yw, lo, hi)                                                            \
-    long lo = max(x - r, 0L), hi = min(x + r, W - 1);                                      \
-    if (clipped) {                                                                         \
-        lo = max(lo, (long)row_first[yw * W + x]);                                         \
-        hi = min(hi, (long)row_last[yw * W + x]);                                          \
-    }
-
 /* The 16 lanes d = top - j of a right-image field at row y, x - d (0 outside the image). */
-__attribute__((always_inline)) inline float16 right_lanes(__global const float *field, long row, long W, long x, int top)
+__attribute__((always_inline)) inline float16 right_lanes(__global const float *field, long row, long W, long x,
+                                                          int top)
 {
     long x0 = x - top;
     if (x0 >= 0 && x0 + 15 < W) return vload16(0, field + row + x0);
@@ -459,10 +451,6 @@ __attribute__((always_inline)) inline float16 right_lanes(__global const float *
     return vload16(0, lanes);
 }
 
-/* Folds the 16 lanes d = top - j of a group into the selection, as consider() would one d after the
- * other in increasing d: the best score among the lanes where the pixel matches itself (the first, in
- * d, of equal scores) replaces the running best only when higher; the vote peaks are followed lane by
- * lane. The scores are cell_score()'s expression on vectors, which rounds the same. */
 /* Folds a group without votes on any lane, and says whether it was one: the pixel matches itself on
  * none of its planes (its own match is a vote), and each lane leaves the peaks as they are but the
  * valley, which drops to 0. */
@@ -473,6 +461,11 @@ __attribute__((always_inline)) inline int fold_silent(Selection *s, short16 vote
     return 1;
 }
 
+/* Folds the 16 lanes d = top - j of a group into the selection, as consider() would one d after the
+ * other in increasing d: the best score among the lanes where the pixel matches itself (the first, in
+ * d, of equal scores) replaces the running best only when higher; the vote peaks are followed lane by
+ * lane (as prefix scans over the lanes, with shuffles, it ran 1.7 times slower on PoCL). The scores
+ * are cell_score()'s expression on vectors, which rounds the same. */
 __attribute__((always_inline)) inline void fold_lanes(Selection *s, short16 votes, short16 own, float16 eligible,
                                                       int top, int d_max, float area, float negative, float dip)
 {
@@ -500,30 +493,36 @@ __attribute__((always_inline)) inline void fold_lanes(Selection *s, short16 vote
     *s = peaks;
 }
 
-#define PASS_GROUPS 8 /* groups of 16 disparities summed in one pass over a window */
+/* With barriers: one work-item per run of SPAN pixels of a row visits its features and sums, over each
+ * one's window, the matches of the features there, PASS_GROUPS groups per pass over the window. The
+ * window of (x, y): rows [y - r, y + r], and on each row y' columns [x - r, x + r], each clipped to the
+ * image and to the barrier-free run through (x, y) along the column and through (x, y') along row y'
+ * (rows first, then columns: the sums _Support makes for the table). Eligible counts come from `stats`. */
+#define PASS_GROUPS 8
 
 __kernel void match_edges_clipped(__global const uchar *left, __global const uchar *right,
-                          __global const ushort *left_code, __global const ushort *right_code,
-                          __global const float *stats, __global const int *row_first,
-                          __global const int *row_last, __global const int *col_first,
-                          __global const int *col_last, int clipped,
-                          __global float *best_score, __global int *best_d, __global float *peaks,
-                          long W, long H, int d_min, int d_max, long r, int tolerance, float area,
-                          float negative, float dip)
+                                  __global const ushort *left_code, __global const ushort *right_code,
+                                  __global const float *stats, __global const int *row_first,
+                                  __global const int *row_last, __global const int *col_first,
+                                  __global const int *col_last,
+                                  __global float *best_score, __global int *best_d, __global float *peaks,
+                                  long W, long H, int d_min, int d_max, long r, int tolerance, float area,
+                                  float negative, float dip)
 {
     long x_first = get_global_id(0) * SPAN, y = get_global_id(1);
     if (x_first >= W || y >= H) return;
     for (long x = x_first; x < min(x_first + SPAN, W); x++) {
         long i = y * W + x;
         if (!left[i]) continue;
-        WINDOW_ROWS(y_lo, y_hi)
+        long y_lo = max(max(y - r, 0L), (long)col_first[i]), y_hi = min(min(y + r, H - 1), (long)col_last[i]);
         Selection s = fresh();
         for (int first = d_min; first <= d_max; first += 16 * PASS_GROUPS) {
             int groups = min(PASS_GROUPS, (d_max - first) / 16 + 1);
             short16 votes[PASS_GROUPS], own[PASS_GROUPS];
             for (int g = 0; g < groups; g++) votes[g] = own[g] = 0;
             for (long yw = y_lo; yw <= y_hi; yw++) {
-                WINDOW_COLS(yw, x_lo, x_hi)
+                long x_lo = max(max(x - r, 0L), (long)row_first[yw * W + x]);
+                long x_hi = min(min(x + r, W - 1), (long)row_last[yw * W + x]);
                 for (long xw = x_lo; xw <= x_hi; xw++) {
                     if (!left[yw * W + xw]) continue;
                     ushort a = left_code[yw * W + xw];
@@ -605,7 +604,8 @@ inline float16 right_counts(__global const int *columns, long W, long x, int top
         return convert_float16(count);
     }
     float lanes[16];
-    for (int j = 0; j < 16; j++) lanes[j] = x0 + j >= 0 && x0 + j < W ? (float)window_count(columns, W, x0 + j, r) : 0.0f;
+    for (int j = 0; j < 16; j++)
+        lanes[j] = x0 + j >= 0 && x0 + j < W ? (float)window_count(columns, W, x0 + j, r) : 0.0f;
     return vload16(0, lanes);
 }
 

@@ -268,7 +268,7 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
     build = machine.kernel("stereo", "match_planes", **defines)
     if variant == "running" and features != "intensity" and not sliding:
         machine.launch(machine.kernel("stereo", "match_edges_clipped", **defines), (-(-width // _SPAN), height),
-                       *common, stats, *support.window_bounds(), np.int32(1), *selection, *dims,
+                       *common, stats, *support.window_bounds(), *selection, *dims,
                        np.int32(d_min), np.int32(d_max), np.int64(radius), tolerance, area,
                        np.float32(negative_evidence), np.float32(dip))
     elif sliding:
@@ -313,7 +313,7 @@ def direction_code(angle: float) -> int:
     """An angle in radians as a count of 1/65536 turns, the unit feature codes compare directions in
     (the tolerance: rounded down, so a code distance within it is an angle within it, up to the codes'
     own rounding of half a step, 0.0027 degrees)."""
-    return min(int(math.floor(angle * 65536 / (2 * math.pi))), 32768)
+    return min(math.floor(angle * 65536 / (2 * math.pi)), 32768)
 
 
 def _codes(machine: Machine, maps: dict, features: str, min_angle: float, *, counts: bool) -> list:
@@ -385,10 +385,7 @@ class _Support:
 
     def window_bounds(self) -> tuple[cl_array.Array, ...]:
         """(first, last) of every pixel's barrier-free run along its row, then along its column, for
-        kernels that clip windows themselves; without barriers, placeholders they never read."""
-        if self.barrier is None:
-            unused = self.machine.empty(1, np.int32)
-            return (unused,) * 4
+        kernels that clip windows themselves (only with barriers)."""
         return (*self.bounds[1], *self.bounds[0])
 
     def sum(self, planes: cl_array.Array) -> cl_array.Array:
