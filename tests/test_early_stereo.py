@@ -253,6 +253,18 @@ def test_intensity_variant_is_dense_and_accurate(machine):
     assert np.mean(np.abs(found.disparity - scene.disparity)[matched] <= 1) >= 0.90
 
 
+
+def test_intensity_matches_exactly_where_every_window_fits(machine):
+    """No intensity match where a patch would leave the image, for this pixel or any disparity of the
+    range (scored with the full area, cut windows were wrong); every pixel inside is matched."""
+    texture = np.random.default_rng(5).random((40, 67)).astype(np.float32)
+    left, right = texture[:, :64], texture[:, 3:]  # left(x) = right(x - 3)
+    found = match(left, right, d_min=-1, d_max=8, patch=5, sigma=0.3, features="intensity", machine=machine)
+    expected = np.zeros(left.shape, bool)
+    expected[2:38, 2 + 8:64 - 2 - 1] = True  # x in [d_max + r, W - 1 - r + d_min], y in [r, H - 1 - r]
+    np.testing.assert_array_equal(np.isfinite(found.disparity), expected)
+    assert np.all(found.disparity[expected] == 3)
+
 def test_negative_evidence_is_measured_against_the_plain_score(machine):
     scene, d_min, d_max = _pair("blocks")
     visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
