@@ -137,7 +137,7 @@ def test_dense_disparity_bad_1_below_5_percent(cues_scene, cues_run):
     visible = ~cues_scene.occluded_stereo & np.isfinite(cues_scene.disparity)
     scores = metrics.evaluate_disparity(cues_run.disparity, cues_scene.disparity, mask=visible)
     assert scores.density == 1.0
-    assert scores.bad[1.0] < 0.05  # measured 0.017
+    assert scores.bad[1.0] < 0.05  # measured 0.019
 
 
 def test_flow_epe_below_half_a_pixel(cues_scene, cues_run):
@@ -160,16 +160,15 @@ def test_colour_only_boundary_is_found_by_colour_alone(cues_scene, cues_run):
 
 @pytest.mark.xfail(strict=True, reason="measured at 256 x 256 (fast mean-field schedule): texture-only recall 0.34 "
                    "within 1 px (the density's 49-px box windows alias with the blob lattice, so the candidates "
-                   "of vmcl.early.texture reach 0.48 within 1 px at precision 0.09); depth-only recall 0.32, all "
-                   "of it from the motion lines: the depth MRF draws almost no line sites, since the sparse "
-                   "edge matches are integer disparities with no data near the boundary, which it bridges "
-                   "with ramps")
+                   "of vmcl.early.texture reach 0.48 within 1 px at precision 0.09); depth-only recall 0.32, "
+                   "nearly all of it from the motion lines: the depth MRF bridges the 2-px jump with a ramp "
+                   "across the few pixels where the matches blur it, which costs less than a line")
 def test_integration_recalls_every_single_cue_boundary(cues_scene, cues_run):
     scores = metrics.label_scores(cues_run.labels, cues_scene.labels, tolerance=1)
     assert min(scores[label].recall for label in (scenes.Label.DEPTH, scenes.Label.ALBEDO, scenes.Label.TEXTURE)) >= 0.8
 
 
-@pytest.mark.xfail(strict=True, reason="measured F 0.32 within 1 px (precision 0.22, recall 0.58): the texture "
+@pytest.mark.xfail(strict=True, reason="measured F 0.31 within 1 px (precision 0.21, recall 0.58): the texture "
                    "lines (2815 px) are at precision 0.08 and the depth lines nearly absent; see the recall test")
 def test_integrated_discontinuities_f_at_least_0_8(cues_scene, cues_run):
     scores = metrics.detection_scores(cues_run.discontinuities, cues_scene.labels > 0, tolerance=1)
