@@ -138,18 +138,16 @@ inline float stats_score(__global const float *stats, long x, long y, long W, lo
 }
 
 /* Scores cell (x, y, d) from its summed votes and folds it into the pixel's selection; `own` is the
- * cell's own plane value p(x, y, d). Intensity matches only pixels in [x_lo, x_hi] x [r, H - 1 - r],
- * where its (2r+1)^2 window and those of every disparity of the range lie inside the image: the score
- * divides by the full area, so a window cut by the border (its sums short of pixels) scored wrongly,
- * and near the left border the disparities reaching outside were missing from the competition, so
- * the winner was the best of the rest (StereoBM leaves those borders unmatched too). */
+ * cell's own plane value p(x, y, d). An intensity cell competes only when both of its (2r+1)^2 windows
+ * lie inside the image: the score divides by the full area, so a window cut by the border (its sums
+ * short of pixels) scored wrongly; at the right border such cells won with d near 0. */
 inline void fold_cell(Selection *s, long x, long y, long W, long H, int d, float votes, float own,
-                      __global const float *stats, float area, float negative, float dip, long x_lo, long x_hi,
-                      long r)
+                      __global const float *stats, float area, float negative, float dip, long r)
 {
     float score = stats_score(stats, x, y, W, H, d, votes, area, negative);
 #if FEATURES == FEATURES_INTENSITY
-    consider(s, d, score, score, x >= x_lo && x <= x_hi && y >= r && y + r < H, dip);
+    int inside = y >= r && y + r < H && x - r >= 0 && x + r < W && x - d - r >= 0 && x - d + r < W;
+    consider(s, d, score, score, inside, dip);
 #else
     consider(s, d, votes, score, own > 0.0f, dip);
 #endif
@@ -168,8 +166,7 @@ inline void finish(Selection s, long i, __global float *best_score, __global int
 __kernel void select_table(__global const float *votes, __global const float *planes, __global const uchar *left,
                            __global const float *stats, __global float *best_score, __global int *best_d,
                            __global float *peaks,
-                           long W, long H, long D, int d_min, float area, float negative, float dip, long x_lo,
-                           long x_hi, long r)
+                           long W, long H, long D, int d_min, float area, float negative, float dip, long r)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -178,8 +175,7 @@ __kernel void select_table(__global const float *votes, __global const float *pl
     if (left[i]) {
         for (long k = 0; k < D; k++) {
             size_t cell = (k * H + y) * W + x;
-            fold_cell(&s, x, y, W, H, d_min + (int)k, votes[cell], planes[cell], stats, area, negative, dip, x_lo,
-                      x_hi, r);
+            fold_cell(&s, x, y, W, H, d_min + (int)k, votes[cell], planes[cell], stats, area, negative, dip, r);
         }
     }
     finish(s, i, best_score, best_d, peaks);
@@ -191,7 +187,7 @@ __kernel void select_running(__global const float *votes, __global const float *
                              __global const float *stats, __global float *best_score, __global int *best_d,
                              __global float *peaks,
                              long W, long H, int d, int first, float area, float negative, float dip,
-                             long x_lo, long x_hi, long r)
+                             long r)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -204,7 +200,7 @@ __kernel void select_running(__global const float *votes, __global const float *
         s.valley = peaks[3 * i + 1];
         s.second = peaks[3 * i + 2];
     }
-    if (left[i]) fold_cell(&s, x, y, W, H, d, votes[i], plane[i], stats, area, negative, dip, x_lo, x_hi, r);
+    if (left[i]) fold_cell(&s, x, y, W, H, d, votes[i], plane[i], stats, area, negative, dip, r);
     finish(s, i, best_score, best_d, peaks);
 }
 

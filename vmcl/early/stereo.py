@@ -95,9 +95,9 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
         "canny" (default): Canny edges, compatible when their gradient directions differ by at most
         ``direction_tolerance``. "dog": zero crossings of the difference of Gaussians, compatible when
         their signs agree (the original matcher). "intensity": every pixel, scored by the normalised
-        cross-correlation of the smoothed brightness over the patch (dense), except within
-        ``patch // 2`` of the border and where the right patch of some disparity in the range would
-        leave the image (the left ``d_max + patch // 2`` columns; the right ``patch // 2 - d_min``).
+        cross-correlation of the smoothed brightness over the patch (dense). A disparity competes
+        only where both patches lie inside the image: no match within ``patch // 2`` of the border, and
+        near the left border only the disparities that stay inside.
     patch : int
         Odd side of the support patch, >= 1.
     sigma : float
@@ -267,9 +267,6 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
     defines = {"FEATURES": _FEATURES[features], "ATTR_T": "float" if features == "intensity" else "ushort"}
     area = np.float32(patch * patch)
     dims = (np.int64(width), np.int64(height))
-    # Columns where the intensity windows of every disparity fit in the image, and the radius for rows.
-    searchable = (np.int64(max(radius, d_max + radius)),
-                  np.int64(min(width - 1 - radius, width - 1 + d_min - radius)), np.int64(radius))
     build = machine.kernel("stereo", "match_planes", **defines)
     if variant == "running" and features != "intensity" and not sliding:
         machine.launch(machine.kernel("stereo", "match_edges_clipped", **defines), (-(-width // _SPAN), height),
@@ -293,7 +290,7 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
                        tolerance)
         machine.launch(machine.kernel("stereo", "select_table", **defines), (width, height), support.sum(planes),
                        planes, common[0], stats, *selection, *dims, np.int64(depth), np.int32(d_min), area,
-                       np.float32(negative_evidence), np.float32(dip), *searchable)
+                       np.float32(negative_evidence), np.float32(dip), np.int64(radius))
     else:
         plane = machine.empty((1, height, width), np.float32)
         fold = machine.kernel("stereo", "select_running", **defines)
@@ -302,7 +299,7 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
                            tolerance)
             machine.launch(fold, (width, height), support.sum(plane), plane, common[0], stats, *selection,
                            *dims, np.int32(d_min + k), np.int32(k == 0), area, np.float32(negative_evidence),
-                           np.float32(dip), *searchable)
+                           np.float32(dip), np.int64(radius))
     outputs = [machine.empty((height, width), np.float32), machine.empty((height, width), np.float32),
                machine.empty((height, width), np.uint8), machine.empty((height, width), np.uint8)]
     machine.launch(machine.kernel("stereo", "suppress", **defines), (-(-width // _SPAN), height), common[0],
