@@ -98,7 +98,7 @@ def backfill(primary: ArrayLike, secondary: ArrayLike, secondary_confidence: Arr
     The pipeline fills the stereo edge matches (a few per cent of the pixels) with the dense intensity
     matches whose normalised cross-correlation exceeds 0.9, at weight up to 0.2. Measured with the
     pipeline's depth restoration (mean field), dense bad-1 rate on Middlebury nonocc: tsukuba 20.2% to
-    11.6%, venus 13.5% to 6.5%, teddy 46.4% to 18.5%; on vmcl.scenes (256 x 256): blocks 10.9% to 4.7%,
+    11.6%, venus 13.5% to 6.5%, teddy 46.4% to 18.2%; on vmcl.scenes (256 x 256): blocks 10.9% to 4.6%,
     "cues" 1.8% to 1.9%.
     """
     machine = machine_for(machine)
