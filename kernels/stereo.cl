@@ -103,15 +103,18 @@ inline void consider(Selection *s, int d, float votes, float score, int own, flo
 
 /* The normalised score of cell (x, y, d). Edges: the share of the edges eligible in the two patches
  * that match, v / ((nl + nr) / 2), less `negative` times the unmatched edges as a share of the patch
- * area. Intensity: the normalised cross-correlation of the two patches. */
+ * area. Intensity: the normalised cross-correlation of the two patches, in [-1, 1]; -INFINITY (never
+ * chosen) where either patch's variance is too small for float32 to tell from rounding, 1e-5 of its
+ * second moment (the images come centred on their means, so that moment is close to the variance
+ * wherever the patch is not far brighter or darker than the image). */
 inline float cell_score(float votes, float nl, float nr, float area, float negative,
                         float sl, float sll, float sr, float srr)
 {
 #if FEATURES == FEATURES_INTENSITY
     float n = area;
-    float cov = votes - sl * sr / n;
-    float var = (sll - sl * sl / n) * (srr - sr * sr / n);
-    return var > 1e-12f ? cov / sqrt(var) : 0.0f;
+    float var_l = sll - sl * sl / n, var_r = srr - sr * sr / n;
+    if (!(var_l > 1e-5f * sll && var_r > 1e-5f * srr)) return -INFINITY;
+    return clamp((votes - sl * sr / n) / sqrt(var_l * var_r), -1.0f, 1.0f);
 #else
     float eligible = 0.5f * (nl + nr);
     if (eligible <= 0.0f) return 0.0f;
@@ -147,7 +150,7 @@ inline void fold_cell(Selection *s, long x, long y, long W, long H, int d, float
     float score = stats_score(stats, x, y, W, H, d, votes, area, negative);
 #if FEATURES == FEATURES_INTENSITY
     int inside = y >= r && y + r < H && x - r >= 0 && x + r < W && x - d - r >= 0 && x - d + r < W;
-    consider(s, d, score, score, inside, dip);
+    consider(s, d, isfinite(score) ? score : 0.0f, score, inside, dip);
 #else
     consider(s, d, votes, score, own > 0.0f, dip);
 #endif
@@ -400,6 +403,14 @@ __kernel void feature_codes(__global const uchar *left, __global const uchar *ri
 }
 
 /* The planes whose patch sums the intensity score needs: L, L^2, R and R^2 (plane k at stack + k n). */
+/* x -= mean, the mean being sum[0] / n (a device scalar, so the host never waits for it). */
+__kernel void subtract_mean(__global float *x, __global const float *sum, long n)
+{
+    long i = get_global_id(0);
+    if (i >= n) return;
+    x[i] -= sum[0] / (float)n;
+}
+
 __kernel void intensity_moments(__global const float *left, __global const float *right, __global float *stack,
                                 long n)
 {

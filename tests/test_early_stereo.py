@@ -270,6 +270,24 @@ def test_intensity_matches_only_with_windows_inside_the_image(machine):
     # there then lose to the true matches in the suppression).
     assert np.all(found.disparity[2:38, 2:5][matched[2:38, 2:5]] <= 2)
 
+def test_intensity_score_does_not_depend_on_the_brightness_level(machine):
+    """A correlation ignores an added constant; float32 patch moments of raw uint8 brightness near 220
+    lost the variance of a low-contrast texture (scores up to 4.6, half the matches wrong)."""
+    texture = np.random.default_rng(1).normal(0, 2, (48, 84)).astype(np.float32)
+    found = {}
+    for level in (30, 220):
+        pair = [np.clip(level + texture[:, k:k + 80], 0, 255).astype(np.uint8) for k in (0, 4)]
+        found[level] = match(*pair, d_min=0, d_max=8, patch=7, features="intensity", machine=machine)
+        assert np.nanmax(found[level].score) <= 1
+    matched = np.isfinite(found[30].disparity)
+    assert matched.mean() > 0.7 and np.mean(found[30].disparity[matched] == 4) > 0.95
+    same = (found[220].disparity == found[30].disparity) | ~(matched | np.isfinite(found[220].disparity))
+    assert same.mean() > 0.99
+    flat = np.full((32, 48), 100, np.uint8)
+    assert not np.isfinite(match(flat, flat, d_min=0, d_max=4, patch=5, features="intensity",
+                                 machine=machine).disparity).any()
+
+
 def test_negative_evidence_is_measured_against_the_plain_score(machine):
     scene, d_min, d_max = _pair("blocks")
     visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
@@ -292,6 +310,11 @@ def test_negative_evidence_is_measured_against_the_plain_score(machine):
     ({"d_min": 1.5}, TypeError, "d_min must be an integer"),
     ({"patch": 183, "variant": "running"}, ValueError, "16 bits"),
     ({"direction_tolerance": -0.1}, ValueError, "direction_tolerance"),
+    ({"horizontal_tolerance": 90.0}, ValueError, "horizontal_tolerance"),
+    ({"horizontal_tolerance": float("nan")}, ValueError, "horizontal_tolerance"),
+    ({"left": np.zeros((0, 32), np.float32), "right": np.zeros((0, 32), np.float32)}, ValueError, "empty"),
+    ({"left": np.full((32, 32), np.nan, np.float32)}, ValueError, "left has NaN"),
+    ({"right": np.full((32, 32), np.inf, np.float32), "features": "intensity"}, ValueError, "right has NaN"),
 ])
 def test_bad_input_is_named(kwargs, error, pattern, machine):
     arguments = {"left": np.zeros((32, 32), np.float32), "right": np.zeros((32, 32), np.float32),

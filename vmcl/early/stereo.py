@@ -30,6 +30,7 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
 
+from vmcl.cm import reduce as cm_reduce
 from vmcl.cm import scan
 from vmcl.cm._arrays import ArrayLike, machine_for
 from vmcl.cm._arrays import field as device_field
@@ -43,7 +44,7 @@ _FEATURES = {"canny": 0, "dog": 1, "intensity": 2}
 _TABLE_BYTES = 256 << 20  # the largest table of match planes the default variant builds
 _BAND = 32  # rows per work-item of match_edges (at least)
 _MAX_RUNNING_PATCH = 181  # (2r + 1)^2 votes fit the running variant's int16 lanes
-_SPAN = 16  # pixels of a row per work-item of match_edges (SPAN in kernels/stereo.cl)
+_SPAN = 16  # pixels of a row per work-item of match_edges_clipped and suppress (SPAN in kernels/stereo.cl)
 
 
 @dataclass
@@ -72,6 +73,12 @@ def _pair(left, right) -> None:
             raise TypeError(f"{name} must be a NumPy array or a pyopencl.array.Array, got {type(image).__name__}")
     if left.shape != right.shape:
         raise ValueError(f"left and right must have the same shape, got {left.shape} and {right.shape}")
+    if 0 in left.shape[:2]:
+        raise ValueError(f"left and right must not be empty, got shape {left.shape}")
+    for name, image in (("left", left), ("right", right)):
+        # Device images are not checked: that would need a read back.
+        if isinstance(image, np.ndarray) and image.dtype.kind == "f" and not np.isfinite(image).all():
+            raise ValueError(f"{name} has NaN or infinite pixels")
 
 
 def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features: Features = "canny",
@@ -97,7 +104,8 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
         their signs agree (the original matcher). "intensity": every pixel, scored by the normalised
         cross-correlation of the smoothed brightness over the patch (dense). A disparity competes
         only where both patches lie inside the image: no match within ``patch // 2`` of the border, and
-        near the left border only the disparities that stay inside.
+        near the left border (or, for negative disparities, the right) only the disparities whose right
+        patch stays inside. Patches too flat for float32 to measure their variance do not match.
     patch : int
         Odd side of the support patch, >= 1.
     sigma : float
@@ -112,7 +120,7 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     horizontal_tolerance : float
         Degrees: Canny edges closer than this to horizontal (their gradient direction's code closer to
         vertical) are not features, since along a scanline they cannot say where they match (the
-        aperture problem). 0 keeps every edge.
+        aperture problem). In [0, 90); 0 keeps every edge.
     min_score : float
         Features whose best normalised score is below it are flagged out of range and left unmatched.
     bimodal, dip, min_votes : float
@@ -153,6 +161,8 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
         raise ValueError(f"features must be one of {sorted(_FEATURES)}, got {features!r}")
     if (left.ndim == 3) != (right.ndim == 3):
         raise ValueError("left and right must both be grey or both be colour")
+    if not 0 <= horizontal_tolerance < 90:  # also refuses NaN; from 90 degrees on no edge would be left
+        raise ValueError(f"horizontal_tolerance must be in [0, 90) degrees, got {horizontal_tolerance}")
     maps = _feature_maps(machine, left, right, features, sigma, low_threshold, high_threshold, use_quantiles)
     min_angle = horizontal_tolerance * 65536 / 360 if features == "canny" else 0.0
     found = _match_maps(machine, maps, features, min_angle=min_angle, d_min=d_min, d_max=d_max, patch=patch,
@@ -360,6 +370,12 @@ def _feature_maps(machine: Machine, left, right, features: str, sigma: float, lo
             maps[side], maps[side + "_attr"] = crossings.mask, crossings.sign
         else:
             brightness = gaussian(image, sigma=sigma, method="exact", machine=machine)
+            # Centred on its mean, so the patch moments stay near the variances they are differenced
+            # into: with uint8 brightness around 200, float32 rounding of the raw sums swamped a patch's
+            # variance and the correlation left [-1, 1] (its value then depended on the mean level).
+            total = cm_reduce.reduce(brightness, "sum", machine=machine)
+            machine.launch(machine.kernel("stereo", "subtract_mean"), (brightness.size,), brightness, total,
+                           np.int64(brightness.size))
             maps[side] = _filled(machine, brightness.shape, np.uint8, 1)
             maps[side + "_attr"] = brightness
     return maps
