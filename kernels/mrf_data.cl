@@ -5,7 +5,8 @@
  *   score_confidence  gamma = weight * clamp((score - floor) / (1 - floor), 0, 1), 0 where no score:
  *                     a measurement whose matching score barely clears chance pulls nothing
  *   backfill          the primary measurement where it has one (gamma 1), else the secondary with
- *                     its own gamma: sparse precise matches kept, the gaps filled by dense ones
+ *                     its own gamma (0 where it has none either): sparse precise matches kept, the
+ *                     gaps filled by dense ones
  *
  * Fields hold NCOMP floats per pixel (1: disparity, 2: flow); a pixel has a measurement when every
  * component is finite.
@@ -35,5 +36,9 @@ __kernel void backfill(__global const float *primary, __global const float *seco
         has &= isfinite(primary[i * NCOMP + c]);
     for (int c = 0; c < NCOMP; ++c)
         data[i * NCOMP + c] = has ? primary[i * NCOMP + c] : secondary[i * NCOMP + c];
-    gamma[i] = has ? 1.0f : secondary_gamma[i];
+    int secondary_has = 1;
+    for (int c = 0; c < NCOMP; ++c)
+        secondary_has &= isfinite(secondary[i * NCOMP + c]);
+    float g2 = secondary_gamma[i];
+    gamma[i] = has ? 1.0f : (secondary_has && isfinite(g2) ? g2 : 0.0f);
 }

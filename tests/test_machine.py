@@ -84,6 +84,17 @@ def test_empty_arrays_are_pyopencl_arrays_of_that_layout(shape, dtype, machine):
         machine.empty((3, -1), dtype)
 
 
+def test_empty_refuses_non_integer_shapes_even_after_equal_ones(machine):
+    """The layout cache must not let 5.0 pass because 5 was seen (equal as dict keys)."""
+    machine.empty(5, np.float32)
+    machine.empty((3, 2), np.float32)
+    for shape in (5.0, (3, 2.0), (True, 2)):
+        with pytest.raises(ValueError, match="invalid shape"):
+            machine.empty(shape, np.float32)
+    assert machine.empty(np.array([2, 3]), np.float32).shape == (2, 3)
+    assert machine.empty([np.int64(4)], np.uint8).shape == (4,)
+
+
 def test_profiling_reports_each_kernel():
     profiled = vmcl.Machine(profile=True)
     scan(np.ones((64, 64), np.float32), machine=profiled)

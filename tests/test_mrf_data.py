@@ -47,11 +47,15 @@ def test_backfill_keeps_the_primary_and_fills_its_gaps(machine, components):
         primary[~gaps & (rng.random((29, 31)) < 0.1), 1] = np.nan
     secondary[rng.random(shape) < 0.1] = np.nan
     gamma2 = rng.random((29, 31)).astype(np.float32)
+    gamma2[rng.random(gamma2.shape) < 0.05] = np.nan
     data, gamma = backfill(primary, secondary, gamma2, machine=machine)
-    has = np.isfinite(primary).all(axis=-1) if components > 1 else np.isfinite(primary)
+    def measured(field):
+        return np.isfinite(field).all(axis=-1) if components > 1 else np.isfinite(field)
+    has, second_has = measured(primary), measured(secondary)
     where = has[..., None] if components > 1 else has
     np.testing.assert_array_equal(data, np.where(where, primary, secondary))
-    np.testing.assert_array_equal(gamma, np.where(has, np.float32(1), gamma2))
+    fill = np.where(second_has & np.isfinite(gamma2), gamma2, np.float32(0))
+    np.testing.assert_array_equal(gamma, np.where(has, np.float32(1), fill))
     device = backfill(machine.to_device(primary), secondary, gamma2, machine=machine)
     assert all(isinstance(a, cl_array.Array) for a in device)
     np.testing.assert_array_equal(device[0].get(), data)

@@ -41,13 +41,25 @@ def test_config_from_toml_overrides_defaults_and_presets(tmp_path):
 @pytest.mark.parametrize("text, message", [("[stereo]\nd_maxx = 3\n", "stereo.d_maxx"),
                                            ("[stero]\n", "stero"),
                                            ("[mrf.depth]\nbetta = 1.0\n", "mrf.depth.betta"),
-                                           ("[stereo\n", "not valid TOML")])
+                                           ("[stereo\n", "not valid TOML"),
+                                           ("[stereo]\nbackfill_floor = 1.5\n", "stereo.backfill_floor"),
+                                           ("[stereo]\nbackfill_weight = -0.1\n", "stereo.backfill_weight"),
+                                           ("[motion]\nconfidence_floor = nan\n", "motion.confidence_floor")])
 def test_bad_config_is_refused_naming_the_key(tmp_path, text, message):
     path = tmp_path / "bad.toml"
     path.write_text(text)
     with pytest.raises(ValueError, match=message):
         Config.from_toml(path)
 
+
+
+def test_weights_can_be_switched_off_from_toml_and_bad_types_are_named(tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text("[motion]\nweigh_by_score = false\n[stereo]\nbackfill = false\n")
+    config = Config.from_toml(path)
+    assert not config.motion.weigh_by_score and not config.stereo.backfill
+    with pytest.raises(TypeError, match="stereo.backfill_weight"):
+        Config.from_dict({"stereo": {"backfill_weight": "0.2"}})
 
 # -- inputs ----------------------------------------------------------------------------------------
 
@@ -137,7 +149,7 @@ def test_dense_disparity_bad_1_below_5_percent(cues_scene, cues_run):
     visible = ~cues_scene.occluded_stereo & np.isfinite(cues_scene.disparity)
     scores = metrics.evaluate_disparity(cues_run.disparity, cues_scene.disparity, mask=visible)
     assert scores.density == 1.0
-    assert scores.bad[1.0] < 0.05  # measured 0.019
+    assert scores.bad[1.0] < 0.05  # measured 0.009
 
 
 def test_flow_epe_below_half_a_pixel(cues_scene, cues_run):
@@ -168,7 +180,7 @@ def test_integration_recalls_every_single_cue_boundary(cues_scene, cues_run):
     assert min(scores[label].recall for label in (scenes.Label.DEPTH, scenes.Label.ALBEDO, scenes.Label.TEXTURE)) >= 0.8
 
 
-@pytest.mark.xfail(strict=True, reason="measured F 0.31 within 1 px (precision 0.21, recall 0.58): the texture "
+@pytest.mark.xfail(strict=True, reason="measured F 0.32 within 1 px (precision 0.22, recall 0.58): the texture "
                    "lines (2815 px) are at precision 0.08 and the depth lines nearly absent; see the recall test")
 def test_integrated_discontinuities_f_at_least_0_8(cues_scene, cues_run):
     scores = metrics.detection_scores(cues_run.discontinuities, cues_scene.labels > 0, tolerance=1)
@@ -187,4 +199,4 @@ def test_dense_disparity_on_middlebury(name, bar, datasets_root, machine):
     stereo = {"d_min": int(np.floor(low)), "d_max": int(np.ceil(high))}
     result = VisionMachine(Config.from_dict({"stereo": stereo}), machine=machine).run(pair.left, pair.right)
     scores = metrics.evaluate_disparity(result.disparity, pair.disparity, mask=pair.masks["nonocc"])
-    assert scores.bad[1.0] < bar  # measured tsukuba 0.116, venus 0.065 (edge matches alone: 0.202, 0.135)
+    assert scores.bad[1.0] < bar  # measured tsukuba 0.115, venus 0.063 (edge matches alone: 0.202, 0.135)

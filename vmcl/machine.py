@@ -28,6 +28,9 @@ INSTALL_HINT = (
     "(or run `make setup`, which does it when run as root). Any vendor's OpenCL driver works too."
 )
 
+_MAX_LAYOUTS = 4096
+"""Array layouts :meth:`Machine.empty` keeps before starting over."""
+
 
 class NoOpenCLPlatformError(RuntimeError):
     """Raised when no OpenCL platform or no matching device is available."""
@@ -184,19 +187,21 @@ class Machine:
         its general one spent about 20 us of host time per array on NumPy checks, and a Canny or stereo
         call makes dozens, on a host thread that shares the CPU with the device's.
         """
-        key = (tuple(shape) if isinstance(shape, list) else shape, dtype)
-        layout = self._layouts.get(key)
+        dims = (shape,) if isinstance(shape, (int, float, np.integer, np.floating)) else tuple(shape)
+        # Only plain-int shapes are looked up: 5.0 == 5 as a dict key, and a float must still be refused.
+        layout = self._layouts.get((dims, dtype)) if all(type(n) is int for n in dims) else None
         if layout is None:
-            dtype = np.dtype(dtype)
-            dims = (shape,) if isinstance(shape, (int, np.integer)) else tuple(shape)
-            if not all(isinstance(n, (int, np.integer)) and n >= 0 for n in dims):
+            if not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 0 for n in dims):
                 raise ValueError(f"invalid shape {dims}: dimensions must be integers >= 0")
             dims = tuple(int(n) for n in dims)
-            strides, step = [], dtype.itemsize
+            item = np.dtype(dtype)
+            strides, step = [], item.itemsize
             for n in reversed(dims):
                 strides.append(step)
                 step *= max(1, n)
-            layout = self._layouts[key] = (dims, dtype, tuple(reversed(strides)), math.prod(dims))
+            if len(self._layouts) >= _MAX_LAYOUTS:  # images of ever new sizes must not grow it forever
+                self._layouts.clear()
+            layout = self._layouts[(dims, dtype)] = (dims, item, tuple(reversed(strides)), math.prod(dims))
         dims, dtype, strides, size = layout
         return cl_array.Array(None, dims, dtype, allocator=self.pool, strides=strides, _fast=True, _size=size,
                               _context=self.context, _queue=self.queue)

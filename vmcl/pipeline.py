@@ -50,6 +50,14 @@ else:  # the same parser, before it joined the standard library
 _FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
 
 
+def _check_unit_interval(value: Any, key: str, *, closed_above: bool) -> None:
+    """Refuse a configuration value outside [0, 1) or [0, 1] now, naming its key, not mid-run."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"{key} must be a number, got {type(value).__name__}")
+    if not (0 <= value <= 1 if closed_above else 0 <= value < 1):  # NaN fails both
+        raise ValueError(f"{key} must be in [0, {'1]' if closed_above else '1)'}, got {value}")
+
+
 @dataclass(frozen=True)
 class EdgesConfig:
     """Canny's brightness edges, the edges every cue's MRF is coupled to.
@@ -112,6 +120,10 @@ class StereoConfig:
     backfill_floor: float = 0.9
     backfill_weight: float = 0.2
 
+    def __post_init__(self) -> None:
+        _check_unit_interval(self.backfill_floor, "stereo.backfill_floor", closed_above=False)
+        _check_unit_interval(self.backfill_weight, "stereo.backfill_weight", closed_above=True)
+
 
 @dataclass(frozen=True)
 class MotionConfig:
@@ -122,10 +134,12 @@ class MotionConfig:
     enabled : bool
     delta, patch, levels, features
         As :func:`vmcl.early.motion.flow` takes them.
-    confidence_floor : float, optional
-        The flow MRF weighs each estimate by :func:`vmcl.mrf.score_confidence` of its score with
-        this floor (in the features' score units; 0.7 was measured with "brightness"); None: every
-        estimate weighs 1.
+    weigh_by_score : bool
+        The flow MRF weighs each estimate by :func:`vmcl.mrf.score_confidence` of its score; off,
+        every estimate weighs 1.
+    confidence_floor : float
+        In [0, 1): that weighting's floor, in the features' score units (0.7 was measured with
+        "brightness").
     """
 
     enabled: bool = True
@@ -133,7 +147,11 @@ class MotionConfig:
     patch: int = 11
     levels: int = 2
     features: str = "brightness"
-    confidence_floor: float | None = 0.7
+    weigh_by_score: bool = True
+    confidence_floor: float = 0.7
+
+    def __post_init__(self) -> None:
+        _check_unit_interval(self.confidence_floor, "motion.confidence_floor", closed_above=False)
 
 
 @dataclass(frozen=True)
@@ -493,7 +511,7 @@ class _Run:
                 found = motion.flow(left, others_d["next"], delta=mc.delta, patch=mc.patch, levels=mc.levels,
                                     features=mc.features, machine=self.m)
                 device["raw_flow"] = found.flow
-                if mc.confidence_floor is not None:
+                if mc.weigh_by_score:
                     weights["flow"] = score_confidence(found.score, floor=mc.confidence_floor, machine=self.m)
         lines = {}
         if "mrf depth" in names:
@@ -542,8 +560,8 @@ class _Run:
         d_max = math.ceil(s.max_disparity * width) if s.d_max is None else s.d_max
         features = features or s.features
         # Canny's thresholds mean nothing to the intensity matcher, which matches every pixel.
-        thresholds = {} if features == "intensity" else dict(
-            low_threshold=s.low_threshold, high_threshold=s.high_threshold, use_quantiles=s.use_quantiles)
+        thresholds = {} if features == "intensity" else {
+            "low_threshold": s.low_threshold, "high_threshold": s.high_threshold, "use_quantiles": s.use_quantiles}
         return stereo.match(left, right, d_min=d_min, d_max=d_max, features=features, patch=s.patch,
                             sigma=s.sigma, barriers=barriers, machine=self.m, **thresholds)
 

@@ -68,9 +68,8 @@ def score_confidence(score: ArrayLike, *, floor: float, weight: float = 1.0,
     floor = _unit_interval(floor, "floor", closed_above=False)
     weight = _unit_interval(weight, "weight", closed_above=True)
     gamma = machine.empty(scores.shape, np.float32)
-    if scores.size:
-        machine.launch(machine.kernel("mrf_data", "score_confidence"), (scores.size,), scores, gamma,
-                       np.float32(floor), np.float32(weight), np.int64(scores.size))
+    machine.launch(machine.kernel("mrf_data", "score_confidence"), (scores.size,), scores, gamma,
+                   np.float32(floor), np.float32(weight), np.int64(scores.size))
     return gamma.get() if host else gamma
 
 
@@ -91,15 +90,16 @@ def backfill(primary: ArrayLike, secondary: ArrayLike, secondary_confidence: Arr
     -------
     (data, confidence)
         The primary (confidence 1) where it has a measurement, elsewhere the secondary with its
-        confidence. NumPy for NumPy input, device arrays when any input is one.
+        confidence (0 where neither has one, or the secondary's confidence is not finite). NumPy for
+        NumPy input, device arrays when any input is one.
 
     Notes
     -----
     The pipeline fills the stereo edge matches (a few per cent of the pixels) with the dense intensity
     matches whose normalised cross-correlation exceeds 0.9, at weight up to 0.2. Measured with the
-    pipeline's depth restoration (mean field), dense bad-1 rate on Middlebury nonocc: tsukuba 20.2% to
-    11.6%, venus 13.5% to 6.5%, teddy 46.4% to 18.2%; on vmcl.scenes (256 x 256): blocks 10.9% to 4.6%,
-    "cues" 1.8% to 1.9%.
+    pipeline's depth restoration (mean field; benchmarks/results/pipeline.md), dense bad-1 rate on
+    Middlebury nonocc: tsukuba 20.2% to 11.5%, venus 13.5% to 6.3%, teddy 46.4% to 18.2%; on vmcl.scenes
+    (256 x 256): blocks 10.9% to 4.6%, "cues" 1.7% to 0.9%.
     """
     machine = machine_for(machine)
     host = all(isinstance(a, np.ndarray) for a in (primary, secondary, secondary_confidence))
@@ -115,10 +115,8 @@ def backfill(primary: ArrayLike, secondary: ArrayLike, secondary_confidence: Arr
         raise ValueError(f"primary must have 1 to 4 components per pixel, got {ncomp}")
     data = machine.empty(first.shape, np.float32)
     gamma = machine.empty(first.shape[:2], np.float32)
-    pixels = gamma.size
-    if pixels:
-        machine.launch(machine.kernel("mrf_data", "backfill", NCOMP=ncomp), (pixels,), first, second, gamma2,
-                       data, gamma, np.int64(pixels))
+    machine.launch(machine.kernel("mrf_data", "backfill", NCOMP=ncomp), (gamma.size,), first, second, gamma2,
+                   data, gamma, np.int64(gamma.size))
     if host:
         return data.get(), gamma.get()
     return data, gamma
