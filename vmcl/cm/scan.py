@@ -230,7 +230,10 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     ``box_sum`` of ones to get a mean). Each pass adds the element entering the window and subtracts
     the one leaving as it scans, which is the paper's difference of two scan values P[x+r] - P[x-r-1]
     fused into one pass: exact for int32 (wrapping on overflow), and for float32 within a relative
-    error of about sqrt(n) * 2**-24 of the largest partial sum.
+    error of about sqrt(n) * 2**-24 of the largest partial sum. For the same reason a NaN or infinity
+    does not leave the window with its element: it spoils every later output of its row (and, in the
+    column pass, of the columns below it). Replace non-finite values first; they are not checked here,
+    since that would cost a pass of its own.
     """
     machine = machine_for(machine)
     data, host = field(x, "x", machine, ndims=(1, 2, 3))
