@@ -30,7 +30,7 @@ def bad_1(field, pair) -> np.ndarray:
 
 # nonocc bad-1 measured with this pipeline (benchmarks/results/mrf.md); the slack is for the matcher's and
 # the solver's float changes, the bar itself is the comparison with StereoBM.
-@pytest.mark.parametrize(("name", "measured"), [("tsukuba", 0.135), ("venus", 0.082), ("teddy", 0.200)])
+@pytest.mark.parametrize(("name", "measured"), [("tsukuba", 0.132), ("venus", 0.075), ("teddy", 0.191)])
 def test_restored_intensity_matches_beat_stereo_bm(datasets_root, machine, name, measured):
     pair = datasets.load_stereo(name, datasets_root)
     d_max = int(np.ceil(pair.disparity_range[1])) + 2
