@@ -40,6 +40,7 @@ from vmcl import integrate as _integrate
 from vmcl.early import color, edges, motion, stereo, texture
 from vmcl.machine import Machine
 from vmcl.mrf import Params, backfill, preset, restore, score_confidence
+from vmcl.mrf.data import check_unit_interval
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -48,14 +49,6 @@ else:  # the same parser, before it joined the standard library
 
 # Full scale of each accepted integer dtype: images are computed as float32 in [0, 1].
 _FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
-
-
-def _check_unit_interval(value: Any, key: str, *, closed_above: bool) -> None:
-    """Refuse a configuration value outside [0, 1) or [0, 1] now, naming its key, not mid-run."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TypeError(f"{key} must be a number, got {type(value).__name__}")
-    if not (0 <= value <= 1 if closed_above else 0 <= value < 1):  # NaN fails both
-        raise ValueError(f"{key} must be in [0, {'1]' if closed_above else '1)'}, got {value}")
 
 
 @dataclass(frozen=True)
@@ -98,8 +91,8 @@ class StereoConfig:
         Also match every pixel by intensity (``features="intensity"``, the same patch) and let those
         matches fill the gaps between the feature matches in the depth MRF's data
         (:func:`vmcl.mrf.backfill`), weighed by :func:`vmcl.mrf.score_confidence` of their normalised
-        cross-correlation with ``backfill_floor`` and ``backfill_weight``. It halves the dense bad-1
-        rate on Middlebury (see :func:`vmcl.mrf.backfill`).
+        cross-correlation with ``backfill_floor`` and ``backfill_weight``. It cut the dense bad-1
+        rate on Middlebury by 43% to 61% (see :func:`vmcl.mrf.backfill`).
     backfill_floor, backfill_weight : float
         Intensity matches whose correlation is at or below the floor weigh 0; a perfect one weighs
         ``backfill_weight`` (the feature matches weigh 1).
@@ -121,8 +114,9 @@ class StereoConfig:
     backfill_weight: float = 0.2
 
     def __post_init__(self) -> None:
-        _check_unit_interval(self.backfill_floor, "stereo.backfill_floor", closed_above=False)
-        _check_unit_interval(self.backfill_weight, "stereo.backfill_weight", closed_above=True)
+        # Checked when the Config is made, naming the key, not mid-run.
+        check_unit_interval(self.backfill_floor, "stereo.backfill_floor", closed_above=False)
+        check_unit_interval(self.backfill_weight, "stereo.backfill_weight", closed_above=True)
 
 
 @dataclass(frozen=True)
@@ -151,7 +145,7 @@ class MotionConfig:
     confidence_floor: float = 0.7
 
     def __post_init__(self) -> None:
-        _check_unit_interval(self.confidence_floor, "motion.confidence_floor", closed_above=False)
+        check_unit_interval(self.confidence_floor, "motion.confidence_floor", closed_above=False)
 
 
 @dataclass(frozen=True)
@@ -568,8 +562,9 @@ class _Run:
     def dense_match(self, left, right, width: int) -> tuple[Any, Any] | None:
         """The intensity matches and their weights for :meth:`depth_data`, or None without backfill.
 
-        Matched once, without barriers: in the feedback pass, cutting the correlation windows at the
-        first pass's lines left too few pixels to correlate (on "cues", dense bad-1 3.9% became 15%).
+        Matched once, without barriers: matched again with the first pass's depth lines as barriers, in
+        the feedback pass, it made the restored disparity worse (dense bad-1 on "cues" 0.9% to 1.1%,
+        on "blocks" 4.6% to 6.7%).
         """
         s = self.c.stereo
         if not s.backfill or s.features == "intensity":

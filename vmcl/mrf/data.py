@@ -20,7 +20,9 @@ from vmcl.cm._arrays import ArrayLike, field, machine_for
 from vmcl.machine import Machine
 
 
-def _unit_interval(value, name: str, *, closed_above: bool) -> float:
+def check_unit_interval(value, name: str, *, closed_above: bool) -> float:
+    """``value`` as a float in [0, 1] (``closed_above``) or [0, 1); TypeError or ValueError naming ``name``
+    otherwise (NaN included). The pipeline checks its configuration of these weights with it too."""
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise TypeError(f"{name} must be a number, got {type(value).__name__}")
     value = float(value)
@@ -65,8 +67,8 @@ def score_confidence(score: ArrayLike, *, floor: float, weight: float = 1.0,
     """
     machine = machine_for(machine)
     scores, host = field(score, "score", machine, ndims=(2,), dtypes=(np.float32,))
-    floor = _unit_interval(floor, "floor", closed_above=False)
-    weight = _unit_interval(weight, "weight", closed_above=True)
+    floor = check_unit_interval(floor, "floor", closed_above=False)
+    weight = check_unit_interval(weight, "weight", closed_above=True)
     gamma = machine.empty(scores.shape, np.float32)
     machine.launch(machine.kernel("mrf_data", "score_confidence"), (scores.size,), scores, gamma,
                    np.float32(floor), np.float32(weight), np.int64(scores.size))
