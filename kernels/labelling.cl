@@ -1,0 +1,138 @@
+/* labelling.cl: the integration stage's labels by a linear classifier, seed section "Integration via
+ * labeling with a linear classifier" (Gamble, Geiger, Weinshall and Poggio). One work-item per pixel
+ * over a (W, H) grid; ids past the field idle.
+ *
+ *   label_features  the classifier's inputs at every pixel: which cues' line processes and whether a
+ *                   brightness edge lie within one pixel (from the support bits of vmcl.integrate), and
+ *                   local measures of the restored fields that tell the physical causes apart (jumps of
+ *                   disparity and flow, creases of disparity, steps of log brightness and hue, whiteness
+ *                   and brightness for highlights). With CLASSIFY, the same inputs go straight into the
+ *                   linear network: each label's support is a weighted sum of them, and a candidate
+ *                   pixel (a cue's line or a brightness edge on it) takes the label of largest support,
+ *                   which may be "none"; without it, the inputs are written out (fitting, inspection).
+ *
+ * Defines (from vmcl.labelling, the one place that names them): NF inputs, NC labels; the support bits
+ * BIT_DEPTH, BIT_MOTION, BIT_COLOUR, BIT_TEXTURE, BIT_BRIGHTNESS; HAS_STEREO, HAS_MOTION, HAS_COLOUR
+ * (which restored fields exist; the inputs of a missing one are 0); RGB (the image has three channels).
+ * Fields: image float32 (H, W) or (H, W, 3) in [0, 1]; disparity, hue float32 (H, W); flow float32
+ * (H, W, 2); NaN values (hue outside its valid range) are skipped.
+ */
+
+#define CLIPPED(v, hi) fmin((float)(v), (float)(hi))
+
+/* max - min of one channel of a field over the (2r+1)^2 window, clamped at the borders, NaN skipped. */
+inline float window_range(__global const float *f, int channels, int c, long x, long y, int r, long W, long H)
+{
+    float lo = INFINITY, hi = -INFINITY;
+    for (long dy = -r; dy <= r; dy++) {
+        long yy = clamp(y + dy, 0L, H - 1);
+        for (long dx = -r; dx <= r; dx++) {
+            float v = f[(yy * W + clamp(x + dx, 0L, W - 1)) * channels + c];
+            if (isnan(v)) continue;
+            lo = fmin(lo, v);
+            hi = fmax(hi, v);
+        }
+    }
+    return hi >= lo ? hi - lo : 0.0f;
+}
+
+inline float grey_at(__global const float *image, long i)
+{
+#if RGB
+    return (image[3 * i] + image[3 * i + 1] + image[3 * i + 2]) * (1.0f / 3.0f);
+#else
+    return image[i];
+#endif
+}
+
+/* The largest second difference of disparity at a spacing of 3 px, across or along the rows: where a
+ * surface folds, the disparity's slope changes. */
+inline float crease_at(__global const float *d, long x, long y, long W, long H)
+{
+    float c = d[y * W + x];
+    float across = d[y * W + clamp(x - 3, 0L, W - 1)] - 2.0f * c + d[y * W + clamp(x + 3, 0L, W - 1)];
+    float along = d[clamp(y - 3, 0L, H - 1) * W + x] - 2.0f * c + d[clamp(y + 3, 0L, H - 1) * W + x];
+    return fmax(fabs(across), fabs(along));
+}
+
+__kernel void label_features(__global const uchar *support, __global const float *image,
+                             __global const float *disparity, __global const float *flow,
+                             __global const float *hue,
+#if CLASSIFY
+                             __constant const float *weights, __global uchar *labels,
+                             __constant const uchar *codes,
+#else
+                             __global float *features,
+#endif
+                             long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    size_t i = (size_t)y * W + x;
+    float in[NF];
+    for (int k = 0; k < NF; k++) in[k] = 0.0f;
+
+    int near = 0;  /* the support bits within one pixel */
+    float log_lo3 = INFINITY, log_hi3 = -INFINITY, log_lo5 = INFINITY, log_hi5 = -INFINITY;
+    float white = 0.0f, bright = 0.0f, crease = 0.0f;
+    for (long dy = -2; dy <= 2; dy++) {
+        long yy = clamp(y + dy, 0L, H - 1);
+        for (long dx = -2; dx <= 2; dx++) {
+            long xx = clamp(x + dx, 0L, W - 1), j = yy * W + xx;
+            int inner = dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1;
+            float g = grey_at(image, j), lg = log(fmax(g, 1e-3f));
+            log_lo5 = fmin(log_lo5, lg);
+            log_hi5 = fmax(log_hi5, lg);
+            bright = fmax(bright, g);
+#if RGB
+            float top = fmax(image[3 * j], fmax(image[3 * j + 1], image[3 * j + 2]));
+            float bottom = fmin(image[3 * j], fmin(image[3 * j + 1], image[3 * j + 2]));
+            white = fmax(white, bottom / fmax(top, 1e-3f));
+#endif
+            if (inner) {
+                near |= support[j];
+                log_lo3 = fmin(log_lo3, lg);
+                log_hi3 = fmax(log_hi3, lg);
+#if HAS_STEREO
+                crease = fmax(crease, crease_at(disparity, xx, yy, W, H));
+#endif
+            }
+        }
+    }
+    in[0] = (near & BIT_DEPTH) != 0;
+    in[1] = (near & BIT_MOTION) != 0;
+    in[2] = (near & BIT_COLOUR) != 0;
+    in[3] = (near & BIT_TEXTURE) != 0;
+    in[4] = (support[i] & BIT_BRIGHTNESS) != 0;
+#if HAS_STEREO
+    in[5] = CLIPPED(window_range(disparity, 1, 0, x, y, 1, W, H), 4.0f);
+    in[6] = CLIPPED(window_range(disparity, 1, 0, x, y, 3, W, H), 4.0f);
+    in[7] = CLIPPED(crease, 2.0f);
+#endif
+#if HAS_MOTION
+    in[8] = CLIPPED(fmax(window_range(flow, 2, 0, x, y, 1, W, H), window_range(flow, 2, 1, x, y, 1, W, H)), 4.0f);
+    in[9] = CLIPPED(fmax(window_range(flow, 2, 0, x, y, 3, W, H), window_range(flow, 2, 1, x, y, 3, W, H)), 4.0f);
+#endif
+    in[10] = CLIPPED(log_hi3 - log_lo3, 1.5f);
+    in[11] = CLIPPED(log_hi5 - log_lo5, 1.5f);
+#if HAS_COLOUR
+    in[12] = CLIPPED(window_range(hue, 1, 0, x, y, 1, W, H), 0.3f);
+#endif
+    in[13] = white;
+    in[14] = bright;
+
+#if CLASSIFY
+    uchar label = 0;
+    if (support[i] & (BIT_DEPTH | BIT_MOTION | BIT_COLOUR | BIT_TEXTURE | BIT_BRIGHTNESS)) {
+        float best = -INFINITY;
+        for (int c = 0; c < NC; c++) {
+            float s = weights[c];  /* row 0: the bias */
+            for (int k = 0; k < NF; k++) s += weights[(k + 1) * NC + c] * in[k];
+            if (s > best) { best = s; label = codes[c]; }
+        }
+    }
+    labels[i] = label;
+#else
+    for (int k = 0; k < NF; k++) features[(size_t)k * W * H + i] = in[k];
+#endif
+}

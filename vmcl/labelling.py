@@ -1,0 +1,282 @@
+"""Labels of the discontinuities by a linear classifier: the integration stage's "cartoon".
+
+Seed section "Integration via labeling with a linear classifier": Gamble, Geiger, Weinshall and Poggio
+"used a simple linear classifier to label edges at pixels where there exists an intensity discontinuity,
+using the output of the line process associated with each low-level vision module"; "each output unit is
+a weighted linear combination of its inputs", and "the output is a real value vector of each labels'
+support". Here the candidates are the pixels with a brightness edge or a cue's line on them (the cues'
+line processes are coupled to the brightness edges, but a boundary seen by one cue alone, such as an
+isoluminant colour edge, has no brightness edge), and the label of largest support wins; "none" is one
+of the labels, so the classifier also decides which candidates are discontinuities at all.
+
+The inputs (:data:`FEATURES`) are the line processes and the brightness edge within one pixel, as the
+paper's, and a few local measures of the restored fields that the line processes do not carry: the
+disparity's and the flow's jumps over 3 and 7 px windows, the disparity's crease (second difference at
+3 px), the steps of log brightness (3 and 5 px) and of hue (3 px), and the whitest and brightest pixel
+within 2 px (highlights take the light's colour). The weights are fitted by multinomial logistic
+regression (the outputs stay linear in the inputs; the softmax only shapes the fit) to rendered scenes
+with exact labels (:mod:`vmcl.scenes`), once for every combination of the inputs a run can have, so a
+run without stereo uses weights fitted without stereo's inputs. benchmarks/labelling.py fits them,
+writes ``vmcl/labelling.json`` and measures the classifier on scenes it was not fitted to.
+
+NumPy in gives NumPy out; device arrays in give a device array out.
+
+References
+----------
+E. Gamble, D. Geiger, T. Poggio and D. Weinshall, "Integration of vision modules and labeling of surface
+discontinuities", IEEE SMC 19(6):1576-1581, 1989.
+T. Poggio et al., "The MIT Vision Machine", Proc. DARPA Image Understanding Workshop, 177-198, 1988.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from vmcl.cm._arrays import ArrayLike, field, machine_for
+from vmcl.integrate import Cue
+from vmcl.machine import Machine
+from vmcl.scenes import Label
+
+FEATURES = ("depth line", "motion line", "colour line", "texture line", "brightness edge",
+            "disparity jump 3", "disparity jump 7", "disparity crease", "flow jump 3", "flow jump 7",
+            "log brightness step 3", "log brightness step 5", "hue step 3", "whiteness 5", "brightness 5")
+"""The classifier's inputs, in the kernel's order (kernels/labelling.cl)."""
+
+INPUTS = ("stereo", "motion", "colour", "texture")
+"""What a run may lack; the features of a missing input are 0 and its weights were fitted without it."""
+
+_NEEDS = {"stereo": (0, 5, 6, 7), "motion": (1, 8, 9), "colour": (2, 12, 13), "texture": (3,)}
+
+CLASSES = (Label.NONE, Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.SHADOW, Label.SPECULAR,
+           Label.TEXTURE)
+"""The classifier's outputs: NONE leaves a candidate out of the cartoon."""
+
+WEIGHTS_FILE = Path(__file__).with_name("labelling.json")
+
+# The label a pixel is fitted to: the ground truth's on it or on a 4-neighbour (a line of the MRF sits
+# on either side of the site it marks), in the ground truth's own precedence.
+_FIT_PRECEDENCE = (Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.TEXTURE, Label.SHADOW, Label.SPECULAR)
+
+
+def _key(inputs: Iterable[str]) -> str:
+    inputs = set(inputs)
+    return "+".join(name for name in INPUTS if name in inputs) or "image"
+
+
+@dataclass(frozen=True)
+class LinearLabeller:
+    """Weights of the linear network, one (1 + len(FEATURES), len(CLASSES)) matrix per set of inputs.
+
+    Attributes
+    ----------
+    weights : mapping of str to ndarray
+        Keyed by the inputs present, joined by "+" in :data:`INPUTS` order ("stereo+motion+colour+texture",
+        ..., "image" for none); row 0 is the bias.
+    fitted_on : str
+        What the weights were fitted to.
+    """
+
+    weights: Mapping[str, np.ndarray]
+    fitted_on: str = ""
+
+    def __post_init__(self):
+        expected = (1 + len(FEATURES), len(CLASSES))
+        for key, w in self.weights.items():
+            if np.shape(w) != expected:
+                raise ValueError(f"weights[{key!r}] must have shape {expected}, got {np.shape(w)}")
+
+    def for_inputs(self, inputs: Iterable[str]) -> np.ndarray:
+        key = _key(inputs)
+        if key not in self.weights:
+            raise ValueError(f"the labeller has no weights for the inputs {key!r}; it has {sorted(self.weights)}")
+        return np.asarray(self.weights[key], np.float32)
+
+    @classmethod
+    def load(cls, path: str | Path | None = None) -> LinearLabeller:
+        """The weights in ``path`` (default: the fitted ones shipped with vmcl)."""
+        text = Path(path or WEIGHTS_FILE).read_text()
+        data = json.loads(text)
+        if tuple(data.get("features", ())) != FEATURES or tuple(data.get("classes", ())) != tuple(
+                c.name for c in CLASSES):
+            raise ValueError(f"{path or WEIGHTS_FILE} was fitted to other features or labels than this vmcl's")
+        return cls({k: np.asarray(v, np.float32) for k, v in data["weights"].items()}, data.get("fitted_on", ""))
+
+    def save(self, path: str | Path) -> None:
+        data = {"features": list(FEATURES), "classes": [c.name for c in CLASSES], "fitted_on": self.fitted_on,
+                "weights": {k: np.round(np.asarray(w, np.float64), 5).tolist() for k, w in self.weights.items()}}
+        Path(path).write_text(json.dumps(data, indent=1) + "\n")
+
+    @classmethod
+    def fit(cls, samples: Iterable[tuple[np.ndarray, np.ndarray, np.ndarray]], *, l2: float = 1e-3,
+            fitted_on: str = "") -> LinearLabeller:
+        """Fit the weights to (features, support, truth) samples, for every combination of inputs.
+
+        Parameters
+        ----------
+        samples : iterable of (features, support, truth)
+            features: float32 (len(FEATURES), H, W) from :func:`features` with every input present;
+            support: uint8 (H, W), :class:`vmcl.integrate.Cue` bits; truth: the scene's Label map.
+        l2 : float
+            Weight decay on the non-bias weights.
+        fitted_on : str
+            Recorded with the weights.
+
+        Notes
+        -----
+        Multinomial logistic regression by L-BFGS (scipy), each label's samples weighted by the inverse
+        square root of its count, so that the rare labels (specular, orientation) are not drowned by "none"
+        and the classes are still weighed toward how often they occur.
+        """
+        from scipy.optimize import minimize
+
+        rows, targets = [], []
+        for feats, support, truth in samples:
+            candidates = (np.asarray(support) & int(Cue.DEPTH | Cue.MOTION | Cue.COLOUR | Cue.TEXTURE
+                                                    | Cue.BRIGHTNESS)) != 0
+            rows.append(np.moveaxis(np.asarray(feats, np.float32), 0, -1)[candidates])
+            targets.append(fit_targets(np.asarray(truth))[candidates])
+        x = np.concatenate(rows).astype(np.float64)
+        y = np.searchsorted([int(c) for c in CLASSES], np.concatenate(targets))
+        n, nc = len(y), len(CLASSES)
+        count = np.bincount(y, minlength=nc) + 1.0
+        sample_weight = (1.0 / np.sqrt(count))[y]
+        sample_weight *= n / sample_weight.sum()
+        onehot = np.eye(nc)[y]
+        weights = {}
+        for present in itertools.chain.from_iterable(itertools.combinations(INPUTS, k) for k in range(5)):
+            kept = np.ones(len(FEATURES), bool)
+            for name in set(INPUTS) - set(present):
+                kept[list(_NEEDS[name])] = False
+            design = np.concatenate([np.ones((n, 1)), x[:, kept]], axis=1)
+            p = design.shape[1]
+
+            def loss_and_gradient(theta, design=design, p=p):
+                w = theta.reshape(p, nc)
+                z = design @ w
+                z -= z.max(axis=1, keepdims=True)
+                prob = np.exp(z)
+                prob /= prob.sum(axis=1, keepdims=True)
+                loss = -(sample_weight * np.log(prob[np.arange(n), y] + 1e-12)).sum() / n + l2 * (w[1:] ** 2).sum()
+                grad = design.T @ ((prob - onehot) * sample_weight[:, None]) / n
+                grad[1:] += 2 * l2 * w[1:]
+                return loss, grad.ravel()
+
+            found = minimize(loss_and_gradient, np.zeros(p * nc), jac=True, method="L-BFGS-B",
+                             options={"maxiter": 1000})
+            full = np.zeros((1 + len(FEATURES), nc))
+            full[np.concatenate([[True], kept])] = found.x.reshape(p, nc)
+            weights[_key(present)] = full.astype(np.float32)
+        return cls(weights, fitted_on)
+
+
+def fit_targets(truth: np.ndarray) -> np.ndarray:
+    """The label each pixel is fitted to: the truth's on it or on a 4-neighbour, in precedence order."""
+    padded = np.pad(truth, 1)
+    h, w = truth.shape
+    out = np.zeros(truth.shape, np.uint8)
+    for label in reversed(_FIT_PRECEDENCE):
+        near = np.zeros(truth.shape, bool)
+        for dy, dx in ((1, 1), (0, 1), (2, 1), (1, 0), (1, 2)):
+            near |= padded[dy:dy + h, dx:dx + w] == label
+        out[near] = label
+    return out
+
+
+def _run(support, image, disparity, flow, hue, texture, labeller, machine, classify: bool):
+    s, host = field(support, "support", machine, ndims=(2,), dtypes=(np.uint8,))
+    shape = s.shape
+    img, _ = field(image, "image", machine, ndims=(2, 3), dtypes=(np.float32,))
+    if img.shape[:2] != shape or (img.ndim == 3 and img.shape[2] != 3):
+        raise ValueError(f"image must be (H, W) or (H, W, 3) with the support's (H, W) {shape}, got {img.shape}")
+    present = {"texture"} if texture else set()
+    fields = {}
+    for name, array, ndims, wanted, needs in (("disparity", disparity, (2,), shape, "stereo"),
+                                              ("flow", flow, (3,), shape + (2,), "motion"),
+                                              ("hue", hue, (2,), shape, "colour")):
+        if array is None:
+            fields[name] = None
+            continue
+        fields[name], _ = field(array, name, machine, ndims=ndims, dtypes=(np.float32,))
+        if fields[name].shape != wanted:
+            raise ValueError(f"{name} must have shape {wanted}, got {fields[name].shape}")
+        present.add(needs)
+    placeholder = machine.empty(1, np.float32)  # never read: its input's HAS_ define is 0
+    args = [s, img] + [placeholder if fields[n] is None else fields[n] for n in ("disparity", "flow", "hue")]
+    defines = {"NF": len(FEATURES), "NC": len(CLASSES), "RGB": int(img.ndim == 3), "CLASSIFY": int(classify),
+               "HAS_STEREO": int("stereo" in present), "HAS_MOTION": int("motion" in present),
+               "HAS_COLOUR": int("colour" in present), "BIT_DEPTH": int(Cue.DEPTH), "BIT_MOTION": int(Cue.MOTION),
+               "BIT_COLOUR": int(Cue.COLOUR), "BIT_TEXTURE": int(Cue.TEXTURE), "BIT_BRIGHTNESS": int(Cue.BRIGHTNESS)}
+    kernel = machine.kernel("labelling", "label_features", **defines)
+    height, width = shape
+    if classify:
+        weights = machine.to_device(labeller.for_inputs(present))
+        codes = machine.to_device(np.array([int(c) for c in CLASSES], np.uint8))
+        out = machine.empty(shape, np.uint8)
+        args += [weights, out, codes]
+    else:
+        out = machine.empty((len(FEATURES),) + shape, np.float32)
+        args += [out]
+    machine.launch(kernel, (width, height), *args, np.int64(width), np.int64(height))
+    return out.get() if host else out
+
+
+def features(support: ArrayLike, image: ArrayLike, *, disparity: ArrayLike | None = None,
+             flow: ArrayLike | None = None, hue: ArrayLike | None = None,
+             machine: Machine | None = None) -> ArrayLike:
+    """The classifier's inputs at every pixel, float32 (len(FEATURES), H, W); see :func:`label`."""
+    machine = machine_for(machine)
+    return _run(support, image, disparity, flow, hue, True, None, machine, classify=False)
+
+
+def label(support: ArrayLike, image: ArrayLike, *, disparity: ArrayLike | None = None,
+          flow: ArrayLike | None = None, hue: ArrayLike | None = None, texture: bool = True,
+          labeller: LinearLabeller | None = None, machine: Machine | None = None) -> ArrayLike:
+    """The cartoon: a :class:`vmcl.scenes.Label` code at every labelled discontinuity, 0 elsewhere.
+
+    Parameters
+    ----------
+    support : (H, W) uint8
+        :class:`vmcl.integrate.Cue` bits (:func:`vmcl.integrate.integrate`'s support map): the
+        candidates are the pixels with any bit set.
+    image : (H, W) or (H, W, 3) float32
+        The image in [0, 1].
+    disparity, hue : (H, W) float32, optional
+        The restored disparity (stereo) and hue (colour); NaN where there is none.
+    flow : (H, W, 2) float32, optional
+        The restored flow (motion).
+    texture : bool
+        Whether the texture cue ran (its line bit in ``support`` means something).
+    labeller : LinearLabeller, optional
+        Default: the fitted weights shipped with vmcl (:meth:`LinearLabeller.load`). The weights used
+        are those fitted for the inputs given.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    uint8 (H, W): NumPy for NumPy support, a device array for a device support.
+    """
+    machine = machine_for(machine)
+    if labeller is not None and not isinstance(labeller, LinearLabeller):
+        raise TypeError(f"labeller must be a LinearLabeller or None, got {type(labeller).__name__}")
+    return _run(support, image, disparity, flow, hue, texture, labeller or default_labeller(), machine,
+                classify=True)
+
+
+_DEFAULT: list[LinearLabeller] = []
+
+
+def default_labeller() -> LinearLabeller:
+    """The shipped weights, read once."""
+    if not _DEFAULT:
+        _DEFAULT.append(LinearLabeller.load())
+    return _DEFAULT[0]
+
+
+__all__ = ["CLASSES", "FEATURES", "INPUTS", "LinearLabeller", "default_labeller", "features", "fit_targets",
+           "label"]
