@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from vmcl import integrate as _integrate
+from vmcl import labelling
 from vmcl.early import color, edges, motion, stereo, texture
 from vmcl.machine import Machine
 from vmcl.mrf import Params, backfill, preset, restore, score_confidence
@@ -221,13 +222,39 @@ class MrfConfig:
         return dataclasses.replace(preset(cue), **overrides)
 
 
+@dataclass(frozen=True)
+class LabelsConfig:
+    """How the integration stage labels the discontinuities (:mod:`vmcl.labelling`).
+
+    Parameters
+    ----------
+    method : {"linear", "rule"}
+        "linear" (default): the paper's linear classifier at every pixel with a brightness edge or a
+        cue's line, fitted to rendered scenes; it also drops candidates it reads as no discontinuity and
+        gives ORIENTATION, SHADOW and SPECULAR labels. "rule": every pixel a cue's line marks, labelled
+        DEPTH (depth or motion), else ALBEDO (colour), else TEXTURE (:func:`vmcl.integrate.integrate`).
+        benchmarks/results/labelling.md compares them.
+    weights : str or None
+        A JSON file of :class:`vmcl.labelling.LinearLabeller` weights; None: the fitted ones shipped.
+    """
+
+    method: str = "linear"
+    weights: str | None = None
+
+    def __post_init__(self):
+        if self.method not in ("linear", "rule"):
+            raise ValueError(f"labels.method must be 'linear' or 'rule', got {self.method!r}")
+        if self.weights is not None and not isinstance(self.weights, str):
+            raise TypeError(f"labels.weights must be a file name or None, got {type(self.weights).__name__}")
+
+
 _SCHEDULES = {
     "fast": {"mf_t0": 2.0, "mf_factor": 0.6, "mf_steps": 6, "mf_iterations": 2, "quench": 2},
     "preset": {},
 }
 
 _SECTIONS = {"edges": EdgesConfig, "stereo": StereoConfig, "motion": MotionConfig, "colour": ColourConfig,
-             "texture": TextureConfig, "mrf": MrfConfig}
+             "texture": TextureConfig, "mrf": MrfConfig, "labels": LabelsConfig}
 
 
 @dataclass(frozen=True)
@@ -235,7 +262,7 @@ class Config:
     """Everything the machine can be told, with documented defaults; see each section's class.
 
     Load one from TOML with :meth:`from_toml` (sections ``[edges]``, ``[stereo]``, ``[motion]``,
-    ``[colour]``, ``[texture]``, ``[mrf]`` and ``[mrf.depth]`` ... for Params overrides); unknown keys
+    ``[colour]``, ``[texture]``, ``[mrf]`` and ``[mrf.depth]`` ... for Params overrides, ``[labels]``); unknown keys
     are refused with a ValueError naming them.
 
     Examples
@@ -250,6 +277,7 @@ class Config:
     colour: ColourConfig = field(default_factory=ColourConfig)
     texture: TextureConfig = field(default_factory=TextureConfig)
     mrf: MrfConfig = field(default_factory=MrfConfig)
+    labels: LabelsConfig = field(default_factory=LabelsConfig)
 
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> Config:
@@ -319,7 +347,8 @@ class Result:
     support : uint8 (H, W)
         :class:`vmcl.integrate.Cue` bits: which cues put a discontinuity at each pixel.
     labels : uint8 (H, W)
-        The cartoon: :class:`vmcl.scenes.Label` codes of the discontinuity pixels.
+        The cartoon: :class:`vmcl.scenes.Label` codes of the discontinuity pixels (``labels.method``
+        says how they are chosen; :mod:`vmcl.labelling` by default).
     stages : dict of str to float
         Wall time of each stage in ms, in the order run (device work included: each stage ends with
         the queue drained).
@@ -353,8 +382,8 @@ class Result:
 
     @property
     def discontinuities(self) -> np.ndarray:
-        """bool (H, W): the integrated discontinuity map, pixels that some cue's line process marks."""
-        return (self.support & int(_integrate.CUE_BITS)) != 0
+        """bool (H, W): the integrated discontinuity map, the labelled pixels of the cartoon."""
+        return self.labels != 0
 
     @property
     def total_ms(self) -> float:
@@ -533,6 +562,13 @@ class _Run:
                         lines["motion" if cue == "flow" else cue] = found
         with self.stage("integrate"):
             device["support"], device["labels"] = _integrate.integrate(lines, edges=brightness, machine=self.m)
+            if self.c.labels.method == "linear":
+                weights = self.c.labels.weights
+                labeller = labelling.LinearLabeller.load(weights) if weights else labelling.default_labeller()
+                device["labels"] = labelling.label(
+                    device["support"], left, disparity=device.get("restored_depth"),
+                    flow=device.get("restored_flow"), hue=device.get("restored_colour"),
+                    texture="texture" in lines, labeller=labeller, machine=self.m)
         with self.stage("download"):
             for name, array in device.items():
                 out[name] = array.get()

@@ -26,10 +26,15 @@ import numpy as np
 
 from vmcl.integrate import Cue
 from vmcl.pipeline import Result
+from vmcl.scenes import Label
 
 CUE_COLOURS = {Cue.DEPTH: (230, 40, 40), Cue.MOTION: (250, 150, 20), Cue.COLOUR: (40, 110, 240),
                Cue.TEXTURE: (30, 180, 60)}
 """RGB of each cue in the cartoon; a pixel several cues support takes the first in this order."""
+
+LABEL_COLOURS = {Label.DEPTH: (230, 40, 40), Label.ORIENTATION: (150, 60, 200), Label.ALBEDO: (40, 110, 240),
+                 Label.SHADOW: (60, 60, 60), Label.SPECULAR: (240, 200, 0), Label.TEXTURE: (30, 180, 60)}
+"""RGB of each physical label in the labelled cartoon."""
 
 BRIGHTNESS_ONLY = (200, 200, 200)
 """RGB of brightness edges no cue supports (drawn under the cues)."""
@@ -134,6 +139,29 @@ def _wheel_colours(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     return _to_uint8(colour * 255)
 
 
+def _faded(image: np.ndarray) -> np.ndarray:
+    faded = 255 * (0.55 + 0.4 * _grey(image))  # light grey: the coloured lines carry the picture
+    return _to_uint8(np.repeat(faded[..., None], 3, axis=2))
+
+
+def labels_image(image: np.ndarray, labels: np.ndarray) -> np.ndarray:
+    """The labelled cartoon: each discontinuity coloured by its physical cause (:data:`LABEL_COLOURS`).
+
+    Parameters
+    ----------
+    image : float (H, W) or (H, W, 3) in [0, 1]
+    labels : uint8 (H, W), :class:`vmcl.scenes.Label` codes (:attr:`vmcl.pipeline.Result.labels`)
+
+    Returns
+    -------
+    uint8 RGB (H, W, 3)
+    """
+    picture = _faded(image)
+    for label, colour in LABEL_COLOURS.items():
+        picture[labels == label] = colour
+    return picture
+
+
 def cartoon_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
     """The cartoon: discontinuities coloured by their cue (:data:`CUE_COLOURS`) over the faded image.
 
@@ -146,8 +174,7 @@ def cartoon_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
     -------
     uint8 RGB (H, W, 3)
     """
-    faded = 255 * (0.55 + 0.4 * _grey(image))  # light grey: the coloured lines carry the picture
-    picture = _to_uint8(np.repeat(faded[..., None], 3, axis=2))
+    picture = _faded(image)
     picture[(support & Cue.BRIGHTNESS) != 0] = BRIGHTNESS_ONLY
     painted = np.zeros(support.shape, bool)
     for cue, colour in CUE_COLOURS.items():
@@ -169,7 +196,8 @@ def field_image(values: np.ndarray) -> np.ndarray:
 
 def images(result: Result) -> dict[str, np.ndarray]:
     """The report's pictures of a run, by file stem, in the order the report shows them."""
-    out = {"cartoon": cartoon_image(result.image, result.support),
+    out = {"labels": labels_image(result.image, result.labels),
+           "cartoon": cartoon_image(result.image, result.support),
            "input": _to_uint8(255 * np.repeat(_grey(result.image)[..., None], 3, axis=2)
                               if result.image.ndim == 2 else 255 * np.clip(result.image, 0, 1))}
     if result.disparity is not None:
@@ -188,7 +216,9 @@ def images(result: Result) -> dict[str, np.ndarray]:
 
 
 _CAPTIONS = {
-    "cartoon": "The cartoon: discontinuities by cue (red depth, orange motion, blue colour, green texture; "
+    "labels": "The cartoon, labelled: depth red, orientation purple, albedo blue, shadow dark grey, "
+              "specular yellow, texture green",
+    "cartoon": "The cues' support: discontinuities by cue (red depth, orange motion, blue colour, green texture; "
                "grey: brightness edges no cue supports) over the faded image",
     "input": "The left image",
     "disparity": "Dense disparity (the depth MRF's restoration), pixels; near is red",

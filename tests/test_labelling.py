@@ -1,0 +1,201 @@
+"""vmcl.labelling: the integration stage's linear classifier (its inputs, its decision, its fit)."""
+
+import numpy as np
+import pytest
+
+from vmcl import labelling, metrics, scenes
+from vmcl.integrate import Cue
+from vmcl.labelling import CLASSES, FEATURES, INPUTS, LinearLabeller
+from vmcl.pipeline import Config, VisionMachine
+from vmcl.scenes import Label
+
+
+def _window(a: np.ndarray, r: int, reduce) -> np.ndarray:
+    """reduce over the (2r+1)^2 window with the border clamped (NaN ignored)."""
+    padded = np.pad(a, [(r, r), (r, r)] + [(0, 0)] * (a.ndim - 2), mode="edge")
+    h, w = a.shape[:2]
+    stack = np.stack([padded[dy:dy + h, dx:dx + w] for dy in range(2 * r + 1) for dx in range(2 * r + 1)])
+    return reduce(stack, axis=0)
+
+
+def _range(a: np.ndarray, r: int) -> np.ndarray:
+    out = _window(a, r, np.nanmax) - _window(a, r, np.nanmin)
+    return np.nan_to_num(out)
+
+
+def _oracle_features(support, image, disparity, flow, hue) -> np.ndarray:
+    """The inputs as the module's docstring defines them, in NumPy."""
+    grey = image.mean(axis=2)
+    near = _window(support.astype(np.int64), 1, lambda s, axis: np.bitwise_or.reduce(s, axis=axis))
+    bits = [Cue.DEPTH, Cue.MOTION, Cue.COLOUR, Cue.TEXTURE]
+    out = [((near & int(b)) != 0).astype(np.float32) for b in bits]
+    out.append(((support & int(Cue.BRIGHTNESS)) != 0).astype(np.float32))
+    out += [np.minimum(_range(disparity, 1), 4), np.minimum(_range(disparity, 3), 4)]
+    d = np.pad(disparity, 3, mode="edge")
+    h, w = disparity.shape
+    across = d[3:3 + h, 0:w] - 2 * disparity + d[3:3 + h, 6:6 + w]
+    along = d[0:h, 3:3 + w] - 2 * disparity + d[6:6 + h, 3:3 + w]
+    out.append(np.minimum(_window(np.maximum(abs(across), abs(along)), 1, np.max), 2))
+    for r in (1, 3):
+        out.append(np.minimum(np.maximum(_range(flow[..., 0], r), _range(flow[..., 1], r)), 4))
+    log = np.log(np.maximum(grey, 1e-3))
+    out += [np.minimum(_range(log, 1), 1.5), np.minimum(_range(log, 2), 1.5), np.minimum(_range(hue, 1), 0.3)]
+    white = image.min(axis=2) / np.maximum(image.max(axis=2), 1e-3)
+    out += [_window(white, 2, np.max), _window(grey, 2, np.max)]
+    return np.stack(out).astype(np.float32)
+
+
+@pytest.fixture(scope="module")
+def fields():
+    rng = np.random.default_rng(3)
+    h, w = 23, 31
+    support = rng.choice(np.array([0, 1, 2, 4, 8, 16, 17, 24], np.uint8), size=(h, w), p=[.6] + [.4 / 7] * 7)
+    image = rng.uniform(0, 1, (h, w, 3)).astype(np.float32)
+    disparity = np.cumsum(rng.normal(0, 0.5, (h, w)), axis=1).astype(np.float32)
+    flow = rng.normal(0, 1.5, (h, w, 2)).astype(np.float32)
+    hue = rng.uniform(0.3, 0.7, (h, w)).astype(np.float32)
+    hue[rng.uniform(size=(h, w)) < 0.1] = np.nan
+    return support, image, disparity, flow, hue
+
+
+def test_features_match_a_numpy_oracle(fields, machine):
+    support, image, disparity, flow, hue = fields
+    got = labelling.features(support, image, disparity=disparity, flow=flow, hue=hue, machine=machine)
+    want = _oracle_features(*fields)
+    assert got.shape == (len(FEATURES),) + support.shape
+    for k, name in enumerate(FEATURES):
+        np.testing.assert_allclose(got[k], want[k], rtol=1e-5, atol=2e-6, err_msg=name)
+
+
+def test_missing_inputs_give_zero_features(fields, machine):
+    support, image, *_ = fields
+    got = labelling.features(support, image, machine=machine)
+    for k in (5, 6, 7, 8, 9, 12):  # disparity, flow and hue measures
+        assert not got[k].any(), FEATURES[k]
+    grey = labelling.features(support, image.mean(axis=2), machine=machine)
+    assert not grey[13].any()  # whiteness needs colour
+    np.testing.assert_allclose(grey[14], _window(image.mean(axis=2), 2, np.max), rtol=1e-6)
+
+
+def _labeller(bias_none: float, weights_by_feature: dict) -> LinearLabeller:
+    w = np.zeros((1 + len(FEATURES), len(CLASSES)), np.float32)
+    w[0, 0] = bias_none
+    for (feature, label), value in weights_by_feature.items():
+        w[1 + FEATURES.index(feature), CLASSES.index(label)] = value
+    keys = {"+".join(n for n in INPUTS if n in s) or "image" for s in
+            ({"texture"}, {"stereo", "texture"}, {"stereo", "motion", "colour", "texture"})}
+    return LinearLabeller({k: w for k in keys})
+
+
+def test_the_largest_support_wins_at_candidates_only(machine):
+    h, w = 8, 12
+    support = np.zeros((h, w), np.uint8)
+    support[2, 3] = Cue.BRIGHTNESS   # a brightness edge where the log step is large: SHADOW
+    support[5, 8] = Cue.BRIGHTNESS   # one where it is small: NONE
+    support[6, 1] = Cue.DEPTH        # the depth line: DEPTH
+    image = np.full((h, w), 0.5, np.float32)
+    image[0:4, 0:4] = 0.1
+    labeller = _labeller(0.5, {("log brightness step 3", Label.SHADOW): 1.0, ("depth line", Label.DEPTH): 2.0})
+    labels = labelling.label(support, image, disparity=np.zeros((h, w), np.float32), labeller=labeller,
+                             machine=machine)
+    expected = np.zeros((h, w), np.uint8)
+    expected[2, 3], expected[6, 1] = Label.SHADOW, Label.DEPTH
+    np.testing.assert_array_equal(labels, expected)
+
+
+def test_device_in_device_out(fields, machine):
+    support, image, disparity, flow, hue = fields
+    host = labelling.label(support, image, disparity=disparity, flow=flow, hue=hue, machine=machine)
+    device = labelling.label(machine.to_device(support), machine.to_device(image),
+                             disparity=machine.to_device(disparity), flow=machine.to_device(flow),
+                             hue=machine.to_device(hue), machine=machine)
+    np.testing.assert_array_equal(device.get(), host)
+
+
+@pytest.mark.parametrize("kwargs, error, message", [
+    ({"disparity": np.zeros((5, 5), np.float32)}, ValueError, "disparity must have shape"),
+    ({"flow": np.zeros((8, 12), np.float32)}, ValueError, "flow must have 3 dimensions"),
+    ({"hue": np.zeros((8, 12), np.float64)}, TypeError, "hue must have dtype"),
+    ({"labeller": "weights.json"}, TypeError, "labeller must be a LinearLabeller"),
+])
+def test_bad_inputs_are_refused(kwargs, error, message, machine):
+    with pytest.raises(error, match=message):
+        labelling.label(np.zeros((8, 12), np.uint8), np.zeros((8, 12), np.float32), machine=machine, **kwargs)
+
+
+def test_image_of_another_size_is_refused(machine):
+    with pytest.raises(ValueError, match="image must be"):
+        labelling.label(np.zeros((8, 12), np.uint8), np.zeros((8, 13), np.float32), machine=machine)
+
+
+def test_weights_round_trip_and_refuse_other_features(tmp_path):
+    shipped = labelling.default_labeller()
+    assert len(shipped.weights) == 16 and "stereo+motion+colour+texture" in shipped.weights
+    path = tmp_path / "w.json"
+    shipped.save(path)
+    again = LinearLabeller.load(path)
+    for key, w in shipped.weights.items():
+        np.testing.assert_allclose(again.weights[key], w, atol=1e-5)
+    path.write_text(path.read_text().replace('"brightness 5"', '"something else"'))
+    with pytest.raises(ValueError, match="other features"):
+        LinearLabeller.load(path)
+    with pytest.raises(ValueError, match="must have shape"):
+        LinearLabeller({"image": np.zeros((3, 3))})
+    with pytest.raises(ValueError, match="no weights for the inputs"):
+        LinearLabeller({"image": np.zeros((1 + len(FEATURES), len(CLASSES)))}).for_inputs({"stereo"})
+
+
+def test_fit_separates_labels_one_input_decides(machine):
+    """Three labels told apart by two inputs: the fitted weights label every candidate right."""
+    rng = np.random.default_rng(0)
+    samples = []
+    for _ in range(2):
+        h, w = 40, 40
+        feats = np.zeros((len(FEATURES), h, w), np.float32)
+        truth = rng.choice(np.array([0, Label.SHADOW, Label.ALBEDO], np.uint8), size=(h, w))
+        # Candidates on one colour of a checkerboard, the truth there too: each candidate's target (its
+        # own or a 4-neighbour's label) is then its own.
+        even = (np.indices((h, w)).sum(axis=0) % 2) == 0
+        truth[~even] = 0
+        support = np.where(even, int(Cue.BRIGHTNESS), 0).astype(np.uint8)
+        feats[FEATURES.index("log brightness step 3")] = (truth == Label.SHADOW) + rng.normal(0, .1, (h, w))
+        feats[FEATURES.index("hue step 3")] = (truth == Label.ALBEDO) * 0.2 + rng.normal(0, .01, (h, w))
+        samples.append((feats, support, truth))
+    fitted = LinearLabeller.fit(samples)
+    feats, support, truth = samples[0]
+    w = fitted.for_inputs(INPUTS)
+    decision = np.array([int(c) for c in CLASSES])[np.tensordot(
+        w.T, np.concatenate([np.ones((1, 40, 40), np.float32), feats]), axes=1).argmax(axis=0)]
+    even = support != 0
+    assert (decision[even] == truth[even]).mean() > 0.99
+
+
+def test_fit_targets_take_a_4_neighbour_label_by_precedence():
+    truth = np.zeros((5, 5), np.uint8)
+    truth[2, 2] = Label.SHADOW
+    truth[2, 3] = Label.DEPTH
+    out = labelling.fit_targets(truth)
+    assert out[2, 2] == Label.DEPTH        # DEPTH precedes SHADOW
+    assert out[1, 2] == Label.SHADOW and out[2, 4] == Label.DEPTH and out[1, 1] == 0
+
+
+# -- on rendered scenes the weights were not fitted to (seed 2; they were fitted to seeds 0 and 1) ----------
+
+
+@pytest.fixture(scope="module")
+def shadows_runs(machine):
+    scene = scenes.render(scenes.preset("shadows", shape=(256, 256)), seed=2, noise=0.01)
+    out = {}
+    for method in ("linear", "rule"):
+        vm = VisionMachine(Config.from_dict({"labels": {"method": method}}), machine=machine)
+        out[method] = vm.run(scene.left, scene.right, scene.left_next)
+    return scene, out
+
+
+def test_linear_labels_find_the_shadows_the_rule_cannot_name(shadows_runs):
+    scene, runs = shadows_runs
+    linear = metrics.label_scores(runs["linear"].labels, scene.labels, tolerance=1)
+    assert linear[Label.SHADOW].recall >= 0.8      # measured 0.90 (the rule has no SHADOW label)
+    assert linear[Label.SHADOW].precision >= 0.6   # measured 0.80
+    f = {m: metrics.detection_scores(r.discontinuities, scene.labels > 0, tolerance=1).f for m, r in runs.items()}
+    assert f["linear"] >= 0.85 and f["rule"] < 0.4  # measured 0.92 and 0.23
