@@ -19,12 +19,14 @@ Scores are the ground truth's: discontinuities within 1 px (vmcl.metrics.detecti
 from __future__ import annotations
 
 import platform
+import statistics
 import time
 from pathlib import Path
 
 import numpy as np
 
 from vmcl import labelling, metrics, scenes
+from vmcl.integrate import integrate
 from vmcl.pipeline import Config, VisionMachine
 from vmcl.scenes import Label
 
@@ -49,10 +51,10 @@ def fields(result) -> dict:
     return {"disparity": result.disparity, "flow": result.flow, "hue": result.restored.get("colour")}
 
 
-def fit(samples, machine, fitted_on: str) -> labelling.LinearLabeller:
+def fit(samples, machine, fitted_on: str, input_sets=None) -> labelling.LinearLabeller:
     return labelling.LinearLabeller.fit(
         ((labelling.features(r.support, r.image, machine=machine, **fields(r)), r.support, truth)
-         for r, truth in samples), fitted_on=fitted_on)
+         for r, truth in samples), fitted_on=fitted_on, input_sets=input_sets)
 
 
 def scores(predicted: np.ndarray, truth: np.ndarray) -> tuple[float, dict[int, metrics.DetectionScores]]:
@@ -82,6 +84,27 @@ def table(rows_in, labeller, machine) -> list[str]:
     return lines
 
 
+def cost(vm: VisionMachine, size: int) -> str:
+    m = vm.machine
+    scene = scenes.render(scenes.preset("blocks", shape=(size, size)), seed=0, noise=0.01)
+    r = vm.run(scene.left, scene.right, scene.left_next)
+    device = {k: m.to_device(np.ascontiguousarray(v)) for k, v in fields(r).items()}
+    support, image = m.to_device(r.support), m.to_device(r.image)
+    lines = {cue: (m.to_device(h.astype(np.uint8)), m.to_device(v.astype(np.uint8))) for cue, (h, v) in r.lines.items()}
+    edges = m.to_device(r.edges.astype(np.uint8))
+    calls = {"linear": lambda: labelling.label(support, image, machine=m, **device),
+             "rule": lambda: integrate(lines, edges=edges, machine=m)}
+    times = {name: [] for name in calls}
+    for _ in range(30):
+        for name, call in calls.items():
+            start = time.perf_counter()
+            call()
+            m.finish()
+            times[name].append((time.perf_counter() - start) * 1e3)
+    linear, rule = statistics.median(times["linear"]), statistics.median(times["rule"])
+    return f"| {size} x {size} | {linear:.2f} | {rule:.2f} | {linear / rule:.1f} |"
+
+
 def main() -> None:
     vm = VisionMachine(Config.from_dict({"labels": {"method": "rule"}}))
     start = time.perf_counter()
@@ -94,22 +117,29 @@ def main() -> None:
     fit_s = time.perf_counter() - start
     shipped.save(labelling.WEIGHTS_FILE)
     out = ["# Labelling: the linear classifier of the integration stage", "",
-           f"{platform.node()}, {time.strftime('%Y-%m-%d')}, device: {vm.machine.device.name}. Written by "
-           "benchmarks/labelling.py, which also fits vmcl/labelling.json.", "",
-           f"{len(data)} runs of the machine in {took:.0f} s; fitting the weights for the {2 ** 4} sets of inputs "
-           f"took {fit_s:.0f} s.", "",
-           "Cells are precision / recall within 1 px per label ('-': no such pixel predicted or in the truth); "
-           "F is the discontinuity F within 1 px whatever the label. 'rule' is labels.method = \"rule\" on "
-           "the same run.", "",
+           (f"{platform.node()}, {time.strftime('%Y-%m-%d')}, device: {vm.machine.device.name}. "
+           "Written by benchmarks/labelling.py, which also fits vmcl/labelling.json."), "",
+           (f"{len(data)} runs of the machine in {took:.0f} s; fitting the weights for the "
+           f"{2 ** len(labelling.INPUTS)} sets of inputs took {fit_s:.0f} s."), "",
+           ("Cells are precision / recall within 1 px per label ('-': no such pixel predicted or in the "
+           "truth); F is the discontinuity F within 1 px whatever the label. 'rule' is labels.method = "
+           "\"rule\" on the same run."), "",
            f"## Shipped weights (fitted to seeds {FIT_SEEDS}) on seed {TEST_SEED}", ""]
     out += table([(k, v) for k, v in data.items() if k[2] == TEST_SEED], shipped, vm.machine)
     out += ["", f"## Leave one preset out: fitted to the other presets (seeds {FIT_SEEDS}), on seed {TEST_SEED}", ""]
     held_rows = []
     for name in scenes.PRESETS:
-        others = fit([v for k, v in data.items() if k[0] != name and k[2] in FIT_SEEDS], vm.machine, "")
+        others = fit([v for k, v in data.items() if k[0] != name and k[2] in FIT_SEEDS], vm.machine, "",
+                     input_sets=[labelling.INPUTS])
         held_rows += table([(k, v) for k, v in data.items() if k[0] == name and k[2] == TEST_SEED], others,
                            vm.machine)[2:]
     out += table([], shipped, vm.machine)[:2] + held_rows
+    out += ["", "## Cost", "", ("Wall time of one labelling (the one kernel; fields already on the device), "
+                                "median of 30, beside the rule labelling (vmcl.integrate.integrate), on the "
+                                "blocks scene:"), ""]
+    out += ["| size | linear (ms) | rule (ms) | ratio |", "|---|---|---|---|"]
+    for size in (256, 512):
+        out.append(cost(vm, size))
     RESULTS.write_text("\n".join(out) + "\n")
     print("\n".join(out))
 

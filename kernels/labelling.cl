@@ -69,6 +69,13 @@ __kernel void label_features(__global const uchar *support, __global const float
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     size_t i = (size_t)y * W + x;
+#if CLASSIFY
+    /* Only candidates are labelled: the others (most pixels) skip the inputs. */
+    if (!support[i]) {
+        labels[i] = 0;
+        return;
+    }
+#endif
     float in[NF];
     for (int k = 0; k < NF; k++) in[k] = 0.0f;
 
@@ -123,13 +130,11 @@ __kernel void label_features(__global const uchar *support, __global const float
 
 #if CLASSIFY
     uchar label = 0;
-    if (support[i] & (BIT_DEPTH | BIT_MOTION | BIT_COLOUR | BIT_TEXTURE | BIT_BRIGHTNESS)) {
-        float best = -INFINITY;
-        for (int c = 0; c < NC; c++) {
-            float s = weights[c];  /* row 0: the bias */
-            for (int k = 0; k < NF; k++) s += weights[(k + 1) * NC + c] * in[k];
-            if (s > best) { best = s; label = codes[c]; }
-        }
+    float best = -INFINITY;
+    for (int c = 0; c < NC; c++) {
+        float s = weights[c];  /* row 0: the bias */
+        for (int k = 0; k < NF; k++) s += weights[(k + 1) * NC + c] * in[k];
+        if (s > best) { best = s; label = codes[c]; }
     }
     labels[i] = label;
 #else

@@ -10,7 +10,15 @@ import pytest
 from vmcl import scenes
 from vmcl.integrate import Cue
 from vmcl.pipeline import Config, VisionMachine
-from vmcl.report import CUE_COLOURS, cartoon_image, disparity_image, flow_image, write_report
+from vmcl.report import (
+    CUE_COLOURS,
+    LABEL_COLOURS,
+    cartoon_image,
+    disparity_image,
+    flow_image,
+    labels_image,
+    write_report,
+)
 
 
 class _Images(HTMLParser):
@@ -37,7 +45,7 @@ def test_report_parses_and_every_inline_image_decodes(run, tmp_path):
     parser.feed(page)
     parser.close()
     assert {"html", "body", "table", "img"} <= set(parser.tags)
-    assert len(parser.sources) == len(written) - 1 == 8  # every PNG is inline too
+    assert len(parser.sources) == len(written) - 1 == 9  # every PNG is inline too
     for source in parser.sources:
         prefix, data = source.split(",", 1)
         assert prefix == "data:image/png;base64"
@@ -80,3 +88,14 @@ def test_cartoon_colours_each_cue_over_the_faded_image():
     assert tuple(picture[1, 1]) == CUE_COLOURS[Cue.COLOUR]
     assert tuple(picture[2, 2]) == CUE_COLOURS[Cue.DEPTH]
     assert picture[0, 0, 0] == picture[0, 0, 1] > 100  # faded, grey
+
+
+def test_labelled_cartoon_colours_each_label():
+    image = np.zeros((6, 6), np.float32)
+    labels = np.zeros((6, 6), np.uint8)
+    for k, label in enumerate(LABEL_COLOURS):
+        labels[k, k] = label
+    picture = labels_image(image, labels)
+    for k, (label, colour) in enumerate(LABEL_COLOURS.items()):
+        assert tuple(picture[k, k]) == colour, label
+    assert picture[0, 1, 0] == picture[0, 1, 1] > 100  # faded, grey

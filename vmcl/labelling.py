@@ -114,7 +114,7 @@ class LinearLabeller:
 
     @classmethod
     def fit(cls, samples: Iterable[tuple[np.ndarray, np.ndarray, np.ndarray]], *, l2: float = 1e-3,
-            fitted_on: str = "") -> LinearLabeller:
+            fitted_on: str = "", input_sets: Iterable[Iterable[str]] | None = None) -> LinearLabeller:
         """Fit the weights to (features, support, truth) samples, for every combination of inputs.
 
         Parameters
@@ -126,6 +126,8 @@ class LinearLabeller:
             Weight decay on the non-bias weights.
         fitted_on : str
             Recorded with the weights.
+        input_sets : iterable of sets of :data:`INPUTS`, optional
+            The combinations to fit weights for; default all 16.
 
         Notes
         -----
@@ -149,7 +151,11 @@ class LinearLabeller:
         sample_weight *= n / sample_weight.sum()
         onehot = np.eye(nc)[y]
         weights = {}
-        for present in itertools.chain.from_iterable(itertools.combinations(INPUTS, k) for k in range(5)):
+        if input_sets is None:
+            input_sets = itertools.chain.from_iterable(itertools.combinations(INPUTS, k) for k in range(5))
+        for present in input_sets:
+            if not set(present) <= set(INPUTS):
+                raise ValueError(f"input_sets: {sorted(present)} names inputs outside {', '.join(INPUTS)}")
             kept = np.ones(len(FEATURES), bool)
             for name in set(INPUTS) - set(present):
                 kept[list(_NEEDS[name])] = False
