@@ -9,7 +9,7 @@ The machine runs on every vmcl.scenes preset at 256 x 256, with and without high
 0, 1 and 2 (seeds change the textures' random elements and the noise, not the geometry), with the rule
 labels (labels.method = "rule") so that the classifier's inputs do not depend on earlier weights.
 - The shipped weights are fitted to seeds 0 and 1 of every preset; seed 2 measures them on images they
-  were not fitted to (same geometry).
+  were not fitted to (same geometry), also as one grey image (no stereo, motion or colour).
 - Leave one preset out: weights fitted to the other four presets (seeds 0 and 1) label the fifth (seed
   2), a scene of a kind they never saw.
 Scores are the ground truth's: discontinuities within 1 px (vmcl.metrics.detection_scores) and per label
@@ -44,6 +44,9 @@ def runs(vm: VisionMachine) -> dict[tuple[str, bool, int], tuple]:
             for seed in FIT_SEEDS + (TEST_SEED,):
                 scene = scenes.render(scenes.preset(name, shape=SHAPE, specular=specular), seed=seed, noise=0.01)
                 out[name, specular, seed] = (vm.run(scene.left, scene.right, scene.left_next), scene.labels)
+                if not specular and seed == TEST_SEED:
+                    grey = np.ascontiguousarray(scene.left @ np.array([0.2125, 0.7154, 0.0721], np.float32))
+                    out[name, "grey", seed] = (vm.run(grey), scene.labels)
     return out
 
 
@@ -78,8 +81,9 @@ def table(rows_in, labeller, machine) -> list[str]:
         predicted = labelling.label(r.support, r.image, labeller=labeller, machine=machine, **fields(r))
         f, per = scores(predicted, truth)
         f_rule, _ = scores(r.labels, truth)
-        name = f"{key[0]}{' (specular)' if key[1] else ''}"
-        lines.append("| " + " | ".join([name, f"{f:.2f}", f"{f_rule:.2f}"] + [_pr(per[int(c)]) for c in
+        name = key[0] + {True: " (specular)", False: "", "grey": " (grey, one image)"}[key[1]]
+        f_text = [f"{v:.2f}" if np.isfinite(v) else "none" for v in (f, f_rule)]
+        lines.append("| " + " | ".join([name, *f_text] + [_pr(per[int(c)]) for c in
                                                                                labelling.CLASSES[1:]]) + " |")
     return lines
 
@@ -113,7 +117,8 @@ def main() -> None:
     fitted_on = (f"vmcl.scenes presets {', '.join(scenes.PRESETS)} at {SHAPE[0]} x {SHAPE[1]}, with and without "
                  f"highlights, noise 0.01, seeds {FIT_SEEDS}: benchmarks/labelling.py")
     start = time.perf_counter()
-    shipped = fit([v for k, v in data.items() if k[2] in FIT_SEEDS], vm.machine, fitted_on)
+    colour_runs = {k: v for k, v in data.items() if k[1] != "grey"}
+    shipped = fit([v for k, v in colour_runs.items() if k[2] in FIT_SEEDS], vm.machine, fitted_on)
     fit_s = time.perf_counter() - start
     shipped.save(labelling.WEIGHTS_FILE)
     out = ["# Labelling: the linear classifier of the integration stage", "",
@@ -122,16 +127,20 @@ def main() -> None:
            (f"{len(data)} runs of the machine in {took:.0f} s; fitting the weights for the "
            f"{2 ** len(labelling.INPUTS)} sets of inputs took {fit_s:.0f} s."), "",
            ("Cells are precision / recall within 1 px per label ('-': no such pixel predicted or in the "
-           "truth); F is the discontinuity F within 1 px whatever the label. 'rule' is labels.method = "
+           "truth); F is the discontinuity F within 1 px whatever the label ('none': nothing labelled). 'rule' is "
+           "labels.method = "
            "\"rule\" on the same run."), "",
            f"## Shipped weights (fitted to seeds {FIT_SEEDS}) on seed {TEST_SEED}", ""]
-    out += table([(k, v) for k, v in data.items() if k[2] == TEST_SEED], shipped, vm.machine)
+    out += table([(k, v) for k, v in colour_runs.items() if k[2] == TEST_SEED], shipped, vm.machine)
+    out += ["", f"## Shipped weights on one grey image (seed {TEST_SEED}): no stereo, motion or colour", "",
+            "The weights fitted without those inputs label brightness edges and texture lines only.", ""]
+    out += table([(k, v) for k, v in data.items() if k[1] == "grey"], shipped, vm.machine)
     out += ["", f"## Leave one preset out: fitted to the other presets (seeds {FIT_SEEDS}), on seed {TEST_SEED}", ""]
     held_rows = []
     for name in scenes.PRESETS:
-        others = fit([v for k, v in data.items() if k[0] != name and k[2] in FIT_SEEDS], vm.machine, "",
+        others = fit([v for k, v in colour_runs.items() if k[0] != name and k[2] in FIT_SEEDS], vm.machine, "",
                      input_sets=[labelling.INPUTS])
-        held_rows += table([(k, v) for k, v in data.items() if k[0] == name and k[2] == TEST_SEED], others,
+        held_rows += table([(k, v) for k, v in colour_runs.items() if k[0] == name and k[2] == TEST_SEED], others,
                            vm.machine)[2:]
     out += table([], shipped, vm.machine)[:2] + held_rows
     out += ["", "## Cost", "", ("Wall time of one labelling (the one kernel; fields already on the device), "

@@ -2,20 +2,22 @@
  * labeling with a linear classifier" (Gamble, Geiger, Weinshall and Poggio). One work-item per pixel
  * over a (W, H) grid; ids past the field idle.
  *
- *   label_features  the classifier's inputs at every pixel: which cues' line processes and whether a
- *                   brightness edge lie within one pixel (from the support bits of vmcl.integrate), and
+ *   label_features  the classifier's inputs at every pixel: which cues' line processes lie within one
+ *                   pixel and whether a brightness edge is on it (the support bits of vmcl.integrate), and
  *                   local measures of the restored fields that tell the physical causes apart (jumps of
  *                   disparity and flow, creases of disparity, steps of log brightness and hue, whiteness
  *                   and brightness for highlights). With CLASSIFY, the same inputs go straight into the
  *                   linear network: each label's support is a weighted sum of them, and a candidate
- *                   pixel (a cue's line or a brightness edge on it) takes the label of largest support,
+ *                   pixel (a support bit of CANDIDATE_BITS on it: a line of a cue that ran, or a
+ *                   brightness edge) takes the label of largest support,
  *                   which may be "none"; without it, the inputs are written out (fitting, inspection).
  *
  * Defines (from vmcl.labelling, the one place that names them): NF inputs, NC labels; the support bits
  * BIT_DEPTH, BIT_MOTION, BIT_COLOUR, BIT_TEXTURE, BIT_BRIGHTNESS; HAS_STEREO, HAS_MOTION, HAS_COLOUR
- * (which restored fields exist; the inputs of a missing one are 0); RGB (the image has three channels).
- * Fields: image float32 (H, W) or (H, W, 3) in [0, 1]; disparity, hue float32 (H, W); flow float32
- * (H, W, 2); NaN values (hue outside its valid range) are skipped.
+ * (which restored fields exist; the inputs of a missing one are 0, whiteness included, which needs
+ * colour); RGB (the image has three channels); CANDIDATE_BITS. Fields: image float32 (H, W) or
+ * (H, W, 3) in [0, 1]; disparity, hue float32 (H, W); flow float32 (H, W, 2); NaN values (hue outside
+ * its valid range) are skipped by the window ranges and the crease.
  */
 
 #define CLIPPED(v, hi) fmin((float)(v), (float)(hi))
@@ -71,7 +73,7 @@ __kernel void label_features(__global const uchar *support, __global const float
     size_t i = (size_t)y * W + x;
 #if CLASSIFY
     /* Only candidates are labelled: the others (most pixels) skip the inputs. */
-    if (!support[i]) {
+    if (!(support[i] & CANDIDATE_BITS)) {
         labels[i] = 0;
         return;
     }
@@ -91,7 +93,7 @@ __kernel void label_features(__global const uchar *support, __global const float
             log_lo5 = fmin(log_lo5, lg);
             log_hi5 = fmax(log_hi5, lg);
             bright = fmax(bright, g);
-#if RGB
+#if RGB && HAS_COLOUR
             float top = fmax(image[3 * j], fmax(image[3 * j + 1], image[3 * j + 2]));
             float bottom = fmin(image[3 * j], fmin(image[3 * j + 1], image[3 * j + 2]));
             white = fmax(white, bottom / fmax(top, 1e-3f));

@@ -57,15 +57,19 @@ def test_run_on_files_writes_report_and_fields(tmp_path, images):
     ("junk", "cannot be read as an image"),
     ("sizes", "same size"),
     ("config", "unknown config key stereo.nope"),
+    ("weights", "labels.weights"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, images, capsys, case, message):
     bad_config = tmp_path / "bad.toml"
     bad_config.write_text("[stereo]\nnope = 1\n")
+    bad_weights = tmp_path / "weights.toml"
+    bad_weights.write_text(f'[labels]\nweights = "{tmp_path / "absent.json"}"\n')
     arguments = {
         "missing": [str(tmp_path / "absent.png")],
         "junk": [str(images["junk"])],
         "sizes": [str(images["left"]), str(images["small"])],
         "config": [str(images["left"]), "--config", str(bad_config)],
+        "weights": [str(images["left"]), "--config", str(bad_weights)],
     }[case]
     out = tmp_path / "out"
     assert main(["run", *arguments, "--out", str(out), "--quiet"]) == 2

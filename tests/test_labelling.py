@@ -35,7 +35,8 @@ def _oracle_features(support, image, disparity, flow, hue) -> np.ndarray:
     h, w = disparity.shape
     across = d[3:3 + h, 0:w] - 2 * disparity + d[3:3 + h, 6:6 + w]
     along = d[0:h, 3:3 + w] - 2 * disparity + d[6:6 + h, 3:3 + w]
-    out.append(np.minimum(_window(np.maximum(abs(across), abs(along)), 1, np.max), 2))
+    crease = np.fmax(abs(across), abs(along))  # NaN only where both are
+    out.append(np.minimum(np.nan_to_num(_window(crease, 1, np.nanmax)), 2))
     for r in (1, 3):
         out.append(np.minimum(np.maximum(_range(flow[..., 0], r), _range(flow[..., 1], r)), 4))
     log = np.log(np.maximum(grey, 1e-3))
@@ -52,7 +53,9 @@ def fields():
     support = rng.choice(np.array([0, 1, 2, 4, 8, 16, 17, 24], np.uint8), size=(h, w), p=[.6] + [.4 / 7] * 7)
     image = rng.uniform(0, 1, (h, w, 3)).astype(np.float32)
     disparity = np.cumsum(rng.normal(0, 0.5, (h, w)), axis=1).astype(np.float32)
+    disparity[rng.uniform(size=(h, w)) < 0.05] = np.nan
     flow = rng.normal(0, 1.5, (h, w, 2)).astype(np.float32)
+    flow[rng.uniform(size=(h, w)) < 0.05] = np.nan
     hue = rng.uniform(0.3, 0.7, (h, w)).astype(np.float32)
     hue[rng.uniform(size=(h, w)) < 0.1] = np.nan
     return support, image, disparity, flow, hue
@@ -70,10 +73,9 @@ def test_features_match_a_numpy_oracle(fields, machine):
 def test_missing_inputs_give_zero_features(fields, machine):
     support, image, *_ = fields
     got = labelling.features(support, image, machine=machine)
-    for k in (5, 6, 7, 8, 9, 12):  # disparity, flow and hue measures
+    for k in (5, 6, 7, 8, 9, 12, 13):  # disparity, flow and hue measures; whiteness needs colour too
         assert not got[k].any(), FEATURES[k]
     grey = labelling.features(support, image.mean(axis=2), machine=machine)
-    assert not grey[13].any()  # whiteness needs colour
     np.testing.assert_allclose(grey[14], _window(image.mean(axis=2), 2, np.max), rtol=1e-6)
 
 
@@ -82,9 +84,7 @@ def _labeller(bias_none: float, weights_by_feature: dict) -> LinearLabeller:
     w[0, 0] = bias_none
     for (feature, label), value in weights_by_feature.items():
         w[1 + FEATURES.index(feature), CLASSES.index(label)] = value
-    keys = {"+".join(n for n in INPUTS if n in s) or "image" for s in
-            ({"texture"}, {"stereo", "texture"}, {"stereo", "motion", "colour", "texture"})}
-    return LinearLabeller({k: w for k in keys})
+    return LinearLabeller(dict.fromkeys(labelling.KEYS, w))
 
 
 def test_the_largest_support_wins_at_candidates_only(machine):
@@ -101,6 +101,26 @@ def test_the_largest_support_wins_at_candidates_only(machine):
     expected = np.zeros((h, w), np.uint8)
     expected[2, 3], expected[6, 1] = Label.SHADOW, Label.DEPTH
     np.testing.assert_array_equal(labels, expected)
+
+
+def test_a_cue_that_did_not_run_makes_no_candidates(machine):
+    support = np.zeros((4, 9), np.uint8)
+    support[1, 2] = Cue.TEXTURE
+    support[2, 5] = 32  # no Cue bit
+    labeller = _labeller(-1.0, {})  # every candidate would be DEPTH (bias 0 beats -1 for NONE)
+    image = np.full((4, 9), 0.5, np.float32)
+    ran = labelling.label(support, image, labeller=labeller, machine=machine)
+    assert ran[1, 2] == Label.DEPTH and ran[2, 5] == 0
+    assert not labelling.label(support, image, texture=False, labeller=labeller, machine=machine).any()
+    with pytest.raises(TypeError, match="texture must be a bool"):
+        labelling.label(support, image, texture="no", machine=machine)
+
+
+def test_device_views_with_an_offset_are_refused(fields, machine):
+    support, image, *_ = fields
+    tall = machine.to_device(np.concatenate([image, image]))
+    with pytest.raises(ValueError, match="image must not be a device view with an offset"):
+        labelling.features(machine.to_device(support), tall[len(image):], machine=machine)
 
 
 def test_device_in_device_out(fields, machine):
@@ -145,6 +165,66 @@ def test_weights_round_trip_and_refuse_other_features(tmp_path):
         LinearLabeller({"image": np.zeros((1 + len(FEATURES), len(CLASSES)))}).for_inputs({"stereo"})
 
 
+@pytest.mark.parametrize("content, message", [
+    (None, "cannot be read"),
+    ("{not json", "cannot be read"),
+    ("[1, 2]", "not labelling weights"),
+    ('{"features": []}', "not labelling weights"),
+    ('{"weights": {}, "features": [], "classes": []}', "other features"),
+])
+def test_bad_weights_files_are_refused_naming_the_file(tmp_path, content, message):
+    path = tmp_path / "w.json"
+    if content is not None:
+        path.write_text(content)
+    with pytest.raises(ValueError, match=message) as error:
+        LinearLabeller.load(path)
+    assert str(path) in str(error.value)
+
+
+def test_weights_of_unknown_input_sets_or_not_finite_are_refused():
+    good = np.zeros((1 + len(FEATURES), len(CLASSES)))
+    with pytest.raises(ValueError, match="names no set of inputs"):
+        LinearLabeller({"stereo+bogus": good})
+    with pytest.raises(ValueError, match="must be finite"):
+        LinearLabeller({"image": np.full_like(good, np.nan)})
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"l2": -1.0}, "l2 must be"),
+    ({"input_sets": ["stereo"]}, "input_sets: each must be"),
+    ({"input_sets": []}, "at least one set"),
+])
+def test_fit_refuses_bad_arguments(kwargs, message):
+    sample = (np.zeros((len(FEATURES), 4, 4), np.float32), np.full((4, 4), 16, np.uint8), np.zeros((4, 4), np.uint8))
+    with pytest.raises(ValueError, match=message):
+        LinearLabeller.fit([sample], **kwargs)
+
+
+def test_fit_refuses_samples_without_candidates_or_of_the_wrong_shape():
+    feats = np.zeros((len(FEATURES), 4, 4), np.float32)
+    with pytest.raises(ValueError, match="at least one candidate"):
+        LinearLabeller.fit([(feats, np.zeros((4, 4), np.uint8), np.zeros((4, 4), np.uint8))])
+    with pytest.raises(ValueError, match="at least one candidate"):
+        LinearLabeller.fit([])
+    with pytest.raises(ValueError, match="features must be"):
+        LinearLabeller.fit([(feats[:3], np.full((4, 4), 16, np.uint8), np.zeros((4, 4), np.uint8))])
+    bad = feats.copy()
+    bad[0, 0, 0] = np.nan
+    with pytest.raises(ValueError, match="must be finite"):
+        LinearLabeller.fit([(bad, np.full((4, 4), 16, np.uint8), np.zeros((4, 4), np.uint8))])
+
+
+def test_a_bad_weights_file_is_refused_when_the_config_is_made(tmp_path):
+    with pytest.raises(ValueError, match="labels.weights: .*nothere.json"):
+        Config.from_dict({"labels": {"weights": str(tmp_path / "nothere.json")}})
+    with pytest.raises(TypeError, match="labels.weights"):
+        Config.from_dict({"labels": {"weights": ""}})
+    path = tmp_path / "w.json"
+    labelling.default_labeller().save(path)
+    assert Config.from_dict({"labels": {"weights": str(path)}}).labels.labeller().weights.keys() == \
+        labelling.default_labeller().weights.keys()
+
+
 def test_fit_separates_labels_one_input_decides(machine):
     """Three labels told apart by two inputs: the fitted weights label every candidate right."""
     rng = np.random.default_rng(0)
@@ -179,7 +259,7 @@ def test_fit_targets_take_a_4_neighbour_label_by_precedence():
     assert out[1, 2] == Label.SHADOW and out[2, 4] == Label.DEPTH and out[1, 1] == 0
 
 
-# -- on rendered scenes the weights were not fitted to (seed 2; they were fitted to seeds 0 and 1) ----------
+# -- on images the weights were not fitted to (seed 2: new texture elements and noise, the fitted geometry) --
 
 
 @pytest.fixture(scope="module")

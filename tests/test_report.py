@@ -13,10 +13,10 @@ from vmcl.pipeline import Config, VisionMachine
 from vmcl.report import (
     CUE_COLOURS,
     LABEL_COLOURS,
-    cartoon_image,
     disparity_image,
     flow_image,
     labels_image,
+    support_image,
     write_report,
 )
 
@@ -78,13 +78,13 @@ def test_disparity_scale_runs_from_far_to_near():
     np.testing.assert_array_equal(picture[0, 0], [0, 0, 0])
 
 
-def test_cartoon_colours_each_cue_over_the_faded_image():
+def test_support_picture_colours_each_cue_over_the_faded_image():
     image = np.zeros((8, 8), np.float32)
     support = np.zeros((8, 8), np.uint8)
     support[1, 1] = Cue.COLOUR
     support[2, 2] = Cue.DEPTH | Cue.COLOUR
     support[3, 3] = Cue.BRIGHTNESS
-    picture = cartoon_image(image, support)
+    picture = support_image(image, support)
     assert tuple(picture[1, 1]) == CUE_COLOURS[Cue.COLOUR]
     assert tuple(picture[2, 2]) == CUE_COLOURS[Cue.DEPTH]
     assert picture[0, 0, 0] == picture[0, 0, 1] > 100  # faded, grey

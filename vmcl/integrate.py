@@ -53,8 +53,11 @@ CUES = ("depth", "motion", "colour", "texture")
 CUE_BITS = Cue.DEPTH | Cue.MOTION | Cue.COLOUR | Cue.TEXTURE
 """The bits that make a pixel a discontinuity of the cartoon (brightness alone does not)."""
 
-_DEFINES = {"BIT_DEPTH": int(Cue.DEPTH), "BIT_MOTION": int(Cue.MOTION), "BIT_COLOUR": int(Cue.COLOUR),
-            "BIT_TEXTURE": int(Cue.TEXTURE), "BIT_BRIGHTNESS": int(Cue.BRIGHTNESS),
+BIT_DEFINES = {"BIT_DEPTH": int(Cue.DEPTH), "BIT_MOTION": int(Cue.MOTION), "BIT_COLOUR": int(Cue.COLOUR),
+               "BIT_TEXTURE": int(Cue.TEXTURE), "BIT_BRIGHTNESS": int(Cue.BRIGHTNESS)}
+"""The kernels' -D names of the :class:`Cue` bits (integrate.cl, labelling.cl)."""
+
+_DEFINES = {**BIT_DEFINES,
             "LABEL_DEPTH": int(Label.DEPTH), "LABEL_ALBEDO": int(Label.ALBEDO),
             "LABEL_TEXTURE": int(Label.TEXTURE)}
 

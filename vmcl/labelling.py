@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from vmcl.cm._arrays import ArrayLike, field, machine_for
-from vmcl.integrate import Cue
+from vmcl.integrate import BIT_DEFINES, Cue
 from vmcl.machine import Machine
 from vmcl.scenes import Label
 
@@ -69,7 +69,24 @@ def _key(inputs: Iterable[str]) -> str:
     return "+".join(name for name in INPUTS if name in inputs) or "image"
 
 
-@dataclass(frozen=True)
+KEYS = tuple(_key(c) for k in range(len(INPUTS) + 1) for c in itertools.combinations(INPUTS, k))
+"""The keys of the weights: one per set of inputs, "image" for none."""
+
+CANDIDATE_BITS = Cue.DEPTH | Cue.MOTION | Cue.COLOUR | Cue.TEXTURE | Cue.BRIGHTNESS
+"""Support bits that make a pixel a candidate (each cue's only when that cue ran)."""
+
+_BITS = {"stereo": Cue.DEPTH, "motion": Cue.MOTION, "colour": Cue.COLOUR, "texture": Cue.TEXTURE}
+
+
+def candidate_bits(inputs: Iterable[str]) -> int:
+    """The support bits that make a candidate when these inputs ran: theirs and the brightness edge's."""
+    bits = Cue.BRIGHTNESS
+    for name in inputs:
+        bits |= _BITS[name]
+    return int(bits)
+
+
+@dataclass(frozen=True, eq=False)
 class LinearLabeller:
     """Weights of the linear network, one (1 + len(FEATURES), len(CLASSES)) matrix per set of inputs.
 
@@ -88,8 +105,12 @@ class LinearLabeller:
     def __post_init__(self):
         expected = (1 + len(FEATURES), len(CLASSES))
         for key, w in self.weights.items():
+            if key not in KEYS:
+                raise ValueError(f"weights key {key!r} names no set of inputs; keys are {', '.join(KEYS)}")
             if np.shape(w) != expected:
                 raise ValueError(f"weights[{key!r}] must have shape {expected}, got {np.shape(w)}")
+            if not np.all(np.isfinite(w)):
+                raise ValueError(f"weights[{key!r}] must be finite")
 
     def for_inputs(self, inputs: Iterable[str]) -> np.ndarray:
         key = _key(inputs)
@@ -100,12 +121,22 @@ class LinearLabeller:
     @classmethod
     def load(cls, path: str | Path | None = None) -> LinearLabeller:
         """The weights in ``path`` (default: the fitted ones shipped with vmcl)."""
-        text = Path(path or WEIGHTS_FILE).read_text()
-        data = json.loads(text)
+        path = WEIGHTS_FILE if path is None else Path(path)
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+            raise ValueError(f"{path}: cannot be read as labelling weights ({error})") from None
+        if not isinstance(data, dict) or not isinstance(data.get("weights"), dict):
+            # A bad file is a bad value of the argument, whatever JSON type it holds.
+            raise ValueError(f"{path}: not labelling weights (a JSON object with a 'weights' object)")  # noqa: TRY004
         if tuple(data.get("features", ())) != FEATURES or tuple(data.get("classes", ())) != tuple(
                 c.name for c in CLASSES):
-            raise ValueError(f"{path or WEIGHTS_FILE} was fitted to other features or labels than this vmcl's")
-        return cls({k: np.asarray(v, np.float32) for k, v in data["weights"].items()}, data.get("fitted_on", ""))
+            raise ValueError(f"{path} was fitted to other features or labels than this vmcl's")
+        try:
+            weights = {k: np.asarray(v, np.float32) for k, v in data["weights"].items()}
+            return cls(weights, str(data.get("fitted_on", "")))
+        except (ValueError, TypeError) as error:
+            raise ValueError(f"{path}: {error}") from None
 
     def save(self, path: str | Path) -> None:
         data = {"features": list(FEATURES), "classes": [c.name for c in CLASSES], "fitted_on": self.fitted_on,
@@ -137,32 +168,51 @@ class LinearLabeller:
         """
         from scipy.optimize import minimize
 
-        rows, targets = [], []
+        if not (isinstance(l2, (int, float)) and np.isfinite(l2) and l2 >= 0):
+            raise ValueError(f"l2 must be a finite number >= 0, got {l2!r}")
+        sets = [tuple(p) for p in (itertools.chain.from_iterable(itertools.combinations(INPUTS, k)
+                                                                 for k in range(len(INPUTS) + 1))
+                                   if input_sets is None else input_sets)]
+        for present in sets:
+            if isinstance(present, str) or not set(present) <= set(INPUTS):
+                raise ValueError(f"input_sets: each must be a collection of {', '.join(INPUTS)}, got {present!r}")
+        if not sets:
+            raise ValueError("input_sets must name at least one set of inputs")
+        rows, bits, targets = [], [], []
+        index_of = np.zeros(256, np.int64)  # Label code -> output row
+        index_of[[int(c) for c in CLASSES]] = np.arange(len(CLASSES))
         for feats, support, truth in samples:
-            candidates = (np.asarray(support) & int(Cue.DEPTH | Cue.MOTION | Cue.COLOUR | Cue.TEXTURE
-                                                    | Cue.BRIGHTNESS)) != 0
-            rows.append(np.moveaxis(np.asarray(feats, np.float32), 0, -1)[candidates])
-            targets.append(fit_targets(np.asarray(truth))[candidates])
-        x = np.concatenate(rows).astype(np.float64)
-        y = np.searchsorted([int(c) for c in CLASSES], np.concatenate(targets))
-        n, nc = len(y), len(CLASSES)
-        count = np.bincount(y, minlength=nc) + 1.0
-        sample_weight = (1.0 / np.sqrt(count))[y]
-        sample_weight *= n / sample_weight.sum()
-        onehot = np.eye(nc)[y]
+            feats, support, truth = np.asarray(feats, np.float32), np.asarray(support), np.asarray(truth)
+            if feats.shape != (len(FEATURES),) + support.shape or truth.shape != support.shape:
+                raise ValueError(f"a sample's features must be ({len(FEATURES)}, H, W) and its support and truth "
+                                 f"(H, W); got {feats.shape}, {support.shape}, {truth.shape}")
+            if not np.all(np.isfinite(feats)):
+                raise ValueError("a sample's features must be finite")
+            candidates = (support & int(CANDIDATE_BITS)) != 0
+            rows.append(np.moveaxis(feats, 0, -1)[candidates])
+            bits.append(support[candidates])
+            targets.append(index_of[fit_targets(truth)[candidates]])
+        if not rows or not sum(len(r) for r in rows):
+            raise ValueError("samples must hold at least one candidate pixel (support bits set)")
+        x_all, bits_all, y_all = (np.concatenate(a) for a in (rows, bits, targets))
+        nc = len(CLASSES)
         weights = {}
-        if input_sets is None:
-            input_sets = itertools.chain.from_iterable(itertools.combinations(INPUTS, k) for k in range(5))
-        for present in input_sets:
-            if not set(present) <= set(INPUTS):
-                raise ValueError(f"input_sets: {sorted(present)} names inputs outside {', '.join(INPUTS)}")
+        for present in sets:
+            # A set's candidates: pixels a cue of the set or a brightness edge marks.
+            chosen = (bits_all & candidate_bits(present)) != 0
+            x, y = x_all[chosen].astype(np.float64), y_all[chosen]
+            n = len(y)
+            count = np.bincount(y, minlength=nc) + 1.0
+            sample_weight = (1.0 / np.sqrt(count))[y]
+            sample_weight *= n / sample_weight.sum()
+            onehot = np.eye(nc)[y]
             kept = np.ones(len(FEATURES), bool)
             for name in set(INPUTS) - set(present):
                 kept[list(_NEEDS[name])] = False
             design = np.concatenate([np.ones((n, 1)), x[:, kept]], axis=1)
             p = design.shape[1]
 
-            def loss_and_gradient(theta, design=design, p=p):
+            def loss_and_gradient(theta, design=design, p=p, n=n, y=y, onehot=onehot, sample_weight=sample_weight):
                 w = theta.reshape(p, nc)
                 z = design @ w
                 z -= z.max(axis=1, keepdims=True)
@@ -175,6 +225,8 @@ class LinearLabeller:
 
             found = minimize(loss_and_gradient, np.zeros(p * nc), jac=True, method="L-BFGS-B",
                              options={"maxiter": 1000})
+            if not found.success:
+                raise RuntimeError(f"the fit for inputs {_key(present)!r} did not converge: {found.message}")
             full = np.zeros((1 + len(FEATURES), nc))
             full[np.concatenate([[True], kept])] = found.x.reshape(p, nc)
             weights[_key(present)] = full.astype(np.float32)
@@ -200,6 +252,8 @@ def _run(support, image, disparity, flow, hue, texture, labeller, machine, class
     img, _ = field(image, "image", machine, ndims=(2, 3), dtypes=(np.float32,))
     if img.shape[:2] != shape or (img.ndim == 3 and img.shape[2] != 3):
         raise ValueError(f"image must be (H, W) or (H, W, 3) with the support's (H, W) {shape}, got {img.shape}")
+    if not isinstance(texture, (bool, np.bool_)):
+        raise TypeError(f"texture must be a bool, got {type(texture).__name__}")
     present = {"texture"} if texture else set()
     fields = {}
     for name, array, ndims, wanted, needs in (("disparity", disparity, (2,), shape, "stereo"),
@@ -216,8 +270,7 @@ def _run(support, image, disparity, flow, hue, texture, labeller, machine, class
     args = [s, img] + [placeholder if fields[n] is None else fields[n] for n in ("disparity", "flow", "hue")]
     defines = {"NF": len(FEATURES), "NC": len(CLASSES), "RGB": int(img.ndim == 3), "CLASSIFY": int(classify),
                "HAS_STEREO": int("stereo" in present), "HAS_MOTION": int("motion" in present),
-               "HAS_COLOUR": int("colour" in present), "BIT_DEPTH": int(Cue.DEPTH), "BIT_MOTION": int(Cue.MOTION),
-               "BIT_COLOUR": int(Cue.COLOUR), "BIT_TEXTURE": int(Cue.TEXTURE), "BIT_BRIGHTNESS": int(Cue.BRIGHTNESS)}
+               "HAS_COLOUR": int("colour" in present), "CANDIDATE_BITS": candidate_bits(present), **BIT_DEFINES}
     kernel = machine.kernel("labelling", "label_features", **defines)
     height, width = shape
     if classify:
@@ -284,5 +337,5 @@ def default_labeller() -> LinearLabeller:
     return _DEFAULT[0]
 
 
-__all__ = ["CLASSES", "FEATURES", "INPUTS", "LinearLabeller", "default_labeller", "features", "fit_targets",
-           "label"]
+__all__ = ["CANDIDATE_BITS", "CLASSES", "FEATURES", "INPUTS", "KEYS", "LinearLabeller", "candidate_bits",
+           "default_labeller", "features", "fit_targets", "label"]

@@ -158,6 +158,9 @@ class Machine:
         of it; every vmcl kernel checks its ids against the field's bounds, so the extra work-items idle.
         """
         values = [a.base_data if isinstance(a, cl_array.Array) else a for a in args]
+        if any(isinstance(a, cl_array.Array) and a.offset for a in args):
+            # base_data is the whole buffer: a view's offset would be silently lost.
+            raise ValueError("device arrays passed to kernels must not be views with an offset; copy the view")
         if local_size is None and self.local_size is not None:
             local_size = (self.local_size,) + (1,) * (len(global_size) - 1)
         if local_size is not None:

@@ -235,7 +235,9 @@ class LabelsConfig:
         DEPTH (depth or motion), else ALBEDO (colour), else TEXTURE (:func:`vmcl.integrate.integrate`).
         benchmarks/results/labelling.md compares them.
     weights : str or None
-        A JSON file of :class:`vmcl.labelling.LinearLabeller` weights; None: the fitted ones shipped.
+        A JSON file of :class:`vmcl.labelling.LinearLabeller` weights (relative to the working
+        directory), read and checked when the Config is made; None: the fitted ones shipped. Only
+        "linear" uses them.
     """
 
     method: str = "linear"
@@ -244,8 +246,17 @@ class LabelsConfig:
     def __post_init__(self):
         if self.method not in ("linear", "rule"):
             raise ValueError(f"labels.method must be 'linear' or 'rule', got {self.method!r}")
-        if self.weights is not None and not isinstance(self.weights, str):
-            raise TypeError(f"labels.weights must be a file name or None, got {type(self.weights).__name__}")
+        if self.weights is not None:
+            if not isinstance(self.weights, str) or not self.weights:
+                raise TypeError(f"labels.weights must be a file name or None, got {self.weights!r}")
+            try:
+                labelling.LinearLabeller.load(self.weights)
+            except ValueError as error:
+                raise ValueError(f"labels.weights: {error}") from None
+
+    def labeller(self) -> labelling.LinearLabeller:
+        """The weights this section names."""
+        return labelling.LinearLabeller.load(self.weights) if self.weights else labelling.default_labeller()
 
 
 _SCHEDULES = {
@@ -437,6 +448,8 @@ class VisionMachine:
             raise TypeError(f"machine must be a vmcl.Machine, got {type(machine).__name__}")
         self.config = config or Config()
         self.machine = machine or Machine(profile=True)
+        # Read once per machine; None with the rule labels.
+        self.labeller = self.config.labels.labeller() if self.config.labels.method == "linear" else None
 
     def stages(self, *, right: bool, next: bool, rgb: bool) -> list[str]:
         """The names of the stages :meth:`run` goes through for these inputs, in order."""
@@ -491,6 +504,7 @@ class _Run:
     def __init__(self, vm: VisionMachine, image: np.ndarray, others: dict[str, np.ndarray],
                  progress: Callable[[str], None] | None) -> None:
         self.m, self.c = vm.machine, vm.config
+        self.labeller = vm.labeller
         self.progress = progress
         self.stages: dict[str, float] = {}
         self.notes: list[str] = []
@@ -562,13 +576,11 @@ class _Run:
                         lines["motion" if cue == "flow" else cue] = found
         with self.stage("integrate"):
             device["support"], device["labels"] = _integrate.integrate(lines, edges=brightness, machine=self.m)
-            if self.c.labels.method == "linear":
-                weights = self.c.labels.weights
-                labeller = labelling.LinearLabeller.load(weights) if weights else labelling.default_labeller()
+            if self.labeller is not None:
                 device["labels"] = labelling.label(
                     device["support"], left, disparity=device.get("restored_depth"),
                     flow=device.get("restored_flow"), hue=device.get("restored_colour"),
-                    texture="texture" in lines, labeller=labeller, machine=self.m)
+                    texture="texture" in lines, labeller=self.labeller, machine=self.m)
         with self.stage("download"):
             for name, array in device.items():
                 out[name] = array.get()

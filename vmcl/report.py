@@ -162,8 +162,9 @@ def labels_image(image: np.ndarray, labels: np.ndarray) -> np.ndarray:
     return picture
 
 
-def cartoon_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
-    """The cartoon: discontinuities coloured by their cue (:data:`CUE_COLOURS`) over the faded image.
+def support_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
+    """The cues' support: the pixels each cue's line marks, coloured by cue (:data:`CUE_COLOURS`), and the
+    brightness edges no cue marks, over the faded image.
 
     Parameters
     ----------
@@ -196,8 +197,8 @@ def field_image(values: np.ndarray) -> np.ndarray:
 
 def images(result: Result) -> dict[str, np.ndarray]:
     """The report's pictures of a run, by file stem, in the order the report shows them."""
-    out = {"labels": labels_image(result.image, result.labels),
-           "cartoon": cartoon_image(result.image, result.support),
+    out = {"cartoon": labels_image(result.image, result.labels),
+           "support": support_image(result.image, result.support),
            "input": _to_uint8(255 * np.repeat(_grey(result.image)[..., None], 3, axis=2)
                               if result.image.ndim == 2 else 255 * np.clip(result.image, 0, 1))}
     if result.disparity is not None:
@@ -211,14 +212,14 @@ def images(result: Result) -> dict[str, np.ndarray]:
         out["hue"] = field_image(result.restored.get("colour", result.hue))
     if result.density is not None:
         out["texture"] = field_image(result.restored.get("texture", result.density))
-    out["edges"] = cartoon_image(result.image, np.where(result.edges, int(Cue.BRIGHTNESS), 0).astype(np.uint8))
+    out["edges"] = support_image(result.image, np.where(result.edges, int(Cue.BRIGHTNESS), 0).astype(np.uint8))
     return out
 
 
 _CAPTIONS = {
-    "labels": "The cartoon, labelled: depth red, orientation purple, albedo blue, shadow dark grey, "
-              "specular yellow, texture green",
-    "cartoon": "The cues' support: discontinuities by cue (red depth, orange motion, blue colour, green texture; "
+    "cartoon": "The cartoon, the discontinuities by label: depth red, orientation purple, albedo blue, "
+               "shadow dark grey, specular yellow, texture green",
+    "support": "The cues' support: discontinuities by cue (red depth, orange motion, blue colour, green texture; "
                "grey: brightness edges no cue supports) over the faded image",
     "input": "The left image",
     "disparity": "Dense disparity (the depth MRF's restoration), pixels; near is red",

@@ -59,6 +59,9 @@ def field(x: Any, name: str, machine: Machine, *, ndims: tuple[int, ...],
             raise TypeError(f"{name} must have dtype {names}, got {x.dtype}")
         if not x.flags.c_contiguous:
             raise ValueError(f"{name} must be a C-contiguous device array")
+        if x.offset:
+            # Kernels get the buffer itself, which starts before a view's first element.
+            raise ValueError(f"{name} must not be a device view with an offset (copy it: {name}.copy())")
         host = False
         device = x
     elif isinstance(x, np.ndarray):
