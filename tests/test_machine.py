@@ -10,6 +10,7 @@ import pyopencl as cl
 import pytest
 
 import vmcl
+from vmcl import integrate as integrate_module
 from vmcl import machine as machine_module
 from vmcl.cm.scan import scan
 
@@ -141,3 +142,15 @@ def test_row_local_size_groups_rows_on_cpus(machine):
     else:
         assert machine.row_local_size((1000, 7)) is None
     assert vmcl.Machine(machine.device, local_size=7).row_local_size((1000, 7)) is None
+
+
+def test_views_with_an_offset_are_refused_at_launch(machine):
+    """A kernel gets an array's whole buffer, so a view's offset would be lost: launch refuses it."""
+    from vmcl.cm.scan import box_sum
+
+    data = machine.to_device(np.arange(64, dtype=np.float32).reshape(8, 8))
+    with pytest.raises(ValueError, match="must not be a device view with an offset"):
+        box_sum(data[2:], 1, machine=machine)
+    kernel = machine.kernel("integrate", "boundary", **integrate_module._DEFINES)
+    with pytest.raises(ValueError, match="views with an offset"):
+        machine.launch(kernel, (4, 4), data[1:], data, data, np.int64(4), np.int64(4))
