@@ -74,9 +74,13 @@ def _pr(score: metrics.DetectionScores) -> str:
     return f"{p} / {r}"
 
 
-def table(rows_in, labeller, machine) -> list[str]:
+def header() -> list[str]:
     head = ["scene", "F (linear)", "F (rule)"] + [Label(int(c)).name.lower() for c in labelling.CLASSES[1:]]
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    return ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+
+
+def table(rows_in, labeller, machine) -> list[str]:
+    lines = header()
     for key, (r, truth) in rows_in:
         predicted = labelling.label(r.support, r.image, labeller=labeller, machine=machine, **fields(r))
         f, per = scores(predicted, truth)
@@ -127,9 +131,8 @@ def main() -> None:
            (f"{len(data)} runs of the machine in {took:.0f} s; fitting the weights for the "
            f"{2 ** len(labelling.INPUTS)} sets of inputs took {fit_s:.0f} s."), "",
            ("Cells are precision / recall within 1 px per label ('-': no such pixel predicted or in the "
-           "truth); F is the discontinuity F within 1 px whatever the label ('none': nothing labelled). 'rule' is "
-           "labels.method = "
-           "\"rule\" on the same run."), "",
+           "truth); F is the discontinuity F within 1 px whatever the label ('none': nothing labelled). "
+           "'rule' is labels.method = \"rule\" on the same run."), "",
            f"## Shipped weights (fitted to seeds {FIT_SEEDS}) on seed {TEST_SEED}", ""]
     out += table([(k, v) for k, v in colour_runs.items() if k[2] == TEST_SEED], shipped, vm.machine)
     out += ["", f"## Shipped weights on one grey image (seed {TEST_SEED}): no stereo, motion or colour", "",
@@ -142,7 +145,7 @@ def main() -> None:
                      input_sets=[labelling.INPUTS])
         held_rows += table([(k, v) for k, v in colour_runs.items() if k[0] == name and k[2] == TEST_SEED], others,
                            vm.machine)[2:]
-    out += table([], shipped, vm.machine)[:2] + held_rows
+    out += header() + held_rows
     out += ["", "## Cost", "", ("Wall time of one labelling (the one kernel; fields already on the device), "
                                 "median of 30, beside the rule labelling (vmcl.integrate.integrate), on the "
                                 "blocks scene:"), ""]

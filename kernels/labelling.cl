@@ -15,12 +15,16 @@
  * Defines (from vmcl.labelling, the one place that names them): NF inputs, NC labels; the support bits
  * BIT_DEPTH, BIT_MOTION, BIT_COLOUR, BIT_TEXTURE, BIT_BRIGHTNESS; HAS_STEREO, HAS_MOTION, HAS_COLOUR
  * (which restored fields exist; the inputs of a missing one are 0, whiteness included, which needs
- * colour); RGB (the image has three channels); CANDIDATE_BITS. Fields: image float32 (H, W) or
- * (H, W, 3) in [0, 1]; disparity, hue float32 (H, W); flow float32 (H, W, 2); NaN values (hue outside
- * its valid range) are skipped by the window ranges and the crease.
+ * colour); RGB (the image has three channels); CANDIDATE_BITS; CODES (the outputs' label codes).
+ * Fields: image float32 (H, W) or (H, W, 3) in [0, 1]; disparity, hue float32 (H, W); flow float32
+ * (H, W, 2); NaN values (hue outside its valid range) are skipped by the window ranges and the crease.
  */
 
 #define CLIPPED(v, hi) fmin((float)(v), (float)(hi))
+
+#if CLASSIFY
+__constant uchar codes[NC] = {CODES};  /* the vmcl.scenes.Label code of each output */
+#endif
 
 /* max - min of one channel of a field over the (2r+1)^2 window, clamped at the borders, NaN skipped. */
 inline float window_range(__global const float *f, int channels, int c, long x, long y, int r, long W, long H)
@@ -62,7 +66,6 @@ __kernel void label_features(__global const uchar *support, __global const float
                              __global const float *hue,
 #if CLASSIFY
                              __constant const float *weights, __global uchar *labels,
-                             __constant const uchar *codes,
 #else
                              __global float *features,
 #endif

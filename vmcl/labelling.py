@@ -17,7 +17,7 @@ within 2 px (highlights take the light's colour). The weights are fitted by mult
 regression (the outputs stay linear in the inputs; the softmax only shapes the fit) to rendered scenes
 with exact labels (:mod:`vmcl.scenes`), once for every combination of the inputs a run can have, so a
 run without stereo uses weights fitted without stereo's inputs. benchmarks/labelling.py fits them,
-writes ``vmcl/labelling.json`` and measures the classifier on scenes it was not fitted to.
+writes ``vmcl/labelling.json`` and measures the classifier on images and presets it was not fitted to.
 
 NumPy in gives NumPy out; device arrays in give a device array out.
 
@@ -30,15 +30,17 @@ T. Poggio et al., "The MIT Vision Machine", Proc. DARPA Image Understanding Work
 
 from __future__ import annotations
 
+import functools
 import itertools
 import json
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from vmcl.cm._arrays import ArrayLike, field, machine_for
+from vmcl.cm._arrays import ArrayLike, machine_for
+from vmcl.cm._arrays import field as device_field
 from vmcl.integrate import BIT_DEFINES, Cue
 from vmcl.machine import Machine
 from vmcl.scenes import Label
@@ -69,11 +71,10 @@ def _key(inputs: Iterable[str]) -> str:
     return "+".join(name for name in INPUTS if name in inputs) or "image"
 
 
-KEYS = tuple(_key(c) for k in range(len(INPUTS) + 1) for c in itertools.combinations(INPUTS, k))
-"""The keys of the weights: one per set of inputs, "image" for none."""
+_INPUT_SETS = tuple(c for k in range(len(INPUTS) + 1) for c in itertools.combinations(INPUTS, k))
 
-CANDIDATE_BITS = Cue.DEPTH | Cue.MOTION | Cue.COLOUR | Cue.TEXTURE | Cue.BRIGHTNESS
-"""Support bits that make a pixel a candidate (each cue's only when that cue ran)."""
+KEYS = tuple(_key(c) for c in _INPUT_SETS)
+"""The keys of the weights: one per set of inputs, "image" for none."""
 
 _BITS = {"stereo": Cue.DEPTH, "motion": Cue.MOTION, "colour": Cue.COLOUR, "texture": Cue.TEXTURE}
 
@@ -84,6 +85,10 @@ def candidate_bits(inputs: Iterable[str]) -> int:
     for name in inputs:
         bits |= _BITS[name]
     return int(bits)
+
+
+CANDIDATE_BITS = candidate_bits(INPUTS)
+"""Support bits that make a pixel a candidate when every input ran."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,6 +106,8 @@ class LinearLabeller:
 
     weights: Mapping[str, np.ndarray]
     fitted_on: str = ""
+    # Device copies by (machine, key): uploaded once, not per labelling.
+    _on_device: dict = field(default_factory=dict, init=False, repr=False)
 
     def __post_init__(self):
         expected = (1 + len(FEATURES), len(CLASSES))
@@ -117,6 +124,13 @@ class LinearLabeller:
         if key not in self.weights:
             raise ValueError(f"the labeller has no weights for the inputs {key!r}; it has {sorted(self.weights)}")
         return np.asarray(self.weights[key], np.float32)
+
+    def on_device(self, inputs: Iterable[str], machine: Machine):
+        """:meth:`for_inputs` as a device array of ``machine`` (kept for later calls)."""
+        key = (machine, _key(inputs))
+        if key not in self._on_device:
+            self._on_device[key] = machine.to_device(self.for_inputs(inputs))
+        return self._on_device[key]
 
     @classmethod
     def load(cls, path: str | Path | None = None) -> LinearLabeller:
@@ -170,9 +184,7 @@ class LinearLabeller:
 
         if not (isinstance(l2, (int, float)) and np.isfinite(l2) and l2 >= 0):
             raise ValueError(f"l2 must be a finite number >= 0, got {l2!r}")
-        sets = [tuple(p) for p in (itertools.chain.from_iterable(itertools.combinations(INPUTS, k)
-                                                                 for k in range(len(INPUTS) + 1))
-                                   if input_sets is None else input_sets)]
+        sets = [tuple(p) for p in (_INPUT_SETS if input_sets is None else input_sets)]
         for present in sets:
             if isinstance(present, str) or not set(present) <= set(INPUTS):
                 raise ValueError(f"input_sets: each must be a collection of {', '.join(INPUTS)}, got {present!r}")
@@ -188,7 +200,7 @@ class LinearLabeller:
                                  f"(H, W); got {feats.shape}, {support.shape}, {truth.shape}")
             if not np.all(np.isfinite(feats)):
                 raise ValueError("a sample's features must be finite")
-            candidates = (support & int(CANDIDATE_BITS)) != 0
+            candidates = (support & CANDIDATE_BITS) != 0
             rows.append(np.moveaxis(feats, 0, -1)[candidates])
             bits.append(support[candidates])
             targets.append(index_of[fit_targets(truth)[candidates]])
@@ -247,9 +259,9 @@ def fit_targets(truth: np.ndarray) -> np.ndarray:
 
 
 def _run(support, image, disparity, flow, hue, texture, labeller, machine, classify: bool):
-    s, host = field(support, "support", machine, ndims=(2,), dtypes=(np.uint8,))
+    s, host = device_field(support, "support", machine, ndims=(2,), dtypes=(np.uint8,))
     shape = s.shape
-    img, _ = field(image, "image", machine, ndims=(2, 3), dtypes=(np.float32,))
+    img, _ = device_field(image, "image", machine, ndims=(2, 3), dtypes=(np.float32,))
     if img.shape[:2] != shape or (img.ndim == 3 and img.shape[2] != 3):
         raise ValueError(f"image must be (H, W) or (H, W, 3) with the support's (H, W) {shape}, got {img.shape}")
     if not isinstance(texture, (bool, np.bool_)):
@@ -262,7 +274,7 @@ def _run(support, image, disparity, flow, hue, texture, labeller, machine, class
         if array is None:
             fields[name] = None
             continue
-        fields[name], _ = field(array, name, machine, ndims=ndims, dtypes=(np.float32,))
+        fields[name], _ = device_field(array, name, machine, ndims=ndims, dtypes=(np.float32,))
         if fields[name].shape != wanted:
             raise ValueError(f"{name} must have shape {wanted}, got {fields[name].shape}")
         present.add(needs)
@@ -270,14 +282,13 @@ def _run(support, image, disparity, flow, hue, texture, labeller, machine, class
     args = [s, img] + [placeholder if fields[n] is None else fields[n] for n in ("disparity", "flow", "hue")]
     defines = {"NF": len(FEATURES), "NC": len(CLASSES), "RGB": int(img.ndim == 3), "CLASSIFY": int(classify),
                "HAS_STEREO": int("stereo" in present), "HAS_MOTION": int("motion" in present),
-               "HAS_COLOUR": int("colour" in present), "CANDIDATE_BITS": candidate_bits(present), **BIT_DEFINES}
+               "HAS_COLOUR": int("colour" in present), "CANDIDATE_BITS": candidate_bits(present),
+               "CODES": ",".join(str(int(c)) for c in CLASSES), **BIT_DEFINES}
     kernel = machine.kernel("labelling", "label_features", **defines)
     height, width = shape
     if classify:
-        weights = machine.to_device(labeller.for_inputs(present))
-        codes = machine.to_device(np.array([int(c) for c in CLASSES], np.uint8))
         out = machine.empty(shape, np.uint8)
-        args += [weights, out, codes]
+        args += [labeller.on_device(present, machine), out]
     else:
         out = machine.empty((len(FEATURES),) + shape, np.float32)
         args += [out]
@@ -302,7 +313,7 @@ def label(support: ArrayLike, image: ArrayLike, *, disparity: ArrayLike | None =
     ----------
     support : (H, W) uint8
         :class:`vmcl.integrate.Cue` bits (:func:`vmcl.integrate.integrate`'s support map): the
-        candidates are the pixels with any bit set.
+        candidates are the pixels with a brightness edge or a line of a cue that ran.
     image : (H, W) or (H, W, 3) float32
         The image in [0, 1].
     disparity, hue : (H, W) float32, optional
@@ -327,14 +338,10 @@ def label(support: ArrayLike, image: ArrayLike, *, disparity: ArrayLike | None =
                 classify=True)
 
 
-_DEFAULT: list[LinearLabeller] = []
-
-
+@functools.cache
 def default_labeller() -> LinearLabeller:
     """The shipped weights, read once."""
-    if not _DEFAULT:
-        _DEFAULT.append(LinearLabeller.load())
-    return _DEFAULT[0]
+    return LinearLabeller.load()
 
 
 __all__ = ["CANDIDATE_BITS", "CLASSES", "FEATURES", "INPUTS", "KEYS", "LinearLabeller", "candidate_bits",
