@@ -1,5 +1,6 @@
-/* filters.cl: the binomial approximation to the Gaussian, seed section "Edge detection" (Zero-crossings):
- * "only integer addition, shifting, and local communication on the 2D mesh".
+/* filters.cl: local filters on the mesh. The binomial approximation to the Gaussian, seed section "Edge
+ * detection" (Zero-crossings): "only integer addition, shifting, and local communication on the 2D mesh";
+ * and the window maximum (grey-level dilation by a square), one axis per pass.
  *
  * One pass convolves with [1 2 1]/4 along x and along y at once (the 3 x 3 mask [1 2 1]^T [1 2 1] / 16),
  * reading the eight NEWS neighbours; borders repeat the edge pixel. n passes give the binomial of
@@ -56,4 +57,20 @@ __kernel void binomial_pass(__global const T *in, __global T *out, long W, long 
             target[x] = (T)NORMALISE(s);
         }
     }
+}
+
+/* One axis of the window maximum: out(x, y) is the largest of in over x - r .. x + r (along_rows) or
+ * y - r .. y + r, within the field; one work-item per pixel of every plane. The window is small (the
+ * matcher's patch), so a plain loop beats a running structure. NaN is passed over (fmax), so a pixel
+ * whose window holds only NaN gets NaN. */
+__kernel void window_max_pass(__global const T *in, __global T *out, long W, long H, long r, int along_rows)
+{
+    long x = get_global_id(0), y = get_global_id(1), p = get_global_id(2);
+    if (x >= W || y >= H) return;
+    __global const T *plane = in + (size_t)p * H * W;
+    long at = along_rows ? x : y, n = along_rows ? W : H, step = along_rows ? 1 : W;
+    long base = along_rows ? y * W : x;
+    T best = NAN;
+    for (long j = max(at - r, 0L); j <= min(at + r, n - 1); j++) best = fmax(best, plane[base + j * step]);
+    out[(size_t)p * H * W + y * W + x] = best;
 }

@@ -207,6 +207,50 @@ __kernel void select_running(__global const float *votes, __global const float *
     finish(s, i, best_score, best_d, peaks);
 }
 
+/* Shiftable windows, intensity only. The score of cell (x, y, d) as one centred window gives it:
+ * -INFINITY where the window leaves the image (either view) or is too flat to score. Its maximum over the
+ * (2r+1)^2 centres around each pixel (vmcl.cm.filters.window_max) is the best window that holds the pixel,
+ * which select_scores then folds. */
+__kernel void intensity_scores(__global const float *votes, __global const float *stats, __global float *scores,
+                               long W, long H, long D, int d_min, float area, long r)
+{
+    long x = get_global_id(0), y = get_global_id(1), k = get_global_id(2);
+    if (x >= W || y >= H || k >= D) return;
+    int d = d_min + (int)k;
+    size_t cell = (k * H + y) * W + x;
+    float score = stats_score(stats, x, y, W, H, d, votes[cell], area, 0.0f);
+    int inside = y >= r && y + r < H && x - r >= 0 && x + r < W && x - d - r >= 0 && x - d + r < W;
+    scores[cell] = inside && isfinite(score) ? score : -INFINITY;
+}
+
+/* Folds D planes of finished scores (disparities d_min, d_min + 1, ...) into every pixel's selection,
+ * continuing the stored one unless `first`: the table folds all planes in one launch, the running
+ * variant one plane per launch. */
+__kernel void select_scores(__global const float *scores, __global const uchar *left, __global float *best_score,
+                            __global int *best_d, __global float *peaks,
+                            long W, long H, long D, int d_min, int first, float dip)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    long i = y * W + x;
+    Selection s = fresh();
+    if (!first) {
+        s.best_score = best_score[i];
+        s.best_d = best_d[i];
+        s.peak = peaks[3 * i];
+        s.valley = peaks[3 * i + 1];
+        s.second = peaks[3 * i + 2];
+    }
+    if (left[i]) {
+        for (long k = 0; k < D; k++) {
+            float score = scores[(k * H + y) * W + x];
+            int scored = isfinite(score);
+            consider(&s, d_min + (int)k, scored ? score : 0.0f, score, scored, dip);
+        }
+    }
+    finish(s, i, best_score, best_d, peaks);
+}
+
 /* Uniqueness and ordering, one round from the winners of every pixel: a winner is dropped when another
  * winner on its row claims the same right pixel with a higher score (ties: the smaller x keeps it), or
  * reverses the left-right order with it (the forbidden zone) with a higher score. Flags: out of range

@@ -1,9 +1,12 @@
-"""The binomial Gaussian: exact integer add-and-shift against an oracle, and its variance."""
+"""Local filters: the binomial Gaussian (exact integer add-and-shift against an oracle, and its variance) and
+the window maximum against scipy."""
 
 import numpy as np
 import pytest
 
-from vmcl.cm.filters import binomial
+from scipy import ndimage
+
+from vmcl.cm.filters import binomial, window_max
 
 
 def _oracle(x, passes):
@@ -56,3 +59,36 @@ def test_large_image_any_local_size(machine, machine_with_local_size):
 def test_bad_input_is_named(image, passes, error, match, machine):
     with pytest.raises(error, match=match):
         binomial(image, passes, machine=machine)
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 17), (17, 1), (37, 53), (3, 19, 23)], ids=str)
+@pytest.mark.parametrize("radius", [0, 1, 5, 30])
+def test_window_max_matches_scipy(shape, radius, machine):
+    rng = np.random.default_rng(radius)
+    x = rng.normal(size=shape).astype(np.float32)
+    x.flat[rng.integers(0, x.size, max(1, x.size // 10))] = -np.inf  # the matcher's unscorable cells
+    size = (1,) * (x.ndim - 2) + (2 * radius + 1,) * 2
+    expected = ndimage.maximum_filter(x, size=size, mode="constant", cval=-np.inf)
+    np.testing.assert_array_equal(window_max(x, radius, machine=machine), expected)
+
+
+def test_window_max_passes_over_nan_and_keeps_device_arrays(machine):
+    x = np.zeros((5, 7), np.float32)
+    x[2, 3] = np.nan
+    x[0, 0] = 4.0
+    got = window_max(machine.to_device(x), 1, machine=machine)
+    assert not isinstance(got, np.ndarray)
+    host = got.get()
+    assert not np.isnan(host).any() and host[1, 1] == 4.0 and host[2, 3] == 0.0
+    assert np.isnan(window_max(np.full((3, 3), np.nan, np.float32), 1, machine=machine)).all()
+
+
+@pytest.mark.parametrize("x, radius, error, pattern", [
+    (np.zeros((4, 4), np.float32), -1, ValueError, "radius must be >= 0"),
+    (np.zeros((4, 4), np.float32), 1.5, TypeError, "radius must be an integer"),
+    (np.zeros((4, 4), np.int32), 1, (TypeError, ValueError), "x"),
+    (np.zeros(4, np.float32), 1, ValueError, "x"),
+])
+def test_window_max_bad_input_is_named(x, radius, error, pattern, machine):
+    with pytest.raises(error, match=pattern):
+        window_max(x, radius, machine=machine)

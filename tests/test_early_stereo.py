@@ -288,6 +288,76 @@ def test_intensity_score_does_not_depend_on_the_brightness_level(machine):
                                  machine=machine).disparity).any()
 
 
+def _shifted_oracle(left, right, d_min, d_max, patch, sigma):
+    """Winners of shiftable-window intensity matching in float64: each cell's centred correlation of the
+    smoothed, mean-centred brightness (-inf where a window leaves either image or is flat), its maximum
+    over the windows holding the pixel, the best d (ties: the smaller)."""
+    from vmcl.early.filters import gaussian
+
+    r = patch // 2
+    smooth = [gaussian(image, sigma=sigma, method="exact").astype(np.float64) for image in (left, right)]
+    lb, rb = (b - b.mean() for b in smooth)
+    height, width = lb.shape
+    scores = np.full((d_max - d_min + 1, height, width), -np.inf)
+    box = np.ones((patch, patch))
+    for k, d in enumerate(range(d_min, d_max + 1)):
+        shifted = np.zeros_like(rb)
+        lo, hi = max(d, 0), min(width, width + d)
+        shifted[:, lo:hi] = rb[:, lo - d:hi - d]
+        n = patch * patch
+        sums = [ndimage.convolve(a, box, mode="constant") for a in (lb, shifted, lb * lb, shifted * shifted,
+                                                                   lb * shifted)]
+        var_l, var_r = sums[2] - sums[0] ** 2 / n, sums[3] - sums[1] ** 2 / n
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ncc = (sums[4] - sums[0] * sums[1] / n) / np.sqrt(var_l * var_r)
+        ys, xs = np.mgrid[:height, :width]
+        inside = (ys >= r) & (ys + r < height) & (xs - r >= 0) & (xs + r < width) & (xs - d - r >= 0) & (
+            xs - d + r < width)
+        scores[k] = np.where(inside & (var_l > 1e-9) & (var_r > 1e-9), np.clip(ncc, -1, 1), -np.inf)
+    widened = ndimage.maximum_filter(scores, size=(1, patch, patch), mode="constant", cval=-np.inf)
+    return d_min + widened.argmax(axis=0), widened.max(axis=0)
+
+
+@pytest.mark.parametrize("variant", ["table", "running"])
+def test_shiftable_windows_match_oracle(variant, machine):
+    rng = np.random.default_rng(7)
+    texture = ndimage.gaussian_filter(rng.random((48, 90)), 1.0).astype(np.float32)
+    # A textured square at disparity 6 in front of a background at disparity 0.
+    left, right = texture[:, 10:74].copy(), texture[:, 10:74].copy()
+    left[12:36, 20:44] = texture[12:36, 4:28]
+    right[12:36, 14:38] = texture[12:36, 4:28]
+    found = match(left, right, d_min=-2, d_max=9, patch=7, sigma=0.7, features="intensity", shiftable=True,
+                  variant=variant, machine=machine)
+    best_d, best_score = _shifted_oracle(left, right, -2, 9, 7, 0.7)
+    kept = np.isfinite(found.disparity)
+    assert kept.mean() > 0.85  # shifted windows reach the border; suppression drops few
+    assert np.mean(found.disparity[kept] == best_d[kept]) > 0.995  # float32 against float64: near-ties
+    scored = np.isfinite(found.score)
+    np.testing.assert_allclose(found.score[scored], best_score[scored], atol=2e-4)
+
+
+def test_shiftable_variants_agree(machine):
+    scene, d_min, d_max = _pair("blocks")
+    found = [match(scene.left, scene.right, d_min=d_min, d_max=d_max, features="intensity", shiftable=True,
+                   variant=variant, machine=machine) for variant in ("table", "running")]
+    for name in ("disparity", "score", "discontinuity"):
+        np.testing.assert_array_equal(getattr(found[0], name), getattr(found[1], name))
+
+
+def test_shiftable_windows_keep_the_nearer_surface_off_the_farther(machine):
+    """Near a depth edge a centred patch straddles both surfaces and the nearer one wins half a patch
+    beyond its outline; a shifted patch lies on the pixel's own side."""
+    scene = two_planes()
+    near = ndimage.binary_dilation(scene.labels == scenes.Label.DEPTH, iterations=5) & ~scene.occluded_stereo
+    accuracy = []
+    for shiftable in (False, True):
+        found = match(scene.left, scene.right, d_min=2, d_max=16, features="intensity", patch=11, sigma=1.0,
+                      shiftable=shiftable, machine=machine)
+        matched = np.isfinite(found.disparity) & near
+        accuracy.append(np.mean(np.abs(found.disparity - scene.disparity)[matched] <= 1))
+    assert accuracy[1] >= 0.9 and accuracy[1] > accuracy[0] + 0.1
+
+
 def test_negative_evidence_is_measured_against_the_plain_score(machine):
     scene, d_min, d_max = _pair("blocks")
     visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
@@ -315,6 +385,9 @@ def test_negative_evidence_is_measured_against_the_plain_score(machine):
     ({"left": np.zeros((0, 32), np.float32), "right": np.zeros((0, 32), np.float32)}, ValueError, "empty"),
     ({"left": np.full((32, 32), np.nan, np.float32)}, ValueError, "left has NaN"),
     ({"right": np.full((32, 32), np.inf, np.float32), "features": "intensity"}, ValueError, "right has NaN"),
+    ({"shiftable": True}, ValueError, "features must be 'intensity'"),
+    ({"shiftable": True, "features": "intensity", "barriers": np.zeros((32, 32), bool)}, ValueError, "no barriers"),
+    ({"shiftable": 1, "features": "intensity"}, TypeError, "shiftable must be a bool"),
 ])
 def test_bad_input_is_named(kwargs, error, pattern, machine):
     arguments = {"left": np.zeros((32, 32), np.float32), "right": np.zeros((32, 32), np.float32),

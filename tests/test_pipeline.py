@@ -45,7 +45,8 @@ def test_config_from_toml_overrides_defaults_and_presets(tmp_path):
                                            ("[stereo]\nbackfill_floor = 1.5\n", "stereo.backfill_floor"),
                                            ("[stereo]\nbackfill_weight = -0.1\n", "stereo.backfill_weight"),
                                            ("[motion]\nconfidence_floor = nan\n", "motion.confidence_floor"),
-                                           ('[labels]\nmethod = "svm"\n', "labels.method")])
+                                           ('[labels]\nmethod = "svm"\n', "labels.method"),
+                                           ("[stereo]\nintensity_sigma = 0\n", "stereo.intensity_sigma")])
 def test_bad_config_is_refused_naming_the_key(tmp_path, text, message):
     path = tmp_path / "bad.toml"
     path.write_text(text)
@@ -61,6 +62,8 @@ def test_weights_can_be_switched_off_from_toml_and_bad_types_are_named(tmp_path)
     assert not config.motion.weigh_by_score and not config.stereo.backfill
     with pytest.raises(TypeError, match="stereo.backfill_weight"):
         Config.from_dict({"stereo": {"backfill_weight": "0.2"}})
+    with pytest.raises(TypeError, match="stereo.shiftable"):
+        Config.from_dict({"stereo": {"shiftable": 1}})
 
 # -- inputs ----------------------------------------------------------------------------------------
 

@@ -97,6 +97,13 @@ class StereoConfig:
     backfill_floor, backfill_weight : float
         Intensity matches whose correlation is at or below the floor weigh 0; a perfect one weighs
         ``backfill_weight`` (the feature matches weigh 1).
+    shiftable : bool
+        Intensity matches (the backfill, or ``features = "intensity"``) score each pixel by the best
+        patch that holds it (:func:`vmcl.early.stereo.match`'s ``shiftable``), so that the nearer
+        surface does not spread over the farther one at depth discontinuities. An intensity matcher's
+        feedback pass has barriers instead, which stop its windows at the lines.
+    intensity_sigma : float
+        The brightness smoothing of intensity matches (``sigma`` is the edge detector's).
     """
 
     enabled: bool = True
@@ -113,11 +120,18 @@ class StereoConfig:
     backfill: bool = True
     backfill_floor: float = 0.9
     backfill_weight: float = 0.2
+    shiftable: bool = True
+    intensity_sigma: float = 1.0
 
     def __post_init__(self) -> None:
         # Checked when the Config is made, naming the key, not mid-run.
         check_unit_interval(self.backfill_floor, "stereo.backfill_floor", closed_above=False)
         check_unit_interval(self.backfill_weight, "stereo.backfill_weight", closed_above=True)
+        if not isinstance(self.shiftable, bool):
+            raise TypeError(f"stereo.shiftable must be true or false, got {self.shiftable!r}")
+        sigma = self.intensity_sigma
+        if isinstance(sigma, bool) or not isinstance(sigma, (int, float)) or not 0 < sigma < math.inf:
+            raise ValueError(f"stereo.intensity_sigma must be a number > 0, got {sigma!r}")
 
 
 @dataclass(frozen=True)
@@ -601,11 +615,13 @@ class _Run:
         d_min = 0 if s.d_min is None else s.d_min
         d_max = math.ceil(s.max_disparity * width) if s.d_max is None else s.d_max
         features = features or s.features
-        # Canny's thresholds mean nothing to the intensity matcher, which matches every pixel.
-        thresholds = {} if features == "intensity" else {
+        # Canny's thresholds mean nothing to the intensity matcher, which matches every pixel; shiftable
+        # windows are its own.
+        options = {"shiftable": s.shiftable and barriers is None} if features == "intensity" else {
             "low_threshold": s.low_threshold, "high_threshold": s.high_threshold, "use_quantiles": s.use_quantiles}
         return stereo.match(left, right, d_min=d_min, d_max=d_max, features=features, patch=s.patch,
-                            sigma=s.sigma, barriers=barriers, machine=self.m, **thresholds)
+                            sigma=s.intensity_sigma if features == "intensity" else s.sigma, barriers=barriers,
+                            machine=self.m, **options)
 
     def dense_match(self, left, right, width: int) -> tuple[Any, Any] | None:
         """The intensity matches and their weights for :meth:`depth_data`, or None without backfill.

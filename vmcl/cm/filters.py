@@ -1,8 +1,10 @@
-"""The binomial Gaussian: smoothing by repeated [1 2 1]/4 passes on the mesh.
+"""Local filters on the mesh: the binomial Gaussian and the window maximum.
 
 Seed section "Edge detection" (Zero-crossings): "An interesting and simple implementation of Gaussian
 convolution relies on the binomial approximation to the Gaussian distribution. This algorithm requires
-only integer addition, shifting, and local communication on the 2D mesh."
+only integer addition, shifting, and local communication on the 2D mesh." The window maximum (grey-level
+dilation by a square) is what the stereo matcher's shiftable windows need: the best of the windows that
+hold a pixel.
 """
 
 from __future__ import annotations
@@ -58,3 +60,40 @@ def binomial(image: ArrayLike, passes: int, *, machine: Machine | None = None) -
     if passes == 0:
         source = data.copy(queue=machine.queue)
     return result(source, host)
+
+
+def window_max(x: ArrayLike, radius: int, *, machine: Machine | None = None) -> ArrayLike:
+    """The maximum over the (2r+1) x (2r+1) window around every pixel (grey-level dilation by a square).
+
+    Parameters
+    ----------
+    x : float32 ndarray or pyopencl.array.Array, 2-D (H, W) or a 3-D stack (planes, H, W)
+        Planes are filtered one by one.
+    radius : int
+        r >= 0.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    Same type, shape and dtype as ``x``.
+
+    Notes
+    -----
+    Windows are cut at the borders (only pixels of the field count). NaN is passed over; a window of
+    NaN only gives NaN. Two passes (rows, then columns) of 2r + 1 reads per pixel each: meant for small
+    windows such as a matching patch.
+    """
+    machine = machine_for(machine)
+    data, host = field(x, "x", machine, ndims=(2, 3), dtypes=(np.float32,))
+    if not isinstance(radius, (int, np.integer)) or isinstance(radius, bool):
+        raise TypeError(f"radius must be an integer, got {type(radius).__name__}")
+    if radius < 0:
+        raise ValueError(f"radius must be >= 0, got {radius}")
+    height, width = data.shape[-2:]
+    planes = data.size // (height * width)
+    kernel = machine.kernel("filters", "window_max_pass", **type_defines(data.dtype))
+    rows, out = machine.empty(data.shape, data.dtype), machine.empty(data.shape, data.dtype)
+    for source, target, along_rows in ((data, rows, 1), (rows, out, 0)):
+        machine.launch(kernel, (width, height, planes), source, target, np.int64(width), np.int64(height),
+                       np.int64(radius), np.int32(along_rows))
+    return result(out, host)

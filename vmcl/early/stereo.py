@@ -34,6 +34,7 @@ from vmcl.cm import reduce as cm_reduce
 from vmcl.cm import scan
 from vmcl.cm._arrays import ArrayLike, machine_for
 from vmcl.cm._arrays import field as device_field
+from vmcl.cm.filters import window_max
 from vmcl.early.edges import canny, zero_crossings
 from vmcl.early.filters import gaussian
 from vmcl.machine import Machine
@@ -87,7 +88,7 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
           direction_tolerance: float = math.radians(20),
           horizontal_tolerance: float = 10.0,
           min_score: float = 0.3, bimodal: float = 0.3, dip: float = 0.8, min_votes: float = 3.0,
-          negative_evidence: float = 0.0,
+          negative_evidence: float = 0.0, shiftable: bool = False,
           barriers: ArrayLike | None = None, variant: Variant | None = None,
           machine: Machine | None = None) -> StereoMatch:
     """Match a rectified (or registered) stereo pair over the disparity range [d_min, d_max].
@@ -131,6 +132,12 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     negative_evidence : float
         >= 0; unmatched edges in the two patches, as a share of the patch area, times this, lower the
         score (the paper's planned negative evidence). 0 (default) is the plain normalised score.
+    shiftable : bool
+        Intensity only, without barriers: a pixel is scored at each d by the best of the (2r+1)^2
+        patches that hold it, not only the one centred on it (shiftable windows, Bobick and Intille).
+        Near a depth discontinuity some patch lies on the pixel's own side, so the nearer surface no
+        longer spreads half a patch over the farther one; pixels within ``patch // 2`` of the border
+        are then matched too, by patches further in. See the notes for what it measured.
     barriers : bool (H, W), optional
         Discontinuity lines (from the integration stage, or ground truth): support windows stop at them,
         along rows and then along columns.
@@ -153,6 +160,9 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     the smaller d). Uniqueness and ordering then run once over the winners: a winner is dropped when
     another winner on its row claims the same right pixel, or lies in its forbidden zone (reversing the
     left-right order), with a higher score.
+
+    Shiftable windows, measured with the pipeline's depth restoration (intensity matches backfilling the
+    edge matches): dense bad-1 rate on Middlebury nonocc ... (see benchmarks/results/stereo.md).
     """
     machine = machine_for(machine)
     _pair(left, right)
@@ -161,13 +171,20 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
         raise ValueError(f"features must be one of {sorted(_FEATURES)}, got {features!r}")
     if (left.ndim == 3) != (right.ndim == 3):
         raise ValueError("left and right must both be grey or both be colour")
+    if not isinstance(shiftable, (bool, np.bool_)):
+        raise TypeError(f"shiftable must be a bool, got {type(shiftable).__name__}")
+    if shiftable and features != "intensity":
+        raise ValueError(f"shiftable windows score intensity patches: features must be 'intensity', got {features!r}")
+    if shiftable and barriers is not None:
+        raise ValueError("shiftable windows take no barriers: a shifted patch already avoids the discontinuity")
     if not 0 <= horizontal_tolerance < 90:  # also refuses NaN; from 90 degrees on no edge would be left
         raise ValueError(f"horizontal_tolerance must be in [0, 90) degrees, got {horizontal_tolerance}")
     maps = _feature_maps(machine, left, right, features, sigma, low_threshold, high_threshold, use_quantiles)
     min_angle = horizontal_tolerance * 65536 / 360 if features == "canny" else 0.0
     found = _match_maps(machine, maps, features, min_angle=min_angle, d_min=d_min, d_max=d_max, patch=patch,
                         direction_tolerance=direction_tolerance, min_score=min_score, bimodal=bimodal, dip=dip,
-                        min_votes=min_votes, negative_evidence=negative_evidence, barriers=barriers, variant=variant)
+                        min_votes=min_votes, negative_evidence=negative_evidence, shiftable=bool(shiftable),
+                        barriers=barriers, variant=variant)
     return _deliver(found, isinstance(left, np.ndarray))
 
 
@@ -234,7 +251,7 @@ def _deliver(found: list, host: bool) -> StereoMatch:
 
 
 def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min, d_max, patch, direction_tolerance,
-                min_score, bimodal, dip, min_votes, negative_evidence, barriers, variant) -> list:
+                min_score, bimodal, dip, min_votes, negative_evidence, shiftable, barriers, variant) -> list:
     """Planes, support, selection and suppression on device feature maps; returns the device outputs."""
     height, width = maps["left"].shape
     depth = d_max - d_min + 1
@@ -294,6 +311,9 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
         machine.launch(machine.kernel("stereo", "match_edges", **defines), (bands,), *common, scratch, tallies,
                        *selection, *dims, np.int64(band), np.int32(d_min), np.int32(d_max), np.int64(radius),
                        tolerance, area, np.float32(negative_evidence), np.float32(dip))
+    elif shiftable:
+        _select_shifted(machine, support, common, stats, selection, defines, variant, d_min=d_min, depth=depth,
+                        area=area, dip=dip, radius=radius)
     elif variant == "table":
         planes = machine.empty((depth, height, width), np.float32)
         machine.launch(build, (width, height, depth), *common, planes, *dims, np.int64(depth), np.int32(d_min),
@@ -319,6 +339,30 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
                    np.float32(min_votes))
     disparity, score, out_of_range, discontinuity = outputs
     return [disparity, score, common[0], out_of_range, discontinuity]
+
+
+def _select_shifted(machine: Machine, support: _Support, common, stats, selection, defines, variant, *, d_min,
+                    depth, area, dip, radius) -> None:
+    """Intensity winners over shiftable windows: each plane's centred scores, their window maximum, folded.
+
+    The table does it for all planes in one go; the running variant plane by plane (three planes' worth
+    of memory instead of three tables).
+    """
+    height, width = selection[0].shape
+    build = machine.kernel("stereo", "match_planes", **defines)
+    score = machine.kernel("stereo", "intensity_scores", **defines)
+    fold = machine.kernel("stereo", "select_scores", **defines)
+    dims = (np.int64(width), np.int64(height))
+    step = depth if variant == "table" else 1
+    for first in range(0, depth, step):
+        count, d = min(step, depth - first), np.int32(d_min + first)
+        planes = machine.empty((count, height, width), np.float32)
+        machine.launch(build, (width, height, count), *common, planes, *dims, np.int64(count), d, np.int32(0))
+        scores = machine.empty((count, height, width), np.float32)
+        machine.launch(score, (width, height, count), support.sum(planes), stats, scores, *dims, np.int64(count), d,
+                       area, np.int64(radius))
+        machine.launch(fold, (width, height), window_max(scores, radius, machine=machine), common[0], *selection,
+                       *dims, np.int64(count), d, np.int32(first == 0), np.float32(dip))
 
 
 def direction_code(angle: float) -> int:
