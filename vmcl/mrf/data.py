@@ -101,7 +101,10 @@ def backfill(primary: ArrayLike, secondary: ArrayLike, secondary_confidence: Arr
     matches whose normalised cross-correlation exceeds 0.9, at weight up to 0.2. Measured with the
     pipeline's depth restoration (mean field; benchmarks/results/pipeline.md), dense bad-1 rate on
     Middlebury nonocc: tsukuba 20.2% to 11.5%, venus 13.5% to 6.3%, teddy 46.4% to 18.2%; on vmcl.scenes
-    (256 x 256): blocks 10.9% to 4.6%, "cues" 1.7% to 0.9%.
+    (256 x 256): blocks 10.9% to 4.6%, "cues" 1.7% to 0.9%. Those intensity matches had centred windows
+    on brightness smoothed with sigma 2; the pipeline's defaults now match with shiftable windows on
+    sigma 1 (``stereo.shiftable``, ``stereo.intensity_sigma``): tsukuba 7.6%, venus 5.3%, teddy 15.3%,
+    blocks 2.8%, "cues" 3.0%.
     """
     machine = machine_for(machine)
     host = all(isinstance(a, np.ndarray) for a in (primary, secondary, secondary_confidence))
