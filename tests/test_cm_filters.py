@@ -3,7 +3,6 @@ the window maximum against scipy."""
 
 import numpy as np
 import pytest
-
 from scipy import ndimage
 
 from vmcl.cm.filters import binomial, window_max
