@@ -59,6 +59,7 @@ __kernel void binomial_pass(__global const T *in, __global T *out, long W, long 
     }
 }
 
+#if T_IS_FLOAT  /* the program is also built for the binomial's integer types */
 /* One axis of the window maximum: out(x, y) is the largest of in over x - r .. x + r (along_rows) or
  * y - r .. y + r, within the field; one work-item per pixel of every plane. The window is small (the
  * matcher's patch), so a plain loop beats a running structure. NaN is passed over (fmax), so a pixel
@@ -74,3 +75,4 @@ __kernel void window_max_pass(__global const T *in, __global T *out, long W, lon
     for (long j = max(at - r, 0L); j <= min(at + r, n - 1); j++) best = fmax(best, plane[base + j * step]);
     out[(size_t)p * H * W + y * W + x] = best;
 }
+#endif

@@ -84,7 +84,8 @@ class StereoConfig:
     max_disparity : float
         The default d_max as a share of the image width.
     features, patch, sigma, low_threshold, high_threshold, use_quantiles
-        As :func:`vmcl.early.stereo.match` takes them. The defaults match Canny edges chosen by
+        As :func:`vmcl.early.stereo.match` takes them, ``sigma`` for edge and zero-crossing features
+        (intensity matches smooth with ``intensity_sigma``). The defaults match Canny edges chosen by
         quantile (60% and 85%), which keeps textured surfaces matched where the noise rule sees none.
     feedback : bool
         Match again with support windows stopped at the first pass's depth discontinuities.
@@ -130,8 +131,10 @@ class StereoConfig:
         if not isinstance(self.shiftable, bool):
             raise TypeError(f"stereo.shiftable must be true or false, got {self.shiftable!r}")
         sigma = self.intensity_sigma
-        if isinstance(sigma, bool) or not isinstance(sigma, (int, float)) or not 0 < sigma < math.inf:
-            raise ValueError(f"stereo.intensity_sigma must be a number > 0, got {sigma!r}")
+        if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.integer, np.floating)):
+            raise TypeError(f"stereo.intensity_sigma must be a number, got {type(sigma).__name__}")
+        if not 0 < sigma < math.inf:
+            raise ValueError(f"stereo.intensity_sigma must be > 0 and finite, got {sigma!r}")
 
 
 @dataclass(frozen=True)

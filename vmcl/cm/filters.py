@@ -93,7 +93,8 @@ def window_max(x: ArrayLike, radius: int, *, machine: Machine | None = None) -> 
     planes = data.size // (height * width)
     kernel = machine.kernel("filters", "window_max_pass", **type_defines(data.dtype))
     rows, out = machine.empty(data.shape, data.dtype), machine.empty(data.shape, data.dtype)
+    size = (width, height, planes)
     for source, target, along_rows in ((data, rows, 1), (rows, out, 0)):
-        machine.launch(kernel, (width, height, planes), source, target, np.int64(width), np.int64(height),
-                       np.int64(radius), np.int32(along_rows))
+        machine.launch(kernel, size, source, target, np.int64(width), np.int64(height), np.int64(radius),
+                       np.int32(along_rows), local_size=machine.row_local_size(size))
     return result(out, host)

@@ -255,13 +255,15 @@ def _deliver(found: list, host: bool) -> StereoMatch:
 
 
 def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min, d_max, patch, direction_tolerance,
-                min_score, bimodal, dip, min_votes, negative_evidence, shiftable, barriers, variant) -> list:
+                min_score, bimodal, dip, min_votes, negative_evidence, barriers, variant, shiftable=False) -> list:
     """Planes, support, selection and suppression on device feature maps; returns the device outputs."""
     height, width = maps["left"].shape
     depth = d_max - d_min + 1
     if variant is None:
         if features == "intensity":
-            variant = "table" if depth * height * width * 4 <= _TABLE_BYTES else "running"
+            # Shiftable windows hold three tables at once: scores and the window maximum's two passes.
+            tables = 3 if shiftable else 1
+            variant = "table" if tables * depth * height * width * 4 <= _TABLE_BYTES else "running"
         else:
             variant = "running" if patch <= _MAX_RUNNING_PATCH else "table"
     if variant not in ("running", "table"):
@@ -358,15 +360,18 @@ def _select_shifted(machine: Machine, support: _Support, common, stats, selectio
     fold = machine.kernel("stereo", "select_scores", **defines)
     dims = (np.int64(width), np.int64(height))
     step = depth if variant == "table" else 1
-    for first in range(0, depth, step):
-        count, d = min(step, depth - first), np.int32(d_min + first)
+    for start in range(0, depth, step):
+        count, d = min(step, depth - start), np.int32(d_min + start)
         planes = machine.empty((count, height, width), np.float32)
         machine.launch(build, (width, height, count), *common, planes, *dims, np.int64(count), d, np.int32(0))
+        votes = support.sum(planes)
+        del planes  # back to the pool before the scores and their maximum need theirs
         scores = machine.empty((count, height, width), np.float32)
-        machine.launch(score, (width, height, count), support.sum(planes), stats, scores, *dims, np.int64(count), d,
-                       area, np.int64(radius))
+        machine.launch(score, (width, height, count), votes, stats, scores, *dims, np.int64(count), d, area,
+                       np.int64(radius))
+        del votes
         machine.launch(fold, (width, height), window_max(scores, radius, machine=machine), common[0], *selection,
-                       *dims, np.int64(count), d, np.int32(first == 0), np.float32(dip))
+                       *dims, np.int64(count), d, np.int32(start == 0), np.float32(dip))
 
 
 def direction_code(angle: float) -> int:
