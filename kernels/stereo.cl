@@ -140,6 +140,13 @@ inline float stats_score(__global const float *stats, long x, long y, long W, lo
 #endif
 }
 
+/* Whether both (2r+1)^2 windows of cell (x, y, d), the left one at x and the right one at x - d, lie inside
+ * the image: only then does an intensity score divide the full area's sums. */
+inline int windows_inside(long x, long y, long W, long H, int d, long r)
+{
+    return y >= r && y + r < H && x - r >= 0 && x + r < W && x - d - r >= 0 && x - d + r < W;
+}
+
 /* Scores cell (x, y, d) from its summed votes and folds it into the pixel's selection; `own` is the
  * cell's own plane value p(x, y, d). An intensity cell competes only when both of its (2r+1)^2 windows
  * lie inside the image: the score divides by the full area, so a window cut by the border (its sums
@@ -149,11 +156,19 @@ inline void fold_cell(Selection *s, long x, long y, long W, long H, int d, float
 {
     float score = stats_score(stats, x, y, W, H, d, votes, area, negative);
 #if FEATURES == FEATURES_INTENSITY
-    int inside = y >= r && y + r < H && x - r >= 0 && x + r < W && x - d - r >= 0 && x - d + r < W;
+    int inside = windows_inside(x, y, W, H, d, r);
     consider(s, d, isfinite(score) ? score : 0.0f, score, inside, dip);
 #else
     consider(s, d, votes, score, own > 0.0f, dip);
 #endif
+}
+
+/* The selection a previous launch stored with finish(), for kernels that fold planes over several launches. */
+inline Selection resume(long i, __global const float *best_score, __global const int *best_d,
+                        __global const float *peaks)
+{
+    Selection s = {best_score[i], best_d[i], peaks[3 * i], peaks[3 * i + 1], peaks[3 * i + 2]};
+    return s;
 }
 
 inline void finish(Selection s, long i, __global float *best_score, __global int *best_d, __global float *peaks)
@@ -195,14 +210,7 @@ __kernel void select_running(__global const float *votes, __global const float *
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     long i = y * W + x;
-    Selection s = fresh();
-    if (!first) {
-        s.best_score = best_score[i];
-        s.best_d = best_d[i];
-        s.peak = peaks[3 * i];
-        s.valley = peaks[3 * i + 1];
-        s.second = peaks[3 * i + 2];
-    }
+    Selection s = first ? fresh() : resume(i, best_score, best_d, peaks);
     if (left[i]) fold_cell(&s, x, y, W, H, d, votes[i], plane[i], stats, area, negative, dip, r);
     finish(s, i, best_score, best_d, peaks);
 }
@@ -219,7 +227,7 @@ __kernel void intensity_scores(__global const float *votes, __global const float
     int d = d_min + (int)k;
     size_t cell = (k * H + y) * W + x;
     float score = stats_score(stats, x, y, W, H, d, votes[cell], area, 0.0f);
-    int inside = y >= r && y + r < H && x - r >= 0 && x + r < W && x - d - r >= 0 && x - d + r < W;
+    int inside = windows_inside(x, y, W, H, d, r);
     scores[cell] = inside && isfinite(score) ? score : -INFINITY;
 }
 
@@ -233,14 +241,7 @@ __kernel void select_scores(__global const float *scores, __global const uchar *
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     long i = y * W + x;
-    Selection s = fresh();
-    if (!first) {
-        s.best_score = best_score[i];
-        s.best_d = best_d[i];
-        s.peak = peaks[3 * i];
-        s.valley = peaks[3 * i + 1];
-        s.second = peaks[3 * i + 2];
-    }
+    Selection s = first ? fresh() : resume(i, best_score, best_d, peaks);
     if (left[i]) {
         for (long k = 0; k < D; k++) {
             float score = scores[(k * H + y) * W + x];

@@ -119,10 +119,19 @@ def type_defines(dtype: np.dtype) -> dict[str, Any]:
     raise TypeError(f"no kernel type for dtype {dtype}")
 
 
+def check_int(value: Any, name: str, *, minimum: int | None = None) -> int:
+    """``value`` as an int; TypeError naming ``name`` for a non-integer (bool included), ValueError below
+    ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be an integer, got {type(value).__name__}")
+    if minimum is not None and value < minimum:
+        raise ValueError(f"{name} must be >= {minimum}, got {value}")
+    return int(value)
+
+
 def normalise_axis(axis: int, ndim: int, allowed: tuple[int, ...], name: str = "axis") -> int:
     """``axis`` as a negative index, checked against the allowed (negative) axes."""
-    if not isinstance(axis, (int, np.integer)) or isinstance(axis, bool):
-        raise TypeError(f"{name} must be an integer, got {type(axis).__name__}")
+    check_int(axis, name)
     if not -ndim <= axis < ndim:
         raise ValueError(f"{name}={axis} is out of range for an array of {ndim} dimensions")
     negative = int(axis) - ndim if axis >= 0 else int(axis)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vmcl.cm._arrays import ArrayLike, field, machine_for, result, type_defines
+from vmcl.cm._arrays import ArrayLike, check_int, field, machine_for, result, type_defines
 from vmcl.machine import Machine
 
 
@@ -38,10 +38,7 @@ def binomial(image: ArrayLike, passes: int, *, machine: Machine | None = None) -
     """
     machine = machine_for(machine)
     data, host = field(image, "image", machine, ndims=(2, 3), dtypes=(np.uint8, np.int32, np.float32))
-    if not isinstance(passes, (int, np.integer)) or isinstance(passes, bool):
-        raise TypeError(f"passes must be an integer, got {type(passes).__name__}")
-    if passes < 0:
-        raise ValueError(f"passes must be >= 0, got {passes}")
+    passes = check_int(passes, "passes", minimum=0)
     height, width = data.shape[-2:]
     planes = data.size // (height * width)
     defines = type_defines(data.dtype)
@@ -85,10 +82,7 @@ def window_max(x: ArrayLike, radius: int, *, machine: Machine | None = None) -> 
     """
     machine = machine_for(machine)
     data, host = field(x, "x", machine, ndims=(2, 3), dtypes=(np.float32,))
-    if not isinstance(radius, (int, np.integer)) or isinstance(radius, bool):
-        raise TypeError(f"radius must be an integer, got {type(radius).__name__}")
-    if radius < 0:
-        raise ValueError(f"radius must be >= 0, got {radius}")
+    radius = check_int(radius, "radius", minimum=0)
     height, width = data.shape[-2:]
     planes = data.size // (height * width)
     kernel = machine.kernel("filters", "window_max_pass", **type_defines(data.dtype))

@@ -10,7 +10,7 @@ from typing import Literal
 
 import numpy as np
 
-from vmcl.cm._arrays import ArrayLike, field, machine_for, result, type_defines
+from vmcl.cm._arrays import ArrayLike, check_int, field, machine_for, result, type_defines
 from vmcl.machine import Machine
 
 Border = Literal["zero", "clamp", "wrap"]
@@ -37,9 +37,7 @@ def shift(x: ArrayLike, dx: int, dy: int, *, border: Border = "zero", machine: M
     """
     machine = machine_for(machine)
     data, host = field(x, "x", machine, ndims=(2, 3), dtypes=(np.uint8, np.int32, np.float32))
-    for name, value in (("dx", dx), ("dy", dy)):
-        if not isinstance(value, (int, np.integer)) or isinstance(value, bool):
-            raise TypeError(f"{name} must be an integer, got {type(value).__name__}")
+    dx, dy = check_int(dx, "dx"), check_int(dy, "dy")
     if border not in BORDERS:
         raise ValueError(f"border must be one of {sorted(BORDERS)}, got {border!r}")
     height, width = data.shape[-2:]

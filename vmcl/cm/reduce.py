@@ -14,7 +14,7 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
 
-from vmcl.cm._arrays import ArrayLike, field, machine_for, result, type_defines
+from vmcl.cm._arrays import ArrayLike, check_int, field, machine_for, result, type_defines
 from vmcl.machine import Machine
 
 ReduceOp = Literal["sum", "max", "min", "and", "or"]
@@ -153,8 +153,7 @@ def _histogram_field(x, bins, tile, machine: Machine) -> tuple[cl_array.Array, b
     source = x.astype(np.uint8) if isinstance(x, np.ndarray) and x.dtype == np.bool_ else x
     data, host = field(source, "x", machine, ndims=(2,) if tile is not None else _ANY_NDIM,
                        dtypes=_DTYPES)
-    if not isinstance(bins, (int, np.integer)) or isinstance(bins, bool):
-        raise TypeError(f"bins must be an integer, got {type(bins).__name__}")
+    check_int(bins, "bins")
     local_bins = machine.device.local_mem_size // 4 - 16
     if not 1 <= bins <= local_bins:
         raise ValueError(f"bins must be between 1 and {local_bins} on this device, got {bins}")

@@ -19,7 +19,16 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
 
-from vmcl.cm._arrays import ArrayLike, field, flags_field, machine_for, normalise_axis, result, type_defines
+from vmcl.cm._arrays import (
+    ArrayLike,
+    check_int,
+    field,
+    flags_field,
+    machine_for,
+    normalise_axis,
+    result,
+    type_defines,
+)
 from vmcl.machine import Machine
 
 Op = Literal["plus", "max", "min", "copy"]
@@ -237,10 +246,7 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     """
     machine = machine_for(machine)
     data, host = field(x, "x", machine, ndims=(1, 2, 3))
-    if not isinstance(radius, (int, np.integer)) or isinstance(radius, bool):
-        raise TypeError(f"radius must be an integer, got {type(radius).__name__}")
-    if radius < 0:
-        raise ValueError(f"radius must be >= 0, got {radius}")
+    radius = check_int(radius, "radius", minimum=0)
     if not isinstance(axes, tuple) or not axes:
         raise ValueError(f"axes must be a non-empty tuple such as (-2, -1), got {axes!r}")
     allowed = (-1,) if data.ndim == 1 else (-1, -2)

@@ -33,7 +33,7 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import scan
-from vmcl.cm._arrays import ArrayLike, field, machine_for
+from vmcl.cm._arrays import ArrayLike, check_int, field, machine_for
 from vmcl.early import edges as _edges
 from vmcl.early import filters as _filters
 from vmcl.early.sign_correlation import arcsine_law
@@ -108,14 +108,6 @@ def _frames(frame0, frame1, machine: Machine) -> tuple[cl_array.Array, cl_array.
     return d0, d1, host0
 
 
-def _positive_int(value, name: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name} must be an integer, got {type(value).__name__}")
-    if value < 1:
-        raise ValueError(f"{name} must be >= 1, got {value}")
-    return int(value)
-
-
 def _number(value, name: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise TypeError(f"{name} must be a number, got {type(value).__name__}")
@@ -126,8 +118,8 @@ def _number(value, name: str) -> float:
 
 def _check(shape: tuple[int, ...], delta, patch, features, sigma, levels: int = 1) -> tuple[int, int, float]:
     """(delta, patch radius, sigma) after checking them against the coarsest level's size."""
-    delta = _positive_int(delta, "delta")
-    patch = _positive_int(patch, "patch")
+    delta = check_int(delta, "delta", minimum=1)
+    patch = check_int(patch, "patch", minimum=1)
     if patch % 2 == 0:
         raise ValueError(f"patch must be odd (a window centred on the pixel), got {patch}")
     if features not in FEATURES:
@@ -401,7 +393,7 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     """
     machine = machine_for(machine)
     d0, d1, host = _frames(frame0, frame1, machine)
-    levels = _positive_int(levels, "levels")
+    levels = check_int(levels, "levels", minimum=1)
     delta, radius, sigma = _check(d0.shape, delta, patch, features, sigma, levels)
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")

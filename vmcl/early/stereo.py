@@ -32,7 +32,7 @@ import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as cm_reduce
 from vmcl.cm import scan
-from vmcl.cm._arrays import ArrayLike, machine_for
+from vmcl.cm._arrays import ArrayLike, check_int, machine_for
 from vmcl.cm._arrays import field as device_field
 from vmcl.cm.filters import window_max
 from vmcl.early.edges import canny, zero_crossings
@@ -233,8 +233,7 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
 
 def _check_range(d_min, d_max, patch, width: int) -> None:
     for name, value in (("d_min", d_min), ("d_max", d_max), ("patch", patch)):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-            raise TypeError(f"{name} must be an integer, got {type(value).__name__}")
+        check_int(value, name)
     if d_min > d_max:
         raise ValueError(f"d_min ({d_min}) must not exceed d_max ({d_max})")
     if d_max - d_min + 1 > width or max(abs(d_min), abs(d_max)) >= width:

@@ -49,7 +49,7 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import scan as _scan
-from vmcl.cm._arrays import ArrayLike, machine_for, result
+from vmcl.cm._arrays import ArrayLike, check_int, machine_for, result
 from vmcl.early import noise as _noise
 from vmcl.early.filters import _check_sigma, _image, laplacian_of_gaussian
 from vmcl.machine import Machine
@@ -83,11 +83,7 @@ def _check(fine_sigma, coarse_sigma, threshold, radius) -> tuple[float, float, f
     if not math.isfinite(threshold) or threshold <= 0:
         raise ValueError(f"threshold must be a finite number > 0 (blobs are thresholded at a non-zero "
                          f"value), got {threshold}")
-    if isinstance(radius, bool) or not isinstance(radius, (int, np.integer)):
-        raise TypeError(f"radius must be an integer, got {type(radius).__name__}")
-    if radius < 1:
-        raise ValueError(f"radius must be >= 1, got {radius}")
-    return fine, coarse, float(threshold), int(radius)
+    return fine, coarse, float(threshold), check_int(radius, "radius", minimum=1)
 
 
 def _density(machine: Machine, data: cl_array.Array, fine: float, coarse: float, threshold: float,
