@@ -1,17 +1,23 @@
-"""UNET framing: CRC-16, frame encoding and a resynchronising frame parser.
+"""UNET framing: CRC-16, byte-stuffed frames between flags, and a frame parser.
 
 The Vision Machine's eye-head hangs off UNET, a multi-drop network of up to 32 micros under one host
 master, where micros "only speak when spoken to" (Poggio et al., "The MIT Vision Machine", section
-"The Eye-Head system"). The byte format here follows the proven serial servo protocols:
+"The Eye-Head system"). The byte format here follows the proven serial protocols:
 
-* Dynamixel Protocol 2.0: a sync header, an id, a length, an instruction, a CRC-16, status packets that
-  carry error bits, broadcast id that is never answered.
+* Dynamixel Protocol 2.0: an id, a length, an instruction, a CRC-16, status packets that carry error
+  bits, a broadcast id that is never answered, and byte stuffing so that a payload can never hold a
+  header.
+* HDLC / PPP (RFC 1662): a flag byte opens and closes every frame, and an escape byte hides the flag
+  (and itself) inside the frame, so the flag on the wire only ever means a frame boundary.
 * Modbus RTU: one-byte addresses, CRC-16/MODBUS sent low byte first, a slave that stays silent on a bad
   CRC so that the master times out and retries.
 
-Request ``A5 | ADDR | SEQ | LEN | CMD | payload | CRC16``, reply ``A5 | ADDR|0x80 | SEQ | LEN | STATUS |
-CMD | payload | CRC16``. LEN counts the bytes between LEN and the CRC. The CRC covers everything from the
-sync byte to the end of the body. hardware/PROTOCOL.md is the full specification.
+On the wire: ``A5 | stuffed(ADDR SEQ LEN body CRC16) | A5``; the body is ``CMD payload`` in a request
+and ``STATUS CMD payload`` in a reply (ADDR with bit 7 set). Inside the flags every ``A5`` is sent as
+``DB 85`` and every ``DB`` as ``DB FB``. LEN counts the body's bytes and must agree with the number of
+bytes actually found between the flags; the CRC covers ADDR to the end of the payload. Because a payload
+byte can never be ``A5``, no frame can ever be found inside another one. hardware/PROTOCOL.md is the
+full specification.
 """
 
 from __future__ import annotations
@@ -20,10 +26,11 @@ from dataclasses import dataclass
 
 __all__ = [
     "BROADCAST",
+    "ESCAPE",
+    "FLAG",
     "MAX_ADDRESS",
     "MAX_PAYLOAD",
     "REPLY_BIT",
-    "SYNC",
     "Frame",
     "Parser",
     "crc16",
@@ -31,16 +38,23 @@ __all__ = [
     "encode_request",
 ]
 
-SYNC = 0xA5
+FLAG = 0xA5
+ESCAPE = 0xDB
+# An escaped byte is sent as ESCAPE followed by the byte XOR this (as in HDLC), so neither FLAG nor
+# ESCAPE ever follows an ESCAPE.
+_FLIP = 0x20
+_ESCAPED = {FLAG ^ _FLIP: FLAG, ESCAPE ^ _FLIP: ESCAPE}
 BROADCAST = 0
 MAX_ADDRESS = 31
 REPLY_BIT = 0x80
 MAX_PAYLOAD = 30
-_HEADER = 4
+_HEADER = 3  # ADDR, SEQ, LEN
 _CRC = 2
-_MIN_REQUEST = _HEADER + 1 + _CRC
-# A bound on LEN keeps a false sync byte in garbage from holding up the parser for long.
-_MAX_BODY = MAX_PAYLOAD + 2
+_MIN_CONTENT = _HEADER + 1 + _CRC  # the shortest request: no payload
+_MAX_CONTENT = _HEADER + MAX_PAYLOAD + 2 + _CRC  # the longest reply
+# The fewest wire bytes that can complete a frame when none is under way: its content and a closing
+# flag (the opening one may be the flag that closed the previous frame).
+_SHORTEST_ON_WIRE = 1 + _MIN_CONTENT + 1
 
 
 def _crc_table() -> tuple[int, ...]:
@@ -125,12 +139,17 @@ def _check_byte(name: str, value: int, low: int, high: int) -> None:
         raise ValueError(f"{name} must be in {low}..{high}, got {value}")
 
 
+def _stuff(content: bytes | bytearray) -> bytes:
+    # ESCAPE first, so that the escapes added for FLAG are not escaped again.
+    return bytes(content).replace(b"\xdb", b"\xdb\xfb").replace(b"\xa5", b"\xdb\x85")
+
+
 def _encode(addr_byte: int, seq: int, body: bytes) -> bytes:
-    frame = bytearray((SYNC, addr_byte, seq, len(body)))
-    frame += body
-    crc = crc16(frame)
-    frame += bytes((crc & 0xFF, crc >> 8))
-    return bytes(frame)
+    content = bytearray((addr_byte, seq, len(body)))
+    content += body
+    crc = crc16(content)
+    content += bytes((crc & 0xFF, crc >> 8))
+    return bytes((FLAG,)) + _stuff(content) + bytes((FLAG,))
 
 
 def _check_frame_args(addr: int, seq: int, cmd: int, payload: bytes) -> None:
@@ -166,107 +185,105 @@ def encode_reply(addr: int, seq: int, status: int, cmd: int, payload: bytes = b"
 def _header_valid(addr_byte: int, length: int) -> bool:
     if addr_byte & REPLY_BIT:
         addr = addr_byte & ~REPLY_BIT
-        return 1 <= addr <= MAX_ADDRESS and 2 <= length <= _MAX_BODY
+        return 1 <= addr <= MAX_ADDRESS and 2 <= length <= MAX_PAYLOAD + 2
     return addr_byte <= MAX_ADDRESS and 1 <= length <= MAX_PAYLOAD + 1
 
 
 class Parser:
-    """Incremental frame parser that resynchronises after garbage.
+    """Incremental frame parser: every flag byte ends one candidate frame and begins the next.
 
-    Feed it bytes as they arrive, in pieces of any size; it returns each frame whose header is plausible
-    and whose CRC checks. After a bad header or a bad CRC it drops only the sync byte and rescans from
-    the next byte, so a real frame that follows garbage (or a frame cut short) is still found; a
-    complete frame found beyond an incomplete one is taken at once (the incomplete one was garbage). It
-    never raises on any input.
+    Feed it bytes as they arrive, in pieces of any size. The bytes between two flags are unstuffed and
+    taken as a frame only if the escapes are well formed, the header is plausible, LEN equals the number
+    of body bytes actually received, and the CRC checks; anything else is dropped whole. A flag can
+    never occur inside a frame, so resynchronisation is immediate: a frame cut short is abandoned at the
+    next flag, and the frame that flag opens is read normally. It never raises on any input.
 
     Attributes
     ----------
     dropped : int
-        Bytes discarded while hunting for a frame.
+        Bytes discarded: bytes before the first flag, and the bytes between the flags of every candidate
+        that was refused.
     crc_errors : int
-        Candidate frames (plausible header, full length) whose CRC failed.
+        Candidates with a plausible header and the length LEN announces whose CRC failed.
     """
 
     def __init__(self) -> None:
-        self._buf = bytearray()
+        self._content = bytearray()
+        self._raw = 0  # wire bytes of the candidate under way, escapes included
+        self._hunting = True  # before the first flag: bytes that belong to no frame we can see
+        self._escaped = False
+        self._bad = False
         self.dropped = 0
         self.crc_errors = 0
 
     def feed(self, data: bytes | bytearray) -> list[Frame]:
         """Append `data` and return the frames completed by it, in order."""
-        buf = self._buf
-        buf += data
         frames = []
-        while buf:
-            start = buf.find(SYNC)
-            if start < 0:
-                self.dropped += len(buf)
-                buf.clear()
-                break
-            if start:
-                self.dropped += start
-                del buf[:start]
-            if len(buf) < _HEADER:
-                break
-            length = buf[3]
-            if not _header_valid(buf[1], length):
-                self._drop(1)
+        for byte in data:
+            if byte == FLAG:
+                if self._hunting:
+                    self._hunting = False
+                elif self._raw:
+                    frame = self._close()
+                    if frame is not None:
+                        frames.append(frame)
                 continue
-            end = _HEADER + length
-            if len(buf) < end + _CRC:
-                # A false sync byte in garbage can announce a body longer than what follows; a complete
-                # frame further on proves it false, and need not wait for bytes that may never come.
-                later = self._complete_frame_after(1)
-                if later is None:
-                    break
-                self._drop(later)
+            if self._hunting:
+                self.dropped += 1
                 continue
-            if not self._crc_ok(0, end):
-                self.crc_errors += 1
-                self._drop(1)
+            self._raw += 1
+            if self._bad:
                 continue
-            frames.append(self._decode(end))
-            del buf[: end + _CRC]
+            if self._escaped:
+                self._escaped = False
+                if byte not in _ESCAPED:
+                    self._bad = True
+                    continue
+                byte = _ESCAPED[byte]
+            elif byte == ESCAPE:
+                self._escaped = True
+                continue
+            if len(self._content) == _MAX_CONTENT:
+                self._bad = True  # longer than any frame: stop keeping it
+                continue
+            self._content.append(byte)
         return frames
 
-    def _crc_ok(self, start: int, end: int) -> bool:
-        buf = self._buf
-        return crc16(memoryview(buf)[start:end]) == buf[end] | buf[end + 1] << 8
+    def _close(self) -> Frame | None:
+        content, raw = self._content, self._raw
+        ok = not (self._bad or self._escaped) and _MIN_CONTENT <= len(content)
+        ok = ok and _header_valid(content[0], content[2]) and content[2] == len(content) - _HEADER - _CRC
+        if ok and crc16(memoryview(content)[:-_CRC]) != content[-2] | content[-1] << 8:
+            self.crc_errors += 1
+            ok = False
+        frame = self._decode(content) if ok else None
+        if not ok:
+            self.dropped += raw
+        self._content = bytearray()
+        self._raw = 0
+        self._escaped = self._bad = False
+        return frame
 
-    def _complete_frame_after(self, first: int) -> int | None:
-        buf = self._buf
-        j = buf.find(SYNC, first)
-        while 0 <= j <= len(buf) - _MIN_REQUEST:
-            if _header_valid(buf[j + 1], buf[j + 3]):
-                end = j + _HEADER + buf[j + 3]
-                if end + _CRC <= len(buf) and self._crc_ok(j, end):
-                    return j
-            j = buf.find(SYNC, j + 1)
-        return None
-
-    def _decode(self, end: int) -> Frame:
-        buf = self._buf
-        addr_byte, seq = buf[1], buf[2]
-        body = bytes(buf[_HEADER:end])
+    @staticmethod
+    def _decode(content: bytearray) -> Frame:
+        addr_byte, seq = content[0], content[1]
+        body = bytes(content[_HEADER:-_CRC])
         if addr_byte & REPLY_BIT:
             return Frame(addr_byte & ~REPLY_BIT, seq, body[1], body[2:], body[0])
         return Frame(addr_byte, seq, body[0], body[1:])
 
-    def _drop(self, count: int) -> None:
-        self.dropped += count
-        del self._buf[:count]
-
     def bytes_needed(self) -> int:
         """The fewest further bytes that could complete a frame (at least 1): how much to read next,
         so that a blocking read never waits for more than the shortest frame that may be under way."""
-        buf = self._buf
-        needs = []
-        j = buf.find(SYNC)
-        while j >= 0:
-            have = len(buf) - j
-            if have < _HEADER:
-                needs.append(_MIN_REQUEST - have)
-            elif _header_valid(buf[j + 1], buf[j + 3]):
-                needs.append(_HEADER + buf[j + 3] + _CRC - have)
-            j = buf.find(SYNC, j + 1)
-        return max(1, min(needs, default=_MIN_REQUEST))
+        if self._hunting:
+            return _SHORTEST_ON_WIRE
+        content = self._content
+        if self._bad:
+            return _SHORTEST_ON_WIRE  # this candidate's closing flag, then a whole frame
+        if len(content) < _HEADER:
+            return _MIN_CONTENT - len(content) + 1
+        if not _header_valid(content[0], content[2]):
+            return _SHORTEST_ON_WIRE
+        # The rest of this frame and its closing flag; or, if a flag ends it early, a whole frame.
+        rest = _HEADER + content[2] + _CRC - len(content) + 1
+        return max(1, min(rest, _SHORTEST_ON_WIRE))

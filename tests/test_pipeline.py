@@ -1,6 +1,8 @@
 """The integrated machine: configuration, input subsets, device residency, and end-to-end quality on
 vmcl.scenes (seed sections "The Vision Machine System" and "Organization of integration")."""
 
+import time
+
 import numpy as np
 import pytest
 
@@ -112,8 +114,9 @@ def test_each_input_adds_its_cues(small_scene, machine):
     assert pair.first_pass_disparity is not None and pair.flow is None
     moving = vm.run(s.left, next=s.left_next)
     assert moving.flow.shape == (64, 64, 2) and moving.disparity is None
-    uint8 = vm.run(np.round(s.left * 255).clip(0, 255).astype(np.uint8))
-    assert uint8.image.dtype == np.float32 and uint8.image.max() <= 1
+    grey8 = np.round(s.left * 255).clip(0, 255).astype(np.uint8)
+    uint8 = vm.run(grey8)
+    np.testing.assert_array_equal(uint8.image, grey8.astype(np.float32) / np.float32(255))
 
 
 def test_bad_images_are_refused(small_scene, machine):
@@ -126,6 +129,13 @@ def test_bad_images_are_refused(small_scene, machine):
         vm.run(np.zeros((32, 32, 4), np.float32))
     with pytest.raises(TypeError, match="uint8, uint16 or float"):
         vm.run(np.zeros((32, 32), np.int64))
+    # Brightness off the [0, 1] scale is refused, not processed as another image (or, from float64,
+    # turned into infinities by the conversion to float32).
+    for scale in (255.0, 1e30, -1.0):
+        with pytest.raises(ValueError, match=r"left: float images hold brightness in \[0, 1\]"):
+            vm.run(small_scene.left * np.float32(scale))
+    with pytest.raises(ValueError, match="right: float images"):
+        vm.run(small_scene.left, small_scene.right.astype(np.float64) * 1e300)
 
 
 def test_fields_stay_on_the_device(small_scene, machine, monkeypatch):
@@ -149,10 +159,18 @@ def test_fields_stay_on_the_device(small_scene, machine, monkeypatch):
 
 def test_timings_per_stage_and_kernel(small_scene):
     s = small_scene
+    start = time.perf_counter()
     result = VisionMachine().run(s.left, s.right)  # its own profiling Machine
-    assert result.stages["stereo"] > 0 and result.total_ms >= sum(result.stages.values()) - 1e-6
-    assert any(name.startswith("stereo") or "box" in name for name in result.kernels)
-    assert all(entry["total_ms"] >= 0 for entry in result.kernels.values())
+    wall_ms = (time.perf_counter() - start) * 1e3
+    assert list(result.stages) == ["upload", "edges", "colour", "texture", "stereo", "mrf depth", "feedback",
+                                   "mrf colour", "mrf texture", "integrate", "download"]
+    assert all(ms > 0 for ms in result.stages.values()) and result.total_ms <= wall_ms
+    # One in-order queue: kernels never overlap, so their device times add up to less than the run's wall time.
+    device_ms = sum(entry["total_ms"] for entry in result.kernels.values())
+    assert 0 < device_ms <= wall_ms
+    assert {"intensity_scores", "select_scores"} <= set(result.kernels)
+    for entry in result.kernels.values():
+        assert entry["calls"] >= 1 and entry["mean_ms"] == pytest.approx(entry["total_ms"] / entry["calls"])
 
 
 # -- integration -----------------------------------------------------------------------------------
@@ -178,14 +196,14 @@ def test_dense_disparity_bad_1_below_5_percent(cues_scene, cues_run):
     visible = ~cues_scene.occluded_stereo & np.isfinite(cues_scene.disparity)
     scores = metrics.evaluate_disparity(cues_run.disparity, cues_scene.disparity, mask=visible)
     assert scores.density == 1.0
-    assert scores.bad[1.0] < 0.05  # measured 0.009
+    assert scores.bad[1.0] < 0.035  # measured 0.024 (shiftable windows; 0.009 with centred ones)
 
 
 def test_flow_epe_below_half_a_pixel(cues_scene, cues_run):
     known = ~cues_scene.occluded_motion & np.isfinite(cues_scene.flow).all(axis=-1)
     scores = metrics.evaluate_flow(cues_run.flow, cues_scene.flow, mask=known)
     assert scores.density == 1.0
-    assert scores.epe < 0.5  # measured 0.24 (the motion module's own: 0.54)
+    assert scores.epe < 0.3  # measured 0.244 (the motion module's own: 0.54)
 
 
 def test_colour_only_boundary_is_found_by_colour_alone(cues_scene, cues_run):

@@ -22,6 +22,8 @@ import cv2
 import numpy as np
 import scipy.io
 
+from vmcl.errors import InputValueError
+
 __all__ = [
     "FLOW_SCENES",
     "FLO_TAG",
@@ -82,10 +84,10 @@ def read_image(path) -> np.ndarray:
     path = _existing(path)
     image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
     if image is None:
-        raise ValueError(f"cannot decode an image from {path}")
+        raise InputValueError(f"cannot decode an image from {path}")
     if image.ndim == 3:
         if image.shape[2] == 4:
-            raise ValueError(f"{path} has an alpha channel; expected grey or RGB")
+            raise InputValueError(f"{path} has an alpha channel; expected grey or RGB")
         image = np.ascontiguousarray(image[..., ::-1])
     return image
 
@@ -95,7 +97,7 @@ def _single_channel(path) -> np.ndarray:
     image = read_image(path)
     if image.ndim == 3:
         if not (image == image[..., :1]).all():
-            raise ValueError(f"{path} has three different channels; expected a single-channel map")
+            raise InputValueError(f"{path} has three different channels; expected a single-channel map")
         image = image[..., 0]
     return image
 
@@ -138,19 +140,19 @@ def read_pfm(path) -> np.ndarray:
     with path.open("rb") as f:
         header = f.readline().strip()
         if header not in (b"PF", b"Pf"):
-            raise ValueError(f"{path} is not a PFM file (header {header[:8]!r})")
+            raise InputValueError(f"{path} is not a PFM file (header {header[:8]!r})")
         dims = f.readline().split()
         scale_line = f.readline().strip()
         try:
             width, height = int(dims[0]), int(dims[1])
             scale = float(scale_line)
         except (IndexError, ValueError):
-            raise ValueError(f"{path} has a malformed PFM header") from None
+            raise InputValueError(f"{path} has a malformed PFM header") from None
         channels = 3 if header == b"PF" else 1
         dtype = "<f4" if scale < 0 else ">f4"
         data = np.frombuffer(f.read(), dtype=dtype)
     if data.size != width * height * channels:
-        raise ValueError(f"{path}: expected {width * height * channels} floats, found {data.size}")
+        raise InputValueError(f"{path}: expected {width * height * channels} floats, found {data.size}")
     shape = (height, width, 3) if channels == 3 else (height, width)
     image = np.flipud(data.reshape(shape)).astype(np.float32)
     image[np.isinf(image)] = np.nan
@@ -167,7 +169,7 @@ def write_pfm(path, image) -> None:
     """
     image = np.asarray(image, dtype=np.float32)
     if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] != 3):
-        raise ValueError(f"image must have shape (H, W) or (H, W, 3), got {image.shape}")
+        raise InputValueError(f"image must have shape (H, W) or (H, W, 3), got {image.shape}")
     header = b"PF" if image.ndim == 3 else b"Pf"
     data = np.where(np.isnan(image), np.float32(np.inf), image)
     with Path(path).open("wb") as f:
@@ -195,13 +197,13 @@ def read_disparity(path, *, scale: float | None = None, unknown: int | None = 0)
     path = Path(path)
     if path.suffix.lower() == ".pfm":
         if scale is not None:
-            raise ValueError("scale applies to 8-bit maps; a PFM stores disparities directly")
+            raise InputValueError("scale applies to 8-bit maps; a PFM stores disparities directly")
         disparity = read_pfm(path)
         if disparity.ndim != 2:
-            raise ValueError(f"{path} holds a 3-channel PFM; expected one channel of disparities")
+            raise InputValueError(f"{path} holds a 3-channel PFM; expected one channel of disparities")
         return disparity
     if scale is None or not scale > 0:
-        raise ValueError(f"scale must be a positive number for an 8-bit map such as {path.name}, got {scale}")
+        raise InputValueError(f"scale must be a positive number for an 8-bit map such as {path.name}, got {scale}")
     grey = _single_channel(path)
     disparity = grey.astype(np.float32) / np.float32(scale)
     if unknown is not None:
@@ -231,11 +233,11 @@ def read_flo(path, *, raw: bool = False) -> np.ndarray:
     path = _existing(path)
     data = path.read_bytes()
     if len(data) < 12 or np.frombuffer(data[:4], "<f4")[0] != FLO_TAG:
-        raise ValueError(f"{path} is not a .flo file (bad tag)")
+        raise InputValueError(f"{path} is not a .flo file (bad tag)")
     width, height = (int(v) for v in np.frombuffer(data[4:12], "<i4"))
     expected = 12 + 8 * width * height
     if width < 1 or height < 1 or len(data) != expected:
-        raise ValueError(f"{path}: header says {width}x{height}, i.e. {expected} bytes, file has {len(data)}")
+        raise InputValueError(f"{path}: header says {width}x{height}, i.e. {expected} bytes, file has {len(data)}")
     flow = np.frombuffer(data[12:], "<f4").reshape(height, width, 2).astype(np.float32)
     if not raw:
         flow[(np.abs(flow) > _FLO_UNKNOWN_ABOVE).any(axis=-1)] = np.nan
@@ -252,7 +254,7 @@ def write_flo(path, flow) -> None:
     """
     flow = np.asarray(flow)
     if flow.ndim != 3 or flow.shape[2] != 2 or flow.shape[0] < 1 or flow.shape[1] < 1:
-        raise ValueError(f"flow must have shape (H, W, 2), got {flow.shape}")
+        raise InputValueError(f"flow must have shape (H, W, 2), got {flow.shape}")
     flow = flow.astype("<f4")
     flow[np.isnan(flow).any(axis=-1)] = _FLO_UNKNOWN_WRITTEN
     header = np.array([FLO_TAG], "<f4").tobytes() + np.array(flow.shape[1::-1], "<i4").tobytes()
@@ -306,7 +308,7 @@ STEREO_SCENES = tuple(_STEREO)
 def _lookup(name: str, table: dict, what: str):
     key = str(name).lower()
     if key not in table:
-        raise ValueError(f"unknown {what} {name!r}; expected one of {', '.join(table)}")
+        raise InputValueError(f"unknown {what} {name!r}; expected one of {', '.join(table)}")
     return key, table[key]
 
 
@@ -429,7 +431,7 @@ def load_flow(name: str, root, *, colour: bool = False) -> FlowPair:
         frames, truth = ("frame10.png", "frame11.png"), "flow10.flo"
     if colour:
         if key != "rubberwhale":
-            raise ValueError(f"colour frames exist only for RubberWhale, not {name!r}")
+            raise InputValueError(f"colour frames exist only for RubberWhale, not {name!r}")
         frames = tuple(f"color/{f}" for f in frames)
     flow = read_flo(folder / truth)
     mask = np.isfinite(flow).all(axis=-1)
@@ -537,7 +539,7 @@ def load_bsds(root, *, split: str = "test") -> BSDSSet:
         ]
         return BSDSSet(split, images)
     if split != "golden":
-        raise ValueError(f"split must be 'test' or 'golden', got {split!r}")
+        raise InputValueError(f"split must be 'test' or 'golden', got {split!r}")
     golden = base / "bench_golden"
     names = sorted(p.stem for p in (golden / "groundTruth").glob("*.mat"))
     if not names:
@@ -553,6 +555,6 @@ def load_bsds(root, *, split: str = "test") -> BSDSSet:
     ]
     values = _existing(golden / "expected_test_2" / "eval_bdry.txt").read_text().split()
     if len(values) != len(_EXPECTED_KEYS):
-        raise ValueError(f"eval_bdry.txt holds {len(values)} numbers, expected {len(_EXPECTED_KEYS)}")
+        raise InputValueError(f"eval_bdry.txt holds {len(values)} numbers, expected {len(_EXPECTED_KEYS)}")
     return BSDSSet(split, images, dict(zip(_EXPECTED_KEYS, map(float, values))))
 

@@ -14,6 +14,7 @@ import numpy as np
 
 from hardware.head import Head
 from vmcl.early.registration import TableStore, WarpTable
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 Capture = Callable[[], tuple[np.ndarray, np.ndarray]]
@@ -48,7 +49,7 @@ def calibrate_vergences(head: Head, store: TableStore, capture: Capture, *, dist
     The vergence angles (degrees) of the tables added.
     """
     if not distances:
-        raise ValueError("distances must name at least one fixation distance")
+        raise InputValueError("distances must name at least one fixation distance")
     angles = []
     for distance in distances:
         head.fixate(distance, baseline=baseline)

@@ -33,6 +33,7 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm._arrays import ArrayLike, machine_for
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.scenes import Label
 
@@ -85,17 +86,17 @@ def _lines(line_h: ArrayLike, line_v: ArrayLike, name: str, machine: Machine,
     for array, which in ((line_h, "line_h"), (line_v, "line_v")):
         if isinstance(array, np.ndarray):
             if array.ndim != 2 or array.dtype not in (np.bool_, np.uint8):
-                raise ValueError(f"{name} {which} must be a 2-D bool or uint8 array, got {array.dtype} {array.shape}")
+                raise InputValueError(f"{name} {which} must be a 2-D bool or uint8 array, got {array.dtype} {array.shape}")
             array = machine.to_device(array.astype(np.uint8, copy=False))
         elif not isinstance(array, cl_array.Array) or array.dtype != np.uint8 or array.ndim != 2:
-            raise TypeError(f"{name} {which} must be a 2-D uint8 device array or a NumPy array")
+            raise InputTypeError(f"{name} {which} must be a 2-D uint8 device array or a NumPy array")
         fields.append(array)
     h, v = fields
     implied = (h.shape[0], h.shape[1] + 1)
     if v.shape != (implied[0] - 1, implied[1]):
-        raise ValueError(f"{name}: line_h {h.shape} and line_v {v.shape} are not the two line fields of one image")
+        raise InputValueError(f"{name}: line_h {h.shape} and line_v {v.shape} are not the two line fields of one image")
     if shape is not None and implied != shape:
-        raise ValueError(f"{name}: line fields of a {implied} image, expected {shape}")
+        raise InputValueError(f"{name}: line fields of a {implied} image, expected {shape}")
     return h, v, implied
 
 
@@ -153,7 +154,7 @@ def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayL
     machine = machine_for(machine)
     unknown = set(lines) - set(CUES)
     if unknown:
-        raise ValueError(f"lines has unknown cues {sorted(unknown)}; cues are {', '.join(CUES)}")
+        raise InputValueError(f"lines has unknown cues {sorted(unknown)}; cues are {', '.join(CUES)}")
     inputs = [a for pair in lines.values() for a in pair] + ([edges] if edges is not None else [])
     host = all(isinstance(a, np.ndarray) for a in inputs)
     present = 0
@@ -169,12 +170,12 @@ def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayL
         if isinstance(edges, np.ndarray):
             edges = machine.to_device((edges != 0).astype(np.uint8))
         if edges.dtype != np.uint8 or edges.ndim != 2 or (shape is not None and edges.shape != shape):
-            raise ValueError(f"edges must be a uint8 (H, W) field of the lines' shape {shape}, got "
+            raise InputValueError(f"edges must be a uint8 (H, W) field of the lines' shape {shape}, got "
                              f"{edges.dtype} {edges.shape}")
         shape = edges.shape
         present |= Cue.BRIGHTNESS
     if shape is None:
-        raise ValueError("integrate needs lines, edges or a shape")
+        raise InputValueError("integrate needs lines, edges or a shape")
     height, width = shape
     placeholder = machine.empty(1, np.uint8)  # never read: its cue's bit is not in `present`
     buffers = [placeholder if b is None else b for b in buffers]

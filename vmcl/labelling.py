@@ -41,6 +41,7 @@ import numpy as np
 
 from vmcl.cm._arrays import ArrayLike, machine_for
 from vmcl.cm._arrays import field as device_field
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.integrate import BIT_DEFINES, Cue
 from vmcl.machine import Machine
 from vmcl.scenes import Label
@@ -113,16 +114,16 @@ class LinearLabeller:
         expected = (1 + len(FEATURES), len(CLASSES))
         for key, w in self.weights.items():
             if key not in KEYS:
-                raise ValueError(f"weights key {key!r} names no set of inputs; keys are {', '.join(KEYS)}")
+                raise InputValueError(f"weights key {key!r} names no set of inputs; keys are {', '.join(KEYS)}")
             if np.shape(w) != expected:
-                raise ValueError(f"weights[{key!r}] must have shape {expected}, got {np.shape(w)}")
+                raise InputValueError(f"weights[{key!r}] must have shape {expected}, got {np.shape(w)}")
             if not np.all(np.isfinite(w)):
-                raise ValueError(f"weights[{key!r}] must be finite")
+                raise InputValueError(f"weights[{key!r}] must be finite")
 
     def for_inputs(self, inputs: Iterable[str]) -> np.ndarray:
         key = _key(inputs)
         if key not in self.weights:
-            raise ValueError(f"the labeller has no weights for the inputs {key!r}; it has {sorted(self.weights)}")
+            raise InputValueError(f"the labeller has no weights for the inputs {key!r}; it has {sorted(self.weights)}")
         return np.asarray(self.weights[key], np.float32)
 
     def on_device(self, inputs: Iterable[str], machine: Machine):
@@ -139,18 +140,18 @@ class LinearLabeller:
         try:
             data = json.loads(path.read_text(encoding="utf-8"))
         except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-            raise ValueError(f"{path}: cannot be read as labelling weights ({error})") from None
+            raise InputValueError(f"{path}: cannot be read as labelling weights ({error})") from None
         if not isinstance(data, dict) or not isinstance(data.get("weights"), dict):
             # A bad file is a bad value of the argument, whatever JSON type it holds.
-            raise ValueError(f"{path}: not labelling weights (a JSON object with a 'weights' object)")  # noqa: TRY004
+            raise InputValueError(f"{path}: not labelling weights (a JSON object with a 'weights' object)")
         if tuple(data.get("features", ())) != FEATURES or tuple(data.get("classes", ())) != tuple(
                 c.name for c in CLASSES):
-            raise ValueError(f"{path} was fitted to other features or labels than this vmcl's")
+            raise InputValueError(f"{path} was fitted to other features or labels than this vmcl's")
         try:
             weights = {k: np.asarray(v, np.float32) for k, v in data["weights"].items()}
             return cls(weights, str(data.get("fitted_on", "")))
         except (ValueError, TypeError) as error:
-            raise ValueError(f"{path}: {error}") from None
+            raise InputValueError(f"{path}: {error}") from None
 
     def save(self, path: str | Path) -> None:
         data = {"features": list(FEATURES), "classes": [c.name for c in CLASSES], "fitted_on": self.fitted_on,
@@ -183,29 +184,29 @@ class LinearLabeller:
         from scipy.optimize import minimize
 
         if not (isinstance(l2, (int, float)) and np.isfinite(l2) and l2 >= 0):
-            raise ValueError(f"l2 must be a finite number >= 0, got {l2!r}")
+            raise InputValueError(f"l2 must be a finite number >= 0, got {l2!r}")
         sets = [tuple(p) for p in (_INPUT_SETS if input_sets is None else input_sets)]
         for present in sets:
             if isinstance(present, str) or not set(present) <= set(INPUTS):
-                raise ValueError(f"input_sets: each must be a collection of {', '.join(INPUTS)}, got {present!r}")
+                raise InputValueError(f"input_sets: each must be a collection of {', '.join(INPUTS)}, got {present!r}")
         if not sets:
-            raise ValueError("input_sets must name at least one set of inputs")
+            raise InputValueError("input_sets must name at least one set of inputs")
         rows, bits, targets = [], [], []
         index_of = np.zeros(256, np.int64)  # Label code -> output row
         index_of[[int(c) for c in CLASSES]] = np.arange(len(CLASSES))
         for feats, support, truth in samples:
             feats, support, truth = np.asarray(feats, np.float32), np.asarray(support), np.asarray(truth)
             if feats.shape != (len(FEATURES),) + support.shape or truth.shape != support.shape:
-                raise ValueError(f"a sample's features must be ({len(FEATURES)}, H, W) and its support and truth "
+                raise InputValueError(f"a sample's features must be ({len(FEATURES)}, H, W) and its support and truth "
                                  f"(H, W); got {feats.shape}, {support.shape}, {truth.shape}")
             if not np.all(np.isfinite(feats)):
-                raise ValueError("a sample's features must be finite")
+                raise InputValueError("a sample's features must be finite")
             candidates = (support & CANDIDATE_BITS) != 0
             rows.append(np.moveaxis(feats, 0, -1)[candidates])
             bits.append(support[candidates])
             targets.append(index_of[fit_targets(truth)[candidates]])
         if not rows or not sum(len(r) for r in rows):
-            raise ValueError("samples must hold at least one candidate pixel (support bits set)")
+            raise InputValueError("samples must hold at least one candidate pixel (support bits set)")
         x_all, bits_all, y_all = (np.concatenate(a) for a in (rows, bits, targets))
         nc = len(CLASSES)
         weights = {}
@@ -263,9 +264,9 @@ def _run(support, image, disparity, flow, hue, texture, labeller, machine, class
     shape = s.shape
     img, _ = device_field(image, "image", machine, ndims=(2, 3), dtypes=(np.float32,))
     if img.shape[:2] != shape or (img.ndim == 3 and img.shape[2] != 3):
-        raise ValueError(f"image must be (H, W) or (H, W, 3) with the support's (H, W) {shape}, got {img.shape}")
+        raise InputValueError(f"image must be (H, W) or (H, W, 3) with the support's (H, W) {shape}, got {img.shape}")
     if not isinstance(texture, (bool, np.bool_)):
-        raise TypeError(f"texture must be a bool, got {type(texture).__name__}")
+        raise InputTypeError(f"texture must be a bool, got {type(texture).__name__}")
     present = {"texture"} if texture else set()
     fields = {}
     for name, array, ndims, wanted, needs in (("disparity", disparity, (2,), shape, "stereo"),
@@ -276,7 +277,7 @@ def _run(support, image, disparity, flow, hue, texture, labeller, machine, class
             continue
         fields[name], _ = device_field(array, name, machine, ndims=ndims, dtypes=(np.float32,))
         if fields[name].shape != wanted:
-            raise ValueError(f"{name} must have shape {wanted}, got {fields[name].shape}")
+            raise InputValueError(f"{name} must have shape {wanted}, got {fields[name].shape}")
         present.add(needs)
     placeholder = machine.empty(1, np.float32)  # never read: its input's HAS_ define is 0
     args = [s, img] + [placeholder if fields[n] is None else fields[n] for n in ("disparity", "flow", "hue")]
@@ -333,7 +334,7 @@ def label(support: ArrayLike, image: ArrayLike, *, disparity: ArrayLike | None =
     """
     machine = machine_for(machine)
     if labeller is not None and not isinstance(labeller, LinearLabeller):
-        raise TypeError(f"labeller must be a LinearLabeller or None, got {type(labeller).__name__}")
+        raise InputTypeError(f"labeller must be a LinearLabeller or None, got {type(labeller).__name__}")
     return _run(support, image, disparity, flow, hue, texture, labeller or default_labeller(), machine,
                 classify=True)
 

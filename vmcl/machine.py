@@ -22,6 +22,8 @@ import pyopencl as cl
 import pyopencl.array as cl_array
 import pyopencl.tools as cl_tools
 
+from vmcl.errors import InputTypeError, InputValueError
+
 INSTALL_HINT = (
     "No OpenCL platform found. vmcl needs an OpenCL driver; on Debian or Ubuntu install PoCL with\n"
     "    sudo apt-get update && sudo apt-get install -y pocl-opencl-icd\n"
@@ -66,7 +68,7 @@ def _choose_device(device: cl.Device | str | None) -> cl.Device:
     if isinstance(device, cl.Device):
         return device
     if device is not None and not isinstance(device, str):
-        raise TypeError(f"device must be a pyopencl.Device, a name substring or None, got {type(device).__name__}")
+        raise InputTypeError(f"device must be a pyopencl.Device, a name substring or None, got {type(device).__name__}")
     wanted = device if device is not None else os.environ.get("VMCL_DEVICE") or None
     devices = list_devices()
     if not devices:
@@ -99,12 +101,18 @@ class Machine:
     Notes
     -----
     Programs are compiled on first use, never at construction, and cached per (file, defines).
+
+    A Machine is safe to share between threads. A pyopencl kernel object holds its arguments until
+    the next launch sets them, so setting them and enqueueing happen under one lock, as do the
+    allocations from the buffer pool; each call's scratch buffers are its own. Work from several
+    threads is serialised on the one in-order queue, so threads add no speed on one device: for that,
+    use one Machine per thread (each with its own queue) or one process per device.
     """
 
     def __init__(self, device: cl.Device | str | None = None, *, profile: bool = False,
                  local_size: int | None = None) -> None:
         if local_size is not None and (not isinstance(local_size, int) or local_size < 1):
-            raise ValueError(f"local_size must be a positive integer or None, got {local_size!r}")
+            raise InputValueError(f"local_size must be a positive integer or None, got {local_size!r}")
         self.device = _choose_device(device)
         self.context = cl.Context([self.device])
         properties = cl.command_queue_properties.PROFILING_ENABLE if profile else 0
@@ -117,6 +125,9 @@ class Machine:
         self._events: list[tuple[str, cl.Event]] = []
         self._layouts: dict[tuple, tuple] = {}  # (shape, dtype) -> (shape, dtype, strides, size) for empty()
         self._lock = threading.Lock()
+        # Held while a launch sets a kernel object's arguments and enqueues it, and while the pool
+        # allocates: both mutate state that every thread using this Machine shares.
+        self._launch_lock = threading.RLock()
         self.is_cpu = bool(self.device.type & cl.device_type.CPU)
         self.compute_units = self.device.max_compute_units
 
@@ -160,12 +171,13 @@ class Machine:
         values = [a.base_data if isinstance(a, cl_array.Array) else a for a in args]
         if any(isinstance(a, cl_array.Array) and a.offset for a in args):
             # base_data is the whole buffer: a view's offset would be silently lost.
-            raise ValueError("device arrays passed to kernels must not be views with an offset; copy the view")
+            raise InputValueError("device arrays passed to kernels must not be views with an offset; copy the view")
         if local_size is None and self.local_size is not None:
             local_size = (self.local_size,) + (1,) * (len(global_size) - 1)
         if local_size is not None:
             global_size = tuple(-(-g // size) * size for g, size in zip(global_size, local_size))
-        event = kernel(self.queue, global_size, local_size, *values)
+        with self._launch_lock:
+            event = kernel(self.queue, global_size, local_size, *values)
         if self.profile:
             self._events.append((kernel.function_name, event))
         return event
@@ -195,7 +207,7 @@ class Machine:
         layout = self._layouts.get((dims, dtype)) if all(type(n) is int for n in dims) else None
         if layout is None:
             if not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n >= 0 for n in dims):
-                raise ValueError(f"invalid shape {dims}: dimensions must be integers >= 0")
+                raise InputValueError(f"invalid shape {dims}: dimensions must be integers >= 0")
             dims = tuple(int(n) for n in dims)
             item = np.dtype(dtype)
             strides, step = [], item.itemsize
@@ -206,8 +218,25 @@ class Machine:
                 self._layouts.clear()
             layout = self._layouts[(dims, dtype)] = (dims, item, tuple(reversed(strides)), math.prod(dims))
         dims, dtype, strides, size = layout
-        return cl_array.Array(None, dims, dtype, allocator=self.pool, strides=strides, _fast=True, _size=size,
-                              _context=self.context, _queue=self.queue)
+        with self._launch_lock:
+            return cl_array.Array(None, dims, dtype, allocator=self.pool, strides=strides, _fast=True,
+                                  _size=size, _context=self.context, _queue=self.queue)
+
+    def require_memory(self, what: str, total: int, largest: int | None = None) -> None:
+        """Refuse, before anything is allocated, work that this device cannot hold.
+
+        ``total`` is the bytes the call keeps on the device at once, ``largest`` its largest single
+        buffer (default: ``total``). A driver reports an oversized request late and obscurely (an
+        allocation failure mid-call, or a host swapping), so callers that size buffers from their
+        arguments check here first and name what does fit.
+        """
+        largest = total if largest is None else largest
+        limit_total, limit_one = self.device.global_mem_size, self.device.max_mem_alloc_size
+        if total > limit_total or largest > limit_one:
+            mib = 2**20
+            raise InputValueError(
+                f"{what} needs {total / mib:,.0f} MiB of device memory (largest buffer {largest / mib:,.0f} MiB); "
+                f"{self.device.name} has {limit_total / mib:,.0f} MiB, at most {limit_one / mib:,.0f} MiB per buffer")
 
     def to_device(self, array: np.ndarray) -> cl_array.Array:
         """Copy a host array to a pooled device array (C order)."""

@@ -30,6 +30,8 @@ import numpy as np
 import pyopencl.array as cl_array
 from scipy import ndimage
 
+from vmcl.errors import InputTypeError, InputValueError
+
 __all__ = [
     "BAD_PIXEL_THRESHOLDS",
     "BoundaryCounts",
@@ -62,23 +64,23 @@ def _host(array) -> np.ndarray:
 def _as_float_field(array, name: str, *, ndim: int) -> np.ndarray:
     array = _host(array)
     if array.dtype == bool or not np.issubdtype(array.dtype, np.number):
-        raise TypeError(f"{name} must be a numeric array, got dtype {array.dtype}")
+        raise InputTypeError(f"{name} must be a numeric array, got dtype {array.dtype}")
     if array.ndim != ndim:
-        raise ValueError(f"{name} must have {ndim} dimensions, got shape {array.shape}")
+        raise InputValueError(f"{name} must have {ndim} dimensions, got shape {array.shape}")
     if array.size == 0:
-        raise ValueError(f"{name} is empty")
+        raise InputValueError(f"{name} is empty")
     array = array.astype(np.float64, copy=False)
     if np.isinf(array).any():
-        raise ValueError(f"{name} contains infinite values; use NaN for 'no value'")
+        raise InputValueError(f"{name} contains infinite values; use NaN for 'no value'")
     return array
 
 
 def _as_mask(mask, name: str, shape: tuple[int, ...]) -> np.ndarray:
     mask = _host(mask)
     if mask.dtype != bool:
-        raise TypeError(f"{name} must be a boolean array, got dtype {mask.dtype}")
+        raise InputTypeError(f"{name} must be a boolean array, got dtype {mask.dtype}")
     if mask.shape != shape:
-        raise ValueError(f"{name} has shape {mask.shape}, expected {shape}")
+        raise InputValueError(f"{name} has shape {mask.shape}, expected {shape}")
     return mask
 
 
@@ -90,9 +92,9 @@ def _evaluated(truth: np.ndarray, mask, truth_known: np.ndarray) -> np.ndarray:
         evaluated = _as_mask(mask, "mask", truth_known.shape)
         unknown = int(np.count_nonzero(evaluated & ~truth_known))
         if unknown:
-            raise ValueError(f"ground_truth has no value (NaN) at {unknown} pixels inside mask")
+            raise InputValueError(f"ground_truth has no value (NaN) at {unknown} pixels inside mask")
     if not evaluated.any():
-        raise ValueError("no pixel to evaluate: the mask (or the known ground truth) is empty")
+        raise InputValueError("no pixel to evaluate: the mask (or the known ground truth) is empty")
     return evaluated
 
 
@@ -169,10 +171,10 @@ def evaluate_disparity(
     disparity = _as_float_field(disparity, "disparity", ndim=2)
     truth = _as_float_field(ground_truth, "ground_truth", ndim=2)
     if disparity.shape != truth.shape:
-        raise ValueError(f"disparity has shape {disparity.shape}, ground_truth has shape {truth.shape}")
+        raise InputValueError(f"disparity has shape {disparity.shape}, ground_truth has shape {truth.shape}")
     thresholds = tuple(float(t) for t in thresholds)
     if not thresholds or min(thresholds) < 0:
-        raise ValueError(f"thresholds must be a non-empty sequence of non-negative numbers, got {thresholds}")
+        raise InputValueError(f"thresholds must be a non-empty sequence of non-negative numbers, got {thresholds}")
     evaluated = _evaluated(truth, mask, np.isfinite(truth))
     error = np.abs(disparity[evaluated] - truth[evaluated])
     has_output = np.isfinite(error)
@@ -193,9 +195,9 @@ def _flow_pair(flow, ground_truth) -> tuple[np.ndarray, np.ndarray]:
     flow = _as_float_field(flow, "flow", ndim=3)
     truth = _as_float_field(ground_truth, "ground_truth", ndim=3)
     if flow.shape[-1] != 2:
-        raise ValueError(f"flow must have shape (H, W, 2), got {flow.shape}")
+        raise InputValueError(f"flow must have shape (H, W, 2), got {flow.shape}")
     if flow.shape != truth.shape:
-        raise ValueError(f"flow has shape {flow.shape}, ground_truth has shape {truth.shape}")
+        raise InputValueError(f"flow has shape {flow.shape}, ground_truth has shape {truth.shape}")
     return flow, truth
 
 
@@ -364,15 +366,15 @@ class BoundaryCounts:
 def _thresholds(thresholds) -> np.ndarray:
     if isinstance(thresholds, (int, np.integer)) and not isinstance(thresholds, bool):
         if thresholds < 1:
-            raise ValueError(f"thresholds must be a positive count or a sequence, got {thresholds}")
+            raise InputValueError(f"thresholds must be a positive count or a sequence, got {thresholds}")
         n = int(thresholds)
         # The benchmark's own choice: n thresholds evenly inside (0, 1), ends excluded.
         return np.linspace(1.0 / (n + 1), 1.0 - 1.0 / (n + 1), n)
     values = np.asarray(thresholds, dtype=np.float64)
     if values.ndim != 1 or values.size == 0 or not np.isfinite(values).all():
-        raise ValueError("thresholds must be a positive count or a non-empty 1-D sequence of finite numbers")
+        raise InputValueError("thresholds must be a positive count or a non-empty 1-D sequence of finite numbers")
     if np.any(np.diff(values) <= 0):
-        raise ValueError("thresholds must be strictly increasing")
+        raise InputValueError("thresholds must be strictly increasing")
     return values
 
 
@@ -382,19 +384,19 @@ def _edge_map(edge_map) -> np.ndarray:
         return edge_map.astype(np.float64)
     edge_map = _as_float_field(edge_map, "edge_map", ndim=2)
     if np.isnan(edge_map).any() or edge_map.min() < 0 or edge_map.max() > 1:
-        raise ValueError("edge_map must hold boundary strengths in [0, 1] (an 8-bit map: divide by 255)")
+        raise InputValueError("edge_map must hold boundary strengths in [0, 1] (an 8-bit map: divide by 255)")
     return edge_map
 
 
 def _truth_boundaries(ground_truths, shape: tuple[int, int]) -> list[np.ndarray]:
     truths = [_host(g) for g in ground_truths]
     if not truths:
-        raise ValueError("ground_truths must hold at least one annotator's boundary map")
+        raise InputValueError("ground_truths must hold at least one annotator's boundary map")
     for k, g in enumerate(truths):
         if g.shape != shape:
-            raise ValueError(f"ground_truths[{k}] has shape {g.shape}, edge_map has shape {shape}")
+            raise InputValueError(f"ground_truths[{k}] has shape {g.shape}, edge_map has shape {shape}")
         if g.dtype != bool and not np.isin(g, (0, 1)).all():
-            raise ValueError(f"ground_truths[{k}] must be a 0/1 boundary map")
+            raise InputValueError(f"ground_truths[{k}] must be a 0/1 boundary map")
     return [g.astype(bool) for g in truths]
 
 
@@ -454,7 +456,7 @@ def boundary_counts(
     truths = _truth_boundaries(ground_truths, pb.shape)
     levels = _thresholds(thresholds)
     if not 0 < max_dist < 1:
-        raise ValueError(f"max_dist must be a fraction of the diagonal in (0, 1), got {max_dist}")
+        raise InputValueError(f"max_dist must be a fraction of the diagonal in (0, 1), got {max_dist}")
     total_truth = sum(int(g.sum()) for g in truths)
     counts = np.zeros((4, levels.size), dtype=np.int64)
     previous_key, previous = None, None
@@ -595,11 +597,11 @@ def evaluate_boundaries(
     segmentation", IEEE TPAMI 33(5):898-916, 2011.
     """
     if len(edge_maps) != len(ground_truths):
-        raise ValueError(f"{len(edge_maps)} edge_maps but {len(ground_truths)} ground_truths")
+        raise InputValueError(f"{len(edge_maps)} edge_maps but {len(ground_truths)} ground_truths")
     if not edge_maps:
-        raise ValueError("edge_maps is empty")
+        raise InputValueError("edge_maps is empty")
     if workers < 1:
-        raise ValueError(f"workers must be at least 1, got {workers}")
+        raise InputValueError(f"workers must be at least 1, got {workers}")
     kwargs = {"thresholds": thresholds, "max_dist": max_dist, "thin": thin}
     # Host copies: a worker process cannot receive device arrays.
     jobs = [(_host(e), [_host(t) for t in g], kwargs) for e, g in zip(edge_maps, ground_truths)]
@@ -692,10 +694,10 @@ def detection_scores(predicted, truth, *, tolerance: float = 1.0) -> DetectionSc
     """
     predicted = _host(predicted)
     if predicted.dtype != bool or predicted.ndim != 2:
-        raise TypeError(f"predicted must be a 2-D boolean array, got {predicted.dtype} {predicted.shape}")
+        raise InputTypeError(f"predicted must be a 2-D boolean array, got {predicted.dtype} {predicted.shape}")
     truth = _as_mask(truth, "truth", predicted.shape)
     if not np.isfinite(tolerance) or tolerance < 0:
-        raise ValueError(f"tolerance must be a finite number >= 0, got {tolerance}")
+        raise InputValueError(f"tolerance must be a finite number >= 0, got {tolerance}")
     n_predicted, n_true = int(predicted.sum()), int(truth.sum())
     found_predicted = np.count_nonzero(predicted & _within(truth, tolerance))
     found_truth = np.count_nonzero(truth & _within(predicted, tolerance))
@@ -732,9 +734,9 @@ def label_scores(
     truth = _host(truth)
     for name, array in (("predicted", predicted), ("truth", truth)):
         if not np.issubdtype(array.dtype, np.integer) or array.ndim != 2:
-            raise TypeError(f"{name} must be a 2-D integer label map, got {array.dtype} {array.shape}")
+            raise InputTypeError(f"{name} must be a 2-D integer label map, got {array.dtype} {array.shape}")
     if predicted.shape != truth.shape:
-        raise ValueError(f"predicted has shape {predicted.shape}, truth has shape {truth.shape}")
+        raise InputValueError(f"predicted has shape {predicted.shape}, truth has shape {truth.shape}")
     if labels is None:
         labels = sorted((set(np.unique(predicted).tolist()) | set(np.unique(truth).tolist())) - {0})
     return {int(lab): detection_scores(predicted == lab, truth == lab, tolerance=tolerance) for lab in labels}

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from vmcl.errors import InputTypeError, InputValueError
+
 _HEADINGS = ((0, 1), (1, 0), (0, -1), (-1, 0))
 
 
@@ -27,9 +29,9 @@ def spiral(size: int, *, corridor: int = 1) -> np.ndarray:
     size**2 / (2 * corridor) pixels long.
     """
     if not isinstance(size, (int, np.integer)) or not isinstance(corridor, (int, np.integer)):
-        raise TypeError("size and corridor must be integers")
+        raise InputTypeError("size and corridor must be integers")
     if corridor < 1 or size < corridor:
-        raise ValueError(f"need 1 <= corridor <= size, got size={size}, corridor={corridor}")
+        raise InputValueError(f"need 1 <= corridor <= size, got size={size}, corridor={corridor}")
     cells = size // corridor
     drawn = np.zeros((cells, cells), bool)
     y = x = heading = turns = 0

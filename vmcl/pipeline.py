@@ -39,6 +39,7 @@ import numpy as np
 from vmcl import integrate as _integrate
 from vmcl import labelling
 from vmcl.early import color, edges, motion, stereo, texture
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.mrf import Params, backfill, preset, restore, score_confidence
 from vmcl.mrf.data import check_unit_interval
@@ -129,12 +130,12 @@ class StereoConfig:
         check_unit_interval(self.backfill_floor, "stereo.backfill_floor", closed_above=False)
         check_unit_interval(self.backfill_weight, "stereo.backfill_weight", closed_above=True)
         if not isinstance(self.shiftable, bool):
-            raise TypeError(f"stereo.shiftable must be true or false, got {self.shiftable!r}")
+            raise InputTypeError(f"stereo.shiftable must be true or false, got {self.shiftable!r}")
         sigma = self.intensity_sigma
         if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.integer, np.floating)):
-            raise TypeError(f"stereo.intensity_sigma must be a number, got {type(sigma).__name__}")
+            raise InputTypeError(f"stereo.intensity_sigma must be a number, got {type(sigma).__name__}")
         if not 0 < sigma < math.inf:
-            raise ValueError(f"stereo.intensity_sigma must be > 0 and finite, got {sigma!r}")
+            raise InputValueError(f"stereo.intensity_sigma must be > 0 and finite, got {sigma!r}")
 
 
 @dataclass(frozen=True)
@@ -230,12 +231,12 @@ class MrfConfig:
     def params(self, cue: str) -> Params:
         """The preset Params of ``cue`` with the schedule and this configuration's overrides."""
         if self.schedule not in _SCHEDULES:
-            raise ValueError(f"mrf.schedule must be one of {', '.join(_SCHEDULES)}, got {self.schedule!r}")
+            raise InputValueError(f"mrf.schedule must be one of {', '.join(_SCHEDULES)}, got {self.schedule!r}")
         overrides = {**_SCHEDULES[self.schedule], **getattr(self, cue)}
         known = {f.name for f in dataclasses.fields(Params)}
         unknown = sorted(set(overrides) - known)
         if unknown:
-            raise ValueError(f"unknown key mrf.{cue}.{unknown[0]}: Params has {', '.join(sorted(known))}")
+            raise InputValueError(f"unknown key mrf.{cue}.{unknown[0]}: Params has {', '.join(sorted(known))}")
         return dataclasses.replace(preset(cue), **overrides)
 
 
@@ -262,14 +263,14 @@ class LabelsConfig:
 
     def __post_init__(self):
         if self.method not in ("linear", "rule"):
-            raise ValueError(f"labels.method must be 'linear' or 'rule', got {self.method!r}")
+            raise InputValueError(f"labels.method must be 'linear' or 'rule', got {self.method!r}")
         if self.weights is not None:
             if not isinstance(self.weights, str) or not self.weights:
-                raise TypeError(f"labels.weights must be a file name or None, got {self.weights!r}")
+                raise InputTypeError(f"labels.weights must be a file name or None, got {self.weights!r}")
             try:
                 labelling.LinearLabeller.load(self.weights)
             except ValueError as error:
-                raise ValueError(f"labels.weights: {error}") from None
+                raise InputValueError(f"labels.weights: {error}") from None
 
     def labeller(self) -> labelling.LinearLabeller:
         """The weights this section names."""
@@ -313,13 +314,13 @@ class Config:
         sections = {}
         for name, entries in values.items():
             if name not in _SECTIONS:
-                raise ValueError(f"unknown config section {name!r}; sections are {', '.join(_SECTIONS)}")
+                raise InputValueError(f"unknown config section {name!r}; sections are {', '.join(_SECTIONS)}")
             if not isinstance(entries, Mapping):
-                raise TypeError(f"config section {name!r} must be a table of keys")
+                raise InputTypeError(f"config section {name!r} must be a table of keys")
             known = {f.name for f in dataclasses.fields(_SECTIONS[name])}
             for key in entries:
                 if key not in known:
-                    raise ValueError(f"unknown config key {name}.{key}; {name} has {', '.join(sorted(known))}")
+                    raise InputValueError(f"unknown config key {name}.{key}; {name} has {', '.join(sorted(known))}")
             sections[name] = _SECTIONS[name](**entries)
         config = cls(**sections)
         for cue in ("depth", "flow", "colour", "texture"):
@@ -332,7 +333,7 @@ class Config:
         try:
             values = tomllib.loads(Path(path).read_text())
         except tomllib.TOMLDecodeError as error:
-            raise ValueError(f"{path}: not valid TOML ({error})") from None
+            raise InputValueError(f"{path}: not valid TOML ({error})") from None
         return cls.from_dict(values)
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
@@ -419,23 +420,36 @@ class Result:
         return sum(self.stages.values())
 
 
+FLOAT_MARGIN = 0.5
+"""How far outside [0, 1] a float image's pixels may lie (noise) before :func:`as_image` refuses it."""
+
+
 def as_image(array: Any, name: str) -> np.ndarray:
     """An input image as float32 in [0, 1]: (H, W) grey or (H, W, 3) RGB; uint8, uint16 or float.
 
-    Raises ValueError or TypeError naming ``name`` for anything else (wrong shape, NaN, too small).
+    Float images must already be in [0, 1] (within :data:`FLOAT_MARGIN`); float64 is converted to
+    float32. Raises ValueError or TypeError naming ``name`` for anything else (wrong shape, NaN or
+    infinite pixels, values off the [0, 1] scale, too small).
     """
     if not isinstance(array, np.ndarray):
-        raise TypeError(f"{name} must be a NumPy array, got {type(array).__name__}")
+        raise InputTypeError(f"{name} must be a NumPy array, got {type(array).__name__}")
     if array.ndim not in (2, 3) or (array.ndim == 3 and array.shape[2] != 3):
-        raise ValueError(f"{name} must be (H, W) grey or (H, W, 3) RGB, got shape {array.shape}")
+        raise InputValueError(f"{name} must be (H, W) grey or (H, W, 3) RGB, got shape {array.shape}")
     if min(array.shape[:2]) < 16:
-        raise ValueError(f"{name} must be at least 16 x 16 pixels, got {array.shape[:2]}")
+        raise InputValueError(f"{name} must be at least 16 x 16 pixels, got {array.shape[:2]}")
     if array.dtype in _FULL_SCALE:
         return (array.astype(np.float32) / np.float32(_FULL_SCALE[array.dtype]))
     if array.dtype.kind != "f":
-        raise TypeError(f"{name} must be uint8, uint16 or float, got {array.dtype}")
+        raise InputTypeError(f"{name} must be uint8, uint16 or float, got {array.dtype}")
     if not np.isfinite(array).all():
-        raise ValueError(f"{name} has NaN or infinite pixels")
+        raise InputValueError(f"{name} has NaN or infinite pixels")
+    # The modules' thresholds and the MRFs' weights are set for brightness in [0, 1]; an image on another
+    # scale (0..255 floats, or 1e30) would be processed as something else, so it is refused, not rescaled:
+    # dividing by the true full scale is the caller's knowledge. The margin admits noisy renderings.
+    low, high = float(array.min()), float(array.max())
+    if low < -FLOAT_MARGIN or high > 1 + FLOAT_MARGIN:
+        raise InputValueError(f"{name}: float images hold brightness in [0, 1], got values in [{low:.3g}, {high:.3g}]; "
+                              "divide by the image's full scale (e.g. 255) first")
     return np.ascontiguousarray(array, np.float32)
 
 
@@ -460,9 +474,9 @@ class VisionMachine:
 
     def __init__(self, config: Config | None = None, *, machine: Machine | None = None) -> None:
         if config is not None and not isinstance(config, Config):
-            raise TypeError(f"config must be a vmcl.pipeline.Config, got {type(config).__name__}")
+            raise InputTypeError(f"config must be a vmcl.pipeline.Config, got {type(config).__name__}")
         if machine is not None and not isinstance(machine, Machine):
-            raise TypeError(f"machine must be a vmcl.Machine, got {type(machine).__name__}")
+            raise InputTypeError(f"machine must be a vmcl.Machine, got {type(machine).__name__}")
         self.config = config or Config()
         self.machine = machine or Machine(profile=True)
         # Read once per machine; None with the rule labels.
@@ -510,7 +524,7 @@ class VisionMachine:
             if array is not None:
                 others[name] = as_image(array, name)
                 if others[name].shape != image.shape:
-                    raise ValueError(f"{name} has shape {others[name].shape}, left has {image.shape}: "
+                    raise InputValueError(f"{name} has shape {others[name].shape}, left has {image.shape}: "
                                      "the images must have the same size and channels")
         return _Run(self, image, others, progress).result
 

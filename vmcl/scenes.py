@@ -57,6 +57,8 @@ from enum import IntEnum
 
 import numpy as np
 
+from vmcl.errors import InputTypeError, InputValueError
+
 __all__ = [
     "PRESETS",
     "Body",
@@ -105,7 +107,7 @@ _PRECEDENCE = (Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.TEXTURE, Labe
 def _vector(value, name: str) -> tuple[float, float, float]:
     v = np.asarray(value, dtype=np.float64)
     if v.shape != (3,) or not np.isfinite(v).all():
-        raise ValueError(f"{name} must be three finite numbers, got {value!r}")
+        raise InputValueError(f"{name} must be three finite numbers, got {value!r}")
     return tuple(float(x) for x in v)
 
 
@@ -153,15 +155,15 @@ class Texture:
 
     def __post_init__(self):
         if self.kind not in ("flat", "noise", "stripes", "gradient", "blobs"):
-            raise ValueError(f"texture kind must be flat, noise, stripes, gradient or blobs: {self.kind!r}")
+            raise InputValueError(f"texture kind must be flat, noise, stripes, gradient or blobs: {self.kind!r}")
         if not self.scale > 0:
-            raise ValueError(f"texture scale must be positive, got {self.scale}")
+            raise InputValueError(f"texture scale must be positive, got {self.scale}")
         if not 0 <= self.contrast < 1:
-            raise ValueError(f"texture contrast must be in [0, 1), got {self.contrast}")
+            raise InputValueError(f"texture contrast must be in [0, 1), got {self.contrast}")
         # The relative slack admits 6 * size == scale computed in floating point (the presets use it).
         fits = self.size > 0 and 6 * self.size <= self.scale * (1 + 1e-9) and 0 <= self.fill <= 1
         if self.kind == "blobs" and not fits:
-            raise ValueError("blobs need size > 0, 6 * size <= scale and fill in [0, 1]")
+            raise InputValueError("blobs need size > 0, 6 * size <= scale and fill in [0, 1]")
 
 
 @dataclass(frozen=True)
@@ -187,9 +189,9 @@ class Mark:
     def __post_init__(self):
         expected = {"rect": 4, "disc": 3}.get(self.shape)
         if expected is None:
-            raise ValueError(f"mark shape must be 'rect' or 'disc', got {self.shape!r}")
+            raise InputValueError(f"mark shape must be 'rect' or 'disc', got {self.shape!r}")
         if len(self.bounds) != expected:
-            raise ValueError(f"a {self.shape} mark needs {expected} bounds, got {self.bounds!r}")
+            raise InputValueError(f"a {self.shape} mark needs {expected} bounds, got {self.bounds!r}")
         _albedo(self.colour, "mark colour")
 
     def contains(self, s: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -203,7 +205,7 @@ class Mark:
 def _albedo(colour, name: str) -> tuple[float, float, float]:
     c = _vector(colour, name)
     if min(c) < 0 or max(c) > 1:
-        raise ValueError(f"{name} must be in [0, 1], got {colour!r}")
+        raise InputValueError(f"{name} must be in [0, 1], got {colour!r}")
     return c
 
 
@@ -238,9 +240,9 @@ class Face:
         v = np.array(_vector(self.v_axis, "v_axis"))
         _vector(self.origin, "origin")
         if abs(u @ u - 1) > 1e-6 or abs(v @ v - 1) > 1e-6 or abs(u @ v) > 1e-6:
-            raise ValueError(f"u_axis and v_axis must be orthonormal, got {self.u_axis} and {self.v_axis}")
+            raise InputValueError(f"u_axis and v_axis must be orthonormal, got {self.u_axis} and {self.v_axis}")
         if self.size is not None and not (len(self.size) == 2 and min(self.size) > 0):
-            raise ValueError(f"size must be two positive extents or None, got {self.size!r}")
+            raise InputValueError(f"size must be two positive extents or None, got {self.size!r}")
         _albedo(self.colour, "colour")
 
 
@@ -308,14 +310,14 @@ class Light:
 
     def __post_init__(self):
         if np.linalg.norm(_vector(self.direction, "direction")) == 0:
-            raise ValueError("light direction must be non-zero")
+            raise InputValueError("light direction must be non-zero")
         _albedo(self.colour, "light colour")
         _vector(self.gradient, "gradient")
         _vector(self.gradient_origin, "gradient_origin")
         if not 0 <= self.ambient <= 1:
-            raise ValueError(f"ambient must be in [0, 1], got {self.ambient}")
+            raise InputValueError(f"ambient must be in [0, 1], got {self.ambient}")
         if self.specular < 0 or self.shininess <= 0:
-            raise ValueError("specular must be >= 0 and shininess > 0")
+            raise InputValueError("specular must be >= 0 and shininess > 0")
 
 
 @dataclass(frozen=True)
@@ -342,9 +344,9 @@ class Camera:
     def __post_init__(self):
         sizes_ok = all(isinstance(n, (int, np.integer)) and 64 <= n <= 1024 for n in self.shape)
         if len(self.shape) != 2 or not sizes_ok:
-            raise ValueError(f"shape must be (height, width) with each in 64..1024, got {self.shape!r}")
+            raise InputValueError(f"shape must be (height, width) with each in 64..1024, got {self.shape!r}")
         if not (self.focal > 0 and self.baseline > 0):
-            raise ValueError("focal and baseline must be positive")
+            raise InputValueError("focal and baseline must be positive")
 
 
 @dataclass(frozen=True)
@@ -357,7 +359,7 @@ class World:
 
     def __post_init__(self):
         if not self.bodies or not all(b.faces for b in self.bodies):
-            raise ValueError("a world needs at least one body, and every body at least one face")
+            raise InputValueError("a world needs at least one body, and every body at least one face")
 
 
 def box(centre, size, *, colour, texture: Texture = Texture(), rotation=(0.0, 0.0, 0.0)) -> tuple[Face, ...]:
@@ -414,7 +416,7 @@ def fold(left, crease, right, height: float, *, colour, texture: Texture = Textu
     for (a, b), panel_marks in zip(((points[0], points[1]), (points[1], points[2])), marks):
         along = b - a
         if abs(along[1]) > 1e-9:
-            raise ValueError("left, crease and right must have the same y")
+            raise InputValueError("left, crease and right must have the same y")
         width = float(np.linalg.norm(along))
         faces.append(Face(tuple(a), tuple(along / width), (0.0, 1.0, 0.0), (width, height), colour, texture,
                           panel_marks))
@@ -920,11 +922,11 @@ def render(world: World, *, seed: int = 0, noise: float = 0.0) -> Scene:
     True
     """
     if not isinstance(world, World):
-        raise TypeError(f"world must be a World (see vmcl.scenes.preset), got {type(world).__name__}")
+        raise InputTypeError(f"world must be a World (see vmcl.scenes.preset), got {type(world).__name__}")
     if not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+        raise InputValueError(f"seed must be a non-negative integer, got {seed!r}")
     if not (np.isfinite(noise) and noise >= 0):
-        raise ValueError(f"noise must be a finite standard deviation >= 0, got {noise!r}")
+        raise InputValueError(f"noise must be a finite standard deviation >= 0, got {noise!r}")
     cam = _Camera(world.camera)
     spec = [f for b in world.bodies for f in b.faces]
     owner = np.array([k for k, b in enumerate(world.bodies) for _ in b.faces])
@@ -1155,7 +1157,7 @@ def preset(name: str, *, shape: tuple[int, int] = (256, 256), specular: bool = F
     builders = {"blocks": _blocks, "corridor": _corridor, "shadows": _shadows, "textures": _textures,
                 "cues": _cues}
     if name not in builders:
-        raise ValueError(f"unknown preset {name!r}; expected one of {', '.join(PRESETS)}")
+        raise InputValueError(f"unknown preset {name!r}; expected one of {', '.join(PRESETS)}")
     camera = Camera(tuple(shape), float(shape[1]), _BASELINE)
     f = camera.focal
 

@@ -7,11 +7,14 @@ the device between stages. Inputs are checked at the door with errors that name 
 from __future__ import annotations
 
 import functools
+import math
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
 import pyopencl.array as cl_array
 
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine, default_machine
 
 ArrayLike = np.ndarray | cl_array.Array
@@ -23,7 +26,7 @@ _EXACT_TO_FLOAT32 = {np.dtype(np.float16), np.dtype(np.float32)}
 
 def machine_for(machine: Machine | None) -> Machine:
     if machine is not None and not isinstance(machine, Machine):
-        raise TypeError(f"machine must be a vmcl.Machine or None, got {type(machine).__name__}")
+        raise InputTypeError(f"machine must be a vmcl.Machine or None, got {type(machine).__name__}")
     return machine if machine is not None else default_machine()
 
 
@@ -53,15 +56,14 @@ def field(x: Any, name: str, machine: Machine, *, ndims: tuple[int, ...],
     accepted = _dtypes(dtypes)
     names = _DtypeNames(accepted)
     if isinstance(x, cl_array.Array):
-        if x.context != machine.context:
-            raise ValueError(f"{name} lives on another OpenCL context than the machine's ({machine!r})")
+        check_context(x, name, machine)
         if x.dtype not in accepted:
-            raise TypeError(f"{name} must have dtype {names}, got {x.dtype}")
+            raise InputTypeError(f"{name} must have dtype {names}, got {x.dtype}")
         if not x.flags.c_contiguous:
-            raise ValueError(f"{name} must be a C-contiguous device array")
+            raise InputValueError(f"{name} must be a C-contiguous device array")
         if x.offset:
             # Kernels get the buffer itself, which starts before a view's first element.
-            raise ValueError(f"{name} must not be a device view with an offset (copy it: {name}.copy())")
+            raise InputValueError(f"{name} must not be a device view with an offset (copy it: {name}.copy())")
         host = False
         device = x
     elif isinstance(x, np.ndarray):
@@ -73,15 +75,15 @@ def field(x: Any, name: str, machine: Machine, *, ndims: tuple[int, ...],
             elif np.dtype(np.float32) in accepted and dtype in _EXACT_TO_FLOAT32:
                 dtype = np.dtype(np.float32)
             else:
-                raise TypeError(f"{name} must have dtype {names} (convert with .astype), got {x.dtype}")
+                raise InputTypeError(f"{name} must have dtype {names} (convert with .astype), got {x.dtype}")
         device = None
     else:
-        raise TypeError(f"{name} must be a NumPy array or a pyopencl.array.Array, got {type(x).__name__}")
+        raise InputTypeError(f"{name} must be a NumPy array or a pyopencl.array.Array, got {type(x).__name__}")
     if x.ndim not in ndims:
         wanted = " or ".join(str(n) for n in ndims)
-        raise ValueError(f"{name} must have {wanted} dimensions, got shape {x.shape}")
+        raise InputValueError(f"{name} must have {wanted} dimensions, got shape {x.shape}")
     if x.size == 0:
-        raise ValueError(f"{name} must not be empty, got shape {x.shape}")
+        raise InputValueError(f"{name} must not be empty, got shape {x.shape}")
     if device is None:
         device = machine.to_device(np.asarray(x, dtype=dtype))
     return device, host
@@ -91,17 +93,18 @@ def flags_field(segments: Any, shape: tuple[int, ...], name: str, machine: Machi
     """Segment-start flags as a uint8 device array of the given shape (non-zero marks a start)."""
     if isinstance(segments, np.ndarray):
         if segments.shape != shape:
-            raise ValueError(f"{name} must have the data's shape {shape}, got {segments.shape}")
+            raise InputValueError(f"{name} must have the data's shape {shape}, got {segments.shape}")
         if segments.dtype != np.bool_ and not np.issubdtype(segments.dtype, np.integer):
-            raise TypeError(f"{name} must be boolean or integer flags, got {segments.dtype}")
+            raise InputTypeError(f"{name} must be boolean or integer flags, got {segments.dtype}")
         return machine.to_device((segments != 0).astype(np.uint8))
     if isinstance(segments, cl_array.Array):
+        check_context(segments, name, machine)
         if segments.shape != shape:
-            raise ValueError(f"{name} must have the data's shape {shape}, got {segments.shape}")
+            raise InputValueError(f"{name} must have the data's shape {shape}, got {segments.shape}")
         if segments.dtype not in (np.dtype(np.uint8), np.dtype(np.bool_)):
-            raise TypeError(f"{name} on the device must be uint8 or bool, got {segments.dtype}")
+            raise InputTypeError(f"{name} on the device must be uint8 or bool, got {segments.dtype}")
         return segments
-    raise TypeError(f"{name} must be a NumPy array, a pyopencl.array.Array or None, got {type(segments).__name__}")
+    raise InputTypeError(f"{name} must be a NumPy array, a pyopencl.array.Array or None, got {type(segments).__name__}")
 
 
 def result(device: cl_array.Array, host: bool) -> ArrayLike:
@@ -116,26 +119,94 @@ def type_defines(dtype: np.dtype) -> dict[str, Any]:
         return {"T": "int", "T_IS_FLOAT": 0}
     if dtype == np.uint8:
         return {"T": "uchar", "T_IS_FLOAT": 0}
-    raise TypeError(f"no kernel type for dtype {dtype}")
+    raise InputTypeError(f"no kernel type for dtype {dtype}")
 
 
-def check_int(value: Any, name: str, *, minimum: int | None = None) -> int:
+def check_int(value: Any, name: str, *, minimum: int | None = None, maximum: int | None = None) -> int:
     """``value`` as an int; TypeError naming ``name`` for a non-integer (bool included), ValueError below
-    ``minimum``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name} must be an integer, got {type(value).__name__}")
+    ``minimum`` or above ``maximum``."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise InputTypeError(f"{name} must be an integer, got {type(value).__name__}")
     if minimum is not None and value < minimum:
-        raise ValueError(f"{name} must be >= {minimum}, got {value}")
+        raise InputValueError(f"{name} must be >= {minimum}, got {value}")
+    if maximum is not None and value > maximum:
+        raise InputValueError(f"{name} must be <= {maximum}, got {value}")
     return int(value)
+
+
+def check_real(value: Any, name: str, *, minimum: float | None = None, maximum: float | None = None,
+               above: float | None = None, below: float | None = None) -> float:
+    """``value`` as a finite float in range; TypeError naming ``name`` for anything but a real number (bool,
+    str, None, arrays and complex included), ValueError for NaN, infinity or a value out of range.
+
+    ``minimum`` / ``maximum`` are inclusive bounds, ``above`` / ``below`` exclusive ones.
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InputTypeError(f"{name} must be a real number, got {type(value).__name__}")
+    try:
+        number = float(value)
+    except OverflowError:  # an int beyond float's range
+        number = math.inf if value > 0 else -math.inf
+    if not math.isfinite(number):
+        raise InputValueError(f"{name} must be finite, got {value}")
+    if minimum is not None and number < minimum:
+        raise InputValueError(f"{name} must be >= {minimum}, got {value}")
+    if maximum is not None and number > maximum:
+        raise InputValueError(f"{name} must be <= {maximum}, got {value}")
+    if above is not None and not number > above:
+        raise InputValueError(f"{name} must be > {above}, got {value}")
+    if below is not None and not number < below:
+        raise InputValueError(f"{name} must be < {below}, got {value}")
+    return number
+
+
+def check_bool(value: Any, name: str) -> bool:
+    """``value`` as a bool; TypeError naming ``name`` for anything else (0, 1, "no" and None included)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputTypeError(f"{name} must be True or False, got {type(value).__name__}")
+    return bool(value)
+
+
+def check_choice(value: Any, name: str, choices: Iterable[str]) -> str:
+    """``value``, one of the strings ``choices``; TypeError for a non-string, ValueError for another string."""
+    choices = tuple(choices)
+    if not isinstance(value, str):
+        raise InputTypeError(f"{name} must be one of {choices}, got {type(value).__name__}")
+    if value not in choices:
+        raise InputValueError(f"{name} must be one of {choices}, got {value!r}")
+    return value
+
+
+def check_context(x: cl_array.Array, name: str, machine: Machine) -> None:
+    """Refuse a device array made in another OpenCL context (another Machine): its buffers mean nothing to
+    this machine's kernels."""
+    if x.context != machine.context:
+        raise InputValueError(f"{name} lives on another OpenCL context than the machine's ({machine!r}); "
+                              f"copy it through the host")
+
+
+def real_host_array(x: Any, name: str, *, ndims: tuple[int, ...]) -> np.ndarray:
+    """``x`` checked as a non-empty NumPy array of real numbers (bool, integer or float) with one of
+    ``ndims`` dimensions; complex, object, string and other dtypes are refused, never converted."""
+    if not isinstance(x, np.ndarray):
+        raise InputTypeError(f"{name} must be a NumPy array, got {type(x).__name__}")
+    if x.dtype.kind not in "biuf":
+        raise InputTypeError(f"{name} must hold real numbers (bool, integer or float), got dtype {x.dtype}")
+    if x.ndim not in ndims:
+        wanted = " or ".join(str(n) for n in ndims)
+        raise InputValueError(f"{name} must have {wanted} dimensions, got shape {x.shape}")
+    if x.size == 0:
+        raise InputValueError(f"{name} must not be empty, got shape {x.shape}")
+    return x
 
 
 def normalise_axis(axis: int, ndim: int, allowed: tuple[int, ...], name: str = "axis") -> int:
     """``axis`` as a negative index, checked against the allowed (negative) axes."""
     check_int(axis, name)
     if not -ndim <= axis < ndim:
-        raise ValueError(f"{name}={axis} is out of range for an array of {ndim} dimensions")
+        raise InputValueError(f"{name}={axis} is out of range for an array of {ndim} dimensions")
     negative = int(axis) - ndim if axis >= 0 else int(axis)
     if negative not in allowed:
-        raise ValueError(f"{name}={axis} is not supported: scans run along the last axis (rows) or, for "
+        raise InputValueError(f"{name}={axis} is not supported: scans run along the last axis (rows) or, for "
                          f"2-D and 3-D fields, the second to last (columns)")
     return negative

@@ -27,6 +27,7 @@ import pyopencl.array as cl_array
 from vmcl.cm import reduce as _reduce
 from vmcl.cm._arrays import ArrayLike, field, machine_for, result
 from vmcl.cm.scan import exclusive_sum_into
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 LabelMethod = Literal["doubling", "iterative"]
@@ -42,7 +43,7 @@ def _pointers(next: ArrayLike, machine: Machine, *, lowest: int) -> tuple[cl_arr
     n = data.size
     low, high = (int(_reduce.reduce(data, op, machine=machine).get()) for op in ("min", "max"))
     if low < lowest or high >= n:
-        raise ValueError(f"next must hold addresses in [{lowest}, {n - 1}], got values in [{low}, {high}]")
+        raise InputValueError(f"next must hold addresses in [{lowest}, {n - 1}], got values in [{low}, {high}]")
     return data, host
 
 
@@ -101,7 +102,7 @@ def principal(next: ArrayLike, *, machine: Machine | None = None) -> tuple[Array
     machine = machine_for(machine)
     data, host = _pointers(next, machine, lowest=0)
     if host and np.bincount(np.asarray(next), minlength=data.size).max() != 1:
-        raise ValueError("next must be a permutation (every node the successor of exactly one node) to form rings")
+        raise InputValueError("next must be a permutation (every node the successor of exactly one node) to form rings")
     n = data.size
     addresses = machine.to_device(np.arange(n, dtype=np.int32))
     top, _ = _jump(machine, addresses, data, 1)
@@ -143,11 +144,11 @@ def label(mask: ArrayLike, *, connectivity: int = 8, relabel: bool = False, meth
         mask = mask.view(np.uint8)
     data, host = field(mask, "mask", machine, ndims=(2,), dtypes=(np.uint8,))
     if connectivity not in (4, 8):
-        raise ValueError(f"connectivity must be 4 or 8, got {connectivity!r}")
+        raise InputValueError(f"connectivity must be 4 or 8, got {connectivity!r}")
     if method not in ("doubling", "iterative"):
-        raise ValueError(f"method must be 'doubling' or 'iterative', got {method!r}")
+        raise InputValueError(f"method must be 'doubling' or 'iterative', got {method!r}")
     if data.size >= 2**31:
-        raise ValueError(f"mask must have fewer than 2**31 pixels, got shape {data.shape}")
+        raise InputValueError(f"mask must have fewer than 2**31 pixels, got shape {data.shape}")
     n = data.size
     labels = machine.empty(data.shape, np.int32)
     if method == "doubling":

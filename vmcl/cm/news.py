@@ -11,6 +11,7 @@ from typing import Literal
 import numpy as np
 
 from vmcl.cm._arrays import ArrayLike, check_int, field, machine_for, result, type_defines
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 Border = Literal["zero", "clamp", "wrap"]
@@ -39,7 +40,7 @@ def shift(x: ArrayLike, dx: int, dy: int, *, border: Border = "zero", machine: M
     data, host = field(x, "x", machine, ndims=(2, 3), dtypes=(np.uint8, np.int32, np.float32))
     dx, dy = check_int(dx, "dx"), check_int(dy, "dy")
     if border not in BORDERS:
-        raise ValueError(f"border must be one of {sorted(BORDERS)}, got {border!r}")
+        raise InputValueError(f"border must be one of {sorted(BORDERS)}, got {border!r}")
     height, width = data.shape[-2:]
     planes = data.size // (height * width)
     out = machine.empty(data.shape, data.dtype)

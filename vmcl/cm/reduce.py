@@ -15,6 +15,7 @@ import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm._arrays import ArrayLike, check_int, field, machine_for, result, type_defines
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 ReduceOp = Literal["sum", "max", "min", "and", "or"]
@@ -50,7 +51,7 @@ def reduce(x: ArrayLike, op: ReduceOp = "sum", *, machine: Machine | None = None
     """
     machine = machine_for(machine)
     if op not in _OPS:
-        raise ValueError(f"op must be one of {sorted(_OPS)}, got {op!r}")
+        raise InputValueError(f"op must be one of {sorted(_OPS)}, got {op!r}")
     source = x.astype(np.uint8) if isinstance(x, np.ndarray) and x.dtype == np.bool_ else x
     data, host = field(source, "x", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
     defines = type_defines(data.dtype)
@@ -109,9 +110,9 @@ def histogram(x: ArrayLike, bins: int, range: tuple[float, float], *, tile: tupl
     try:
         lo, hi = (float(v) for v in range)
     except (TypeError, ValueError):
-        raise TypeError(f"range must be a pair of numbers (lo, hi), got {range!r}") from None
+        raise InputTypeError(f"range must be a pair of numbers (lo, hi), got {range!r}") from None
     if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-        raise ValueError(f"range must be finite with lo < hi, got {range!r}")
+        raise InputValueError(f"range must be finite with lo < hi, got {range!r}")
     return result(_count(machine, data, bins, lo, hi, None, tile), host)
 
 
@@ -140,11 +141,11 @@ def histogram_to_top(x: cl_array.Array, bins: int, top: cl_array.Array, *, lo: f
     """
     machine = machine_for(machine)
     if not isinstance(x, cl_array.Array):
-        raise TypeError(f"x must be a pyopencl.array.Array, got {type(x).__name__}")
+        raise InputTypeError(f"x must be a pyopencl.array.Array, got {type(x).__name__}")
     if not isinstance(top, cl_array.Array) or top.dtype != np.float32 or top.size != 1:
-        raise TypeError("top must be a one-element float32 pyopencl.array.Array")
+        raise InputTypeError("top must be a one-element float32 pyopencl.array.Array")
     if not math.isfinite(lo):
-        raise ValueError(f"lo must be finite, got {lo}")
+        raise InputValueError(f"lo must be finite, got {lo}")
     data, _ = _histogram_field(x, bins, tile, machine)
     return _count(machine, data, bins, float(lo), float(lo) + 1.0, top, tile)
 
@@ -156,10 +157,10 @@ def _histogram_field(x, bins, tile, machine: Machine) -> tuple[cl_array.Array, b
     check_int(bins, "bins")
     local_bins = machine.device.local_mem_size // 4 - 16
     if not 1 <= bins <= local_bins:
-        raise ValueError(f"bins must be between 1 and {local_bins} on this device, got {bins}")
+        raise InputValueError(f"bins must be between 1 and {local_bins} on this device, got {bins}")
     if tile is not None and (not isinstance(tile, tuple) or len(tile) != 2
                              or not all(isinstance(t, (int, np.integer)) and t >= 1 for t in tile)):
-        raise ValueError(f"tile must be a pair of positive integers (th, tw), got {tile!r}")
+        raise InputValueError(f"tile must be a pair of positive integers (th, tw), got {tile!r}")
     return data, host
 
 

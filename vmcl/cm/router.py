@@ -17,6 +17,7 @@ from vmcl.cm import _arrays
 from vmcl.cm import reduce as _reduce
 from vmcl.cm._arrays import ArrayLike, machine_for, result, type_defines
 from vmcl.cm.scan import exclusive_sum_into
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 Combine = Literal["overwrite", "sum", "max", "min", "and", "or"]
@@ -32,7 +33,7 @@ def _addresses(address: ArrayLike, size: int, machine: Machine) -> tuple:
     else:
         low, high = (int(_reduce.reduce(data, op, machine=machine).get()) for op in ("min", "max"))
     if low < 0 or high >= size:
-        raise ValueError(f"address must lie in [0, {size - 1}], got values in [{low}, {high}]")
+        raise InputValueError(f"address must lie in [0, {size - 1}], got values in [{low}, {high}]")
     return data, host
 
 
@@ -88,15 +89,15 @@ def send(values: ArrayLike, address: ArrayLike, *, size: int | tuple[int, ...], 
     data, host = _arrays.field(values, "values", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
     shape = (size,) if isinstance(size, (int, np.integer)) else tuple(size)
     if not shape or not all(isinstance(s, (int, np.integer)) and s >= 1 for s in shape):
-        raise ValueError(f"size must be a positive integer or a shape of positive integers, got {size!r}")
+        raise InputValueError(f"size must be a positive integer or a shape of positive integers, got {size!r}")
     if combine not in _COMBINE:
-        raise ValueError(f"combine must be one of {sorted(_COMBINE)}, got {combine!r}")
+        raise InputValueError(f"combine must be one of {sorted(_COMBINE)}, got {combine!r}")
     if combine in ("and", "or") and data.dtype == np.float32:
-        raise TypeError(f"combine={combine!r} needs integer values, got float32")
+        raise InputTypeError(f"combine={combine!r} needs integer values, got float32")
     destinations = int(np.prod(shape))
     where, _ = _addresses(address, destinations, machine)
     if where.shape != data.shape:
-        raise ValueError(f"address must have the shape of values {data.shape}, got {where.shape}")
+        raise InputValueError(f"address must have the shape of values {data.shape}, got {where.shape}")
     n = data.size
     defines = dict(COMBINE_OP=_COMBINE[combine], **type_defines(data.dtype))
     counts = machine.empty(destinations, np.int32)

@@ -29,6 +29,7 @@ from vmcl.cm._arrays import (
     result,
     type_defines,
 )
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 Op = Literal["plus", "max", "min", "copy"]
@@ -85,11 +86,11 @@ def scan(x: ArrayLike, *, op: Op = "plus", axis: int = -1, exclusive: bool = Fal
     data, host = field(x, "x", machine, ndims=(1, 2, 3))
     axis = normalise_axis(axis, data.ndim, (-1,) if data.ndim == 1 else (-1, -2))
     if op not in OPS:
-        raise ValueError(f"op must be one of {sorted(OPS)}, got {op!r}")
+        raise InputValueError(f"op must be one of {sorted(OPS)}, got {op!r}")
     if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        raise InputValueError(f"method must be one of {METHODS}, got {method!r}")
     if not isinstance(exclusive, (bool, np.bool_)):
-        raise TypeError(f"exclusive must be a bool, got {type(exclusive).__name__}")
+        raise InputTypeError(f"exclusive must be a bool, got {type(exclusive).__name__}")
     flags = None if segments is None else flags_field(segments, data.shape, "segments", machine)
     out = machine.empty(data.shape, data.dtype)
     defines = dict(type_defines(data.dtype), OP=OPS[op], SEGMENTED=int(flags is not None),
@@ -248,11 +249,11 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     data, host = field(x, "x", machine, ndims=(1, 2, 3))
     radius = check_int(radius, "radius", minimum=0)
     if not isinstance(axes, tuple) or not axes:
-        raise ValueError(f"axes must be a non-empty tuple such as (-2, -1), got {axes!r}")
+        raise InputValueError(f"axes must be a non-empty tuple such as (-2, -1), got {axes!r}")
     allowed = (-1,) if data.ndim == 1 else (-1, -2)
     wanted = {normalise_axis(a, data.ndim, allowed, "axes") for a in axes}
     if len(wanted) != len(axes):
-        raise ValueError(f"axes must not repeat an axis, got {axes!r}")
+        raise InputValueError(f"axes must not repeat an axis, got {axes!r}")
     defines = type_defines(data.dtype)
     width = data.shape[-1]
     r = np.int64(radius)

@@ -61,6 +61,7 @@ import pyopencl.array as cl_array
 from vmcl.cm._arrays import ArrayLike, field, machine_for, result
 from vmcl.early import noise as _noise
 from vmcl.early.filters import _kernel, _launch_flat, _launch_rows
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 MIN_INTENSITY = 0.05
@@ -112,15 +113,15 @@ class AlbedoEdges(NamedTuple):
 def _rgb(rgb, machine: Machine) -> tuple[cl_array.Array, bool]:
     """Check an RGB image and return it on the device (uint8, uint16 or float32) with its origin."""
     if isinstance(rgb, (np.ndarray, cl_array.Array)) and (rgb.ndim != 3 or rgb.shape[2] != 3):
-        raise ValueError(f"rgb must be an RGB image of shape (H, W, 3), got shape {rgb.shape}: a grey image "
+        raise InputValueError(f"rgb must be an RGB image of shape (H, W, 3), got shape {rgb.shape}: a grey image "
                          f"has no hue")
     if isinstance(rgb, np.ndarray) and rgb.dtype.kind == "f":
         if not np.isfinite(rgb).all():
-            raise ValueError("rgb must not contain NaN or infinite values")
+            raise InputValueError("rgb must not contain NaN or infinite values")
         if rgb.dtype != np.float32:
             rgb = rgb.astype(np.float32)
             if not np.isfinite(rgb).all():
-                raise ValueError("rgb has values beyond float32's range")
+                raise InputValueError("rgb has values beyond float32's range")
     return field(rgb, "rgb", machine, ndims=(3,), dtypes=tuple(_IN_TYPES))
 
 
@@ -128,9 +129,9 @@ def _min_intensity(value, dtype: np.dtype) -> float:
     if value is None:
         return MIN_INTENSITY * _FULL_SCALE[dtype]
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"min_intensity must be a number or None, got {type(value).__name__}")
+        raise InputTypeError(f"min_intensity must be a number or None, got {type(value).__name__}")
     if not math.isfinite(value) or value <= 0:
-        raise ValueError(f"min_intensity must be a finite number > 0, got {value}")
+        raise InputValueError(f"min_intensity must be a finite number > 0, got {value}")
     return float(value)
 
 
@@ -234,9 +235,9 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
     least = _min_intensity(min_intensity, data.dtype)
     if threshold is not None:
         if isinstance(threshold, bool) or not isinstance(threshold, (int, float, np.integer, np.floating)):
-            raise TypeError(f"threshold must be a number or None, got {type(threshold).__name__}")
+            raise InputTypeError(f"threshold must be a number or None, got {type(threshold).__name__}")
         if not math.isfinite(threshold) or threshold < 0:
-            raise ValueError(f"threshold must be a finite number >= 0, got {threshold}")
+            raise InputValueError(f"threshold must be a finite number >= 0, got {threshold}")
     height, width = data.shape[:2]
     shape = (height, width)
     hue_field, valid, z = (machine.empty(shape, np.float32), machine.empty(shape, np.uint8),

@@ -42,6 +42,7 @@ from vmcl.early.filters import (
     _launch_rows,
     _separable,
 )
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 Hysteresis = Literal["doubling", "iterative"]
@@ -119,7 +120,7 @@ def zero_crossings(image: ArrayLike, *, sigma: float, method: Literal["log", "do
     machine = machine_for(machine)
     sigma = _check_sigma(sigma)
     if method not in ("log", "dog"):
-        raise ValueError(f"method must be 'log' or 'dog', got {method!r}")
+        raise InputValueError(f"method must be 'log' or 'dog', got {method!r}")
     min_slope = _non_negative(min_slope, "min_slope")
     data, host = _image(image, machine)
     if method == "log":
@@ -138,9 +139,9 @@ def zero_crossings(image: ArrayLike, *, sigma: float, method: Literal["log", "do
 
 def _non_negative(value, name: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
+        raise InputTypeError(f"{name} must be a number, got {type(value).__name__}")
     if not math.isfinite(value) or value < 0:
-        raise ValueError(f"{name} must be a finite number >= 0, got {value}")
+        raise InputValueError(f"{name} must be a finite number >= 0, got {value}")
     return float(value)
 
 
@@ -174,7 +175,7 @@ def _hysteresis(machine: Machine, state: cl_array.Array, marks: cl_array.Array |
 
 def _check_hysteresis(method) -> None:
     if method not in ("doubling", "iterative"):
-        raise ValueError(f"hysteresis must be 'doubling' or 'iterative', got {method!r}")
+        raise InputValueError(f"hysteresis must be 'doubling' or 'iterative', got {method!r}")
 
 
 def hysteresis_threshold(image: ArrayLike, *, low_threshold: float, high_threshold: float,
@@ -206,7 +207,7 @@ def hysteresis_threshold(image: ArrayLike, *, low_threshold: float, high_thresho
     low, high = (_non_negative(v, name) for v, name in ((low_threshold, "low_threshold"),
                                                          (high_threshold, "high_threshold")))
     if low > high:
-        raise ValueError(f"low_threshold ({low}) must not exceed high_threshold ({high})")
+        raise InputValueError(f"low_threshold ({low}) must not exceed high_threshold ({high})")
     data, host = field(image, "image", machine, ndims=(2,), dtypes=(np.float32,))
     size = _xy(data)
     state, marks = machine.empty(data.shape, np.uint8), machine.empty(data.shape, np.uint8)
@@ -220,7 +221,7 @@ def _threshold_value(value, name: str, use_quantiles: bool) -> float | None:
         return None
     value = _non_negative(value, name)
     if use_quantiles and value > 1:
-        raise ValueError(f"{name} must be a quantile in [0, 1] when use_quantiles=True, got {value}")
+        raise InputValueError(f"{name} must be a quantile in [0, 1] when use_quantiles=True, got {value}")
     return value
 
 
@@ -319,11 +320,11 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     sigma = _check_sigma(sigma)
     _check_hysteresis(hysteresis)
     if noise not in ("global", "local"):
-        raise ValueError(f"noise must be 'global' or 'local', got {noise!r}")
+        raise InputValueError(f"noise must be 'global' or 'local', got {noise!r}")
     low = _threshold_value(low_threshold, "low_threshold", use_quantiles)
     high = _threshold_value(high_threshold, "high_threshold", use_quantiles)
     if low is not None and high is not None and low > high:
-        raise ValueError(f"low_threshold ({low}) must not exceed high_threshold ({high})")
+        raise InputValueError(f"low_threshold ({low}) must not exceed high_threshold ({high})")
     data, host = _image(image, machine)
     smoothed = _separable(machine, data, (sigma,))
     size = _xy(smoothed)

@@ -32,6 +32,7 @@ from pyopencl import cltypes
 
 from vmcl.cm import filters as _cm_filters
 from vmcl.cm._arrays import ArrayLike, field, machine_for, result
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 GREY_WEIGHTS = (0.2125, 0.7154, 0.0721)
@@ -51,14 +52,14 @@ def _image(image, machine: Machine) -> tuple[cl_array.Array, bool]:
     """Check a grey or RGB image and return it on the device (uint8, uint16 or float32) with its origin."""
     if isinstance(image, np.ndarray) and image.dtype.kind == "f":
         if not np.isfinite(image).all():
-            raise ValueError("image must not contain NaN or infinite values")
+            raise InputValueError("image must not contain NaN or infinite values")
         if image.dtype != np.float32:
             image = image.astype(np.float32)
             if not np.isfinite(image).all():
-                raise ValueError("image has values beyond float32's range")
+                raise InputValueError("image has values beyond float32's range")
     data, host = field(image, "image", machine, ndims=(2, 3), dtypes=tuple(_IN_TYPES))
     if data.ndim == 3 and data.shape[2] != 3:
-        raise ValueError(f"image must be grey (H, W) or RGB (H, W, 3), got shape {data.shape}")
+        raise InputValueError(f"image must be grey (H, W) or RGB (H, W, 3), got shape {data.shape}")
     return data, host
 
 
@@ -68,9 +69,9 @@ def _grey_weights() -> np.ndarray:
 
 def _check_sigma(sigma, name: str = "sigma") -> float:
     if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name} must be a number, got {type(sigma).__name__}")
+        raise InputTypeError(f"{name} must be a number, got {type(sigma).__name__}")
     if not math.isfinite(sigma) or sigma <= 0:
-        raise ValueError(f"{name} must be a finite number > 0, got {sigma}")
+        raise InputValueError(f"{name} must be a finite number > 0, got {sigma}")
     return float(sigma)
 
 
@@ -159,7 +160,7 @@ def _smooth(machine: Machine, data: cl_array.Array, sigma: float, method: str) -
         return _separable(machine, data, (sigma,))
     if method == "binomial":
         return _cm_filters.binomial(_grey(machine, data), binomial_passes(sigma), machine=machine)
-    raise ValueError(f"method must be 'binomial' or 'exact', got {method!r}")
+    raise InputValueError(f"method must be 'binomial' or 'exact', got {method!r}")
 
 
 def _laplacian(machine: Machine, smoothed: cl_array.Array) -> cl_array.Array:
@@ -214,7 +215,7 @@ def gaussian(image: ArrayLike, *, sigma: float, method: Method = "binomial",
     machine = machine_for(machine)
     sigma = _check_sigma(sigma)
     if method not in ("binomial", "exact"):
-        raise ValueError(f"method must be 'binomial' or 'exact', got {method!r}")
+        raise InputValueError(f"method must be 'binomial' or 'exact', got {method!r}")
     data, host = _image(image, machine)
     return result(_smooth(machine, data, sigma, method), host)
 
@@ -271,6 +272,6 @@ def difference_of_gaussians(image: ArrayLike, *, low_sigma: float, high_sigma: f
     low_sigma = _check_sigma(low_sigma, "low_sigma")
     high_sigma = DOG_RATIO * low_sigma if high_sigma is None else _check_sigma(high_sigma, "high_sigma")
     if high_sigma <= low_sigma:
-        raise ValueError(f"high_sigma must exceed low_sigma, got {high_sigma} <= {low_sigma}")
+        raise InputValueError(f"high_sigma must exceed low_sigma, got {high_sigma} <= {low_sigma}")
     data, host = _image(image, machine)
     return result(_separable(machine, data, (low_sigma, high_sigma)), host)

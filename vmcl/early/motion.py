@@ -37,6 +37,7 @@ from vmcl.cm._arrays import ArrayLike, check_int, field, machine_for
 from vmcl.early import edges as _edges
 from vmcl.early import filters as _filters
 from vmcl.early.sign_correlation import arcsine_law
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 Features = Literal["brightness", "log", "sign_log", "edges"]
@@ -92,27 +93,27 @@ def _frames(frame0, frame1, machine: Machine) -> tuple[cl_array.Array, cl_array.
     for name, frame in (("frame0", frame0), ("frame1", frame1)):
         if isinstance(frame, np.ndarray) and frame.dtype.kind == "f":
             if not np.isfinite(frame).all():
-                raise ValueError(f"{name} must not contain NaN or infinite values")
+                raise InputValueError(f"{name} must not contain NaN or infinite values")
             frame = frame.astype(np.float32)
             if not np.isfinite(frame).all():
-                raise ValueError(f"{name} has values beyond float32's range")
+                raise InputValueError(f"{name} has values beyond float32's range")
         data, host = field(frame, name, machine, ndims=(2, 3), dtypes=_IMAGE_DTYPES)
         if data.ndim == 3 and data.shape[2] != 3:
-            raise ValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {data.shape}")
+            raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {data.shape}")
         devices.append((data, host))
     (d0, host0), (d1, host1) = devices
     if host0 != host1:
-        raise TypeError("frame0 and frame1 must both be NumPy arrays or both device arrays")
+        raise InputTypeError("frame0 and frame1 must both be NumPy arrays or both device arrays")
     if d0.shape != d1.shape:
-        raise ValueError(f"frame0 and frame1 must have the same shape, got {d0.shape} and {d1.shape}")
+        raise InputValueError(f"frame0 and frame1 must have the same shape, got {d0.shape} and {d1.shape}")
     return d0, d1, host0
 
 
 def _number(value, name: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
+        raise InputTypeError(f"{name} must be a number, got {type(value).__name__}")
     if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite, got {value}")
+        raise InputValueError(f"{name} must be finite, got {value}")
     return float(value)
 
 
@@ -121,23 +122,23 @@ def _check(shape: tuple[int, ...], delta, patch, features, sigma, levels: int = 
     delta = check_int(delta, "delta", minimum=1)
     patch = check_int(patch, "patch", minimum=1)
     if patch % 2 == 0:
-        raise ValueError(f"patch must be odd (a window centred on the pixel), got {patch}")
+        raise InputValueError(f"patch must be odd (a window centred on the pixel), got {patch}")
     if features not in FEATURES:
-        raise ValueError(f"features must be one of {FEATURES}, got {features!r}")
+        raise InputValueError(f"features must be one of {FEATURES}, got {features!r}")
     sigma = _number(DEFAULT_SIGMA[features] if sigma is None else sigma, "sigma")
     if sigma <= 0:
-        raise ValueError(f"sigma must be > 0, got {sigma}")
+        raise InputValueError(f"sigma must be > 0, got {sigma}")
     side = min(shape[:2])
     if patch > side:
-        raise ValueError(f"patch ({patch}) is larger than the image ({shape[0]} x {shape[1]})")
+        raise InputValueError(f"patch ({patch}) is larger than the image ({shape[0]} x {shape[1]})")
     if delta >= side:
-        raise ValueError(f"delta ({delta}) must be smaller than the image ({shape[0]} x {shape[1]})")
+        raise InputValueError(f"delta ({delta}) must be smaller than the image ({shape[0]} x {shape[1]})")
     if _COMPARE[features] and patch**2 * (2 * delta**2 + 1) >= 2**31:
-        raise ValueError(f"patch ({patch}) and delta ({delta}) are too large for the integer keys of binary "
+        raise InputValueError(f"patch ({patch}) and delta ({delta}) are too large for the integer keys of binary "
                          f"votes: patch**2 * (2 delta**2 + 1) must stay below 2**31")
     coarsest = min(-(-n // 2 ** (levels - 1)) for n in shape[:2])
     if patch > coarsest or delta >= coarsest:
-        raise ValueError(f"levels={levels} halves the image to a side of {coarsest} pixels, smaller than "
+        raise InputValueError(f"levels={levels} halves the image to a side of {coarsest} pixels, smaller than "
                          f"patch ({patch}) or delta + 1 ({delta + 1}); use fewer levels")
     return delta, patch // 2, sigma
 
@@ -396,12 +397,12 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     levels = check_int(levels, "levels", minimum=1)
     delta, radius, sigma = _check(d0.shape, delta, patch, features, sigma, levels)
     if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        raise InputValueError(f"method must be one of {METHODS}, got {method!r}")
     boundary_score = _number(BOUNDARY_SCORE[features] if boundary_score is None else boundary_score,
                              "boundary_score")
     speed_penalty = _number(speed_penalty, "speed_penalty")
     if speed_penalty < 0:
-        raise ValueError(f"speed_penalty must be >= 0, got {speed_penalty}")
+        raise InputValueError(f"speed_penalty must be >= 0, got {speed_penalty}")
     pyramids = [_pyramid(machine, d, levels) for d in (d0, d1)]
     coarse = None
     for image0, image1 in zip(reversed(pyramids[0]), reversed(pyramids[1])):

@@ -43,6 +43,7 @@ from pyopencl import cltypes
 from vmcl.cm import reduce as _reduce
 from vmcl.cm._arrays import ArrayLike, field, machine_for, result
 from vmcl.early.filters import _kernel
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 NOISE_LOW = 2.0
@@ -116,7 +117,7 @@ def noise_thresholds(magnitude: ArrayLike, *, noise: Noise = "global", machine: 
     """
     machine = machine_for(machine)
     if noise not in ("global", "local"):
-        raise ValueError(f"noise must be 'global' or 'local', got {noise!r}")
+        raise InputValueError(f"noise must be 'global' or 'local', got {noise!r}")
     data, host = field(magnitude, "magnitude", machine, ndims=(2,), dtypes=(np.float32,))
     out, _ = threshold_field(machine, data, noise_rule(CANNY_LOW, CANNY_HIGH), local=noise == "local")
     return result(out.reshape(2) if noise == "global" else out, host)

@@ -27,17 +27,18 @@ from scipy.spatial import cKDTree
 from vmcl.cm import doubling, reduce, router
 from vmcl.cm._arrays import ArrayLike, machine_for, result
 from vmcl.cm._arrays import field as device_field
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 
 def _grey(image: np.ndarray, name: str) -> np.ndarray:
     if not isinstance(image, np.ndarray):
-        raise TypeError(f"{name} must be a NumPy array, got {type(image).__name__}")
+        raise InputTypeError(f"{name} must be a NumPy array, got {type(image).__name__}")
     if image.ndim != 2 or image.size == 0:
-        raise ValueError(f"{name} must be a non-empty grey image (H, W), got shape {image.shape}")
+        raise InputValueError(f"{name} must be a non-empty grey image (H, W), got shape {image.shape}")
     grey = image.astype(np.float32)
     if not np.all(np.isfinite(grey)):
-        raise ValueError(f"{name} must be finite")
+        raise InputValueError(f"{name} must be finite")
     return grey
 
 
@@ -45,7 +46,7 @@ def _otsu(grey: np.ndarray, machine: Machine) -> float:
     """Otsu's threshold from a 256-bin histogram of the image (computed on the device)."""
     lo, hi = float(grey.min()), float(grey.max())
     if hi <= lo:
-        raise ValueError("image is constant: there are no dots to find")
+        raise InputValueError("image is constant: there are no dots to find")
     counts = reduce.histogram(grey, 256, (lo, hi), machine=machine).astype(np.float64)
     centres = lo + (np.arange(256) + 0.5) * (hi - lo) / 256
     weight = np.cumsum(counts)
@@ -79,7 +80,7 @@ def find_dots(image: np.ndarray, *, polarity: Literal["dark", "bright"] = "dark"
     machine = machine_for(machine)
     grey = _grey(image, "image")
     if polarity not in ("dark", "bright"):
-        raise ValueError(f"polarity must be 'dark' or 'bright', got {polarity!r}")
+        raise InputValueError(f"polarity must be 'dark' or 'bright', got {polarity!r}")
     if threshold is None:
         threshold = _otsu(grey, machine)
     contrast = (threshold - grey) if polarity == "dark" else (grey - threshold)
@@ -107,9 +108,9 @@ def match_dots(left: np.ndarray, right: np.ndarray, *, max_shift: float) -> tupl
     """
     for name, dots in (("left", left), ("right", right)):
         if not isinstance(dots, np.ndarray) or dots.ndim != 2 or dots.shape[1] != 2:
-            raise ValueError(f"{name} must be an array of (x, y) centroids of shape (k, 2)")
+            raise InputValueError(f"{name} must be an array of (x, y) centroids of shape (k, 2)")
     if not max_shift > 0:
-        raise ValueError(f"max_shift must be positive, got {max_shift}")
+        raise InputValueError(f"max_shift must be positive, got {max_shift}")
     if len(left) == 0 or len(right) == 0:
         return np.zeros((0, 2)), np.zeros((0, 2))
     distance, nearest = cKDTree(right).query(left, distance_upper_bound=max_shift)
@@ -137,7 +138,7 @@ class WarpTable:
                   vergence: float = 0.0) -> WarpTable:
         """The table from matched dot centroids (see :func:`match_dots`) for images of ``shape``."""
         if len(left) < 3:
-            raise ValueError(f"need at least 3 matched dots to interpolate a warp table, got {len(left)}")
+            raise InputValueError(f"need at least 3 matched dots to interpolate a warp table, got {len(left)}")
         vectors = right - left
         ys, xs = np.indices(shape, dtype=np.float64)
         points = np.stack([xs.ravel(), ys.ravel()], axis=1)
@@ -153,7 +154,7 @@ class WarpTable:
                   machine: Machine | None = None) -> WarpTable:
         """Find, match and interpolate the dots of a calibration pair in one call."""
         if left_image.shape != right_image.shape:
-            raise ValueError(f"the calibration images differ in shape: {left_image.shape} and {right_image.shape}")
+            raise InputValueError(f"the calibration images differ in shape: {left_image.shape} and {right_image.shape}")
         left = find_dots(left_image, polarity=polarity, machine=machine)
         right = find_dots(right_image, polarity=polarity, machine=machine)
         matched_left, matched_right = match_dots(left, right, max_shift=max_shift)
@@ -168,19 +169,19 @@ class TableStore:
 
     def add(self, table: WarpTable) -> None:
         if self.tables and table.source.shape != self.tables[0].source.shape:
-            raise ValueError(f"table shape {table.source.shape} differs from the store's "
+            raise InputValueError(f"table shape {table.source.shape} differs from the store's "
                              f"{self.tables[0].source.shape}")
         if any(t.vergence == table.vergence for t in self.tables):
-            raise ValueError(f"a table for vergence {table.vergence} is already stored")
+            raise InputValueError(f"a table for vergence {table.vergence} is already stored")
         bisect.insort(self.tables, table, key=lambda t: t.vergence)
 
     def table_for(self, vergence: float) -> WarpTable:
         """The stored table for this angle, or the linear interpolation of the two around it."""
         if not self.tables:
-            raise ValueError("the store holds no tables")
+            raise InputValueError("the store holds no tables")
         angles = [t.vergence for t in self.tables]
         if not angles[0] <= vergence <= angles[-1]:
-            raise ValueError(f"vergence {vergence} lies outside the stored range [{angles[0]}, {angles[-1]}]; "
+            raise InputValueError(f"vergence {vergence} lies outside the stored range [{angles[0]}, {angles[-1]}]; "
                              "tables are interpolated, never extrapolated")
         upper = bisect.bisect_left(angles, vergence)
         if angles[upper] == vergence:
@@ -219,13 +220,13 @@ def warp(image: ArrayLike, table: WarpTable | ArrayLike, *, machine: Machine | N
     source = table.source if isinstance(table, WarpTable) else table
     if isinstance(image, np.ndarray) and image.dtype != np.float32:
         if not np.issubdtype(image.dtype, np.number) or np.iscomplexobj(image):
-            raise TypeError(f"image must be real-valued, got {image.dtype}")
+            raise InputTypeError(f"image must be real-valued, got {image.dtype}")
         image = image.astype(np.float32)
     data, host = device_field(image, "image", machine, ndims=(2, 3), dtypes=(np.float32,))
     positions, _ = device_field(source, "table", machine, ndims=(3,), dtypes=(np.float32,))
     height, width = data.shape[:2]
     if positions.shape != (height, width, 2):
-        raise ValueError(f"table must have shape {(height, width, 2)} for this image, got {positions.shape}")
+        raise InputValueError(f"table must have shape {(height, width, 2)} for this image, got {positions.shape}")
     channels = data.shape[2] if data.ndim == 3 else 1
     out = machine.empty(data.shape, np.float32)
     machine.launch(machine.kernel("warp", "warp_bilinear"), (width, height), data, positions, out,

@@ -20,6 +20,7 @@ import numpy as np
 
 from vmcl.cm import reduce as _reduce
 from vmcl.cm._arrays import ArrayLike, field, machine_for
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 
@@ -61,11 +62,11 @@ def sign_correlation(f: ArrayLike, g: ArrayLike, *, machine: Machine | None = No
     machine = machine_for(machine)
     for name, x in (("f", f), ("g", g)):
         if isinstance(x, np.ndarray) and x.dtype.kind == "f" and np.isnan(x).any():
-            raise ValueError(f"{name} must not contain NaN (it has no sign)")
+            raise InputValueError(f"{name} must not contain NaN (it has no sign)")
     fd, _ = field(f, "f", machine, ndims=(1, 2, 3), dtypes=(np.float32,))
     gd, _ = field(g, "g", machine, ndims=(1, 2, 3), dtypes=(np.float32,))
     if fd.shape != gd.shape:
-        raise ValueError(f"f and g must have the same shape, got {fd.shape} and {gd.shape}")
+        raise InputValueError(f"f and g must have the same shape, got {fd.shape} and {gd.shape}")
     agreement = machine.empty(fd.shape, np.int32)
     machine.launch(machine.kernel("motion", "sign_agreement"), (fd.size,), fd, gd, agreement, np.int64(fd.size))
     total = _reduce.reduce(agreement, "sum", machine=machine)

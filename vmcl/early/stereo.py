@@ -37,6 +37,7 @@ from vmcl.cm._arrays import field as device_field
 from vmcl.cm.filters import window_max
 from vmcl.early.edges import canny, zero_crossings
 from vmcl.early.filters import gaussian
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 Features = Literal["canny", "dog", "intensity"]
@@ -71,15 +72,15 @@ class StereoMatch:
 def _pair(left, right) -> None:
     for name, image in (("left", left), ("right", right)):
         if not isinstance(image, (np.ndarray, cl_array.Array)):
-            raise TypeError(f"{name} must be a NumPy array or a pyopencl.array.Array, got {type(image).__name__}")
+            raise InputTypeError(f"{name} must be a NumPy array or a pyopencl.array.Array, got {type(image).__name__}")
     if left.shape != right.shape:
-        raise ValueError(f"left and right must have the same shape, got {left.shape} and {right.shape}")
+        raise InputValueError(f"left and right must have the same shape, got {left.shape} and {right.shape}")
     if 0 in left.shape[:2]:
-        raise ValueError(f"left and right must not be empty, got shape {left.shape}")
+        raise InputValueError(f"left and right must not be empty, got shape {left.shape}")
     for name, image in (("left", left), ("right", right)):
         # Device images are not checked: that would need a read back.
         if isinstance(image, np.ndarray) and image.dtype.kind == "f" and not np.isfinite(image).all():
-            raise ValueError(f"{name} has NaN or infinite pixels")
+            raise InputValueError(f"{name} has NaN or infinite pixels")
 
 
 def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features: Features = "canny",
@@ -172,17 +173,17 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     _pair(left, right)
     _check_range(d_min, d_max, patch, left.shape[1])
     if features not in _FEATURES:
-        raise ValueError(f"features must be one of {sorted(_FEATURES)}, got {features!r}")
+        raise InputValueError(f"features must be one of {sorted(_FEATURES)}, got {features!r}")
     if (left.ndim == 3) != (right.ndim == 3):
-        raise ValueError("left and right must both be grey or both be colour")
+        raise InputValueError("left and right must both be grey or both be colour")
     if not isinstance(shiftable, (bool, np.bool_)):
-        raise TypeError(f"shiftable must be a bool, got {type(shiftable).__name__}")
+        raise InputTypeError(f"shiftable must be a bool, got {type(shiftable).__name__}")
     if shiftable and features != "intensity":
-        raise ValueError(f"shiftable windows score intensity patches: features must be 'intensity', got {features!r}")
+        raise InputValueError(f"shiftable windows score intensity patches: features must be 'intensity', got {features!r}")
     if shiftable and barriers is not None:
-        raise ValueError("shiftable windows take no barriers: a shifted patch already avoids the discontinuity")
+        raise InputValueError("shiftable windows take no barriers: a shifted patch already avoids the discontinuity")
     if not 0 <= horizontal_tolerance < 90:  # also refuses NaN; from 90 degrees on no edge would be left
-        raise ValueError(f"horizontal_tolerance must be in [0, 90) degrees, got {horizontal_tolerance}")
+        raise InputValueError(f"horizontal_tolerance must be in [0, 90) degrees, got {horizontal_tolerance}")
     maps = _feature_maps(machine, left, right, features, sigma, low_threshold, high_threshold, use_quantiles)
     min_angle = horizontal_tolerance * 65536 / 360 if features == "canny" else 0.0
     found = _match_maps(machine, maps, features, min_angle=min_angle, d_min=d_min, d_max=d_max, patch=patch,
@@ -211,7 +212,7 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
     """
     machine = machine_for(machine)
     if compatible not in ("direction", "sign"):
-        raise ValueError(f"compatible must be 'direction' or 'sign', got {compatible!r}")
+        raise InputValueError(f"compatible must be 'direction' or 'sign', got {compatible!r}")
     features = "canny" if compatible == "direction" else "dog"
     attr_type = np.float32 if compatible == "direction" else np.int8
     maps = {}
@@ -222,7 +223,7 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
         maps[name + "_attr"], _ = device_field(attribute, f"{name}_attribute", machine, ndims=(2,),
                                                dtypes=(attr_type,))
         if maps[name + "_attr"].shape != maps[name].shape:
-            raise ValueError(f"{name}_attribute must have the shape of {name}")
+            raise InputValueError(f"{name}_attribute must have the shape of {name}")
     _pair(maps["left"], maps["right"])
     _check_range(d_min, d_max, patch, maps["left"].shape[1])
     found = _match_maps(machine, maps, features, min_angle=0.0, d_min=d_min, d_max=d_max, patch=patch,
@@ -235,11 +236,11 @@ def _check_range(d_min, d_max, patch, width: int) -> None:
     for name, value in (("d_min", d_min), ("d_max", d_max), ("patch", patch)):
         check_int(value, name)
     if d_min > d_max:
-        raise ValueError(f"d_min ({d_min}) must not exceed d_max ({d_max})")
+        raise InputValueError(f"d_min ({d_min}) must not exceed d_max ({d_max})")
     if d_max - d_min + 1 > width or max(abs(d_min), abs(d_max)) >= width:
-        raise ValueError(f"the disparity range [{d_min}, {d_max}] is wider than the image ({width} pixels)")
+        raise InputValueError(f"the disparity range [{d_min}, {d_max}] is wider than the image ({width} pixels)")
     if patch < 1 or patch % 2 == 0:
-        raise ValueError(f"patch must be an odd integer >= 1, got {patch}")
+        raise InputValueError(f"patch must be an odd integer >= 1, got {patch}")
 
 
 def _deliver(found: list, host: bool) -> StereoMatch:
@@ -266,21 +267,21 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
         else:
             variant = "running" if patch <= _MAX_RUNNING_PATCH else "table"
     if variant not in ("running", "table"):
-        raise ValueError(f"variant must be 'running' or 'table', got {variant!r}")
+        raise InputValueError(f"variant must be 'running' or 'table', got {variant!r}")
     if variant == "running" and features != "intensity" and patch > _MAX_RUNNING_PATCH:
-        raise ValueError(f"the running variant counts votes in 16 bits: patch must be <= {_MAX_RUNNING_PATCH}, "
+        raise InputValueError(f"the running variant counts votes in 16 bits: patch must be <= {_MAX_RUNNING_PATCH}, "
                          f"got {patch} (use variant='table')")
     if negative_evidence < 0:
-        raise ValueError(f"negative_evidence must be >= 0, got {negative_evidence}")
+        raise InputValueError(f"negative_evidence must be >= 0, got {negative_evidence}")
     if not direction_tolerance >= 0:
-        raise ValueError(f"direction_tolerance must be >= 0 radians, got {direction_tolerance}")
+        raise InputValueError(f"direction_tolerance must be >= 0 radians, got {direction_tolerance}")
     radius = patch // 2
     if barriers is not None:
         if isinstance(barriers, np.ndarray) and barriers.dtype == np.bool_:
             barriers = barriers.view(np.uint8)
         barrier, _ = device_field(barriers, "barriers", machine, ndims=(2,), dtypes=(np.uint8,))
         if barrier.shape != (height, width):
-            raise ValueError(f"barriers must have the images' shape {(height, width)}, got {barrier.shape}")
+            raise InputValueError(f"barriers must have the images' shape {(height, width)}, got {barrier.shape}")
     else:
         barrier = None
     support = _Support(machine, radius, barrier, (height, width))

@@ -52,6 +52,7 @@ from vmcl.cm import scan as _scan
 from vmcl.cm._arrays import ArrayLike, check_int, machine_for, result
 from vmcl.early import noise as _noise
 from vmcl.early.filters import _check_sigma, _image, laplacian_of_gaussian
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 MIN_DENSITY_STEP = 0.01
@@ -77,11 +78,11 @@ def _check(fine_sigma, coarse_sigma, threshold, radius) -> tuple[float, float, f
     fine = _check_sigma(fine_sigma, "fine_sigma")
     coarse = _check_sigma(coarse_sigma, "coarse_sigma")
     if coarse <= fine:
-        raise ValueError(f"coarse_sigma must exceed fine_sigma, got coarse_sigma={coarse} <= fine_sigma={fine}")
+        raise InputValueError(f"coarse_sigma must exceed fine_sigma, got coarse_sigma={coarse} <= fine_sigma={fine}")
     if isinstance(threshold, bool) or not isinstance(threshold, (int, float, np.integer, np.floating)):
-        raise TypeError(f"threshold must be a number, got {type(threshold).__name__}")
+        raise InputTypeError(f"threshold must be a number, got {type(threshold).__name__}")
     if not math.isfinite(threshold) or threshold <= 0:
-        raise ValueError(f"threshold must be a finite number > 0 (blobs are thresholded at a non-zero "
+        raise InputValueError(f"threshold must be a finite number > 0 (blobs are thresholded at a non-zero "
                          f"value), got {threshold}")
     return fine, coarse, float(threshold), check_int(radius, "radius", minimum=1)
 
@@ -185,9 +186,9 @@ def texture_edges(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, t
     fine, coarse, threshold, radius = _check(fine_sigma, coarse_sigma, threshold, radius)
     if edge_threshold is not None:
         if isinstance(edge_threshold, bool) or not isinstance(edge_threshold, (int, float, np.integer, np.floating)):
-            raise TypeError(f"edge_threshold must be a number or None, got {type(edge_threshold).__name__}")
+            raise InputTypeError(f"edge_threshold must be a number or None, got {type(edge_threshold).__name__}")
         if not math.isfinite(edge_threshold) or edge_threshold < 0:
-            raise ValueError(f"edge_threshold must be a finite number >= 0, got {edge_threshold}")
+            raise InputValueError(f"edge_threshold must be a finite number >= 0, got {edge_threshold}")
     data, host = _image(image, machine)
     dens = _density(machine, data, fine, coarse, threshold, radius)
     height, width = dens.shape

@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from vmcl.cm._arrays import ArrayLike, field, machine_for
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 
@@ -24,11 +25,11 @@ def check_unit_interval(value, name: str, *, closed_above: bool) -> float:
     """``value`` as a float in [0, 1] (``closed_above``) or [0, 1); TypeError or ValueError naming ``name``
     otherwise (NaN included). The pipeline checks its configuration of these weights with it too."""
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name} must be a number, got {type(value).__name__}")
+        raise InputTypeError(f"{name} must be a number, got {type(value).__name__}")
     value = float(value)
     inside = 0 <= value <= 1 if closed_above else 0 <= value < 1
     if not math.isfinite(value) or not inside:
-        raise ValueError(f"{name} must be in [0, {'1]' if closed_above else '1)'}, got {value}")
+        raise InputValueError(f"{name} must be in [0, {'1]' if closed_above else '1)'}, got {value}")
     return value
 
 
@@ -112,12 +113,12 @@ def backfill(primary: ArrayLike, secondary: ArrayLike, secondary_confidence: Arr
     second, _ = field(secondary, "secondary", machine, ndims=(2, 3), dtypes=(np.float32,))
     gamma2, _ = field(secondary_confidence, "secondary_confidence", machine, ndims=(2,), dtypes=(np.float32,))
     if second.shape != first.shape:
-        raise ValueError(f"secondary has shape {second.shape}, primary has {first.shape}")
+        raise InputValueError(f"secondary has shape {second.shape}, primary has {first.shape}")
     if gamma2.shape != first.shape[:2]:
-        raise ValueError(f"secondary_confidence must have shape {first.shape[:2]}, got {gamma2.shape}")
+        raise InputValueError(f"secondary_confidence must have shape {first.shape[:2]}, got {gamma2.shape}")
     ncomp = first.shape[2] if first.ndim == 3 else 1
     if not 1 <= ncomp <= 4:
-        raise ValueError(f"primary must have 1 to 4 components per pixel, got {ncomp}")
+        raise InputValueError(f"primary must have 1 to 4 components per pixel, got {ncomp}")
     data = machine.empty(first.shape, np.float32)
     gamma = machine.empty(first.shape[:2], np.float32)
     machine.launch(machine.kernel("mrf_data", "backfill", NCOMP=ncomp), (gamma.size,), first, second, gamma2,

@@ -50,6 +50,8 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from vmcl.errors import InputTypeError, InputValueError
+
 KINDS = ("smooth", "constant")
 
 
@@ -57,11 +59,11 @@ def _check_finite(owner: object, names: tuple[str, ...], *, positive: tuple[str,
     for name in names:
         value = getattr(owner, name)
         if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-            raise TypeError(f"{type(owner).__name__}.{name} must be a number, got {type(value).__name__}")
+            raise InputTypeError(f"{type(owner).__name__}.{name} must be a number, got {type(value).__name__}")
         if not math.isfinite(value):
-            raise ValueError(f"{type(owner).__name__}.{name} must be finite, got {value}")
+            raise InputValueError(f"{type(owner).__name__}.{name} must be finite, got {value}")
         if name in positive and value <= 0:
-            raise ValueError(f"{type(owner).__name__}.{name} must be > 0, got {value}")
+            raise InputValueError(f"{type(owner).__name__}.{name} must be > 0, got {value}")
 
 
 @dataclass(frozen=True)
@@ -180,25 +182,25 @@ class Params:
                              "mf_t0", "mf_factor"),
                       positive=("t0", "t_factor", "mpm_temperature", "mf_t0", "mf_factor"))
         if not isinstance(self.prior, LinePrior):
-            raise TypeError(f"Params.prior must be a LinePrior, got {type(self.prior).__name__}")
+            raise InputTypeError(f"Params.prior must be a LinePrior, got {type(self.prior).__name__}")
         for name in ("alpha", "beta", "kappa"):
             if getattr(self, name) < 0:
-                raise ValueError(f"Params.{name} must be >= 0, got {getattr(self, name)}")
+                raise InputValueError(f"Params.{name} must be >= 0, got {getattr(self, name)}")
         for name in ("edge_radius", "sweeps", "quench", "burn_in", "samples", "mf_steps", "mf_iterations",
                      "icm_sweeps"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
-                raise ValueError(f"Params.{name} must be an integer >= 0, got {value!r}")
+                raise InputValueError(f"Params.{name} must be an integer >= 0, got {value!r}")
         if self.t_factor > 1 or self.mf_factor > 1:
-            raise ValueError("Params.t_factor and Params.mf_factor must be in (0, 1]: temperatures fall")
+            raise InputValueError("Params.t_factor and Params.mf_factor must be in (0, 1]: temperatures fall")
         if isinstance(self.levels, (int, np.integer)) and not isinstance(self.levels, bool):
             if not 2 <= self.levels <= 64:
-                raise ValueError(f"Params.levels must be a count in 2..64 or a tuple of levels, got {self.levels}")
+                raise InputValueError(f"Params.levels must be a count in 2..64 or a tuple of levels, got {self.levels}")
         else:
             levels = np.asarray(self.levels, np.float64)
             if levels.ndim != 1 or not 2 <= levels.size <= 64 or not np.all(np.isfinite(levels)) \
                     or np.unique(levels).size != levels.size:
-                raise ValueError(f"Params.levels must be 2..64 distinct finite values, got {self.levels!r}")
+                raise InputValueError(f"Params.levels must be 2..64 distinct finite values, got {self.levels!r}")
 
     def vertex_table(self) -> np.ndarray:
         """beta times the vertex potentials, float64 (16,)."""
@@ -301,18 +303,18 @@ def energy(f: np.ndarray, line_h: np.ndarray, line_v: np.ndarray, *, data: np.nd
     """
     params = Params() if params is None else params
     if kind not in KINDS:
-        raise ValueError(f"kind must be 'smooth' or 'constant', got {kind!r}")
+        raise InputValueError(f"kind must be 'smooth' or 'constant', got {kind!r}")
     g = np.asarray(data, np.float64)
     f = np.asarray(f, np.float64)
     if f.shape != g.shape or f.ndim not in (2, 3):
-        raise ValueError(f"f must have the data's shape (H, W) or (H, W, C), got {f.shape} and {g.shape}")
+        raise InputValueError(f"f must have the data's shape (H, W) or (H, W, C), got {f.shape} and {g.shape}")
     if f.ndim == 2:
         f, g = f[..., None], g[..., None]
     height, width = f.shape[:2]
     lh = np.asarray(line_h) != 0
     lv = np.asarray(line_v) != 0
     if lh.shape != (height, width - 1) or lv.shape != (height - 1, width):
-        raise ValueError(f"line_h and line_v must have shapes {(height, width - 1)} and {(height - 1, width)}, "
+        raise InputValueError(f"line_h and line_v must have shapes {(height, width - 1)} and {(height - 1, width)}, "
                          f"got {lh.shape} and {lv.shape}")
     finite = np.all(np.isfinite(g), axis=2)
     gamma = np.ones((height, width)) if confidence is None else np.asarray(confidence, np.float64)

@@ -25,6 +25,7 @@ How each was chosen (tests/test_mrf_quality.py holds the scenes; the figures are
 
 from __future__ import annotations
 
+from vmcl.errors import InputValueError
 from vmcl.mrf.energy import Params
 
 DEPTH = Params(alpha=1.0, beta=2.0, edge_gain=0.75, mf_t0=8.0, mf_factor=0.9, mf_steps=40, mf_iterations=5,
@@ -41,5 +42,5 @@ PRESETS = {"depth": DEPTH, "flow": FLOW, "colour": COLOUR, "texture": TEXTURE}
 def preset(cue: str) -> Params:
     """The measured Params of a cue: "depth", "flow", "colour" or "texture"."""
     if cue not in PRESETS:
-        raise ValueError(f"cue must be one of {', '.join(PRESETS)}, got {cue!r}")
+        raise InputValueError(f"cue must be one of {', '.join(PRESETS)}, got {cue!r}")
     return PRESETS[cue]

@@ -24,6 +24,7 @@ import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as cm_reduce
 from vmcl.cm._arrays import ArrayLike, field, machine_for
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.mrf.energy import KINDS, Params
 from vmcl.mrf.icm import icm
@@ -122,24 +123,24 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
     machine = machine_for(machine)
     params = Params() if params is None else params
     if not isinstance(params, Params):
-        raise TypeError(f"params must be a vmcl.mrf.Params, got {type(params).__name__}")
+        raise InputTypeError(f"params must be a vmcl.mrf.Params, got {type(params).__name__}")
     if kind not in KINDS:
-        raise ValueError(f"kind must be 'smooth' or 'constant', got {kind!r}")
+        raise InputValueError(f"kind must be 'smooth' or 'constant', got {kind!r}")
     if method not in METHODS:
-        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+        raise InputValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**64:
-        raise ValueError(f"seed must be an integer in [0, 2**64), got {seed!r}")
+        raise InputValueError(f"seed must be an integer in [0, 2**64), got {seed!r}")
     if params.alpha <= 0:
-        raise ValueError("params.alpha must be > 0: without the data term nothing anchors the field")
+        raise InputValueError("params.alpha must be > 0: without the data term nothing anchors the field")
     g, host = _data(data, machine)
     height, width = g.shape[:2]
     if kind == "constant" and g.ndim == 3 and g.shape[2] != 1:
-        raise ValueError(f"kind='constant' takes scalar data (H, W), got shape {g.shape}")
+        raise InputValueError(f"kind='constant' takes scalar data (H, W), got shape {g.shape}")
     gamma = _pixel_field(confidence, "confidence", (height, width), np.float32, machine)
     e = _pixel_field(edges, "edges", (height, width), np.uint8, machine)
     lattice = Lattice(machine, g, gamma, e, kind, params)
     if not float(cm_reduce.reduce(lattice.w, "max", machine=machine).get()) > 0:
-        raise ValueError("data has no value with a positive confidence: nothing to restore")
+        raise InputValueError("data has no value with a positive confidence: nothing to restore")
     if method == "anneal":
         sweeps = anneal(lattice, int(seed))
     elif method == "mpm":
@@ -159,13 +160,13 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
 def _data(data: Any, machine: Machine) -> tuple[cl_array.Array, bool]:
     if isinstance(data, np.ndarray):
         if data.dtype.kind not in "iuf":
-            raise TypeError(f"data must be a real array (integer or float), got dtype {data.dtype}")
+            raise InputTypeError(f"data must be a real array (integer or float), got dtype {data.dtype}")
         data = data.astype(np.float32)
     g, host = field(data, "data", machine, ndims=(2, 3), dtypes=(np.float32,))
     if g.ndim == 3 and not 1 <= g.shape[2] <= 4:
-        raise ValueError(f"data must be (H, W) or (H, W, C) with C in 1..4, got shape {g.shape}")
+        raise InputValueError(f"data must be (H, W) or (H, W, C) with C in 1..4, got shape {g.shape}")
     if min(g.shape[:2]) < 2:
-        raise ValueError(f"data must be at least 2 x 2 pixels, got shape {g.shape}")
+        raise InputValueError(f"data must be at least 2 x 2 pixels, got shape {g.shape}")
     return g, host
 
 
@@ -175,19 +176,19 @@ def _pixel_field(x: Any, name: str, shape: tuple[int, int], dtype: type, machine
         return None
     if isinstance(x, np.ndarray):
         if x.shape != shape:
-            raise ValueError(f"{name} must have the data's shape {shape}, got {x.shape}")
+            raise InputValueError(f"{name} must have the data's shape {shape}, got {x.shape}")
         if dtype is np.uint8:
             if x.dtype != np.bool_ and x.dtype.kind not in "iu":
-                raise TypeError(f"{name} must be boolean or integer (non-zero: an edge), got {x.dtype}")
+                raise InputTypeError(f"{name} must be boolean or integer (non-zero: an edge), got {x.dtype}")
             return machine.to_device((x != 0).astype(np.uint8))
         if x.dtype.kind not in "iuf":
-            raise TypeError(f"{name} must be real, got dtype {x.dtype}")
+            raise InputTypeError(f"{name} must be real, got dtype {x.dtype}")
         if not np.all(np.isfinite(x)) or np.any(x < 0):
-            raise ValueError(f"{name} must be finite and >= 0")
+            raise InputValueError(f"{name} must be finite and >= 0")
         return machine.to_device(x.astype(np.float32))
     device, _ = field(x, name, machine, ndims=(2,), dtypes=(dtype,))
     if device.shape != shape:
-        raise ValueError(f"{name} must have the data's shape {shape}, got {device.shape}")
+        raise InputValueError(f"{name} must have the data's shape {shape}, got {device.shape}")
     return device
 
 
@@ -207,7 +208,7 @@ def boundary_map(line_h: np.ndarray, line_v: np.ndarray) -> np.ndarray:
     line_h, line_v = np.asarray(line_h) != 0, np.asarray(line_v) != 0
     height, width = line_v.shape[0] + 1, line_h.shape[1] + 1
     if line_h.shape != (height, width - 1):
-        raise ValueError(f"line_h must have shape {(height, width - 1)} to match line_v {line_v.shape}")
+        raise InputValueError(f"line_h must have shape {(height, width - 1)} to match line_v {line_v.shape}")
     out = np.zeros((height, width), bool)
     out[:, :-1] |= line_h
     out[:-1, :] |= line_v

@@ -1,0 +1,876 @@
+"""Bad and extreme inputs against every public function of vmcl: a refusal that names the argument, or a
+result of the right kind; never a crash, a hang or an exception of another type.
+
+Each public callable has a row in :data:`TABLE`: a valid call (every argument as a JSON-able spec) and the
+kind of each argument. Hypothesis picks one argument and a bad value of its kind (an array of the wrong
+shape, dtype, order, scale or place; a number that is NaN, infinite, huge, negative or not a number; an
+unknown name; a missing file ...). The cases run in a worker subprocess (this file run as a script), one
+JSON line in and one out per case, so a segfault or a hang fails the case that caused it instead of
+killing the test run; the worker is then restarted for the cases that remain.
+
+A case passes when the call
+- raises :class:`vmcl.errors.InputError` whose message contains the argument's name, or
+- returns a result whose structure, dtypes and (unless the arrays' shapes were changed) dimensions are
+  those of the valid call's result, or
+- for a path argument, raises FileNotFoundError (a missing file is not a bad value of the argument).
+
+The default run draws a few cases per callable (derandomized); ``-m slow`` selects the long variant.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import select
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import pytest
+
+TEST_CASE_TIMEOUT_S = 120.0  # one case: a hang, not a slow run (the slowest valid case takes ~5 s)
+REPO = Path(__file__).resolve().parents[1]
+
+# --------------------------------------------------------------------------------------------- specs
+# A value spec is JSON: plain JSON values stand for themselves; a dict with one of these keys builds:
+#   {"array": shape, "dtype": d, "fill": f, "order": "C"|"F"|"strided", "device": bool}
+#   {"float": "nan"|"inf"|"-inf"}, {"tuple": [...]}, {"complex": [re, im]}, {"np": dtype, "value": v}
+#   {"make": name}: an object built by the worker (see _MAKERS), {"path": kind}: a file the worker writes.
+
+
+def arr(shape, dtype="float32", fill="rand", **extra) -> dict:
+    return {"array": list(shape), "dtype": dtype, "fill": fill, **extra}
+
+
+def tup(*items) -> dict:
+    return {"tuple": list(items)}
+
+
+def make(name: str) -> dict:
+    return {"make": name}
+
+
+def path(kind: str) -> dict:
+    return {"path": kind}
+
+
+IMG = arr((16, 16))
+RGB = arr((16, 16, 3))
+MASK = arr((16, 16), "bool", "bits")
+LINE_H, LINE_V = arr((16, 15), "bool", "bits"), arr((15, 16), "bool", "bits")
+SUPPORT = arr((16, 16), "uint8", "randint:32")
+
+
+@dataclasses.dataclass(frozen=True)
+class Entry:
+    """A callable (``module:qualname``), its valid call, and the kind of each argument to vary."""
+
+    target: str
+    call: dict
+    kinds: dict  # argument -> kind (see _mutations); arguments left out are not varied
+
+
+def _e(target: str, **call) -> Entry:
+    kinds = call.pop("kinds")
+    return Entry(target, call, kinds)
+
+
+_A, _N, _I, _C, _B, _O, _T, _P, _M = ("array", "number", "int", "choice", "bool", "opaque", "tuple", "path",
+                                      "machine")
+_ON = "optional_number"
+_OA = "optional_array"
+
+TABLE: tuple[Entry, ...] = (
+    # ------------------------------------------------------------------ cm
+    _e("vmcl.cm.doubling:label", mask=MASK, connectivity=8, relabel=False, method="doubling",
+       kinds={"mask": _A, "connectivity": _I, "relabel": _B, "method": _C, "machine": _M}),
+    _e("vmcl.cm.doubling:rank", next=make("chain"), kinds={"next": _A, "machine": _M}),
+    _e("vmcl.cm.doubling:principal", next=make("chain"), kinds={"next": _A, "machine": _M}),
+    _e("vmcl.cm.filters:binomial", image=IMG, passes=2, kinds={"image": _A, "passes": _I, "machine": _M}),
+    _e("vmcl.cm.filters:window_max", x=IMG, radius=2, kinds={"x": _A, "radius": _I, "machine": _M}),
+    _e("vmcl.cm.news:shift", x=IMG, dx=1, dy=-1, border="zero",
+       kinds={"x": _A, "dx": _I, "dy": _I, "border": _C, "machine": _M}),
+    _e("vmcl.cm.reduce:reduce", x=IMG, op="sum", kinds={"x": _A, "op": _C, "machine": _M}),
+    _e("vmcl.cm.reduce:histogram", x=IMG, bins=8, range=tup(0.0, 1.0), tile=None,
+       kinds={"x": _A, "bins": _I, "range": _T, "tile": _T, "machine": _M}),
+    _e("vmcl.cm.reduce:histogram_to_top", x=arr((16, 16), device=True), bins=8, top=make("device_one"), lo=0.0,
+       kinds={"x": _A, "bins": _I, "top": _A, "lo": _N, "machine": _M}),
+    _e("vmcl.cm.router:get", field=IMG, address=arr((16, 16), "int32", "randint:256"),
+       kinds={"field": _A, "address": _A, "machine": _M}),
+    _e("vmcl.cm.router:send", values=IMG, address=arr((16, 16), "int32", "randint:64"), size=64,
+       combine="sum", fill=0.0,
+       kinds={"values": _A, "address": _A, "size": _I, "combine": _C, "fill": _N, "machine": _M}),
+    _e("vmcl.cm.scan:scan", x=IMG, op="plus", axis=-1, exclusive=False, segments=None, method="work_efficient",
+       kinds={"x": _A, "op": _C, "axis": _I, "exclusive": _B, "segments": _OA, "method": _C, "machine": _M}),
+    _e("vmcl.cm.scan:box_sum", x=IMG, radius=2, axes=tup(-2, -1),
+       kinds={"x": _A, "radius": _I, "axes": _T, "machine": _M}),
+    _e("vmcl.cm.scan:column_groups", width=16, kinds={"width": _I}),
+    # ------------------------------------------------------------------ early
+    _e("vmcl.early.color:hue", rgb=RGB, min_intensity=None, chromaticity=False,
+       kinds={"rgb": _A, "min_intensity": _ON, "chromaticity": _B, "machine": _M}),
+    _e("vmcl.early.color:albedo_edges", rgb=RGB, min_intensity=None, threshold=None,
+       kinds={"rgb": _A, "min_intensity": _ON, "threshold": _ON, "machine": _M}),
+    _e("vmcl.early.edges:zero_crossings", image=IMG, sigma=2.0, method="log", min_slope=0.0,
+       kinds={"image": _A, "sigma": _N, "method": _C, "min_slope": _N, "machine": _M}),
+    _e("vmcl.early.edges:hysteresis_threshold", image=IMG, low_threshold=0.3, high_threshold=0.6,
+       method="doubling",
+       kinds={"image": _A, "low_threshold": _N, "high_threshold": _N, "method": _C, "machine": _M}),
+    _e("vmcl.early.edges:canny", image=IMG, sigma=2.0, low_threshold=None, high_threshold=None,
+       use_quantiles=False, interpolate=True, hysteresis="doubling", noise="global", return_gradient=False,
+       kinds={"image": _A, "sigma": _N, "low_threshold": _ON, "high_threshold": _ON, "use_quantiles": _B,
+              "interpolate": _B, "hysteresis": _C, "noise": _C, "return_gradient": _B, "machine": _M}),
+    _e("vmcl.early.filters:gaussian_taps", sigma=2.0, kinds={"sigma": _N}),
+    _e("vmcl.early.filters:binomial_passes", sigma=2.0, kinds={"sigma": _N}),
+    _e("vmcl.early.filters:gaussian", image=IMG, sigma=2.0, method="binomial",
+       kinds={"image": _A, "sigma": _N, "method": _C, "machine": _M}),
+    _e("vmcl.early.filters:laplacian_of_gaussian", image=IMG, sigma=2.0,
+       kinds={"image": _A, "sigma": _N, "machine": _M}),
+    _e("vmcl.early.filters:difference_of_gaussians", image=IMG, low_sigma=1.0, high_sigma=None,
+       kinds={"image": _A, "low_sigma": _N, "high_sigma": _ON, "machine": _M}),
+    _e("vmcl.early.motion:flow", frame0=IMG, frame1=IMG, delta=2, patch=5, features="brightness", subpixel=True,
+       levels=1, sigma=None, speed_penalty=0.001, method="running", boundary_score=None,
+       kinds={"frame0": _A, "frame1": _A, "delta": _I, "patch": _I, "features": _C, "subpixel": _B,
+              "levels": _I, "sigma": _ON, "speed_penalty": _N, "method": _C, "boundary_score": _ON,
+              "machine": _M}),
+    _e("vmcl.early.motion:votes", frame0=IMG, frame1=IMG, delta=2, patch=5, features="brightness", sigma=None,
+       kinds={"frame0": _A, "frame1": _A, "delta": _I, "patch": _I, "features": _C, "sigma": _ON,
+              "machine": _M}),
+    _e("vmcl.early.noise:noise_rule", low=2.0, high=4.1, kinds={"low": _N, "high": _N}),
+    _e("vmcl.early.noise:noise_thresholds", magnitude=IMG, noise="global",
+       kinds={"magnitude": _A, "noise": _C, "machine": _M}),
+    _e("vmcl.early.registration:find_dots", image=make("dots"), polarity="dark", threshold=None, min_area=4,
+       kinds={"image": _A, "polarity": _C, "threshold": _ON, "min_area": _I, "machine": _M}),
+    _e("vmcl.early.registration:match_dots", left=make("dot_coords"), right=make("dot_coords"), max_shift=3.0,
+       kinds={"left": _A, "right": _A, "max_shift": _N}),
+    _e("vmcl.early.registration:WarpTable.from_dots", left=make("dot_coords"), right=make("dot_coords"),
+       shape=tup(16, 16), vergence=0.0, kinds={"left": _A, "right": _A, "shape": _T, "vergence": _N}),
+    _e("vmcl.early.registration:WarpTable.calibrate", left_image=make("dots"), right_image=make("dots"),
+       max_shift=3.0, vergence=0.0, polarity="dark",
+       kinds={"left_image": _A, "right_image": _A, "max_shift": _N, "vergence": _N, "polarity": _C,
+              "machine": _M}),
+    _e("vmcl.early.registration:warp", image=IMG, table=make("warp_table"),
+       kinds={"image": _A, "table": _O, "machine": _M}),
+    _e("vmcl.early.registration:TableStore.add", self=make("store"), table=make("warp_table_2"),
+       kinds={"table": _O}),
+    _e("vmcl.early.registration:TableStore.table_for", self=make("store"), vergence=0.5,
+       kinds={"vergence": _N}),
+    _e("vmcl.early.registration:TableStore.load", path=path("store"), kinds={"path": _P}),
+    _e("vmcl.early.sign_correlation:sign_correlation", f=IMG, g=IMG, kinds={"f": _A, "g": _A, "machine": _M}),
+    _e("vmcl.early.sign_correlation:arcsine_law", correlation=0.5, kinds={"correlation": _N}),
+    _e("vmcl.early.stereo:match", left=IMG, right=IMG, d_min=0, d_max=4, features="canny", patch=5, sigma=2.0,
+       min_score=0.3, bimodal=0.3, dip=0.8, min_votes=3.0, shiftable=False, barriers=None,
+       kinds={"left": _A, "right": _A, "d_min": _I, "d_max": _I, "features": _C, "patch": _I, "sigma": _N,
+              "min_score": _N, "bimodal": _N, "dip": _N, "min_votes": _N, "shiftable": _B, "barriers": _OA,
+              "machine": _M}),
+    _e("vmcl.early.stereo:match_features", left=MASK, right=MASK, left_attribute=IMG, right_attribute=IMG,
+       d_min=0, d_max=4, compatible="sign", patch=5, direction_tolerance=0.35,
+       kinds={"left": _A, "right": _A, "left_attribute": _A, "right_attribute": _A, "d_min": _I, "d_max": _I,
+              "compatible": _C, "patch": _I, "direction_tolerance": _N, "machine": _M}),
+    _e("vmcl.early.stereo:direction_code", angle=0.5, kinds={"angle": _N}),
+    _e("vmcl.early.texture:density", image=IMG, fine_sigma=1.0, coarse_sigma=2.0, threshold=0.1, radius=4,
+       kinds={"image": _A, "fine_sigma": _N, "coarse_sigma": _N, "threshold": _N, "radius": _I, "machine": _M}),
+    _e("vmcl.early.texture:texture_edges", image=IMG, fine_sigma=1.0, coarse_sigma=2.0, threshold=0.1, radius=4,
+       edge_threshold=None,
+       kinds={"image": _A, "fine_sigma": _N, "coarse_sigma": _N, "threshold": _N, "radius": _I,
+              "edge_threshold": _ON, "machine": _M}),
+    # ------------------------------------------------------------------ mrf
+    _e("vmcl.mrf:LinePrior", line=1.0, end=0.5, crossing=1.5, kinds={"line": _N, "end": _N, "crossing": _N}),
+    _e("vmcl.mrf:Params", alpha=1.0, beta=1.0, kappa=1.0, levels=32, edge_radius=1, t0=4.0, t_factor=0.95,
+       sweeps=10, require_edge=False, prior=make("prior"),
+       kinds={"alpha": _N, "beta": _N, "kappa": _N, "levels": _I, "edge_radius": _I, "t0": _N, "t_factor": _N,
+              "sweeps": _I, "require_edge": _B, "prior": _O}),
+    _e("vmcl.mrf:backfill", primary=IMG, secondary=IMG, secondary_confidence=IMG,
+       kinds={"primary": _A, "secondary": _A, "secondary_confidence": _A, "machine": _M}),
+    _e("vmcl.mrf:boundary_map", line_h=LINE_H, line_v=LINE_V, kinds={"line_h": _A, "line_v": _A}),
+    _e("vmcl.mrf:energy", f=IMG, line_h=LINE_H, line_v=LINE_V, data=IMG, confidence=None, edges=None,
+       kind="smooth", params=None,
+       kinds={"f": _A, "line_h": _A, "line_v": _A, "data": _A, "confidence": _OA, "edges": _OA, "kind": _C,
+              "params": _O}),
+    _e("vmcl.mrf:preset", cue="depth", kinds={"cue": _C}),
+    _e("vmcl.mrf:restore", data=arr((12, 12)), confidence=None, edges=None, kind="smooth", method="icm",
+       params=make("fast_params"), seed=0,
+       kinds={"data": _A, "confidence": _OA, "edges": _OA, "kind": _C, "method": _C, "params": _O, "seed": _I,
+              "machine": _M}),
+    _e("vmcl.mrf:score_confidence", score=IMG, floor=0.5, weight=1.0,
+       kinds={"score": _A, "floor": _N, "weight": _N, "machine": _M}),
+    # ------------------------------------------------------------------ integration and labelling
+    _e("vmcl.integrate:boundary", line_h=LINE_H, line_v=LINE_V, kinds={"line_h": _A, "line_v": _A, "machine": _M}),
+    _e("vmcl.integrate:integrate", lines=make("lines"), edges=MASK, shape=None,
+       kinds={"lines": _O, "edges": _OA, "shape": _T, "machine": _M}),
+    _e("vmcl.labelling:candidate_bits", inputs=["stereo", "colour"], kinds={"inputs": "names"}),
+    _e("vmcl.labelling:LinearLabeller", weights=make("weights"), fitted_on="", kinds={"weights": _O}),
+    _e("vmcl.labelling:LinearLabeller.load", path=None, kinds={"path": _P}),
+    _e("vmcl.labelling:LinearLabeller.for_inputs", self=make("labeller"), inputs=["stereo"],
+       kinds={"inputs": "names"}),
+    _e("vmcl.labelling:features", support=SUPPORT, image=IMG, disparity=None, flow=None, hue=None,
+       kinds={"support": _A, "image": _A, "disparity": _OA, "flow": _OA, "hue": _OA, "machine": _M}),
+    _e("vmcl.labelling:fit_targets", truth=arr((16, 16), "uint8", "randint:7"), kinds={"truth": _A}),
+    _e("vmcl.labelling:label", support=SUPPORT, image=IMG, disparity=IMG, flow=None, hue=None, texture=True,
+       labeller=None,
+       kinds={"support": _A, "image": _A, "disparity": _OA, "flow": _OA, "hue": _OA, "texture": _B,
+              "labeller": _O, "machine": _M}),
+    # ------------------------------------------------------------------ metrics
+    _e("vmcl.metrics:evaluate_disparity", disparity=IMG, ground_truth=IMG, mask=None, thresholds=[0.5, 1.0],
+       kinds={"disparity": _A, "ground_truth": _A, "mask": _OA, "thresholds": _T}),
+    _e("vmcl.metrics:endpoint_error", flow=arr((16, 16, 2)), ground_truth=arr((16, 16, 2)),
+       kinds={"flow": _A, "ground_truth": _A}),
+    _e("vmcl.metrics:angular_error", flow=arr((16, 16, 2)), ground_truth=arr((16, 16, 2)),
+       kinds={"flow": _A, "ground_truth": _A}),
+    _e("vmcl.metrics:evaluate_flow", flow=arr((16, 16, 2)), ground_truth=arr((16, 16, 2)), mask=None,
+       kinds={"flow": _A, "ground_truth": _A, "mask": _OA}),
+    _e("vmcl.metrics:boundary_counts", edge_map=IMG, ground_truths=[MASK], thresholds=3, max_dist=0.0075,
+       thin=True, kinds={"edge_map": _A, "ground_truths": _O, "thresholds": _I, "max_dist": _N, "thin": _B}),
+    _e("vmcl.metrics:evaluate_boundaries", edge_maps=[IMG], ground_truths=[[MASK]], thresholds=3,
+       max_dist=0.0075, thin=True, workers=1,
+       kinds={"edge_maps": _O, "ground_truths": _O, "thresholds": _I, "max_dist": _N, "thin": _B,
+              "workers": _I}),
+    _e("vmcl.metrics:detection_scores", predicted=MASK, truth=MASK, tolerance=1.0,
+       kinds={"predicted": _A, "truth": _A, "tolerance": _N}),
+    _e("vmcl.metrics:label_scores", predicted=arr((16, 16), "uint8", "randint:7"),
+       truth=arr((16, 16), "uint8", "randint:7"), tolerance=1.0, labels=None,
+       kinds={"predicted": _A, "truth": _A, "tolerance": _N, "labels": "names"}),
+    # ------------------------------------------------------------------ scenes
+    _e("vmcl.scenes:Texture", kind="blobs", scale=1.0, contrast=0.5, angle=0.0, size=0.1, fill=0.5,
+       kinds={"kind": _C, "scale": _N, "contrast": _N, "angle": _N, "size": _N, "fill": _N}),
+    _e("vmcl.scenes:Mark", shape="rect", bounds=tup(0.0, 0.0, 1.0, 1.0), colour=tup(0.5, 0.5, 0.5), texture=None,
+       kinds={"shape": _C, "bounds": _T, "colour": _T, "texture": _O}),
+    _e("vmcl.scenes:Face", origin=tup(0.0, 0.0, 5.0), u_axis=tup(1.0, 0.0, 0.0), v_axis=tup(0.0, 1.0, 0.0),
+       size=tup(1.0, 1.0), colour=tup(0.5, 0.5, 0.5),
+       kinds={"origin": _T, "u_axis": _T, "v_axis": _T, "size": _T, "colour": _T}),
+    _e("vmcl.scenes:Motion.matrix", self=make("motion"), kinds={}),
+    _e("vmcl.scenes:Motion", translation=tup(0.1, 0.0, 0.0), rotation=tup(0.0, 0.1, 0.0),
+       centre=tup(0.0, 0.0, 5.0), kinds={"translation": _T, "rotation": _T, "centre": _T}),
+    _e("vmcl.scenes:Body", faces=make("faces"), motion=make("motion"), name="b",
+       kinds={"faces": _O, "motion": _O, "name": _C}),
+    _e("vmcl.scenes:Light", direction=tup(-0.4, -0.6, -0.7), colour=tup(1.0, 1.0, 1.0), ambient=0.3,
+       specular=0.0, shininess=60.0,
+       kinds={"direction": _T, "colour": _T, "ambient": _N, "specular": _N, "shininess": _N}),
+    _e("vmcl.scenes:Camera", shape=tup(64, 64), focal=64.0, baseline=0.15,
+       kinds={"shape": _T, "focal": _N, "baseline": _N}),
+    _e("vmcl.scenes:World", camera=make("camera"), light=make("light"), bodies=make("bodies"),
+       kinds={"camera": _O, "light": _O, "bodies": _O}),
+    _e("vmcl.scenes:box", centre=tup(0.0, 0.0, 5.0), size=tup(1.0, 1.0, 1.0), colour=tup(0.5, 0.5, 0.5),
+       rotation=tup(0.0, 0.2, 0.0), kinds={"centre": _T, "size": _T, "colour": _T, "rotation": _T}),
+    _e("vmcl.scenes:fold", left=tup(-1.0, 0.0, 5.0), crease=tup(0.0, 0.0, 4.0), right=tup(1.0, 0.0, 5.0),
+       height=1.0, colour=tup(0.5, 0.5, 0.5),
+       kinds={"left": _T, "crease": _T, "right": _T, "height": _N, "colour": _T}),
+    _e("vmcl.scenes:preset", name="blocks", shape=tup(64, 64), specular=False,
+       kinds={"name": _C, "shape": _T, "specular": _B}),
+    _e("vmcl.scenes:render", world=make("world"), seed=0, noise=0.0,
+       kinds={"world": _O, "seed": _I, "noise": _N}),
+    # ------------------------------------------------------------------ datasets
+    _e("vmcl.datasets:read_image", path=path("png"), kinds={"path": _P}),
+    _e("vmcl.datasets:read_mask", path=path("png"), value=255, kinds={"path": _P, "value": _I}),
+    _e("vmcl.datasets:read_pfm", path=path("pfm"), kinds={"path": _P}),
+    _e("vmcl.datasets:write_pfm", path=path("new"), image=IMG, kinds={"path": _P, "image": _A}),
+    _e("vmcl.datasets:read_disparity", path=path("png"), scale=8.0, unknown=0,
+       kinds={"path": _P, "scale": _N, "unknown": _I}),
+    _e("vmcl.datasets:read_flo", path=path("flo"), raw=False, kinds={"path": _P, "raw": _B}),
+    _e("vmcl.datasets:write_flo", path=path("new"), flow=arr((16, 16, 2)), kinds={"path": _P, "flow": _A}),
+    _e("vmcl.datasets:load_stereo", name="tsukuba", root=path("empty_dir"), kinds={"name": _C, "root": _P},
+       expect_missing=True),
+    _e("vmcl.datasets:load_flow", name="Venus", root=path("empty_dir"), colour=False,
+       kinds={"name": _C, "root": _P, "colour": _B}, expect_missing=True),
+    _e("vmcl.datasets:load_bsds", root=path("empty_dir"), split="test", kinds={"root": _P, "split": _C},
+       expect_missing=True),
+    # ------------------------------------------------------------------ patterns, eye-head, report
+    _e("vmcl.patterns:spiral", size=16, corridor=1, kinds={"size": _I, "corridor": _I}),
+    _e("vmcl.eyehead:table_for_fixation", head=make("head"), store=make("store"), kinds={"head": _O, "store": _O}),
+    _e("vmcl.report:disparity_image", disparity=IMG, vmin=None, vmax=None,
+       kinds={"disparity": _A, "vmin": _ON, "vmax": _ON}),
+    _e("vmcl.report:flow_image", flow=arr((16, 16, 2)), max_flow=None, kinds={"flow": _A, "max_flow": _ON}),
+    _e("vmcl.report:labels_image", image=RGB, labels=arr((16, 16), "uint8", "randint:7"),
+       kinds={"image": _A, "labels": _A}),
+    _e("vmcl.report:support_image", image=RGB, support=SUPPORT, kinds={"image": _A, "support": _A}),
+    _e("vmcl.report:field_image", values=IMG, kinds={"values": _A}),
+    _e("vmcl.report:encode_png", rgb=arr((16, 16, 3), "uint8", "randint:256"), kinds={"rgb": _A}),
+    _e("vmcl.report:images", result=make("result"), kinds={"result": _O}),
+    _e("vmcl.report:write_report", result=make("result"), folder=path("new_dir"), title="t", evaluation=None,
+       kinds={"result": _O, "folder": _P, "title": _C, "evaluation": _O}),
+    # ------------------------------------------------------------------ pipeline, machine
+    _e("vmcl.pipeline:as_image", array=IMG, name="left", kinds={"array": _A}),
+    _e("vmcl.pipeline:Config.from_dict", values={"edges": {"sigma": 1.5}}, kinds={"values": "mapping"}),
+    _e("vmcl.pipeline:EdgesConfig", sigma=2.0, low_threshold=None, high_threshold=None, use_quantiles=False,
+       kinds={"sigma": _N, "low_threshold": _ON, "high_threshold": _ON, "use_quantiles": _B}),
+    _e("vmcl.pipeline:StereoConfig", d_min=None, d_max=None, max_disparity=0.05, patch=11, backfill_floor=0.9,
+       kinds={"d_min": _I, "d_max": _I, "max_disparity": _N, "patch": _I, "backfill_floor": _N}),
+    _e("vmcl.pipeline:MotionConfig", delta=4, patch=11, levels=2, features="brightness", confidence_floor=0.7,
+       kinds={"delta": _I, "patch": _I, "levels": _I, "features": _C, "confidence_floor": _N}),
+    _e("vmcl.pipeline:TextureConfig", fine_sigma=1.0, coarse_sigma=4.0, threshold=0.08, radius=24,
+       kinds={"fine_sigma": _N, "coarse_sigma": _N, "threshold": _N, "radius": _I}),
+    _e("vmcl.pipeline:MrfConfig", method="meanfield", seed=0, schedule="fast",
+       kinds={"method": _C, "seed": _I, "schedule": _C}),
+    _e("vmcl.pipeline:LabelsConfig", method="linear", weights=None, kinds={"method": _C, "weights": _P}),
+    _e("vmcl.pipeline:VisionMachine", config=None, kinds={"config": _O, "machine": _M}),
+    _e("vmcl.pipeline:VisionMachine.run", self=make("vision_machine"), left=IMG, right=None, next=None,
+       kinds={"left": _A, "right": _OA, "next": _OA}),
+    _e("vmcl.machine:Machine", device=None, profile=False, local_size=None,
+       kinds={"device": _C, "profile": _B, "local_size": _I}),
+)
+
+# Public names that take no input to check: records vmcl returns, enums, plumbing that takes a Machine
+# first (imported by other vmcl modules, not meant for users), and calls without arguments.
+EXEMPT = {
+    "vmcl.early.color:Hue", "vmcl.early.color:AlbedoEdges", "vmcl.early.edges:ZeroCrossings",
+    "vmcl.early.motion:FlowResult", "vmcl.early.stereo:StereoMatch", "vmcl.early.texture:TextureEdges",
+    "vmcl.mrf:Restoration", "vmcl.integrate:Cue", "vmcl.integrate:Integration", "vmcl.scenes:Label",
+    "vmcl.scenes:Scene", "vmcl.metrics:BoundaryCounts", "vmcl.metrics:BoundaryScores",
+    "vmcl.metrics:DetectionScores", "vmcl.metrics:DisparityScores", "vmcl.metrics:FlowScores",
+    "vmcl.datasets:BSDSImage", "vmcl.datasets:BSDSSet", "vmcl.datasets:FlowPair", "vmcl.datasets:StereoPair",
+    "vmcl.pipeline:Result", "vmcl.pipeline:Config", "vmcl.early.registration:WarpTable",
+    "vmcl.early.registration:TableStore", "vmcl.pipeline:ColourConfig",
+    "vmcl.cm.scan:scan_rows_into", "vmcl.cm.scan:exclusive_sum_into", "vmcl.early.noise:threshold_field",
+    "vmcl.labelling:default_labeller", "vmcl.machine:default_machine", "vmcl.machine:list_devices",
+    "vmcl.machine:kernels_dir", "vmcl.machine:NoOpenCLPlatformError",
+    # Needs a head that has run a calibration pattern in front of it; table_for_fixation covers the glue.
+    "vmcl.eyehead:calibrate_vergences",
+}
+
+PUBLIC_MODULES = (
+    "vmcl.cm.doubling", "vmcl.cm.filters", "vmcl.cm.news", "vmcl.cm.reduce", "vmcl.cm.router", "vmcl.cm.scan",
+    "vmcl.early.color", "vmcl.early.edges", "vmcl.early.filters", "vmcl.early.motion", "vmcl.early.noise",
+    "vmcl.early.registration", "vmcl.early.sign_correlation", "vmcl.early.stereo", "vmcl.early.texture",
+    "vmcl.mrf", "vmcl.integrate", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
+    "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pipeline", "vmcl.machine",
+)
+
+
+# --------------------------------------------------------------------------------------------- mutations
+
+_FLOATS = [None, "1.0", [1.0], True, {"float": "nan"}, {"float": "inf"}, {"float": "-inf"}, -1.0, 0.0, 1e30,
+           -1e30, 1e-30, 2**64, {"complex": [1.0, 1.0]}, {"np": "float32", "value": "nan"}]
+_INTS = [None, "3", [3], True, 2.5, {"float": "nan"}, -1, 0, 1, 2**31, 2**63, -(2**63), 10**30,
+         {"np": "int64", "value": 3}, {"np": "float64", "value": 3.0}]
+_CHOICES = ["bogus", "", None, 3, ["x"], {"float": "nan"}]
+_BOOLS = [None, "yes", 2, 1.0, {"np": "bool", "value": True}, [True]]
+_OPAQUES = [None, 3, "x", [], {"float": "nan"}]
+_TUPLES = [None, tup(), tup(1), tup(1, 2, 3, 4, 5), tup("a", "b"), tup({"float": "nan"}, {"float": "nan"}),
+           tup({"float": "inf"}, 1.0), tup(-1, -1), tup(0, 0), tup(10**9, 10**9), 3, "ab", [1, 2],
+           tup(2.5, 2.5, 2.5), tup(True, False)]
+_PATHS = [path("missing"), path("dir"), path("garbage"), path("empty"), None, 3, path("png"), path("flo")]
+_MACHINES = ["cpu", 3, {"make": "foreign_device_array"}]
+_NAMES = [["bogus"], "stereo", None, [3], [], [None], {"float": "nan"}]
+_MAPPINGS = [{"bogus": {}}, {"edges": {"sigma": "x"}}, {"edges": 3}, None, [], {"mrf": {"method": "x"}},
+             {"edges": {"bogus": 1}}, {"stereo": {"patch": -1}}, {"mrf": {"depth": {"alpha": "x"}}}, "edges"]
+
+_DTYPES = ["bool", "int8", "uint8", "int32", "int64", "float16", "float64", "complex64", "object", "<U3"]
+_FILLS = ["nan", "inf", "-inf", "huge", "-huge", "tiny", "neg", "zeros", "nanpart"]
+
+
+def _shape_variants(shape: list[int]) -> list[list[int]]:
+    out = [[0] + shape[1:], shape[:1] + [0] + shape[2:], [1, 1] + shape[2:], [1] + shape[1:],
+           shape[:1] + [1] + shape[2:], shape[:-1], shape + [2], [2, 2048] + shape[2:], [5] + shape[1:]]
+    if len(shape) >= 3:
+        out.append(shape[:-1] + [shape[-1] + 1])
+    if len(shape) == 1:
+        out += [[1], [4096]]
+    return [s for s in out if s]
+
+
+def _mutations(kind: str, base):
+    """The bad values of one argument of this kind, as a Hypothesis strategy of (label, spec)."""
+    from hypothesis import strategies as st
+
+    def listed(label, values):
+        return st.sampled_from(values).map(lambda v: (label, v))
+
+    if kind in ("array", "optional_array"):
+        if not (isinstance(base, dict) and "array" in base):
+            base = arr((16, 16))
+        def variant(k):
+            return {**base, **k}
+        strategies = [
+            st.sampled_from(_shape_variants(base["array"])).map(lambda s: ("shape", variant({"array": s}))),
+            st.sampled_from(_DTYPES).map(lambda d: ("dtype", variant({"dtype": d}))),
+            st.sampled_from(_FILLS).map(lambda f: ("fill", variant({"fill": f}))),
+            st.sampled_from(["F", "strided"]).map(lambda o: ("order", variant({"order": o}))),
+            st.just(("device", variant({"device": True}))),
+            st.sampled_from([None, "abc", 3.0, {"tolist": base}, tup(1, 2)]).map(lambda v: ("type", v)),
+        ]
+        return st.one_of(strategies)
+    table = {"number": _FLOATS, "optional_number": _FLOATS, "int": _INTS, "choice": _CHOICES, "bool": _BOOLS,
+             "opaque": _OPAQUES, "tuple": _TUPLES, "path": _PATHS, "machine": _MACHINES, "names": _NAMES,
+             "mapping": _MAPPINGS}
+    return listed(kind, table[kind])
+
+
+def cases(entry: Entry):
+    """Strategy: a case of ``entry`` with one argument replaced by a bad value."""
+    from hypothesis import strategies as st
+
+    names = sorted(entry.kinds)
+    if not names:
+        return st.just({"target": entry.target, "call": entry.call, "argument": None, "label": "valid"})
+
+    def one(name):
+        return _mutations(entry.kinds[name], entry.call.get(name)).map(
+            lambda lv: {"target": entry.target, "call": {**entry.call, name: lv[1]}, "argument": name,
+                        "label": lv[0]})
+    return st.sampled_from(names).flatmap(one)
+
+
+# --------------------------------------------------------------------------------------------- the worker
+
+
+class Worker:
+    """The subprocess that runs cases; restarted after a crash or a hang."""
+
+    def __init__(self) -> None:
+        self.process = None
+        self.log = None
+
+    def start(self) -> None:
+        self.log = tempfile.TemporaryFile()
+        env = {**os.environ, "PYTHONFAULTHANDLER": "1"}
+        self.process = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker"], cwd=REPO,
+                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=self.log, env=env)
+
+    def stop(self) -> str:
+        """Kill the worker; the tail of what it wrote to stderr."""
+        if self.process is None:
+            return ""
+        if self.process.poll() is None:
+            self.process.kill()
+        self.process.wait()
+        self.log.seek(0)
+        tail = self.log.read()[-3000:].decode(errors="replace")
+        self.log.close()
+        self.process = None
+        return tail
+
+    def run(self, case: dict, timeout: float = TEST_CASE_TIMEOUT_S) -> dict:
+        if self.process is None:
+            self.start()
+        try:
+            self.process.stdin.write((json.dumps(case) + "\n").encode())
+            self.process.stdin.flush()
+        except BrokenPipeError:
+            pass
+        ready, _, _ = select.select([self.process.stdout], [], [], timeout)
+        line = self.process.stdout.readline() if ready else b""
+        if line:
+            return json.loads(line)
+        hung = not ready
+        code = self.process.poll()
+        tail = self.stop()
+        what = f"hung (no answer in {timeout:.0f} s)" if hung else f"worker died (exit status {code})"
+        return {"ok": False, "why": f"{what}; its stderr ends:\n{tail}"}
+
+
+def _describe(case: dict) -> str:
+    value = case["call"].get(case["argument"]) if case["argument"] else None
+    return f"{case['target']}({case['argument']}={json.dumps(value)}) [{case['label']}]"
+
+
+@pytest.fixture(scope="module")
+def worker():
+    w = Worker()
+    yield w
+    w.stop()
+
+
+def _check(worker: Worker, case: dict) -> None:
+    answer = worker.run(case)
+    assert answer["ok"], f"{_describe(case)}: {answer['why']}"
+
+
+def _sweep_settings(examples: int):
+    from hypothesis import HealthCheck, Phase, settings
+
+    # No shrinking: every case is one subprocess round trip, and the first failing case already says
+    # which argument and which kind of bad value.
+    return settings(max_examples=examples, derandomize=True, database=None, deadline=None,
+                    phases=(Phase.explicit, Phase.generate),
+                    suppress_health_check=list(HealthCheck))
+
+
+def _run_sweep(entry: Entry, examples: int, worker: Worker) -> None:
+    from hypothesis import given
+
+    @_sweep_settings(examples)
+    @given(case=cases(entry))
+    def sweep(case):
+        _check(worker, case)
+
+    sweep()
+
+
+@pytest.mark.parametrize("entry", TABLE, ids=lambda e: e.target)
+def test_valid_call_of_the_table_works(entry, worker):
+    """The sweep's reference: the table's own call must succeed, or the sweep measures nothing."""
+    _check(worker, {"target": entry.target, "call": entry.call, "argument": None, "label": "valid"})
+
+
+@pytest.mark.parametrize("entry", TABLE, ids=lambda e: e.target)
+def test_bad_inputs_are_refused_by_name(entry, worker):
+    _run_sweep(entry, 6, worker)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("entry", TABLE, ids=lambda e: e.target)
+def test_bad_inputs_are_refused_by_name_long(entry, worker):
+    _run_sweep(entry, 60, worker)
+
+
+def test_every_public_callable_is_swept_or_exempt():
+    import importlib
+    import inspect
+
+    listed = {e.target.split(".")[0] if False else e.target for e in TABLE}
+    covered = {t.rsplit(".", 1)[0] if "." in t.split(":")[1] else t for t in listed} | listed | EXEMPT
+    missing = []
+    for module_name in PUBLIC_MODULES:
+        module = importlib.import_module(module_name)
+        names = getattr(module, "__all__", None) or [n for n in vars(module) if not n.startswith("_")]
+        for name in names:
+            obj = getattr(module, name)
+            if not callable(obj) or not (inspect.isfunction(obj) or inspect.isclass(obj)):
+                continue
+            if module_name != "vmcl.mrf" and getattr(obj, "__module__", None) != module_name:
+                continue  # imported from elsewhere: swept under its own module
+            if f"{module_name}:{name}" not in covered:
+                missing.append(f"{module_name}:{name}")
+    assert not missing, f"public callables with no row in TABLE and no exemption: {missing}"
+
+
+# --------------------------------------------------------------------------------------------- worker side
+
+
+def _build(spec, ctx):
+    import numpy as np
+
+    if isinstance(spec, list):
+        return [_build(s, ctx) for s in spec]
+    if not isinstance(spec, dict):
+        return spec
+    if "array" in spec:
+        return _array(spec, ctx)
+    if "tuple" in spec:
+        return tuple(_build(s, ctx) for s in spec["tuple"])
+    if "float" in spec:
+        return float(spec["float"])
+    if "complex" in spec:
+        return complex(*spec["complex"])
+    if "np" in spec:
+        value = spec["value"]
+        return np.dtype(spec["np"]).type(float(value) if value == "nan" else value)
+    if "tolist" in spec:
+        return _array(spec["tolist"], ctx).tolist()
+    if "make" in spec:
+        return _MAKERS[spec["make"]](ctx)
+    if "path" in spec:
+        return _path(spec["path"], ctx)
+    return {k: _build(v, ctx) for k, v in spec.items()}
+
+
+def _array(spec, ctx):
+    import numpy as np
+
+    shape, dtype, fill = tuple(spec["array"]), np.dtype(spec.get("dtype", "float32")), spec.get("fill", "rand")
+    rng = np.random.default_rng(0)
+    count = int(np.prod(shape))
+    if fill == "rand":
+        values = rng.random(shape)
+    elif fill == "bits":
+        values = rng.random(shape) < 0.3
+    elif fill.startswith("randint:"):
+        values = rng.integers(0, int(fill.split(":")[1]), shape)
+    elif fill == "zeros":
+        values = np.zeros(shape)
+    elif fill == "nanpart":
+        values = rng.random(shape)
+        values.flat[::3] = np.nan
+    else:
+        scalar = {"nan": np.nan, "inf": np.inf, "-inf": -np.inf, "huge": 1e30, "-huge": -1e30, "tiny": 1e-30,
+                  "neg": -0.5}[fill]
+        values = np.full(shape, scalar)
+    if dtype.kind in "iub" and np.asarray(values).dtype.kind == "f":
+        info = np.iinfo(dtype) if dtype.kind in "iu" else None
+        finite = np.nan_to_num(values, nan=0, posinf=info.max if info else 1, neginf=info.min if info else 0)
+        values = np.clip(finite, info.min, info.max) if info else finite != 0
+    with np.errstate(all="ignore"):
+        out = np.asarray(values).astype(dtype) if count else np.zeros(shape, dtype)
+    order = spec.get("order", "C")
+    if order == "F":
+        out = np.asfortranarray(out)
+    elif order == "strided":
+        big = np.repeat(out, 2, axis=-1) if out.ndim else out
+        out = big[..., ::2]
+    if spec.get("device"):
+        if out.dtype.kind in "OU":
+            return out
+        return ctx["machine"].to_device(np.ascontiguousarray(out))
+    return out
+
+
+def _path(kind, ctx):
+    import numpy as np
+
+    root = ctx["tmp"]
+    if kind == "missing":
+        return str(root / "missing" / "nothing.png")
+    if kind == "dir":
+        return str(root)
+    if kind in ("empty_dir", "new_dir"):
+        folder = Path(tempfile.mkdtemp(dir=root))
+        return str(folder / "out") if kind == "new_dir" else str(folder)
+    if kind == "new":
+        return str(Path(tempfile.mkdtemp(dir=root)) / "out.bin")
+    target = root / f"file.{kind}"
+    if kind == "garbage":
+        target.write_bytes(b"\x00\xffnot any format\n" * 10)
+    elif kind == "empty":
+        target.write_bytes(b"")
+    elif kind == "png":
+        import cv2
+
+        cv2.imwrite(str(target), (np.arange(256, dtype=np.uint8).reshape(16, 16)))
+    elif kind == "pfm":
+        from vmcl.datasets import write_pfm
+
+        write_pfm(target, np.ones((16, 16), np.float32))
+    elif kind == "flo":
+        from vmcl.datasets import write_flo
+
+        write_flo(target, np.zeros((16, 16, 2), np.float32))
+    elif kind == "store":
+        _MAKERS["store"](ctx).save(target.with_suffix(".npz"))
+        target = target.with_suffix(".npz")
+    return str(target)
+
+
+def _dots(ctx):
+    import numpy as np
+
+    image = np.ones((48, 48), np.float32)
+    for y in range(6, 48, 12):
+        for x in range(6, 48, 12):
+            image[y - 1:y + 2, x - 1:x + 2] = 0.0
+    return image
+
+
+def _warp_table(ctx, vergence=0.0):
+    import numpy as np
+
+    from vmcl.early.registration import WarpTable
+
+    ys, xs = np.indices((16, 16), dtype=np.float32)
+    return WarpTable(np.stack([xs + 0.5, ys], axis=-1), vergence=vergence, dots=4)
+
+
+def _store(ctx):
+    from vmcl.early.registration import TableStore
+
+    store = TableStore()
+    store.add(_warp_table(ctx, 0.0))
+    store.add(_warp_table(ctx, 1.0))
+    return store
+
+
+def _result(ctx):
+    import numpy as np
+
+    from vmcl.pipeline import Config, Result
+
+    rng = np.random.default_rng(0)
+    image = rng.random((16, 16, 3)).astype(np.float32)
+    return Result(image=image, edges=rng.random((16, 16)) < 0.2, support=rng.integers(0, 32, (16, 16), np.uint8),
+                  labels=rng.integers(0, 7, (16, 16), np.uint8), config=Config(),
+                  disparity=rng.random((16, 16)).astype(np.float32),
+                  flow=rng.random((16, 16, 2)).astype(np.float32))
+
+
+def _world(ctx):
+    from vmcl import scenes
+
+    return scenes.preset("cues", shape=(64, 64))
+
+
+def _head(ctx):
+    from hardware.head import Head
+
+    head = Head("sim://")
+    return head
+
+
+def _foreign_device_array(ctx):
+    import numpy as np
+    import pyopencl as cl
+    import pyopencl.array as cl_array
+
+    other = ctx.setdefault("foreign", cl.Context([ctx["machine"].context.devices[0]]))
+    queue = cl.CommandQueue(other)
+    return cl_array.to_device(queue, np.zeros((16, 16), np.float32))
+
+
+def _makers():
+    import numpy as np
+
+    def faces(ctx):
+        from vmcl import scenes
+
+        return scenes.box((0.0, 0.0, 5.0), (1.0, 1.0, 1.0), colour=(0.5, 0.5, 0.5))
+
+    def labeller(ctx):
+        from vmcl.labelling import default_labeller
+
+        return default_labeller()
+
+    def vision_machine(ctx):
+        from vmcl.pipeline import Config, VisionMachine
+
+        if "vm" not in ctx:
+            ctx["vm"] = VisionMachine(Config.from_dict({"mrf": {"schedule": "fast"}}), machine=ctx["machine"])
+        return ctx["vm"]
+
+    def fast_params(ctx):
+        from vmcl.mrf import Params
+
+        return Params(sweeps=4, quench=2, burn_in=2, samples=2, mf_steps=2, mf_iterations=2, icm_sweeps=3)
+
+    def camera(ctx):
+        from vmcl.scenes import Camera
+
+        return Camera((64, 64), 64.0, 0.15)
+
+    return {
+        "chain": lambda ctx: np.append(np.arange(1, 16, dtype=np.int32), np.int32(-1)),
+        "device_one": lambda ctx: ctx["machine"].to_device(np.ones(1, np.float32)),
+        "dots": _dots,
+        "dot_coords": lambda ctx: np.array([[2.0, 2.0], [12.0, 3.0], [4.0, 13.0], [13.0, 12.0], [8.0, 8.0]]),
+        "warp_table": _warp_table,
+        "warp_table_2": lambda ctx: _warp_table(ctx, 2.0),
+        "store": _store,
+        "prior": lambda ctx: __import__("vmcl.mrf", fromlist=["LinePrior"]).LinePrior(),
+        "fast_params": fast_params,
+        "lines": lambda ctx: {"depth": (_array(LINE_H, ctx), _array(LINE_V, ctx))},
+        "weights": lambda ctx: dict(labeller(ctx).weights),
+        "labeller": labeller,
+        "motion": lambda ctx: __import__("vmcl.scenes", fromlist=["Motion"]).Motion((0.1, 0.0, 0.0)),
+        "faces": faces,
+        "camera": camera,
+        "light": lambda ctx: __import__("vmcl.scenes", fromlist=["Light"]).Light(),
+        "bodies": lambda ctx: (__import__("vmcl.scenes", fromlist=["Body"]).Body(faces(ctx)),),
+        "world": _world,
+        "head": _head,
+        "result": _result,
+        "vision_machine": vision_machine,
+        "foreign_device_array": _foreign_device_array,
+    }
+
+
+_MAKERS: dict = {}
+
+
+def _resolve(target: str):
+    import importlib
+
+    module_name, qualname = target.split(":")
+    obj = importlib.import_module(module_name)
+    for part in qualname.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def _signature(value):
+    """What a result must keep when an input changes: containers, types, array dtypes and ndims."""
+    import numpy as np
+    import pyopencl.array as cl_array
+
+    if isinstance(value, (np.ndarray, cl_array.Array)):
+        if value.ndim == 0:
+            return "number"
+        return ["array", str(value.dtype), value.ndim]
+    if isinstance(value, (bool, np.bool_)):
+        return "bool"
+    if isinstance(value, (int, float, np.number)):
+        return "number"
+    if isinstance(value, tuple) and hasattr(value, "_fields"):
+        return [type(value).__name__, [_signature(v) for v in value]]
+    if isinstance(value, tuple):
+        return ["tuple", [_signature(v) for v in value]]
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return [type(value).__name__, [_signature(getattr(value, f.name)) for f in dataclasses.fields(value)]]
+    if isinstance(value, (list, dict)):
+        return type(value).__name__  # lengths and keys follow the input
+    return type(value).__name__
+
+
+def _same_kind(got, want, check_ndim: bool) -> bool:
+    if isinstance(want, list) and want and want[0] == "array":
+        return isinstance(got, list) and got[:2] == want[:2] and (not check_ndim or got[2] == want[2])
+    if isinstance(want, list):
+        return (isinstance(got, list) and got[0] == want[0] and len(got[1]) == len(want[1])
+                and all(_same_kind(g, w, check_ndim) for g, w in zip(got[1], want[1])))
+    return got == want
+
+
+def _run_case(case: dict, ctx: dict) -> dict:
+    from vmcl.errors import InputError
+
+    target = _resolve(case["target"])
+    argument = case["argument"]
+    try:
+        kwargs = {k: _build(v, ctx) for k, v in case["call"].items()}
+        if "machine" in getattr(target, "__code__", target.__init__.__code__).co_varnames and \
+                "machine" not in kwargs and case["target"] != "vmcl.machine:Machine":
+            kwargs["machine"] = ctx["machine"]
+    except Exception as error:  # noqa: BLE001 - a broken table row, reported as such
+        return {"ok": False, "why": f"the sweep could not build the case: {type(error).__name__}: {error}"}
+    try:
+        value = target(**kwargs)
+    except InputError as error:
+        if argument is None:
+            return {"ok": False, "why": f"the valid call was refused: {error}"}
+        named = argument in str(error)
+        return {"ok": named, "why": f"refused without naming {argument!r}: {type(error).__name__}: {error}"}
+    except FileNotFoundError as error:
+        kinds = dict(next(e.kinds for e in TABLE if e.target == case["target"]))
+        expected = kinds.get(argument) == "path" or _expect_missing(case["target"])
+        return {"ok": expected, "why": f"FileNotFoundError: {error}"}
+    except BaseException as error:  # noqa: BLE001 - every other exception is the finding
+        import traceback
+
+        where = traceback.extract_tb(error.__traceback__)[-1]
+        return {"ok": False, "why": f"{type(error).__name__}: {str(error)[:300]} (at {where.filename}:{where.lineno})"}
+    got = _signature(value)
+    if argument is None:
+        ctx["reference"][case["target"]] = got
+        return {"ok": True, "why": ""}
+    want = ctx["reference"].get(case["target"])
+    if want is None:
+        ref = _run_case({**case, "call": next(e.call for e in TABLE if e.target == case["target"]),
+                         "argument": None}, ctx)
+        if not ref["ok"]:
+            return {"ok": False, "why": f"(the valid call fails too) {ref['why']}"}
+        want = ctx["reference"][case["target"]]
+    ok = _same_kind(got, want, check_ndim=case["label"] != "shape")
+    return {"ok": ok, "why": f"accepted, but returned {json.dumps(got)} instead of {json.dumps(want)}"}
+
+
+def _expect_missing(target: str) -> bool:
+    return target.startswith("vmcl.datasets:load_")
+
+
+def _serve() -> None:
+    import warnings
+
+    from vmcl import default_machine
+
+    warnings.simplefilter("ignore")
+    _MAKERS.update(_makers())
+    with tempfile.TemporaryDirectory() as tmp:
+        ctx = {"machine": default_machine(), "tmp": Path(tmp), "reference": {}}
+        out = sys.stdout
+        sys.stdout = sys.stderr  # anything a case prints must not corrupt the answers
+        for line in sys.stdin:
+            answer = _run_case(json.loads(line), ctx)
+            out.write(json.dumps(answer) + "\n")
+            out.flush()
+
+
+if __name__ == "__main__" and sys.argv[1:] == ["--worker"]:
+    sys.path.insert(0, str(REPO / "tests"))
+    _serve()
