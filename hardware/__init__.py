@@ -6,11 +6,11 @@ controlled over UNET, a multi-drop network of micros that speak only when spoken
 (hardware/PROTOCOL.md) follows Dynamixel Protocol 2.0, Modbus RTU and the FLIR/Directed Perception
 pan-tilt units.
 
-Modules, one job each: protocol (framing, CRC-16, parser), commands (command set), bus (the master over
-pyserial), micros (one proxy class per micro kind), joint and eye (axes in physical units), head (the
-whole head), errors; physics, firmware and simulator (the simulated head on a virtual clock),
-protocol_sim (the ``sim://`` pyserial URL handler), ptyserver (the simulator on a pty), cli
-(``vmcl-head``).
+Modules, one job each: protocol (byte-stuffed framing, CRC-16, parser), commands (command set), bus (the
+master over pyserial), micros (one proxy class per micro kind), joint and eye (axes in physical units),
+head (the whole head), arguments (argument checks before sending), errors; physics, firmware and
+simulator (the simulated head on a virtual clock), protocol_sim (the ``sim://`` pyserial URL handler),
+ptyserver (the simulator on a pty), cli (``vmcl-head``).
 
 Example
 -------
@@ -34,6 +34,7 @@ from .errors import (
     MotionTimeout,
     NotHomed,
     OutOfRange,
+    PortError,
     Timeout,
     UnknownCommand,
 )
@@ -59,6 +60,7 @@ __all__ = [
     "MotionTimeout",
     "NotHomed",
     "OutOfRange",
+    "PortError",
     "Timeout",
     "UnknownCommand",
     "open_port",

@@ -16,7 +16,8 @@ from __future__ import annotations
 import random
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
@@ -32,6 +33,7 @@ from .errors import (
     MotionTimeout,
     NotHomed,
     OutOfRange,
+    PortError,
     Timeout,
     UnknownCommand,
 )
@@ -75,11 +77,34 @@ def open_port(url: str, *, baudrate: int = 115200) -> serial.SerialBase:
         A device (``/dev/ttyUSB0``, ``COM3``, a pty path) or a URL (``sim://?seed=1``, ``socket://...``).
     baudrate : int
         Bits per second; the eye-head runs at 115200 by default.
+
+    Raises
+    ------
+    PortError
+        The port would not open (no such device, no permission, busy).
     """
     if not isinstance(url, str) or not url:
         raise TypeError(f"url must be a non-empty str, got {url!r}")
+    if isinstance(baudrate, bool) or not isinstance(baudrate, int) or baudrate <= 0:
+        raise ValueError(f"baudrate must be a positive int, got {baudrate!r}")
     register_sim_handler()
-    return serial.serial_for_url(url, baudrate=baudrate, timeout=0)
+    try:
+        return serial.serial_for_url(url, baudrate=baudrate, timeout=0)
+    except (serial.SerialException, OSError) as exc:
+        raise PortError(f"cannot use port {url!r}: {exc}") from exc
+
+
+@contextmanager
+def _port_failures(port: serial.SerialBase) -> Iterator[None]:
+    """Turn a failing port (pyserial raises SerialException, an OSError, when a device vanishes) into
+    the driver's own PortError, so a caller needs to catch only HardwareError."""
+    try:
+        yield
+    except (serial.SerialException, OSError) as exc:
+        raise PortError(
+            f"the serial port {getattr(port, 'port', None)!r} failed ({exc}); "
+            "is the head still plugged in and powered?"
+        ) from exc
 
 
 _DEVICE_ERRORS: dict[int, tuple[type[DeviceError], str]] = {
@@ -135,7 +160,7 @@ class Bus:
         retries: int = 3,
         clock: Clock | None = None,
     ) -> None:
-        if not isinstance(timeout, (int, float)) or not 0.0 < timeout < 60.0:
+        if isinstance(timeout, bool) or not isinstance(timeout, (int, float)) or not 0.0 < timeout < 60.0:
             raise ValueError(f"timeout must be a number of seconds in (0, 60), got {timeout!r}")
         if not isinstance(retries, int) or isinstance(retries, bool) or not 0 <= retries <= 100:
             raise ValueError(f"retries must be an int in 0..100, got {retries!r}")
@@ -161,7 +186,8 @@ class Bus:
     def close(self) -> None:
         """Close the port, if the Bus opened it."""
         if self._owns_port:
-            self.port.close()
+            with _port_failures(self.port):
+                self.port.close()
 
     def sleep(self, seconds: float) -> None:
         """Sleep on the bus's clock (virtual time on the simulator)."""
@@ -192,13 +218,15 @@ class Bus:
             No reply after ``retries + 1`` attempts.
         CorruptFrame
             Only corrupted replies after ``retries + 1`` attempts.
+        PortError
+            The port failed (the device is gone).
         DeviceError
             The micro refused the command (a subclass per error code).
         """
         if not isinstance(addr, int) or isinstance(addr, bool) or not 1 <= addr <= MAX_ADDRESS:
             raise ValueError(f"addr must be an int in 1..{MAX_ADDRESS} (0 is broadcast), got {addr!r}")
         who = who or f"micro {addr}"
-        with self._lock:
+        with self._lock, _port_failures(self.port):
             seq = self._seq[addr] = (self._seq[addr] + 1) & 0xFF
             frame = encode_request(addr, seq, cmd, payload)
             self.stats.requests += 1
@@ -253,7 +281,7 @@ class Bus:
     def broadcast(self, cmd: int, payload: bytes = b"") -> None:
         """Send `cmd` to every micro at once. No micro answers a broadcast, so this returns as soon as
         the frame is on the wire; it cannot report whether anyone heard it."""
-        with self._lock:
+        with self._lock, _port_failures(self.port):
             seq = self._seq[BROADCAST] = (self._seq[BROADCAST] + 1) & 0xFF
             self.port.write(encode_request(BROADCAST, seq, cmd, payload))
             self.port.flush()

@@ -18,8 +18,7 @@ import sys
 from collections.abc import Callable
 from typing import TextIO
 
-import serial
-
+from .arguments import OneLineParser
 from .errors import HardwareError
 from .head import Head
 
@@ -124,7 +123,7 @@ def parse_commands(words: list[str]) -> list[Step]:
 def main(argv: list[str] | None = None, *, out: TextIO | None = None) -> int:
     """Run ``vmcl-head``; returns the exit status."""
     out = out or sys.stdout
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="vmcl-head",
         description="Drive the Vision Machine eye-head (default: the simulator).",
         epilog=USAGE,
@@ -155,6 +154,4 @@ def main(argv: list[str] | None = None, *, out: TextIO | None = None) -> int:
         return fail(str(exc), 2)
     except HardwareError as exc:
         return fail(str(exc), 1)
-    except (serial.SerialException, OSError) as exc:
-        return fail(f"cannot use port {args.port!r}: {exc}", 1)
     return 0

@@ -16,12 +16,14 @@ import struct
 from enum import IntEnum, IntFlag
 
 __all__ = [
+    "ACCEL_LIMIT",
     "FAULT_BIT",
     "FAULT_FLAGS",
     "GALVO_ADDR",
     "LENS_ADDR",
     "PROTOCOL_VERSION",
     "STEPPER_ADDR",
+    "VMAX_LIMIT",
     "Cmd",
     "Error",
     "Flag",
@@ -32,10 +34,14 @@ __all__ = [
     "unpack",
 ]
 
-PROTOCOL_VERSION = 1
+# Version 2: frames between A5 flags with byte stuffing (version 1 had a sync byte only).
+PROTOCOL_VERSION = 2
 FAULT_BIT = 0x80
 # The factory addresses of the three micros.
 STEPPER_ADDR, GALVO_ADDR, LENS_ADDR = 1, 2, 3
+# The ranges SET_PROFILE accepts; the host checks them before sending, the stepper micro again.
+VMAX_LIMIT = 60_000  # counts/s: about 53 degrees/s at the joint
+ACCEL_LIMIT = 400_000  # counts/s^2
 
 
 class Cmd(IntEnum):

@@ -24,6 +24,7 @@ __all__ = [
     "MotionTimeout",
     "NotHomed",
     "OutOfRange",
+    "PortError",
     "Timeout",
     "UnknownCommand",
 ]
@@ -44,6 +45,12 @@ class Timeout(CommError):
 
 class CorruptFrame(CommError):
     """Replies came back, but every one failed its CRC or was cut short, after every retry."""
+
+
+class PortError(CommError):
+    """The serial port itself failed: it would not open, or a read or write on it failed (a USB-serial
+    adapter unplugged, the device powered off, the pty's far end gone). The original
+    ``serial.SerialException`` or OSError is its ``__cause__``."""
 
 
 class DeviceError(HardwareError):

@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+from .arguments import check_number
 from .commands import FAULT_FLAGS, Flag, describe
 from .errors import Fault, NotHomed, OutOfRange, naming
 from .micros import GalvoMicro, LensMicro
@@ -74,8 +75,16 @@ def mirror_angles(azimuth: float, elevation: float, *, tol: float = 1e-9) -> tup
         No mirror angles within the galvanometers' range look that way.
     """
     for name, value in (("azimuth", azimuth), ("elevation", elevation)):
-        if not isinstance(value, (int, float)) or not math.isfinite(value):
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise ValueError(f"{name} must be a finite number of degrees, got {value!r}")
+    beyond = OutOfRange(
+        f"gaze (azimuth {azimuth:g}, elevation {elevation:g}) deg needs mirror angles beyond "
+        f"+-{MIRROR_RANGE:g} deg"
+    )
+    # Two mirrors within +-MIRROR_RANGE turn the gaze by well under 4 * MIRROR_RANGE either way; from
+    # further out, Newton's method would start where the mirrors no longer reflect forwards.
+    if max(abs(azimuth), abs(elevation)) > 4 * MIRROR_RANGE:
+        raise beyond
     x, y = azimuth / 2.0, elevation / 2.0
     h = 1e-6
     for _ in range(30):
@@ -87,38 +96,32 @@ def mirror_angles(azimuth: float, elevation: float, *, tol: float = 1e-9) -> tup
         ay, ey = line_of_sight(x, y + h)
         j11, j12, j21, j22 = (ax - az) / h, (ay - az) / h, (ex - el) / h, (ey - el) / h
         det = j11 * j22 - j12 * j21
+        if not math.isfinite(det) or det == 0.0:
+            raise beyond
         x -= (j22 * ea - j12 * ee) / det
         y -= (j11 * ee - j21 * ea) / det
-    if max(abs(x), abs(y)) > MIRROR_RANGE or abs(ea) > 1e-6 or abs(ee) > 1e-6:
-        raise OutOfRange(
-            f"gaze ({azimuth:g}, {elevation:g}) deg needs mirror angles beyond +-{MIRROR_RANGE:g} deg"
-        )
+    # Written so that a NaN anywhere refuses too.
+    if not (max(abs(x), abs(y)) <= MIRROR_RANGE and abs(ea) <= 1e-6 and abs(ee) <= 1e-6):
+        raise beyond
     return x, y
-
-
-def _check_range(name: str, value: float, low: float, high: float, unit: str) -> None:
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or math.isnan(value):
-        raise TypeError(f"{name} must be a number of {unit}, got {value!r}")
-    if not low <= value <= high:
-        raise OutOfRange(f"{name} must be in [{low:g}, {high:g}] {unit}, got {value:g}")
 
 
 def zoom_counts(focal_length_mm: float) -> int:
     """Lens motor count of a focal length (linear in millimetres)."""
-    _check_range("zoom", focal_length_mm, *ZOOM_MM, "mm")
+    check_number("zoom", focal_length_mm, *ZOOM_MM, "mm")
     low, high = ZOOM_MM
     return round((focal_length_mm - low) / (high - low) * _TOP)
 
 
 def focus_counts(distance_m: float) -> int:
     """Lens motor count of a focus distance (linear in dioptres: 0 at infinity)."""
-    _check_range("focus", distance_m, *FOCUS_M, "m")
+    check_number("focus", distance_m, *FOCUS_M, "m")
     return round(FOCUS_M[0] / distance_m * _TOP)
 
 
 def iris_counts(f_number: float) -> int:
     """Lens motor count of an f-number (linear in stops)."""
-    _check_range("iris", f_number, *F_NUMBER, "(f-number)")
+    check_number("iris", f_number, *F_NUMBER, "(f-number)")
     low, high = F_NUMBER
     return round(math.log(f_number / low) / math.log(high / low) * _TOP)
 
@@ -170,7 +173,7 @@ class Eye:
     def set_mirrors(self, x: float, y: float) -> None:
         """Start turning the mirrors to `x`, `y` degrees."""
         for name, value in (("x", x), ("y", y)):
-            _check_range(f"{self.name} mirror {name}", value, -MIRROR_RANGE, MIRROR_RANGE, "degrees")
+            check_number(f"{self.name} mirror {name}", value, -MIRROR_RANGE, MIRROR_RANGE, "degrees")
         with naming(f"{self.name} eye"):
             self.galvo.set_angles(self.index, round(x * 1000), round(y * 1000))
 

@@ -23,9 +23,11 @@ from collections.abc import Callable, Sequence
 from typing import cast
 
 from .commands import (
+    ACCEL_LIMIT,
     FAULT_BIT,
     FAULT_FLAGS,
     PROTOCOL_VERSION,
+    VMAX_LIMIT,
     Cmd,
     Error,
     Flag,
@@ -45,9 +47,7 @@ from .physics import (
 from .protocol import BROADCAST, Frame, encode_reply
 
 __all__ = [
-    "ACCEL_LIMIT",
     "STALL_COUNTS",
-    "VMAX_LIMIT",
     "GalvoEye",
     "GalvoFirmware",
     "LensAxis",
@@ -58,8 +58,6 @@ __all__ = [
     "StepperFirmware",
 ]
 
-VMAX_LIMIT = 60_000  # counts/s: about 53 degrees/s at the joint
-ACCEL_LIMIT = 400_000  # counts/s^2
 STALL_COUNTS = 100  # following error that counts as a stall (about 0.09 degree at the joint)
 _SEEK_SPEED, _SEEK_ACCEL = 25_000.0, 200_000.0
 _CREEP_SPEED = 2_000.0

@@ -23,12 +23,13 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from .arguments import check_number
 from .bus import Bus
 from .commands import GALVO_ADDR, LENS_ADDR, STEPPER_ADDR, Cmd, Flag
 from .errors import HardwareError
 from .eye import Eye, EyeStatus
 from .joint import Joint, JointStatus
-from .micros import GalvoMicro, LensMicro, Micro, StepperMicro
+from .micros import WATCHDOG_RANGE, GalvoMicro, LensMicro, Micro, StepperMicro
 
 if TYPE_CHECKING:
     from typing_extensions import Self
@@ -65,8 +66,8 @@ class Head:
     stepper, galvo, lens : int
         The micros' addresses.
     watchdog : float, optional
-        Arm every micro's watchdog: if the host is silent this many seconds, motion stops and a fault
-        latches.
+        Arm every micro's watchdog: if the host is silent this many seconds (0.001 to 65.535), motion
+        stops and a fault latches.
 
     Attributes
     ----------
@@ -88,6 +89,9 @@ class Head:
         lens: int = LENS_ADDR,
         watchdog: float | None = None,
     ) -> None:
+        if watchdog is not None:
+            # Checked before the port opens, so a bad value sends nothing.
+            check_number("watchdog", watchdog, *WATCHDOG_RANGE, "seconds")
         self._owns_bus = not isinstance(port, Bus)
         self.bus = Bus(port, baudrate=baudrate, timeout=timeout, retries=retries) if self._owns_bus else port
         try:

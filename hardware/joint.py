@@ -12,9 +12,11 @@ Angles: pan 0 is straight ahead, positive to the right; tilt 0 is horizontal, -9
 from __future__ import annotations
 
 import math
+import numbers
 from typing import NamedTuple
 
-from .commands import FAULT_FLAGS, Flag, describe
+from .arguments import check_number
+from .commands import ACCEL_LIMIT, FAULT_FLAGS, VMAX_LIMIT, Flag, describe
 from .errors import Fault, OutOfRange, naming
 from .micros import StepperMicro
 from .physics import COUNTS_PER_DEGREE
@@ -66,13 +68,15 @@ class Joint:
 
     def counts(self, degrees: float) -> int:
         """The encoder count of `degrees`, refused (OutOfRange) beyond the soft limits."""
-        if not isinstance(degrees, (int, float)) or isinstance(degrees, bool):
+        if not isinstance(degrees, numbers.Real) or isinstance(degrees, bool):
             raise TypeError(f"{self.name} must be a number of degrees, got {type(degrees).__name__}")
         if not math.isfinite(degrees):
             raise ValueError(f"{self.name} must be finite, got {degrees!r}")
-        counts = round(degrees * COUNTS_PER_DEGREE)
         low, high = self._count_limits
-        if not low <= counts <= high:
+        # Compared before rounding: a huge angle (1e308) would overflow to inf counts, which round refuses.
+        scaled = float(degrees) * COUNTS_PER_DEGREE
+        counts = round(scaled) if low - 1 <= scaled <= high + 1 else None
+        if counts is None or not low <= counts <= high:
             raise OutOfRange(
                 f"{self.name} {degrees:g} deg is outside its travel [{self.limits[0]:g}, {self.limits[1]:g}] deg;"
                 " nothing moved"
@@ -103,14 +107,17 @@ class Joint:
             self.micro.move_to(self.axis, counts)
 
     def set_profile(self, speed: float, acceleration: float) -> None:
-        """Set the top speed (degrees/s) and acceleration (degrees/s^2) of later moves."""
-        for name, value in (("speed", speed), ("acceleration", acceleration)):
-            if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-                raise ValueError(f"{name} must be a positive number, got {value!r}")
+        """Set the top speed (degrees/s) and acceleration (degrees/s^2) of later moves, within what the
+        stepper micro accepts (1..VMAX_LIMIT counts/s, 1..ACCEL_LIMIT counts/s^2)."""
+        counts = []
+        for name, value, limit, unit in (
+            ("speed", speed, VMAX_LIMIT, "degrees/s"),
+            ("acceleration", acceleration, ACCEL_LIMIT, "degrees/s^2"),
+        ):
+            low, high = 1 / COUNTS_PER_DEGREE, limit / COUNTS_PER_DEGREE
+            counts.append(round(check_number(name, value, low, high, unit) * COUNTS_PER_DEGREE))
         with naming(self.name):
-            self.micro.set_profile(
-                self.axis, round(speed * COUNTS_PER_DEGREE), round(acceleration * COUNTS_PER_DEGREE)
-            )
+            self.micro.set_profile(self.axis, *counts)
 
     def settled(self) -> bool:
         """True once the joint is at rest and not homing; raises Fault if a fault has latched."""

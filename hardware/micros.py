@@ -11,11 +11,29 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+from .arguments import check_int, check_number
 from .bus import Bus
-from .commands import Cmd, Flag, Kind, LayoutError, pack, unpack
+from .commands import ACCEL_LIMIT, VMAX_LIMIT, Cmd, Flag, Kind, LayoutError, pack, unpack
 from .errors import BadLength, UnknownCommand
+from .physics import GALVO_RANGE_MDEG, LENS_COUNTS
+from .protocol import MAX_ADDRESS
 
-__all__ = ["AxisStatus", "GalvoMicro", "GalvoStatus", "LensMicro", "LensStatus", "Micro", "StepperMicro"]
+__all__ = [
+    "WATCHDOG_RANGE",
+    "AxisStatus",
+    "GalvoMicro",
+    "GalvoStatus",
+    "LensMicro",
+    "LensStatus",
+    "Micro",
+    "StepperMicro",
+]
+
+# Every micro drives two of something: the stepper axes 0 pan and 1 tilt, the galvo and lens micros
+# eyes 0 left and 1 right (PROTOCOL.md).
+_LAST_INDEX = 1
+_INT32 = (-(2**31), 2**31 - 1)
+WATCHDOG_RANGE = (0.001, 65.535)  # seconds: WATCHDOG takes 1..65535 ms (0 disarms)
 
 
 class AxisStatus(NamedTuple):
@@ -63,7 +81,7 @@ class Micro:
         if not isinstance(bus, Bus):
             raise TypeError(f"bus must be a hardware.bus.Bus, got {type(bus).__name__}")
         self.bus = bus
-        self.addr = addr
+        self.addr = check_int("addr", addr, 1, MAX_ADDRESS)
         self.name = name or f"{self.kind.name.lower()} micro"
 
     def __repr__(self) -> str:
@@ -118,10 +136,17 @@ class Micro:
         period : float or None
             0.001 to 65.535 seconds; None (or 0) disarms the watchdog.
         """
-        ms = 0 if not period else round(period * 1000)
-        if period and not 1 <= ms <= 0xFFFF:
-            raise ValueError(f"period must be in [0.001, 65.535] seconds or None, got {period!r}")
+        disarm = period is None or (not isinstance(period, bool) and period == 0)
+        ms = (
+            0
+            if disarm
+            else round(check_number("period", period, *WATCHDOG_RANGE, "seconds (or None)") * 1000)
+        )
         self.call(Cmd.WATCHDOG, ms)
+
+
+def _index(name: str, value: object) -> int:
+    return check_int(name, value, 0, _LAST_INDEX)
 
 
 class StepperMicro(Micro):
@@ -129,21 +154,35 @@ class StepperMicro(Micro):
 
     kind = Kind.STEPPER
 
+    def __init__(self, bus: Bus, addr: int, name: str | None = None) -> None:
+        super().__init__(bus, addr, name)
+        # The soft limits of each axis once read from the micro: later moves are checked against them.
+        self._limits: dict[int, tuple[int, int]] = {}
+
     def home(self, axis: int) -> None:
-        self.call(Cmd.HOME, axis)
+        self.call(Cmd.HOME, _index("axis", axis))
 
     def move_to(self, axis: int, counts: int) -> None:
+        """Start a move to `counts`, checked against the soft limits when `limits` has read them."""
+        axis = _index("axis", axis)
+        counts = check_int("counts", counts, *self._limits.get(axis, _INT32))
         self.call(Cmd.MOVE_TO, axis, counts)
 
     def set_profile(self, axis: int, vmax: int, accel: int) -> None:
+        """Top speed `vmax` (counts/s, 1..VMAX_LIMIT) and acceleration `accel` (counts/s^2,
+        1..ACCEL_LIMIT) of later moves."""
+        axis = _index("axis", axis)
+        vmax = check_int("vmax", vmax, 1, VMAX_LIMIT)
+        accel = check_int("accel", accel, 1, ACCEL_LIMIT)
         self.call(Cmd.SET_PROFILE, axis, vmax, accel)
 
     def axis_status(self, axis: int) -> AxisStatus:
-        encoder, target, flags = self.call(Cmd.AXIS_STATUS, axis)
+        encoder, target, flags = self.call(Cmd.AXIS_STATUS, _index("axis", axis))
         return AxisStatus(encoder, target, Flag(flags))
 
     def limits(self, axis: int) -> tuple[int, int]:
-        low, high = self.call(Cmd.GET_LIMITS, axis)
+        axis = _index("axis", axis)
+        low, high = self._limits[axis] = self.call(Cmd.GET_LIMITS, axis)
         return low, high
 
 
@@ -153,10 +192,16 @@ class GalvoMicro(Micro):
     kind = Kind.GALVO
 
     def set_angles(self, eye: int, x: int, y: int) -> None:
-        self.call(Cmd.GALVO_SET, eye, x, y)
+        """Turn the mirrors to `x`, `y` millidegrees (each within +-GALVO_RANGE_MDEG)."""
+        eye = _index("eye", eye)
+        angles = [
+            check_int(name, value, -GALVO_RANGE_MDEG, GALVO_RANGE_MDEG)
+            for name, value in (("x", x), ("y", y))
+        ]
+        self.call(Cmd.GALVO_SET, eye, *angles)
 
     def get(self, eye: int) -> GalvoStatus:
-        *angles, flags = self.call(Cmd.GALVO_GET, eye)
+        *angles, flags = self.call(Cmd.GALVO_GET, _index("eye", eye))
         return GalvoStatus(*angles, Flag(flags))
 
 
@@ -166,11 +211,17 @@ class LensMicro(Micro):
     kind = Kind.LENS
 
     def home(self, eye: int) -> None:
-        self.call(Cmd.LENS_HOME, eye)
+        self.call(Cmd.LENS_HOME, _index("eye", eye))
 
     def set_counts(self, eye: int, zoom: int, focus: int, iris: int) -> None:
-        self.call(Cmd.LENS_SET, eye, zoom, focus, iris)
+        """Move the lens motors to `zoom`, `focus`, `iris` counts (each 0..LENS_COUNTS - 1)."""
+        eye = _index("eye", eye)
+        counts = [
+            check_int(name, value, 0, LENS_COUNTS - 1)
+            for name, value in (("zoom", zoom), ("focus", focus), ("iris", iris))
+        ]
+        self.call(Cmd.LENS_SET, eye, *counts)
 
     def get(self, eye: int) -> LensStatus:
-        zoom, focus, iris, flags = self.call(Cmd.LENS_GET, eye)
+        zoom, focus, iris, flags = self.call(Cmd.LENS_GET, _index("eye", eye))
         return LensStatus(zoom, focus, iris, Flag(flags))

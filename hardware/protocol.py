@@ -168,7 +168,9 @@ def encode_request(addr: int, seq: int, cmd: int, payload: bytes = b"") -> bytes
     Examples
     --------
     >>> encode_request(1, 7, 0x01).hex(" ")
-    'a5 01 07 01 01 18 74'
+    'a5 01 07 01 01 70 49 a5'
+    >>> encode_request(1, 0xA5, 0x01).hex(" ")  # an A5 inside the frame is escaped
+    'a5 01 db 85 01 01 d1 ab a5'
     """
     _check_frame_args(addr, seq, cmd, payload)
     return _encode(addr, seq, bytes((cmd,)) + bytes(payload))

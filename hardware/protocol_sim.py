@@ -41,7 +41,13 @@ class Serial(SerialBase):
         if self._port is None:
             raise SerialException("port must be configured before it can be used")
         self.world = World.from_url(self._port, baudrate=self._baudrate)
+        self._unplugged = False
         self.is_open = True
+
+    def unplug(self) -> None:
+        """Pull the simulated USB-serial adapter out: from now on every read and write fails with the
+        SerialException pyserial raises on Linux when that happens to a real one."""
+        self._unplugged = True
 
     def close(self) -> None:
         self.is_open = False
@@ -58,6 +64,11 @@ class Serial(SerialBase):
     def _require_open(self) -> None:
         if not self.is_open:
             raise PortNotOpenError()
+        if self._unplugged:
+            raise SerialException(
+                "device reports readiness to read but returned no data "
+                "(device disconnected or multiple access on port?)"
+            )
 
     @property
     def in_waiting(self) -> int:

@@ -18,18 +18,21 @@ baud rate of its own).
 
 from __future__ import annotations
 
-import argparse
 import os
 import select
 import sys
 import time
 import tty
 
+from .arguments import OneLineParser, check_number
 from .simulator import World
 
-__all__ = ["main", "serve"]
+__all__ = ["RATE_RANGE", "main", "serve"]
 
 _POLL = 0.001  # seconds between looks at the wire: the pty's own latency is of this order
+# Virtual seconds per wall-clock second. Beyond a thousand, one poll of the wire lets a whole reply
+# timeout pass in virtual time, so no host could keep up.
+RATE_RANGE = (0.001, 1000.0)
 
 
 def serve(world: World, master: int, *, rate: float = 1.0, parent: int | None = None) -> None:
@@ -46,8 +49,7 @@ def serve(world: World, master: int, *, rate: float = 1.0, parent: int | None = 
     parent : int, optional
         Stop when our parent process is no longer this one (it exited).
     """
-    if not rate > 0:
-        raise ValueError(f"rate must be > 0, got {rate!r}")
+    check_number("rate", rate, *RATE_RANGE, "virtual seconds per second")
     start = time.monotonic()
     while parent is None or os.getppid() == parent:
         readable, _, _ = select.select([master], [], [], _POLL)
@@ -61,17 +63,14 @@ def serve(world: World, master: int, *, rate: float = 1.0, parent: int | None = 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python -m hardware.ptyserver``."""
-    parser = argparse.ArgumentParser(
-        prog="python -m hardware.ptyserver", description=__doc__.split("\n\n")[0]
-    )
+    parser = OneLineParser(prog="python -m hardware.ptyserver", description=__doc__.split("\n\n")[0])
     parser.add_argument("url", nargs="?", default="sim://", help="sim:// URL with fault and start options")
     parser.add_argument("--rate", type=float, default=1.0, help="virtual seconds per wall-clock second")
     parser.add_argument("--baud", type=int, default=115200, help="baud rate of the simulated line")
     args = parser.parse_args(argv)
     try:
+        check_number("--rate", args.rate, *RATE_RANGE, "virtual seconds per second")
         world = World.from_url(args.url, baudrate=args.baud)
-        if not args.rate > 0:
-            raise ValueError(f"--rate must be > 0, got {args.rate!r}")
     except ValueError as exc:
         parser.error(str(exc))
     master, slave = os.openpty()

@@ -68,8 +68,8 @@ class Faults:
     def __post_init__(self) -> None:
         for f in fields(self):
             value = getattr(self, f.name)
-            if not isinstance(value, (int, float)) or math.isnan(value) or value < 0.0:
-                raise ValueError(f"{f.name} must be a number >= 0, got {value!r}")
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0.0:
+                raise ValueError(f"{f.name} must be a finite number >= 0, got {value!r}")
             if f.name != "lag" and value > 1.0:
                 raise ValueError(f"{f.name} is a probability and must be in [0, 1], got {value!r}")
 
@@ -142,8 +142,8 @@ class World:
     ) -> None:
         if not isinstance(baudrate, int) or baudrate <= 0:
             raise ValueError(f"baudrate must be a positive int, got {baudrate!r}")
-        if not turnaround >= 0.0:
-            raise ValueError(f"turnaround must be >= 0 seconds, got {turnaround!r}")
+        if not 0.0 <= turnaround < math.inf:
+            raise ValueError(f"turnaround must be a finite number >= 0 seconds, got {turnaround!r}")
         self.faults = faults or Faults()
         self.byte_time = 10.0 / baudrate
         self.turnaround = turnaround

@@ -160,7 +160,7 @@ __kernel void hue_histogram(__global const float *z, __global int *counts, long 
     for (uint k = 0; k < KEY_BINS; k++) h[k] = 0;
     for (long i = y0 * W, end = min(y0 + rows, H) * W; i < end; i++) {
         float v = z[i];
-        if (!isnan(v)) h[as_uint(v) >> KEY_SHIFT]++;
+        if (!isnan(v)) h[as_uint(fabs(v)) >> KEY_SHIFT]++;  /* fabs: -0.0's sign bit is past the bins */
     }
 }
 

@@ -88,6 +88,25 @@
         a = hi > 0.0f ? a : 0.0f;                                                          \
         return gy < 0.0f ? -a : a;                                                         \
     }
+/* sqrt(gx^2 + gy^2) over float32's whole range. Where the larger component lies outside
+ * [2^-50, 2^50] (and is not 0), the squares could overflow or underflow, so both components are scaled
+ * by the power of two that brings it near 1, which is exact, and the result is scaled back: magnitudes
+ * are then float32's at any image scale. Other lanes keep the plain expression, bit for bit, and it is
+ * all that runs unless some lane needs the scaling. Defined for (VT, VIT) and (float, int). */
+#define DEFINE_MAGNITUDE(NAME, F, I)                                                       \
+    __attribute__((always_inline)) inline F NAME(F gx, F gy)                               \
+    {                                                                                      \
+        F plain = sqrt(gx * gx + gy * gy), big = fmax(fabs(gx), fabs(gy));                 \
+        /* -1 where true, for any() on a scalar as on a vector (which test the top bit). */ \
+        I rescale = (big > 0x1p50f || big < 0x1p-50f) && big > 0.0f ? (I)-1 : (I)0;        \
+        if (!ANY(rescale)) return plain;                                                   \
+        I e = rescale ? clamp(ilogb(big), -149, 127) : (I)0;                               \
+        F sx = ldexp(gx, -e), sy = ldexp(gy, -e);                                          \
+        return rescale ? ldexp(sqrt(sx * sx + sy * sy), e) : plain;                        \
+    }
+DEFINE_MAGNITUDE(magnitude_v, VT, VIT)
+DEFINE_MAGNITUDE(magnitude_s, float, int)
+
 #if WITH_DIRECTION
 DEFINE_ATAN2(direction_v, VT, VIT)
 DEFINE_ATAN2(direction_s, float, int)
@@ -101,7 +120,7 @@ __kernel void gradient(__global const float *s, __global float *magnitude, __glo
     ROWS(s, float)
     if (INTERIOR) {
         VT gx = SOBEL_X(SV), gy = SOBEL_Y(SV);
-        VSTORE(sqrt(gx * gx + gy * gy), magnitude + y * W + x0);
+        VSTORE(magnitude_v(gx, gy), magnitude + y * W + x0);
 #if WITH_DIRECTION
         VSTORE(direction_v(gy, gx), direction + y * W + x0);
 #endif
@@ -109,7 +128,7 @@ __kernel void gradient(__global const float *s, __global float *magnitude, __glo
     }
     for (long x = x0; x < min(x0 + VEC, W); x++) {
         float gx = SOBEL_X(SS), gy = SOBEL_Y(SS);
-        magnitude[y * W + x] = sqrt(gx * gx + gy * gy);
+        magnitude[y * W + x] = magnitude_s(gx, gy);
 #if WITH_DIRECTION
         direction[y * W + x] = direction_s(gy, gx);
 #endif
@@ -322,18 +341,25 @@ inline float quantile(__global const int *h, int bins, long total, float f, floa
 }
 
 /* The histograms span [0, top] (from the field's maximum on the device, [0, 1] for a field of zeros:
- * vmcl.cm.reduce.histogram_to_top), bins of width top / bins. */
+ * vmcl.cm.reduce.histogram_to_top), bins of width top / bins. When that width is below float32's
+ * normal range (a subnormal top), the quantiles are computed in units a power of two smaller, exactly,
+ * and scaled back once at the end, so they keep the precision float32 has at that scale. */
 __kernel void histogram_thresholds(__global const int *hist, __global float *thr, int bins,
                                    __global const float *top, float4 rule, long tiles)
 {
     long t = get_global_id(0);
     if (t >= tiles) return;
-    float lo = 0.0f, width = (top[0] > 0.0f ? top[0] : 1.0f) / (float)bins;
+    float range = top[0] > 0.0f ? top[0] : 1.0f, lo = 0.0f, width = range / (float)bins, unscale = 1.0f;
+    if (width < FLT_MIN) {
+        float prescale = ldexp(1.0f, min(-ilogb(range), 127));
+        width = range * prescale / (float)bins;
+        unscale = 1.0f / prescale;
+    }
     __global const int *h = hist + t * bins;
     long total = 0;
     for (int b = 0; b < bins; b++) total += h[b];
-    thr[2 * t] = rule.z * quantile(h, bins, total, rule.x, lo, width);
-    thr[2 * t + 1] = rule.w * quantile(h, bins, total, rule.y, lo, width);
+    thr[2 * t] = rule.z * quantile(h, bins, total, rule.x, lo, width) * unscale;
+    thr[2 * t + 1] = rule.w * quantile(h, bins, total, rule.y, lo, width) * unscale;
 }
 
 __kernel void set_thresholds(__global float *thr, float low, float high)
@@ -367,7 +393,7 @@ __kernel void zero_crossings(__global const float *f, __global uchar *mask, __gl
     if (INTERIOR) {
         VT c = FV(0, 0), l = FV(-1, 0), r = FV(1, 0), u = FV(0, -1), d = FV(0, 1);
         VT dx = 0.5f * (r - l), dy = 0.5f * (d - u);
-        VT s = sqrt(dx * dx + dy * dy);
+        VT s = magnitude_v(dx, dy);
         VIT keep = CROSSING(c, l, r, u, d) && s >= min_slope;
         long i0 = y * W + x0;
         VSTORE(TO_VUCHAR(keep ? (VIT)1 : (VIT)0), mask + i0);
@@ -378,7 +404,7 @@ __kernel void zero_crossings(__global const float *f, __global uchar *mask, __gl
     for (long x = x0; x < min(x0 + VEC, W); x++) {
         float c = FS(0, 0), l = FS(-1, 0), r = FS(1, 0), u = FS(0, -1), d = FS(0, 1);
         float dx = 0.5f * (r - l), dy = 0.5f * (d - u);
-        float s = sqrt(dx * dx + dy * dy);
+        float s = magnitude_s(dx, dy);
         int keep = CROSSING(c, l, r, u, d) && s >= min_slope;
         mask[y * W + x] = keep;
         slope[y * W + x] = keep ? s : 0.0f;

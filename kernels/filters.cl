@@ -33,6 +33,14 @@
 #define ROW16(p) (LOAD((p) - 1) + 2 * LOAD(p) + LOAD((p) + 1))
 #define ROW1(r, x) ((ACC)(r)[max(x - 1, 0L)] + 2 * (ACC)(r)[x] + (ACC)(r)[min(x + 1, W - 1)])
 
+/* Float sums of 16 pixels overflow for values past FLT_MAX / 16 (about 2e37): where one did, the sum
+ * is taken again with every weight divided by 16 before it is applied (1/4 along each axis). Powers of
+ * two scale normal values exactly, so that is the same sum, rounded alike, without the overflow; lanes
+ * that did not overflow keep their own. */
+#define ROW16Q(p) (0.25f * LOAD((p) - 1) + 0.5f * LOAD(p) + 0.25f * LOAD((p) + 1))
+#define ROW1Q(r, x) (0.25f * (r)[max(x - 1, 0L)] + 0.5f * (r)[x] + 0.25f * (r)[min(x + 1, W - 1)])
+#define BIG_SUM(s, q) (isinf(s) ? (q) : NORMALISE(s))
+
 /* Work-item (k, y, p) smooths pixels [16k, 16k + 16) of row y of plane p: one vector step in the
  * interior, pixel by pixel where the window meets the left or right border (or the row ends). */
 __kernel void binomial_pass(__global const T *in, __global T *out, long W, long H)
@@ -47,14 +55,19 @@ __kernel void binomial_pass(__global const T *in, __global T *out, long W, long 
     if (x0 >= 1 && x0 + 17 <= W) {
         ACC16 s = ROW16(up + x0) + 2 * ROW16(mid + x0) + ROW16(down + x0);
 #if T_IS_FLOAT
-        vstore16(NORMALISE(s), 0, target + x0);
+        vstore16(any(isinf(s)) ? BIG_SUM(s, 0.25f * ROW16Q(up + x0) + 0.5f * ROW16Q(mid + x0)
+                                         + 0.25f * ROW16Q(down + x0)) : NORMALISE(s), 0, target + x0);
 #else
         vstore16(TO_T(NORMALISE(s)), 0, target + x0);
 #endif
     } else {
         for (long x = x0; x < min(x0 + 16, W); x++) {
             ACC s = ROW1(up, x) + 2 * ROW1(mid, x) + ROW1(down, x);
+#if T_IS_FLOAT
+            target[x] = BIG_SUM(s, 0.25f * ROW1Q(up, x) + 0.5f * ROW1Q(mid, x) + 0.25f * ROW1Q(down, x));
+#else
             target[x] = (T)NORMALISE(s);
+#endif
         }
     }
 }

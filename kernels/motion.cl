@@ -419,7 +419,8 @@ __kernel void warp(__global const F_T *f1, __global const float2 *coarse, __glob
     float2 p = all(isfinite(f)) ? 2.0f * f : (float2)(0.0f);
     pred[y * W + x] = p;
 #if COMPARE == CMP_XOR
-    long xs = clamp((long)rint(x + p.x), 0L, W - 1), ys = clamp((long)rint(y + p.y), 0L, H - 1);
+    /* Clamped in float before the conversion: an infinite prediction still reads an edge pixel. */
+    long xs = (long)clamp(rint(x + p.x), 0.0f, (float)(W - 1)), ys = (long)clamp(rint(y + p.y), 0.0f, (float)(H - 1));
     out[y * W + x] = f1[ys * W + xs];
 #else
     float v;

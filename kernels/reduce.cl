@@ -93,7 +93,20 @@ __kernel void reduce_partials(__global const ACC *partial, __global const ACC *c
  * writes its tile's row of `out` (per-tile mode) or adds it into the one histogram (accumulate).
  * SHARED_COUNTS = 0 (work-groups of one work-item) counts with plain increments. TO_TOP = 1 takes hi
  * from top[0], a maximum computed on the device (lo + 1 when it is not above lo), and scale from it as
- * the host would, so the host never waits for the range; otherwise `top` is not read. */
+ * the host would, so the host never waits for the range; otherwise `top` is not read.
+ *
+ * A range too narrow (bins / (hi - lo) overflows) or too wide (hi - lo overflows) for float32's
+ * exponent is binned as if the exponent were unbounded: v and lo are first multiplied by a power of two
+ * that brings the range near 1, which is exact, so the bins are the same rule's. Bin positions are
+ * clamped to [0, bins - 1] in float before the conversion to int, so no value of v, lo, hi or top
+ * (infinite, NaN or subnormal) can index outside the counts. */
+inline float range_prescale(float lo, float hi)
+{
+    float width = hi - lo, extent = isfinite(width) ? width : fmax(fabs(lo), fabs(hi));
+    /* ilogb of 0, infinity or NaN is far outside the clamp: the clamp keeps the factor finite. */
+    return ldexp(1.0f, clamp(-ilogb(extent), -126, 127));
+}
+
 __kernel void histogram_tiles(__global const T *x, __global int *out, __local int *counts,
                               __global const float *top, long W, long H, long th, long tw, long tiles_x,
                               float lo, float hi, float scale, int bins, int accumulate)
@@ -102,6 +115,12 @@ __kernel void histogram_tiles(__global const T *x, __global int *out, __local in
     hi = top[0] > lo ? top[0] : lo + 1.0f;
     scale = (float)bins / (hi - lo);
 #endif
+    float prescale = 1.0f;
+    if (!(isfinite(hi - lo) && isfinite(scale))) {
+        prescale = range_prescale(lo, hi);
+        scale = (float)bins / (hi * prescale - lo * prescale);
+    }
+    float lo_scaled = lo * prescale, last = (float)(bins - 1);
     long g = get_group_id(0);
     int lid = get_local_id(0), size = get_local_size(0);
     for (int b = lid; b < bins; b += size) counts[b] = 0;
@@ -112,11 +131,11 @@ __kernel void histogram_tiles(__global const T *x, __global int *out, __local in
         __global const T *row = x + (y0 + r) * W + x0;
         long c = lid;
 #if !SHARED_COUNTS
-        /* One work-item: bins of 16 values at once (the same rule in vector form: the conversion
-         * rounding towards -inf is floor), then plain increments; 2.3x faster on PoCL. */
+        /* One work-item: bins of 16 values at once (the same rule in vector form: the positions are
+         * clamped to >= 0, where truncation is floor), then plain increments; 2.3x faster on PoCL. */
         for (; c + 16 <= cols; c += 16) {
             float16 v = convert_float16(vload16(0, row + c));
-            int16 b = min(convert_int16_rtn((v - lo) * scale), bins - 1);
+            int16 b = convert_int16(fmin(fmax((v * prescale - lo_scaled) * scale, 0.0f), last));
             int lanes[16];
             vstore16(v >= lo && v <= hi ? b : -1, 0, lanes);
             for (int j = 0; j < 16; j++)
@@ -126,7 +145,7 @@ __kernel void histogram_tiles(__global const T *x, __global int *out, __local in
         for (; c < cols; c += size) {
             float v = (float)row[c];
             if (v >= lo && v <= hi) {
-                int b = min((int)floor((v - lo) * scale), bins - 1);
+                int b = (int)fmin(fmax((v * prescale - lo_scaled) * scale, 0.0f), last);
 #if SHARED_COUNTS
                 atomic_inc(&counts[b]);
 #else

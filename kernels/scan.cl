@@ -16,14 +16,24 @@
  */
 #include "vmcl.h"
 
+#if T_IS_FLOAT
+#define MAX_OF fmax
+#define MIN_OF fmin
+#else
+#define MAX_OF max
+#define MIN_OF min
+#endif
+
 #if OP == OP_PLUS
 #define COMBINE(a, b) ((a) + (b))
 #define IDENTITY ((T)0)
+/* Floats take fmax and fmin, which pass over NaN (as reduce.cl's max and min do): max and min return
+ * their first operand when the comparison fails, so a NaN's effect depended on the scan's order. */
 #elif OP == OP_MAX
-#define COMBINE(a, b) max((a), (b))
+#define COMBINE(a, b) MAX_OF((a), (b))
 #define IDENTITY (T_LOWEST)
 #elif OP == OP_MIN
-#define COMBINE(a, b) min((a), (b))
+#define COMBINE(a, b) MIN_OF((a), (b))
 #define IDENTITY (T_HIGHEST)
 #elif OP == OP_COPY
 #define COMBINE(a, b) (a)

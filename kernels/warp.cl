@@ -17,17 +17,23 @@ __kernel void warp_bilinear(__global const float *image, __global const float *t
     size_t i = (size_t)y * W + x;
     float sx = table[2 * i], sy = table[2 * i + 1];
     float fx = floor(sx), fy = floor(sy);
-    long x0 = (long)fx, y0 = (long)fy;
     float ax = sx - fx, ay = sy - fy;
-    /* A position exactly on the last row or column needs no neighbour beyond it. */
-    long x1 = ax > 0.0f ? x0 + 1 : x0, y1 = ay > 0.0f ? y0 + 1 : y0;
-    int inside = isfinite(sx) && isfinite(sy) && x0 >= 0 && y0 >= 0 && x1 < W && y1 < H;
+    /* A position exactly on the last row or column needs no neighbour beyond it. The test is made in
+     * float, before any conversion, so a NaN, infinite or huge position never becomes an address. */
+    int step_x = ax > 0.0f, step_y = ay > 0.0f;
+    int inside = fx >= 0.0f && fy >= 0.0f && fx + (float)step_x <= (float)(W - 1)
+                 && fy + (float)step_y <= (float)(H - 1);
+    long x0 = inside ? (long)fx : 0, y0 = inside ? (long)fy : 0, x1 = x0 + step_x, y1 = y0 + step_y;
     for (long c = 0; c < C; c++) {
         float v = NAN;
         if (inside) {
             float a = image[(y0 * W + x0) * C + c], b = image[(y0 * W + x1) * C + c];
             float d = image[(y1 * W + x0) * C + c], e = image[(y1 * W + x1) * C + c];
-            v = (1.0f - ay) * ((1.0f - ax) * a + ax * b) + ay * ((1.0f - ax) * d + ax * e);
+            /* A neighbour of weight 0 is left out rather than multiplied by 0, so an infinite
+             * pixel does not turn the samples on its neighbours' grid lines into NaN. */
+            float top = ax > 0.0f ? (1.0f - ax) * a + ax * b : a;
+            float bottom = ax > 0.0f ? (1.0f - ax) * d + ax * e : d;
+            v = ay > 0.0f ? (1.0f - ay) * top + ay * bottom : top;
         }
         out[i * C + c] = v;
     }

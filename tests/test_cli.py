@@ -1,11 +1,24 @@
 """The vmcl command: exit codes, the files it promises, and one clear line for bad input."""
 
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+import zlib
+from pathlib import Path
+
 import cv2
 import numpy as np
 import pytest
 
 from vmcl import scenes
 from vmcl.cli import main
+from vmcl.datasets import read_image
+from vmcl.errors import InputError, InputTypeError
+from vmcl.output_folder import output_folder
+from vmcl.pipeline import Config
 
 
 @pytest.fixture(scope="module")
@@ -95,3 +108,297 @@ def test_info_names_the_chosen_device(capsys):
     assert main(["info"]) == 0
     printed = capsys.readouterr().out
     assert " * " in printed and "kernel binary cache" in printed
+
+
+# -- --out: vmcl writes only its own files -------------------------------------------------------------
+
+def _snapshot(folder):
+    """Every file under ``folder`` with its bytes, and the folder's mode."""
+    return ({p.relative_to(folder).as_posix(): p.read_bytes() for p in folder.rglob("*") if p.is_file()},
+            folder.stat().st_mode & 0o777)
+
+
+def _no_run(monkeypatch):
+    """Fail the test if the machine runs: --out is to be refused before any work."""
+    from vmcl.pipeline import VisionMachine
+
+    monkeypatch.setattr(VisionMachine, "run", lambda *a, **k: pytest.fail("the machine ran before --out was checked"))
+
+
+@pytest.mark.parametrize("command", ["run", "demo"])
+def test_a_folder_of_other_files_is_refused_before_the_run_and_left_alone(tmp_path, images, capsys, monkeypatch,
+                                                                          command):
+    project = tmp_path / "project"
+    (project / "imgs").mkdir(parents=True)
+    (project / "main.py").write_text("print('mine')\n")
+    (project / "imgs" / "left.png").write_bytes(images["left"].read_bytes())
+    project.chmod(0o755)
+    before = _snapshot(project)
+    _no_run(monkeypatch)
+    monkeypatch.chdir(project)
+    argv = ["run", "imgs/left.png"] if command == "run" else ["demo", "--size", "64"]
+    assert main([*argv, "--out", ".", "-q"]) == 2
+    error = capsys.readouterr().err
+    assert "not empty and is not a vmcl output" in error and len(error.strip().splitlines()) == 1
+    assert _snapshot(project) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["project"]
+
+
+@pytest.mark.parametrize("case, message", [("file", "exists and is not a folder"),
+                                           ("foreign", "holds files vmcl did not write (notes.txt)"),
+                                           ("bad marker", "which is not a file vmcl writes")])
+def test_out_is_checked_before_the_run(tmp_path, images, capsys, monkeypatch, case, message):
+    out = tmp_path / "out"
+    if case == "file":
+        out.write_text("a file")
+    else:
+        out.mkdir()
+        (out / ".vmcl-output").write_text("report.html\n../elsewhere.txt\n" if case == "bad marker" else "report.html\n")
+        (out / "report.html").write_text("previous")
+        (out / "notes.txt").write_text("mine")
+    before = out.read_bytes() if case == "file" else _snapshot(out)
+    _no_run(monkeypatch)
+    assert main(["run", str(images["left"]), "--out", str(out), "-q"]) == 2
+    assert message in capsys.readouterr().err
+    assert (out.read_bytes() if case == "file" else _snapshot(out)) == before
+    assert not _leftovers(tmp_path)
+
+
+def test_new_output_folders_get_the_umask_mode_and_existing_ones_keep_theirs(tmp_path, images):
+    umask = os.umask(0o027)
+    try:
+        fresh = tmp_path / "a" / "b"
+        assert main(["run", str(images["left"]), "--config", str(images["fast"]), "--out", str(fresh), "-q"]) == 0
+    finally:
+        os.umask(umask)
+    assert fresh.stat().st_mode & 0o777 == 0o750 and (tmp_path / "a").stat().st_mode & 0o777 == 0o750
+    existing = tmp_path / "existing"
+    existing.mkdir()
+    existing.chmod(0o711)
+    for _ in range(2):  # into an empty folder, then over its own output
+        assert main(["run", str(images["left"]), "--config", str(images["fast"]), "--out", str(existing), "-q"]) == 0
+        assert existing.stat().st_mode & 0o777 == 0o711
+    listed = (existing / ".vmcl-output").read_text().split("\n")
+    assert {"report.html", "fields.npz", "cartoon.png"} <= set(listed)
+    assert set(listed) - {""} - {line for line in listed if line.startswith("#")} == \
+        {p.name for p in existing.iterdir()} - {".vmcl-output"}
+
+
+@pytest.mark.parametrize("command", ["run", "demo"])
+def test_a_failed_rename_keeps_the_previous_output(tmp_path, images, monkeypatch, capsys, command):
+    out = tmp_path / "out"
+    common = ["--config", str(images["fast"]), "--out", str(out), "-q"]
+    first, second = {"run": (["run", str(images["left"])], ["run", str(images["left"]), str(images["right"])]),
+                     "demo": (["demo", "--size", "64"], ["demo", "--size", "64", "--data", "corridor"])}[command]
+    assert main([*first, *common]) == 0
+    before = _snapshot(out)
+    real_replace, calls = os.replace, []
+
+    def failing_second_call(source, target):
+        if Path(source).is_relative_to(tmp_path):  # the output's renames, not those of a cache
+            calls.append(source)
+            if len(calls) == 2:
+                raise OSError(28, "No space left on device")
+        return real_replace(source, target)
+
+    monkeypatch.setattr(os, "replace", failing_second_call)
+    assert main([*second, *common]) == 1
+    assert "No space left on device" in capsys.readouterr().err
+    assert _snapshot(out) == before
+    assert not _leftovers(tmp_path)
+
+
+@pytest.mark.parametrize("failure", [OSError, KeyboardInterrupt])
+def test_every_interrupted_replacement_puts_the_previous_output_back(tmp_path, monkeypatch, failure):
+    out = tmp_path / "out"
+    with output_folder(out) as work:
+        for name in ("report.html", "a.png", "fields.npz"):
+            (work / name).write_text(f"previous {name}")
+    before = _snapshot(out)
+    real_replace = os.replace
+    replaced = 0
+    for fail_at in range(1, 20):
+        calls = []
+
+        def failing(source, target, fail_at=fail_at, calls=calls):
+            calls.append(source)
+            if len(calls) == fail_at:
+                raise failure()
+            return real_replace(source, target)
+
+        monkeypatch.setattr(os, "replace", failing)
+        try:
+            with output_folder(out) as work:
+                for name in ("report.html", "b.png"):
+                    (work / name).write_text(f"new {name}")
+        except failure:
+            replaced += 1
+            assert _snapshot(out) == before, f"rename {fail_at} failed"
+            assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+        else:  # every rename went through
+            break
+    assert replaced >= 4
+    assert {p.name: p.read_text() for p in out.iterdir()} == {
+        "report.html": "new report.html", "b.png": "new b.png",
+        ".vmcl-output": (out / ".vmcl-output").read_text()}
+    assert (out / ".vmcl-output").read_text().splitlines()[1:] == ["b.png", "report.html"]
+
+
+def test_a_changed_folder_is_not_replaced(tmp_path):
+    out = tmp_path / "out"
+    with output_folder(out) as work:
+        (work / "report.html").write_text("previous")
+    with pytest.raises(InputError, match="did not write"), output_folder(out) as work:
+        (work / "report.html").write_text("new")
+        (out / "added meanwhile.txt").write_text("mine")
+    assert (out / "report.html").read_text() == "previous" and (out / "added meanwhile.txt").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+# -- images vmcl cannot trust ---------------------------------------------------------------------------
+
+def _jpeg(images):
+    return cv2.imencode(".jpg", cv2.imread(str(images["left"])))[1].tobytes()
+
+
+def _png_with_bad_text_crc(images):
+    data = images["left"].read_bytes()
+    chunk = b"tEXt" + b"Comment\x00made by the test"
+    crc = (zlib.crc32(chunk) ^ 1).to_bytes(4, "big")
+    return data[:33] + (len(chunk) - 4).to_bytes(4, "big") + chunk + crc + data[33:]  # after IHDR
+
+
+def _corrupt_scan(jpeg):
+    data = bytearray(jpeg)
+    scan = data.find(b"\xff\xda") + 40
+    data[scan:scan + 20] = bytes(b ^ 0x5A for b in data[scan:scan + 20])
+    return bytes(data)
+
+
+@pytest.mark.parametrize("case, message", [
+    ("truncated jpeg", "no end-of-image marker"),
+    ("corrupt jpeg", "Corrupt JPEG data"),
+    ("png with a bad crc", "tEXt chunk at byte 33 fails its CRC check"),
+    ("truncated png", "before its IEND chunk"),
+    ("folder", "is a folder, not an image file"),
+])
+def test_damaged_images_are_refused(tmp_path, images, capsys, case, message):
+    jpeg = _jpeg(images)
+    data = {"truncated jpeg": jpeg[:len(jpeg) * 2 // 3],
+            "corrupt jpeg": _corrupt_scan(jpeg),
+            "png with a bad crc": _png_with_bad_text_crc(images),
+            "truncated png": images["left"].read_bytes()[:-200]}.get(case)
+    path = tmp_path / ("image.jpg" if "jpeg" in case else "image.png")
+    if data is None:
+        path.mkdir()
+    else:
+        path.write_bytes(data)
+    with pytest.raises(InputError, match=re.escape(message)):
+        read_image(path)
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--out", str(out), "-q"]) == 2
+    error = capsys.readouterr().err.strip()
+    assert len(error.splitlines()) == 1 and message in error and "left image" in error
+    assert not out.exists()
+
+
+def test_a_jpeg_ends_at_its_own_end_marker_not_at_a_thumbnails(tmp_path, images):
+    jpeg = _jpeg(images)
+    thumbnail = b"\xff\xe1" + (2 + 6).to_bytes(2, "big") + b"\x00\xff\xd9\x00\xff\xd9"  # an APP1 holding FFD9
+    sound = tmp_path / "sound.jpg"
+    sound.write_bytes(jpeg[:2] + thumbnail + jpeg[2:] + b"a camera's trailer")
+    np.testing.assert_array_equal(read_image(sound), cv2.imread(str(sound), cv2.IMREAD_UNCHANGED)[..., ::-1])
+    cut = tmp_path / "cut.jpg"
+    cut.write_bytes(jpeg[:2] + thumbnail + jpeg[2:len(jpeg) * 2 // 3])
+    with pytest.raises(InputError, match="no end-of-image marker"):
+        read_image(cut)
+
+
+# -- exit statuses ----------------------------------------------------------------------------------------
+
+def test_a_defect_is_exit_1_with_its_traceback(images, tmp_path, capsys, monkeypatch):
+    from vmcl.pipeline import VisionMachine
+
+    def broken(*args, **kwargs):
+        raise ValueError("a defect inside vmcl")
+
+    monkeypatch.setattr(VisionMachine, "run", broken)
+    assert main(["run", str(images["left"]), "--out", str(tmp_path / "out"), "-q"]) == 1
+    error = capsys.readouterr().err
+    assert "Traceback" in error and "a defect inside vmcl" in error and "broken" in error
+    assert not _leftovers(tmp_path) and not (tmp_path / "out").exists()
+
+
+def test_debug_shows_the_traceback_of_bad_input(tmp_path, capsys):
+    assert main(["run", str(tmp_path / "absent.png"), "--out", str(tmp_path / "out"), "-q", "--debug"]) == 2
+    error = capsys.readouterr().err
+    assert "Traceback" in error and error.strip().endswith("no such file")
+
+
+@pytest.mark.parametrize("text, message", [
+    ('[stereo]\nenabled = "no"\n', "stereo.enabled must be true or false, got 'no' (str)"),
+    ("[stereo]\nd_max = true\n", "stereo.d_max must be an integer or None, got True (bool)"),
+    ("[texture]\nradius = 2.5\n", "texture.radius must be an integer, got 2.5 (float)"),
+    ('[edges]\nsigma = "2"\n', "edges.sigma must be a number, got '2' (str)"),
+    ('[colour]\nthreshold = [0.1]\n', "colour.threshold must be a number or None"),
+    ("[mrf]\ndepth = 3\n", "mrf.depth must be a table of keys"),
+])
+def test_config_types_are_checked_naming_the_key(tmp_path, images, capsys, monkeypatch, text, message):
+    path = tmp_path / "c.toml"
+    path.write_text(text)
+    with pytest.raises(InputTypeError) as refused:
+        Config.from_toml(path)
+    assert message in str(refused.value)
+    _no_run(monkeypatch)
+    assert main(["run", str(images["left"]), "--config", str(path), "--out", str(tmp_path / "out"), "-q"]) == 2
+    assert message in capsys.readouterr().err
+
+
+def test_a_binary_config_is_bad_input(tmp_path, images, capsys):
+    path = tmp_path / "c.toml"
+    path.write_bytes(b"\xff\xfe\x00binary")
+    assert main(["run", str(images["left"]), "--config", str(path), "--out", str(tmp_path / "out"), "-q"]) == 2
+    assert "not valid TOML" in capsys.readouterr().err
+
+
+def _vmcl(*argv, env=None, cwd=None):
+    return subprocess.Popen([sys.executable, "-m", "vmcl.cli", *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=env, cwd=cwd)
+
+
+@pytest.mark.parametrize("command", ["run", "demo", "info"])
+def test_without_an_opencl_platform_the_hint_alone_and_exit_2(tmp_path, images, command):
+    no_drivers = tmp_path / "no-icd"
+    no_drivers.mkdir()
+    env = {k: v for k, v in os.environ.items() if k != "OCL_ICD_FILENAMES"} | {"OCL_ICD_VENDORS": str(no_drivers)}
+    out = tmp_path / "out"
+    argv = {"run": ["run", str(images["left"]), "--out", str(out), "-q"],
+            "demo": ["demo", "--size", "64", "--out", str(out), "-q"], "info": ["info"]}[command]
+    process = _vmcl(*argv, env=env)
+    _, error = process.communicate(timeout=120)
+    assert process.returncode == 2
+    assert error.startswith("vmcl: No OpenCL platform found") and "Traceback" not in error
+    assert "pocl-opencl-icd" in error and len(error.strip().splitlines()) <= 5
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["no-icd"]
+
+
+def test_ctrl_c_is_one_line_exit_130_and_leaves_the_previous_output(tmp_path):
+    s = scenes.render(scenes.preset("cues", shape=(192, 192)), seed=0, noise=0.01)
+    paths = []
+    for name, image in (("left", s.left), ("right", s.right), ("next", s.left_next)):
+        paths.append(tmp_path / f"{name}.png")
+        cv2.imwrite(str(paths[-1]), cv2.cvtColor(np.round(image * 255).astype(np.uint8), cv2.COLOR_RGB2BGR))
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / ".vmcl-output").write_text("report.html\n")
+    (out / "report.html").write_text("previous")
+    before = _snapshot(out)
+    process = _vmcl("run", str(paths[0]), str(paths[1]), "--next", str(paths[2]), "--out", str(out), "-q")
+    deadline = time.monotonic() + 120
+    while not _leftovers(tmp_path) and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)  # the hidden folder appears once --out is checked, as the run starts
+    process.send_signal(signal.SIGINT)
+    _, error = process.communicate(timeout=300)
+    assert process.returncode == 130 and error.strip() == "vmcl: interrupted"
+    assert _snapshot(out) == before
+    assert not _leftovers(tmp_path)

@@ -55,3 +55,19 @@ def test_window_counts_with_zero_border(machine):
 def test_bad_input_is_named(kwargs, error, match, machine):
     with pytest.raises(error, match=match):
         box_sum(np.zeros((2, 3, 4), np.float32), machine=machine, **kwargs)
+
+
+@pytest.mark.parametrize("radius", [2**63, 10**30])
+def test_radii_beyond_64_bits_sum_the_whole_line(radius, machine):
+    """A window wider than the field sums all of it, at any radius (these used to raise OverflowError)."""
+    x = np.random.default_rng(5).integers(-1000, 1000, (9, 14)).astype(np.int32)
+    np.testing.assert_array_equal(box_sum(x, radius, machine=machine), np.full(x.shape, x.sum(), np.int32))
+    np.testing.assert_array_equal(box_sum(x, radius, axes=(-1,), machine=machine),
+                                  np.repeat(x.sum(axis=1, keepdims=True), 14, axis=1))
+
+
+@pytest.mark.parametrize("axes, error, match", [([-1], TypeError, "axes must be a tuple"),
+                                                (None, TypeError, "axes must be a tuple")])
+def test_axes_of_the_wrong_type_are_a_type_error(axes, error, match, machine):
+    with pytest.raises(error, match=match):
+        box_sum(np.zeros((3, 3), np.int32), 1, axes=axes, machine=machine)

@@ -148,3 +148,20 @@ def test_large_random_field_and_repeatability(machine, machine_with_local_size):
 def test_bad_input_is_named(call, error, match, machine):
     with pytest.raises(error, match=match):
         call(machine)
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    ({"relabel": "no"}, TypeError, "relabel must be a bool"),
+    ({"relabel": 0}, TypeError, "relabel must be a bool"),
+    ({"relabel": None}, TypeError, "relabel must be a bool"),
+    ({"connectivity": 8.0}, TypeError, "connectivity must be an integer"),
+    ({"connectivity": "8"}, TypeError, "connectivity must be an integer"),
+    ({"method": ["doubling"]}, TypeError, "method must be one of"),
+])
+def test_label_refuses_arguments_by_type(kwargs, error, match, machine):
+    """relabel="no" used to relabel (a non-empty string is true) and connectivity=8.0 to compile."""
+    from vmcl.errors import InputError
+
+    with pytest.raises(error, match=match) as raised:
+        label(np.eye(4, dtype=bool), machine=machine, **kwargs)
+    assert isinstance(raised.value, InputError)

@@ -56,3 +56,30 @@ def test_copy_yardstick_copies_every_element(machine):
     kernel = machine.kernel("news", "copy", T="float", BORDER=0, VEC=16)
     machine.launch(kernel, (-(-source.size // 16),), machine.to_device(source), target, np.int64(source.size))
     np.testing.assert_array_equal(target.get(), source)
+
+
+@pytest.mark.parametrize("border", ["zero", "clamp", "wrap"])
+@pytest.mark.parametrize("dx, dy", [(2**63, 0), (0, -2**63 - 1), (10**30 + 3, -(10**30) - 2)])
+def test_displacements_beyond_64_bits_match_oracle(dx, dy, border, machine):
+    """Any integer is a displacement; these used to raise OverflowError converting to the kernel's long."""
+    x = (np.arange(7 * 13) % 251).astype(np.float32).reshape(7, 13)
+
+    def same_result(d, size):
+        # The oracle's NumPy integers cannot hold these: a wrap repeats every size, and a zero or clamp
+        # border shifted by the whole field or more is all zeros or all edge.
+        return d % size if border == "wrap" else int(np.sign(d)) * min(abs(d), size)
+
+    want = _oracle(x, same_result(dx, 13), same_result(dy, 7), border)
+    np.testing.assert_array_equal(shift(x, dx, dy, border=border, machine=machine), want)
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    ({"border": ["zero"]}, TypeError, "border must be one of"),
+    ({"border": None}, TypeError, "border must be one of"),
+])
+def test_bad_border_type_is_named(kwargs, error, match, machine):
+    from vmcl.errors import InputError
+
+    with pytest.raises(error, match=match) as raised:
+        shift(np.zeros((2, 2), np.float32), 1, 0, machine=machine, **kwargs)
+    assert isinstance(raised.value, InputError)

@@ -111,3 +111,20 @@ def test_histogram_to_a_top_on_the_device_matches_the_host_range(tile, machine):
 def test_histogram_bad_input_is_named(kwargs, error, match, machine):
     with pytest.raises(error, match=match):
         histogram(np.zeros((4, 4), np.float32), machine=machine, **kwargs)
+
+
+@pytest.mark.parametrize("width", [16, 17])
+@pytest.mark.parametrize("value_range", [(0.0, 1e-38), (0.0, 2.0**-140), (-3e38, 3e38)])
+def test_histogram_of_a_range_beyond_float32s_exponent_is_numpys(width, value_range, machine):
+    # bins / (hi - lo) or hi - lo overflows float32 here: the bins were garbage indices (a crash at
+    # width 17, where the scalar path runs) and are now np.histogram's.
+    value_range = lo, hi = tuple(float(np.float32(v)) for v in value_range)  # ends that float32 holds
+    x = np.linspace(lo, hi, 4 * width, dtype=np.float32).reshape(4, width)
+    x[0, 0] = 0.0
+    expected, _ = np.histogram(x.astype(np.float64), 16, value_range)
+    np.testing.assert_array_equal(histogram(x, 16, value_range, machine=machine), expected)
+
+
+def test_histogram_counts_too_many_tiles_are_refused_before_allocating(machine):
+    with pytest.raises(ValueError, match="histograms of 4096 bins needs"):
+        histogram(np.zeros((2048, 2048), np.uint8), 4096, (0, 1), tile=(1, 1), machine=machine)

@@ -98,3 +98,47 @@ def test_large_field_2048(machine):
     np.add.at(expected, address, field.ravel())
     np.testing.assert_array_equal(send(field.ravel(), address, size=field.size, combine="sum", machine=machine),
                                   expected)
+
+
+@pytest.mark.parametrize("fill, error", [(0.5, TypeError), ("7", TypeError), (None, TypeError), (True, TypeError),
+                                         ([0], TypeError), (float("nan"), TypeError), (2**40, ValueError)])
+def test_send_refuses_an_integer_fill_it_would_change(fill, error, machine):
+    """0.5 used to become 0, "7" become 7 and True become 1: a fill is a value of the values' dtype."""
+    from vmcl.errors import InputError
+
+    with pytest.raises(error, match="fill") as raised:
+        send(np.ones(3, np.int32), np.zeros(3, np.int32), size=4, fill=fill, machine=machine)
+    assert isinstance(raised.value, InputError)
+
+
+@pytest.mark.parametrize("dtype, fill", [(np.uint8, 300), (np.uint8, -1), (np.float32, 1e39)])
+def test_send_refuses_a_fill_beyond_the_dtype(dtype, fill, machine):
+    with pytest.raises(ValueError, match="fill"):
+        send(np.ones(3, dtype), np.zeros(3, np.int32), size=4, fill=fill, machine=machine)
+
+
+@pytest.mark.parametrize("size, error, match", [
+    (2**31, ValueError, "at most 2147483647 destinations"),
+    ((2**16, 2**16), ValueError, "at most 2147483647 destinations"),
+    (None, TypeError, "size must be an integer"),
+    (16.0, TypeError, "size must be an integer"),
+    ((4, True), TypeError, "size must be an integer"),
+    ((), ValueError, "non-empty shape"),
+])
+def test_send_refuses_sizes_by_type_and_range(size, error, match, machine):
+    with pytest.raises(error, match=match):
+        send(np.ones(3, np.float32), np.zeros(3, np.int32), size=size, machine=machine)
+
+
+def test_send_refuses_destinations_beyond_the_device_memory(machine):
+    """Checked before anything is allocated (it used to fail in pyopencl's create_buffer)."""
+    destinations = 2**31 - 1
+    if destinations * 16 <= machine.device.global_mem_size and destinations * 4 <= machine.device.max_mem_alloc_size:
+        pytest.skip("this device holds the largest addressable send")
+    with pytest.raises(ValueError, match="device memory"):
+        send(np.ones(3, np.float32), np.zeros(3, np.int32), size=destinations, machine=machine)
+
+
+def test_send_refuses_a_combine_of_the_wrong_type(machine):
+    with pytest.raises(TypeError, match="combine must be one of"):
+        send(np.ones(3, np.float32), np.zeros(3, np.int32), size=2, combine=["sum"], machine=machine)

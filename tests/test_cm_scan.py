@@ -122,3 +122,23 @@ def test_bad_input_is_named(kwargs, error, match, machine):
     x = kwargs.pop("x")
     with pytest.raises(error, match=match):
         scan(x, machine=machine, **kwargs)
+
+
+def test_segments_of_another_machine_are_refused(machine):
+    """A device array of another OpenCL context used to be handed to this machine's kernels."""
+    from vmcl import Machine
+
+    other = Machine()
+    x = machine.to_device(np.ones((4, 5), np.float32))
+    with pytest.raises(ValueError, match="segments lives on another OpenCL context"):
+        scan(x, segments=other.to_device(np.zeros((4, 5), np.uint8)), machine=machine)
+
+
+@pytest.mark.parametrize("kwargs, match", [({"op": ["plus"]}, "op must be one of"),
+                                           ({"method": ["hillis_steele"]}, "method must be one of"),
+                                           ({"op": None}, "op must be one of")])
+def test_choices_of_the_wrong_type_are_a_type_error(kwargs, match, machine):
+    from vmcl.errors import InputTypeError
+
+    with pytest.raises(InputTypeError, match=match):
+        scan(np.zeros(5, np.float32), machine=machine, **kwargs)

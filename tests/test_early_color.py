@@ -96,11 +96,15 @@ def test_albedo_edges_match_oracle_with_a_fixed_threshold(dtype, machine):
     least = 0.3 * FULL_SCALE[dtype]
     z = _z_oracle(rgb, least)
     threshold = float(np.nanmedian(z))
-    edges = color.albedo_edges(rgb, min_intensity=least, threshold=threshold, machine=machine).edges
+    got = color.albedo_edges(rgb, min_intensity=least, threshold=threshold, machine=machine)
     want = z > threshold
     close = np.abs(z - threshold) <= 1e-5 * threshold  # float32 rounding decides these
     assert 0.1 < want.mean() < 0.5  # both outcomes are well represented
-    np.testing.assert_array_equal(edges[~close], want[~close])
+    assert close.mean() < 0.01  # so the comparison below covers nearly every pixel
+    np.testing.assert_array_equal(got.edges[~close], want[~close])
+    hue, valid = _hue_oracle(rgb, least)
+    np.testing.assert_array_equal(got.valid, valid)
+    np.testing.assert_allclose(got.hue, hue, rtol=1e-6, equal_nan=True)
 
 
 def test_noise_rule_estimates_the_channel_noise(machine):
@@ -171,3 +175,14 @@ def test_bad_input_is_refused(machine):
         color.hue(np.ones((4, 4, 3), np.int64), machine=machine)
     with pytest.raises(ValueError, match="threshold"):
         color.albedo_edges(np.ones((4, 4, 3), np.float32), threshold=-1.0, machine=machine)
+
+
+@pytest.mark.parametrize("call, error, match", [
+    (lambda m: color.hue(np.ones((4, 4, 3), np.float32), chromaticity="no", machine=m), TypeError, "chromaticity"),
+    (lambda m: color.hue(np.ones((4, 4, 3), np.float32), chromaticity=None, machine=m), TypeError, "chromaticity"),
+    (lambda m: color.hue(np.ones((4, 4, 3), np.float32), chromaticity=1, machine=m), TypeError, "chromaticity"),
+])
+def test_chromaticity_must_be_a_bool(call, error, match, machine):
+    """chromaticity="no" used to return the chromaticity pair (a non-empty string is true)."""
+    with pytest.raises(error, match=match):
+        call(machine)

@@ -441,3 +441,46 @@ def test_bsds500_boundaries_at_least_as_good_as_skimage(datasets_root, machine):
           f"skimage ODS {skimage_scores.ods_f:.4f} OIS {skimage_scores.ois_f:.4f}")
     assert vmcl_scores.ods_f >= skimage_scores.ods_f
     assert vmcl_scores.ois_f >= skimage_scores.ois_f
+
+
+def _scene_grey() -> np.ndarray:
+    from vmcl import scenes
+
+    return np.asarray(scenes.render(scenes.preset("cues", shape=(96, 128)), seed=0, noise=0.01).left, np.float32)
+
+
+@pytest.mark.parametrize("scale", [1e-42, 1e-30, 1e-10, 1e10, 1e20, 1e30, 1e38])
+def test_canny_with_estimated_thresholds_is_scale_invariant(scale, machine):
+    image = _scene_grey()
+    expected = canny(image, sigma=1.0, machine=machine)
+    assert expected.sum() > 500
+    np.testing.assert_array_equal(canny(image * np.float32(scale), sigma=1.0, machine=machine), expected)
+
+
+def test_canny_with_one_huge_pixel_marks_only_around_it(machine):
+    image = _scene_grey().mean(axis=2)
+    image[40, 123] = 1e30  # in the last 8 columns: the scalar path of the histogram
+    edges = canny(image, sigma=1.0, machine=machine)
+    rows, cols = np.nonzero(edges)
+    assert len(rows) and np.abs(rows - 40).max() <= 4 and np.abs(cols - 123).max() <= 4
+
+
+def test_noise_thresholds_of_subnormal_and_non_finite_magnitudes(machine):
+    tiny = np.float32(1e-42)
+    got = noise.noise_thresholds(np.full((40, 56), tiny, np.float32), machine=machine)
+    expected = np.array([noise.CANNY_LOW, noise.CANNY_HIGH]) * float(tiny) / math.sqrt(2 * math.log(2))
+    np.testing.assert_allclose(got, expected, rtol=2e-3)
+    for bad in (np.inf, np.nan):
+        magnitude = np.ones((40, 56), np.float32)
+        magnitude[3, 3] = bad
+        with pytest.raises(ValueError, match="magnitude must not contain NaN or infinite values"):
+            noise.noise_thresholds(magnitude, machine=machine)
+
+
+def test_canny_refuses_what_float32_or_the_device_cannot_hold(machine):
+    with pytest.raises(ValueError, match="gradient magnitudes beyond float32's range"):
+        canny(np.kron(np.eye(2, dtype=np.float32), np.full((16, 16), 3e38, np.float32)), sigma=1.0,
+              return_gradient=True, machine=machine)
+    # np.zeros does not touch its pages: the refusal comes before anything is read or uploaded.
+    with pytest.raises(ValueError, match="canny of a 32768 x 32768 image needs"):
+        canny(np.zeros((32768, 32768), np.uint8), sigma=1.0, machine=machine)

@@ -170,3 +170,25 @@ def test_bad_input_is_refused(machine):
         gaussian(image, sigma="1", machine=machine)
     with pytest.raises(ValueError, match="high_sigma must exceed low_sigma"):
         difference_of_gaussians(image, low_sigma=2.0, high_sigma=1.0, machine=machine)
+
+
+def test_widths_past_the_image_are_refused(machine):
+    from vmcl.cm.filters import binomial
+
+    image = np.zeros((30, 50), np.float32)
+    for method in ("binomial", "exact"):
+        with pytest.raises(ValueError, match="sigma must be at most 50 for a 30 x 50 image"):
+            gaussian(image, sigma=1e4, method=method, machine=machine)
+    with pytest.raises(ValueError, match="passes must be at most 5000"):
+        binomial(image, 2**31, machine=machine)
+    with pytest.raises(ValueError, match="high_sigma must be at most 50"):
+        difference_of_gaussians(image, low_sigma=1.0, high_sigma=51.0, machine=machine)
+    gaussian(np.zeros((2, 2), np.float32), sigma=4.0, machine=machine)  # small images take usual widths
+
+
+def test_binomial_of_values_near_float32s_largest_does_not_overflow(machine):
+    from vmcl.cm.filters import binomial
+
+    image = np.random.default_rng(3).random((20, 37)).astype(np.float32) * np.float32(3e38)
+    expected = ndimage.correlate(image.astype(np.float64), np.outer([1, 2, 1], [1, 2, 1]) / 16, mode="nearest")
+    np.testing.assert_allclose(binomial(image, 1, machine=machine), expected, rtol=1e-6)

@@ -346,3 +346,45 @@ def test_real_sequences_beat_farneback(datasets_root):
         theirs = cv2.calcOpticalFlowFarneback(pair.frame0, pair.frame1, None, 0.5, 3, 15, 3, 5, 1.2, 0)
         farneback.append(evaluate_flow(theirs, pair.flow, mask=pair.mask).epe)
     assert np.mean(ours) < np.mean(farneback)
+
+
+def test_levels_are_bounded_by_the_image(pair, machine):
+    """levels=10**12 used to grow memory without end (2 ** (levels - 1)); the refusal names the maximum."""
+    frame0, frame1 = pair
+    height, width = frame0.shape
+    most, side = 1, min(height, width)
+    while -(-side // 2) >= 5:  # the coarsest level must hold the patch (5) and delta + 1 (3)
+        most, side = most + 1, -(-side // 2)
+    for levels in (most + 1, 10**12):
+        with pytest.raises(ValueError, match=f"levels must be at most {most} "):
+            motion.flow(frame0, frame1, delta=2, patch=5, levels=levels, machine=machine)
+    assert motion.flow(frame0, frame1, delta=2, patch=5, levels=most, machine=machine).flow.shape == (height, width, 2)
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    ({"subpixel": "no"}, TypeError, "subpixel must be a bool"),
+    ({"subpixel": None}, TypeError, "subpixel must be a bool"),
+    ({"features": ["log"]}, TypeError, "features must be one of"),
+    ({"method": ["table"]}, TypeError, "method must be one of"),
+])
+def test_flags_and_choices_are_checked_by_type(pair, kwargs, error, match, machine):
+    frame0, frame1 = pair
+    with pytest.raises(error, match=match):
+        motion.flow(frame0, frame1, delta=2, patch=5, machine=machine, **kwargs)
+
+
+def test_a_vote_table_beyond_the_device_memory_is_refused(machine):
+    """(2 * 1000 + 1)**2 planes of 1024 x 1024 pixels: refused before anything is allocated (it used to fail
+    in pyopencl's create_buffer)."""
+    frame = np.zeros((1024, 1024), np.float32)
+    with pytest.raises(ValueError, match="device memory"):
+        motion.votes(frame, frame, delta=1000, patch=3, machine=machine)
+    with pytest.raises(ValueError, match="device memory"):
+        motion.flow(frame, frame, delta=1000, patch=3, method="table", machine=machine)
+
+
+@pytest.mark.parametrize("value, error", [(2.0, ValueError), (float("nan"), ValueError), ("0.5", TypeError),
+                                          (None, TypeError), (True, TypeError), (np.array([0.5, 1.5]), ValueError)])
+def test_arcsine_law_takes_correlations_only(value, error):
+    with pytest.raises(error, match="correlation"):
+        arcsine_law(value)

@@ -127,3 +127,36 @@ def test_match_dots_is_mutual_and_bounded():
 def test_bad_input_is_named(call, error, match):
     with pytest.raises(error, match=match):
         call()
+
+
+@pytest.mark.parametrize("dtype", [np.complex128, object, str])
+def test_find_dots_refuses_images_that_are_not_real(dtype):
+    """Complex images lost their imaginary part, and object and string images were parsed as numbers."""
+    image = np.eye(8).astype(dtype)
+    with pytest.raises(TypeError, match="image must hold real numbers"):
+        find_dots(image)
+
+
+@pytest.mark.parametrize("call, error, match", [
+    (lambda: find_dots(np.eye(8), threshold=float("nan")), ValueError, "threshold"),
+    (lambda: find_dots(np.eye(8), threshold="0.5"), TypeError, "threshold"),
+    (lambda: find_dots(np.eye(8), min_area=2.0), TypeError, "min_area"),
+    (lambda: find_dots(np.eye(8), min_area=-1), ValueError, "min_area"),
+    (lambda: find_dots(np.eye(8), polarity=["dark"]), TypeError, "polarity"),
+    (lambda: match_dots(np.zeros((3, 2)), np.zeros((3, 2)), max_shift="1"), TypeError, "max_shift"),
+    (lambda: match_dots(np.zeros((3, 2), complex), np.zeros((3, 2)), max_shift=1), TypeError, "left"),
+    (lambda: match_dots(np.full((3, 2), np.nan), np.zeros((3, 2)), max_shift=1), ValueError, "left"),
+    (lambda: WarpTable.from_dots(np.eye(3, 2), np.eye(3, 2), (8, 8), vergence="1"), TypeError, "vergence"),
+    (lambda: WarpTable.from_dots(np.eye(3, 2), np.eye(3, 2)[:2], (8, 8)), ValueError, "same number"),
+    (lambda: WarpTable.from_dots(np.eye(3, 2), np.eye(3, 2), (0, 8)), ValueError, "shape"),
+    (lambda: WarpTable.from_dots(np.eye(3, 2), np.eye(3, 2), None), TypeError, "shape"),
+    (lambda: WarpTable.calibrate([[1.0]], [[1.0]], max_shift=1.0), TypeError, "left_image"),
+    (lambda: TableStore().add("table"), TypeError, "WarpTable"),
+    (lambda: TableStore([WarpTable(np.zeros((2, 2, 2), np.float32))]).table_for("0"), TypeError, "vergence"),
+])
+def test_arguments_are_checked_by_type_and_range(call, error, match):
+    from vmcl.errors import InputError
+
+    with pytest.raises(error, match=match) as raised:
+        call()
+    assert isinstance(raised.value, InputError)

@@ -138,6 +138,12 @@ def test_features_drop_edges_near_horizontal(machine):
     expected = edges & (from_vertical >= np.float32(25.0 * 65536 / 360))
     np.testing.assert_array_equal(found.features, expected)
     assert 0 < expected.sum() < edges.sum()
+    # Matches lie on those features only, and agree with the scene's ground truth.
+    matched = np.isfinite(found.disparity)
+    assert not (matched & ~expected).any()
+    visible = matched & ~scene.occluded_stereo & np.isfinite(scene.disparity)
+    assert visible.sum() >= 0.5 * expected.sum()
+    assert (np.abs(found.disparity - scene.disparity)[visible] <= 1).mean() >= 0.9
 
 
 def _pair(name, noise=0.01):
@@ -418,3 +424,58 @@ def test_edge_matches_beat_stereobm_on_middlebury(name, datasets_root, machine):
     ours = np.mean(np.abs(found.disparity - pair.disparity)[at] > 1)
     theirs = np.mean(~(np.abs(block - pair.disparity)[at] <= 1))
     assert at.sum() > 1000 and ours <= theirs
+
+
+@pytest.mark.parametrize("name", ["min_score", "bimodal", "dip", "min_votes"])
+@pytest.mark.parametrize("value, error", [(None, TypeError), (float("nan"), ValueError), ("0.3", TypeError),
+                                          ([0.3], TypeError), (True, TypeError), (float("inf"), ValueError)])
+def test_selection_parameters_are_checked_by_type_and_range(name, value, error, machine):
+    """These used to be taken as they came: None became NaN in the kernel, "0.3" and [0.3] were converted."""
+    image = np.zeros((32, 32), np.float32)
+    with pytest.raises(error, match=name):
+        match(image, image, d_min=0, d_max=4, machine=machine, **{name: value})
+
+
+@pytest.mark.parametrize("kwargs, error, pattern", [
+    ({"bimodal": 1.5}, ValueError, "bimodal must be a finite number >= 0 and <= 1"),
+    ({"dip": -0.1}, ValueError, "dip must be a finite number >= 0 and <= 1"),
+    ({"min_votes": -1.0}, ValueError, "min_votes must be a finite number >= 0"),
+    ({"use_quantiles": "no"}, TypeError, "use_quantiles must be a bool"),
+    ({"features": ["canny"]}, TypeError, "features must be one of"),
+    ({"direction_tolerance": float("inf")}, ValueError, "direction_tolerance"),
+    ({"horizontal_tolerance": None}, TypeError, "horizontal_tolerance"),
+    ({"patch": 33}, ValueError, "patch must be at most the image's smaller side, 32"),
+    ({"left": np.ones(32, np.float32), "right": np.ones(32, np.float32)}, ValueError, "left must be grey"),
+])
+def test_more_bad_input_is_named(kwargs, error, pattern, machine):
+    from vmcl.errors import InputError
+
+    arguments = {"left": np.zeros((32, 32), np.float32), "right": np.zeros((32, 32), np.float32),
+                 "d_min": 0, "d_max": 8} | kwargs
+    with pytest.raises(error, match=pattern) as raised:
+        match(arguments.pop("left"), arguments.pop("right"), machine=machine, **arguments)
+    assert isinstance(raised.value, InputError)
+
+
+def test_match_features_refuses_a_host_and_a_device_mask(machine):
+    mask, direction = np.zeros((32, 32), np.uint8), np.zeros((32, 32), np.float32)
+    with pytest.raises(TypeError, match="both be NumPy arrays or both device arrays"):
+        match_features(mask, machine.to_device(mask), direction, direction, d_min=0, d_max=4, machine=machine)
+
+
+def test_a_table_beyond_the_device_memory_is_refused_before_any_work(machine):
+    """8192 x 8192 pixels over 8192 disparities: the check comes before the features are computed (it used
+    to fail in pyopencl's create_buffer after them). The images are never read."""
+    side = 8192
+    left, right = (machine.empty((side, side), np.float32) for _ in range(2))
+    with pytest.raises(ValueError, match="device memory"):
+        match(left, right, d_min=0, d_max=side - 1, features="intensity", variant="table", machine=machine)
+
+
+@pytest.mark.parametrize("angle, error", [(float("nan"), ValueError), (float("inf"), ValueError),
+                                          (None, TypeError), ("1", TypeError)])
+def test_direction_code_refuses_what_is_not_an_angle(angle, error):
+    from vmcl.early.stereo import direction_code
+
+    with pytest.raises(error, match="angle"):
+        direction_code(angle)

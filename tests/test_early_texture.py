@@ -79,6 +79,10 @@ def test_texture_edges_match_oracle_with_a_fixed_threshold(machine):
     want, ties = _edges_oracle(got.density, 6, np.float32(0.02))
     assert want.sum() > 20 and ties.mean() < 0.15
     np.testing.assert_array_equal(got.edges[~ties], want[~ties])
+    # The edges' oracle starts from vmcl's density: that density must itself match its oracle.
+    density, ambiguous = _density_oracle(image, 1.0, 4.0, 0.1, 6)
+    assert not ambiguous.any()
+    np.testing.assert_allclose(got.density, density, rtol=1e-6, atol=1e-7)
 
 
 def test_device_in_device_out_and_local_sizes_agree(machine_with_local_size):
@@ -184,3 +188,16 @@ def test_bad_input_is_refused(machine):
         texture.density(image, threshold=0.1, fine_sigma=-1.0, coarse_sigma=4.0, radius=3, machine=machine)
     with pytest.raises(ValueError, match="edge_threshold"):
         texture.texture_edges(image, threshold=0.1, edge_threshold=-0.5, machine=machine, **PARAMS)
+
+
+@pytest.mark.parametrize("radius", [2**63, 10**30])
+def test_radii_beyond_the_image_take_the_whole_image(radius, machine):
+    """Windows are cut at the border, so any radius past the image is the whole image (these radii used
+    to raise OverflowError)."""
+    image = _dotted((40, 71), seed=40)  # no pixel near the threshold (as in test_density_matches_oracle)
+    got = texture.texture_edges(image, threshold=0.1, radius=radius, edge_threshold=0.02, machine=machine,
+                                fine_sigma=1.0, coarse_sigma=4.0)
+    want, ambiguous = _density_oracle(image, 1.0, 4.0, 0.1, 71)
+    assert not ambiguous.any()
+    np.testing.assert_allclose(got.density, want, rtol=1e-6, atol=1e-7)
+    assert not got.edges.any()  # one window, one density: no gradient anywhere

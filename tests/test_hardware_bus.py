@@ -7,9 +7,9 @@ import pytest
 import serial
 
 from hardware.bus import Bus, open_port, register_sim_handler
-from hardware.commands import FAULT_BIT, Cmd, Flag, pack, unpack
-from hardware.errors import BadLength, CorruptFrame, Fault, Timeout, UnknownCommand
-from hardware.protocol import encode_request
+from hardware.commands import FAULT_BIT, PROTOCOL_VERSION, Cmd, Flag, pack, unpack
+from hardware.errors import BadLength, CorruptFrame, Fault, OutOfRange, PortError, Timeout, UnknownCommand
+from hardware.protocol import Frame, Parser, encode_request
 
 STEPPER, GALVO, LENS = 1, 2, 3
 
@@ -18,6 +18,11 @@ STEPPER, GALVO, LENS = 1, 2, 3
 def bus():
     with Bus("sim://?seed=1", timeout=0.05, retries=3) as bus:
         yield bus
+
+
+def decode(wire: bytes) -> Frame:
+    (frame,) = Parser().feed(wire)
+    return frame
 
 
 def flip(index: int):
@@ -35,14 +40,14 @@ def test_sim_handler_is_registered_once_and_serves_serial_for_url():
     assert serial.protocol_handler_packages.count("hardware") == 1
     port = serial.serial_for_url("sim://?seed=2", baudrate=115200, timeout=0.05)
     port.write(encode_request(GALVO, 1, Cmd.PING))
-    assert port.read(10)[4:8] == bytes((0x00, Cmd.PING, 2, 1))  # status OK, PING, kind galvo, version 1
+    assert decode(port.read(11)) == Frame(GALVO, 1, Cmd.PING, bytes((2, PROTOCOL_VERSION)), 0)  # a galvo
     port.close()
 
 
 def test_corrupted_reply_is_retried_and_answered_from_memory(bus):
     world = bus.port.world
     world.tamper("reply", flip(6))
-    assert unpack(Cmd.PING, bus.request(GALVO, Cmd.PING).payload, reply=True) == (2, 1)
+    assert unpack(Cmd.PING, bus.request(GALVO, Cmd.PING).payload, reply=True) == (2, PROTOCOL_VERSION)
     assert bus.stats.retries == 1
     assert world.galvo.executed[Cmd.PING] == 1
 
@@ -70,7 +75,7 @@ def test_garbage_before_a_reply_is_skipped_without_a_retry(bus):
     world = bus.port.world
     garbage = bytes((0x00, 0xA5, 0x81, 0x00, 0x20, 0xA5, 0x17, 0xFF, 0xA5))
     world.tamper("reply", lambda frame: garbage + frame)
-    assert unpack(Cmd.PING, bus.request(LENS, Cmd.PING).payload, reply=True) == (3, 1)
+    assert unpack(Cmd.PING, bus.request(LENS, Cmd.PING).payload, reply=True) == (3, PROTOCOL_VERSION)
     assert bus.stats.retries == 0
 
 
@@ -90,7 +95,8 @@ def test_absent_micro_times_out_within_a_bounded_time():
         with pytest.raises(Timeout, match=r"address 3\).*PING in 4 tries"):
             bus.request(LENS, Cmd.PING)
         elapsed = world.now - start
-        assert 4 * 0.05 <= elapsed <= 4 * (0.05 + 7 * world.byte_time) + 1e-9
+        longest_ping = 2 + 2 * 6  # flags, and every byte of ADDR SEQ LEN CMD CRC escaped
+        assert 4 * 0.05 <= elapsed <= 4 * (0.05 + longest_ping * world.byte_time) + 1e-9
         assert time.monotonic() - wall < 1.0
         assert bus.stats.failures == 1
 
@@ -105,10 +111,13 @@ def test_only_corrupted_replies_raise_corrupt_frame(bus):
 
 def test_broadcast_is_not_awaited_and_every_micro_acts_on_it(bus):
     world = bus.port.world
+    sent = []
+    world.tamper("request", lambda frame: sent.append(frame) or frame)
     start = world.now
     bus.broadcast(Cmd.ESTOP)
-    # Exactly the time to put the 7-byte frame on the wire (flush), no reply timeout.
-    assert world.now - start == pytest.approx(7 * world.byte_time)
+    # Exactly the time to put the frame on the wire (flush), no reply timeout.
+    assert world.now - start == pytest.approx(len(sent[0]) * world.byte_time)
+    assert decode(sent[0]).addr == 0
     for micro in (world.stepper, world.galvo, world.lens):
         assert micro.executed[Cmd.ESTOP] == 1
         assert all(axis.latched & Flag.FAULT_ESTOP for axis in micro.axes)
@@ -163,9 +172,9 @@ def test_bus_is_safe_to_share_between_threads(bus):
 def test_sequence_numbers_advance_per_address_and_retries_reuse_them(bus):
     world = bus.port.world
     seen = []
-    world.tamper("request", lambda frame: seen.append(frame[2]) or frame)
-    world.tamper("request", lambda frame: seen.append(frame[2]) or b"")
-    world.tamper("request", lambda frame: seen.append(frame[2]) or frame)
+    world.tamper("request", lambda frame: seen.append(decode(frame).seq) or frame)
+    world.tamper("request", lambda frame: seen.append(decode(frame).seq) or b"")
+    world.tamper("request", lambda frame: seen.append(decode(frame).seq) or frame)
     bus.request(GALVO, Cmd.PING)
     bus.request(GALVO, Cmd.PING)
     assert seen[1] == seen[2] == (seen[0] + 1) % 256
@@ -173,7 +182,12 @@ def test_sequence_numbers_advance_per_address_and_retries_reuse_them(bus):
 
 @pytest.mark.parametrize(
     ("kwargs", "name"),
-    [({"timeout": 0}, "timeout"), ({"timeout": "1"}, "timeout"), ({"retries": -1}, "retries")],
+    [
+        ({"timeout": 0}, "timeout"),
+        ({"timeout": "1"}, "timeout"),
+        ({"timeout": True}, "timeout"),
+        ({"retries": -1}, "retries"),
+    ],
 )
 def test_bus_rejects_bad_settings_by_name(kwargs, name):
     with pytest.raises(ValueError, match=name):
@@ -187,3 +201,33 @@ def test_bad_addresses_and_urls_are_rejected_by_name(bus):
         open_port(None)
     with pytest.raises(ValueError, match="unknown sim:// parameter 'drops'"):
         open_port("sim://?drops=0.1")
+
+
+def test_a_frame_inside_a_payload_never_reaches_the_micros(bus):
+    # SET_PROFILE of axis 0 whose speed and acceleration bytes hold a whole ESTOP broadcast (as protocol
+    # version 1 framed it), sent raw past the host's checks: the stepper refuses the speeds; no micro
+    # sees an emergency stop.
+    world = bus.port.world
+    payload = bytes.fromhex("00 a5 00 03 01 05 59 8a 00")
+    with pytest.raises(OutOfRange, match="SET_PROFILE"):
+        bus.request(STEPPER, Cmd.SET_PROFILE, payload)
+    assert [m.executed[Cmd.ESTOP] for m in (world.stepper, world.galvo, world.lens)] == [0, 0, 0]
+    assert not any(axis.latched for m in (world.stepper, world.galvo, world.lens) for axis in m.axes)
+    assert world.stepper.executed[Cmd.SET_PROFILE] == 1
+
+
+@pytest.mark.parametrize("step", ["request", "broadcast"])
+def test_a_dead_port_raises_port_error_not_serial_exception(bus, step):
+    bus.request(GALVO, Cmd.PING)
+    bus.port.unplug()
+    with pytest.raises(PortError, match="disconnected.*plugged in and powered") as info:
+        if step == "request":
+            bus.request(GALVO, Cmd.PING)
+        else:
+            bus.broadcast(Cmd.ESTOP)
+    assert isinstance(info.value.__cause__, serial.SerialException)
+
+
+def test_a_port_that_will_not_open_raises_port_error():
+    with pytest.raises(PortError, match="cannot use port '/dev/does-not-exist'"):
+        Bus("/dev/does-not-exist")

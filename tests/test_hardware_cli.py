@@ -63,6 +63,13 @@ def test_status_of_a_fresh_head_says_not_homed():
         (["home", "move", "100", "0"], "pan 100 deg is outside its travel"),
         (["home", "lens", "left", "zoom=5"], r"zoom must be in \[12.5, 75\] mm"),
         (["--port", "sim://?nope=1", "status"], "unknown sim:// parameter 'nope'"),
+        (["move", "1e308", "0"], r"pan 1e\+308 deg is outside its travel \[-90, 90\] deg; nothing moved"),
+        (["move", "0", "-1e308"], r"tilt -1e\+308 deg is outside its travel"),
+        (
+            ["point", "left", "1e308", "0"],
+            r"gaze \(azimuth 1e\+308, elevation 0\) deg needs mirror angles beyond",
+        ),
+        (["--baud", "fast", "status"], "argument --baud: invalid int value: 'fast'"),
     ],
 )
 def test_usage_and_input_errors_exit_2_with_one_line(capsys, argv, message):

@@ -5,11 +5,12 @@ import math
 
 import pytest
 
-from hardware.commands import FAULT_FLAGS, Cmd, Flag
-from hardware.errors import Fault, NotHomed, OutOfRange, UnknownCommand
+from hardware.commands import FAULT_FLAGS, Cmd, Flag, pack
+from hardware.errors import Fault, NotHomed, OutOfRange, PortError, UnknownCommand
 from hardware.eye import line_of_sight, mirror_angles
 from hardware.head import Head
 from hardware.physics import COUNTS_PER_DEGREE, PAN, TILT
+from hardware.protocol import FLAG, Parser
 
 
 def open_head(url="sim://?seed=1", **kwargs):
@@ -85,14 +86,42 @@ def test_out_of_travel_move_is_refused_on_the_host_and_nothing_moves(homed):
     assert [axis.mech.position for axis in world.stepper.axes] == before
 
 
+def test_out_of_travel_move_in_counts_is_refused_on_the_host_against_the_limits_read():
+    with open_head("sim://?seed=2") as head:
+        requests = head.bus.stats.requests
+        with pytest.raises(OutOfRange, match=r"pan: counts must be in -102400\.\.102400, got 102401"):
+            head.pan.move_to_counts(PAN.soft_max + 1)
+        assert head.bus.stats.requests == requests
+
+
 def test_out_of_travel_move_is_refused_by_the_micro_too(homed):
     world = world_of(homed)
     before = world.stepper.axes[0].mech.position
-    with pytest.raises(OutOfRange, match="pan: stepper micro refused MOVE_TO"):
-        homed.pan.move_to_counts(PAN.soft_max + 1)
+    executed = world.stepper.executed[Cmd.MOVE_TO]
+    # Sent raw, past the host's checks, as a host that skipped them would.
+    with pytest.raises(OutOfRange, match="stepper micro refused MOVE_TO"):
+        homed.bus.request(1, Cmd.MOVE_TO, pack(Cmd.MOVE_TO, 0, PAN.soft_max + 1), who="stepper micro")
     world.sleep(1.0)
     assert world.stepper.axes[0].mech.position == before
-    assert world.stepper.executed[Cmd.MOVE_TO] > 0
+    assert world.stepper.executed[Cmd.MOVE_TO] == executed + 1  # it reached the micro, which refused it
+
+
+def test_a_move_whose_sequence_number_is_the_flag_byte_arrives(homed):
+    # Protocol version 1 found a false frame inside this request whenever SEQ was A5 (2 moves in 600).
+    world = world_of(homed)
+    seqs = []
+    world.tamper("request", lambda frame: seqs.append(Parser().feed(frame)[0].seq) or frame)
+    homed.stepper.ping()
+    for _ in range((FLAG - 1 - seqs[0]) % 256):
+        homed.stepper.ping()
+    sent = []
+    world.tamper("request", lambda frame: sent.append(Parser().feed(frame)[0]) or frame)
+    retries = homed.bus.stats.retries
+    homed.move(tilt=-30.52)
+    assert (sent[0].seq, sent[0].cmd) == (FLAG, Cmd.MOVE_TO)
+    assert homed.bus.stats.retries == retries
+    assert homed.tilt.position == pytest.approx(-30.52, abs=0.5 / COUNTS_PER_DEGREE)
+    homed.move(tilt=0.0)
 
 
 def test_move_before_homing_raises_not_homed_and_nothing_moves():
@@ -300,11 +329,63 @@ def test_fixate_sets_the_vergence(homed):
         (lambda h: h.fixate(-1.0), ValueError, "distance"),
         (lambda h: h.pan.set_profile(0.0, 10.0), ValueError, "speed"),
         (lambda h: h.stepper.set_watchdog(100.0), ValueError, "period"),
+        (lambda h: h.move(pan=1e308), OutOfRange, r"pan 1e\+308 deg is outside its travel \[-90, 90\]"),
+        (lambda h: h.left.point(1e308, 0.0), OutOfRange, r"azimuth 1e\+308, elevation 0\) deg needs"),
+        (lambda h: h.left.point(0.0, True), ValueError, "elevation must be a finite number"),
+        (lambda h: h.right.set_mirrors(math.nan, 0.0), OutOfRange, r"right mirror x must be in \[-10, 10\]"),
+        (lambda h: h.pan.set_profile(100.0, 10.0), OutOfRange, r"speed must be in \[0.000878906, 52.7344\]"),
+        (lambda h: h.pan.set_profile(10.0, math.inf), OutOfRange, "acceleration must be in .* got inf"),
+        (lambda h: h.pan.set_profile(math.nan, 10.0), OutOfRange, "speed .* got nan"),
+        (lambda h: h.tilt.set_profile(1e308, 10.0), OutOfRange, r"speed .* got 1e\+308"),
+        (lambda h: h.tilt.set_profile(True, 10.0), TypeError, "speed must be a number"),
+        (lambda h: h.stepper.set_profile(0, 16974053, 5), OutOfRange, r"vmax must be in 1\.\.60000"),
+        (lambda h: h.stepper.set_profile(0, 100, 0), OutOfRange, r"accel must be in 1\.\.400000, got 0"),
+        (lambda h: h.stepper.set_profile(0, 100.0, 5), TypeError, "vmax must be an int"),
+        (lambda h: h.stepper.set_profile(2, 100, 5), OutOfRange, r"axis must be in 0\.\.1, got 2"),
+        (lambda h: h.stepper.move_to(True, 0), TypeError, "axis must be an int"),
+        (lambda h: h.stepper.move_to(1, 2**40), OutOfRange, r"counts must be in -102400\.\.0"),
+        (lambda h: h.stepper.home("0"), TypeError, "axis"),
+        (lambda h: h.galvo.set_angles(0, 10_001, 0), OutOfRange, r"x must be in -10000\.\.10000"),
+        (lambda h: h.galvo.set_angles(0, 0, 1.5), TypeError, "y must be an int"),
+        (lambda h: h.lens.set_counts(1, 0, 4096, 0), OutOfRange, r"focus must be in 0\.\.4095, got 4096"),
+        (lambda h: h.lens.set_counts(2, 0, 0, 0), OutOfRange, "eye must be in 0..1"),
+        (lambda h: h.lens.get(-1), OutOfRange, "eye"),
+        (lambda h: h.stepper.set_watchdog(math.inf), OutOfRange, r"period must be in \[0.001, 65.535\]"),
+        (lambda h: h.stepper.set_watchdog(math.nan), OutOfRange, "period .* got nan"),
+        (lambda h: h.stepper.set_watchdog(True), TypeError, "period"),
     ],
 )
-def test_bad_arguments_are_refused_by_name(homed, call, error, message):
+def test_bad_arguments_are_refused_by_name_before_anything_is_sent(homed, call, error, message):
+    requests = homed.bus.stats.requests
     with pytest.raises(error, match=message):
         call(homed)
+    assert homed.bus.stats.requests == requests
+
+
+@pytest.mark.parametrize(
+    ("watchdog", "error", "message"),
+    [
+        (math.inf, ValueError, r"watchdog must be in \[0.001, 65.535\] seconds, got inf"),
+        (math.nan, ValueError, "watchdog .* got nan"),
+        (1e308, ValueError, "watchdog"),
+        (0.0, ValueError, "watchdog"),
+        (True, TypeError, "watchdog must be a number"),
+        ("1", TypeError, "watchdog must be a number"),
+    ],
+)
+def test_head_refuses_a_bad_watchdog_by_name(watchdog, error, message):
+    with pytest.raises(error, match=message):
+        Head("sim://?seed=1", watchdog=watchdog)
+
+
+def test_a_dead_port_raises_port_error_and_not_serial_exception():
+    head = open_head("sim://?seed=2")
+    head.status()
+    head.bus.port.unplug()
+    with pytest.raises(PortError, match="disconnected") as info, head:
+        head.status()
+    assert info.value.__cause__ is not None
+    assert not head.bus.port.is_open
 
 
 def test_profile_changes_the_speed(homed):

@@ -1,6 +1,7 @@
 """End to end: the host drives a simulated head served on a pty by another process."""
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -10,7 +11,7 @@ import pytest
 
 import hardware
 from hardware.commands import FAULT_FLAGS, Flag
-from hardware.errors import OutOfRange, Timeout
+from hardware.errors import OutOfRange, PortError, Timeout
 from hardware.head import Head
 
 # The package's parent directory, so the server imports this checkout of `hardware` installed or not.
@@ -104,14 +105,43 @@ def test_server_exits_when_its_parent_dies():
     pytest.fail("the pty server outlived its parent")
 
 
-def test_bad_server_options_exit_2():
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["sim://?drop=2"], "drop is a probability"),
+        (["--rate", "inf"], r"--rate must be in \[0.001, 1000\] virtual seconds per second, got inf"),
+        (["--rate", "1e308"], r"--rate must be in .* got 1e\+308"),
+        (["--rate", "nan"], "--rate must be in .* got nan"),
+        (["--rate", "0"], "--rate must be in .* got 0"),
+        (["--rate", "fast"], "argument --rate: invalid float value: 'fast'"),
+        (["--baud", "0"], "baudrate must be a positive int, got 0"),
+    ],
+)
+def test_bad_server_options_exit_2_with_one_line_naming_them(args, message):
     env = dict(os.environ, PYTHONPATH=_ROOT)
     done = subprocess.run(
-        [sys.executable, "-m", "hardware.ptyserver", "sim://?drop=2"],
+        [sys.executable, "-m", "hardware.ptyserver", *args],
         check=False,
         capture_output=True,
         text=True,
         env=env,
+        timeout=30,
     )
     assert done.returncode == 2
-    assert "drop is a probability" in done.stderr
+    assert done.stderr.startswith("python -m hardware.ptyserver: error: ")
+    assert done.stderr.count("\n") == 1
+    assert re.search(message, done.stderr)
+
+
+def test_a_server_that_dies_under_the_host_raises_port_error():
+    proc, path = start_server("sim://?seed=12", rate=20.0)
+    try:
+        head = Head(path, timeout=0.1)
+        head.status()
+        proc.kill()
+        proc.wait()
+        with pytest.raises(PortError, match=repr(path)) as info, head:
+            head.status()
+        assert info.value.__cause__ is not None
+    finally:
+        stop_server(proc)

@@ -8,7 +8,7 @@ import pytest
 import serial
 
 from hardware.bus import open_port
-from hardware.commands import Cmd, Flag, pack
+from hardware.commands import PROTOCOL_VERSION, Cmd, Flag, pack
 from hardware.firmware import LensAxis
 from hardware.physics import (
     COUNTS_PER_MOTOR_REV,
@@ -18,7 +18,7 @@ from hardware.physics import (
     StepperMechanism,
     trapezoid_step,
 )
-from hardware.protocol import Parser, encode_request
+from hardware.protocol import encode_reply, encode_request
 from hardware.simulator import Faults, World
 
 PING_TO_STEPPER = encode_request(1, 1, Cmd.PING)
@@ -108,9 +108,10 @@ def test_lens_backlash_and_the_firmware_approach_from_below():
 def test_ping_round_trip_takes_exactly_the_bytes_and_the_turnaround():
     world = World(baudrate=115200, turnaround=3e-4)
     world.host_write(PING_TO_STEPPER)
-    reply = world.host_read(10, 1.0)
-    assert Parser().feed(reply)[0].payload == bytes((1, 1))
-    assert world.now == pytest.approx((7 + 10) * 10 / 115200 + 3e-4)
+    expected = encode_reply(1, 1, 0, Cmd.PING, bytes((1, PROTOCOL_VERSION)))
+    reply = world.host_read(len(expected), 1.0)
+    assert reply == expected
+    assert world.now == pytest.approx((len(PING_TO_STEPPER) + len(reply)) * 10 / 115200 + 3e-4)
 
 
 def test_read_waits_for_its_timeout_in_virtual_time_only():
@@ -131,7 +132,7 @@ def test_same_seed_same_faults_same_bytes():
         received = []
         for _ in range(50):
             world.host_write(PING_TO_STEPPER)
-            received.append((world.host_read(10, 0.2), world.now))
+            received.append((world.host_read(11, 0.2), world.now))
         return received
 
     assert session(3) == session(3)
@@ -200,7 +201,9 @@ def test_watchdog_stops_motion_when_the_host_falls_silent():
         ("sim://?sede=1", "unknown sim:// parameter 'sede'"),
         ("sim://?seed=x", "'seed' has a bad value"),
         ("sim://?drop=1.5", "drop is a probability"),
-        ("sim://?corrupt=-0.1", "corrupt must be a number >= 0"),
+        ("sim://?corrupt=-0.1", "corrupt must be a finite number >= 0"),
+        ("sim://?lag=inf", "lag must be a finite number >= 0"),
+        ("sim://?turnaround=inf", "turnaround must be a finite number"),
         ("sim://?absent=40", "absent addresses"),
         ("sim://?pan=120", "beyond the joint's mechanical stops"),
         ("sim://?turnaround=-1", "turnaround"),

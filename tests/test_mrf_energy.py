@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from vmcl import mrf
+from vmcl.errors import InputError
 from vmcl.mrf.energy import LinePrior, Params, line_costs
 from vmcl.mrf.lattice import Lattice
 
@@ -108,15 +109,93 @@ def test_bad_input_is_named(kwargs, error, match, machine):
         mrf.restore(machine=machine, **kwargs)
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    ({"alpha": -1.0}, "alpha must be >= 0"),
-    ({"t0": 0.0}, "t0 must be > 0"),
-    ({"t_factor": 1.5}, "temperatures fall"),
-    ({"sweeps": 2.5}, "sweeps must be an integer"),
-    ({"levels": 1}, "levels must be a count"),
-    ({"levels": (1.0, 1.0)}, "distinct"),
-    ({"beta": float("nan")}, "beta must be finite"),
+@pytest.mark.parametrize("kwargs, error, match", [
+    ({"alpha": -1.0}, ValueError, "alpha must be >= 0"),
+    ({"t0": 0.0}, ValueError, "t0 must be > 0"),
+    ({"t_factor": 1.5}, ValueError, "temperatures fall"),
+    # A float where a count belongs is a wrong type, as everywhere in vmcl (vmcl.errors).
+    ({"sweeps": 2.5}, TypeError, "sweeps must be an integer"),
+    ({"sweeps": 2**40}, ValueError, "sweeps must be <= 2147483647"),
+    ({"require_edge": 1}, TypeError, "require_edge must be a bool"),
+    ({"levels": 1}, ValueError, "levels must be a count"),
+    ({"levels": (1.0, 1.0)}, ValueError, "distinct"),
+    ({"levels": "32"}, ValueError, "levels must be a count"),
+    ({"levels": None}, ValueError, "levels must be a count"),
+    ({"beta": float("nan")}, ValueError, "beta must be finite"),
+    ({"beta": 10**400}, ValueError, "beta must be finite"),
+    ({"kappa": np.bool_(True)}, TypeError, "kappa must be a number"),
 ])
-def test_bad_params_are_named(kwargs, match):
-    with pytest.raises(ValueError, match=match):
+def test_bad_params_are_named(kwargs, error, match):
+    with pytest.raises(error, match=match):
         Params(**kwargs)
+
+
+_G = np.zeros((4, 5))
+_LH, _LV = np.zeros((4, 4), bool), np.zeros((3, 5), bool)
+
+
+@pytest.mark.parametrize("kwargs, error, match", [
+    ({"f": _G.astype(complex)}, TypeError, "f must hold real numbers"),
+    ({"data": _G.astype(object)}, TypeError, "data must hold real numbers"),
+    ({"line_h": _LH.astype("<U1")}, TypeError, "line_h must hold real numbers"),
+    ({"f": [[0.0] * 5] * 4}, TypeError, "f must be a NumPy array"),
+    ({"f": np.full((4, 5), np.nan)}, ValueError, "f must be finite"),
+    ({"f": np.zeros(5), "data": np.zeros(5)}, ValueError, "data must have 2 or 3 dimensions"),
+    ({"f": np.zeros((0, 5)), "data": np.zeros((0, 5))}, ValueError, "data must not be empty"),
+    ({"confidence": np.ones((0, 5))}, ValueError, "confidence must not be empty"),
+    ({"confidence": np.ones((4, 4))}, ValueError, "confidence must have the field's shape"),
+    ({"confidence": -np.ones((4, 5))}, ValueError, "confidence must be finite and >= 0"),
+    ({"edges": np.ones((4, 5), complex)}, TypeError, "edges must hold real numbers"),
+    ({"edges": np.ones((5, 4))}, ValueError, "edges must have the field's shape"),
+    ({"kind": ["smooth"]}, TypeError, "kind must be one of"),
+    ({"params": {"alpha": 1}}, TypeError, "params must be"),
+])
+def test_energy_refuses_bad_input_by_name(kwargs, error, match):
+    call = {"f": _G, "line_h": _LH, "line_v": _LV, "data": _G, **kwargs}
+    with pytest.raises(error, match=match) as raised:
+        mrf.energy(call.pop("f"), call.pop("line_h"), call.pop("line_v"), **call)
+    assert isinstance(raised.value, InputError)
+
+
+def test_energy_of_device_arrays_and_of_a_radius_beyond_the_image(machine):
+    rng = np.random.default_rng(3)
+    f, data = rng.random((5, 6)), rng.random((5, 6))
+    line_h, line_v = rng.random((5, 5)) < 0.3, rng.random((4, 6)) < 0.3
+    edges = np.zeros((5, 6), bool)
+    edges[2, 3] = True
+    wide = Params(require_edge=True, edge_radius=6)
+    expected = mrf.energy(f, line_h, line_v, data=data, edges=edges, params=wide)
+    on_device = [machine.to_device(a.astype(np.float32)) for a in (f, data)]
+    lines = [machine.to_device(a.astype(np.uint8)) for a in (line_h, line_v)]
+    got = mrf.energy(on_device[0], *lines, data=on_device[1], edges=machine.to_device(edges.astype(np.uint8)),
+                     params=wide)
+    assert got == pytest.approx(expected, rel=1e-6)
+    # A radius wider than the image marks the same pixels (it once allocated a (2r + H) x (2r + W) mask).
+    huge = Params(require_edge=True, edge_radius=2**31 - 1)
+    assert mrf.energy(f, line_h, line_v, data=data, edges=edges, params=huge) == expected
+
+
+def test_boundary_map_takes_device_lines_and_names_bad_ones(machine):
+    line_h = np.zeros((3, 3), bool)
+    line_h[1, 0] = True
+    line_v = np.zeros((2, 4), bool)
+    line_v[0, 3] = True
+    expected = np.zeros((3, 4), bool)
+    expected[1, 0] = expected[0, 3] = True
+    assert np.array_equal(mrf.boundary_map(line_h, line_v), expected)
+    device = mrf.boundary_map(machine.to_device(line_h.view(np.uint8)), machine.to_device(line_v.view(np.uint8)))
+    assert np.array_equal(device, expected)
+    for bad, error, match in ((line_h.astype(complex), TypeError, "line_h must hold real numbers"),
+                              (None, TypeError, "line_h must be a NumPy array"),
+                              (np.zeros(3, bool), ValueError, "line_h must have 2 dimensions"),
+                              (np.zeros((2, 3), bool), ValueError, "line_h must have shape")):
+        with pytest.raises(error, match=match) as raised:
+            mrf.boundary_map(bad, line_v)
+        assert isinstance(raised.value, InputError)
+
+
+@pytest.mark.parametrize("cue, error", [("sky", ValueError), (["depth"], TypeError), (None, TypeError)])
+def test_preset_names_a_bad_cue(cue, error):
+    with pytest.raises(error, match="cue must be one of") as raised:
+        mrf.preset(cue)
+    assert isinstance(raised.value, InputError)

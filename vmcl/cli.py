@@ -7,11 +7,26 @@ dense fields out (:mod:`vmcl.pipeline`, :mod:`vmcl.report`).
     vmcl run LEFT [RIGHT] [--next NEXT] [--config C.toml] --out DIR
     vmcl eval stereo|flow|edges --data DIR
     vmcl info
+    (each takes --quiet / -q, no progress bars, and --debug, tracebacks for every error)
 
-Bad input (a missing or unreadable file, images of different sizes, a bad configuration key) prints one
-line and exits with status 2. Outputs are written into a hidden temporary folder beside ``--out`` and
-renamed into place at the end, so a folder under that name is always a finished one. Stages that take
-time show a progress bar on stderr (tqdm); ``--quiet`` keeps only the results.
+Exit statuses: 0 done; 2 bad input (a missing, unreadable, truncated or corrupt file, images of
+different sizes, a bad configuration key or type, an ``--out`` vmcl may not write into) or no OpenCL
+platform, reported as one line (the install hint for the latter); 1 a defect in vmcl or a library under
+it, reported with its traceback; 130 interrupted (Ctrl-C), reported as one line. ``--debug`` shows the
+traceback for every error, bad input included.
+
+vmcl writes only its own files. ``--out`` must be a new folder, an empty one, or a previous vmcl output,
+which vmcl knows by the file :data:`vmcl.output_folder.MARKER` listing the files it wrote there; anything else is refused
+before the run. The files are written into a hidden folder beside ``--out`` and moved into place only
+when all are written; replacing a previous output touches only the files it lists, and puts them back
+if the move fails or is interrupted part way. A new folder gets the mode the umask gives; an existing one
+keeps its own.
+
+Images must be at least 16 x 16 pixels. Motion (``--next``) halves the frames ``[motion] levels - 1``
+times and its coarsest level must hold a ``[motion] patch``: with the defaults (2 levels, patch 11) the
+frames must be at least 21 x 21; ``levels = 1`` takes 16 x 16.
+
+Stages that take time show a progress bar on stderr (tqdm); ``--quiet`` keeps only the results.
 """
 
 from __future__ import annotations
@@ -21,21 +36,25 @@ import contextlib
 import dataclasses
 import math
 import os
-import shutil
 import sys
-import tempfile
 import time
+import traceback
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
 
+from vmcl.errors import InputError
+from vmcl.machine import NoOpenCLPlatformError
+from vmcl.output_folder import output_folder
+
+EXIT_DEFECT = 1
 EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report a command stopped by Ctrl-C
 
 SCENES = ("blocks", "corridor", "shadows", "textures", "cues")
 
-
-class BadInput(Exception):
+class BadInput(InputError):
     """Input the command refuses: reported as one line, exit status 2."""
 
 
@@ -54,31 +73,6 @@ def _progress(args: argparse.Namespace, total: int, what: str) -> Iterator[Calla
         yield step
 
 
-@contextlib.contextmanager
-def _atomic_folder(out: Path) -> Iterator[Path]:
-    """A temporary folder beside ``out`` that replaces it when the block succeeds, else vanishes."""
-    out = out.resolve()
-    if out.exists() and not out.is_dir():
-        raise BadInput(f"--out {out} exists and is not a folder")
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
-    except OSError as error:
-        raise BadInput(f"cannot write into {out.parent}: {error.strerror}") from None
-    try:
-        yield work
-        if out.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
-            os.replace(out, old / out.name)
-            os.replace(work, out)
-            shutil.rmtree(old)
-        else:
-            os.replace(work, out)
-    finally:
-        if work.exists():
-            shutil.rmtree(work)
-
-
 def _read(path: str, what: str) -> np.ndarray:
     from vmcl.datasets import read_image
 
@@ -86,7 +80,7 @@ def _read(path: str, what: str) -> np.ndarray:
         return read_image(path)
     except FileNotFoundError:
         raise BadInput(f"{what} image {path}: no such file") from None
-    except (ValueError, OSError) as error:
+    except (InputError, OSError) as error:
         raise BadInput(f"{what} image {path}: cannot be read as an image ({error})") from None
 
 
@@ -99,7 +93,7 @@ def _config(path: str | None):
         return Config.from_toml(path)
     except FileNotFoundError:
         raise BadInput(f"config {path}: no such file") from None
-    except (ValueError, TypeError, OSError) as error:
+    except (InputError, OSError) as error:
         raise BadInput(f"config {path}: {error}") from None
 
 
@@ -184,19 +178,19 @@ def _demo(args) -> int:
     from vmcl.pipeline import VisionMachine
     from vmcl.report import write_report
 
-    title, inputs, truth = _demo_inputs(args)
     config = _config(args.config)
-    if args.data == "motorcycle" and config.stereo.d_max is None:
-        known = truth["disparity"][np.isfinite(truth["disparity"])]
-        stereo = dataclasses.replace(config.stereo, d_min=int(known.min()), d_max=int(np.ceil(known.max())))
-        config = dataclasses.replace(config, stereo=stereo)
-    vm = VisionMachine(config)
-    result = _run_machine(vm, args, inputs["left"], inputs.get("right"), inputs.get("next"))
-    tables = evaluation_tables(result, truth)
-    print(f"{title}: {result.total_ms:.0f} ms")
-    for name, rows in tables.items():
-        _print_table(name, rows)
-    with _atomic_folder(Path(args.out)) as work:
+    with output_folder(Path(args.out)) as work:
+        title, inputs, truth = _demo_inputs(args)
+        if args.data == "motorcycle" and config.stereo.d_max is None:
+            known = truth["disparity"][np.isfinite(truth["disparity"])]
+            stereo = dataclasses.replace(config.stereo, d_min=int(known.min()), d_max=int(np.ceil(known.max())))
+            config = dataclasses.replace(config, stereo=stereo)
+        vm = VisionMachine(config)
+        result = _run_machine(vm, args, inputs["left"], inputs.get("right"), inputs.get("next"))
+        tables = evaluation_tables(result, truth)
+        print(f"{title}: {result.total_ms:.0f} ms")
+        for name, rows in tables.items():
+            _print_table(name, rows)
         write_report(result, work, title=f"Vision Machine demo: {title}", evaluation=tables)
     print(f"report: {Path(args.out) / 'report.html'}")
     return 0
@@ -218,9 +212,9 @@ def _run(args) -> int:
                            f"{'' if image.ndim == left.ndim else ' ' + ('RGB' if image.ndim == 3 else 'grey')}, "
                            f"left is {left.shape[1]} x {left.shape[0]}{' RGB' if left.ndim == 3 else ' grey'}: "
                            "the images must have the same size and channels")
-    vm = VisionMachine(config)
-    result = _run_machine(vm, args, left, right, next_)
-    with _atomic_folder(Path(args.out)) as work:
+    with output_folder(Path(args.out)) as work:
+        vm = VisionMachine(config)
+        result = _run_machine(vm, args, left, right, next_)
         write_report(result, work, title=f"Vision Machine: {Path(args.left).name}")
         np.savez_compressed(work / "fields.npz", **_fields(result))
     print(f"{result.total_ms:.0f} ms; report: {Path(args.out) / 'report.html'}")
@@ -376,7 +370,7 @@ def _info(args) -> int:
     import pyopencl as cl
 
     import vmcl
-    from vmcl.machine import NoOpenCLPlatformError, kernels_dir, list_devices
+    from vmcl.machine import kernels_dir, list_devices
 
     print(f"vmcl {vmcl.__version__}; pyopencl {cl.VERSION_TEXT}")
     try:
@@ -384,7 +378,7 @@ def _info(args) -> int:
         chosen = vmcl.default_machine().device
     except NoOpenCLPlatformError as error:
         print(f"vmcl: {error}", file=sys.stderr)
-        return 1
+        return EXIT_BAD_INPUT
     for device in devices:
         mark = "*" if device == chosen else " "
         kind = cl.device_type.to_string(device.type)
@@ -405,9 +399,12 @@ def parser() -> argparse.ArgumentParser:
     commands = top.add_subparsers(dest="command", required=True)
     quiet = argparse.ArgumentParser(add_help=False)
     quiet.add_argument("--quiet", "-q", action="store_true", help="no progress bars")
+    quiet.add_argument("--debug", action="store_true",
+                       help="show the traceback of every error, bad input and interrupts included")
 
     demo = commands.add_parser("demo", parents=[quiet], help="run the machine on a scene and write the report")
-    demo.add_argument("--out", default="vmcl-demo", help="output folder (default: vmcl-demo)")
+    demo.add_argument("--out", default="vmcl-demo",
+                      help="output folder: new, empty or a previous vmcl output (default: vmcl-demo)")
     demo.add_argument("--data", default="blocks", choices=(*SCENES, "motorcycle"),
                       help="a vmcl.scenes preset (default: blocks) or scikit-image's Middlebury Motorcycle pair")
     demo.add_argument("--size", type=int, default=256, help="scene size in pixels (64..1024, default 256)")
@@ -418,7 +415,7 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("right", nargs="?", help="right image of a rectified pair: adds stereo")
     run.add_argument("--next", help="the left view's next frame: adds motion")
     run.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config)")
-    run.add_argument("--out", required=True, help="output folder")
+    run.add_argument("--out", required=True, help="output folder: new, empty or a previous vmcl output")
 
     evaluate = commands.add_parser("eval", parents=[quiet], help="benchmarks beside OpenCV's baselines")
     evaluate.add_argument("benchmark", choices=("stereo", "flow", "edges"))
@@ -437,13 +434,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     handler = {"demo": _demo, "run": _run, "eval": _eval, "info": _info}[args.command]
     try:
         return handler(args)
-    except BadInput as error:
+    except KeyboardInterrupt:
+        _traceback_if(args.debug)
+        print("vmcl: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except NoOpenCLPlatformError as error:
+        _traceback_if(args.debug)
+        print(f"vmcl: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except InputError as error:
+        # vmcl refuses bad input with a sentence naming the argument; anything else is a defect.
+        _traceback_if(args.debug)
         print(f"vmcl: error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except (ValueError, TypeError) as error:
-        # The library refuses bad input with a sentence naming the argument (vmcl's convention).
-        print(f"vmcl: error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+    except Exception as error:  # noqa: BLE001 - the command's top: any defect is shown whole, then exit 1
+        traceback.print_exc()
+        print(f"vmcl: internal error: {type(error).__name__}: {error} (a defect, not bad input: please "
+              "report it with the traceback above)", file=sys.stderr)
+        return EXIT_DEFECT
+
+
+def _traceback_if(debug: bool) -> None:
+    if debug:
+        traceback.print_exc()
 
 
 if __name__ == "__main__":

@@ -15,6 +15,10 @@ nothing is downloaded and nothing is silently resized or rescaled.
 
 from __future__ import annotations
 
+import os
+import sys
+import tempfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -79,17 +83,108 @@ def read_image(path) -> np.ndarray:
     FileNotFoundError
         If the file does not exist.
     ValueError
-        If it cannot be decoded as an image.
+        If it is a folder, cannot be decoded as an image, or is a PNG or JPEG cut short or corrupt
+        (OpenCV would decode what it can and fill the rest with grey).
     """
+    if Path(path).is_dir():
+        raise InputValueError(f"{path} is a folder, not an image file")
     path = _existing(path)
-    image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    data = path.read_bytes()
+    if not data:
+        raise InputValueError(f"{path} is empty, not an image")
+    if data.startswith(_PNG_SIGNATURE):
+        damage = _png_damage(data)
+    elif data.startswith(_JPEG_START):
+        damage = _jpeg_damage(data)
+    else:
+        damage = None
+    if damage is not None:
+        raise InputValueError(f"{path} is damaged: {damage}")
+    image, printed = _decode(data)
+    warnings = [line for line in printed.splitlines() if line.startswith(_LIBJPEG_DAMAGE)]
+    if warnings:
+        raise InputValueError(f"{path} is damaged: its decoder says {warnings[0]!r}")
     if image is None:
         raise InputValueError(f"cannot decode an image from {path}")
+    sys.stderr.write(printed)  # the decoders' other notes (e.g. libpng's about colour profiles) stay visible
     if image.ndim == 3:
         if image.shape[2] == 4:
             raise InputValueError(f"{path} has an alpha channel; expected grey or RGB")
         image = np.ascontiguousarray(image[..., ::-1])
     return image
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+_JPEG_START = b"\xff\xd8\xff"  # start of image, then the first segment's marker
+_LIBJPEG_DAMAGE = ("Corrupt JPEG data", "Premature end of JPEG file")  # libjpeg's warnings about bad data
+
+
+def _png_damage(data: bytes) -> str | None:
+    """Why a PNG is damaged (a chunk cut short or failing its CRC, no IEND chunk), or None."""
+    at = len(_PNG_SIGNATURE)
+    while at + 12 <= len(data):
+        length = int.from_bytes(data[at:at + 4], "big")
+        kind = data[at + 4:at + 8].decode("latin-1")
+        end = at + 12 + length
+        if end > len(data):
+            break
+        if zlib.crc32(data[at + 4:end - 4]) != int.from_bytes(data[end - 4:end], "big"):
+            return f"its {kind} chunk at byte {at} fails its CRC check"
+        if kind == "IEND":
+            return None
+        at = end
+    return "it ends before its IEND chunk (cut short)"
+
+
+def _jpeg_damage(data: bytes) -> str | None:
+    """Why a JPEG is damaged (cut short in its headers, or no end-of-image marker after the scan), or None.
+
+    The segments before the first scan carry their lengths, so an EXIF thumbnail's own end marker is
+    stepped over; in the scans every 0xFF byte of data is followed by 0x00, so the first 0xFF 0xD9 after
+    the scan starts is the image's end. Bytes after it (camera trailers) are allowed.
+    """
+    at = 2
+    while at + 4 <= len(data):
+        if data[at] != 0xFF:
+            return f"no segment marker at byte {at}"
+        marker = data[at + 1]
+        if marker == 0xFF or 0xD0 <= marker <= 0xD8 or marker == 0x01:
+            at += 1 if marker == 0xFF else 2  # fill bytes and the markers without a length
+            continue
+        if marker == 0xD9:
+            return "it ends before any image data"
+        if marker == 0xDA:
+            if data.find(b"\xff\xd9", at) < 0:
+                return "it has no end-of-image marker (cut short)"
+            return None
+        at += 2 + int.from_bytes(data[at + 2:at + 4], "big")
+    return "it ends inside its headers (cut short)"
+
+
+def _decode(data: bytes) -> tuple[np.ndarray | None, str]:
+    """OpenCV's decoding of an image file's bytes, and what its decoders printed meanwhile.
+
+    libjpeg reports corrupt or missing data only by printing a warning on the process's stderr (file
+    descriptor 2, where the C libraries write), and OpenCV returns the image with the rest grey; so that
+    descriptor is caught around the call.
+    """
+    array = np.frombuffer(data, np.uint8)
+    sys.stderr.flush()
+    try:
+        saved = os.dup(2)
+    except OSError:  # no stderr to catch (a daemon): decode without
+        return cv2.imdecode(array, cv2.IMREAD_UNCHANGED), ""
+    try:
+        with tempfile.TemporaryFile() as caught:
+            os.dup2(caught.fileno(), 2)
+            try:
+                image = cv2.imdecode(array, cv2.IMREAD_UNCHANGED)
+            finally:
+                os.dup2(saved, 2)
+            caught.seek(0)
+            return image, caught.read().decode(errors="replace")
+    finally:
+        os.close(saved)
 
 
 def _single_channel(path) -> np.ndarray:

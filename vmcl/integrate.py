@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm._arrays import ArrayLike, machine_for
+from vmcl.cm._arrays import ArrayLike, check_int, check_real_dtype, field, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.scenes import Label
@@ -79,25 +79,34 @@ class Integration(NamedTuple):
     labels: ArrayLike
 
 
-def _lines(line_h: ArrayLike, line_v: ArrayLike, name: str, machine: Machine,
+def _pixel_map(array: ArrayLike, name: str, machine: Machine) -> cl_array.Array:
+    """A 2-D 0/1 map on the device as uint8: bool or uint8 on the host (0/1), uint8 on the device."""
+    if isinstance(array, np.ndarray) and array.dtype not in (np.bool_, np.uint8):
+        raise InputTypeError(f"{name} must be a bool or uint8 array, got {array.dtype}")
+    if isinstance(array, np.ndarray):
+        array = array.view(np.uint8)
+    return field(array, name, machine, ndims=(2,), dtypes=(np.uint8,))[0]
+
+
+def _lines(line_h: ArrayLike, line_v: ArrayLike, prefix: str, machine: Machine,
            shape: tuple[int, int] | None) -> tuple[cl_array.Array, cl_array.Array, tuple[int, int]]:
-    """Both line fields of one cue on the device as uint8, and the pixel shape they imply."""
-    fields = []
-    for array, which in ((line_h, "line_h"), (line_v, "line_v")):
-        if isinstance(array, np.ndarray):
-            if array.ndim != 2 or array.dtype not in (np.bool_, np.uint8):
-                raise InputValueError(f"{name} {which} must be a 2-D bool or uint8 array, got {array.dtype} {array.shape}")
-            array = machine.to_device(array.astype(np.uint8, copy=False))
-        elif not isinstance(array, cl_array.Array) or array.dtype != np.uint8 or array.ndim != 2:
-            raise InputTypeError(f"{name} {which} must be a 2-D uint8 device array or a NumPy array")
-        fields.append(array)
-    h, v = fields
+    """Both line fields of one cue on the device as uint8, and the pixel shape they imply; ``prefix`` says
+    where they came from in the caller's arguments."""
+    h = _pixel_map(line_h, f"{prefix}line_h", machine)
+    v = _pixel_map(line_v, f"{prefix}line_v", machine)
     implied = (h.shape[0], h.shape[1] + 1)
     if v.shape != (implied[0] - 1, implied[1]):
-        raise InputValueError(f"{name}: line_h {h.shape} and line_v {v.shape} are not the two line fields of one image")
+        raise InputValueError(f"{prefix}line_h {h.shape} and {prefix}line_v {v.shape} are not the two line fields "
+                              f"of one image")
     if shape is not None and implied != shape:
-        raise InputValueError(f"{name}: line fields of a {implied} image, expected {shape}")
+        raise InputValueError(f"{prefix}line_h and line_v: line fields of a {implied} image, expected {shape}")
     return h, v, implied
+
+
+def _shape(shape) -> tuple[int, int]:
+    if not isinstance(shape, (tuple, list)) or len(shape) != 2:
+        raise InputTypeError(f"shape must be a (height, width) pair of integers, got {shape!r}")
+    return check_int(shape[0], "shape[0]", minimum=1), check_int(shape[1], "shape[1]", minimum=1)
 
 
 def boundary(line_h: ArrayLike, line_v: ArrayLike, *, machine: Machine | None = None) -> ArrayLike:
@@ -116,7 +125,7 @@ def boundary(line_h: ArrayLike, line_v: ArrayLike, *, machine: Machine | None = 
     """
     machine = machine_for(machine)
     host = isinstance(line_h, np.ndarray)
-    h, v, (height, width) = _lines(line_h, line_v, "lines", machine, None)
+    h, v, (height, width) = _lines(line_h, line_v, "", machine, None)
     out = machine.empty((height, width), np.uint8)
     kernel = machine.kernel("integrate", "boundary", **_DEFINES)
     machine.launch(kernel, (width, height), h, v, out, np.int64(width), np.int64(height))
@@ -152,26 +161,33 @@ def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayL
     ([0, 3, 0, 0], 4)
     """
     machine = machine_for(machine)
+    if not isinstance(lines, Mapping):
+        raise InputTypeError(f"lines must be a mapping of cue name to (line_h, line_v), got {type(lines).__name__}")
     unknown = set(lines) - set(CUES)
     if unknown:
-        raise InputValueError(f"lines has unknown cues {sorted(unknown)}; cues are {', '.join(CUES)}")
+        raise InputValueError(f"lines has unknown cues {sorted(unknown, key=str)}; cues are {', '.join(CUES)}")
+    for name, pair in lines.items():
+        if not isinstance(pair, (tuple, list)) or len(pair) != 2:
+            raise InputTypeError(f"lines[{name!r}] must be a (line_h, line_v) pair, got {type(pair).__name__}")
+    if shape is not None:
+        shape = _shape(shape)
     inputs = [a for pair in lines.values() for a in pair] + ([edges] if edges is not None else [])
     host = all(isinstance(a, np.ndarray) for a in inputs)
     present = 0
     buffers = []
     for bit, name in zip((Cue.DEPTH, Cue.MOTION, Cue.COLOUR, Cue.TEXTURE), CUES):
         if name in lines:
-            h, v, shape = _lines(*lines[name], name, machine, shape)
+            h, v, shape = _lines(*lines[name], f"lines[{name!r}] ", machine, shape)
             present |= bit
             buffers += [h, v]
         else:
             buffers += [None, None]
     if edges is not None:
         if isinstance(edges, np.ndarray):
-            edges = machine.to_device((edges != 0).astype(np.uint8))
-        if edges.dtype != np.uint8 or edges.ndim != 2 or (shape is not None and edges.shape != shape):
-            raise InputValueError(f"edges must be a uint8 (H, W) field of the lines' shape {shape}, got "
-                             f"{edges.dtype} {edges.shape}")
+            edges = (check_real_dtype(edges, "edges") != 0).view(np.uint8)
+        edges = field(edges, "edges", machine, ndims=(2,), dtypes=(np.uint8,))[0]
+        if shape is not None and edges.shape != shape:
+            raise InputValueError(f"edges must have the lines' shape {shape}, got {edges.shape}")
         shape = edges.shape
         present |= Cue.BRIGHTNESS
     if shape is None:

@@ -33,13 +33,14 @@ from __future__ import annotations
 import functools
 import itertools
 import json
+import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from vmcl.cm._arrays import ArrayLike, machine_for
+from vmcl.cm._arrays import ArrayLike, check_bool, check_real, machine_for, real_host_array
 from vmcl.cm._arrays import field as device_field
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.integrate import BIT_DEFINES, Cue
@@ -67,8 +68,21 @@ WEIGHTS_FILE = Path(__file__).with_name("labelling.json")
 _FIT_PRECEDENCE = (Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.TEXTURE, Label.SHADOW, Label.SPECULAR)
 
 
+def _input_names(inputs: Iterable[str], name: str = "inputs") -> set[str]:
+    """``inputs`` checked as a collection of names from :data:`INPUTS` (a lone string is refused: its
+    letters name nothing)."""
+    if isinstance(inputs, str) or not isinstance(inputs, Iterable):
+        raise InputTypeError(f"{name} must be a collection of names from {', '.join(INPUTS)}, "
+                             f"got {type(inputs).__name__}")
+    names = list(inputs)
+    unknown = [n for n in names if not isinstance(n, str) or n not in INPUTS]
+    if unknown:
+        raise InputValueError(f"{name} holds {unknown!r}, which name no input; inputs are {', '.join(INPUTS)}")
+    return set(names)
+
+
 def _key(inputs: Iterable[str]) -> str:
-    inputs = set(inputs)
+    inputs = _input_names(inputs)
     return "+".join(name for name in INPUTS if name in inputs) or "image"
 
 
@@ -83,7 +97,7 @@ _BITS = {"stereo": Cue.DEPTH, "motion": Cue.MOTION, "colour": Cue.COLOUR, "textu
 def candidate_bits(inputs: Iterable[str]) -> int:
     """The support bits that make a candidate when these inputs ran: theirs and the brightness edge's."""
     bits = Cue.BRIGHTNESS
-    for name in inputs:
+    for name in _input_names(inputs):
         bits |= _BITS[name]
     return int(bits)
 
@@ -111,10 +125,18 @@ class LinearLabeller:
     _on_device: dict = field(default_factory=dict, init=False, repr=False)
 
     def __post_init__(self):
+        if not isinstance(self.weights, Mapping):
+            raise InputTypeError(f"weights must be a mapping of input-set key to weight matrix, got "
+                                 f"{type(self.weights).__name__}")
+        if not isinstance(self.fitted_on, str):
+            raise InputTypeError(f"fitted_on must be a str, got {type(self.fitted_on).__name__}")
         expected = (1 + len(FEATURES), len(CLASSES))
         for key, w in self.weights.items():
             if key not in KEYS:
                 raise InputValueError(f"weights key {key!r} names no set of inputs; keys are {', '.join(KEYS)}")
+            if not isinstance(w, np.ndarray) or w.dtype.kind not in "iuf":
+                raise InputTypeError(f"weights[{key!r}] must be a real NumPy array, got {type(w).__name__} "
+                                     f"{getattr(w, 'dtype', '')}")
             if np.shape(w) != expected:
                 raise InputValueError(f"weights[{key!r}] must have shape {expected}, got {np.shape(w)}")
             if not np.all(np.isfinite(w)):
@@ -136,6 +158,8 @@ class LinearLabeller:
     @classmethod
     def load(cls, path: str | Path | None = None) -> LinearLabeller:
         """The weights in ``path`` (default: the fitted ones shipped with vmcl)."""
+        if path is not None and not isinstance(path, (str, os.PathLike)):
+            raise InputTypeError(f"path must be a str, an os.PathLike or None, got {type(path).__name__}")
         path = WEIGHTS_FILE if path is None else Path(path)
         try:
             data = json.loads(path.read_text(encoding="utf-8"))
@@ -183,8 +207,7 @@ class LinearLabeller:
         """
         from scipy.optimize import minimize
 
-        if not (isinstance(l2, (int, float)) and np.isfinite(l2) and l2 >= 0):
-            raise InputValueError(f"l2 must be a finite number >= 0, got {l2!r}")
+        check_real(l2, "l2", minimum=0)
         sets = [tuple(p) for p in (_INPUT_SETS if input_sets is None else input_sets)]
         for present in sets:
             if isinstance(present, str) or not set(present) <= set(INPUTS):
@@ -248,6 +271,9 @@ class LinearLabeller:
 
 def fit_targets(truth: np.ndarray) -> np.ndarray:
     """The label each pixel is fitted to: the truth's on it or on a 4-neighbour, in precedence order."""
+    real_host_array(truth, "truth", ndims=(2,), empty=True)
+    if truth.dtype.kind not in "iu":
+        raise InputTypeError(f"truth must be an integer Label map, got dtype {truth.dtype}")
     padded = np.pad(truth, 1)
     h, w = truth.shape
     out = np.zeros(truth.shape, np.uint8)
@@ -265,9 +291,7 @@ def _run(support, image, disparity, flow, hue, texture, labeller, machine, class
     img, _ = device_field(image, "image", machine, ndims=(2, 3), dtypes=(np.float32,))
     if img.shape[:2] != shape or (img.ndim == 3 and img.shape[2] != 3):
         raise InputValueError(f"image must be (H, W) or (H, W, 3) with the support's (H, W) {shape}, got {img.shape}")
-    if not isinstance(texture, (bool, np.bool_)):
-        raise InputTypeError(f"texture must be a bool, got {type(texture).__name__}")
-    present = {"texture"} if texture else set()
+    present = {"texture"} if check_bool(texture, "texture") else set()
     fields = {}
     for name, array, ndims, wanted, needs in (("disparity", disparity, (2,), shape, "stereo"),
                                               ("flow", flow, (3,), shape + (2,), "motion"),

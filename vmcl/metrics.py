@@ -30,6 +30,7 @@ import numpy as np
 import pyopencl.array as cl_array
 from scipy import ndimage
 
+from vmcl.cm._arrays import check_bool, check_int, check_real
 from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = [
@@ -52,6 +53,9 @@ __all__ = [
 BAD_PIXEL_THRESHOLDS: tuple[float, ...] = (0.5, 1.0, 2.0, 4.0)
 """The Middlebury thresholds, in pixels, at which a disparity counts as bad."""
 
+# More boundary thresholds than a 16-bit edge map has levels only repeat matchings, at 0.1 s each.
+_MAX_BOUNDARY_THRESHOLDS = 2**16
+
 
 # --------------------------------------------------------------------------------------------- validation
 
@@ -63,8 +67,8 @@ def _host(array) -> np.ndarray:
 
 def _as_float_field(array, name: str, *, ndim: int) -> np.ndarray:
     array = _host(array)
-    if array.dtype == bool or not np.issubdtype(array.dtype, np.number):
-        raise InputTypeError(f"{name} must be a numeric array, got dtype {array.dtype}")
+    if array.dtype.kind not in "iuf":
+        raise InputTypeError(f"{name} must be a numeric array of real numbers, got dtype {array.dtype}")
     if array.ndim != ndim:
         raise InputValueError(f"{name} must have {ndim} dimensions, got shape {array.shape}")
     if array.size == 0:
@@ -75,13 +79,21 @@ def _as_float_field(array, name: str, *, ndim: int) -> np.ndarray:
     return array
 
 
-def _as_mask(mask, name: str, shape: tuple[int, ...]) -> np.ndarray:
+def _as_mask(mask, name: str, shape: tuple[int, ...], against: str) -> np.ndarray:
+    """``mask`` as a boolean array of ``against``'s shape."""
     mask = _host(mask)
     if mask.dtype != bool:
         raise InputTypeError(f"{name} must be a boolean array, got dtype {mask.dtype}")
     if mask.shape != shape:
-        raise InputValueError(f"{name} has shape {mask.shape}, expected {shape}")
+        raise InputValueError(f"{name} has shape {mask.shape}, {against} has shape {shape}")
     return mask
+
+
+def _sequence(value, name: str) -> Sequence:
+    """``value`` checked as a list, tuple or NumPy array of at least one dimension (a stack of maps)."""
+    if not isinstance(value, (list, tuple, np.ndarray)) or (isinstance(value, np.ndarray) and value.ndim == 0):
+        raise InputTypeError(f"{name} must be a list, tuple or array, got {type(value).__name__}")
+    return value
 
 
 def _evaluated(truth: np.ndarray, mask, truth_known: np.ndarray) -> np.ndarray:
@@ -89,7 +101,7 @@ def _evaluated(truth: np.ndarray, mask, truth_known: np.ndarray) -> np.ndarray:
     if mask is None:
         evaluated = truth_known
     else:
-        evaluated = _as_mask(mask, "mask", truth_known.shape)
+        evaluated = _as_mask(mask, "mask", truth_known.shape, "ground_truth")
         unknown = int(np.count_nonzero(evaluated & ~truth_known))
         if unknown:
             raise InputValueError(f"ground_truth has no value (NaN) at {unknown} pixels inside mask")
@@ -172,9 +184,9 @@ def evaluate_disparity(
     truth = _as_float_field(ground_truth, "ground_truth", ndim=2)
     if disparity.shape != truth.shape:
         raise InputValueError(f"disparity has shape {disparity.shape}, ground_truth has shape {truth.shape}")
-    thresholds = tuple(float(t) for t in thresholds)
-    if not thresholds or min(thresholds) < 0:
-        raise InputValueError(f"thresholds must be a non-empty sequence of non-negative numbers, got {thresholds}")
+    thresholds = tuple(check_real(t, "thresholds[]", minimum=0) for t in _sequence(thresholds, "thresholds"))
+    if not thresholds:
+        raise InputValueError("thresholds must be a non-empty sequence of non-negative numbers, got ()")
     evaluated = _evaluated(truth, mask, np.isfinite(truth))
     error = np.abs(disparity[evaluated] - truth[evaluated])
     has_output = np.isfinite(error)
@@ -364,18 +376,21 @@ class BoundaryCounts:
 
 
 def _thresholds(thresholds) -> np.ndarray:
-    if isinstance(thresholds, (int, np.integer)) and not isinstance(thresholds, bool):
-        if thresholds < 1:
-            raise InputValueError(f"thresholds must be a positive count or a sequence, got {thresholds}")
+    if isinstance(thresholds, (int, np.integer)) and not isinstance(thresholds, (bool, np.bool_)):
+        if not 1 <= thresholds <= _MAX_BOUNDARY_THRESHOLDS:
+            raise InputValueError(f"thresholds must be a count in 1..{_MAX_BOUNDARY_THRESHOLDS} or a sequence, "
+                                  f"got {thresholds}")
         n = int(thresholds)
         # The benchmark's own choice: n thresholds evenly inside (0, 1), ends excluded.
         return np.linspace(1.0 / (n + 1), 1.0 - 1.0 / (n + 1), n)
-    values = np.asarray(thresholds, dtype=np.float64)
+    values = np.asarray(thresholds if isinstance(thresholds, (list, tuple, np.ndarray)) else ())
+    if values.dtype.kind not in "iuf":
+        raise InputTypeError(f"thresholds must be a positive count or a sequence of numbers, got {thresholds!r}")
     if values.ndim != 1 or values.size == 0 or not np.isfinite(values).all():
         raise InputValueError("thresholds must be a positive count or a non-empty 1-D sequence of finite numbers")
     if np.any(np.diff(values) <= 0):
         raise InputValueError("thresholds must be strictly increasing")
-    return values
+    return values.astype(np.float64)
 
 
 def _edge_map(edge_map) -> np.ndarray:
@@ -389,10 +404,12 @@ def _edge_map(edge_map) -> np.ndarray:
 
 
 def _truth_boundaries(ground_truths, shape: tuple[int, int]) -> list[np.ndarray]:
-    truths = [_host(g) for g in ground_truths]
+    truths = [_host(g) for g in _sequence(ground_truths, "ground_truths")]
     if not truths:
         raise InputValueError("ground_truths must hold at least one annotator's boundary map")
     for k, g in enumerate(truths):
+        if g.dtype.kind not in "biuf":
+            raise InputTypeError(f"ground_truths[{k}] must be a 0/1 or boolean boundary map, got dtype {g.dtype}")
         if g.shape != shape:
             raise InputValueError(f"ground_truths[{k}] has shape {g.shape}, edge_map has shape {shape}")
         if g.dtype != bool and not np.isin(g, (0, 1)).all():
@@ -455,8 +472,8 @@ def boundary_counts(
     pb = _edge_map(edge_map)
     truths = _truth_boundaries(ground_truths, pb.shape)
     levels = _thresholds(thresholds)
-    if not 0 < max_dist < 1:
-        raise InputValueError(f"max_dist must be a fraction of the diagonal in (0, 1), got {max_dist}")
+    check_real(max_dist, "max_dist (a fraction of the diagonal)", above=0, below=1)
+    thin = check_bool(thin, "thin")
     total_truth = sum(int(g.sum()) for g in truths)
     counts = np.zeros((4, levels.size), dtype=np.int64)
     previous_key, previous = None, None
@@ -596,12 +613,14 @@ def evaluate_boundaries(
     P. Arbelaez, M. Maire, C. Fowlkes and J. Malik, "Contour detection and hierarchical image
     segmentation", IEEE TPAMI 33(5):898-916, 2011.
     """
+    _sequence(edge_maps, "edge_maps")
+    for k, truths in enumerate(_sequence(ground_truths, "ground_truths")):
+        _sequence(truths, f"ground_truths[{k}]")
     if len(edge_maps) != len(ground_truths):
         raise InputValueError(f"{len(edge_maps)} edge_maps but {len(ground_truths)} ground_truths")
     if not edge_maps:
         raise InputValueError("edge_maps is empty")
-    if workers < 1:
-        raise InputValueError(f"workers must be at least 1, got {workers}")
+    check_int(workers, "workers", minimum=1)
     kwargs = {"thresholds": thresholds, "max_dist": max_dist, "thin": thin}
     # Host copies: a worker process cannot receive device arrays.
     jobs = [(_host(e), [_host(t) for t in g], kwargs) for e, g in zip(edge_maps, ground_truths)]
@@ -693,11 +712,12 @@ def detection_scores(predicted, truth, *, tolerance: float = 1.0) -> DetectionSc
     one pixel thick and the question is whether each kind of discontinuity was found at all.
     """
     predicted = _host(predicted)
-    if predicted.dtype != bool or predicted.ndim != 2:
-        raise InputTypeError(f"predicted must be a 2-D boolean array, got {predicted.dtype} {predicted.shape}")
-    truth = _as_mask(truth, "truth", predicted.shape)
-    if not np.isfinite(tolerance) or tolerance < 0:
-        raise InputValueError(f"tolerance must be a finite number >= 0, got {tolerance}")
+    if predicted.dtype != bool:
+        raise InputTypeError(f"predicted must be a 2-D boolean array, got dtype {predicted.dtype}")
+    if predicted.ndim != 2:
+        raise InputValueError(f"predicted must be a 2-D boolean array, got shape {predicted.shape}")
+    truth = _as_mask(truth, "truth", predicted.shape, "predicted")
+    tolerance = check_real(tolerance, "tolerance", minimum=0)
     n_predicted, n_true = int(predicted.sum()), int(truth.sum())
     found_predicted = np.count_nonzero(predicted & _within(truth, tolerance))
     found_truth = np.count_nonzero(truth & _within(predicted, tolerance))
@@ -733,10 +753,14 @@ def label_scores(
     predicted = _host(predicted)
     truth = _host(truth)
     for name, array in (("predicted", predicted), ("truth", truth)):
-        if not np.issubdtype(array.dtype, np.integer) or array.ndim != 2:
-            raise InputTypeError(f"{name} must be a 2-D integer label map, got {array.dtype} {array.shape}")
+        if not np.issubdtype(array.dtype, np.integer):
+            raise InputTypeError(f"{name} must be a 2-D integer label map, got dtype {array.dtype}")
+        if array.ndim != 2:
+            raise InputValueError(f"{name} must be a 2-D integer label map, got shape {array.shape}")
     if predicted.shape != truth.shape:
         raise InputValueError(f"predicted has shape {predicted.shape}, truth has shape {truth.shape}")
+    check_real(tolerance, "tolerance", minimum=0)
     if labels is None:
         labels = sorted((set(np.unique(predicted).tolist()) | set(np.unique(truth).tolist())) - {0})
+    labels = [check_int(lab, "labels[]") for lab in _sequence(labels, "labels")]
     return {int(lab): detection_scores(predicted == lab, truth == lab, tolerance=tolerance) for lab in labels}

@@ -52,6 +52,29 @@ else:  # the same parser, before it joined the standard library
 # Full scale of each accepted integer dtype: images are computed as float32 in [0, 1].
 _FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
 
+# What each annotation of a Config section's fields takes; bool is not taken as an int (TOML's true is
+# not 1), and an int is taken as a float (TOML's 2 is 2.0).
+_FIELD_TYPES = {"bool": ((bool, np.bool_), "true or false"),
+                "int": ((int, np.integer), "an integer"),
+                "float": ((int, float, np.integer, np.floating), "a number"),
+                "str": ((str,), "a string"),
+                "Mapping[str, Any]": ((Mapping,), "a table of keys")}
+
+
+def _check_field_types(section: str, values: Any) -> None:
+    """Refuse a section field of the wrong type, naming ``section.key``, when the Config is made."""
+    for spec in dataclasses.fields(values):
+        value = getattr(values, spec.name)
+        kinds = spec.type.split(" | ")  # the annotation as written (postponed annotations are strings)
+        if value is None and "None" in kinds:
+            continue
+        is_bool = isinstance(value, (bool, np.bool_))
+        if any(isinstance(value, _FIELD_TYPES[kind][0]) and (kind == "bool" or not is_bool)
+               for kind in kinds if kind != "None"):
+            continue
+        expected = " or ".join("None" if kind == "None" else _FIELD_TYPES[kind][1] for kind in kinds)
+        raise InputTypeError(f"{section}.{spec.name} must be {expected}, got {value!r} ({type(value).__name__})")
+
 
 @dataclass(frozen=True)
 class EdgesConfig:
@@ -71,6 +94,9 @@ class EdgesConfig:
     low_threshold: float | None = None
     high_threshold: float | None = None
     use_quantiles: bool = False
+
+    def __post_init__(self) -> None:
+        _check_field_types("edges", self)
 
 
 @dataclass(frozen=True)
@@ -127,15 +153,11 @@ class StereoConfig:
 
     def __post_init__(self) -> None:
         # Checked when the Config is made, naming the key, not mid-run.
+        _check_field_types("stereo", self)
         check_unit_interval(self.backfill_floor, "stereo.backfill_floor", closed_above=False)
         check_unit_interval(self.backfill_weight, "stereo.backfill_weight", closed_above=True)
-        if not isinstance(self.shiftable, bool):
-            raise InputTypeError(f"stereo.shiftable must be true or false, got {self.shiftable!r}")
-        sigma = self.intensity_sigma
-        if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.integer, np.floating)):
-            raise InputTypeError(f"stereo.intensity_sigma must be a number, got {type(sigma).__name__}")
-        if not 0 < sigma < math.inf:
-            raise InputValueError(f"stereo.intensity_sigma must be > 0 and finite, got {sigma!r}")
+        if not 0 < self.intensity_sigma < math.inf:
+            raise InputValueError(f"stereo.intensity_sigma must be > 0 and finite, got {self.intensity_sigma!r}")
 
 
 @dataclass(frozen=True)
@@ -164,6 +186,7 @@ class MotionConfig:
     confidence_floor: float = 0.7
 
     def __post_init__(self) -> None:
+        _check_field_types("motion", self)
         check_unit_interval(self.confidence_floor, "motion.confidence_floor", closed_above=False)
 
 
@@ -181,6 +204,9 @@ class ColourConfig:
     enabled: bool = True
     threshold: float | None = None
 
+    def __post_init__(self) -> None:
+        _check_field_types("colour", self)
+
 
 @dataclass(frozen=True)
 class TextureConfig:
@@ -194,6 +220,9 @@ class TextureConfig:
     coarse_sigma: float = 4.0
     threshold: float = 0.08
     radius: int = 24
+
+    def __post_init__(self) -> None:
+        _check_field_types("texture", self)
 
 
 @dataclass(frozen=True)
@@ -227,6 +256,9 @@ class MrfConfig:
     flow: Mapping[str, Any] = field(default_factory=dict)
     colour: Mapping[str, Any] = field(default_factory=dict)
     texture: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        _check_field_types("mrf", self)
 
     def params(self, cue: str) -> Params:
         """The preset Params of ``cue`` with the schedule and this configuration's overrides."""
@@ -262,6 +294,7 @@ class LabelsConfig:
     weights: str | None = None
 
     def __post_init__(self):
+        _check_field_types("labels", self)
         if self.method not in ("linear", "rule"):
             raise InputValueError(f"labels.method must be 'linear' or 'rule', got {self.method!r}")
         if self.weights is not None:
@@ -292,7 +325,8 @@ class Config:
 
     Load one from TOML with :meth:`from_toml` (sections ``[edges]``, ``[stereo]``, ``[motion]``,
     ``[colour]``, ``[texture]``, ``[mrf]`` and ``[mrf.depth]`` ... for Params overrides, ``[labels]``); unknown keys
-    are refused with a ValueError naming them.
+    are refused with a ValueError naming them, and values of the wrong type (each field's annotation: bool,
+    int, float, str, None where allowed; true is not an integer) with a TypeError naming ``section.key``.
 
     Examples
     --------
@@ -310,7 +344,7 @@ class Config:
 
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> Config:
-        """A Config from nested mappings; a key that names nothing raises ValueError."""
+        """A Config from nested mappings; a key that names nothing raises ValueError, a mistyped value TypeError."""
         sections = {}
         for name, entries in values.items():
             if name not in _SECTIONS:
@@ -329,10 +363,14 @@ class Config:
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Config:
-        """Read a Config from a TOML file (raises ValueError on bad TOML or keys, OSError if unreadable)."""
+        """Read a Config from a TOML file.
+
+        Raises ValueError on bad TOML (or text that is not UTF-8) or keys, TypeError on mistyped values,
+        OSError if the file cannot be read.
+        """
         try:
-            values = tomllib.loads(Path(path).read_text())
-        except tomllib.TOMLDecodeError as error:
+            values = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
             raise InputValueError(f"{path}: not valid TOML ({error})") from None
         return cls.from_dict(values)
 

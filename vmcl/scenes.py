@@ -57,6 +57,7 @@ from enum import IntEnum
 
 import numpy as np
 
+from vmcl.cm._arrays import check_bool, check_int, check_real
 from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = [
@@ -104,11 +105,30 @@ _PRECEDENCE = (Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.TEXTURE, Labe
 # --------------------------------------------------------------------------------------------- world
 
 
-def _vector(value, name: str) -> tuple[float, float, float]:
-    v = np.asarray(value, dtype=np.float64)
-    if v.shape != (3,) or not np.isfinite(v).all():
-        raise InputValueError(f"{name} must be three finite numbers, got {value!r}")
+def _numbers(value, name: str, count: int) -> tuple[float, ...]:
+    """``value`` as ``count`` finite floats: a tuple, list or array of real numbers."""
+    if not isinstance(value, (tuple, list, np.ndarray)):
+        raise InputTypeError(f"{name} must be {count} finite numbers, got {type(value).__name__}")
+    v = np.asarray(value)
+    if v.dtype.kind not in "iuf":
+        raise InputTypeError(f"{name} must be {count} finite numbers, got {value!r}")
+    v = v.astype(np.float64)
+    if v.shape != (count,) or not np.isfinite(v).all():
+        raise InputValueError(f"{name} must be {count} finite numbers, got {value!r}")
     return tuple(float(x) for x in v)
+
+
+def _vector(value, name: str) -> tuple[float, float, float]:
+    return _numbers(value, name, 3)
+
+
+def _instances(value, name: str, kind: type, *, empty: bool = True) -> tuple:
+    """``value`` as a tuple of ``kind`` instances (a tuple or list of them)."""
+    if not isinstance(value, (tuple, list)) or not all(isinstance(v, kind) for v in value):
+        raise InputTypeError(f"{name} must be a tuple of {kind.__name__}, got {value!r:.80}")
+    if not value and not empty:
+        raise InputValueError(f"{name} must hold at least one {kind.__name__}")
+    return tuple(value)
 
 
 def _rotation(rvec) -> np.ndarray:
@@ -154,12 +174,13 @@ class Texture:
     fill: float = 1.0
 
     def __post_init__(self):
-        if self.kind not in ("flat", "noise", "stripes", "gradient", "blobs"):
+        if not isinstance(self.kind, str) or self.kind not in ("flat", "noise", "stripes", "gradient", "blobs"):
             raise InputValueError(f"texture kind must be flat, noise, stripes, gradient or blobs: {self.kind!r}")
-        if not self.scale > 0:
-            raise InputValueError(f"texture scale must be positive, got {self.scale}")
-        if not 0 <= self.contrast < 1:
-            raise InputValueError(f"texture contrast must be in [0, 1), got {self.contrast}")
+        check_real(self.scale, "texture scale", above=0)
+        check_real(self.contrast, "texture contrast", minimum=0, below=1)
+        check_real(self.angle, "texture angle")
+        check_real(self.size, "texture size", minimum=0)
+        check_real(self.fill, "texture fill", minimum=0, maximum=1)
         # The relative slack admits 6 * size == scale computed in floating point (the presets use it).
         fits = self.size > 0 and 6 * self.size <= self.scale * (1 + 1e-9) and 0 <= self.fill <= 1
         if self.kind == "blobs" and not fits:
@@ -187,12 +208,15 @@ class Mark:
     texture: Texture | None = None
 
     def __post_init__(self):
-        expected = {"rect": 4, "disc": 3}.get(self.shape)
+        expected = {"rect": 4, "disc": 3}.get(self.shape) if isinstance(self.shape, str) else None
         if expected is None:
             raise InputValueError(f"mark shape must be 'rect' or 'disc', got {self.shape!r}")
-        if len(self.bounds) != expected:
+        if not isinstance(self.bounds, (tuple, list, np.ndarray)) or len(self.bounds) != expected:
             raise InputValueError(f"a {self.shape} mark needs {expected} bounds, got {self.bounds!r}")
+        _numbers(self.bounds, f"{self.shape} mark bounds", expected)
         _albedo(self.colour, "mark colour")
+        if self.texture is not None and not isinstance(self.texture, Texture):
+            raise InputTypeError(f"mark texture must be a Texture or None, got {type(self.texture).__name__}")
 
     def contains(self, s: np.ndarray, t: np.ndarray) -> np.ndarray:
         if self.shape == "rect":
@@ -241,9 +265,12 @@ class Face:
         _vector(self.origin, "origin")
         if abs(u @ u - 1) > 1e-6 or abs(v @ v - 1) > 1e-6 or abs(u @ v) > 1e-6:
             raise InputValueError(f"u_axis and v_axis must be orthonormal, got {self.u_axis} and {self.v_axis}")
-        if self.size is not None and not (len(self.size) == 2 and min(self.size) > 0):
+        if self.size is not None and min(_numbers(self.size, "size", 2)) <= 0:
             raise InputValueError(f"size must be two positive extents or None, got {self.size!r}")
         _albedo(self.colour, "colour")
+        if not isinstance(self.texture, Texture):
+            raise InputTypeError(f"texture must be a Texture, got {type(self.texture).__name__}")
+        _instances(self.marks, "marks", Mark)
 
 
 @dataclass(frozen=True)
@@ -264,6 +291,10 @@ class Motion:
     rotation: tuple[float, float, float] = (0.0, 0.0, 0.0)
     centre: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
+    def __post_init__(self):
+        for name in ("translation", "rotation", "centre"):
+            _vector(getattr(self, name), name)
+
     def matrix(self) -> tuple[np.ndarray, np.ndarray]:
         """(R, t) with ``p(t + 1) = R p(t) + t``."""
         rot = _rotation(_vector(self.rotation, "rotation"))
@@ -278,6 +309,13 @@ class Body:
     faces: tuple[Face, ...]
     motion: Motion = Motion()
     name: str = ""
+
+    def __post_init__(self):
+        _instances(self.faces, "faces", Face, empty=False)
+        if not isinstance(self.motion, Motion):
+            raise InputTypeError(f"motion must be a Motion, got {type(self.motion).__name__}")
+        if not isinstance(self.name, str):
+            raise InputTypeError(f"name must be a str, got {type(self.name).__name__}")
 
 
 @dataclass(frozen=True)
@@ -314,10 +352,9 @@ class Light:
         _albedo(self.colour, "light colour")
         _vector(self.gradient, "gradient")
         _vector(self.gradient_origin, "gradient_origin")
-        if not 0 <= self.ambient <= 1:
-            raise InputValueError(f"ambient must be in [0, 1], got {self.ambient}")
-        if self.specular < 0 or self.shininess <= 0:
-            raise InputValueError("specular must be >= 0 and shininess > 0")
+        check_real(self.ambient, "ambient", minimum=0, maximum=1)
+        check_real(self.specular, "specular", minimum=0)
+        check_real(self.shininess, "shininess", above=0)
 
 
 @dataclass(frozen=True)
@@ -342,11 +379,14 @@ class Camera:
     motion: Motion = Motion()
 
     def __post_init__(self):
-        sizes_ok = all(isinstance(n, (int, np.integer)) and 64 <= n <= 1024 for n in self.shape)
-        if len(self.shape) != 2 or not sizes_ok:
+        if not isinstance(self.shape, (tuple, list)) or len(self.shape) != 2:
             raise InputValueError(f"shape must be (height, width) with each in 64..1024, got {self.shape!r}")
-        if not (self.focal > 0 and self.baseline > 0):
-            raise InputValueError("focal and baseline must be positive")
+        for k, n in enumerate(self.shape):
+            check_int(n, f"shape[{k}] (each side in 64..1024)", minimum=64, maximum=1024)
+        check_real(self.focal, "focal", above=0)
+        check_real(self.baseline, "baseline", above=0)
+        if not isinstance(self.motion, Motion):
+            raise InputTypeError(f"motion must be a Motion, got {type(self.motion).__name__}")
 
 
 @dataclass(frozen=True)
@@ -358,8 +398,11 @@ class World:
     bodies: tuple[Body, ...]
 
     def __post_init__(self):
-        if not self.bodies or not all(b.faces for b in self.bodies):
-            raise InputValueError("a world needs at least one body, and every body at least one face")
+        if not isinstance(self.camera, Camera):
+            raise InputTypeError(f"camera must be a Camera, got {type(self.camera).__name__}")
+        if not isinstance(self.light, Light):
+            raise InputTypeError(f"light must be a Light, got {type(self.light).__name__}")
+        _instances(self.bodies, "bodies (a world needs at least one body)", Body, empty=False)
 
 
 def box(centre, size, *, colour, texture: Texture = Texture(), rotation=(0.0, 0.0, 0.0)) -> tuple[Face, ...]:
@@ -379,9 +422,11 @@ def box(centre, size, *, colour, texture: Texture = Texture(), rotation=(0.0, 0.
     -------
     tuple of Face
     """
-    rot = _rotation(rotation)
-    half = np.asarray(size, dtype=np.float64) / 2
-    c = np.asarray(centre, dtype=np.float64)
+    rot = _rotation(_vector(rotation, "rotation"))
+    half = np.asarray(_vector(size, "size"), dtype=np.float64) / 2
+    if min(half) <= 0:
+        raise InputValueError(f"size must be three positive side lengths, got {size!r}")
+    c = np.asarray(_vector(centre, "centre"), dtype=np.float64)
     faces = []
     for axis in range(3):
         a, b = [(1, 2), (2, 0), (0, 1)][axis]
@@ -411,13 +456,19 @@ def fold(left, crease, right, height: float, *, colour, texture: Texture = Textu
     -------
     (Face, Face)
     """
-    points = [np.asarray(p, dtype=np.float64) for p in (left, crease, right)]
+    points = [np.asarray(_vector(p, name), dtype=np.float64)
+              for p, name in ((left, "left"), (crease, "crease"), (right, "right"))]
+    check_real(height, "height", above=0)
+    if not (isinstance(marks, (tuple, list)) and len(marks) == 2):
+        raise InputTypeError(f"marks must be a pair of tuples of Mark, got {marks!r:.80}")
     faces = []
     for (a, b), panel_marks in zip(((points[0], points[1]), (points[1], points[2])), marks):
         along = b - a
         if abs(along[1]) > 1e-9:
             raise InputValueError("left, crease and right must have the same y")
         width = float(np.linalg.norm(along))
+        if width == 0:
+            raise InputValueError("left, crease and right must be distinct points")
         faces.append(Face(tuple(a), tuple(along / width), (0.0, 1.0, 0.0), (width, height), colour, texture,
                           panel_marks))
     return faces[0], faces[1]
@@ -923,10 +974,8 @@ def render(world: World, *, seed: int = 0, noise: float = 0.0) -> Scene:
     """
     if not isinstance(world, World):
         raise InputTypeError(f"world must be a World (see vmcl.scenes.preset), got {type(world).__name__}")
-    if not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InputValueError(f"seed must be a non-negative integer, got {seed!r}")
-    if not (np.isfinite(noise) and noise >= 0):
-        raise InputValueError(f"noise must be a finite standard deviation >= 0, got {noise!r}")
+    check_int(seed, "seed", minimum=0)
+    check_real(noise, "noise (a standard deviation)", minimum=0)
     cam = _Camera(world.camera)
     spec = [f for b in world.bodies for f in b.faces]
     owner = np.array([k for k, b in enumerate(world.bodies) for _ in b.faces])
@@ -1156,9 +1205,11 @@ def preset(name: str, *, shape: tuple[int, int] = (256, 256), specular: bool = F
     """
     builders = {"blocks": _blocks, "corridor": _corridor, "shadows": _shadows, "textures": _textures,
                 "cues": _cues}
-    if name not in builders:
-        raise InputValueError(f"unknown preset {name!r}; expected one of {', '.join(PRESETS)}")
-    camera = Camera(tuple(shape), float(shape[1]), _BASELINE)
+    if not isinstance(name, str) or name not in builders:
+        raise InputValueError(f"unknown preset {name!r}; name must be one of {', '.join(PRESETS)}")
+    specular = check_bool(specular, "specular")
+    shape = Camera(shape, 1.0, _BASELINE).shape  # checked before its width becomes the focal length
+    camera = Camera(tuple(int(n) for n in shape), float(shape[1]), _BASELINE)
     f = camera.focal
 
     def px(pixels: float, depth: float) -> float:

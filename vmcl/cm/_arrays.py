@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 import math
+import operator
 from collections.abc import Iterable
 from typing import Any
 
@@ -147,23 +148,19 @@ def check_real(value: Any, name: str, *, minimum: float | None = None, maximum: 
         number = float(value)
     except OverflowError:  # an int beyond float's range
         number = math.inf if value > 0 else -math.inf
-    if not math.isfinite(number):
-        raise InputValueError(f"{name} must be finite, got {value}")
-    if minimum is not None and number < minimum:
-        raise InputValueError(f"{name} must be >= {minimum}, got {value}")
-    if maximum is not None and number > maximum:
-        raise InputValueError(f"{name} must be <= {maximum}, got {value}")
-    if above is not None and not number > above:
-        raise InputValueError(f"{name} must be > {above}, got {value}")
-    if below is not None and not number < below:
-        raise InputValueError(f"{name} must be < {below}, got {value}")
+    limits = [(bound, sign, test) for bound, sign, test in ((minimum, ">=", operator.ge), (maximum, "<=", operator.le),
+                                                            (above, ">", operator.gt), (below, "<", operator.lt))
+              if bound is not None]
+    if not math.isfinite(number) or not all(test(number, bound) for bound, _, test in limits):
+        wanted = "".join(f"{' and' if i else ''} {sign} {bound}" for i, (bound, sign, _) in enumerate(limits))
+        raise InputValueError(f"{name} must be a finite number{wanted}, got {value}")
     return number
 
 
 def check_bool(value: Any, name: str) -> bool:
     """``value`` as a bool; TypeError naming ``name`` for anything else (0, 1, "no" and None included)."""
     if not isinstance(value, (bool, np.bool_)):
-        raise InputTypeError(f"{name} must be True or False, got {type(value).__name__}")
+        raise InputTypeError(f"{name} must be a bool (True or False), got {type(value).__name__}")
     return bool(value)
 
 
@@ -185,17 +182,24 @@ def check_context(x: cl_array.Array, name: str, machine: Machine) -> None:
                               f"copy it through the host")
 
 
-def real_host_array(x: Any, name: str, *, ndims: tuple[int, ...]) -> np.ndarray:
-    """``x`` checked as a non-empty NumPy array of real numbers (bool, integer or float) with one of
-    ``ndims`` dimensions; complex, object, string and other dtypes are refused, never converted."""
+def check_real_dtype(x: Any, name: str) -> np.ndarray:
+    """``x`` checked as a NumPy array of real numbers (bool, integer or float); complex, object, string
+    and other dtypes are refused, never converted."""
     if not isinstance(x, np.ndarray):
         raise InputTypeError(f"{name} must be a NumPy array, got {type(x).__name__}")
     if x.dtype.kind not in "biuf":
         raise InputTypeError(f"{name} must hold real numbers (bool, integer or float), got dtype {x.dtype}")
+    return x
+
+
+def real_host_array(x: Any, name: str, *, ndims: tuple[int, ...], empty: bool = False) -> np.ndarray:
+    """``x`` checked as a NumPy array of real numbers (:func:`check_real_dtype`) with one of ``ndims``
+    dimensions, and not empty unless ``empty``."""
+    check_real_dtype(x, name)
     if x.ndim not in ndims:
         wanted = " or ".join(str(n) for n in ndims)
         raise InputValueError(f"{name} must have {wanted} dimensions, got shape {x.shape}")
-    if x.size == 0:
+    if x.size == 0 and not empty:
         raise InputValueError(f"{name} must not be empty, got shape {x.shape}")
     return x
 

@@ -25,7 +25,7 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as _reduce
-from vmcl.cm._arrays import ArrayLike, field, machine_for, result
+from vmcl.cm._arrays import ArrayLike, check_bool, check_choice, check_int, field, machine_for, result
 from vmcl.cm.scan import exclusive_sum_into
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
@@ -143,10 +143,11 @@ def label(mask: ArrayLike, *, connectivity: int = 8, relabel: bool = False, meth
     if isinstance(mask, np.ndarray) and mask.dtype == np.bool_:
         mask = mask.view(np.uint8)
     data, host = field(mask, "mask", machine, ndims=(2,), dtypes=(np.uint8,))
-    if connectivity not in (4, 8):
+    if check_int(connectivity, "connectivity") not in (4, 8):
         raise InputValueError(f"connectivity must be 4 or 8, got {connectivity!r}")
-    if method not in ("doubling", "iterative"):
-        raise InputValueError(f"method must be 'doubling' or 'iterative', got {method!r}")
+    connectivity = int(connectivity)
+    method = check_choice(method, "method", ("doubling", "iterative"))
+    relabel = check_bool(relabel, "relabel")
     if data.size >= 2**31:
         raise InputValueError(f"mask must have fewer than 2**31 pixels, got shape {data.shape}")
     n = data.size

@@ -12,7 +12,18 @@ from __future__ import annotations
 import numpy as np
 
 from vmcl.cm._arrays import ArrayLike, check_int, field, machine_for, result, type_defines
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine
+
+WIDEST = 32
+"""Gaussian width (sigma, in pixels) any image may be smoothed with; wider ones only up to the image's
+larger side, past which a Gaussian only blurs the repeated border while its work keeps growing."""
+
+
+def max_passes(height: int, width: int) -> int:
+    """The most binomial passes an (height, width) image takes: those of a Gaussian of sigma
+    max(height, width, WIDEST), since n passes have sigma sqrt(n / 2)."""
+    return 2 * max(height, width, WIDEST) ** 2
 
 
 def binomial(image: ArrayLike, passes: int, *, machine: Machine | None = None) -> ArrayLike:
@@ -24,8 +35,8 @@ def binomial(image: ArrayLike, passes: int, *, machine: Machine | None = None) -
         uint8 or int32 (integer add and shift: each pass rounds to nearest, ties up, exactly as
         ``(s + 8) >> 4``) or float32.
     passes : int
-        n >= 0. n passes approximate a Gaussian of standard deviation sqrt(n / 2) pixels (the binomial
-        of order 2n); n = 0 returns a copy.
+        0 <= n <= :func:`max_passes` (2 * max(H, W, WIDEST)**2). n passes approximate a Gaussian of
+        standard deviation sqrt(n / 2) pixels (the binomial of order 2n); n = 0 returns a copy.
     machine : vmcl.Machine, optional
 
     Returns
@@ -40,6 +51,11 @@ def binomial(image: ArrayLike, passes: int, *, machine: Machine | None = None) -
     data, host = field(image, "image", machine, ndims=(2, 3), dtypes=(np.uint8, np.int32, np.float32))
     passes = check_int(passes, "passes", minimum=0)
     height, width = data.shape[-2:]
+    if passes > max_passes(height, width):
+        raise InputValueError(f"passes must be at most {max_passes(height, width)} for a {height} x {width} "
+                              f"image (a Gaussian of sigma sqrt(passes / 2) no wider than max(H, W, {WIDEST})), "
+                              f"got {passes}")
+    machine.require_memory(f"{passes} binomial passes over shape {data.shape}", 3 * data.nbytes, data.nbytes)
     planes = data.size // (height * width)
     defines = type_defines(data.dtype)
     if data.dtype == np.uint8:
@@ -67,7 +83,7 @@ def window_max(x: ArrayLike, radius: int, *, machine: Machine | None = None) -> 
     x : float32 ndarray or pyopencl.array.Array, 2-D (H, W) or a 3-D stack (planes, H, W)
         Planes are filtered one by one.
     radius : int
-        r >= 0.
+        r >= 0; windows reaching past the field are cut, so any r gives the result of the field's size.
     machine : vmcl.Machine, optional
 
     Returns
@@ -82,8 +98,11 @@ def window_max(x: ArrayLike, radius: int, *, machine: Machine | None = None) -> 
     """
     machine = machine_for(machine)
     data, host = field(x, "x", machine, ndims=(2, 3), dtypes=(np.float32,))
-    radius = check_int(radius, "radius", minimum=0)
     height, width = data.shape[-2:]
+    # A window past the field holds only the field, so a larger radius changes nothing, and this bound
+    # keeps x + r within the kernel's integers.
+    radius = min(check_int(radius, "radius", minimum=0), max(height, width))
+    machine.require_memory(f"a window maximum over shape {data.shape}", 3 * data.nbytes, data.nbytes)
     planes = data.size // (height * width)
     kernel = machine.kernel("filters", "window_max_pass", **type_defines(data.dtype))
     rows, out = machine.empty(data.shape, data.dtype), machine.empty(data.shape, data.dtype)

@@ -10,8 +10,7 @@ from typing import Literal
 
 import numpy as np
 
-from vmcl.cm._arrays import ArrayLike, check_int, field, machine_for, result, type_defines
-from vmcl.errors import InputValueError
+from vmcl.cm._arrays import ArrayLike, check_choice, check_int, field, machine_for, result, type_defines
 from vmcl.machine import Machine
 
 Border = Literal["zero", "clamp", "wrap"]
@@ -39,9 +38,14 @@ def shift(x: ArrayLike, dx: int, dy: int, *, border: Border = "zero", machine: M
     machine = machine_for(machine)
     data, host = field(x, "x", machine, ndims=(2, 3), dtypes=(np.uint8, np.int32, np.float32))
     dx, dy = check_int(dx, "dx"), check_int(dy, "dy")
-    if border not in BORDERS:
-        raise InputValueError(f"border must be one of {sorted(BORDERS)}, got {border!r}")
+    border = check_choice(border, "border", BORDERS)
     height, width = data.shape[-2:]
+    # Displacements reduced to the same result within the kernel's 64-bit arithmetic: a wrap repeats
+    # every field size, and beyond one field size "zero" and "clamp" no longer change.
+    if border == "wrap":
+        dx, dy = dx % width, dy % height
+    else:
+        dx, dy = max(-width, min(width, dx)), max(-height, min(height, dy))
     planes = data.size // (height * width)
     out = machine.empty(data.shape, data.dtype)
     kernel = machine.kernel("news", "shift", BORDER=BORDERS[border], **type_defines(data.dtype))

@@ -179,6 +179,9 @@ def _count(machine: Machine, data: cl_array.Array, bins: int, lo: float, hi: flo
         th, tw, accumulate = int(tile[0]), int(tile[1]), False
     tiles_y, tiles_x = math.ceil(height / th), math.ceil(width / tw)
     shape = (bins,) if accumulate else (tiles_y, tiles_x, bins)
+    counts_bytes = 4 * math.prod(shape)
+    machine.require_memory(f"{tiles_y * tiles_x} histograms of {bins} bins", data.nbytes + counts_bytes,
+                           max(data.nbytes, counts_bytes))
     out = machine.empty(shape, np.int32)
     local = 1 if machine.is_cpu else min(256, machine.device.max_work_group_size)
     # A one-work-item group counts without atomics (a CPU runs each group on one thread anyway).
@@ -186,7 +189,9 @@ def _count(machine: Machine, data: cl_array.Array, bins: int, lo: float, hi: flo
                    **type_defines(data.dtype))
     if accumulate:
         cl.enqueue_fill_buffer(machine.queue, out.base_data, np.int32(0), 0, out.nbytes)
-    scale = np.float32(bins) / (np.float32(hi) - np.float32(lo))
+    # A range too narrow or too wide for float32 overflows here; the kernel rescales such ranges.
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        scale = np.float32(bins) / (np.float32(hi) - np.float32(lo))
     kernel = machine.kernel("reduce", "histogram_tiles", **defines)
     machine.launch(kernel, (tiles_y * tiles_x * local,), data, out, cl.LocalMemory(4 * bins),
                    top if top is not None else out, np.int64(width), np.int64(height), np.int64(th),

@@ -8,6 +8,7 @@ minimum". Addresses are flat indices (the CM's linear processor order: y * W + x
 
 from __future__ import annotations
 
+import math
 from typing import Literal
 
 import numpy as np
@@ -15,7 +16,7 @@ import pyopencl as cl
 
 from vmcl.cm import _arrays
 from vmcl.cm import reduce as _reduce
-from vmcl.cm._arrays import ArrayLike, machine_for, result, type_defines
+from vmcl.cm._arrays import ArrayLike, check_choice, check_int, check_real, machine_for, result, type_defines
 from vmcl.cm.scan import exclusive_sum_into
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
@@ -24,6 +25,7 @@ Combine = Literal["overwrite", "sum", "max", "min", "and", "or"]
 _COMBINE = {"overwrite": 100, "sum": 0, "max": 1, "min": 2, "and": 4, "or": 5}
 _DTYPES = (np.uint8, np.int32, np.float32)
 _ANY_NDIM = tuple(range(1, 33))
+_MAX_DESTINATIONS = 2**31 - 1  # addresses, counts and offsets are int32
 
 
 def _addresses(address: ArrayLike, size: int, machine: Machine) -> tuple:
@@ -35,6 +37,28 @@ def _addresses(address: ArrayLike, size: int, machine: Machine) -> tuple:
     if low < 0 or high >= size:
         raise InputValueError(f"address must lie in [0, {size - 1}], got values in [{low}, {high}]")
     return data, host
+
+
+def _shape(size) -> tuple[int, ...]:
+    """The destination shape from an int or a sequence of ints, each >= 1."""
+    if isinstance(size, (list, tuple)):
+        if not size:
+            raise InputValueError("size must be a positive integer or a non-empty shape, got ()")
+        return tuple(check_int(s, "size", minimum=1) for s in size)
+    return (check_int(size, "size", minimum=1),)
+
+
+def _fill(fill, dtype: np.dtype):
+    """``fill`` as a scalar of ``dtype``, refused where the conversion would change it."""
+    if dtype.kind == "f":
+        # NaN and infinities are float32 values (a "no message" marker); finite values must not overflow.
+        if isinstance(fill, (float, np.floating)) and not math.isfinite(fill):
+            return dtype.type(fill)
+        largest = float(np.finfo(dtype).max)
+        return dtype.type(check_real(fill, "fill", minimum=-largest, maximum=largest))
+    limits = np.iinfo(dtype)
+    return dtype.type(check_int(fill, f"fill (for {dtype} values)", minimum=int(limits.min),
+                                maximum=int(limits.max)))
 
 
 def get(field: ArrayLike, address: ArrayLike, *, machine: Machine | None = None) -> ArrayLike:
@@ -67,12 +91,14 @@ def send(values: ArrayLike, address: ArrayLike, *, size: int | tuple[int, ...], 
     values : array of any shape; uint8, int32 or float32
     address : int32 array of ``values``' shape, values in [0, prod(size))
     size : int or tuple of int
-        The destination field's size (1-D) or shape.
+        The destination field's size (1-D) or shape; at most 2**31 - 1 destinations (int32 addresses),
+        and as many as the device's memory holds.
     combine : {"overwrite", "sum", "max", "min", "and", "or"}
         How messages to one destination combine. "overwrite": the sender with the highest index wins.
         "and" / "or": bitwise, integer types only (logical on 0/1 fields).
     fill : scalar
-        What destinations that receive no message hold.
+        What destinations that receive no message hold: an integer within the range of integer
+        ``values``, a real number (or NaN, or an infinity) within float32's range for float32 ones.
 
     Returns
     -------
@@ -87,14 +113,20 @@ def send(values: ArrayLike, address: ArrayLike, *, size: int | tuple[int, ...], 
     """
     machine = machine_for(machine)
     data, host = _arrays.field(values, "values", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
-    shape = (size,) if isinstance(size, (int, np.integer)) else tuple(size)
-    if not shape or not all(isinstance(s, (int, np.integer)) and s >= 1 for s in shape):
-        raise InputValueError(f"size must be a positive integer or a shape of positive integers, got {size!r}")
-    if combine not in _COMBINE:
-        raise InputValueError(f"combine must be one of {sorted(_COMBINE)}, got {combine!r}")
+    shape = _shape(size)
+    combine = check_choice(combine, "combine", _COMBINE)
     if combine in ("and", "or") and data.dtype == np.float32:
         raise InputTypeError(f"combine={combine!r} needs integer values, got float32")
-    destinations = int(np.prod(shape))
+    fill_value = _fill(fill, data.dtype)
+    destinations = math.prod(shape)
+    if destinations > _MAX_DESTINATIONS:
+        raise InputValueError(f"size must hold at most {_MAX_DESTINATIONS} destinations (int32 addresses), "
+                              f"got {size!r}")
+    int32 = np.dtype(np.int32).itemsize
+    # counts, offsets and cursor per destination, the output, and one slot per sender.
+    machine.require_memory(f"router.send to {destinations} destinations",
+                           destinations * (3 * int32 + data.dtype.itemsize) + data.size * int32,
+                           max(destinations, data.size) * max(int32, data.dtype.itemsize))
     where, _ = _addresses(address, destinations, machine)
     if where.shape != data.shape:
         raise InputValueError(f"address must have the shape of values {data.shape}, got {where.shape}")
@@ -114,5 +146,5 @@ def send(values: ArrayLike, address: ArrayLike, *, size: int | tuple[int, ...], 
     machine.launch(machine.kernel("router", "sort_buckets", **defines), (destinations,), offsets, counts, slots,
                    np.int64(destinations))
     machine.launch(machine.kernel("router", "combine_buckets", **defines), (destinations,), data, offsets, counts,
-                   slots, out, data.dtype.type(fill), np.int64(destinations))
+                   slots, out, fill_value, np.int64(destinations))
     return result(out, host)

@@ -21,6 +21,8 @@ import pyopencl.array as cl_array
 
 from vmcl.cm._arrays import (
     ArrayLike,
+    check_bool,
+    check_choice,
     check_int,
     field,
     flags_field,
@@ -85,12 +87,9 @@ def scan(x: ArrayLike, *, op: Op = "plus", axis: int = -1, exclusive: bool = Fal
     machine = machine_for(machine)
     data, host = field(x, "x", machine, ndims=(1, 2, 3))
     axis = normalise_axis(axis, data.ndim, (-1,) if data.ndim == 1 else (-1, -2))
-    if op not in OPS:
-        raise InputValueError(f"op must be one of {sorted(OPS)}, got {op!r}")
-    if method not in METHODS:
-        raise InputValueError(f"method must be one of {METHODS}, got {method!r}")
-    if not isinstance(exclusive, (bool, np.bool_)):
-        raise InputTypeError(f"exclusive must be a bool, got {type(exclusive).__name__}")
+    op = check_choice(op, "op", OPS)
+    method = check_choice(method, "method", METHODS)
+    exclusive = check_bool(exclusive, "exclusive")
     flags = None if segments is None else flags_field(segments, data.shape, "segments", machine)
     out = machine.empty(data.shape, data.dtype)
     defines = dict(type_defines(data.dtype), OP=OPS[op], SEGMENTED=int(flags is not None),
@@ -247,9 +246,13 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     """
     machine = machine_for(machine)
     data, host = field(x, "x", machine, ndims=(1, 2, 3))
-    radius = check_int(radius, "radius", minimum=0)
-    if not isinstance(axes, tuple) or not axes:
-        raise InputValueError(f"axes must be a non-empty tuple such as (-2, -1), got {axes!r}")
+    # A window as long as the line already sums all of it, so wider ones are cut to that (the same
+    # sums) before the kernels' 64-bit index arithmetic sees them.
+    radius = min(check_int(radius, "radius", minimum=0), max(data.shape))
+    if not isinstance(axes, tuple):
+        raise InputTypeError(f"axes must be a tuple such as (-2, -1), got {type(axes).__name__}")
+    if not axes:
+        raise InputValueError("axes must be a non-empty tuple such as (-2, -1), got ()")
     allowed = (-1,) if data.ndim == 1 else (-1, -2)
     wanted = {normalise_axis(a, data.ndim, allowed, "axes") for a in axes}
     if len(wanted) != len(axes):

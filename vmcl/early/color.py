@@ -58,10 +58,10 @@ from typing import NamedTuple
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm._arrays import ArrayLike, field, machine_for, result
+from vmcl.cm._arrays import ArrayLike, check_bool, check_real, field, machine_for, result
 from vmcl.early import noise as _noise
 from vmcl.early.filters import _kernel, _launch_flat, _launch_rows
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 MIN_INTENSITY = 0.05
@@ -128,11 +128,7 @@ def _rgb(rgb, machine: Machine) -> tuple[cl_array.Array, bool]:
 def _min_intensity(value, dtype: np.dtype) -> float:
     if value is None:
         return MIN_INTENSITY * _FULL_SCALE[dtype]
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise InputTypeError(f"min_intensity must be a number or None, got {type(value).__name__}")
-    if not math.isfinite(value) or value <= 0:
-        raise InputValueError(f"min_intensity must be a finite number > 0, got {value}")
-    return float(value)
+    return check_real(value, "min_intensity", above=0)
 
 
 def _mask_out(mask: cl_array.Array, host: bool) -> ArrayLike:
@@ -179,7 +175,7 @@ def hue(rgb: ArrayLike, *, min_intensity: float | None = None, chromaticity: boo
     data, host = _rgb(rgb, machine)
     threshold = _min_intensity(min_intensity, data.dtype)
     height, width = data.shape[:2]
-    chroma = bool(chromaticity)
+    chroma = check_bool(chromaticity, "chromaticity")
     out = machine.empty((height, width, 2) if chroma else (height, width), np.float32)
     valid = machine.empty((height, width), np.uint8)
     kernel = machine.kernel("color", "hue", IN_T=_IN_TYPES[data.dtype], CHROMA=int(chroma))
@@ -234,10 +230,7 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
     data, host = _rgb(rgb, machine)
     least = _min_intensity(min_intensity, data.dtype)
     if threshold is not None:
-        if isinstance(threshold, bool) or not isinstance(threshold, (int, float, np.integer, np.floating)):
-            raise InputTypeError(f"threshold must be a number or None, got {type(threshold).__name__}")
-        if not math.isfinite(threshold) or threshold < 0:
-            raise InputValueError(f"threshold must be a finite number >= 0, got {threshold}")
+        threshold = check_real(threshold, "threshold", minimum=0)
     height, width = data.shape[:2]
     shape = (height, width)
     hue_field, valid, z = (machine.empty(shape, np.float32), machine.empty(shape, np.uint8),

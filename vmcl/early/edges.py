@@ -47,6 +47,10 @@ from vmcl.machine import Machine
 
 Hysteresis = Literal["doubling", "iterative"]
 _CHECK_EVERY = 16  # spreading-activation steps between reads of the "changed" flag
+PLAIN_SCALE = 2.0**100
+"""Host float images whose largest |value| lies within [1 / PLAIN_SCALE, PLAIN_SCALE] go to Canny as
+they are; others are first scaled by a power of two (exactly) to bring it near 1."""
+_CANNY_BYTES = 40  # device bytes per pixel canny keeps at once: fields, states, labels, with room to spare
 
 
 class ZeroCrossings(NamedTuple):
@@ -122,7 +126,7 @@ def zero_crossings(image: ArrayLike, *, sigma: float, method: Literal["log", "do
     if method not in ("log", "dog"):
         raise InputValueError(f"method must be 'log' or 'dog', got {method!r}")
     min_slope = _non_negative(min_slope, "min_slope")
-    data, host = _image(image, machine)
+    data, host = _image(image, machine, what="zero crossings", footprint=22, largest=8, widths={"sigma": sigma})
     if method == "log":
         response = _laplacian(machine, _separable(machine, data, (sigma,)))
     else:
@@ -246,6 +250,19 @@ def _thresholds(machine: Machine, magnitude: cl_array.Array, low: float | None, 
     return pairs, (1, 1), False
 
 
+def _scale_exponent(image) -> int:
+    """e such that ``image * 2**-e`` has its largest |value| in [1, 2), for a host float image outside
+    :data:`PLAIN_SCALE`'s range; 0 for all others (device arrays, integers, ordinary images, and
+    images with NaN or infinity, which :func:`vmcl.early.filters._image` refuses)."""
+    if not isinstance(image, np.ndarray) or image.dtype.kind != "f" or image.size == 0:
+        return 0
+    with np.errstate(invalid="ignore"):
+        largest = float(np.max(np.abs(image)))
+    if not math.isfinite(largest) or largest == 0 or 1 / PLAIN_SCALE <= largest <= PLAIN_SCALE:
+        return 0
+    return math.frexp(largest)[1] - 1
+
+
 def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
           high_threshold: float | None = None, use_quantiles: bool = False, interpolate: bool = True,
           hysteresis: Hysteresis = "doubling", noise: _noise.Noise = "global", return_gradient: bool = False,
@@ -299,6 +316,15 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     with ``skimage.feature.canny(..., mode="nearest")``. Borders repeat the edge pixel; the outermost
     ring of pixels is never an edge. Weak pixels are maxima >= low and > 0, strong ones maxima >= high.
 
+    The noise-estimated thresholds scale with the image, so ``canny(k * image)`` finds the edges of
+    ``image`` for any k that float32 holds, up to the rounding of ``k * image`` itself: the gradient
+    magnitude is computed without overflow or underflow, and a host float image whose largest |value|
+    lies outside [2**-100, 2**100] (subnormal, or near float32's largest) is filtered scaled by a power
+    of two (exact), with given thresholds scaled alike. Magnitudes returned with ``return_gradient``
+    are in the input's units; where those overflow float32 the call is refused. Device images are
+    taken as they are (checking them would make the host wait): NaN or infinity there, or values
+    beyond 2**124, give meaningless edges.
+
     When thresholds come from histograms, their range (the magnitude's maximum) stays on the device: the
     host does not wait for the device anywhere in a call with device input.
 
@@ -325,7 +351,12 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     high = _threshold_value(high_threshold, "high_threshold", use_quantiles)
     if low is not None and high is not None and low > high:
         raise InputValueError(f"low_threshold ({low}) must not exceed high_threshold ({high})")
-    data, host = _image(image, machine)
+    exponent = _scale_exponent(image)
+    if exponent:
+        image = np.ldexp(image, -exponent)
+        if not use_quantiles:
+            low, high = (None if t is None else math.ldexp(t, -exponent) for t in (low, high))
+    data, host = _image(image, machine, what="canny", footprint=_CANNY_BYTES, widths={"sigma": sigma})
     smoothed = _separable(machine, data, (sigma,))
     size = _xy(smoothed)
     dims = tuple(map(np.int64, size))
@@ -343,6 +374,13 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     _launch_rows(machine, classify, *size, smoothed, magnitude, pairs, state, marks, np.int64(_noise.TILE),
                  np.int64(tiles[1]), np.int64(tiles[0]), *dims)
     edges = _mask_out(_hysteresis(machine, state, marks if doubling else None, hysteresis), host)
-    if return_gradient:
-        return edges, result(magnitude, host), result(direction, host)
-    return edges
+    if not return_gradient:
+        return edges
+    magnitude = result(magnitude, host)
+    if exponent:
+        with np.errstate(over="ignore"):
+            magnitude = np.ldexp(magnitude, exponent)
+        if not np.isfinite(magnitude).all():
+            raise InputValueError(f"image values of about {2.0 ** exponent:.3g} give gradient magnitudes beyond "
+                                  "float32's range: scale the image down to return them (return_gradient)")
+    return edges, magnitude, result(direction, host)

@@ -48,8 +48,14 @@ Method = Literal["binomial", "exact"]
 _IN_TYPES = {np.dtype(np.uint8): "uchar", np.dtype(np.uint16): "ushort", np.dtype(np.float32): "float"}
 
 
-def _image(image, machine: Machine) -> tuple[cl_array.Array, bool]:
-    """Check a grey or RGB image and return it on the device (uint8, uint16 or float32) with its origin."""
+def _image(image, machine: Machine, *, what: str, footprint: int, largest: int = 4,
+           widths: dict[str, float] | None = None) -> tuple[cl_array.Array, bool]:
+    """Check a grey or RGB image and return it on the device (uint8, uint16 or float32) with its origin.
+
+    Before anything is uploaded, the Gaussian ``widths`` (name: sigma) are checked against the image
+    (:func:`_check_widths`) and the device memory the call needs against the device: ``footprint``
+    bytes per pixel besides the input, the largest buffer ``largest`` bytes per pixel.
+    """
     if isinstance(image, np.ndarray) and image.dtype.kind == "f":
         if not np.isfinite(image).all():
             raise InputValueError("image must not contain NaN or infinite values")
@@ -57,10 +63,26 @@ def _image(image, machine: Machine) -> tuple[cl_array.Array, bool]:
             image = image.astype(np.float32)
             if not np.isfinite(image).all():
                 raise InputValueError("image has values beyond float32's range")
+    if isinstance(image, (np.ndarray, cl_array.Array)) and image.ndim in (2, 3) and image.size:
+        height, width = image.shape[:2]
+        _check_widths(widths or {}, height, width)
+        pixels, input_bytes = height * width, image.size * min(image.dtype.itemsize, 4)
+        machine.require_memory(f"{what} of a {height} x {width} image", input_bytes + footprint * pixels,
+                               max(input_bytes, largest * pixels))
     data, host = field(image, "image", machine, ndims=(2, 3), dtypes=tuple(_IN_TYPES))
     if data.ndim == 3 and data.shape[2] != 3:
         raise InputValueError(f"image must be grey (H, W) or RGB (H, W, 3), got shape {data.shape}")
     return data, host
+
+
+def _check_widths(widths: dict[str, float], height: int, width: int) -> None:
+    """Refuse Gaussians wider than the image allows: the work of a pass grows with the width (taps or
+    binomial passes), and past the image's larger side a Gaussian only blurs the repeated border."""
+    limit = max(height, width, _cm_filters.WIDEST)
+    for name, sigma in widths.items():
+        if sigma > limit:
+            raise InputValueError(f"{name} must be at most {limit} for a {height} x {width} image (its larger "
+                                  f"side, or {_cm_filters.WIDEST} for smaller images), got {sigma}")
 
 
 def _grey_weights() -> np.ndarray:
@@ -181,7 +203,8 @@ def gaussian(image: ArrayLike, *, sigma: float, method: Method = "binomial",
         uint8, uint16 or float (float64 is converted to float32; device arrays must be uint8, uint16 or
         float32). RGB is converted to grey with :data:`GREY_WEIGHTS`.
     sigma : float
-        Standard deviation in pixels, > 0.
+        Standard deviation in pixels, > 0 and at most the image's larger side (or
+        :data:`vmcl.cm.filters.WIDEST` for smaller images).
     method : {"binomial", "exact"}
         "binomial" (the paper's): n = max(1, round(2 sigma**2)) passes of the 3 x 3 mask
         [1 2 1]^T [1 2 1] / 16 (:func:`vmcl.cm.filters.binomial`), a Gaussian of standard deviation
@@ -216,7 +239,7 @@ def gaussian(image: ArrayLike, *, sigma: float, method: Method = "binomial",
     sigma = _check_sigma(sigma)
     if method not in ("binomial", "exact"):
         raise InputValueError(f"method must be 'binomial' or 'exact', got {method!r}")
-    data, host = _image(image, machine)
+    data, host = _image(image, machine, what="a Gaussian", footprint=12, widths={"sigma": sigma})
     return result(_smooth(machine, data, sigma, method), host)
 
 
@@ -227,7 +250,8 @@ def laplacian_of_gaussian(image: ArrayLike, *, sigma: float, machine: Machine | 
     ----------
     image : ndarray or pyopencl.array.Array, (H, W) or (H, W, 3); uint8, uint16 or float
     sigma : float
-        Standard deviation of the Gaussian in pixels, > 0.
+        Standard deviation of the Gaussian in pixels, > 0 and at most the image's larger side (or
+        :data:`vmcl.cm.filters.WIDEST` for smaller images).
     machine : vmcl.Machine, optional
 
     Returns
@@ -241,7 +265,7 @@ def laplacian_of_gaussian(image: ArrayLike, *, sigma: float, machine: Machine | 
     """
     machine = machine_for(machine)
     sigma = _check_sigma(sigma)
-    data, host = _image(image, machine)
+    data, host = _image(image, machine, what="a Laplacian of a Gaussian", footprint=16, widths={"sigma": sigma})
     return result(_laplacian(machine, _separable(machine, data, (sigma,))), host)
 
 
@@ -256,7 +280,8 @@ def difference_of_gaussians(image: ArrayLike, *, low_sigma: float, high_sigma: f
         Standard deviation of the narrower Gaussian, > 0.
     high_sigma : float, optional
         Of the wider one, > low_sigma. Default: 1.6 * low_sigma (Marr and Hildreth's best fit to the
-        Laplacian of a Gaussian of width about sqrt(low_sigma * high_sigma)).
+        Laplacian of a Gaussian of width about sqrt(low_sigma * high_sigma)). Both at most the image's
+        larger side (or :data:`vmcl.cm.filters.WIDEST` for smaller images).
     machine : vmcl.Machine, optional
 
     Returns
@@ -273,5 +298,6 @@ def difference_of_gaussians(image: ArrayLike, *, low_sigma: float, high_sigma: f
     high_sigma = DOG_RATIO * low_sigma if high_sigma is None else _check_sigma(high_sigma, "high_sigma")
     if high_sigma <= low_sigma:
         raise InputValueError(f"high_sigma must exceed low_sigma, got {high_sigma} <= {low_sigma}")
-    data, host = _image(image, machine)
+    data, host = _image(image, machine, what="a difference of Gaussians", footprint=16, largest=8,
+                        widths={"low_sigma": low_sigma, "high_sigma": high_sigma})
     return result(_separable(machine, data, (low_sigma, high_sigma)), host)

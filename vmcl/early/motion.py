@@ -25,7 +25,6 @@ J. J. Little, H. H. Bulthoff and T. Poggio, "Parallel optical flow using local v
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Literal
 
@@ -33,7 +32,7 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import scan
-from vmcl.cm._arrays import ArrayLike, check_int, field, machine_for
+from vmcl.cm._arrays import ArrayLike, check_bool, check_choice, check_int, check_real, field, machine_for
 from vmcl.early import edges as _edges
 from vmcl.early import filters as _filters
 from vmcl.early.sign_correlation import arcsine_law
@@ -109,25 +108,24 @@ def _frames(frame0, frame1, machine: Machine) -> tuple[cl_array.Array, cl_array.
     return d0, d1, host0
 
 
-def _number(value, name: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise InputTypeError(f"{name} must be a number, got {type(value).__name__}")
-    if not math.isfinite(value):
-        raise InputValueError(f"{name} must be finite, got {value}")
-    return float(value)
+def _most_levels(shape: tuple[int, ...], patch: int, delta: int) -> int:
+    """The most pyramid levels this image allows: the coarsest level must still hold the patch and a
+    displacement of delta (its sides are halved, rounding up, at each level)."""
+    sides, levels = shape[:2], 1
+    while min(-(-n // 2) for n in sides) >= max(patch, delta + 1) and max(sides) > 1:
+        sides, levels = tuple(-(-n // 2) for n in sides), levels + 1
+    return levels
 
 
-def _check(shape: tuple[int, ...], delta, patch, features, sigma, levels: int = 1) -> tuple[int, int, float]:
-    """(delta, patch radius, sigma) after checking them against the coarsest level's size."""
+def _check(shape: tuple[int, ...], delta, patch, features, sigma, levels=1) -> tuple[int, int, float, int]:
+    """(delta, patch radius, sigma, levels) after checking them against the image and the coarsest level."""
     delta = check_int(delta, "delta", minimum=1)
     patch = check_int(patch, "patch", minimum=1)
+    levels = check_int(levels, "levels", minimum=1)
     if patch % 2 == 0:
         raise InputValueError(f"patch must be odd (a window centred on the pixel), got {patch}")
-    if features not in FEATURES:
-        raise InputValueError(f"features must be one of {FEATURES}, got {features!r}")
-    sigma = _number(DEFAULT_SIGMA[features] if sigma is None else sigma, "sigma")
-    if sigma <= 0:
-        raise InputValueError(f"sigma must be > 0, got {sigma}")
+    features = check_choice(features, "features", FEATURES)
+    sigma = check_real(DEFAULT_SIGMA[features] if sigma is None else sigma, "sigma", above=0)
     side = min(shape[:2])
     if patch > side:
         raise InputValueError(f"patch ({patch}) is larger than the image ({shape[0]} x {shape[1]})")
@@ -135,12 +133,22 @@ def _check(shape: tuple[int, ...], delta, patch, features, sigma, levels: int = 
         raise InputValueError(f"delta ({delta}) must be smaller than the image ({shape[0]} x {shape[1]})")
     if _COMPARE[features] and patch**2 * (2 * delta**2 + 1) >= 2**31:
         raise InputValueError(f"patch ({patch}) and delta ({delta}) are too large for the integer keys of binary "
-                         f"votes: patch**2 * (2 delta**2 + 1) must stay below 2**31")
-    coarsest = min(-(-n // 2 ** (levels - 1)) for n in shape[:2])
-    if patch > coarsest or delta >= coarsest:
-        raise InputValueError(f"levels={levels} halves the image to a side of {coarsest} pixels, smaller than "
-                         f"patch ({patch}) or delta + 1 ({delta + 1}); use fewer levels")
-    return delta, patch // 2, sigma
+                              f"votes: patch**2 * (2 delta**2 + 1) must stay below 2**31")
+    most = _most_levels(shape, patch, delta)
+    if levels > most:
+        raise InputValueError(f"levels must be at most {most} for a {shape[0]} x {shape[1]} image with patch "
+                              f"{patch} and delta {delta} (each level halves the image, and the coarsest must "
+                              f"still hold the patch and delta + 1 pixels), got {levels}")
+    return delta, patch // 2, sigma, levels
+
+
+def _require_memory(machine: Machine, shape: tuple[int, ...], planes: int, largest: int, what: str) -> None:
+    """Refuse a search whose vote planes (``planes`` alive at once, ``largest`` in one buffer) the device
+    cannot hold."""
+    height, width = shape[:2]
+    plane = height * width * 4
+    per_pixel = 96  # frames, pyramid, feature maps, moments and their sums, winners, outputs
+    machine.require_memory(what, planes * plane + per_pixel * height * width, largest * plane)
 
 
 def _features(machine: Machine, image: cl_array.Array, features: str, sigma: float) -> cl_array.Array:
@@ -394,15 +402,17 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     """
     machine = machine_for(machine)
     d0, d1, host = _frames(frame0, frame1, machine)
-    levels = check_int(levels, "levels", minimum=1)
-    delta, radius, sigma = _check(d0.shape, delta, patch, features, sigma, levels)
-    if method not in METHODS:
-        raise InputValueError(f"method must be one of {METHODS}, got {method!r}")
-    boundary_score = _number(BOUNDARY_SCORE[features] if boundary_score is None else boundary_score,
-                             "boundary_score")
-    speed_penalty = _number(speed_penalty, "speed_penalty")
-    if speed_penalty < 0:
-        raise InputValueError(f"speed_penalty must be >= 0, got {speed_penalty}")
+    delta, radius, sigma, levels = _check(d0.shape, delta, patch, features, sigma, levels)
+    method = check_choice(method, "method", METHODS)
+    subpixel = check_bool(subpixel, "subpixel")
+    boundary_score = check_real(BOUNDARY_SCORE[features] if boundary_score is None else boundary_score,
+                                "boundary_score")
+    speed_penalty = check_real(speed_penalty, "speed_penalty", minimum=0)
+    n = 2 * delta + 1
+    # The table and its box sum's two passes; running: three rows of votes kept, one being summed.
+    table = method == "table"
+    _require_memory(machine, d0.shape, 3 * n * n if table else 6 * n, n * n if table else n,
+                    f"motion.flow over {n} x {n} displacements (method {method!r})")
     pyramids = [_pyramid(machine, d, levels) for d in (d0, d1)]
     coarse = None
     for image0, image1 in zip(reversed(pyramids[0]), reversed(pyramids[1])):
@@ -446,7 +456,9 @@ def votes(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featu
     """
     machine = machine_for(machine)
     d0, d1, host = _frames(frame0, frame1, machine)
-    delta, radius, sigma = _check(d0.shape, delta, patch, features, sigma)
+    delta, radius, sigma, _ = _check(d0.shape, delta, patch, features, sigma)
+    n = 2 * delta + 1
+    _require_memory(machine, d0.shape, 3 * n * n, n * n, f"motion.votes over {n} x {n} displacements")
     f0 = _features(machine, d0, features, sigma)
     f1 = _features(machine, d1, features, sigma)
     table = _table(machine, f0, f1, delta, radius, _defines(f0, features))

@@ -94,7 +94,9 @@ def noise_thresholds(magnitude: ArrayLike, *, noise: Noise = "global", machine: 
     Parameters
     ----------
     magnitude : ndarray or pyopencl.array.Array, float32 (H, W)
-        Gradient magnitudes, e.g. the second output of ``canny(..., return_gradient=True)``; >= 0.
+        Gradient magnitudes, e.g. the second output of ``canny(..., return_gradient=True)``; >= 0 and
+        finite (NaN or infinity in a host array is refused; in a device array, which is not checked
+        because that would make the host wait, it gives thresholds of infinity or 0).
     noise : {"global", "local"}
         "global": one histogram of the whole field. "local": one per tile of :data:`TILE` x :data:`TILE`
         pixels (tiles at the right and bottom hold what is left); :func:`vmcl.early.edges.canny`
@@ -109,7 +111,8 @@ def noise_thresholds(magnitude: ArrayLike, *, noise: Noise = "global", machine: 
     Notes
     -----
     Medians come from :data:`BINS`-bin histograms over [0, max], with the values of a bin taken as
-    spread evenly across it: within one bin width (max / 4096) of ``np.median``.
+    spread evenly across it: within one bin width (max / 4096) of ``np.median``. Any finite scale works,
+    subnormal magnitudes included: the thresholds keep float32's precision at that scale.
 
     References
     ----------
@@ -118,6 +121,8 @@ def noise_thresholds(magnitude: ArrayLike, *, noise: Noise = "global", machine: 
     machine = machine_for(machine)
     if noise not in ("global", "local"):
         raise InputValueError(f"noise must be 'global' or 'local', got {noise!r}")
+    if isinstance(magnitude, np.ndarray) and magnitude.dtype.kind == "f" and not np.isfinite(magnitude).all():
+        raise InputValueError("magnitude must not contain NaN or infinite values")
     data, host = field(magnitude, "magnitude", machine, ndims=(2,), dtypes=(np.float32,))
     out, _ = threshold_field(machine, data, noise_rule(CANNY_LOW, CANNY_HIGH), local=noise == "local")
     return result(out.reshape(2) if noise == "global" else out, host)

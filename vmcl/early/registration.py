@@ -22,24 +22,43 @@ from typing import Literal
 
 import numpy as np
 from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
-from scipy.spatial import cKDTree
+from scipy.spatial import QhullError, cKDTree
 
 from vmcl.cm import doubling, reduce, router
-from vmcl.cm._arrays import ArrayLike, machine_for, result
+from vmcl.cm._arrays import (
+    ArrayLike,
+    check_choice,
+    check_int,
+    check_real,
+    check_real_dtype,
+    machine_for,
+    real_host_array,
+    result,
+)
 from vmcl.cm._arrays import field as device_field
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 
 def _grey(image: np.ndarray, name: str) -> np.ndarray:
-    if not isinstance(image, np.ndarray):
-        raise InputTypeError(f"{name} must be a NumPy array, got {type(image).__name__}")
+    check_real_dtype(image, name)
     if image.ndim != 2 or image.size == 0:
         raise InputValueError(f"{name} must be a non-empty grey image (H, W), got shape {image.shape}")
-    grey = image.astype(np.float32)
+    with np.errstate(over="ignore"):
+        grey = image.astype(np.float32)
     if not np.all(np.isfinite(grey)):
-        raise InputValueError(f"{name} must be finite")
+        raise InputValueError(f"{name} must be finite (and within float32's range)")
     return grey
+
+
+def _dots(dots, name: str) -> np.ndarray:
+    """Centroids checked as a finite (k, 2) array of reals (k may be 0)."""
+    real_host_array(dots, name, ndims=(2,), empty=True)
+    if dots.shape[1] != 2:
+        raise InputValueError(f"{name} must be an array of (x, y) centroids of shape (k, 2), got shape {dots.shape}")
+    if not np.isfinite(dots).all():
+        raise InputValueError(f"{name} must hold finite centroids")
+    return dots
 
 
 def _otsu(grey: np.ndarray, machine: Machine) -> float:
@@ -79,10 +98,12 @@ def find_dots(image: np.ndarray, *, polarity: Literal["dark", "bright"] = "dark"
     """
     machine = machine_for(machine)
     grey = _grey(image, "image")
-    if polarity not in ("dark", "bright"):
-        raise InputValueError(f"polarity must be 'dark' or 'bright', got {polarity!r}")
+    polarity = check_choice(polarity, "polarity", ("dark", "bright"))
+    min_area = check_int(min_area, "min_area", minimum=0)
     if threshold is None:
         threshold = _otsu(grey, machine)
+    else:
+        threshold = check_real(threshold, "threshold")
     contrast = (threshold - grey) if polarity == "dark" else (grey - threshold)
     mask = contrast > 0
     labels = doubling.label(mask, connectivity=8, relabel=True, machine=machine)
@@ -106,11 +127,10 @@ def match_dots(left: np.ndarray, right: np.ndarray, *, max_shift: float) -> tupl
     The pattern must be sparse enough that matching is unambiguous (dot spacing above 2 * max_shift),
     as the paper requires. Returns the matched left and right centroids, (m, 2) each, in left order.
     """
-    for name, dots in (("left", left), ("right", right)):
-        if not isinstance(dots, np.ndarray) or dots.ndim != 2 or dots.shape[1] != 2:
-            raise InputValueError(f"{name} must be an array of (x, y) centroids of shape (k, 2)")
-    if not max_shift > 0:
-        raise InputValueError(f"max_shift must be positive, got {max_shift}")
+    left, right = _dots(left, "left"), _dots(right, "right")
+    # An infinite shift is a query without a distance bound.
+    if not (isinstance(max_shift, (float, np.floating)) and max_shift == np.inf):
+        max_shift = check_real(max_shift, "max_shift", above=0)
     if len(left) == 0 or len(right) == 0:
         return np.zeros((0, 2)), np.zeros((0, 2))
     distance, nearest = cKDTree(right).query(left, distance_upper_bound=max_shift)
@@ -137,22 +157,37 @@ class WarpTable:
     def from_dots(cls, left: np.ndarray, right: np.ndarray, shape: tuple[int, int], *,
                   vergence: float = 0.0) -> WarpTable:
         """The table from matched dot centroids (see :func:`match_dots`) for images of ``shape``."""
+        left, right = _dots(left, "left"), _dots(right, "right")
+        if left.shape != right.shape:
+            raise InputValueError(f"left and right must hold the same number of matched dots, got {len(left)} "
+                                  f"and {len(right)}")
         if len(left) < 3:
             raise InputValueError(f"need at least 3 matched dots to interpolate a warp table, got {len(left)}")
+        if not isinstance(shape, (tuple, list)) or len(shape) != 2:
+            raise InputTypeError(f"shape must be a tuple (H, W), got {shape!r}")
+        shape = tuple(check_int(n, "shape", minimum=1) for n in shape)
+        vergence = check_real(vergence, "vergence")
         vectors = right - left
-        ys, xs = np.indices(shape, dtype=np.float64)
-        points = np.stack([xs.ravel(), ys.ravel()], axis=1)
-        linear = LinearNDInterpolator(left, vectors)(points)
+        try:
+            ys, xs = np.indices(shape, dtype=np.float64)
+            points = np.stack([xs.ravel(), ys.ravel()], axis=1)
+            linear = LinearNDInterpolator(left, vectors)(points)
+        except MemoryError as error:
+            raise InputValueError(f"a warp table of shape {shape} needs more host memory than there is") from error
+        except QhullError as error:
+            raise InputValueError(f"the matched dots do not span an area (all on one line?): {error}") from error
         outside = ~np.isfinite(linear[:, 0])
         linear[outside] = NearestNDInterpolator(left, vectors)(points[outside])
         source = (points + linear).reshape(*shape, 2).astype(np.float32)
-        return cls(source=source, vergence=float(vergence), dots=len(left))
+        return cls(source=source, vergence=vergence, dots=len(left))
 
     @classmethod
     def calibrate(cls, left_image: np.ndarray, right_image: np.ndarray, *, max_shift: float,
                   vergence: float = 0.0, polarity: Literal["dark", "bright"] = "dark",
                   machine: Machine | None = None) -> WarpTable:
         """Find, match and interpolate the dots of a calibration pair in one call."""
+        _grey(left_image, "left_image")
+        _grey(right_image, "right_image")
         if left_image.shape != right_image.shape:
             raise InputValueError(f"the calibration images differ in shape: {left_image.shape} and {right_image.shape}")
         left = find_dots(left_image, polarity=polarity, machine=machine)
@@ -168,6 +203,8 @@ class TableStore:
     tables: list[WarpTable] = field(default_factory=list)
 
     def add(self, table: WarpTable) -> None:
+        if not isinstance(table, WarpTable):
+            raise InputTypeError(f"table must be a WarpTable, got {type(table).__name__}")
         if self.tables and table.source.shape != self.tables[0].source.shape:
             raise InputValueError(f"table shape {table.source.shape} differs from the store's "
                              f"{self.tables[0].source.shape}")
@@ -177,6 +214,7 @@ class TableStore:
 
     def table_for(self, vergence: float) -> WarpTable:
         """The stored table for this angle, or the linear interpolation of the two around it."""
+        vergence = check_real(vergence, "vergence")
         if not self.tables:
             raise InputValueError("the store holds no tables")
         angles = [t.vergence for t in self.tables]

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from vmcl.cm import reduce as _reduce
-from vmcl.cm._arrays import ArrayLike, field, machine_for
+from vmcl.cm._arrays import ArrayLike, check_real, check_real_dtype, field, machine_for
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
@@ -90,4 +90,10 @@ def arcsine_law(correlation: float | np.ndarray) -> float | np.ndarray:
     H. H. Bulthoff, J. J. Little and T. Poggio, "A parallel algorithm for real-time computation of
     optical flow", Nature 337:549-553, 1989 (the theorem in the seed paper's section "Motion").
     """
+    if isinstance(correlation, np.ndarray):
+        check_real_dtype(correlation, "correlation")
+        if not (np.abs(correlation) <= 1).all():  # NaN fails too
+            raise InputValueError("correlation must hold values in [-1, 1]")
+    else:
+        correlation = check_real(correlation, "correlation", minimum=-1, maximum=1)
     return 2.0 / np.pi * np.arcsin(correlation)

@@ -32,7 +32,15 @@ import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as cm_reduce
 from vmcl.cm import scan
-from vmcl.cm._arrays import ArrayLike, check_int, machine_for
+from vmcl.cm._arrays import (
+    ArrayLike,
+    check_bool,
+    check_choice,
+    check_context,
+    check_int,
+    check_real,
+    machine_for,
+)
 from vmcl.cm._arrays import field as device_field
 from vmcl.cm.filters import window_max
 from vmcl.early.edges import canny, zero_crossings
@@ -69,18 +77,44 @@ class StereoMatch:
     discontinuity: ArrayLike
 
 
-def _pair(left, right) -> None:
+_IMAGE_DTYPES = {np.dtype(np.uint8), np.dtype(np.uint16), np.dtype(np.float32)}
+
+
+def _pair(left, right, machine: Machine) -> None:
     for name, image in (("left", left), ("right", right)):
         if not isinstance(image, (np.ndarray, cl_array.Array)):
             raise InputTypeError(f"{name} must be a NumPy array or a pyopencl.array.Array, got {type(image).__name__}")
+        if isinstance(image, cl_array.Array):
+            check_context(image, name, machine)
+        host_float = isinstance(image, np.ndarray) and image.dtype.kind == "f"
+        if image.dtype not in _IMAGE_DTYPES and not host_float:
+            raise InputTypeError(f"{name} must have dtype uint8, uint16 or float32 (or another float on the "
+                                 f"host), got {image.dtype}")
+        if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] != 3):
+            raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {image.shape}")
+    if isinstance(left, np.ndarray) != isinstance(right, np.ndarray):
+        raise InputTypeError("left and right must both be NumPy arrays or both device arrays")
     if left.shape != right.shape:
         raise InputValueError(f"left and right must have the same shape, got {left.shape} and {right.shape}")
     if 0 in left.shape[:2]:
         raise InputValueError(f"left and right must not be empty, got shape {left.shape}")
     for name, image in (("left", left), ("right", right)):
         # Device images are not checked: that would need a read back.
-        if isinstance(image, np.ndarray) and image.dtype.kind == "f" and not np.isfinite(image).all():
-            raise InputValueError(f"{name} has NaN or infinite pixels")
+        if isinstance(image, np.ndarray) and image.dtype.kind == "f":
+            if not np.isfinite(image).all():
+                raise InputValueError(f"{name} has NaN or infinite pixels")
+            if image.dtype.itemsize > 4 and np.abs(image).max() > np.finfo(np.float32).max:
+                raise InputValueError(f"{name} has values beyond float32's range")
+
+
+def _selection(min_score, bimodal, dip, min_votes, negative_evidence, direction_tolerance) -> dict:
+    """The selection's numeric parameters, checked (the ranges in which they mean something)."""
+    return {"min_score": check_real(min_score, "min_score"),
+            "bimodal": check_real(bimodal, "bimodal", minimum=0, maximum=1),
+            "dip": check_real(dip, "dip", minimum=0, maximum=1),
+            "min_votes": check_real(min_votes, "min_votes", minimum=0),
+            "negative_evidence": check_real(negative_evidence, "negative_evidence", minimum=0),
+            "direction_tolerance": check_real(direction_tolerance, "direction_tolerance", minimum=0)}
 
 
 def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features: Features = "canny",
@@ -170,26 +204,24 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     pipeline, dense bad-1 on the sparsely textured "cues" scene rose from 1.0% to 3.0%.
     """
     machine = machine_for(machine)
-    _pair(left, right)
+    _pair(left, right, machine)
     _check_range(d_min, d_max, patch, left.shape[1])
-    if features not in _FEATURES:
-        raise InputValueError(f"features must be one of {sorted(_FEATURES)}, got {features!r}")
-    if (left.ndim == 3) != (right.ndim == 3):
-        raise InputValueError("left and right must both be grey or both be colour")
-    if not isinstance(shiftable, (bool, np.bool_)):
-        raise InputTypeError(f"shiftable must be a bool, got {type(shiftable).__name__}")
+    features = check_choice(features, "features", _FEATURES)
+    shiftable = check_bool(shiftable, "shiftable")
+    use_quantiles = check_bool(use_quantiles, "use_quantiles")
+    sigma = check_real(sigma, "sigma", above=0)
     if shiftable and features != "intensity":
         raise InputValueError(f"shiftable windows score intensity patches: features must be 'intensity', got {features!r}")
     if shiftable and barriers is not None:
         raise InputValueError("shiftable windows take no barriers: a shifted patch already avoids the discontinuity")
-    if not 0 <= horizontal_tolerance < 90:  # also refuses NaN; from 90 degrees on no edge would be left
-        raise InputValueError(f"horizontal_tolerance must be in [0, 90) degrees, got {horizontal_tolerance}")
+    # From 90 degrees on no edge would be left.
+    horizontal_tolerance = check_real(horizontal_tolerance, "horizontal_tolerance", minimum=0, below=90)
+    selection = _selection(min_score, bimodal, dip, min_votes, negative_evidence, direction_tolerance)
+    variant = _plan(machine, features, left.shape[:2], d_min, d_max, patch, shiftable, barriers, variant)
     maps = _feature_maps(machine, left, right, features, sigma, low_threshold, high_threshold, use_quantiles)
     min_angle = horizontal_tolerance * 65536 / 360 if features == "canny" else 0.0
     found = _match_maps(machine, maps, features, min_angle=min_angle, d_min=d_min, d_max=d_max, patch=patch,
-                        direction_tolerance=direction_tolerance, min_score=min_score, bimodal=bimodal, dip=dip,
-                        min_votes=min_votes, negative_evidence=negative_evidence, shiftable=bool(shiftable),
-                        barriers=barriers, variant=variant)
+                        **selection, shiftable=shiftable, barriers=barriers, variant=variant)
     return _deliver(found, isinstance(left, np.ndarray))
 
 
@@ -211,8 +243,9 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
     The other parameters are :func:`match`'s.
     """
     machine = machine_for(machine)
-    if compatible not in ("direction", "sign"):
-        raise InputValueError(f"compatible must be 'direction' or 'sign', got {compatible!r}")
+    compatible = check_choice(compatible, "compatible", ("direction", "sign"))
+    selection = _selection(min_score, bimodal, dip, min_votes, negative_evidence, direction_tolerance)
+    hosts = set()
     features = "canny" if compatible == "direction" else "dog"
     attr_type = np.float32 if compatible == "direction" else np.int8
     maps = {}
@@ -220,15 +253,19 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
         if isinstance(mask, np.ndarray) and mask.dtype == np.bool_:
             mask = mask.view(np.uint8)
         maps[name], host = device_field(mask, name, machine, ndims=(2,), dtypes=(np.uint8,))
+        hosts.add(host)
         maps[name + "_attr"], _ = device_field(attribute, f"{name}_attribute", machine, ndims=(2,),
                                                dtypes=(attr_type,))
         if maps[name + "_attr"].shape != maps[name].shape:
             raise InputValueError(f"{name}_attribute must have the shape of {name}")
-    _pair(maps["left"], maps["right"])
-    _check_range(d_min, d_max, patch, maps["left"].shape[1])
+    if len(hosts) > 1:
+        raise InputTypeError("left and right must both be NumPy arrays or both device arrays")
+    _pair(maps["left"], maps["right"], machine)
+    shape = maps["left"].shape
+    _check_range(d_min, d_max, patch, shape[1])
+    variant = _plan(machine, features, shape, d_min, d_max, patch, False, barriers, variant)
     found = _match_maps(machine, maps, features, min_angle=0.0, d_min=d_min, d_max=d_max, patch=patch,
-                        direction_tolerance=direction_tolerance, min_score=min_score, bimodal=bimodal, dip=dip,
-                        min_votes=min_votes, negative_evidence=negative_evidence, barriers=barriers, variant=variant)
+                        **selection, barriers=barriers, variant=variant)
     return _deliver(found, host)
 
 
@@ -241,6 +278,40 @@ def _check_range(d_min, d_max, patch, width: int) -> None:
         raise InputValueError(f"the disparity range [{d_min}, {d_max}] is wider than the image ({width} pixels)")
     if patch < 1 or patch % 2 == 0:
         raise InputValueError(f"patch must be an odd integer >= 1, got {patch}")
+
+
+def _plan(machine: Machine, features: str, shape: tuple[int, int], d_min: int, d_max: int, patch: int,
+          shiftable: bool, barriers, variant) -> str:
+    """The variant to run (the given one, checked, or the default), after checking that the device holds
+    the tables it builds; before any work is done."""
+    height, width = shape
+    depth = d_max - d_min + 1
+    table_bytes = depth * height * width * np.dtype(np.float32).itemsize
+    if variant is None:
+        if features == "intensity":
+            # Shiftable windows hold three tables at once: scores and the window maximum's two passes.
+            tables = 3 if shiftable else 1
+            variant = "table" if tables * table_bytes <= _TABLE_BYTES else "running"
+        else:
+            variant = "running" if patch <= _MAX_RUNNING_PATCH else "table"
+    variant = check_choice(variant, "variant", ("running", "table"))
+    if variant == "running" and features != "intensity" and patch > _MAX_RUNNING_PATCH:
+        raise InputValueError(f"the running variant counts votes in 16 bits: patch must be <= {_MAX_RUNNING_PATCH}, "
+                              f"got {patch} (use variant='table')")
+    if patch > min(height, width):
+        # No patch would lie inside the image, so nothing could match.
+        raise InputValueError(f"patch must be at most the image's smaller side, {min(height, width)} for this "
+                              f"{height} x {width} image, got {patch}")
+    # Tables alive at once: the planes and the box sum's two passes (the clipped sums' prefix and pass
+    # with barriers; the shiftable scores and window maximum): the running variants hold at most one
+    # plane, or _TABLE_BYTES of column sums.
+    tables = (4 if barriers is not None or shiftable else 3) if variant == "table" else 0
+    per_pixel = 160  # feature maps, codes, counts, moments and their sums, selection, outputs
+    machine.require_memory(f"stereo matching of {height} x {width} pixels over {depth} disparities "
+                           f"(variant {variant!r})",
+                           tables * table_bytes + per_pixel * height * width + (_TABLE_BYTES if not tables else 0),
+                           max(table_bytes if tables else 0, 16 * height * width))
+    return variant
 
 
 def _deliver(found: list, host: bool) -> StereoMatch:
@@ -259,22 +330,6 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
     """Planes, support, selection and suppression on device feature maps; returns the device outputs."""
     height, width = maps["left"].shape
     depth = d_max - d_min + 1
-    if variant is None:
-        if features == "intensity":
-            # Shiftable windows hold three tables at once: scores and the window maximum's two passes.
-            tables = 3 if shiftable else 1
-            variant = "table" if tables * depth * height * width * 4 <= _TABLE_BYTES else "running"
-        else:
-            variant = "running" if patch <= _MAX_RUNNING_PATCH else "table"
-    if variant not in ("running", "table"):
-        raise InputValueError(f"variant must be 'running' or 'table', got {variant!r}")
-    if variant == "running" and features != "intensity" and patch > _MAX_RUNNING_PATCH:
-        raise InputValueError(f"the running variant counts votes in 16 bits: patch must be <= {_MAX_RUNNING_PATCH}, "
-                         f"got {patch} (use variant='table')")
-    if negative_evidence < 0:
-        raise InputValueError(f"negative_evidence must be >= 0, got {negative_evidence}")
-    if not direction_tolerance >= 0:
-        raise InputValueError(f"direction_tolerance must be >= 0 radians, got {direction_tolerance}")
     radius = patch // 2
     if barriers is not None:
         if isinstance(barriers, np.ndarray) and barriers.dtype == np.bool_:
@@ -375,10 +430,11 @@ def _select_shifted(machine: Machine, support: _Support, common, stats, selectio
 
 
 def direction_code(angle: float) -> int:
-    """An angle in radians as a count of 1/65536 turns, the unit feature codes compare directions in
-    (the tolerance: rounded down, so a code distance within it is an angle within it, up to the codes'
-    own rounding of half a step, 0.0027 degrees)."""
-    return min(math.floor(angle * 65536 / (2 * math.pi)), 32768)
+    """An angle in radians (>= 0) as a count of 1/65536 turns, the unit feature codes compare directions
+    in (the tolerance: rounded down, so a code distance within it is an angle within it, up to the codes'
+    own rounding of half a step, 0.0027 degrees); half a turn and more is 32768."""
+    angle = check_real(angle, "angle", minimum=0)
+    return min(math.floor(min(angle, math.pi) * 65536 / (2 * math.pi)), 32768)
 
 
 def _codes(machine: Machine, maps: dict, features: str, min_angle: float, *, counts: bool) -> list:

@@ -42,17 +42,16 @@ T. Poggio et al., "The MIT Vision Machine", Proc. DARPA Image Understanding Work
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import scan as _scan
-from vmcl.cm._arrays import ArrayLike, check_int, machine_for, result
+from vmcl.cm._arrays import ArrayLike, check_int, check_real, machine_for, result
 from vmcl.early import noise as _noise
 from vmcl.early.filters import _check_sigma, _image, laplacian_of_gaussian
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 MIN_DENSITY_STEP = 0.01
@@ -79,12 +78,21 @@ def _check(fine_sigma, coarse_sigma, threshold, radius) -> tuple[float, float, f
     coarse = _check_sigma(coarse_sigma, "coarse_sigma")
     if coarse <= fine:
         raise InputValueError(f"coarse_sigma must exceed fine_sigma, got coarse_sigma={coarse} <= fine_sigma={fine}")
-    if isinstance(threshold, bool) or not isinstance(threshold, (int, float, np.integer, np.floating)):
-        raise InputTypeError(f"threshold must be a number, got {type(threshold).__name__}")
-    if not math.isfinite(threshold) or threshold <= 0:
-        raise InputValueError(f"threshold must be a finite number > 0 (blobs are thresholded at a non-zero "
-                         f"value), got {threshold}")
-    return fine, coarse, float(threshold), check_int(radius, "radius", minimum=1)
+    # Blobs are thresholded at a non-zero value.
+    threshold = check_real(threshold, "threshold", above=0)
+    return fine, coarse, threshold, check_int(radius, "radius", minimum=1)
+
+
+def _image_and_radius(image, radius: int, fine: float, coarse: float,
+                      machine: Machine) -> tuple[cl_array.Array, bool, int]:
+    """The image on the device, whether it came from the host, and the radius cut to the image: windows
+    are cut at the border, so a radius beyond the image's longer side gives the same windows (and the
+    kernels' 64-bit index arithmetic never sees a larger one)."""
+    # Per pixel: two Laplacians and their smoothing passes, the blobs and their window sums, the
+    # density, and the gradient's magnitude, axis and edges.
+    data, host = _image(image, machine, what="texture density", footprint=56,
+                        widths={"fine_sigma": fine, "coarse_sigma": coarse})
+    return data, host, min(radius, max(data.shape[:2]))
 
 
 def _density(machine: Machine, data: cl_array.Array, fine: float, coarse: float, threshold: float,
@@ -150,7 +158,7 @@ def density(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, thresho
     """
     machine = machine_for(machine)
     fine, coarse, threshold, radius = _check(fine_sigma, coarse_sigma, threshold, radius)
-    data, host = _image(image, machine)
+    data, host, radius = _image_and_radius(image, radius, fine, coarse, machine)
     return result(_density(machine, data, fine, coarse, threshold, radius), host)
 
 
@@ -185,11 +193,8 @@ def texture_edges(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, t
     machine = machine_for(machine)
     fine, coarse, threshold, radius = _check(fine_sigma, coarse_sigma, threshold, radius)
     if edge_threshold is not None:
-        if isinstance(edge_threshold, bool) or not isinstance(edge_threshold, (int, float, np.integer, np.floating)):
-            raise InputTypeError(f"edge_threshold must be a number or None, got {type(edge_threshold).__name__}")
-        if not math.isfinite(edge_threshold) or edge_threshold < 0:
-            raise InputValueError(f"edge_threshold must be a finite number >= 0, got {edge_threshold}")
-    data, host = _image(image, machine)
+        edge_threshold = check_real(edge_threshold, "edge_threshold", minimum=0)
+    data, host, radius = _image_and_radius(image, radius, fine, coarse, machine)
     dens = _density(machine, data, fine, coarse, threshold, radius)
     height, width = dens.shape
     size, dims = (width, height), (np.int64(width), np.int64(height))

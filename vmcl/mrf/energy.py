@@ -49,18 +49,32 @@ import math
 from dataclasses import dataclass, field, fields
 
 import numpy as np
+import pyopencl.array as cl_array
 
+from vmcl.cm._arrays import check_choice, check_int, real_host_array
 from vmcl.errors import InputTypeError, InputValueError
 
 KINDS = ("smooth", "constant")
+
+# Counts of sweeps, levels and radii: far above any schedule that ends, and within the kernels' int32.
+_MAX_COUNT = 2**31 - 1
+
+
+def host_field(x, name: str, *, ndims: tuple[int, ...], empty: bool = False) -> np.ndarray:
+    """``x``, a NumPy or device array, as a NumPy array of real numbers with one of ``ndims`` dimensions."""
+    return real_host_array(x.get() if isinstance(x, cl_array.Array) else x, name, ndims=ndims, empty=empty)
 
 
 def _check_finite(owner: object, names: tuple[str, ...], *, positive: tuple[str, ...] = ()) -> None:
     for name in names:
         value = getattr(owner, name)
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
             raise InputTypeError(f"{type(owner).__name__}.{name} must be a number, got {type(value).__name__}")
-        if not math.isfinite(value):
+        try:
+            finite = math.isfinite(value)
+        except OverflowError:  # an int beyond float's range
+            finite = False
+        if not finite:
             raise InputValueError(f"{type(owner).__name__}.{name} must be finite, got {value}")
         if name in positive and value <= 0:
             raise InputValueError(f"{type(owner).__name__}.{name} must be > 0, got {value}")
@@ -188,19 +202,20 @@ class Params:
                 raise InputValueError(f"Params.{name} must be >= 0, got {getattr(self, name)}")
         for name in ("edge_radius", "sweeps", "quench", "burn_in", "samples", "mf_steps", "mf_iterations",
                      "icm_sweeps"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
-                raise InputValueError(f"Params.{name} must be an integer >= 0, got {value!r}")
+            check_int(getattr(self, name), f"Params.{name}", minimum=0, maximum=_MAX_COUNT)
+        if not isinstance(self.require_edge, (bool, np.bool_)):
+            raise InputTypeError(f"Params.require_edge must be a bool, got {type(self.require_edge).__name__}")
         if self.t_factor > 1 or self.mf_factor > 1:
             raise InputValueError("Params.t_factor and Params.mf_factor must be in (0, 1]: temperatures fall")
-        if isinstance(self.levels, (int, np.integer)) and not isinstance(self.levels, bool):
+        if isinstance(self.levels, (int, np.integer)) and not isinstance(self.levels, (bool, np.bool_)):
             if not 2 <= self.levels <= 64:
                 raise InputValueError(f"Params.levels must be a count in 2..64 or a tuple of levels, got {self.levels}")
         else:
-            levels = np.asarray(self.levels, np.float64)
-            if levels.ndim != 1 or not 2 <= levels.size <= 64 or not np.all(np.isfinite(levels)) \
-                    or np.unique(levels).size != levels.size:
-                raise InputValueError(f"Params.levels must be 2..64 distinct finite values, got {self.levels!r}")
+            levels = np.asarray(self.levels if isinstance(self.levels, (tuple, list, np.ndarray)) else ())
+            if levels.dtype.kind not in "iuf" or levels.ndim != 1 or not 2 <= levels.size <= 64 \
+                    or not np.all(np.isfinite(levels)) or np.unique(levels).size != levels.size:
+                raise InputValueError(f"Params.levels must be a count in 2..64 or 2..64 distinct finite values, "
+                                      f"got {self.levels!r}")
 
     def vertex_table(self) -> np.ndarray:
         """beta times the vertex potentials, float64 (16,)."""
@@ -237,7 +252,7 @@ def line_costs(shape: tuple[int, int], edges: np.ndarray | None, params: Params)
     b_v = np.full((height - 1, width), base)
     if edges is None:
         return b_h, b_v
-    e = np.asarray(edges) != 0
+    e = (edges.get() if isinstance(edges, cl_array.Array) else np.asarray(edges)) != 0
     gain = params.beta * params.edge_gain
     at_h = e[:, :-1] | e[:, 1:]
     at_v = e[:-1, :] | e[1:, :]
@@ -253,6 +268,7 @@ def line_costs(shape: tuple[int, int], edges: np.ndarray | None, params: Params)
 def _dilate(mask: np.ndarray, radius: int) -> np.ndarray:
     """True within Chebyshev distance ``radius`` of a True pixel (the image does not wrap)."""
     height, width = mask.shape
+    radius = min(radius, max(height, width))  # a wider radius marks no more pixels, and would not fit
     padded = np.pad(mask, radius)
     out = np.zeros_like(mask)
     for dy in range(2 * radius + 1):
@@ -302,22 +318,31 @@ def energy(f: np.ndarray, line_h: np.ndarray, line_v: np.ndarray, *, data: np.nd
     S. Geman and D. Geman, IEEE PAMI 6(6):721-741, 1984 (line processes).
     """
     params = Params() if params is None else params
-    if kind not in KINDS:
-        raise InputValueError(f"kind must be 'smooth' or 'constant', got {kind!r}")
-    g = np.asarray(data, np.float64)
-    f = np.asarray(f, np.float64)
-    if f.shape != g.shape or f.ndim not in (2, 3):
+    if not isinstance(params, Params):
+        raise InputTypeError(f"params must be a vmcl.mrf.Params or None, got {type(params).__name__}")
+    check_choice(kind, "kind", KINDS)
+    g = host_field(data, "data", ndims=(2, 3)).astype(np.float64)
+    f = host_field(f, "f", ndims=(2, 3)).astype(np.float64)
+    if f.shape != g.shape:
         raise InputValueError(f"f must have the data's shape (H, W) or (H, W, C), got {f.shape} and {g.shape}")
+    if not np.all(np.isfinite(f)):
+        raise InputValueError("f must be finite (NaN marks missing data, never a missing field value)")
     if f.ndim == 2:
         f, g = f[..., None], g[..., None]
     height, width = f.shape[:2]
-    lh = np.asarray(line_h) != 0
-    lv = np.asarray(line_v) != 0
+    lh = host_field(line_h, "line_h", ndims=(2,), empty=True) != 0
+    lv = host_field(line_v, "line_v", ndims=(2,), empty=True) != 0
     if lh.shape != (height, width - 1) or lv.shape != (height - 1, width):
         raise InputValueError(f"line_h and line_v must have shapes {(height, width - 1)} and {(height - 1, width)}, "
-                         f"got {lh.shape} and {lv.shape}")
+                              f"got {lh.shape} and {lv.shape}")
+    for name, pixels in (("confidence", confidence), ("edges", edges)):
+        if pixels is not None and host_field(pixels, name, ndims=(2,)).shape != (height, width):
+            raise InputValueError(f"{name} must have the field's shape {(height, width)}, got {np.shape(pixels)}")
     finite = np.all(np.isfinite(g), axis=2)
-    gamma = np.ones((height, width)) if confidence is None else np.asarray(confidence, np.float64)
+    gamma = np.ones((height, width)) if confidence is None else host_field(confidence, "confidence", ndims=(2,))
+    if not np.all(np.isfinite(gamma)) or np.any(gamma < 0):
+        raise InputValueError("confidence must be finite and >= 0")
+    gamma = gamma.astype(np.float64)
     w = params.alpha * np.where(finite, gamma, 0.0)
     total = float(np.sum(w * np.sum((f - np.where(finite[..., None], g, 0.0)) ** 2, axis=2)))
     if kind == "smooth":

@@ -25,7 +25,7 @@ How each was chosen (tests/test_mrf_quality.py holds the scenes; the figures are
 
 from __future__ import annotations
 
-from vmcl.errors import InputValueError
+from vmcl.cm._arrays import check_choice
 from vmcl.mrf.energy import Params
 
 DEPTH = Params(alpha=1.0, beta=2.0, edge_gain=0.75, mf_t0=8.0, mf_factor=0.9, mf_steps=40, mf_iterations=5,
@@ -41,6 +41,4 @@ PRESETS = {"depth": DEPTH, "flow": FLOW, "colour": COLOUR, "texture": TEXTURE}
 
 def preset(cue: str) -> Params:
     """The measured Params of a cue: "depth", "flow", "colour" or "texture"."""
-    if cue not in PRESETS:
-        raise InputValueError(f"cue must be one of {', '.join(PRESETS)}, got {cue!r}")
-    return PRESETS[cue]
+    return PRESETS[check_choice(cue, "cue", PRESETS)]

@@ -23,10 +23,10 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as cm_reduce
-from vmcl.cm._arrays import ArrayLike, field, machine_for
+from vmcl.cm._arrays import ArrayLike, check_choice, check_int, field, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
-from vmcl.mrf.energy import KINDS, Params
+from vmcl.mrf.energy import KINDS, Params, host_field
 from vmcl.mrf.icm import icm
 from vmcl.mrf.lattice import Lattice
 from vmcl.mrf.meanfield import meanfield
@@ -124,12 +124,9 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
     params = Params() if params is None else params
     if not isinstance(params, Params):
         raise InputTypeError(f"params must be a vmcl.mrf.Params, got {type(params).__name__}")
-    if kind not in KINDS:
-        raise InputValueError(f"kind must be 'smooth' or 'constant', got {kind!r}")
-    if method not in METHODS:
-        raise InputValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**64:
-        raise InputValueError(f"seed must be an integer in [0, 2**64), got {seed!r}")
+    check_choice(kind, "kind", KINDS)
+    check_choice(method, "method", METHODS)
+    check_int(seed, "seed", minimum=0, maximum=2**64 - 1)
     if params.alpha <= 0:
         raise InputValueError("params.alpha must be > 0: without the data term nothing anchors the field")
     g, host = _data(data, machine)
@@ -197,7 +194,7 @@ def boundary_map(line_h: np.ndarray, line_v: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    line_h, line_v : (H, W - 1) and (H - 1, W) arrays
+    line_h, line_v : (H, W - 1) and (H - 1, W) arrays (NumPy or device), non-zero where a line is on
 
     Returns
     -------
@@ -205,7 +202,8 @@ def boundary_map(line_h: np.ndarray, line_v: np.ndarray) -> np.ndarray:
         The left/upper pixel of each line site, the convention of vmcl.scenes' labels for non-depth
         discontinuities; compare within a tolerance of 1 px with :func:`vmcl.metrics.detection_scores`.
     """
-    line_h, line_v = np.asarray(line_h) != 0, np.asarray(line_v) != 0
+    line_h = host_field(line_h, "line_h", ndims=(2,), empty=True) != 0
+    line_v = host_field(line_v, "line_v", ndims=(2,), empty=True) != 0
     height, width = line_v.shape[0] + 1, line_h.shape[1] + 1
     if line_h.shape != (height, width - 1):
         raise InputValueError(f"line_h must have shape {(height, width - 1)} to match line_v {line_v.shape}")

@@ -1,0 +1,165 @@
+"""Output folders vmcl writes: only its own files, replaced whole or not at all.
+
+vmcl writes only its own files. An output folder must be a new folder, an empty one, or a previous vmcl
+output, which vmcl knows by the file :data:`MARKER` listing the files it wrote there; anything else is
+refused before any work starts. The files are written into a hidden folder beside the output and moved
+into place only when all are written; replacing a previous output touches only the files it lists, and
+puts them back if the move fails or is interrupted part way. A new folder gets the mode the umask
+gives; an existing one keeps its own.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import secrets
+import shutil
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+from vmcl.errors import InputValueError
+
+MARKER = ".vmcl-output"
+"""The file that marks a folder as a vmcl output: the names of the files vmcl wrote there, one a line."""
+
+_MARKER_HEADER = "# Written by vmcl: the files it wrote here, which its next run into this folder replaces.\n"
+
+
+@contextlib.contextmanager
+def output_folder(out: Path) -> Iterator[Path]:
+    """A hidden folder beside ``out`` to write into; its files replace ``out``'s when the block succeeds.
+
+    ``out`` is checked at once (before the run that fills it): it must be new, empty or a previous vmcl
+    output (see the module's docstring), and its parent writable. The hidden folder and any parent
+    folders made for ``out`` vanish if the block fails or is interrupted.
+    """
+    out = out.resolve()  # the hidden folders go beside the real folder, on its file system
+    _previous_output(out)
+    missing = [folder for folder in (out.parent, *out.parent.parents) if not folder.exists()]
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        work = _hidden_folder(out, "partial")
+    except OSError as error:
+        _remove_empty(missing)
+        raise InputValueError(f"--out {out}: cannot write into {out.parent} ({error.strerror})") from None
+    if out.is_dir() and not os.access(out, os.W_OK | os.X_OK):
+        _remove_empty([work, *missing])
+        raise InputValueError(f"--out {out}: the folder is not writable")
+    done = False
+    try:
+        yield work
+        _move_in(work, out)
+        done = True
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+        if not done:
+            _remove_empty(missing)
+
+
+def _previous_output(out: Path) -> list[str]:
+    """The files a previous vmcl output at ``out`` holds ([] for a new or empty folder); refuses others."""
+    if not out.exists():
+        return []
+    if not out.is_dir():
+        raise InputValueError(f"--out {out} exists and is not a folder")
+    try:
+        present = {entry.name for entry in out.iterdir()}
+    except OSError as error:
+        raise InputValueError(f"--out {out}: cannot list the folder ({error.strerror})") from None
+    if not present:
+        return []
+    if MARKER not in present:
+        raise InputValueError(f"--out {out} is not empty and is not a vmcl output (it has no {MARKER}); vmcl writes "
+                       "only its own files: name a new or empty folder")
+    listed = _listed(out)
+    foreign = sorted(present - set(listed) - {MARKER})
+    if foreign:
+        shown = ", ".join(foreign[:3]) + (f" and {len(foreign) - 3} more" if len(foreign) > 3 else "")
+        raise InputValueError(f"--out {out} holds files vmcl did not write ({shown}); vmcl replaces only its own "
+                       "output: move them away or name another folder")
+    return sorted(set(listed) & present)
+
+
+def _listed(out: Path) -> list[str]:
+    """The file names :data:`MARKER` lists, each a plain file of ``out``'s (vmcl writes no others)."""
+    try:
+        lines = (out / MARKER).read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as error:
+        raise InputValueError(f"--out {out}: cannot read its {MARKER} ({error})") from None
+    names = [line for line in lines if line and not line.startswith("#")]
+    for name in names:
+        if name in (".", "..") or name.startswith(MARKER) or "/" in name or os.sep in name or (out / name).is_dir():
+            raise InputValueError(f"--out {out}: its {MARKER} lists {name!r}, which is not a file vmcl writes")
+    return names
+
+
+def _hidden_folder(out: Path, kind: str) -> Path:
+    """A new hidden folder beside ``out``, made with the umask's mode (mkdtemp's would be 0700)."""
+    while True:
+        folder = out.parent / f".{out.name}.{kind}-{secrets.token_hex(4)}"
+        try:
+            folder.mkdir()
+            return folder
+        except FileExistsError:
+            continue
+
+
+def _remove_empty(folders: Sequence[Path]) -> None:
+    """Remove these folders, nearest first, while they are empty (those made for a run that failed)."""
+    for folder in folders:
+        try:
+            folder.rmdir()
+        except OSError:
+            return
+
+
+def _write_marker(path: Path, names: Sequence[str]) -> None:
+    path.write_text(_MARKER_HEADER + "".join(f"{name}\n" for name in sorted(names)), encoding="utf-8")
+
+
+def _move_in(work: Path, out: Path) -> None:
+    """Put ``work``'s files in ``out``: a rename of the folder if ``out`` is new, else file by file.
+
+    File by file, the marker first lists the old and new files together, so that every state on the way
+    is a vmcl output the next run would take; the old files are moved aside, the new ones in, and the old
+    ones deleted only at the end. On any error or interrupt the moves are undone from what is on disk
+    (a rename may have completed just before an interrupt arrived).
+    """
+    new = sorted(entry.name for entry in work.iterdir())
+    if not out.exists():
+        _write_marker(work / MARKER, new)
+        os.replace(work, out)
+        return
+    previous = _previous_output(out)  # again: the folder may have changed during the run
+    old_marker = (out / MARKER).read_bytes() if (out / MARKER).exists() else None
+    aside = _hidden_folder(out, "old")
+    try:
+        _write_marker(aside / f"{MARKER}.both", sorted(set(previous) | set(new)))
+        os.replace(aside / f"{MARKER}.both", out / MARKER)
+        for name in previous:
+            os.replace(out / name, aside / name)
+        for name in new:
+            os.replace(work / name, out / name)
+        _write_marker(aside / f"{MARKER}.new", new)
+        os.replace(aside / f"{MARKER}.new", out / MARKER)
+    except BaseException:
+        _undo_move_in(work, out, aside, previous, new, old_marker)
+        raise
+    shutil.rmtree(aside)
+
+
+def _undo_move_in(work: Path, out: Path, aside: Path, previous: Sequence[str], new: Sequence[str],
+                  old_marker: bytes | None) -> None:
+    """Put the previous output back as it was; ``aside`` is removed only once it holds none of it."""
+    for name in new:
+        if (out / name).exists() and not (work / name).exists():
+            os.replace(out / name, work / name)
+    for name in previous:
+        if (aside / name).exists():
+            os.replace(aside / name, out / name)
+    if old_marker is None:
+        (out / MARKER).unlink(missing_ok=True)
+    else:
+        (aside / f"{MARKER}.old").write_bytes(old_marker)
+        os.replace(aside / f"{MARKER}.old", out / MARKER)
+    shutil.rmtree(aside)
