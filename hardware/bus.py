@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import serial
 
+from .arguments import check_number
 from .commands import FAULT_BIT, Cmd, Error
 from .errors import (
     BadLength,
@@ -43,6 +44,10 @@ if TYPE_CHECKING:
     from typing_extensions import Self
 
 __all__ = ["Bus", "BusStats", "Clock", "WallClock", "open_port", "register_sim_handler"]
+
+# The longest sleep or wait the Bus accepts, seconds: a day. Longer ones (inf, 1e308) are mistakes that
+# would hang the host, or overflow the simulator's clock.
+_LONGEST_WAIT = 86_400.0
 
 
 class Clock(Protocol):
@@ -173,8 +178,9 @@ class Bus:
         self._parser = Parser()
         self._lock = threading.RLock()
         # A fresh host starts its sequence numbers at random, so a micro's memory of the last request
-        # of a previous host session is not mistaken for a retry of this session's first request.
-        start = random.SystemRandom().randrange(256)
+        # of a previous host session is not mistaken for a retry of this session's first request. The
+        # simulator's port offers a seeded generator, so that a simulated session repeats to the bit.
+        start = (getattr(self.port, "random", None) or random.SystemRandom()).randrange(256)
         self._seq = dict.fromkeys(range(MAX_ADDRESS + 1), start)
 
     def __enter__(self) -> Self:
@@ -190,8 +196,8 @@ class Bus:
                 self.port.close()
 
     def sleep(self, seconds: float) -> None:
-        """Sleep on the bus's clock (virtual time on the simulator)."""
-        self.clock.sleep(seconds)
+        """Sleep on the bus's clock (virtual time on the simulator), 0 to a day."""
+        self.clock.sleep(check_number("seconds", seconds, 0.0, _LONGEST_WAIT, "seconds"))
 
     def request(self, addr: int, cmd: int, payload: bytes = b"", *, who: str | None = None) -> Frame:
         """Send a request to micro `addr` and return its reply.
@@ -295,8 +301,10 @@ class Bus:
         Raises
         ------
         MotionTimeout
-            `done` was still False after `timeout` seconds.
+            `done` was still False after `timeout` seconds (0 to a day).
         """
+        check_number("timeout", timeout, 0.0, _LONGEST_WAIT, "seconds")
+        check_number("interval", interval, 1e-6, _LONGEST_WAIT, "seconds")
         deadline = self.clock.monotonic() + timeout
         while not done():
             if self.clock.monotonic() >= deadline:

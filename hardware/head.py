@@ -224,7 +224,8 @@ class Head:
         """Converge both eyes symmetrically on a point straight ahead at `distance` metres, with the
         eyes `baseline` metres apart."""
         for name, value in (("distance", distance), ("baseline", baseline)):
-            if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+            number = isinstance(value, (int, float)) and not isinstance(value, bool)
+            if not number or not math.isfinite(value) or value <= 0:
                 raise ValueError(f"{name} must be a positive number of metres, got {value!r}")
         half = math.degrees(math.atan2(baseline / 2.0, distance))
         self.left.point(half, 0.0)

@@ -16,6 +16,8 @@ handler documentation ("URL handlers", ``serial.protocol_handler_packages``).
 
 from __future__ import annotations
 
+import random
+
 import serial
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException
 
@@ -33,6 +35,8 @@ class Serial(SerialBase):
         The simulation, for tests and tools that inspect or disturb it.
     clock : hardware.simulator.World
         The virtual clock (``monotonic()`` and ``sleep()``) the port's timeouts count in.
+    random : random.Random
+        The seeded generator for the host's random choices.
     """
 
     def open(self) -> None:
@@ -55,6 +59,12 @@ class Serial(SerialBase):
     @property
     def clock(self) -> World:
         return self.world
+
+    @property
+    def random(self) -> random.Random:
+        """The generator the host draws its random choices from (hardware.bus.Bus uses it for its
+        first sequence number), seeded from the URL's seed so that a session repeats to the bit."""
+        return self.world.host_random
 
     def _reconfigure_port(self) -> None:
         if self.is_open:

@@ -127,6 +127,8 @@ class World:
         The micros at addresses 1, 2 and 3 (present on the bus or not).
     micros : dict
         The micros present on the bus, by address.
+    host_random : random.Random
+        Seeded from `seed`, for the host's random choices, so that a run repeats to the bit.
     """
 
     def __init__(
@@ -151,6 +153,10 @@ class World:
         self._ticks = 0
         self._fault_rng = random.Random(f"{seed}/faults")
         mech_rng = random.Random(f"{seed}/mechanics")
+        # The host's own random choices (its first sequence number) come from the seed too: frames are
+        # byte-stuffed, so their lengths, and with them the timing and the faults that hit them, depend
+        # on their content.
+        self.host_random = random.Random(f"{seed}/host")
 
         def scatter() -> float:
             return mech_rng.uniform(-_SWITCH_SCATTER, _SWITCH_SCATTER)

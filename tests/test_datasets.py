@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from vmcl import datasets
+from vmcl.errors import InputError
 
 # --------------------------------------------------------------------------------------------- formats
 
@@ -241,3 +242,29 @@ def test_missing_root_names_the_path(tmp_path):
         datasets.load_stereo("tsukuba", tmp_path)
     with pytest.raises(FileNotFoundError, match="bsds500"):
         datasets.load_bsds(tmp_path)
+
+
+@pytest.mark.parametrize("call, error, match", [
+    (lambda tmp: datasets.read_mask(3), TypeError, "path must be a str or an os.PathLike"),
+    (lambda tmp: datasets.read_flo(None), TypeError, "path must be a str or an os.PathLike"),
+    (lambda tmp: datasets.read_disparity(3, scale=8.0), TypeError, "path must be a str"),
+    (lambda tmp: datasets.read_disparity(tmp / "d.png", scale="8"), TypeError, "scale .* must be a real number"),
+    (lambda tmp: datasets.read_disparity(tmp / "d.png", scale=8.0, unknown=0.5), TypeError,
+     "unknown must be an integer"),
+    (lambda tmp: datasets.read_flo(tmp / "f.flo", raw="yes"), TypeError, "raw must be a bool"),
+    (lambda tmp: datasets.write_pfm(tmp / "x.pfm", np.zeros((4, 4), complex)), TypeError, "image must hold real"),
+    (lambda tmp: datasets.write_pfm(tmp / "x.pfm", [[0.0]]), TypeError, "image must be a NumPy array"),
+    (lambda tmp: datasets.write_pfm(3, np.zeros((4, 4))), TypeError, "path must be a str"),
+    (lambda tmp: datasets.write_flo(tmp / "x.flo", np.zeros((4, 4, 2), object)), TypeError, "flow must hold real"),
+    (lambda tmp: datasets.load_stereo("cones", tmp), ValueError, "name must be one of"),
+    (lambda tmp: datasets.load_stereo(["tsukuba"], tmp), TypeError, "name must be the name of a stereo scene"),
+    (lambda tmp: datasets.load_stereo("tsukuba", 3), TypeError, "root must be a str"),
+    (lambda tmp: datasets.load_flow("Venus", tmp, colour=None), TypeError, "colour must be a bool"),
+    (lambda tmp: datasets.load_bsds(None), TypeError, "root must be a str"),
+    (lambda tmp: datasets.load_bsds(tmp, split=None), TypeError, "split must be one of"),
+])
+def test_bad_arguments_are_refused_by_name(tmp_path, call, error, match):
+    datasets.write_flo(tmp_path / "f.flo", np.zeros((2, 2, 2), np.float32))
+    with pytest.raises(error, match=match) as raised:
+        call(tmp_path)
+    assert isinstance(raised.value, InputError)

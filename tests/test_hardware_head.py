@@ -353,6 +353,9 @@ def test_fixate_sets_the_vergence(homed):
         (lambda h: h.stepper.set_watchdog(math.inf), OutOfRange, r"period must be in \[0.001, 65.535\]"),
         (lambda h: h.stepper.set_watchdog(math.nan), OutOfRange, "period .* got nan"),
         (lambda h: h.stepper.set_watchdog(True), TypeError, "period"),
+        (lambda h: h.fixate(True), ValueError, "distance must be a positive number of metres"),
+        (lambda h: h.wait(timeout=math.nan), OutOfRange, r"timeout must be in \[0, 86400\] seconds, got nan"),
+        (lambda h: h.bus.sleep(math.inf), OutOfRange, "seconds must be in .* got inf"),
     ],
 )
 def test_bad_arguments_are_refused_by_name_before_anything_is_sent(homed, call, error, message):

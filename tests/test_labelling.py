@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from vmcl import labelling, metrics, scenes
+from vmcl.errors import InputError
 from vmcl.integrate import Cue
 from vmcl.labelling import CLASSES, FEATURES, INPUTS, LinearLabeller
 from vmcl.pipeline import Config, VisionMachine
@@ -279,3 +280,34 @@ def test_linear_labels_find_the_shadows_the_rule_cannot_name(shadows_runs):
     assert linear[Label.SHADOW].precision >= 0.6   # measured 0.80
     f = {m: metrics.detection_scores(r.discontinuities, scene.labels > 0, tolerance=1).f for m, r in runs.items()}
     assert f["linear"] >= 0.85 and f["rule"] < 0.4  # measured 0.92 and 0.23
+
+
+@pytest.mark.parametrize("call, error, match", [
+    (lambda: labelling.candidate_bits(["stereo", "sonar"]), ValueError, "inputs holds .*'sonar'"),
+    (lambda: labelling.candidate_bits("stereo"), TypeError, "inputs must be a collection of names"),
+    (lambda: labelling.candidate_bits(None), TypeError, "inputs must be a collection of names"),
+    (lambda: labelling.default_labeller().for_inputs(None), TypeError, "inputs must be a collection"),
+    (lambda: labelling.default_labeller().for_inputs([3]), ValueError, "inputs holds"),
+    (lambda: LinearLabeller(None), TypeError, "weights must be a mapping"),
+    (lambda: LinearLabeller({"image": "abc"}), TypeError, r"weights\['image'\] must be a real NumPy array"),
+    (lambda: LinearLabeller({}, fitted_on=3), TypeError, "fitted_on must be a str"),
+    (lambda: LinearLabeller.load(3), TypeError, "path must be a str"),
+    (lambda: LinearLabeller.fit([], l2=True), TypeError, "l2 must be a real number"),
+    (lambda: labelling.fit_targets("abc"), TypeError, "truth must be a NumPy array"),
+    (lambda: labelling.fit_targets(np.zeros((4, 4), np.float32)), TypeError, "truth must be an integer Label map"),
+    (lambda: labelling.fit_targets(np.zeros(4, np.uint8)), ValueError, "truth must have 2 dimensions"),
+])
+def test_bad_arguments_of_the_helpers_are_refused_by_name(call, error, match):
+    with pytest.raises(error, match=match) as raised:
+        call()
+    assert isinstance(raised.value, InputError)
+
+
+def test_candidate_bits_and_fit_targets_hand_computed():
+    assert labelling.candidate_bits(["stereo", "colour"]) == Cue.BRIGHTNESS | Cue.DEPTH | Cue.COLOUR
+    assert labelling.candidate_bits(()) == Cue.BRIGHTNESS
+    truth = np.zeros((3, 3), np.uint8)
+    truth[1, 1] = Label.SHADOW
+    expected = np.zeros((3, 3), np.uint8)
+    expected[1, 1] = expected[0, 1] = expected[2, 1] = expected[1, 0] = expected[1, 2] = Label.SHADOW
+    np.testing.assert_array_equal(labelling.fit_targets(truth), expected)

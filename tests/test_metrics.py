@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from vmcl import datasets, metrics
+from vmcl.errors import InputError
 
 NAN = np.nan
 
@@ -211,3 +212,53 @@ def test_device_arrays_are_accepted(machine):
     labels[:, 3] = 1
     scores = metrics.label_scores(machine.to_device(labels), labels)
     assert scores[1].precision == scores[1].recall == 1.0
+
+
+_D = np.ones((4, 5))
+_M = np.zeros((4, 5), bool)
+
+
+@pytest.mark.parametrize("call, error, match", [
+    (lambda: metrics.evaluate_disparity(_D.astype(complex), _D), TypeError, "disparity must be a numeric array of real"),
+    (lambda: metrics.evaluate_disparity(_D, _D.astype(object)), TypeError, "ground_truth must be a numeric array"),
+    (lambda: metrics.evaluate_disparity(_D, _D.astype("<U3")), TypeError, "ground_truth must be a numeric array"),
+    (lambda: metrics.evaluate_disparity(_D, _D, thresholds=None), TypeError, "thresholds must be a list"),
+    (lambda: metrics.evaluate_disparity(_D, _D, thresholds=["a"]), TypeError, r"thresholds\[\] must be a real"),
+    (lambda: metrics.evaluate_disparity(_D, _D, thresholds=[math.nan]), ValueError, r"thresholds\[\] must be a finite"),
+    (lambda: metrics.evaluate_disparity(_D, _D * np.nan), ValueError, "ground_truth has no value"),
+    (lambda: metrics.evaluate_flow(np.ones((4, 5, 2)), np.full((4, 5, 2), np.nan)), ValueError,
+     "ground_truth has no value"),
+    (lambda: metrics.endpoint_error(np.ones((4, 5, 2), complex), np.ones((4, 5, 2))), TypeError, "flow must be"),
+    (lambda: metrics.boundary_counts(_D / 2, None), TypeError, "ground_truths must be a list"),
+    (lambda: metrics.boundary_counts(_D / 2, [_M.astype(object)]), TypeError, r"ground_truths\[0\] must be a 0/1"),
+    (lambda: metrics.boundary_counts(_D / 2, [_M], thresholds="abc"), TypeError, "thresholds must be a positive count"),
+    (lambda: metrics.boundary_counts(_D / 2, [_M], thresholds=10**30), ValueError, "thresholds must be a count in"),
+    (lambda: metrics.boundary_counts(_D / 2, [_M], max_dist=None), TypeError, "max_dist"),
+    (lambda: metrics.boundary_counts(_D / 2, [_M], max_dist=math.nan), ValueError, "max_dist"),
+    (lambda: metrics.boundary_counts(_D / 2, [_M], thin=1), TypeError, "thin must be a bool"),
+    (lambda: metrics.evaluate_boundaries(None, [[_M]]), TypeError, "edge_maps must be a list"),
+    (lambda: metrics.evaluate_boundaries([_D / 2], [None]), TypeError, r"ground_truths\[0\] must be a list"),
+    (lambda: metrics.evaluate_boundaries([_D / 2], [[_M]], workers=1.5), TypeError, "workers must be an integer"),
+    (lambda: metrics.detection_scores(np.zeros((0, 5), bool), _M), ValueError,
+     r"truth has shape \(4, 5\), predicted has shape \(0, 5\)"),
+    (lambda: metrics.detection_scores(_M[0], _M[0]), ValueError, "predicted must be a 2-D boolean array, got shape"),
+    (lambda: metrics.detection_scores(_M, _M, tolerance=None), TypeError, "tolerance must be a real number"),
+    (lambda: metrics.label_scores(_M.view(np.uint8), _M.view(np.uint8), labels=["bogus"]), TypeError,
+     r"labels\[\] must be an integer"),
+    (lambda: metrics.label_scores(_M.view(np.uint8), _M.view(np.uint8), labels=None, tolerance=-1.0), ValueError,
+     "tolerance must be a finite number >= 0"),
+    (lambda: metrics.label_scores(_M.view(np.uint8)[0], _M.view(np.uint8)[0]), ValueError, "2-D integer label map"),
+])
+def test_bad_arguments_are_refused_by_name(call, error, match):
+    with pytest.raises(error, match=match) as raised:
+        call()
+    assert isinstance(raised.value, InputError)
+
+
+
+def test_more_workers_than_images_is_one_worker_per_image():
+    truth = _square(100).astype(bool)
+    edge_map = _square(100, shift=1) / 2.0
+    one = metrics.evaluate_boundaries([edge_map], [[truth]], thresholds=3)
+    many = metrics.evaluate_boundaries([edge_map], [[truth]], thresholds=3, workers=10**30)
+    assert many.ods_f == one.ods_f and many.ois_f == one.ois_f

@@ -188,7 +188,8 @@ def test_boundary_map_takes_device_lines_and_names_bad_ones(machine):
     for bad, error, match in ((line_h.astype(complex), TypeError, "line_h must hold real numbers"),
                               (None, TypeError, "line_h must be a NumPy array"),
                               (np.zeros(3, bool), ValueError, "line_h must have 2 dimensions"),
-                              (np.zeros((2, 3), bool), ValueError, "line_h must have shape")):
+                              (np.zeros((2, 3), bool), ValueError, "line_h must have shape"),
+                              (np.zeros((3, 1), bool), ValueError, "line_h must have shape")):
         with pytest.raises(error, match=match) as raised:
             mrf.boundary_map(bad, line_v)
         assert isinstance(raised.value, InputError)

@@ -1,10 +1,13 @@
 """vmcl.scenes: the rendered images agree with their own ground truth, and with hand-computed geometry."""
 
+import math
+
 import cv2
 import numpy as np
 import pytest
 
 from vmcl import scenes
+from vmcl.errors import InputError
 from vmcl.scenes import Body, Camera, Face, Label, Light, Mark, Texture, World
 
 SIZE = (256, 256)
@@ -343,3 +346,46 @@ def test_presets_build_at_widths_where_blob_sizes_round(width):
     for name in scenes.PRESETS:
         world = scenes.preset(name, shape=(128, width))
         assert world.camera.shape == (128, width) and world.bodies
+
+
+_GREY = (0.5, 0.5, 0.5)
+
+
+@pytest.mark.parametrize("make, error, match", [
+    (lambda: Texture("blobs", 1.0, 0.5, angle=None, size=0.1), TypeError, "texture angle must be a real number"),
+    (lambda: Texture("noise", 1.0, 0.5, fill=2.0), ValueError, "texture fill must be"),
+    (lambda: Texture(["noise"]), ValueError, "texture kind must be"),
+    (lambda: Mark("rect", None, _GREY), ValueError, "rect mark needs 4 bounds"),
+    (lambda: Mark("rect", (0, 0, "a", 1), _GREY), TypeError, "rect mark bounds must be 4 finite numbers"),
+    (lambda: Mark("disc", (0.0, 0.0, 1.0), _GREY, texture="dots"), TypeError, "mark texture must be a Texture"),
+    (lambda: Face((0.0, 0.0, 5.0), X_AXIS, Y_AXIS, 3, _GREY), TypeError, "size must be 2 finite numbers"),
+    (lambda: Face((0.0, 0.0, 5.0), X_AXIS, Y_AXIS, None, _GREY, marks=None), TypeError, "marks must be a tuple"),
+    (lambda: Face("ab", X_AXIS, Y_AXIS, None, _GREY), TypeError, "origin must be 3 finite numbers"),
+    (lambda: scenes.Motion(centre=None), TypeError, "centre must be 3 finite numbers"),
+    (lambda: scenes.Motion(rotation=(0.0, 2**64, 1e400)), ValueError, "rotation must be 3 finite numbers"),
+    (lambda: Body(None), TypeError, "faces must be a tuple of Face"),
+    (lambda: Body(()), ValueError, "faces must hold at least one Face"),
+    (lambda: Light(ambient=None), TypeError, "ambient must be a real number"),
+    (lambda: Light(shininess=0.0), ValueError, "shininess must be a finite number > 0"),
+    (lambda: Camera((64, 64), 64.0, None), TypeError, "baseline must be a real number"),
+    (lambda: Camera(3, 64.0, 0.15), ValueError, "shape must be"),
+    (lambda: Camera((64.0, 64), 64.0, 0.15), TypeError, r"shape\[0\]"),
+    (lambda: World(Camera((64, 64), 64.0, 0.15), Light(), None), TypeError, "bodies"),
+    (lambda: World(None, Light(), ()), TypeError, "camera must be a Camera"),
+    (lambda: scenes.box(None, (1.0, 1.0, 1.0), colour=_GREY), TypeError, "centre must be 3 finite numbers"),
+    (lambda: scenes.box((0.0, 0.0, 5.0), (1.0, 0.0, 1.0), colour=_GREY), ValueError, "size must be three positive"),
+    (lambda: scenes.fold((-1.0, 0.0, 5.0), (0.0, 0.0, 4.0), (math.inf, 1.0), 1.0, colour=_GREY), ValueError,
+     "right must be 3 finite numbers"),
+    (lambda: scenes.fold((-1.0, 0.0, 5.0), (0.0, 0.0, 4.0), (1.0, 0.0, 5.0), 2**64 * 1e300, colour=_GREY), ValueError,
+     "height must be a finite number"),
+    (lambda: scenes.preset("bogus"), ValueError, "name must be one of"),
+    (lambda: scenes.preset(["blocks"]), ValueError, "name must be one of"),
+    (lambda: scenes.preset("blocks", shape=None), ValueError, "shape must be"),
+    (lambda: scenes.preset("blocks", shape=(64, 64), specular="yes"), TypeError, "specular must be a bool"),
+    (lambda: scenes.render(scenes.preset("blocks", shape=(64, 64)), noise=None), TypeError, "noise"),
+    (lambda: scenes.render(scenes.preset("blocks", shape=(64, 64)), seed=1.5), TypeError, "seed must be an integer"),
+])
+def test_bad_worlds_are_refused_by_name(make, error, match):
+    with pytest.raises(error, match=match) as raised:
+        make()
+    assert isinstance(raised.value, InputError)

@@ -26,7 +26,8 @@ import cv2
 import numpy as np
 import scipy.io
 
-from vmcl.errors import InputValueError
+from vmcl.cm._arrays import check_bool, check_choice, check_int, check_real, check_real_dtype, real_host_array
+from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = [
     "FLOW_SCENES",
@@ -59,8 +60,14 @@ _FLO_UNKNOWN_WRITTEN = np.float32(1e10)
 # --------------------------------------------------------------------------------------------- files
 
 
+def _as_path(path, name: str = "path") -> Path:
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputTypeError(f"{name} must be a str or an os.PathLike, got {type(path).__name__}")
+    return Path(path)
+
+
 def _existing(path) -> Path:
-    path = Path(path)
+    path = _as_path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no such file: {path}")
     return path
@@ -189,7 +196,7 @@ def _decode(data: bytes) -> tuple[np.ndarray | None, str]:
 
 def _single_channel(path) -> np.ndarray:
     """A grey map, also when stored as three identical channels (as several Middlebury PNGs are)."""
-    image = read_image(path)
+    image = read_image(_as_path(path))
     if image.ndim == 3:
         if not (image == image[..., :1]).all():
             raise InputValueError(f"{path} has three different channels; expected a single-channel map")
@@ -212,6 +219,7 @@ def read_mask(path, *, value: int = 255) -> np.ndarray:
     -------
     (H, W) bool array
     """
+    check_int(value, "value", minimum=0)
     return _single_channel(path) == value
 
 
@@ -262,12 +270,12 @@ def write_pfm(path, image) -> None:
     path : str or Path
     image : (H, W) or (H, W, 3) array
     """
-    image = np.asarray(image, dtype=np.float32)
-    if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] != 3):
+    image = real_host_array(image, "image", ndims=(2, 3)).astype(np.float32)
+    if image.ndim == 3 and image.shape[2] != 3:
         raise InputValueError(f"image must have shape (H, W) or (H, W, 3), got {image.shape}")
     header = b"PF" if image.ndim == 3 else b"Pf"
     data = np.where(np.isnan(image), np.float32(np.inf), image)
-    with Path(path).open("wb") as f:
+    with _as_path(path).open("wb") as f:
         f.write(header + b"\n" + f"{image.shape[1]} {image.shape[0]}\n-1.0\n".encode())
         f.write(np.flipud(data).astype("<f4").tobytes())
 
@@ -289,7 +297,9 @@ def read_disparity(path, *, scale: float | None = None, unknown: int | None = 0)
     -------
     (H, W) float32 array
     """
-    path = Path(path)
+    path = _as_path(path)
+    if unknown is not None:
+        check_int(unknown, "unknown", minimum=0)
     if path.suffix.lower() == ".pfm":
         if scale is not None:
             raise InputValueError("scale applies to 8-bit maps; a PFM stores disparities directly")
@@ -297,8 +307,9 @@ def read_disparity(path, *, scale: float | None = None, unknown: int | None = 0)
         if disparity.ndim != 2:
             raise InputValueError(f"{path} holds a 3-channel PFM; expected one channel of disparities")
         return disparity
-    if scale is None or not scale > 0:
-        raise InputValueError(f"scale must be a positive number for an 8-bit map such as {path.name}, got {scale}")
+    if scale is None:
+        raise InputValueError(f"scale must be a positive number for an 8-bit map such as {path.name}, got None")
+    check_real(scale, "scale (grey levels per pixel of disparity)", above=0)
     grey = _single_channel(path)
     disparity = grey.astype(np.float32) / np.float32(scale)
     if unknown is not None:
@@ -326,6 +337,7 @@ def read_flo(path, *, raw: bool = False) -> np.ndarray:
     little endian. A vector is unknown when ``|u| > 1e9`` or ``|v| > 1e9``.
     """
     path = _existing(path)
+    check_bool(raw, "raw")
     data = path.read_bytes()
     if len(data) < 12 or np.frombuffer(data[:4], "<f4")[0] != FLO_TAG:
         raise InputValueError(f"{path} is not a .flo file (bad tag)")
@@ -347,13 +359,13 @@ def write_flo(path, flow) -> None:
     path : str or Path
     flow : (H, W, 2) array
     """
-    flow = np.asarray(flow)
+    flow = check_real_dtype(flow, "flow")
     if flow.ndim != 3 or flow.shape[2] != 2 or flow.shape[0] < 1 or flow.shape[1] < 1:
         raise InputValueError(f"flow must have shape (H, W, 2), got {flow.shape}")
     flow = flow.astype("<f4")
     flow[np.isnan(flow).any(axis=-1)] = _FLO_UNKNOWN_WRITTEN
     header = np.array([FLO_TAG], "<f4").tobytes() + np.array(flow.shape[1::-1], "<i4").tobytes()
-    Path(path).write_bytes(header + flow.tobytes())
+    _as_path(path).write_bytes(header + flow.tobytes())
 
 
 # --------------------------------------------------------------------------------------------- stereo
@@ -401,9 +413,11 @@ STEREO_SCENES = tuple(_STEREO)
 
 
 def _lookup(name: str, table: dict, what: str):
-    key = str(name).lower()
+    if not isinstance(name, str):
+        raise InputTypeError(f"name must be the name of a {what} (a str), got {type(name).__name__}")
+    key = name.lower()
     if key not in table:
-        raise InputValueError(f"unknown {what} {name!r}; expected one of {', '.join(table)}")
+        raise InputValueError(f"unknown {what} {name!r}; name must be one of {', '.join(table)}")
     return key, table[key]
 
 
@@ -439,7 +453,7 @@ def load_stereo(name: str, root) -> StereoPair:
     (teddy).
     """
     key, (folder, left, right, truth, scale, has_masks) = _lookup(name, _STEREO, "stereo scene")
-    folder = Path(root) / folder
+    folder = _as_path(root, "root") / folder
     disparity = read_disparity(folder / truth, scale=scale)
     masks = {m: read_mask(folder / f"{m}.png") for m in ("nonocc", "all", "disc")} if has_masks else {}
     return StereoPair(
@@ -519,7 +533,8 @@ def load_flow(name: str, root, *, colour: bool = False) -> FlowPair:
     12(1):43-77, 1994 (Yosemite).
     """
     key, folder = _lookup(name, _FLOW, "flow sequence")
-    folder = Path(root) / folder
+    folder = _as_path(root, "root") / folder
+    check_bool(colour, "colour")
     if key == "yosemite":
         frames, truth = ("yos9.png", "yos10.png"), "correct_yos.flo"
     else:
@@ -623,7 +638,8 @@ def load_bsds(root, *, split: str = "test") -> BSDSSet:
     P. Arbelaez, M. Maire, C. Fowlkes and J. Malik, "Contour detection and hierarchical image
     segmentation", IEEE TPAMI 33(5):898-916, 2011.
     """
-    base = Path(root) / "bsds500"
+    base = _as_path(root, "root") / "bsds500"
+    check_choice(split, "split", ("test", "golden"))
     if split == "test":
         folders = sorted(p for p in (base / "test").glob("*") if p.is_dir())
         if not folders:

@@ -14,7 +14,7 @@ import numpy as np
 
 from hardware.head import Head
 from vmcl.early.registration import TableStore, WarpTable
-from vmcl.errors import InputValueError
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 Capture = Callable[[], tuple[np.ndarray, np.ndarray]]
@@ -22,7 +22,15 @@ Capture = Callable[[], tuple[np.ndarray, np.ndarray]]
 
 def table_for_fixation(head: Head, store: TableStore) -> WarpTable:
     """The warp table for the eyes' current vergence (stored, or interpolated between stored angles)."""
+    _check_glue(head, store)
     return store.table_for(head.vergence())
+
+
+def _check_glue(head, store) -> None:
+    if not isinstance(head, Head):
+        raise InputTypeError(f"head must be a hardware.head.Head, got {type(head).__name__}")
+    if not isinstance(store, TableStore):
+        raise InputTypeError(f"store must be a vmcl.early.registration.TableStore, got {type(store).__name__}")
 
 
 def calibrate_vergences(head: Head, store: TableStore, capture: Capture, *, distances: list[float],
@@ -48,7 +56,10 @@ def calibrate_vergences(head: Head, store: TableStore, capture: Capture, *, dist
     -------
     The vergence angles (degrees) of the tables added.
     """
-    if not distances:
+    _check_glue(head, store)
+    if not callable(capture):
+        raise InputTypeError(f"capture must be a callable returning (left, right) images, got {type(capture).__name__}")
+    if not isinstance(distances, (list, tuple)) or not distances:
         raise InputValueError("distances must name at least one fixation distance")
     angles = []
     for distance in distances:

@@ -99,7 +99,8 @@ def _lines(line_h: ArrayLike, line_v: ArrayLike, prefix: str, machine: Machine,
         raise InputValueError(f"{prefix}line_h {h.shape} and {prefix}line_v {v.shape} are not the two line fields "
                               f"of one image")
     if shape is not None and implied != shape:
-        raise InputValueError(f"{prefix}line_h and line_v: line fields of a {implied} image, expected {shape}")
+        raise InputValueError(f"{prefix}line_h and line_v are the line fields of a {implied} image, but edges, "
+                              f"shape or another cue says {shape}")
     return h, v, implied
 
 

@@ -106,7 +106,8 @@ def _evaluated(truth: np.ndarray, mask, truth_known: np.ndarray) -> np.ndarray:
         if unknown:
             raise InputValueError(f"ground_truth has no value (NaN) at {unknown} pixels inside mask")
     if not evaluated.any():
-        raise InputValueError("no pixel to evaluate: the mask (or the known ground truth) is empty")
+        raise InputValueError("no pixel to evaluate: the mask is empty, or the ground_truth has no value (NaN) "
+                              "anywhere")
     return evaluated
 
 
@@ -383,8 +384,8 @@ def _thresholds(thresholds) -> np.ndarray:
         n = int(thresholds)
         # The benchmark's own choice: n thresholds evenly inside (0, 1), ends excluded.
         return np.linspace(1.0 / (n + 1), 1.0 - 1.0 / (n + 1), n)
-    values = np.asarray(thresholds if isinstance(thresholds, (list, tuple, np.ndarray)) else ())
-    if values.dtype.kind not in "iuf":
+    values = np.asarray(thresholds) if isinstance(thresholds, (list, tuple, np.ndarray)) else None
+    if values is None or values.dtype.kind not in "iuf":
         raise InputTypeError(f"thresholds must be a positive count or a sequence of numbers, got {thresholds!r}")
     if values.ndim != 1 or values.size == 0 or not np.isfinite(values).all():
         raise InputValueError("thresholds must be a positive count or a non-empty 1-D sequence of finite numbers")
@@ -620,7 +621,8 @@ def evaluate_boundaries(
         raise InputValueError(f"{len(edge_maps)} edge_maps but {len(ground_truths)} ground_truths")
     if not edge_maps:
         raise InputValueError("edge_maps is empty")
-    check_int(workers, "workers", minimum=1)
+    # Workers beyond one per image would idle (and a count beyond the system's limits would not start).
+    workers = min(check_int(workers, "workers", minimum=1), len(edge_maps))
     kwargs = {"thresholds": thresholds, "max_dist": max_dist, "thin": thin}
     # Host copies: a worker process cannot receive device arrays.
     jobs = [(_host(e), [_host(t) for t in g], kwargs) for e, g in zip(edge_maps, ground_truths)]

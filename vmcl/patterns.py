@@ -8,9 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.cm._arrays import check_int
+from vmcl.errors import InputValueError
 
 _HEADINGS = ((0, 1), (1, 0), (0, -1), (-1, 0))
+_LARGEST = 8192
 
 
 def spiral(size: int, *, corridor: int = 1) -> np.ndarray:
@@ -19,7 +21,7 @@ def spiral(size: int, *, corridor: int = 1) -> np.ndarray:
     Parameters
     ----------
     size : int
-        The mask is size x size (size >= corridor).
+        The mask is size x size (corridor <= size <= 8192).
     corridor : int
         Width of the wall and of the gap between turns.
 
@@ -28,9 +30,10 @@ def spiral(size: int, *, corridor: int = 1) -> np.ndarray:
     bool array (size, size). The wall's path from the outer corner to the centre is about
     size**2 / (2 * corridor) pixels long.
     """
-    if not isinstance(size, (int, np.integer)) or not isinstance(corridor, (int, np.integer)):
-        raise InputTypeError("size and corridor must be integers")
-    if corridor < 1 or size < corridor:
+    # The turtle walks in Python: 8192 x 8192 takes about half a minute, and no device holds much more.
+    size = check_int(size, "size", minimum=1, maximum=_LARGEST)
+    corridor = check_int(corridor, "corridor", minimum=1)
+    if size < corridor:
         raise InputValueError(f"need 1 <= corridor <= size, got size={size}, corridor={corridor}")
     cells = size // corridor
     drawn = np.zeros((cells, cells), bool)

@@ -109,10 +109,17 @@ def _numbers(value, name: str, count: int) -> tuple[float, ...]:
     """``value`` as ``count`` finite floats: a tuple, list or array of real numbers."""
     if not isinstance(value, (tuple, list, np.ndarray)):
         raise InputTypeError(f"{name} must be {count} finite numbers, got {type(value).__name__}")
-    v = np.asarray(value)
-    if v.dtype.kind not in "iuf":
+    if isinstance(value, np.ndarray):
+        numbers = value.dtype.kind in "iuf"
+    else:
+        numbers = all(isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, (bool, np.bool_))
+                      for x in value)
+    if not numbers:
         raise InputTypeError(f"{name} must be {count} finite numbers, got {value!r}")
-    v = v.astype(np.float64)
+    try:
+        v = np.array([float(x) for x in np.ravel(value)], np.float64).reshape(np.shape(value))
+    except OverflowError:  # an int beyond float's range
+        raise InputValueError(f"{name} must be {count} finite numbers, got {value!r}") from None
     if v.shape != (count,) or not np.isfinite(v).all():
         raise InputValueError(f"{name} must be {count} finite numbers, got {value!r}")
     return tuple(float(x) for x in v)
@@ -458,7 +465,7 @@ def fold(left, crease, right, height: float, *, colour, texture: Texture = Textu
     """
     points = [np.asarray(_vector(p, name), dtype=np.float64)
               for p, name in ((left, "left"), (crease, "crease"), (right, "right"))]
-    check_real(height, "height", above=0)
+    height = check_real(height, "height", above=0)
     if not (isinstance(marks, (tuple, list)) and len(marks) == 2):
         raise InputTypeError(f"marks must be a pair of tuples of Mark, got {marks!r:.80}")
     faces = []

@@ -28,14 +28,14 @@ _ANY_NDIM = tuple(range(1, 33))
 _MAX_DESTINATIONS = 2**31 - 1  # addresses, counts and offsets are int32
 
 
-def _addresses(address: ArrayLike, size: int, machine: Machine) -> tuple:
+def _addresses(address: ArrayLike, size: int, machine: Machine, bound: str) -> tuple:
     data, host = _arrays.field(address, "address", machine, ndims=_ANY_NDIM, dtypes=(np.int32,))
     if host:
         low, high = int(np.min(address)), int(np.max(address))
     else:
         low, high = (int(_reduce.reduce(data, op, machine=machine).get()) for op in ("min", "max"))
     if low < 0 or high >= size:
-        raise InputValueError(f"address must lie in [0, {size - 1}], got values in [{low}, {high}]")
+        raise InputValueError(f"address must lie in [0, {size - 1}] ({bound}), got values in [{low}, {high}]")
     return data, host
 
 
@@ -75,7 +75,7 @@ def get(field: ArrayLike, address: ArrayLike, *, machine: Machine | None = None)
     """
     machine = machine_for(machine)
     data, host = _arrays.field(field, "field", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
-    where, _ = _addresses(address, data.size, machine)
+    where, _ = _addresses(address, data.size, machine, f"field has {data.size} elements")
     out = machine.empty(where.shape, data.dtype)
     machine.launch(machine.kernel("router", "gather", COMBINE_OP=100, **type_defines(data.dtype)), (where.size,),
                    data, where, out, np.int64(where.size))
@@ -127,7 +127,7 @@ def send(values: ArrayLike, address: ArrayLike, *, size: int | tuple[int, ...], 
     machine.require_memory(f"router.send to {destinations} destinations",
                            destinations * (3 * int32 + data.dtype.itemsize) + data.size * int32,
                            max(destinations, data.size) * max(int32, data.dtype.itemsize))
-    where, _ = _addresses(address, destinations, machine)
+    where, _ = _addresses(address, destinations, machine, f"size gives {destinations} destinations")
     if where.shape != data.shape:
         raise InputValueError(f"address must have the shape of values {data.shape}, got {where.shape}")
     n = data.size

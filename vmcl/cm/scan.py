@@ -143,6 +143,7 @@ def scan_rows_into(machine: Machine, data: cl_array.Array, flags: cl_array.Array
 def column_groups(width: int) -> list[tuple[int, int, int]]:
     """(VEC, first column, work-items) per launch of a column kernel: full groups of 16 columns take
     the vector build, the remaining width % 16 columns the scalar one."""
+    width = check_int(width, "width", minimum=0)
     n_vec = width // COLUMN_VEC
     groups = ((COLUMN_VEC, 0, n_vec), (1, n_vec * COLUMN_VEC, width - n_vec * COLUMN_VEC))
     return [group for group in groups if group[2]]

@@ -16,6 +16,7 @@ distance doubling (:func:`vmcl.cm.doubling.label`) and weighted centroids summed
 from __future__ import annotations
 
 import bisect
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -172,8 +173,9 @@ class WarpTable:
             ys, xs = np.indices(shape, dtype=np.float64)
             points = np.stack([xs.ravel(), ys.ravel()], axis=1)
             linear = LinearNDInterpolator(left, vectors)(points)
-        except MemoryError as error:
-            raise InputValueError(f"a warp table of shape {shape} needs more host memory than there is") from error
+        except (MemoryError, ValueError) as error:  # NumPy's "array is too big" is a ValueError
+            raise InputValueError(f"shape {shape}: a warp table that large needs more host memory than there "
+                                  f"is ({error})") from error
         except QhullError as error:
             raise InputValueError(f"the matched dots do not span an area (all on one line?): {error}") from error
         outside = ~np.isfinite(linear[:, 0])
@@ -189,7 +191,8 @@ class WarpTable:
         _grey(left_image, "left_image")
         _grey(right_image, "right_image")
         if left_image.shape != right_image.shape:
-            raise InputValueError(f"the calibration images differ in shape: {left_image.shape} and {right_image.shape}")
+            raise InputValueError(f"left_image and right_image differ in shape: {left_image.shape} and "
+                                  f"{right_image.shape}")
         left = find_dots(left_image, polarity=polarity, machine=machine)
         right = find_dots(right_image, polarity=polarity, machine=machine)
         matched_left, matched_right = match_dots(left, right, max_shift=max_shift)
@@ -236,9 +239,15 @@ class TableStore:
 
     @classmethod
     def load(cls, path: str | Path) -> TableStore:
-        with np.load(path) as data:
-            return cls([WarpTable(source=s, vergence=float(v), dots=int(d))
-                        for s, v, d in zip(data["source"], data["vergence"], data["dots"])])
+        if not isinstance(path, (str, Path)):
+            raise InputTypeError(f"path must be a str or a pathlib.Path, got {type(path).__name__}")
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                return cls([WarpTable(source=s, vergence=float(v), dots=int(d))
+                            for s, v, d in zip(data["source"], data["vergence"], data["dots"])])
+        except (ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile) as error:
+            raise InputValueError(f"path {str(path)!r} is not a table store saved by TableStore.save: "
+                                  f"{error}") from error
 
 
 def warp(image: ArrayLike, table: WarpTable | ArrayLike, *, machine: Machine | None = None) -> ArrayLike:

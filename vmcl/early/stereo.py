@@ -275,7 +275,8 @@ def _check_range(d_min, d_max, patch, width: int) -> None:
     if d_min > d_max:
         raise InputValueError(f"d_min ({d_min}) must not exceed d_max ({d_max})")
     if d_max - d_min + 1 > width or max(abs(d_min), abs(d_max)) >= width:
-        raise InputValueError(f"the disparity range [{d_min}, {d_max}] is wider than the image ({width} pixels)")
+        raise InputValueError(f"d_min and d_max: the disparity range [{d_min}, {d_max}] is wider than the image "
+                              f"({width} pixels)")
     if patch < 1 or patch % 2 == 0:
         raise InputValueError(f"patch must be an odd integer >= 1, got {patch}")
 

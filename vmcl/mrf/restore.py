@@ -204,9 +204,10 @@ def boundary_map(line_h: np.ndarray, line_v: np.ndarray) -> np.ndarray:
     """
     line_h = host_field(line_h, "line_h", ndims=(2,), empty=True) != 0
     line_v = host_field(line_v, "line_v", ndims=(2,), empty=True) != 0
-    height, width = line_v.shape[0] + 1, line_h.shape[1] + 1
-    if line_h.shape != (height, width - 1):
-        raise InputValueError(f"line_h must have shape {(height, width - 1)} to match line_v {line_v.shape}")
+    height, width = line_h.shape[0], line_v.shape[1]
+    if line_h.shape != (height, width - 1) or line_v.shape != (height - 1, width):
+        raise InputValueError(f"line_h must have shape (H, W - 1) and line_v (H - 1, W), got {line_h.shape} and "
+                              f"{line_v.shape}")
     out = np.zeros((height, width), bool)
     out[:, :-1] |= line_h
     out[:-1, :] |= line_v
