@@ -302,12 +302,3 @@ def test_bad_arguments_of_the_helpers_are_refused_by_name(call, error, match):
         call()
     assert isinstance(raised.value, InputError)
 
-
-def test_candidate_bits_and_fit_targets_hand_computed():
-    assert labelling.candidate_bits(["stereo", "colour"]) == Cue.BRIGHTNESS | Cue.DEPTH | Cue.COLOUR
-    assert labelling.candidate_bits(()) == Cue.BRIGHTNESS
-    truth = np.zeros((3, 3), np.uint8)
-    truth[1, 1] = Label.SHADOW
-    expected = np.zeros((3, 3), np.uint8)
-    expected[1, 1] = expected[0, 1] = expected[2, 1] = expected[1, 0] = expected[1, 2] = Label.SHADOW
-    np.testing.assert_array_equal(labelling.fit_targets(truth), expected)

@@ -123,7 +123,6 @@ def test_bad_input_is_named(kwargs, error, match, machine):
     ({"levels": None}, ValueError, "levels must be a count"),
     ({"beta": float("nan")}, ValueError, "beta must be finite"),
     ({"beta": 10**400}, ValueError, "beta must be finite"),
-    ({"kappa": np.bool_(True)}, TypeError, "kappa must be a number"),
 ])
 def test_bad_params_are_named(kwargs, error, match):
     with pytest.raises(error, match=match):
@@ -195,7 +194,7 @@ def test_boundary_map_takes_device_lines_and_names_bad_ones(machine):
         assert isinstance(raised.value, InputError)
 
 
-@pytest.mark.parametrize("cue, error", [("sky", ValueError), (["depth"], TypeError), (None, TypeError)])
+@pytest.mark.parametrize("cue, error", [(["depth"], TypeError), (None, TypeError)])
 def test_preset_names_a_bad_cue(cue, error):
     with pytest.raises(error, match="cue must be one of") as raised:
         mrf.preset(cue)

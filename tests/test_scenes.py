@@ -354,7 +354,6 @@ _GREY = (0.5, 0.5, 0.5)
 @pytest.mark.parametrize("make, error, match", [
     (lambda: Texture("blobs", 1.0, 0.5, angle=None, size=0.1), TypeError, "texture angle must be a real number"),
     (lambda: Texture("noise", 1.0, 0.5, fill=2.0), ValueError, "texture fill must be"),
-    (lambda: Texture(["noise"]), ValueError, "texture kind must be"),
     (lambda: Mark("rect", None, _GREY), ValueError, "rect mark needs 4 bounds"),
     (lambda: Mark("rect", (0, 0, "a", 1), _GREY), TypeError, "rect mark bounds must be 4 finite numbers"),
     (lambda: Mark("disc", (0.0, 0.0, 1.0), _GREY, texture="dots"), TypeError, "mark texture must be a Texture"),
