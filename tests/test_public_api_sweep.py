@@ -902,8 +902,15 @@ def _serve() -> None:
         ctx = {"machine": default_machine(), "tmp": Path(tmp), "reference": {}}
         out = sys.stdout
         sys.stdout = sys.stderr  # anything a case prints must not corrupt the answers
+        # VMCL_SWEEP_LOG names a file that receives every case with its outcome (for counting, by hand).
+        log = open(os.environ["VMCL_SWEEP_LOG"], "a") if os.environ.get("VMCL_SWEEP_LOG") else None  # noqa: SIM115
         for line in sys.stdin:
-            answer = _run_case(json.loads(line), ctx)
+            case = json.loads(line)
+            answer = _run_case(case, ctx)
+            if log is not None:
+                log.write(json.dumps({"target": case["target"], "argument": case["argument"],
+                                      "label": case["label"], **answer}) + "\n")
+                log.flush()
             out.write(json.dumps(answer) + "\n")
             out.flush()
 

@@ -95,7 +95,8 @@ def histogram(x: ArrayLike, bins: int, range: tuple[float, float], *, tile: tupl
         lo < hi, finite. Bin of v: floor((v - lo) * bins / (hi - lo)) in float32, with v == hi in the last
         bin; values outside [lo, hi] and NaN are not counted. This is ``np.histogram``'s rule except that
         the bin index is computed in float32, so a value within float32 rounding of an inner edge may
-        land in the neighbouring bin.
+        land in the neighbouring bin. Ranges too narrow or too wide for float32's exponent (bins /
+        (hi - lo) or hi - lo overflowing) are binned by the same rule as if the exponent were unbounded.
     tile : (th, tw), optional
         Per-tile histograms over tiles of th x tw pixels, row-major from the top left; tiles at the right
         and bottom edges hold what is left (smaller tiles).
