@@ -71,3 +71,12 @@ def test_radii_beyond_64_bits_sum_the_whole_line(radius, machine):
 def test_axes_of_the_wrong_type_are_a_type_error(axes, error, match, machine):
     with pytest.raises(error, match=match):
         box_sum(np.zeros((3, 3), np.int32), 1, axes=axes, machine=machine)
+
+
+def test_window_sums_beyond_float32_are_refused_not_turned_into_nan(machine):
+    # 25 values of 1e38 sum past float32's largest; the running sum's inf would become NaN downstream.
+    x = np.full((8, 9), 1e38, np.float32)
+    with pytest.raises(ValueError, match="x holds values up to 1e\\+38"):
+        box_sum(x, 2, machine=machine)
+    # One window's worth fits: the same values over a 1-pixel window are summed exactly.
+    np.testing.assert_array_equal(box_sum(x, 0, machine=machine), x)

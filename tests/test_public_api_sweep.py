@@ -14,7 +14,9 @@ A case passes when the call
   those of the valid call's result, or
 - for a path argument, raises FileNotFoundError (a missing file is not a bad value of the argument).
 
-The default run draws a few cases per callable (derandomized); ``-m slow`` selects the long variant.
+Both variants are derandomized: the short one draws 12 cases per callable, the long one (marked ``slow``;
+``-m "not slow"`` leaves it out) up to 300, which exhausts most callables' cases. Measured on one core with
+PoCL's kernel cache warm: 5 s and 12 s. ``VMCL_SWEEP_LOG=file`` records every case and its outcome.
 """
 
 from __future__ import annotations

@@ -214,6 +214,19 @@ def _hillis_steele(machine: Machine, data: cl_array.Array, flags: cl_array.Array
                        final, flags if segmented else data, out, np.int64(stride), np.int64(n), np.int64(size))
 
 
+def _check_window_sums_fit(x: np.ndarray, window: int) -> None:
+    """Refuse a host field whose window sums could overflow float32.
+
+    The running sum that overflows to inf does not come back when the large values leave the window
+    (inf - inf is NaN), so later, finite, sums would be lost; the bound is checked on the host, where
+    it costs one pass over memory the upload reads anyway.
+    """
+    largest = float(np.max(np.abs(x), initial=0.0, where=np.isfinite(x)))
+    if largest * window > float(np.finfo(np.float32).max):
+        raise InputValueError(f"x holds values up to {largest:.3g}, whose sums over a {window}-pixel window "
+                              "overflow float32; scale x down first")
+
+
 def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
             machine: Machine | None = None) -> ArrayLike:
     """Sum over the (2r+1) x (2r+1) window around every pixel, by grid-scans, in time independent of r.
@@ -240,7 +253,8 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     ``box_sum`` of ones to get a mean). Each pass adds the element entering the window and subtracts
     the one leaving as it scans, which is the paper's difference of two scan values P[x+r] - P[x-r-1]
     fused into one pass: exact for int32 (wrapping on overflow), and for float32 within a relative
-    error of about sqrt(n) * 2**-24 of the largest partial sum. For the same reason a NaN or infinity
+    error of about sqrt(n) * 2**-24 of the largest partial sum. A host float field whose window sums
+    could overflow float32 is refused. For the same reason a NaN or infinity
     does not leave the window with its element: it spoils every later output of its row (and, in the
     column pass, of the columns below it). Replace non-finite values first; they are not checked here,
     since that would cost a pass of its own.
@@ -258,6 +272,8 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     wanted = {normalise_axis(a, data.ndim, allowed, "axes") for a in axes}
     if len(wanted) != len(axes):
         raise InputValueError(f"axes must not repeat an axis, got {axes!r}")
+    if host and data.dtype.kind == "f" and data.size:
+        _check_window_sums_fit(x, (2 * radius + 1) ** len(wanted))
     defines = type_defines(data.dtype)
     width = data.shape[-1]
     r = np.int64(radius)
