@@ -31,6 +31,7 @@ from hardware.bus import Bus
 from hardware.commands import Cmd, pack
 from hardware.errors import CommError
 from hardware.head import Head
+from hardware.protocol import encode_reply, encode_request
 
 RESULTS = ROOT / "benchmarks" / "results" / "head.md"
 COMMANDS = [
@@ -53,7 +54,9 @@ def virtual_round_trips(baudrate: int, n: int = 200) -> list[tuple[str, int, flo
             start = world.now
             for _ in range(n):
                 reply = bus.request(addr, cmd, payload)
-            wire = (7 + len(payload)) + (8 + len(reply.payload))
+            # The frames as sent (byte stuffing makes their length depend on their content).
+            wire = (len(encode_request(addr, reply.seq, cmd, payload))
+                    + len(encode_reply(addr, reply.seq, reply.status, cmd, reply.payload)))
             rows.append((name, wire, (world.now - start) / n))
     return rows
 
