@@ -399,6 +399,9 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_the_previous_output(tmp_path):
         time.sleep(0.05)  # the hidden folder appears once --out is checked, as the run starts
     process.send_signal(signal.SIGINT)
     _, error = process.communicate(timeout=300)
-    assert process.returncode == 130 and error.strip() == "vmcl: interrupted"
+    # PoCL's in-process compiler may add its own "N errors generated." when the signal lands during a
+    # kernel build (a first run); vmcl's own report is the one line, without a traceback.
+    assert process.returncode == 130 and error.strip().splitlines()[-1] == "vmcl: interrupted"
+    assert "Traceback" not in error and len(error.strip().splitlines()) <= 2
     assert _snapshot(out) == before
     assert not _leftovers(tmp_path)

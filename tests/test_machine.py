@@ -14,6 +14,7 @@ import vmcl
 from vmcl import integrate as integrate_module
 from vmcl import machine as machine_module
 from vmcl.cm.scan import scan
+from vmcl.errors import InputValueError
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -38,8 +39,11 @@ def test_device_chosen_by_name_substring(monkeypatch, machine):
 
 def test_unknown_device_lists_the_available_ones(monkeypatch, machine):
     monkeypatch.setenv("VMCL_DEVICE", "no-such-device-anywhere")
-    with pytest.raises(vmcl.NoOpenCLPlatformError, match=machine.device.name[:10]):
+    # A name that matches nothing is bad input (named by where it came from), not a missing platform.
+    with pytest.raises(InputValueError, match=f"VMCL_DEVICE.*{machine.device.name[:10]}"):
         vmcl.Machine()
+    with pytest.raises(InputValueError, match="^device: no OpenCL device matches 'bogus'"):
+        vmcl.Machine("bogus")
 
 
 def test_missing_platform_says_how_to_install(monkeypatch):

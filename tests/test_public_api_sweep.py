@@ -72,7 +72,8 @@ class Entry:
     target: str
     call: dict
     kinds: dict  # argument -> kind (see _mutations); arguments left out are not varied
-    aliases: dict  # argument -> the word a refusal may name it by instead (as_image's caller-given name)
+    aliases: dict  # argument -> the word (or words) a refusal may name it by instead (as_image's caller-given
+    # name; a Config's section.key)
 
 
 def _e(target: str, **call) -> Entry:
@@ -295,7 +296,8 @@ TABLE: tuple[Entry, ...] = (
        kinds={"result": _O, "folder": _P, "title": _C, "evaluation": _O}),
     # ------------------------------------------------------------------ pipeline, machine
     _e("vmcl.pipeline:as_image", array=IMG, name="left", kinds={"array": _A}, aliases={"array": "left"}),
-    _e("vmcl.pipeline:Config.from_dict", values={"edges": {"sigma": 1.5}}, kinds={"values": "mapping"}),
+    _e("vmcl.pipeline:Config.from_dict", values={"edges": {"sigma": 1.5}}, kinds={"values": "mapping"},
+       aliases={"values": ("config", "edges.", "stereo.", "motion.", "colour.", "texture.", "mrf.", "labels.")}),
     _e("vmcl.pipeline:EdgesConfig", sigma=2.0, low_threshold=None, high_threshold=None, use_quantiles=False,
        kinds={"sigma": _N, "low_threshold": _ON, "high_threshold": _ON, "use_quantiles": _B}),
     _e("vmcl.pipeline:StereoConfig", d_min=None, d_max=None, max_disparity=0.05, patch=11, backfill_floor=0.9,
@@ -348,7 +350,8 @@ _FLOATS = [None, "1.0", [1.0], True, {"float": "nan"}, {"float": "inf"}, {"float
 _INTS = [None, "3", [3], True, 2.5, {"float": "nan"}, -1, 0, 1, 2**31, 2**63, -(2**63), 10**30,
          {"np": "int64", "value": 3}, {"np": "float64", "value": 3.0}]
 _CHOICES = ["bogus", "", None, 3, ["x"], {"float": "nan"}]
-_BOOLS = [None, "yes", 2, 1.0, {"np": "bool", "value": True}, [True]]
+# NumPy's False is a bool (accepted); True would be too, but changes some results' type (canny's gradient).
+_BOOLS = [None, "yes", 2, 1.0, {"np": "bool", "value": False}, [True]]
 _OPAQUES = [None, 3, "x", [], {"float": "nan"}]
 _TUPLES = [None, tup(), tup(1), tup(1, 2, 3, 4, 5), tup("a", "b"), tup({"float": "nan"}, {"float": "nan"}),
            tup({"float": "inf"}, 1.0), tup(-1, -1), tup(0, 0), tup(10**9, 10**9), 3, "ab", [1, 2],
@@ -561,7 +564,8 @@ def _build(spec, ctx):
         value = spec["value"]
         return np.dtype(spec["np"]).type(float(value) if value == "nan" else value)
     if "tolist" in spec:
-        return _array(spec["tolist"], ctx).tolist()
+        value = _array(spec["tolist"], ctx)
+        return (value.get() if hasattr(value, "get") else value).tolist()
     if "make" in spec:
         return _MAKERS[spec["make"]](ctx)
     if "path" in spec:
@@ -851,7 +855,8 @@ def _run_case(case: dict, ctx: dict) -> dict:
         if argument is None:
             return {"ok": False, "why": f"the valid call was refused: {error}"}
         entry = next(e for e in TABLE if e.target == case["target"])
-        words = [argument, entry.aliases.get(argument, argument)]
+        alias = entry.aliases.get(argument, argument)
+        words = [argument, *([alias] if isinstance(alias, str) else alias)]
         if entry.kinds.get(argument) == "path" and isinstance(kwargs.get(argument), str):
             words.append(kwargs[argument])  # a bad file is named by its path
         named = any(word in str(error) for word in words)

@@ -99,3 +99,29 @@ def test_labelled_cartoon_colours_each_label():
     for k, (label, colour) in enumerate(LABEL_COLOURS.items()):
         assert tuple(picture[k, k]) == colour, label
     assert picture[0, 1, 0] == picture[0, 1, 1] > 100  # faded, grey
+
+
+def test_the_report_never_overwrites_a_file_it_did_not_write(run, tmp_path):
+    mine = tmp_path / "cartoon.png"
+    mine.write_bytes(b"the user's own picture")
+    with pytest.raises(ValueError, match="already holds cartoon.png"):
+        write_report(run, tmp_path)
+    assert mine.read_bytes() == b"the user's own picture"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cartoon.png"]
+
+
+@pytest.mark.parametrize(("call", "error", "named"), [
+    (lambda: disparity_image(np.zeros((0, 16), np.float32)), ValueError, "disparity"),
+    (lambda: disparity_image(np.zeros((8, 8), complex)), TypeError, "disparity"),
+    (lambda: disparity_image(np.zeros((8, 8), np.float32), vmin="0"), TypeError, "vmin"),
+    (lambda: flow_image(np.zeros((0, 16, 2), np.float32)), ValueError, "flow"),
+    (lambda: flow_image(np.zeros((8, 8, 3), np.float32)), ValueError, "flow"),
+    (lambda: flow_image(np.zeros((8, 8, 2), np.float32), max_flow=np.nan), ValueError, "max_flow"),
+    (lambda: labels_image(np.zeros((0, 16, 3), np.float32), np.zeros((0, 16), np.uint8)), ValueError, "image"),
+    (lambda: labels_image(np.zeros((8, 8), np.float32), np.zeros((8, 9), np.uint8)), ValueError, "labels"),
+    (lambda: support_image(np.zeros((8, 8), np.float32), np.zeros((8, 8), np.float32)), TypeError, "support"),
+    (lambda: write_report(None, "unused"), TypeError, "result"),
+])
+def test_bad_pictures_are_refused_by_name(call, error, named):
+    with pytest.raises(error, match=named):
+        call()

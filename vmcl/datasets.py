@@ -93,7 +93,8 @@ def read_image(path) -> np.ndarray:
         If it is a folder, cannot be decoded as an image, or is a PNG or JPEG cut short or corrupt
         (OpenCV would decode what it can and fill the rest with grey).
     """
-    if Path(path).is_dir():
+    path = _as_path(path)
+    if path.is_dir():
         raise InputValueError(f"{path} is a folder, not an image file")
     path = _existing(path)
     data = path.read_bytes()

@@ -80,7 +80,8 @@ def _choose_device(device: cl.Device | str | None) -> cl.Device:
         if needle in candidate.name.lower() or needle in candidate.platform.name.lower():
             return candidate
     names = ", ".join(f"{d.platform.name} / {d.name}" for d in devices)
-    raise NoOpenCLPlatformError(f"no OpenCL device matches {wanted!r} (VMCL_DEVICE or device=); available: {names}")
+    source = "device" if device is not None else "the VMCL_DEVICE environment variable"
+    raise InputValueError(f"{source}: no OpenCL device matches {wanted!r}; available: {names}")
 
 
 class Machine:

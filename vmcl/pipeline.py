@@ -39,7 +39,7 @@ import numpy as np
 from vmcl import integrate as _integrate
 from vmcl import labelling
 from vmcl.early import color, edges, motion, stereo, texture
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.mrf import Params, backfill, preset, restore, score_confidence
 from vmcl.mrf.data import check_unit_interval
@@ -269,7 +269,11 @@ class MrfConfig:
         unknown = sorted(set(overrides) - known)
         if unknown:
             raise InputValueError(f"unknown key mrf.{cue}.{unknown[0]}: Params has {', '.join(sorted(known))}")
-        return dataclasses.replace(preset(cue), **overrides)
+        try:
+            return dataclasses.replace(preset(cue), **overrides)
+        except InputError as error:
+            # Params names its fields as Params.x; in a Config they are mrf.<cue>.x.
+            raise type(error)(str(error).replace("Params.", f"mrf.{cue}.", 1)) from None
 
 
 @dataclass(frozen=True)
@@ -345,6 +349,8 @@ class Config:
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> Config:
         """A Config from nested mappings; a key that names nothing raises ValueError, a mistyped value TypeError."""
+        if not isinstance(values, Mapping):
+            raise InputTypeError(f"config values must be a mapping of section to keys, got {type(values).__name__}")
         sections = {}
         for name, entries in values.items():
             if name not in _SECTIONS:

@@ -24,6 +24,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from vmcl.cm._arrays import check_real, real_host_array
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.integrate import Cue
 from vmcl.pipeline import Result
 from vmcl.scenes import Label
@@ -49,6 +51,26 @@ def _grey(image: np.ndarray) -> np.ndarray:
     return np.clip(image, 0.0, 1.0)
 
 
+def _image_argument(image: np.ndarray, name: str) -> np.ndarray:
+    """A picture's background: a real (H, W) grey or (H, W, 3) RGB NumPy array, not empty."""
+    real_host_array(image, name, ndims=(2, 3))
+    if image.ndim == 3 and image.shape[2] != 3:
+        raise InputValueError(f"{name} must be (H, W) grey or (H, W, 3) RGB, got shape {image.shape}")
+    return image
+
+
+def _overlay_argument(values: np.ndarray, name: str, image: np.ndarray) -> np.ndarray:
+    """Codes drawn over ``image``: a real (H, W) array of the image's height and width."""
+    real_host_array(values, name, ndims=(2,))
+    if values.shape != image.shape[:2]:
+        raise InputValueError(f"{name} has shape {values.shape}, the image {image.shape[:2]}: they must match")
+    return values
+
+
+def _optional_real(value, name: str) -> float | None:
+    return None if value is None else check_real(value, name)
+
+
 def _to_uint8(rgb: np.ndarray) -> np.ndarray:
     return np.clip(np.round(rgb), 0, 255).astype(np.uint8)
 
@@ -66,6 +88,8 @@ def disparity_image(disparity: np.ndarray, *, vmin: float | None = None, vmax: f
     -------
     uint8 RGB (H + 28, W, 3)
     """
+    real_host_array(disparity, "disparity", ndims=(2,))
+    vmin, vmax = _optional_real(vmin, "vmin"), _optional_real(vmax, "vmax")
     finite = np.isfinite(disparity)
     low = float(np.nanmin(disparity)) if vmin is None and finite.any() else (vmin or 0.0)
     high = float(np.nanmax(disparity)) if vmax is None and finite.any() else (vmax or 1.0)
@@ -110,6 +134,11 @@ def flow_image(flow: np.ndarray, *, max_flow: float | None = None) -> np.ndarray
     -------
     uint8 RGB (H, W, 3), with the wheel itself drawn in the top-left corner as the key.
     """
+    real_host_array(flow, "flow", ndims=(3,))
+    if flow.shape[2] != 2:
+        raise InputValueError(f"flow must be (H, W, 2), got shape {flow.shape}")
+    if max_flow is not None:
+        max_flow = check_real(max_flow, "max_flow", above=0)
     u, v = flow[..., 0], flow[..., 1]
     known = np.isfinite(u) & np.isfinite(v)
     speed = np.hypot(np.where(known, u, 0), np.where(known, v, 0))
@@ -156,6 +185,7 @@ def labels_image(image: np.ndarray, labels: np.ndarray) -> np.ndarray:
     -------
     uint8 RGB (H, W, 3)
     """
+    _overlay_argument(labels, "labels", _image_argument(image, "image"))
     picture = _faded(image)
     for label, colour in LABEL_COLOURS.items():
         picture[labels == label] = colour
@@ -175,6 +205,9 @@ def support_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
     -------
     uint8 RGB (H, W, 3)
     """
+    _overlay_argument(support, "support", _image_argument(image, "image"))
+    if support.dtype.kind not in "biu":
+        raise InputTypeError(f"support must hold integer Cue bits, got dtype {support.dtype}")
     picture = _faded(image)
     picture[(support & Cue.BRIGHTNESS) != 0] = BRIGHTNESS_ONLY
     painted = np.zeros(support.shape, bool)
@@ -187,6 +220,7 @@ def support_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
 
 def field_image(values: np.ndarray) -> np.ndarray:
     """A scalar field (hue, texture density) as grey levels over its finite range; NaN is black."""
+    real_host_array(values, "values", ndims=(2,))
     finite = np.isfinite(values)
     if not finite.any():
         return np.zeros(values.shape + (3,), np.uint8)
@@ -197,6 +231,8 @@ def field_image(values: np.ndarray) -> np.ndarray:
 
 def images(result: Result) -> dict[str, np.ndarray]:
     """The report's pictures of a run, by file stem, in the order the report shows them."""
+    if not isinstance(result, Result):
+        raise InputTypeError(f"result must be a vmcl.pipeline.Result, got {type(result).__name__}")
     out = {"cartoon": labels_image(result.image, result.labels),
            "support": support_image(result.image, result.support),
            "input": _to_uint8(255 * np.repeat(_grey(result.image)[..., None], 3, axis=2)
@@ -233,6 +269,9 @@ _CAPTIONS = {
 
 def encode_png(rgb: np.ndarray) -> bytes:
     """PNG bytes of an RGB uint8 image."""
+    real_host_array(rgb, "rgb", ndims=(3,))
+    if rgb.dtype != np.uint8 or rgb.shape[2] != 3:
+        raise InputValueError(f"rgb must be a uint8 (H, W, 3) array, got {rgb.dtype} of shape {rgb.shape}")
     ok, data = cv2.imencode(".png", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
     if not ok:
         raise RuntimeError("OpenCV could not encode a PNG")
@@ -249,6 +288,8 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
                  evaluation: Mapping[str, Sequence[Sequence[object]]] | None = None) -> dict[str, Path]:
     """Write the run's PNGs and report.html (images inline) into ``folder`` (created if missing).
 
+    Files of those names already in ``folder`` are never overwritten: the call is refused instead.
+
     Parameters
     ----------
     result : Result
@@ -262,11 +303,23 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
     dict of str to Path
         Every file written, by stem ("report" for the HTML).
     """
+    if not isinstance(title, str):
+        raise InputTypeError(f"title must be a str, got {type(title).__name__}")
+    if evaluation is not None and not isinstance(evaluation, Mapping):
+        raise InputTypeError(f"evaluation must be a mapping of table title to rows, got {type(evaluation).__name__}")
+    if not isinstance(folder, (str, Path)):
+        raise InputTypeError(f"folder must be a str or Path, got {type(folder).__name__}")
+    pictures = images(result)
     folder = Path(folder)
+    # vmcl never overwrites a file it did not write: the report goes into a folder without its names.
+    taken = sorted(name for name in [*(f"{stem}.png" for stem in pictures), "report.html"] if (folder / name).exists())
+    if taken:
+        raise InputValueError(f"folder {folder} already holds {', '.join(taken)}; write the report into a new "
+                              "or empty folder (the vmcl command replaces its own previous output)")
     folder.mkdir(parents=True, exist_ok=True)
     written = {}
     figures = []
-    for stem, picture in images(result).items():
+    for stem, picture in pictures.items():
         data = encode_png(picture)
         path = folder / f"{stem}.png"
         path.write_bytes(data)

@@ -23,6 +23,7 @@ larger side, past which a Gaussian only blurs the repeated border while its work
 def max_passes(height: int, width: int) -> int:
     """The most binomial passes an (height, width) image takes: those of a Gaussian of sigma
     max(height, width, WIDEST), since n passes have sigma sqrt(n / 2)."""
+    height, width = check_int(height, "height", minimum=0), check_int(width, "width", minimum=0)
     return 2 * max(height, width, WIDEST) ** 2
 
 

@@ -14,7 +14,16 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
 
-from vmcl.cm._arrays import ArrayLike, check_int, field, machine_for, result, type_defines
+from vmcl.cm._arrays import (
+    ArrayLike,
+    check_choice,
+    check_int,
+    check_real,
+    field,
+    machine_for,
+    result,
+    type_defines,
+)
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
@@ -50,8 +59,7 @@ def reduce(x: ArrayLike, op: ReduceOp = "sum", *, machine: Machine | None = None
     ignored by "max" and "min" (OpenCL's fmax/fmin rule).
     """
     machine = machine_for(machine)
-    if op not in _OPS:
-        raise InputValueError(f"op must be one of {sorted(_OPS)}, got {op!r}")
+    check_choice(op, "op", sorted(_OPS))
     source = x.astype(np.uint8) if isinstance(x, np.ndarray) and x.dtype == np.bool_ else x
     data, host = field(source, "x", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
     defines = type_defines(data.dtype)
@@ -145,10 +153,9 @@ def histogram_to_top(x: cl_array.Array, bins: int, top: cl_array.Array, *, lo: f
         raise InputTypeError(f"x must be a pyopencl.array.Array, got {type(x).__name__}")
     if not isinstance(top, cl_array.Array) or top.dtype != np.float32 or top.size != 1:
         raise InputTypeError("top must be a one-element float32 pyopencl.array.Array")
-    if not math.isfinite(lo):
-        raise InputValueError(f"lo must be finite, got {lo}")
+    lo = check_real(lo, "lo")
     data, _ = _histogram_field(x, bins, tile, machine)
-    return _count(machine, data, bins, float(lo), float(lo) + 1.0, top, tile)
+    return _count(machine, data, bins, lo, lo + 1.0, top, tile)
 
 
 def _histogram_field(x, bins, tile, machine: Machine) -> tuple[cl_array.Array, bool]:

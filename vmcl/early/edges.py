@@ -30,7 +30,7 @@ import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm import doubling as _doubling
-from vmcl.cm._arrays import ArrayLike, field, machine_for, result
+from vmcl.cm._arrays import ArrayLike, check_bool, check_choice, field, machine_for, result
 from vmcl.early import noise as _noise
 from vmcl.early.filters import (
     DOG_RATIO,
@@ -177,9 +177,8 @@ def _hysteresis(machine: Machine, state: cl_array.Array, marks: cl_array.Array |
     return edges
 
 
-def _check_hysteresis(method) -> None:
-    if method not in ("doubling", "iterative"):
-        raise InputValueError(f"hysteresis must be 'doubling' or 'iterative', got {method!r}")
+def _check_hysteresis(method, name: str) -> None:
+    check_choice(method, name, ("doubling", "iterative"))
 
 
 def hysteresis_threshold(image: ArrayLike, *, low_threshold: float, high_threshold: float,
@@ -207,7 +206,7 @@ def hysteresis_threshold(image: ArrayLike, *, low_threshold: float, high_thresho
     bool (H, W) for NumPy input; uint8 0/1 device array for device input.
     """
     machine = machine_for(machine)
-    _check_hysteresis(method)
+    _check_hysteresis(method, "method")
     low, high = (_non_negative(v, name) for v, name in ((low_threshold, "low_threshold"),
                                                          (high_threshold, "high_threshold")))
     if low > high:
@@ -344,9 +343,10 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     """
     machine = machine_for(machine)
     sigma = _check_sigma(sigma)
-    _check_hysteresis(hysteresis)
-    if noise not in ("global", "local"):
-        raise InputValueError(f"noise must be 'global' or 'local', got {noise!r}")
+    _check_hysteresis(hysteresis, "hysteresis")
+    check_choice(noise, "noise", ("global", "local"))
+    return_gradient = check_bool(return_gradient, "return_gradient")
+    use_quantiles = check_bool(use_quantiles, "use_quantiles")
     low = _threshold_value(low_threshold, "low_threshold", use_quantiles)
     high = _threshold_value(high_threshold, "high_threshold", use_quantiles)
     if low is not None and high is not None and low > high:

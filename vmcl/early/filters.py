@@ -97,8 +97,15 @@ def _check_sigma(sigma, name: str = "sigma") -> float:
     return float(sigma)
 
 
+MAX_TAPS_SIGMA = 2.0**18
+"""The widest Gaussian :func:`gaussian_taps` tabulates (2 M taps); images bound their own widths lower."""
+
+
 def gaussian_taps(sigma: float) -> np.ndarray:
     """The exact Gaussian's 1-D taps, normalised to sum 1 over ``int(4 sigma + 0.5)`` pixels each side."""
+    sigma = _check_sigma(sigma)
+    if sigma > MAX_TAPS_SIGMA:
+        raise InputValueError(f"sigma must be at most {MAX_TAPS_SIGMA} for a tap table, got {sigma}")
     radius = int(TRUNCATE * sigma + 0.5)
     x = np.arange(-radius, radius + 1, dtype=np.float64)
     taps = np.exp(-0.5 * (x / sigma) ** 2)
@@ -107,6 +114,7 @@ def gaussian_taps(sigma: float) -> np.ndarray:
 
 def binomial_passes(sigma: float) -> int:
     """Passes of the 3 x 3 binomial mask for a Gaussian of ``sigma``: n passes have variance n / 2."""
+    sigma = _check_sigma(sigma)
     return max(1, round(2.0 * sigma * sigma))
 
 

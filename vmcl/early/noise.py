@@ -41,7 +41,7 @@ import pyopencl.array as cl_array
 from pyopencl import cltypes
 
 from vmcl.cm import reduce as _reduce
-from vmcl.cm._arrays import ArrayLike, field, machine_for, result
+from vmcl.cm._arrays import ArrayLike, check_real, field, machine_for, result
 from vmcl.early.filters import _kernel
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
@@ -66,6 +66,9 @@ _MEDIAN_OF_RAYLEIGH = math.sqrt(2.0 * math.log(2.0))
 def noise_rule(low: float = NOISE_LOW, high: float = NOISE_HIGH) -> tuple[float, float, float, float]:
     """(quantile, quantile, factor, factor) for :func:`threshold_field`: thresholds ``low * s`` and
     ``high * s``, both scaling the median."""
+    low, high = check_real(low, "low", minimum=0), check_real(high, "high", minimum=0)
+    if low > high:
+        raise InputValueError(f"low must be at most high, got low={low}, high={high}")
     return 0.5, 0.5, low / _MEDIAN_OF_RAYLEIGH, high / _MEDIAN_OF_RAYLEIGH
 
 
