@@ -27,8 +27,8 @@ import numpy as np
 
 from vmcl import labelling, metrics, scenes
 from vmcl.integrate import integrate
+from vmcl.labels import Label
 from vmcl.pipeline import Config, VisionMachine
-from vmcl.scenes import Label
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "labelling.md"

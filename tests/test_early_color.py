@@ -10,6 +10,7 @@ import pytest
 from vmcl import metrics, scenes
 from vmcl.early import color, noise
 from vmcl.early.edges import canny
+from vmcl.labels import Label
 
 FULL_SCALE = {np.uint8: 255.0, np.uint16: 65535.0, np.float32: 1.0}
 
@@ -150,8 +151,8 @@ def test_albedo_edges_find_albedo_edges_and_not_shadows(shadows, machine):
     rng = np.random.default_rng(5)
     noisy = shadows.left + rng.normal(0, 0.5 / 255, shadows.left.shape).astype(np.float32)
     rgb = np.clip(np.round(noisy * 255), 0, 255).astype(np.uint8)
-    albedo = shadows.labels == scenes.Label.ALBEDO
-    shadow = shadows.labels == scenes.Label.SHADOW
+    albedo = shadows.labels == Label.ALBEDO
+    shadow = shadows.labels == Label.SHADOW
     assert albedo.sum() > 500 and shadow.sum() > 100
     edges = color.albedo_edges(rgb, machine=machine).edges
     assert metrics.detection_scores(edges, albedo, tolerance=1).recall >= 0.90

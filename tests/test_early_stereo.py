@@ -9,6 +9,7 @@ from scipy import ndimage
 
 from vmcl import scenes
 from vmcl.early.stereo import match, match_features
+from vmcl.labels import Label
 from vmcl.scenes import Body, Camera, Face, Light, Texture, World
 
 DENSE_EDGES = {"low_threshold": 0.6, "high_threshold": 0.85, "use_quantiles": True}
@@ -201,7 +202,7 @@ def two_planes(size=256):
 def test_bimodal_votes_flag_depth_discontinuities(machine):
     scene = two_planes()
     found = match(scene.left, scene.right, d_min=2, d_max=16, patch=15, machine=machine, **DENSE_EDGES)
-    depth_edges = scene.labels == scenes.Label.DEPTH
+    depth_edges = scene.labels == Label.DEPTH
     reachable = depth_edges & ndimage.binary_dilation(found.features, iterations=2)
     flagged = ndimage.binary_dilation(found.discontinuity, iterations=2)
     assert flagged[reachable].mean() >= 0.60
@@ -211,7 +212,7 @@ def test_bimodal_votes_flag_depth_discontinuities(machine):
 
 def test_barriers_keep_support_on_one_surface(machine):
     scene = two_planes()
-    depth_edges = scene.labels == scenes.Label.DEPTH
+    depth_edges = scene.labels == Label.DEPTH
     near = ndimage.binary_dilation(depth_edges, iterations=6) & ~scene.occluded_stereo
     accuracy, flags = [], []
     for barriers in (None, ndimage.binary_dilation(depth_edges)):
@@ -354,7 +355,7 @@ def test_shiftable_windows_keep_the_nearer_surface_off_the_farther(machine):
     """Near a depth edge a centred patch straddles both surfaces and the nearer one wins half a patch
     beyond its outline; a shifted patch lies on the pixel's own side."""
     scene = two_planes()
-    near = ndimage.binary_dilation(scene.labels == scenes.Label.DEPTH, iterations=5) & ~scene.occluded_stereo
+    near = ndimage.binary_dilation(scene.labels == Label.DEPTH, iterations=5) & ~scene.occluded_stereo
     accuracy = []
     for shiftable in (False, True):
         found = match(scene.left, scene.right, d_min=2, d_max=16, features="intensity", patch=11, sigma=1.0,

@@ -9,6 +9,7 @@ from scipy import ndimage
 from vmcl import metrics, scenes
 from vmcl.early import texture
 from vmcl.early.filters import gaussian_taps
+from vmcl.labels import Label
 
 PARAMS = {"fine_sigma": 1.0, "coarse_sigma": 4.0, "radius": 24}
 PRESET_THRESHOLD = 0.08  # float images of the preset: blobs of depth about 0.3
@@ -126,7 +127,7 @@ def test_blob_mosaic_densities_separate_and_edges_are_found(blob_mosaic, machine
     # expected densities by construction (0.3 / 10**2 against 0.9 / 16**2): that pair is not compared.
     pairs = [(dense, wall), (sparse, wall), (disc, wall), (disc, dense), (dense, sparse)]
     assert min(_separations(got.density, regions, pairs, PARAMS["radius"])) > 5
-    truth = s.labels == scenes.Label.TEXTURE
+    truth = s.labels == Label.TEXTURE
     assert metrics.detection_scores(got.edges, truth, tolerance=3).recall >= 0.80
 
 

@@ -5,10 +5,9 @@ import pytest
 
 from vmcl import labelling, metrics, scenes
 from vmcl.errors import InputError
-from vmcl.integrate import Cue
 from vmcl.labelling import CLASSES, FEATURES, INPUTS, LinearLabeller
+from vmcl.labels import Cue, Label
 from vmcl.pipeline import Config, VisionMachine
-from vmcl.scenes import Label
 
 
 def _window(a: np.ndarray, r: int, reduce) -> np.ndarray:

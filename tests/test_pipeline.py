@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from vmcl import metrics, scenes
-from vmcl.integrate import Cue, boundary, integrate
+from vmcl.integrate import boundary, integrate
+from vmcl.labels import Cue, Label
 from vmcl.mrf import boundary_map
 from vmcl.pipeline import Config, VisionMachine
 
@@ -184,8 +185,8 @@ def test_integrate_matches_boundary_maps_and_labels(machine):
     expected = (maps["depth"] * Cue.DEPTH + maps["colour"] * Cue.COLOUR + maps["texture"] * Cue.TEXTURE
                 + edges * Cue.BRIGHTNESS)
     np.testing.assert_array_equal(support, expected)
-    want = np.where(maps["depth"], scenes.Label.DEPTH,
-                    np.where(maps["colour"], scenes.Label.ALBEDO, np.where(maps["texture"], scenes.Label.TEXTURE, 0)))
+    want = np.where(maps["depth"], Label.DEPTH,
+                    np.where(maps["colour"], Label.ALBEDO, np.where(maps["texture"], Label.TEXTURE, 0)))
     np.testing.assert_array_equal(labels, want)
     np.testing.assert_array_equal(boundary(*lines["depth"], machine=machine), maps["depth"])
 
@@ -208,13 +209,13 @@ def test_flow_epe_below_half_a_pixel(cues_scene, cues_run):
 
 def test_colour_only_boundary_is_found_by_colour_alone(cues_scene, cues_run):
     """The isoluminant boundary: colour's lines find it, brightness and the other cues do not."""
-    albedo = cues_scene.labels == scenes.Label.ALBEDO
+    albedo = cues_scene.labels == Label.ALBEDO
     colour = boundary_map(*cues_run.lines["colour"])
     assert metrics.detection_scores(colour, albedo, tolerance=1).recall >= 0.8  # measured 1.0
     assert metrics.detection_scores(cues_run.edges, albedo, tolerance=1).recall < 0.2
     for cue in ("depth", "texture"):
         assert metrics.detection_scores(boundary_map(*cues_run.lines[cue]), albedo, tolerance=1).recall < 0.2
-    assert metrics.label_scores(cues_run.labels, cues_scene.labels, tolerance=1)[scenes.Label.ALBEDO].recall >= 0.8
+    assert metrics.label_scores(cues_run.labels, cues_scene.labels, tolerance=1)[Label.ALBEDO].recall >= 0.8
 
 
 @pytest.mark.xfail(strict=True, reason="measured at 256 x 256 (fast mean-field schedule): the linear labels "
@@ -227,7 +228,7 @@ def test_colour_only_boundary_is_found_by_colour_alone(cues_scene, cues_run):
                    "for the classifier to label them")
 def test_integration_recalls_every_single_cue_boundary(cues_scene, cues_run):
     scores = metrics.label_scores(cues_run.labels, cues_scene.labels, tolerance=1)
-    assert min(scores[label].recall for label in (scenes.Label.DEPTH, scenes.Label.ALBEDO, scenes.Label.TEXTURE)) >= 0.8
+    assert min(scores[label].recall for label in (Label.DEPTH, Label.ALBEDO, Label.TEXTURE)) >= 0.8
 
 
 @pytest.mark.xfail(strict=True, reason="measured F 0.49 within 1 px (precision 0.80, recall 0.35) with the "

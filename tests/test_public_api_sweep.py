@@ -204,6 +204,7 @@ TABLE: tuple[Entry, ...] = (
        kinds={"score": _A, "floor": _N, "weight": _N, "machine": _M}),
     # ------------------------------------------------------------------ integration and labelling
     _e("vmcl.integrate:boundary", line_h=LINE_H, line_v=LINE_V, kinds={"line_h": _A, "line_v": _A, "machine": _M}),
+    _e("vmcl.labels:cue_bit", cue="depth", kinds={"cue": _C}),
     _e("vmcl.integrate:integrate", lines=make("lines"), edges=MASK, shape=None,
        kinds={"lines": _O, "edges": _OA, "shape": _OT, "machine": _M}),
     _e("vmcl.labelling:candidate_bits", inputs=["stereo", "colour"], kinds={"inputs": "names"}),
@@ -321,7 +322,7 @@ TABLE: tuple[Entry, ...] = (
 EXEMPT = {
     "vmcl.early.color:Hue", "vmcl.early.color:AlbedoEdges", "vmcl.early.edges:ZeroCrossings",
     "vmcl.early.motion:FlowResult", "vmcl.early.stereo:StereoMatch", "vmcl.early.texture:TextureEdges",
-    "vmcl.mrf:Restoration", "vmcl.integrate:Cue", "vmcl.integrate:Integration", "vmcl.scenes:Label",
+    "vmcl.mrf:Restoration", "vmcl.labels:Cue", "vmcl.integrate:Integration", "vmcl.labels:Label",
     "vmcl.scenes:Scene", "vmcl.metrics:BoundaryCounts", "vmcl.metrics:BoundaryScores",
     "vmcl.metrics:DetectionScores", "vmcl.metrics:DisparityScores", "vmcl.metrics:FlowScores",
     "vmcl.datasets:BSDSImage", "vmcl.datasets:BSDSSet", "vmcl.datasets:FlowPair", "vmcl.datasets:StereoPair",
@@ -338,7 +339,7 @@ PUBLIC_MODULES = (
     "vmcl.cm.doubling", "vmcl.cm.filters", "vmcl.cm.news", "vmcl.cm.reduce", "vmcl.cm.router", "vmcl.cm.scan",
     "vmcl.early.color", "vmcl.early.edges", "vmcl.early.filters", "vmcl.early.motion", "vmcl.early.noise",
     "vmcl.early.registration", "vmcl.early.sign_correlation", "vmcl.early.stereo", "vmcl.early.texture",
-    "vmcl.mrf", "vmcl.integrate", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
+    "vmcl.mrf", "vmcl.integrate", "vmcl.labels", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
     "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pipeline", "vmcl.machine",
 )
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from vmcl import scenes
-from vmcl.integrate import Cue
+from vmcl.labels import Cue
 from vmcl.pipeline import Config, VisionMachine
 from vmcl.report import (
     CUE_COLOURS,

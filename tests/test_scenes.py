@@ -8,7 +8,8 @@ import pytest
 
 from vmcl import scenes
 from vmcl.errors import InputError
-from vmcl.scenes import Body, Camera, Face, Label, Light, Mark, Texture, World
+from vmcl.labels import Label
+from vmcl.scenes import Body, Camera, Face, Light, Mark, Texture, World
 
 SIZE = (256, 256)
 X_AXIS, Y_AXIS = (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)

@@ -61,7 +61,8 @@ HAMMER = textwrap.dedent("""
 
 
 def test_threads_sharing_the_default_machine_get_their_own_results():
-    run = subprocess.run([sys.executable, "-c", HAMMER, "6", "20"], capture_output=True, text=True, timeout=600)
+    run = subprocess.run([sys.executable, "-c", HAMMER, "6", "20"], capture_output=True, text=True, timeout=600,
+                         check=False)
     assert run.returncode == 0, f"the hammering process died (status {run.returncode}): {run.stderr[-2000:]}"
     wrong = json.loads(run.stdout.strip().splitlines()[-1])["wrong"]
     assert wrong == [], f"{len(wrong)} results differ from the thread's sequential ones: {wrong[:5]}"

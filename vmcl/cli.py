@@ -146,7 +146,7 @@ def _demo_inputs(args) -> tuple[str, dict, dict]:
 def evaluation_tables(result, truth: dict) -> dict[str, list[tuple]]:
     """Tables of the run's scores against whatever ground truth there is (for the terminal and report)."""
     from vmcl import metrics
-    from vmcl.scenes import Label
+    from vmcl.labels import Label
 
     tables = {}
     if "labels" in truth:

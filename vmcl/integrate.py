@@ -5,7 +5,7 @@ from stereo, motion, colour, texture) is restored by its own line-process MRF wh
 at brightness edges (equation (12), :func:`vmcl.mrf.restore` with ``edges=``); this module puts their
 line processes on the pixel grid and records, at every pixel, which cues support a discontinuity there
 and whether a brightness edge lies on it (:class:`Cue` bits). The label of a supported pixel is its
-physical reading (a :class:`vmcl.scenes.Label` code): a jump of depth or motion is an occluding contour
+physical reading (a :class:`vmcl.labels.Label` code): a jump of depth or motion is an occluding contour
 (DEPTH), a change of hue an albedo edge (ALBEDO), a change of texture alone a texture boundary
 (TEXTURE). The labelled pixels are the paper's "cartoon" of the scene. :func:`boundary` turns one line
 process into a pixel map, the barriers that feed the integration back to the stereo matcher (the seed's
@@ -26,7 +26,6 @@ T. Poggio et al., "The MIT Vision Machine", Proc. DARPA Image Understanding Work
 from __future__ import annotations
 
 from collections.abc import Mapping
-from enum import IntFlag
 from typing import NamedTuple
 
 import numpy as np
@@ -34,29 +33,8 @@ import pyopencl.array as cl_array
 
 from vmcl.cm._arrays import ArrayLike, check_int, check_real_dtype, field, machine_for
 from vmcl.errors import InputTypeError, InputValueError
+from vmcl.labels import BIT_DEFINES, CUES, Cue, Label
 from vmcl.machine import Machine
-from vmcl.scenes import Label
-
-
-class Cue(IntFlag):
-    """Bits of the support map: the cues whose line process marks a pixel, and the brightness edges."""
-
-    DEPTH = 1
-    MOTION = 2
-    COLOUR = 4
-    TEXTURE = 8
-    BRIGHTNESS = 16
-
-
-CUES = ("depth", "motion", "colour", "texture")
-"""The cues with a line process, in the order of their :class:`Cue` bits."""
-
-CUE_BITS = Cue.DEPTH | Cue.MOTION | Cue.COLOUR | Cue.TEXTURE
-"""The bits that make a pixel a discontinuity of the cartoon (brightness alone does not)."""
-
-BIT_DEFINES = {"BIT_DEPTH": int(Cue.DEPTH), "BIT_MOTION": int(Cue.MOTION), "BIT_COLOUR": int(Cue.COLOUR),
-               "BIT_TEXTURE": int(Cue.TEXTURE), "BIT_BRIGHTNESS": int(Cue.BRIGHTNESS)}
-"""The kernels' -D names of the :class:`Cue` bits (integrate.cl, labelling.cl)."""
 
 _DEFINES = {**BIT_DEFINES,
             "LABEL_DEPTH": int(Label.DEPTH), "LABEL_ALBEDO": int(Label.ALBEDO),
@@ -71,7 +49,7 @@ class Integration(NamedTuple):
     support : uint8 (H, W)
         OR of the :class:`Cue` bits of the cues marking each pixel (and BRIGHTNESS on edge pixels).
     labels : uint8 (H, W)
-        :class:`vmcl.scenes.Label` code of each discontinuity pixel (0 elsewhere): DEPTH where depth or
+        :class:`vmcl.labels.Label` code of each discontinuity pixel (0 elsewhere): DEPTH where depth or
         motion supports it, else ALBEDO where colour does, else TEXTURE where texture does.
     """
 

@@ -43,9 +43,8 @@ import numpy as np
 from vmcl.cm._arrays import ArrayLike, check_bool, check_real, machine_for, real_host_array
 from vmcl.cm._arrays import field as device_field
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.integrate import BIT_DEFINES, Cue
+from vmcl.labels import BIT_DEFINES, Cue, Label
 from vmcl.machine import Machine
-from vmcl.scenes import Label
 
 FEATURES = ("depth line", "motion line", "colour line", "texture line", "brightness edge",
             "disparity jump 3", "disparity jump 7", "disparity crease", "flow jump 3", "flow jump 7",
@@ -191,7 +190,7 @@ class LinearLabeller:
         ----------
         samples : iterable of (features, support, truth)
             features: float32 (len(FEATURES), H, W) from :func:`features` with every input present;
-            support: uint8 (H, W), :class:`vmcl.integrate.Cue` bits; truth: the scene's Label map.
+            support: uint8 (H, W), :class:`vmcl.labels.Cue` bits; truth: the scene's Label map.
         l2 : float
             Weight decay on the non-bias weights.
         fitted_on : str
@@ -332,12 +331,12 @@ def features(support: ArrayLike, image: ArrayLike, *, disparity: ArrayLike | Non
 def label(support: ArrayLike, image: ArrayLike, *, disparity: ArrayLike | None = None,
           flow: ArrayLike | None = None, hue: ArrayLike | None = None, texture: bool = True,
           labeller: LinearLabeller | None = None, machine: Machine | None = None) -> ArrayLike:
-    """The cartoon: a :class:`vmcl.scenes.Label` code at every labelled discontinuity, 0 elsewhere.
+    """The cartoon: a :class:`vmcl.labels.Label` code at every labelled discontinuity, 0 elsewhere.
 
     Parameters
     ----------
     support : (H, W) uint8
-        :class:`vmcl.integrate.Cue` bits (:func:`vmcl.integrate.integrate`'s support map): the
+        :class:`vmcl.labels.Cue` bits (:func:`vmcl.integrate.integrate`'s support map): the
         candidates are the pixels with a brightness edge or a line of a cue that ran.
     image : (H, W) or (H, W, 3) float32
         The image in [0, 1].

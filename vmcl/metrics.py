@@ -741,7 +741,7 @@ def label_scores(
     Parameters
     ----------
     predicted, truth : (H, W) integer arrays
-        Label maps with the codes of :class:`vmcl.scenes.Label` (0 = no discontinuity).
+        Label maps with the codes of :class:`vmcl.labels.Label` (0 = no discontinuity).
     tolerance : float
         Largest Euclidean distance in pixels at which a pixel counts as found.
     labels : sequence of int, optional

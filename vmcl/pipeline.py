@@ -418,9 +418,9 @@ class Result:
     lines : dict of str to (line_h, line_v)
         Each cue's line process (bool).
     support : uint8 (H, W)
-        :class:`vmcl.integrate.Cue` bits: which cues put a discontinuity at each pixel.
+        :class:`vmcl.labels.Cue` bits: which cues put a discontinuity at each pixel.
     labels : uint8 (H, W)
-        The cartoon: :class:`vmcl.scenes.Label` codes of the discontinuity pixels (``labels.method``
+        The cartoon: :class:`vmcl.labels.Label` codes of the discontinuity pixels (``labels.method``
         says how they are chosen; :mod:`vmcl.labelling` by default).
     stages : dict of str to float
         Wall time of each stage in ms, in the order run (device work included: each stage ends with

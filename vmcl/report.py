@@ -26,9 +26,8 @@ import numpy as np
 
 from vmcl.cm._arrays import check_real, real_host_array
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.integrate import Cue
+from vmcl.labels import Cue, Label
 from vmcl.pipeline import Result
-from vmcl.scenes import Label
 
 CUE_COLOURS = {Cue.DEPTH: (230, 40, 40), Cue.MOTION: (250, 150, 20), Cue.COLOUR: (40, 110, 240),
                Cue.TEXTURE: (30, 180, 60)}
@@ -179,7 +178,7 @@ def labels_image(image: np.ndarray, labels: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     image : float (H, W) or (H, W, 3) in [0, 1]
-    labels : uint8 (H, W), :class:`vmcl.scenes.Label` codes (:attr:`vmcl.pipeline.Result.labels`)
+    labels : uint8 (H, W), :class:`vmcl.labels.Label` codes (:attr:`vmcl.pipeline.Result.labels`)
 
     Returns
     -------
@@ -199,7 +198,7 @@ def support_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     image : float (H, W) or (H, W, 3) in [0, 1]
-    support : uint8 (H, W), :class:`vmcl.integrate.Cue` bits (:attr:`vmcl.pipeline.Result.support`)
+    support : uint8 (H, W), :class:`vmcl.labels.Cue` bits (:attr:`vmcl.pipeline.Result.support`)
 
     Returns
     -------

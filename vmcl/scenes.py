@@ -53,19 +53,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from enum import IntEnum
 
 import numpy as np
 
 from vmcl.cm._arrays import check_bool, check_int, check_real
 from vmcl.errors import InputTypeError, InputValueError
+from vmcl.labels import Label
 
 __all__ = [
     "PRESETS",
     "Body",
     "Camera",
     "Face",
-    "Label",
     "Light",
     "Mark",
     "Motion",
@@ -81,22 +80,6 @@ __all__ = [
 F32 = np.float32
 _NEAR = 1e-3  # nearest depth a camera sees, world units
 _EPS = 1e-5  # relative slack of segment tests, so a point never hides itself
-
-
-class Label(IntEnum):
-    """Physical cause of a discontinuity (seed paper, "Labeling the physical origin of edges").
-
-    TEXTURE is an albedo edge between regions of equal colour that differ only in texture; merge it
-    with ALBEDO for the paper's five classes.
-    """
-
-    NONE = 0
-    DEPTH = 1
-    ORIENTATION = 2
-    ALBEDO = 3
-    SHADOW = 4
-    SPECULAR = 5
-    TEXTURE = 6
 
 
 _PRECEDENCE = (Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.TEXTURE, Label.SHADOW, Label.SPECULAR)
