@@ -37,6 +37,7 @@ test: setup
 bench: setup
 	$(PY) benchmarks/primitives.py
 	$(PY) benchmarks/pipeline.py
+	$(PY) benchmarks/readme.py
 
 clean:
 	rm -rf $(VENV) vmcl-demo build dist *.egg-info .pytest_cache .hypothesis

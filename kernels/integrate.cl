@@ -10,7 +10,7 @@
  *               brightness edge lies on it) and its label: the "cartoon"
  *
  * Line fields: line_h is (H, W - 1), line_v is (H - 1, W), uint8 0/1, as vmcl.mrf.restore returns them.
- * Defines (from vmcl.integrate, the one place that names them): the cue bits BIT_DEPTH, BIT_MOTION,
+ * Defines (from vmcl.integrate, the one place that names them): the cue bits BIT_STEREO, BIT_MOTION,
  * BIT_COLOUR, BIT_TEXTURE, BIT_BRIGHTNESS and the vmcl.scenes.Label codes LABEL_DEPTH, LABEL_ALBEDO,
  * LABEL_TEXTURE.
  */
@@ -29,7 +29,7 @@ __kernel void boundary(__global const uchar *line_h, __global const uchar *line_
 }
 
 /* A cue whose bit is not in `present` has no line process; its buffers are placeholders never read. */
-__kernel void integrate(__global const uchar *depth_h, __global const uchar *depth_v,
+__kernel void integrate(__global const uchar *stereo_h, __global const uchar *stereo_v,
                         __global const uchar *motion_h, __global const uchar *motion_v,
                         __global const uchar *colour_h, __global const uchar *colour_v,
                         __global const uchar *texture_h, __global const uchar *texture_v,
@@ -40,7 +40,7 @@ __kernel void integrate(__global const uchar *depth_h, __global const uchar *dep
     if (x >= W || y >= H) return;
     size_t i = (size_t)y * W + x;
     int bits = 0;
-    if ((present & BIT_DEPTH) && on_boundary(depth_h, depth_v, x, y, W, H)) bits |= BIT_DEPTH;
+    if ((present & BIT_STEREO) && on_boundary(stereo_h, stereo_v, x, y, W, H)) bits |= BIT_STEREO;
     if ((present & BIT_MOTION) && on_boundary(motion_h, motion_v, x, y, W, H)) bits |= BIT_MOTION;
     if ((present & BIT_COLOUR) && on_boundary(colour_h, colour_v, x, y, W, H)) bits |= BIT_COLOUR;
     if ((present & BIT_TEXTURE) && on_boundary(texture_h, texture_v, x, y, W, H)) bits |= BIT_TEXTURE;
@@ -50,7 +50,7 @@ __kernel void integrate(__global const uchar *depth_h, __global const uchar *dep
      * shading leave H = R / (R + G) unchanged); a change of texture alone is a texture boundary. A
      * brightness edge no cue supports stays unlabelled (shadow, shading, fold or texture element). */
     uchar label = 0;
-    if (bits & (BIT_DEPTH | BIT_MOTION)) label = LABEL_DEPTH;
+    if (bits & (BIT_STEREO | BIT_MOTION)) label = LABEL_DEPTH;
     else if (bits & BIT_COLOUR) label = LABEL_ALBEDO;
     else if (bits & BIT_TEXTURE) label = LABEL_TEXTURE;
     support[i] = (uchar)bits;

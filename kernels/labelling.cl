@@ -12,8 +12,9 @@
  *                   brightness edge) takes the label of largest support,
  *                   which may be "none"; without it, the inputs are written out (fitting, inspection).
  *
- * Defines (from vmcl.labelling, the one place that names them): NF inputs, NC labels; the support bits
- * BIT_DEPTH, BIT_MOTION, BIT_COLOUR, BIT_TEXTURE, BIT_BRIGHTNESS; HAS_STEREO, HAS_MOTION, HAS_COLOUR
+ * Defines (from vmcl.labelling, the one place that names them): NF inputs, NC labels; F_<FEATURE NAME>,
+ * each input's slot (vmcl.labelling.SLOT_DEFINES); the support bits
+ * BIT_STEREO, BIT_MOTION, BIT_COLOUR, BIT_TEXTURE, BIT_BRIGHTNESS; HAS_STEREO, HAS_MOTION, HAS_COLOUR
  * (which restored fields exist; the inputs of a missing one are 0, whiteness included, which needs
  * colour); RGB (the image has three channels); CANDIDATE_BITS; CODES (the outputs' label codes).
  * Fields: image float32 (H, W) or (H, W, 3) in [0, 1]; disparity, hue float32 (H, W); flow float32
@@ -111,27 +112,27 @@ __kernel void label_features(__global const uchar *support, __global const float
             }
         }
     }
-    in[0] = (near & BIT_DEPTH) != 0;
-    in[1] = (near & BIT_MOTION) != 0;
-    in[2] = (near & BIT_COLOUR) != 0;
-    in[3] = (near & BIT_TEXTURE) != 0;
-    in[4] = (support[i] & BIT_BRIGHTNESS) != 0;
+    in[F_STEREO_LINE] = (near & BIT_STEREO) != 0;
+    in[F_MOTION_LINE] = (near & BIT_MOTION) != 0;
+    in[F_COLOUR_LINE] = (near & BIT_COLOUR) != 0;
+    in[F_TEXTURE_LINE] = (near & BIT_TEXTURE) != 0;
+    in[F_BRIGHTNESS_EDGE] = (support[i] & BIT_BRIGHTNESS) != 0;
 #if HAS_STEREO
-    in[5] = CLIPPED(window_range(disparity, 1, 0, x, y, 1, W, H), 4.0f);
-    in[6] = CLIPPED(window_range(disparity, 1, 0, x, y, 3, W, H), 4.0f);
-    in[7] = CLIPPED(crease, 2.0f);
+    in[F_DISPARITY_JUMP_3] = CLIPPED(window_range(disparity, 1, 0, x, y, 1, W, H), 4.0f);
+    in[F_DISPARITY_JUMP_7] = CLIPPED(window_range(disparity, 1, 0, x, y, 3, W, H), 4.0f);
+    in[F_DISPARITY_CREASE] = CLIPPED(crease, 2.0f);
 #endif
 #if HAS_MOTION
-    in[8] = CLIPPED(fmax(window_range(flow, 2, 0, x, y, 1, W, H), window_range(flow, 2, 1, x, y, 1, W, H)), 4.0f);
-    in[9] = CLIPPED(fmax(window_range(flow, 2, 0, x, y, 3, W, H), window_range(flow, 2, 1, x, y, 3, W, H)), 4.0f);
+    in[F_FLOW_JUMP_3] = CLIPPED(fmax(window_range(flow, 2, 0, x, y, 1, W, H), window_range(flow, 2, 1, x, y, 1, W, H)), 4.0f);
+    in[F_FLOW_JUMP_7] = CLIPPED(fmax(window_range(flow, 2, 0, x, y, 3, W, H), window_range(flow, 2, 1, x, y, 3, W, H)), 4.0f);
 #endif
-    in[10] = CLIPPED(log_hi3 - log_lo3, 1.5f);
-    in[11] = CLIPPED(log_hi5 - log_lo5, 1.5f);
+    in[F_LOG_BRIGHTNESS_STEP_3] = CLIPPED(log_hi3 - log_lo3, 1.5f);
+    in[F_LOG_BRIGHTNESS_STEP_5] = CLIPPED(log_hi5 - log_lo5, 1.5f);
 #if HAS_COLOUR
-    in[12] = CLIPPED(window_range(hue, 1, 0, x, y, 1, W, H), 0.3f);
+    in[F_HUE_STEP_3] = CLIPPED(window_range(hue, 1, 0, x, y, 1, W, H), 0.3f);
 #endif
-    in[13] = white;
-    in[14] = bright;
+    in[F_WHITENESS_5] = white;
+    in[F_BRIGHTNESS_5] = bright;
 
 #if CLASSIFY
     uchar label = 0;

@@ -341,7 +341,7 @@ def test_debug_shows_the_traceback_of_bad_input(tmp_path, capsys):
     ("[texture]\nradius = 2.5\n", "texture.radius must be an integer, got 2.5 (float)"),
     ('[edges]\nsigma = "2"\n', "edges.sigma must be a number, got '2' (str)"),
     ('[colour]\nthreshold = [0.1]\n', "colour.threshold must be a number or None"),
-    ("[mrf]\ndepth = 3\n", "mrf.depth must be a table of keys"),
+    ("[mrf]\nstereo = 3\n", "mrf.stereo must be a table of keys"),
 ])
 def test_config_types_are_checked_naming_the_key(tmp_path, images, capsys, monkeypatch, text, message):
     path = tmp_path / "c.toml"

@@ -27,7 +27,7 @@ def _oracle_features(support, image, disparity, flow, hue) -> np.ndarray:
     """The inputs as the module's docstring defines them, in NumPy."""
     grey = image.mean(axis=2)
     near = _window(support.astype(np.int64), 1, lambda s, axis: np.bitwise_or.reduce(s, axis=axis))
-    bits = [Cue.DEPTH, Cue.MOTION, Cue.COLOUR, Cue.TEXTURE]
+    bits = [Cue.STEREO, Cue.MOTION, Cue.COLOUR, Cue.TEXTURE]
     out = [((near & int(b)) != 0).astype(np.float32) for b in bits]
     out.append(((support & int(Cue.BRIGHTNESS)) != 0).astype(np.float32))
     out += [np.minimum(_range(disparity, 1), 4), np.minimum(_range(disparity, 3), 4)]
@@ -92,10 +92,10 @@ def test_the_largest_support_wins_at_candidates_only(machine):
     support = np.zeros((h, w), np.uint8)
     support[2, 3] = Cue.BRIGHTNESS   # a brightness edge where the log step is large: SHADOW
     support[5, 8] = Cue.BRIGHTNESS   # one where it is small: NONE
-    support[6, 1] = Cue.DEPTH        # the depth line: DEPTH
+    support[6, 1] = Cue.STEREO        # the depth line: DEPTH
     image = np.full((h, w), 0.5, np.float32)
     image[0:4, 0:4] = 0.1
-    labeller = _labeller(0.5, {("log brightness step 3", Label.SHADOW): 1.0, ("depth line", Label.DEPTH): 2.0})
+    labeller = _labeller(0.5, {("log brightness step 3", Label.SHADOW): 1.0, ("stereo line", Label.DEPTH): 2.0})
     labels = labelling.label(support, image, disparity=np.zeros((h, w), np.float32), labeller=labeller,
                              machine=machine)
     expected = np.zeros((h, w), np.uint8)

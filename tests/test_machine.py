@@ -1,5 +1,7 @@
 """The Machine: device choice, program and kernel caches, buffer pool, timings, packaging."""
 
+import logging
+import os
 import subprocess
 import sys
 import time
@@ -165,3 +167,72 @@ def test_views_with_an_offset_are_refused_at_launch(machine):
     kernel = machine.kernel("integrate", "boundary", **integrate_module._DEFINES)
     with pytest.raises(ValueError, match="views with an offset"):
         machine.launch(kernel, (4, 4), data[1:], data, data, np.int64(4), np.int64(4))
+
+
+# A first run with an empty PoCL cache: every family built (the define sets a pipeline run uses, plus the
+# families it leaves out), with vmcl.machine's records and whatever reaches file descriptor 2 collected.
+_FIRST_RUN = """
+import logging, sys
+import numpy as np
+from vmcl import machine as machine_module, scenes
+from vmcl.cm import news, router
+from vmcl.early import registration
+from vmcl.pipeline import VisionMachine
+
+records = []
+handler = logging.Handler(level=logging.DEBUG)
+handler.emit = records.append
+logger = logging.getLogger("vmcl.machine")
+logger.addHandler(handler)
+logger.setLevel(logging.DEBUG)
+built = set()
+build = machine_module.Machine.program
+def recording(self, family, **defines):
+    built.add(family)
+    return build(self, family, **defines)
+machine_module.Machine.program = recording
+
+scene = scenes.render(scenes.preset("cues", shape=(64, 64)), seed=3, noise=0.01)
+VisionMachine().run(scene.left, scene.right, scene.left_next)
+VisionMachine().run(scene.left.mean(axis=2))
+for dtype in (np.float32, np.int32, np.uint8):
+    field = np.arange(64, dtype=dtype).reshape(8, 8)
+    for border in news.BORDERS:
+        news.shift(field, 1, -1, border=border)
+    where = np.arange(64, dtype=np.int32)[::-1].copy()
+    router.get(field, where)
+    for combine in ("overwrite", "sum", "max", "min"):
+        router.send(field.ravel(), where % 7, size=7, combine=combine)
+image = np.zeros((8, 8), np.float32)
+registration.warp(image, np.zeros((8, 8, 2), np.float32))
+for record in records:
+    print(f"{record.levelname}: {record.getMessage()}")
+print("built:", " ".join(sorted(built)))
+"""
+
+
+def test_first_build_of_every_family_is_warning_free_and_quiet(tmp_path):
+    env = {**os.environ, "POCL_CACHE_DIR": str(tmp_path)}  # an empty cache: real builds
+    run = subprocess.run([sys.executable, "-c", _FIRST_RUN], capture_output=True, text=True, env=env, cwd=ROOT,
+                         check=True)
+    families = {path.stem for path in (ROOT / "kernels").glob("*.cl")}
+    assert set(run.stdout.split("built:")[-1].split()) == families
+    assert "WARNING" not in run.stdout
+    assert run.stderr == ""
+
+
+def test_compiler_warnings_reach_the_vmcl_machine_logger(tmp_path, monkeypatch, caplog, capfd):
+    (tmp_path / "vmcl.h").write_text("")
+    # Falling off the end of a non-void function is one of the few warnings clang shows by default.
+    (tmp_path / "lint.cl").write_text("int halve(int a) { if (a > 0) return a / 2; }\n"
+                                      "__kernel void k(__global int *x) { x[0] = halve(x[0]); }\n")
+    monkeypatch.setattr(machine_module, "kernels_dir", lambda: tmp_path)
+    machine = vmcl.Machine()
+    with caplog.at_level(logging.DEBUG, logger="vmcl.machine"):
+        machine.program("lint", NONCE=time.time_ns())  # a define never used before: PoCL really builds
+    warnings = [r for r in caplog.records if r.name == "vmcl.machine" and r.levelno == logging.WARNING]
+    assert len(warnings) == 1 and "non-void function" in warnings[0].getMessage()
+    assert "lint.cl" in warnings[0].getMessage()
+    # clang's "1 warning generated." went to the log, not the terminal.
+    assert "generated" not in capfd.readouterr().err
+    assert any("1 warning generated." in r.getMessage() for r in caplog.records if r.levelno == logging.DEBUG)

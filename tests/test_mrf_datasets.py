@@ -7,7 +7,7 @@ the matcher's 11 x 11 correlation patches fatten foreground edges, and the MRF k
 disc is reported in the benchmark, not tested. The input is
 vmcl.early.stereo.match(features="intensity") (the sparse Canny matches, 2 to 4% of the pixels, restore
 to a worse map than StereoBM's on tsukuba: benchmarks/results/mrf.md), restored by mean field with the
-DEPTH preset and vmcl's Canny edges of the left image. Skipped when ../shared/datasets is absent.
+STEREO preset and vmcl's Canny edges of the left image. Skipped when ../shared/datasets is absent.
 """
 
 import cv2
@@ -38,7 +38,8 @@ def test_restored_intensity_matches_beat_stereo_bm(datasets_root, machine, name,
     matched = np.isfinite(found.disparity)
     field = mrf.restore(found.disparity, confidence=matched.astype(np.float32),
                         edges=canny(pair.left, sigma=2.0, machine=machine), method="meanfield",
-                        params=mrf.preset("depth"), machine=machine).field
+                        model=mrf.preset("stereo").model, schedule=mrf.preset("stereo").schedule("meanfield"),
+                        machine=machine).field
     assert np.isfinite(field).all()
     ours = bad_1(field, pair)
 
@@ -51,5 +52,5 @@ def test_restored_intensity_matches_beat_stereo_bm(datasets_root, machine, name,
     # smoothing and lines, not the fill, make the map.
     if name != "tsukuba":
         start = mrf.restore(found.disparity, confidence=matched.astype(np.float32), method="icm",
-                            params=mrf.Params(icm_sweeps=0), machine=machine).field
+                            schedule=mrf.IcmSchedule(icm_sweeps=0), machine=machine).field
         assert ours[0] < bad_1(start, pair)[0], (ours, bad_1(start, pair))

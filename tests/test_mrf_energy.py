@@ -5,7 +5,7 @@ import pytest
 
 from vmcl import mrf
 from vmcl.errors import InputError
-from vmcl.mrf.energy import LinePrior, Params, line_costs
+from vmcl.mrf.energy import EnergyModel, LinePrior, line_costs
 from vmcl.mrf.lattice import Lattice
 
 
@@ -15,11 +15,11 @@ def _padded(line, shape):
     return out.ravel()
 
 
-def _lattice(machine, data, confidence, edges, kind, params):
+def _lattice(machine, data, confidence, edges, kind, model):
     to = machine.to_device
     return Lattice(machine, to(data.astype(np.float32)),
                    None if confidence is None else to(confidence.astype(np.float32)),
-                   None if edges is None else to(edges.astype(np.uint8)), kind, params)
+                   None if edges is None else to(edges.astype(np.uint8)), kind, model)
 
 
 CASES = [  # (shape, kind, with confidence, with edges, require_edge)
@@ -35,16 +35,16 @@ CASES = [  # (shape, kind, with confidence, with edges, require_edge)
 def test_kernel_energy_equals_numpy(shape, kind, with_confidence, with_edges, require, machine):
     rng = np.random.default_rng(sum(shape))
     height, width = shape[:2]
-    params = Params(alpha=0.7, beta=1.3, kappa=2.0, levels=(0.0, 1.0, 2.5),
-                    prior=LinePrior(line=1.0, end=0.4, continuation=0.1, turn=0.3, junction=0.8, crossing=1.7,
-                                    parallel=0.9),
-                    edge_gain=0.6, require_edge=require, edge_radius=1)
+    model = EnergyModel(alpha=0.7, beta=1.3, kappa=2.0, levels=(0.0, 1.0, 2.5),
+                        prior=LinePrior(line=1.0, end=0.4, continuation=0.1, turn=0.3, junction=0.8, crossing=1.7,
+                                        parallel=0.9),
+                        edge_gain=0.6, require_edge=require, edge_radius=1)
     data = rng.normal(0, 2, shape).astype(np.float32)
     data[rng.random(shape[:2]) < 0.2] = np.nan
     confidence = rng.random((height, width)) if with_confidence else None
     edges = rng.random((height, width)) < (0.04 if require else 0.3) if with_edges else None
-    lattice = _lattice(machine, data, confidence, edges, kind, params)
-    b_h, b_v = line_costs((height, width), edges, params)
+    lattice = _lattice(machine, data, confidence, edges, kind, model)
+    b_h, b_v = line_costs((height, width), edges, model)
     for trial in range(5):
         if kind == "constant":
             f = rng.choice(np.float32([0.0, 1.0, 2.5]), shape)
@@ -57,13 +57,13 @@ def test_kernel_energy_equals_numpy(shape, kind, with_confidence, with_edges, re
         lattice.lh.set(_padded(line_h, (height, width)))
         lattice.lv.set(_padded(line_v, (height, width)))
         expected = mrf.energy(f, line_h, line_v, data=data, confidence=confidence, edges=edges, kind=kind,
-                              params=params)
+                              model=model)
         assert lattice.energy() == pytest.approx(expected, rel=2e-5, abs=1e-4), trial
     if require:
         forbidden = ~np.isfinite(b_h)
         assert forbidden.any()
         assert mrf.energy(f, line_h | forbidden, line_v, data=data, confidence=confidence, edges=edges,
-                          params=params) == np.inf
+                          model=model) == np.inf
 
 
 def test_vertex_table_classes():
@@ -81,8 +81,8 @@ def test_vertex_table_classes():
 def test_edges_lower_and_forbid_line_costs():
     edges = np.zeros((5, 6), bool)
     edges[2, 3] = True
-    params = Params(beta=2.0, edge_gain=0.25, require_edge=True, edge_radius=1)
-    b_h, b_v = line_costs((5, 6), edges, params)
+    model = EnergyModel(beta=2.0, edge_gain=0.25, require_edge=True, edge_radius=1)
+    b_h, b_v = line_costs((5, 6), edges, model)
     assert b_h[2, 2] == b_h[2, 3] == b_v[1, 3] == b_v[2, 3] == 2.0 * 0.75
     assert b_h[1, 1] == 2.0  # no edge on either side, one within the radius
     assert b_h[0, 0] == np.inf and b_v[4 - 1, 0] == np.inf
@@ -97,36 +97,46 @@ def test_edges_lower_and_forbid_line_costs():
     ({"data": np.zeros((4, 4)), "confidence": -np.ones((4, 4))}, ValueError, "confidence must be finite"),
     ({"data": np.zeros((4, 4)), "edges": np.ones((4, 4), np.float32)}, TypeError, "edges must be boolean"),
     ({"data": np.zeros((4, 4)), "kind": "plate"}, ValueError, "kind must be"),
-    ({"data": np.zeros((4, 4)), "method": "sa"}, ValueError, "method must be"),
+    ({"data": np.zeros((4, 4)), "method": "sa"}, ValueError, "method must be one of .*'meanfield', 'icm'"),
     ({"data": np.zeros((4, 4)), "seed": -1}, ValueError, "seed must be"),
-    ({"data": np.zeros((4, 4)), "params": {"alpha": 1}}, TypeError, "params must be"),
+    ({"data": np.zeros((4, 4)), "model": {"alpha": 1}}, TypeError, "model must be"),
+    ({"data": np.zeros((4, 4)), "method": "icm", "schedule": mrf.MpmSchedule()}, TypeError,
+     "schedule must be a vmcl.mrf.IcmSchedule"),
+    ({"data": np.zeros((4, 4)), "model": EnergyModel(alpha=0.0)}, ValueError, "model.alpha must be > 0"),
     ({"data": np.zeros((4, 4, 2)), "kind": "constant"}, ValueError, "scalar data"),
-    ({"data": np.full((4, 4), np.nan)}, ValueError, "no value"),
-    ({"data": np.zeros((4, 4)), "confidence": np.zeros((4, 4))}, ValueError, "no value"),
+    ({"data": np.full((4, 4), np.nan)}, mrf.NothingToRestore, "no value"),
+    ({"data": np.zeros((4, 4)), "confidence": np.zeros((4, 4))}, mrf.NothingToRestore, "no value"),
 ])
 def test_bad_input_is_named(kwargs, error, match, machine):
     with pytest.raises(error, match=match):
         mrf.restore(machine=machine, **kwargs)
 
 
-@pytest.mark.parametrize("kwargs, error, match", [
-    ({"alpha": -1.0}, ValueError, "alpha must be >= 0"),
-    ({"t0": 0.0}, ValueError, "t0 must be > 0"),
-    ({"t_factor": 1.5}, ValueError, "temperatures fall"),
+@pytest.mark.parametrize("settings, kwargs, error, match", [
+    (EnergyModel, {"alpha": -1.0}, ValueError, "EnergyModel.alpha must be a finite number >= 0"),
+    (mrf.AnnealSchedule, {"t0": 0.0}, ValueError, "AnnealSchedule.t0 must be a finite number > 0"),
+    # Temperatures fall: a cooling factor above 1 is refused.
+    (mrf.AnnealSchedule, {"t_factor": 1.5}, ValueError, "t_factor must be a finite number <= 1 and > 0"),
+    (mrf.MeanFieldSchedule, {"mf_factor": 1.5}, ValueError, "mf_factor must be a finite number <= 1 and > 0"),
+    (mrf.MpmSchedule, {"mpm_temperature": 0}, ValueError, "MpmSchedule.mpm_temperature must be a finite number > 0"),
     # A float where a count belongs is a wrong type, as everywhere in vmcl (vmcl.errors).
-    ({"sweeps": 2.5}, TypeError, "sweeps must be an integer"),
-    ({"sweeps": 2**40}, ValueError, "sweeps must be <= 2147483647"),
-    ({"require_edge": 1}, TypeError, "require_edge must be a bool"),
-    ({"levels": 1}, ValueError, "levels must be a count"),
-    ({"levels": (1.0, 1.0)}, ValueError, "distinct"),
-    ({"levels": "32"}, ValueError, "levels must be a count"),
-    ({"levels": None}, ValueError, "levels must be a count"),
-    ({"beta": float("nan")}, ValueError, "beta must be finite"),
-    ({"beta": 10**400}, ValueError, "beta must be finite"),
+    (mrf.AnnealSchedule, {"sweeps": 2.5}, TypeError, "AnnealSchedule.sweeps must be an integer"),
+    (mrf.AnnealSchedule, {"sweeps": 2**40}, ValueError, "sweeps must be <= 2147483647"),
+    (mrf.IcmSchedule, {"icm_sweeps": -1}, ValueError, "IcmSchedule.icm_sweeps must be >= 0"),
+    (EnergyModel, {"require_edge": 1}, TypeError, "require_edge must be a bool"),
+    (EnergyModel, {"prior": {"line": 1.0}}, TypeError, "EnergyModel.prior must be a vmcl.mrf.LinePrior"),
+    (EnergyModel, {"levels": 1}, ValueError, "levels must be a count"),
+    (EnergyModel, {"levels": (1.0, 1.0)}, ValueError, "distinct"),
+    (EnergyModel, {"levels": "32"}, ValueError, "levels must be a count"),
+    (EnergyModel, {"levels": None}, ValueError, "levels must be a count"),
+    (EnergyModel, {"beta": float("nan")}, ValueError, "beta must be a finite number"),
+    (EnergyModel, {"beta": 10**400}, ValueError, "beta must be a finite number"),
+    (LinePrior, {"end": float("inf")}, ValueError, "LinePrior.end must be a finite number"),
 ])
-def test_bad_params_are_named(kwargs, error, match):
-    with pytest.raises(error, match=match):
-        Params(**kwargs)
+def test_bad_settings_are_named(settings, kwargs, error, match):
+    with pytest.raises(error, match=match) as raised:
+        settings(**kwargs)
+    assert isinstance(raised.value, InputError)
 
 
 _G = np.zeros((4, 5))
@@ -147,7 +157,7 @@ _LH, _LV = np.zeros((4, 4), bool), np.zeros((3, 5), bool)
     ({"edges": np.ones((4, 5), complex)}, TypeError, "edges must hold real numbers"),
     ({"edges": np.ones((5, 4))}, ValueError, "edges must have the field's shape"),
     ({"kind": ["smooth"]}, TypeError, "kind must be one of"),
-    ({"params": {"alpha": 1}}, TypeError, "params must be"),
+    ({"model": {"alpha": 1}}, TypeError, "model must be"),
 ])
 def test_energy_refuses_bad_input_by_name(kwargs, error, match):
     call = {"f": _G, "line_h": _LH, "line_v": _LV, "data": _G, **kwargs}
@@ -162,16 +172,16 @@ def test_energy_of_device_arrays_and_of_a_radius_beyond_the_image(machine):
     line_h, line_v = rng.random((5, 5)) < 0.3, rng.random((4, 6)) < 0.3
     edges = np.zeros((5, 6), bool)
     edges[2, 3] = True
-    wide = Params(require_edge=True, edge_radius=6)
-    expected = mrf.energy(f, line_h, line_v, data=data, edges=edges, params=wide)
+    wide = EnergyModel(require_edge=True, edge_radius=6)
+    expected = mrf.energy(f, line_h, line_v, data=data, edges=edges, model=wide)
     on_device = [machine.to_device(a.astype(np.float32)) for a in (f, data)]
     lines = [machine.to_device(a.astype(np.uint8)) for a in (line_h, line_v)]
     got = mrf.energy(on_device[0], *lines, data=on_device[1], edges=machine.to_device(edges.astype(np.uint8)),
-                     params=wide)
+                     model=wide)
     assert got == pytest.approx(expected, rel=1e-6)
     # A radius wider than the image marks the same pixels (it once allocated a (2r + H) x (2r + W) mask).
-    huge = Params(require_edge=True, edge_radius=2**31 - 1)
-    assert mrf.energy(f, line_h, line_v, data=data, edges=edges, params=huge) == expected
+    huge = EnergyModel(require_edge=True, edge_radius=2**31 - 1)
+    assert mrf.energy(f, line_h, line_v, data=data, edges=edges, model=huge) == expected
 
 
 def test_boundary_map_takes_device_lines_and_names_bad_ones(machine):
@@ -194,7 +204,9 @@ def test_boundary_map_takes_device_lines_and_names_bad_ones(machine):
         assert isinstance(raised.value, InputError)
 
 
-@pytest.mark.parametrize("cue, error", [(["depth"], TypeError), (None, TypeError)])
+# The cues are named as vmcl.labels names them: the old "depth" and "flow" are refused.
+@pytest.mark.parametrize("cue, error", [(["stereo"], TypeError), (None, TypeError), ("depth", ValueError),
+                                        ("flow", ValueError)])
 def test_preset_names_a_bad_cue(cue, error):
     with pytest.raises(error, match="cue must be one of") as raised:
         mrf.preset(cue)

@@ -10,8 +10,8 @@ import pytest
 
 from vmcl import Machine, mrf
 from vmcl.metrics import detection_scores
-from vmcl.mrf import Params, boundary_map
-from vmcl.mrf.icm import icm
+from vmcl.mrf import Settings, boundary_map
+from vmcl.mrf.icm import quench
 from vmcl.mrf.lattice import Lattice, philox_key
 
 
@@ -50,23 +50,28 @@ def _scores(result, region):
     return detection_scores(boundary_map(result.line_h, result.line_v), _boundaries(region), tolerance=1)
 
 
-DENSE = Params(alpha=0.5, beta=4.0, t0=4.0, t_factor=0.98, sweeps=300, mf_t0=2.0, mf_factor=0.8, mf_steps=20,
-               mf_iterations=5)
+DENSE = Settings().override({"alpha": 0.5, "beta": 4.0, "t0": 4.0, "t_factor": 0.98, "sweeps": 300, "mf_t0": 2.0,
+                              "mf_factor": 0.8, "mf_steps": 20, "mf_iterations": 5})
+
+
+def _settings(settings, method):
+    """restore's keyword arguments for ``method`` under ``settings``."""
+    return {"method": method, "model": settings.model, "schedule": settings.schedule(method)}
 
 
 def test_annealing_beats_icm_restarts_and_mean_field_matches_annealing(machine):
     depth, region, _ = planar_scene()
     noisy = (depth + np.random.default_rng(0).normal(0, 1.0, depth.shape)).astype(np.float32)
-    annealed = mrf.restore(noisy, method="anneal", params=DENSE, seed=3, machine=machine)
-    lattice = Lattice(machine, machine.to_device(noisy), None, None, "smooth", DENSE)
+    annealed = mrf.restore(noisy, **_settings(DENSE, "anneal"), seed=3, machine=machine)
+    lattice = Lattice(machine, machine.to_device(noisy), None, None, "smooth", DENSE.model)
     restarts = []
     for seed in range(10):  # random starts: a few heat-bath sweeps at T = 1 from the data
         lattice.reset()
         for k in range(3):
             lattice.sweep("sample", 1.0, k, philox_key(100 + seed))
-        icm(lattice, DENSE.icm_sweeps)
+        quench(lattice, DENSE.schedule("icm").icm_sweeps)
         restarts.append(lattice.energy())
-    field = mrf.restore(noisy, method="meanfield", params=DENSE, machine=machine)
+    field = mrf.restore(noisy, **_settings(DENSE, "meanfield"), machine=machine)
     assert annealed.energy <= 1.02 * min(restarts), (annealed.energy, min(restarts))
     assert field.energy <= 1.05 * annealed.energy, (field.energy, annealed.energy)
     for result in (annealed, field):
@@ -80,9 +85,10 @@ def test_piecewise_constant_at_snr_2(method, machine):
     """Four levels one unit apart, noise sigma 0.5; the levels are known, as in Geman and Geman's tests."""
     truth = constant_scene()
     noisy = truth + np.random.default_rng(1).normal(0, 0.5, truth.shape)
-    params = Params(alpha=2.0, beta=1.5, kappa=4.0, levels=(0.0, 1.0, 2.0, 3.0), t0=2.0, t_factor=0.985,
-                    sweeps=400, mf_t0=2.0, mf_factor=0.9, mf_steps=30, mf_iterations=5, burn_in=100, samples=100)
-    result = mrf.restore(noisy, kind="constant", method=method, params=params, seed=1, machine=machine)
+    settings = Settings().override({"alpha": 2.0, "beta": 1.5, "kappa": 4.0, "levels": (0.0, 1.0, 2.0, 3.0),
+                                    "t0": 2.0, "t_factor": 0.985, "sweeps": 400, "mf_t0": 2.0, "mf_factor": 0.9,
+                                    "mf_steps": 30, "mf_iterations": 5, "burn_in": 100, "samples": 100})
+    result = mrf.restore(noisy, kind="constant", **_settings(settings, method), seed=1, machine=machine)
     rms_in = np.sqrt(np.mean((noisy - truth) ** 2))
     assert np.sqrt(np.mean((result.field - truth) ** 2)) <= rms_in / 3
     scores = _scores(result, truth)
@@ -94,9 +100,9 @@ def test_sparse_depth_and_coupling_to_brightness_edges(seed, machine):
     depth, region, edges = planar_scene()
     rng = np.random.default_rng(seed)
     sparse = np.where(rng.random(depth.shape) < 0.1, depth + rng.normal(0, 0.3, depth.shape), np.nan)
-    params = mrf.preset("depth")
-    coupled = mrf.restore(sparse, edges=edges, method="meanfield", params=params, machine=machine)
-    alone = mrf.restore(sparse, method="meanfield", params=params, machine=machine)
+    settings = _settings(mrf.preset("stereo"), "meanfield")
+    coupled = mrf.restore(sparse, edges=edges, **settings, machine=machine)
+    alone = mrf.restore(sparse, **settings, machine=machine)
     assert np.mean(np.abs(coupled.field - depth) > 1) < 0.05
     with_edges, without = _scores(coupled, region), _scores(alone, region)
     assert with_edges.recall >= 0.85, with_edges
@@ -111,7 +117,7 @@ def test_flow_shares_one_line_process(machine):
     region = np.zeros((n, n), int)
     region[12:36, 10:30] = 1
     noisy = flow + np.random.default_rng(2).normal(0, 0.7, flow.shape).astype(np.float32)
-    result = mrf.restore(noisy, method="meanfield", params=mrf.preset("flow"), machine=machine)
+    result = mrf.restore(noisy, **_settings(mrf.preset("motion"), "meanfield"), machine=machine)
     assert result.field.shape == flow.shape
     assert np.sqrt(np.mean((result.field - flow) ** 2)) < np.sqrt(np.mean((noisy - flow) ** 2)) / 2
     scores = _scores(result, region)
@@ -120,8 +126,9 @@ def test_flow_shares_one_line_process(machine):
 
 METHODS = [("anneal", "smooth"), ("mpm", "smooth"), ("meanfield", "smooth"), ("icm", "smooth"),
            ("anneal", "constant"), ("meanfield", "constant")]
-SMALL = Params(sweeps=20, quench=2, burn_in=5, samples=10, mf_steps=4, mf_iterations=2, icm_sweeps=5, levels=6,
-               alpha=0.5, beta=2.0, kappa=4.0)
+SMALL = Settings().override({"sweeps": 20, "quench": 2, "burn_in": 5, "samples": 10, "mf_steps": 4,
+                              "mf_iterations": 2, "icm_sweeps": 5, "levels": 6, "alpha": 0.5, "beta": 2.0,
+                              "kappa": 4.0})
 
 
 @pytest.fixture(scope="module")
@@ -134,7 +141,7 @@ def test_same_bits_at_every_local_size_and_every_run(method, kind, machine, mach
     depth, _, edges = planar_scene(96)
     rng = np.random.default_rng(4)
     data = (depth[:37, :53] + rng.normal(0, 1.0, (37, 53))).astype(np.float32)
-    runs = [mrf.restore(data, edges=edges[:37, :53], kind=kind, method=method, params=SMALL, seed=9, machine=m)
+    runs = [mrf.restore(data, edges=edges[:37, :53], kind=kind, **_settings(SMALL, method), seed=9, machine=m)
             for m in [machine, machine, *machines]]
     for other in runs[1:]:
         np.testing.assert_array_equal(other.field, runs[0].field)
@@ -147,12 +154,12 @@ def test_same_bits_at_every_local_size_and_every_run(method, kind, machine, mach
 def test_device_in_device_out(machine):
     depth, _, edges = planar_scene(48)
     noisy = (depth + np.random.default_rng(5).normal(0, 1.0, depth.shape)).astype(np.float32)
-    on_host = mrf.restore(noisy, edges=edges, method="icm", params=DENSE, machine=machine)
+    on_host = mrf.restore(noisy, edges=edges, **_settings(DENSE, "icm"), machine=machine)
     on_device = mrf.restore(machine.to_device(noisy), edges=machine.to_device(edges.astype(np.uint8)),
-                            method="icm", params=DENSE, machine=machine)
+                            **_settings(DENSE, "icm"), machine=machine)
     np.testing.assert_array_equal(on_device.field.get(), on_host.field)
     np.testing.assert_array_equal(on_device.line_h.get(), on_host.line_h)
     np.testing.assert_array_equal(on_device.line_v.get(), on_host.line_v)
     assert on_device.energy == on_host.energy
     assert on_host.energy == pytest.approx(mrf.energy(on_host.field, on_host.line_h, on_host.line_v, data=noisy,
-                                                      edges=edges, params=DENSE), rel=1e-5)
+                                                      edges=edges, model=DENSE.model), rel=1e-5)

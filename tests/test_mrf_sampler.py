@@ -14,12 +14,12 @@ import pytest
 from scipy import stats
 
 from vmcl import mrf
-from vmcl.mrf.energy import LinePrior, Params
+from vmcl.mrf.energy import EnergyModel, LinePrior
 from vmcl.mrf.lattice import Lattice, philox_key
 
 H = W = 3
-PARAMS = Params(alpha=1.0, beta=1.0, prior=LinePrior(line=1.0, end=0.5, continuation=0.1, turn=0.3,
-                                                     junction=0.8, crossing=1.5, parallel=0.7), edge_gain=0.5)
+MODEL = EnergyModel(alpha=1.0, beta=1.0, prior=LinePrior(line=1.0, end=0.5, continuation=0.1, turn=0.3,
+                                                         junction=0.8, crossing=1.5, parallel=0.7), edge_gain=0.5)
 F = np.float32([[0.0, 1.1, 1.0], [0.1, 0.9, 1.2], [0.0, 0.2, 1.0]])
 EDGES = np.array([[0, 1, 0], [0, 1, 0], [0, 0, 0]], bool)
 
@@ -44,7 +44,7 @@ def _exact_line_distribution():
     for index, bits in enumerate(itertools.product((0, 1), repeat=12)):
         line_h = np.array(bits[:6], bool).reshape(H, W - 1)
         line_v = np.array(bits[6:], bool).reshape(H - 1, W)
-        probabilities[index] = -mrf.energy(F, line_h, line_v, data=F, edges=EDGES, params=PARAMS)
+        probabilities[index] = -mrf.energy(F, line_h, line_v, data=F, edges=EDGES, model=MODEL)
     probabilities = np.exp(probabilities - probabilities.max())
     return probabilities / probabilities.sum()
 
@@ -52,7 +52,7 @@ def _exact_line_distribution():
 @pytest.mark.parametrize("order", [(0, 1, 2, 3), (3, 0, 2, 1)], ids=str)
 def test_lines_given_f_match_exact_enumeration(order, machine):
     to = machine.to_device
-    lattice = Lattice(machine, to(F), None, to(EDGES.astype(np.uint8)), "smooth", PARAMS)
+    lattice = Lattice(machine, to(F), None, to(EDGES.astype(np.uint8)), "smooth", MODEL)
     samples = _chain(machine, lattice, tuple(("lines", c) for c in order), 10000, (lattice.lh, lattice.lv),
                      seed=11, thin=1)
     lh = samples[:, :H * W].reshape(-1, H, W)[:, :, :W - 1].reshape(-1, 6)
@@ -94,7 +94,7 @@ def test_f_given_lines_matches_gaussian_posterior(components, order, machine):
     line_h = np.array([[0, 1], [0, 1], [0, 0]], bool)
     line_v = np.array([[1, 0, 0], [0, 0, 1]], bool)
     to = machine.to_device
-    lattice = Lattice(machine, to(data), to(confidence), None, "smooth", PARAMS)
+    lattice = Lattice(machine, to(data), to(confidence), None, "smooth", MODEL)
     for line, padded in ((line_h, lattice.lh), (line_v, lattice.lv)):
         full = np.zeros((H, W), np.float32)
         full[:line.shape[0], :line.shape[1]] = line

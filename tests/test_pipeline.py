@@ -33,23 +33,37 @@ def small_scene():
 
 def test_config_from_toml_overrides_defaults_and_presets(tmp_path):
     path = tmp_path / "c.toml"
-    path.write_text('[stereo]\nd_max = 20\nfeedback = false\n[mrf]\nmethod = "icm"\n[mrf.depth]\nbeta = 3.0\n')
+    path.write_text('[stereo]\nd_max = 20\nfeedback = false\n[mrf]\nmethod = "icm"\n[mrf.stereo]\nbeta = 3.0\n')
     config = Config.from_toml(path)
     assert config.stereo.d_max == 20 and not config.stereo.feedback and config.mrf.method == "icm"
-    assert config.mrf.params("depth").beta == 3.0
-    assert config.mrf.params("flow") == Config().mrf.params("flow")
+    assert config.mrf.settings("stereo").model.beta == 3.0
+    assert config.mrf.settings("motion") == Config().mrf.settings("motion")
     assert config.to_dict()["stereo"]["d_max"] == 20
 
 
 @pytest.mark.parametrize("text, message", [("[stereo]\nd_maxx = 3\n", "stereo.d_maxx"),
                                            ("[stero]\n", "stero"),
-                                           ("[mrf.depth]\nbetta = 1.0\n", "mrf.depth.betta"),
+                                           ("[mrf.stereo]\nbetta = 1.0\n", "mrf.stereo.betta"),
                                            ("[stereo\n", "not valid TOML"),
                                            ("[stereo]\nbackfill_floor = 1.5\n", "stereo.backfill_floor"),
                                            ("[stereo]\nbackfill_weight = -0.1\n", "stereo.backfill_weight"),
                                            ("[motion]\nconfidence_floor = nan\n", "motion.confidence_floor"),
                                            ('[labels]\nmethod = "svm"\n', "labels.method"),
-                                           ("[stereo]\nintensity_sigma = 0\n", "stereo.intensity_sigma")])
+                                           ("[stereo]\nintensity_sigma = 0\n", "stereo.intensity_sigma"),
+                                           ('[mrf]\nmethod = "foo"\n', "mrf.method"),
+                                           ('[mrf]\nschedule = "slow"\n', "mrf.schedule"),
+                                           ("[edges]\nsigma = -1\n", "edges.sigma"),
+                                           ("[edges]\nlow_threshold = 0.5\nhigh_threshold = 0.2\n", "edges.low_threshold"),
+                                           ("[stereo]\npatch = 10\n", "stereo.patch"),
+                                           ('[stereo]\nfeatures = "sift"\n', "stereo.features"),
+                                           ("[stereo]\nd_min = 9\nd_max = 3\n", "stereo.d_min"),
+                                           ("[stereo]\nmax_disparity = 0\n", "stereo.max_disparity"),
+                                           ("[motion]\ndelta = 0\n", "motion.delta"),
+                                           ('[motion]\nfeatures = "sift"\n', "motion.features"),
+                                           ("[motion]\nlevels = 0\n", "motion.levels"),
+                                           ("[colour]\nthreshold = -1\n", "colour.threshold"),
+                                           ("[texture]\nradius = 0\n", "texture.radius"),
+                                           ("[texture]\nfine_sigma = 5\ncoarse_sigma = 4\n", "texture.fine_sigma")])
 def test_bad_config_is_refused_naming_the_key(tmp_path, text, message):
     path = tmp_path / "bad.toml"
     path.write_text(text)
@@ -163,7 +177,7 @@ def test_timings_per_stage_and_kernel(small_scene):
     start = time.perf_counter()
     result = VisionMachine().run(s.left, s.right)  # its own profiling Machine
     wall_ms = (time.perf_counter() - start) * 1e3
-    assert list(result.stages) == ["upload", "edges", "colour", "texture", "stereo", "mrf depth", "feedback",
+    assert list(result.stages) == ["upload", "edges", "colour", "texture", "stereo", "mrf stereo", "feedback",
                                    "mrf colour", "mrf texture", "integrate", "download"]
     assert all(ms > 0 for ms in result.stages.values()) and result.total_ms <= wall_ms
     # One in-order queue: kernels never overlap, so their device times add up to less than the run's wall time.
@@ -178,17 +192,17 @@ def test_timings_per_stage_and_kernel(small_scene):
 
 def test_integrate_matches_boundary_maps_and_labels(machine):
     rng = np.random.default_rng(1)
-    lines = {cue: (rng.random((9, 12)) < 0.1, rng.random((8, 13)) < 0.1) for cue in ("depth", "colour", "texture")}
+    lines = {cue: (rng.random((9, 12)) < 0.1, rng.random((8, 13)) < 0.1) for cue in ("stereo", "colour", "texture")}
     edges = rng.random((9, 13)) < 0.2
     support, labels = integrate(lines, edges=edges, machine=machine)
     maps = {cue: boundary_map(*pair) for cue, pair in lines.items()}
-    expected = (maps["depth"] * Cue.DEPTH + maps["colour"] * Cue.COLOUR + maps["texture"] * Cue.TEXTURE
+    expected = (maps["stereo"] * Cue.STEREO + maps["colour"] * Cue.COLOUR + maps["texture"] * Cue.TEXTURE
                 + edges * Cue.BRIGHTNESS)
     np.testing.assert_array_equal(support, expected)
-    want = np.where(maps["depth"], Label.DEPTH,
+    want = np.where(maps["stereo"], Label.DEPTH,
                     np.where(maps["colour"], Label.ALBEDO, np.where(maps["texture"], Label.TEXTURE, 0)))
     np.testing.assert_array_equal(labels, want)
-    np.testing.assert_array_equal(boundary(*lines["depth"], machine=machine), maps["depth"])
+    np.testing.assert_array_equal(boundary(*lines["stereo"], machine=machine), maps["stereo"])
 
 
 # -- end to end on the "cues" scene (256 x 256) ----------------------------------------------------
@@ -213,7 +227,7 @@ def test_colour_only_boundary_is_found_by_colour_alone(cues_scene, cues_run):
     colour = boundary_map(*cues_run.lines["colour"])
     assert metrics.detection_scores(colour, albedo, tolerance=1).recall >= 0.8  # measured 1.0
     assert metrics.detection_scores(cues_run.edges, albedo, tolerance=1).recall < 0.2
-    for cue in ("depth", "texture"):
+    for cue in ("stereo", "texture"):
         assert metrics.detection_scores(boundary_map(*cues_run.lines[cue]), albedo, tolerance=1).recall < 0.2
     assert metrics.label_scores(cues_run.labels, cues_scene.labels, tolerance=1)[Label.ALBEDO].recall >= 0.8
 

@@ -82,11 +82,11 @@ def test_support_picture_colours_each_cue_over_the_faded_image():
     image = np.zeros((8, 8), np.float32)
     support = np.zeros((8, 8), np.uint8)
     support[1, 1] = Cue.COLOUR
-    support[2, 2] = Cue.DEPTH | Cue.COLOUR
+    support[2, 2] = Cue.STEREO | Cue.COLOUR
     support[3, 3] = Cue.BRIGHTNESS
     picture = support_image(image, support)
     assert tuple(picture[1, 1]) == CUE_COLOURS[Cue.COLOUR]
-    assert tuple(picture[2, 2]) == CUE_COLOURS[Cue.DEPTH]
+    assert tuple(picture[2, 2]) == CUE_COLOURS[Cue.STEREO]
     assert picture[0, 0, 0] == picture[0, 0, 1] > 100  # faded, grey
 
 

@@ -33,7 +33,7 @@ import pyopencl.array as cl_array
 
 from vmcl.cm._arrays import ArrayLike, check_int, check_real_dtype, field, machine_for
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.labels import BIT_DEFINES, CUES, Cue, Label
+from vmcl.labels import BIT_DEFINES, CUES, Cue, Label, cue_bit
 from vmcl.machine import Machine
 
 _DEFINES = {**BIT_DEFINES,
@@ -49,7 +49,7 @@ class Integration(NamedTuple):
     support : uint8 (H, W)
         OR of the :class:`Cue` bits of the cues marking each pixel (and BRIGHTNESS on edge pixels).
     labels : uint8 (H, W)
-        :class:`vmcl.labels.Label` code of each discontinuity pixel (0 elsewhere): DEPTH where depth or
+        :class:`vmcl.labels.Label` code of each discontinuity pixel (0 elsewhere): DEPTH where stereo or
         motion supports it, else ALBEDO where colour does, else TEXTURE where texture does.
     """
 
@@ -118,7 +118,7 @@ def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayL
     Parameters
     ----------
     lines : mapping of cue name to (line_h, line_v)
-        Any subset of :data:`CUES` ("depth", "motion", "colour", "texture"); each value as
+        Any subset of :data:`vmcl.labels.CUES` ("stereo", "motion", "colour", "texture"); each value as
         :func:`boundary` takes it. Cues left out support nothing.
     edges : (H, W) array, optional
         Brightness edges, non-zero on edge pixels (device arrays: uint8); they set the BRIGHTNESS bit.
@@ -154,7 +154,8 @@ def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayL
     host = all(isinstance(a, np.ndarray) for a in inputs)
     present = 0
     buffers = []
-    for bit, name in zip((Cue.DEPTH, Cue.MOTION, Cue.COLOUR, Cue.TEXTURE), CUES):
+    for name in CUES:
+        bit = cue_bit(name)
         if name in lines:
             h, v, shape = _lines(*lines[name], f"lines[{name!r}] ", machine, shape)
             present |= bit

@@ -43,18 +43,31 @@ import numpy as np
 from vmcl.cm._arrays import ArrayLike, check_bool, check_real, machine_for, real_host_array
 from vmcl.cm._arrays import field as device_field
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.labels import BIT_DEFINES, Cue, Label
+from vmcl.labels import BIT_DEFINES, CUES, Cue, Label, cue_bit
 from vmcl.machine import Machine
 
-FEATURES = ("depth line", "motion line", "colour line", "texture line", "brightness edge",
-            "disparity jump 3", "disparity jump 7", "disparity crease", "flow jump 3", "flow jump 7",
-            "log brightness step 3", "log brightness step 5", "hue step 3", "whiteness 5", "brightness 5")
-"""The classifier's inputs, in the kernel's order (kernels/labelling.cl)."""
+INPUTS = CUES
+"""What a run may lack: the cues (:data:`vmcl.labels.CUES`). The features of a missing cue are 0 and its
+weights were fitted without them."""
 
-INPUTS = ("stereo", "motion", "colour", "texture")
-"""What a run may lack; the features of a missing input are 0 and its weights were fitted without it."""
+_FEATURE_TABLE = (
+    # (name, the cue it needs, or None for the image's own)
+    ("stereo line", "stereo"), ("motion line", "motion"), ("colour line", "colour"), ("texture line", "texture"),
+    ("brightness edge", None),
+    ("disparity jump 3", "stereo"), ("disparity jump 7", "stereo"), ("disparity crease", "stereo"),
+    ("flow jump 3", "motion"), ("flow jump 7", "motion"),
+    ("log brightness step 3", None), ("log brightness step 5", None),
+    ("hue step 3", "colour"), ("whiteness 5", "colour"), ("brightness 5", None),
+)
 
-_NEEDS = {"stereo": (0, 5, 6, 7), "motion": (1, 8, 9), "colour": (2, 12, 13), "texture": (3,)}
+FEATURES = tuple(name for name, _ in _FEATURE_TABLE)
+"""The classifier's inputs, in the kernel's slot order (kernels/labelling.cl reads each slot by the
+name :data:`SLOT_DEFINES` gives it)."""
+
+SLOT_DEFINES = {"F_" + name.upper().replace(" ", "_"): k for k, name in enumerate(FEATURES)}
+"""The kernel's -D names of the feature slots, e.g. F_DISPARITY_JUMP_3."""
+
+_NEEDS = {cue: tuple(k for k, (_, needs) in enumerate(_FEATURE_TABLE) if needs == cue) for cue in INPUTS}
 
 CLASSES = (Label.NONE, Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.SHADOW, Label.SPECULAR,
            Label.TEXTURE)
@@ -90,14 +103,11 @@ _INPUT_SETS = tuple(c for k in range(len(INPUTS) + 1) for c in itertools.combina
 KEYS = tuple(_key(c) for c in _INPUT_SETS)
 """The keys of the weights: one per set of inputs, "image" for none."""
 
-_BITS = {"stereo": Cue.DEPTH, "motion": Cue.MOTION, "colour": Cue.COLOUR, "texture": Cue.TEXTURE}
-
-
 def candidate_bits(inputs: Iterable[str]) -> int:
     """The support bits that make a candidate when these inputs ran: theirs and the brightness edge's."""
     bits = Cue.BRIGHTNESS
     for name in _input_names(inputs):
-        bits |= _BITS[name]
+        bits |= cue_bit(name)
     return int(bits)
 
 
@@ -307,7 +317,7 @@ def _run(support, image, disparity, flow, hue, texture, labeller, machine, class
     defines = {"NF": len(FEATURES), "NC": len(CLASSES), "RGB": int(img.ndim == 3), "CLASSIFY": int(classify),
                "HAS_STEREO": int("stereo" in present), "HAS_MOTION": int("motion" in present),
                "HAS_COLOUR": int("colour" in present), "CANDIDATE_BITS": candidate_bits(present),
-               "CODES": ",".join(str(int(c)) for c in CLASSES), **BIT_DEFINES}
+               "CODES": ",".join(str(int(c)) for c in CLASSES), **BIT_DEFINES, **SLOT_DEFINES}
     kernel = machine.kernel("labelling", "label_features", **defines)
     height, width = shape
     if classify:

@@ -31,18 +31,20 @@ class Label(IntEnum):
 class Cue(IntFlag):
     """Bits of the support map: the cues whose line process marks a pixel, and the brightness edges."""
 
-    DEPTH = 1
+    STEREO = 1
     MOTION = 2
     COLOUR = 4
     TEXTURE = 8
     BRIGHTNESS = 16
 
 
-CUES = ("depth", "motion", "colour", "texture")
-"""The cues with a line process, by the one name each has everywhere (configuration, results, weights),
-in the order of their :class:`Cue` bits."""
+CUES = ("stereo", "motion", "colour", "texture")
+"""The cues with a line process, each by the one name it has everywhere (its configuration section, its
+MRF preset and overrides, its restored field and line process in a Result, the classifier's inputs), in
+the order of their :class:`Cue` bits. A cue is named after the module that measures it; stereo's
+restored field is the disparity (depth), motion's the flow."""
 
-CUE_BITS = Cue.DEPTH | Cue.MOTION | Cue.COLOUR | Cue.TEXTURE
+CUE_BITS = Cue.STEREO | Cue.MOTION | Cue.COLOUR | Cue.TEXTURE
 """The bits that make a pixel a discontinuity of the cartoon (brightness alone does not)."""
 
 BIT_DEFINES = {f"BIT_{bit.name}": int(bit) for bit in Cue}

@@ -9,8 +9,13 @@ timings.
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import math
 import os
+import re
+import sys
+import tempfile
 import threading
 import warnings
 from collections import defaultdict
@@ -32,6 +37,21 @@ INSTALL_HINT = (
 
 _MAX_LAYOUTS = 4096
 """Array layouts :meth:`Machine.empty` keeps before starting over."""
+
+_log = logging.getLogger(__name__)
+# A library's records are the application's to show: without this, Python's last-resort handler would
+# print WARNING records to the terminal of a user who never configured logging.
+_log.addHandler(logging.NullHandler())
+
+_DRIVER_NOTE = re.compile(r"changes the ABI|vector ABI", re.IGNORECASE)
+"""Build-log lines that are about the driver, not vmcl's source: PoCL's notes on AVX vector ABIs, which
+depend on how the CPU and PoCL's own kernel library were built. Logged at DEBUG."""
+
+_CLANG_SUMMARY = re.compile(rb"^\d+ (warnings?|errors?)( and \d+ errors?)? generated\.$")
+"""The line clang inside PoCL prints straight to the process's stderr after a build with diagnostics."""
+
+_STDERR_LOCK = threading.Lock()
+"""File descriptor 2 belongs to the process: one build at a time may redirect it, whatever the Machine."""
 
 
 class NoOpenCLPlatformError(RuntimeError):
@@ -82,6 +102,57 @@ def _choose_device(device: cl.Device | str | None) -> cl.Device:
     names = ", ".join(f"{d.platform.name} / {d.name}" for d in devices)
     source = "device" if device is not None else "the VMCL_DEVICE environment variable"
     raise InputValueError(f"{source}: no OpenCL device matches {wanted!r}; available: {names}")
+
+
+def _log_build(family: str, defines: tuple, build_log: str) -> None:
+    """Log a build's compiler output on "vmcl.machine": vmcl's own warnings at WARNING, driver notes at DEBUG.
+
+    Nothing reaches the terminal unless the application configures logging; a developer sees both with
+    ``logging.basicConfig(level=logging.DEBUG)``. Each build logs once: programs are cached per Machine,
+    and PoCL keeps the log with its cached binaries, so a cache hit logs the same as the first build.
+    """
+    lines = [line for line in build_log.splitlines() if line.strip()]
+    notes = [line for line in lines if _DRIVER_NOTE.search(line)]
+    own = [line for line in lines if not _DRIVER_NOTE.search(line)]
+    where = f"kernels/{family}.cl with {dict(defines)}"
+    if own:
+        _log.warning("compiler output building %s:\n%s", where, "\n".join(own))
+    if notes:
+        _log.debug("driver notes building %s:\n%s", where, "\n".join(notes))
+
+
+@contextlib.contextmanager
+def _clang_stderr_to_log():
+    """Keep clang's "N warnings generated." off the terminal: PoCL's clang writes it to file descriptor 2.
+
+    PoCL hands clang's diagnostics to the build log, but clang's own summary line goes straight to the
+    process's stderr, bypassing Python, for any build with a diagnostic (PoCL's AVX notes count as one).
+    Passing -w would silence it, but also empty the build log that :func:`_log_build` reports from, so
+    instead fd 2 points at a temporary file for the build: the summary lines go to DEBUG, anything else
+    that arrived meanwhile (not clang's, e.g. another thread's) is written back to stderr.
+    """
+    with _STDERR_LOCK, tempfile.TemporaryFile() as capture:
+        try:
+            sys.stderr.flush()
+            saved = os.dup(2)
+        except (OSError, ValueError, AttributeError):  # no fd 2 or no sys.stderr: nothing reaches a terminal
+            yield
+            return
+        os.dup2(capture.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            capture.seek(0)
+            others = []
+            for line in capture.read().splitlines(keepends=True):
+                if _CLANG_SUMMARY.match(line.strip()):
+                    _log.debug("clang: %s", line.strip().decode(errors="replace"))
+                else:
+                    others.append(line)
+            if others:
+                os.write(2, b"".join(others))
 
 
 class Machine:
@@ -146,10 +217,15 @@ class Machine:
                 folder = kernels_dir()
                 source = (folder / f"{family}.cl").read_text()
                 options = [f"-I{folder}"] + [f"-D{name}={value}" for name, value in key[1]]
-                with warnings.catch_warnings():
-                    # PoCL logs harmless notes (e.g. on AVX vector ABIs) for successful builds.
-                    warnings.simplefilter("ignore", cl.CompilerWarning)
+                with warnings.catch_warnings(record=True) as caught, _clang_stderr_to_log():
+                    # pyopencl only says "non-empty compiler output" here; the log itself is read below.
+                    warnings.simplefilter("always")
                     program = cl.Program(self.context, source).build(options=options)
+                for warning in caught:
+                    if not issubclass(warning.category, cl.CompilerWarning):
+                        # Another thread's warning, caught only because catch_warnings is process-wide.
+                        warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)
+                _log_build(family, key[1], program.get_build_info(self.device, cl.program_build_info.LOG))
                 self._programs[key] = program
         return program
 

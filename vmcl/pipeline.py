@@ -8,7 +8,7 @@ line-process MRF coupled to the brightness edges (:func:`vmcl.mrf.restore`), whi
 finds their discontinuities at once; :mod:`vmcl.integrate` puts the line processes together into the
 labelled map. The depth discontinuities of this first pass are fed back to the stereo matcher (the seed's
 "feedback from the results of integration into the matching stage"): its support windows stop at them
-in a second pass, which the depth MRF restores again.
+in a second pass, which the stereo MRF restores again.
 
 Any subset of inputs works: one image gives edges, colour (when RGB) and texture; a right image adds
 stereo; a next frame adds motion. Every field stays on the device from the one upload of each image to
@@ -28,6 +28,7 @@ import dataclasses
 import math
 import sys
 import time
+import typing
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -38,10 +39,12 @@ import numpy as np
 
 from vmcl import integrate as _integrate
 from vmcl import labelling
+from vmcl.cm._arrays import check_choice, check_int, check_real
 from vmcl.early import color, edges, motion, stereo, texture
-from vmcl.errors import InputError, InputTypeError, InputValueError
+from vmcl.errors import InputTypeError, InputValueError
+from vmcl.labels import CUES
 from vmcl.machine import Machine
-from vmcl.mrf import Params, backfill, preset, restore, score_confidence
+from vmcl.mrf import SOLVERS, NothingToRestore, Settings, backfill, preset, restore, score_confidence
 from vmcl.mrf.data import check_unit_interval
 
 if sys.version_info >= (3, 11):
@@ -76,6 +79,16 @@ def _check_field_types(section: str, values: Any) -> None:
         raise InputTypeError(f"{section}.{spec.name} must be {expected}, got {value!r} ({type(value).__name__})")
 
 
+def _check_thresholds(section: str, low: float | None, high: float | None, quantiles: bool) -> None:
+    """Hysteresis thresholds: each None or >= 0 (a quantile in [0, 1] with ``use_quantiles``), low <= high."""
+    top = 1.0 if quantiles else None
+    for name, value in (("low_threshold", low), ("high_threshold", high)):
+        if value is not None:
+            check_real(value, f"{section}.{name}", minimum=0, maximum=top)
+    if low is not None and high is not None and low > high:
+        raise InputValueError(f"{section}.low_threshold ({low}) must not exceed {section}.high_threshold ({high})")
+
+
 @dataclass(frozen=True)
 class EdgesConfig:
     """Canny's brightness edges, the edges every cue's MRF is coupled to.
@@ -97,6 +110,8 @@ class EdgesConfig:
 
     def __post_init__(self) -> None:
         _check_field_types("edges", self)
+        check_real(self.sigma, "edges.sigma", above=0)
+        _check_thresholds("edges", self.low_threshold, self.high_threshold, self.use_quantiles)
 
 
 @dataclass(frozen=True)
@@ -118,7 +133,7 @@ class StereoConfig:
         Match again with support windows stopped at the first pass's depth discontinuities.
     backfill : bool
         Also match every pixel by intensity (``features="intensity"``, the same patch) and let those
-        matches fill the gaps between the feature matches in the depth MRF's data
+        matches fill the gaps between the feature matches in the stereo MRF's data
         (:func:`vmcl.mrf.backfill`), weighed by :func:`vmcl.mrf.score_confidence` of their normalised
         cross-correlation with ``backfill_floor`` and ``backfill_weight``. It cut the dense bad-1
         rate on Middlebury by 43% to 61% (see :func:`vmcl.mrf.backfill`).
@@ -154,6 +169,15 @@ class StereoConfig:
     def __post_init__(self) -> None:
         # Checked when the Config is made, naming the key, not mid-run.
         _check_field_types("stereo", self)
+        check_choice(self.features, "stereo.features", typing.get_args(stereo.Features))
+        check_int(self.patch, "stereo.patch", minimum=1)
+        if self.patch % 2 == 0:
+            raise InputValueError(f"stereo.patch must be odd (a window centred on the pixel), got {self.patch}")
+        if self.d_min is not None and self.d_max is not None and self.d_min > self.d_max:
+            raise InputValueError(f"stereo.d_min ({self.d_min}) must not exceed stereo.d_max ({self.d_max})")
+        check_real(self.max_disparity, "stereo.max_disparity", above=0, maximum=1)
+        check_real(self.sigma, "stereo.sigma", above=0)
+        _check_thresholds("stereo", self.low_threshold, self.high_threshold, self.use_quantiles)
         check_unit_interval(self.backfill_floor, "stereo.backfill_floor", closed_above=False)
         check_unit_interval(self.backfill_weight, "stereo.backfill_weight", closed_above=True)
         if not 0 < self.intensity_sigma < math.inf:
@@ -170,7 +194,7 @@ class MotionConfig:
     delta, patch, levels, features
         As :func:`vmcl.early.motion.flow` takes them.
     weigh_by_score : bool
-        The flow MRF weighs each estimate by :func:`vmcl.mrf.score_confidence` of its score; off,
+        The motion MRF weighs each estimate by :func:`vmcl.mrf.score_confidence` of its score; off,
         every estimate weighs 1.
     confidence_floor : float
         In [0, 1): that weighting's floor, in the features' score units (0.7 was measured with
@@ -187,6 +211,12 @@ class MotionConfig:
 
     def __post_init__(self) -> None:
         _check_field_types("motion", self)
+        check_int(self.delta, "motion.delta", minimum=1)
+        check_int(self.patch, "motion.patch", minimum=1)
+        if self.patch % 2 == 0:
+            raise InputValueError(f"motion.patch must be odd (a window centred on the pixel), got {self.patch}")
+        check_int(self.levels, "motion.levels", minimum=1)
+        check_choice(self.features, "motion.features", motion.FEATURES)
         check_unit_interval(self.confidence_floor, "motion.confidence_floor", closed_above=False)
 
 
@@ -206,6 +236,8 @@ class ColourConfig:
 
     def __post_init__(self) -> None:
         _check_field_types("colour", self)
+        if self.threshold is not None:
+            check_real(self.threshold, "colour.threshold", minimum=0)
 
 
 @dataclass(frozen=True)
@@ -223,6 +255,13 @@ class TextureConfig:
 
     def __post_init__(self) -> None:
         _check_field_types("texture", self)
+        check_real(self.fine_sigma, "texture.fine_sigma", above=0)
+        check_real(self.coarse_sigma, "texture.coarse_sigma", above=0)
+        if self.fine_sigma >= self.coarse_sigma:
+            raise InputValueError(f"texture.fine_sigma ({self.fine_sigma}) must be below texture.coarse_sigma "
+                                  f"({self.coarse_sigma})")
+        check_real(self.threshold, "texture.threshold", minimum=0)
+        check_int(self.radius, "texture.radius", minimum=1)
 
 
 @dataclass(frozen=True)
@@ -244,36 +283,30 @@ class MrfConfig:
         (dense bad-1 1.7% against 1.4%, flow EPE 0.43 px both, integrated F 0.26 against 0.29; measured
         before the flow's confidence weights).
         "preset": each cue's preset schedule.
-    depth, flow, colour, texture : mapping of str to value
-        Overrides of :func:`vmcl.mrf.preset`'s measured Params per cue (field names of
-        :class:`vmcl.mrf.Params`, e.g. ``{"beta": 3.0}``).
+    stereo, motion, colour, texture : mapping of str to value
+        Overrides of :func:`vmcl.mrf.preset`'s measured settings per cue (any field of
+        :class:`vmcl.mrf.EnergyModel` or of a solver's schedule, e.g. ``{"beta": 3.0}``; see
+        :meth:`vmcl.mrf.Settings.override`), one table per cue of :data:`vmcl.labels.CUES`.
     """
 
     method: str = "meanfield"
     seed: int = 0
     schedule: str = "fast"
-    depth: Mapping[str, Any] = field(default_factory=dict)
-    flow: Mapping[str, Any] = field(default_factory=dict)
+    stereo: Mapping[str, Any] = field(default_factory=dict)
+    motion: Mapping[str, Any] = field(default_factory=dict)
     colour: Mapping[str, Any] = field(default_factory=dict)
     texture: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         _check_field_types("mrf", self)
+        check_choice(self.method, "mrf.method", SOLVERS)
+        check_choice(self.schedule, "mrf.schedule", _SCHEDULES)
+        check_int(self.seed, "mrf.seed", minimum=0, maximum=2**64 - 1)
 
-    def params(self, cue: str) -> Params:
-        """The preset Params of ``cue`` with the schedule and this configuration's overrides."""
-        if self.schedule not in _SCHEDULES:
-            raise InputValueError(f"mrf.schedule must be one of {', '.join(_SCHEDULES)}, got {self.schedule!r}")
-        overrides = {**_SCHEDULES[self.schedule], **getattr(self, cue)}
-        known = {f.name for f in dataclasses.fields(Params)}
-        unknown = sorted(set(overrides) - known)
-        if unknown:
-            raise InputValueError(f"unknown key mrf.{cue}.{unknown[0]}: Params has {', '.join(sorted(known))}")
-        try:
-            return dataclasses.replace(preset(cue), **overrides)
-        except InputError as error:
-            # Params names its fields as Params.x; in a Config they are mrf.<cue>.x.
-            raise type(error)(str(error).replace("Params.", f"mrf.{cue}.", 1)) from None
+    def settings(self, cue: str) -> Settings:
+        """The preset settings of ``cue`` (one of :data:`vmcl.labels.CUES`) with the schedule and this
+        configuration's overrides."""
+        return preset(cue).override({**_SCHEDULES[self.schedule], **getattr(self, cue)}, prefix=f"mrf.{cue}")
 
 
 @dataclass(frozen=True)
@@ -328,7 +361,7 @@ class Config:
     """Everything the machine can be told, with documented defaults; see each section's class.
 
     Load one from TOML with :meth:`from_toml` (sections ``[edges]``, ``[stereo]``, ``[motion]``,
-    ``[colour]``, ``[texture]``, ``[mrf]`` and ``[mrf.depth]`` ... for Params overrides, ``[labels]``); unknown keys
+    ``[colour]``, ``[texture]``, ``[mrf]`` and ``[mrf.stereo]`` ... for the MRF settings' overrides, ``[labels]``); unknown keys
     are refused with a ValueError naming them, and values of the wrong type (each field's annotation: bool,
     int, float, str, None where allowed; true is not an integer) with a TypeError naming ``section.key``.
 
@@ -363,8 +396,8 @@ class Config:
                     raise InputValueError(f"unknown config key {name}.{key}; {name} has {', '.join(sorted(known))}")
             sections[name] = _SECTIONS[name](**entries)
         config = cls(**sections)
-        for cue in ("depth", "flow", "colour", "texture"):
-            config.mrf.params(cue)  # refuse bad Params overrides now, not mid-run
+        for cue in CUES:
+            config.mrf.settings(cue)  # refuse bad overrides now, not mid-run
         return config
 
     @classmethod
@@ -410,11 +443,12 @@ class Result:
     stereo_discontinuity : bool (H, W)
         Features whose votes were bimodal over d.
     disparity : float32 (H, W)
-        Dense disparity: the depth MRF's restoration.
+        Dense disparity: the stereo MRF's restoration.
     raw_flow, flow : float32 (H, W, 2)
         The motion module's flow (NaN where none) and its MRF restoration.
     restored : dict of str to ndarray
-        Each cue's restored field: "depth" (= disparity), "flow" (= flow), "colour", "texture".
+        Each cue's restored field, by cue (:data:`vmcl.labels.CUES`): "stereo" (the disparity, =
+        ``disparity``), "motion" (the flow, = ``flow``), "colour" (hue), "texture" (texton density).
     lines : dict of str to (line_h, line_v)
         Each cue's line process (bool).
     support : uint8 (H, W)
@@ -513,7 +547,7 @@ class VisionMachine:
     >>> scene = scenes.render(scenes.preset("cues", shape=(64, 64)), seed=0)
     >>> result = VisionMachine().run(scene.left, scene.right)  # doctest: +SKIP
     >>> result.disparity.shape, sorted(result.lines)  # doctest: +SKIP
-    ((64, 64), ['colour', 'depth', 'texture'])
+    ((64, 64), ['colour', 'stereo', 'texture'])
     """
 
     def __init__(self, config: Config | None = None, *, machine: Machine | None = None) -> None:
@@ -533,9 +567,9 @@ class VisionMachine:
         colour_on, texture_on = rgb and c.colour.enabled, c.texture.enabled
         names = ["upload", "edges"]
         names += ["colour"] * colour_on + ["texture"] * texture_on + ["stereo"] * stereo_on + ["motion"] * motion_on
-        names += ["mrf depth"] * stereo_on
+        names += ["mrf stereo"] * stereo_on
         names += ["feedback"] * (stereo_on and c.stereo.feedback)
-        names += ["mrf flow"] * motion_on + ["mrf colour"] * colour_on + ["mrf texture"] * texture_on
+        names += ["mrf motion"] * motion_on + ["mrf colour"] * colour_on + ["mrf texture"] * texture_on
         return names + ["integrate", "download"]
 
     def run(self, left: np.ndarray, right: np.ndarray | None = None, next: np.ndarray | None = None, *,
@@ -624,23 +658,23 @@ class _Run:
                                     features=mc.features, machine=self.m)
                 device["raw_flow"] = found.flow
                 if mc.weigh_by_score:
-                    weights["flow"] = score_confidence(found.score, floor=mc.confidence_floor, machine=self.m)
+                    weights["motion"] = score_confidence(found.score, floor=mc.confidence_floor, machine=self.m)
         lines = {}
-        if "mrf depth" in names:
-            with self.stage("mrf depth"):
-                found = self.restore("depth", *depth_data, brightness, device)
+        if "mrf stereo" in names:
+            with self.stage("mrf stereo"):
+                found = self.restore("stereo", *depth_data, brightness, device)
                 if found is not None:
-                    lines["depth"] = found
-            if "feedback" in names and "depth" in lines:
+                    lines["stereo"] = found
+            if "feedback" in names and "stereo" in lines:
                 with self.stage("feedback"):
-                    barriers = _integrate.boundary(*lines["depth"], machine=self.m)
+                    barriers = _integrate.boundary(*lines["stereo"], machine=self.m)
                     device["first_pass_disparity"] = device["sparse_disparity"]
                     matched = self.match(left, others_d["right"], width, barriers)
                     device["sparse_disparity"] = matched.disparity
                     device["stereo_discontinuity"] = matched.discontinuity
                     depth_data = self.depth_data(matched, dense)
-                    lines["depth"] = self.restore("depth", *depth_data, brightness, device) or lines["depth"]
-        for cue, data, coupling, kind in (("flow", "raw_flow", "edges", "smooth"),
+                    lines["stereo"] = self.restore("stereo", *depth_data, brightness, device) or lines["stereo"]
+        for cue, data, coupling, kind in (("motion", "raw_flow", "edges", "smooth"),
                                           ("colour", "hue", "colour_edges", "constant"),
                                           ("texture", "density", "texture_edges", "constant")):
             if f"mrf {cue}" in names:
@@ -648,13 +682,13 @@ class _Run:
                     found = self.restore(cue, device[data], weights.get(cue), device[coupling], device,
                                          kind=kind)
                     if found is not None:
-                        lines["motion" if cue == "flow" else cue] = found
+                        lines[cue] = found
         with self.stage("integrate"):
             device["support"], device["labels"] = _integrate.integrate(lines, edges=brightness, machine=self.m)
             if self.labeller is not None:
                 device["labels"] = labelling.label(
-                    device["support"], left, disparity=device.get("restored_depth"),
-                    flow=device.get("restored_flow"), hue=device.get("restored_colour"),
+                    device["support"], left, disparity=device.get("restored_stereo"),
+                    flow=device.get("restored_motion"), hue=device.get("restored_colour"),
                     texture="texture" in lines, labeller=self.labeller, machine=self.m)
         with self.stage("download"):
             for name, array in device.items():
@@ -699,7 +733,7 @@ class _Run:
                                                  machine=self.m)
 
     def depth_data(self, matched: stereo.StereoMatch, dense: tuple[Any, Any] | None) -> tuple[Any, Any]:
-        """The depth MRF's data and confidence: the feature matches, backfilled by intensity matches."""
+        """The stereo MRF's data and confidence: the feature matches, backfilled by intensity matches."""
         if dense is None:
             return matched.disparity, None
         return backfill(matched.disparity, *dense, machine=self.m)
@@ -714,28 +748,27 @@ class _Run:
         coupling would license lines at every texton (measured on the "cues" scene, mean field: hue
         lines at precision 0.27 coupled to brightness, 0.94 coupled to the candidates).
         """
-        params = self.c.mrf.params(cue)
+        settings = self.c.mrf.settings(cue)
+        model = settings.model
         if kind == "constant":
-            params = dataclasses.replace(params, require_edge=True)
+            model = dataclasses.replace(model, require_edge=True)
+        method = self.c.mrf.method
         try:
-            found = restore(data, confidence=confidence, edges=coupling, kind=kind, method=self.c.mrf.method,
-                            params=params, seed=self.c.mrf.seed, machine=self.m)
-        except ValueError as error:
+            found = restore(data, confidence=confidence, edges=coupling, kind=kind, method=method, model=model,
+                            schedule=settings.schedule(method), seed=self.c.mrf.seed, machine=self.m)
+        except NothingToRestore:
             # The one refusal a good run can meet: the module found nothing (no match, no flow, no
             # valid hue) for the MRF to restore. The cue is then absent from the result.
-            if "nothing to restore" not in str(error):
-                raise
             self.notes.append(f"{cue}: the early module gave no data, so no {cue} field or discontinuities")
             return None
         device[f"restored_{cue}"] = found.field
         return found.line_h, found.line_v
 
     def collect(self, image: np.ndarray, out: dict[str, Any]) -> Result:
-        restored = {cue: out.pop(f"restored_{cue}") for cue in ("depth", "flow", "colour", "texture")
-                    if f"restored_{cue}" in out}
+        restored = {cue: out.pop(f"restored_{cue}") for cue in CUES if f"restored_{cue}" in out}
         as_bool = ("edges", "colour_edges", "texture_edges", "stereo_discontinuity")
         fields = {name: (value.astype(bool) if name in as_bool else value) for name, value in out.items()}
         kernels = self.m.timings(reset=True) if self.m.profile else {}
-        return Result(image=image, config=self.c, restored=restored, disparity=restored.get("depth"),
-                      flow=restored.get("flow"), stages=self.stages, kernels=kernels, notes=self.notes,
+        return Result(image=image, config=self.c, restored=restored, disparity=restored.get("stereo"),
+                      flow=restored.get("motion"), stages=self.stages, kernels=kernels, notes=self.notes,
                       **fields)

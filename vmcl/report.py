@@ -29,7 +29,7 @@ from vmcl.errors import InputTypeError, InputValueError
 from vmcl.labels import Cue, Label
 from vmcl.pipeline import Result
 
-CUE_COLOURS = {Cue.DEPTH: (230, 40, 40), Cue.MOTION: (250, 150, 20), Cue.COLOUR: (40, 110, 240),
+CUE_COLOURS = {Cue.STEREO: (230, 40, 40), Cue.MOTION: (250, 150, 20), Cue.COLOUR: (40, 110, 240),
                Cue.TEXTURE: (30, 180, 60)}
 """RGB of each cue in the cartoon; a pixel several cues support takes the first in this order."""
 
@@ -254,12 +254,12 @@ def images(result: Result) -> dict[str, np.ndarray]:
 _CAPTIONS = {
     "cartoon": "The cartoon, the discontinuities by label: depth red, orientation purple, albedo blue, "
                "shadow dark grey, specular yellow, texture green",
-    "support": "The cues' support: discontinuities by cue (red depth, orange motion, blue colour, green texture; "
+    "support": "The cues' support: discontinuities by cue (red stereo, orange motion, blue colour, green texture; "
                "grey: brightness edges no cue supports) over the faded image",
     "input": "The left image",
-    "disparity": "Dense disparity (the depth MRF's restoration), pixels; near is red",
+    "disparity": "Dense disparity (the stereo MRF's restoration), pixels; near is red",
     "sparse_disparity": "The matcher's sparse disparities, same scale",
-    "flow": "Optical flow (the flow MRF's restoration), Middlebury colour wheel; key top left",
+    "flow": "Optical flow (the motion MRF's restoration), Middlebury colour wheel; key top left",
     "hue": "Hue H = R / (R + G), restored as piecewise constant",
     "texture": "Texton density, restored as piecewise constant",
     "edges": "Canny's brightness edges",

@@ -1,4 +1,4 @@
-"""The line-process energy: parameters, the clique table of the line prior, and the energy on the host.
+"""The line-process energy: its model, the clique table of the line prior, and the energy on the host.
 
 Seed sections "MRF models" and "Organization of integration", equations (10) to (12). A field f (depth,
 disparity, a flow vector, hue, texture density) on the pixel lattice is restored from data g while a
@@ -45,19 +45,17 @@ edges", MIT AI Memo 970, 1987.
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
 
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm._arrays import check_choice, check_int, real_host_array
+from vmcl.cm._arrays import check_bool, check_choice, real_host_array
 from vmcl.errors import InputTypeError, InputValueError
+from vmcl.mrf.checks import check_count, check_fields, check_number, check_weight
 
 KINDS = ("smooth", "constant")
-
-# Counts of sweeps, levels and radii: far above any schedule that ends, and within the kernels' int32.
-_MAX_COUNT = 2**31 - 1
 
 
 def host_field(x, name: str, *, ndims: tuple[int, ...], empty: bool = False) -> np.ndarray:
@@ -65,24 +63,9 @@ def host_field(x, name: str, *, ndims: tuple[int, ...], empty: bool = False) -> 
     return real_host_array(x.get() if isinstance(x, cl_array.Array) else x, name, ndims=ndims, empty=empty)
 
 
-def _check_finite(owner: object, names: tuple[str, ...], *, positive: tuple[str, ...] = ()) -> None:
-    for name in names:
-        value = getattr(owner, name)
-        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-            raise InputTypeError(f"{type(owner).__name__}.{name} must be a number, got {type(value).__name__}")
-        try:
-            finite = math.isfinite(value)
-        except OverflowError:  # an int beyond float's range
-            finite = False
-        if not finite:
-            raise InputValueError(f"{type(owner).__name__}.{name} must be finite, got {value}")
-        if name in positive and value <= 0:
-            raise InputValueError(f"{type(owner).__name__}.{name} must be > 0, got {value}")
-
-
 @dataclass(frozen=True)
 class LinePrior:
-    """Clique potentials of the line process, in units of ``Params.beta``.
+    """Clique potentials of the line process, in units of ``EnergyModel.beta``.
 
     Parameters
     ----------
@@ -116,8 +99,11 @@ class LinePrior:
     crossing: float = 1.5
     parallel: float = 1.0
 
+    CHECKS: ClassVar = dict.fromkeys(("line", "end", "continuation", "turn", "junction", "crossing", "parallel"),
+                                     check_number)
+
     def __post_init__(self) -> None:
-        _check_finite(self, tuple(f.name for f in fields(self)))
+        check_fields(self)
 
     def table(self) -> np.ndarray:
         """The 16 vertex potentials (units of beta), indexed by up | down << 1 | left << 2 | right << 3."""
@@ -136,38 +122,51 @@ class LinePrior:
         return table
 
 
+def check_prior(value: Any, label: str) -> None:
+    if not isinstance(value, LinePrior):
+        raise InputTypeError(f"{label} must be a vmcl.mrf.LinePrior, got {type(value).__name__}")
+
+
+def check_levels(value: Any, label: str) -> None:
+    """The constant kind's levels: a count in 2..64, or 2..64 distinct finite values."""
+    if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)):
+        if not 2 <= value <= 64:
+            raise InputValueError(f"{label} must be a count in 2..64 or a tuple of levels, got {value}")
+        return
+    levels = np.asarray(value if isinstance(value, (tuple, list, np.ndarray)) else ())
+    if levels.dtype.kind not in "iuf" or levels.ndim != 1 or not 2 <= levels.size <= 64 \
+            or not np.all(np.isfinite(levels)) or np.unique(levels).size != levels.size:
+        raise InputValueError(f"{label} must be a count in 2..64 or 2..64 distinct finite values, got {value!r}")
+
+
 @dataclass(frozen=True)
-class Params:
-    """Parameters of the energy and of the solvers. Temperatures are in the energy's units.
+class EnergyModel:
+    """The energy U(f, l): its weights, the line prior and the coupling to brightness edges.
+
+    What the energy is, not how a solver minimises or samples it (each solver's schedule is its own
+    class, :data:`vmcl.mrf.SOLVERS`). Temperatures of the schedules are in this energy's units.
 
     Parameters
     ----------
     alpha : float
-        Weight of the data term (with Gaussian noise of standard deviation sigma at T = 1 the posterior
-        is exact for alpha = 1 / (2 sigma^2)).
+        Weight of the data term, >= 0 (:func:`vmcl.mrf.restore` needs > 0). With Gaussian noise of
+        standard deviation sigma at T = 1 the posterior is exact for alpha = 1 / (2 sigma^2).
     beta : float
-        Scale of the line prior: a line site costs ``beta * prior.line`` and breaks a bond whose
+        Scale of the line prior, >= 0: a line site costs ``beta * prior.line`` and breaks a bond whose
         smoothness cost exceeds about that.
     prior : LinePrior
         The clique table.
     kappa : float
-        Potts cost of two different neighbouring levels (constant kind).
+        Potts cost of two different neighbouring levels (constant kind), >= 0.
     levels : int or tuple of float
-        The constant kind's levels: a count, spread evenly over the range of the data, or the levels.
+        The constant kind's levels: a count in 2..64, spread evenly over the range of the data, or 2..64
+        distinct levels.
     edge_gain : float
         How much a brightness edge lowers a line site's cost, in units of beta (equation (12)).
     require_edge : bool
         Forbid lines with no brightness edge pixel within ``edge_radius`` pixels (only with edges).
     edge_radius : int
         Chebyshev radius for ``require_edge``.
-    t0, t_factor, sweeps, quench : float, float, int, int
-        Annealing: ``sweeps`` Gibbs sweeps at T = t0 * t_factor**k, then ``quench`` ICM sweeps.
-    mpm_temperature, burn_in, samples : float, int, int
-        MPM (Marroquin's estimator): ``burn_in`` sweeps, then ``samples`` sweeps averaged, at one T.
-    mf_t0, mf_factor, mf_steps, mf_iterations : float, float, int, int
-        Mean field: ``mf_steps`` temperatures mf_t0 * mf_factor**k, ``mf_iterations`` sweeps at each.
-    icm_sweeps : int
-        ICM sweeps.
     """
 
     alpha: float = 1.0
@@ -178,60 +177,29 @@ class Params:
     edge_gain: float = 0.5
     require_edge: bool = False
     edge_radius: int = 1
-    t0: float = 4.0
-    t_factor: float = 0.95
-    sweeps: int = 100
-    quench: int = 10
-    mpm_temperature: float = 1.0
-    burn_in: int = 50
-    samples: int = 100
-    mf_t0: float = 4.0
-    mf_factor: float = 0.8
-    mf_steps: int = 15
-    mf_iterations: int = 5
-    icm_sweeps: int = 30
+
+    CHECKS: ClassVar = {"alpha": check_weight, "beta": check_weight, "prior": check_prior, "kappa": check_weight,
+                        "levels": check_levels, "edge_gain": check_number, "require_edge": check_bool,
+                        "edge_radius": check_count}
 
     def __post_init__(self) -> None:
-        _check_finite(self, ("alpha", "beta", "kappa", "edge_gain", "t0", "t_factor", "mpm_temperature",
-                             "mf_t0", "mf_factor"),
-                      positive=("t0", "t_factor", "mpm_temperature", "mf_t0", "mf_factor"))
-        if not isinstance(self.prior, LinePrior):
-            raise InputTypeError(f"Params.prior must be a LinePrior, got {type(self.prior).__name__}")
-        for name in ("alpha", "beta", "kappa"):
-            if getattr(self, name) < 0:
-                raise InputValueError(f"Params.{name} must be >= 0, got {getattr(self, name)}")
-        for name in ("edge_radius", "sweeps", "quench", "burn_in", "samples", "mf_steps", "mf_iterations",
-                     "icm_sweeps"):
-            check_int(getattr(self, name), f"Params.{name}", minimum=0, maximum=_MAX_COUNT)
-        if not isinstance(self.require_edge, (bool, np.bool_)):
-            raise InputTypeError(f"Params.require_edge must be a bool, got {type(self.require_edge).__name__}")
-        if self.t_factor > 1 or self.mf_factor > 1:
-            raise InputValueError("Params.t_factor and Params.mf_factor must be in (0, 1]: temperatures fall")
-        if isinstance(self.levels, (int, np.integer)) and not isinstance(self.levels, (bool, np.bool_)):
-            if not 2 <= self.levels <= 64:
-                raise InputValueError(f"Params.levels must be a count in 2..64 or a tuple of levels, got {self.levels}")
-        else:
-            levels = np.asarray(self.levels if isinstance(self.levels, (tuple, list, np.ndarray)) else ())
-            if levels.dtype.kind not in "iuf" or levels.ndim != 1 or not 2 <= levels.size <= 64 \
-                    or not np.all(np.isfinite(levels)) or np.unique(levels).size != levels.size:
-                raise InputValueError(f"Params.levels must be a count in 2..64 or 2..64 distinct finite values, "
-                                      f"got {self.levels!r}")
+        check_fields(self)
 
     def vertex_table(self) -> np.ndarray:
         """beta times the vertex potentials, float64 (16,)."""
         return self.beta * self.prior.table()
 
 
-def resolve_levels(params: Params, low: float, high: float) -> np.ndarray:
+def resolve_levels(model: EnergyModel, low: float, high: float) -> np.ndarray:
     """The constant kind's levels as float32: the given ones, or a count spread over [low, high]."""
-    if isinstance(params.levels, (int, np.integer)):
+    if isinstance(model.levels, (int, np.integer)):
         if not high > low:
             high = low + 1.0
-        return np.linspace(low, high, int(params.levels)).astype(np.float32)
-    return np.asarray(params.levels, np.float32)
+        return np.linspace(low, high, int(model.levels)).astype(np.float32)
+    return np.asarray(model.levels, np.float32)
 
 
-def line_costs(shape: tuple[int, int], edges: np.ndarray | None, params: Params) -> tuple[np.ndarray, np.ndarray]:
+def line_costs(shape: tuple[int, int], edges: np.ndarray | None, model: EnergyModel) -> tuple[np.ndarray, np.ndarray]:
     """Central clique costs b of every line site: ((H, W - 1), (H - 1, W)) float64, +inf where forbidden.
 
     Parameters
@@ -240,26 +208,26 @@ def line_costs(shape: tuple[int, int], edges: np.ndarray | None, params: Params)
         (H, W) of the pixel lattice.
     edges : (H, W) array or None
         Brightness edge pixels (non-zero: an edge), e.g. from Canny.
-    params : Params
+    model : EnergyModel
 
     Returns
     -------
     (b_h, b_v)
     """
     height, width = shape
-    base = params.beta * params.prior.line
+    base = model.beta * model.prior.line
     b_h = np.full((height, width - 1), base)
     b_v = np.full((height - 1, width), base)
     if edges is None:
         return b_h, b_v
     e = (edges.get() if isinstance(edges, cl_array.Array) else np.asarray(edges)) != 0
-    gain = params.beta * params.edge_gain
+    gain = model.beta * model.edge_gain
     at_h = e[:, :-1] | e[:, 1:]
     at_v = e[:-1, :] | e[1:, :]
     b_h -= gain * at_h
     b_v -= gain * at_v
-    if params.require_edge:
-        near = _dilate(e, params.edge_radius)
+    if model.require_edge:
+        near = _dilate(e, model.edge_radius)
         b_h[~(near[:, :-1] | near[:, 1:])] = np.inf
         b_v[~(near[:-1, :] | near[1:, :])] = np.inf
     return b_h, b_v
@@ -279,7 +247,7 @@ def _dilate(mask: np.ndarray, radius: int) -> np.ndarray:
 
 def energy(f: np.ndarray, line_h: np.ndarray, line_v: np.ndarray, *, data: np.ndarray,
            confidence: np.ndarray | None = None, edges: np.ndarray | None = None, kind: str = "smooth",
-           params: Params | None = None) -> float:
+           model: EnergyModel | None = None) -> float:
     """U(f, l) of any configuration, in float64 on the host (the oracle of the kernels).
 
     Parameters
@@ -295,7 +263,8 @@ def energy(f: np.ndarray, line_h: np.ndarray, line_v: np.ndarray, *, data: np.nd
     edges : (H, W) array, optional
         Brightness edge pixels.
     kind : {"smooth", "constant"}
-    params : Params, optional
+    model : EnergyModel, optional
+        Default ``EnergyModel()``.
 
     Returns
     -------
@@ -317,9 +286,9 @@ def energy(f: np.ndarray, line_h: np.ndarray, line_v: np.ndarray, *, data: np.nd
     ----------
     S. Geman and D. Geman, IEEE PAMI 6(6):721-741, 1984 (line processes).
     """
-    params = Params() if params is None else params
-    if not isinstance(params, Params):
-        raise InputTypeError(f"params must be a vmcl.mrf.Params or None, got {type(params).__name__}")
+    model = EnergyModel() if model is None else model
+    if not isinstance(model, EnergyModel):
+        raise InputTypeError(f"model must be a vmcl.mrf.EnergyModel or None, got {type(model).__name__}")
     check_choice(kind, "kind", KINDS)
     g = host_field(data, "data", ndims=(2, 3)).astype(np.float64)
     f = host_field(f, "f", ndims=(2, 3)).astype(np.float64)
@@ -343,18 +312,18 @@ def energy(f: np.ndarray, line_h: np.ndarray, line_v: np.ndarray, *, data: np.nd
     if not np.all(np.isfinite(gamma)) or np.any(gamma < 0):
         raise InputValueError("confidence must be finite and >= 0")
     gamma = gamma.astype(np.float64)
-    w = params.alpha * np.where(finite, gamma, 0.0)
+    w = model.alpha * np.where(finite, gamma, 0.0)
     total = float(np.sum(w * np.sum((f - np.where(finite[..., None], g, 0.0)) ** 2, axis=2)))
     if kind == "smooth":
         bond_h = np.sum((f[:, 1:] - f[:, :-1]) ** 2, axis=2)
         bond_v = np.sum((f[1:] - f[:-1]) ** 2, axis=2)
     else:
-        bond_h = params.kappa * np.any(f[:, 1:] != f[:, :-1], axis=2)
-        bond_v = params.kappa * np.any(f[1:] != f[:-1], axis=2)
-    b_h, b_v = line_costs((height, width), edges, params)
+        bond_h = model.kappa * np.any(f[:, 1:] != f[:, :-1], axis=2)
+        bond_v = model.kappa * np.any(f[1:] != f[:-1], axis=2)
+    b_h, b_v = line_costs((height, width), edges, model)
     total += float(np.sum(np.where(lh, b_h, bond_h)) + np.sum(np.where(lv, b_v, bond_v)))
     arms = (lh[:-1, :].astype(int) | lh[1:, :] << 1 | lv[:, :-1] << 2 | lv[:, 1:] << 3)
-    total += float(np.sum(params.vertex_table()[arms]))
+    total += float(np.sum(model.vertex_table()[arms]))
     doubled = np.sum(lh[:, :-1] & lh[:, 1:]) + np.sum(lv[:-1, :] & lv[1:, :])
-    total += float(params.beta * params.prior.parallel * doubled)
+    total += float(model.beta * model.prior.parallel * doubled)
     return total

@@ -17,7 +17,7 @@ from pyopencl import cltypes
 
 from vmcl.cm import reduce as cm_reduce
 from vmcl.machine import Machine
-from vmcl.mrf.energy import Params, resolve_levels
+from vmcl.mrf.energy import EnergyModel, resolve_levels
 
 MODES = {"sample": 0, "icm": 1, "mean": 2}
 # (phase, colour): the line sites' four colours, then f at the checkerboard's two colours. Lines go first
@@ -40,13 +40,13 @@ class Lattice:
     confidence : device float32 (H, W) or None
     edges : device uint8 (H, W) or None
     kind : {"smooth", "constant"}
-    params : Params
+    model : EnergyModel
     """
 
     def __init__(self, machine: Machine, data: cl_array.Array, confidence: cl_array.Array | None,
-                 edges: cl_array.Array | None, kind: str, params: Params) -> None:
+                 edges: cl_array.Array | None, kind: str, model: EnergyModel) -> None:
         self.machine = machine
-        self.params = params
+        self.model = model
         self.kind = kind
         self.height, self.width = data.shape[:2]
         self.ncomp = 1 if data.ndim == 2 else data.shape[2]
@@ -63,23 +63,23 @@ class Lattice:
         self.w = empty((self.height, self.width), np.float32)
         self.lh, self.lv = empty(self.n, np.float32), empty(self.n, np.float32)
         self.bh, self.bv = empty(self.n, np.float32), empty(self.n, np.float32)
-        self.table = machine.to_device(params.vertex_table().astype(np.float32))
-        self.parallel = np.float32(params.beta * params.prior.parallel)
-        self.kappa = np.float32(params.kappa)
+        self.table = machine.to_device(model.vertex_table().astype(np.float32))
+        self.parallel = np.float32(model.beta * model.prior.parallel)
+        self.kappa = np.float32(model.kappa)
         self.nlevels = 1
         self.levels = machine.to_device(np.zeros(1, np.float32))
         self._prepare(data, confidence)
         if kind == "constant":
             low = float(cm_reduce.reduce(self.f, "min", machine=machine).get())
             high = float(cm_reduce.reduce(self.f, "max", machine=machine).get())
-            levels = resolve_levels(params, low, high)
+            levels = resolve_levels(model, low, high)
             self.nlevels = int(levels.size)
             self.levels = machine.to_device(levels)
             machine.launch(self.kernel("quantise"), self.grid, self.f, self.levels, *self.dims)
         self.f_start = self.f.copy(queue=machine.queue)
         machine.launch(self.kernel("line_costs"), self.grid, edges, np.int32(edges is not None),
-                       np.float32(params.beta * params.prior.line), np.float32(params.beta * params.edge_gain),
-                       np.int32(params.require_edge), np.int64(params.edge_radius), self.bh, self.bv,
+                       np.float32(model.beta * model.prior.line), np.float32(model.beta * model.edge_gain),
+                       np.int32(model.require_edge), np.int64(model.edge_radius), self.bh, self.bv,
                        *self.dims)
         self.reset()
 
@@ -91,7 +91,7 @@ class Lattice:
         """Clean data and weights, and the starting field: the data, its gaps filled by a jump fill."""
         scratch = self.machine.empty(data.shape, np.float32)
         self.machine.launch(self.kernel("prepare"), self.grid, data, confidence, np.int32(confidence is not None),
-                            np.float32(self.params.alpha), self.g, self.w, scratch, *self.dims)
+                            np.float32(self.model.alpha), self.g, self.w, scratch, *self.dims)
         fill = self.kernel("fill_step")
         source, target = scratch, self.f
         steps = 1 + int(np.ceil(np.log2(max(self.height, self.width))))

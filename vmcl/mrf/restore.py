@@ -3,8 +3,8 @@
 Seed sections "The integration stage and MRF" ("detect discontinuities in each cue, for instance depth,
 simultaneously with the approximation of the depth data"), "MRF models", "Organization of integration"
 (coupling to brightness edges, equation (12)) and "Algorithms: Deterministic and stochastic". The energy
-is :mod:`vmcl.mrf.energy`'s; the solvers are :mod:`vmcl.mrf.sampler` (annealing, MPM),
-:mod:`vmcl.mrf.meanfield` and :mod:`vmcl.mrf.icm`.
+is :mod:`vmcl.mrf.energy`'s; the solvers are those :data:`vmcl.mrf.SOLVERS` registers by name
+(:mod:`vmcl.mrf.sampler`: annealing, MPM; :mod:`vmcl.mrf.meanfield`; :mod:`vmcl.mrf.icm`).
 
 References
 ----------
@@ -26,13 +26,17 @@ from vmcl.cm import reduce as cm_reduce
 from vmcl.cm._arrays import ArrayLike, check_choice, check_int, field, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
-from vmcl.mrf.energy import KINDS, Params, host_field
-from vmcl.mrf.icm import icm
+from vmcl.mrf.energy import KINDS, EnergyModel, host_field
 from vmcl.mrf.lattice import Lattice
-from vmcl.mrf.meanfield import meanfield
-from vmcl.mrf.sampler import anneal, mpm
+from vmcl.mrf.solvers import SOLVERS
 
-METHODS = ("anneal", "mpm", "meanfield", "icm")
+
+class NothingToRestore(InputValueError):
+    """The data hold no value with a positive confidence, so there is nothing to restore.
+
+    The one refusal of :func:`restore` that a good run can meet (an early module that found no match,
+    no flow, no valid hue); callers that then leave the cue out catch it by this type.
+    """
 
 
 @dataclass
@@ -61,8 +65,8 @@ class Restoration:
 
 
 def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: ArrayLike | None = None,
-            kind: str = "smooth", method: str = "anneal", params: Params | None = None, seed: int = 0,
-            machine: Machine | None = None) -> Restoration:
+            kind: str = "smooth", method: str = "anneal", model: EnergyModel | None = None,
+            schedule: Any = None, seed: int = 0, machine: Machine | None = None) -> Restoration:
     """Restore ``data`` under the line-process MRF prior and find its discontinuities.
 
     Parameters
@@ -76,16 +80,22 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
         Default 1 wherever the data is finite. Device arrays: float32.
     edges : (H, W) array, optional
         Brightness edges (e.g. Canny), non-zero at edge pixels; they lower the cost of a line between
-        two pixels when either is an edge pixel (``params.edge_gain``), and with ``params.require_edge``
+        two pixels when either is an edge pixel (``model.edge_gain``), and with ``model.require_edge``
         lines far from every edge are forbidden. Device arrays: uint8.
     kind : {"smooth", "constant"}
-        Piecewise smooth (quadratic membrane) or piecewise constant (Potts over ``params.levels``;
+        Piecewise smooth (quadratic membrane) or piecewise constant (Potts over ``model.levels``;
         scalar data only).
-    method : {"anneal", "mpm", "meanfield", "icm"}
-        Simulated annealing (MAP), Marroquin's MPM estimator (posterior mean of f, marginal modes of
-        l), Geiger-Girosi mean field with continuation in temperature, or ICM from the data.
-    params : Params, optional
-        Energy and schedule; see :mod:`vmcl.mrf.presets` for measured ones per cue.
+    method : str
+        A solver of :data:`vmcl.mrf.SOLVERS`: "anneal" (simulated annealing, MAP), "mpm" (Marroquin's
+        MPM estimator: posterior mean of f, marginal modes of l), "meanfield" (Geiger-Girosi mean field
+        with continuation in temperature) or "icm" (ICM from the data).
+    model : EnergyModel, optional
+        The energy; default ``EnergyModel()``. alpha must be > 0.
+    schedule : optional
+        The method's schedule, an instance of ``SOLVERS[method].schedule`` (:class:`AnnealSchedule`,
+        :class:`MpmSchedule`, :class:`MeanFieldSchedule`, :class:`IcmSchedule`); default that class's
+        defaults. :func:`vmcl.mrf.preset` gives measured models and schedules per cue:
+        ``s = preset("stereo"); restore(..., model=s.model, schedule=s.schedule(method))``.
     seed : int
         0 <= seed < 2**64, keys the random numbers of "anneal" and "mpm" (ignored by the deterministic
         methods). The same seed gives the same bits at any local size.
@@ -95,6 +105,11 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
     -------
     Restoration
         NumPy fields for NumPy data, device arrays for device data.
+
+    Raises
+    ------
+    NothingToRestore
+        No datum has a positive confidence (an InputValueError, caught by type where a cue may be empty).
 
     Notes
     -----
@@ -121,31 +136,28 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
     J. Besag, "On the statistical analysis of dirty pictures", J. Roy. Statist. Soc. B 48:259-302, 1986.
     """
     machine = machine_for(machine)
-    params = Params() if params is None else params
-    if not isinstance(params, Params):
-        raise InputTypeError(f"params must be a vmcl.mrf.Params, got {type(params).__name__}")
+    model = EnergyModel() if model is None else model
+    if not isinstance(model, EnergyModel):
+        raise InputTypeError(f"model must be a vmcl.mrf.EnergyModel or None, got {type(model).__name__}")
     check_choice(kind, "kind", KINDS)
-    check_choice(method, "method", METHODS)
+    solver = SOLVERS[check_choice(method, "method", SOLVERS)]
+    schedule = solver.schedule() if schedule is None else schedule
+    if not isinstance(schedule, solver.schedule):
+        raise InputTypeError(f"schedule must be a vmcl.mrf.{solver.schedule.__name__} (method {method!r}) or None, "
+                             f"got {type(schedule).__name__}")
     check_int(seed, "seed", minimum=0, maximum=2**64 - 1)
-    if params.alpha <= 0:
-        raise InputValueError("params.alpha must be > 0: without the data term nothing anchors the field")
+    if model.alpha <= 0:
+        raise InputValueError("model.alpha must be > 0: without the data term nothing anchors the field")
     g, host = _data(data, machine)
     height, width = g.shape[:2]
     if kind == "constant" and g.ndim == 3 and g.shape[2] != 1:
         raise InputValueError(f"kind='constant' takes scalar data (H, W), got shape {g.shape}")
     gamma = _pixel_field(confidence, "confidence", (height, width), np.float32, machine)
     e = _pixel_field(edges, "edges", (height, width), np.uint8, machine)
-    lattice = Lattice(machine, g, gamma, e, kind, params)
+    lattice = Lattice(machine, g, gamma, e, kind, model)
     if not float(cm_reduce.reduce(lattice.w, "max", machine=machine).get()) > 0:
-        raise InputValueError("data has no value with a positive confidence: nothing to restore")
-    if method == "anneal":
-        sweeps = anneal(lattice, int(seed))
-    elif method == "mpm":
-        sweeps = mpm(lattice, int(seed))
-    elif method == "meanfield":
-        sweeps = meanfield(lattice)
-    else:
-        sweeps = icm(lattice, params.icm_sweeps)
+        raise NothingToRestore("data has no value with a positive confidence: nothing to restore")
+    sweeps = solver.solve(lattice, schedule, int(seed))
     total = lattice.energy()
     line_h, line_v = lattice.lines()
     if host:

@@ -18,9 +18,13 @@ vision", J. Amer. Statist. Assoc. 82(397):76-89, 1987.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import ClassVar
+
 import numpy as np
 
-from vmcl.mrf.icm import icm
+from vmcl.mrf.checks import check_cooling, check_count, check_fields, check_temperature
+from vmcl.mrf.icm import quench
 from vmcl.mrf.lattice import Lattice, philox_key
 
 
@@ -29,27 +33,78 @@ def temperatures(t0: float, factor: float, count: int) -> np.ndarray:
     return t0 * factor ** np.arange(count, dtype=np.float64)
 
 
-def anneal(lattice: Lattice, seed: int) -> int:
-    """Simulated annealing from the lattice's state, then a zero-temperature quench; returns sweeps run.
+@dataclass(frozen=True)
+class AnnealSchedule:
+    """Simulated annealing: ``sweeps`` heat-bath sweeps at T = t0 * t_factor**k, then ``quench`` ICM sweeps.
 
-    ``params.sweeps`` heat-bath sweeps at T = t0 * t_factor**k, then ``params.quench`` ICM sweeps so the
-    result is a local minimum of U.
+    Parameters
+    ----------
+    t0 : float
+        The first temperature, > 0.
+    t_factor : float
+        The cooling factor between sweeps, in (0, 1].
+    sweeps : int
+        Heat-bath sweeps.
+    quench : int
+        ICM sweeps after the last one, so the result is a local minimum of U.
+
+    Notes
+    -----
+    The defaults are a short generic schedule; the presets' own (:mod:`vmcl.mrf.presets`) are the
+    measured ones, of 300 to 600 sweeps.
     """
-    params = lattice.params
+
+    t0: float = 4.0
+    t_factor: float = 0.95
+    sweeps: int = 100
+    quench: int = 10
+
+    CHECKS: ClassVar = {"t0": check_temperature, "t_factor": check_cooling, "sweeps": check_count,
+                        "quench": check_count}
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+
+
+@dataclass(frozen=True)
+class MpmSchedule:
+    """Marroquin's MPM estimator: ``burn_in`` sweeps, then ``samples`` sweeps averaged, all at one T.
+
+    Parameters
+    ----------
+    mpm_temperature : float
+        The sampling temperature, > 0 (1: the posterior itself).
+    burn_in : int
+        Sweeps before the first sample.
+    samples : int
+        Sweeps averaged.
+    """
+
+    mpm_temperature: float = 1.0
+    burn_in: int = 50
+    samples: int = 100
+
+    CHECKS: ClassVar = {"mpm_temperature": check_temperature, "burn_in": check_count, "samples": check_count}
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+
+
+def anneal(lattice: Lattice, schedule: AnnealSchedule, seed: int) -> int:
+    """Simulated annealing from the lattice's state, then a zero-temperature quench; returns sweeps run."""
     key = philox_key(seed)
-    for k, temperature in enumerate(temperatures(params.t0, params.t_factor, params.sweeps)):
+    for k, temperature in enumerate(temperatures(schedule.t0, schedule.t_factor, schedule.sweeps)):
         lattice.sweep("sample", temperature, k, key)
-    return params.sweeps + icm(lattice, params.quench)
+    return schedule.sweeps + quench(lattice, schedule.quench)
 
 
-def mpm(lattice: Lattice, seed: int) -> int:
-    """Marroquin's estimator at T = params.mpm_temperature; returns sweeps run.
+def mpm(lattice: Lattice, schedule: MpmSchedule, seed: int) -> int:
+    """Marroquin's estimator at T = schedule.mpm_temperature; returns sweeps run.
 
     After ``burn_in`` sweeps, ``samples`` sweeps are accumulated: the smooth kind's f becomes the sample
     mean (the posterior mean), the constant kind's the most frequent level of each pixel (the maximiser
     of the posterior marginals), and a line site is on where it was on in more than half the samples.
     """
-    params = lattice.params
     machine = lattice.machine
     key = philox_key(seed)
     per_site = lattice.ncomp if lattice.kind == "smooth" else lattice.nlevels
@@ -59,12 +114,12 @@ def mpm(lattice: Lattice, seed: int) -> int:
         lattice.set_value(array, 0.0)
     accumulate = lattice.kernel("accumulate")
     size = (lattice.n,)
-    for k in range(params.burn_in + params.samples):
-        lattice.sweep("sample", params.mpm_temperature, k, key)
-        if k >= params.burn_in:
+    for k in range(schedule.burn_in + schedule.samples):
+        lattice.sweep("sample", schedule.mpm_temperature, k, key)
+        if k >= schedule.burn_in:
             machine.launch(accumulate, size, lattice.f, lattice.lh, lattice.lv, sum_f, sum_h, sum_v,
                            lattice.levels, np.int64(lattice.n))
-    count = np.float32(max(params.samples, 1))
+    count = np.float32(max(schedule.samples, 1))
     smooth = lattice.kind == "smooth"
     machine.launch(lattice.kernel("scale_and_threshold"), size, sum_f, sum_h, sum_v, count, np.int32(smooth),
                    np.int64(lattice.n))
@@ -74,4 +129,4 @@ def mpm(lattice: Lattice, seed: int) -> int:
         machine.launch(lattice.kernel("levels_mode"), size, sum_f, lattice.f, lattice.levels, np.int64(lattice.n))
     lattice.copy(lattice.lh, sum_h)
     lattice.copy(lattice.lv, sum_v)
-    return params.burn_in + params.samples
+    return schedule.burn_in + schedule.samples

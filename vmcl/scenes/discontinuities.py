@@ -1,0 +1,44 @@
+"""Ground-truth discontinuity labels: a :class:`~vmcl.labels.Label` for every line site of the dual
+lattice between 4-neighbours, and for the pixels (the rules are in the notes of :mod:`vmcl.scenes`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vmcl.labels import Label
+
+_PRECEDENCE = (Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.TEXTURE, Label.SHADOW, Label.SPECULAR)
+
+
+def discontinuity_labels(depth, body, face, hue, look, region, shadow, highlight):
+    """Labels of the line sites between horizontal and vertical neighbours, and of the pixels."""
+
+    def sites(a, b):
+        code = np.zeros(body[a].shape, np.uint8)
+        code[highlight[a] != highlight[b]] = Label.SPECULAR
+        code[shadow[a] != shadow[b]] = Label.SHADOW
+        other = region[a] != region[b]
+        same_colour = hue[a] == hue[b]
+        code[other & same_colour & (look[a] != look[b])] = Label.TEXTURE
+        code[other & ~same_colour] = Label.ALBEDO
+        code[face[a] != face[b]] = Label.ORIENTATION
+        code[body[a] != body[b]] = Label.DEPTH
+        return code
+
+    h, w = depth.shape
+    line_h = sites((slice(None), slice(0, -1)), (slice(None), slice(1, None)))
+    line_v = sites((slice(0, -1), slice(None)), (slice(1, None), slice(None)))
+    rank = np.full(len(Label), len(_PRECEDENCE), np.int64)
+    rank[list(_PRECEDENCE)] = np.arange(len(_PRECEDENCE))
+    best = np.full((h, w), len(_PRECEDENCE), np.int64)
+    for code, step in ((line_h, (0, 1)), (line_v, (1, 0))):
+        ys, xs = np.nonzero(code)
+        ys2, xs2 = ys + step[0], xs + step[1]
+        # A DEPTH site labels its nearer pixel: the occluding contour belongs to the occluder.
+        far = (code[ys, xs] == Label.DEPTH) & (depth[ys2, xs2] < depth[ys, xs])
+        np.minimum.at(best, (np.where(far, ys2, ys), np.where(far, xs2, xs)), rank[code[ys, xs]])
+    labels = np.zeros((h, w), np.uint8)
+    has = best < len(_PRECEDENCE)
+    labels[has] = np.array(_PRECEDENCE, np.uint8)[best[has]]
+    return labels, line_h, line_v
