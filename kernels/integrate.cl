@@ -1,18 +1,19 @@
 /* integrate.cl: the integration stage's output, seed sections "The Vision Machine System" and
- * "Organization of integration". Each cue (depth, motion, colour, texture) has been restored by its own
+ * "Organization of integration". Each cue (stereo, motion, colour, texture ...) has been restored by its own
  * line-process MRF coupled to the brightness edges; here their line processes meet on the pixel grid.
  * One work-item per pixel (per CM processor), over a (W, H) grid; ids past the field idle.
  *
  *   boundary    a line process as a 0/1 pixel map: (x, y) is on when the site to its right (line_h) or
  *               below it (line_v) is on (the convention of vmcl.scenes' non-depth labels); the stereo
  *               matcher takes it as the barriers of its second pass
- *   integrate   the cue-support bitmask of every pixel (which cues put a line next to it, and whether a
- *               brightness edge lies on it) and its label: the "cartoon"
+ *   start_support, mark_cue
+ *               the cue-support bitmask of every pixel: whether a brightness edge lies on it, and which
+ *               cues put a line next to it (one launch per cue)
+ *   rule_labels each supported pixel's label by the cues' rules: the "cartoon"
  *
  * Line fields: line_h is (H, W - 1), line_v is (H - 1, W), uint8 0/1, as vmcl.mrf.restore returns them.
- * Defines (from vmcl.integrate, the one place that names them): the cue bits BIT_STEREO, BIT_MOTION,
- * BIT_COLOUR, BIT_TEXTURE, BIT_BRIGHTNESS and the vmcl.scenes.Label codes LABEL_DEPTH, LABEL_ALBEDO,
- * LABEL_TEXTURE.
+ * Defines (from vmcl.integrate, the one place that names them): BIT_BRIGHTNESS; NRULES, RULE_MASKS and
+ * RULE_CODES, the rule labelling of every registered cue (vmcl.labels.rule_label).
  */
 
 inline int on_boundary(__global const uchar *line_h, __global const uchar *line_v, long x, long y, long W, long H)
@@ -28,31 +29,43 @@ __kernel void boundary(__global const uchar *line_h, __global const uchar *line_
     out[y * W + x] = (uchar)on_boundary(line_h, line_v, x, y, W, H);
 }
 
-/* A cue whose bit is not in `present` has no line process; its buffers are placeholders never read. */
-__kernel void integrate(__global const uchar *stereo_h, __global const uchar *stereo_v,
-                        __global const uchar *motion_h, __global const uchar *motion_v,
-                        __global const uchar *colour_h, __global const uchar *colour_v,
-                        __global const uchar *texture_h, __global const uchar *texture_v,
-                        __global const uchar *edges, int present,
-                        __global uchar *support, __global uchar *labels, long W, long H)
+/* The support map starts as the brightness edges' bit (or nothing without edges); each cue's line
+ * process then adds its bit. */
+__kernel void start_support(__global const uchar *edges, int with_edges, __global uchar *support, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     size_t i = (size_t)y * W + x;
-    int bits = 0;
-    if ((present & BIT_STEREO) && on_boundary(stereo_h, stereo_v, x, y, W, H)) bits |= BIT_STEREO;
-    if ((present & BIT_MOTION) && on_boundary(motion_h, motion_v, x, y, W, H)) bits |= BIT_MOTION;
-    if ((present & BIT_COLOUR) && on_boundary(colour_h, colour_v, x, y, W, H)) bits |= BIT_COLOUR;
-    if ((present & BIT_TEXTURE) && on_boundary(texture_h, texture_v, x, y, W, H)) bits |= BIT_TEXTURE;
-    if ((present & BIT_BRIGHTNESS) && edges[i]) bits |= BIT_BRIGHTNESS;
-    /* The physical reading of the support, most specific first: a jump of depth or of motion is an
-     * occluding contour whatever else changes there; a change of hue is a change of albedo (shadows and
-     * shading leave H = R / (R + G) unchanged); a change of texture alone is a texture boundary. A
-     * brightness edge no cue supports stays unlabelled (shadow, shading, fold or texture element). */
+    support[i] = (uchar)((with_edges && edges[i]) ? BIT_BRIGHTNESS : 0);
+}
+
+__kernel void mark_cue(__global const uchar *line_h, __global const uchar *line_v, int bit,
+                       __global uchar *support, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    if (on_boundary(line_h, line_v, x, y, W, H)) support[(size_t)y * W + x] |= (uchar)bit;
+}
+
+/* The rule labels: the physical reading of the support, most specific first (vmcl.labels.RULE_PRECEDENCE):
+ * rule k gives label rule_codes[k] to a pixel with a bit of rule_masks[k] (the bits of the cues whose
+ * lines stand for that label: stereo and motion for an occluding contour, colour for albedo, texture for
+ * a texture boundary). A brightness edge no cue supports stays unlabelled (shadow, shading, fold or
+ * texture element). */
+__constant int rule_masks[NRULES] = {RULE_MASKS};
+__constant uchar rule_codes[NRULES] = {RULE_CODES};
+
+__kernel void rule_labels(__global const uchar *support, __global uchar *labels, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    size_t i = (size_t)y * W + x;
     uchar label = 0;
-    if (bits & (BIT_STEREO | BIT_MOTION)) label = LABEL_DEPTH;
-    else if (bits & BIT_COLOUR) label = LABEL_ALBEDO;
-    else if (bits & BIT_TEXTURE) label = LABEL_TEXTURE;
-    support[i] = (uchar)bits;
+    for (int k = 0; k < NRULES; k++) {
+        if (support[i] & rule_masks[k]) {
+            label = rule_codes[k];
+            break;
+        }
+    }
     labels[i] = label;
 }

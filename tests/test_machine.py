@@ -13,7 +13,6 @@ import pyopencl as cl
 import pytest
 
 import vmcl
-from vmcl import integrate as integrate_module
 from vmcl import machine as machine_module
 from vmcl.cm.scan import scan
 from vmcl.errors import InputValueError
@@ -164,7 +163,7 @@ def test_views_with_an_offset_are_refused_at_launch(machine):
     data = machine.to_device(np.arange(64, dtype=np.float32).reshape(8, 8))
     with pytest.raises(ValueError, match="must not be a device view with an offset"):
         box_sum(data[2:], 1, machine=machine)
-    kernel = machine.kernel("integrate", "boundary", **integrate_module._DEFINES)
+    kernel = machine.kernel("integrate", "boundary", BIT_BRIGHTNESS=16, NRULES=1, RULE_MASKS=1, RULE_CODES=1)
     with pytest.raises(ValueError, match="views with an offset"):
         machine.launch(kernel, (4, 4), data[1:], data, data, np.int64(4), np.int64(4))
 

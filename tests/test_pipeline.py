@@ -177,7 +177,7 @@ def test_timings_per_stage_and_kernel(small_scene):
     start = time.perf_counter()
     result = VisionMachine().run(s.left, s.right)  # its own profiling Machine
     wall_ms = (time.perf_counter() - start) * 1e3
-    assert list(result.stages) == ["upload", "edges", "colour", "texture", "stereo", "mrf stereo", "feedback",
+    assert list(result.stages) == ["upload", "edges", "stereo", "colour", "texture", "mrf stereo", "feedback",
                                    "mrf colour", "mrf texture", "integrate", "download"]
     assert all(ms > 0 for ms in result.stages.values()) and result.total_ms <= wall_ms
     # One in-order queue: kernels never overlap, so their device times add up to less than the run's wall time.

@@ -213,6 +213,11 @@ TABLE: tuple[Entry, ...] = (
     # ------------------------------------------------------------------ integration and labelling
     _e("vmcl.integrate:boundary", line_h=LINE_H, line_v=LINE_V, kinds={"line_h": _A, "line_v": _A, "machine": _M}),
     _e("vmcl.labels:cue_bit", cue="stereo", kinds={"cue": _C}),
+    _e("vmcl.labels:rule_label", cue="stereo", kinds={"cue": _C}),
+    _e("vmcl.integrate:restore_cue", data=arr((12, 12)), confidence=None, coupling=None, kind="smooth",
+       candidates_only=False, settings=make("settings"), method="icm", seed=0,
+       kinds={"data": _A, "confidence": _OA, "kind": _C, "candidates_only": _B, "settings": _O, "method": _C,
+              "seed": _I, "machine": _M}),
     _e("vmcl.integrate:integrate", lines=make("lines"), edges=MASK, shape=None,
        kinds={"lines": _O, "edges": _OA, "shape": _OT, "machine": _M}),
     _e("vmcl.labelling:candidate_bits", inputs=["stereo", "colour"], kinds={"inputs": "names"}),
@@ -301,6 +306,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.report:field_image", values=IMG, kinds={"values": _A}),
     _e("vmcl.report:encode_png", rgb=arr((16, 16, 3), "uint8", "randint:256"), kinds={"rgb": _A}),
     _e("vmcl.report:images", result=make("result"), kinds={"result": _O}),
+    _e("vmcl.report:images_with_captions", result=make("result"), kinds={"result": _O}),
     _e("vmcl.report:write_report", result=make("result"), folder=path("new_dir"), title="t", evaluation=None,
        kinds={"result": _O, "folder": _P, "title": _C, "evaluation": _O}),
     # ------------------------------------------------------------------ pipeline, machine
@@ -339,6 +345,10 @@ EXEMPT = {
     "vmcl.cm.scan:scan_rows_into", "vmcl.cm.scan:exclusive_sum_into", "vmcl.early.noise:threshold_field",
     "vmcl.labelling:default_labeller", "vmcl.machine:default_machine", "vmcl.machine:list_devices",
     "vmcl.machine:kernels_dir", "vmcl.machine:NoOpenCLPlatformError",
+    "vmcl.labels:cue_names", "vmcl.cues:registered", "vmcl.cues:CueModule", "vmcl.cues:Measurement",
+    "vmcl.cues:RunInputs",
+    # Change the machine's cues for the whole process: tests/test_cues.py checks their refusals.
+    "vmcl.labels:add_cue", "vmcl.labels:remove_cue", "vmcl.cues:register", "vmcl.cues:unregister",
     # Needs a head that has run a calibration pattern in front of it; table_for_fixation covers the glue.
     "vmcl.eyehead:calibrate_vergences",
 }
@@ -347,7 +357,7 @@ PUBLIC_MODULES = (
     "vmcl.cm.doubling", "vmcl.cm.filters", "vmcl.cm.news", "vmcl.cm.reduce", "vmcl.cm.router", "vmcl.cm.scan",
     "vmcl.early.color", "vmcl.early.edges", "vmcl.early.filters", "vmcl.early.motion", "vmcl.early.noise",
     "vmcl.early.registration", "vmcl.early.sign_correlation", "vmcl.early.stereo", "vmcl.early.texture",
-    "vmcl.mrf", "vmcl.integrate", "vmcl.labels", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
+    "vmcl.mrf", "vmcl.integrate", "vmcl.labels", "vmcl.cues", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
     "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pipeline", "vmcl.machine",
 )
 
@@ -753,6 +763,11 @@ def _makers():
 
         return EnergyModel()
 
+    def settings(ctx):
+        from vmcl.mrf import IcmSchedule, Settings
+
+        return Settings(schedules={"icm": IcmSchedule(icm_sweeps=3)})
+
     def icm_schedule(ctx):
         from vmcl.mrf import IcmSchedule
 
@@ -773,7 +788,7 @@ def _makers():
         "warp_table_2": lambda ctx: _warp_table(ctx, 2.0),
         "store": _store,
         "prior": lambda ctx: __import__("vmcl.mrf", fromlist=["LinePrior"]).LinePrior(),
-        "energy_model": energy_model, "icm_schedule": icm_schedule,
+        "energy_model": energy_model, "icm_schedule": icm_schedule, "settings": settings,
         "lines": lambda ctx: {"stereo": (_array(LINE_H, ctx), _array(LINE_V, ctx))},
         "weights": lambda ctx: dict(labeller(ctx).weights),
         "labeller": labeller,

@@ -25,20 +25,37 @@ T. Poggio et al., "The MIT Vision Machine", Proc. DARPA Image Understanding Work
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from typing import NamedTuple
 
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm._arrays import ArrayLike, check_int, check_real_dtype, field, machine_for
+from vmcl.cm._arrays import (
+    ArrayLike,
+    check_bool,
+    check_choice,
+    check_int,
+    check_real_dtype,
+    field,
+    machine_for,
+)
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.labels import BIT_DEFINES, CUES, Cue, Label, cue_bit
+from vmcl.labels import RULE_PRECEDENCE, Cue, cue_bit, cue_names, rule_label
 from vmcl.machine import Machine
+from vmcl.mrf import SOLVERS, Restoration, Settings, restore
 
-_DEFINES = {**BIT_DEFINES,
-            "LABEL_DEPTH": int(Label.DEPTH), "LABEL_ALBEDO": int(Label.ALBEDO),
-            "LABEL_TEXTURE": int(Label.TEXTURE)}
+
+def _rule_defines() -> dict[str, object]:
+    """The kernels' defines: the brightness bit, and each rule label's mask of cue bits in precedence order."""
+    masks = {label: 0 for label in RULE_PRECEDENCE}
+    for name in cue_names():
+        masks[rule_label(name)] |= cue_bit(name)
+    rules = [(mask, int(label)) for label, mask in masks.items() if mask]
+    return {"BIT_BRIGHTNESS": int(Cue.BRIGHTNESS), "NRULES": len(rules),
+            "RULE_MASKS": ",".join(str(mask) for mask, _ in rules),
+            "RULE_CODES": ",".join(str(code) for _, code in rules)}
 
 
 class Integration(NamedTuple):
@@ -88,6 +105,49 @@ def _shape(shape) -> tuple[int, int]:
     return check_int(shape[0], "shape[0]", minimum=1), check_int(shape[1], "shape[1]", minimum=1)
 
 
+def restore_cue(data: ArrayLike, *, confidence: ArrayLike | None, coupling: ArrayLike, kind: str,
+                candidates_only: bool, settings: Settings, method: str, seed: int = 0,
+                machine: Machine | None = None) -> Restoration:
+    """Restore one cue's measurements by its line-process MRF, coupled to an edge field.
+
+    The piecewise smooth cues (stereo, motion) are coupled to the brightness edges: a line site costs
+    less next to one (equation (12)). The piecewise constant ones (colour, texture) are coupled to their
+    own module's candidates with ``candidates_only``: lines are allowed only near them (the boundaries
+    these cues exist for are the ones brightness misses).
+
+    Parameters
+    ----------
+    data, confidence, coupling
+        As :func:`vmcl.mrf.restore` takes ``data``, ``confidence`` and ``edges``.
+    kind : {"smooth", "constant"}
+    candidates_only : bool
+        Forbid lines with no coupling edge within the model's ``edge_radius``.
+    settings : vmcl.mrf.Settings
+        The cue's energy model and solver schedules (e.g. ``Config().mrf.settings("stereo")``).
+    method : str
+        A solver of :data:`vmcl.mrf.SOLVERS`.
+    seed : int
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    vmcl.mrf.Restoration
+
+    Raises
+    ------
+    vmcl.mrf.NothingToRestore
+        When no measurement has a positive confidence.
+    """
+    if not isinstance(settings, Settings):
+        raise InputTypeError(f"settings must be a vmcl.mrf.Settings, got {type(settings).__name__}")
+    model = settings.model
+    if check_bool(candidates_only, "candidates_only"):
+        model = dataclasses.replace(model, require_edge=True)
+    check_choice(method, "method", SOLVERS)
+    return restore(data, confidence=confidence, edges=coupling, kind=kind, method=method, model=model,
+                   schedule=settings.schedule(method), seed=seed, machine=machine)
+
+
 def boundary(line_h: ArrayLike, line_v: ArrayLike, *, machine: Machine | None = None) -> ArrayLike:
     """A line process as a pixel map: (y, x) is on when the site to its right or below it is on.
 
@@ -106,7 +166,7 @@ def boundary(line_h: ArrayLike, line_v: ArrayLike, *, machine: Machine | None = 
     host = isinstance(line_h, np.ndarray)
     h, v, (height, width) = _lines(line_h, line_v, "", machine, None)
     out = machine.empty((height, width), np.uint8)
-    kernel = machine.kernel("integrate", "boundary", **_DEFINES)
+    kernel = machine.kernel("integrate", "boundary", **_rule_defines())
     machine.launch(kernel, (width, height), h, v, out, np.int64(width), np.int64(height))
     return out.get().astype(bool) if host else out
 
@@ -142,9 +202,9 @@ def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayL
     machine = machine_for(machine)
     if not isinstance(lines, Mapping):
         raise InputTypeError(f"lines must be a mapping of cue name to (line_h, line_v), got {type(lines).__name__}")
-    unknown = set(lines) - set(CUES)
+    unknown = set(lines) - set(cue_names())
     if unknown:
-        raise InputValueError(f"lines has unknown cues {sorted(unknown, key=str)}; cues are {', '.join(CUES)}")
+        raise InputValueError(f"lines has unknown cues {sorted(unknown, key=str)}; cues are {', '.join(cue_names())}")
     for name, pair in lines.items():
         if not isinstance(pair, (tuple, list)) or len(pair) != 2:
             raise InputTypeError(f"lines[{name!r}] must be a (line_h, line_v) pair, got {type(pair).__name__}")
@@ -152,16 +212,11 @@ def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayL
         shape = _shape(shape)
     inputs = [a for pair in lines.values() for a in pair] + ([edges] if edges is not None else [])
     host = all(isinstance(a, np.ndarray) for a in inputs)
-    present = 0
-    buffers = []
-    for name in CUES:
-        bit = cue_bit(name)
+    marks = []
+    for name in cue_names():
         if name in lines:
             h, v, shape = _lines(*lines[name], f"lines[{name!r}] ", machine, shape)
-            present |= bit
-            buffers += [h, v]
-        else:
-            buffers += [None, None]
+            marks.append((h, v, cue_bit(name)))
     if edges is not None:
         if isinstance(edges, np.ndarray):
             edges = (check_real_dtype(edges, "edges") != 0).view(np.uint8)
@@ -169,16 +224,17 @@ def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayL
         if shape is not None and edges.shape != shape:
             raise InputValueError(f"edges must have the lines' shape {shape}, got {edges.shape}")
         shape = edges.shape
-        present |= Cue.BRIGHTNESS
     if shape is None:
         raise InputValueError("integrate needs lines, edges or a shape")
     height, width = shape
-    placeholder = machine.empty(1, np.uint8)  # never read: its cue's bit is not in `present`
-    buffers = [placeholder if b is None else b for b in buffers]
     support, labels = machine.empty(shape, np.uint8), machine.empty(shape, np.uint8)
-    kernel = machine.kernel("integrate", "integrate", **_DEFINES)
-    machine.launch(kernel, (width, height), *buffers, placeholder if edges is None else edges,
-                   np.int32(present), support, labels, np.int64(width), np.int64(height))
+    defines = _rule_defines()
+    size, extent = (width, height), (np.int64(width), np.int64(height))
+    machine.launch(machine.kernel("integrate", "start_support", **defines), size,
+                   support if edges is None else edges, np.int32(edges is not None), support, *extent)
+    for h, v, bit in marks:
+        machine.launch(machine.kernel("integrate", "mark_cue", **defines), size, h, v, np.int32(bit), support, *extent)
+    machine.launch(machine.kernel("integrate", "rule_labels", **defines), size, support, labels, *extent)
     if host:
         return Integration(support.get(), labels.get())
     return Integration(support, labels)

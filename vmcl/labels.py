@@ -51,10 +51,68 @@ BIT_DEFINES = {f"BIT_{bit.name}": int(bit) for bit in Cue}
 """The kernels' -D names of the :class:`Cue` bits (integrate.cl, labelling.cl)."""
 
 
-def cue_bit(cue: str) -> Cue:
-    """The support bit of the cue named ``cue`` (one of :data:`CUES`)."""
+RULE_LABELS = {"stereo": Label.DEPTH, "motion": Label.DEPTH, "colour": Label.ALBEDO, "texture": Label.TEXTURE}
+"""The physical reading of each cue's line under the rule labelling (:func:`vmcl.integrate.integrate`): a
+jump of depth or of motion is an occluding contour, a change of hue a change of albedo (shadows and
+shading leave hue unchanged), a change of texture alone a texture boundary."""
+
+RULE_PRECEDENCE = (Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.TEXTURE, Label.SHADOW, Label.SPECULAR)
+"""Where several cues mark a pixel, the rule label is the first of theirs in this order (the most
+specific cause first, as the scenes' ground truth orders them)."""
+
+_FREE_BITS = (32, 64, 128)  # the support map is uint8; BRIGHTNESS holds 16
+_EXTRA: dict[str, tuple[int, Label]] = {}  # cues registered beyond CUES: name -> (bit, rule label)
+
+
+def _check_name(cue) -> str:
     if not isinstance(cue, str):
-        raise InputTypeError(f"cue must be a str, one of {', '.join(CUES)}; got {type(cue).__name__}")
-    if cue not in CUES:
-        raise InputValueError(f"cue must be one of {', '.join(CUES)}, got {cue!r}")
-    return Cue[cue.upper()]
+        raise InputTypeError(f"cue must be a str, one of {', '.join(cue_names())}; got {type(cue).__name__}")
+    if cue not in CUES and cue not in _EXTRA:
+        raise InputValueError(f"cue must be one of {', '.join(cue_names())}, got {cue!r}")
+    return cue
+
+
+def cue_names() -> tuple[str, ...]:
+    """Every cue the machine knows: :data:`CUES`, then those added with :func:`add_cue`, in bit order."""
+    return CUES + tuple(_EXTRA)
+
+
+def cue_bit(cue: str) -> int:
+    """The support bit of the cue named ``cue`` (a :class:`Cue` member for the cues of :data:`CUES`)."""
+    _check_name(cue)
+    return Cue[cue.upper()] if cue in CUES else _EXTRA[cue][0]
+
+
+def rule_label(cue: str) -> Label:
+    """The label the rule labelling gives a pixel the cue ``cue`` marks (see :data:`RULE_LABELS`)."""
+    _check_name(cue)
+    return RULE_LABELS[cue] if cue in CUES else _EXTRA[cue][1]
+
+
+def add_cue(name: str, label: Label) -> int:
+    """Give a new cue a support bit and its rule label; returns the bit (adding a name twice returns its bit).
+
+    The support map is uint8 with :data:`CUES` and BRIGHTNESS in its five low bits, so three cues can be
+    added. :func:`vmcl.cues.register` calls this; a cue's name must be a Python identifier.
+    """
+    if not isinstance(name, str) or not name.isidentifier():
+        raise InputTypeError(f"name must be an identifier string, got {name!r}")
+    if not isinstance(label, Label) or label == Label.NONE:
+        raise InputTypeError(f"label must be a Label other than NONE, got {label!r}")
+    if name in CUES:
+        raise InputValueError(f"name {name!r} is a cue the machine already has")
+    if name in _EXTRA:
+        if _EXTRA[name][1] != label:
+            raise InputValueError(f"cue {name!r} was added with the label {_EXTRA[name][1].name}, not {label.name}")
+        return _EXTRA[name][0]
+    if len(_EXTRA) == len(_FREE_BITS):
+        raise InputValueError(f"the support map has no bit left for cue {name!r} ({len(_FREE_BITS)} added already)")
+    _EXTRA[name] = (_FREE_BITS[len(_EXTRA)], label)
+    return _EXTRA[name][0]
+
+
+def remove_cue(name: str) -> None:
+    """Forget a cue added with :func:`add_cue` (the last added only, so that the bits stay packed)."""
+    if not _EXTRA or name != list(_EXTRA)[-1]:
+        raise InputValueError(f"only the last added cue can be removed, got {name!r}")
+    del _EXTRA[name]

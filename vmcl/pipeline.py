@@ -40,11 +40,12 @@ import numpy as np
 from vmcl import integrate as _integrate
 from vmcl import labelling
 from vmcl.cm._arrays import check_choice, check_int, check_real
-from vmcl.early import color, edges, motion, stereo, texture
+from vmcl.cues import CueModule, Measurement, RunInputs, registered
+from vmcl.early import edges, motion, stereo
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.labels import CUES
 from vmcl.machine import Machine
-from vmcl.mrf import SOLVERS, NothingToRestore, Settings, backfill, preset, restore, score_confidence
+from vmcl.mrf import SOLVERS, NothingToRestore, Restoration, Settings, preset
 from vmcl.mrf.data import check_unit_interval
 
 if sys.version_info >= (3, 11):
@@ -303,10 +304,12 @@ class MrfConfig:
         check_choice(self.schedule, "mrf.schedule", _SCHEDULES)
         check_int(self.seed, "mrf.seed", minimum=0, maximum=2**64 - 1)
 
-    def settings(self, cue: str) -> Settings:
-        """The preset settings of ``cue`` (one of :data:`vmcl.labels.CUES`) with the schedule and this
-        configuration's overrides."""
-        return preset(cue).override({**_SCHEDULES[self.schedule], **getattr(self, cue)}, prefix=f"mrf.{cue}")
+    def settings(self, cue: str, default: Settings | None = None) -> Settings:
+        """The MRF settings of ``cue``: its preset (for :data:`vmcl.labels.CUES`; else ``default``, or
+        ``Settings()``) with the schedule and this configuration's overrides."""
+        if cue in CUES:
+            return preset(cue).override({**_SCHEDULES[self.schedule], **getattr(self, cue)}, prefix=f"mrf.{cue}")
+        return (default or Settings()).override(_SCHEDULES[self.schedule], prefix=f"mrf.{cue}")
 
 
 @dataclass(frozen=True)
@@ -560,16 +563,17 @@ class VisionMachine:
         # Read once per machine; None with the rule labels.
         self.labeller = self.config.labels.labeller() if self.config.labels.method == "linear" else None
 
+    def cues(self, *, right: bool, next: bool, rgb: bool) -> list[CueModule]:
+        """The registered cues (:func:`vmcl.cues.registered`) that run for these inputs, in order."""
+        given = {name for name, present in (("right", right), ("next", next), ("rgb", rgb)) if present}
+        return [cue for cue in registered() if cue.needs <= given and cue.enabled(self.config)]
+
     def stages(self, *, right: bool, next: bool, rgb: bool) -> list[str]:
         """The names of the stages :meth:`run` goes through for these inputs, in order."""
-        c = self.config
-        stereo_on, motion_on = right and c.stereo.enabled, next and c.motion.enabled
-        colour_on, texture_on = rgb and c.colour.enabled, c.texture.enabled
-        names = ["upload", "edges"]
-        names += ["colour"] * colour_on + ["texture"] * texture_on + ["stereo"] * stereo_on + ["motion"] * motion_on
-        names += ["mrf stereo"] * stereo_on
-        names += ["feedback"] * (stereo_on and c.stereo.feedback)
-        names += ["mrf motion"] * motion_on + ["mrf colour"] * colour_on + ["mrf texture"] * texture_on
+        active = self.cues(right=right, next=next, rgb=rgb)
+        names = ["upload", "edges", *(cue.name for cue in active)]
+        for cue in active:
+            names += [f"mrf {cue.name}"] + [stage for stage in [cue.refine_stage(self.config)] if stage]
         return names + ["integrate", "download"]
 
     def run(self, left: np.ndarray, right: np.ndarray | None = None, next: np.ndarray | None = None, *,
@@ -613,88 +617,58 @@ class _Run:
     def __init__(self, vm: VisionMachine, image: np.ndarray, others: dict[str, np.ndarray],
                  progress: Callable[[str], None] | None) -> None:
         self.m, self.c = vm.machine, vm.config
-        self.labeller = vm.labeller
         self.progress = progress
         self.stages: dict[str, float] = {}
         self.notes: list[str] = []
         if self.m.profile:
             self.m.timings(reset=True)  # only this run's kernels
-        width = image.shape[1]
-        rgb = image.ndim == 3
-        names = vm.stages(right="right" in others, next="next" in others, rgb=rgb)
-        device: dict[str, Any] = {}
-        out: dict[str, Any] = {}
-        weights: dict[str, Any] = {}  # each cue's MRF data confidence, where its module gives one
+        active = vm.cues(right="right" in others, next="next" in others, rgb=image.ndim == 3)
         with self.stage("upload"):
             left = self.m.to_device(image)
             others_d = {name: self.m.to_device(array) for name, array in others.items()}
         with self.stage("edges"):
             e = self.c.edges
-            device["edges"] = edges.canny(left, sigma=e.sigma, low_threshold=e.low_threshold,
-                                          high_threshold=e.high_threshold, use_quantiles=e.use_quantiles,
-                                          machine=self.m)
-        brightness = device["edges"]
-        if "colour" in names:
-            with self.stage("colour"):
-                found = color.albedo_edges(left, threshold=self.c.colour.threshold, machine=self.m)
-                device["hue"], device["colour_edges"] = found.hue, found.edges
-        if "texture" in names:
-            with self.stage("texture"):
-                t = self.c.texture
-                found = texture.texture_edges(left, fine_sigma=t.fine_sigma, coarse_sigma=t.coarse_sigma,
-                                              threshold=t.threshold, radius=t.radius, machine=self.m)
-                device["density"], device["texture_edges"] = found.density, found.edges
-        if "stereo" in names:
-            with self.stage("stereo"):
-                matched = self.match(left, others_d["right"], width, None)
-                device["sparse_disparity"] = matched.disparity
-                dense = self.dense_match(left, others_d["right"], width)
-                depth_data = self.depth_data(matched, dense)
-                device["stereo_discontinuity"] = matched.discontinuity
-        if "motion" in names:
-            with self.stage("motion"):
-                mc = self.c.motion
-                found = motion.flow(left, others_d["next"], delta=mc.delta, patch=mc.patch, levels=mc.levels,
-                                    features=mc.features, machine=self.m)
-                device["raw_flow"] = found.flow
-                if mc.weigh_by_score:
-                    weights["motion"] = score_confidence(found.score, floor=mc.confidence_floor, machine=self.m)
-        lines = {}
-        if "mrf stereo" in names:
-            with self.stage("mrf stereo"):
-                found = self.restore("stereo", *depth_data, brightness, device)
-                if found is not None:
-                    lines["stereo"] = found
-            if "feedback" in names and "stereo" in lines:
-                with self.stage("feedback"):
-                    barriers = _integrate.boundary(*lines["stereo"], machine=self.m)
-                    device["first_pass_disparity"] = device["sparse_disparity"]
-                    matched = self.match(left, others_d["right"], width, barriers)
-                    device["sparse_disparity"] = matched.disparity
-                    device["stereo_discontinuity"] = matched.discontinuity
-                    depth_data = self.depth_data(matched, dense)
-                    lines["stereo"] = self.restore("stereo", *depth_data, brightness, device) or lines["stereo"]
-        for cue, data, coupling, kind in (("motion", "raw_flow", "edges", "smooth"),
-                                          ("colour", "hue", "colour_edges", "constant"),
-                                          ("texture", "density", "texture_edges", "constant")):
-            if f"mrf {cue}" in names:
-                with self.stage(f"mrf {cue}"):
-                    found = self.restore(cue, device[data], weights.get(cue), device[coupling], device,
-                                         kind=kind)
-                    if found is not None:
-                        lines[cue] = found
+            brightness = edges.canny(left, sigma=e.sigma, low_threshold=e.low_threshold,
+                                     high_threshold=e.high_threshold, use_quantiles=e.use_quantiles,
+                                     machine=self.m)
+        run = RunInputs(self.m, self.c, left, others_d.get("right"), others_d.get("next"), brightness)
+        measured = {}
+        for cue in active:
+            with self.stage(cue.name):
+                measured[cue.name] = cue.measure(run)
+        fields = {name: array for m in measured.values() for name, array in m.fields.items()}
+        lines, restored = {}, {}
+        for cue in active:
+            with self.stage(f"mrf {cue.name}"):
+                found = self.restore(cue, measured[cue.name])
+            refine = cue.refine_stage(self.c)
+            if found is not None and refine:
+                with self.stage(refine):
+                    again = cue.refine(run, measured[cue.name], (found.line_h, found.line_v))
+                    fields.update(again.fields)
+                    found = self.restore(cue, again) or found
+            if found is not None:
+                lines[cue.name], restored[cue.name] = (found.line_h, found.line_v), found.field
         with self.stage("integrate"):
-            device["support"], device["labels"] = _integrate.integrate(lines, edges=brightness, machine=self.m)
-            if self.labeller is not None:
-                device["labels"] = labelling.label(
-                    device["support"], left, disparity=device.get("restored_stereo"),
-                    flow=device.get("restored_motion"), hue=device.get("restored_colour"),
-                    texture="texture" in lines, labeller=self.labeller, machine=self.m)
+            support, labels = _integrate.integrate(lines, edges=brightness, machine=self.m)
+            if vm.labeller is not None:
+                labels = labelling.label(
+                    support, left, disparity=restored.get("stereo"), flow=restored.get("motion"),
+                    hue=restored.get("colour"), texture="texture" in lines, labeller=vm.labeller, machine=self.m)
         with self.stage("download"):
-            for name, array in device.items():
-                out[name] = array.get()
-            out["lines"] = {cue: (h.get().astype(bool), v.get().astype(bool)) for cue, (h, v) in lines.items()}
-        self.result = self.collect(image, out)
+            host = {name: array.get() for name, array in fields.items()}
+            host_restored = {cue: array.get() for cue, array in restored.items()}
+            host_lines = {cue: (h.get().astype(bool), v.get().astype(bool)) for cue, (h, v) in lines.items()}
+            edge_map, support, labels = brightness.get(), support.get(), labels.get()
+        as_bool = ("colour_edges", "texture_edges", "stereo_discontinuity")
+        host = {name: (value.astype(bool) if name in as_bool else value) for name, value in host.items()}
+        for cue in active:
+            if cue.restored_as and cue.name in host_restored:
+                host[cue.restored_as] = host_restored[cue.name]
+        self.result = Result(image=image, edges=edge_map.astype(bool), support=support, labels=labels,
+                             config=self.c, restored=host_restored, lines=host_lines, stages=self.stages,
+                             kernels=self.m.timings(reset=True) if self.m.profile else {}, notes=self.notes,
+                             **host)
 
     @contextmanager
     def stage(self, name: str) -> Iterator[None]:
@@ -705,70 +679,17 @@ class _Run:
         if self.progress is not None:
             self.progress(name)
 
-    def match(self, left, right, width: int, barriers, *, features: str | None = None) -> stereo.StereoMatch:
-        s = self.c.stereo
-        d_min = 0 if s.d_min is None else s.d_min
-        d_max = math.ceil(s.max_disparity * width) if s.d_max is None else s.d_max
-        features = features or s.features
-        # Canny's thresholds mean nothing to the intensity matcher, which matches every pixel; shiftable
-        # windows are its own.
-        options = {"shiftable": s.shiftable and barriers is None} if features == "intensity" else {
-            "low_threshold": s.low_threshold, "high_threshold": s.high_threshold, "use_quantiles": s.use_quantiles}
-        return stereo.match(left, right, d_min=d_min, d_max=d_max, features=features, patch=s.patch,
-                            sigma=s.intensity_sigma if features == "intensity" else s.sigma, barriers=barriers,
-                            machine=self.m, **options)
-
-    def dense_match(self, left, right, width: int) -> tuple[Any, Any] | None:
-        """The intensity matches and their weights for :meth:`depth_data`, or None without backfill.
-
-        Matched once, without barriers: matched again with the first pass's depth lines as barriers, in
-        the feedback pass, it made the restored disparity worse (dense bad-1 on "cues" 0.9% to 1.1%,
-        on "blocks" 4.6% to 6.7%).
-        """
-        s = self.c.stereo
-        if not s.backfill or s.features == "intensity":
-            return None
-        dense = self.match(left, right, width, None, features="intensity")
-        return dense.disparity, score_confidence(dense.score, floor=s.backfill_floor, weight=s.backfill_weight,
-                                                 machine=self.m)
-
-    def depth_data(self, matched: stereo.StereoMatch, dense: tuple[Any, Any] | None) -> tuple[Any, Any]:
-        """The stereo MRF's data and confidence: the feature matches, backfilled by intensity matches."""
-        if dense is None:
-            return matched.disparity, None
-        return backfill(matched.disparity, *dense, machine=self.m)
-
-    def restore(self, cue: str, data, confidence, coupling, device: dict, *, kind: str = "smooth"):
-        """Restore one cue coupled to an edge field; keeps its field, returns its lines.
-
-        Depth and flow are coupled to the brightness edges (equation (12)). Colour and texture are
-        coupled to their own module's candidates with lines allowed only near them: the boundaries
-        these cues exist for are the ones brightness misses (isoluminant colour, equal mean
-        brightness), and inside a texture brightness edges are everywhere, so there the brightness
-        coupling would license lines at every texton (measured on the "cues" scene, mean field: hue
-        lines at precision 0.27 coupled to brightness, 0.94 coupled to the candidates).
-        """
-        settings = self.c.mrf.settings(cue)
-        model = settings.model
-        if kind == "constant":
-            model = dataclasses.replace(model, require_edge=True)
-        method = self.c.mrf.method
+    def restore(self, cue: CueModule, measured: Measurement) -> Restoration | None:
+        """Restore one cue's measurement coupled to its edges (None, with a note, when it holds no data)."""
         try:
-            found = restore(data, confidence=confidence, edges=coupling, kind=kind, method=method, model=model,
-                            schedule=settings.schedule(method), seed=self.c.mrf.seed, machine=self.m)
+            return _integrate.restore_cue(measured.data, confidence=measured.confidence, coupling=measured.coupling,
+                                          kind=cue.kind, candidates_only=cue.candidates_only,
+                                          settings=self.c.mrf.settings(cue.name, cue.settings),
+                                          method=self.c.mrf.method,
+                                          seed=self.c.mrf.seed, machine=self.m)
         except NothingToRestore:
             # The one refusal a good run can meet: the module found nothing (no match, no flow, no
             # valid hue) for the MRF to restore. The cue is then absent from the result.
-            self.notes.append(f"{cue}: the early module gave no data, so no {cue} field or discontinuities")
+            self.notes.append(f"{cue.name}: the early module gave no data, so no {cue.name} field or "
+                              "discontinuities")
             return None
-        device[f"restored_{cue}"] = found.field
-        return found.line_h, found.line_v
-
-    def collect(self, image: np.ndarray, out: dict[str, Any]) -> Result:
-        restored = {cue: out.pop(f"restored_{cue}") for cue in CUES if f"restored_{cue}" in out}
-        as_bool = ("edges", "colour_edges", "texture_edges", "stereo_discontinuity")
-        fields = {name: (value.astype(bool) if name in as_bool else value) for name, value in out.items()}
-        kernels = self.m.timings(reset=True) if self.m.profile else {}
-        return Result(image=image, config=self.c, restored=restored, disparity=restored.get("stereo"),
-                      flow=restored.get("motion"), stages=self.stages, kernels=kernels, notes=self.notes,
-                      **fields)

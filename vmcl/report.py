@@ -25,6 +25,7 @@ import cv2
 import numpy as np
 
 from vmcl.cm._arrays import check_real, real_host_array
+from vmcl.cues import registered
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.labels import Cue, Label
 from vmcl.pipeline import Result
@@ -230,24 +231,23 @@ def field_image(values: np.ndarray) -> np.ndarray:
 
 def images(result: Result) -> dict[str, np.ndarray]:
     """The report's pictures of a run, by file stem, in the order the report shows them."""
+    return {stem: picture for stem, (picture, _) in images_with_captions(result).items()}
+
+
+def images_with_captions(result: Result) -> dict[str, tuple[np.ndarray, str]]:
+    """The report's pictures of a run with their captions: the cartoon, the cues' support and the input,
+    then each registered cue's own (:meth:`vmcl.cues.CueModule.pictures`), then the brightness edges."""
     if not isinstance(result, Result):
         raise InputTypeError(f"result must be a vmcl.pipeline.Result, got {type(result).__name__}")
-    out = {"cartoon": labels_image(result.image, result.labels),
-           "support": support_image(result.image, result.support),
-           "input": _to_uint8(255 * np.repeat(_grey(result.image)[..., None], 3, axis=2)
-                              if result.image.ndim == 2 else 255 * np.clip(result.image, 0, 1))}
-    if result.disparity is not None:
-        finite = result.disparity[np.isfinite(result.disparity)]
-        span = (float(finite.min()), float(finite.max())) if finite.size else (None, None)
-        out["disparity"] = disparity_image(result.disparity, vmin=span[0], vmax=span[1])
-        out["sparse_disparity"] = disparity_image(result.sparse_disparity, vmin=span[0], vmax=span[1])
-    if result.flow is not None:
-        out["flow"] = flow_image(result.flow)
-    if result.hue is not None:
-        out["hue"] = field_image(result.restored.get("colour", result.hue))
-    if result.density is not None:
-        out["texture"] = field_image(result.restored.get("texture", result.density))
-    out["edges"] = support_image(result.image, np.where(result.edges, int(Cue.BRIGHTNESS), 0).astype(np.uint8))
+    grey = _grey(result.image)
+    out = {"cartoon": (labels_image(result.image, result.labels), _CAPTIONS["cartoon"]),
+           "support": (support_image(result.image, result.support), _CAPTIONS["support"]),
+           "input": (_to_uint8(255 * np.repeat(grey[..., None], 3, axis=2) if result.image.ndim == 2
+                               else 255 * np.clip(result.image, 0, 1)), _CAPTIONS["input"])}
+    for cue in registered():
+        out.update(cue.pictures(result))
+    edges = np.where(result.edges, int(Cue.BRIGHTNESS), 0).astype(np.uint8)
+    out["edges"] = (support_image(result.image, edges), _CAPTIONS["edges"])
     return out
 
 
@@ -257,11 +257,6 @@ _CAPTIONS = {
     "support": "The cues' support: discontinuities by cue (red stereo, orange motion, blue colour, green texture; "
                "grey: brightness edges no cue supports) over the faded image",
     "input": "The left image",
-    "disparity": "Dense disparity (the stereo MRF's restoration), pixels; near is red",
-    "sparse_disparity": "The matcher's sparse disparities, same scale",
-    "flow": "Optical flow (the motion MRF's restoration), Middlebury colour wheel; key top left",
-    "hue": "Hue H = R / (R + G), restored as piecewise constant",
-    "texture": "Texton density, restored as piecewise constant",
     "edges": "Canny's brightness edges",
 }
 
@@ -308,7 +303,7 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
         raise InputTypeError(f"evaluation must be a mapping of table title to rows, got {type(evaluation).__name__}")
     if not isinstance(folder, (str, Path)):
         raise InputTypeError(f"folder must be a str or Path, got {type(folder).__name__}")
-    pictures = images(result)
+    pictures = images_with_captions(result)
     folder = Path(folder)
     # vmcl never overwrites a file it did not write: the report goes into a folder without its names.
     taken = sorted(name for name in [*(f"{stem}.png" for stem in pictures), "report.html"] if (folder / name).exists())
@@ -318,14 +313,14 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
     folder.mkdir(parents=True, exist_ok=True)
     written = {}
     figures = []
-    for stem, picture in pictures.items():
+    for stem, (picture, caption) in pictures.items():
         data = encode_png(picture)
         path = folder / f"{stem}.png"
         path.write_bytes(data)
         written[stem] = path
         inline = base64.b64encode(data).decode("ascii")
         figures.append(f'<figure><img alt="{stem}" src="data:image/png;base64,{inline}">'
-                       f"<figcaption>{html.escape(_CAPTIONS[stem])}</figcaption></figure>")
+                       f"<figcaption>{html.escape(caption)}</figcaption></figure>")
     sections = [f"<h1>{html.escape(title)}</h1>",
                 (f"<p>{result.image.shape[1]} x {result.image.shape[0]} pixels, "
                  f"{html.escape(', '.join(result.stages))}; {result.total_ms:.0f} ms in all.</p>")]

@@ -1,0 +1,101 @@
+"""The stereo cue: depth from a rectified pair, restored piecewise smooth, refined by feedback.
+
+Seed sections "Stereo", "Feedback from the results of integration into the matching stage". The
+Drumheller-Poggio matcher (:func:`vmcl.early.stereo.match`) gives sparse disparities at edge features;
+with ``backfill``, intensity matches of high correlation fill the gaps between them, weighed less
+(:func:`vmcl.mrf.backfill`). The stereo MRF restores the disparity coupled to the brightness edges; its
+first restoration's lines become the barriers of a second matching pass (feedback), whose support
+windows stop at them, and the MRF restores again.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pyopencl.array as cl_array
+
+from vmcl import integrate
+from vmcl.cues.base import CueModule, Measurement, RunInputs
+from vmcl.early import stereo
+from vmcl.labels import Label
+from vmcl.mrf import backfill, score_confidence
+
+
+class StereoCue(CueModule):
+    """Depth from the left and right views (:class:`vmcl.pipeline.StereoConfig`)."""
+
+    name = "stereo"
+    needs = frozenset({"right"})
+    kind = "smooth"
+    label = Label.DEPTH
+    fields = ("sparse_disparity", "stereo_discontinuity", "first_pass_disparity")
+    restored_as = "disparity"
+
+    def measure(self, run: RunInputs) -> Measurement:
+        matched = _match(run, None)
+        dense = _dense_match(run)
+        data, confidence = _depth_data(run, matched, dense)
+        return Measurement(data, confidence, run.brightness, state=dense,
+                           fields={"sparse_disparity": matched.disparity,
+                                   "stereo_discontinuity": matched.discontinuity})
+
+    def refine_stage(self, config) -> str | None:
+        return "feedback" if config.stereo.feedback else None
+
+    def refine(self, run: RunInputs, measurement: Measurement, lines) -> Measurement:
+        barriers = integrate.boundary(*lines, machine=run.machine)
+        matched = _match(run, barriers)
+        data, confidence = _depth_data(run, matched, measurement.state)
+        return Measurement(data, confidence, run.brightness, state=measurement.state,
+                           fields={"first_pass_disparity": measurement.fields["sparse_disparity"],
+                                   "sparse_disparity": matched.disparity,
+                                   "stereo_discontinuity": matched.discontinuity})
+
+    def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
+        from vmcl.report import disparity_image
+
+        if result.disparity is None:
+            return {}
+        finite = result.disparity[np.isfinite(result.disparity)]
+        low, high = (float(finite.min()), float(finite.max())) if finite.size else (None, None)
+        return {"disparity": (disparity_image(result.disparity, vmin=low, vmax=high),
+                              "Dense disparity (the stereo MRF's restoration), pixels; near is red"),
+                "sparse_disparity": (disparity_image(result.sparse_disparity, vmin=low, vmax=high),
+                                     "The matcher's sparse disparities, same scale")}
+
+
+def _match(run: RunInputs, barriers, *, features: str | None = None) -> stereo.StereoMatch:
+    s = run.config.stereo
+    d_min = 0 if s.d_min is None else s.d_min
+    d_max = math.ceil(s.max_disparity * run.width) if s.d_max is None else s.d_max
+    features = features or s.features
+    # Canny's thresholds mean nothing to the intensity matcher, which matches every pixel; shiftable
+    # windows are its own.
+    options = {"shiftable": s.shiftable and barriers is None} if features == "intensity" else {
+        "low_threshold": s.low_threshold, "high_threshold": s.high_threshold, "use_quantiles": s.use_quantiles}
+    return stereo.match(run.left, run.right, d_min=d_min, d_max=d_max, features=features, patch=s.patch,
+                        sigma=s.intensity_sigma if features == "intensity" else s.sigma, barriers=barriers,
+                        machine=run.machine, **options)
+
+
+def _dense_match(run: RunInputs) -> tuple[cl_array.Array, cl_array.Array] | None:
+    """The intensity matches and their weights for :func:`_depth_data`, or None without backfill.
+
+    Matched once, without barriers: matched again with the first pass's lines as barriers, in the
+    feedback pass, it made the restored disparity worse (dense bad-1 on "cues" 0.9% to 1.1%, on
+    "blocks" 4.6% to 6.7%).
+    """
+    s = run.config.stereo
+    if not s.backfill or s.features == "intensity":
+        return None
+    dense = _match(run, None, features="intensity")
+    return dense.disparity, score_confidence(dense.score, floor=s.backfill_floor, weight=s.backfill_weight,
+                                             machine=run.machine)
+
+
+def _depth_data(run: RunInputs, matched: stereo.StereoMatch, dense) -> tuple[cl_array.Array, cl_array.Array | None]:
+    """The stereo MRF's data and confidence: the feature matches, backfilled by intensity matches."""
+    if dense is None:
+        return matched.disparity, None
+    return backfill(matched.disparity, *dense, machine=run.machine)
