@@ -62,7 +62,7 @@ def canny_table(machine: vmcl.Machine, side: int, repeat: int) -> tuple[list[str
     runs = {
         "vmcl.canny (NumPy in/out)": lambda: canny(image, sigma=SIGMA, machine=machine, **fixed),
         "vmcl.canny (device in/out)": on_device(**fixed),
-        "vmcl.canny, iterative hysteresis": on_device(hysteresis="iterative", **fixed),
+        "vmcl.canny, iterative hysteresis": on_device(method="iterative", **fixed),
         "vmcl.canny, no interpolation": on_device(interpolate=False, **fixed),
         "vmcl.canny, noise thresholds (global)": on_device(noise="global"),
         "vmcl.canny, noise thresholds (local)": on_device(noise="local"),

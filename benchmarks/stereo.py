@@ -62,11 +62,11 @@ def block_matchers(left: np.ndarray, right: np.ndarray, disparities: int):
 def speed(pair, repeat: int) -> list[tuple[str, float]]:
     left, right = grey(pair.left), grey(pair.right)
     bm, sgbm = block_matchers(left, right, 64)
-    runs = {f"vmcl.match canny, {variant}": (lambda v=variant: match(left, right, d_min=0, d_max=63, variant=v))
+    runs = {f"vmcl.match canny, {variant}": (lambda v=variant: match(left, right, d_min=0, d_max=63, method=v))
             for variant in ("running", "table")}
     for shiftable in (False, True):
         name = f"vmcl.match intensity (NCC){', shiftable' if shiftable else ''}, table"
-        runs[name] = lambda s=shiftable: match(left, right, d_min=0, d_max=63, features="intensity", variant="table",
+        runs[name] = lambda s=shiftable: match(left, right, d_min=0, d_max=63, features="intensity", method="table",
                                                shiftable=s)
     runs["cv2.StereoBM block 15"] = lambda: bm.compute(left, right)
     runs["cv2.StereoSGBM 3WAY"] = lambda: sgbm.compute(left, right)

@@ -10,7 +10,7 @@
  *   histogram_thresholds  quantiles of gradient-magnitude histograms (the noise estimate)
  *   zero_crossings      sign changes of a Laplacian-of-Gaussian field between 4-neighbours
  *
- * As in gaussian.cl, work-item (k, y) stands for the VEC pixels [k * VEC, (k + 1) * VEC) of row y (16 on
+ * As in early_filters.cl, work-item (k, y) stands for the VEC pixels [k * VEC, (k + 1) * VEC) of row y (16 on
  * CPUs, 1 on GPUs): one vector step inside the image, pixel by pixel where the 3 x 3 window meets a
  * border. Each per-pixel rule is written once as a macro over the operand type, so the vector and the
  * border paths compute the same operations in the same order; the ?: and comparison operators act per

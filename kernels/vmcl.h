@@ -2,6 +2,12 @@
  *
  * One work-item stands for one Connection Machine processor. Element types arrive as -D T=float|int
  * (plus VEC for vector widths) so each family is compiled once per type it is used with.
+ *
+ * File names: a family is named after the host module that drives it (scan.cl: vmcl/cm/scan.py),
+ * prefixed with its package where two modules share a name (cm_filters.cl, early_filters.cl) or where
+ * a package's modules share the family (mrf.cl: vmcl/mrf; mrf_data.cl: vmcl/mrf/data.py), and suffixed
+ * where one module drives two families (scan_box.cl). A module may launch a family another module owns
+ * (noise.py reads edges.cl's histogram; sign_correlation.py uses motion.cl's kernels).
  */
 #ifndef VMCL_H
 #define VMCL_H

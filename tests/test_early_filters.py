@@ -131,12 +131,12 @@ def test_results_do_not_depend_on_the_local_size(machine_with_local_size, machin
                                       function(image, machine=machine, **kwargs))
 
 
-def test_one_pixel_per_work_item_on_gpus_gives_the_same_values(machine, monkeypatch):
+def test_one_pixel_per_work_item_on_gpus_gives_the_same_values(machine):
     # GPUs run VEC = 1; forcing it here runs those kernels on this device.
     image = _image((26, 51), np.float32, seed=7)
     expected = laplacian_of_gaussian(image, sigma=1.5, machine=machine)
     scalar = Machine()
-    monkeypatch.setattr(filters, "_vec", lambda m: 1)
+    scalar.vector_width = 1
     np.testing.assert_array_equal(laplacian_of_gaussian(image, sigma=1.5, machine=scalar), expected)
 
 

@@ -103,7 +103,7 @@ def test_matches_numpy_oracle(compatible, variant, shape, d_min, d_max, machine)
     rng = np.random.default_rng(0 if compatible == "sign" else 1)
     left, right, la, ra = _random_features(rng, shape, compatible)
     got = match_features(left, right, la, ra, d_min=d_min, d_max=d_max, compatible=compatible, patch=5,
-                         direction_tolerance=math.radians(60), variant=variant, machine=machine)
+                         direction_tolerance=math.radians(60), method=variant, machine=machine)
     disparity, out_of_range, discontinuity = _oracle(left, right, la, ra, d_min, d_max, 5, compatible,
                                                      tolerance=math.radians(60))
     np.testing.assert_array_equal(got.disparity, disparity)
@@ -120,7 +120,7 @@ def test_variants_agree_with_barriers(compatible, machine):
     left, right, la, ra = _random_features(rng, shape, compatible)
     barriers = rng.random(shape) < 0.08
     found = [match_features(left, right, la, ra, d_min=-3, d_max=20, compatible=compatible, patch=7,
-                            barriers=barriers, direction_tolerance=math.radians(60), variant=variant,
+                            barriers=barriers, direction_tolerance=math.radians(60), method=variant,
                             machine=machine) for variant in ("table", "running")]
     for name in ("disparity", "score", "out_of_range", "discontinuity"):
         np.testing.assert_array_equal(getattr(found[1], name), getattr(found[0], name))
@@ -171,7 +171,7 @@ def test_variants_and_local_sizes_agree(machine, machine_with_local_size):
     left, right = scene.left[:96, :128], scene.right[:96, :128]
     reference = match(left, right, d_min=d_min, d_max=d_max, machine=machine)
     for variant, m in (("table", machine), ("running", machine_with_local_size)):
-        other = match(left, right, d_min=d_min, d_max=d_max, variant=variant, machine=m)
+        other = match(left, right, d_min=d_min, d_max=d_max, method=variant, machine=m)
         np.testing.assert_array_equal(other.disparity, reference.disparity)
         np.testing.assert_array_equal(other.discontinuity, reference.discontinuity)
 
@@ -334,7 +334,7 @@ def test_shiftable_windows_match_oracle(variant, machine):
     left[12:36, 20:44] = texture[12:36, 4:28]
     right[12:36, 14:38] = texture[12:36, 4:28]
     found = match(left, right, d_min=-2, d_max=9, patch=7, sigma=0.7, features="intensity", shiftable=True,
-                  variant=variant, machine=machine)
+                  method=variant, machine=machine)
     best_d, best_score = _shifted_oracle(left, right, -2, 9, 7, 0.7)
     kept = np.isfinite(found.disparity)
     assert kept.mean() > 0.85  # shifted windows reach the border; suppression drops few
@@ -346,7 +346,7 @@ def test_shiftable_windows_match_oracle(variant, machine):
 def test_shiftable_variants_agree(machine):
     scene, d_min, d_max = _pair("blocks")
     found = [match(scene.left, scene.right, d_min=d_min, d_max=d_max, features="intensity", shiftable=True,
-                   variant=variant, machine=machine) for variant in ("table", "running")]
+                   method=variant, machine=machine) for variant in ("table", "running")]
     for name in ("disparity", "score", "discontinuity"):
         np.testing.assert_array_equal(getattr(found[0], name), getattr(found[1], name))
 
@@ -383,9 +383,9 @@ def test_negative_evidence_is_measured_against_the_plain_score(machine):
     ({"right": np.zeros((32, 32, 3), np.float32)}, ValueError, "same shape"),
     ({"patch": 4}, ValueError, "odd integer"),
     ({"features": "sift"}, ValueError, "features must be one of"),
-    ({"variant": "fast"}, ValueError, "variant must be"),
+    ({"method": "fast"}, ValueError, "method must be"),
     ({"d_min": 1.5}, TypeError, "d_min must be an integer"),
-    ({"patch": 183, "variant": "running"}, ValueError, "16 bits"),
+    ({"patch": 183, "method": "running"}, ValueError, "16 bits"),
     ({"direction_tolerance": -0.1}, ValueError, "direction_tolerance"),
     ({"horizontal_tolerance": 90.0}, ValueError, "horizontal_tolerance"),
     ({"horizontal_tolerance": float("nan")}, ValueError, "horizontal_tolerance"),
@@ -470,7 +470,7 @@ def test_a_table_beyond_the_device_memory_is_refused_before_any_work(machine):
     side = 8192
     left, right = (machine.empty((side, side), np.float32) for _ in range(2))
     with pytest.raises(ValueError, match="device memory"):
-        match(left, right, d_min=0, d_max=side - 1, features="intensity", variant="table", machine=machine)
+        match(left, right, d_min=0, d_max=side - 1, features="intensity", method="table", machine=machine)
 
 
 @pytest.mark.parametrize("angle, error", [(float("nan"), ValueError), (float("inf"), ValueError),

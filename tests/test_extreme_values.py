@@ -265,15 +265,16 @@ def case_labelling(kind):
 
 FAMILIES = {
     "news": case_news, "scan": case_scan, "router": case_router, "doubling": case_doubling,
-    "reduce": case_reduce, "filters": case_filters, "gaussian": case_gaussian, "edges": case_edges,
-    "noise": case_noise, "box": case_box, "registration": case_registration,
+    "reduce": case_reduce, "cm_filters": case_filters, "early_filters": case_gaussian, "edges": case_edges,
+    "noise": case_noise, "scan_box": case_box, "registration": case_registration,
     "registration_table": case_registration_table, "stereo": case_stereo, "motion": case_motion,
     "color": case_color, "texture": case_texture, "mrf": case_mrf, "labelling": case_labelling,
 }
 CASES = [f"{family}:{kind}" for family in FAMILIES for kind in (*SCALES, *SPECIALS)]
 # The argument each family's refusal must name.
-ARGUMENTS = {"news": "x", "scan": "x", "router": "field", "doubling": "mask", "reduce": "x", "filters": "image",
-             "gaussian": "image", "edges": "image", "noise": "magnitude", "box": "x", "registration": "image",
+ARGUMENTS = {"news": "x", "scan": "x", "router": "field", "doubling": "mask", "reduce": "x",
+             "cm_filters": "image", "early_filters": "image", "edges": "image", "noise": "magnitude",
+             "scan_box": "x", "registration": "image",
              "registration_table": "table", "stereo": "left", "motion": "frame0", "color": "rgb",
              "texture": "image", "mrf": "data", "labelling": "image"}
 

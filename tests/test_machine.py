@@ -147,6 +147,11 @@ def test_kernels_dir_prefers_the_installed_copy(tmp_path, monkeypatch):
     assert machine_module.kernels_dir() == installed / "_kernels"
 
 
+def test_vector_width_is_sixteen_on_cpus_and_one_elsewhere(machine):
+    # CPUs' SIMD lanes see contiguous loads with 16 elements per work-item; a GPU's work-items are its lanes.
+    assert machine.vector_width == (16 if machine.is_cpu else 1)
+
+
 def test_row_local_size_groups_rows_on_cpus(machine):
     if machine.is_cpu:
         assert machine.row_local_size((1000, 7)) == (64, 1)

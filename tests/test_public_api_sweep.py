@@ -125,9 +125,9 @@ TABLE: tuple[Entry, ...] = (
        method="doubling",
        kinds={"image": _A, "low_threshold": _N, "high_threshold": _N, "method": _C, "machine": _M}),
     _e("vmcl.early.edges:canny", image=IMG, sigma=2.0, low_threshold=None, high_threshold=None,
-       use_quantiles=False, interpolate=True, hysteresis="doubling", noise="global", return_gradient=False,
+       use_quantiles=False, interpolate=True, method="doubling", noise="global", return_gradient=False,
        kinds={"image": _A, "sigma": _N, "low_threshold": _ON, "high_threshold": _ON, "use_quantiles": _B,
-              "interpolate": _B, "hysteresis": _C, "noise": _C, "return_gradient": _B, "machine": _M}),
+              "interpolate": _B, "method": _C, "noise": _C, "return_gradient": _B, "machine": _M}),
     _e("vmcl.early.filters:gaussian_taps", sigma=2.0, kinds={"sigma": _N}),
     _e("vmcl.early.filters:binomial_passes", sigma=2.0, kinds={"sigma": _N}),
     _e("vmcl.early.filters:gaussian", image=IMG, sigma=2.0, method="binomial",
@@ -336,6 +336,7 @@ TABLE: tuple[Entry, ...] = (
 EXEMPT = {
     "vmcl.early.color:Hue", "vmcl.early.color:AlbedoEdges", "vmcl.early.edges:ZeroCrossings",
     "vmcl.early.motion:FlowResult", "vmcl.early.stereo:StereoMatch", "vmcl.early.texture:TextureEdges",
+    "vmcl.early.edges:CannyResult",
     "vmcl.mrf:Restoration", "vmcl.mrf:NothingToRestore", "vmcl.labels:Cue", "vmcl.integrate:Integration", "vmcl.labels:Label",
     "vmcl.scenes:Scene", "vmcl.metrics:BoundaryCounts", "vmcl.metrics:BoundaryScores",
     "vmcl.metrics:DetectionScores", "vmcl.metrics:DisparityScores", "vmcl.metrics:FlowScores",
@@ -349,6 +350,9 @@ EXEMPT = {
     "vmcl.cues:RunInputs",
     # Change the machine's cues for the whole process: tests/test_cues.py checks their refusals.
     "vmcl.labels:add_cue", "vmcl.labels:remove_cue", "vmcl.cues:register", "vmcl.cues:unregister",
+    # Device-level building blocks of the early layer: they take images already checked by
+    # vmcl.cm.core.image_field, and the sweeps of gaussian, canny and zero_crossings reach them.
+    "vmcl.early.filters:separable_gaussian", "vmcl.early.filters:discrete_laplacian",
     # Needs a head that has run a calibration pattern in front of it; table_for_fixation covers the glue.
     "vmcl.eyehead:calibrate_vergences",
 }

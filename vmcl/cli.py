@@ -48,6 +48,17 @@ from vmcl.errors import InputError
 from vmcl.machine import NoOpenCLPlatformError
 from vmcl.output_folder import output_folder
 
+__all__ = [
+    "EXIT_BAD_INPUT",
+    "EXIT_DEFECT",
+    "EXIT_INTERRUPTED",
+    "SCENES",
+    "BadInput",
+    "evaluation_tables",
+    "main",
+    "parser",
+]
+
 EXIT_DEFECT = 1
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report a command stopped by Ctrl-C

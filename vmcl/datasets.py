@@ -26,7 +26,7 @@ import cv2
 import numpy as np
 import scipy.io
 
-from vmcl.cm._arrays import check_bool, check_choice, check_int, check_real, check_real_dtype, real_host_array
+from vmcl.cm.core import check_bool, check_choice, check_int, check_real, check_real_dtype, real_host_array
 from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = [

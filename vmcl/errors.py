@@ -8,6 +8,8 @@ defect in vmcl (or in a library under it) and keeps its traceback, exit status 1
 
 from __future__ import annotations
 
+__all__ = ["InputError", "InputTypeError", "InputValueError"]
+
 
 class InputError(Exception):
     """vmcl refused an argument: the message names it and says what was expected."""

@@ -17,6 +17,8 @@ from vmcl.early.registration import TableStore, WarpTable
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
+__all__ = ["Capture", "calibrate_vergences", "table_for_fixation"]
+
 Capture = Callable[[], tuple[np.ndarray, np.ndarray]]
 
 

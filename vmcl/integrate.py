@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm._arrays import (
+from vmcl.cm.core import (
     ArrayLike,
     check_bool,
     check_choice,
@@ -45,6 +45,8 @@ from vmcl.errors import InputTypeError, InputValueError
 from vmcl.labels import RULE_PRECEDENCE, Cue, cue_bit, cue_names, rule_label
 from vmcl.machine import Machine
 from vmcl.mrf import SOLVERS, Restoration, Settings, restore
+
+__all__ = ["Integration", "boundary", "integrate", "restore_cue"]
 
 
 def _rule_defines() -> dict[str, object]:

@@ -40,8 +40,8 @@ from pathlib import Path
 
 import numpy as np
 
-from vmcl.cm._arrays import ArrayLike, check_bool, check_real, machine_for, real_host_array
-from vmcl.cm._arrays import field as device_field
+from vmcl.cm.core import ArrayLike, check_bool, check_real, machine_for, real_host_array
+from vmcl.cm.core import field as device_field
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.labels import BIT_DEFINES, CUES, Cue, Label, cue_bit
 from vmcl.machine import Machine

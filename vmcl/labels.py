@@ -11,6 +11,21 @@ from enum import IntEnum, IntFlag
 
 from vmcl.errors import InputTypeError, InputValueError
 
+__all__ = [
+    "BIT_DEFINES",
+    "CUES",
+    "CUE_BITS",
+    "RULE_LABELS",
+    "RULE_PRECEDENCE",
+    "Cue",
+    "Label",
+    "add_cue",
+    "cue_bit",
+    "cue_names",
+    "remove_cue",
+    "rule_label",
+]
+
 
 class Label(IntEnum):
     """Physical cause of a discontinuity (seed paper, "Labeling the physical origin of edges").

@@ -29,6 +29,15 @@ import pyopencl.tools as cl_tools
 
 from vmcl.errors import InputTypeError, InputValueError
 
+__all__ = [
+    "INSTALL_HINT",
+    "Machine",
+    "NoOpenCLPlatformError",
+    "default_machine",
+    "kernels_dir",
+    "list_devices",
+]
+
 INSTALL_HINT = (
     "No OpenCL platform found. vmcl needs an OpenCL driver; on Debian or Ubuntu install PoCL with\n"
     "    sudo apt-get update && sudo apt-get install -y pocl-opencl-icd\n"
@@ -170,6 +179,16 @@ class Machine:
         global size is rounded up to a multiple; kernels ignore the extra work-items). Default: the
         driver's choice. Results never depend on it; tests use it to prove that.
 
+    Attributes
+    ----------
+    is_cpu : bool
+        Whether the device is a CPU.
+    compute_units : int
+        The device's compute units.
+    vector_width : int
+        Elements each work-item of a vectorised kernel handles (its ``VEC`` define): 16 on CPUs, whose
+        SIMD lanes then see contiguous loads, 1 on GPUs, whose work-items are the lanes.
+
     Notes
     -----
     Programs are compiled on first use, never at construction, and cached per (file, defines).
@@ -202,6 +221,7 @@ class Machine:
         self._launch_lock = threading.RLock()
         self.is_cpu = bool(self.device.type & cl.device_type.CPU)
         self.compute_units = self.device.max_compute_units
+        self.vector_width = 16 if self.is_cpu else 1
 
     def __repr__(self) -> str:
         return f"Machine({self.device.platform.name} / {self.device.name})"

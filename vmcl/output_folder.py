@@ -19,6 +19,8 @@ from pathlib import Path
 
 from vmcl.errors import InputValueError
 
+__all__ = ["MARKER", "output_folder"]
+
 MARKER = ".vmcl-output"
 """The file that marks a folder as a vmcl output: the names of the files vmcl wrote there, one a line."""
 

@@ -8,8 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from vmcl.cm._arrays import check_int
+from vmcl.cm.core import check_int
 from vmcl.errors import InputValueError
+
+__all__ = ["spiral"]
 
 _HEADINGS = ((0, 1), (1, 0), (0, -1), (-1, 0))
 _LARGEST = 8192

@@ -39,7 +39,7 @@ import numpy as np
 
 from vmcl import integrate as _integrate
 from vmcl import labelling
-from vmcl.cm._arrays import check_choice, check_int, check_real
+from vmcl.cm.core import check_choice, check_int, check_real
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
 from vmcl.early import edges, motion, stereo
 from vmcl.errors import InputTypeError, InputValueError
@@ -47,6 +47,21 @@ from vmcl.labels import CUES
 from vmcl.machine import Machine
 from vmcl.mrf import SOLVERS, NothingToRestore, Restoration, Settings, preset
 from vmcl.mrf.data import check_unit_interval
+
+__all__ = [
+    "FLOAT_MARGIN",
+    "ColourConfig",
+    "Config",
+    "EdgesConfig",
+    "LabelsConfig",
+    "MotionConfig",
+    "MrfConfig",
+    "Result",
+    "StereoConfig",
+    "TextureConfig",
+    "VisionMachine",
+    "as_image",
+]
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -24,11 +24,26 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from vmcl.cm._arrays import check_real, real_host_array
+from vmcl.cm.core import check_real, real_host_array
 from vmcl.cues import registered
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.labels import Cue, Label
 from vmcl.pipeline import Result
+
+__all__ = [
+    "BRIGHTNESS_ONLY",
+    "CUE_COLOURS",
+    "LABEL_COLOURS",
+    "disparity_image",
+    "encode_png",
+    "field_image",
+    "flow_image",
+    "images",
+    "images_with_captions",
+    "labels_image",
+    "support_image",
+    "write_report",
+]
 
 CUE_COLOURS = {Cue.STEREO: (230, 40, 40), Cue.MOTION: (250, 150, 20), Cue.COLOUR: (40, 110, 240),
                Cue.TEXTURE: (30, 180, 60)}

@@ -25,10 +25,12 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as _reduce
-from vmcl.cm._arrays import ArrayLike, check_bool, check_choice, check_int, field, machine_for, result
+from vmcl.cm.core import ArrayLike, check_bool, check_choice, check_int, field, machine_for, result
 from vmcl.cm.scan import exclusive_sum_into
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
+
+__all__ = ["LabelMethod", "label", "principal", "rank"]
 
 LabelMethod = Literal["doubling", "iterative"]
 _CHECK_EVERY = 16  # spreading-activation passes between reads of the "changed" flag

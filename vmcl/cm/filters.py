@@ -11,13 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from vmcl.cm._arrays import ArrayLike, check_int, field, machine_for, result, type_defines
+from vmcl.cm.core import WIDEST, ArrayLike, check_int, field, machine_for, result, type_defines
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-WIDEST = 32
-"""Gaussian width (sigma, in pixels) any image may be smoothed with; wider ones only up to the image's
-larger side, past which a Gaussian only blurs the repeated border while its work keeps growing."""
+__all__ = ["binomial", "max_passes", "window_max"]
 
 
 def max_passes(height: int, width: int) -> int:
@@ -61,7 +59,7 @@ def binomial(image: ArrayLike, passes: int, *, machine: Machine | None = None) -
     defines = type_defines(data.dtype)
     if data.dtype == np.uint8:
         defines["T_IS_UCHAR"] = 1
-    kernel = machine.kernel("filters", "binomial_pass", **defines)
+    kernel = machine.kernel("cm_filters", "binomial_pass", **defines)
     size = (-(-width // 16), height, planes)
     local = machine.row_local_size(size)
     # Ping-pong between two pooled buffers; the input is never written.
@@ -105,7 +103,7 @@ def window_max(x: ArrayLike, radius: int, *, machine: Machine | None = None) -> 
     radius = min(check_int(radius, "radius", minimum=0), max(height, width))
     machine.require_memory(f"a window maximum over shape {data.shape}", 3 * data.nbytes, data.nbytes)
     planes = data.size // (height * width)
-    kernel = machine.kernel("filters", "window_max_pass", **type_defines(data.dtype))
+    kernel = machine.kernel("cm_filters", "window_max_pass", **type_defines(data.dtype))
     rows, out = machine.empty(data.shape, data.dtype), machine.empty(data.shape, data.dtype)
     size = (width, height, planes)
     for source, target, along_rows in ((data, rows, 1), (rows, out, 0)):

@@ -10,8 +10,10 @@ from typing import Literal
 
 import numpy as np
 
-from vmcl.cm._arrays import ArrayLike, check_choice, check_int, field, machine_for, result, type_defines
+from vmcl.cm.core import ArrayLike, check_choice, check_int, field, machine_for, result, type_defines
 from vmcl.machine import Machine
+
+__all__ = ["BORDERS", "Border", "shift"]
 
 Border = Literal["zero", "clamp", "wrap"]
 BORDERS = {"zero": 0, "clamp": 1, "wrap": 2}

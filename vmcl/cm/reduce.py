@@ -14,7 +14,7 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
 
-from vmcl.cm._arrays import (
+from vmcl.cm.core import (
     ArrayLike,
     check_choice,
     check_int,
@@ -26,6 +26,8 @@ from vmcl.cm._arrays import (
 )
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
+
+__all__ = ["ReduceOp", "histogram", "histogram_to_top", "reduce"]
 
 ReduceOp = Literal["sum", "max", "min", "and", "or"]
 _OPS = {"sum": 0, "max": 1, "min": 2, "and": 4, "or": 5}

@@ -14,12 +14,14 @@ from typing import Literal
 import numpy as np
 import pyopencl as cl
 
-from vmcl.cm import _arrays
+from vmcl.cm import core
 from vmcl.cm import reduce as _reduce
-from vmcl.cm._arrays import ArrayLike, check_choice, check_int, check_real, machine_for, result, type_defines
+from vmcl.cm.core import ArrayLike, check_choice, check_int, check_real, machine_for, result, type_defines
 from vmcl.cm.scan import exclusive_sum_into
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
+
+__all__ = ["Combine", "get", "send"]
 
 Combine = Literal["overwrite", "sum", "max", "min", "and", "or"]
 _COMBINE = {"overwrite": 100, "sum": 0, "max": 1, "min": 2, "and": 4, "or": 5}
@@ -29,7 +31,7 @@ _MAX_DESTINATIONS = 2**31 - 1  # addresses, counts and offsets are int32
 
 
 def _addresses(address: ArrayLike, size: int, machine: Machine, bound: str) -> tuple:
-    data, host = _arrays.field(address, "address", machine, ndims=_ANY_NDIM, dtypes=(np.int32,))
+    data, host = core.field(address, "address", machine, ndims=_ANY_NDIM, dtypes=(np.int32,))
     if host:
         low, high = int(np.min(address)), int(np.max(address))
     else:
@@ -74,7 +76,7 @@ def get(field: ArrayLike, address: ArrayLike, *, machine: Machine | None = None)
     Values of ``field``'s dtype, in ``address``'s shape.
     """
     machine = machine_for(machine)
-    data, host = _arrays.field(field, "field", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
+    data, host = core.field(field, "field", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
     where, _ = _addresses(address, data.size, machine, f"field has {data.size} elements")
     out = machine.empty(where.shape, data.dtype)
     machine.launch(machine.kernel("router", "gather", COMBINE_OP=100, **type_defines(data.dtype)), (where.size,),
@@ -112,7 +114,7 @@ def send(values: ArrayLike, address: ArrayLike, *, size: int | tuple[int, ...], 
     A float32 "sum" therefore equals the sequential ``np.add.at`` bit for bit.
     """
     machine = machine_for(machine)
-    data, host = _arrays.field(values, "values", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
+    data, host = core.field(values, "values", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
     shape = _shape(size)
     combine = check_choice(combine, "combine", _COMBINE)
     if combine in ("and", "or") and data.dtype == np.float32:

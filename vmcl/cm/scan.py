@@ -19,7 +19,7 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
 
-from vmcl.cm._arrays import (
+from vmcl.cm.core import (
     ArrayLike,
     check_bool,
     check_choice,
@@ -33,6 +33,20 @@ from vmcl.cm._arrays import (
 )
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
+
+__all__ = [
+    "COLUMN_VEC",
+    "METHODS",
+    "OPS",
+    "ROW_ILP",
+    "Method",
+    "Op",
+    "box_sum",
+    "column_groups",
+    "exclusive_sum_into",
+    "scan",
+    "scan_rows_into",
+]
 
 Op = Literal["plus", "max", "min", "copy"]
 Method = Literal["work_efficient", "hillis_steele"]
@@ -281,7 +295,7 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     if -1 in wanted:
         lines = data.size // width
         rows = machine.empty(data.shape, data.dtype)
-        machine.launch(machine.kernel("box", "box_rows", **defines), (math.ceil(lines / 4),),
+        machine.launch(machine.kernel("scan_box", "box_rows", **defines), (math.ceil(lines / 4),),
                        source, rows, np.int64(width), np.int64(lines), r)
         source = rows
     if -2 in wanted:
@@ -289,7 +303,7 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
         planes = data.size // (height * width)
         cols = machine.empty(data.shape, data.dtype)
         for vec, col0, count in column_groups(width):
-            machine.launch(machine.kernel("box", "box_cols", VEC=vec, **defines), (count, planes),
+            machine.launch(machine.kernel("scan_box", "box_cols", VEC=vec, **defines), (count, planes),
                            source, cols, np.int64(width), np.int64(height), np.int64(col0), np.int64(count), r)
         source = cols
     return result(source, host)

@@ -20,6 +20,8 @@ from vmcl.labels import Label
 from vmcl.machine import Machine
 from vmcl.mrf import Settings
 
+__all__ = ["CueModule", "Measurement", "RunInputs"]
+
 
 @dataclass(frozen=True)
 class RunInputs:

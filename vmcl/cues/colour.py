@@ -15,6 +15,8 @@ from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import color
 from vmcl.labels import Label
 
+__all__ = ["ColourCue"]
+
 
 class ColourCue(CueModule):
     """Hue from the left view when it is RGB (:class:`vmcl.pipeline.ColourConfig`)."""

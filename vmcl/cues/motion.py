@@ -14,6 +14,8 @@ from vmcl.early import motion
 from vmcl.labels import Label
 from vmcl.mrf import score_confidence
 
+__all__ = ["MotionCue"]
+
 
 class MotionCue(CueModule):
     """Flow from the left view at t and t + 1 (:class:`vmcl.pipeline.MotionConfig`)."""

@@ -21,6 +21,8 @@ from vmcl.early import stereo
 from vmcl.labels import Label
 from vmcl.mrf import backfill, score_confidence
 
+__all__ = ["StereoCue"]
+
 
 class StereoCue(CueModule):
     """Depth from the left and right views (:class:`vmcl.pipeline.StereoConfig`)."""

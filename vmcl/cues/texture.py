@@ -13,6 +13,8 @@ from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import texture
 from vmcl.labels import Label
 
+__all__ = ["TextureCue"]
+
 
 class TextureCue(CueModule):
     """Texton density of the left view (:class:`vmcl.pipeline.TextureConfig`)."""

@@ -58,11 +58,24 @@ from typing import NamedTuple
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm._arrays import ArrayLike, check_bool, check_real, field, machine_for, result
+from vmcl.cm.core import (
+    IMAGE_TYPES,
+    ArrayLike,
+    check_bool,
+    check_real,
+    field,
+    finite_float32,
+    launch_flat,
+    launch_rows,
+    machine_for,
+    result,
+    vector_kernel,
+)
 from vmcl.early import noise as _noise
-from vmcl.early.filters import _kernel, _launch_flat, _launch_rows
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
+
+__all__ = ["HISTOGRAM_BINS", "MIN_INTENSITY", "NOISE_FLOOR", "AlbedoEdges", "Hue", "albedo_edges", "hue"]
 
 MIN_INTENSITY = 0.05
 """Default ``min_intensity`` as a share of the full scale: R + G below 5% of it is too dark for a hue."""
@@ -74,7 +87,6 @@ HISTOGRAM_BINS = (0x7F800000 >> 19) + 1
 """Bins of the noise estimate's histogram of z: 1/16 of an octave each, from 0 to infinity (color.cl)."""
 _MEDIAN_OF_RAYLEIGH = math.sqrt(2.0 * math.log(2.0))
 
-_IN_TYPES = {np.dtype(np.uint8): "uchar", np.dtype(np.uint16): "ushort", np.dtype(np.float32): "float"}
 _FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0, np.dtype(np.float32): 1.0}
 
 
@@ -115,14 +127,7 @@ def _rgb(rgb, machine: Machine) -> tuple[cl_array.Array, bool]:
     if isinstance(rgb, (np.ndarray, cl_array.Array)) and (rgb.ndim != 3 or rgb.shape[2] != 3):
         raise InputValueError(f"rgb must be an RGB image of shape (H, W, 3), got shape {rgb.shape}: a grey image "
                          f"has no hue")
-    if isinstance(rgb, np.ndarray) and rgb.dtype.kind == "f":
-        if not np.isfinite(rgb).all():
-            raise InputValueError("rgb must not contain NaN or infinite values")
-        if rgb.dtype != np.float32:
-            rgb = rgb.astype(np.float32)
-            if not np.isfinite(rgb).all():
-                raise InputValueError("rgb has values beyond float32's range")
-    return field(rgb, "rgb", machine, ndims=(3,), dtypes=tuple(_IN_TYPES))
+    return field(finite_float32(rgb, "rgb"), "rgb", machine, ndims=(3,), dtypes=tuple(IMAGE_TYPES))
 
 
 def _min_intensity(value, dtype: np.dtype) -> float:
@@ -178,7 +183,7 @@ def hue(rgb: ArrayLike, *, min_intensity: float | None = None, chromaticity: boo
     chroma = check_bool(chromaticity, "chromaticity")
     out = machine.empty((height, width, 2) if chroma else (height, width), np.float32)
     valid = machine.empty((height, width), np.uint8)
-    kernel = machine.kernel("color", "hue", IN_T=_IN_TYPES[data.dtype], CHROMA=int(chroma))
+    kernel = machine.kernel("color", "hue", IN_T=IMAGE_TYPES[data.dtype], CHROMA=int(chroma))
     machine.launch(kernel, (width, height), data, out, valid, np.float32(threshold), np.int64(width),
                    np.int64(height))
     return Hue(result(out, host), _mask_out(valid, host))
@@ -235,26 +240,26 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
     shape = (height, width)
     hue_field, valid, z = (machine.empty(shape, np.float32), machine.empty(shape, np.uint8),
                            machine.empty(shape, np.float32))
-    gradient = _kernel(machine, "color", "hue_gradient", IN_T=_IN_TYPES[data.dtype])
-    _launch_rows(machine, gradient, width, height, data, hue_field, valid, z, np.float32(least),
-                 np.int64(width), np.int64(height))
+    gradient = vector_kernel(machine, "color", "hue_gradient", IN_T=IMAGE_TYPES[data.dtype])
+    launch_rows(machine, gradient, width, height, data, hue_field, valid, z, np.float32(least),
+                np.int64(width), np.int64(height))
     if threshold is None:
         # Bands of rows, each histogrammed by one work-item: enough of them to keep every core busy.
         bands = min(height, 8 * machine.compute_units)
         rows = -(-height // bands)
         bands = -(-height // rows)
         counts = machine.empty((bands, HISTOGRAM_BINS), np.int32)
-        machine.launch(_kernel(machine, "color", "hue_histogram"), (bands,), z, counts, np.int64(rows),
+        machine.launch(vector_kernel(machine, "color", "hue_histogram"), (bands,), z, counts, np.int64(rows),
                        np.int64(width), np.int64(height))
         estimated = machine.empty((1,), np.float32)
-        machine.launch(_kernel(machine, "color", "hue_threshold"), (1,), counts, estimated, np.int64(bands),
-                       np.float32(_noise.NOISE_HIGH / _MEDIAN_OF_RAYLEIGH),
+        machine.launch(vector_kernel(machine, "color", "hue_threshold"), (1,), counts, estimated,
+                       np.int64(bands), np.float32(_noise.NOISE_HIGH / _MEDIAN_OF_RAYLEIGH),
                        np.float32(_noise.NOISE_HIGH * NOISE_FLOOR * _FULL_SCALE[data.dtype]))
         fixed = 0.0
     else:
         estimated, fixed = z, float(threshold)
     edges = machine.empty(shape, np.uint8)
     n = height * width
-    _launch_flat(machine, _kernel(machine, "color", "hue_edges", FIXED=int(threshold is not None)), n, z,
-                 estimated, edges, np.float32(fixed), np.int64(n))
+    launch_flat(machine, vector_kernel(machine, "color", "hue_edges", FIXED=int(threshold is not None)), n, z,
+                estimated, edges, np.float32(fixed), np.int64(n))
     return AlbedoEdges(_mask_out(edges, host), result(hue_field, host), _mask_out(valid, host))

@@ -30,20 +30,33 @@ import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm import doubling as _doubling
-from vmcl.cm._arrays import ArrayLike, check_bool, check_choice, field, machine_for, result
-from vmcl.early import noise as _noise
-from vmcl.early.filters import (
-    DOG_RATIO,
-    _check_sigma,
-    _image,
-    _kernel,
-    _laplacian,
-    _launch_flat,
-    _launch_rows,
-    _separable,
+from vmcl.cm.core import (
+    ArrayLike,
+    check_bool,
+    check_choice,
+    check_sigma,
+    field,
+    image_field,
+    launch_flat,
+    launch_rows,
+    machine_for,
+    result,
+    vector_kernel,
 )
+from vmcl.early import noise as _noise
+from vmcl.early.filters import DOG_RATIO, discrete_laplacian, separable_gaussian
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
+
+__all__ = [
+    "PLAIN_SCALE",
+    "CannyResult",
+    "Hysteresis",
+    "ZeroCrossings",
+    "canny",
+    "hysteresis_threshold",
+    "zero_crossings",
+]
 
 Hysteresis = Literal["doubling", "iterative"]
 _CHECK_EVERY = 16  # spreading-activation steps between reads of the "changed" flag
@@ -51,6 +64,24 @@ PLAIN_SCALE = 2.0**100
 """Host float images whose largest |value| lies within [1 / PLAIN_SCALE, PLAIN_SCALE] go to Canny as
 they are; others are first scaled by a power of two (exactly) to bring it near 1."""
 _CANNY_BYTES = 40  # device bytes per pixel canny keeps at once: fields, states, labels, with room to spare
+
+
+class CannyResult(NamedTuple):
+    """What :func:`canny` returns with ``return_gradient=True``: the edges and the gradient they came from.
+
+    Attributes
+    ----------
+    edges : ndarray or pyopencl.array.Array, (H, W)
+        bool for NumPy input; uint8 0/1 device array for device input.
+    magnitude : ndarray or pyopencl.array.Array, float32 (H, W)
+        sqrt(gx**2 + gy**2) of the Sobel derivatives of the smoothed image, in the input's units.
+    direction : ndarray or pyopencl.array.Array, float32 (H, W)
+        atan2(gy, gx) in radians, x to the right and y downwards (rows), in [-pi, pi].
+    """
+
+    edges: ArrayLike
+    magnitude: ArrayLike
+    direction: ArrayLike
 
 
 class ZeroCrossings(NamedTuple):
@@ -122,22 +153,23 @@ def zero_crossings(image: ArrayLike, *, sigma: float, method: Literal["log", "do
     M. Drumheller and T. Poggio, "On parallel stereo", Proc. IEEE Conf. Robotics and Automation, 1986.
     """
     machine = machine_for(machine)
-    sigma = _check_sigma(sigma)
+    sigma = check_sigma(sigma)
     if method not in ("log", "dog"):
         raise InputValueError(f"method must be 'log' or 'dog', got {method!r}")
     min_slope = _non_negative(min_slope, "min_slope")
-    data, host = _image(image, machine, what="zero crossings", footprint=22, largest=8, widths={"sigma": sigma})
+    data, host = image_field(image, machine, what="zero crossings", footprint=22, largest=8,
+                             widths={"sigma": sigma})
     if method == "log":
-        response = _laplacian(machine, _separable(machine, data, (sigma,)))
+        response = discrete_laplacian(machine, separable_gaussian(machine, data, (sigma,)))
     else:
         ratio = math.sqrt(DOG_RATIO)
-        response = _separable(machine, data, (sigma * ratio, sigma / ratio))
+        response = separable_gaussian(machine, data, (sigma * ratio, sigma / ratio))
     size = _xy(response)
     mask = machine.empty(response.shape, np.uint8)
     sign = machine.empty(response.shape, np.int8)
     slope = machine.empty(response.shape, np.float32)
-    _launch_rows(machine, _kernel(machine, "edges", "zero_crossings"), *size, response, mask, sign, slope,
-                 np.float32(min_slope), *map(np.int64, size))
+    launch_rows(machine, vector_kernel(machine, "edges", "zero_crossings"), *size, response, mask, sign,
+                slope, np.float32(min_slope), *map(np.int64, size))
     return ZeroCrossings(_mask_out(mask, host), result(sign, host), result(slope, host), result(response, host))
 
 
@@ -158,22 +190,24 @@ def _hysteresis(machine: Machine, state: cl_array.Array, marks: cl_array.Array |
     edges = machine.empty(state.shape, np.uint8)
     if method == "doubling":
         labels = _doubling.label(state, connectivity=8, method="doubling", machine=machine)
-        _launch_flat(machine, _kernel(machine, "edges", "mark_strong"), n, state, labels, marks, np.int64(n))
-        _launch_flat(machine, _kernel(machine, "edges", "keep_marked"), n, labels, marks, edges, np.int64(n))
+        mark_strong = vector_kernel(machine, "edges", "mark_strong")
+        launch_flat(machine, mark_strong, n, state, labels, marks, np.int64(n))
+        launch_flat(machine, vector_kernel(machine, "edges", "keep_marked"), n, labels, marks, edges,
+                    np.int64(n))
         return edges
     size = _xy(state)
-    step = _kernel(machine, "edges", "grow_step")
+    step = vector_kernel(machine, "edges", "grow_step")
     spare = machine.empty(state.shape, np.uint8)
     changed = machine.empty(1, np.int32)
     current = state
     while True:
         cl.enqueue_fill_buffer(machine.queue, changed.base_data, np.int32(0), 0, changed.nbytes)
         for _ in range(_CHECK_EVERY):
-            _launch_rows(machine, step, *size, current, spare, changed, *map(np.int64, size))
+            launch_rows(machine, step, *size, current, spare, changed, *map(np.int64, size))
             current, spare = spare, current
         if not changed.get(queue=machine.queue)[0]:
             break
-    _launch_flat(machine, _kernel(machine, "edges", "strong_pixels"), n, current, edges, np.int64(n))
+    launch_flat(machine, vector_kernel(machine, "edges", "strong_pixels"), n, current, edges, np.int64(n))
     return edges
 
 
@@ -214,8 +248,8 @@ def hysteresis_threshold(image: ArrayLike, *, low_threshold: float, high_thresho
     data, host = field(image, "image", machine, ndims=(2,), dtypes=(np.float32,))
     size = _xy(data)
     state, marks = machine.empty(data.shape, np.uint8), machine.empty(data.shape, np.uint8)
-    _launch_rows(machine, _kernel(machine, "edges", "double_threshold"), *size, data, state, marks,
-                 np.float32(low), np.float32(high), *map(np.int64, size))
+    launch_rows(machine, vector_kernel(machine, "edges", "double_threshold"), *size, data, state, marks,
+                np.float32(low), np.float32(high), *map(np.int64, size))
     return _mask_out(_hysteresis(machine, state, marks, method), host)
 
 
@@ -245,14 +279,15 @@ def _thresholds(machine: Machine, magnitude: cl_array.Array, low: float | None, 
     low = high * ratio if low is None else low
     high = low / ratio if high is None else high
     pairs = machine.empty((1, 1, 2), np.float32)
-    machine.launch(_kernel(machine, "edges", "set_thresholds"), (1,), pairs, np.float32(low), np.float32(high))
+    machine.launch(vector_kernel(machine, "edges", "set_thresholds"), (1,), pairs, np.float32(low),
+                   np.float32(high))
     return pairs, (1, 1), False
 
 
 def _scale_exponent(image) -> int:
     """e such that ``image * 2**-e`` has its largest |value| in [1, 2), for a host float image outside
     :data:`PLAIN_SCALE`'s range; 0 for all others (device arrays, integers, ordinary images, and
-    images with NaN or infinity, which :func:`vmcl.early.filters._image` refuses)."""
+    images with NaN or infinity, which :func:`vmcl.cm.core.image_field` refuses)."""
     if not isinstance(image, np.ndarray) or image.dtype.kind != "f" or image.size == 0:
         return 0
     with np.errstate(invalid="ignore"):
@@ -264,8 +299,8 @@ def _scale_exponent(image) -> int:
 
 def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
           high_threshold: float | None = None, use_quantiles: bool = False, interpolate: bool = True,
-          hysteresis: Hysteresis = "doubling", noise: _noise.Noise = "global", return_gradient: bool = False,
-          machine: Machine | None = None):
+          method: Hysteresis = "doubling", noise: _noise.Noise = "global", return_gradient: bool = False,
+          machine: Machine | None = None) -> ArrayLike | CannyResult:
     """Canny's edge detector, as the Vision Machine ran it on the Connection Machine.
 
     Parameters
@@ -287,24 +322,25 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
         Non-maximum suppression against the gradient magnitude interpolated between the two neighbours
         on each side along the gradient (scikit-image's bilinear rule, ties kept); False compares the
         two neighbours of the nearest of the 4 axes and diagonals.
-    hysteresis : {"doubling", "iterative"}
-        "doubling" (default): label the weak-or-strong mask with :func:`vmcl.cm.doubling.label` and keep
-        the components holding a strong pixel. "iterative": the paper's O(m) spreading activation.
+    method : {"doubling", "iterative"}
+        The hysteresis: "doubling" (default): label the weak-or-strong mask with
+        :func:`vmcl.cm.doubling.label` and keep the components holding a strong pixel. "iterative": the
+        paper's O(m) spreading activation.
         Identical edges; see :func:`hysteresis_threshold`.
     noise : {"global", "local"}
         Used when both thresholds are None: one histogram for the whole image, or one per 64 x 64 tile
         with the thresholds interpolated bilinearly between tile centres.
     return_gradient : bool
-        Also return the gradient magnitude and direction (for the stereo matcher).
+        Also return the gradient magnitude and direction (for the stereo matcher), as a
+        :class:`CannyResult`.
     machine : vmcl.Machine, optional
 
     Returns
     -------
     edges : bool (H, W) for NumPy input; uint8 0/1 device array for device input
-    magnitude : float32 (H, W), only with ``return_gradient``
-        sqrt(gx**2 + gy**2) of the Sobel derivatives of the smoothed image.
-    direction : float32 (H, W), only with ``return_gradient``
-        atan2(gy, gx) in radians, x to the right and y downwards (rows), in [-pi, pi].
+        Without ``return_gradient``, the edges alone.
+    CannyResult
+        With ``return_gradient``, the named tuple ``(edges, magnitude, direction)``.
 
     Notes
     -----
@@ -342,8 +378,8 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     (True, False)
     """
     machine = machine_for(machine)
-    sigma = _check_sigma(sigma)
-    _check_hysteresis(hysteresis, "hysteresis")
+    sigma = check_sigma(sigma)
+    _check_hysteresis(method, "method")
     check_choice(noise, "noise", ("global", "local"))
     return_gradient = check_bool(return_gradient, "return_gradient")
     use_quantiles = check_bool(use_quantiles, "use_quantiles")
@@ -356,24 +392,24 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
         image = np.ldexp(image, -exponent)
         if not use_quantiles:
             low, high = (None if t is None else math.ldexp(t, -exponent) for t in (low, high))
-    data, host = _image(image, machine, what="canny", footprint=_CANNY_BYTES, widths={"sigma": sigma})
-    smoothed = _separable(machine, data, (sigma,))
+    data, host = image_field(image, machine, what="canny", footprint=_CANNY_BYTES, widths={"sigma": sigma})
+    smoothed = separable_gaussian(machine, data, (sigma,))
     size = _xy(smoothed)
     dims = tuple(map(np.int64, size))
     magnitude = machine.empty(smoothed.shape, np.float32)
     direction = machine.empty(smoothed.shape, np.float32) if return_gradient else magnitude
-    _launch_rows(machine, _kernel(machine, "edges", "gradient", WITH_DIRECTION=int(return_gradient)), *size,
-                 smoothed, magnitude, direction, *dims)
+    gradient = vector_kernel(machine, "edges", "gradient", WITH_DIRECTION=int(return_gradient))
+    launch_rows(machine, gradient, *size, smoothed, magnitude, direction, *dims)
     pairs, tiles, local = _thresholds(machine, magnitude, low, high, use_quantiles, noise)
     state = machine.empty(smoothed.shape, np.uint8)
-    doubling = hysteresis == "doubling"
+    doubling = method == "doubling"
     # Spreading activation needs no marks; without CLEAR_MARKS the kernel never touches its marks argument.
     marks = machine.empty(smoothed.shape, np.uint8) if doubling else state
-    classify = _kernel(machine, "edges", "nms_classify", INTERPOLATE=int(bool(interpolate)), LOCAL=int(local),
-                       CLEAR_MARKS=int(doubling))
-    _launch_rows(machine, classify, *size, smoothed, magnitude, pairs, state, marks, np.int64(_noise.TILE),
-                 np.int64(tiles[1]), np.int64(tiles[0]), *dims)
-    edges = _mask_out(_hysteresis(machine, state, marks if doubling else None, hysteresis), host)
+    classify = vector_kernel(machine, "edges", "nms_classify", INTERPOLATE=int(bool(interpolate)),
+                             LOCAL=int(local), CLEAR_MARKS=int(doubling))
+    launch_rows(machine, classify, *size, smoothed, magnitude, pairs, state, marks, np.int64(_noise.TILE),
+                np.int64(tiles[1]), np.int64(tiles[0]), *dims)
+    edges = _mask_out(_hysteresis(machine, state, marks if doubling else None, method), host)
     if not return_gradient:
         return edges
     magnitude = result(magnitude, host)
@@ -383,4 +419,4 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
         if not np.isfinite(magnitude).all():
             raise InputValueError(f"image values of about {2.0 ** exponent:.3g} give gradient magnitudes beyond "
                                   "float32's range: scale the image down to return them (return_gradient)")
-    return edges, magnitude, result(direction, host)
+    return CannyResult(edges, magnitude, result(direction, host))

@@ -21,19 +21,41 @@ V. Torre and T. Poggio, "On edge detection", IEEE TPAMI 8(2):147-163, 1986.
 
 from __future__ import annotations
 
-import math
 import weakref
 from typing import Literal
 
 import numpy as np
-import pyopencl as cl
 import pyopencl.array as cl_array
 from pyopencl import cltypes
 
 from vmcl.cm import filters as _cm_filters
-from vmcl.cm._arrays import ArrayLike, field, machine_for, result
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.cm.core import (
+    IMAGE_TYPES,
+    ArrayLike,
+    check_sigma,
+    image_field,
+    launch_rows,
+    machine_for,
+    result,
+    vector_kernel,
+)
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine
+
+__all__ = [
+    "DOG_RATIO",
+    "GREY_WEIGHTS",
+    "MAX_TAPS_SIGMA",
+    "TRUNCATE",
+    "Method",
+    "binomial_passes",
+    "difference_of_gaussians",
+    "discrete_laplacian",
+    "gaussian",
+    "gaussian_taps",
+    "laplacian_of_gaussian",
+    "separable_gaussian",
+]
 
 GREY_WEIGHTS = (0.2125, 0.7154, 0.0721)
 """Weights of R, G and B in the grey image (ITU-R BT.709 luma, scikit-image's ``rgb2gray``)."""
@@ -45,56 +67,10 @@ DOG_RATIO = 1.6
 """Marr and Hildreth's ratio of the two widths of a difference of Gaussians that best fits a LoG."""
 
 Method = Literal["binomial", "exact"]
-_IN_TYPES = {np.dtype(np.uint8): "uchar", np.dtype(np.uint16): "ushort", np.dtype(np.float32): "float"}
-
-
-def _image(image, machine: Machine, *, what: str, footprint: int, largest: int = 4,
-           widths: dict[str, float] | None = None) -> tuple[cl_array.Array, bool]:
-    """Check a grey or RGB image and return it on the device (uint8, uint16 or float32) with its origin.
-
-    Before anything is uploaded, the Gaussian ``widths`` (name: sigma) are checked against the image
-    (:func:`_check_widths`) and the device memory the call needs against the device: ``footprint``
-    bytes per pixel besides the input, the largest buffer ``largest`` bytes per pixel.
-    """
-    if isinstance(image, np.ndarray) and image.dtype.kind == "f":
-        if not np.isfinite(image).all():
-            raise InputValueError("image must not contain NaN or infinite values")
-        if image.dtype != np.float32:
-            image = image.astype(np.float32)
-            if not np.isfinite(image).all():
-                raise InputValueError("image has values beyond float32's range")
-    if isinstance(image, (np.ndarray, cl_array.Array)) and image.ndim in (2, 3) and image.size:
-        height, width = image.shape[:2]
-        _check_widths(widths or {}, height, width)
-        pixels, input_bytes = height * width, image.size * min(image.dtype.itemsize, 4)
-        machine.require_memory(f"{what} of a {height} x {width} image", input_bytes + footprint * pixels,
-                               max(input_bytes, largest * pixels))
-    data, host = field(image, "image", machine, ndims=(2, 3), dtypes=tuple(_IN_TYPES))
-    if data.ndim == 3 and data.shape[2] != 3:
-        raise InputValueError(f"image must be grey (H, W) or RGB (H, W, 3), got shape {data.shape}")
-    return data, host
-
-
-def _check_widths(widths: dict[str, float], height: int, width: int) -> None:
-    """Refuse Gaussians wider than the image allows: the work of a pass grows with the width (taps or
-    binomial passes), and past the image's larger side a Gaussian only blurs the repeated border."""
-    limit = max(height, width, _cm_filters.WIDEST)
-    for name, sigma in widths.items():
-        if sigma > limit:
-            raise InputValueError(f"{name} must be at most {limit} for a {height} x {width} image (its larger "
-                                  f"side, or {_cm_filters.WIDEST} for smaller images), got {sigma}")
 
 
 def _grey_weights() -> np.ndarray:
     return cltypes.make_float4(*GREY_WEIGHTS, 0.0)
-
-
-def _check_sigma(sigma, name: str = "sigma") -> float:
-    if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.integer, np.floating)):
-        raise InputTypeError(f"{name} must be a number, got {type(sigma).__name__}")
-    if not math.isfinite(sigma) or sigma <= 0:
-        raise InputValueError(f"{name} must be a finite number > 0, got {sigma}")
-    return float(sigma)
 
 
 MAX_TAPS_SIGMA = 2.0**18
@@ -103,7 +79,7 @@ MAX_TAPS_SIGMA = 2.0**18
 
 def gaussian_taps(sigma: float) -> np.ndarray:
     """The exact Gaussian's 1-D taps, normalised to sum 1 over ``int(4 sigma + 0.5)`` pixels each side."""
-    sigma = _check_sigma(sigma)
+    sigma = check_sigma(sigma)
     if sigma > MAX_TAPS_SIGMA:
         raise InputValueError(f"sigma must be at most {MAX_TAPS_SIGMA} for a tap table, got {sigma}")
     radius = int(TRUNCATE * sigma + 0.5)
@@ -114,28 +90,8 @@ def gaussian_taps(sigma: float) -> np.ndarray:
 
 def binomial_passes(sigma: float) -> int:
     """Passes of the 3 x 3 binomial mask for a Gaussian of ``sigma``: n passes have variance n / 2."""
-    sigma = _check_sigma(sigma)
+    sigma = check_sigma(sigma)
     return max(1, round(2.0 * sigma * sigma))
-
-
-def _vec(machine: Machine) -> int:
-    """Pixels per work-item: 16 on CPUs (their SIMD lanes see contiguous loads), 1 on GPUs."""
-    return 16 if machine.is_cpu else 1
-
-
-def _kernel(machine: Machine, family: str, name: str, **defines) -> cl.Kernel:
-    return machine.kernel(family, name, VEC=_vec(machine), **defines)
-
-
-def _launch_rows(machine: Machine, kernel: cl.Kernel, width: int, height: int, *args) -> None:
-    """Launch over (row chunks of VEC pixels, rows), in the Machine's work-groups for row kernels."""
-    size = (-(-width // _vec(machine)), height)
-    machine.launch(kernel, size, *args, local_size=machine.row_local_size(size))
-
-
-def _launch_flat(machine: Machine, kernel: cl.Kernel, n: int, *args) -> None:
-    """Launch over chunks of VEC elements of a flat field."""
-    machine.launch(kernel, (-(-n // _vec(machine)),), *args)
 
 
 _TAPS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -157,8 +113,13 @@ def _taps(machine: Machine, sigmas: tuple[float, ...]) -> tuple[cl_array.Array, 
     return cache[sigmas]
 
 
-def _separable(machine: Machine, data: cl_array.Array, sigmas: tuple[float, ...]) -> cl_array.Array:
-    """Exact separable Gaussian of the grey image; with two widths, the first smoothing minus the second."""
+def separable_gaussian(machine: Machine, data: cl_array.Array, sigmas: tuple[float, ...]) -> cl_array.Array:
+    """The exact separable Gaussian of the grey image of a device image checked by
+    :func:`vmcl.cm.core.image_field`.
+
+    With one width in ``sigmas``, the smoothed float32 (H, W) image; with two, the first smoothing minus
+    the second, in one fused pair of passes. The edge detectors smooth with it on the device.
+    """
     height, width = data.shape[:2]
     planes = len(sigmas)
     taps_device, radius = _taps(machine, sigmas)
@@ -167,10 +128,11 @@ def _separable(machine: Machine, data: cl_array.Array, sigmas: tuple[float, ...]
     rows = machine.empty((planes, height, width), np.float32)
     out = machine.empty((height, width), np.float32)
     dims = (np.int64(width), np.int64(height))
-    _launch_rows(machine, _kernel(machine, "gaussian", "gauss_rows", PLANES=planes, IN_T=_IN_TYPES[data.dtype]),
-                 width, height, data, rows, taps_device, np.int32(radius), *dims)
-    _launch_rows(machine, _kernel(machine, "gaussian", "gauss_cols", PLANES=planes), width, height, rows, out,
-                 taps_device, np.int32(radius), *dims)
+    along_rows = vector_kernel(machine, "early_filters", "gauss_rows", PLANES=planes,
+                               IN_T=IMAGE_TYPES[data.dtype])
+    launch_rows(machine, along_rows, width, height, data, rows, taps_device, np.int32(radius), *dims)
+    along_columns = vector_kernel(machine, "early_filters", "gauss_cols", PLANES=planes)
+    launch_rows(machine, along_columns, width, height, rows, out, taps_device, np.int32(radius), *dims)
     return out
 
 
@@ -179,25 +141,26 @@ def _grey(machine: Machine, data: cl_array.Array) -> cl_array.Array:
         return data
     height, width = data.shape[:2]
     out = machine.empty((height, width), np.float32)
-    _launch_rows(machine, _kernel(machine, "gaussian", "to_grey", IN_T=_IN_TYPES[data.dtype],
-                                  CHANNELS=3 if data.ndim == 3 else 1),
-                 width, height, data, out, _grey_weights(), np.int64(width), np.int64(height))
+    to_grey = vector_kernel(machine, "early_filters", "to_grey", IN_T=IMAGE_TYPES[data.dtype],
+                            CHANNELS=3 if data.ndim == 3 else 1)
+    launch_rows(machine, to_grey, width, height, data, out, _grey_weights(), *map(np.int64, (width, height)))
     return out
 
 
 def _smooth(machine: Machine, data: cl_array.Array, sigma: float, method: str) -> cl_array.Array:
     if method == "exact":
-        return _separable(machine, data, (sigma,))
+        return separable_gaussian(machine, data, (sigma,))
     if method == "binomial":
         return _cm_filters.binomial(_grey(machine, data), binomial_passes(sigma), machine=machine)
     raise InputValueError(f"method must be 'binomial' or 'exact', got {method!r}")
 
 
-def _laplacian(machine: Machine, smoothed: cl_array.Array) -> cl_array.Array:
+def discrete_laplacian(machine: Machine, smoothed: cl_array.Array) -> cl_array.Array:
+    """The 5-point discrete Laplacian of a float32 (H, W) device field, borders repeating the edge pixel."""
     height, width = smoothed.shape
     out = machine.empty((height, width), np.float32)
-    _launch_rows(machine, _kernel(machine, "gaussian", "laplacian"), width, height, smoothed, out,
-                 np.int64(width), np.int64(height))
+    launch_rows(machine, vector_kernel(machine, "early_filters", "laplacian"), width, height, smoothed, out,
+                np.int64(width), np.int64(height))
     return out
 
 
@@ -212,7 +175,7 @@ def gaussian(image: ArrayLike, *, sigma: float, method: Method = "binomial",
         float32). RGB is converted to grey with :data:`GREY_WEIGHTS`.
     sigma : float
         Standard deviation in pixels, > 0 and at most the image's larger side (or
-        :data:`vmcl.cm.filters.WIDEST` for smaller images).
+        :data:`vmcl.cm.core.WIDEST` for smaller images).
     method : {"binomial", "exact"}
         "binomial" (the paper's): n = max(1, round(2 sigma**2)) passes of the 3 x 3 mask
         [1 2 1]^T [1 2 1] / 16 (:func:`vmcl.cm.filters.binomial`), a Gaussian of standard deviation
@@ -244,10 +207,10 @@ def gaussian(image: ArrayLike, *, sigma: float, method: Method = "binomial",
     True
     """
     machine = machine_for(machine)
-    sigma = _check_sigma(sigma)
+    sigma = check_sigma(sigma)
     if method not in ("binomial", "exact"):
         raise InputValueError(f"method must be 'binomial' or 'exact', got {method!r}")
-    data, host = _image(image, machine, what="a Gaussian", footprint=12, widths={"sigma": sigma})
+    data, host = image_field(image, machine, what="a Gaussian", footprint=12, widths={"sigma": sigma})
     return result(_smooth(machine, data, sigma, method), host)
 
 
@@ -259,7 +222,7 @@ def laplacian_of_gaussian(image: ArrayLike, *, sigma: float, machine: Machine | 
     image : ndarray or pyopencl.array.Array, (H, W) or (H, W, 3); uint8, uint16 or float
     sigma : float
         Standard deviation of the Gaussian in pixels, > 0 and at most the image's larger side (or
-        :data:`vmcl.cm.filters.WIDEST` for smaller images).
+        :data:`vmcl.cm.core.WIDEST` for smaller images).
     machine : vmcl.Machine, optional
 
     Returns
@@ -272,9 +235,10 @@ def laplacian_of_gaussian(image: ArrayLike, *, sigma: float, machine: Machine | 
     D. Marr and E. Hildreth, "Theory of edge detection", Proc. R. Soc. Lond. B 207:187-217, 1980.
     """
     machine = machine_for(machine)
-    sigma = _check_sigma(sigma)
-    data, host = _image(image, machine, what="a Laplacian of a Gaussian", footprint=16, widths={"sigma": sigma})
-    return result(_laplacian(machine, _separable(machine, data, (sigma,))), host)
+    sigma = check_sigma(sigma)
+    data, host = image_field(image, machine, what="a Laplacian of a Gaussian", footprint=16,
+                             widths={"sigma": sigma})
+    return result(discrete_laplacian(machine, separable_gaussian(machine, data, (sigma,))), host)
 
 
 def difference_of_gaussians(image: ArrayLike, *, low_sigma: float, high_sigma: float | None = None,
@@ -289,7 +253,7 @@ def difference_of_gaussians(image: ArrayLike, *, low_sigma: float, high_sigma: f
     high_sigma : float, optional
         Of the wider one, > low_sigma. Default: 1.6 * low_sigma (Marr and Hildreth's best fit to the
         Laplacian of a Gaussian of width about sqrt(low_sigma * high_sigma)). Both at most the image's
-        larger side (or :data:`vmcl.cm.filters.WIDEST` for smaller images).
+        larger side (or :data:`vmcl.cm.core.WIDEST` for smaller images).
     machine : vmcl.Machine, optional
 
     Returns
@@ -302,10 +266,10 @@ def difference_of_gaussians(image: ArrayLike, *, low_sigma: float, high_sigma: f
     D. Marr and E. Hildreth, "Theory of edge detection", Proc. R. Soc. Lond. B 207:187-217, 1980.
     """
     machine = machine_for(machine)
-    low_sigma = _check_sigma(low_sigma, "low_sigma")
-    high_sigma = DOG_RATIO * low_sigma if high_sigma is None else _check_sigma(high_sigma, "high_sigma")
+    low_sigma = check_sigma(low_sigma, "low_sigma")
+    high_sigma = DOG_RATIO * low_sigma if high_sigma is None else check_sigma(high_sigma, "high_sigma")
     if high_sigma <= low_sigma:
         raise InputValueError(f"high_sigma must exceed low_sigma, got {high_sigma} <= {low_sigma}")
-    data, host = _image(image, machine, what="a difference of Gaussians", footprint=16, largest=8,
-                        widths={"low_sigma": low_sigma, "high_sigma": high_sigma})
-    return result(_separable(machine, data, (low_sigma, high_sigma)), host)
+    data, host = image_field(image, machine, what="a difference of Gaussians", footprint=16, largest=8,
+                             widths={"low_sigma": low_sigma, "high_sigma": high_sigma})
+    return result(separable_gaussian(machine, data, (low_sigma, high_sigma)), host)

@@ -32,12 +32,27 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import scan
-from vmcl.cm._arrays import ArrayLike, check_bool, check_choice, check_int, check_real, field, machine_for
+from vmcl.cm.core import ArrayLike, check_bool, check_choice, check_int, check_real, field, machine_for
 from vmcl.early import edges as _edges
 from vmcl.early import filters as _filters
 from vmcl.early.sign_correlation import arcsine_law
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
+
+__all__ = [
+    "BOUNDARY_SCORE",
+    "DEFAULT_SIGMA",
+    "EDGE_QUANTILES",
+    "FEATURES",
+    "METHODS",
+    "PYRAMID_SIGMA",
+    "SPEED_PENALTY",
+    "Features",
+    "FlowResult",
+    "Method",
+    "flow",
+    "votes",
+]
 
 Features = Literal["brightness", "log", "sign_log", "edges"]
 Method = Literal["running", "table"]

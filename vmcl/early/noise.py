@@ -41,10 +41,22 @@ import pyopencl.array as cl_array
 from pyopencl import cltypes
 
 from vmcl.cm import reduce as _reduce
-from vmcl.cm._arrays import ArrayLike, check_real, field, machine_for, result
-from vmcl.early.filters import _kernel
+from vmcl.cm.core import ArrayLike, check_real, field, machine_for, result, vector_kernel
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
+
+__all__ = [
+    "BINS",
+    "CANNY_HIGH",
+    "CANNY_LOW",
+    "NOISE_HIGH",
+    "NOISE_LOW",
+    "TILE",
+    "Noise",
+    "noise_rule",
+    "noise_thresholds",
+    "threshold_field",
+]
 
 NOISE_LOW = 2.0
 """Low threshold of the plain rule, in units of the estimated noise scale s."""
@@ -86,8 +98,9 @@ def threshold_field(machine: Machine, magnitude: cl_array.Array, rule: tuple[flo
     tiles = (math.ceil(height / TILE), math.ceil(width / TILE)) if local else (1, 1)
     out = machine.empty(tiles + (2,), np.float32)
     count = tiles[0] * tiles[1]
-    machine.launch(_kernel(machine, "edges", "histogram_thresholds"), (count,), hist, out, np.int32(BINS), top,
-                   cltypes.make_float4(*rule), np.int64(count))
+    thresholds = vector_kernel(machine, "edges", "histogram_thresholds")
+    machine.launch(thresholds, (count,), hist, out, np.int32(BINS), top, cltypes.make_float4(*rule),
+                   np.int64(count))
     return out, tiles
 
 

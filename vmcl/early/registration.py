@@ -26,7 +26,7 @@ from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
 from scipy.spatial import QhullError, cKDTree
 
 from vmcl.cm import doubling, reduce, router
-from vmcl.cm._arrays import (
+from vmcl.cm.core import (
     ArrayLike,
     check_choice,
     check_int,
@@ -36,9 +36,11 @@ from vmcl.cm._arrays import (
     real_host_array,
     result,
 )
-from vmcl.cm._arrays import field as device_field
+from vmcl.cm.core import field as device_field
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
+
+__all__ = ["TableStore", "WarpTable", "find_dots", "match_dots", "warp"]
 
 
 def _grey(image: np.ndarray, name: str) -> np.ndarray:
@@ -276,6 +278,6 @@ def warp(image: ArrayLike, table: WarpTable | ArrayLike, *, machine: Machine | N
         raise InputValueError(f"table must have shape {(height, width, 2)} for this image, got {positions.shape}")
     channels = data.shape[2] if data.ndim == 3 else 1
     out = machine.empty(data.shape, np.float32)
-    machine.launch(machine.kernel("warp", "warp_bilinear"), (width, height), data, positions, out,
+    machine.launch(machine.kernel("registration", "warp_bilinear"), (width, height), data, positions, out,
                    np.int64(width), np.int64(height), np.int64(channels))
     return result(out, host)

@@ -19,9 +19,11 @@ from __future__ import annotations
 import numpy as np
 
 from vmcl.cm import reduce as _reduce
-from vmcl.cm._arrays import ArrayLike, check_real, check_real_dtype, field, machine_for
+from vmcl.cm.core import ArrayLike, check_real, check_real_dtype, field, machine_for
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
+
+__all__ = ["arcsine_law", "sign_correlation"]
 
 
 def sign_correlation(f: ArrayLike, g: ArrayLike, *, machine: Machine | None = None) -> float:

@@ -32,7 +32,7 @@ import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as cm_reduce
 from vmcl.cm import scan
-from vmcl.cm._arrays import (
+from vmcl.cm.core import (
     ArrayLike,
     check_bool,
     check_choice,
@@ -41,15 +41,17 @@ from vmcl.cm._arrays import (
     check_real,
     machine_for,
 )
-from vmcl.cm._arrays import field as device_field
+from vmcl.cm.core import field as device_field
 from vmcl.cm.filters import window_max
 from vmcl.early.edges import canny, zero_crossings
 from vmcl.early.filters import gaussian
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
+__all__ = ["Features", "Method", "StereoMatch", "direction_code", "match", "match_features"]
+
 Features = Literal["canny", "dog", "intensity"]
-Variant = Literal["running", "table"]
+Method = Literal["running", "table"]
 _FEATURES = {"canny": 0, "dog": 1, "intensity": 2}
 _TABLE_BYTES = 256 << 20  # the largest table of match planes the default variant builds
 _BAND = 32  # rows per work-item of match_edges (at least)
@@ -124,7 +126,7 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
           horizontal_tolerance: float = 10.0,
           min_score: float = 0.3, bimodal: float = 0.3, dip: float = 0.8, min_votes: float = 3.0,
           negative_evidence: float = 0.0, shiftable: bool = False,
-          barriers: ArrayLike | None = None, variant: Variant | None = None,
+          barriers: ArrayLike | None = None, method: Method | None = None,
           machine: Machine | None = None) -> StereoMatch:
     """Match a rectified (or registered) stereo pair over the disparity range [d_min, d_max].
 
@@ -176,7 +178,7 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     barriers : bool (H, W), optional
         Discontinuity lines (from the integration stage, or ground truth): support windows stop at them,
         along rows and then along columns.
-    variant : {"table", "running"}, optional
+    method : {"table", "running"}, optional
         "table": the faithful version, every plane built (4 bytes per cell) and box-summed, then the
         selection walks the table. "running": no plane is stored. For edges and zero crossings, each
         left feature's support is summed from the features of its window, 16 disparities at a time,
@@ -217,11 +219,11 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     # From 90 degrees on no edge would be left.
     horizontal_tolerance = check_real(horizontal_tolerance, "horizontal_tolerance", minimum=0, below=90)
     selection = _selection(min_score, bimodal, dip, min_votes, negative_evidence, direction_tolerance)
-    variant = _plan(machine, features, left.shape[:2], d_min, d_max, patch, shiftable, barriers, variant)
+    method = _plan(machine, features, left.shape[:2], d_min, d_max, patch, shiftable, barriers, method)
     maps = _feature_maps(machine, left, right, features, sigma, low_threshold, high_threshold, use_quantiles)
     min_angle = horizontal_tolerance * 65536 / 360 if features == "canny" else 0.0
     found = _match_maps(machine, maps, features, min_angle=min_angle, d_min=d_min, d_max=d_max, patch=patch,
-                        **selection, shiftable=shiftable, barriers=barriers, variant=variant)
+                        **selection, shiftable=shiftable, barriers=barriers, method=method)
     return _deliver(found, isinstance(left, np.ndarray))
 
 
@@ -229,7 +231,7 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
                    d_min: int, d_max: int, compatible: Literal["direction", "sign"] = "direction",
                    patch: int = 11, direction_tolerance: float = math.radians(20), min_score: float = 0.3,
                    bimodal: float = 0.3, dip: float = 0.8, min_votes: float = 3.0, negative_evidence: float = 0.0,
-                   barriers: ArrayLike | None = None, variant: Variant | None = None,
+                   barriers: ArrayLike | None = None, method: Method | None = None,
                    machine: Machine | None = None) -> StereoMatch:
     """The matcher on feature maps computed elsewhere (the second half of :func:`match`).
 
@@ -263,9 +265,9 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
     _pair(maps["left"], maps["right"], machine)
     shape = maps["left"].shape
     _check_range(d_min, d_max, patch, shape[1])
-    variant = _plan(machine, features, shape, d_min, d_max, patch, False, barriers, variant)
+    method = _plan(machine, features, shape, d_min, d_max, patch, False, barriers, method)
     found = _match_maps(machine, maps, features, min_angle=0.0, d_min=d_min, d_max=d_max, patch=patch,
-                        **selection, barriers=barriers, variant=variant)
+                        **selection, barriers=barriers, method=method)
     return _deliver(found, host)
 
 
@@ -282,23 +284,23 @@ def _check_range(d_min, d_max, patch, width: int) -> None:
 
 
 def _plan(machine: Machine, features: str, shape: tuple[int, int], d_min: int, d_max: int, patch: int,
-          shiftable: bool, barriers, variant) -> str:
+          shiftable: bool, barriers, method) -> str:
     """The variant to run (the given one, checked, or the default), after checking that the device holds
     the tables it builds; before any work is done."""
     height, width = shape
     depth = d_max - d_min + 1
     table_bytes = depth * height * width * np.dtype(np.float32).itemsize
-    if variant is None:
+    if method is None:
         if features == "intensity":
             # Shiftable windows hold three tables at once: scores and the window maximum's two passes.
             tables = 3 if shiftable else 1
-            variant = "table" if tables * table_bytes <= _TABLE_BYTES else "running"
+            method = "table" if tables * table_bytes <= _TABLE_BYTES else "running"
         else:
-            variant = "running" if patch <= _MAX_RUNNING_PATCH else "table"
-    variant = check_choice(variant, "variant", ("running", "table"))
-    if variant == "running" and features != "intensity" and patch > _MAX_RUNNING_PATCH:
+            method = "running" if patch <= _MAX_RUNNING_PATCH else "table"
+    method = check_choice(method, "method", ("running", "table"))
+    if method == "running" and features != "intensity" and patch > _MAX_RUNNING_PATCH:
         raise InputValueError(f"the running variant counts votes in 16 bits: patch must be <= {_MAX_RUNNING_PATCH}, "
-                              f"got {patch} (use variant='table')")
+                              f"got {patch} (use method='table')")
     if patch > min(height, width):
         # No patch would lie inside the image, so nothing could match.
         raise InputValueError(f"patch must be at most the image's smaller side, {min(height, width)} for this "
@@ -306,13 +308,13 @@ def _plan(machine: Machine, features: str, shape: tuple[int, int], d_min: int, d
     # Tables alive at once: the planes and the box sum's two passes (the clipped sums' prefix and pass
     # with barriers; the shiftable scores and window maximum): the running variants hold at most one
     # plane, or _TABLE_BYTES of column sums.
-    tables = (4 if barriers is not None or shiftable else 3) if variant == "table" else 0
+    tables = (4 if barriers is not None or shiftable else 3) if method == "table" else 0
     per_pixel = 160  # feature maps, codes, counts, moments and their sums, selection, outputs
     machine.require_memory(f"stereo matching of {height} x {width} pixels over {depth} disparities "
-                           f"(variant {variant!r})",
+                           f"(method {method!r})",
                            tables * table_bytes + per_pixel * height * width + (_TABLE_BYTES if not tables else 0),
                            max(table_bytes if tables else 0, 16 * height * width))
-    return variant
+    return method
 
 
 def _deliver(found: list, host: bool) -> StereoMatch:
@@ -327,7 +329,7 @@ def _deliver(found: list, host: bool) -> StereoMatch:
 
 
 def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min, d_max, patch, direction_tolerance,
-                min_score, bimodal, dip, min_votes, negative_evidence, barriers, variant, shiftable=False) -> list:
+                min_score, bimodal, dip, min_votes, negative_evidence, barriers, method, shiftable=False) -> list:
     """Planes, support, selection and suppression on device feature maps; returns the device outputs."""
     height, width = maps["left"].shape
     depth = d_max - d_min + 1
@@ -342,7 +344,7 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
         barrier = None
     support = _Support(machine, radius, barrier, (height, width))
     # The square windows of the running edge matcher count eligible features themselves.
-    sliding = variant == "running" and features != "intensity" and barrier is None
+    sliding = method == "running" and features != "intensity" and barrier is None
     if features == "intensity":
         common = (maps["left"], maps["right"], maps["left_attr"], maps["right_attr"])
         stats = support.sum(_moments(machine, maps))
@@ -357,7 +359,7 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
     area = np.float32(patch * patch)
     dims = (np.int64(width), np.int64(height))
     build = machine.kernel("stereo", "match_planes", **defines)
-    if variant == "running" and features != "intensity" and not sliding:
+    if method == "running" and features != "intensity" and not sliding:
         machine.launch(machine.kernel("stereo", "match_edges_clipped", **defines), (-(-width // _SPAN), height),
                        *common, stats, *support.window_bounds(), *selection, *dims,
                        np.int32(d_min), np.int32(d_max), np.int64(radius), tolerance, area,
@@ -374,9 +376,9 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
                        *selection, *dims, np.int64(band), np.int32(d_min), np.int32(d_max), np.int64(radius),
                        tolerance, area, np.float32(negative_evidence), np.float32(dip))
     elif shiftable:
-        _select_shifted(machine, support, common, stats, selection, defines, variant, d_min=d_min, depth=depth,
+        _select_shifted(machine, support, common, stats, selection, defines, method, d_min=d_min, depth=depth,
                         area=area, dip=dip, radius=radius)
-    elif variant == "table":
+    elif method == "table":
         planes = machine.empty((depth, height, width), np.float32)
         machine.launch(build, (width, height, depth), *common, planes, *dims, np.int64(depth), np.int32(d_min),
                        tolerance)
@@ -403,7 +405,7 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
     return [disparity, score, common[0], out_of_range, discontinuity]
 
 
-def _select_shifted(machine: Machine, support: _Support, common, stats, selection, defines, variant, *, d_min,
+def _select_shifted(machine: Machine, support: _Support, common, stats, selection, defines, method, *, d_min,
                     depth, area, dip, radius) -> None:
     """Intensity winners over shiftable windows: each plane's centred scores, their window maximum, folded.
 
@@ -415,7 +417,7 @@ def _select_shifted(machine: Machine, support: _Support, common, stats, selectio
     score = machine.kernel("stereo", "intensity_scores", **defines)
     fold = machine.kernel("stereo", "select_scores", **defines)
     dims = (np.int64(width), np.int64(height))
-    step = depth if variant == "table" else 1
+    step = depth if method == "table" else 1
     for start in range(0, depth, step):
         count, d = min(step, depth - start), np.int32(d_min + start)
         planes = machine.empty((count, height, width), np.float32)
@@ -472,9 +474,9 @@ def _feature_maps(machine: Machine, left, right, features: str, sigma: float, lo
         if isinstance(image, np.ndarray):
             image = machine.to_device(image.astype(np.float32) if image.dtype.kind == "f" else image)
         if features == "canny":
-            edges, _, direction = canny(image, sigma=sigma, low_threshold=low, high_threshold=high,
-                                        use_quantiles=quantiles, return_gradient=True, machine=machine)
-            maps[side], maps[side + "_attr"] = edges, direction
+            found = canny(image, sigma=sigma, low_threshold=low, high_threshold=high, use_quantiles=quantiles,
+                          return_gradient=True, machine=machine)
+            maps[side], maps[side + "_attr"] = found.edges, found.direction
         elif features == "dog":
             crossings = zero_crossings(image, sigma=sigma, method="dog", machine=machine)
             maps[side], maps[side + "_attr"] = crossings.mask, crossings.sign

@@ -48,11 +48,13 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import scan as _scan
-from vmcl.cm._arrays import ArrayLike, check_int, check_real, machine_for, result
+from vmcl.cm.core import ArrayLike, check_int, check_real, check_sigma, image_field, machine_for, result
 from vmcl.early import noise as _noise
-from vmcl.early.filters import _check_sigma, _image, laplacian_of_gaussian
+from vmcl.early.filters import laplacian_of_gaussian
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
+
+__all__ = ["MIN_DENSITY_STEP", "TextureEdges", "density", "texture_edges"]
 
 MIN_DENSITY_STEP = 0.01
 """Smallest density difference (share of a window covered by blobs) that can be a texture edge."""
@@ -74,8 +76,8 @@ class TextureEdges(NamedTuple):
 
 
 def _check(fine_sigma, coarse_sigma, threshold, radius) -> tuple[float, float, float, int]:
-    fine = _check_sigma(fine_sigma, "fine_sigma")
-    coarse = _check_sigma(coarse_sigma, "coarse_sigma")
+    fine = check_sigma(fine_sigma, "fine_sigma")
+    coarse = check_sigma(coarse_sigma, "coarse_sigma")
     if coarse <= fine:
         raise InputValueError(f"coarse_sigma must exceed fine_sigma, got coarse_sigma={coarse} <= fine_sigma={fine}")
     # Blobs are thresholded at a non-zero value.
@@ -90,8 +92,8 @@ def _image_and_radius(image, radius: int, fine: float, coarse: float,
     kernels' 64-bit index arithmetic never sees a larger one)."""
     # Per pixel: two Laplacians and their smoothing passes, the blobs and their window sums, the
     # density, and the gradient's magnitude, axis and edges.
-    data, host = _image(image, machine, what="texture density", footprint=56,
-                        widths={"fine_sigma": fine, "coarse_sigma": coarse})
+    data, host = image_field(image, machine, what="texture density", footprint=56,
+                             widths={"fine_sigma": fine, "coarse_sigma": coarse})
     return data, host, min(radius, max(data.shape[:2]))
 
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vmcl.cm._arrays import check_bool, check_int, check_real
+from vmcl.cm.core import check_bool, check_int, check_real
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.metrics._inputs import as_float_field, check_sequence, to_host
 from vmcl.metrics._rates import f_measure, ratio

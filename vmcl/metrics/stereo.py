@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vmcl.cm._arrays import check_real
+from vmcl.cm.core import check_real
 from vmcl.errors import InputValueError
 from vmcl.metrics._inputs import as_float_field, check_sequence, evaluated_pixels
 

@@ -11,7 +11,17 @@ from __future__ import annotations
 from dataclasses import fields
 from typing import Any
 
-from vmcl.cm._arrays import check_int, check_real
+from vmcl.cm.core import check_int, check_real
+
+__all__ = [
+    "MAX_COUNT",
+    "check_cooling",
+    "check_count",
+    "check_fields",
+    "check_number",
+    "check_temperature",
+    "check_weight",
+]
 
 # Counts of sweeps, levels and radii: far above any schedule that ends, and within the kernels' int32.
 MAX_COUNT = 2**31 - 1

@@ -16,9 +16,11 @@ import math
 
 import numpy as np
 
-from vmcl.cm._arrays import ArrayLike, field, machine_for
+from vmcl.cm.core import ArrayLike, field, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
+
+__all__ = ["backfill", "check_unit_interval", "score_confidence"]
 
 
 def check_unit_interval(value, name: str, *, closed_above: bool) -> float:

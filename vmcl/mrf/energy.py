@@ -51,9 +51,21 @@ from typing import Any, ClassVar
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm._arrays import check_bool, check_choice, real_host_array
+from vmcl.cm.core import check_bool, check_choice, real_host_array
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.mrf.checks import check_count, check_fields, check_number, check_weight
+
+__all__ = [
+    "KINDS",
+    "EnergyModel",
+    "LinePrior",
+    "check_levels",
+    "check_prior",
+    "energy",
+    "host_field",
+    "line_costs",
+    "resolve_levels",
+]
 
 KINDS = ("smooth", "constant")
 

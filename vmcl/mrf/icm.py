@@ -18,6 +18,8 @@ from typing import ClassVar
 from vmcl.mrf.checks import check_count, check_fields
 from vmcl.mrf.lattice import Lattice, philox_key
 
+__all__ = ["IcmSchedule", "icm", "quench"]
+
 
 @dataclass(frozen=True)
 class IcmSchedule:

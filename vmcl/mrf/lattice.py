@@ -19,6 +19,8 @@ from vmcl.cm import reduce as cm_reduce
 from vmcl.machine import Machine
 from vmcl.mrf.energy import EnergyModel, resolve_levels
 
+__all__ = ["MODES", "SWEEP_ORDER", "Lattice", "philox_key"]
+
 MODES = {"sample": 0, "icm": 1, "mean": 2}
 # (phase, colour): the line sites' four colours, then f at the checkerboard's two colours. Lines go first
 # so that the first sweep sees the data's jumps before the smoothing of f has flattened them.

@@ -27,6 +27,8 @@ from vmcl.mrf.icm import quench
 from vmcl.mrf.lattice import Lattice, philox_key
 from vmcl.mrf.sampler import temperatures
 
+__all__ = ["MeanFieldSchedule", "meanfield"]
+
 
 @dataclass(frozen=True)
 class MeanFieldSchedule:

@@ -39,12 +39,14 @@ How each was chosen (tests/test_mrf_quality.py holds the scenes; the figures are
 
 from __future__ import annotations
 
-from vmcl.cm._arrays import check_choice
+from vmcl.cm.core import check_choice
 from vmcl.mrf.energy import EnergyModel
 from vmcl.mrf.icm import IcmSchedule
 from vmcl.mrf.meanfield import MeanFieldSchedule
 from vmcl.mrf.sampler import AnnealSchedule, MpmSchedule
 from vmcl.mrf.settings import Settings
+
+__all__ = ["COLOUR", "MOTION", "PRESETS", "STEREO", "TEXTURE", "preset"]
 
 STEREO = Settings(EnergyModel(alpha=1.0, beta=2.0, edge_gain=0.75),
                   {"anneal": AnnealSchedule(t0=1.0, t_factor=0.99, sweeps=600, quench=10),

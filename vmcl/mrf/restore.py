@@ -23,12 +23,14 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as cm_reduce
-from vmcl.cm._arrays import ArrayLike, check_choice, check_int, field, machine_for
+from vmcl.cm.core import ArrayLike, check_choice, check_int, field, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.mrf.energy import KINDS, EnergyModel, host_field
 from vmcl.mrf.lattice import Lattice
 from vmcl.mrf.solvers import SOLVERS
+
+__all__ = ["NothingToRestore", "Restoration", "boundary_map", "restore"]
 
 
 class NothingToRestore(InputValueError):

@@ -27,6 +27,8 @@ from vmcl.mrf.checks import check_cooling, check_count, check_fields, check_temp
 from vmcl.mrf.icm import quench
 from vmcl.mrf.lattice import Lattice, philox_key
 
+__all__ = ["AnnealSchedule", "MpmSchedule", "anneal", "mpm", "temperatures"]
+
 
 def temperatures(t0: float, factor: float, count: int) -> np.ndarray:
     """The geometric schedule t0 * factor**k, k = 0 .. count - 1."""

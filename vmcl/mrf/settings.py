@@ -12,10 +12,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from vmcl.cm._arrays import check_choice
+from vmcl.cm.core import check_choice
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.mrf.energy import EnergyModel
 from vmcl.mrf.solvers import SOLVERS
+
+__all__ = ["Settings"]
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,8 @@ from vmcl.mrf.lattice import Lattice
 from vmcl.mrf.meanfield import MeanFieldSchedule, meanfield
 from vmcl.mrf.sampler import AnnealSchedule, MpmSchedule, anneal, mpm
 
+__all__ = ["SOLVERS", "Solver"]
+
 
 class Solver(NamedTuple):
     """One registered solver: the function that runs it and the class of its schedule."""

@@ -8,6 +8,8 @@ import numpy as np
 
 from vmcl.labels import Label
 
+__all__ = ["discontinuity_labels"]
+
 _PRECEDENCE = (Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.TEXTURE, Label.SHADOW, Label.SPECULAR)
 
 

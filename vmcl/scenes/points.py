@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+__all__ = ["F32", "dot", "transform"]
+
 F32 = np.float32
 """The renderer's working precision (images, depths and points are float32)."""
 

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import math
 
-from vmcl.cm._arrays import check_bool
+from vmcl.cm.core import check_bool
 from vmcl.errors import InputValueError
 from vmcl.scenes.world import Body, Camera, Face, Light, Mark, Motion, Texture, World, box, fold
+
+__all__ = ["PRESETS", "preset"]
 
 PRESETS = ("blocks", "corridor", "shadows", "textures", "cues")
 """Names accepted by :func:`preset`."""

@@ -12,6 +12,8 @@ import numpy as np
 from vmcl.scenes.points import F32, dot
 from vmcl.scenes.world import Camera, Face
 
+__all__ = ["EPS", "NEAR", "FaceArrays", "Pinhole", "camera_blocked", "projected_boxes", "segment_blocked"]
+
 NEAR = 1e-3
 """Nearest depth a camera sees, world units."""
 EPS = 1e-5

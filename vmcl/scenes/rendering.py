@@ -9,13 +9,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vmcl.cm._arrays import check_int, check_real
+from vmcl.cm.core import check_int, check_real
 from vmcl.errors import InputTypeError
 from vmcl.scenes.discontinuities import discontinuity_labels
 from vmcl.scenes.points import F32, transform
 from vmcl.scenes.raycast import NEAR, FaceArrays, Pinhole, camera_blocked
 from vmcl.scenes.shading import Regions, form_image, shade
 from vmcl.scenes.world import World
+
+__all__ = ["Scene", "render"]
 
 
 @dataclass(frozen=True)

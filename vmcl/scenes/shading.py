@@ -13,6 +13,8 @@ from vmcl.scenes.raycast import EPS, FaceArrays, Pinhole, projected_boxes, segme
 from vmcl.scenes.textures import texture_modulation
 from vmcl.scenes.world import Face, Texture, World
 
+__all__ = ["Regions", "Surface", "form_image", "shade"]
+
 
 @dataclass
 class Surface:

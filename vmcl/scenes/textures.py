@@ -11,6 +11,8 @@ import numpy as np
 from vmcl.scenes.points import F32
 from vmcl.scenes.world import Texture
 
+__all__ = ["texture_modulation"]
+
 
 def _hash01(i: np.ndarray, j: np.ndarray, key: int) -> np.ndarray:
     """Uniform [0, 1) from integer lattice coordinates and a key (splitmix64 finaliser)."""

@@ -11,8 +11,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vmcl.cm._arrays import check_int, check_real
+from vmcl.cm.core import check_int, check_real
 from vmcl.errors import InputTypeError, InputValueError
+
+__all__ = ["Body", "Camera", "Face", "Light", "Mark", "Motion", "Texture", "World", "box", "fold"]
 
 
 def _numbers(value, name: str, count: int) -> tuple[float, ...]:

@@ -1,4 +1,5 @@
-/* box.cl: the window sum of "Powerful primitive operations" (Scanning): for every pixel, the sum over the
+/* scan_box.cl, driven by vmcl/cm/scan.py (box_sum).
+ * The window sum of "Powerful primitive operations" (Scanning): for every pixel, the sum over the
  * (2r+1) x (2r+1) square around it, zero outside the field, in time independent of r.
  *
  * The paper's recipe: plus-scan the rows, and let each pixel take the scan values r in front of it and

@@ -1,8 +1,9 @@
-/* gaussian.cl: the exact separable Gaussian, the grey conversion, the discrete Laplacian and the
+/* early_filters.cl, driven by vmcl/early/filters.py.
+ * The exact separable Gaussian, the grey conversion, the discrete Laplacian and the
  * difference of Gaussians. Seed section "Edge detection" (Zero-crossings): "The Laplacian of a Gaussian
  * can also be computed by convolution with a Gaussian followed by convolution with a discrete
  * Laplacian"; the Laplacian "is often approximated by the difference of Gaussians". The binomial
- * Gaussian (add and shift on the mesh) is filters.cl's.
+ * Gaussian (add and shift on the mesh) is cm_filters.cl's.
  *
  * Work-item (k, y) stands for the VEC processors (pixels) [k * VEC, (k + 1) * VEC) of row y: one vector
  * step where its window lies inside the row, pixel by pixel where it meets a border. VEC = 16 on CPUs,

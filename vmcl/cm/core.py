@@ -1,7 +1,9 @@
-"""Argument checking and host/device dispatch shared by the primitives.
+"""The shared core under the primitives (:mod:`vmcl.cm`) and the early layer (:mod:`vmcl.early`):
+argument checks, host/device dispatch and the launches of vectorised row and flat kernels.
 
 NumPy in gives NumPy out; a device array in gives a device array out, so a pipeline keeps its fields on
-the device between stages. Inputs are checked at the door with errors that name the argument.
+the device between stages. Inputs are checked at the door with errors that name the argument. Every
+module above takes its checks and launches from here, so one piece of code serves every caller.
 """
 
 from __future__ import annotations
@@ -13,12 +15,47 @@ from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
+import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine, default_machine
 
+__all__ = [
+    "IMAGE_TYPES",
+    "WIDEST",
+    "ArrayLike",
+    "check_bool",
+    "check_choice",
+    "check_context",
+    "check_int",
+    "check_real",
+    "check_real_dtype",
+    "check_sigma",
+    "check_widths",
+    "field",
+    "finite_float32",
+    "flags_field",
+    "image_field",
+    "launch_flat",
+    "launch_rows",
+    "machine_for",
+    "normalise_axis",
+    "real_host_array",
+    "result",
+    "type_defines",
+    "vector_kernel",
+]
+
 ArrayLike = np.ndarray | cl_array.Array
+"""What the public functions take and return: a NumPy array or a device array."""
+
+WIDEST = 32
+"""Gaussian width (sigma, in pixels) any image may be smoothed with; wider ones only up to the image's
+larger side, past which a Gaussian only blurs the repeated border while its work keeps growing."""
+
+IMAGE_TYPES = {np.dtype(np.uint8): "uchar", np.dtype(np.uint16): "ushort", np.dtype(np.float32): "float"}
+"""The image dtypes the early layer's kernels read, with their OpenCL type names (the ``IN_T`` define)."""
 
 # Host dtypes that convert to int32 or float32 without changing any value.
 _EXACT_TO_INT32 = {np.dtype(t) for t in (np.bool_, np.int8, np.uint8, np.int16, np.uint16, np.int32)}
@@ -26,6 +63,13 @@ _EXACT_TO_FLOAT32 = {np.dtype(np.float16), np.dtype(np.float32)}
 
 
 def machine_for(machine: Machine | None) -> Machine:
+    """The Machine a call runs on: ``machine`` itself, or :func:`vmcl.default_machine` for None.
+
+    Raises
+    ------
+    InputTypeError
+        For anything but a Machine or None.
+    """
     if machine is not None and not isinstance(machine, Machine):
         raise InputTypeError(f"machine must be a vmcl.Machine or None, got {type(machine).__name__}")
     return machine if machine is not None else default_machine()
@@ -109,6 +153,7 @@ def flags_field(segments: Any, shape: tuple[int, ...], name: str, machine: Machi
 
 
 def result(device: cl_array.Array, host: bool) -> ArrayLike:
+    """A call's output as its input came: copied to NumPy when ``host``, else the device array itself."""
     return device.get() if host else device
 
 
@@ -214,3 +259,104 @@ def normalise_axis(axis: int, ndim: int, allowed: tuple[int, ...], name: str = "
         raise InputValueError(f"{name}={axis} is not supported: scans run along the last axis (rows) or, for "
                          f"2-D and 3-D fields, the second to last (columns)")
     return negative
+
+
+def check_sigma(sigma: Any, name: str = "sigma") -> float:
+    """``sigma`` as a float; TypeError naming ``name`` for anything but a real number (bool included),
+    ValueError for NaN, infinity or a value <= 0."""
+    if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.integer, np.floating)):
+        raise InputTypeError(f"{name} must be a number, got {type(sigma).__name__}")
+    if not math.isfinite(sigma) or sigma <= 0:
+        raise InputValueError(f"{name} must be a finite number > 0, got {sigma}")
+    return float(sigma)
+
+
+def check_widths(widths: dict[str, float], height: int, width: int) -> None:
+    """Refuse Gaussians (name: sigma) wider than a ``height`` x ``width`` image allows.
+
+    The work of a pass grows with the width (taps or binomial passes), and past the image's larger side
+    (or :data:`WIDEST` for smaller images) a Gaussian only blurs the repeated border.
+    """
+    limit = max(height, width, WIDEST)
+    for name, sigma in widths.items():
+        if sigma > limit:
+            raise InputValueError(f"{name} must be at most {limit} for a {height} x {width} image (its larger "
+                                  f"side, or {WIDEST} for smaller images), got {sigma}")
+
+
+def finite_float32(x: Any, name: str) -> Any:
+    """A host float array ``x`` checked finite and converted to float32; anything else unchanged.
+
+    Raises
+    ------
+    InputValueError
+        Naming ``name``, for NaN or infinity, and for values beyond float32's range.
+    """
+    if isinstance(x, np.ndarray) and x.dtype.kind == "f":
+        if not np.isfinite(x).all():
+            raise InputValueError(f"{name} must not contain NaN or infinite values")
+        if x.dtype != np.float32:
+            x = x.astype(np.float32)
+            if not np.isfinite(x).all():
+                raise InputValueError(f"{name} has values beyond float32's range")
+    return x
+
+
+def image_field(image: Any, machine: Machine, *, what: str, footprint: int, largest: int = 4,
+                widths: dict[str, float] | None = None) -> tuple[cl_array.Array, bool]:
+    """Check a grey or RGB image and return it on the device with whether it came from the host.
+
+    Parameters
+    ----------
+    image : ndarray or pyopencl.array.Array, (H, W) or (H, W, 3)
+        Of a dtype in :data:`IMAGE_TYPES`; host floats of other widths are converted to float32, after
+        refusing NaN, infinity and values beyond float32's range (:func:`finite_float32`).
+    machine : vmcl.Machine
+    what : str
+        The computation, as the memory error names it ("a Gaussian").
+    footprint : int
+        Device bytes per pixel the call needs besides the input.
+    largest : int
+        Bytes per pixel of the largest buffer the call allocates.
+    widths : dict of str to float, optional
+        Gaussian widths (name: sigma) checked against the image (:func:`check_widths`).
+
+    Returns
+    -------
+    (pyopencl.array.Array, bool)
+        The image on the device (uint8, uint16 or float32) and whether it came from the host.
+
+    Notes
+    -----
+    Widths and device memory (:meth:`vmcl.Machine.require_memory`) are checked before anything is
+    uploaded.
+    """
+    image = finite_float32(image, "image")
+    if isinstance(image, (np.ndarray, cl_array.Array)) and image.ndim in (2, 3) and image.size:
+        height, width = image.shape[:2]
+        check_widths(widths or {}, height, width)
+        pixels, input_bytes = height * width, image.size * min(image.dtype.itemsize, 4)
+        machine.require_memory(f"{what} of a {height} x {width} image", input_bytes + footprint * pixels,
+                               max(input_bytes, largest * pixels))
+    data, host = field(image, "image", machine, ndims=(2, 3), dtypes=tuple(IMAGE_TYPES))
+    if data.ndim == 3 and data.shape[2] != 3:
+        raise InputValueError(f"image must be grey (H, W) or RGB (H, W, 3), got shape {data.shape}")
+    return data, host
+
+
+def vector_kernel(machine: Machine, family: str, name: str, **defines: Any) -> cl.Kernel:
+    """Kernel ``name`` of ``family`` built for the Machine's :attr:`~vmcl.Machine.vector_width` (the
+    ``VEC`` define: elements per work-item), for :func:`launch_rows` and :func:`launch_flat`."""
+    return machine.kernel(family, name, VEC=machine.vector_width, **defines)
+
+
+def launch_rows(machine: Machine, kernel: cl.Kernel, width: int, height: int, *args: Any) -> None:
+    """Launch a :func:`vector_kernel` over (row chunks of ``vector_width`` pixels, rows) of a ``height`` x
+    ``width`` field, in the Machine's work-groups for row kernels (:meth:`vmcl.Machine.row_local_size`)."""
+    size = (-(-width // machine.vector_width), height)
+    machine.launch(kernel, size, *args, local_size=machine.row_local_size(size))
+
+
+def launch_flat(machine: Machine, kernel: cl.Kernel, n: int, *args: Any) -> None:
+    """Launch a :func:`vector_kernel` over chunks of ``vector_width`` elements of a flat field of ``n``."""
+    machine.launch(kernel, (-(-n // machine.vector_width),), *args)

@@ -1,4 +1,5 @@
-/* warp.cl: warping an image by a stored table, seed section "Stereo" (Memory-based registration and
+/* registration.cl, driven by vmcl/early/registration.py.
+ * Warping an image by a stored table, seed section "Stereo" (Memory-based registration and
  * calibration): "the right image is warped according to the pre-stored addresses by sending each pixel
  * ... to the processor specified in the table". Every output pixel gets (a router read of) the four
  * pixels around its table address, weighted bilinearly.

@@ -1,4 +1,5 @@
-/* filters.cl: local filters on the mesh. The binomial approximation to the Gaussian, seed section "Edge
+/* cm_filters.cl, driven by vmcl/cm/filters.py.
+ * Local filters on the mesh. The binomial approximation to the Gaussian, seed section "Edge
  * detection" (Zero-crossings): "only integer addition, shifting, and local communication on the 2D mesh";
  * and the window maximum (grey-level dilation by a square), one axis per pass.
  *
