@@ -32,6 +32,7 @@ demo: setup
 	$(VENV)/bin/vmcl demo --out vmcl-demo
 
 test: setup
+	$(PY) -m mypy
 	$(PY) -m pytest -q
 
 bench: setup

@@ -254,13 +254,15 @@ class Bus:
                 raise Timeout(
                     f"{what} ({self.timeout * 1000:.0f} ms each); is it powered, wired, at that address?"
                 )
-        code = reply.status & ~FAULT_BIT
+        status = reply.status
+        assert status is not None  # _await returns only replies, and every reply carries a status
+        code = status & ~FAULT_BIT
         if code != Error.OK:
             kind, advice = _DEVICE_ERRORS.get(code, (DeviceError, f"error code {code}"))
             raise kind(
                 f"{who} refused {_name(cmd)}: {advice}",
                 code=code,
-                fault_latched=bool(reply.status & FAULT_BIT),
+                fault_latched=bool(status & FAULT_BIT),
             )
         return reply
 

@@ -78,10 +78,20 @@ def parse_commands(words: list[str]) -> list[Step]:
         if command == "status":
             steps.append(lambda head, out: print(head.status(), file=out))
         elif command == "home":
-            steps.append(lambda head, out: (head.home(), print("homed", file=out)))
+
+            def home(head: Head, out: TextIO) -> None:
+                head.home()
+                print("homed", file=out)
+
+            steps.append(home)
         elif command == "move":
             pan, tilt = (_number(w, a) for w, a in zip(_take(words, 2, "move", "PAN TILT"), ("PAN", "TILT")))
-            steps.append(lambda head, out, p=pan, t=tilt: head.move(pan=p, tilt=t))
+
+            # Defaults bind this command's angles (a closure would see the loop's last ones).
+            def move(head: Head, out: TextIO, p: float = pan, t: float = tilt) -> None:
+                head.move(pan=p, tilt=t)
+
+            steps.append(move)
         elif command == "point":
             eye, az, el = _take(words, 3, "point", "EYE AZIMUTH ELEVATION")
             if eye not in ("left", "right"):
@@ -112,9 +122,12 @@ def parse_commands(words: list[str]) -> list[Step]:
 
             steps.append(lens)
         elif command == "estop":
-            steps.append(
-                lambda head, out: (head.estop(), print("emergency stop sent to every micro", file=out))
-            )
+
+            def estop(head: Head, out: TextIO) -> None:
+                head.estop()
+                print("emergency stop sent to every micro", file=out)
+
+            steps.append(estop)
         else:
             raise UsageError(f"unknown command {command!r}")
     return steps

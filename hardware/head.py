@@ -93,7 +93,9 @@ class Head:
             # Checked before the port opens, so a bad value sends nothing.
             check_number("watchdog", watchdog, *WATCHDOG_RANGE, "seconds")
         self._owns_bus = not isinstance(port, Bus)
-        self.bus = Bus(port, baudrate=baudrate, timeout=timeout, retries=retries) if self._owns_bus else port
+        self.bus = (
+            port if isinstance(port, Bus) else Bus(port, baudrate=baudrate, timeout=timeout, retries=retries)
+        )
         try:
             self.stepper = StepperMicro(self.bus, stepper)
             self.galvo = GalvoMicro(self.bus, galvo)

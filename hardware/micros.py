@@ -182,7 +182,8 @@ class StepperMicro(Micro):
 
     def limits(self, axis: int) -> tuple[int, int]:
         axis = _index("axis", axis)
-        low, high = self._limits[axis] = self.call(Cmd.GET_LIMITS, axis)
+        low, high = self.call(Cmd.GET_LIMITS, axis)
+        self._limits[axis] = (low, high)
         return low, high
 
 
@@ -201,8 +202,8 @@ class GalvoMicro(Micro):
         self.call(Cmd.GALVO_SET, eye, *angles)
 
     def get(self, eye: int) -> GalvoStatus:
-        *angles, flags = self.call(Cmd.GALVO_GET, _index("eye", eye))
-        return GalvoStatus(*angles, Flag(flags))
+        x, y, target_x, target_y, flags = self.call(Cmd.GALVO_GET, _index("eye", eye))
+        return GalvoStatus(x, y, target_x, target_y, Flag(flags))
 
 
 class LensMicro(Micro):

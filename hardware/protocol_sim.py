@@ -39,6 +39,9 @@ class Serial(SerialBase):
         The seeded generator for the host's random choices.
     """
 
+    # SerialBase (pyserial ships no types) sets is_open in its __init__; declared so that mypy knows its type.
+    is_open: bool
+
     def open(self) -> None:
         if self.is_open:
             raise SerialException("port is already open")

@@ -536,6 +536,7 @@ def load_flow(name: str, root, *, colour: bool = False) -> FlowPair:
     key, folder = _lookup(name, _FLOW, "flow sequence")
     folder = _as_path(root, "root") / folder
     check_bool(colour, "colour")
+    frames: tuple[str, ...]  # a pair of file names, under color/ for the colour frames
     if key == "yosemite":
         frames, truth = ("yos9.png", "yos10.png"), "correct_yos.flo"
     else:

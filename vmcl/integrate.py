@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
 import pyopencl.array as cl_array
@@ -225,7 +225,7 @@ def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayL
         edges = field(edges, "edges", machine, ndims=(2,), dtypes=(np.uint8,))[0]
         if shape is not None and edges.shape != shape:
             raise InputValueError(f"edges must have the lines' shape {shape}, got {edges.shape}")
-        shape = edges.shape
+        shape = cast("tuple[int, int]", edges.shape)  # field() above checked that edges is 2-D
     if shape is None:
         raise InputValueError("integrate needs lines, edges or a shape")
     height, width = shape

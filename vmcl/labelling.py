@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import pyopencl.array as cl_array
 
 from vmcl.cm.core import ArrayLike, check_bool, check_real, machine_for, real_host_array
 from vmcl.cm.core import field as device_field
@@ -301,16 +302,17 @@ def _run(support, image, disparity, flow, hue, texture, labeller, machine, class
     if img.shape[:2] != shape or (img.ndim == 3 and img.shape[2] != 3):
         raise InputValueError(f"image must be (H, W) or (H, W, 3) with the support's (H, W) {shape}, got {img.shape}")
     present = {"texture"} if check_bool(texture, "texture") else set()
-    fields = {}
+    fields: dict[str, cl_array.Array | None] = {}
     for name, array, ndims, wanted, needs in (("disparity", disparity, (2,), shape, "stereo"),
                                               ("flow", flow, (3,), shape + (2,), "motion"),
                                               ("hue", hue, (2,), shape, "colour")):
         if array is None:
             fields[name] = None
             continue
-        fields[name], _ = device_field(array, name, machine, ndims=ndims, dtypes=(np.float32,))
-        if fields[name].shape != wanted:
-            raise InputValueError(f"{name} must have shape {wanted}, got {fields[name].shape}")
+        checked, _ = device_field(array, name, machine, ndims=ndims, dtypes=(np.float32,))
+        if checked.shape != wanted:
+            raise InputValueError(f"{name} must have shape {wanted}, got {checked.shape}")
+        fields[name] = checked
         present.add(needs)
     placeholder = machine.empty(1, np.float32)  # never read: its input's HAS_ define is 0
     args = [s, img] + [placeholder if fields[n] is None else fields[n] for n in ("disparity", "flow", "hue")]

@@ -36,6 +36,7 @@ __all__ = [
     "default_machine",
     "kernels_dir",
     "list_devices",
+    "on_device",
 ]
 
 INSTALL_HINT = (
@@ -206,8 +207,10 @@ class Machine:
             raise InputValueError(f"local_size must be a positive integer or None, got {local_size!r}")
         self.device = _choose_device(device)
         self.context = cl.Context([self.device])
-        properties = cl.command_queue_properties.PROFILING_ENABLE if profile else 0
-        self.queue = cl.CommandQueue(self.context, properties=properties)
+        # Without profiling the queue takes pyopencl's default properties (0): its stub types the
+        # argument as an enum that has no member for "none" at run time.
+        self.queue = (cl.CommandQueue(self.context, properties=cl.command_queue_properties.PROFILING_ENABLE)
+                      if profile else cl.CommandQueue(self.context))
         self.profile = profile
         self.local_size = local_size
         self.pool = cl_tools.MemoryPool(cl_tools.ImmediateAllocator(self.queue))
@@ -274,7 +277,9 @@ class Machine:
         if local_size is not None:
             global_size = tuple(-(-g // size) * size for g, size in zip(global_size, local_size))
         with self._launch_lock:
-            event = kernel(self.queue, global_size, local_size, *values)
+            # pyopencl's KernelArg omits MemoryObjectHolder, yet a pooled array's base_data is a
+            # PooledBuffer (one), which kernels take as they take a Buffer.
+            event = kernel(self.queue, global_size, local_size, *values)  # type: ignore[arg-type]
         if self.profile:
             self._events.append((kernel.function_name, event))
         return event
@@ -376,3 +381,15 @@ def default_machine() -> Machine:
         if _default is None:
             _default = Machine()
         return _default
+
+
+def on_device(array: np.ndarray | cl_array.Array) -> cl_array.Array:
+    """``array``, typed as the device array it is.
+
+    vmcl's modules return host arrays for host input and device arrays for device input, and their
+    result types say "either". A caller that gave device input (the pipeline and its cues) narrows the
+    result with this; a host array here is a defect in vmcl, hence TypeError rather than an InputError.
+    """
+    if not isinstance(array, cl_array.Array):
+        raise TypeError(f"expected a device array, got {type(array).__name__}")
+    return array

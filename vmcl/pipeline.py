@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pyopencl.array as cl_array
 
 from vmcl import integrate as _integrate
 from vmcl import labelling
@@ -44,7 +45,7 @@ from vmcl.cues import CueModule, Measurement, RunInputs, registered
 from vmcl.early import edges, motion, stereo
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.labels import CUES
-from vmcl.machine import Machine
+from vmcl.machine import Machine, on_device
 from vmcl.mrf import SOLVERS, NothingToRestore, Restoration, Settings, preset
 from vmcl.mrf.data import check_unit_interval
 
@@ -626,6 +627,11 @@ class VisionMachine:
         return _Run(self, image, others, progress).result
 
 
+def _device_lines(found: Restoration) -> tuple[cl_array.Array, cl_array.Array]:
+    """A restoration's line fields (line_h, line_v), on the device where the run's restorations are."""
+    return on_device(found.line_h), on_device(found.line_v)
+
+
 class _Run:
     """One run of the machine: the stages in order, each timed, the fields kept on the device."""
 
@@ -659,28 +665,29 @@ class _Run:
             refine = cue.refine_stage(self.c)
             if found is not None and refine:
                 with self.stage(refine):
-                    again = cue.refine(run, measured[cue.name], (found.line_h, found.line_v))
+                    again = cue.refine(run, measured[cue.name], _device_lines(found))
                     fields.update(again.fields)
                     found = self.restore(cue, again) or found
             if found is not None:
-                lines[cue.name], restored[cue.name] = (found.line_h, found.line_v), found.field
+                lines[cue.name], restored[cue.name] = _device_lines(found), on_device(found.field)
         with self.stage("integrate"):
-            support, labels = _integrate.integrate(lines, edges=brightness, machine=self.m)
+            integration = _integrate.integrate(lines, edges=brightness, machine=self.m)
+            support, labels = on_device(integration.support), on_device(integration.labels)
             if vm.labeller is not None:
-                labels = labelling.label(
+                labels = on_device(labelling.label(
                     support, left, disparity=restored.get("stereo"), flow=restored.get("motion"),
-                    hue=restored.get("colour"), texture="texture" in lines, labeller=vm.labeller, machine=self.m)
+                    hue=restored.get("colour"), texture="texture" in lines, labeller=vm.labeller, machine=self.m))
         with self.stage("download"):
             host = {name: array.get() for name, array in fields.items()}
             host_restored = {cue: array.get() for cue, array in restored.items()}
             host_lines = {cue: (h.get().astype(bool), v.get().astype(bool)) for cue, (h, v) in lines.items()}
-            edge_map, support, labels = brightness.get(), support.get(), labels.get()
+            edge_map, host_support, host_labels = brightness.get(), support.get(), labels.get()
         as_bool = ("colour_edges", "texture_edges", "stereo_discontinuity")
         host = {name: (value.astype(bool) if name in as_bool else value) for name, value in host.items()}
         for cue in active:
             if cue.restored_as and cue.name in host_restored:
                 host[cue.restored_as] = host_restored[cue.name]
-        self.result = Result(image=image, edges=edge_map.astype(bool), support=support, labels=labels,
+        self.result = Result(image=image, edges=edge_map.astype(bool), support=host_support, labels=host_labels,
                              config=self.c, restored=host_restored, lines=host_lines, stages=self.stages,
                              kernels=self.m.timings(reset=True) if self.m.profile else {}, notes=self.notes,
                              **host)

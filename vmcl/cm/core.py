@@ -12,11 +12,12 @@ import functools
 import math
 import operator
 from collections.abc import Iterable
-from typing import Any
+from typing import Any, TypeVar, cast
 
 import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
+from numpy.typing import DTypeLike
 
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine, default_machine
@@ -33,6 +34,7 @@ __all__ = [
     "check_real_dtype",
     "check_sigma",
     "check_widths",
+    "device_memory",
     "field",
     "finite_float32",
     "flags_field",
@@ -54,7 +56,8 @@ WIDEST = 32
 """Gaussian width (sigma, in pixels) any image may be smoothed with; wider ones only up to the image's
 larger side, past which a Gaussian only blurs the repeated border while its work keeps growing."""
 
-IMAGE_TYPES = {np.dtype(np.uint8): "uchar", np.dtype(np.uint16): "ushort", np.dtype(np.float32): "float"}
+IMAGE_TYPES: dict[np.dtype, str] = {np.dtype(np.uint8): "uchar", np.dtype(np.uint16): "ushort",
+                                    np.dtype(np.float32): "float"}
 """The image dtypes the early layer's kernels read, with their OpenCL type names (the ``IN_T`` define)."""
 
 # Host dtypes that convert to int32 or float32 without changing any value.
@@ -76,7 +79,7 @@ def machine_for(machine: Machine | None) -> Machine:
 
 
 @functools.cache
-def _dtypes(dtypes: tuple) -> tuple[np.dtype, ...]:
+def _dtypes(dtypes: tuple[DTypeLike, ...]) -> tuple[np.dtype, ...]:
     return tuple(np.dtype(t) for t in dtypes)
 
 
@@ -91,7 +94,7 @@ class _DtypeNames:
 
 
 def field(x: Any, name: str, machine: Machine, *, ndims: tuple[int, ...],
-          dtypes: tuple[type, ...] = (np.int32, np.float32)) -> tuple[cl_array.Array, bool]:
+          dtypes: tuple[DTypeLike, ...] = (np.int32, np.float32)) -> tuple[cl_array.Array, bool]:
     """Check ``x`` and return it as a device array with whether it came from the host.
 
     Host arrays of a narrower integer (or float16) dtype are widened exactly to int32 (float32) when
@@ -157,6 +160,15 @@ def result(device: cl_array.Array, host: bool) -> ArrayLike:
     return device.get() if host else device
 
 
+def device_memory(x: cl_array.Array) -> cl.MemoryObjectHolder:
+    """The memory object under ``x``, a non-empty array from :meth:`vmcl.Machine.empty`, for the
+    ``cl.enqueue_*`` calls that take one (pyopencl types ``base_data`` as memory, SVM pointer or None)."""
+    memory = x.base_data
+    # The Machine's pool hands out PooledBuffers, which are memory objects; only an empty array has none.
+    assert isinstance(memory, cl.MemoryObjectHolder), f"no device memory under an array of shape {x.shape}"
+    return memory
+
+
 def type_defines(dtype: np.dtype) -> dict[str, Any]:
     """The -D defines that specialise a kernel family for int32 or float32."""
     if dtype == np.float32:
@@ -209,14 +221,21 @@ def check_bool(value: Any, name: str) -> bool:
     return bool(value)
 
 
-def check_choice(value: Any, name: str, choices: Iterable[str]) -> str:
-    """``value``, one of the strings ``choices``; TypeError for a non-string, ValueError for another string."""
+_Choice = TypeVar("_Choice", bound=str)
+
+
+def check_choice(value: Any, name: str, choices: Iterable[_Choice]) -> _Choice:
+    """``value``, one of the strings ``choices``; TypeError for a non-string, ValueError for another string.
+
+    Typed as the choices' type, so choices of a ``Literal`` type (``OPS: dict[Op, int]``) give that type.
+    """
     choices = tuple(choices)
     if not isinstance(value, str):
         raise InputTypeError(f"{name} must be one of {choices}, got {type(value).__name__}")
     if value not in choices:
         raise InputValueError(f"{name} must be one of {choices}, got {value!r}")
-    return value
+    # Equal to one of the choices, so of their type (a Literal's values are plain strs).
+    return cast(_Choice, value)
 
 
 def check_context(x: cl_array.Array, name: str, machine: Machine) -> None:

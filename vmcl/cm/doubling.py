@@ -19,7 +19,7 @@ not pixels, as the elements of the union-find).
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Literal, overload
 
 import numpy as np
 import pyopencl.array as cl_array
@@ -114,6 +114,12 @@ def principal(next: ArrayLike, *, machine: Machine | None = None) -> tuple[Array
     return result(top, host), result(distance, host)
 
 
+@overload
+def label(mask: np.ndarray, *, connectivity: int = 8, relabel: bool = False, method: LabelMethod = "doubling",
+          machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def label(mask: cl_array.Array, *, connectivity: int = 8, relabel: bool = False,
+          method: LabelMethod = "doubling", machine: Machine | None = None) -> cl_array.Array: ...
 def label(mask: ArrayLike, *, connectivity: int = 8, relabel: bool = False, method: LabelMethod = "doubling",
           machine: Machine | None = None) -> ArrayLike:
     """Connected-component labels of a binary field.

@@ -9,7 +9,10 @@ hold a pixel.
 
 from __future__ import annotations
 
+from typing import overload
+
 import numpy as np
+import pyopencl.array as cl_array
 
 from vmcl.cm.core import WIDEST, ArrayLike, check_int, field, machine_for, result, type_defines
 from vmcl.errors import InputValueError
@@ -25,6 +28,10 @@ def max_passes(height: int, width: int) -> int:
     return 2 * max(height, width, WIDEST) ** 2
 
 
+@overload
+def binomial(image: np.ndarray, passes: int, *, machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def binomial(image: cl_array.Array, passes: int, *, machine: Machine | None = None) -> cl_array.Array: ...
 def binomial(image: ArrayLike, passes: int, *, machine: Machine | None = None) -> ArrayLike:
     """Smooth ``image`` with ``passes`` passes of the 3 x 3 binomial mask [1 2 1]^T [1 2 1] / 16.
 
@@ -74,6 +81,10 @@ def binomial(image: ArrayLike, passes: int, *, machine: Machine | None = None) -
     return result(source, host)
 
 
+@overload
+def window_max(x: np.ndarray, radius: int, *, machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def window_max(x: cl_array.Array, radius: int, *, machine: Machine | None = None) -> cl_array.Array: ...
 def window_max(x: ArrayLike, radius: int, *, machine: Machine | None = None) -> ArrayLike:
     """The maximum over the (2r+1) x (2r+1) window around every pixel (grey-level dilation by a square).
 

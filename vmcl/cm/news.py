@@ -6,9 +6,10 @@ the four cardinal directions of a grid; accesses are made in the same direction 
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, overload
 
 import numpy as np
+import pyopencl.array as cl_array
 
 from vmcl.cm.core import ArrayLike, check_choice, check_int, field, machine_for, result, type_defines
 from vmcl.machine import Machine
@@ -16,9 +17,15 @@ from vmcl.machine import Machine
 __all__ = ["BORDERS", "Border", "shift"]
 
 Border = Literal["zero", "clamp", "wrap"]
-BORDERS = {"zero": 0, "clamp": 1, "wrap": 2}
+BORDERS: dict[Border, int] = {"zero": 0, "clamp": 1, "wrap": 2}
 
 
+@overload
+def shift(x: np.ndarray, dx: int, dy: int, *, border: Border = "zero",
+          machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def shift(x: cl_array.Array, dx: int, dy: int, *, border: Border = "zero",
+          machine: Machine | None = None) -> cl_array.Array: ...
 def shift(x: ArrayLike, dx: int, dy: int, *, border: Border = "zero", machine: Machine | None = None) -> ArrayLike:
     """The field moved ``dx`` pixels to the right and ``dy`` down: ``out[y, x] = x[y - dy, x - dx]``.
 

@@ -19,6 +19,7 @@ from vmcl.cm.core import (
     check_choice,
     check_int,
     check_real,
+    device_memory,
     field,
     machine_for,
     result,
@@ -66,7 +67,7 @@ def reduce(x: ArrayLike, op: ReduceOp = "sum", *, machine: Machine | None = None
     data, host = field(source, "x", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
     defines = type_defines(data.dtype)
     if op == "sum":
-        accumulator = np.dtype(np.float32) if data.dtype == np.float32 else np.dtype(np.int64)
+        accumulator: np.dtype = np.dtype(np.float32) if data.dtype == np.float32 else np.dtype(np.int64)
     elif op in ("and", "or"):
         accumulator = np.dtype(np.uint8)
     else:
@@ -198,7 +199,7 @@ def _count(machine: Machine, data: cl_array.Array, bins: int, lo: float, hi: flo
     defines = dict(OP=0, ACC="int", SHARED_COUNTS=int(local > 1), TO_TOP=int(top is not None),
                    **type_defines(data.dtype))
     if accumulate:
-        cl.enqueue_fill_buffer(machine.queue, out.base_data, np.int32(0), 0, out.nbytes)
+        cl.enqueue_fill_buffer(machine.queue, device_memory(out), np.int32(0), 0, out.nbytes)
     # A range too narrow or too wide for float32 overflows here; the kernel rescales such ranges.
     with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
         scale = np.float32(bins) / (np.float32(hi) - np.float32(lo))

@@ -16,7 +16,16 @@ import pyopencl as cl
 
 from vmcl.cm import core
 from vmcl.cm import reduce as _reduce
-from vmcl.cm.core import ArrayLike, check_choice, check_int, check_real, machine_for, result, type_defines
+from vmcl.cm.core import (
+    ArrayLike,
+    check_choice,
+    check_int,
+    check_real,
+    device_memory,
+    machine_for,
+    result,
+    type_defines,
+)
 from vmcl.cm.scan import exclusive_sum_into
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
@@ -24,7 +33,7 @@ from vmcl.machine import Machine
 __all__ = ["Combine", "get", "send"]
 
 Combine = Literal["overwrite", "sum", "max", "min", "and", "or"]
-_COMBINE = {"overwrite": 100, "sum": 0, "max": 1, "min": 2, "and": 4, "or": 5}
+_COMBINE: dict[Combine, int] = {"overwrite": 100, "sum": 0, "max": 1, "min": 2, "and": 4, "or": 5}
 _DTYPES = (np.uint8, np.int32, np.float32)
 _ANY_NDIM = tuple(range(1, 33))
 _MAX_DESTINATIONS = 2**31 - 1  # addresses, counts and offsets are int32
@@ -33,6 +42,7 @@ _MAX_DESTINATIONS = 2**31 - 1  # addresses, counts and offsets are int32
 def _addresses(address: ArrayLike, size: int, machine: Machine, bound: str) -> tuple:
     data, host = core.field(address, "address", machine, ndims=_ANY_NDIM, dtypes=(np.int32,))
     if host:
+        assert isinstance(address, np.ndarray)  # field() reports host for NumPy input only
         low, high = int(np.min(address)), int(np.max(address))
     else:
         low, high = (int(_reduce.reduce(data, op, machine=machine).get()) for op in ("min", "max"))
@@ -140,10 +150,13 @@ def send(values: ArrayLike, address: ArrayLike, *, size: int | tuple[int, ...], 
     slots = machine.empty(n, np.int32)
     out = machine.empty(shape, data.dtype)
     queue = machine.queue
-    cl.enqueue_fill_buffer(queue, counts.base_data, np.int32(0), 0, counts.nbytes)
+    cl.enqueue_fill_buffer(queue, device_memory(counts), np.int32(0), 0, counts.nbytes)
     machine.launch(machine.kernel("router", "count_senders", **defines), (n,), where, counts, np.int64(n))
     exclusive_sum_into(machine, counts, offsets)
-    cl.enqueue_copy(queue, cursor.base_data, offsets.base_data, byte_count=offsets.nbytes)
+    # pyopencl's overloads type a device copy's ends as Buffer, but enqueue_copy dispatches on
+    # MemoryObjectHolder, so the pool's PooledBuffers (not Buffer subclasses) are copied alike.
+    cl.enqueue_copy(queue, device_memory(cursor), device_memory(offsets),  # type: ignore[call-overload]
+                    byte_count=offsets.nbytes)
     machine.launch(machine.kernel("router", "place_senders", **defines), (n,), where, cursor, slots, np.int64(n))
     machine.launch(machine.kernel("router", "sort_buckets", **defines), (destinations,), offsets, counts, slots,
                    np.int64(destinations))

@@ -13,7 +13,7 @@ W. D. Hillis and G. L. Steele, "Data parallel algorithms", CACM 29(12), 1986.
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Literal, overload
 
 import numpy as np
 import pyopencl as cl
@@ -24,6 +24,7 @@ from vmcl.cm.core import (
     check_bool,
     check_choice,
     check_int,
+    device_memory,
     field,
     flags_field,
     machine_for,
@@ -51,13 +52,21 @@ __all__ = [
 Op = Literal["plus", "max", "min", "copy"]
 Method = Literal["work_efficient", "hillis_steele"]
 
-OPS = {"plus": 0, "max": 1, "min": 2, "copy": 3}
-METHODS = ("work_efficient", "hillis_steele")
+OPS: dict[Op, int] = {"plus": 0, "max": 1, "min": 2, "copy": 3}
+METHODS: tuple[Method, ...] = ("work_efficient", "hillis_steele")
 COLUMN_VEC = 16
 ROW_ILP = 4  # chunks per work-item in the row kernels (ILP in kernels/scan.cl)
 _MIN_CHUNK = 4096
 
 
+@overload
+def scan(x: np.ndarray, *, op: Op = "plus", axis: int = -1, exclusive: bool = False,
+         segments: ArrayLike | None = None, method: Method = "work_efficient",
+         machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def scan(x: cl_array.Array, *, op: Op = "plus", axis: int = -1, exclusive: bool = False,
+         segments: ArrayLike | None = None, method: Method = "work_efficient",
+         machine: Machine | None = None) -> cl_array.Array: ...
 def scan(x: ArrayLike, *, op: Op = "plus", axis: int = -1, exclusive: bool = False,
          segments: ArrayLike | None = None, method: Method = "work_efficient",
          machine: Machine | None = None) -> ArrayLike:
@@ -217,7 +226,11 @@ def _hillis_steele(machine: Machine, data: cl_array.Array, flags: cl_array.Array
                     if segmented else (data, data))
     source, source_flags = data, flags if segmented else data
     if steps == 0:
-        cl.enqueue_copy(machine.queue, final.base_data, data.base_data, byte_count=data.nbytes)
+        # pyopencl's overloads type a device copy's ends as Buffer, but enqueue_copy dispatches on
+        # MemoryObjectHolder, so the pool's PooledBuffers (not Buffer subclasses) are copied alike. ``data``
+        # may be the caller's array, from any allocator: its memory is passed on as it is.
+        cl.enqueue_copy(machine.queue, device_memory(final), data.base_data,  # type: ignore[call-overload]
+                        byte_count=data.nbytes)
     for k in range(steps):
         target, target_flags = buffers[k % 2], flag_buffers[k % 2]
         machine.launch(step, (size,), source, source_flags, target, target_flags,
@@ -241,6 +254,12 @@ def _check_window_sums_fit(x: np.ndarray, window: int) -> None:
                               "overflow float32; scale x down first")
 
 
+@overload
+def box_sum(x: np.ndarray, radius: int, *, axes: tuple[int, ...] = (-2, -1),
+            machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def box_sum(x: cl_array.Array, radius: int, *, axes: tuple[int, ...] = (-2, -1),
+            machine: Machine | None = None) -> cl_array.Array: ...
 def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
             machine: Machine | None = None) -> ArrayLike:
     """Sum over the (2r+1) x (2r+1) window around every pixel, by grid-scans, in time independent of r.
@@ -287,6 +306,7 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     if len(wanted) != len(axes):
         raise InputValueError(f"axes must not repeat an axis, got {axes!r}")
     if host and data.dtype.kind == "f" and data.size:
+        assert isinstance(x, np.ndarray)  # field() reports host for NumPy input only
         _check_window_sums_fit(x, (2 * radius + 1) ** len(wanted))
     defines = type_defines(data.dtype)
     width = data.shape[-1]

@@ -11,7 +11,7 @@ its pictures in the report. :mod:`vmcl.pipeline` loops over the registered cues 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import pyopencl.array as cl_array
@@ -49,6 +49,17 @@ class RunInputs:
     @property
     def width(self) -> int:
         return int(self.left.shape[1])
+
+    def needed(self, name: Literal["right", "next"]) -> cl_array.Array:
+        """The right view or the next frame, which a cue reads only when it lists ``name`` in its needs.
+
+        The pipeline runs a cue only when its needs are given, so for such a cue the image is there; a
+        cue that reads an input it did not declare fails here, by name, rather than in its module.
+        """
+        array = self.right if name == "right" else self.next
+        if array is None:
+            raise RuntimeError(f"this run has no {name!r} image: a cue that reads it must list it in its needs")
+        return array
 
 
 @dataclass

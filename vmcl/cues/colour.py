@@ -14,6 +14,7 @@ import numpy as np
 from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import color
 from vmcl.labels import Label
+from vmcl.machine import on_device
 
 __all__ = ["ColourCue"]
 
@@ -30,7 +31,8 @@ class ColourCue(CueModule):
 
     def measure(self, run: RunInputs) -> Measurement:
         found = color.albedo_edges(run.left, threshold=run.config.colour.threshold, machine=run.machine)
-        return Measurement(found.hue, None, found.edges, fields={"hue": found.hue, "colour_edges": found.edges})
+        hue, edges = on_device(found.hue), on_device(found.edges)  # device input, device output
+        return Measurement(hue, None, edges, fields={"hue": hue, "colour_edges": edges})
 
     def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
         from vmcl.report import field_image

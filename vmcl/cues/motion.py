@@ -12,6 +12,7 @@ import numpy as np
 from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import motion
 from vmcl.labels import Label
+from vmcl.machine import on_device
 from vmcl.mrf import score_confidence
 
 __all__ = ["MotionCue"]
@@ -29,11 +30,12 @@ class MotionCue(CueModule):
 
     def measure(self, run: RunInputs) -> Measurement:
         mc = run.config.motion
-        found = motion.flow(run.left, run.next, delta=mc.delta, patch=mc.patch, levels=mc.levels,
+        found = motion.flow(run.left, run.needed("next"), delta=mc.delta, patch=mc.patch, levels=mc.levels,
                             features=mc.features, machine=run.machine)
-        confidence = (score_confidence(found.score, floor=mc.confidence_floor, machine=run.machine)
+        confidence = (on_device(score_confidence(found.score, floor=mc.confidence_floor, machine=run.machine))
                       if mc.weigh_by_score else None)
-        return Measurement(found.flow, confidence, run.brightness, fields={"raw_flow": found.flow})
+        flow = on_device(found.flow)  # device input, device output
+        return Measurement(flow, confidence, run.brightness, fields={"raw_flow": flow})
 
     def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
         from vmcl.report import flow_image

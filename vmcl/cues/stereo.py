@@ -19,6 +19,7 @@ from vmcl import integrate
 from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import stereo
 from vmcl.labels import Label
+from vmcl.machine import on_device
 from vmcl.mrf import backfill, score_confidence
 
 __all__ = ["StereoCue"]
@@ -39,8 +40,8 @@ class StereoCue(CueModule):
         dense = _dense_match(run)
         data, confidence = _depth_data(run, matched, dense)
         return Measurement(data, confidence, run.brightness, state=dense,
-                           fields={"sparse_disparity": matched.disparity,
-                                   "stereo_discontinuity": matched.discontinuity})
+                           fields={"sparse_disparity": on_device(matched.disparity),
+                                   "stereo_discontinuity": on_device(matched.discontinuity)})
 
     def refine_stage(self, config) -> str | None:
         return "feedback" if config.stereo.feedback else None
@@ -51,8 +52,8 @@ class StereoCue(CueModule):
         data, confidence = _depth_data(run, matched, measurement.state)
         return Measurement(data, confidence, run.brightness, state=measurement.state,
                            fields={"first_pass_disparity": measurement.fields["sparse_disparity"],
-                                   "sparse_disparity": matched.disparity,
-                                   "stereo_discontinuity": matched.discontinuity})
+                                   "sparse_disparity": on_device(matched.disparity),
+                                   "stereo_discontinuity": on_device(matched.discontinuity)})
 
     def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
         from vmcl.report import disparity_image
@@ -67,7 +68,7 @@ class StereoCue(CueModule):
                                      "The matcher's sparse disparities, same scale")}
 
 
-def _match(run: RunInputs, barriers, *, features: str | None = None) -> stereo.StereoMatch:
+def _match(run: RunInputs, barriers, *, features: stereo.Features | None = None) -> stereo.StereoMatch:
     s = run.config.stereo
     d_min = 0 if s.d_min is None else s.d_min
     d_max = math.ceil(s.max_disparity * run.width) if s.d_max is None else s.d_max
@@ -76,7 +77,7 @@ def _match(run: RunInputs, barriers, *, features: str | None = None) -> stereo.S
     # windows are its own.
     options = {"shiftable": s.shiftable and barriers is None} if features == "intensity" else {
         "low_threshold": s.low_threshold, "high_threshold": s.high_threshold, "use_quantiles": s.use_quantiles}
-    return stereo.match(run.left, run.right, d_min=d_min, d_max=d_max, features=features, patch=s.patch,
+    return stereo.match(run.left, run.needed("right"), d_min=d_min, d_max=d_max, features=features, patch=s.patch,
                         sigma=s.intensity_sigma if features == "intensity" else s.sigma, barriers=barriers,
                         machine=run.machine, **options)
 
@@ -92,12 +93,14 @@ def _dense_match(run: RunInputs) -> tuple[cl_array.Array, cl_array.Array] | None
     if not s.backfill or s.features == "intensity":
         return None
     dense = _match(run, None, features="intensity")
-    return dense.disparity, score_confidence(dense.score, floor=s.backfill_floor, weight=s.backfill_weight,
-                                             machine=run.machine)
+    return on_device(dense.disparity), on_device(score_confidence(dense.score, floor=s.backfill_floor,
+                                                                   weight=s.backfill_weight, machine=run.machine))
 
 
-def _depth_data(run: RunInputs, matched: stereo.StereoMatch, dense) -> tuple[cl_array.Array, cl_array.Array | None]:
+def _depth_data(run: RunInputs, matched: stereo.StereoMatch, dense: tuple[cl_array.Array, cl_array.Array] | None
+                ) -> tuple[cl_array.Array, cl_array.Array | None]:
     """The stereo MRF's data and confidence: the feature matches, backfilled by intensity matches."""
     if dense is None:
-        return matched.disparity, None
-    return backfill(matched.disparity, *dense, machine=run.machine)
+        return on_device(matched.disparity), None
+    data, confidence = backfill(matched.disparity, *dense, machine=run.machine)
+    return on_device(data), on_device(confidence)

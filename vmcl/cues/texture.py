@@ -12,6 +12,7 @@ import numpy as np
 from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import texture
 from vmcl.labels import Label
+from vmcl.machine import on_device
 
 __all__ = ["TextureCue"]
 
@@ -29,8 +30,8 @@ class TextureCue(CueModule):
         t = run.config.texture
         found = texture.texture_edges(run.left, fine_sigma=t.fine_sigma, coarse_sigma=t.coarse_sigma,
                                       threshold=t.threshold, radius=t.radius, machine=run.machine)
-        return Measurement(found.density, None, found.edges,
-                           fields={"density": found.density, "texture_edges": found.edges})
+        density, edges = on_device(found.density), on_device(found.edges)  # device input, device output
+        return Measurement(density, None, edges, fields={"density": density, "texture_edges": edges})
 
     def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
         from vmcl.report import field_image

@@ -23,7 +23,7 @@ M. Drumheller and T. Poggio, "On parallel stereo", Proc. IEEE Conf. Robotics and
 from __future__ import annotations
 
 import math
-from typing import Literal, NamedTuple
+from typing import Literal, NamedTuple, overload
 
 import numpy as np
 import pyopencl as cl
@@ -35,6 +35,7 @@ from vmcl.cm.core import (
     check_bool,
     check_choice,
     check_sigma,
+    device_memory,
     field,
     image_field,
     launch_flat,
@@ -201,7 +202,7 @@ def _hysteresis(machine: Machine, state: cl_array.Array, marks: cl_array.Array |
     changed = machine.empty(1, np.int32)
     current = state
     while True:
-        cl.enqueue_fill_buffer(machine.queue, changed.base_data, np.int32(0), 0, changed.nbytes)
+        cl.enqueue_fill_buffer(machine.queue, device_memory(changed), np.int32(0), 0, changed.nbytes)
         for _ in range(_CHECK_EVERY):
             launch_rows(machine, step, *size, current, spare, changed, *map(np.int64, size))
             current, spare = spare, current
@@ -271,12 +272,16 @@ def _thresholds(machine: Machine, magnitude: cl_array.Array, low: float | None, 
         rule = _noise.noise_rule(_noise.CANNY_LOW, _noise.CANNY_HIGH)
         pairs, tiles = _noise.threshold_field(machine, magnitude, rule, local=local)
         return pairs, tiles, local
+    given_low = low if low is not None else high
+    given_high = high if high is not None else low
+    # At least one threshold was given (both None returned above), so each stands in for a missing one.
+    assert given_low is not None and given_high is not None
     if use_quantiles:
-        rule = (low if low is not None else high, high if high is not None else low,
-                1.0 if low is not None else ratio, 1.0 if high is not None else 1.0 / ratio)
+        rule = (given_low, given_high, 1.0 if low is not None else ratio,
+                1.0 if high is not None else 1.0 / ratio)
         pairs, tiles = _noise.threshold_field(machine, magnitude, rule, local=False)
         return pairs, tiles, False
-    low = high * ratio if low is None else low
+    low = given_high * ratio if low is None else low
     high = low / ratio if high is None else high
     pairs = machine.empty((1, 1, 2), np.float32)
     machine.launch(vector_kernel(machine, "edges", "set_thresholds"), (1,), pairs, np.float32(low),
@@ -297,6 +302,26 @@ def _scale_exponent(image) -> int:
     return math.frexp(largest)[1] - 1
 
 
+@overload
+def canny(image: np.ndarray, *, sigma: float, low_threshold: float | None = None,
+          high_threshold: float | None = None, use_quantiles: bool = False, interpolate: bool = True,
+          method: Hysteresis = "doubling", noise: _noise.Noise = "global",
+          return_gradient: Literal[False] = False, machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def canny(image: cl_array.Array, *, sigma: float, low_threshold: float | None = None,
+          high_threshold: float | None = None, use_quantiles: bool = False, interpolate: bool = True,
+          method: Hysteresis = "doubling", noise: _noise.Noise = "global",
+          return_gradient: Literal[False] = False, machine: Machine | None = None) -> cl_array.Array: ...
+@overload
+def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
+          high_threshold: float | None = None, use_quantiles: bool = False, interpolate: bool = True,
+          method: Hysteresis = "doubling", noise: _noise.Noise = "global",
+          return_gradient: Literal[True], machine: Machine | None = None) -> CannyResult: ...
+@overload
+def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
+          high_threshold: float | None = None, use_quantiles: bool = False, interpolate: bool = True,
+          method: Hysteresis = "doubling", noise: _noise.Noise = "global",
+          return_gradient: bool = False, machine: Machine | None = None) -> ArrayLike | CannyResult: ...
 def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
           high_threshold: float | None = None, use_quantiles: bool = False, interpolate: bool = True,
           method: Hysteresis = "doubling", noise: _noise.Noise = "global", return_gradient: bool = False,
@@ -389,6 +414,7 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
         raise InputValueError(f"low_threshold ({low}) must not exceed high_threshold ({high})")
     exponent = _scale_exponent(image)
     if exponent:
+        assert isinstance(image, np.ndarray)  # _scale_exponent scales host float images only
         image = np.ldexp(image, -exponent)
         if not use_quantiles:
             low, high = (None if t is None else math.ldexp(t, -exponent) for t in (low, high))
@@ -412,11 +438,12 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     edges = _mask_out(_hysteresis(machine, state, marks if doubling else None, method), host)
     if not return_gradient:
         return edges
-    magnitude = result(magnitude, host)
+    magnitude_out = result(magnitude, host)
     if exponent:
+        assert isinstance(magnitude_out, np.ndarray)  # scaled images are host images (above)
         with np.errstate(over="ignore"):
-            magnitude = np.ldexp(magnitude, exponent)
-        if not np.isfinite(magnitude).all():
+            magnitude_out = np.ldexp(magnitude_out, exponent)
+        if not np.isfinite(magnitude_out).all():
             raise InputValueError(f"image values of about {2.0 ** exponent:.3g} give gradient magnitudes beyond "
                                   "float32's range: scale the image down to return them (return_gradient)")
-    return CannyResult(edges, magnitude, result(direction, host))
+    return CannyResult(edges, magnitude_out, result(direction, host))

@@ -22,7 +22,7 @@ V. Torre and T. Poggio, "On edge detection", IEEE TPAMI 8(2):147-163, 1986.
 from __future__ import annotations
 
 import weakref
-from typing import Literal
+from typing import Literal, overload
 
 import numpy as np
 import pyopencl.array as cl_array
@@ -70,7 +70,8 @@ Method = Literal["binomial", "exact"]
 
 
 def _grey_weights() -> np.ndarray:
-    return cltypes.make_float4(*GREY_WEIGHTS, 0.0)
+    # pyopencl.cltypes makes its make_<type> functions at import; its type hints declare only the dtypes.
+    return cltypes.make_float4(*GREY_WEIGHTS, 0.0)  # type: ignore[attr-defined]
 
 
 MAX_TAPS_SIGMA = 2.0**18
@@ -164,6 +165,12 @@ def discrete_laplacian(machine: Machine, smoothed: cl_array.Array) -> cl_array.A
     return out
 
 
+@overload
+def gaussian(image: np.ndarray, *, sigma: float, method: Method = "binomial",
+             machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def gaussian(image: cl_array.Array, *, sigma: float, method: Method = "binomial",
+             machine: Machine | None = None) -> cl_array.Array: ...
 def gaussian(image: ArrayLike, *, sigma: float, method: Method = "binomial",
              machine: Machine | None = None) -> ArrayLike:
     """Smooth the grey image with a Gaussian of standard deviation ``sigma`` pixels.
@@ -214,6 +221,12 @@ def gaussian(image: ArrayLike, *, sigma: float, method: Method = "binomial",
     return result(_smooth(machine, data, sigma, method), host)
 
 
+@overload
+def laplacian_of_gaussian(image: np.ndarray, *, sigma: float,
+                          machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def laplacian_of_gaussian(image: cl_array.Array, *, sigma: float,
+                          machine: Machine | None = None) -> cl_array.Array: ...
 def laplacian_of_gaussian(image: ArrayLike, *, sigma: float, machine: Machine | None = None) -> ArrayLike:
     """The exact Gaussian of ``sigma`` followed by the 5-point discrete Laplacian.
 
@@ -241,6 +254,12 @@ def laplacian_of_gaussian(image: ArrayLike, *, sigma: float, machine: Machine | 
     return result(discrete_laplacian(machine, separable_gaussian(machine, data, (sigma,))), host)
 
 
+@overload
+def difference_of_gaussians(image: np.ndarray, *, low_sigma: float, high_sigma: float | None = None,
+                            machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def difference_of_gaussians(image: cl_array.Array, *, low_sigma: float, high_sigma: float | None = None,
+                            machine: Machine | None = None) -> cl_array.Array: ...
 def difference_of_gaussians(image: ArrayLike, *, low_sigma: float, high_sigma: float | None = None,
                             machine: Machine | None = None) -> ArrayLike:
     """The narrower Gaussian minus the wider one (scikit-image's convention), in one fused pair of passes.

@@ -57,8 +57,8 @@ __all__ = [
 Features = Literal["brightness", "log", "sign_log", "edges"]
 Method = Literal["running", "table"]
 
-FEATURES = ("brightness", "log", "sign_log", "edges")
-METHODS = ("running", "table")
+FEATURES: tuple[Features, ...] = ("brightness", "log", "sign_log", "edges")
+METHODS: tuple[Method, ...] = ("running", "table")
 
 DEFAULT_SIGMA = {"brightness": 1.0, "log": 2.0, "sign_log": 1.0, "edges": 1.5}
 """Gaussian width (pixels) of each feature map when ``sigma`` is None (sign_log: 1.0 gave a mean EPE of

@@ -34,7 +34,7 @@ J. Canny, "A computational approach to edge detection", IEEE TPAMI 8(6):679-698,
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Literal, overload
 
 import numpy as np
 import pyopencl.array as cl_array
@@ -99,11 +99,18 @@ def threshold_field(machine: Machine, magnitude: cl_array.Array, rule: tuple[flo
     out = machine.empty(tiles + (2,), np.float32)
     count = tiles[0] * tiles[1]
     thresholds = vector_kernel(machine, "edges", "histogram_thresholds")
-    machine.launch(thresholds, (count,), hist, out, np.int32(BINS), top, cltypes.make_float4(*rule),
-                   np.int64(count))
+    # pyopencl.cltypes makes its make_<type> functions at import; its type hints declare only the dtypes.
+    rule4 = cltypes.make_float4(*rule)  # type: ignore[attr-defined]
+    machine.launch(thresholds, (count,), hist, out, np.int32(BINS), top, rule4, np.int64(count))
     return out, tiles
 
 
+@overload
+def noise_thresholds(magnitude: np.ndarray, *, noise: Noise = "global",
+                     machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def noise_thresholds(magnitude: cl_array.Array, *, noise: Noise = "global",
+                     machine: Machine | None = None) -> cl_array.Array: ...
 def noise_thresholds(magnitude: ArrayLike, *, noise: Noise = "global", machine: Machine | None = None) -> ArrayLike:
     """Canny's (low, high) thresholds from the noise estimated in a field of gradient magnitudes.
 

@@ -19,9 +19,10 @@ import bisect
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import Literal, overload
 
 import numpy as np
+import pyopencl.array as cl_array
 from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
 from scipy.spatial import QhullError, cKDTree
 
@@ -168,7 +169,8 @@ class WarpTable:
             raise InputValueError(f"need at least 3 matched dots to interpolate a warp table, got {len(left)}")
         if not isinstance(shape, (tuple, list)) or len(shape) != 2:
             raise InputTypeError(f"shape must be a tuple (H, W), got {shape!r}")
-        shape = tuple(check_int(n, "shape", minimum=1) for n in shape)
+        height, width = (check_int(n, "shape", minimum=1) for n in shape)
+        shape = (height, width)
         vergence = check_real(vergence, "vergence")
         vectors = right - left
         try:
@@ -252,6 +254,12 @@ class TableStore:
                                   f"{error}") from error
 
 
+@overload
+def warp(image: np.ndarray, table: WarpTable | ArrayLike, *,
+         machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def warp(image: cl_array.Array, table: WarpTable | ArrayLike, *,
+         machine: Machine | None = None) -> cl_array.Array: ...
 def warp(image: ArrayLike, table: WarpTable | ArrayLike, *, machine: Machine | None = None) -> ArrayLike:
     """Warp ``image`` by a table: ``out[y, x] = image`` sampled bilinearly at ``table[y, x]``.
 

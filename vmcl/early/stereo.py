@@ -23,6 +23,7 @@ T. Poggio et al., "The MIT Vision Machine", Proc. DARPA Image Understanding Work
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -39,6 +40,7 @@ from vmcl.cm.core import (
     check_context,
     check_int,
     check_real,
+    device_memory,
     machine_for,
 )
 from vmcl.cm.core import field as device_field
@@ -52,7 +54,8 @@ __all__ = ["Features", "Method", "StereoMatch", "direction_code", "match", "matc
 
 Features = Literal["canny", "dog", "intensity"]
 Method = Literal["running", "table"]
-_FEATURES = {"canny": 0, "dog": 1, "intensity": 2}
+_METHODS: tuple[Method, ...] = ("running", "table")
+_FEATURES: dict[Features, int] = {"canny": 0, "dog": 1, "intensity": 2}
 _TABLE_BYTES = 256 << 20  # the largest table of match planes the default variant builds
 _BAND = 32  # rows per work-item of match_edges (at least)
 _MAX_RUNNING_PATCH = 181  # (2r + 1)^2 votes fit the running variant's int16 lanes
@@ -248,7 +251,7 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
     compatible = check_choice(compatible, "compatible", ("direction", "sign"))
     selection = _selection(min_score, bimodal, dip, min_votes, negative_evidence, direction_tolerance)
     hosts = set()
-    features = "canny" if compatible == "direction" else "dog"
+    features: Features = "canny" if compatible == "direction" else "dog"
     attr_type = np.float32 if compatible == "direction" else np.int8
     maps = {}
     for name, mask, attribute in (("left", left, left_attribute), ("right", right, right_attribute)):
@@ -283,8 +286,8 @@ def _check_range(d_min, d_max, patch, width: int) -> None:
         raise InputValueError(f"patch must be an odd integer >= 1, got {patch}")
 
 
-def _plan(machine: Machine, features: str, shape: tuple[int, int], d_min: int, d_max: int, patch: int,
-          shiftable: bool, barriers, method) -> str:
+def _plan(machine: Machine, features: Features, shape: tuple[int, ...], d_min: int, d_max: int, patch: int,
+          shiftable: bool, barriers, method: Method | None) -> Method:
     """The variant to run (the given one, checked, or the default), after checking that the device holds
     the tables it builds; before any work is done."""
     height, width = shape
@@ -297,7 +300,7 @@ def _plan(machine: Machine, features: str, shape: tuple[int, int], d_min: int, d
             method = "table" if tables * table_bytes <= _TABLE_BYTES else "running"
         else:
             method = "running" if patch <= _MAX_RUNNING_PATCH else "table"
-    method = check_choice(method, "method", ("running", "table"))
+    method = check_choice(method, "method", _METHODS)
     if method == "running" and features != "intensity" and patch > _MAX_RUNNING_PATCH:
         raise InputValueError(f"the running variant counts votes in 16 bits: patch must be <= {_MAX_RUNNING_PATCH}, "
                               f"got {patch} (use method='table')")
@@ -328,8 +331,9 @@ def _deliver(found: list, host: bool) -> StereoMatch:
     return StereoMatch(disparity, score, *(f.view(np.bool_) for f in (features, out_of_range, discontinuity)))
 
 
-def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min, d_max, patch, direction_tolerance,
-                min_score, bimodal, dip, min_votes, negative_evidence, barriers, method, shiftable=False) -> list:
+def _match_maps(machine: Machine, maps: dict, features: Features, *, min_angle, d_min, d_max, patch,
+                direction_tolerance, min_score, bimodal, dip, min_votes, negative_evidence, barriers, method,
+                shiftable=False) -> list:
     """Planes, support, selection and suppression on device feature maps; returns the device outputs."""
     height, width = maps["left"].shape
     depth = d_max - d_min + 1
@@ -346,8 +350,9 @@ def _match_maps(machine: Machine, maps: dict, features: str, *, min_angle, d_min
     # The square windows of the running edge matcher count eligible features themselves.
     sliding = method == "running" and features != "intensity" and barrier is None
     if features == "intensity":
-        common = (maps["left"], maps["right"], maps["left_attr"], maps["right_attr"])
-        stats = support.sum(_moments(machine, maps))
+        common: Sequence[cl_array.Array] = (maps["left"], maps["right"], maps["left_attr"],
+                                            maps["right_attr"])
+        stats: cl_array.Array | None = support.sum(_moments(machine, maps))
         tolerance = np.int32(0)
     else:
         *common, counts = _codes(machine, maps, features, min_angle, counts=not sliding)
@@ -440,7 +445,7 @@ def direction_code(angle: float) -> int:
     return min(math.floor(min(angle, math.pi) * 65536 / (2 * math.pi)), 32768)
 
 
-def _codes(machine: Machine, maps: dict, features: str, min_angle: float, *, counts: bool) -> list:
+def _codes(machine: Machine, maps: dict, features: Features, min_angle: float, *, counts: bool) -> list:
     """The left and right feature masks and 16-bit codes both matchers compare, and with ``counts`` the
     masks as a (2, H, W) float32 stack of counts, else None (kernels/stereo.cl, feature_codes); edges whose
     gradient lies within ``min_angle`` (in 1/65536 turns) of vertical are dropped."""
@@ -467,7 +472,8 @@ def _moments(machine: Machine, maps: dict) -> cl_array.Array:
     return stack
 
 
-def _feature_maps(machine: Machine, left, right, features: str, sigma: float, low, high, quantiles: bool) -> dict:
+def _feature_maps(machine: Machine, left, right, features: Features, sigma: float, low, high,
+                  quantiles: bool) -> dict:
     """Left and right feature masks (uint8) and attributes (direction, sign, or brightness) on the device."""
     maps = {}
     for side, image in (("left", left), ("right", right)):
@@ -495,7 +501,7 @@ def _feature_maps(machine: Machine, left, right, features: str, sigma: float, lo
 
 def _filled(machine: Machine, shape, dtype, value) -> cl_array.Array:
     array = machine.empty(shape, dtype)
-    cl.enqueue_fill_buffer(machine.queue, array.base_data, np.dtype(dtype).type(value), 0, array.nbytes)
+    cl.enqueue_fill_buffer(machine.queue, device_memory(array), np.dtype(dtype).type(value), 0, array.nbytes)
     return array
 
 

@@ -42,7 +42,7 @@ T. Poggio et al., "The MIT Vision Machine", Proc. DARPA Image Understanding Work
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import NamedTuple, overload
 
 import numpy as np
 import pyopencl.array as cl_array
@@ -112,6 +112,12 @@ def _density(machine: Machine, data: cl_array.Array, fine: float, coarse: float,
     return out
 
 
+@overload
+def density(image: np.ndarray, *, fine_sigma: float, coarse_sigma: float, threshold: float, radius: int,
+            machine: Machine | None = None) -> np.ndarray: ...
+@overload
+def density(image: cl_array.Array, *, fine_sigma: float, coarse_sigma: float, threshold: float, radius: int,
+            machine: Machine | None = None) -> cl_array.Array: ...
 def density(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, threshold: float, radius: int,
             machine: Machine | None = None) -> ArrayLike:
     """Share of the (2r+1) x (2r+1) window around every pixel covered by fine-scale blobs (textons).

@@ -47,7 +47,7 @@ def as_mask(mask, name: str, shape: tuple[int, ...], against: str) -> np.ndarray
     return mask
 
 
-def check_sequence(value, name: str) -> Sequence:
+def check_sequence(value, name: str) -> Sequence | np.ndarray:
     """``value`` checked as a list, tuple or NumPy array of at least one dimension (a stack of maps)."""
     if not isinstance(value, (list, tuple, np.ndarray)) or (isinstance(value, np.ndarray) and value.ndim == 0):
         raise InputTypeError(f"{name} must be a list, tuple or array, got {type(value).__name__}")

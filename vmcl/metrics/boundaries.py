@@ -175,6 +175,8 @@ def boundary_counts(
                     matched_truth += int(np.count_nonzero(match_truth > 0))
             previous_key = key
             previous = (matched_truth, total_truth, int(matched_predicted.sum()), int(binary.sum()))
+        # The first level's key differs from None, so it has always set `previous` by now.
+        assert previous is not None
         counts[:, i] = previous
     return BoundaryCounts(levels, *counts)
 
@@ -192,7 +194,7 @@ def _interpolated_best(thresholds, recall, precision) -> tuple[float, float, flo
         j = int(np.argmax(f))
         if f[j] > best[3]:
             best = (t[j], r[j], p[j], float(f[j]))
-    return tuple(float(x) for x in best)
+    return float(best[0]), float(best[1]), float(best[2]), float(best[3])
 
 
 @dataclass(frozen=True)
@@ -252,7 +254,7 @@ def _counts_of(args) -> BoundaryCounts:
 
 def evaluate_boundaries(
     edge_maps: Sequence,
-    ground_truths: Sequence[Sequence],
+    ground_truths: Sequence[Sequence | np.ndarray],
     *,
     thresholds=99,
     max_dist: float = 0.0075,
@@ -265,7 +267,7 @@ def evaluate_boundaries(
     ----------
     edge_maps : sequence of (H, W) arrays
         Boundary strength in [0, 1] per image.
-    ground_truths : sequence of sequences of (H, W) arrays
+    ground_truths : sequence of sequences of (H, W) arrays, or of (K, H, W) arrays
         Per image, the annotators' 0/1 boundary maps.
     thresholds : int or sequence of float
         As in :func:`boundary_counts`. The default, 99, is the benchmark's; each threshold costs about

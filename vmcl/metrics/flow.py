@@ -7,6 +7,7 @@ an output, with the output density beside (Barron, Fleet and Beauchemin 1994; Ba
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -122,7 +123,10 @@ def evaluate_flow(flow, ground_truth, *, mask=None) -> FlowScores:
     epe = endpoint_error(flow, ground_truth)
     aae = angular_error(flow, ground_truth)
     truth = to_host(ground_truth).astype(np.float64)
-    evaluated = evaluated_pixels(truth, mask, np.isfinite(truth).all(axis=-1))
+    # endpoint_error has checked that the truth is (H, W, 2), so reducing its last axis leaves an (H, W)
+    # array; NumPy's stubs cannot tell that from a scalar.
+    truth_known = cast(np.ndarray, np.isfinite(truth).all(axis=-1))
+    evaluated = evaluated_pixels(truth, mask, truth_known)
     has_output = evaluated & np.isfinite(epe)
     n = int(np.count_nonzero(evaluated))
     if not has_output.any():

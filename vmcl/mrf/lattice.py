@@ -29,7 +29,9 @@ SWEEP_ORDER = (("lines", 0), ("lines", 1), ("lines", 2), ("lines", 3), ("f", 0),
 
 def philox_key(seed: int) -> np.ndarray:
     """The Philox key of a 64-bit seed: (low word, high word)."""
-    return cltypes.make_uint2(seed & 0xFFFFFFFF, seed >> 32)
+    # pyopencl generates the make_* constructors at import time and its annotations declare only the
+    # vector dtypes (cltypes.uint2), not the constructors.
+    return cltypes.make_uint2(seed & 0xFFFFFFFF, seed >> 32)  # type: ignore[attr-defined]
 
 
 class Lattice:
@@ -104,7 +106,10 @@ class Lattice:
             self.copy(self.f, source)
 
     def copy(self, target: cl_array.Array, source: cl_array.Array) -> None:
-        cl.enqueue_copy(self.machine.queue, target.data, source.data, byte_count=source.nbytes)
+        # pyopencl's annotations take only a Buffer here, but enqueue_copy copies between any
+        # MemoryObjectHolder buffers, such as the PooledBuffer that Machine.empty allocates.
+        cl.enqueue_copy(self.machine.queue, target.data, source.data,  # type: ignore[arg-type]
+                        byte_count=source.nbytes)
 
     def set_value(self, array: cl_array.Array, value: float) -> None:
         self.machine.launch(self.kernel("set_value"), (array.size,), array, np.float32(value),

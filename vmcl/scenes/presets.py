@@ -162,7 +162,7 @@ def preset(name: str, *, shape: tuple[int, int] = (256, 256), specular: bool = F
         raise InputValueError(f"unknown preset {name!r}; name must be one of {', '.join(PRESETS)}")
     specular = check_bool(specular, "specular")
     shape = Camera(shape, 1.0, _BASELINE).shape  # checked before its width becomes the focal length
-    camera = Camera(tuple(int(n) for n in shape), float(shape[1]), _BASELINE)
+    camera = Camera((int(shape[0]), int(shape[1])), float(shape[1]), _BASELINE)
     f = camera.focal
 
     def px(pixels: float, depth: float) -> float:

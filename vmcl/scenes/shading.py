@@ -45,18 +45,22 @@ class Regions:
 
     @classmethod
     def of(cls, faces: list[Face], seed: int) -> Regions:
-        first, colours, looks, textures, seen = [], [], [], [], {}
+        first: list[int] = []
+        colours: list[tuple[float, float, float]] = []
+        looks: list[int] = []
+        textures: list[tuple[Texture, int]] = []
+        seen: dict[tuple[Texture, int], int] = {}
         for k, face in enumerate(faces):
             first.append(len(colours))
             looks_of_face = [(face.colour, None)] + [(mk.colour, mk.texture) for mk in face.marks]
-            for m, (colour, texture) in enumerate(looks_of_face):
+            for m, (look_colour, texture) in enumerate(looks_of_face):
                 # A mark without its own texture continues its face's pattern: same texture, same key.
                 own = texture is not None
-                item = (texture if own else face.texture, _seed_key(seed, k, m if own else 0))
+                item = (texture if texture is not None else face.texture, _seed_key(seed, k, m if own else 0))
                 look = seen.setdefault(item, len(seen))
                 if look == len(textures):
                     textures.append(item)
-                colours.append(colour)
+                colours.append(look_colour)
                 looks.append(look)
         colour = np.array(colours, F32)
         hue = np.unique(colour, axis=0, return_inverse=True)[1].ravel()
@@ -137,10 +141,10 @@ def form_image(surface: Surface, cam: Pinhole, colour: np.ndarray, noise: float,
                rng: np.random.Generator) -> np.ndarray:
     """(H, W, 3) float32 image ``colour * (illumination * albedo + specular)`` of what a view sees,
     plus Gaussian noise of standard deviation ``noise`` drawn from ``rng``; NaN where nothing is seen."""
-    image = np.full((cam.h * cam.w, 3), np.nan, F32)
+    flat = np.full((cam.h * cam.w, 3), np.nan, F32)
     radiance = surface.illumination[:, None] * surface.albedo + surface.specular[:, None]
-    image[surface.pixels] = colour * radiance
-    image = image.reshape(cam.h, cam.w, 3)
+    flat[surface.pixels] = colour * radiance
+    image = flat.reshape(cam.h, cam.w, 3)
     if noise > 0:
         image += rng.standard_normal(image.shape, dtype=F32) * F32(noise)
     return image

@@ -38,7 +38,8 @@ def _numbers(value, name: str, count: int) -> tuple[float, ...]:
 
 
 def _vector(value, name: str) -> tuple[float, float, float]:
-    return _numbers(value, name, 3)
+    x, y, z = _numbers(value, name, 3)  # exactly three: _numbers checks the count
+    return x, y, z
 
 
 def _instances(value, name: str, kind: type, *, empty: bool = True) -> tuple:
