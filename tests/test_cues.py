@@ -7,8 +7,10 @@ from vmcl import cues, scenes
 from vmcl.cues import CueModule, Measurement
 from vmcl.labels import CUES, Cue, Label, cue_bit, cue_names
 from vmcl.mrf import EnergyModel, Settings, boundary_map
-from vmcl.pipeline import Config, Result, VisionMachine
-from vmcl.report import field_image, write_report
+from vmcl.pictures import field_image
+from vmcl.pipeline import Config, VisionMachine
+from vmcl.report import write_report
+from vmcl.result import Result
 
 
 class BrightnessCue(CueModule):

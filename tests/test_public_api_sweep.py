@@ -297,13 +297,14 @@ TABLE: tuple[Entry, ...] = (
     # ------------------------------------------------------------------ patterns, eye-head, report
     _e("vmcl.patterns:spiral", size=16, corridor=1, kinds={"size": _I, "corridor": _I}),
     _e("vmcl.eyehead:table_for_fixation", head=make("head"), store=make("store"), kinds={"head": _O, "store": _O}),
-    _e("vmcl.report:disparity_image", disparity=IMG, vmin=None, vmax=None,
+    _e("vmcl.pictures:disparity_image", disparity=IMG, vmin=None, vmax=None,
        kinds={"disparity": _A, "vmin": _ON, "vmax": _ON}),
-    _e("vmcl.report:flow_image", flow=arr((16, 16, 2)), max_flow=None, kinds={"flow": _A, "max_flow": _ON}),
+    _e("vmcl.pictures:flow_image", flow=arr((16, 16, 2)), max_flow=None, kinds={"flow": _A, "max_flow": _ON}),
     _e("vmcl.report:labels_image", image=RGB, labels=arr((16, 16), "uint8", "randint:7"),
        kinds={"image": _A, "labels": _A}),
     _e("vmcl.report:support_image", image=RGB, support=SUPPORT, kinds={"image": _A, "support": _A}),
-    _e("vmcl.report:field_image", values=IMG, kinds={"values": _A}),
+    _e("vmcl.pictures:field_image", values=IMG, kinds={"values": _A}),
+    _e("vmcl.pictures:to_uint8", rgb=arr((16, 16, 3)), kinds={"rgb": _A}),
     _e("vmcl.report:encode_png", rgb=arr((16, 16, 3), "uint8", "randint:256"), kinds={"rgb": _A}),
     _e("vmcl.report:images", result=make("result"), kinds={"result": _O}),
     _e("vmcl.report:images_with_captions", result=make("result"), kinds={"result": _O}),
@@ -341,7 +342,7 @@ EXEMPT = {
     "vmcl.scenes:Scene", "vmcl.metrics:BoundaryCounts", "vmcl.metrics:BoundaryScores",
     "vmcl.metrics:DetectionScores", "vmcl.metrics:DisparityScores", "vmcl.metrics:FlowScores",
     "vmcl.datasets:BSDSImage", "vmcl.datasets:BSDSSet", "vmcl.datasets:FlowPair", "vmcl.datasets:StereoPair",
-    "vmcl.pipeline:Result", "vmcl.pipeline:Config", "vmcl.early.registration:WarpTable",
+    "vmcl.result:Result", "vmcl.pipeline:Config", "vmcl.early.registration:WarpTable",
     "vmcl.early.registration:TableStore", "vmcl.pipeline:ColourConfig",
     "vmcl.cm.scan:scan_rows_into", "vmcl.cm.scan:exclusive_sum_into", "vmcl.early.noise:threshold_field",
     "vmcl.labelling:default_labeller", "vmcl.machine:default_machine", "vmcl.machine:list_devices",
@@ -364,7 +365,7 @@ PUBLIC_MODULES = (
     "vmcl.early.color", "vmcl.early.edges", "vmcl.early.filters", "vmcl.early.motion", "vmcl.early.noise",
     "vmcl.early.registration", "vmcl.early.sign_correlation", "vmcl.early.stereo", "vmcl.early.texture",
     "vmcl.mrf", "vmcl.integrate", "vmcl.labels", "vmcl.cues", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
-    "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pipeline", "vmcl.machine",
+    "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pictures", "vmcl.pipeline", "vmcl.result", "vmcl.machine",
 )
 
 
@@ -708,7 +709,8 @@ def _store(ctx):
 def _result(ctx):
     import numpy as np
 
-    from vmcl.pipeline import Config, Result
+    from vmcl.pipeline import Config
+    from vmcl.result import Result
 
     rng = np.random.default_rng(0)
     image = rng.random((16, 16, 3)).astype(np.float32)

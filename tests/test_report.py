@@ -9,16 +9,9 @@ import pytest
 
 from vmcl import scenes
 from vmcl.labels import Cue
+from vmcl.pictures import disparity_image, flow_image
 from vmcl.pipeline import Config, VisionMachine
-from vmcl.report import (
-    CUE_COLOURS,
-    LABEL_COLOURS,
-    disparity_image,
-    flow_image,
-    labels_image,
-    support_image,
-    write_report,
-)
+from vmcl.report import CUE_COLOURS, LABEL_COLOURS, labels_image, support_image, write_report
 
 
 class _Images(HTMLParser):

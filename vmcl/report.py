@@ -2,16 +2,11 @@
 
 Seed section "The Vision Machine System": the machine's output is "a 'cartoon' of the original scene"
 (its labelled discontinuities) "along with interpolated depth, motion, texture, and color fields". The
-report shows exactly those: the cartoon coloured by the cue that supports each discontinuity over the
-faded image, the dense disparity colour-mapped with a scale bar, the flow in the Middlebury colour wheel
-(hue = direction, saturation = speed; Baker et al. 2011), the hue and texture fields, then the
-parameters and the timing table. Images are NumPy RGB uint8; files are PNGs, and report.html holds them
+report shows exactly those: the cartoon coloured by label and by the cue that supports each
+discontinuity over the faded image, each cue's pictures of its fields (:mod:`vmcl.pictures`: the dense
+disparity with a scale bar, the flow in the Middlebury colour wheel, the hue and texture fields), then
+the parameters and the timing table. Images are NumPy RGB uint8; files are PNGs, and report.html holds them
 inline (base64) so it can be mailed or archived as one file.
-
-References
-----------
-S. Baker, D. Scharstein, J. P. Lewis, S. Roth, M. J. Black and R. Szeliski, "A database and evaluation
-methodology for optical flow", IJCV 92(1):1-31, 2011 (the colour wheel).
 """
 
 from __future__ import annotations
@@ -24,20 +19,18 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from vmcl.cm.core import check_real, real_host_array
+from vmcl.cm.core import real_host_array
 from vmcl.cues import registered
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.labels import Cue, Label
-from vmcl.pipeline import Result
+from vmcl.pictures import to_uint8
+from vmcl.result import Result
 
 __all__ = [
     "BRIGHTNESS_ONLY",
     "CUE_COLOURS",
     "LABEL_COLOURS",
-    "disparity_image",
     "encode_png",
-    "field_image",
-    "flow_image",
     "images",
     "images_with_captions",
     "labels_image",
@@ -55,9 +48,6 @@ LABEL_COLOURS = {Label.DEPTH: (230, 40, 40), Label.ORIENTATION: (150, 60, 200), 
 
 BRIGHTNESS_ONLY = (200, 200, 200)
 """RGB of brightness edges no cue supports (drawn under the cues)."""
-
-_BAR = 28  # height in pixels of the colour scale under the disparity map
-
 
 def _grey(image: np.ndarray) -> np.ndarray:
     """float (H, W) in [0, 1] from a grey or RGB float image (BT.709 luma, as vmcl.early.filters)."""
@@ -82,110 +72,9 @@ def _overlay_argument(values: np.ndarray, name: str, image: np.ndarray) -> np.nd
     return values
 
 
-def _optional_real(value, name: str) -> float | None:
-    return None if value is None else check_real(value, name)
-
-
-def _to_uint8(rgb: np.ndarray) -> np.ndarray:
-    return np.clip(np.round(rgb), 0, 255).astype(np.uint8)
-
-
-def disparity_image(disparity: np.ndarray, *, vmin: float | None = None, vmax: float | None = None) -> np.ndarray:
-    """Disparity colour-mapped (turbo: near is red, far is blue) with a labelled scale bar underneath.
-
-    Parameters
-    ----------
-    disparity : (H, W) float array, NaN where unknown (drawn black)
-    vmin, vmax : float, optional
-        The range of the colour map; default the finite values' range.
-
-    Returns
-    -------
-    uint8 RGB (H + 28, W, 3)
-    """
-    real_host_array(disparity, "disparity", ndims=(2,))
-    vmin, vmax = _optional_real(vmin, "vmin"), _optional_real(vmax, "vmax")
-    finite = np.isfinite(disparity)
-    low = float(np.nanmin(disparity)) if vmin is None and finite.any() else (vmin or 0.0)
-    high = float(np.nanmax(disparity)) if vmax is None and finite.any() else (vmax or 1.0)
-    span = max(high - low, 1e-6)
-    width = disparity.shape[1]
-    scaled = np.where(finite, (disparity - low) / span, 0.0)
-    codes = _to_uint8(np.clip(scaled, 0, 1) * 255)
-    picture = cv2.cvtColor(cv2.applyColorMap(codes, cv2.COLORMAP_TURBO), cv2.COLOR_BGR2RGB)
-    picture[~finite] = 0
-    bar = np.full((_BAR, width, 3), 255, np.uint8)
-    ramp = _to_uint8(np.linspace(0, 255, width))[None, :].repeat(10, axis=0)
-    bar[2:12] = cv2.cvtColor(cv2.applyColorMap(ramp, cv2.COLORMAP_TURBO), cv2.COLOR_BGR2RGB)
-    for fraction, align in ((0.0, 0), (0.5, 1), (1.0, 2)):
-        text = f"{low + fraction * span:.1f}" + (" px" if fraction == 1.0 else "")
-        (tw, _), _ = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, 0.35, 1)
-        x = [1, (width - tw) // 2, width - tw - 1][align]
-        cv2.putText(bar, text, (max(x, 0), _BAR - 4), cv2.FONT_HERSHEY_SIMPLEX, 0.35, (0, 0, 0), 1, cv2.LINE_AA)
-    return np.concatenate([picture, bar], axis=0)
-
-
-def _colour_wheel() -> np.ndarray:
-    """The Middlebury wheel's 55 colours: red-yellow-green-cyan-blue-magenta in 15/6/4/11/13/6 steps."""
-    segments = ((15, (255, 0, 0), (255, 255, 0)), (6, (255, 255, 0), (0, 255, 0)), (4, (0, 255, 0), (0, 255, 255)),
-                (11, (0, 255, 255), (0, 0, 255)), (13, (0, 0, 255), (255, 0, 255)), (6, (255, 0, 255), (255, 0, 0)))
-    rows = []
-    for steps, start, end in segments:
-        t = np.arange(steps)[:, None] / steps
-        rows.append(np.array(start) * (1 - t) + np.array(end) * t)
-    return np.concatenate(rows) / 255.0
-
-
-def flow_image(flow: np.ndarray, *, max_flow: float | None = None) -> np.ndarray:
-    """Flow in the Middlebury colour wheel: hue is the direction, saturation the speed; NaN is black.
-
-    Parameters
-    ----------
-    flow : (H, W, 2) float array, (u, v) with x right and y down
-    max_flow : float, optional
-        The speed drawn fully saturated; default the largest finite speed.
-
-    Returns
-    -------
-    uint8 RGB (H, W, 3), with the wheel itself drawn in the top-left corner as the key.
-    """
-    real_host_array(flow, "flow", ndims=(3,))
-    if flow.shape[2] != 2:
-        raise InputValueError(f"flow must be (H, W, 2), got shape {flow.shape}")
-    if max_flow is not None:
-        max_flow = check_real(max_flow, "max_flow", above=0)
-    u, v = flow[..., 0], flow[..., 1]
-    known = np.isfinite(u) & np.isfinite(v)
-    speed = np.hypot(np.where(known, u, 0), np.where(known, v, 0))
-    scale = max(float(speed.max()) if max_flow is None else max_flow, 1e-6)
-    picture = _wheel_colours(np.where(known, u, 0) / scale, np.where(known, v, 0) / scale)
-    picture[~known] = 0
-    size = min(48, *flow.shape[:2]) // 2 * 2
-    if size >= 16:
-        y, x = (np.mgrid[:size, :size] - (size - 1) / 2) / (size / 2)
-        key = _wheel_colours(x, y)
-        key[np.hypot(x, y) > 1] = 255
-        picture[:size, :size] = key
-    return picture
-
-
-def _wheel_colours(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    wheel = _colour_wheel()
-    n = len(wheel)
-    radius = np.minimum(np.hypot(u, v), 1.0)
-    angle = np.arctan2(-v, -u) / np.pi  # Baker et al.'s convention
-    position = (angle + 1) / 2 * (n - 1)
-    k0 = np.floor(position).astype(int)
-    k1 = (k0 + 1) % n
-    f = (position - k0)[..., None]
-    colour = (1 - f) * wheel[k0] + f * wheel[k1]
-    colour = 1 - radius[..., None] * (1 - colour)  # slow motion fades to white
-    return _to_uint8(colour * 255)
-
-
 def _faded(image: np.ndarray) -> np.ndarray:
     faded = 255 * (0.55 + 0.4 * _grey(image))  # light grey: the coloured lines carry the picture
-    return _to_uint8(np.repeat(faded[..., None], 3, axis=2))
+    return to_uint8(np.repeat(faded[..., None], 3, axis=2))
 
 
 def labels_image(image: np.ndarray, labels: np.ndarray) -> np.ndarray:
@@ -194,7 +83,7 @@ def labels_image(image: np.ndarray, labels: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     image : float (H, W) or (H, W, 3) in [0, 1]
-    labels : uint8 (H, W), :class:`vmcl.labels.Label` codes (:attr:`vmcl.pipeline.Result.labels`)
+    labels : uint8 (H, W), :class:`vmcl.labels.Label` codes (:attr:`vmcl.result.Result.labels`)
 
     Returns
     -------
@@ -214,7 +103,7 @@ def support_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     image : float (H, W) or (H, W, 3) in [0, 1]
-    support : uint8 (H, W), :class:`vmcl.labels.Cue` bits (:attr:`vmcl.pipeline.Result.support`)
+    support : uint8 (H, W), :class:`vmcl.labels.Cue` bits (:attr:`vmcl.result.Result.support`)
 
     Returns
     -------
@@ -233,17 +122,6 @@ def support_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
     return picture
 
 
-def field_image(values: np.ndarray) -> np.ndarray:
-    """A scalar field (hue, texture density) as grey levels over its finite range; NaN is black."""
-    real_host_array(values, "values", ndims=(2,))
-    finite = np.isfinite(values)
-    if not finite.any():
-        return np.zeros(values.shape + (3,), np.uint8)
-    low, high = float(values[finite].min()), float(values[finite].max())
-    scaled = np.where(finite, (values - low) / max(high - low, 1e-6), 0.0)
-    return np.repeat(_to_uint8(scaled * 255)[..., None], 3, axis=2)
-
-
 def images(result: Result) -> dict[str, np.ndarray]:
     """The report's pictures of a run, by file stem, in the order the report shows them."""
     return {stem: picture for stem, (picture, _) in images_with_captions(result).items()}
@@ -253,11 +131,11 @@ def images_with_captions(result: Result) -> dict[str, tuple[np.ndarray, str]]:
     """The report's pictures of a run with their captions: the cartoon, the cues' support and the input,
     then each registered cue's own (:meth:`vmcl.cues.CueModule.pictures`), then the brightness edges."""
     if not isinstance(result, Result):
-        raise InputTypeError(f"result must be a vmcl.pipeline.Result, got {type(result).__name__}")
+        raise InputTypeError(f"result must be a vmcl.result.Result, got {type(result).__name__}")
     grey = _grey(result.image)
     out = {"cartoon": (labels_image(result.image, result.labels), _CAPTIONS["cartoon"]),
            "support": (support_image(result.image, result.support), _CAPTIONS["support"]),
-           "input": (_to_uint8(255 * np.repeat(grey[..., None], 3, axis=2) if result.image.ndim == 2
+           "input": (to_uint8(255 * np.repeat(grey[..., None], 3, axis=2) if result.image.ndim == 2
                                else 255 * np.clip(result.image, 0, 1)), _CAPTIONS["input"])}
     for cue in registered():
         out.update(cue.pictures(result))

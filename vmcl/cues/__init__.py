@@ -24,6 +24,7 @@ from vmcl.cues.stereo import StereoCue
 from vmcl.cues.texture import TextureCue
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.labels import CUES, add_cue, remove_cue
+from vmcl.result import Result
 
 _REGISTRY: dict[str, CueModule] = {}
 
@@ -35,9 +36,8 @@ def register(cue: CueModule) -> None:
     """Add a cue to the machine (after the ones registered before it).
 
     Its declarations are checked here, not mid-run: a name no other cue has, needs among
-    :data:`INPUTS`, an MRF kind, and Result fields that :class:`vmcl.pipeline.Result` has.
+    :data:`INPUTS`, an MRF kind, and Result fields that :class:`vmcl.result.Result` has.
     """
-    from vmcl.pipeline import Result
 
     if not isinstance(cue, CueModule):
         raise InputTypeError(f"cue must be a vmcl.cues.CueModule, got {type(cue).__name__}")

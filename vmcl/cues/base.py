@@ -75,7 +75,7 @@ class Measurement:
     coupling : device uint8 (H, W)
         The edges the cue's line sites are coupled to (equation (12)).
     fields : dict of str to device array
-        Fields for the Result, by :class:`vmcl.pipeline.Result` attribute name (the cue declares them in
+        Fields for the Result, by :class:`vmcl.result.Result` attribute name (the cue declares them in
         :attr:`CueModule.fields`).
     state : any
         What the cue keeps for :meth:`CueModule.refine` (e.g. stereo's intensity matches).

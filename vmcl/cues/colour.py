@@ -15,6 +15,7 @@ from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import color
 from vmcl.labels import Label
 from vmcl.machine import on_device
+from vmcl.pictures import field_image
 
 __all__ = ["ColourCue"]
 
@@ -35,8 +36,6 @@ class ColourCue(CueModule):
         return Measurement(hue, None, edges, fields={"hue": hue, "colour_edges": edges})
 
     def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
-        from vmcl.report import field_image
-
         if result.hue is None:
             return {}
         return {"hue": (field_image(result.restored.get("colour", result.hue)),

@@ -14,6 +14,7 @@ from vmcl.early import motion
 from vmcl.labels import Label
 from vmcl.machine import on_device
 from vmcl.mrf import score_confidence
+from vmcl.pictures import flow_image
 
 __all__ = ["MotionCue"]
 
@@ -38,8 +39,6 @@ class MotionCue(CueModule):
         return Measurement(flow, confidence, run.brightness, fields={"raw_flow": flow})
 
     def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
-        from vmcl.report import flow_image
-
         if result.flow is None:
             return {}
         return {"flow": (flow_image(result.flow),

@@ -21,6 +21,7 @@ from vmcl.early import stereo
 from vmcl.labels import Label
 from vmcl.machine import on_device
 from vmcl.mrf import backfill, score_confidence
+from vmcl.pictures import disparity_image
 
 __all__ = ["StereoCue"]
 
@@ -56,8 +57,6 @@ class StereoCue(CueModule):
                                    "stereo_discontinuity": on_device(matched.discontinuity)})
 
     def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
-        from vmcl.report import disparity_image
-
         if result.disparity is None:
             return {}
         finite = result.disparity[np.isfinite(result.disparity)]

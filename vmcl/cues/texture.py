@@ -13,6 +13,7 @@ from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import texture
 from vmcl.labels import Label
 from vmcl.machine import on_device
+from vmcl.pictures import field_image
 
 __all__ = ["TextureCue"]
 
@@ -34,8 +35,6 @@ class TextureCue(CueModule):
         return Measurement(density, None, edges, fields={"density": density, "texture_edges": edges})
 
     def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
-        from vmcl.report import field_image
-
         if result.density is None:
             return {}
         return {"texture": (field_image(result.restored.get("texture", result.density)),

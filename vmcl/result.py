@@ -1,0 +1,97 @@
+"""What one run of the machine gives: :class:`Result`.
+
+It lives apart from :mod:`vmcl.pipeline` so that the cues (:mod:`vmcl.cues`), which declare the Result
+fields they fill, and the report sit below the machine that runs them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from vmcl.pipeline import Config
+
+
+@dataclass
+class Result:
+    """What :meth:`VisionMachine.run` returns: host (NumPy) fields, the cartoon and the timings.
+
+    Fields a run had no input for are None. Line processes follow :mod:`vmcl.scenes`: ``line_h`` is
+    (H, W - 1), ``line_v`` (H - 1, W).
+
+    Attributes
+    ----------
+    image : float32 (H, W) or (H, W, 3)
+        The left image in [0, 1], as the machine saw it.
+    edges : bool (H, W)
+        Canny's brightness edges.
+    hue, colour_edges : float32 (H, W) (NaN where not valid), bool (H, W)
+        The hue H = R / (R + G) and its albedo-edge candidates (RGB input only).
+    density, texture_edges : float32 (H, W), bool (H, W)
+        Texton density and its edge candidates.
+    sparse_disparity : float32 (H, W)
+        The matcher's disparities (of the feedback pass when there is one), NaN where none.
+    first_pass_disparity : float32 (H, W)
+        The matcher's disparities before feedback (None without feedback).
+    stereo_discontinuity : bool (H, W)
+        Features whose votes were bimodal over d.
+    disparity : float32 (H, W)
+        Dense disparity: the stereo MRF's restoration.
+    raw_flow, flow : float32 (H, W, 2)
+        The motion module's flow (NaN where none) and its MRF restoration.
+    restored : dict of str to ndarray
+        Each cue's restored field, by cue (:data:`vmcl.labels.CUES`): "stereo" (the disparity, =
+        ``disparity``), "motion" (the flow, = ``flow``), "colour" (hue), "texture" (texton density).
+    lines : dict of str to (line_h, line_v)
+        Each cue's line process (bool).
+    support : uint8 (H, W)
+        :class:`vmcl.labels.Cue` bits: which cues put a discontinuity at each pixel.
+    labels : uint8 (H, W)
+        The cartoon: :class:`vmcl.labels.Label` codes of the discontinuity pixels (``labels.method``
+        says how they are chosen; :mod:`vmcl.labelling` by default).
+    stages : dict of str to float
+        Wall time of each stage in ms, in the order run (device work included: each stage ends with
+        the queue drained).
+    kernels : dict of str to dict
+        Per-kernel device time, as :meth:`vmcl.Machine.timings` gives it (empty without profiling).
+    config : Config
+    notes : list of str
+        What the run could not do (e.g. no stereo match to restore).
+    """
+
+    image: np.ndarray
+    edges: np.ndarray
+    support: np.ndarray
+    labels: np.ndarray
+    config: Config
+    hue: np.ndarray | None = None
+    colour_edges: np.ndarray | None = None
+    density: np.ndarray | None = None
+    texture_edges: np.ndarray | None = None
+    sparse_disparity: np.ndarray | None = None
+    first_pass_disparity: np.ndarray | None = None
+    stereo_discontinuity: np.ndarray | None = None
+    disparity: np.ndarray | None = None
+    raw_flow: np.ndarray | None = None
+    flow: np.ndarray | None = None
+    restored: dict[str, np.ndarray] = field(default_factory=dict)
+    lines: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    stages: dict[str, float] = field(default_factory=dict)
+    kernels: dict[str, dict[str, float]] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def discontinuities(self) -> np.ndarray:
+        """bool (H, W): the integrated discontinuity map, the labelled pixels of the cartoon."""
+        return self.labels != 0
+
+    @property
+    def total_ms(self) -> float:
+        """Wall time of the whole run in ms."""
+        return sum(self.stages.values())
+
+
+__all__ = ["Result"]
