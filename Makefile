@@ -31,7 +31,9 @@ $(STAMP): pyproject.toml
 demo: setup
 	$(VENV)/bin/vmcl demo --out vmcl-demo
 
+# The tests, after the linter and the type checker (the house's rules hold in CI, not only locally).
 test: setup
+	$(PY) -m ruff check vmcl hardware tests benchmarks
 	$(PY) -m mypy
 	$(PY) -m pytest -q
 

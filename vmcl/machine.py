@@ -287,8 +287,8 @@ class Machine:
     def row_local_size(self, global_size: tuple[int, ...]) -> tuple[int, ...] | None:
         """The work-group shape for a launch whose first dimension runs along image rows.
 
-        On CPU devices, groups of up to 64 work-items along the row: on PoCL they ran row kernels 1.8x
-        to 2x faster than the driver's own choice (binomial filter, motion). Elsewhere, or when the
+        On CPU devices, groups of up to 64 work-items along the row: on PoCL they ran row kernels
+        faster than the driver's own choice (binomial filter, motion). Elsewhere, or when the
         Machine fixes ``local_size``, None (the driver's or the Machine's choice).
         """
         if not self.is_cpu or self.local_size is not None:
@@ -301,7 +301,7 @@ class Machine:
         """An uninitialised C-contiguous device array from the pool (memory of freed arrays is reused).
 
         Built through pyopencl's fast constructor with the shape checked and the strides computed here:
-        its general one spent about 20 us of host time per array on NumPy checks, and a Canny or stereo
+        its general one spends host time on NumPy checks for every array, and a Canny or stereo
         call makes dozens, on a host thread that shares the CPU with the device's.
         """
         dims = (shape,) if isinstance(shape, (int, float, np.integer, np.floating)) else tuple(shape)

@@ -32,7 +32,8 @@ def spiral(size: int, *, corridor: int = 1) -> np.ndarray:
     bool array (size, size). The wall's path from the outer corner to the centre is about
     size**2 / (2 * corridor) pixels long.
     """
-    # The turtle walks in Python: 8192 x 8192 takes about half a minute, and no device holds much more.
+    # The turtle walks in Python, one step per cell of its path: 8192 x 8192 is already slow, and no
+    # device holds much more.
     size = check_int(size, "size", minimum=1, maximum=_LARGEST)
     corridor = check_int(corridor, "corridor", minimum=1)
     if size < corridor:

@@ -153,8 +153,8 @@ class StereoConfig:
         Also match every pixel by intensity (``features="intensity"``, the same patch) and let those
         matches fill the gaps between the feature matches in the stereo MRF's data
         (:func:`vmcl.mrf.backfill`), weighed by :func:`vmcl.mrf.score_confidence` of their normalised
-        cross-correlation with ``backfill_floor`` and ``backfill_weight``. It cut the dense bad-1
-        rate on Middlebury by 43% to 61% (see :func:`vmcl.mrf.backfill`).
+        cross-correlation with ``backfill_floor`` and ``backfill_weight``. It lowers the dense bad-1
+        rate on Middlebury (benchmarks/results/pipeline.md; see :func:`vmcl.mrf.backfill`).
     backfill_floor, backfill_weight : float
         Intensity matches whose correlation is at or below the floor weigh 0; a perfect one weighs
         ``backfill_weight`` (the feature matches weigh 1).
@@ -215,8 +215,8 @@ class MotionConfig:
         The motion MRF weighs each estimate by :func:`vmcl.mrf.score_confidence` of its score; off,
         every estimate weighs 1.
     confidence_floor : float
-        In [0, 1): that weighting's floor, in the features' score units (0.7 was measured with
-        "brightness").
+        In [0, 1): that weighting's floor, in the features' score units (the default was chosen with
+        "brightness" features; see :func:`vmcl.mrf.score_confidence`).
     """
 
     enabled: bool = True
@@ -296,10 +296,11 @@ class MrfConfig:
         Keys the random numbers of "anneal" and "mpm".
     schedule : {"fast", "preset"}
         "fast" (default): mean field at 6 temperatures falling from 2 by a factor 0.6, two sweeps each,
-        then 2 ICM sweeps (14 sweeps). On the "cues" scene at 256 x 256 it ran a frame in 0.90 s
-        against 12.3 s with the presets' own 110-sweep schedules, with the same quality within noise
-        (dense bad-1 1.7% against 1.4%, flow EPE 0.43 px both, integrated F 0.26 against 0.29; measured
-        before the flow's confidence weights).
+        then 2 ICM sweeps (14 sweeps). It runs a frame many times faster than the presets' own
+        110-sweep schedules with the same quality within noise (dense disparity, flow and integrated
+        discontinuities on the "cues" scene, compared before the flow's confidence weights); on a
+        disparity map alone, benchmarks/results/mrf.md compares the two schedules' time, energy and
+        error.
         "preset": each cue's preset schedule.
     stereo, motion, colour, texture : mapping of str to value
         Overrides of :func:`vmcl.mrf.preset`'s measured settings per cue (any field of

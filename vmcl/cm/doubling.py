@@ -178,7 +178,8 @@ def _union_runs(machine: Machine, mask: cl_array.Array, labels: cl_array.Array, 
     # Row y's runs take the run indices y * slots onwards; a row has at most ceil(W / 2) runs, and the
     # kernel that finds them writes one int past their bounds.
     slots = width // 2 + 1
-    # Raw pooled buffers: the kernels alone see them, and a pyopencl Array costs ~30 us a call to make.
+    # Raw pooled buffers: the kernels alone see them, and making a pyopencl Array costs host time on
+    # every call.
     int32 = np.dtype(np.int32).itemsize
     bounds, counts, parent, run_label = (machine.pool.allocate(size * int32) for size in
                                          (2 * height * slots, height, height * slots, height * slots))

@@ -103,8 +103,8 @@ def scan(x: ArrayLike, *, op: Op = "plus", axis: int = -1, exclusive: bool = Fal
     Notes
     -----
     Float sums accumulate in float32 serially within each chunk, and chunk totals are added as carries,
-    so the rounding differs from a serial loop's; it is no worse than ``np.cumsum``'s in float32 (on 4M
-    uniform values: 1.9e-5 relative error against float64, np.cumsum 4.6e-5). Integer plus-scans wrap
+    so the rounding differs from a serial loop's; it is no worse than ``np.cumsum``'s in float32
+    (relative error against a float64 sum, on uniform values). Integer plus-scans wrap
     on int32 overflow, as the hardware does.
     """
     machine = machine_for(machine)

@@ -3,8 +3,9 @@
 Seed section "Color": the Hurlbert-Poggio hue H = R / (R + G) and its albedo-edge candidates
 (:func:`vmcl.early.color.albedo_edges`). The colour MRF is coupled to those candidates, with lines
 allowed only near them: the boundaries colour exists for are the ones brightness misses (isoluminant
-colour), and the brightness coupling would license lines at every shadow and texton (measured on the
-"cues" scene, mean field: hue lines at precision 0.27 coupled to brightness, 0.94 to the candidates).
+colour), and the brightness coupling would license lines at every shadow and texton (on the "cues"
+scene, with mean field, the hue lines coupled to brightness were far less precise than those coupled to
+the candidates, most of them false).
 """
 
 from __future__ import annotations

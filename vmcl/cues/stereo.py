@@ -85,8 +85,8 @@ def _dense_match(run: RunInputs) -> tuple[cl_array.Array, cl_array.Array] | None
     """The intensity matches and their weights for :func:`_depth_data`, or None without backfill.
 
     Matched once, without barriers: matched again with the first pass's lines as barriers, in the
-    feedback pass, it made the restored disparity worse (dense bad-1 on "cues" 0.9% to 1.1%, on
-    "blocks" 4.6% to 6.7%).
+    feedback pass, it made the restored disparity worse (a higher dense bad-1 rate on the rendered
+    "cues" and "blocks" scenes).
     """
     s = run.config.stereo
     if not s.backfill or s.features == "intensity":

@@ -31,16 +31,16 @@ quantisation noise of an 8-bit camera), and a pixel is a candidate when
     z > NOISE_HIGH * max(s, NOISE_FLOOR * full scale),
 
 NOISE_HIGH = 4.1 (:data:`vmcl.early.noise.NOISE_HIGH`). The two differences share the centre pixel
-(correlation 1/2), so z is not exactly Rayleigh: on pure noise s comes out about 5% low and about 2e-3
-of the pixels pass (measured on 512 x 512 pixels; an exact Rayleigh law would pass 2e-4). Shadow and
-shading edges change E only, so H does not step there.
+(correlation 1/2), so z is not exactly Rayleigh: on pure noise s comes out a little low and more pixels
+pass than an exact Rayleigh law would let through. Shadow and shading edges change E only, so H does
+not step there.
 
 The median comes from a histogram of z on the device, as in :mod:`vmcl.early.noise`, but with bins of
 1/16 of an octave (:data:`HISTOGRAM_BINS`, by z's float exponent and leading mantissa bits) instead of
 4096 linear bins over [0, max z]: they need no range, so nothing is read back to the host, and their
 resolution follows the median rather than the largest edge. Within a bin the values are taken as spread
-evenly: measured within 2.3e-4 of ``np.median`` on Gaussian noise (deviations 0.002 to 0.05), and
-within 1% on 8-bit images, whose z clusters on a few quantised values (0.9% on the "shadows" scene).
+evenly, which puts the median close to ``np.median``'s on Gaussian noise; on 8-bit images, whose z
+clusters on a few quantised values, the even spread is coarser and the median less exact.
 
 References
 ----------

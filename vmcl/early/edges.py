@@ -145,8 +145,8 @@ def zero_crossings(image: ArrayLike, *, sigma: float, method: Literal["log", "do
     interpolated crossing. A pixel that is exactly 0 is marked when its neighbours on either side along
     x or along y have opposite signs; runs of exact zeros mark nothing. The Laplacian of a Gaussian is
     exactly 0 where the image is flat; the difference of Gaussians is not (its two smoothings round
-    differently, leaving about 1e-7 of the image's range), so on synthetic images with flat regions a
-    ``min_slope`` of a small fraction of the contrast keeps that residue from crossing zero.
+    differently, leaving a residue at float32's rounding level), so on synthetic images with flat
+    regions a ``min_slope`` of a small fraction of the contrast keeps that residue from crossing zero.
 
     References
     ----------

@@ -61,8 +61,8 @@ FEATURES: tuple[Features, ...] = ("brightness", "log", "sign_log", "edges")
 METHODS: tuple[Method, ...] = ("running", "table")
 
 DEFAULT_SIGMA = {"brightness": 1.0, "log": 2.0, "sign_log": 1.0, "edges": 1.5}
-"""Gaussian width (pixels) of each feature map when ``sigma`` is None (sign_log: 1.0 gave a mean EPE of
-0.26 on the real sequences, 1.5 gave 0.28 and 2.0 gave 0.32; benchmarks/results/motion.md)."""
+"""Gaussian width (pixels) of each feature map when ``sigma`` is None (sign_log: of 1.0, 1.5 and 2.0, 1.0
+gave the lowest mean EPE on the real sequences of benchmarks/results/motion.md)."""
 
 EDGE_QUANTILES = (0.7, 0.9)
 """Canny's hysteresis thresholds for the "edges" features, as quantiles of the gradient magnitude: a
@@ -394,8 +394,8 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     With levels > 1, frame 1's features are warped by the prediction (bilinearly; edges: nearest
     pixel) before the search, which is then for the residual around it. Averaging the coarse flow over
     the patch first matters: the winners' pixel-to-pixel jitter would otherwise pass into the warp and
-    the finer flow (on Middlebury it doubled the error away from motion boundaries). Device frames are
-    not checked for NaN (that would need a read back).
+    the finer flow (on Middlebury it raised the error markedly away from motion boundaries). Device
+    frames are not checked for NaN (that would need a read back).
 
     References
     ----------

@@ -177,7 +177,7 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
         patches that hold it, not only the one centred on it (shiftable windows, Bobick and Intille).
         Near a depth discontinuity some patch lies on the pixel's own side, so the nearer surface no
         longer spreads half a patch over the farther one; pixels within ``patch // 2`` of the border
-        are then matched too, by patches further in. See the notes for what it measured.
+        are then matched too, by patches further in. See the notes for how it compares.
     barriers : bool (H, W), optional
         Discontinuity lines (from the integration stage, or ground truth): support windows stop at them,
         along rows and then along columns.
@@ -201,12 +201,12 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     another winner on its row claims the same right pixel, or lies in its forbidden zone (reversing the
     left-right order), with a higher score.
 
-    Shiftable windows (patch 11, sigma 1, benchmarks/results/stereo.md): bad-1 of the dense intensity
-    matches on Middlebury tsukuba / venus / teddy went from 12.9 / 9.8 / 23.6% to 9.9 / 7.6 / 18.2% on the
-    nonocc mask and from 46 / 53 / 53% to 30 / 34 / 41% near discontinuities (disc mask); StereoSGBM gives
-    16.4 / 14.2 / 21.1% and 24 / 31 / 34% there. The match took 1.5x as long (teddy, 64 disparities).
-    Where the texture is sparse the best of many windows is more often a chance correlation: in the
-    pipeline, dense bad-1 on the sparsely textured "cues" scene rose from 1.0% to 3.0%.
+    Shiftable windows (patch 11, sigma 1) lower the bad-1 rate of the dense intensity matches on
+    Middlebury tsukuba, venus and teddy against centred windows, on the nonocc mask and most near
+    discontinuities (disc mask); there StereoSGBM still does better, while on the nonocc mask the
+    shiftable matches beat it. The match takes longer (benchmarks/results/stereo.md holds the rates and
+    the times). Where the texture is sparse the best of many windows is more often a chance correlation:
+    in the pipeline, dense bad-1 on the sparsely textured "cues" scene rose with shiftable windows.
     """
     machine = machine_for(machine)
     _pair(left, right, machine)

@@ -21,7 +21,7 @@ from vmcl.metrics._rates import f_measure, ratio
 
 __all__ = ["BoundaryCounts", "BoundaryScores", "boundary_counts", "evaluate_boundaries"]
 
-# More boundary thresholds than a 16-bit edge map has levels only repeat matchings, at 0.1 s each.
+# More boundary thresholds than a 16-bit edge map has levels only repeat matchings, each a costly one.
 _MAX_BOUNDARY_THRESHOLDS = 2**16
 
 
@@ -270,16 +270,16 @@ def evaluate_boundaries(
     ground_truths : sequence of sequences of (H, W) arrays, or of (K, H, W) arrays
         Per image, the annotators' 0/1 boundary maps.
     thresholds : int or sequence of float
-        As in :func:`boundary_counts`. The default, 99, is the benchmark's; each threshold costs about
-        0.1 s of matching per annotator on a 321 x 481 image (10 BSDS images at 5 thresholds: about
-        30 s on 2 cores), so a quick check may use fewer.
+        As in :func:`boundary_counts`. The default, 99, is the benchmark's; each threshold costs one
+        matching per annotator and image, which is most of the time (benchmarks/results/ground_truth.md
+        times 10 BSDS images), so a quick check may use fewer.
     max_dist : float
         Match distance as a fraction of the image diagonal.
     thin : bool
         Thin thresholded maps before matching.
     workers : int
-        Processes evaluating images in parallel (1: in this process). Workers are spawned, which
-        costs about a second each to start.
+        Processes evaluating images in parallel (1: in this process). Workers are spawned, so each
+        pays a fresh interpreter's start-up.
 
     Returns
     -------
@@ -290,8 +290,8 @@ def evaluate_boundaries(
     Follows the benchmark's ``collect_eval_bdry``: ODS interpolates the dataset's precision-recall
     curve between thresholds; OIS adds up each image's counts at its best threshold (the highest one
     when several tie); the average precision interpolates precision on a recall grid of step 0.01.
-    On the benchmark's own golden set (``bench/data``, 5 thresholds) this gives ODS F and OIS F within
-    2e-4 of the official 0.7046 and 0.7087.
+    On the benchmark's own golden set (``bench/data``, 5 thresholds) this reproduces the official
+    figures up to the matcher's random outlier edges (benchmarks/results/ground_truth.md compares them).
 
     References
     ----------

@@ -56,11 +56,10 @@ def score_confidence(score: ArrayLike, *, floor: float, weight: float = 1.0,
 
     Notes
     -----
-    Measured on the "cues" scene at 256 x 256 (brightness features, mean field): weighing the flow by
-    its score with floor 0.7 cut the motion line sites from 1737 to 429 pixels, raised their precision
-    within 1 px from 0.07 to 0.28 at the same recall of the moving plate's outline, and lowered the
-    restored flow's endpoint error from 0.43 to 0.24 px (corridor: 0.73 to 0.47 px; blocks: 0.55 to
-    0.50 px).
+    Why the pipeline weighs the flow by its score (brightness features, mean field, floor 0.7): on the
+    "cues" scene it removed most of the motion line sites, made those left more precise at the same
+    recall of the moving plate's outline, and lowered the restored flow's endpoint error there and on
+    the "corridor" and "blocks" scenes.
 
     Examples
     --------
@@ -100,14 +99,15 @@ def backfill(primary: ArrayLike, secondary: ArrayLike, secondary_confidence: Arr
 
     Notes
     -----
-    The pipeline fills the stereo edge matches (a few per cent of the pixels) with the dense intensity
-    matches whose normalised cross-correlation exceeds 0.9, at weight up to 0.2. Measured with the
-    pipeline's depth restoration (mean field; benchmarks/results/pipeline.md), dense bad-1 rate on
-    Middlebury nonocc: tsukuba 20.2% to 11.5%, venus 13.5% to 6.3%, teddy 46.4% to 18.2%; on vmcl.scenes
-    (256 x 256): blocks 10.9% to 4.6%, "cues" 1.7% to 0.9%. Those intensity matches had centred windows
-    on brightness smoothed with sigma 2; the pipeline's defaults now match with shiftable windows on
-    sigma 1 (``stereo.shiftable``, ``stereo.intensity_sigma``): tsukuba 7.6%, venus 5.3%, teddy 15.3%,
-    blocks 2.8%, "cues" 3.0%.
+    The pipeline fills the stereo edge matches (a small share of the pixels; benchmarks/results/mrf.md
+    gives their density on Middlebury) with the dense intensity matches whose normalised
+    cross-correlation exceeds 0.9, at weight up to 0.2. With the pipeline's depth restoration (mean
+    field) and its default intensity matches (shiftable windows, ``stereo.shiftable`` and
+    ``stereo.intensity_sigma``), this lowers the dense bad-1 rate on Middlebury (nonocc) and on the
+    "blocks" scene; on the sparsely textured "cues" scene, where the edge matches alone do well, it
+    raises it (benchmarks/results/pipeline.md holds both). Centred windows on brightness smoothed with
+    sigma 2, the earlier default, lowered it on "cues" too, but lowered it less on Middlebury and on
+    "blocks".
     """
     machine = machine_for(machine)
     host = all(isinstance(a, np.ndarray) for a in (primary, secondary, secondary_confidence))

@@ -1,6 +1,6 @@
 """Arithmetic on points and directions held as (3, N) float32 arrays (structure of arrays).
 
-NumPy's (N, 3) @ (3,) products measured 10 to 40 times slower than three scaled rows added, so the ray
+NumPy's (N, 3) @ (3,) products ran many times slower than three scaled rows added, so the ray
 caster, the shading and the renderer all keep points as three rows and use :func:`dot` and
 :func:`transform`.
 """

@@ -120,8 +120,8 @@ def render(world: World, *, seed: int = 0, noise: float = 0.0) -> Scene:
     Notes
     -----
     Each pixel's ray is cast against every face (culled by the face's projected bounding box); shadows
-    and occlusions are exact segment tests against the faces. A 512 x 512 scene with ten faces
-    renders in about 0.3 s on two cores (benchmarks/results/ground_truth.md).
+    and occlusions are exact segment tests against the faces (benchmarks/results/ground_truth.md times
+    each preset's rendering at 512 x 512).
 
     Examples
     --------
