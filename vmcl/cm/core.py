@@ -43,6 +43,7 @@ __all__ = [
     "launch_rows",
     "machine_for",
     "normalise_axis",
+    "output_array",
     "real_host_array",
     "result",
     "type_defines",
@@ -153,6 +154,32 @@ def flags_field(segments: Any, shape: tuple[int, ...], name: str, machine: Machi
             raise InputTypeError(f"{name} on the device must be uint8 or bool, got {segments.dtype}")
         return segments
     raise InputTypeError(f"{name} must be a NumPy array, a pyopencl.array.Array or None, got {type(segments).__name__}")
+
+
+def output_array(out: Any, machine: Machine, like: cl_array.Array, host: bool, name: str = "out") -> cl_array.Array:
+    """The device array a call writes its result into: ``out`` when the caller gives one, else a new one
+    from the Machine's pool, with ``like``'s shape and dtype.
+
+    ``out`` lets a caller that keeps its fields on the device reuse one buffer across calls (a stream of
+    frames). It must be a C-contiguous device array of this Machine's context with the result's shape and
+    dtype, and not the input itself: the kernels read neighbours of what they write.
+    """
+    if out is None:
+        return machine.empty(like.shape, like.dtype)
+    if host:
+        raise InputTypeError(f"{name} is for device input (it is a device array the result is written to); "
+                             "with NumPy input the result is a new NumPy array")
+    if not isinstance(out, cl_array.Array):
+        raise InputTypeError(f"{name} must be a pyopencl.array.Array or None, got {type(out).__name__}")
+    check_context(out, name, machine)
+    if out.shape != like.shape or out.dtype != like.dtype:
+        raise InputValueError(f"{name} must have the result's shape {like.shape} and dtype {like.dtype}, "
+                              f"got {out.shape} {out.dtype}")
+    if not out.flags.c_contiguous or out.offset:
+        raise InputValueError(f"{name} must be a C-contiguous device array without an offset (not a view)")
+    if out.base_data is like.base_data:
+        raise InputValueError(f"{name} must not be the input array: the kernels read it while writing")
+    return out
 
 
 def result(device: cl_array.Array, host: bool) -> ArrayLike:

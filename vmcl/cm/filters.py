@@ -12,9 +12,20 @@ from __future__ import annotations
 from typing import overload
 
 import numpy as np
+import pyopencl as cl
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import WIDEST, ArrayLike, check_int, field, machine_for, result, type_defines
+from vmcl.cm.core import (
+    WIDEST,
+    ArrayLike,
+    check_int,
+    device_memory,
+    field,
+    machine_for,
+    output_array,
+    result,
+    type_defines,
+)
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
@@ -29,10 +40,12 @@ def max_passes(height: int, width: int) -> int:
 
 
 @overload
-def binomial(image: np.ndarray, passes: int, *, machine: Machine | None = None) -> np.ndarray: ...
+def binomial(image: np.ndarray, passes: int, *, out: None = None, machine: Machine | None = None) -> np.ndarray: ...
 @overload
-def binomial(image: cl_array.Array, passes: int, *, machine: Machine | None = None) -> cl_array.Array: ...
-def binomial(image: ArrayLike, passes: int, *, machine: Machine | None = None) -> ArrayLike:
+def binomial(image: cl_array.Array, passes: int, *, out: cl_array.Array | None = None,
+             machine: Machine | None = None) -> cl_array.Array: ...
+def binomial(image: ArrayLike, passes: int, *, out: cl_array.Array | None = None,
+             machine: Machine | None = None) -> ArrayLike:
     """Smooth ``image`` with ``passes`` passes of the 3 x 3 binomial mask [1 2 1]^T [1 2 1] / 16.
 
     Parameters
@@ -43,11 +56,13 @@ def binomial(image: ArrayLike, passes: int, *, machine: Machine | None = None) -
     passes : int
         0 <= n <= :func:`max_passes` (2 * max(H, W, WIDEST)**2). n passes approximate a Gaussian of
         standard deviation sqrt(n / 2) pixels (the binomial of order 2n); n = 0 returns a copy.
+    out : pyopencl.array.Array, optional
+        For device input: the array to write the result into (:func:`vmcl.cm.core.output_array`).
     machine : vmcl.Machine, optional
 
     Returns
     -------
-    Same type, shape and dtype as ``image``.
+    Same type, shape and dtype as ``image`` (``out`` itself when given).
 
     Notes
     -----
@@ -69,15 +84,20 @@ def binomial(image: ArrayLike, passes: int, *, machine: Machine | None = None) -
     kernel = machine.kernel("cm_filters", "binomial_pass", **defines)
     size = (-(-width // 16), height, planes)
     local = machine.row_local_size(size)
-    # Ping-pong between two pooled buffers; the input is never written.
-    buffers = (machine.empty(data.shape, data.dtype), machine.empty(data.shape, data.dtype))
+    # Ping-pong between two buffers, the last pass writing into the output; the input is never written.
+    final = output_array(out, machine, data, host)
+    spare = machine.empty(data.shape, data.dtype) if passes > 1 else final
+    buffers = (final, spare) if passes % 2 else (spare, final)
     source = data
     for k in range(passes):
         target = buffers[k % 2]
         machine.launch(kernel, size, source, target, np.int64(width), np.int64(height), local_size=local)
         source = target
     if passes == 0:
-        source = data.copy(queue=machine.queue)
+        # pyopencl's overloads type a device copy's ends as Buffer; pooled buffers are memory objects too.
+        cl.enqueue_copy(machine.queue, device_memory(final), data.base_data,  # type: ignore[call-overload]
+                        byte_count=data.nbytes)
+        source = final
     return result(source, host)
 
 

@@ -11,7 +11,16 @@ from typing import Literal, overload
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import ArrayLike, check_choice, check_int, field, machine_for, result, type_defines
+from vmcl.cm.core import (
+    ArrayLike,
+    check_choice,
+    check_int,
+    field,
+    machine_for,
+    output_array,
+    result,
+    type_defines,
+)
 from vmcl.machine import Machine
 
 __all__ = ["BORDERS", "Border", "shift"]
@@ -21,12 +30,13 @@ BORDERS: dict[Border, int] = {"zero": 0, "clamp": 1, "wrap": 2}
 
 
 @overload
-def shift(x: np.ndarray, dx: int, dy: int, *, border: Border = "zero",
+def shift(x: np.ndarray, dx: int, dy: int, *, border: Border = "zero", out: None = None,
           machine: Machine | None = None) -> np.ndarray: ...
 @overload
-def shift(x: cl_array.Array, dx: int, dy: int, *, border: Border = "zero",
+def shift(x: cl_array.Array, dx: int, dy: int, *, border: Border = "zero", out: cl_array.Array | None = None,
           machine: Machine | None = None) -> cl_array.Array: ...
-def shift(x: ArrayLike, dx: int, dy: int, *, border: Border = "zero", machine: Machine | None = None) -> ArrayLike:
+def shift(x: ArrayLike, dx: int, dy: int, *, border: Border = "zero", out: cl_array.Array | None = None,
+          machine: Machine | None = None) -> ArrayLike:
     """The field moved ``dx`` pixels to the right and ``dy`` down: ``out[y, x] = x[y - dy, x - dx]``.
 
     Parameters
@@ -38,6 +48,8 @@ def shift(x: ArrayLike, dx: int, dy: int, *, border: Border = "zero", machine: M
     border : {"zero", "clamp", "wrap"}
         What a pixel gets whose source lies outside the field: 0, the nearest edge pixel, or the pixel
         on the opposite side (``np.roll`` semantics).
+    out : pyopencl.array.Array, optional
+        For device input: the array to write the result into (:func:`vmcl.cm.core.output_array`).
     machine : vmcl.Machine, optional
 
     Returns
@@ -56,7 +68,7 @@ def shift(x: ArrayLike, dx: int, dy: int, *, border: Border = "zero", machine: M
     else:
         dx, dy = max(-width, min(width, dx)), max(-height, min(height, dy))
     planes = data.size // (height * width)
-    out = machine.empty(data.shape, data.dtype)
+    out = output_array(out, machine, data, host)
     kernel = machine.kernel("news", "shift", BORDER=BORDERS[border], **type_defines(data.dtype))
     machine.launch(kernel, (width, height, planes), data, out, np.int64(width), np.int64(height),
                    np.int64(dx), np.int64(dy))

@@ -29,6 +29,7 @@ from vmcl.cm.core import (
     flags_field,
     machine_for,
     normalise_axis,
+    output_array,
     result,
     type_defines,
 )
@@ -255,13 +256,13 @@ def _check_window_sums_fit(x: np.ndarray, window: int) -> None:
 
 
 @overload
-def box_sum(x: np.ndarray, radius: int, *, axes: tuple[int, ...] = (-2, -1),
+def box_sum(x: np.ndarray, radius: int, *, axes: tuple[int, ...] = (-2, -1), out: None = None,
             machine: Machine | None = None) -> np.ndarray: ...
 @overload
 def box_sum(x: cl_array.Array, radius: int, *, axes: tuple[int, ...] = (-2, -1),
-            machine: Machine | None = None) -> cl_array.Array: ...
+            out: cl_array.Array | None = None, machine: Machine | None = None) -> cl_array.Array: ...
 def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
-            machine: Machine | None = None) -> ArrayLike:
+            out: cl_array.Array | None = None, machine: Machine | None = None) -> ArrayLike:
     """Sum over the (2r+1) x (2r+1) window around every pixel, by grid-scans, in time independent of r.
 
     Parameters
@@ -274,6 +275,8 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     axes : tuple of int
         The axes to sum along: (-2, -1) (the square window, default), (-1,) (rows only) or (-2,)
         (columns only). A 1-D field takes (-1,).
+    out : pyopencl.array.Array, optional
+        For device input: the array to write the sums into (:func:`vmcl.cm.core.output_array`).
     machine : vmcl.Machine, optional
 
     Returns
@@ -308,20 +311,21 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     if host and data.dtype.kind == "f" and data.size:
         assert isinstance(x, np.ndarray)  # field() reports host for NumPy input only
         _check_window_sums_fit(x, (2 * radius + 1) ** len(wanted))
+    final = output_array(out, machine, data, host)
     defines = type_defines(data.dtype)
     width = data.shape[-1]
     r = np.int64(radius)
     source = data
     if -1 in wanted:
         lines = data.size // width
-        rows = machine.empty(data.shape, data.dtype)
+        rows = final if -2 not in wanted else machine.empty(data.shape, data.dtype)
         machine.launch(machine.kernel("scan_box", "box_rows", **defines), (math.ceil(lines / 4),),
                        source, rows, np.int64(width), np.int64(lines), r)
         source = rows
     if -2 in wanted:
         height = data.shape[-2]
         planes = data.size // (height * width)
-        cols = machine.empty(data.shape, data.dtype)
+        cols = final
         for vec, col0, count in column_groups(width):
             machine.launch(machine.kernel("scan_box", "box_cols", VEC=vec, **defines), (count, planes),
                            source, cols, np.int64(width), np.int64(height), np.int64(col0), np.int64(count), r)
