@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import dataclasses
 import math
 import os
 import sys
@@ -192,10 +191,6 @@ def _demo(args) -> int:
     config = _config(args.config)
     with output_folder(Path(args.out)) as work:
         title, inputs, truth = _demo_inputs(args)
-        if args.data == "motorcycle" and config.stereo.d_max is None:
-            known = truth["disparity"][np.isfinite(truth["disparity"])]
-            stereo = dataclasses.replace(config.stereo, d_min=int(known.min()), d_max=int(np.ceil(known.max())))
-            config = dataclasses.replace(config, stereo=stereo)
         vm = VisionMachine(config)
         result = _run_machine(vm, args, inputs["left"], inputs.get("right"), inputs.get("next"))
         tables = evaluation_tables(result, truth)

@@ -140,9 +140,13 @@ class StereoConfig:
     ----------
     enabled : bool
     d_min, d_max : int, optional
-        Disparity range; None: 0 and ``ceil(max_disparity * W)``.
+        The disparity range every matching pass searches. None (the default): found from the images
+        (:func:`vmcl.early.disparity_range.estimate_range`; ``Result.notes`` states the range and
+        what it was based on); a bound given overrides that end of the range found.
     max_disparity : float
-        The default d_max as a share of the image width.
+        In (0, 1]: the widest disparity, of either sign, the range estimate searches, as a share of the
+        image width; where the images do not decide the range, the matching falls back to 0 ..
+        ``floor(max_disparity * W)``.
     features, patch, sigma, low_threshold, high_threshold, use_quantiles
         As :func:`vmcl.early.stereo.match` takes them, ``sigma`` for edge and zero-crossing features
         (intensity matches smooth with ``intensity_sigma``). The defaults match Canny edges chosen by
@@ -170,7 +174,7 @@ class StereoConfig:
     enabled: bool = True
     d_min: int | None = None
     d_max: int | None = None
-    max_disparity: float = 0.05
+    max_disparity: float = 1 / 3
     features: str = "canny"
     patch: int = 11
     sigma: float = 2.0
@@ -580,6 +584,7 @@ class _Run:
         for cue in active:
             with self.stage(cue.name):
                 measured[cue.name] = cue.measure(run)
+            self.notes.extend(measured[cue.name].notes)
         fields = {name: array for m in measured.values() for name, array in m.fields.items()}
         lines, restored = {}, {}
         for cue in active:

@@ -79,6 +79,9 @@ class Measurement:
         :attr:`CueModule.fields`).
     state : any
         What the cue keeps for :meth:`CueModule.refine` (e.g. stereo's intensity matches).
+    notes : tuple of str
+        Lines for ``Result.notes``: what the module decided from the data that the user should know
+        (e.g. the disparity range stereo found).
     """
 
     data: cl_array.Array
@@ -86,6 +89,7 @@ class Measurement:
     coupling: cl_array.Array
     fields: dict[str, cl_array.Array] = field(default_factory=dict)
     state: Any = None
+    notes: tuple[str, ...] = ()
 
 
 class CueModule:

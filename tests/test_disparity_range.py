@@ -1,0 +1,144 @@
+"""The disparity range found from the images: it holds the true range on rendered pairs with near objects,
+the machine matches over it when the Config gives none and says so, and bad pairs are refused."""
+
+import math
+
+import numpy as np
+import pytest
+
+from vmcl import metrics, scenes
+from vmcl.early.disparity_range import DisparityRange, estimate_range, fallback_range
+from vmcl.errors import InputTypeError, InputValueError
+from vmcl.pipeline import Config, VisionMachine
+from vmcl.scenes import Body, Camera, Face, Light, Texture, World
+
+SHAPE = (128, 192)
+
+
+def _near_scene(plate_depth: float) -> scenes.Scene:
+    """A dotted wall at depth 6 (d = 0.025 W) and a dotted plate in front of it at ``plate_depth`` (0.5:
+    d = 0.3 W), seen by the presets' rig (focal length W, baseline 0.15); ambient light only."""
+    focal = float(SHAPE[1])
+
+    def dots(depth):
+        return Texture("noise", 5 * depth / focal, 0.5)
+
+    wall = Face((0.0, 0.0, 6.0), (1, 0, 0), (0, 1, 0), None, (0.6, 0.55, 0.5), dots(6.0))
+    plate = Face((0.05, -0.15 * plate_depth, plate_depth), (1, 0, 0), (0, 1, 0),
+                 (0.25 * plate_depth, 0.3 * plate_depth), (0.7, 0.5, 0.4), dots(plate_depth))
+    world = World(Camera(SHAPE, focal, 0.15), Light(ambient=1.0), (Body((wall,)), Body((plate,))))
+    return scenes.render(world, seed=0, noise=0.01)
+
+
+def _visible(scene):
+    return ~scene.occluded_stereo & np.isfinite(scene.disparity)
+
+
+@pytest.fixture(scope="module")
+def near_scene():
+    return _near_scene(0.5)
+
+
+@pytest.mark.parametrize("plate_depth", [0.5, 0.8])
+def test_range_holds_the_visible_disparities_and_little_more(plate_depth, machine):
+    scene = _near_scene(plate_depth)
+    truth = scene.disparity[_visible(scene)]
+    low, high = math.floor(truth.min()), math.ceil(truth.max())
+    assert high > 0.18 * SHAPE[1]  # far beyond the old default of 5% of the width
+    found = estimate_range(scene.left, scene.right, machine=machine)
+    assert found.decided and found.confident > 0.3
+    assert found.d_min <= low and found.d_max >= high
+    # The margin is one pixel of the finest level searched (2 px here), the quantiles a few more.
+    assert found.d_min >= low - 5 and found.d_max <= high + 5
+
+
+def test_negative_disparities_are_found(near_scene, machine):
+    """Swapping the views negates every disparity: the estimate follows, below zero."""
+    truth = near_scene.disparity[_visible(near_scene)]
+    found = estimate_range(near_scene.right, near_scene.left, machine=machine)
+    assert found.decided
+    assert found.d_min <= -math.ceil(truth.max()) and found.d_max >= -math.floor(truth.min())
+    assert found.d_max < 0
+
+
+def test_device_images_give_the_host_result(near_scene, machine):
+    host = estimate_range(near_scene.left, near_scene.right, machine=machine)
+    device = estimate_range(machine.to_device(near_scene.left), machine.to_device(near_scene.right),
+                            machine=machine)
+    assert host == device
+
+
+def test_restored_disparity_with_the_range_found_is_as_good_as_with_the_true_range(near_scene, machine):
+    visible = _visible(near_scene)
+    truth = near_scene.disparity[visible]
+    given = {"d_min": math.floor(truth.min()), "d_max": math.ceil(truth.max())}
+    bad = {}
+    for name, stereo in (("found", {}), ("true", given), ("old", {"d_min": 0, "d_max": math.ceil(0.05 * SHAPE[1])})):
+        result = VisionMachine(Config.from_dict({"stereo": stereo}), machine=machine).run(near_scene.left,
+                                                                                           near_scene.right)
+        bad[name] = metrics.evaluate_disparity(result.disparity, near_scene.disparity, mask=visible).bad[1.0]
+        notes = [n for n in result.notes if n.startswith("stereo: disparity range")]
+        if name == "found":
+            assert len(notes) == 1 and "from the images at 1/2 scale" in notes[0], result.notes
+        else:
+            assert not notes  # the Config gave the range
+    assert bad["found"] <= bad["true"] + 0.01, bad
+    assert bad["old"] > bad["found"] + 0.1, bad  # what the range was for
+
+
+def test_one_bound_given_overrides_its_end(near_scene, machine, monkeypatch):
+    from vmcl.early import stereo
+
+    spans = []
+    real = stereo.match
+
+    def spy(*args, **kwargs):
+        spans.append((kwargs["d_min"], kwargs["d_max"]))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(stereo, "match", spy)
+    config = Config.from_dict({"stereo": {"d_min": -3, "feedback": False}, "mrf": {"method": "icm"}})
+    result = VisionMachine(config, machine=machine).run(near_scene.left, near_scene.right)
+    found = estimate_range(near_scene.left, near_scene.right, machine=machine)
+    assert set(spans) == {(-3, found.d_max)}
+    assert any(n.startswith(f"stereo: disparity range -3..{found.d_max} px") and "d_min = -3" in n
+               for n in result.notes), result.notes
+
+
+def test_flat_images_do_not_decide_and_fall_back_with_a_note(machine):
+    flat = np.full((64, 96), 0.5, np.float32)
+    found = estimate_range(flat, flat, machine=machine)
+    assert found == DisparityRange(*fallback_range(96), decided=False, level=found.level, confident=0.0,
+                                   searched=found.searched, found=None)
+    assert (found.d_min, found.d_max) == (0, 32)
+    result = VisionMachine(machine=machine).run(flat, flat)
+    assert any(n.startswith("stereo: disparity range 0..32 px, a wide fallback") for n in result.notes), result.notes
+
+
+def test_tiny_images_are_matched_at_full_resolution_or_refused(machine):
+    rng = np.random.default_rng(0)
+    image = rng.random((16, 40), np.float32)
+    found = estimate_range(image, np.roll(image, -3, axis=1), machine=machine)  # d = 3 everywhere
+    assert found.level == 0 and found.decided and found.d_min <= 3 <= found.d_max
+    with pytest.raises(InputValueError, match="patch"):
+        estimate_range(image[:5], image[:5], machine=machine)
+
+
+@pytest.mark.parametrize("left, right, error, name", [
+    (np.zeros((64, 64)), np.zeros((64, 80)), InputValueError, "same shape"),
+    (np.zeros((64, 64)), [[0.0]], InputTypeError, "right"),
+    (np.zeros((64, 64, 4)), np.zeros((64, 64, 4)), InputValueError, "left"),
+    (np.full((64, 64), np.nan), np.zeros((64, 64)), InputValueError, "left"),
+])
+def test_bad_pairs_are_refused_naming_the_argument(left, right, error, name, machine):
+    with pytest.raises(error, match=name):
+        estimate_range(left, right, machine=machine)
+
+
+@pytest.mark.parametrize("key, value", [("max_disparity", 0.0), ("max_disparity", 1.5), ("coarse_side", 0),
+                                        ("patch", 6), ("min_score", 2.0), ("quantile", 0.5), ("margin", -1),
+                                        ("min_share", 0.0)])
+def test_bad_options_are_refused_naming_them(key, value, machine):
+    image = np.zeros((64, 64), np.float32)
+    with pytest.raises((InputValueError, InputTypeError), match=key):
+        estimate_range(image, image, machine=machine, **{key: value})
