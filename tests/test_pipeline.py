@@ -207,7 +207,7 @@ def test_integrate_matches_boundary_maps_and_labels(machine):
 
 # -- end to end on the "cues" scene (256 x 256) ----------------------------------------------------
 
-def test_dense_disparity_bad_1_below_5_percent(cues_scene, cues_run):
+def test_dense_disparity_bad_1_below_2_percent(cues_scene, cues_run):
     visible = ~cues_scene.occluded_stereo & np.isfinite(cues_scene.disparity)
     scores = metrics.evaluate_disparity(cues_run.disparity, cues_scene.disparity, mask=visible)
     assert scores.density == 1.0
