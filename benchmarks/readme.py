@@ -225,9 +225,10 @@ def stereo_figures(f: ResultsFile) -> str:
             f"{bad1(matched, 'vmcl bad-1')} (tsukuba / venus / teddy) against StereoBM's "
             f"{bad1(matched, 'StereoBM bad-1 at the same pixels')} there; dense intensity matches with "
             f"shiftable windows {bad1(dense, 'shiftable nonocc')} (centred {bad1(dense, 'centred nonocc')}, "
-            f"SGBM {bad1(dense, 'SGBM nonocc')}), near discontinuities (disc mask) "
-            f"{bad1(dense, 'shiftable disc')} (centred {bad1(dense, 'centred disc')}, SGBM "
-            f"{bad1(dense, 'SGBM disc')}), "
+            f"SGBM {bad1(dense, 'SGBM MODE_SGBM nonocc')}, SGBM 3WAY {bad1(dense, 'SGBM 3WAY nonocc')}), "
+            f"near discontinuities (disc mask) {bad1(dense, 'shiftable disc')} (centred "
+            f"{bad1(dense, 'centred disc')}, SGBM {bad1(dense, 'SGBM MODE_SGBM disc')}, SGBM 3WAY "
+            f"{bad1(dense, 'SGBM 3WAY disc')}), "
             f"{times(shiftable_cost)} the centred match's time")
 
 

@@ -203,9 +203,8 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
 
     Shiftable windows (patch 11, sigma 1) lower the bad-1 rate of the dense intensity matches on
     Middlebury tsukuba, venus and teddy against centred windows, on the nonocc mask and most near
-    discontinuities (disc mask); there StereoSGBM still does better, while on the nonocc mask the
-    shiftable matches beat it. The match takes longer (benchmarks/results/stereo.md holds the rates and
-    the times). Where the texture is sparse the best of many windows is more often a chance correlation:
+    discontinuities (disc mask); StereoSGBM, configured as OpenCV documents it, still does better on
+    both masks. The match takes longer (benchmarks/results/stereo.md holds the rates and the times). Where the texture is sparse the best of many windows is more often a chance correlation:
     in the pipeline, dense bad-1 on the sparsely textured "cues" scene rose with shiftable windows.
     """
     machine = machine_for(machine)
