@@ -267,6 +267,7 @@ def _eval_stereo(args, root: Path) -> int:
 
     from vmcl import metrics
     from vmcl.datasets import STEREO_SCENES, load_stereo
+    from vmcl.early.disparity_range import estimate_range
     from vmcl.pipeline import StereoConfig, VisionMachine
 
     rows = [("scene", "method", "bad 1 nonocc", "bad 2 nonocc", "bad 1 all", "density", "ms")]
@@ -278,15 +279,20 @@ def _eval_stereo(args, root: Path) -> int:
         for name in names:
             pair = load_stereo(name, root)
             grey = [cv2.cvtColor(im, cv2.COLOR_RGB2GRAY) if im.ndim == 3 else im for im in (pair.left, pair.right)]
-            d_max = int(np.ceil(pair.disparity_range[1]))
-            numdisp = -(-(d_max + 1) // 16) * 16
-            vm = VisionMachine(_only(stereo=StereoConfig(d_min=0, d_max=d_max)))
+            # vmcl finds its range from the images. OpenCV needs one: the range the data set publishes
+            # (info.txt), else the range vmcl found; never the ground truth's.
+            vm = VisionMachine(_only(stereo=StereoConfig()))
             vm.run(pair.left, pair.right)  # builds the kernels: the timed run below is the steady state
             ours, ms = _timed(vm.run, pair.left, pair.right)
+            info = pair.folder / "info.txt"
+            d_max = (int(info.read_text().split()[1]) if info.is_file()
+                     else estimate_range(pair.left, pair.right).d_max)
+            numdisp = -(-(max(d_max, 0) + 1) // 16) * 16
             bm = cv2.StereoBM.create(numDisparities=numdisp, blockSize=11)
-            sgbm = cv2.StereoSGBM.create(0, numdisp, 5, P1=8 * 25, P2=32 * 25, uniquenessRatio=10, mode=cv2.STEREO_SGBM_MODE_SGBM)
+            sgbm = cv2.StereoSGBM.create(0, numdisp, 5, P1=8 * 25, P2=32 * 25, uniquenessRatio=10,
+                                         mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY)
             methods = [("vmcl dense (MRF)", ours.disparity, ms), ("vmcl sparse", ours.sparse_disparity, ms)]
-            for label, matcher in (("OpenCV StereoBM", bm), ("OpenCV StereoSGBM", sgbm)):
+            for label, matcher in (("OpenCV StereoBM", bm), ("OpenCV StereoSGBM 3WAY", sgbm)):
                 raw, ms_cv = _timed(matcher.compute, *grey)
                 methods.append((label, np.where(raw >= 0, raw / 16.0, np.nan).astype(np.float32), ms_cv))
             for label, disparity, took in methods:
