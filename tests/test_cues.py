@@ -85,3 +85,10 @@ def test_every_built_in_cue_declares_fields_the_result_has():
     known = {f for f in Result.__dataclass_fields__}
     for cue in cues.registered():
         assert set(cue.fields) <= known and (cue.restored_as is None or cue.restored_as in known)
+
+
+def test_a_cue_cannot_take_the_name_of_a_stage_or_a_config_section():
+    for name in ("edges", "upload", "mrf", "labels"):
+        misnamed = type("Misnamed", (BrightnessCue,), {"name": name})
+        with pytest.raises(ValueError, match="cannot be named"):
+            cues.register(misnamed())

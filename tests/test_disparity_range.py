@@ -142,3 +142,12 @@ def test_bad_options_are_refused_naming_them(key, value, machine):
     image = np.zeros((64, 64), np.float32)
     with pytest.raises((InputValueError, InputTypeError), match=key):
         estimate_range(image, image, machine=machine, **{key: value})
+
+
+def test_a_wide_margin_is_cut_at_the_matcher_s_limits_never_past_what_was_found():
+    rng = np.random.default_rng(0)
+    left = rng.random((64, 96)).astype(np.float32)
+    right = np.roll(left, -5, axis=1)
+    found = estimate_range(left, right, margin=10**9)
+    assert found.found == (5, 5) and found.d_min <= 5 <= found.d_max
+    assert found.d_max - found.d_min <= 95

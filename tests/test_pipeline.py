@@ -41,6 +41,15 @@ def test_config_from_toml_overrides_defaults_and_presets(tmp_path):
     assert config.to_dict()["stereo"]["d_max"] == 20
 
 
+def test_a_config_made_in_python_is_checked_when_made():
+    from vmcl.pipeline import MrfConfig
+
+    with pytest.raises(ValueError, match="mrf.stereo.bogus"):
+        Config(mrf=MrfConfig(stereo={"bogus": 1}))
+    with pytest.raises(TypeError, match="config section stereo must be a vmcl.pipeline.StereoConfig"):
+        Config(stereo={"d_max": 3})
+
+
 @pytest.mark.parametrize("text, message", [("[stereo]\nd_maxx = 3\n", "stereo.d_maxx"),
                                            ("[stero]\n", "stero"),
                                            ("[mrf.stereo]\nbetta = 1.0\n", "mrf.stereo.betta"),

@@ -230,8 +230,11 @@ def _run(args) -> int:
 
 def _fields(result) -> dict[str, np.ndarray]:
     """The run's fields as named arrays for fields.npz."""
-    names = ("edges", "support", "labels", "hue", "density", "sparse_disparity", "disparity", "raw_flow", "flow")
+    names = ("edges", "support", "labels", "hue", "colour_edges", "density", "texture_edges", "sparse_disparity",
+             "first_pass_disparity", "stereo_discontinuity", "disparity", "raw_flow", "flow")
     out = {name: getattr(result, name) for name in names if getattr(result, name) is not None}
+    for cue, restored in result.restored.items():
+        out[f"restored_{cue}"] = restored
     for cue, (line_h, line_v) in result.lines.items():
         out[f"{cue}_line_h"], out[f"{cue}_line_v"] = line_h, line_v
     return out
@@ -473,5 +476,21 @@ def _traceback_if(debug: bool) -> None:
         traceback.print_exc()
 
 
+def console() -> None:
+    """The ``vmcl`` console script: :func:`main`, then the process's exit.
+
+    After Ctrl-C the process ends at once (``os._exit``), once its output is flushed: an interrupt that
+    landed inside a library's constructor (pyopencl's on-disk kernel cache, for one) leaves objects whose
+    finalisers would print tracebacks at interpreter shutdown, after the one line the user was promised.
+    Everything vmcl owns was already cleaned up when the interrupt unwound (:mod:`vmcl.output_folder`).
+    """
+    code = main()
+    if code == EXIT_INTERRUPTED:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    console()

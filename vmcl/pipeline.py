@@ -43,7 +43,7 @@ from vmcl import labelling
 from vmcl.cm.core import check_choice, check_int, check_real
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
 from vmcl.early import edges, motion, stereo
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.labels import CUES
 from vmcl.machine import Machine, on_device
 from vmcl.mrf import SOLVERS, NothingToRestore, Restoration, Settings, preset
@@ -404,6 +404,17 @@ class Config:
     mrf: MrfConfig = field(default_factory=MrfConfig)
     labels: LabelsConfig = field(default_factory=LabelsConfig)
 
+    def __post_init__(self) -> None:
+        # A Config made in Python is checked like one read from TOML: each section of its own class
+        # (whose values checked themselves), and every cue's MRF overrides applied once.
+        for name, kind in _SECTIONS.items():
+            section = getattr(self, name)
+            if not isinstance(section, kind):
+                raise InputTypeError(f"config section {name} must be a vmcl.pipeline.{kind.__name__}, "
+                                     f"got {type(section).__name__}")
+        for cue in CUES:
+            self.mrf.settings(cue)
+
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> Config:
         """A Config from nested mappings; a key that names nothing raises ValueError, a mistyped value TypeError."""
@@ -420,10 +431,7 @@ class Config:
                 if key not in known:
                     raise InputValueError(f"unknown config key {name}.{key}; {name} has {', '.join(sorted(known))}")
             sections[name] = _SECTIONS[name](**entries)
-        config = cls(**sections)
-        for cue in CUES:
-            config.mrf.settings(cue)  # refuse bad overrides now, not mid-run
-        return config
+        return cls(**sections)
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Config:
@@ -583,7 +591,11 @@ class _Run:
         measured = {}
         for cue in active:
             with self.stage(cue.name):
-                measured[cue.name] = cue.measure(run)
+                try:
+                    measured[cue.name] = cue.measure(run)
+                except InputError as error:
+                    # The module's own argument names (patch, levels) are the cue's Config keys.
+                    raise type(error)(f"{cue.name} (the [{cue.name}] settings on this image): {error}") from None
             self.notes.extend(measured[cue.name].notes)
         fields = {name: array for m in measured.values() for name, array in m.fields.items()}
         lines, restored = {}, {}

@@ -21,6 +21,7 @@ import numpy as np
 
 from vmcl.cm.core import real_host_array
 from vmcl.cues import registered
+from vmcl.early.filters import GREY_WEIGHTS
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.labels import Cue, Label
 from vmcl.pictures import to_uint8
@@ -52,7 +53,7 @@ BRIGHTNESS_ONLY = (200, 200, 200)
 def _grey(image: np.ndarray) -> np.ndarray:
     """float (H, W) in [0, 1] from a grey or RGB float image (BT.709 luma, as vmcl.early.filters)."""
     if image.ndim == 3:
-        image = image @ np.array([0.2125, 0.7154, 0.0721], np.float32)
+        image = image @ np.array(GREY_WEIGHTS, np.float32)
     return np.clip(image, 0.0, 1.0)
 
 

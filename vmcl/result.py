@@ -56,10 +56,12 @@ class Result:
         Wall time of each stage in ms, in the order run (device work included: each stage ends with
         the queue drained).
     kernels : dict of str to dict
-        Per-kernel device time, as :meth:`vmcl.Machine.timings` gives it (empty without profiling).
+        Per-kernel device time, as :meth:`vmcl.Machine.timings` gives it (empty without profiling; mixed
+        with other threads' runs when several threads share one profiling Machine).
     config : Config
     notes : list of str
-        What the run could not do (e.g. no stereo match to restore).
+        What the run found out about its inputs or could not do: the disparity range found from the
+        images, a cue whose module measured nothing to restore.
     """
 
     image: np.ndarray

@@ -31,6 +31,9 @@ _REGISTRY: dict[str, CueModule] = {}
 INPUTS = frozenset({"right", "next", "rgb"})
 """What a cue may need beyond the left image."""
 
+RESERVED = frozenset({"upload", "edges", "feedback", "integrate", "download", "mrf", "labels"})
+"""Names no cue may take: the run's own stages and the Config sections that are not a cue's."""
+
 
 def register(cue: CueModule) -> None:
     """Add a cue to the machine (after the ones registered before it).
@@ -43,6 +46,9 @@ def register(cue: CueModule) -> None:
         raise InputTypeError(f"cue must be a vmcl.cues.CueModule, got {type(cue).__name__}")
     if cue.name in _REGISTRY:
         raise InputValueError(f"a cue named {cue.name!r} is already registered")
+    if cue.name in RESERVED:
+        raise InputValueError(f"a cue cannot be named {cue.name!r}: the run has a stage or Config section of "
+                              f"that name ({', '.join(sorted(RESERVED))})")
     if not cue.needs <= INPUTS:
         raise InputValueError(f"cue {cue.name!r} needs {sorted(cue.needs - INPUTS)}, which no run gives; "
                               f"needs are among {sorted(INPUTS)}")
@@ -75,4 +81,4 @@ def registered() -> tuple[CueModule, ...]:
 for _builtin in (StereoCue(), MotionCue(), ColourCue(), TextureCue()):
     _REGISTRY[_builtin.name] = _builtin
 
-__all__ = ["INPUTS", "CueModule", "Measurement", "RunInputs", "register", "registered", "unregister"]
+__all__ = ["INPUTS", "RESERVED", "CueModule", "Measurement", "RunInputs", "register", "registered", "unregister"]

@@ -43,7 +43,7 @@ class StereoCue(CueModule):
         span, note = _disparity_range(run)
         matched = _match(run, None, span)
         dense = _dense_match(run, span)
-        data, confidence = _depth_data(run, matched, dense)
+        data, confidence = _disparity_data(run, matched, dense)
         return Measurement(data, confidence, run.brightness, state=_State(span, dense), notes=(note,) if note else (),
                            fields={"sparse_disparity": on_device(matched.disparity),
                                    "stereo_discontinuity": on_device(matched.discontinuity)})
@@ -55,7 +55,7 @@ class StereoCue(CueModule):
         barriers = integrate.boundary(*lines, machine=run.machine)
         state = measurement.state
         matched = _match(run, barriers, state.span)
-        data, confidence = _depth_data(run, matched, state.dense)
+        data, confidence = _disparity_data(run, matched, state.dense)
         return Measurement(data, confidence, run.brightness, state=measurement.state,
                            fields={"first_pass_disparity": measurement.fields["sparse_disparity"],
                                    "sparse_disparity": on_device(matched.disparity),
@@ -122,7 +122,7 @@ def _match(run: RunInputs, barriers, span: tuple[int, int], *, features: stereo.
 
 
 def _dense_match(run: RunInputs, span: tuple[int, int]) -> tuple[cl_array.Array, cl_array.Array] | None:
-    """The intensity matches and their weights for :func:`_depth_data`, or None without backfill.
+    """The intensity matches and their weights for :func:`_disparity_data`, or None without backfill.
 
     Matched once, without barriers: matched again with the first pass's lines as barriers, in the
     feedback pass, it made the restored disparity worse (a higher dense bad-1 rate on the rendered
@@ -136,7 +136,7 @@ def _dense_match(run: RunInputs, span: tuple[int, int]) -> tuple[cl_array.Array,
                                                                    weight=s.backfill_weight, machine=run.machine))
 
 
-def _depth_data(run: RunInputs, matched: stereo.StereoMatch, dense: tuple[cl_array.Array, cl_array.Array] | None
+def _disparity_data(run: RunInputs, matched: stereo.StereoMatch, dense: tuple[cl_array.Array, cl_array.Array] | None
                 ) -> tuple[cl_array.Array, cl_array.Array | None]:
     """The stereo MRF's data and confidence: the feature matches, backfilled by intensity matches."""
     if dense is None:

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import ArrayLike, check_int, check_real, finite_float32, machine_for
+from vmcl.cm.core import IMAGE_TYPES, ArrayLike, check_int, check_real, finite_float32, machine_for
 from vmcl.cm.filters import binomial
 from vmcl.early.filters import gaussian
 from vmcl.early.stereo import StereoMatch, match
@@ -170,8 +170,9 @@ def estimate_range(left: ArrayLike, right: ArrayLike, *, max_disparity: float = 
             break
         found, finest = finer, finest - 1
     scale = 2**finest
-    d_min = max(scale * (found[0] - margin), -(width - 1))
-    # The matcher takes |d| < W and at most W planes.
+    # The matcher takes |d| < W and at most W planes: the margin is cut where it would pass those limits,
+    # never what the images showed.
+    d_min = max(scale * (found[0] - margin), -(width - 1), scale * found[1] - (width - 1))
     d_max = min(scale * (found[1] + margin), width - 1, d_min + width - 1)
     return DisparityRange(d_min, d_max, decided=True, level=level, confident=share, searched=searched,
                           found=(scale * found[0], scale * found[1]))
@@ -223,6 +224,9 @@ def _pair(left, right) -> tuple[cl_array.Array | np.ndarray, cl_array.Array | np
             raise InputTypeError(f"{name} must be a NumPy array or a pyopencl.array.Array, got {type(image).__name__}")
         if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] != 3):
             raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {image.shape}")
+        if image.dtype not in IMAGE_TYPES and not (isinstance(image, np.ndarray) and image.dtype.kind == "f"):
+            raise InputTypeError(f"{name} must have dtype {' or '.join(str(dtype) for dtype in IMAGE_TYPES)} (or another float "
+                                 f"on the host), got {image.dtype}")
         views.append(finite_float32(image, name) if isinstance(image, np.ndarray) else image)
     if isinstance(left, np.ndarray) != isinstance(right, np.ndarray):
         raise InputTypeError("left and right must both be NumPy arrays or both device arrays")
