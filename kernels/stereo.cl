@@ -6,7 +6,9 @@
  * feature is summed from the features of its window as it is needed, 16 disparities at a time, and
  * folded into the winner at once; no plane is ever stored. Running variant, intensity: each plane is
  * summed and folded into the winners as it is made. Every path folds the disparities in increasing d
- * with the same rules and the same float expressions, so the variants give identical results.
+ * with the same rules and the same float expressions, so the variants give identical results. Intensity
+ * selections also follow the winner's scores at d - 1 and d + 1 (Around), from which refine_subpixel moves
+ * each kept winner to a fraction of a pixel.
  *
  * Feature attributes are 16-bit codes (feature_codes): a gradient direction as a fraction of a turn,
  * 65536 steps (two codes are compatible when their circular distance is at most the tolerance, in the
@@ -150,16 +152,19 @@ inline int windows_inside(long x, long y, long W, long H, int d, long r)
 /* Scores cell (x, y, d) from its summed votes and folds it into the pixel's selection; `own` is the
  * cell's own plane value p(x, y, d). An intensity cell competes only when both of its (2r+1)^2 windows
  * lie inside the image: the score divides by the full area, so a window cut by the border (its sums
- * short of pixels) scored wrongly; at the right border such cells won with d near 0. */
-inline void fold_cell(Selection *s, long x, long y, long W, long H, int d, float votes, float own,
-                      __global const float *stats, float area, float negative, float dip, long r)
+ * short of pixels) scored wrongly; at the right border such cells won with d near 0. Returns the
+ * intensity cell's score where it competes, else NAN (the sub-pixel neighbours); NAN for edges. */
+inline float fold_cell(Selection *s, long x, long y, long W, long H, int d, float votes, float own,
+                       __global const float *stats, float area, float negative, float dip, long r)
 {
     float score = stats_score(stats, x, y, W, H, d, votes, area, negative);
 #if FEATURES == FEATURES_INTENSITY
     int inside = windows_inside(x, y, W, H, d, r);
     consider(s, d, isfinite(score) ? score : 0.0f, score, inside, dip);
+    return inside && isfinite(score) ? score : NAN;
 #else
     consider(s, d, votes, score, own > 0.0f, dip);
+    return NAN;
 #endif
 }
 
@@ -180,30 +185,79 @@ inline void finish(Selection s, long i, __global float *best_score, __global int
     peaks[3 * i + 2] = s.second;
 }
 
-/* Table variant: one work-item per pixel walks the summed planes of the whole table. */
+/* Sub-pixel refinement, intensity only: the winner's neighbouring scores, followed as the planes arrive
+ * (d in increasing order, one after the other). `below` and `above` are the scores at best_d - 1 and
+ * best_d + 1, `last` the score of the plane folded last; NAN where a cell did not compete (a window
+ * outside the image, too flat to score) or no plane exists (the range's ends). Stored as three floats
+ * per pixel between launches, like the peaks. */
+typedef struct {
+    float below, above, last;
+} Around;
+
+inline Around no_neighbours(void)
+{
+    Around a = {NAN, NAN, NAN};
+    return a;
+}
+
+/* After plane d was folded into `s` with `score` (NAN where the cell did not compete): a winner new at d
+ * takes the previous plane's score as its lower neighbour; plane d is the upper neighbour of a winner
+ * at d - 1. */
+inline void follow_neighbours(Around *a, const Selection *s, int d, float score)
+{
+    if (s->best_d == d) {
+        a->below = a->last;
+        a->above = NAN;
+    } else if (s->best_d == d - 1) {
+        a->above = score;
+    }
+    a->last = score;
+}
+
+inline Around resume_around(long i, __global const float *around)
+{
+    Around a = {around[3 * i], around[3 * i + 1], around[3 * i + 2]};
+    return a;
+}
+
+inline void finish_around(Around a, long i, __global float *around)
+{
+    around[3 * i] = a.below;
+    around[3 * i + 1] = a.above;
+    around[3 * i + 2] = a.last;
+}
+
+/* Table variant: one work-item per pixel walks the summed planes of the whole table. `around` receives
+ * the winner's neighbouring scores for intensity; edges leave it untouched (a one-element placeholder). */
 __kernel void select_table(__global const float *votes, __global const float *planes, __global const uchar *left,
                            __global const float *stats, __global float *best_score, __global int *best_d,
-                           __global float *peaks,
+                           __global float *peaks, __global float *around,
                            long W, long H, long D, int d_min, float area, float negative, float dip, long r)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     long i = y * W + x;
     Selection s = fresh();
+    Around a = no_neighbours();
     if (left[i]) {
         for (long k = 0; k < D; k++) {
             size_t cell = (k * H + y) * W + x;
-            fold_cell(&s, x, y, W, H, d_min + (int)k, votes[cell], planes[cell], stats, area, negative, dip, r);
+            int d = d_min + (int)k;
+            float score = fold_cell(&s, x, y, W, H, d, votes[cell], planes[cell], stats, area, negative, dip, r);
+            follow_neighbours(&a, &s, d, score);
         }
     }
     finish(s, i, best_score, best_d, peaks);
+#if FEATURES == FEATURES_INTENSITY
+    finish_around(a, i, around);
+#endif
 }
 
 /* Running variant for intensity: plane k (already summed) is folded into every pixel's selection;
  * no table. */
 __kernel void select_running(__global const float *votes, __global const float *plane, __global const uchar *left,
                              __global const float *stats, __global float *best_score, __global int *best_d,
-                             __global float *peaks,
+                             __global float *peaks, __global float *around,
                              long W, long H, int d, int first, float area, float negative, float dip,
                              long r)
 {
@@ -211,8 +265,13 @@ __kernel void select_running(__global const float *votes, __global const float *
     if (x >= W || y >= H) return;
     long i = y * W + x;
     Selection s = first ? fresh() : resume(i, best_score, best_d, peaks);
-    if (left[i]) fold_cell(&s, x, y, W, H, d, votes[i], plane[i], stats, area, negative, dip, r);
+    Around a = first ? no_neighbours() : resume_around(i, around);
+    if (left[i]) {
+        float score = fold_cell(&s, x, y, W, H, d, votes[i], plane[i], stats, area, negative, dip, r);
+        follow_neighbours(&a, &s, d, score);
+    }
     finish(s, i, best_score, best_d, peaks);
+    finish_around(a, i, around);
 }
 
 /* Shiftable windows, intensity only. The score of cell (x, y, d) as one centred window gives it:
@@ -235,21 +294,41 @@ __kernel void intensity_scores(__global const float *votes, __global const float
  * continuing the stored one unless `first`: the table folds all planes in one launch, the running
  * variant one plane per launch. */
 __kernel void select_scores(__global const float *scores, __global const uchar *left, __global float *best_score,
-                            __global int *best_d, __global float *peaks,
+                            __global int *best_d, __global float *peaks, __global float *around,
                             long W, long H, long D, int d_min, int first, float dip)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     long i = y * W + x;
     Selection s = first ? fresh() : resume(i, best_score, best_d, peaks);
+    Around a = first ? no_neighbours() : resume_around(i, around);
     if (left[i]) {
         for (long k = 0; k < D; k++) {
             float score = scores[(k * H + y) * W + x];
-            int scored = isfinite(score);
-            consider(&s, d_min + (int)k, scored ? score : 0.0f, score, scored, dip);
+            int scored = isfinite(score), d = d_min + (int)k;
+            consider(&s, d, scored ? score : 0.0f, score, scored, dip);
+            follow_neighbours(&a, &s, d, scored ? score : NAN);
         }
     }
     finish(s, i, best_score, best_d, peaks);
+    finish_around(a, i, around);
+}
+
+/* Sub-pixel disparity of the kept intensity matches: the vertex of the parabola through the winner's
+ * scores at d - 1, d, d + 1, d + (s- - s+) / (2 (s- - 2 s + s+)), the offset clamped to [-0.5, 0.5]
+ * (within it already, since the winner's score is the largest of the three; the clamp guards rounding).
+ * A winner with a missing neighbour (NAN: the range's ends, a cell that did not compete) keeps its
+ * integer d, as does a flat triple (a zero denominator). */
+__kernel void refine_subpixel(__global float *disparity, __global const float *best_score,
+                              __global const float *around, long n)
+{
+    long i = get_global_id(0);
+    if (i >= n) return;
+    float d = disparity[i], below = around[3 * i], above = around[3 * i + 1], centre = best_score[i];
+    if (isnan(d) || !isfinite(below) || !isfinite(above)) return;
+    float curvature = below - 2.0f * centre + above;
+    if (!(curvature < 0.0f)) return;
+    disparity[i] = d + clamp((below - above) / (2.0f * curvature), -0.5f, 0.5f);
 }
 
 /* Uniqueness and ordering, one round from the winners of every pixel: a winner is dropped when another

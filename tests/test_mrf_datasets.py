@@ -34,7 +34,7 @@ def bad_1(field, pair) -> np.ndarray:
 # nonocc bad-1 measured with this pipeline (benchmarks/results/mrf.md); the slack is for the matcher's and
 # the solver's float changes, the bar itself is the comparison with StereoBM.
 @pytest.mark.parametrize(("name", "measured", "beats_bm"),
-                         [("tsukuba", 0.132, False), ("venus", 0.0765, True), ("teddy", 0.193, True)])
+                         [("tsukuba", 0.143, False), ("venus", 0.0776, True), ("teddy", 0.194, True)])
 def test_restored_intensity_matches_beside_stereo_bm(datasets_root, machine, name, measured, beats_bm):
     pair = datasets.load_stereo(name, datasets_root)
     found_range = estimate_range(pair.left, pair.right, machine=machine)

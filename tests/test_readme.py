@@ -41,11 +41,11 @@ def test_readme_tables_match_the_results_files(generator):
 def test_a_changed_figure_in_a_results_file_is_noticed(generator, results_copy: Path):
     pipeline = results_copy / "pipeline.md"
     text = pipeline.read_text()
-    assert "| teddy | 15.4% | 46.2% |" in text, "the pipeline result's teddy row changed: update this test"
-    pipeline.write_text(text.replace("| teddy | 15.4% | 46.2% |", "| teddy | 99.9% | 46.2% |"))
+    assert "| teddy | 15.2% | 46.2% |" in text, "the pipeline result's teddy row changed: update this test"
+    pipeline.write_text(text.replace("| teddy | 15.2% | 46.2% |", "| teddy | 99.9% | 46.2% |"))
     added = [line for line in generator.difference(results_dir=results_copy).splitlines()
              if line.startswith("+") and not line.startswith("+++")]
-    assert len(added) == 1 and "9.4 / 5.3 / 99.9%" in added[0]
+    assert len(added) == 1 and "9.7 / 5.1 / 99.9%" in added[0]
 
 
 def test_a_renamed_row_fails_loudly(generator, results_copy: Path):
@@ -62,10 +62,10 @@ def test_a_readme_without_markers_is_refused(generator):
 
 def test_check_exits_1_with_a_diff_when_stale(generator, tmp_path: Path, monkeypatch, capsys):
     stale = tmp_path / "README.md"
-    stale.write_text(generator.README.read_text().replace("5.3 / 15.4%", "5.3 / 15.5%"))
+    stale.write_text(generator.README.read_text().replace("5.1 / 15.2%", "5.1 / 15.5%"))
     monkeypatch.setattr(generator, "README", stale)
     assert generator.main(["--check"]) == 1
     removed = [line for line in capsys.readouterr().out.splitlines()
                if line.startswith("-") and not line.startswith("---")]
-    assert len(removed) == 1 and "5.3 / 15.5%" in removed[0]
+    assert len(removed) == 1 and "5.1 / 15.5%" in removed[0]
     assert stale.read_text().count("15.5%") == 1, "--check must not write"

@@ -155,8 +155,8 @@ class StereoConfig:
         Match again with support windows stopped at the first pass's depth discontinuities.
     backfill : bool
         Also match every pixel by intensity (``features="intensity"``, the same patch) and let those
-        matches fill the gaps between the feature matches in the stereo MRF's data
-        (:func:`vmcl.mrf.backfill`), weighed by :func:`vmcl.mrf.score_confidence` of their normalised
+        matches, refined to sub-pixel disparities (the matcher's ``subpixel``), fill the gaps between
+        the feature matches in the stereo MRF's data (:func:`vmcl.mrf.backfill`), weighed by :func:`vmcl.mrf.score_confidence` of their normalised
         cross-correlation with ``backfill_floor`` and ``backfill_weight``. It lowers the dense bad-1
         rate on Middlebury (benchmarks/results/pipeline.md; see :func:`vmcl.mrf.backfill`).
     backfill_floor, backfill_weight : float

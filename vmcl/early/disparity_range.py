@@ -211,9 +211,11 @@ class _Search:
         return (math.floor(low), math.ceil(high)), share
 
     def _match(self, left: cl_array.Array, right: cl_array.Array, d_min: int, d_max: int) -> StereoMatch:
-        # Light smoothing: the pyramid has smoothed already.
+        # Light smoothing: the pyramid has smoothed already. Whole-pixel matches: the range's bounds are
+        # the quantiles rounded outwards, which sub-pixel disparities moved out by a pixel a level (blocks:
+        # 2..12 became -6..14, and its dense bad-1 rose from 2.9% to 8.4%).
         return match(left, right, d_min=d_min, d_max=d_max, features="intensity", patch=self.patch,
-                            sigma=0.5, machine=self.machine)
+                            sigma=0.5, subpixel=False, machine=self.machine)
 
 
 def _pair(left, right) -> tuple[cl_array.Array | np.ndarray, cl_array.Array | np.ndarray]:

@@ -66,7 +66,8 @@ _SPAN = 16  # pixels of a row per work-item of match_edges_clipped and suppress 
 class StereoMatch:
     """The matcher's output for the left view (host or device arrays, as the input was).
 
-    disparity : float32 (H, W), d with I_left(x, y) = I_right(x - d, y); NaN where no match was kept.
+    disparity : float32 (H, W), d with I_left(x, y) = I_right(x - d, y); NaN where no match was kept. Whole
+        pixels, but for intensity matches with ``subpixel``: the winner moved to its scores' parabola vertex.
     score : float32 (H, W), the winner's normalised score (before suppression); NaN off features.
     features : bool (H, W), the left features that took part (edges, zero crossings, or every pixel).
     out_of_range : bool (H, W), features whose best score stays below ``min_score``: the paper's sign of
@@ -128,7 +129,7 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
           direction_tolerance: float = math.radians(20),
           horizontal_tolerance: float = 10.0,
           min_score: float = 0.3, bimodal: float = 0.3, dip: float = 0.8, min_votes: float = 3.0,
-          negative_evidence: float = 0.0, shiftable: bool = False,
+          negative_evidence: float = 0.0, shiftable: bool = False, subpixel: bool = True,
           barriers: ArrayLike | None = None, method: Method | None = None,
           machine: Machine | None = None) -> StereoMatch:
     """Match a rectified (or registered) stereo pair over the disparity range [d_min, d_max].
@@ -178,6 +179,11 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
         Near a depth discontinuity some patch lies on the pixel's own side, so the nearer surface no
         longer spreads half a patch over the farther one; pixels within ``patch // 2`` of the border
         are then matched too, by patches further in. See the notes for how it compares.
+    subpixel : bool
+        Intensity only (edges and zero crossings ignore it: their support counts features, whose sums
+        over neighbouring planes carry no peak to interpolate): refine each kept winner d to the vertex
+        of the parabola through its scores at d - 1, d and d + 1 (see the notes). False keeps whole
+        pixels. The winner itself, and so the uniqueness and ordering, are the same either way.
     barriers : bool (H, W), optional
         Discontinuity lines (from the integration stage, or ground truth): support windows stop at them,
         along rows and then along columns.
@@ -206,12 +212,22 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     discontinuities (disc mask); StereoSGBM, configured as OpenCV documents it, still does better on
     both masks. The match takes longer (benchmarks/results/stereo.md holds the rates and the times). Where the texture is sparse the best of many windows is more often a chance correlation:
     in the pipeline, dense bad-1 on the sparsely textured "cues" scene rose with shiftable windows.
+
+    Sub-pixel refinement fits a parabola through the winner's normalised cross-correlations s-, s, s+ at
+    d - 1, d, d + 1 and moves the disparity to its vertex, d + (s- - s+) / (2 (s- - 2 s + s+)), the offset
+    clamped to [-0.5, 0.5] (it lies there already, the winner's score being the largest of the three).
+    A parabola rather than the equiangular (V) fit: the correlation of smoothed brightness is smooth in d
+    and close to quadratic around its peak, whereas the V shape suits costs with a kink at the minimum,
+    such as sums of absolute differences. The neighbours' scores are those of the same windows as the
+    winner's (shiftable: the best window at each d). A winner at d_min or d_max, or one whose neighbour
+    did not compete (a window outside the image, a patch too flat to score), keeps its integer d.
     """
     machine = machine_for(machine)
     _pair(left, right, machine)
     _check_range(d_min, d_max, patch, left.shape[1])
     features = check_choice(features, "features", _FEATURES)
     shiftable = check_bool(shiftable, "shiftable")
+    subpixel = check_bool(subpixel, "subpixel")
     use_quantiles = check_bool(use_quantiles, "use_quantiles")
     sigma = check_real(sigma, "sigma", above=0)
     if shiftable and features != "intensity":
@@ -225,7 +241,7 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     maps = _feature_maps(machine, left, right, features, sigma, low_threshold, high_threshold, use_quantiles)
     min_angle = horizontal_tolerance * 65536 / 360 if features == "canny" else 0.0
     found = _match_maps(machine, maps, features, min_angle=min_angle, d_min=d_min, d_max=d_max, patch=patch,
-                        **selection, shiftable=shiftable, barriers=barriers, method=method)
+                        **selection, shiftable=shiftable, subpixel=subpixel, barriers=barriers, method=method)
     return _deliver(found, isinstance(left, np.ndarray))
 
 
@@ -311,7 +327,7 @@ def _plan(machine: Machine, features: Features, shape: tuple[int, ...], d_min: i
     # with barriers; the shiftable scores and window maximum): the running variants hold at most one
     # plane, or _TABLE_BYTES of column sums.
     tables = (4 if barriers is not None or shiftable else 3) if method == "table" else 0
-    per_pixel = 160  # feature maps, codes, counts, moments and their sums, selection, outputs
+    per_pixel = 172  # feature maps, codes, counts, moments and their sums, selection, neighbours, outputs
     machine.require_memory(f"stereo matching of {height} x {width} pixels over {depth} disparities "
                            f"(method {method!r})",
                            tables * table_bytes + per_pixel * height * width + (_TABLE_BYTES if not tables else 0),
@@ -332,8 +348,9 @@ def _deliver(found: list, host: bool) -> StereoMatch:
 
 def _match_maps(machine: Machine, maps: dict, features: Features, *, min_angle, d_min, d_max, patch,
                 direction_tolerance, min_score, bimodal, dip, min_votes, negative_evidence, barriers, method,
-                shiftable=False) -> list:
-    """Planes, support, selection and suppression on device feature maps; returns the device outputs."""
+                shiftable=False, subpixel=False) -> list:
+    """Planes, support, selection and suppression on device feature maps, and for intensity with
+    ``subpixel`` the refinement of the kept winners; returns the device outputs."""
     height, width = maps["left"].shape
     depth = d_max - d_min + 1
     radius = patch // 2
@@ -359,6 +376,9 @@ def _match_maps(machine: Machine, maps: dict, features: Features, *, min_angle, 
         tolerance = np.int32(direction_code(direction_tolerance) if features == "canny" else 0)
     selection = [machine.empty((height, width), np.float32), machine.empty((height, width), np.int32),
                  machine.empty((height, width, 3), np.float32)]
+    # The winners' neighbouring scores (kernels/stereo.cl, Around); the edge table's selection takes a
+    # placeholder it never writes.
+    around = machine.empty((height, width, 3) if features == "intensity" else (1,), np.float32)
     defines = {"FEATURES": _FEATURES[features], "ATTR_T": "float" if features == "intensity" else "ushort"}
     area = np.float32(patch * patch)
     dims = (np.int64(width), np.int64(height))
@@ -380,14 +400,14 @@ def _match_maps(machine: Machine, maps: dict, features: Features, *, min_angle, 
                        *selection, *dims, np.int64(band), np.int32(d_min), np.int32(d_max), np.int64(radius),
                        tolerance, area, np.float32(negative_evidence), np.float32(dip))
     elif shiftable:
-        _select_shifted(machine, support, common, stats, selection, defines, method, d_min=d_min, depth=depth,
-                        area=area, dip=dip, radius=radius)
+        _select_shifted(machine, support, common, stats, [*selection, around], defines, method, d_min=d_min,
+                        depth=depth, area=area, dip=dip, radius=radius)
     elif method == "table":
         planes = machine.empty((depth, height, width), np.float32)
         machine.launch(build, (width, height, depth), *common, planes, *dims, np.int64(depth), np.int32(d_min),
                        tolerance)
         machine.launch(machine.kernel("stereo", "select_table", **defines), (width, height), support.sum(planes),
-                       planes, common[0], stats, *selection, *dims, np.int64(depth), np.int32(d_min), area,
+                       planes, common[0], stats, *selection, around, *dims, np.int64(depth), np.int32(d_min), area,
                        np.float32(negative_evidence), np.float32(dip), np.int64(radius))
     else:
         plane = machine.empty((1, height, width), np.float32)
@@ -396,7 +416,7 @@ def _match_maps(machine: Machine, maps: dict, features: Features, *, min_angle, 
             machine.launch(build, (width, height, 1), *common, plane, *dims, np.int64(1), np.int32(d_min + k),
                            tolerance)
             machine.launch(fold, (width, height), support.sum(plane), plane, common[0], stats, *selection,
-                           *dims, np.int32(d_min + k), np.int32(k == 0), area, np.float32(negative_evidence),
+                           around, *dims, np.int32(d_min + k), np.int32(k == 0), area, np.float32(negative_evidence),
                            np.float32(dip), np.int64(radius))
     outputs = [machine.empty((height, width), np.float32), machine.empty((height, width), np.float32),
                machine.empty((height, width), np.uint8), machine.empty((height, width), np.uint8)]
@@ -406,12 +426,16 @@ def _match_maps(machine: Machine, maps: dict, features: Features, *, min_angle, 
                    np.float32(min_score if features != "intensity" else -np.inf), np.float32(bimodal),
                    np.float32(min_votes))
     disparity, score, out_of_range, discontinuity = outputs
+    if features == "intensity" and subpixel:
+        machine.launch(machine.kernel("stereo", "refine_subpixel"), (height * width,), disparity, selection[0],
+                       around, np.int64(height * width))
     return [disparity, score, common[0], out_of_range, discontinuity]
 
 
 def _select_shifted(machine: Machine, support: _Support, common, stats, selection, defines, method, *, d_min,
                     depth, area, dip, radius) -> None:
-    """Intensity winners over shiftable windows: each plane's centred scores, their window maximum, folded.
+    """Intensity winners over shiftable windows: each plane's centred scores, their window maximum, folded
+    (``selection``: best scores, winners, peaks and the winners' neighbouring scores).
 
     The table does it for all planes in one go; the running variant plane by plane (three planes' worth
     of memory instead of three tables).

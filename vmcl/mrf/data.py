@@ -103,11 +103,11 @@ def backfill(primary: ArrayLike, secondary: ArrayLike, secondary_confidence: Arr
     gives their density on Middlebury) with the dense intensity matches whose normalised
     cross-correlation exceeds 0.9, at weight up to 0.2. With the pipeline's depth restoration (mean
     field) and its default intensity matches (shiftable windows, ``stereo.shiftable`` and
-    ``stereo.intensity_sigma``), this lowers the dense bad-1 rate on Middlebury (nonocc) and on the
-    "blocks" scene; on the sparsely textured "cues" scene, where the edge matches alone do well, it
-    raises it (benchmarks/results/pipeline.md holds both). Centred windows on brightness smoothed with
-    sigma 2, the earlier default, lowered it on "cues" too, but lowered it less on Middlebury and on
-    "blocks".
+    ``stereo.intensity_sigma``, sub-pixel disparities), this lowers the dense bad-1 rate on Middlebury
+    (nonocc) and on the "blocks" scene, and a little on the sparsely textured "cues" scene, where the
+    edge matches alone do well (benchmarks/results/pipeline.md holds both; with whole-pixel intensity
+    matches the rate on "cues" was the edge matches' own). Centred windows on brightness smoothed with
+    sigma 2, an earlier default, lowered it less on Middlebury and on "blocks".
     """
     machine = machine_for(machine)
     host = all(isinstance(a, np.ndarray) for a in (primary, secondary, secondary_confidence))
