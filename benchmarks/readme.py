@@ -354,6 +354,15 @@ def ground_truth_figures(f: ResultsFile) -> str:
             f"{golden.cell(ods, 'official (expected_test_2)')}")
 
 
+def protocol_figures(f: ResultsFile) -> str:
+    table = f.table("damage (one per frame)", "wrong", "of")
+    column = table.index("wrong")
+    wrong = sum(int(row[column]) for row in table.rows)
+    smallest = min(int(row[table.index("of")].replace(",", "")) for row in table.rows)
+    return (f"{wrong} wrong streams over {len(table.rows)} kinds of damage, at least {smallest:,} damaged "
+            "frames each")
+
+
 def head_figures(f: ResultsFile) -> str:
     wire = f.table("command", "bytes (both ways)")
     return f"{wire.cell({'command': 'PING'}, 'round trip, ms')} ms PING round trip at 115200 baud"
@@ -375,6 +384,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("labelling", ("the linear classifier's labels on images it was not fitted to (new noise seed; and each "
                    "preset left out of the fit), beside the rule labels; its cost"), labelling_figures),
     ("ground_truth", "scene rendering; BSDS evaluation", ground_truth_figures),
+    ("protocol", ("damaged frames the eye-head protocol's parser accepts (flips, bursts, inserted, lost and "
+                 "cut bytes, LEN errors, a flag inside a frame)"), protocol_figures),
     ("head", "eye-head protocol (v2: flag-delimited, byte-stuffed frames) on the simulator's clock",
      head_figures),
 )
