@@ -14,7 +14,6 @@ from vmcl.errors import InputTypeError, InputValueError
 __all__ = [
     "BIT_DEFINES",
     "CUES",
-    "CUE_BITS",
     "RULE_LABELS",
     "RULE_PRECEDENCE",
     "Cue",
@@ -58,9 +57,6 @@ CUES = ("stereo", "motion", "colour", "texture")
 MRF preset and overrides, its restored field and line process in a Result, the classifier's inputs), in
 the order of their :class:`Cue` bits. A cue is named after the module that measures it; stereo's
 restored field is the disparity (depth), motion's the flow."""
-
-CUE_BITS = Cue.STEREO | Cue.MOTION | Cue.COLOUR | Cue.TEXTURE
-"""The bits that make a pixel a discontinuity of the cartoon (brightness alone does not)."""
 
 BIT_DEFINES = {f"BIT_{bit.name}": int(bit) for bit in Cue}
 """The kernels' -D names of the :class:`Cue` bits (integrate.cl, labelling.cl)."""

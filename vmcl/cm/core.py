@@ -46,6 +46,7 @@ __all__ = [
     "output_array",
     "real_host_array",
     "result",
+    "to_host",
     "type_defines",
     "vector_kernel",
 ]
@@ -281,6 +282,11 @@ def check_real_dtype(x: Any, name: str) -> np.ndarray:
     if x.dtype.kind not in "biuf":
         raise InputTypeError(f"{name} must hold real numbers (bool, integer or float), got dtype {x.dtype}")
     return x
+
+
+def to_host(x: Any) -> Any:
+    """``x`` as it is, or a device array (pyopencl) copied to a NumPy array, for host-side arithmetic."""
+    return x.get() if isinstance(x, cl_array.Array) else x
 
 
 def real_host_array(x: Any, name: str, *, ndims: tuple[int, ...], empty: bool = False) -> np.ndarray:

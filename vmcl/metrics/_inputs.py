@@ -10,21 +10,16 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-import pyopencl.array as cl_array
 
+from vmcl.cm.core import to_host
 from vmcl.errors import InputTypeError, InputValueError
 
-__all__ = ["as_float_field", "as_mask", "check_sequence", "evaluated_pixels", "to_host"]
-
-
-def to_host(array) -> np.ndarray:
-    """A NumPy view of the input; a device array (pyopencl) is copied to the host first."""
-    return np.asarray(array.get() if isinstance(array, cl_array.Array) else array)
+__all__ = ["as_float_field", "as_mask", "check_sequence", "evaluated_pixels"]
 
 
 def as_float_field(array, name: str, *, ndim: int) -> np.ndarray:
     """``array`` as a non-empty float64 field of ``ndim`` dimensions; NaN allowed (no value), infinity not."""
-    array = to_host(array)
+    array = np.asarray(to_host(array))
     if array.dtype.kind not in "iuf":
         raise InputTypeError(f"{name} must be a numeric array of real numbers, got dtype {array.dtype}")
     if array.ndim != ndim:
@@ -39,7 +34,7 @@ def as_float_field(array, name: str, *, ndim: int) -> np.ndarray:
 
 def as_mask(mask, name: str, shape: tuple[int, ...], against: str) -> np.ndarray:
     """``mask`` as a boolean array of ``against``'s shape."""
-    mask = to_host(mask)
+    mask = np.asarray(to_host(mask))
     if mask.dtype != bool:
         raise InputTypeError(f"{name} must be a boolean array, got dtype {mask.dtype}")
     if mask.shape != shape:

@@ -13,9 +13,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from vmcl.cm.core import check_int, check_real
+from vmcl.cm.core import check_int, check_real, to_host
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.metrics._inputs import as_mask, check_sequence, to_host
+from vmcl.metrics._inputs import as_mask, check_sequence
 from vmcl.metrics._rates import f_measure
 
 __all__ = ["DetectionScores", "detection_scores", "label_scores"]
@@ -71,7 +71,7 @@ def detection_scores(predicted, truth, *, tolerance: float = 1.0) -> DetectionSc
     pixel. It is the usual measure for labelled discontinuities on synthetic scenes, where the truth is
     one pixel thick and the question is whether each kind of discontinuity was found at all.
     """
-    predicted = to_host(predicted)
+    predicted = np.asarray(to_host(predicted))
     if predicted.dtype != bool:
         raise InputTypeError(f"predicted must be a 2-D boolean array, got dtype {predicted.dtype}")
     if predicted.ndim != 2:
@@ -110,8 +110,8 @@ def label_scores(
     dict of int to DetectionScores
         For each label l, :func:`detection_scores` of ``predicted == l`` against ``truth == l``.
     """
-    predicted = to_host(predicted)
-    truth = to_host(truth)
+    predicted = np.asarray(to_host(predicted))
+    truth = np.asarray(to_host(truth))
     for name, array in (("predicted", predicted), ("truth", truth)):
         if not np.issubdtype(array.dtype, np.integer):
             raise InputTypeError(f"{name} must be a 2-D integer label map, got dtype {array.dtype}")

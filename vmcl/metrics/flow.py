@@ -11,8 +11,9 @@ from typing import cast
 
 import numpy as np
 
+from vmcl.cm.core import to_host
 from vmcl.errors import InputValueError
-from vmcl.metrics._inputs import as_float_field, evaluated_pixels, to_host
+from vmcl.metrics._inputs import as_float_field, evaluated_pixels
 
 __all__ = ["FlowScores", "angular_error", "endpoint_error", "evaluate_flow"]
 
@@ -122,7 +123,7 @@ def evaluate_flow(flow, ground_truth, *, mask=None) -> FlowScores:
     """
     epe = endpoint_error(flow, ground_truth)
     aae = angular_error(flow, ground_truth)
-    truth = to_host(ground_truth).astype(np.float64)
+    truth = np.asarray(to_host(ground_truth)).astype(np.float64)
     # endpoint_error has checked that the truth is (H, W, 2), so reducing its last axis leaves an (H, W)
     # array; NumPy's stubs cannot tell that from a scalar.
     truth_known = cast(np.ndarray, np.isfinite(truth).all(axis=-1))

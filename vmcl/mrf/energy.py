@@ -51,7 +51,7 @@ from typing import Any, ClassVar
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import check_bool, check_choice, real_host_array
+from vmcl.cm.core import check_bool, check_choice, real_host_array, to_host
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.mrf.checks import check_count, check_fields, check_number, check_weight
 
@@ -72,7 +72,7 @@ KINDS = ("smooth", "constant")
 
 def host_field(x, name: str, *, ndims: tuple[int, ...], empty: bool = False) -> np.ndarray:
     """``x``, a NumPy or device array, as a NumPy array of real numbers with one of ``ndims`` dimensions."""
-    return real_host_array(x.get() if isinstance(x, cl_array.Array) else x, name, ndims=ndims, empty=empty)
+    return real_host_array(to_host(x), name, ndims=ndims, empty=empty)
 
 
 @dataclass(frozen=True)
