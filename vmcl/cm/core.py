@@ -42,6 +42,7 @@ __all__ = [
     "launch_flat",
     "launch_rows",
     "machine_for",
+    "mask_result",
     "normalise_axis",
     "output_array",
     "real_host_array",
@@ -186,6 +187,12 @@ def output_array(out: Any, machine: Machine, like: cl_array.Array, host: bool, n
 def result(device: cl_array.Array, host: bool) -> ArrayLike:
     """A call's output as its input came: copied to NumPy when ``host``, else the device array itself."""
     return device.get() if host else device
+
+
+def mask_result(mask: cl_array.Array, host: bool) -> ArrayLike:
+    """A call's 0/1 uint8 device mask as its input came: a bool NumPy array for host input (a view of the
+    copied bytes), else the device array itself."""
+    return mask.get().view(np.bool_) if host else mask
 
 
 def device_memory(x: cl_array.Array) -> cl.MemoryObjectHolder:

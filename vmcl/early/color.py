@@ -68,6 +68,7 @@ from vmcl.cm.core import (
     launch_flat,
     launch_rows,
     machine_for,
+    mask_result,
     result,
     vector_kernel,
 )
@@ -136,10 +137,6 @@ def _min_intensity(value, dtype: np.dtype) -> float:
     return check_real(value, "min_intensity", above=0)
 
 
-def _mask_out(mask: cl_array.Array, host: bool) -> ArrayLike:
-    return mask.get().view(np.bool_) if host else mask
-
-
 def hue(rgb: ArrayLike, *, min_intensity: float | None = None, chromaticity: bool = False,
         machine: Machine | None = None) -> Hue:
     """Hurlbert and Poggio's hue H = R / (R + G) at every pixel, with where it is defined.
@@ -186,7 +183,7 @@ def hue(rgb: ArrayLike, *, min_intensity: float | None = None, chromaticity: boo
     kernel = machine.kernel("color", "hue", IN_T=IMAGE_TYPES[data.dtype], CHROMA=int(chroma))
     machine.launch(kernel, (width, height), data, out, valid, np.float32(threshold), np.int64(width),
                    np.int64(height))
-    return Hue(result(out, host), _mask_out(valid, host))
+    return Hue(result(out, host), mask_result(valid, host))
 
 
 def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshold: float | None = None,
@@ -262,4 +259,4 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
     n = height * width
     launch_flat(machine, vector_kernel(machine, "color", "hue_edges", FIXED=int(threshold is not None)), n, z,
                 estimated, edges, np.float32(fixed), np.int64(n))
-    return AlbedoEdges(_mask_out(edges, host), result(hue_field, host), _mask_out(valid, host))
+    return AlbedoEdges(mask_result(edges, host), result(hue_field, host), mask_result(valid, host))

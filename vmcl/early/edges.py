@@ -41,6 +41,7 @@ from vmcl.cm.core import (
     launch_flat,
     launch_rows,
     machine_for,
+    mask_result,
     result,
     vector_kernel,
 )
@@ -113,10 +114,6 @@ def _xy(array: cl_array.Array) -> tuple[int, int]:
     return width, height
 
 
-def _mask_out(mask: cl_array.Array, host: bool) -> ArrayLike:
-    return mask.get().view(np.bool_) if host else mask
-
-
 def zero_crossings(image: ArrayLike, *, sigma: float, method: Literal["log", "dog"] = "log",
                    min_slope: float = 0.0, machine: Machine | None = None) -> ZeroCrossings:
     """Zero crossings of the Laplacian of a Gaussian (or its difference-of-Gaussians approximation).
@@ -171,7 +168,7 @@ def zero_crossings(image: ArrayLike, *, sigma: float, method: Literal["log", "do
     slope = machine.empty(response.shape, np.float32)
     launch_rows(machine, vector_kernel(machine, "edges", "zero_crossings"), *size, response, mask, sign,
                 slope, np.float32(min_slope), *map(np.int64, size))
-    return ZeroCrossings(_mask_out(mask, host), result(sign, host), result(slope, host), result(response, host))
+    return ZeroCrossings(mask_result(mask, host), result(sign, host), result(slope, host), result(response, host))
 
 
 def _non_negative(value, name: str) -> float:
@@ -251,7 +248,7 @@ def hysteresis_threshold(image: ArrayLike, *, low_threshold: float, high_thresho
     state, marks = machine.empty(data.shape, np.uint8), machine.empty(data.shape, np.uint8)
     launch_rows(machine, vector_kernel(machine, "edges", "double_threshold"), *size, data, state, marks,
                 np.float32(low), np.float32(high), *map(np.int64, size))
-    return _mask_out(_hysteresis(machine, state, marks, method), host)
+    return mask_result(_hysteresis(machine, state, marks, method), host)
 
 
 def _threshold_value(value, name: str, use_quantiles: bool) -> float | None:
@@ -435,7 +432,7 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
                              LOCAL=int(local), CLEAR_MARKS=int(doubling))
     launch_rows(machine, classify, *size, smoothed, magnitude, pairs, state, marks, np.int64(_noise.TILE),
                 np.int64(tiles[1]), np.int64(tiles[0]), *dims)
-    edges = _mask_out(_hysteresis(machine, state, marks if doubling else None, method), host)
+    edges = mask_result(_hysteresis(machine, state, marks if doubling else None, method), host)
     if not return_gradient:
         return edges
     magnitude_out = result(magnitude, host)
