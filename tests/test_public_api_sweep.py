@@ -175,6 +175,8 @@ TABLE: tuple[Entry, ...] = (
        d_min=0, d_max=4, compatible="direction", patch=5, direction_tolerance=0.35,
        kinds={"left": _A, "right": _A, "left_attribute": _A, "right_attribute": _A, "d_min": _I, "d_max": _I,
               "compatible": _C, "patch": _I, "direction_tolerance": _N, "machine": _M}),
+    _e("vmcl.early.stereo:check_pair", left=IMG, right=IMG,
+       kinds={"left": _A, "right": _A, "machine": _M}),
     _e("vmcl.early.stereo:direction_code", angle=0.5, kinds={"angle": _N}),
     _e("vmcl.early.texture:density", image=IMG, fine_sigma=1.0, coarse_sigma=2.0, threshold=0.1, radius=4,
        kinds={"image": _A, "fine_sigma": _N, "coarse_sigma": _N, "threshold": _N, "radius": _I, "machine": _M}),

@@ -21,11 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import IMAGE_TYPES, ArrayLike, check_int, check_real, finite_float32, machine_for
+from vmcl.cm.core import ArrayLike, check_int, check_real, finite_float32, machine_for
 from vmcl.cm.filters import binomial
 from vmcl.early.filters import gaussian
-from vmcl.early.stereo import StereoMatch, match
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.early.stereo import StereoMatch, check_pair, match
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine, on_device
 
 __all__ = ["DisparityRange", "estimate_range", "fallback_range"]
@@ -136,7 +136,9 @@ def estimate_range(left: ArrayLike, right: ArrayLike, *, max_disparity: float = 
         Not a pair of images of one shape and type, or images smaller than the patch.
     """
     machine = machine_for(machine)
-    images = _pair(left, right)
+    check_pair(left, right, machine)
+    images = tuple(finite_float32(image, name) if isinstance(image, np.ndarray) else image
+                   for name, image in (("left", left), ("right", right)))
     max_disparity = check_real(max_disparity, "max_disparity", above=0, maximum=1)
     coarse_side = check_int(coarse_side, "coarse_side", minimum=1)
     patch = check_int(patch, "patch", minimum=1)
@@ -216,25 +218,6 @@ class _Search:
         # 2..12 became -6..14, and its dense bad-1 rose from 2.9% to 8.4%).
         return match(left, right, d_min=d_min, d_max=d_max, features="intensity", patch=self.patch,
                             sigma=0.5, subpixel=False, machine=self.machine)
-
-
-def _pair(left, right) -> tuple[cl_array.Array | np.ndarray, cl_array.Array | np.ndarray]:
-    """The two views, checked to be images of one shape and kind (the matcher checks the rest)."""
-    views = []
-    for name, image in (("left", left), ("right", right)):
-        if not isinstance(image, (np.ndarray, cl_array.Array)):
-            raise InputTypeError(f"{name} must be a NumPy array or a pyopencl.array.Array, got {type(image).__name__}")
-        if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] != 3):
-            raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {image.shape}")
-        if image.dtype not in IMAGE_TYPES and not (isinstance(image, np.ndarray) and image.dtype.kind == "f"):
-            raise InputTypeError(f"{name} must have dtype {' or '.join(str(dtype) for dtype in IMAGE_TYPES)} (or another float "
-                                 f"on the host), got {image.dtype}")
-        views.append(finite_float32(image, name) if isinstance(image, np.ndarray) else image)
-    if isinstance(left, np.ndarray) != isinstance(right, np.ndarray):
-        raise InputTypeError("left and right must both be NumPy arrays or both device arrays")
-    if left.shape != right.shape:
-        raise InputValueError(f"left and right must have the same shape, got {left.shape} and {right.shape}")
-    return views[0], views[1]
 
 
 def _level(height: int, width: int, side: int) -> int:

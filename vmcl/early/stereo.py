@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import pyopencl as cl
@@ -34,6 +34,7 @@ import pyopencl.array as cl_array
 from vmcl.cm import reduce as cm_reduce
 from vmcl.cm import scan
 from vmcl.cm.core import (
+    IMAGE_TYPES,
     ArrayLike,
     check_bool,
     check_choice,
@@ -50,7 +51,7 @@ from vmcl.early.filters import gaussian
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["Features", "Method", "StereoMatch", "direction_code", "match", "match_features"]
+__all__ = ["Features", "Method", "StereoMatch", "check_pair", "direction_code", "match", "match_features"]
 
 Features = Literal["canny", "dog", "intensity"]
 Method = Literal["running", "table"]
@@ -83,17 +84,19 @@ class StereoMatch:
     discontinuity: ArrayLike
 
 
-_IMAGE_DTYPES = {np.dtype(np.uint8), np.dtype(np.uint16), np.dtype(np.float32)}
 
 
-def _pair(left, right, machine: Machine) -> None:
+def check_pair(left: Any, right: Any, machine: Machine) -> None:
+    """Refuse, naming ``left`` or ``right``, anything but a rectified pair of images the matcher takes: NumPy
+    or device arrays of this machine (not one of each), grey (H, W) or RGB (H, W, 3), of one shape, not
+    empty, uint8, uint16, float32 or (on the host) another float, finite and within float32's range."""
     for name, image in (("left", left), ("right", right)):
         if not isinstance(image, (np.ndarray, cl_array.Array)):
             raise InputTypeError(f"{name} must be a NumPy array or a pyopencl.array.Array, got {type(image).__name__}")
         if isinstance(image, cl_array.Array):
             check_context(image, name, machine)
         host_float = isinstance(image, np.ndarray) and image.dtype.kind == "f"
-        if image.dtype not in _IMAGE_DTYPES and not host_float:
+        if image.dtype not in IMAGE_TYPES and not host_float:
             raise InputTypeError(f"{name} must have dtype uint8, uint16 or float32 (or another float on the "
                                  f"host), got {image.dtype}")
         if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] != 3):
@@ -223,7 +226,7 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     did not compete (a window outside the image, a patch too flat to score), keeps its integer d.
     """
     machine = machine_for(machine)
-    _pair(left, right, machine)
+    check_pair(left, right, machine)
     _check_range(d_min, d_max, patch, left.shape[1])
     features = check_choice(features, "features", _FEATURES)
     shiftable = check_bool(shiftable, "shiftable")
@@ -280,7 +283,7 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
             raise InputValueError(f"{name}_attribute must have the shape of {name}")
     if len(hosts) > 1:
         raise InputTypeError("left and right must both be NumPy arrays or both device arrays")
-    _pair(maps["left"], maps["right"], machine)
+    check_pair(maps["left"], maps["right"], machine)
     shape = maps["left"].shape
     _check_range(d_min, d_max, patch, shape[1])
     method = _plan(machine, features, shape, d_min, d_max, patch, False, barriers, method)
