@@ -22,28 +22,14 @@ import time
 from pathlib import Path
 
 import numpy as np
+from stereo_training import near_world
 
 import vmcl
 from vmcl import datasets, metrics, scenes
 from vmcl.early.disparity_range import estimate_range
 from vmcl.pipeline import Config, VisionMachine
-from vmcl.scenes import Body, Camera, Face, Light, Texture, World
 
 OLD_SHARE = 0.05  # the default range before the estimate: 0 .. ceil(0.05 W)
-
-
-def near_world(shape: tuple[int, int] = (192, 256)) -> World:
-    """A dotted wall at depth 6 (d = 0.025 W), a panel at 1.5 (0.1 W) and a plate at 0.5 (0.3 W)."""
-    focal = float(shape[1])
-
-    def dots(depth: float) -> Texture:
-        return Texture("noise", 5 * depth / focal, 0.5)  # 5-pixel cells on every face
-
-    wall = Face((0.0, 0.0, 6.0), (1, 0, 0), (0, 1, 0), None, (0.6, 0.55, 0.5), dots(6.0))
-    panel = Face((-0.45, -0.2, 1.5), (1, 0, 0), (0, 1, 0), (0.3, 0.45), (0.45, 0.6, 0.5), dots(1.5))
-    plate = Face((0.02, -0.06, 0.5), (1, 0, 0), (0, 1, 0), (0.13, 0.16), (0.7, 0.5, 0.4), dots(0.5))
-    bodies = (Body((wall,), name="wall"), Body((panel,), name="panel"), Body((plate,), name="plate"))
-    return World(Camera(shape, focal, 0.15), Light(ambient=1.0), bodies)
 
 
 def cases(root: Path) -> list[tuple[str, str, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:

@@ -11,18 +11,23 @@ bad-pixel rate at 1 px on the nonocc mask at the pixels vmcl matched, the share 
 matched, and StereoBM's bad-pixel rate at the same pixels (a pixel StereoBM leaves without a value
 counts as bad). Dense intensity matches (normalised cross-correlation, patch 11, brightness smoothed
 with sigma 1 as the pipeline's backfill does): centred against shiftable windows, bad-1 on the nonocc
-and disc masks (an unmatched pixel counts as bad), beside StereoSGBM in both modes. The machine is shared
-and noisy: compare ratios within one run.
+and disc masks (an unmatched pixel counts as bad), beside StereoSGBM in both modes. Last, the pipeline's
+dense disparity beside OpenCV's matchers on every Middlebury scene folder under --data, as `vmcl eval
+stereo` prints it. The machine is shared and noisy: compare ratios within one run.
 
-OpenCV is configured as its documentation says: grey 8-bit input; StereoBM with numDisparities a multiple
-of 16 and block 15 (OpenCV's Python stereo tutorial), its other parameters OpenCV's defaults; StereoSGBM
-with block 5, P1 = 8 * cn * blockSize^2 = 200 and P2 = 32 * cn * blockSize^2 = 800 (cn = 1), and
-uniquenessRatio 10 as `vmcl eval stereo` sets it (OpenCV's default is 0; its documentation suggests 5 to
-15), the rest OpenCV's defaults. Disparity ranges: no method takes one from the ground truth. vmcl's
+Every quality figure comes from vmcl.stereo_evaluation, the one harness `vmcl eval stereo` uses too: its
+reading of the folders (vmcl.datasets.read_stereo_folder), its OpenCV baselines and its scores
+(vmcl.metrics.evaluate_disparity). The Middlebury v2 tables cover the scenes found with nonocc and disc
+masks. OpenCV is configured as its documentation says: grey 8-bit input; StereoBM with numDisparities a
+multiple of 16 and block 15 (OpenCV's Python stereo tutorial), its other parameters OpenCV's defaults;
+StereoSGBM with block 5, P1 = 8 * cn * blockSize^2 = 200 and P2 = 32 * cn * blockSize^2 = 800 (cn = 1),
+and uniquenessRatio 10 (OpenCV's default is 0; its documentation suggests 5 to 15), the rest OpenCV's
+defaults. Disparity ranges: no method takes one from the ground truth. vmcl's
 matcher searches the range vmcl.early.disparity_range.estimate_range finds from the images (the range the
 pipeline uses when its Config gives none); OpenCV's matchers get numDisparities from the range the dataset
 publishes (info.txt's maximum disparity, 15 / 19 / 59, plus one, rounded up to 16: 16 / 32 / 64), as
-their documentation asks for a multiple of 16.
+their documentation asks for a multiple of 16; where a folder publishes none (2001, 2003), the largest
+disparity estimate_range finds, plus one, rounded up to 16.
 """
 
 from __future__ import annotations
@@ -32,22 +37,28 @@ import datetime
 import statistics
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
-import cv2
-import numpy as np
-
 import vmcl
-from vmcl.datasets import load_stereo
+from vmcl.datasets import find_stereo_folders, load_stereo, read_stereo_folder
 from vmcl.early.disparity_range import estimate_range
 from vmcl.early.edges import canny
 from vmcl.early.stereo import match
+from vmcl.stereo_evaluation import (
+    SGBM_MODES,
+    StereoMethod,
+    baseline_disparities,
+    evaluate_pair,
+    grey,
+    markdown_tables,
+    opencv_baselines,
+    stereo_bm,
+    stereo_sgbm,
+    vmcl_method,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
-SCENES = ("tsukuba", "venus", "teddy")
-SGBM_BLOCK = 5
-# The two StereoSGBM modes compared: OpenCV's default (5 directions) and its faster 3-way variant.
-SGBM_MODES = (("MODE_SGBM", cv2.STEREO_SGBM_MODE_SGBM), ("3WAY", cv2.STEREO_SGBM_MODE_SGBM_3WAY))
 
 
 def interleaved_ms(runs: dict, repeat: int) -> list[tuple[str, float]]:
@@ -62,35 +73,6 @@ def interleaved_ms(runs: dict, repeat: int) -> list[tuple[str, float]]:
     return [(name, statistics.median(t) * 1e3) for name, t in times.items()]
 
 
-def grey(image: np.ndarray) -> np.ndarray:
-    return cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) if image.ndim == 3 else image
-
-
-def published_disparities(pair) -> int:
-    """numDisparities for OpenCV from the range the dataset publishes: the maximum disparity of its
-    info.txt (second line) plus one, rounded up to a multiple of 16 as OpenCV requires."""
-    max_disparity = int((pair.folder / "info.txt").read_text().split()[1])
-    return -(-(max_disparity + 1) // 16) * 16
-
-
-def stereo_bm(disparities: int):
-    return cv2.StereoBM_create(numDisparities=disparities, blockSize=15)
-
-
-def stereo_sgbm(disparities: int, mode: int):
-    """StereoSGBM as OpenCV documents it for grey input (cn = 1); uniquenessRatio 10 as vmcl eval uses."""
-    area = SGBM_BLOCK * SGBM_BLOCK
-    return cv2.StereoSGBM_create(minDisparity=0, numDisparities=disparities, blockSize=SGBM_BLOCK, P1=8 * area,
-                                 P2=32 * area, uniquenessRatio=10, mode=mode)
-
-
-def opencv_disparity(matcher, left: np.ndarray, right: np.ndarray) -> np.ndarray:
-    """OpenCV's fixed-point disparity in pixels, NaN where it gives none (below minDisparity)."""
-    disparity = matcher.compute(left, right).astype(np.float32) / 16
-    disparity[disparity < 0] = np.nan
-    return disparity
-
-
 def speed(pair, repeat: int) -> list[tuple[str, float]]:
     left, right = grey(pair.left), grey(pair.right)
     bm = stereo_bm(64)
@@ -101,9 +83,9 @@ def speed(pair, repeat: int) -> list[tuple[str, float]]:
         runs[name] = lambda s=shiftable: match(left, right, d_min=0, d_max=63, features="intensity", method="table",
                                                shiftable=s)
     runs["cv2.StereoBM block 15"] = lambda: bm.compute(left, right)
-    for label, mode in SGBM_MODES:
+    for mode in SGBM_MODES:
         sgbm = stereo_sgbm(64, mode)
-        runs[f"cv2.StereoSGBM {label}"] = lambda m=sgbm: m.compute(left, right)
+        runs[f"cv2.StereoSGBM {mode}"] = lambda m=sgbm: m.compute(left, right)
     return interleaved_ms(runs, repeat)
 
 
@@ -122,42 +104,56 @@ def kernel_times(pair, repeat: int) -> list[tuple[str, int, float]]:
     return sorted(rows, key=lambda row: -row[2])
 
 
+def _baseline(pair, name: str) -> StereoMethod:
+    """One of the harness's OpenCV baselines for the pair, by its name."""
+    return next(m for m in opencv_baselines(pair) if m.name == name)
+
+
+def _method(name: str, compute) -> StereoMethod:
+    return StereoMethod(name, lambda left, right: compute(left, right).disparity)
+
+
 def quality(pair) -> dict:
-    left, right = grey(pair.left), grey(pair.right)
+    """vmcl's edge matches, bad-1 on the nonocc pixels they matched, beside StereoBM's there.
+
+    The harness compares methods on the pixels a reference method matched: here the edge matcher is the
+    reference and StereoBM the method compared with it.
+    """
     found_range = estimate_range(pair.left, pair.right)
-    found = match(pair.left, pair.right, d_min=found_range.d_min, d_max=found_range.d_max)
-    disparities = published_disparities(pair)
-    bm_disparity = opencv_disparity(stereo_bm(disparities), left, right)
-    nonocc = pair.masks["nonocc"]
-    at = np.isfinite(found.disparity) & nonocc
-    edges = canny(pair.left, sigma=2.0) & nonocc
+    edges = _method("vmcl.match canny", lambda left, right: match(left, right, d_min=found_range.d_min,
+                                                                   d_max=found_range.d_max))
+    bm = replace(_baseline(pair, "OpenCV StereoBM"), baseline=False)
+    evaluation = evaluate_pair(replace(pair, masks={"nonocc": pair.masks["nonocc"]}),
+                               [replace(edges, baseline=True), bm], warm=False)
+    (compared,) = evaluation.matched
+    left_edges = canny(pair.left, sigma=2.0) & pair.masks["nonocc"]
     return {
         "scene": pair.name,
         "vmcl range (estimated)": f"{found_range.d_min}..{found_range.d_max}",
-        "OpenCV numDisparities": disparities,
-        "matched": int(at.sum()),
-        "share of left edges matched": at.sum() / edges.sum(),
-        "vmcl bad-1": np.mean(np.abs(found.disparity - pair.disparity)[at] > 1),
-        "StereoBM bad-1 at the same pixels": np.mean(~(np.abs(bm_disparity - pair.disparity)[at] <= 1)),
+        "OpenCV numDisparities": baseline_disparities(pair)[0],
+        "matched": compared.matched,
+        "share of left edges matched": compared.matched / left_edges.sum(),
+        "vmcl bad-1": compared.baseline_bad,
+        "StereoBM bad-1 at the same pixels": compared.method_bad,
     }
 
 
 def dense_quality(pair) -> dict:
     """Bad-1 rates of the dense intensity matches, centred and shiftable, and of StereoSGBM in both modes."""
-    left, right = grey(pair.left), grey(pair.right)
-    found = {f"SGBM {label}": opencv_disparity(stereo_sgbm(published_disparities(pair), mode), left, right)
-             for label, mode in SGBM_MODES}
     found_range = estimate_range(pair.left, pair.right)
+    methods = [_baseline(pair, f"OpenCV StereoSGBM {mode}") for mode in SGBM_MODES]
     for shiftable in (False, True):
-        found["shiftable" if shiftable else "centred"] = match(pair.left, pair.right, d_min=found_range.d_min,
-                                                                d_max=found_range.d_max,
-                                                                features="intensity", sigma=1.0,
-                                                                shiftable=shiftable).disparity
+        methods.append(_method("shiftable" if shiftable else "centred", lambda left, right, s=shiftable: match(
+            left, right, d_min=found_range.d_min, d_max=found_range.d_max, features="intensity", sigma=1.0,
+            shiftable=s)))
+    masks = {mask: pair.masks[mask] for mask in ("nonocc", "disc")}
+    evaluation = evaluate_pair(replace(pair, masks=masks), methods, warm=False)
+    label = {f"OpenCV StereoSGBM {mode}": f"SGBM {mode}" for mode in SGBM_MODES}
     row = {"scene": pair.name}
-    for mask in ("nonocc", "disc"):
-        at = pair.masks[mask]
-        for name, disparity in found.items():
-            row[f"{name} {mask}"] = np.mean(~(np.abs(disparity - pair.disparity)[at] <= 1))
+    for mask in masks:
+        for scores in evaluation.scores:
+            if scores.region == mask:
+                row[f"{label.get(scores.method, scores.method)} {mask}"] = scores.bad[1.0]
     return row
 
 
@@ -174,8 +170,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeat", type=int, default=15)
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "stereo.md")
     args = parser.parse_args(argv)
-    if not (args.data / "middlebury_stereo_v2eval").is_dir():
-        print(f"no Middlebury v2 data under {args.data}: pass --data", file=sys.stderr)
+    folders = find_stereo_folders(args.data) if args.data.is_dir() else []
+    pairs = [replace(read_stereo_folder(f), name=f.relative_to(args.data).as_posix() if f != args.data else f.name)
+             for f in folders]
+    # The quality tables need the v2 masks (nonocc, disc); they name the scenes by their folders.
+    masked = [replace(pair, name=folder.name) for folder, pair in zip(folders, pairs)
+              if {"nonocc", "disc"} <= pair.masks.keys()]
+    if not masked or not (args.data / "middlebury_stereo_v2eval" / "teddy").is_dir():
+        print(f"no Middlebury v2 scenes (with nonocc and disc masks, teddy among them) under {args.data}: pass "
+              "--data", file=sys.stderr)
         return 2
     machine = vmcl.default_machine()
     teddy = load_stereo("teddy", args.data)
@@ -185,13 +188,15 @@ def main(argv: list[str] | None = None) -> int:
              (f"Measured {datetime.datetime.now():%Y-%m-%d %H:%M} on {machine.device.platform.name} / "
              f"{machine.device.name}. NumPy images in and out; medians of {args.repeat} interleaved rounds."), "",
              ("OpenCV as documented, on grey images: StereoBM block 15; StereoSGBM block 5, P1 = 8 * cn * "
-              "blockSize^2 = 200, P2 = 32 * cn * blockSize^2 = 800 (cn = 1), uniquenessRatio 10 (as `vmcl eval "
-              "stereo` sets it; OpenCV's default is 0), in OpenCV's default mode (MODE_SGBM) and in "
-              "MODE_SGBM_3WAY; their other parameters OpenCV's defaults. No method takes a range from the "
-              "ground truth: the speed runs search 64 disparities (0..63) with every method; on Middlebury, "
-              "vmcl's matcher searches the range vmcl.early.disparity_range.estimate_range finds from the "
-              "images, and OpenCV gets numDisparities from the range the dataset publishes (info.txt's "
-              "maximum disparity 15 / 19 / 59, plus one, rounded up to 16: 16 / 32 / 64)."), "",
+              "blockSize^2 = 200, P2 = 32 * cn * blockSize^2 = 800 (cn = 1), uniquenessRatio 10 (as "
+              "vmcl.stereo_evaluation, the harness of `vmcl eval stereo`, sets it; OpenCV's default is 0), in "
+              "OpenCV's default mode (MODE_SGBM) and in MODE_SGBM_3WAY; their other parameters OpenCV's "
+              "defaults. No method takes a range from the ground truth: the speed runs search 64 disparities "
+              "(0..63) with every method; on Middlebury, vmcl's matcher searches the range "
+              "vmcl.early.disparity_range.estimate_range finds from the images, and OpenCV gets numDisparities "
+              "from the range the dataset publishes (info.txt's maximum disparity 15 / 19 / 59, plus one, "
+              "rounded up to 16: 16 / 32 / 64), or where a folder publishes none (2001, 2003) from the largest "
+              "disparity estimate_range finds, plus one, rounded up to 16."), "",
              "## Speed at teddy's size (450 x 375), 64 disparities, Canny included", "",
              "| method | ms | x StereoBM |", "|---|---|---|"]
     lines += [f"| {name} | {ms:.1f} | {ms / reference:.1f} |" for name, ms in timings]
@@ -202,10 +207,17 @@ def main(argv: list[str] | None = None) -> int:
               "| kernel | launches | ms |", "|---|---|---|"]
     lines += [f"| {name} | {calls} | {ms:.3f} |" for name, calls, ms in kernels]
     lines += ["", "## Quality on Middlebury v2 (nonocc mask, at the pixels vmcl matched)", ""]
-    lines += table([quality(load_stereo(name, args.data)) for name in SCENES])
+    lines += table([quality(pair) for pair in masked])
     lines += ["", "## Dense intensity matches on Middlebury v2: bad-1, centred and shiftable windows, and SGBM", "",
               "Every pixel of the mask counts; one without a value is bad.", ""]
-    lines += table([dense_quality(load_stereo(name, args.data)) for name in SCENES])
+    lines += table([dense_quality(pair) for pair in masked])
+    ours = vmcl_method()
+    evaluations = [evaluate_pair(pair, [ours, *opencv_baselines(pair)]) for pair in pairs]
+    lines += ["", "## The pipeline's dense disparity on every Middlebury scene found (`vmcl eval stereo`)", "",
+              ("vmcl.stereo_evaluation, the harness of `vmcl eval stereo`: vmcl's pipeline with only stereo "
+               "enabled (its disparity range found from the images) beside OpenCV's matchers configured as "
+               "above; scenes named by their folder under --data."), "",
+              *markdown_tables(evaluations)]
     text = "\n".join(lines) + "\n"
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(text)

@@ -7,6 +7,8 @@
  *   backfill          the primary measurement where it has one (gamma 1), else the secondary with
  *                     its own gamma (0 where it has none either): sparse precise matches kept, the
  *                     gaps filled by dense ones
+ *   mask_confidence   gamma = weight where the measurement exists, masked_weight where it exists and the
+ *                     mask is set (a value filled in rather than measured), 0 where it does not exist
  *
  * Fields hold NCOMP floats per pixel (1: disparity, 2: flow); a pixel has a measurement when every
  * component is finite.
@@ -41,4 +43,15 @@ __kernel void backfill(__global const float *primary, __global const float *seco
         secondary_has &= isfinite(secondary[i * NCOMP + c]);
     float g2 = secondary_gamma[i];
     gamma[i] = has ? 1.0f : (secondary_has && isfinite(g2) ? g2 : 0.0f);
+}
+
+__kernel void mask_confidence(__global const float *data, __global const uchar *mask, __global float *gamma,
+                              float weight, float masked_weight, long size)
+{
+    long i = get_global_id(0);
+    if (i >= size) return;
+    int has = 1;
+    for (int c = 0; c < NCOMP; ++c)
+        has &= isfinite(data[i * NCOMP + c]);
+    gamma[i] = has ? (mask[i] ? masked_weight : weight) : 0.0f;
 }

@@ -49,3 +49,72 @@ def box_sum(x, r, axes=(-2, -1)):
         index = np.arange(n)
         acc = np.take(prefix, np.minimum(index + r + 1, n), axis=axis) - np.take(prefix, np.maximum(index - r, 0), axis=axis)
     return acc
+
+
+def census_codes(image, size=(9, 7), margin=0.0):
+    """Census codes as Python ints: bit set where a window pixel (border repeated) is below centre - margin."""
+    height, width = image.shape
+    rx, ry = size[0] // 2, size[1] // 2
+    codes = np.zeros((height, width), dtype=object)
+    for y in range(height):
+        for x in range(width):
+            code = 0
+            for j in range(-ry, ry + 1):
+                for i in range(-rx, rx + 1):
+                    if i == 0 and j == 0:
+                        continue
+                    yy, xx = min(max(y + j, 0), height - 1), min(max(x + i, 0), width - 1)
+                    code = (code << 1) | int(image[yy, xx] < image[y, x] - margin)
+            codes[y, x] = code
+    return codes
+
+
+def semiglobal_sums(left, right, d_min, d_max, p1, p2, directions, outside, margin=0.0):
+    """Semi-global matching on grey float images, edge gain 0: the (H, W, D) sums of the min-sum messages
+    along ``directions`` of census Hamming costs (``outside`` where x - d leaves the image)."""
+    height, width = left.shape
+    depth = d_max - d_min + 1
+    lc, rc = census_codes(left, margin=margin), census_codes(right, margin=margin)
+    cost = np.full((height, width, depth), outside, np.int64)
+    for y, x, k in itertools.product(range(height), range(width), range(depth)):
+        xr = x - (d_min + k)
+        if 0 <= xr < width:
+            cost[y, x, k] = (lc[y, x] ^ rc[y, xr]).bit_count()
+    total = np.zeros_like(cost)
+    for dx, dy in directions:
+        messages = np.zeros_like(cost)
+        ys = range(height) if dy >= 0 else range(height - 1, -1, -1)
+        xs = range(width) if dx >= 0 else range(width - 1, -1, -1)
+        for y in ys:
+            for x in xs:
+                py, px = y - dy, x - dx
+                if not (0 <= py < height and 0 <= px < width):
+                    messages[y, x] = cost[y, x]
+                    continue
+                prev = messages[py, px]
+                low = prev.min()
+                shifted = np.full(depth + 2, np.iinfo(np.int64).max // 2)
+                shifted[1:-1] = prev
+                best = np.minimum.reduce([prev, shifted[:-2] + p1, shifted[2:] + p1, np.full(depth, low + int(max(p1, p2)))])
+                messages[y, x] = cost[y, x] + best - low
+        total += messages
+    return total
+
+
+def semiglobal_winners(total, d_min):
+    """Left winners (ties: smaller d) over the disparities whose right pixel is inside, and the right view's
+    winners from the same sums; ``d_min - 1`` where none competes, and for a left winner pressed against
+    the image's edge (the last disparity inside where the range goes on)."""
+    height, width, depth = total.shape
+    left = np.full((height, width), d_min - 1)
+    right = np.full((height, width), d_min - 1)
+    for y, x in itertools.product(range(height), range(width)):
+        ks = [k for k in range(depth) if 0 <= x - (d_min + k) < width]
+        if ks:
+            best = min(ks, key=lambda k: (total[y, x, k], k))
+            pressed = (best == ks[-1] and ks[-1] < depth - 1) or (best == ks[0] and ks[0] > 0)
+            left[y, x] = d_min - 1 if pressed else d_min + best
+        ks = [k for k in range(depth) if 0 <= x + d_min + k < width]
+        if ks:
+            right[y, x] = d_min + min(ks, key=lambda k: (total[y, x + d_min + k, k], k))
+    return left, right

@@ -178,6 +178,17 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.early.stereo:check_pair", left=IMG, right=IMG,
        kinds={"left": _A, "right": _A, "machine": _M}),
     _e("vmcl.early.stereo:direction_code", angle=0.5, kinds={"angle": _N}),
+    _e("vmcl.early.stereo:check_range", d_min=0, d_max=4, width=16, kinds={"d_min": _I, "d_max": _I, "width": _I}),
+    _e("vmcl.early.semiglobal:match_semiglobal", left=IMG, right=IMG, d_min=0, d_max=4, census_threshold=3.0,
+       p1=48, p2=64.0, edge_gain=0.0, paths=8, subpixel=True, tolerance=1,
+       kinds={"left": _A, "right": _A, "d_min": _I, "d_max": _I, "census_threshold": _N, "p1": _I, "p2": _N,
+              "edge_gain": _N, "paths": _I, "subpixel": _B, "tolerance": _I, "machine": _M}),
+    _e("vmcl.early.disparity_range:estimate_range", left=IMG, right=IMG, max_disparity=1 / 3, coarse_side=48,
+       patch=11, min_score=0.8, quantile=0.005, margin=1, widen=0.25, min_share=0.05,
+       kinds={"left": _A, "right": _A, "max_disparity": _N, "coarse_side": _I, "patch": _I, "min_score": _N,
+              "quantile": _N, "margin": _I, "widen": _N, "min_share": _N, "machine": _M}),
+    _e("vmcl.early.disparity_range:fallback_range", width=16, max_disparity=1 / 3,
+       kinds={"width": _I, "max_disparity": _N}),
     _e("vmcl.early.texture:density", image=IMG, fine_sigma=1.0, coarse_sigma=2.0, threshold=0.1, radius=4,
        kinds={"image": _A, "fine_sigma": _N, "coarse_sigma": _N, "threshold": _N, "radius": _I, "machine": _M}),
     _e("vmcl.early.texture:texture_edges", image=IMG, fine_sigma=1.0, coarse_sigma=2.0, threshold=0.1, radius=4,
@@ -212,6 +223,8 @@ TABLE: tuple[Entry, ...] = (
               "schedule": _O, "seed": _I, "machine": _M}),
     _e("vmcl.mrf:score_confidence", score=IMG, floor=0.5, weight=1.0,
        kinds={"score": _A, "floor": _N, "weight": _N, "machine": _M}),
+    _e("vmcl.mrf:mask_confidence", data=IMG, mask=MASK, weight=1.0, masked_weight=0.5,
+       kinds={"data": _A, "mask": _A, "weight": _N, "masked_weight": _N, "machine": _M}),
     # ------------------------------------------------------------------ integration and labelling
     _e("vmcl.integrate:boundary", line_h=LINE_H, line_v=LINE_V, kinds={"line_h": _A, "line_v": _A, "machine": _M}),
     _e("vmcl.labels:cue_bit", cue="stereo", kinds={"cue": _C}),
@@ -296,6 +309,22 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.datasets:load_flow", name="Venus", root=path("empty_dir"), colour=False,
        kinds={"name": _C, "root": _P, "colour": _B}),
     _e("vmcl.datasets:load_bsds", root=path("empty_dir"), split="test", kinds={"root": _P, "split": _C}),
+    _e("vmcl.datasets:read_stereo_folder", folder=path("stereo_dir"), kinds={"folder": _P}),
+    _e("vmcl.datasets:find_stereo_folders", root=path("empty_dir"), depth=4, kinds={"root": _P, "depth": _I}),
+    # ------------------------------------------------------------------ stereo evaluation
+    _e("vmcl.stereo_evaluation:grey", image=arr((16, 16), "uint8", "randint:256"), kinds={"image": _A}),
+    _e("vmcl.stereo_evaluation:stereo_bm", num_disparities=16, kinds={"num_disparities": _I}),
+    _e("vmcl.stereo_evaluation:stereo_sgbm", num_disparities=16, mode="3WAY",
+       kinds={"num_disparities": _I, "mode": _C}),
+    _e("vmcl.stereo_evaluation:opencv_disparity", matcher=make("stereo_sgbm"),
+       left=arr((16, 32), "uint8", "randint:256"), right=arr((16, 32), "uint8", "randint:256"),
+       kinds={"matcher": _O, "left": _A, "right": _A}),
+    _e("vmcl.stereo_evaluation:baseline_disparities", pair=make("stereo_pair"), kinds={"pair": _O}),
+    _e("vmcl.stereo_evaluation:opencv_baselines", pair=make("stereo_pair"), kinds={"pair": _O}),
+    _e("vmcl.stereo_evaluation:vmcl_method", config=None, kinds={"config": _O, "machine": _M}),
+    _e("vmcl.stereo_evaluation:evaluate_pair", pair=make("stereo_pair"), methods=make("stereo_methods"), warm=False,
+       kinds={"pair": _O, "methods": _O, "warm": _B}),
+    _e("vmcl.stereo_evaluation:markdown_tables", evaluations=make("evaluations"), kinds={"evaluations": _O}),
     # ------------------------------------------------------------------ patterns, eye-head, report
     _e("vmcl.patterns:spiral", size=16, corridor=1, kinds={"size": _I, "corridor": _I}),
     _e("vmcl.eyehead:table_for_fixation", head=make("head"), store=make("store"), kinds={"head": _O, "store": _O}),
@@ -344,6 +373,9 @@ EXEMPT = {
     "vmcl.scenes:Scene", "vmcl.metrics:BoundaryCounts", "vmcl.metrics:BoundaryScores",
     "vmcl.metrics:DetectionScores", "vmcl.metrics:DisparityScores", "vmcl.metrics:FlowScores",
     "vmcl.datasets:BSDSImage", "vmcl.datasets:BSDSSet", "vmcl.datasets:FlowPair", "vmcl.datasets:StereoPair",
+    "vmcl.early.semiglobal:SemiGlobalMatch", "vmcl.early.disparity_range:DisparityRange",
+    "vmcl.stereo_evaluation:MethodScores", "vmcl.stereo_evaluation:MatchedComparison",
+    "vmcl.stereo_evaluation:PairEvaluation", "vmcl.stereo_evaluation:StereoMethod",
     "vmcl.result:Result", "vmcl.pipeline:Config", "vmcl.early.registration:WarpTable",
     "vmcl.early.registration:TableStore", "vmcl.pipeline:ColourConfig",
     "vmcl.cm.scan:scan_rows_into", "vmcl.cm.scan:exclusive_sum_into", "vmcl.early.noise:threshold_field",
@@ -357,7 +389,7 @@ EXEMPT = {
     "vmcl.labels:add_cue", "vmcl.labels:remove_cue", "vmcl.cues:register", "vmcl.cues:unregister",
     # Device-level building blocks of the early layer: they take images already checked by
     # vmcl.cm.core.image_field, and the sweeps of gaussian, canny and zero_crossings reach them.
-    "vmcl.early.filters:separable_gaussian", "vmcl.early.filters:discrete_laplacian",
+    "vmcl.early.filters:separable_gaussian", "vmcl.early.filters:discrete_laplacian", "vmcl.early.filters:grey_field",
     # Needs a head that has run a calibration pattern in front of it; table_for_fixation covers the glue.
     "vmcl.eyehead:calibrate_vergences",
 }
@@ -366,8 +398,10 @@ PUBLIC_MODULES = (
     "vmcl.cm.doubling", "vmcl.cm.filters", "vmcl.cm.news", "vmcl.cm.reduce", "vmcl.cm.router", "vmcl.cm.scan",
     "vmcl.early.color", "vmcl.early.edges", "vmcl.early.filters", "vmcl.early.motion", "vmcl.early.noise",
     "vmcl.early.registration", "vmcl.early.sign_correlation", "vmcl.early.stereo", "vmcl.early.texture",
+    "vmcl.early.semiglobal", "vmcl.early.disparity_range",
     "vmcl.mrf", "vmcl.integrate", "vmcl.labels", "vmcl.cues", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
     "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pictures", "vmcl.pipeline", "vmcl.result", "vmcl.machine",
+    "vmcl.stereo_evaluation",
 )
 
 
@@ -677,7 +711,49 @@ def _path(kind, ctx):
     elif kind == "store":
         _MAKERS["store"](ctx).save(target.with_suffix(".npz"))
         target = target.with_suffix(".npz")
+    elif kind == "stereo_dir":
+        return str(_stereo_dir(ctx))
     return str(target)
+
+
+def _stereo_dir(ctx) -> Path:
+    """A scene folder in the Middlebury 2014 layout. 16 x 32: OpenCV's StereoSGBM needs rows wider than
+    calib.txt's 16 disparities plus half its block, which the evaluation's baselines are given."""
+    import cv2
+    import numpy as np
+
+    from vmcl.datasets import write_pfm
+
+    folder = Path(tempfile.mkdtemp(dir=ctx["tmp"]))
+    rng = np.random.default_rng(0)
+    for name in ("im0.png", "im1.png"):
+        cv2.imwrite(str(folder / name), rng.integers(0, 256, (16, 32), dtype=np.uint8))
+    write_pfm(folder / "disp0.pfm", np.ones((16, 32), np.float32))
+    (folder / "calib.txt").write_text("ndisp=16\n")
+    return folder
+
+
+def _stereo_pair(ctx):
+    from vmcl.datasets import read_stereo_folder
+
+    return read_stereo_folder(_stereo_dir(ctx))
+
+
+def _stereo_methods(ctx):
+    import numpy as np
+
+    from vmcl.stereo_evaluation import StereoMethod, opencv_baselines
+
+    def ones(left, right):
+        return np.ones(left.shape[:2], np.float32)
+
+    return [StereoMethod("ones", ones, note="every disparity 1"), *opencv_baselines(_stereo_pair(ctx))]
+
+
+def _evaluations(ctx):
+    from vmcl.stereo_evaluation import evaluate_pair
+
+    return [evaluate_pair(_stereo_pair(ctx), _stereo_methods(ctx), warm=False)]
 
 
 def _dots(ctx):
@@ -812,6 +888,10 @@ def _makers():
         "result": _result,
         "vision_machine": vision_machine,
         "foreign_device_array": _foreign_device_array,
+        "stereo_pair": _stereo_pair,
+        "stereo_methods": _stereo_methods,
+        "evaluations": _evaluations,
+        "stereo_sgbm": lambda ctx: __import__("vmcl.stereo_evaluation", fromlist=["stereo_sgbm"]).stereo_sgbm(16),
     }
 
 

@@ -170,7 +170,9 @@ def evaluation_tables(result, truth: dict) -> dict[str, list[tuple]]:
     if "disparity" in truth and result.disparity is not None:
         rows = [("disparity", "bad 0.5", "bad 1", "bad 2", "density")]
         known = np.isfinite(truth["disparity"])
-        for name, field in (("dense (MRF)", result.disparity), ("sparse (matcher)", result.sparse_disparity)):
+        for name, field in (("dense (MRF)", result.disparity), ("sparse (feature matcher)", result.sparse_disparity)):
+            if field is None:  # the feature matcher is off by default
+                continue
             s = metrics.evaluate_disparity(field, truth["disparity"], mask=known)
             rows.append((name, _fmt(s.bad[0.5]), _fmt(s.bad[1.0]), _fmt(s.bad[2.0]), _fmt(s.density)))
         tables["Disparity (share of bad pixels)"] = rows
@@ -266,45 +268,27 @@ def _timed(function, *args, **kwargs):
 
 
 def _eval_stereo(args, root: Path) -> int:
-    import cv2
+    from dataclasses import replace
 
-    from vmcl import metrics
-    from vmcl.datasets import STEREO_SCENES, load_stereo
-    from vmcl.early.disparity_range import estimate_range
-    from vmcl.pipeline import StereoConfig, VisionMachine
+    from vmcl.datasets import find_stereo_folders, read_stereo_folder
+    from vmcl.stereo_evaluation import evaluate_pair, markdown_tables, opencv_baselines, vmcl_method
 
-    rows = [("scene", "method", "bad 1 nonocc", "bad 2 nonocc", "bad 1 all", "density", "ms")]
-    names = [n for n in STEREO_SCENES if (root / "middlebury_stereo_v2eval" / n).is_dir()
-             or (root / "middlebury_stereo_2001" / n).is_dir()]
-    if not names:
-        raise BadInput(f"--data {root}: no Middlebury stereo scene found")
-    with _progress(args, len(names), "stereo") as step:
-        for name in names:
-            pair = load_stereo(name, root)
-            grey = [cv2.cvtColor(im, cv2.COLOR_RGB2GRAY) if im.ndim == 3 else im for im in (pair.left, pair.right)]
-            # vmcl finds its range from the images. OpenCV needs one: the range the data set publishes
-            # (info.txt), else the range vmcl found; never the ground truth's.
-            vm = VisionMachine(_only(stereo=StereoConfig()))
-            vm.run(pair.left, pair.right)  # builds the kernels: the timed run below is the steady state
-            ours, ms = _timed(vm.run, pair.left, pair.right)
-            info = pair.folder / "info.txt"
-            d_max = (int(info.read_text().split()[1]) if info.is_file()
-                     else estimate_range(pair.left, pair.right).d_max)
-            numdisp = -(-(max(d_max, 0) + 1) // 16) * 16
-            bm = cv2.StereoBM.create(numDisparities=numdisp, blockSize=11)
-            sgbm = cv2.StereoSGBM.create(0, numdisp, 5, P1=8 * 25, P2=32 * 25, uniquenessRatio=10,
-                                         mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY)
-            methods = [("vmcl dense (MRF)", ours.disparity, ms), ("vmcl sparse", ours.sparse_disparity, ms)]
-            for label, matcher in (("OpenCV StereoBM", bm), ("OpenCV StereoSGBM 3WAY", sgbm)):
-                raw, ms_cv = _timed(matcher.compute, *grey)
-                methods.append((label, np.where(raw >= 0, raw / 16.0, np.nan).astype(np.float32), ms_cv))
-            for label, disparity, took in methods:
-                nonocc = metrics.evaluate_disparity(disparity, pair.disparity, mask=pair.masks.get("nonocc"))
-                every = metrics.evaluate_disparity(disparity, pair.disparity, mask=pair.masks.get("all"))
-                rows.append((name, label, _fmt(nonocc.bad[1.0]), _fmt(nonocc.bad[2.0]), _fmt(every.bad[1.0]),
-                             _fmt(nonocc.density), f"{took:.0f}"))
+    folders = find_stereo_folders(root)
+    if not folders:
+        raise BadInput(f"--data {root}: no stereo scene in a Middlebury layout found (a scene's folder, or a "
+                       "folder holding such folders)")
+    ours = vmcl_method()  # one machine for every scene: its kernels are built once
+    evaluations = []
+    with _progress(args, len(folders), "stereo") as step:
+        for folder in folders:
+            # Named by the path under --data, so that two copies of a scene (2001 and v2) stay apart.
+            name = folder.name if folder == root else folder.relative_to(root).as_posix()
+            pair = replace(read_stereo_folder(folder), name=name)
+            evaluations.append(evaluate_pair(pair, [ours, *opencv_baselines(pair)]))
             step(name)
-    _print_table("Stereo (Middlebury; share of bad pixels, missing outputs counted bad)", rows)
+    print(f"Stereo on {len(folders)} Middlebury scene(s) under {root}")
+    print()
+    print("\n".join(markdown_tables(evaluations)))
     return 0
 
 
@@ -436,7 +420,10 @@ def parser() -> argparse.ArgumentParser:
 
     evaluate = commands.add_parser("eval", parents=[quiet], help="benchmarks beside OpenCV's baselines")
     evaluate.add_argument("benchmark", choices=("stereo", "flow", "edges"))
-    evaluate.add_argument("--data", required=True, help="data sets folder laid out as ../shared/datasets")
+    evaluate.add_argument("--data", required=True,
+                          help="stereo: a scene folder in a Middlebury layout (2001, 2003, v2, 2005/2006, "
+                               "2014/2021) or any folder holding such folders; flow, edges: the data sets "
+                               "folder laid out as ../shared/datasets")
 
     commands.add_parser("info", parents=[quiet], help="OpenCL platforms and devices, the kernel cache")
     return top

@@ -10,7 +10,9 @@ half, with the ground truth in vmcl's conventions (``vmcl.scenes`` gives the syn
 The layout and encodings are those of ``shared/datasets/README.md`` and each group's PROVENANCE.md
 (Scharstein and Szeliski 2002 and 2003 for stereo, Baker et al. 2011 for flow, Barron, Fleet and
 Beauchemin 1994 for Yosemite, Arbelaez et al. 2011 for BSDS500). The root folder is always an argument;
-nothing is downloaded and nothing is silently resized or rescaled.
+nothing is downloaded and nothing is silently resized or rescaled. A stereo scene in any Middlebury layout
+(2001, 2003, v2 evaluation, 2005/2006, 2014/2021) is read by its folder's path (``read_stereo_folder``,
+``find_stereo_folders``), whatever its name; ``load_stereo`` names the shared ones.
 """
 
 from __future__ import annotations
@@ -19,7 +21,8 @@ import os
 import sys
 import tempfile
 import zlib
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import cv2
@@ -37,6 +40,7 @@ __all__ = [
     "BSDSSet",
     "FlowPair",
     "StereoPair",
+    "find_stereo_folders",
     "load_bsds",
     "load_flow",
     "load_stereo",
@@ -45,6 +49,7 @@ __all__ = [
     "read_image",
     "read_mask",
     "read_pfm",
+    "read_stereo_folder",
     "write_flo",
     "write_pfm",
 ]
@@ -380,16 +385,20 @@ class StereoPair:
     ----------
     name : str
     left, right : ndarray
-        uint8 images, (H, W, 3) RGB or (H, W) grey.
+        Images as stored: (H, W, 3) RGB or (H, W) grey, uint8 (uint16 where a file holds 16 bits).
     disparity : (H, W) float32 array
         Left-view disparity in pixels, NaN where unknown.
     masks : dict of str to (H, W) bool array
-        Middlebury v2 evaluation masks "nonocc", "all", "disc" where the data set has them.
+        Evaluation masks where the data set has them: Middlebury v2's "nonocc", "all", "disc"; for a
+        2014 folder with mask0nocc.png, "nonocc" and "all". Empty when it has none.
     disparity_range : (float, float)
         Smallest and largest known disparity.
     scale : float
-        Grey levels per pixel of disparity in the stored map.
+        Grey levels per pixel of disparity in the stored map (1 for a PFM, which stores disparities).
     folder : Path
+    published_disparities : int or None
+        The number of disparities the data set publishes for the pair (0 .. n - 1): info.txt's maximum
+        disparity plus one, or calib.txt's ``ndisp``; None where the folder publishes none.
     """
 
     name: str
@@ -400,15 +409,290 @@ class StereoPair:
     disparity_range: tuple[float, float]
     scale: float
     folder: Path
+    published_disparities: int | None = None
 
 
-# name -> (group folder, left, right, ground truth, scale, whether the v2 masks are there)
+def _stereo_pair(folder: Path, left: Path, right: Path, disparity: np.ndarray, truth: Path, *, scale: float,
+                 masks: dict[str, np.ndarray] | None = None, published: int | None = None,
+                 left_image: np.ndarray | None = None) -> StereoPair:
+    """A StereoPair from files already found (the left image already read, where given), its sizes and
+    masks checked against the ground truth."""
+    left_image = read_image(left) if left_image is None else left_image
+    right_image = read_image(right)
+    if left_image.shape != right_image.shape:
+        raise InputValueError(f"{folder}: {left.name} is {left_image.shape} and {right.name} is "
+                              f"{right_image.shape}; a stereo pair must have one size")
+    if disparity.shape != left_image.shape[:2]:
+        raise InputValueError(f"{folder}: {truth.name} is {disparity.shape}, the images "
+                              f"{left_image.shape[:2]}; the ground truth must have the images' size")
+    known = np.isfinite(disparity)
+    if not known.any():
+        raise InputValueError(f"{truth} holds no known disparity")
+    masks = masks or {}
+    for mask_name, mask in masks.items():
+        # The evaluation needs the truth wherever a mask says "evaluate".
+        if mask.shape != known.shape or (mask & ~known).any():
+            raise InputValueError(f"{folder}: the {mask_name} mask does not lie within the known ground truth "
+                                  f"of {truth.name}")
+    return StereoPair(
+        name=folder.name,
+        left=left_image,
+        right=right_image,
+        disparity=disparity,
+        masks=masks,
+        disparity_range=(float(np.nanmin(disparity)), float(np.nanmax(disparity))),
+        scale=scale,
+        folder=folder,
+        published_disparities=published,
+    )
+
+
+def _numbers_file(path: Path) -> list[str]:
+    return path.read_text(encoding="ascii", errors="replace").split()
+
+
+def _read_v2(folder: Path, files: list[Path]) -> StereoPair:
+    left, right, truth, info = files
+    words = _numbers_file(info)
+    try:
+        scale = float(words[0])
+        published = int(words[1]) + 1 if len(words) > 1 else None
+    except (IndexError, ValueError):
+        raise InputValueError(f"{info} must hold the ground truth's scale on its first line and the maximum "
+                              f"disparity on its second, got {' '.join(words)[:40]!r}") from None
+    disparity = read_disparity(truth, scale=scale)
+    masks = {m: read_mask(folder / f"{m}.png") for m in ("nonocc", "all", "disc") if (folder / f"{m}.png").is_file()}
+    if published is not None and published < 1:
+        raise InputValueError(f"{info}: the maximum disparity on its second line must be >= 0, got {published - 1}")
+    return _stereo_pair(folder, left, right, disparity, truth, scale=scale, masks=masks, published=published)
+
+
+def _calibration(path: Path) -> dict[str, str]:
+    """calib.txt's ``key=value`` lines (Middlebury 2014 and 2021)."""
+    entries = {}
+    for line in path.read_text(encoding="ascii", errors="replace").splitlines():
+        key, sep, value = line.partition("=")
+        if sep:
+            entries[key.strip()] = value.strip()
+    return entries
+
+
+def _read_2014(folder: Path, files: list[Path]) -> StereoPair:
+    left, right, truth, calib = files
+    entries = _calibration(calib)
+    published = None
+    if "ndisp" in entries:
+        try:
+            published = int(entries["ndisp"])
+        except ValueError:
+            raise InputValueError(f"{calib}: ndisp must be an integer, got {entries['ndisp']!r}") from None
+        if published < 1:
+            raise InputValueError(f"{calib}: ndisp must be >= 1, got {published}")
+    disparity = read_disparity(truth)
+    masks = {}
+    mask_file = folder / "mask0nocc.png"
+    if mask_file.is_file():
+        # MiddEval3's mask: 255 non-occluded, 128 occluded, 0 no ground truth; its "all" is 255 and 128.
+        levels = _single_channel(mask_file)
+        masks = {"nonocc": levels == 255, "all": (levels == 255) | (levels == 128)}
+    return _stereo_pair(folder, left, right, disparity, truth, scale=1.0, masks=masks, published=published)
+
+
+# The 2005 and 2006 sets were published in three sizes (their pages: full size 1240 to 1396 pixels wide and
+# 1110 high, half size 620 to 698 by 555, third size 413 to 465 by 370), and disp1.png holds the disparity
+# of the full-size pair at every size: divided by 2 at half size and by 3 at third size.
+_SIZES_2005 = ((400, 470, 3.0, "third"), (600, 700, 2.0, "half"), (1200, 1400, 1.0, "full"))
+
+
+def _read_2005(folder: Path, files: list[Path]) -> StereoPair:
+    left, right, truth = files
+    image = read_image(left)
+    width = image.shape[1]
+    for low, high, scale, _ in _SIZES_2005:
+        if low <= width <= high:
+            break
+    else:
+        sizes = ", ".join(f"{size} size {low} to {high} px wide" for low, high, _, size in _SIZES_2005)
+        raise InputValueError(f"{left} is {width} px wide, not a size the 2005/2006 sets were published in "
+                              f"({sizes}); the scale of {truth.name} cannot be decided")
+    disparity = read_disparity(truth, scale=scale)
+    return _stereo_pair(folder, left, right, disparity, truth, scale=scale, left_image=image)
+
+
+def _read_tsukuba(folder: Path, files: list[Path]) -> StereoPair:
+    left, right, truth = files
+    return _stereo_pair(folder, left, right, read_disparity(truth, scale=16.0), truth, scale=16.0)
+
+
+# The im2/im6/disp2 layout is shared by the 2001 sets (about 434 x 383, scale 8) and the 2003 sets (quarter
+# size 450 x 375, scale 4; half size 900 x 750, scale 2): the size tells them apart.
+_SIZES_IM2 = (((450, 450), (375, 375), 4.0), ((900, 900), (750, 750), 2.0), ((430, 435), (380, 383), 8.0))
+
+
+def _read_im2(folder: Path, files: list[Path]) -> StereoPair:
+    left, right, truth = files
+    image = read_image(left)
+    height, width = image.shape[:2]
+    for (w_low, w_high), (h_low, h_high), scale in _SIZES_IM2:
+        if w_low <= width <= w_high and h_low <= height <= h_high:
+            break
+    else:
+        raise InputValueError(f"{left} is {width} x {height}, not a size the 2001 sets (about 434 x 383, scale 8) "
+                              f"or the 2003 sets (450 x 375, scale 4; 900 x 750, scale 2) were published in; "
+                              f"the scale of {truth.name} cannot be decided")
+    return _stereo_pair(folder, left, right, read_disparity(truth, scale=scale), truth, scale=scale,
+                        left_image=image)
+
+
+def _read_map(folder: Path, files: list[Path]) -> StereoPair:
+    left, right, truth = files
+    return _stereo_pair(folder, left, right, read_disparity(truth, scale=8.0), truth, scale=8.0)
+
+
+@dataclass(frozen=True)
+class _Layout:
+    description: str
+    files: tuple[tuple[str, ...], ...]  # each file the layout needs, by its accepted names
+    read: Callable[[Path, list[Path]], StereoPair]
+
+
+# Tried in this order; the first whose files are all there reads the folder.
+_LAYOUTS = (
+    _Layout("Middlebury v2 evaluation: imL.png, imR.png, groundtruth.png, info.txt (masks nonocc.png, all.png, "
+            "disc.png where given)", (("imL.png",), ("imR.png",), ("groundtruth.png",), ("info.txt",)), _read_v2),
+    _Layout("Middlebury 2014/2021: im0.png, im1.png, disp0.pfm or disp0GT.pfm, calib.txt (mask0nocc.png where "
+            "given)", (("im0.png",), ("im1.png",), ("disp0.pfm", "disp0GT.pfm"), ("calib.txt",)), _read_2014),
+    _Layout("Middlebury 2005/2006: view1.png, view5.png, disp1.png",
+            (("view1.png",), ("view5.png",), ("disp1.png",)), _read_2005),
+    _Layout("Middlebury 2001 tsukuba: scene1.row3.col3.ppm, scene1.row3.col4.ppm, truedisp.row3.col3.pgm",
+            (("scene1.row3.col3.ppm",), ("scene1.row3.col4.ppm",), ("truedisp.row3.col3.pgm",)), _read_tsukuba),
+    _Layout("Middlebury 2001/2003: im2 and im6 (.ppm or .png), disp2 (.pgm or .png)",
+            (("im2.ppm", "im2.png"), ("im6.ppm", "im6.png"), ("disp2.pgm", "disp2.png")), _read_im2),
+    _Layout("Middlebury 2001 map: im0.pgm, im1.pgm, disp0.pgm", (("im0.pgm",), ("im1.pgm",), ("disp0.pgm",)),
+            _read_map),
+)
+
+
+def _stereo_layout(folder: Path) -> tuple[_Layout, list[Path]] | None:
+    """The first layout whose files are all in ``folder``, with the files found; None if there is none."""
+    for layout in _LAYOUTS:
+        found = [next((folder / n for n in names if (folder / n).is_file()), None) for names in layout.files]
+        if all(path is not None for path in found):
+            return layout, [path for path in found if path is not None]
+    return None
+
+
+def read_stereo_folder(folder) -> StereoPair:
+    """Read the stereo pair and left-view ground truth of one scene folder in a Middlebury layout.
+
+    The layout is found from the files the folder holds (the first of these that fits):
+
+    - Middlebury v2 evaluation: imL.png, imR.png, groundtruth.png (grey / info.txt's first line), info.txt
+      (its second line, the maximum disparity, plus one gives ``published_disparities``), and the masks
+      nonocc.png, all.png, disc.png where given (255 = evaluate);
+    - 2014 and 2021: im0.png, im1.png, disp0.pfm or disp0GT.pfm (infinity = unknown), calib.txt
+      (``ndisp`` gives ``published_disparities``); mask0nocc.png where given gives "nonocc" (255) and
+      "all" (255 or 128, MiddEval3's pixels with ground truth);
+    - 2005 and 2006: view1.png, view5.png, disp1.png; disp1 holds the full-size disparity at every size
+      the sets were published in, so the scale is decided from the image width as those pages state the
+      sizes: 1200 to 1400 px wide (full size, 1240 to 1396) scale 1, 600 to 700 (half size, 620 to 698)
+      scale 2, 400 to 470 (third size, 413 to 465) scale 3; another width is refused;
+    - 2001 tsukuba: scene1.row3.col3.ppm, scene1.row3.col4.ppm, truedisp.row3.col3.pgm (scale 16);
+    - 2001 and 2003: im2, im6 (.ppm or .png), disp2 (.pgm or .png); the size decides the scale: 2001's
+      sets (430 to 435 x 380 to 383) 8, 2003's quarter size (450 x 375) 4, half size (900 x 750) 2;
+    - 2001 map: im0.pgm, im1.pgm, disp0.pgm (scale 8).
+
+    Grey level 0 of an 8-bit map means "unknown". Nothing is resized or rescaled beyond the scale.
+
+    Parameters
+    ----------
+    folder : str or Path
+        One scene's folder, under any name.
+
+    Returns
+    -------
+    StereoPair
+        Named after the folder.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the folder does not exist.
+    ValueError
+        If it matches no layout (the message names the folder and the layouts looked for), or its files
+        disagree (sizes, a mask outside the known ground truth, an unreadable info.txt or calib.txt).
+
+    Examples
+    --------
+    >>> pair = read_stereo_folder("../shared/datasets/middlebury_stereo_v2eval/teddy")  # doctest: +SKIP
+    >>> pair.scale, pair.published_disparities, sorted(pair.masks)  # doctest: +SKIP
+    (4.0, 60, ['all', 'disc', 'nonocc'])
+
+    References
+    ----------
+    D. Scharstein and R. Szeliski, IJCV 47:7-42, 2002 (2001 sets) and CVPR 2003 (2003 sets); D. Scharstein
+    and C. Pal, CVPR 2007, and H. Hirschmüller and D. Scharstein, CVPR 2007 (2005 and 2006 sets);
+    D. Scharstein et al., GCPR 2014 (2014 sets).
+    """
+    folder = _as_path(folder, "folder")
+    if not folder.exists():
+        raise FileNotFoundError(f"no such folder: {folder}")
+    if not folder.is_dir():
+        raise InputValueError(f"folder must be a scene's folder, got the file {folder}")
+    found = _stereo_layout(folder)
+    if found is None:
+        looked_for = "; ".join(layout.description for layout in _LAYOUTS)
+        raise InputValueError(f"folder {folder} holds no stereo pair in a Middlebury layout; looked for {looked_for}")
+    layout, files = found
+    return layout.read(folder, files)
+
+
+def find_stereo_folders(root, *, depth: int = 4) -> list[Path]:
+    """The scene folders in a Middlebury layout at or below ``root``.
+
+    Parameters
+    ----------
+    root : str or Path
+        A scene folder (returned alone), or a folder holding scene folders at any depth up to ``depth``
+        (a data sets folder such as ``shared/datasets``).
+    depth : int
+        How many levels below ``root`` are searched (>= 1). A scene folder's subfolders are not.
+
+    Returns
+    -------
+    list of Path
+        Sorted; empty when there is none. Hidden folders (names starting with ".") are skipped.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``root`` is not a folder.
+    """
+    root = _as_path(root, "root")
+    check_int(depth, "depth", minimum=1)
+    if not root.is_dir():
+        raise FileNotFoundError(f"no such folder: {root}")
+    if _stereo_layout(root) is not None:
+        return [root]
+    found: list[Path] = []
+    level = [root]
+    for _ in range(depth):
+        if not level:  # nothing left to search, however deep the search may go
+            break
+        below = sorted(child for parent in level for child in parent.iterdir()
+                       if child.is_dir() and not child.name.startswith("."))
+        found += [child for child in below if _stereo_layout(child) is not None]
+        level = [child for child in below if _stereo_layout(child) is None]
+    return sorted(found)
+
+
+# name -> its folder under the data sets folder
 _STEREO = {
-    "tsukuba": ("middlebury_stereo_v2eval/tsukuba", "imL.png", "imR.png", "groundtruth.png", 16.0, True),
-    "venus": ("middlebury_stereo_v2eval/venus", "imL.png", "imR.png", "groundtruth.png", 8.0, True),
-    "teddy": ("middlebury_stereo_v2eval/teddy", "imL.png", "imR.png", "groundtruth.png", 4.0, True),
-    "sawtooth": ("middlebury_stereo_2001/sawtooth", "im2.ppm", "im6.ppm", "disp2.pgm", 8.0, False),
-    "map": ("middlebury_stereo_2001/map", "im0.pgm", "im1.pgm", "disp0.pgm", 8.0, False),
+    "tsukuba": "middlebury_stereo_v2eval/tsukuba",
+    "venus": "middlebury_stereo_v2eval/venus",
+    "teddy": "middlebury_stereo_v2eval/teddy",
+    "sawtooth": "middlebury_stereo_2001/sawtooth",
+    "map": "middlebury_stereo_2001/map",
 }
 STEREO_SCENES = tuple(_STEREO)
 
@@ -423,13 +707,13 @@ def _lookup(name: str, table: dict, what: str):
 
 
 def load_stereo(name: str, root) -> StereoPair:
-    """Load a Middlebury stereo scene with its left-view disparity and evaluation masks.
+    """Load a Middlebury stereo scene of the shared data sets by name (:func:`read_stereo_folder` of its folder).
 
     Parameters
     ----------
     name : str
         "tsukuba", "venus", "teddy" (Middlebury v2 set, with nonocc/all/disc masks), "sawtooth" or
-        "map" (2001 set, no masks); case-insensitive.
+        "map" (2001 set, no masks); case-insensitive. Any other folder: :func:`read_stereo_folder`.
     root : str or Path
         The data sets folder (``shared/datasets``).
 
@@ -453,20 +737,8 @@ def load_stereo(name: str, root) -> StereoPair:
     D. Scharstein and R. Szeliski, IJCV 47:7-42, 2002 (tsukuba, venus, sawtooth, map) and CVPR 2003
     (teddy).
     """
-    key, (folder, left, right, truth, scale, has_masks) = _lookup(name, _STEREO, "stereo scene")
-    folder = _as_path(root, "root") / folder
-    disparity = read_disparity(folder / truth, scale=scale)
-    masks = {m: read_mask(folder / f"{m}.png") for m in ("nonocc", "all", "disc")} if has_masks else {}
-    return StereoPair(
-        name=key,
-        left=read_image(folder / left),
-        right=read_image(folder / right),
-        disparity=disparity,
-        masks=masks,
-        disparity_range=(float(np.nanmin(disparity)), float(np.nanmax(disparity))),
-        scale=scale,
-        folder=folder,
-    )
+    key, folder = _lookup(name, _STEREO, "stereo scene")
+    return replace(read_stereo_folder(_as_path(root, "root") / folder), name=key)
 
 
 # --------------------------------------------------------------------------------------------- flow

@@ -42,7 +42,7 @@ from vmcl import integrate as _integrate
 from vmcl import labelling
 from vmcl.cm.core import check_choice, check_int, check_real
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
-from vmcl.early import edges, motion, stereo
+from vmcl.early import edges, motion, semiglobal, stereo
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.labels import CUES
 from vmcl.machine import Machine, on_device
@@ -132,6 +132,10 @@ class EdgesConfig:
         _check_thresholds("edges", self.low_threshold, self.high_threshold, self.use_quantiles)
 
 
+DENSE_MATCHERS = ("semiglobal", "intensity")
+"""The stereo cue's dense matchers (``StereoConfig.dense``)."""
+
+
 @dataclass(frozen=True)
 class StereoConfig:
     """The Drumheller-Poggio matcher (:func:`vmcl.early.stereo.match`) and the feedback pass.
@@ -151,17 +155,31 @@ class StereoConfig:
         As :func:`vmcl.early.stereo.match` takes them, ``sigma`` for edge and zero-crossing features
         (intensity matches smooth with ``intensity_sigma``). The defaults match Canny edges chosen by
         quantile (60% and 85%), which keeps textured surfaces matched where the noise rule sees none.
+    feature_matches : bool
+        Run the feature matcher (:func:`vmcl.early.stereo.match` with ``features``); False leaves the
+        stereo MRF the dense matches alone (``backfill`` must then be on).
     feedback : bool
-        Match again with support windows stopped at the first pass's depth discontinuities.
+        Match the features again with support windows stopped at the first pass's depth discontinuities.
     backfill : bool
-        Also match every pixel by intensity (``features="intensity"``, the same patch) and let those
-        matches, refined to sub-pixel disparities (the matcher's ``subpixel``), fill the gaps between
-        the feature matches in the stereo MRF's data (:func:`vmcl.mrf.backfill`), weighed by :func:`vmcl.mrf.score_confidence` of their normalised
-        cross-correlation with ``backfill_floor`` and ``backfill_weight``. It lowers the dense bad-1
-        rate on Middlebury (benchmarks/results/pipeline.md; see :func:`vmcl.mrf.backfill`).
+        Also match every pixel (``dense``) and let those matches fill the gaps between the feature
+        matches in the stereo MRF's data (:func:`vmcl.mrf.backfill`); without feature matches, they are
+        the data.
+    dense : {"semiglobal", "intensity"}
+        The dense matcher. "semiglobal": census costs with min-sum messages along scanlines, both views
+        checked (:func:`vmcl.early.semiglobal.match_semiglobal`); its confirmed disparities weigh
+        ``backfill_weight``, its half-occluded pixels, given their background's disparity,
+        ``occluded_weight``; ``Result.half_occluded`` marks them. "intensity": normalised
+        cross-correlation (``features="intensity"``, the same patch, sub-pixel), weighed by
+        :func:`vmcl.mrf.score_confidence` of the correlation with ``backfill_floor`` and
+        ``backfill_weight``.
     backfill_floor, backfill_weight : float
-        Intensity matches whose correlation is at or below the floor weigh 0; a perfect one weighs
-        ``backfill_weight`` (the feature matches weigh 1).
+        Intensity matches whose correlation is at or below the floor weigh 0; a perfect one (or a
+        confirmed semi-global match) weighs ``backfill_weight`` (the feature matches weigh 1).
+    occluded_weight : float
+        In [0, 1]: the weight of the semi-global matcher's half-occluded pixels.
+    census_threshold, p1, p2, edge_gain
+        The semi-global matcher's census margin and smoothness prices, as
+        :func:`vmcl.early.semiglobal.match_semiglobal` takes them.
     shiftable : bool
         Intensity matches (the backfill, or ``features = "intensity"``) score each pixel by the best
         patch that holds it (:func:`vmcl.early.stereo.match`'s ``shiftable``), so that the nearer
@@ -181,10 +199,17 @@ class StereoConfig:
     low_threshold: float | None = 0.6
     high_threshold: float | None = 0.85
     use_quantiles: bool = True
+    feature_matches: bool = False
     feedback: bool = True
     backfill: bool = True
+    dense: str = "semiglobal"
     backfill_floor: float = 0.9
     backfill_weight: float = 0.2
+    occluded_weight: float = 0.1
+    census_threshold: float = semiglobal.CENSUS_THRESHOLD
+    p1: int = semiglobal.P1
+    p2: float = semiglobal.P2
+    edge_gain: float = semiglobal.EDGE_GAIN
     shiftable: bool = True
     intensity_sigma: float = 1.0
 
@@ -202,6 +227,14 @@ class StereoConfig:
         _check_thresholds("stereo", self.low_threshold, self.high_threshold, self.use_quantiles)
         check_unit_interval(self.backfill_floor, "stereo.backfill_floor", closed_above=False)
         check_unit_interval(self.backfill_weight, "stereo.backfill_weight", closed_above=True)
+        check_unit_interval(self.occluded_weight, "stereo.occluded_weight", closed_above=True)
+        check_choice(self.dense, "stereo.dense", DENSE_MATCHERS)
+        check_real(self.census_threshold, "stereo.census_threshold", minimum=0)
+        check_int(self.p1, "stereo.p1", minimum=0, maximum=255)
+        check_real(self.p2, "stereo.p2", minimum=self.p1, maximum=8000)
+        check_real(self.edge_gain, "stereo.edge_gain", minimum=0)
+        if not self.feature_matches and not self.backfill:
+            raise InputValueError("stereo: feature_matches and backfill are both off, which leaves no matcher")
         if not 0 < self.intensity_sigma < math.inf:
             raise InputValueError(f"stereo.intensity_sigma must be > 0 and finite, got {self.intensity_sigma!r}")
 
@@ -622,7 +655,7 @@ class _Run:
             host_restored = {cue: array.get() for cue, array in restored.items()}
             host_lines = {cue: (h.get().astype(bool), v.get().astype(bool)) for cue, (h, v) in lines.items()}
             edge_map, host_support, host_labels = brightness.get(), support.get(), labels.get()
-        as_bool = ("colour_edges", "texture_edges", "stereo_discontinuity")
+        as_bool = ("colour_edges", "texture_edges", "stereo_discontinuity", "half_occluded")
         host = {name: (value.astype(bool) if name in as_bool else value) for name, value in host.items()}
         for cue in active:
             if cue.restored_as and cue.name in host_restored:

@@ -37,7 +37,11 @@ class Result:
     first_pass_disparity : float32 (H, W)
         The matcher's disparities before feedback (None without feedback).
     stereo_discontinuity : bool (H, W)
-        Features whose votes were bimodal over d.
+        Features whose votes were bimodal over d (None without feature matches).
+    half_occluded : bool (H, W)
+        Pixels the right camera does not see (the semi-global matcher's left-right check; None with
+        another dense matcher): their disparity in ``disparity`` is the restoration's, from the
+        background beside them.
     disparity : float32 (H, W)
         Dense disparity: the stereo MRF's restoration.
     raw_flow, flow : float32 (H, W, 2)
@@ -76,6 +80,7 @@ class Result:
     sparse_disparity: np.ndarray | None = None
     first_pass_disparity: np.ndarray | None = None
     stereo_discontinuity: np.ndarray | None = None
+    half_occluded: np.ndarray | None = None
     disparity: np.ndarray | None = None
     raw_flow: np.ndarray | None = None
     flow: np.ndarray | None = None

@@ -2,10 +2,11 @@
 
 Seed sections "Stereo", "Feedback from the results of integration into the matching stage". The
 Drumheller-Poggio matcher (:func:`vmcl.early.stereo.match`) gives sparse disparities at edge features;
-with ``backfill``, intensity matches of high correlation fill the gaps between them, weighed less
-(:func:`vmcl.mrf.backfill`). The stereo MRF restores the disparity coupled to the brightness edges; its
-first restoration's lines become the barriers of a second matching pass (feedback), whose support
-windows stop at them, and the MRF restores again. Every pass matches over one disparity range: the
+with ``backfill``, a dense matcher fills the gaps between them, weighed less (:func:`vmcl.mrf.backfill`):
+the semi-global matcher (:func:`vmcl.early.semiglobal.match_semiglobal`, whose half-occluded pixels it
+reports and weighs least) or intensity correlation. The stereo MRF restores the disparity coupled to
+the brightness edges; its first restoration's lines become the barriers of a second feature matching
+pass (feedback), whose support windows stop at them, and the MRF restores again. Every pass matches over one disparity range: the
 Config's ``d_min``/``d_max`` where given, else the range found from the images by
 :func:`vmcl.early.disparity_range.estimate_range`, which the run's notes state.
 """
@@ -18,12 +19,14 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl import integrate
+from vmcl.cm import reduce as cm_reduce
 from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import stereo
 from vmcl.early.disparity_range import estimate_range
+from vmcl.early.semiglobal import SemiGlobalMatch, match_semiglobal
 from vmcl.labels import Label
 from vmcl.machine import on_device
-from vmcl.mrf import backfill, score_confidence
+from vmcl.mrf import backfill, mask_confidence, score_confidence
 from vmcl.pictures import disparity_image
 
 __all__ = ["StereoCue"]
@@ -36,20 +39,27 @@ class StereoCue(CueModule):
     needs = frozenset({"right"})
     kind = "smooth"
     label = Label.DEPTH
-    fields = ("sparse_disparity", "stereo_discontinuity", "first_pass_disparity")
+    fields = ("sparse_disparity", "stereo_discontinuity", "first_pass_disparity", "half_occluded")
     restored_as = "disparity"
 
     def measure(self, run: RunInputs) -> Measurement:
         span, note = _disparity_range(run)
-        matched = _match(run, None, span)
         dense = _dense_match(run, span)
+        notes = tuple(n for n in (note, dense.note if dense else None) if n)
+        fields = {} if dense is None or dense.occluded is None else {"half_occluded": dense.occluded}
+        if not run.config.stereo.feature_matches:
+            assert dense is not None  # the Config refuses a stereo section with neither matcher
+            return Measurement(dense.disparity, dense.confidence, run.brightness, state=_State(span, dense),
+                               notes=notes, fields=fields)
+        matched = _match(run, None, span)
         data, confidence = _disparity_data(run, matched, dense)
-        return Measurement(data, confidence, run.brightness, state=_State(span, dense), notes=(note,) if note else (),
-                           fields={"sparse_disparity": on_device(matched.disparity),
-                                   "stereo_discontinuity": on_device(matched.discontinuity)})
+        fields.update({"sparse_disparity": on_device(matched.disparity),
+                       "stereo_discontinuity": on_device(matched.discontinuity)})
+        return Measurement(data, confidence, run.brightness, state=_State(span, dense), notes=notes, fields=fields)
 
     def refine_stage(self, config) -> str | None:
-        return "feedback" if config.stereo.feedback else None
+        s = config.stereo
+        return "feedback" if s.feedback and s.feature_matches else None
 
     def refine(self, run: RunInputs, measurement: Measurement, lines) -> Measurement:
         barriers = integrate.boundary(*lines, machine=run.machine)
@@ -66,18 +76,37 @@ class StereoCue(CueModule):
             return {}
         finite = result.disparity[np.isfinite(result.disparity)]
         low, high = (float(finite.min()), float(finite.max())) if finite.size else (None, None)
-        return {"disparity": (disparity_image(result.disparity, vmin=low, vmax=high),
-                              "Dense disparity (the stereo MRF's restoration), pixels; near is red"),
-                "sparse_disparity": (disparity_image(result.sparse_disparity, vmin=low, vmax=high),
-                                     "The matcher's sparse disparities, same scale")}
+        shown = {"disparity": (disparity_image(result.disparity, vmin=low, vmax=high),
+                               "Dense disparity (the stereo MRF's restoration), pixels; near is red")}
+        if result.half_occluded is not None:
+            marked = disparity_image(result.disparity, vmin=low, vmax=high)
+            marked[:result.half_occluded.shape[0]][result.half_occluded] = (255, 0, 255)
+            shown["half_occluded"] = (marked, ("Half-occluded pixels (magenta): the right camera does not see them; "
+                                               "their disparity is the restoration's, from the background"))
+        if result.sparse_disparity is not None:
+            shown["sparse_disparity"] = (disparity_image(result.sparse_disparity, vmin=low, vmax=high),
+                                         "The feature matcher's sparse disparities, same scale")
+        return shown
+
+
+@dataclass(frozen=True)
+class _Dense:
+    """The dense matches as the stereo MRF's data: disparity (NaN where none), its confidence, the
+    half-occluded pixels (None when the matcher does not tell them), and what the run's notes should say
+    of them."""
+
+    disparity: cl_array.Array
+    confidence: cl_array.Array
+    occluded: cl_array.Array | None
+    note: str | None = None
 
 
 @dataclass(frozen=True)
 class _State:
-    """What the feedback pass reuses: the disparity range and the intensity matches."""
+    """What the feedback pass reuses: the disparity range and the dense matches."""
 
     span: tuple[int, int]
-    dense: tuple[cl_array.Array, cl_array.Array] | None
+    dense: _Dense | None
 
 
 def _disparity_range(run: RunInputs) -> tuple[tuple[int, int], str | None]:
@@ -121,25 +150,53 @@ def _match(run: RunInputs, barriers, span: tuple[int, int], *, features: stereo.
                         barriers=barriers, machine=run.machine, **options)
 
 
-def _dense_match(run: RunInputs, span: tuple[int, int]) -> tuple[cl_array.Array, cl_array.Array] | None:
-    """The intensity matches and their weights for :func:`_disparity_data`, or None without backfill.
+def _dense_match(run: RunInputs, span: tuple[int, int]) -> _Dense | None:
+    """The dense matches and their weights, or None without backfill.
 
-    Matched once, without barriers: matched again with the first pass's lines as barriers, in the
-    feedback pass, it made the restored disparity worse (a higher dense bad-1 rate on the rendered
-    "cues" and "blocks" scenes).
+    Matched once, without barriers: intensity matches made again with the first pass's lines as
+    barriers, in the feedback pass, made the restored disparity worse (a higher dense bad-1 rate on the
+    rendered "cues" and "blocks" scenes).
     """
     s = run.config.stereo
-    if not s.backfill or s.features == "intensity":
+    if not s.backfill or (s.feature_matches and s.features == "intensity" and s.dense == "intensity"):
         return None
+    if s.dense == "semiglobal":
+        found = match_semiglobal(run.left, run.needed("right"), d_min=span[0], d_max=span[1],
+                                 census_threshold=s.census_threshold, p1=s.p1, p2=s.p2, edge_gain=s.edge_gain,
+                                 machine=run.machine)
+        filled, occluded = on_device(found.filled), on_device(found.occluded)
+        confidence = mask_confidence(filled, occluded, weight=s.backfill_weight, masked_weight=s.occluded_weight,
+                                     machine=run.machine)
+        return _Dense(filled, on_device(confidence), occluded, _confirmation_note(run, found))
     dense = _match(run, None, span, features="intensity")
-    return on_device(dense.disparity), on_device(score_confidence(dense.score, floor=s.backfill_floor,
-                                                                   weight=s.backfill_weight, machine=run.machine))
+    return _Dense(on_device(dense.disparity), on_device(score_confidence(
+        dense.score, floor=s.backfill_floor, weight=s.backfill_weight, machine=run.machine)), None)
 
 
-def _disparity_data(run: RunInputs, matched: stereo.StereoMatch, dense: tuple[cl_array.Array, cl_array.Array] | None
-                ) -> tuple[cl_array.Array, cl_array.Array | None]:
-    """The stereo MRF's data and confidence: the feature matches, backfilled by intensity matches."""
+UNCONFIRMED_NOTE = 0.5
+"""Share of the pixels the left-right check leaves unconfirmed above which the run's notes say so. On the
+training pairs it stayed at or below 0.29 (the untextured "shadows" scene), and rose to 0.53-0.78 with
+the right view rotated by 10 degrees."""
+
+
+def _confirmation_note(run: RunInputs, found: SemiGlobalMatch) -> str | None:
+    """A note when most pixels fail the left-right check: the pair is likely not rectified."""
+    failed = [cm_reduce.reduce(on_device(mask), "sum", machine=run.machine) for mask in (found.occluded,
+                                                                                        found.mismatched)]
+    occluded, mismatched = (int(count.get()) for count in failed)
+    pixels = found.occluded.size
+    share = (occluded + mismatched) / pixels
+    if share <= UNCONFIRMED_NOTE:
+        return None
+    return (f"stereo: the right view confirmed only {100 * (1 - share):.0f}% of the left view's matches "
+            f"({100 * occluded / pixels:.0f}% half-occluded, {100 * mismatched / pixels:.0f}% mismatched): the "
+            "pair may not be rectified (its rows must be epipolar lines), or most of the scene is untextured")
+
+
+def _disparity_data(run: RunInputs, matched: stereo.StereoMatch, dense: _Dense | None
+                    ) -> tuple[cl_array.Array, cl_array.Array | None]:
+    """The stereo MRF's data and confidence: the feature matches, backfilled by the dense matches."""
     if dense is None:
         return on_device(matched.disparity), None
-    data, confidence = backfill(matched.disparity, *dense, machine=run.machine)
+    data, confidence = backfill(matched.disparity, dense.disparity, dense.confidence, machine=run.machine)
     return on_device(data), on_device(confidence)

@@ -53,6 +53,7 @@ __all__ = [
     "discrete_laplacian",
     "gaussian",
     "gaussian_taps",
+    "grey_field",
     "laplacian_of_gaussian",
     "separable_gaussian",
 ]
@@ -125,7 +126,7 @@ def separable_gaussian(machine: Machine, data: cl_array.Array, sigmas: tuple[flo
     planes = len(sigmas)
     taps_device, radius = _taps(machine, sigmas)
     if data.ndim == 3:
-        data = _grey(machine, data)
+        data = grey_field(machine, data)
     rows = machine.empty((planes, height, width), np.float32)
     out = machine.empty((height, width), np.float32)
     dims = (np.int64(width), np.int64(height))
@@ -137,7 +138,9 @@ def separable_gaussian(machine: Machine, data: cl_array.Array, sigmas: tuple[flo
     return out
 
 
-def _grey(machine: Machine, data: cl_array.Array) -> cl_array.Array:
+def grey_field(machine: Machine, data: cl_array.Array) -> cl_array.Array:
+    """The float32 (H, W) grey image of a device image (uint8, uint16 or float32; grey or RGB, weighed by
+    :data:`GREY_WEIGHTS`), in grey levels of its own type; a float32 grey image is returned as it is."""
     if data.dtype == np.float32 and data.ndim == 2:
         return data
     height, width = data.shape[:2]
@@ -152,7 +155,7 @@ def _smooth(machine: Machine, data: cl_array.Array, sigma: float, method: str) -
     if method == "exact":
         return separable_gaussian(machine, data, (sigma,))
     if method == "binomial":
-        return _cm_filters.binomial(_grey(machine, data), binomial_passes(sigma), machine=machine)
+        return _cm_filters.binomial(grey_field(machine, data), binomial_passes(sigma), machine=machine)
     raise InputValueError(f"method must be 'binomial' or 'exact', got {method!r}")
 
 

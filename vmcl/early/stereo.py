@@ -51,7 +51,7 @@ from vmcl.early.filters import gaussian
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["Features", "Method", "StereoMatch", "check_pair", "direction_code", "match", "match_features"]
+__all__ = ["Features", "Method", "StereoMatch", "check_pair", "check_range", "direction_code", "match", "match_features"]
 
 Features = Literal["canny", "dog", "intensity"]
 Method = Literal["running", "table"]
@@ -292,14 +292,23 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
     return _deliver(found, host)
 
 
-def _check_range(d_min, d_max, patch, width: int) -> None:
-    for name, value in (("d_min", d_min), ("d_max", d_max), ("patch", patch)):
+def check_range(d_min: int, d_max: int, width: int) -> None:
+    """Refuse, naming ``d_min`` or ``d_max``, a disparity range a matcher cannot search in an image
+    ``width`` pixels wide: ends that are not integers, ``d_min > d_max``, more than ``width`` disparities,
+    or a disparity of ``width`` or more either way (no pixel of the other view lies that far)."""
+    width = check_int(width, "width", minimum=1)
+    for name, value in (("d_min", d_min), ("d_max", d_max)):
         check_int(value, name)
     if d_min > d_max:
         raise InputValueError(f"d_min ({d_min}) must not exceed d_max ({d_max})")
     if d_max - d_min + 1 > width or max(abs(d_min), abs(d_max)) >= width:
         raise InputValueError(f"d_min and d_max: the disparity range [{d_min}, {d_max}] is wider than the image "
-                              f"({width} pixels)")
+                              f"(width {width} pixels)")
+
+
+def _check_range(d_min, d_max, patch, width: int) -> None:
+    check_range(d_min, d_max, width)
+    check_int(patch, "patch")
     if patch < 1 or patch % 2 == 0:
         raise InputValueError(f"patch must be an odd integer >= 1, got {patch}")
 

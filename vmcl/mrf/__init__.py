@@ -4,7 +4,7 @@ Seed sections "The integration stage and MRF", "MRF models", "Organization of in
 "Algorithms: Deterministic and stochastic". :func:`restore` restores a cue (stereo disparity, motion
 flow, colour, texture) as piecewise smooth or piecewise constant and finds its discontinuities at once,
 helped by brightness edges; :func:`energy` evaluates the energy of any configuration on the host;
-:func:`score_confidence` and :func:`backfill` make its data and confidence from the early modules'
+:func:`score_confidence`, :func:`mask_confidence` and :func:`backfill` make its data and confidence from the early modules'
 measurements.
 
 What a restoration is told comes in two halves: the energy (:class:`EnergyModel`, with its
@@ -20,7 +20,7 @@ a user's flat overrides to them::
 :class:`NothingToRestore` is the refusal of data with no value to restore, caught by type.
 """
 
-from vmcl.mrf.data import backfill, score_confidence
+from vmcl.mrf.data import backfill, mask_confidence, score_confidence
 from vmcl.mrf.energy import EnergyModel, LinePrior, energy
 from vmcl.mrf.icm import IcmSchedule
 from vmcl.mrf.meanfield import MeanFieldSchedule
@@ -32,4 +32,4 @@ from vmcl.mrf.solvers import SOLVERS
 
 __all__ = ["SOLVERS", "AnnealSchedule", "EnergyModel", "IcmSchedule", "LinePrior", "MeanFieldSchedule",
            "MpmSchedule", "NothingToRestore", "Restoration", "Settings", "backfill", "boundary_map", "energy",
-           "preset", "restore", "score_confidence"]
+           "mask_confidence", "preset", "restore", "score_confidence"]

@@ -20,7 +20,7 @@ from vmcl.cm.core import ArrayLike, field, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["backfill", "check_unit_interval", "score_confidence"]
+__all__ = ["backfill", "check_unit_interval", "mask_confidence", "score_confidence"]
 
 
 def check_unit_interval(value, name: str, *, closed_above: bool) -> float:
@@ -128,3 +128,39 @@ def backfill(primary: ArrayLike, secondary: ArrayLike, secondary_confidence: Arr
     if host:
         return data.get(), gamma.get()
     return data, gamma
+
+
+def mask_confidence(data: ArrayLike, mask: ArrayLike, *, weight: float, masked_weight: float,
+                    machine: Machine | None = None) -> ArrayLike:
+    """Weights of a measurement some of whose values were filled in rather than measured.
+
+    Parameters
+    ----------
+    data : float32 (H, W) or (H, W, C) array or device array
+        The measurement, NaN where there is none (a pixel has one when all its components are finite).
+    mask : bool or uint8 (H, W)
+        Set where the value was filled in (e.g. :attr:`vmcl.early.semiglobal.SemiGlobalMatch.occluded`,
+        whose disparities come from the background beside them).
+    weight, masked_weight : float
+        In [0, 1]: the weight of a measured value and of a filled one.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    float32 (H, W): ``weight``, ``masked_weight``, or 0 where there is no value. NumPy for NumPy input.
+    """
+    machine = machine_for(machine)
+    host = isinstance(data, np.ndarray) and isinstance(mask, np.ndarray)
+    values, _ = field(data, "data", machine, ndims=(2, 3), dtypes=(np.float32,))
+    if isinstance(mask, np.ndarray) and mask.dtype == np.bool_:
+        mask = mask.view(np.uint8)
+    flags, _ = field(mask, "mask", machine, ndims=(2,), dtypes=(np.uint8,))
+    if flags.shape != values.shape[:2]:
+        raise InputValueError(f"mask must have data's shape (H, W): data has {values.shape}, mask {flags.shape}")
+    weight = check_unit_interval(weight, "weight", closed_above=True)
+    masked_weight = check_unit_interval(masked_weight, "masked_weight", closed_above=True)
+    ncomp = values.shape[2] if values.ndim == 3 else 1
+    gamma = machine.empty(values.shape[:2], np.float32)
+    machine.launch(machine.kernel("mrf_data", "mask_confidence", NCOMP=ncomp), (gamma.size,), values, flags, gamma,
+                   np.float32(weight), np.float32(masked_weight), np.int64(gamma.size))
+    return gamma.get() if host else gamma

@@ -1,0 +1,246 @@
+/* semiglobal.cl: the census data term and its min-sum aggregation along scanlines (vmcl/early/semiglobal.py).
+ *
+ * The stereo MRF's energy over disparities d(p) is sum_p C(p, d_p) + sum_{p,q} V(d_p, d_q), with V = 0 for
+ * equal neighbours, P1 for a change of one disparity (a slanted surface) and P2 for a jump (a depth
+ * discontinuity: the line process's price, lowered where the brightness changes, since the seed couples
+ * depth discontinuities to brightness edges). Minimised exactly along one scanline it is a dynamic
+ * program: min-sum messages passed from pixel to pixel (aggregate). Passed along 4 or 8 directions and
+ * summed, the messages approximate the 2-D minimum (Hirschmueller's semi-global matching).
+ *
+ * One work-item per census code, per cost cell row, per scanline, per pixel: the Connection Machine's
+ * processors, one per pixel; the scanline kernels give each processor of a line's first pixel the line.
+ *
+ * Layout: the cost and the sum of messages are (H, W, D) with the D disparities of a pixel contiguous,
+ * so that a scanline's step reads and writes one short run. D = d_max - d_min + 1 <= MAX_D (a define,
+ * the size of the private message arrays).
+ */
+#include "vmcl.h"
+
+#ifndef MAX_D
+#define MAX_D 64
+#endif
+#ifndef CENSUS_W
+#define CENSUS_W 9
+#endif
+#ifndef CENSUS_H
+#define CENSUS_H 7
+#endif
+
+/* The census code of every pixel: bit b set when the b-th pixel of its CENSUS_W x CENSUS_H window (row
+ * by row, the centre skipped) is darker than the centre by more than `threshold` times the noise's standard
+ * deviation (noise[0]): without a margin, the noise of a flat patch would give it a random code,
+ * which matches some other random code by chance, where the flat patch should give no evidence at all.
+ * Outside the image the window repeats the border pixel, never darker than itself: those bits stay 0. */
+__kernel void census(__global const float *image, __global ulong *codes, long W, long H, float threshold,
+                     __global const float *noise)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    float centre = image[y * W + x] - threshold * noise[0];
+    ulong code = 0;
+    for (int j = -(CENSUS_H / 2); j <= CENSUS_H / 2; j++) {
+        long yy = clamp(y + j, (long)0, H - 1);
+        for (int i = -(CENSUS_W / 2); i <= CENSUS_W / 2; i++) {
+            if (i == 0 && j == 0) continue;
+            long xx = clamp(x + i, (long)0, W - 1);
+            code = (code << 1) | (ulong)(image[yy * W + xx] < centre);
+        }
+    }
+    codes[y * W + x] = code;
+}
+
+/* C(x, y, d) = Hamming distance between the left code at x and the right code at x - d; where x - d
+ * falls outside the right image, `outside` (the distance expected between unrelated codes: no evidence
+ * for or against d). */
+__kernel void census_costs(__global const ulong *left, __global const ulong *right, __global uchar *cost,
+                           long W, long H, int D, int d_min, uchar outside)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    ulong code = left[y * W + x];
+    __global uchar *out = cost + (y * W + x) * D;
+    for (int k = 0; k < D; k++) {
+        long xr = x - (d_min + k);
+        out[k] = (xr >= 0 && xr < W) ? (uchar)popcount(code ^ right[y * W + xr]) : outside;
+    }
+}
+
+/* The magnitude of the response of Immerkaer's noise mask [1 -2 1; -2 4 -2; 1 -2 1] (the difference of two
+ * Laplacians, blind to brightness that changes linearly). On the border, where the mask does not fit,
+ * the nearest inner pixel's response (a NaN would poison the maximum the host's histogram spans); 0 for
+ * images thinner than the mask. On Gaussian noise of standard deviation s the response is Gaussian with
+ * deviation 6 s, so its median magnitude is 0.6745 * 6 s. */
+__kernel void noise_response(__global const float *grey, __global float *response, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    if (W < 3 || H < 3) { response[y * W + x] = 0.0f; return; }
+    size_t i = clamp(y, (long)1, H - 2) * W + clamp(x, (long)1, W - 2);
+    __global const float *up = grey + i - W, *here = grey + i, *down = grey + i + W;
+    float r = (up[-1] - 2.0f * up[0] + up[1]) - 2.0f * (here[-1] - 2.0f * here[0] + here[1])
+              + (down[-1] - 2.0f * down[0] + down[1]);
+    response[y * W + x] = fabs(r);
+}
+
+/* The messages along direction (dx, dy), one work-item per scanline, added into `total` (written when
+ * `first`). L(p, d) = C(p, d) + min(L(p-r, d), L(p-r, d +- 1) + P1, min_k L(p-r, k) + P2(p)) - min_k L(p-r, k);
+ * subtracting the previous minimum keeps L below max C + P2, so sums of 8 directions fit 16 bits (the
+ * host checks).  P2(p) = max(P1, P2 / (1 + edge_gain * |I(p) - I(p-r)| / s)), s the noise's standard
+ * deviation (noise[0]): brightness changes are counted in units of the noise, whatever the image's scale. 
+ *
+ * Scanlines: along a row or a column, one per row or column; diagonal, one from each pixel of the entry
+ * row and one from each pixel of the entry column but its first (W + H - 1). */
+__kernel void aggregate(__global const uchar *cost, __global const float *grey, __global ushort *total,
+                        long W, long H, int D, int dx, int dy, ushort p1, float p2, float edge_gain,
+                        __global const float *noise, int first)
+{
+    float gain = edge_gain / fmax(noise[0], FLT_MIN);
+    long id = get_global_id(0);
+    long x, y;
+    if (dy == 0) {
+        if (id >= H) return;
+        x = dx > 0 ? 0 : W - 1; y = id;
+    } else if (dx == 0) {
+        if (id >= W) return;
+        x = id; y = dy > 0 ? 0 : H - 1;
+    } else {
+        if (id >= W + H - 1) return;
+        if (id < W) { x = id; y = dy > 0 ? 0 : H - 1; }
+        else { x = dx > 0 ? 0 : W - 1; y = (dy > 0 ? 0 : H - 1) + dy * (id - W + 1); }
+    }
+    ushort previous[MAX_D], current[MAX_D];
+    /* The line's first pixel: its messages are its costs. */
+    size_t p = y * W + x;
+    ushort lowest = 0xffff;
+    for (int k = 0; k < D; k++) {
+        ushort c = cost[p * D + k];
+        previous[k] = c;
+        lowest = min(lowest, c);
+        total[p * D + k] = first ? c : (ushort)(total[p * D + k] + c);
+    }
+    float brightness = grey[p];
+    for (x += dx, y += dy; x >= 0 && x < W && y >= 0 && y < H; x += dx, y += dy) {
+        p = y * W + x;
+        float here = grey[p];
+        ushort jump = (ushort)max((float)p1, p2 / (1.0f + gain * fabs(here - brightness)));
+        brightness = here;
+        uint ceiling = (uint)lowest + jump;
+        ushort next_lowest = 0xffff;
+        for (int k = 0; k < D; k++) {
+            uint best = min((uint)previous[k], ceiling);
+            if (k > 0) best = min(best, (uint)previous[k - 1] + p1);
+            if (k + 1 < D) best = min(best, (uint)previous[k + 1] + p1);
+            ushort l = (ushort)(cost[p * D + k] + best - lowest);
+            current[k] = l;
+            next_lowest = min(next_lowest, l);
+            total[p * D + k] = first ? l : (ushort)(total[p * D + k] + l);
+        }
+        for (int k = 0; k < D; k++) previous[k] = current[k];
+        lowest = next_lowest;
+    }
+}
+
+/* The left view's winner at each pixel (smallest summed cost; ties: the smaller d), moved to the vertex of
+ * the symmetric V through the sums at d - 1, d, d + 1 (`subpixel`: the equiangular fit, for costs that,
+ * like Hamming distances, grow linearly away from the match rather than quadratically; a winner at either end of the disparities
+ * that compete stays whole), and its integer d for the consistency check. Only the disparities whose right
+ * pixel x - d lies inside the image compete; a pixel with none gets NaN and the winner d_min - 1. */
+__kernel void select_left(__global const ushort *total, __global float *disparity, __global int *winner,
+                          long W, long H, int D, int d_min, int subpixel)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    __global const ushort *s = total + (y * W + x) * D;
+    /* Disparities with x - d inside [0, W). */
+    int k_lo = max(0, (int)(x - (W - 1)) - d_min), k_hi = min(D - 1, (int)x - d_min);
+    if (k_lo > k_hi) { disparity[y * W + x] = NAN; winner[y * W + x] = d_min - 1; return; }
+    int best = k_lo;
+    for (int k = k_lo + 1; k <= k_hi; k++)
+        if (s[k] < s[best]) best = k;
+    /* A winner pressed against the image's edge (the last disparity whose right pixel is inside, where
+     * the range goes on) is where the cost was cut off, not a minimum: the match lies outside the right
+     * image, and the pixel is treated as unmatched (half-occluded by the frame). */
+    if ((best == k_hi && k_hi < D - 1) || (best == k_lo && k_lo > 0)) {
+        disparity[y * W + x] = NAN;
+        winner[y * W + x] = d_min - 1;
+        return;
+    }
+    float d = (float)(d_min + best);
+    if (subpixel && best > k_lo && best < k_hi) {
+        float a = s[best - 1], b = s[best], c = s[best + 1];
+        float rise = fmax(a, c) - b;
+        if (rise > 0.0f) d += clamp((a - c) / (2.0f * rise), -0.5f, 0.5f);
+    }
+    disparity[y * W + x] = d;
+    winner[y * W + x] = d_min + best;
+}
+
+/* The right view's winner at each right pixel xr, from the same sums: the d that minimises
+ * S(xr + d, y, d) over the d whose left pixel is inside (Hirschmueller: no second aggregation). */
+__kernel void select_right(__global const ushort *total, __global int *winner, long W, long H, int D, int d_min)
+{
+    long xr = get_global_id(0), y = get_global_id(1);
+    if (xr >= W || y >= H) return;
+    int best = -1;
+    uint best_sum = 0xffffffffu;
+    for (int k = 0; k < D; k++) {
+        long x = xr + d_min + k;
+        if (x < 0 || x >= W) continue;
+        uint sum = total[(y * W + x) * D + k];
+        if (sum < best_sum) { best_sum = sum; best = k; }
+    }
+    winner[y * W + xr] = best < 0 ? d_min - 1 : d_min + best;
+}
+
+/* Left-right consistency: a left winner d at x is kept when the right view's winner at x - d is within
+ * `tolerance` of it. Otherwise the pixel loses its disparity and is half-occluded when no disparity of the
+ * range would be confirmed by the right view (no right pixel on its row points back to it: what it sees,
+ * the right camera does not), mismatched when one would (the right camera sees it; the left winner was
+ * wrong). Hirschmueller 2008, section 3.4. */
+__kernel void check_views(__global float *disparity, __global const int *left_winner,
+                          __global const int *right_winner, __global uchar *occluded, __global uchar *mismatched,
+                          long W, long H, int D, int d_min, int tolerance)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    size_t i = y * W + x;
+    int d = left_winner[i];
+    long xr = x - d;
+    occluded[i] = 0;
+    mismatched[i] = 0;
+    if (d >= d_min && xr >= 0 && xr < W && abs(right_winner[y * W + xr] - d) <= tolerance) return;
+    int seen = 0;
+    for (int k = 0; k < D && !seen; k++) {
+        long r = x - (d_min + k);
+        seen = r >= 0 && r < W && right_winner[y * W + r] == d_min + k;
+    }
+    occluded[i] = !seen;
+    mismatched[i] = seen;
+    disparity[i] = NAN;
+}
+
+/* Half-occluded pixels take the background's disparity: of the nearest kept disparities to their left
+ * and right on the row, the smaller (the farther surface, which the nearer one hides from one view).
+ * One work-item per row; `filled` is the disparity with them filled (NaN where a row has no kept pixel);
+ * other pixels are copied. */
+__kernel void fill_occluded(__global const float *disparity, __global const uchar *occluded, __global float *filled,
+                            long W, long H)
+{
+    long y = get_global_id(0);
+    if (y >= H) return;
+    __global const float *row = disparity + y * W;
+    __global const uchar *hidden = occluded + y * W;
+    __global float *out = filled + y * W;
+    /* Left to right: the nearest kept value on the left; then right to left, the smaller of it and the
+     * nearest on the right (fmin ignores a NaN: a side with none gives way to the other). */
+    float last = NAN;
+    for (long x = 0; x < W; x++) {
+        if (!isnan(row[x])) last = row[x];
+        out[x] = hidden[x] ? last : row[x];
+    }
+    last = NAN;
+    for (long x = W - 1; x >= 0; x--) {
+        if (!isnan(row[x])) last = row[x];
+        else if (hidden[x]) out[x] = fmin(out[x], last);
+    }
+}

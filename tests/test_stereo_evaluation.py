@@ -1,0 +1,268 @@
+"""vmcl.stereo_evaluation and the folder reader under it: any Middlebury-layout folder, OpenCV as documented."""
+
+import shutil
+
+import cv2
+import numpy as np
+import pytest
+
+from vmcl import datasets
+from vmcl import stereo_evaluation as se
+from vmcl.cli import main
+from vmcl.early.disparity_range import estimate_range
+from vmcl.errors import InputTypeError, InputValueError
+
+V2_TEDDY = "middlebury_stereo_v2eval/teddy"
+
+
+def _oracle_bad(disparity, truth, mask, threshold):
+    """Middlebury's bad-pixel share computed here directly: |d - d_gt| > t, or no value."""
+    d, g = disparity[mask], truth[mask]
+    return float(np.mean(np.isnan(d) | (np.abs(d - g) > threshold)))
+
+
+def _opencv(raw):
+    """OpenCV's fixed-point output in pixels, its "no value" (below minDisparity 0) as NaN."""
+    return np.where(raw < 0, np.nan, raw.astype(np.float32) / 16).astype(np.float32)
+
+
+# --------------------------------------------------------------------------------------------- baselines
+
+
+def test_sgbm_3way_is_opencv_bit_for_bit(datasets_root):
+    pair = datasets.load_stereo("teddy", datasets_root)
+    # teddy's info.txt publishes a maximum disparity of 59: 60 disparities, 64 for OpenCV.
+    assert pair.published_disparities == 60
+    assert se.baseline_disparities(pair)[0] == 64
+    left, right = (cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) for image in (pair.left, pair.right))
+    direct = {
+        "OpenCV StereoSGBM 3WAY": cv2.StereoSGBM_create(
+            minDisparity=0, numDisparities=64, blockSize=5, P1=8 * 1 * 5**2, P2=32 * 1 * 5**2, uniquenessRatio=10,
+            mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY).compute(left, right),
+        "OpenCV StereoSGBM MODE_SGBM": cv2.StereoSGBM_create(
+            minDisparity=0, numDisparities=64, blockSize=5, P1=200, P2=800, uniquenessRatio=10,
+            mode=cv2.STEREO_SGBM_MODE_SGBM).compute(left, right),
+        "OpenCV StereoBM": cv2.StereoBM_create(numDisparities=64, blockSize=15).compute(left, right),
+    }
+    evaluation = se.evaluate_pair(pair, se.opencv_baselines(pair), warm=False)
+    assert set(evaluation.disparities) == set(direct)
+    for name, raw in direct.items():
+        expected = _opencv(raw)
+        got = evaluation.disparities[name]
+        assert got.dtype == np.float32
+        assert np.array_equal(got, expected, equal_nan=True), name
+        assert np.isnan(got).any()  # OpenCV leaves some pixels without a value: they must count as bad
+        for scores in (s for s in evaluation.scores if s.method == name):
+            mask = pair.masks[scores.region]
+            assert scores.pixels == int(mask.sum())
+            assert scores.density == float(np.mean(np.isfinite(expected[mask])))
+            for threshold in se.THRESHOLDS:
+                assert scores.bad[threshold] == pytest.approx(_oracle_bad(expected, pair.disparity, mask, threshold),
+                                                              abs=1e-12)
+    assert sorted({s.region for s in evaluation.scores}) == ["all", "disc", "nonocc"]
+
+
+def test_unpublished_range_comes_from_the_images_not_the_truth(datasets_root):
+    pair = datasets.read_stereo_folder(datasets_root / "middlebury_stereo_2003/teddy")
+    assert pair.published_disparities is None
+    count, note = se.baseline_disparities(pair)
+    found = estimate_range(pair.left, pair.right)
+    assert count == -(-(found.d_max + 1) // 16) * 16 and count % 16 == 0
+    assert "publishes no disparity range" in note and f"{found.d_min}..{found.d_max}" in note
+
+
+def test_matched_pixels_comparison_against_an_oracle(datasets_root):
+    pair = datasets.load_stereo("tsukuba", datasets_root)
+    truth = pair.disparity.copy()
+    half = truth.copy()
+    half[:, : truth.shape[1] // 2] = np.nan  # a method that answers on the right half only
+    sgbm = next(m for m in se.opencv_baselines(pair) if m.name == "OpenCV StereoSGBM 3WAY")
+    methods = [se.StereoMethod("truth", lambda left, right: truth), se.StereoMethod("half", lambda left, right: half), sgbm]
+    evaluation = se.evaluate_pair(pair, methods)
+    nonocc = pair.masks["nonocc"]
+    scores = {(s.method, s.region): s for s in evaluation.scores}
+    assert scores["truth", "nonocc"].bad == {0.5: 0.0, 1.0: 0.0, 2.0: 0.0}
+    assert scores["half", "all"].density == pytest.approx(np.mean(np.isfinite(half[pair.masks["all"]])))
+    assert scores["half", "nonocc"].bad[1.0] == pytest.approx(np.mean(np.isnan(half[nonocc])))
+    assert all(s.ms > 0 for s in evaluation.scores)
+    matched_at = nonocc & np.isfinite(evaluation.disparities[sgbm.name])
+    rows = {c.method: c for c in evaluation.matched}
+    assert set(rows) == {"truth", "half"} and all(c.baseline == sgbm.name for c in rows.values())
+    assert rows["truth"].matched == int(matched_at.sum()) > 0
+    assert rows["truth"].method_bad == 0.0
+    assert rows["truth"].baseline_bad == pytest.approx(
+        _oracle_bad(evaluation.disparities[sgbm.name], pair.disparity, matched_at, 1.0))
+    assert rows["half"].method_bad == pytest.approx(np.mean(np.isnan(half[matched_at])))
+
+
+# --------------------------------------------------------------------------------------------- folders
+
+
+def test_a_copied_scene_under_another_name(datasets_root, tmp_path):
+    folder = tmp_path / "my_pair"
+    shutil.copytree(datasets_root / V2_TEDDY, folder)
+    pair = datasets.read_stereo_folder(folder)
+    teddy = datasets.load_stereo("teddy", datasets_root)
+    assert pair.name == "my_pair" and pair.folder == folder
+    assert (pair.scale, pair.published_disparities, pair.disparity_range) == (4.0, 60, (12.5, 52.75))
+    assert np.array_equal(pair.disparity, teddy.disparity, equal_nan=True)
+    assert np.array_equal(pair.left, teddy.left) and np.array_equal(pair.right, teddy.right)
+    assert pair.masks.keys() == teddy.masks.keys() == {"nonocc", "all", "disc"}
+    assert all(np.array_equal(pair.masks[m], teddy.masks[m]) for m in pair.masks)
+    methods = se.opencv_baselines(pair)
+    ours = se.evaluate_pair(pair, methods, warm=False)
+    reference = se.evaluate_pair(teddy, se.opencv_baselines(teddy), warm=False)
+    assert [(s.method, s.region, s.bad, s.density, s.mae) for s in ours.scores] == \
+           [(s.method, s.region, s.bad, s.density, s.mae) for s in reference.scores]
+    # Found as a scene folder itself, and below a folder of scene folders, at any depth within reach.
+    assert datasets.find_stereo_folders(folder) == [folder]
+    nested = tmp_path / "a" / "b"
+    shutil.copytree(folder, nested / "other")
+    assert datasets.find_stereo_folders(tmp_path) == [nested / "other", folder]
+    assert datasets.find_stereo_folders(tmp_path, depth=1) == [folder]
+
+
+def test_the_shared_scenes_are_all_found(datasets_root):
+    found = {f.relative_to(datasets_root).as_posix() for f in datasets.find_stereo_folders(datasets_root)}
+    assert found == {"middlebury_stereo_2001/map", "middlebury_stereo_2001/sawtooth", "middlebury_stereo_2001/tsukuba",
+                     "middlebury_stereo_2001/venus", "middlebury_stereo_2003/teddy",
+                     "middlebury_stereo_v2eval/teddy", "middlebury_stereo_v2eval/tsukuba",
+                     "middlebury_stereo_v2eval/venus"}
+    # Each copy agrees with its other copy (PROVENANCE: the same pixels), whatever its layout's scale.
+    for name, old in (("tsukuba", "middlebury_stereo_2001/tsukuba"), ("venus", "middlebury_stereo_2001/venus"),
+                      ("teddy", "middlebury_stereo_2003/teddy")):
+        v2 = datasets.load_stereo(name, datasets_root)
+        other = datasets.read_stereo_folder(datasets_root / old)
+        assert np.array_equal(other.disparity, v2.disparity, equal_nan=True), name
+        assert other.scale == v2.scale and other.masks == {} and other.published_disparities is None
+    assert [datasets.load_stereo(n, datasets_root).published_disparities for n in ("tsukuba", "venus")] == [16, 20]
+
+
+def _write_pair(folder, names, shape, rng):
+    folder.mkdir(parents=True, exist_ok=True)
+    for name in names:
+        assert cv2.imwrite(str(folder / name), rng.integers(0, 256, shape, dtype=np.uint8))
+
+
+@pytest.mark.parametrize(("width", "scale"), [(463, 3), (695, 2), (1390, 1)])
+def test_2005_2006_layout_scale_from_the_published_width(tmp_path, width, scale):
+    rng = np.random.default_rng(width)
+    folder = tmp_path / "Art"
+    _write_pair(folder, ("view1.png", "view5.png"), (6, width), rng)
+    grey = rng.integers(0, 256, (6, width), dtype=np.uint8)
+    grey[0, :5] = 0
+    assert cv2.imwrite(str(folder / "disp1.png"), grey)
+    pair = datasets.read_stereo_folder(folder)
+    expected = np.where(grey == 0, np.nan, grey / scale).astype(np.float32)
+    assert pair.scale == scale and pair.published_disparities is None and pair.masks == {}
+    assert np.array_equal(pair.disparity, expected, equal_nan=True)
+    assert np.isnan(pair.disparity[0, :5]).all()
+
+
+def test_2005_layout_of_an_unpublished_width_is_refused(tmp_path):
+    folder = tmp_path / "cropped"
+    _write_pair(folder, ("view1.png", "view5.png", "disp1.png"), (6, 550), np.random.default_rng(0))
+    with pytest.raises(InputValueError, match="550 px wide.*scale of disp1.png cannot be decided"):
+        datasets.read_stereo_folder(folder)
+
+
+def _write_pfm_by_hand(path, rows_top_first):
+    """A little-endian PFM written here: its rows bottom to top, as the format stores them."""
+    height, width = rows_top_first.shape
+    path.write_bytes(f"Pf\n{width} {height}\n-1.0\n".encode() + np.flipud(rows_top_first).astype("<f4").tobytes())
+
+
+@pytest.mark.parametrize("truth_name", ["disp0.pfm", "disp0GT.pfm"])
+def test_2014_layout(tmp_path, truth_name):
+    rng = np.random.default_rng(7)
+    folder = tmp_path / "Adirondack-perfect"
+    _write_pair(folder, ("im0.png", "im1.png"), (5, 8, 3), rng)
+    truth = (rng.random((5, 8)) * 60).astype(np.float32)
+    truth[0, 0] = truth[4, 7] = np.inf
+    _write_pfm_by_hand(folder / truth_name, truth)
+    (folder / "calib.txt").write_text("cam0=[4000 0 1000; 0 4000 900; 0 0 1]\ncam1=[4000 0 1100; 0 4000 900; 0 0 1]\n"
+                                      "doffs=100\nbaseline=170\nwidth=8\nheight=5\nndisp=290\nisint=0\nvmin=10\n"
+                                      "vmax=60\n")
+    pair = datasets.read_stereo_folder(folder)
+    expected = np.where(np.isinf(truth), np.nan, truth)
+    assert np.array_equal(pair.disparity, expected, equal_nan=True)  # row 0 on top, inf unknown
+    assert pair.scale == 1.0 and pair.published_disparities == 290 and pair.masks == {}
+    assert pair.left.shape == (5, 8, 3)
+    # MiddEval3's mask: 255 non-occluded, 128 occluded, 0 without ground truth.
+    levels = np.full((5, 8), 255, np.uint8)
+    levels[1, :3] = 128
+    levels[0, 0] = levels[4, 7] = 0
+    assert cv2.imwrite(str(folder / "mask0nocc.png"), levels)
+    masked = datasets.read_stereo_folder(folder)
+    assert np.array_equal(masked.masks["nonocc"], levels == 255)
+    assert np.array_equal(masked.masks["all"], levels > 0)
+    # The same map through write_pfm reads back the same.
+    datasets.write_pfm(folder / truth_name, expected)
+    assert np.array_equal(datasets.read_stereo_folder(folder).disparity, expected, equal_nan=True)
+
+
+def test_a_folder_of_no_layout_is_refused_by_name(tmp_path):
+    folder = tmp_path / "holiday_photos"
+    _write_pair(folder, ("left.png", "right.png"), (4, 4), np.random.default_rng(1))
+    with pytest.raises(InputValueError, match="holiday_photos holds no stereo pair.*imL.png.*calib.txt.*view1.png"):
+        datasets.read_stereo_folder(folder)
+    assert datasets.find_stereo_folders(tmp_path) == []
+    with pytest.raises(FileNotFoundError, match="nowhere"):
+        datasets.read_stereo_folder(tmp_path / "nowhere")
+    with pytest.raises(InputTypeError, match="folder must be a str"):
+        datasets.read_stereo_folder(3)
+    # The 2001 / 2003 layout's scale is known only for their published sizes.
+    _write_pair(tmp_path / "small", ("im2.png", "im6.png", "disp2.png"), (10, 20), np.random.default_rng(2))
+    with pytest.raises(InputValueError, match="20 x 10, not a size"):
+        datasets.read_stereo_folder(tmp_path / "small")
+
+
+def test_harness_arguments_are_refused_by_name(datasets_root):
+    from vmcl.pipeline import Config, StereoConfig
+
+    pair = datasets.load_stereo("map", datasets_root)
+    with pytest.raises(InputTypeError, match="pair must be a vmcl.datasets.StereoPair"):
+        se.evaluate_pair("map", se.opencv_baselines(pair))
+    with pytest.raises(InputValueError, match="methods must be a non-empty sequence"):
+        se.evaluate_pair(pair, [])
+    with pytest.raises(InputValueError, match="num_disparities must be a multiple of 16"):
+        se.stereo_bm(40)
+    with pytest.raises(InputValueError, match="mode must be one of"):
+        se.stereo_sgbm(64, "HH")
+    with pytest.raises(InputValueError, match="config must enable stereo"):
+        se.vmcl_method(Config(stereo=StereoConfig(enabled=False)))
+    with pytest.raises(InputTypeError, match="config must be a vmcl.pipeline.Config"):
+        se.vmcl_method({"stereo": {}})
+    with pytest.raises(InputValueError, match="image must be uint8"):
+        se.grey(pair.left.astype(np.uint16))
+
+
+# --------------------------------------------------------------------------------------------- the command
+
+
+def test_eval_stereo_reads_any_folder(datasets_root, tmp_path, capsys):
+    shutil.copytree(datasets_root / V2_TEDDY, tmp_path / "my_pair")
+    assert main(["eval", "stereo", "--data", str(tmp_path), "-q"]) == 0
+    printed = capsys.readouterr().out
+    rows = {tuple(c.strip() for c in line.strip("|").split("|")) for line in printed.splitlines()
+            if line.startswith("| my_pair |")}
+    methods = {row[1] for row in rows if len(row) == 9}
+    assert methods == {"vmcl (dense, MRF)", "OpenCV StereoBM", "OpenCV StereoSGBM MODE_SGBM",
+                       "OpenCV StereoSGBM 3WAY"}
+    pair = datasets.load_stereo("teddy", datasets_root)
+    left, right = (cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) for image in (pair.left, pair.right))
+    sgbm = _opencv(cv2.StereoSGBM_create(minDisparity=0, numDisparities=64, blockSize=5, P1=200, P2=800,
+                                         uniquenessRatio=10, mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY).compute(left, right))
+    bad1 = _oracle_bad(sgbm, pair.disparity, pair.masks["nonocc"], 1.0)
+    row = next(r for r in rows if r[1:3] == ("OpenCV StereoSGBM 3WAY", "nonocc") and len(r) == 9)
+    assert row[4] == f"{100 * bad1:.1f}"
+    assert "numDisparities 64: the data set publishes 60 disparities" in printed
+    # The scene folder itself is read too.
+    assert main(["eval", "stereo", "--data", str(tmp_path / "my_pair"), "-q"]) == 0
+    assert "| my_pair | vmcl (dense, MRF) | nonocc |" in capsys.readouterr().out
+
+
+def test_eval_stereo_without_a_scene_is_exit_2(tmp_path, capsys):
+    (tmp_path / "notes.txt").write_text("no pair here")
+    assert main(["eval", "stereo", "--data", str(tmp_path), "-q"]) == 2
+    assert "no stereo scene in a Middlebury layout" in capsys.readouterr().err

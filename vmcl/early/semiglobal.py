@@ -1,0 +1,244 @@
+"""Dense stereo by the census data term and min-sum message passing along scanlines (semi-global matching).
+
+Seed sections "Stereo" and "Organization of integration": the stereo MRF's energy over a disparity per
+pixel is a data term plus a smoothness term whose line process pays for discontinuities, and
+discontinuities are cheaper where the brightness changes. Here the data term is the census transform's
+Hamming distance (Zabih and Woodfill: each pixel described by which neighbours are darker, robust to the
+two cameras' different gains and to the outliers a depth edge brings into a window); the smoothness term
+charges ``p1`` for a change of one disparity and ``p2`` for a jump, ``p2`` lowered where the brightness
+changes between the two pixels. The energy is minimised exactly along each scanline by min-sum
+messages (a 1-D dynamic program), along 8 (or 4) directions, and the messages summed
+(Hirschmueller's semi-global matching): the MRF's minimum approximated in a fixed number of sweeps,
+one work-item per scanline.
+
+Both views' winners come from the one sum of messages. A left winner the right view does not confirm
+(left-right consistency) has no value, and is told apart as half-occluded (no right pixel on its row
+points back to it: the right camera does not see it) or mismatched (one does). Kept winners are moved to
+a fraction of a pixel by the equiangular (V) fit through their neighbours' sums.
+
+References
+----------
+R. Zabih and J. Woodfill, "Non-parametric local transforms for computing visual correspondence", ECCV 1994.
+J. Immerkaer, "Fast noise variance estimation", Computer Vision and Image Understanding 64(2), 1996.
+H. Hirschmueller, "Stereo processing by semiglobal matching and mutual information", IEEE PAMI 30(2), 2008.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pyopencl.array as cl_array
+
+from vmcl.cm.core import (
+    ArrayLike,
+    check_bool,
+    check_int,
+    check_real,
+    finite_float32,
+    machine_for,
+    mask_result,
+)
+from vmcl.early.disparity_range import estimate_range
+from vmcl.early.filters import grey_field
+from vmcl.early.noise import threshold_field
+from vmcl.early.stereo import check_pair, check_range
+from vmcl.errors import InputValueError
+from vmcl.machine import Machine
+
+__all__ = ["CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "P1", "P2", "SemiGlobalMatch",
+           "match_semiglobal"]
+
+CENSUS_SIZE = (9, 7)  # width, height of the census window: 62 neighbours in a 64-bit code
+CENSUS_BITS = CENSUS_SIZE[0] * CENSUS_SIZE[1] - 1
+"""Bits of a census code, the largest matching cost."""
+
+DIRECTIONS = {8: ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (-1, 1)),
+              4: ((1, 0), (-1, 0), (0, 1), (0, -1))}
+"""The scanline directions (dx, dy) messages are passed along, for 8 and 4 paths."""
+
+# The defaults, fitted on the training pairs by the stereo machine's fit (benchmarks/stereo_fit.py, whose
+# results/stereo_fit.md gives every combination tried): never on a pair a benchmark reports.
+CENSUS_THRESHOLD = 3.0
+"""Default census margin, in units of the noise's standard deviation."""
+P1 = 32
+"""Default price of a change of one disparity between neighbours, in census bits."""
+P2 = 64.0
+"""Default price of a jump where the brightness does not change, in census bits."""
+EDGE_GAIN = 0.1
+"""Default lowering of the jump's price per unit of noise in the brightness change."""
+
+_NOISE_MEDIAN = 0.6745 * 6
+"""The median magnitude of Immerkaer's mask on Gaussian noise, in units of the noise's standard deviation."""
+_PRIVATE_STEP = 32  # the private message arrays are sized in steps of this many disparities
+
+
+@dataclass
+class SemiGlobalMatch:
+    """Dense disparities of the left view (host or device arrays, as the input was).
+
+    disparity : float32 (H, W), d with I_left(x, y) = I_right(x - d, y), to a fraction of a pixel; NaN where
+        the right view does not confirm the left winner.
+    filled : float32 (H, W), ``disparity`` with the half-occluded pixels given their background's value
+        (the smaller of the nearest kept disparities left and right on the row); mismatched pixels NaN.
+    occluded : bool (H, W), half-occluded pixels: no disparity of the range is confirmed by the right view.
+    mismatched : bool (H, W), unconfirmed pixels that are not half-occluded (the winner was wrong).
+    d_min, d_max : int, the range searched.
+    """
+
+    disparity: ArrayLike
+    filled: ArrayLike
+    occluded: ArrayLike
+    mismatched: ArrayLike
+    d_min: int
+    d_max: int
+
+
+def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max: int | None = None,
+                     census_threshold: float = CENSUS_THRESHOLD, p1: int = P1, p2: float = P2,
+                     edge_gain: float = EDGE_GAIN, paths: int = 8,
+                     subpixel: bool = True, tolerance: int = 1, machine: Machine | None = None
+                     ) -> SemiGlobalMatch:
+    """Match a rectified pair densely: census costs, min-sum messages along scanlines, both views checked.
+
+    Parameters
+    ----------
+    left, right : (H, W) or (H, W, 3) arrays or device arrays; uint8, uint16 or float
+        The pair, rows being epipolar lines (as :func:`vmcl.early.stereo.match` takes it).
+    d_min, d_max : int, optional
+        The disparity range. Default: found from the images by
+        :func:`vmcl.early.disparity_range.estimate_range` (either end given overrides that end).
+    census_threshold : float
+        >= 0: a neighbour sets its census bit when it is darker than the centre by more than this times the
+        noise's standard deviation, estimated from the left view (J. Immerkaer's mask, with the median of
+        its magnitude for the mean), so that noise on a flat patch leaves its bits unset rather than random.
+    p1 : int
+        In [0, 255]: the price of a change of one disparity between neighbours (slanted surfaces), in
+        census bits (a code has :data:`CENSUS_BITS`).
+    p2 : float
+        >= p1: the price of a larger jump (a depth discontinuity), where the brightness does not change.
+    edge_gain : float
+        >= 0: the jump's price between two pixels is ``max(p1, p2 / (1 + edge_gain * s))``, ``s`` their
+        brightness difference in units of the noise's standard deviation (as for ``census_threshold``):
+        discontinuities are cheaper at brightness edges. 0 keeps ``p2`` everywhere.
+    paths : {8, 4}
+        Directions the messages are passed along (:data:`DIRECTIONS`).
+    subpixel : bool
+        Move each kept winner to the vertex of the symmetric V through the summed costs at d - 1, d, d + 1
+        (the equiangular fit: d + (s- - s+) / (2 (max(s-, s+) - s))), offsets within half a pixel; a
+        winner at either end of the disparities that compete stays whole. Hamming costs grow linearly
+        away from the match, which the V follows; on rendered slanted planes it came out a little
+        closer than the parabola (mean absolute error 0.136 against 0.149 px on the test's plane).
+    tolerance : int
+        >= 0: the most the right view's winner may differ from the left one's for the pixel to be kept.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    SemiGlobalMatch
+
+    Notes
+    -----
+    The summed messages are 16-bit: 8 paths of at most ``CENSUS_BITS + p2`` each, so ``p2`` is at most
+    8000. The costs and sums take 3 bytes per pixel and disparity of device memory.
+
+    Raises
+    ------
+    InputTypeError, InputValueError
+        Not a pair of images of one shape and type; a range wider than the image or with |d| >= W; a
+        parameter outside its range.
+    """
+    machine = machine_for(machine)
+    check_pair(left, right, machine)
+    left, right = (finite_float32(image, name) for name, image in (("left", left), ("right", right)))
+    census_threshold = check_real(census_threshold, "census_threshold", minimum=0)
+    p1 = check_int(p1, "p1", minimum=0, maximum=255)
+    p2 = check_real(p2, "p2", minimum=p1, maximum=8000)
+    edge_gain = check_real(edge_gain, "edge_gain", minimum=0)
+    paths = check_int(paths, "paths")
+    if paths not in DIRECTIONS:
+        raise InputValueError(f"paths must be 8 or 4, got {paths}")
+    subpixel = check_bool(subpixel, "subpixel")
+    tolerance = check_int(tolerance, "tolerance", minimum=0, maximum=2**31 - 1)
+    height, width = left.shape[:2]
+    d_min, d_max = _range(left, right, d_min, d_max, machine)
+    depth = d_max - d_min + 1
+    cells = height * width * depth
+    machine.require_memory(f"semi-global matching of a {height} x {width} pair over {depth} disparities",
+                           3 * cells + 40 * height * width, 2 * cells)
+    host = isinstance(left, np.ndarray)
+    views = [grey_field(machine, machine.to_device(image) if isinstance(image, np.ndarray) else image)
+             for image in (left, right)]
+    dims = (np.int64(width), np.int64(height))
+    sums = _aggregate(machine, views, d_min, depth, census_threshold, p1, p2, edge_gain, paths)
+    found = _select(machine, sums, dims, d_min, depth, subpixel, tolerance)
+    disparity, filled, occluded, mismatched = found
+    return SemiGlobalMatch(disparity.get() if host else disparity, filled.get() if host else filled,
+                           mask_result(occluded, host), mask_result(mismatched, host), d_min=d_min, d_max=d_max)
+
+
+def _range(left, right, d_min, d_max, machine: Machine) -> tuple[int, int]:
+    """The range to search: the given ends, the others from :func:`estimate_range`, checked."""
+    for name, value in (("d_min", d_min), ("d_max", d_max)):
+        if value is not None:
+            check_int(value, name)
+    if d_min is None or d_max is None:
+        found = estimate_range(left, right, machine=machine)
+        if d_min is None and d_max is None:
+            d_min, d_max = found.d_min, found.d_max
+        elif d_min is None:
+            d_min = min(found.d_min, d_max)
+        else:
+            d_max = max(found.d_max, d_min)
+    check_range(d_min, d_max, left.shape[1])
+    return d_min, d_max
+
+
+def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth: int, census_threshold: float,
+               p1: int, p2: float, edge_gain: float, paths: int) -> cl_array.Array:
+    """The (H, W, D) uint16 sum of the messages along every direction."""
+    height, width = views[0].shape
+    dims = (np.int64(width), np.int64(height))
+    response = machine.empty((height, width), np.float32)
+    machine.launch(machine.kernel("semiglobal", "noise_response"), (width, height), views[0], response, *dims)
+    # The noise's standard deviation from the median response of Immerkaer's mask (most pixels of most
+    # images are smooth at its 3 x 3 scale; texture raises the median, which makes the census margin more
+    # conservative, never less), kept on the device.
+    to_sigma = 1 / _NOISE_MEDIAN
+    noise, _ = threshold_field(machine, response, (0.5, 0.5, to_sigma, to_sigma), local=False)
+    del response
+    codes = [machine.empty((height, width), np.uint64) for _ in views]
+    build = machine.kernel("semiglobal", "census", CENSUS_W=CENSUS_SIZE[0], CENSUS_H=CENSUS_SIZE[1])
+    for view, code in zip(views, codes):
+        machine.launch(build, (width, height), view, code, *dims, np.float32(census_threshold), noise)
+    costs = machine.empty((height, width, depth), np.uint8)
+    machine.launch(machine.kernel("semiglobal", "census_costs"), (width, height), *codes, costs, *dims,
+                   np.int32(depth), np.int32(d_min), np.uint8(CENSUS_BITS // 2))
+    del codes
+    sums = machine.empty((height, width, depth), np.uint16)
+    aggregate = machine.kernel("semiglobal", "aggregate", MAX_D=_PRIVATE_STEP * math.ceil(depth / _PRIVATE_STEP))
+    for index, (dx, dy) in enumerate(DIRECTIONS[paths]):
+        lines = height if dy == 0 else width if dx == 0 else width + height - 1
+        machine.launch(aggregate, (lines,), costs, views[0], sums, *dims, np.int32(depth), np.int32(dx),
+                       np.int32(dy), np.uint16(p1), np.float32(p2), np.float32(edge_gain), noise,
+                       np.int32(index == 0))
+    return sums
+
+
+def _select(machine: Machine, sums: cl_array.Array, dims, d_min: int, depth: int, subpixel: bool,
+            tolerance: int) -> tuple[cl_array.Array, ...]:
+    """Both views' winners, the check, and the filled disparity: (disparity, filled, occluded, mismatched)."""
+    width, height = int(dims[0]), int(dims[1])
+    disparity = machine.empty((height, width), np.float32)
+    winners = [machine.empty((height, width), np.int32) for _ in range(2)]
+    machine.launch(machine.kernel("semiglobal", "select_left"), (width, height), sums, disparity, winners[0], *dims,
+                   np.int32(depth), np.int32(d_min), np.int32(subpixel))
+    machine.launch(machine.kernel("semiglobal", "select_right"), (width, height), sums, winners[1], *dims,
+                   np.int32(depth), np.int32(d_min))
+    occluded, mismatched = (machine.empty((height, width), np.uint8) for _ in range(2))
+    machine.launch(machine.kernel("semiglobal", "check_views"), (width, height), disparity, *winners, occluded,
+                   mismatched, *dims, np.int32(depth), np.int32(d_min), np.int32(tolerance))
+    filled = machine.empty((height, width), np.float32)
+    machine.launch(machine.kernel("semiglobal", "fill_occluded"), (height,), disparity, occluded, filled, *dims)
+    return disparity, filled, occluded, mismatched
