@@ -10,9 +10,9 @@
  * One work-item per census code, per cost cell row, per scanline, per pixel: the Connection Machine's
  * processors, one per pixel; the scanline kernels give each processor of a line's first pixel the line.
  *
- * Layout: the cost and the sum of messages are (H, W, D) with the D disparities of a pixel contiguous,
- * so that a scanline's step reads and writes one short run. D = d_max - d_min + 1 <= MAX_D (a define,
- * the size of the private message arrays).
+ * Layout: the cost and the sum of messages are (H, W, S) with the D = d_max - d_min + 1 disparities of a
+ * pixel contiguous (S = D rounded up to whole vectors of LANES), so that a scanline's step reads and
+ * writes one short run. S <= MAX_D (a define, the size of the private message arrays).
  */
 #include "vmcl.h"
 
@@ -53,12 +53,12 @@ __kernel void census(__global const float *image, __global ulong *codes, long W,
  * falls outside the right image, `outside` (the distance expected between unrelated codes: no evidence
  * for or against d). */
 __kernel void census_costs(__global const ulong *left, __global const ulong *right, __global uchar *cost,
-                           long W, long H, int D, int d_min, uchar outside)
+                           long W, long H, int D, int S, int d_min, uchar outside)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     ulong code = left[y * W + x];
-    __global uchar *out = cost + (y * W + x) * D;
+    __global uchar *out = cost + (y * W + x) * S;
     for (int k = 0; k < D; k++) {
         long xr = x - (d_min + k);
         out[k] = (xr >= 0 && xr < W) ? (uchar)popcount(code ^ right[y * W + xr]) : outside;
@@ -82,16 +82,33 @@ __kernel void noise_response(__global const float *grey, __global float *respons
     response[y * W + x] = fabs(r);
 }
 
+/* Message arithmetic runs on LANES disparities at once (one CPU vector register, or a GPU's 16-wide
+ * loads); a pixel's D disparities are stored in a run of S = LANES * ceil(D / LANES), the lanes past D
+ * unused. In the messages those lanes hold PAD, which no real lane ever takes up: a real message is at
+ * most max C + P2 <= 8062 (the host bounds P2 by 8000), and a candidate through a padded lane is at least
+ * PAD + P1 > lowest + P2, so every real value is the one the scalar recursion gives. */
+#define LANES 16
+#define PAD ((ushort)0x3fff)
+#define CHUNKS (MAX_D / LANES)
+
+inline ushort lowest_lane(ushort16 v)
+{
+    ushort8 a = min(v.lo, v.hi);
+    ushort4 b = min(a.lo, a.hi);
+    ushort2 c = min(b.lo, b.hi);
+    return min(c.x, c.y);
+}
+
 /* The messages along direction (dx, dy), one work-item per scanline, added into `total` (written when
  * `first`). L(p, d) = C(p, d) + min(L(p-r, d), L(p-r, d +- 1) + P1, min_k L(p-r, k) + P2(p)) - min_k L(p-r, k);
  * subtracting the previous minimum keeps L below max C + P2, so sums of 8 directions fit 16 bits (the
- * host checks).  P2(p) = max(P1, P2 / (1 + edge_gain * |I(p) - I(p-r)| / s)), s the noise's standard
- * deviation (noise[0]): brightness changes are counted in units of the noise, whatever the image's scale. 
+ * host checks). P2(p) = max(P1, P2 / (1 + edge_gain * |I(p) - I(p-r)| / s)), s the noise's standard
+ * deviation (noise[0]): brightness changes are counted in units of the noise, whatever the image's scale.
  *
  * Scanlines: along a row or a column, one per row or column; diagonal, one from each pixel of the entry
  * row and one from each pixel of the entry column but its first (W + H - 1). */
 __kernel void aggregate(__global const uchar *cost, __global const float *grey, __global ushort *total,
-                        long W, long H, int D, int dx, int dy, ushort p1, float p2, float edge_gain,
+                        long W, long H, int D, int S, int dx, int dy, ushort p1, float p2, float edge_gain,
                         __global const float *noise, int first)
 {
     float gain = edge_gain / fmax(noise[0], FLT_MIN);
@@ -108,34 +125,44 @@ __kernel void aggregate(__global const uchar *cost, __global const float *grey, 
         if (id < W) { x = id; y = dy > 0 ? 0 : H - 1; }
         else { x = dx > 0 ? 0 : W - 1; y = (dy > 0 ? 0 : H - 1) + dy * (id - W + 1); }
     }
-    ushort previous[MAX_D], current[MAX_D];
+    int chunks = S / LANES;
+    const ushort16 lane = (ushort16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    const ushort16 pad = (ushort16)PAD;
+    const ushort16 down = (ushort16)(15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30);
+    const ushort16 up = (ushort16)(1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16);
+    ushort16 unused[CHUNKS], previous[CHUNKS], current[CHUNKS];
+    for (int c = 0; c < chunks; c++) unused[c] = as_ushort16(lane >= (ushort16)(ushort)max(D - c * LANES, 0));
     /* The line's first pixel: its messages are its costs. */
     size_t p = y * W + x;
     ushort lowest = 0xffff;
-    for (int k = 0; k < D; k++) {
-        ushort c = cost[p * D + k];
-        previous[k] = c;
-        lowest = min(lowest, c);
-        total[p * D + k] = first ? c : (ushort)(total[p * D + k] + c);
+    for (int c = 0; c < chunks; c++) {
+        ushort16 l = select(convert_ushort16(vload16(0, cost + p * S + c * LANES)), pad, unused[c]);
+        previous[c] = l;
+        lowest = min(lowest, lowest_lane(l));
+        __global ushort *out = total + p * S + c * LANES;
+        vstore16(first ? l : vload16(0, out) + l, 0, out);
     }
     float brightness = grey[p];
+    const ushort16 slope = (ushort16)p1;
     for (x += dx, y += dy; x >= 0 && x < W && y >= 0 && y < H; x += dx, y += dy) {
         p = y * W + x;
         float here = grey[p];
         ushort jump = (ushort)max((float)p1, p2 / (1.0f + gain * fabs(here - brightness)));
         brightness = here;
-        uint ceiling = (uint)lowest + jump;
+        ushort16 ceiling = (ushort16)(ushort)(lowest + jump), floor = (ushort16)lowest;
         ushort next_lowest = 0xffff;
-        for (int k = 0; k < D; k++) {
-            uint best = min((uint)previous[k], ceiling);
-            if (k > 0) best = min(best, (uint)previous[k - 1] + p1);
-            if (k + 1 < D) best = min(best, (uint)previous[k + 1] + p1);
-            ushort l = (ushort)(cost[p * D + k] + best - lowest);
-            current[k] = l;
-            next_lowest = min(next_lowest, l);
-            total[p * D + k] = first ? l : (ushort)(total[p * D + k] + l);
+        for (int c = 0; c < chunks; c++) {
+            ushort16 below = shuffle2(c > 0 ? previous[c - 1] : pad, previous[c], down);
+            ushort16 above = shuffle2(previous[c], c + 1 < chunks ? previous[c + 1] : pad, up);
+            ushort16 best = min(min(previous[c], ceiling), min(below, above) + slope);
+            ushort16 costs = select(convert_ushort16(vload16(0, cost + p * S + c * LANES)), pad, unused[c]);
+            ushort16 l = costs + best - floor;
+            current[c] = l;
+            next_lowest = min(next_lowest, lowest_lane(l));
+            __global ushort *out = total + p * S + c * LANES;
+            vstore16(first ? l : vload16(0, out) + l, 0, out);
         }
-        for (int k = 0; k < D; k++) previous[k] = current[k];
+        for (int c = 0; c < chunks; c++) previous[c] = current[c];
         lowest = next_lowest;
     }
 }
@@ -146,11 +173,11 @@ __kernel void aggregate(__global const uchar *cost, __global const float *grey, 
  * that compete stays whole), and its integer d for the consistency check. Only the disparities whose right
  * pixel x - d lies inside the image compete; a pixel with none gets NaN and the winner d_min - 1. */
 __kernel void select_left(__global const ushort *total, __global float *disparity, __global int *winner,
-                          long W, long H, int D, int d_min, int subpixel)
+                          long W, long H, int D, int S, int d_min, int subpixel)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
-    __global const ushort *s = total + (y * W + x) * D;
+    __global const ushort *s = total + (y * W + x) * S;
     /* Disparities with x - d inside [0, W). */
     int k_lo = max(0, (int)(x - (W - 1)) - d_min), k_hi = min(D - 1, (int)x - d_min);
     if (k_lo > k_hi) { disparity[y * W + x] = NAN; winner[y * W + x] = d_min - 1; return; }
@@ -177,7 +204,8 @@ __kernel void select_left(__global const ushort *total, __global float *disparit
 
 /* The right view's winner at each right pixel xr, from the same sums: the d that minimises
  * S(xr + d, y, d) over the d whose left pixel is inside (Hirschmueller: no second aggregation). */
-__kernel void select_right(__global const ushort *total, __global int *winner, long W, long H, int D, int d_min)
+__kernel void select_right(__global const ushort *total, __global int *winner, long W, long H, int D, int S,
+                           int d_min)
 {
     long xr = get_global_id(0), y = get_global_id(1);
     if (xr >= W || y >= H) return;
@@ -186,7 +214,7 @@ __kernel void select_right(__global const ushort *total, __global int *winner, l
     for (int k = 0; k < D; k++) {
         long x = xr + d_min + k;
         if (x < 0 || x >= W) continue;
-        uint sum = total[(y * W + x) * D + k];
+        uint sum = total[(y * W + x) * S + k];
         if (sum < best_sum) { best_sum = sum; best = k; }
     }
     winner[y * W + xr] = best < 0 ? d_min - 1 : d_min + best;
@@ -217,6 +245,29 @@ __kernel void check_views(__global float *disparity, __global const int *left_wi
     occluded[i] = !seen;
     mismatched[i] = seen;
     disparity[i] = NAN;
+}
+
+/* The median of the kept disparities of each kept pixel's 3 x 3 neighbourhood (itself included; pixels
+ * without one stay without): isolated wrong winners, a pixel or two wide, give way to their neighbours'
+ * value, while a surface's edge, held by the pixels on its own side, stays where it is. */
+__kernel void median_kept(__global const float *disparity, __global float *out, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    size_t i = y * W + x;
+    if (isnan(disparity[i])) { out[i] = NAN; return; }
+    float v[9];
+    int n = 0;
+    for (long yy = max(y - 1, (long)0); yy <= min(y + 1, H - 1); yy++)
+        for (long xx = max(x - 1, (long)0); xx <= min(x + 1, W - 1); xx++) {
+            float d = disparity[yy * W + xx];
+            if (isnan(d)) continue;
+            /* Insertion sort: at most 9 values. */
+            int j = n++;
+            while (j > 0 && v[j - 1] > d) { v[j] = v[j - 1]; j--; }
+            v[j] = d;
+        }
+    out[i] = (n % 2) ? v[n / 2] : 0.5f * (v[n / 2 - 1] + v[n / 2]);
 }
 
 /* Half-occluded pixels take the background's disparity: of the nearest kept disparities to their left

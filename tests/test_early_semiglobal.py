@@ -34,7 +34,7 @@ def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, machine):
     total = semiglobal_sums(left, right, d_min, d_max, p1, p2, DIRECTIONS[paths], CENSUS_BITS // 2)
     want_left, want_right = semiglobal_winners(total, d_min)
     found = match_semiglobal(left, right, d_min=d_min, d_max=d_max, census_threshold=0, p1=p1, p2=p2, edge_gain=0,
-                             paths=paths, subpixel=False, machine=machine)
+                             paths=paths, subpixel=False, median=False, machine=machine)
     height, width = left.shape
     kept = np.zeros((height, width), bool)
     occluded = np.zeros((height, width), bool)
@@ -64,9 +64,9 @@ def test_subpixel_offset_is_the_equiangular_vertex_of_the_sums(machine):
     left, right = _textured_pair(seed=1)
     total = semiglobal_sums(left, right, 0, 5, 7, 40, DIRECTIONS[8], CENSUS_BITS // 2)
     whole = match_semiglobal(left, right, d_min=0, d_max=5, census_threshold=0, p1=7, p2=40, edge_gain=0,
-                             subpixel=False, machine=machine).disparity
+                             subpixel=False, median=False, machine=machine).disparity
     refined = match_semiglobal(left, right, d_min=0, d_max=5, census_threshold=0, p1=7, p2=40, edge_gain=0,
-                               machine=machine).disparity
+                               median=False, machine=machine).disparity
     np.testing.assert_array_equal(np.isfinite(whole), np.isfinite(refined))
     width = left.shape[1]
     checked = 0
@@ -82,6 +82,22 @@ def test_subpixel_offset_is_the_equiangular_vertex_of_the_sums(machine):
         assert refined[y, x] == pytest.approx(want, abs=1e-5)
         checked += 1
     assert checked > 50
+
+
+def test_median_is_that_of_the_kept_neighbours(machine):
+    """Each kept disparity becomes the median of the kept ones in its 3 x 3 neighbourhood (the mean of the
+    middle two for an even count); unkept pixels stay unkept, and the fill follows the filtered values."""
+    left, right = _textured_pair(shape=(24, 40), seed=4)
+    raw = match_semiglobal(left, right, d_min=0, d_max=6, median=False, machine=machine)
+    found = match_semiglobal(left, right, d_min=0, d_max=6, machine=machine)
+    kept = np.isfinite(raw.disparity)
+    assert (~kept).sum() > 10
+    np.testing.assert_array_equal(np.isfinite(found.disparity), kept)
+    padded = np.pad(raw.disparity, 1, constant_values=np.nan)
+    for y, x in zip(*np.nonzero(kept)):
+        window = padded[y:y + 3, x:x + 3]
+        assert found.disparity[y, x] == pytest.approx(np.median(window[np.isfinite(window)]), abs=1e-6)
+    np.testing.assert_array_equal(found.occluded, raw.occluded)
 
 
 def _slanted_plane(size=96):

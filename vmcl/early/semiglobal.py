@@ -71,7 +71,11 @@ EDGE_GAIN = 0.1
 
 _NOISE_MEDIAN = 0.6745 * 6
 """The median magnitude of Immerkaer's mask on Gaussian noise, in units of the noise's standard deviation."""
-_PRIVATE_STEP = 32  # the private message arrays are sized in steps of this many disparities
+_LINES_PER_GROUP = 16
+"""Scanlines per work-group of the message kernel: left to the device, PoCL put a whole direction's lines
+in one work-group, which one CPU thread runs (teddy's 8 directions: 174 ms, against 84 ms in groups of 16)."""
+_LANES = 16  # disparities per vector in the message kernel (LANES in kernels/semiglobal.cl)
+_PRIVATE_STEP = 64  # the private message arrays are sized in steps of this many disparities
 
 
 @dataclass
@@ -98,7 +102,8 @@ class SemiGlobalMatch:
 def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max: int | None = None,
                      census_threshold: float = CENSUS_THRESHOLD, p1: int = P1, p2: float = P2,
                      edge_gain: float = EDGE_GAIN, paths: int = 8,
-                     subpixel: bool = True, tolerance: int = 1, machine: Machine | None = None
+                     subpixel: bool = True, tolerance: int = 1, median: bool = True,
+                     machine: Machine | None = None
                      ) -> SemiGlobalMatch:
     """Match a rectified pair densely: census costs, min-sum messages along scanlines, both views checked.
 
@@ -132,6 +137,11 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         closer than the parabola (mean absolute error 0.136 against 0.149 px on the test's plane).
     tolerance : int
         >= 0: the most the right view's winner may differ from the left one's for the pixel to be kept.
+    median : bool
+        Replace each kept disparity by the median of the kept ones in its 3 x 3 neighbourhood (after the
+        check, before the fill), which removes isolated wrong winners (Hirschmueller's filter). On every
+        training pair of benchmarks/stereo_training.py it lowered the filled disparity's bad-1 rate
+        (by 0.1 to 1.7 points).
     machine : vmcl.Machine, optional
 
     Returns
@@ -161,10 +171,11 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         raise InputValueError(f"paths must be 8 or 4, got {paths}")
     subpixel = check_bool(subpixel, "subpixel")
     tolerance = check_int(tolerance, "tolerance", minimum=0, maximum=2**31 - 1)
+    median = check_bool(median, "median")
     height, width = left.shape[:2]
     d_min, d_max = _range(left, right, d_min, d_max, machine)
     depth = d_max - d_min + 1
-    cells = height * width * depth
+    cells = height * width * _LANES * math.ceil(depth / _LANES)
     machine.require_memory(f"semi-global matching of a {height} x {width} pair over {depth} disparities",
                            3 * cells + 40 * height * width, 2 * cells)
     host = isinstance(left, np.ndarray)
@@ -172,7 +183,7 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
              for image in (left, right)]
     dims = (np.int64(width), np.int64(height))
     sums = _aggregate(machine, views, d_min, depth, census_threshold, p1, p2, edge_gain, paths)
-    found = _select(machine, sums, dims, d_min, depth, subpixel, tolerance)
+    found = _select(machine, sums, dims, d_min, depth, subpixel, tolerance, median)
     disparity, filled, occluded, mismatched = found
     return SemiGlobalMatch(disparity.get() if host else disparity, filled.get() if host else filled,
                            mask_result(occluded, host), mask_result(mismatched, host), d_min=d_min, d_max=d_max)
@@ -197,8 +208,9 @@ def _range(left, right, d_min, d_max, machine: Machine) -> tuple[int, int]:
 
 def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth: int, census_threshold: float,
                p1: int, p2: float, edge_gain: float, paths: int) -> cl_array.Array:
-    """The (H, W, D) uint16 sum of the messages along every direction."""
+    """The (H, W, S) uint16 sum of the messages along every direction, S = D rounded up to whole vectors."""
     height, width = views[0].shape
+    stride = _LANES * math.ceil(depth / _LANES)
     dims = (np.int64(width), np.int64(height))
     response = machine.empty((height, width), np.float32)
     machine.launch(machine.kernel("semiglobal", "noise_response"), (width, height), views[0], response, *dims)
@@ -212,33 +224,39 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
     build = machine.kernel("semiglobal", "census", CENSUS_W=CENSUS_SIZE[0], CENSUS_H=CENSUS_SIZE[1])
     for view, code in zip(views, codes):
         machine.launch(build, (width, height), view, code, *dims, np.float32(census_threshold), noise)
-    costs = machine.empty((height, width, depth), np.uint8)
+    costs = machine.empty((height, width, stride), np.uint8)
     machine.launch(machine.kernel("semiglobal", "census_costs"), (width, height), *codes, costs, *dims,
-                   np.int32(depth), np.int32(d_min), np.uint8(CENSUS_BITS // 2))
+                   np.int32(depth), np.int32(stride), np.int32(d_min), np.uint8(CENSUS_BITS // 2))
     del codes
-    sums = machine.empty((height, width, depth), np.uint16)
+    sums = machine.empty((height, width, stride), np.uint16)
     aggregate = machine.kernel("semiglobal", "aggregate", MAX_D=_PRIVATE_STEP * math.ceil(depth / _PRIVATE_STEP))
     for index, (dx, dy) in enumerate(DIRECTIONS[paths]):
         lines = height if dy == 0 else width if dx == 0 else width + height - 1
-        machine.launch(aggregate, (lines,), costs, views[0], sums, *dims, np.int32(depth), np.int32(dx),
+        machine.launch(aggregate, (lines,), costs, views[0], sums, *dims, np.int32(depth), np.int32(stride),
+                       np.int32(dx),
                        np.int32(dy), np.uint16(p1), np.float32(p2), np.float32(edge_gain), noise,
-                       np.int32(index == 0))
+                       np.int32(index == 0), local_size=(_LINES_PER_GROUP,))
     return sums
 
 
 def _select(machine: Machine, sums: cl_array.Array, dims, d_min: int, depth: int, subpixel: bool,
-            tolerance: int) -> tuple[cl_array.Array, ...]:
+            tolerance: int, median: bool) -> tuple[cl_array.Array, ...]:
     """Both views' winners, the check, and the filled disparity: (disparity, filled, occluded, mismatched)."""
     width, height = int(dims[0]), int(dims[1])
+    stride = np.int32(sums.shape[2])
     disparity = machine.empty((height, width), np.float32)
     winners = [machine.empty((height, width), np.int32) for _ in range(2)]
     machine.launch(machine.kernel("semiglobal", "select_left"), (width, height), sums, disparity, winners[0], *dims,
-                   np.int32(depth), np.int32(d_min), np.int32(subpixel))
+                   np.int32(depth), stride, np.int32(d_min), np.int32(subpixel))
     machine.launch(machine.kernel("semiglobal", "select_right"), (width, height), sums, winners[1], *dims,
-                   np.int32(depth), np.int32(d_min))
+                   np.int32(depth), stride, np.int32(d_min))
     occluded, mismatched = (machine.empty((height, width), np.uint8) for _ in range(2))
     machine.launch(machine.kernel("semiglobal", "check_views"), (width, height), disparity, *winners, occluded,
                    mismatched, *dims, np.int32(depth), np.int32(d_min), np.int32(tolerance))
+    if median:
+        smoothed = machine.empty((height, width), np.float32)
+        machine.launch(machine.kernel("semiglobal", "median_kept"), (width, height), disparity, smoothed, *dims)
+        disparity = smoothed
     filled = machine.empty((height, width), np.float32)
     machine.launch(machine.kernel("semiglobal", "fill_occluded"), (height,), disparity, occluded, filled, *dims)
     return disparity, filled, occluded, mismatched
