@@ -11,8 +11,8 @@ Run as ``python benchmarks/mrf.py``. In one run, on a piecewise-planar disparity
   (Canny edges, sparse; and the dense intensity variant) restored by the MRF with Canny edges of the left
   image, bad-1 on nonocc, all and disc, beside cv2.StereoBM (block 15) and StereoSGBM (block 5, P1 = 8 *
   cn * blockSize^2, P2 = 32 * cn * blockSize^2 as OpenCV documents them, uniquenessRatio 10 as `vmcl eval
-  stereo` uses; default MODE_SGBM and MODE_SGBM_3WAY) computed in the same run (bar: vmcl below StereoBM on
-  every scene). vmcl's matcher searches the range vmcl.early.disparity_range.estimate_range finds from the
+  stereo` uses; default MODE_SGBM and MODE_SGBM_3WAY), built by vmcl.stereo_evaluation (the one stereo
+  evaluation harness) and computed in the same run (bar: vmcl below StereoBM on every scene). vmcl's matcher searches the range vmcl.early.disparity_range.estimate_range finds from the
   images; OpenCV's matchers get numDisparities from the range the dataset publishes (info.txt), rounded up
   to 16. Nothing takes a range from the ground truth.
 
@@ -26,7 +26,6 @@ import platform
 import time
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from vmcl import datasets, default_machine, mrf
@@ -36,6 +35,15 @@ from vmcl.early.stereo import match
 from vmcl.metrics import evaluate_disparity
 from vmcl.mrf import EnergyModel, Settings
 from vmcl.mrf.lattice import Lattice, philox_key
+from vmcl.stereo_evaluation import (
+    BM_BLOCK,
+    SGBM_BLOCK,
+    baseline_disparities,
+    grey,
+    opencv_disparity,
+    stereo_bm,
+    stereo_sgbm,
+)
 
 DENSE = Settings().override({"alpha": 0.5, "beta": 4.0, "t0": 4.0, "t_factor": 0.98, "sweeps": 300, "mf_t0": 2.0,
                               "mf_factor": 0.8, "mf_steps": 20, "mf_iterations": 5})
@@ -168,31 +176,6 @@ class NumpyGibbs:
 
 
 DATASETS = Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets"
-# Measured on the three scenes themselves (mean field, intensity matches, Canny edges; alpha in {0.1, 0.25,
-# 1, 8}, beta in {0.25, 0.5, 2, 8}, confidence 1 or the clipped NCC score, edge_gain 0.75 or 0.95): the
-# lowest nonocc bad-1 on every scene. Tuned on the evaluation data, so the DEPTH rows are the fair ones.
-STEREO_DENSE = mrf.preset("stereo").override({"alpha": 0.1, "beta": 0.25})
-
-
-SGBM_BLOCK = 5
-
-
-def grey(image: np.ndarray) -> np.ndarray:
-    return cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) if image.ndim == 3 else image
-
-
-def published_disparities(pair) -> int:
-    """numDisparities for OpenCV from the range the dataset publishes: the maximum disparity of its
-    info.txt (second line) plus one, rounded up to a multiple of 16 as OpenCV requires."""
-    max_disparity = int((pair.folder / "info.txt").read_text().split()[1])
-    return -(-(max_disparity + 1) // 16) * 16
-
-
-def stereo_sgbm(disparities: int, mode: int):
-    """StereoSGBM as OpenCV documents it for grey input (cn = 1); uniquenessRatio 10 as vmcl eval uses."""
-    area = SGBM_BLOCK * SGBM_BLOCK
-    return cv2.StereoSGBM_create(minDisparity=0, numDisparities=disparities, blockSize=SGBM_BLOCK, P1=8 * area,
-                                 P2=32 * area, uniquenessRatio=10, mode=mode)
 
 
 def real_data(machine) -> list[str]:
@@ -202,7 +185,8 @@ def real_data(machine) -> list[str]:
               "vmcl.early.disparity_range.estimate_range finds from the images (stated per scene below); "
               "OpenCV's matchers get numDisparities from the range the dataset publishes (info.txt's maximum "
               "disparity 15 / 19 / 59, plus one, rounded up to 16: 16 / 32 / 64), as their documentation asks "
-              "for a multiple of 16. OpenCV as documented, on grey images: StereoBM block 15, its other "
+              "for a multiple of 16 (vmcl.stereo_evaluation.baseline_disparities). OpenCV as documented, built by "
+              "vmcl.stereo_evaluation (the harness `vmcl eval stereo` uses), on grey images: StereoBM block 15, its other "
               "parameters OpenCV's defaults; StereoSGBM block 5, P1 = 8 * cn * blockSize^2 = 200, P2 = 32 * cn "
               "* blockSize^2 = 800 (cn = 1), uniquenessRatio 10 (as `vmcl eval stereo` sets it; OpenCV's "
               "default is 0), the rest OpenCV's defaults, in its default mode (MODE_SGBM) and in "
@@ -220,9 +204,9 @@ def real_data(machine) -> list[str]:
         start = time.perf_counter()
         found_range = estimate_range(pair.left, pair.right, machine=machine)
         estimate_seconds = time.perf_counter() - start
-        levels = published_disparities(pair)
+        levels, levels_note = baseline_disparities(pair)
         ranges.append(f"{name} {found_range.d_min}..{found_range.d_max} (found in {estimate_seconds:.3f} s, not "
-                      f"in the seconds column; OpenCV numDisparities {levels})")
+                      f"in the seconds column; OpenCV {levels_note})")
         edges = canny(pair.left, sigma=2.0, machine=machine)
         rows = []
         for features in ("canny", "intensity"):
@@ -234,8 +218,7 @@ def real_data(machine) -> list[str]:
             confidence = matched.astype(np.float32)
             runs = [("DEPTH preset", "meanfield", mrf.preset("stereo"))]
             if features == "intensity":
-                runs += [("alpha 0.1, beta 0.25", "meanfield", STEREO_DENSE),
-                         ("gaps filled, no MRF", "icm", mrf.preset("stereo").override({"icm_sweeps": 0}))]
+                runs.append(("gaps filled, no MRF", "icm", mrf.preset("stereo").override({"icm_sweeps": 0})))
             for label, method, settings in runs:
                 start = time.perf_counter()
                 field = restore_with(found.disparity, settings, method, confidence=confidence, edges=edges,
@@ -243,20 +226,20 @@ def real_data(machine) -> list[str]:
                 seconds = match_seconds + time.perf_counter() - start
                 rows.append((f"vmcl {features} matches + {label}", matched.mean(), field, seconds))
         left, right = grey(pair.left), grey(pair.right)
-        for label, matcher in (("cv2.StereoBM (block 15)", cv2.StereoBM_create(levels, 15)),
-                               ("cv2.StereoSGBM MODE_SGBM (block 5)", stereo_sgbm(levels, cv2.STEREO_SGBM_MODE_SGBM)),
-                               ("cv2.StereoSGBM 3WAY (block 5)", stereo_sgbm(levels, cv2.STEREO_SGBM_MODE_SGBM_3WAY))):
+        for label, matcher in ((f"cv2.StereoBM (block {BM_BLOCK})", stereo_bm(levels)),
+                               *((f"cv2.StereoSGBM {mode} (block {SGBM_BLOCK})", stereo_sgbm(levels, mode))
+                                 for mode in ("MODE_SGBM", "3WAY"))):
             start = time.perf_counter()
-            disparity = matcher.compute(left, right).astype(np.float32) / 16
+            disparity = opencv_disparity(matcher, left, right)
             seconds = time.perf_counter() - start
-            rows.append((label, 1.0, np.where(disparity >= 0, disparity, np.nan), seconds))
+            rows.append((label, 1.0, disparity, seconds))
         bad = {}
         for label, density, field, seconds in rows:
             bad[label] = [evaluate_disparity(field, truth, mask=pair.masks[m] & np.isfinite(truth)).bad[1.0]
                           for m in ("nonocc", "all", "disc")]
             lines.append(f"| {name} | {label} | {density:.3f} | {bad[label][0]:.4f} | {bad[label][1]:.4f} | "
                          f"{bad[label][2]:.4f} | {seconds:.3f} |")
-        ours, bm = bad["vmcl intensity matches + DEPTH preset"], bad["cv2.StereoBM (block 15)"]
+        ours, bm = bad["vmcl intensity matches + DEPTH preset"], bad[f"cv2.StereoBM (block {BM_BLOCK})"]
         verdicts.append(f"{name}: " + ", ".join(f"{m} {'holds' if o < b else 'missed'} ({o:.4f} against {b:.4f})"
                                                 for m, o, b in zip(("nonocc", "all", "disc"), ours, bm)))
     return lines + ["", ("Ranges searched, vmcl's estimated from the images (the first estimate's time includes "

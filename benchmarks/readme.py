@@ -206,30 +206,27 @@ def edges_figures(f: ResultsFile) -> str:
 
 
 def stereo_figures(f: ResultsFile) -> str:
-    speed = f.table("method", "x StereoBM")
+    quality = f.table("scene", "method", "region", "bad 1")
+    v2 = tuple(f"middlebury_stereo_v2eval/{name}" for name in SCENES)
 
-    def ms(method: str) -> float:
-        return number(speed.cell({"method": method}, "ms"))
+    def bad(method: str, column: str = "bad 1") -> str:
+        scenes = " / ".join(quality.cell({"scene": scene, "method": method, "region": "nonocc"}, column)
+                            for scene in v2)
+        motorcycle = quality.cell({"scene": "motorcycle", "method": method, "region": "known"}, column)
+        return f"{scenes} / {motorcycle}%"
 
-    matched = f.table("vmcl bad-1", "StereoBM bad-1 at the same pixels")
-    dense = f.table("shiftable nonocc", "shiftable disc")
-
-    def bad1(table: Table, column: str) -> str:
-        return per_scene(table, column, as_percent) + "%"
-
-    shiftable_cost = (ms("vmcl.match intensity (NCC), shiftable, table")
-                      / ms("vmcl.match intensity (NCC), table"))
-    return (f"running variant {milliseconds(ms('vmcl.match canny, running'))} against StereoBM's "
-            f"{milliseconds(ms('cv2.StereoBM block 15'))} (Canny on both images included; full table "
-            f"{milliseconds(ms('vmcl.match canny, table'))}); bad-1 at the matched pixels "
-            f"{bad1(matched, 'vmcl bad-1')} (tsukuba / venus / teddy) against StereoBM's "
-            f"{bad1(matched, 'StereoBM bad-1 at the same pixels')} there; dense intensity matches with "
-            f"shiftable windows {bad1(dense, 'shiftable nonocc')} (centred {bad1(dense, 'centred nonocc')}, "
-            f"SGBM {bad1(dense, 'SGBM MODE_SGBM nonocc')}, SGBM 3WAY {bad1(dense, 'SGBM 3WAY nonocc')}), "
-            f"near discontinuities (disc mask) {bad1(dense, 'shiftable disc')} (centred "
-            f"{bad1(dense, 'centred disc')}, SGBM {bad1(dense, 'SGBM MODE_SGBM disc')}, SGBM 3WAY "
-            f"{bad1(dense, 'SGBM 3WAY disc')}), "
-            f"{times(shiftable_cost)} the centred match's time")
+    speed = f.table("method", "x SGBM 3WAY", section="middlebury_stereo_v2eval/teddy")
+    machine = "vmcl depth machine (range found, semi-global, MRF)"
+    ms = number(speed.cell({"method": machine}, "ms"))
+    found = next(row[0] for row in speed.rows if row[0].startswith("vmcl semi-global matcher, range found"))
+    full = next(row[0] for row in speed.rows if row[0].startswith("vmcl semi-global matcher, full range"))
+    narrowing = number(speed.cell({"method": full}, "ms")) / number(speed.cell({"method": found}, "ms"))
+    return (f"dense bad-1 (tsukuba / venus / teddy nonocc / Motorcycle) {bad('vmcl (dense, MRF)')}, no range "
+            f"given, against StereoSGBM 3WAY's {bad('OpenCV StereoSGBM 3WAY')} and MODE_SGBM's "
+            f"{bad('OpenCV StereoSGBM MODE_SGBM')}; bad-0.5 {bad('vmcl (dense, MRF)', 'bad 0.5')}; teddy's depth "
+            f"machine {milliseconds(ms)}, {speed.cell({'method': machine}, 'x SGBM 3WAY')}x SGBM 3WAY's time; the "
+            f"range found from the images makes the semi-global matcher {times(narrowing)} faster than the full "
+            "range")
 
 
 def disparity_range_figures(f: ResultsFile) -> str:
@@ -304,7 +301,6 @@ def mrf_figures(f: ResultsFile) -> str:
 def pipeline_figures(f: ResultsFile) -> str:
     frames = f.table("MRF solver", "ms per frame")
     stages = f.table("stage", "256 meanfield")
-    dense = f.table("data", "edge matches alone")
 
     def frame(size: str, solver: str, column: str = "ms per frame") -> str:
         return frames.cell({"size": f"{size} x {size}", "MRF solver": solver}, column)
@@ -315,17 +311,10 @@ def pipeline_figures(f: ResultsFile) -> str:
     def stage(name: str) -> str:
         return stages.cell({"stage": name}, "256 meanfield") + " ms"
 
-    def bad1(column: str) -> str:
-        return per_scene(dense, column, lambda cell: f"{number(cell):.1f}", key="data") + "%"
-
     return (f"256²: {seconds('256', 'meanfield')} per frame with every cue "
             f"({frame('256', 'meanfield', 'frames per second')} fps; stereo {stage('stereo')} of it, the "
             f"integrate stage, labelling included, {stage('integrate')}), 512²: "
-            f"{seconds('512', 'meanfield')} with mean field, {seconds('512', 'icm')} with ICM; dense bad-1 "
-            "(Middlebury nonocc, tsukuba / venus / teddy) "
-            f"{bad1('edge matches backfilled by intensity matches')} with the edge matches backfilled by "
-            "intensity matches (`vmcl.mrf.backfill`), "
-            f"{bad1('edge matches alone')} from the edge matches alone")
+            f"{seconds('512', 'meanfield')} with mean field, {seconds('512', 'icm')} with ICM")
 
 
 def labelling_figures(f: ResultsFile) -> str:
@@ -372,15 +361,15 @@ def head_figures(f: ResultsFile) -> str:
 BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("edges", ("Canny (σ 1.4, smoothing included) against cv2.GaussianBlur + cv2.Canny and skimage; "
                "hysteresis variants"), edges_figures),
-    ("stereo", "teddy, 64 disparities, against StereoBM/SGBM; Middlebury v2 quality", stereo_figures),
+    ("stereo", ("the depth machine against StereoBM/SGBM on every Middlebury pair and Motorcycle; each stage on "
+                "and off; speed"), stereo_figures),
     ("disparity_range", "the disparity range found from the images, on rendered (training) and real (test) pairs",
      disparity_range_figures),
     ("motion", "584x388 against Farneback and DIS; EPE/AAE on Middlebury flow and Yosemite", motion_figures),
     ("early", "colour and texture against NumPy/SciPy", early_figures),
     ("mrf", "sweeps per second of each solver; Gibbs against NumPy; dense disparity on Middlebury",
      mrf_figures),
-    ("pipeline", "the whole machine per frame, stage by stage; dense disparity with and without the backfill",
-     pipeline_figures),
+    ("pipeline", "the whole machine per frame, stage by stage", pipeline_figures),
     ("labelling", ("the linear classifier's labels on images it was not fitted to (new noise seed; and each "
                    "preset left out of the fit), beside the rule labels; its cost"), labelling_figures),
     ("ground_truth", "scene rendering; BSDS evaluation", ground_truth_figures),

@@ -1,5 +1,6 @@
 """Fit the stereo cue's defaults on the training pairs: the semi-global matcher's census margin and
-smoothness prices, and whether the feature matcher still earns its place beside it.
+smoothness prices, whether the feature matcher still earns its place beside it, then the stereo MRF's
+weights on those matches.
 
 Run: python benchmarks/stereo_fit.py
 
@@ -7,9 +8,12 @@ Every combination of the grid below runs the Vision Machine (stereo only, every 
 default) on every training pair of benchmarks/stereo_training.py: the rendered scenes and Middlebury
 sawtooth and map, never a pair a benchmark reports. A combination's score is the mean of two means of
 the restored disparity's bad-1 rate (on the evaluated pixels), over the rendered pairs and over the real
-ones, which weigh equally so that the many rendered pairs do not decide alone. The best combination
-gives the defaults (vmcl.early.semiglobal's CENSUS_THRESHOLD, P1, P2, EDGE_GAIN and StereoConfig's
-feature_matches). Writes benchmarks/results/stereo_fit.md, every combination, best first.
+ones, which weigh equally so that the many rendered pairs do not decide alone. Two stages, each a grid: the
+matcher's (GRID), whose best combination gives vmcl.early.semiglobal's CENSUS_THRESHOLD, P1, P2, EDGE_GAIN
+and StereoConfig's feature_matches; then, with those, the MRF's (MRF_GRID): the weight of the matches in the
+MRF's data (StereoConfig.backfill_weight) and the stereo MRF's alpha and beta (vmcl.mrf.presets.STEREO,
+which was measured on sparse edge matches). Writes benchmarks/results/stereo_fit.md, every combination of
+each stage, best first.
 """
 
 from __future__ import annotations
@@ -28,35 +32,54 @@ from vmcl.pipeline import Config, VisionMachine
 
 GRID = {"feature_matches": (True, False), "census_threshold": (2.0, 3.0, 4.0), "p1": (32, 48, 64),
         "p2": (64.0, 96.0, 128.0), "edge_gain": (0.0, 0.1)}
+MRF_GRID = {"backfill_weight": (0.2, 1.0), "alpha": (0.25, 1.0, 4.0), "beta": (0.5, 2.0, 8.0)}
 ONLY_STEREO = {"motion": {"enabled": False}, "colour": {"enabled": False}, "texture": {"enabled": False}}
+
+
+def score(machine: vmcl.Machine, rendered: list, real: list, config: dict) -> tuple[float, list[float]]:
+    """The mean of the rendered pairs' and the real pairs' mean bad-1 of the restored disparity."""
+    vm = VisionMachine(Config.from_dict({**config, **ONLY_STEREO}), machine=machine)
+    rates = [metrics.evaluate_disparity(vm.run(p.left, p.right).disparity, p.disparity, mask=p.mask).bad[1.0]
+             for p in rendered + real]
+    return (float(np.mean(rates[:len(rendered)])) + float(np.mean(rates[len(rendered):]))) / 2, rates
+
+
+def stage(machine: vmcl.Machine, rendered: list, real: list, grid: dict, config) -> list[tuple]:
+    """(score, values, rates) of every combination of ``grid``, best first; ``config(values)`` makes its
+    Config dictionary."""
+    rows = []
+    for values in itertools.product(*grid.values()):
+        found, rates = score(machine, rendered, real, config(dict(zip(grid, values))))
+        rows.append((found, values, rates))
+        print(f"{dict(zip(grid, values))}: {found:.4f}", file=sys.stderr)
+    return sorted(rows, key=lambda row: row[0])
+
+
+def table(grid: dict, rows: list[tuple], names: list[str]) -> list[str]:
+    lines = ["| score | " + " | ".join(grid) + " | " + " | ".join(names) + " |",
+             "|---" * (1 + len(grid) + len(names)) + "|"]
+    return lines + [f"| {found:.4f} | " + " | ".join(str(v) for v in values) + " | "
+                    + " | ".join(f"{r:.3f}" for r in rates) + " |" for found, values, rates in rows]
 
 
 def main() -> int:
     machine = vmcl.Machine()
     rendered, real = rendered_pairs(), middlebury_pairs()
-    pairs = rendered + real
-    rows = []
-    for values in itertools.product(*GRID.values()):
-        stereo = dict(zip(GRID, values))
-        vm = VisionMachine(Config.from_dict({"stereo": stereo, **ONLY_STEREO}), machine=machine)
-        rates = [metrics.evaluate_disparity(vm.run(p.left, p.right).disparity, p.disparity, mask=p.mask).bad[1.0]
-                 for p in pairs]
-        score = (float(np.mean(rates[:len(rendered)])) + float(np.mean(rates[len(rendered):]))) / 2
-        rows.append((score, values, rates))
-        print(f"{stereo}: {score:.4f}", file=sys.stderr)
-    rows.sort(key=lambda row: row[0])
-    names = [p.name for p in pairs]
+    names = [p.name for p in rendered + real]
+    matcher = stage(machine, rendered, real, GRID, lambda values: {"stereo": values})
+    chosen = dict(zip(GRID, matcher[0][1]))
+    weights = stage(machine, rendered, real, MRF_GRID, lambda values: {
+        "stereo": {**chosen, "backfill_weight": values["backfill_weight"]},
+        "mrf": {"stereo": {"alpha": values["alpha"], "beta": values["beta"]}}})
     lines = ["# The stereo cue's defaults, fitted on the training pairs", "",
              (f"Measured {datetime.datetime.now():%Y-%m-%d %H:%M}. The Vision Machine, stereo only, each pair's "
               "range found from the images. Score: the mean of the rendered pairs' mean and the real pairs' "
-              "mean of the restored disparity's bad-1. Best first; the first row gives the defaults."), "",
-             "| score | " + " | ".join(GRID) + " | " + " | ".join(names) + " |",
-             "|---" * (1 + len(GRID) + len(names)) + "|"]
-    lines += [f"| {score:.4f} | " + " | ".join(str(v) for v in values) + " | "
-              + " | ".join(f"{r:.3f}" for r in rates) + " |" for score, values, rates in rows]
+              "mean of the restored disparity's bad-1. Best first; each stage's first row gives the defaults."),
+             "", "## Stage 1: the matcher", "", *table(GRID, matcher, names), "",
+             f"## Stage 2: the MRF's weights, with {chosen}", "", *table(MRF_GRID, weights, names)]
     out = Path(__file__).resolve().parent / "results" / "stereo_fit.md"
     out.write_text("\n".join(lines) + "\n")
-    print("\n".join(lines[:8]))
+    print("\n".join(lines[:10]))
     return 0
 
 

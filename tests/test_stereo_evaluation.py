@@ -266,3 +266,48 @@ def test_eval_stereo_without_a_scene_is_exit_2(tmp_path, capsys):
     (tmp_path / "notes.txt").write_text("no pair here")
     assert main(["eval", "stereo", "--data", str(tmp_path), "-q"]) == 2
     assert "no stereo scene in a Middlebury layout" in capsys.readouterr().err
+
+
+# -- the depth machine on Middlebury v2 -----------------------------------------------------------------
+
+BARS = {"tsukuba": 0.05, "venus": 0.025, "teddy": 0.10}  # the stereo issue's nonocc bad-1 bars
+
+
+@pytest.fixture(scope="module")
+def v2_evaluations(datasets_root):
+    from vmcl.datasets import load_stereo
+    from vmcl.stereo_evaluation import evaluate_pair, opencv_baselines, vmcl_method
+
+    method = vmcl_method()
+    found = {}
+    for name in BARS:
+        pair = load_stereo(name, datasets_root)
+        found[name] = evaluate_pair(pair, [method, *[m for m in opencv_baselines(pair) if "3WAY" in m.name]],
+                                    warm=False)
+    return found
+
+
+def _bad1(evaluation, method_prefix, region):
+    return next(s.bad[1.0] for s in evaluation.scores if s.method.startswith(method_prefix) and s.region == region)
+
+
+_BEHIND_SGBM = pytest.mark.xfail(strict=True, reason=(
+    "measured nonocc 4.8% against StereoSGBM 3WAY's 4.4% (all: 6.2% against 6.4%), with the defaults fitted "
+    "on the training pairs (benchmarks/stereo_fit.py)"))
+
+
+@pytest.mark.parametrize("name", [pytest.param("tsukuba", marks=_BEHIND_SGBM), "venus", "teddy"])
+def test_depth_machine_beats_sgbm_3way_on_middlebury(name, v2_evaluations):
+    """No range given, the restored disparity has fewer bad pixels than StereoSGBM 3WAY configured as
+    OpenCV documents it, over the nonocc and the all masks (measured nonocc: 4.8 / 3.5 / 11.3% against
+    4.4 / 5.9 / 16.6%)."""
+    evaluation = v2_evaluations[name]
+    for region in ("nonocc", "all"):
+        assert _bad1(evaluation, "vmcl", region) < _bad1(evaluation, "OpenCV StereoSGBM 3WAY", region), region
+
+
+@pytest.mark.xfail(strict=True, reason="measured nonocc bad-1 4.8 / 3.5 / 11.3% (tsukuba / venus / teddy) against "
+                   "bars of 5 / 2.5 / 10%: tsukuba meets its bar, venus and teddy do not; their errors lie mostly "
+                   "in bands along depth discontinuities, where the census window straddles both surfaces")
+def test_depth_machine_meets_the_issue_s_bars(v2_evaluations):
+    assert all(_bad1(v2_evaluations[name], "vmcl", "nonocc") <= bar for name, bar in BARS.items())

@@ -42,7 +42,7 @@ from vmcl import integrate as _integrate
 from vmcl import labelling
 from vmcl.cm.core import check_choice, check_int, check_real
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
-from vmcl.early import edges, motion, semiglobal, stereo
+from vmcl.early import disparity_range, edges, motion, semiglobal, stereo
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.labels import CUES
 from vmcl.machine import Machine, on_device
@@ -174,7 +174,9 @@ class StereoConfig:
         ``backfill_weight``.
     backfill_floor, backfill_weight : float
         Intensity matches whose correlation is at or below the floor weigh 0; a perfect one (or a
-        confirmed semi-global match) weighs ``backfill_weight`` (the feature matches weigh 1).
+        confirmed semi-global match) weighs ``backfill_weight`` (the feature matches weigh 1). The
+        default, 1, was fitted with the semi-global matcher (benchmarks/stereo_fit.py); with intensity
+        matches beside edge matches, 0.2 did better (the earlier default).
     occluded_weight : float
         In [0, 1]: the weight of the semi-global matcher's half-occluded pixels.
     census_threshold, p1, p2, edge_gain
@@ -192,7 +194,7 @@ class StereoConfig:
     enabled: bool = True
     d_min: int | None = None
     d_max: int | None = None
-    max_disparity: float = 1 / 3
+    max_disparity: float = disparity_range.MAX_DISPARITY
     features: str = "canny"
     patch: int = 11
     sigma: float = 2.0
@@ -204,7 +206,7 @@ class StereoConfig:
     backfill: bool = True
     dense: str = "semiglobal"
     backfill_floor: float = 0.9
-    backfill_weight: float = 0.2
+    backfill_weight: float = 1.0
     occluded_weight: float = 0.1
     census_threshold: float = semiglobal.CENSUS_THRESHOLD
     p1: int = semiglobal.P1
@@ -360,10 +362,12 @@ class MrfConfig:
         check_int(self.seed, "mrf.seed", minimum=0, maximum=2**64 - 1)
 
     def settings(self, cue: str, default: Settings | None = None) -> Settings:
-        """The MRF settings of ``cue``: its preset (for :data:`vmcl.labels.CUES`; else ``default``, or
-        ``Settings()``) with the schedule and this configuration's overrides."""
+        """The MRF settings of ``cue``: ``default`` (the cue's own, :attr:`vmcl.cues.CueModule.settings`),
+        else its preset (for :data:`vmcl.labels.CUES`) or ``Settings()``, with the schedule and this
+        configuration's overrides."""
         if cue in CUES:
-            return preset(cue).override({**_SCHEDULES[self.schedule], **getattr(self, cue)}, prefix=f"mrf.{cue}")
+            base = default if default is not None else preset(cue)
+            return base.override({**_SCHEDULES[self.schedule], **getattr(self, cue)}, prefix=f"mrf.{cue}")
         return (default or Settings()).override(_SCHEDULES[self.schedule], prefix=f"mrf.{cue}")
 
 

@@ -115,8 +115,8 @@ class CueModule:
     restored_as : str or None
         The Result attribute that holds its restored field besides ``Result.restored[name]``.
     settings : vmcl.mrf.Settings or None
-        Its MRF's energy model and schedules when :func:`vmcl.mrf.preset` has none for it (default:
-        ``Settings()``); the Config's ``[mrf] schedule`` applies on top, as for every cue.
+        Its MRF's energy model and schedules. None: :func:`vmcl.mrf.preset`'s for a built-in cue, else
+        ``Settings()``. The Config's ``[mrf] schedule`` and ``[mrf.<cue>]`` overrides apply on top.
     """
 
     name: str = ""

@@ -27,9 +27,16 @@ from vmcl.early.semiglobal import SemiGlobalMatch, match_semiglobal
 from vmcl.labels import Label
 from vmcl.machine import on_device
 from vmcl.mrf import backfill, mask_confidence, score_confidence
+from vmcl.mrf import preset as mrf_preset
 from vmcl.pictures import disparity_image
 
 __all__ = ["StereoCue"]
+
+
+DENSE_ALPHA = 0.25
+"""The stereo MRF's data weight for the dense matches (the preset's is 1)."""
+DENSE_BETA = 0.5
+"""The stereo MRF's smoothness weight for the dense matches (the preset's is 2)."""
 
 
 class StereoCue(CueModule):
@@ -40,6 +47,10 @@ class StereoCue(CueModule):
     kind = "smooth"
     label = Label.DEPTH
     fields = ("sparse_disparity", "stereo_discontinuity", "first_pass_disparity", "half_occluded")
+    # The stereo MRF's weights for the dense matches: the preset's, with the data weight alpha and the
+    # smoothness beta fitted on the training pairs (benchmarks/stereo_fit.py, stage 2). The preset itself
+    # was measured on sparse edge matches.
+    settings = mrf_preset("stereo").override({"alpha": DENSE_ALPHA, "beta": DENSE_BETA})
     restored_as = "disparity"
 
     def measure(self, run: RunInputs) -> Measurement:

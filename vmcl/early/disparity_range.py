@@ -3,8 +3,8 @@
 The matcher (:func:`vmcl.early.stereo.match`) compares the two views over a given range of disparities;
 what that range is, is a property of the scene, which only the images tell. Both views are smoothed with
 the binomial mask (:func:`vmcl.cm.filters.binomial`, the seed's Gaussian on the mesh) and halved, ``k``
-times, until the smaller side would drop below ``coarse_side``; at that level a disparity of a third of
-the width is a few dozen planes, so a wide range is searched cheaply. Dense intensity matches are made
+times, until the smaller side would drop below ``coarse_side``; at that level a disparity of half the
+width is a few dozen planes, so a wide range is searched cheaply. Dense intensity matches are made
 there in both directions, and a match counts when its correlation is high and the other view's match
 points back to it (left-right consistency, which rejects the chance winners of occluded and untextured
 pixels). The low and high quantiles of the confident matches are the range at that level; each finer
@@ -28,7 +28,11 @@ from vmcl.early.stereo import StereoMatch, check_pair, match
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine, on_device
 
-__all__ = ["DisparityRange", "estimate_range", "fallback_range"]
+__all__ = ["MAX_DISPARITY", "DisparityRange", "estimate_range", "fallback_range"]
+
+MAX_DISPARITY = 0.5
+"""The widest disparity searched by default, either sign, as a share of the image width: near objects of
+a wide-baseline rig reach 40% of the width (a third, the first default, missed them)."""
 
 _PYRAMID_PASSES = 2
 """Binomial passes before each halving: two passes of [1 2 1] / 4 are Burt and Adelson's 5-tap
@@ -67,7 +71,7 @@ class DisparityRange:
     found: tuple[int, int] | None
 
 
-def fallback_range(width: int, max_disparity: float = 1 / 3) -> tuple[int, int]:
+def fallback_range(width: int, max_disparity: float = MAX_DISPARITY) -> tuple[int, int]:
     """The wide range a caller matches over when the images do not decide it: 0 to
     ``floor(max_disparity * width)``, no more than the matcher takes (``width - 1``).
 
@@ -80,7 +84,7 @@ def fallback_range(width: int, max_disparity: float = 1 / 3) -> tuple[int, int]:
     return 0, min(width - 1, math.floor(max_disparity * width))
 
 
-def estimate_range(left: ArrayLike, right: ArrayLike, *, max_disparity: float = 1 / 3, coarse_side: int = 48,
+def estimate_range(left: ArrayLike, right: ArrayLike, *, max_disparity: float = MAX_DISPARITY, coarse_side: int = 48,
                    patch: int = 11, min_score: float = 0.8, quantile: float = 0.005, margin: int = 1,
                    widen: float = 0.25, min_share: float = 0.05, machine: Machine | None = None) -> DisparityRange:
     """Estimate the disparity range of a rectified pair from the images (coarse to fine).

@@ -62,11 +62,11 @@ DIRECTIONS = {8: ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (
 # results/stereo_fit.md gives every combination tried): never on a pair a benchmark reports.
 CENSUS_THRESHOLD = 3.0
 """Default census margin, in units of the noise's standard deviation."""
-P1 = 32
+P1 = 48
 """Default price of a change of one disparity between neighbours, in census bits."""
 P2 = 64.0
 """Default price of a jump where the brightness does not change, in census bits."""
-EDGE_GAIN = 0.1
+EDGE_GAIN = 0.0
 """Default lowering of the jump's price per unit of noise in the brightness change."""
 
 _NOISE_MEDIAN = 0.6745 * 6
