@@ -173,13 +173,14 @@ __kernel void aggregate(__global const uchar *cost, __global const float *grey, 
  * that compete stays whole), and its integer d for the consistency check. Only the disparities whose right
  * pixel x - d lies inside the image compete; a pixel with none gets NaN and the winner d_min - 1. */
 __kernel void select_left(__global const ushort *total, __global float *disparity, __global int *winner,
-                          long W, long H, int D, int S, int d_min, int subpixel)
+                          __global uchar *out_of_range, long W, long H, int D, int S, int d_min, int subpixel)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     __global const ushort *s = total + (y * W + x) * S;
     /* Disparities with x - d inside [0, W). */
     int k_lo = max(0, (int)(x - (W - 1)) - d_min), k_hi = min(D - 1, (int)x - d_min);
+    out_of_range[y * W + x] = 0;
     if (k_lo > k_hi) { disparity[y * W + x] = NAN; winner[y * W + x] = d_min - 1; return; }
     int best = k_lo;
     for (int k = k_lo + 1; k <= k_hi; k++)
@@ -190,6 +191,14 @@ __kernel void select_left(__global const ushort *total, __global float *disparit
     if ((best == k_hi && k_hi < D - 1) || (best == k_lo && k_lo > 0)) {
         disparity[y * W + x] = NAN;
         winner[y * W + x] = d_min - 1;
+        return;
+    }
+    /* A winner at an end of the range itself is where the search stopped: the seed's sign of an area
+     * outside the matcher's disparity range. Unmatched, and flagged as such. */
+    if (D > 1 && (best == 0 || best == D - 1)) {
+        disparity[y * W + x] = NAN;
+        winner[y * W + x] = d_min - 1;
+        out_of_range[y * W + x] = 1;
         return;
     }
     float d = (float)(d_min + best);
@@ -226,8 +235,9 @@ __kernel void select_right(__global const ushort *total, __global int *winner, l
  * the right camera does not), mismatched when one would (the right camera sees it; the left winner was
  * wrong). Hirschmueller 2008, section 3.4. */
 __kernel void check_views(__global float *disparity, __global const int *left_winner,
-                          __global const int *right_winner, __global uchar *occluded, __global uchar *mismatched,
-                          long W, long H, int D, int d_min, int tolerance)
+                          __global const int *right_winner, __global const uchar *out_of_range,
+                          __global uchar *occluded, __global uchar *mismatched, long W, long H, int D, int d_min,
+                          int tolerance)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -236,6 +246,7 @@ __kernel void check_views(__global float *disparity, __global const int *left_wi
     long xr = x - d;
     occluded[i] = 0;
     mismatched[i] = 0;
+    if (out_of_range[i]) return;  /* already unmatched, for its own reason */
     if (d >= d_min && xr >= 0 && xr < W && abs(right_winner[y * W + xr] - d) <= tolerance) return;
     int seen = 0;
     for (int k = 0; k < D && !seen; k++) {

@@ -103,18 +103,22 @@ def semiglobal_sums(left, right, d_min, d_max, p1, p2, directions, outside, marg
 
 def semiglobal_winners(total, d_min):
     """Left winners (ties: smaller d) over the disparities whose right pixel is inside, and the right view's
-    winners from the same sums; ``d_min - 1`` where none competes, and for a left winner pressed against
-    the image's edge (the last disparity inside where the range goes on)."""
+    winners from the same sums; ``d_min - 1`` where none competes, for a left winner pressed against the
+    image's edge (the last disparity inside where the range goes on), and for one at an end of the range,
+    which the third output marks (out of range)."""
     height, width, depth = total.shape
     left = np.full((height, width), d_min - 1)
     right = np.full((height, width), d_min - 1)
+    out_of_range = np.zeros((height, width), bool)
     for y, x in itertools.product(range(height), range(width)):
         ks = [k for k in range(depth) if 0 <= x - (d_min + k) < width]
         if ks:
             best = min(ks, key=lambda k: (total[y, x, k], k))
             pressed = (best == ks[-1] and ks[-1] < depth - 1) or (best == ks[0] and ks[0] > 0)
-            left[y, x] = d_min - 1 if pressed else d_min + best
+            at_end = depth > 1 and best in (0, depth - 1)
+            out_of_range[y, x] = at_end and not pressed
+            left[y, x] = d_min - 1 if pressed or at_end else d_min + best
         ks = [k for k in range(depth) if 0 <= x + d_min + k < width]
         if ks:
             right[y, x] = d_min + min(ks, key=lambda k: (total[y, x + d_min + k, k], k))
-    return left, right
+    return left, right, out_of_range

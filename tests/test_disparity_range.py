@@ -180,3 +180,18 @@ def test_a_pair_that_is_not_rectified_gets_a_note(near_scene, machine):
         result = VisionMachine(machine=machine).run(near_scene.left, right)
         notes[label] = [n for n in result.notes if "may not be rectified" in n]
     assert len(notes["turned"]) == 1 and not notes["upright"], notes
+
+
+def test_a_range_too_narrow_is_reported(near_scene, machine):
+    """Given 0..12 where the plate lies at 0.3 W (about 58 px), pixels that matched best at the range's end
+    are marked in Result.out_of_range and the notes say so; with the range found from the images, neither."""
+    narrow = VisionMachine(Config.from_dict({"stereo": {"d_min": 0, "d_max": 12}}), machine=machine).run(
+        near_scene.left, near_scene.right)
+    found = VisionMachine(machine=machine).run(near_scene.left, near_scene.right)
+    visible = _visible(near_scene)
+    plate, wall = visible & (near_scene.disparity > 12), visible & (near_scene.disparity <= 12)
+    # Measured: 36% of the plate, 0.1% of the wall.
+    assert narrow.out_of_range[plate].mean() > 0.2 and narrow.out_of_range[wall].mean() < 0.02
+    assert any("matched best at an end of the range 0..12 px" in n for n in narrow.notes), narrow.notes
+    assert not any("end of the range" in n for n in found.notes), found.notes
+    assert found.out_of_range.mean() < 0.01

@@ -659,7 +659,7 @@ class _Run:
             host_restored = {cue: array.get() for cue, array in restored.items()}
             host_lines = {cue: (h.get().astype(bool), v.get().astype(bool)) for cue, (h, v) in lines.items()}
             edge_map, host_support, host_labels = brightness.get(), support.get(), labels.get()
-        as_bool = ("colour_edges", "texture_edges", "stereo_discontinuity", "half_occluded")
+        as_bool = ("colour_edges", "texture_edges", "stereo_discontinuity", "half_occluded", "out_of_range")
         host = {name: (value.astype(bool) if name in as_bool else value) for name, value in host.items()}
         for cue in active:
             if cue.restored_as and cue.name in host_restored:

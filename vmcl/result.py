@@ -42,6 +42,10 @@ class Result:
         Pixels the right camera does not see (the semi-global matcher's left-right check; None with
         another dense matcher): their disparity in ``disparity`` is the restoration's, from the
         background beside them.
+    out_of_range : bool (H, W)
+        Pixels whose best semi-global match was an end of the searched range: their disparity may lie
+        outside it (the seed's areas outside the matcher's disparity range); restored from their
+        neighbours. None with another dense matcher.
     disparity : float32 (H, W)
         Dense disparity: the stereo MRF's restoration.
     raw_flow, flow : float32 (H, W, 2)
@@ -81,6 +85,7 @@ class Result:
     first_pass_disparity: np.ndarray | None = None
     stereo_discontinuity: np.ndarray | None = None
     half_occluded: np.ndarray | None = None
+    out_of_range: np.ndarray | None = None
     disparity: np.ndarray | None = None
     raw_flow: np.ndarray | None = None
     flow: np.ndarray | None = None

@@ -46,7 +46,7 @@ class StereoCue(CueModule):
     needs = frozenset({"right"})
     kind = "smooth"
     label = Label.DEPTH
-    fields = ("sparse_disparity", "stereo_discontinuity", "first_pass_disparity", "half_occluded")
+    fields = ("sparse_disparity", "stereo_discontinuity", "first_pass_disparity", "half_occluded", "out_of_range")
     # The stereo MRF's weights for the dense matches: the preset's, with the data weight alpha and the
     # smoothness beta fitted on the training pairs (benchmarks/stereo_fit.py, stage 2). The preset itself
     # was measured on sparse edge matches.
@@ -57,7 +57,7 @@ class StereoCue(CueModule):
         span, note = _disparity_range(run)
         dense = _dense_match(run, span)
         notes = tuple(n for n in (note, dense.note if dense else None) if n)
-        fields = {} if dense is None or dense.occluded is None else {"half_occluded": dense.occluded}
+        fields = {} if dense is None else dense.fields
         if not run.config.stereo.feature_matches:
             assert dense is not None  # the Config refuses a stereo section with neither matcher
             return Measurement(dense.disparity, dense.confidence, run.brightness, state=_State(span, dense),
@@ -89,11 +89,13 @@ class StereoCue(CueModule):
         low, high = (float(finite.min()), float(finite.max())) if finite.size else (None, None)
         shown = {"disparity": (disparity_image(result.disparity, vmin=low, vmax=high),
                                "Dense disparity (the stereo MRF's restoration), pixels; near is red")}
-        if result.half_occluded is not None:
+        if result.half_occluded is not None and result.out_of_range is not None:
             marked = disparity_image(result.disparity, vmin=low, vmax=high)
             marked[:result.half_occluded.shape[0]][result.half_occluded] = (255, 0, 255)
+            marked[:result.out_of_range.shape[0]][result.out_of_range] = (0, 255, 255)
             shown["half_occluded"] = (marked, ("Half-occluded pixels (magenta): the right camera does not see them; "
-                                               "their disparity is the restoration's, from the background"))
+                                               "their disparity is the restoration's, from the background. "
+                                               "Out of the searched range (cyan): best matched at its end"))
         if result.sparse_disparity is not None:
             shown["sparse_disparity"] = (disparity_image(result.sparse_disparity, vmin=low, vmax=high),
                                          "The feature matcher's sparse disparities, same scale")
@@ -102,13 +104,13 @@ class StereoCue(CueModule):
 
 @dataclass(frozen=True)
 class _Dense:
-    """The dense matches as the stereo MRF's data: disparity (NaN where none), its confidence, the
-    half-occluded pixels (None when the matcher does not tell them), and what the run's notes should say
-    of them."""
+    """The dense matches as the stereo MRF's data: disparity (NaN where none), its confidence, the Result
+    fields the matcher adds (the semi-global matcher's half-occluded and out-of-range pixels), and what
+    the run's notes should say of them."""
 
     disparity: cl_array.Array
     confidence: cl_array.Array
-    occluded: cl_array.Array | None
+    fields: dict[str, cl_array.Array]
     note: str | None = None
 
 
@@ -178,10 +180,11 @@ def _dense_match(run: RunInputs, span: tuple[int, int]) -> _Dense | None:
         filled, occluded = on_device(found.filled), on_device(found.occluded)
         confidence = mask_confidence(filled, occluded, weight=s.backfill_weight, masked_weight=s.occluded_weight,
                                      machine=run.machine)
-        return _Dense(filled, on_device(confidence), occluded, _confirmation_note(run, found))
+        fields = {"half_occluded": occluded, "out_of_range": on_device(found.out_of_range)}
+        return _Dense(filled, on_device(confidence), fields, _confirmation_note(run, found))
     dense = _match(run, None, span, features="intensity")
     return _Dense(on_device(dense.disparity), on_device(score_confidence(
-        dense.score, floor=s.backfill_floor, weight=s.backfill_weight, machine=run.machine)), None)
+        dense.score, floor=s.backfill_floor, weight=s.backfill_weight, machine=run.machine)), {})
 
 
 UNCONFIRMED_NOTE = 0.5
@@ -190,18 +193,30 @@ training pairs it stayed at or below 0.29 (the untextured "shadows" scene), and 
 the right view rotated by 10 degrees."""
 
 
+OUT_OF_RANGE_NOTE = 0.01
+"""Share of the pixels matched best at an end of the range above which the run's notes say so (on the
+training pairs, with the range found from the images: at most 0.5%)."""
+
+
 def _confirmation_note(run: RunInputs, found: SemiGlobalMatch) -> str | None:
-    """A note when most pixels fail the left-right check: the pair is likely not rectified."""
-    failed = [cm_reduce.reduce(on_device(mask), "sum", machine=run.machine) for mask in (found.occluded,
-                                                                                        found.mismatched)]
-    occluded, mismatched = (int(count.get()) for count in failed)
+    """What the run's notes should say of the semi-global matches: that most failed the left-right check
+    (the pair is likely not rectified), and how many matched best at an end of the range."""
+    counts = [cm_reduce.reduce(on_device(mask), "sum", machine=run.machine)
+              for mask in (found.occluded, found.mismatched, found.out_of_range)]
+    occluded, mismatched, outside = (int(count.get()) for count in counts)
     pixels = found.occluded.size
+    said = []
     share = (occluded + mismatched) / pixels
-    if share <= UNCONFIRMED_NOTE:
-        return None
-    return (f"stereo: the right view confirmed only {100 * (1 - share):.0f}% of the left view's matches "
-            f"({100 * occluded / pixels:.0f}% half-occluded, {100 * mismatched / pixels:.0f}% mismatched): the "
-            "pair may not be rectified (its rows must be epipolar lines), or most of the scene is untextured")
+    if share > UNCONFIRMED_NOTE:
+        said.append(f"stereo: the right view confirmed only {100 * (1 - share):.0f}% of the left view's matches "
+                    f"({100 * occluded / pixels:.0f}% half-occluded, {100 * mismatched / pixels:.0f}% mismatched): "
+                    "the pair may not be rectified (its rows must be epipolar lines), or most of the scene is "
+                    "untextured")
+    if outside / pixels > OUT_OF_RANGE_NOTE:
+        said.append(f"stereo: {100 * outside / pixels:.1f}% of the pixels matched best at an end of the range "
+                    f"{found.d_min}..{found.d_max} px (Result.out_of_range): their disparity may lie outside it; "
+                    "[stereo] d_min and d_max set the range")
+    return "; ".join(said) or None
 
 
 def _disparity_data(run: RunInputs, matched: stereo.StereoMatch, dense: _Dense | None

@@ -88,6 +88,9 @@ class SemiGlobalMatch:
         (the smaller of the nearest kept disparities left and right on the row); mismatched pixels NaN.
     occluded : bool (H, W), half-occluded pixels: no disparity of the range is confirmed by the right view.
     mismatched : bool (H, W), unconfirmed pixels that are not half-occluded (the winner was wrong).
+    out_of_range : bool (H, W), pixels whose winner was an end of the range (d_min or d_max, where the
+        image lets the range go on): the search stopped there, so the match may lie beyond it (the seed's
+        areas outside the matcher's disparity range). Unmatched, neither occluded nor mismatched.
     d_min, d_max : int, the range searched.
     """
 
@@ -95,6 +98,7 @@ class SemiGlobalMatch:
     filled: ArrayLike
     occluded: ArrayLike
     mismatched: ArrayLike
+    out_of_range: ArrayLike
     d_min: int
     d_max: int
 
@@ -184,9 +188,10 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     dims = (np.int64(width), np.int64(height))
     sums = _aggregate(machine, views, d_min, depth, census_threshold, p1, p2, edge_gain, paths)
     found = _select(machine, sums, dims, d_min, depth, subpixel, tolerance, median)
-    disparity, filled, occluded, mismatched = found
+    disparity, filled, occluded, mismatched, out_of_range = found
     return SemiGlobalMatch(disparity.get() if host else disparity, filled.get() if host else filled,
-                           mask_result(occluded, host), mask_result(mismatched, host), d_min=d_min, d_max=d_max)
+                           mask_result(occluded, host), mask_result(mismatched, host), mask_result(out_of_range, host),
+                           d_min=d_min, d_max=d_max)
 
 
 def _range(left, right, d_min, d_max, machine: Machine) -> tuple[int, int]:
@@ -241,22 +246,24 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
 
 def _select(machine: Machine, sums: cl_array.Array, dims, d_min: int, depth: int, subpixel: bool,
             tolerance: int, median: bool) -> tuple[cl_array.Array, ...]:
-    """Both views' winners, the check, and the filled disparity: (disparity, filled, occluded, mismatched)."""
+    """Both views' winners, the check, and the filled disparity: (disparity, filled, occluded, mismatched,
+    out_of_range)."""
     width, height = int(dims[0]), int(dims[1])
     stride = np.int32(sums.shape[2])
     disparity = machine.empty((height, width), np.float32)
     winners = [machine.empty((height, width), np.int32) for _ in range(2)]
-    machine.launch(machine.kernel("semiglobal", "select_left"), (width, height), sums, disparity, winners[0], *dims,
-                   np.int32(depth), stride, np.int32(d_min), np.int32(subpixel))
+    out_of_range = machine.empty((height, width), np.uint8)
+    machine.launch(machine.kernel("semiglobal", "select_left"), (width, height), sums, disparity, winners[0],
+                   out_of_range, *dims, np.int32(depth), stride, np.int32(d_min), np.int32(subpixel))
     machine.launch(machine.kernel("semiglobal", "select_right"), (width, height), sums, winners[1], *dims,
                    np.int32(depth), stride, np.int32(d_min))
     occluded, mismatched = (machine.empty((height, width), np.uint8) for _ in range(2))
-    machine.launch(machine.kernel("semiglobal", "check_views"), (width, height), disparity, *winners, occluded,
-                   mismatched, *dims, np.int32(depth), np.int32(d_min), np.int32(tolerance))
+    machine.launch(machine.kernel("semiglobal", "check_views"), (width, height), disparity, *winners, out_of_range,
+                   occluded, mismatched, *dims, np.int32(depth), np.int32(d_min), np.int32(tolerance))
     if median:
         smoothed = machine.empty((height, width), np.float32)
         machine.launch(machine.kernel("semiglobal", "median_kept"), (width, height), disparity, smoothed, *dims)
         disparity = smoothed
     filled = machine.empty((height, width), np.float32)
     machine.launch(machine.kernel("semiglobal", "fill_occluded"), (height,), disparity, occluded, filled, *dims)
-    return disparity, filled, occluded, mismatched
+    return disparity, filled, occluded, mismatched, out_of_range
