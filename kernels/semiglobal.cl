@@ -172,8 +172,9 @@ __kernel void aggregate(__global const uchar *cost, __global const float *grey, 
  * like Hamming distances, grow linearly away from the match rather than quadratically; a winner at either end of the disparities
  * that compete stays whole), and its integer d for the consistency check. Only the disparities whose right
  * pixel x - d lies inside the image compete; a pixel with none gets NaN and the winner d_min - 1. */
-__kernel void select_left(__global const ushort *total, __global float *disparity, __global int *winner,
-                          __global uchar *out_of_range, long W, long H, int D, int S, int d_min, int subpixel)
+__kernel void select_left(__global const ushort *total, __global const uchar *cost, __global float *disparity,
+                          __global int *winner, __global uchar *out_of_range, long W, long H, int D, int S,
+                          int d_min, int subpixel, int poor)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -193,9 +194,11 @@ __kernel void select_left(__global const ushort *total, __global float *disparit
         winner[y * W + x] = d_min - 1;
         return;
     }
-    /* A winner at an end of the range itself is where the search stopped: the seed's sign of an area
-     * outside the matcher's disparity range. Unmatched, and flagged as such. */
-    if (D > 1 && (best == 0 || best == D - 1)) {
+    /* A winner at an end of the range itself, whose own census cost is poor (more than `poor` bits differ),
+     * is where the search stopped rather than a match: the seed's sign of an area outside the matcher's
+     * disparity range (low scores at the range's limit). Unmatched, and flagged as such. A good match at
+     * the end is kept: the range may end right at the true disparity. */
+    if (D > 1 && (best == 0 || best == D - 1) && cost[(y * W + x) * S + best] > poor) {
         disparity[y * W + x] = NAN;
         winner[y * W + x] = d_min - 1;
         out_of_range[y * W + x] = 1;

@@ -71,7 +71,7 @@ def census_codes(image, size=(9, 7), margin=0.0):
 
 def semiglobal_sums(left, right, d_min, d_max, p1, p2, directions, outside, margin=0.0):
     """Semi-global matching on grey float images, edge gain 0: the (H, W, D) sums of the min-sum messages
-    along ``directions`` of census Hamming costs (``outside`` where x - d leaves the image)."""
+    along ``directions`` of census Hamming costs (``outside`` where x - d leaves the image), and the costs."""
     height, width = left.shape
     depth = d_max - d_min + 1
     lc, rc = census_codes(left, margin=margin), census_codes(right, margin=margin)
@@ -98,14 +98,14 @@ def semiglobal_sums(left, right, d_min, d_max, p1, p2, directions, outside, marg
                 best = np.minimum.reduce([prev, shifted[:-2] + p1, shifted[2:] + p1, np.full(depth, low + int(max(p1, p2)))])
                 messages[y, x] = cost[y, x] + best - low
         total += messages
-    return total
+    return total, cost
 
 
-def semiglobal_winners(total, d_min):
+def semiglobal_winners(total, d_min, cost=None, poor=None):
     """Left winners (ties: smaller d) over the disparities whose right pixel is inside, and the right view's
     winners from the same sums; ``d_min - 1`` where none competes, for a left winner pressed against the
-    image's edge (the last disparity inside where the range goes on), and for one at an end of the range,
-    which the third output marks (out of range)."""
+    image's edge (the last disparity inside where the range goes on), and for one at an end of the range
+    (whose ``cost`` there exceeds ``poor``, when given), which the third output marks (out of range)."""
     height, width, depth = total.shape
     left = np.full((height, width), d_min - 1)
     right = np.full((height, width), d_min - 1)
@@ -115,7 +115,7 @@ def semiglobal_winners(total, d_min):
         if ks:
             best = min(ks, key=lambda k: (total[y, x, k], k))
             pressed = (best == ks[-1] and ks[-1] < depth - 1) or (best == ks[0] and ks[0] > 0)
-            at_end = depth > 1 and best in (0, depth - 1)
+            at_end = depth > 1 and best in (0, depth - 1) and (cost is None or cost[y, x, best] > poor)
             out_of_range[y, x] = at_end and not pressed
             left[y, x] = d_min - 1 if pressed or at_end else d_min + best
         ks = [k for k in range(depth) if 0 <= x + d_min + k < width]

@@ -8,7 +8,7 @@ import pytest
 from oracles import semiglobal_sums, semiglobal_winners
 
 from vmcl import scenes
-from vmcl.early.semiglobal import CENSUS_BITS, DIRECTIONS, match_semiglobal
+from vmcl.early.semiglobal import CENSUS_BITS, DIRECTIONS, POOR_MATCH, match_semiglobal
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.scenes import Body, Camera, Face, Light, Texture, World
 
@@ -31,8 +31,8 @@ def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, machine):
     occlusion fill, against a plain NumPy (Python int) implementation of the same definitions."""
     left, right = _textured_pair()
     p1, p2 = 7, 40
-    total = semiglobal_sums(left, right, d_min, d_max, p1, p2, DIRECTIONS[paths], CENSUS_BITS // 2)
-    want_left, want_right, want_out = semiglobal_winners(total, d_min)
+    total, cost = semiglobal_sums(left, right, d_min, d_max, p1, p2, DIRECTIONS[paths], CENSUS_BITS // 2)
+    want_left, want_right, want_out = semiglobal_winners(total, d_min, cost, int(POOR_MATCH * CENSUS_BITS))
     found = match_semiglobal(left, right, d_min=d_min, d_max=d_max, census_threshold=0, p1=p1, p2=p2, edge_gain=0,
                              paths=paths, subpixel=False, median=False, machine=machine)
     height, width = left.shape
@@ -65,7 +65,7 @@ def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, machine):
 
 def test_subpixel_offset_is_the_equiangular_vertex_of_the_sums(machine):
     left, right = _textured_pair(seed=1)
-    total = semiglobal_sums(left, right, 0, 5, 7, 40, DIRECTIONS[8], CENSUS_BITS // 2)
+    total, _ = semiglobal_sums(left, right, 0, 5, 7, 40, DIRECTIONS[8], CENSUS_BITS // 2)
     whole = match_semiglobal(left, right, d_min=0, d_max=5, census_threshold=0, p1=7, p2=40, edge_gain=0,
                              subpixel=False, median=False, machine=machine).disparity
     refined = match_semiglobal(left, right, d_min=0, d_max=5, census_threshold=0, p1=7, p2=40, edge_gain=0,
@@ -157,15 +157,16 @@ def test_half_occluded_pixels_are_found(machine):
 
 
 def test_disparities_beyond_the_range_are_flagged_out_of_range(machine):
-    """The plate (d = 24) searched over 0..15 only: a quarter of its pixels match best at the range's end and
-    are flagged out of range, unmatched (measured 27%; 23% more fail the left-right check, and the rest take
-    wrong disparities that both views confirm); the wall (d = 6), inside the range, is hardly touched."""
+    """The plate (d = 24) searched over 0..15 only: a sixth of its pixels match best at the range's end, and
+    poorly, and are flagged out of range, unmatched (measured 17%; about a quarter more fail the left-right
+    check, and the rest take wrong disparities that both views confirm); the wall (d = 6), inside the
+    range, is hardly touched."""
     scene = _occluding_plate()
     visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
     found = match_semiglobal(scene.left, scene.right, d_min=0, d_max=15, machine=machine)
     plate, wall = visible & (scene.disparity > 15), visible & (scene.disparity < 15)
     assert plate.sum() > 1000
-    assert found.out_of_range[plate].mean() > 0.2, found.out_of_range[plate].mean()
+    assert found.out_of_range[plate].mean() > 0.12, found.out_of_range[plate].mean()
     assert found.out_of_range[wall].mean() < 0.02, found.out_of_range[wall].mean()
     assert not np.isfinite(found.disparity[found.out_of_range]).any()
     assert not (found.out_of_range & (found.occluded | found.mismatched)).any()

@@ -213,8 +213,8 @@ def _confirmation_note(run: RunInputs, found: SemiGlobalMatch) -> str | None:
                     "the pair may not be rectified (its rows must be epipolar lines), or most of the scene is "
                     "untextured")
     if outside / pixels > OUT_OF_RANGE_NOTE:
-        said.append(f"stereo: {100 * outside / pixels:.1f}% of the pixels matched best at an end of the range "
-                    f"{found.d_min}..{found.d_max} px (Result.out_of_range): their disparity may lie outside it; "
+        said.append(f"stereo: {100 * outside / pixels:.1f}% of the pixels matched best, and poorly, at an end of the "
+                    f"range {found.d_min}..{found.d_max} px (Result.out_of_range): their disparity may lie outside it; "
                     "[stereo] d_min and d_max set the range")
     return "; ".join(said) or None
 

@@ -47,8 +47,8 @@ from vmcl.early.stereo import check_pair, check_range
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "P1", "P2", "SemiGlobalMatch",
-           "match_semiglobal"]
+__all__ = ["CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "P1", "P2", "POOR_MATCH",
+           "SemiGlobalMatch", "match_semiglobal"]
 
 CENSUS_SIZE = (9, 7)  # width, height of the census window: 62 neighbours in a 64-bit code
 CENSUS_BITS = CENSUS_SIZE[0] * CENSUS_SIZE[1] - 1
@@ -62,12 +62,17 @@ DIRECTIONS = {8: ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (
 # results/stereo_fit.md gives every combination tried): never on a pair a benchmark reports.
 CENSUS_THRESHOLD = 3.0
 """Default census margin, in units of the noise's standard deviation."""
-P1 = 48
+P1 = 32
 """Default price of a change of one disparity between neighbours, in census bits."""
 P2 = 64.0
 """Default price of a jump where the brightness does not change, in census bits."""
-EDGE_GAIN = 0.0
+EDGE_GAIN = 0.1
 """Default lowering of the jump's price per unit of noise in the brightness change."""
+
+POOR_MATCH = 0.25
+"""A winner at an end of the range is out of range when more than this share of its census bits differ:
+the matches found at the range ends on the training pairs were all wrong, and the range found from the
+images may end right at a true disparity, whose match is good."""
 
 _NOISE_MEDIAN = 0.6745 * 6
 """The median magnitude of Immerkaer's mask on Gaussian noise, in units of the noise's standard deviation."""
@@ -89,8 +94,9 @@ class SemiGlobalMatch:
     occluded : bool (H, W), half-occluded pixels: no disparity of the range is confirmed by the right view.
     mismatched : bool (H, W), unconfirmed pixels that are not half-occluded (the winner was wrong).
     out_of_range : bool (H, W), pixels whose winner was an end of the range (d_min or d_max, where the
-        image lets the range go on): the search stopped there, so the match may lie beyond it (the seed's
-        areas outside the matcher's disparity range). Unmatched, neither occluded nor mismatched.
+        image lets the range go on) with a poor census cost there (more than :data:`POOR_MATCH` of the
+        bits differ): the search stopped there, so the match may lie beyond it (the seed's areas outside
+        the matcher's disparity range). Unmatched, neither occluded nor mismatched.
     d_min, d_max : int, the range searched.
     """
 
@@ -186,8 +192,8 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     views = [grey_field(machine, machine.to_device(image) if isinstance(image, np.ndarray) else image)
              for image in (left, right)]
     dims = (np.int64(width), np.int64(height))
-    sums = _aggregate(machine, views, d_min, depth, census_threshold, p1, p2, edge_gain, paths)
-    found = _select(machine, sums, dims, d_min, depth, subpixel, tolerance, median)
+    costs, sums = _aggregate(machine, views, d_min, depth, census_threshold, p1, p2, edge_gain, paths)
+    found = _select(machine, sums, costs, dims, d_min, depth, subpixel, tolerance, median)
     disparity, filled, occluded, mismatched, out_of_range = found
     return SemiGlobalMatch(disparity.get() if host else disparity, filled.get() if host else filled,
                            mask_result(occluded, host), mask_result(mismatched, host), mask_result(out_of_range, host),
@@ -212,8 +218,9 @@ def _range(left, right, d_min, d_max, machine: Machine) -> tuple[int, int]:
 
 
 def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth: int, census_threshold: float,
-               p1: int, p2: float, edge_gain: float, paths: int) -> cl_array.Array:
-    """The (H, W, S) uint16 sum of the messages along every direction, S = D rounded up to whole vectors."""
+               p1: int, p2: float, edge_gain: float, paths: int) -> tuple[cl_array.Array, cl_array.Array]:
+    """The (H, W, S) uint8 census costs and uint16 sum of the messages along every direction, S = D rounded
+    up to whole vectors."""
     height, width = views[0].shape
     stride = _LANES * math.ceil(depth / _LANES)
     dims = (np.int64(width), np.int64(height))
@@ -241,11 +248,11 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
                        np.int32(dx),
                        np.int32(dy), np.uint16(p1), np.float32(p2), np.float32(edge_gain), noise,
                        np.int32(index == 0), local_size=(_LINES_PER_GROUP,))
-    return sums
+    return costs, sums
 
 
-def _select(machine: Machine, sums: cl_array.Array, dims, d_min: int, depth: int, subpixel: bool,
-            tolerance: int, median: bool) -> tuple[cl_array.Array, ...]:
+def _select(machine: Machine, sums: cl_array.Array, costs: cl_array.Array, dims, d_min: int, depth: int,
+            subpixel: bool, tolerance: int, median: bool) -> tuple[cl_array.Array, ...]:
     """Both views' winners, the check, and the filled disparity: (disparity, filled, occluded, mismatched,
     out_of_range)."""
     width, height = int(dims[0]), int(dims[1])
@@ -253,8 +260,9 @@ def _select(machine: Machine, sums: cl_array.Array, dims, d_min: int, depth: int
     disparity = machine.empty((height, width), np.float32)
     winners = [machine.empty((height, width), np.int32) for _ in range(2)]
     out_of_range = machine.empty((height, width), np.uint8)
-    machine.launch(machine.kernel("semiglobal", "select_left"), (width, height), sums, disparity, winners[0],
-                   out_of_range, *dims, np.int32(depth), stride, np.int32(d_min), np.int32(subpixel))
+    machine.launch(machine.kernel("semiglobal", "select_left"), (width, height), sums, costs, disparity, winners[0],
+                   out_of_range, *dims, np.int32(depth), stride, np.int32(d_min), np.int32(subpixel),
+                   np.int32(POOR_MATCH * CENSUS_BITS))
     machine.launch(machine.kernel("semiglobal", "select_right"), (width, height), sums, winners[1], *dims,
                    np.int32(depth), stride, np.int32(d_min))
     occluded, mismatched = (machine.empty((height, width), np.uint8) for _ in range(2))
