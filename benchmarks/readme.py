@@ -317,6 +317,22 @@ def pipeline_figures(f: ResultsFile) -> str:
             f"{seconds('512', 'meanfield')} with mean field, {seconds('512', 'icm')} with ICM")
 
 
+def distributed_figures(f: ResultsFile) -> str:
+    rates = f.table("setup", "workers", "items per second")
+
+    def rate(workers: str, threads: str) -> str:
+        return rates.cell({"setup": "local cluster", "workers": workers, "threads per worker": threads},
+                          "items per second")
+
+    model = f.table("nodes", "limited by")
+    first = next((row for row in model.rows if row[model.index("limited by")] != "the nodes"), None)
+    limit = (f"the model's first limit is {first[model.index('limited by')]}, from {first[model.index('nodes')]} "
+             "nodes" if first else "no limit within the model's nodes")
+    return (f"256² stereo items per second: serial {rates.cell({'setup': 'serial (one process, no Dask)'}, 'items per second')}, "
+            f"1 worker {rate('1', '1')}, 1 worker x 2 threads {rate('1', '2')}, 2 workers {rate('2', '1')}; "
+            f"{limit}")
+
+
 def labelling_figures(f: ResultsFile) -> str:
     def f_values(section: str, column: str, scene_suffix: str = "") -> str:
         table = f.table("scene", column, section=section)
@@ -370,6 +386,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("mrf", "sweeps per second of each solver; Gibbs against NumPy; dense disparity on Middlebury",
      mrf_figures),
     ("pipeline", "the whole machine per frame, stage by stage", pipeline_figures),
+    ("distributed", ("`vmcl batch` on a local Dask cluster: items per second for 1 and 2 workers, 1 and 2 "
+                     "threads; a model of N nodes"), distributed_figures),
     ("labelling", ("the linear classifier's labels on images it was not fitted to (new noise seed; and each "
                    "preset left out of the fit), beside the rule labels; its cost"), labelling_figures),
     ("ground_truth", "scene rendering; BSDS evaluation", ground_truth_figures),

@@ -310,6 +310,9 @@ TABLE: tuple[Entry, ...] = (
        kinds={"name": _C, "root": _P, "colour": _B}),
     _e("vmcl.datasets:load_bsds", root=path("empty_dir"), split="test", kinds={"root": _P, "split": _C}),
     _e("vmcl.datasets:read_stereo_folder", folder=path("stereo_dir"), kinds={"folder": _P}),
+    _e("vmcl.datasets:write_stereo_folder", folder=path("new_dir"), left=arr((16, 16), "uint8"),
+       right=arr((16, 16), "uint8"), disparity=IMG, ndisp=16,
+       kinds={"folder": _P, "left": _A, "right": _A, "disparity": _A, "ndisp": _I}),
     _e("vmcl.datasets:find_stereo_folders", root=path("empty_dir"), depth=4, kinds={"root": _P, "depth": _I}),
     # ------------------------------------------------------------------ stereo evaluation
     _e("vmcl.stereo_evaluation:grey", image=arr((16, 16), "uint8", "randint:256"), kinds={"image": _A}),
@@ -361,6 +364,14 @@ TABLE: tuple[Entry, ...] = (
        kinds={"left": _A, "right": _OA, "next": _OA}),
     _e("vmcl.machine:Machine", device=None, profile=False, local_size=None,
        kinds={"device": _C, "profile": _B, "local_size": _I}),
+    # ------------------------------------------------------------------ distributed (what needs no cluster)
+    _e("vmcl.distributed:run_frame", left=IMG, right=None, next=None, config={"motion": {"levels": 1}},
+       kinds={"left": _A, "right": _OA, "next": _OA, "config": "mapping"},
+       aliases={"config": ("config", "edges.", "stereo.", "motion.", "colour.", "texture.", "mrf.", "labels.")}),
+    _e("vmcl.distributed:stitch", chunks=[[tup(0, make("result"))]], kinds={"chunks": _O}),
+    _e("vmcl.distributed:batch_items", inputs=[path("png")], frames=False, kinds={"inputs": "names", "frames": _B}),
+    _e("vmcl.distributed:local_cluster_size", workers=None, threads=None, kinds={"workers": _I, "threads": _I}),
+    _e("vmcl.distributed:MachinePlugin", device=None, kinds={"device": _C}),
 )
 
 # Public names that take no input to check: records vmcl returns, enums, plumbing that takes a Machine
@@ -392,6 +403,14 @@ EXEMPT = {
     "vmcl.early.filters:separable_gaussian", "vmcl.early.filters:discrete_laplacian", "vmcl.early.filters:grey_field",
     # Needs a head that has run a calibration pattern in front of it; table_for_fixation covers the glue.
     "vmcl.eyehead:calibrate_vergences",
+    # Need a running Dask cluster: tests/test_distributed.py starts one and checks their refusals.
+    "vmcl.distributed:map_frames", "vmcl.distributed:map_sequence", "vmcl.distributed:run_batch",
+    "vmcl.distributed:cluster_client",
+    # The tasks map_sequence and run_batch submit, with the arguments those calls checked.
+    "vmcl.distributed:run_chunk", "vmcl.distributed:render_item",
+    # Records vmcl returns, and the worker's Machine (no arguments).
+    "vmcl.distributed:BatchItem", "vmcl.distributed:ItemOutput", "vmcl.distributed:ItemStatus",
+    "vmcl.distributed:LocalClusterSize", "vmcl.distributed:worker_machine",
 }
 
 PUBLIC_MODULES = (
@@ -401,7 +420,7 @@ PUBLIC_MODULES = (
     "vmcl.early.semiglobal", "vmcl.early.disparity_range",
     "vmcl.mrf", "vmcl.integrate", "vmcl.labels", "vmcl.cues", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
     "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pictures", "vmcl.pipeline", "vmcl.result", "vmcl.machine",
-    "vmcl.stereo_evaluation",
+    "vmcl.stereo_evaluation", "vmcl.distributed",
 )
 
 

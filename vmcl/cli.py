@@ -7,6 +7,7 @@ dense fields out (:mod:`vmcl.pipeline`, :mod:`vmcl.report`).
     vmcl run LEFT [RIGHT] [--next NEXT] [--config C.toml] --out DIR
     vmcl eval stereo|flow|edges --data DIR
     vmcl info
+    vmcl batch INPUTS... --out DIR [--frames] [--config C.toml] [--scheduler ADDRESS] [--workers N] [--threads N]
     (each takes --quiet / -q, no progress bars, and --debug, tracebacks for every error)
 
 Exit statuses: 0 done; 2 bad input (a missing, unreadable, truncated or corrupt file, images of
@@ -25,6 +26,12 @@ keeps its own.
 Images must be at least 16 x 16 pixels. Motion (``--next``) halves the frames ``[motion] levels - 1``
 times and its coarsest level must hold a ``[motion] patch``: with the defaults (2 levels, patch 11) the
 frames must be at least 21 x 21; ``levels = 1`` takes 16 x 16.
+
+``vmcl batch`` (the ``dask`` extra) runs every item, an image, a Middlebury-layout scene folder's pair or
+with ``--frames`` a frame and the next, as one task on a Dask cluster (:mod:`vmcl.distributed`), and writes
+what ``vmcl run`` writes into ``--out``/<item>/ as each finishes, each folder whole or absent. Items
+already there are skipped (a rerun resumes); an item that fails is listed with its error in the table at
+the end while the others complete, and the exit status is then 2 if every failure was bad input, else 1.
 
 Stages that take time show a progress bar on stderr (tqdm); ``--quiet`` keeps only the results.
 """
@@ -56,6 +63,8 @@ __all__ = [
     "evaluation_tables",
     "main",
     "parser",
+    "result_fields",
+    "write_output",
 ]
 
 EXIT_DEFECT = 1
@@ -69,14 +78,14 @@ class BadInput(InputError):
 
 
 @contextlib.contextmanager
-def _progress(args: argparse.Namespace, total: int, what: str) -> Iterator[Callable[[str], None]]:
+def _progress(args: argparse.Namespace, total: int, what: str, unit: str = "stage") -> Iterator[Callable[[str], None]]:
     """A tqdm bar of ``total`` steps on stderr (none with --quiet); yields the step callback."""
     if args.quiet:
         yield lambda name: None
         return
     from tqdm import tqdm
 
-    with tqdm(total=total, desc=what, unit="stage", file=sys.stderr, leave=False) as bar:
+    with tqdm(total=total, desc=what, unit=unit, file=sys.stderr, leave=False) as bar:
         def step(name: str) -> None:
             bar.set_postfix_str(name)
             bar.update()
@@ -208,7 +217,6 @@ def _demo(args) -> int:
 
 def _run(args) -> int:
     from vmcl.pipeline import VisionMachine
-    from vmcl.report import write_report
 
     config = _config(args.config)
     left = _read(args.left, "left")
@@ -223,17 +231,28 @@ def _run(args) -> int:
     with output_folder(Path(args.out)) as work:
         vm = VisionMachine(config)
         result = _run_machine(vm, args, left, right, next_)
-        write_report(result, work, title=f"Vision Machine: {Path(args.left).name}")
-        # allow_pickle is NumPy's default; naming it tells the type checker that no field of the ** binds it.
-        np.savez_compressed(work / "fields.npz", allow_pickle=True, **_fields(result))
+        write_output(result, work, f"Vision Machine: {Path(args.left).name}")
     print(f"{result.total_ms:.0f} ms; report: {Path(args.out) / 'report.html'}")
     return 0
 
 
-def _fields(result) -> dict[str, np.ndarray]:
+def write_output(result, folder: Path, title: str) -> None:
+    """Write what ``vmcl run`` writes for a run into ``folder``: the report (HTML and PNGs) and fields.npz.
+
+    ``vmcl batch`` writes the same files for every item (on the worker that ran it).
+    """
+    from vmcl.report import write_report
+
+    write_report(result, folder, title=title)
+    # allow_pickle is NumPy's default; naming it tells the type checker that no field of the ** binds it.
+    np.savez_compressed(folder / "fields.npz", allow_pickle=True, **result_fields(result))
+
+
+def result_fields(result) -> dict[str, np.ndarray]:
     """The run's fields as named arrays for fields.npz."""
     names = ("edges", "support", "labels", "hue", "colour_edges", "density", "texture_edges", "sparse_disparity",
-             "first_pass_disparity", "stereo_discontinuity", "disparity", "raw_flow", "flow")
+             "first_pass_disparity", "stereo_discontinuity", "half_occluded", "out_of_range", "disparity",
+             "raw_flow", "flow")
     out = {name: getattr(result, name) for name in names if getattr(result, name) is not None}
     for cue, restored in result.restored.items():
         out[f"restored_{cue}"] = restored
@@ -392,6 +411,33 @@ def _info(args) -> int:
     return 0
 
 
+# -- batch ---------------------------------------------------------------------------------------------
+
+def _batch(args) -> int:
+    try:
+        from vmcl import distributed
+    except ImportError as error:
+        raise BadInput(f"vmcl batch runs on Dask: {error}") from None
+
+    config = _config(args.config)
+    items = distributed.batch_items(args.inputs, frames=args.frames)
+    with distributed.cluster_client(args.scheduler, workers=args.workers, threads=args.threads,
+                                    worker_logs=args.debug) as (client, where):
+        print(f"{len(items)} item(s) on the {where}", file=sys.stderr)
+        with _progress(args, len(items), "batch", unit="item") as step:
+            statuses = distributed.run_batch(client, items, Path(args.out), config, progress=step)
+    rows: list[tuple[object, ...]] = [("item", "status", "ms", "error")]
+    rows += [(s.name, s.state, _fmt(s.total_ms, 0), s.detail) for s in statuses]
+    counts = {state: sum(s.state == state for s in statuses) for state in ("done", "skipped", "failed")}
+    _print_table(f"Batch into {args.out}: {counts['done']} done, {counts['skipped']} skipped (already there), "
+                 f"{counts['failed']} failed", rows)
+    failed = [s for s in statuses if s.state == "failed"]
+    if not failed:
+        return 0
+    # Every item ran or was tried: the status says whether what failed was bad input or a defect.
+    return EXIT_BAD_INPUT if all(isinstance(s.error, InputError) for s in failed) else EXIT_DEFECT
+
+
 # -- the parser ----------------------------------------------------------------------------------------
 
 def parser() -> argparse.ArgumentParser:
@@ -426,6 +472,23 @@ def parser() -> argparse.ArgumentParser:
                                "folder laid out as ../shared/datasets")
 
     commands.add_parser("info", parents=[quiet], help="OpenCL platforms and devices, the kernel cache")
+
+    batch = commands.add_parser("batch", parents=[quiet],
+                                help="run the machine on many items over a Dask cluster, one output folder each")
+    batch.add_argument("inputs", nargs="+", metavar="INPUT",
+                       help="image files (one item each), folders of Middlebury-layout scenes (a stereo pair "
+                            "each) or folders of images (one item each)")
+    batch.add_argument("--out", required=True,
+                       help="the batch's folder: each item's output goes to OUT/<item>/; items already there "
+                            "are skipped (a rerun resumes)")
+    batch.add_argument("--frames", action="store_true",
+                       help="the images are the frames of one sequence, in order: each item is a frame and the "
+                            "next (motion)")
+    batch.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config)")
+    batch.add_argument("--scheduler", metavar="ADDRESS",
+                       help="a Dask scheduler (tcp://host:8786); default: a local cluster on this computer")
+    batch.add_argument("--workers", type=int, help="the local cluster's worker processes (default 1)")
+    batch.add_argument("--threads", type=int, help="threads per local worker (default 1)")
     return top
 
 
@@ -435,7 +498,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command == "demo" and not 64 <= args.size <= 1024:
         print("vmcl: error: --size must be within 64..1024", file=sys.stderr)
         return EXIT_BAD_INPUT
-    handler = {"demo": _demo, "run": _run, "eval": _eval, "info": _info}[args.command]
+    handler = {"demo": _demo, "run": _run, "eval": _eval, "info": _info, "batch": _batch}[args.command]
     try:
         return handler(args)
     except KeyboardInterrupt:

@@ -52,6 +52,7 @@ __all__ = [
     "read_stereo_folder",
     "write_flo",
     "write_pfm",
+    "write_stereo_folder",
 ]
 
 FLO_TAG = 202021.25
@@ -284,6 +285,60 @@ def write_pfm(path, image) -> None:
     with _as_path(path).open("wb") as f:
         f.write(header + b"\n" + f"{image.shape[1]} {image.shape[0]}\n-1.0\n".encode())
         f.write(np.flipud(data).astype("<f4").tobytes())
+
+
+def write_stereo_folder(folder, left, right, disparity, *, ndisp: int | None = None) -> Path:
+    """Write a stereo pair and its disparity as a Middlebury 2014-layout scene folder, which
+    :func:`read_stereo_folder` reads back (rendered scenes as data sets, for ``vmcl eval stereo`` or
+    ``vmcl batch``).
+
+    Parameters
+    ----------
+    folder : str or Path
+        A new or empty folder (made with its parents if missing): vmcl writes only its own files.
+    left, right : (H, W) or (H, W, 3) arrays of one shape
+        uint8 as they are, or floats in [0, 1] (as :mod:`vmcl.scenes` renders them), rounded to 8 bits.
+    disparity : (H, W) float array
+        The left view's disparity, NaN where unknown (written as infinity, Middlebury's unknown).
+    ndisp : int, optional
+        calib.txt's disparity count; default: the largest finite disparity rounded up, plus one.
+
+    Returns
+    -------
+    Path
+        The folder: im0.png, im1.png, disp0.pfm and calib.txt.
+    """
+    folder = _as_path(folder, "folder")
+    if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
+        raise InputValueError(f"folder must be new or empty, got {folder}")
+    images = []
+    for name, image in (("left", left), ("right", right)):
+        image = real_host_array(image, name, ndims=(2, 3))
+        if image.ndim == 3 and image.shape[2] != 3:
+            raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {image.shape}")
+        if image.dtype != np.uint8:
+            image = image.astype(np.float64)  # other integer types would overflow when scaled
+            if not (np.isfinite(image).all() and image.min() >= 0 and image.max() <= 1):
+                raise InputValueError(f"{name} must be uint8 or floats in [0, 1]")
+            image = np.round(image * 255).astype(np.uint8)
+        images.append(image)
+    if images[0].shape != images[1].shape:
+        raise InputValueError(f"left and right must have the same shape, got {images[0].shape} and {images[1].shape}")
+    truth = real_host_array(disparity, "disparity", ndims=(2,)).astype(np.float32)
+    if truth.shape != images[0].shape[:2]:
+        raise InputValueError(f"disparity must have the images' shape {images[0].shape[:2]}, got {truth.shape}")
+    finite = truth[np.isfinite(truth)]
+    if ndisp is None:
+        ndisp = int(np.ceil(finite.max())) + 1 if finite.size else 1
+    ndisp = check_int(ndisp, "ndisp", minimum=1)
+    folder.mkdir(parents=True, exist_ok=True)
+    for path, image in ((folder / "im0.png", images[0]), (folder / "im1.png", images[1])):
+        written = cv2.imwrite(str(path), cv2.cvtColor(image, cv2.COLOR_RGB2BGR) if image.ndim == 3 else image)
+        if not written:
+            raise OSError(f"cannot write {path}")
+    write_pfm(folder / "disp0.pfm", truth)
+    (folder / "calib.txt").write_text(f"ndisp={ndisp}\n")
+    return folder
 
 
 def read_disparity(path, *, scale: float | None = None, unknown: int | None = 0) -> np.ndarray:

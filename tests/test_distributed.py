@@ -1,0 +1,326 @@
+"""vmcl on Dask: a local cluster of 2 spawned workers gives, bit for bit, what one process gives alone.
+
+The oracle is the serial run over the same items: :meth:`VisionMachine.run` in this process for the
+library, ``vmcl run`` per item for ``vmcl batch`` (every array of fields.npz and every PNG compared byte
+for byte; report.html holds the run's timings, so only its presence is checked). The cluster starts once
+for the module and stops at its end; the kill test SIGKILLs one of its worker processes, which its nanny
+restarts.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import threading
+import time
+from pathlib import Path
+
+import cv2
+import distributed
+import numpy as np
+import pytest
+
+from vmcl import scenes
+from vmcl.cli import main, write_output
+from vmcl.datasets import read_image, read_stereo_folder, write_stereo_folder
+from vmcl.distributed import (
+    MachinePlugin,
+    batch_items,
+    map_frames,
+    map_sequence,
+    run_batch,
+    stitch,
+    worker_machine,
+)
+from vmcl.errors import InputValueError
+from vmcl.machine import Machine
+from vmcl.output_folder import MARKER, output_folder
+from vmcl.pipeline import Config, VisionMachine
+
+# ICM restores in a few sweeps: the items stay cheap and every stage still runs.
+FAST = {"mrf": {"method": "icm"}}
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                                       silence_logs=logging.CRITICAL)
+    try:
+        with distributed.Client(cluster) as c:
+            c.register_plugin(MachinePlugin())
+            yield c
+    finally:
+        cluster.close()
+
+
+@pytest.fixture(scope="module")
+def serial():
+    return VisionMachine(Config.from_dict(FAST), machine=Machine(profile=True))
+
+
+def _scene(seed: int, size: int = 64):
+    return scenes.render(scenes.preset("blocks", shape=(size, size)), seed=seed, noise=0.01)
+
+
+def _same_result(a, b) -> None:
+    for name, value in vars(a).items():
+        other = getattr(b, name)
+        if isinstance(value, np.ndarray):
+            assert value.dtype == other.dtype and value.shape == other.shape, name
+            assert value.tobytes() == other.tobytes(), f"{name} differs"
+        elif value is None:
+            assert other is None, name
+    assert a.restored.keys() == b.restored.keys() and a.lines.keys() == b.lines.keys()
+    for cue in a.restored:
+        assert a.restored[cue].tobytes() == b.restored[cue].tobytes(), cue
+    for cue in a.lines:
+        assert all(x.tobytes() == y.tobytes() for x, y in zip(a.lines[cue], b.lines[cue])), cue
+    assert a.notes == b.notes and a.config == b.config and list(a.stages) == list(b.stages)
+
+
+def test_map_frames_equals_the_serial_run_and_each_worker_keeps_one_machine(client, serial):
+    views = []
+    for seed in range(3):
+        s = _scene(seed)
+        views += [(s.left, s.right, s.left_next), (s.left,), {"left": s.left[..., 0], "next": s.left_next[..., 0]}]
+    futures = map_frames(client, views, FAST)
+    for view, future in zip(views, futures):
+        left, right, next_ = (view["left"], None, view["next"]) if isinstance(view, dict) else (*view, None, None)[:3]
+        _same_result(future.result(), serial.run(left, right, next_))
+
+    def machine_of_this_worker(_):
+        return os.getpid(), id(worker_machine())
+
+    seen = client.gather([client.submit(machine_of_this_worker, i, pure=False) for i in range(24)])
+    per_process: dict[int, set[int]] = {}
+    for pid, machine in seen:
+        per_process.setdefault(pid, set()).add(machine)
+    assert os.getpid() not in per_process  # spawned workers ran the tasks, not this process
+    assert all(len(machines) == 1 for machines in per_process.values()), per_process
+
+
+def test_a_frame_that_raises_is_reported_and_the_others_complete(client, serial):
+    s = _scene(4)
+    views = [(s.left, s.right), (s.left, s.right[:48, :48]), (s.left,)]
+    futures = map_frames(client, views, FAST)
+    distributed.wait(futures)
+    assert [f.status for f in futures] == ["finished", "error", "finished"]
+    error = futures[1].exception()
+    assert isinstance(error, InputValueError) and "right" in str(error)
+    _same_result(futures[0].result(), serial.run(s.left, s.right))
+    _same_result(futures[2].result(), serial.run(s.left))
+
+
+def test_map_frames_refuses_what_is_not_a_frame_by_name(client):
+    s = _scene(0)
+    with pytest.raises(TypeError, match=r"frames\[1\]"):
+        map_frames(client, [s.left, "left.png"])
+    with pytest.raises(TypeError, match=r"frames\[0\]\.right"):
+        map_frames(client, [(s.left, "right.png")])
+    with pytest.raises(ValueError, match="unknown config key"):
+        map_frames(client, [s.left], {"mrf": {"nope": 1}})
+
+
+def test_a_sequence_in_chunks_with_overlap_stitches_to_the_serial_run(client, serial):
+    s = _scene(5)
+    # A camera moving one pixel a frame over the rendered view: 6 frames, 5 pairs.
+    frames = [np.ascontiguousarray(np.roll(s.left, shift, axis=1)) for shift in range(6)]
+    futures = map_sequence(client, frames, FAST, chunk=2, overlap=1)
+    assert len(futures) == 3
+    chunks = client.gather(futures)
+    assert [[t for t, _ in chunk] for chunk in chunks] == [[0, 1], [2, 3], [4]]
+    results = stitch(chunks)
+    assert len(results) == 5
+    for t, result in enumerate(results):
+        _same_result(result, serial.run(frames[t], next=frames[t + 1]))
+    with pytest.raises(ValueError, match="pair"):
+        stitch([chunks[0], chunks[2]])
+
+
+# ------------------------------------------------------------------------------------------------ vmcl batch
+
+def _png(path: Path, image: np.ndarray) -> Path:
+    cv2.imwrite(str(path), cv2.cvtColor(np.round(image * 255).clip(0, 255).astype(np.uint8), cv2.COLOR_RGB2BGR))
+    return path
+
+
+def _scene_folders(root: Path, count: int, size: int) -> list[Path]:
+    """Middlebury 2014-layout scene folders (im0, im1, disp0.pfm, calib.txt) of rendered pairs."""
+    folders = []
+    for seed in range(count):
+        s = _scene(seed, size)
+        folders.append(write_stereo_folder(root / f"scene{seed:02d}", s.left, s.right, s.disparity, ndisp=16))
+    return folders
+
+
+def _fast_toml(tmp_path: Path) -> Path:
+    path = tmp_path / "fast.toml"
+    path.write_text('[mrf]\nmethod = "icm"\n')
+    return path
+
+
+def _vmcl_run_outputs(folders: list[Path], config: Path, out: Path) -> None:
+    """``vmcl run`` on each scene's pair (a new Machine each time: about 1 s of kernel builds per item)."""
+    for folder in folders:
+        assert main(["run", str(folder / "im0.png"), str(folder / "im1.png"), "--config", str(config),
+                     "--out", str(out / folder.name), "--quiet"]) == 0
+
+
+def _serial_outputs(folders: list[Path], serial: VisionMachine, out: Path) -> None:
+    """What ``vmcl run`` writes for each scene, from one machine in this process (its kernels built once)."""
+    for folder in folders:
+        pair = read_stereo_folder(folder)
+        with output_folder(out / folder.name) as work:
+            write_output(serial.run(pair.left, pair.right), work, f"Vision Machine: {folder.name}")
+
+
+def _assert_same_output(batch: Path, reference: Path) -> None:
+    """The item's folder is whole and holds the serial run's arrays and pictures, bit for bit."""
+    assert (batch / MARKER).is_file() and (batch / "report.html").is_file()
+    assert sorted(p.name for p in batch.iterdir()) == sorted(p.name for p in reference.iterdir())
+    with np.load(batch / "fields.npz") as ours, np.load(reference / "fields.npz") as theirs:
+        assert sorted(ours.files) == sorted(theirs.files)
+        for name in ours.files:
+            a, b = ours[name], theirs[name]
+            assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes(), name
+    for png in reference.glob("*.png"):
+        assert (batch / png.name).read_bytes() == png.read_bytes(), png.name
+
+
+def _no_partial_folders(out: Path) -> bool:
+    return not [p for p in out.iterdir() if p.name.startswith(".")]
+
+
+def test_batch_equals_vmcl_run_per_item(client, tmp_path, capsys):
+    folders = _scene_folders(tmp_path / "data", 4, 64)
+    config = _fast_toml(tmp_path)
+    _vmcl_run_outputs(folders, config, tmp_path / "serial")
+    out = tmp_path / "batch"
+    code = main(["batch", str(tmp_path / "data"), "--config", str(config), "--out", str(out),
+                 "--scheduler", client.scheduler_info()["address"], "--quiet"])
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "4 done, 0 skipped (already there), 0 failed" in printed
+    for folder in folders:
+        _assert_same_output(out / folder.name, tmp_path / "serial" / folder.name)
+    assert _no_partial_folders(out)
+
+
+def test_a_worker_killed_mid_batch_loses_nothing(client, serial, tmp_path):
+    folders = _scene_folders(tmp_path / "data", 20, 128)
+    config = _fast_toml(tmp_path)
+    out = tmp_path / "batch"
+    killed: dict[str, object] = {}
+
+    def kill_a_busy_worker() -> None:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            finished = sum((folder / MARKER).is_file() for folder in out.glob("*")) if out.exists() else 0
+            busy = [address for address, keys in client.processing().items() if keys]
+            if finished >= 3 and busy:
+                pid = client.run(os.getpid, workers=[busy[0]])[busy[0]]
+                os.kill(pid, signal.SIGKILL)
+                killed.update(pid=pid, finished=finished)
+                return
+            time.sleep(0.005)
+
+    killer = threading.Thread(target=kill_a_busy_worker)
+    killer.start()
+    try:
+        code = main(["batch", str(tmp_path / "data"), "--config", str(config), "--out", str(out),
+                     "--scheduler", client.scheduler_info()["address"], "--quiet"])
+    finally:
+        killer.join()
+    assert killed, "no worker was killed"
+    assert killed["finished"] < 20, "the batch ended before the kill: the items are too small to test this"
+    assert code == 0
+    _serial_outputs(folders, serial, tmp_path / "serial")
+    for folder in folders:
+        _assert_same_output(out / folder.name, tmp_path / "serial" / folder.name)
+    assert _no_partial_folders(out)
+    client.wait_for_workers(2, timeout=60)  # the nanny brings the worker back for the tests after this one
+    assert killed["pid"] not in client.run(os.getpid).values()
+
+
+def test_an_interrupted_batch_resumes_with_only_the_missing_items(client, serial, tmp_path, capsys):
+    folders = _scene_folders(tmp_path / "data", 6, 64)
+    items = batch_items([tmp_path / "data"])
+    out = tmp_path / "batch"
+    ended = []
+
+    def interrupt_after_two(name: str) -> None:
+        ended.append(name)
+        if len(ended) == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_batch(client, items, out, FAST, progress=interrupt_after_two)
+    first = {p.name: (p / MARKER).stat().st_mtime_ns for p in out.iterdir() if (p / MARKER).is_file()}
+    assert sorted(first) == sorted(ended) and _no_partial_folders(out)
+
+    config = _fast_toml(tmp_path)
+    code = main(["batch", str(tmp_path / "data"), "--config", str(config), "--out", str(out),
+                 "--scheduler", client.scheduler_info()["address"], "--quiet"])
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "4 done, 2 skipped (already there), 0 failed" in printed
+    for name, mtime in first.items():  # the finished items were not written again
+        assert (out / name / MARKER).stat().st_mtime_ns == mtime
+        assert f"{name}  skipped" in printed
+    _serial_outputs(folders, serial, tmp_path / "serial")
+    for folder in folders:
+        _assert_same_output(out / folder.name, tmp_path / "serial" / folder.name)
+
+
+def test_a_failing_item_is_reported_by_name_and_the_others_complete(client, serial, tmp_path, capsys):
+    data = tmp_path / "data"
+    data.mkdir()
+    for seed in range(3):
+        _png(data / f"frame{seed}.png", _scene(seed).left)
+    cv2.imwrite(str(data / "tiny.png"), np.zeros((8, 8), np.uint8))  # the machine refuses it on the worker
+    (data / "broken.png").write_text("not an image")  # refused when read, before it is sent
+    out = tmp_path / "batch"
+    code = main(["batch", str(data), "--out", str(out), "--config", str(_fast_toml(tmp_path)),
+                 "--scheduler", client.scheduler_info()["address"], "--quiet"])
+    assert code == 2  # what failed was bad input
+    printed = capsys.readouterr().out
+    assert "3 done, 0 skipped (already there), 2 failed" in printed
+    lines = {line.split()[0]: line for line in printed.splitlines()[2:]}
+    assert "failed" in lines["tiny"] and "InputValueError: left must be at least 16 x 16" in lines["tiny"]
+    assert "failed" in lines["broken"] and "broken.png" in lines["broken"]
+    assert sorted(p.name for p in out.iterdir()) == ["frame0", "frame1", "frame2"]
+    for seed in range(3):
+        reference = tmp_path / "serial" / f"frame{seed}"
+        with output_folder(reference) as work:
+            write_output(serial.run(read_image(data / f"frame{seed}.png")), work, f"Vision Machine: frame{seed}")
+        _assert_same_output(out / f"frame{seed}", reference)
+
+
+def test_batch_refuses_an_item_folder_it_did_not_write(client, tmp_path, capsys):
+    data = tmp_path / "data"
+    data.mkdir()
+    _png(data / "a.png", _scene(0).left)
+    (tmp_path / "batch" / "a").mkdir(parents=True)
+    (tmp_path / "batch" / "a" / "notes.txt").write_text("mine")
+    code = main(["batch", str(data), "--out", str(tmp_path / "batch"), "--scheduler", client.scheduler_info()["address"],
+                 "--quiet"])
+    assert code == 2
+    assert "is not a vmcl output" in capsys.readouterr().err
+    assert (tmp_path / "batch" / "a" / "notes.txt").read_text() == "mine"
+
+
+def test_batch_items_are_named_uniquely_and_safely(tmp_path):
+    for folder in ("x", "y"):
+        (tmp_path / folder).mkdir()
+        for name in ("a b.png", "A.PNG", ".hidden.png", "c.txt"):
+            (tmp_path / folder / name).write_bytes(b"")
+    items = batch_items([tmp_path / "x", tmp_path / "y"])
+    assert [(i.name, i.paths[0].name) for i in items] == [
+        ("A", "A.PNG"), ("a_b", "a b.png"), ("A-2", "A.PNG"), ("a_b-2", "a b.png")]
+    frames = batch_items([tmp_path / "x"], frames=True)
+    assert [(i.name, i.kind, [p.name for p in i.paths]) for i in frames] == [("A", "motion", ["A.PNG", "a b.png"])]
+    with pytest.raises(ValueError, match="inputs: no such file or folder"):
+        batch_items([tmp_path / "missing"])
+    with pytest.raises(ValueError, match="at least 2 frames"):
+        batch_items([tmp_path / "x" / "A.PNG"], frames=True)

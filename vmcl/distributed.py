@@ -1,0 +1,735 @@
+"""Batches and sequences on Dask: one Machine per worker process, NumPy arrays in and Results out.
+
+A data set, a long video or a parameter sweep outgrows one machine; :mod:`dask.distributed` runs the
+same code on a laptop (a ``LocalCluster``), on SSH hosts, Kubernetes, SLURM (dask-jobqueue) or a cloud
+service. An OpenCL context, queue or kernel cannot be pickled, and a forked child reusing its parent's
+PoCL context hangs, so nothing of OpenCL ever travels: each worker process (spawned, Dask's default
+start method) makes its own :class:`vmcl.Machine` once, through :class:`MachinePlugin`, and keeps it in
+this module's per-process cache (:func:`worker_machine`); tasks carry NumPy arrays and the Config as a
+dict, and return :class:`vmcl.result.Result` (NumPy fields and a Config dataclass, both picklable).
+
+- :func:`map_frames` runs the machine on each frame, pair or triple: futures of Results.
+- :func:`map_sequence` splits a video into chunks of frame pairs (t, t + 1), each chunk run in order on
+  one worker, starting ``overlap`` pairs before its own; :func:`stitch` puts the chunks' Results back in
+  order. The machine keeps no state from one pair to the next yet, so the overlap pairs are run and
+  dropped; they are there for warm starts across frames, which will start from them.
+- :func:`batch_items` and :func:`run_batch` are the ``vmcl batch`` command: every item an output folder
+  written whole or not at all (:func:`vmcl.output_folder.output_folder`), finished items skipped on a
+  rerun, failed items reported by name with their error while the rest complete.
+
+Dask reruns the tasks of a worker that died on another worker (``distributed.scheduler.allowed-failures``,
+3 by default, bounds how many deaths one task may witness); a task that raises is run once more
+(``retries=1``) before its error is reported.
+
+Examples
+--------
+>>> from distributed import Client, LocalCluster  # doctest: +SKIP
+>>> with LocalCluster(n_workers=2, threads_per_worker=1) as cluster, Client(cluster) as client:  # doctest: +SKIP
+...     client.register_plugin(MachinePlugin())
+...     results = client.gather(map_frames(client, [(left, right), (left2, right2)]))
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import itertools
+import json
+import math
+import os
+import re
+import tempfile
+import threading
+import uuid
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+try:
+    from distributed import Client, Future, LocalCluster, WorkerPlugin, as_completed
+except ImportError as _missing:  # an optional extra: say which one
+    raise ImportError("vmcl.distributed needs Dask's distributed scheduler: pip install 'vmcl[dask]'") from _missing
+
+from vmcl.errors import InputError, InputTypeError, InputValueError
+from vmcl.machine import Machine, list_devices
+from vmcl.output_folder import MARKER, output_folder
+from vmcl.pipeline import Config, VisionMachine
+from vmcl.result import Result
+
+__all__ = [
+    "IMAGE_SUFFIXES",
+    "BatchItem",
+    "ItemOutput",
+    "ItemStatus",
+    "LocalClusterSize",
+    "MachinePlugin",
+    "batch_items",
+    "cluster_client",
+    "local_cluster_size",
+    "map_frames",
+    "map_sequence",
+    "render_item",
+    "run_batch",
+    "run_chunk",
+    "run_frame",
+    "stitch",
+    "worker_machine",
+]
+
+IMAGE_SUFFIXES = (".png", ".ppm", ".pgm", ".pnm", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
+"""The files a batch input folder's images are taken from (what :func:`vmcl.datasets.read_image` reads)."""
+
+# ----------------------------------------------------------------------------------- the worker's side
+
+_lock = threading.Lock()
+_machine: Machine | None = None
+_machine_device: str | int | None = None
+_machines: dict[str, VisionMachine] = {}
+_MAX_CONFIGS = 8  # VisionMachines kept per process, one per Config seen (a sweep's configs)
+
+
+def _make_machine(device: str | int | None) -> Machine:
+    if isinstance(device, int):
+        devices = list_devices()
+        if not 0 <= device < len(devices):
+            raise InputValueError(f"device: index {device} is outside the {len(devices)} OpenCL device(s) of this "
+                                  "worker (vmcl info lists them)")
+        return Machine(devices[device], profile=True)
+    # Profiling, as a VisionMachine's own Machine: the report's kernel table is that of `vmcl run`.
+    return Machine(device, profile=True)
+
+
+def worker_machine() -> Machine:
+    """This process's Machine: the one :class:`MachinePlugin` made, else one on the default device.
+
+    Made once per process and kept: every task a worker runs shares it (and so its built kernels).
+    The default device is ``VMCL_DEVICE`` of the worker's environment, else the first (GPUs first).
+    """
+    global _machine
+    with _lock:
+        if _machine is None:
+            _machine = _make_machine(None)
+        return _machine
+
+
+def _install_machine(device: str | int | None) -> Machine:
+    """Make this process's Machine on ``device``, unless the one it has was made for the same device."""
+    global _machine, _machine_device
+    with _lock:
+        if _machine is None or _machine_device != device:
+            _machine, _machine_device = _make_machine(device), device
+            _machines.clear()  # their Machine is gone
+        return _machine
+
+
+class MachinePlugin(WorkerPlugin):
+    """Makes each worker process's Machine when the worker starts (and when the nanny restarts it).
+
+    Register it once per cluster: ``client.register_plugin(MachinePlugin())``; workers that join later
+    get it too. A device that cannot be opened fails the registration on that worker.
+
+    Parameters
+    ----------
+    device : str or int, optional
+        A case-insensitive substring of the OpenCL platform or device name, or an index into
+        :func:`vmcl.machine.list_devices` as the worker sees it. Default: the worker's ``VMCL_DEVICE``,
+        else its first device (GPUs first). Several devices on one node: one worker per device, each
+        started with its own ``VMCL_DEVICE`` (or its own plugin).
+    """
+
+    name = "vmcl-machine"
+
+    def __init__(self, device: str | int | None = None) -> None:
+        if isinstance(device, bool) or not isinstance(device, (str, int, type(None))):
+            raise InputTypeError(f"device must be a device name substring, a device index or None, "
+                                 f"got {type(device).__name__}")
+        if isinstance(device, int) and device < 0:
+            raise InputValueError(f"device must be a device index >= 0, got {device}")
+        self.device = device
+
+    def setup(self, worker: Any = None) -> None:
+        """Make the worker's Machine (a registration again for the same device keeps the one it has)."""
+        _install_machine(self.device)
+
+
+def _vision_machine(config: Mapping[str, Any] | None) -> VisionMachine:
+    """The process's VisionMachine for this Config (as a dict), on :func:`worker_machine`."""
+    key = json.dumps(config or {}, sort_keys=True, default=str)
+    machine = worker_machine()
+    with _lock:
+        vm = _machines.get(key)
+        if vm is None or vm.machine is not machine:
+            if len(_machines) >= _MAX_CONFIGS:
+                _machines.pop(next(iter(_machines)))
+            vm = _machines[key] = VisionMachine(Config.from_dict(config or {}), machine=machine)
+        return vm
+
+
+def run_frame(left: np.ndarray, right: np.ndarray | None = None, next: np.ndarray | None = None,
+              config: Mapping[str, Any] | None = None) -> Result:
+    """One run of the machine on this worker's Machine (the task :func:`map_frames` submits).
+
+    Parameters
+    ----------
+    left, right, next : ndarray
+        As :meth:`vmcl.pipeline.VisionMachine.run` takes them.
+    config : mapping, optional
+        :meth:`vmcl.pipeline.Config.to_dict`'s nested values (default: ``Config()``).
+
+    Returns
+    -------
+    Result
+    """
+    return _vision_machine(config).run(left, right, next)
+
+
+def run_chunk(frames: Sequence[np.ndarray], first: int, skip: int, config: Mapping[str, Any] | None = None,
+              rights: Sequence[np.ndarray] | None = None) -> list[tuple[int, Result]]:
+    """Run the pairs (frames[k], frames[k + 1]) of one chunk in order; the task of :func:`map_sequence`.
+
+    Parameters
+    ----------
+    frames : sequence of ndarray
+        The chunk's frames: frame ``first`` of the video onwards.
+    first : int
+        The video index of ``frames[0]``.
+    skip : int
+        Leading pairs that are the chunk's overlap: run, not returned.
+    config : mapping, optional
+        :meth:`vmcl.pipeline.Config.to_dict`'s nested values.
+    rights : sequence of ndarray, optional
+        The right view of each frame (stereo video): pair k is also matched in stereo.
+
+    Returns
+    -------
+    list of (int, Result)
+        Each returned pair's video index t (the pair t, t + 1) and its Result.
+    """
+    vm = _vision_machine(config)
+    out = []
+    for k in range(len(frames) - 1):
+        result = vm.run(frames[k], None if rights is None else rights[k], frames[k + 1])
+        if k >= skip:
+            out.append((first + k, result))
+    return out
+
+
+@dataclass(frozen=True)
+class ItemOutput:
+    """What a batch item's task sends back: its output files' bytes (encoded on the worker) and its time.
+
+    Attributes
+    ----------
+    files : dict of str to bytes
+        The files ``vmcl run`` writes (report.html, the report's PNGs, fields.npz), by name.
+    total_ms : float
+        The machine's wall time for the item.
+    notes : list of str
+        :attr:`vmcl.result.Result.notes`.
+    """
+
+    files: dict[str, bytes]
+    total_ms: float
+    notes: list[str] = field(default_factory=list)
+
+
+def render_item(left: np.ndarray, right: np.ndarray | None, next: np.ndarray | None,
+                config: Mapping[str, Any] | None, title: str) -> ItemOutput:
+    """Run the machine on one batch item and encode its output as ``vmcl run`` would write it.
+
+    The PNGs and the compressed fields are made on the worker, so the client only writes bytes and no
+    file system is shared between them.
+    """
+    from vmcl.cli import write_output  # the command's own writer: a batch item is a `vmcl run`
+
+    result = run_frame(left, right, next, config)
+    with tempfile.TemporaryDirectory(prefix="vmcl-item-") as folder:
+        write_output(result, Path(folder), f"Vision Machine: {title}")
+        files = {path.name: path.read_bytes() for path in sorted(Path(folder).iterdir())}
+    return ItemOutput(files, result.total_ms, list(result.notes))
+
+
+# ----------------------------------------------------------------------------------- the client's side
+
+def _check_client(client: Any) -> Client:
+    if not isinstance(client, Client):
+        raise InputTypeError(f"client must be a distributed.Client, got {type(client).__name__}")
+    return client
+
+
+def _config_dict(config: Any) -> dict[str, Any]:
+    if config is None:
+        return Config().to_dict()
+    if isinstance(config, Config):
+        return config.to_dict()
+    if isinstance(config, Mapping):
+        return Config.from_dict(config).to_dict()  # checked here, not on every worker
+    raise InputTypeError(f"config must be a vmcl.pipeline.Config, a mapping of its sections or None, "
+                         f"got {type(config).__name__}")
+
+
+def _check_retries(retries: Any) -> int:
+    if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
+        raise InputValueError(f"retries must be an integer >= 0, got {retries!r}")
+    return retries
+
+
+def _frame(frame: Any, where: str) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """(left, right, next) of one item of ``frames``; the arrays' values are the machine's to check."""
+    if isinstance(frame, np.ndarray):
+        views: tuple[Any, ...] = (frame, None, None)
+    elif isinstance(frame, Mapping):
+        unknown = sorted(set(map(str, frame)) - {"left", "right", "next"})
+        if unknown or "left" not in frame:
+            raise InputValueError(f"{where} must map 'left' (and optionally 'right', 'next') to images, "
+                                  f"got the keys {sorted(map(str, frame))}")
+        views = (frame["left"], frame.get("right"), frame.get("next"))
+    elif isinstance(frame, (tuple, list)) and 1 <= len(frame) <= 3:
+        views = (*frame, *(None,) * (3 - len(frame)))
+    elif hasattr(frame, "left") and hasattr(frame, "right"):  # vmcl.datasets.StereoPair
+        views = (frame.left, frame.right, None)
+    else:
+        raise InputTypeError(f"{where} must be an image, a (left, right[, next]) tuple, a mapping of 'left', "
+                             f"'right', 'next' or a StereoPair, got {type(frame).__name__}")
+    for name, view in zip(("left", "right", "next"), views):
+        if not (view is None and name != "left") and not isinstance(view, np.ndarray):
+            raise InputTypeError(f"{where}.{name} must be a NumPy array{'' if name == 'left' else ' or None'}, "
+                                 f"got {type(view).__name__}")
+    return views[0], views[1], views[2]
+
+
+def map_frames(client: Client, frames: Iterable[Any], config: Config | Mapping[str, Any] | None = None, *,
+               retries: int = 1) -> list[Future]:
+    """Run the machine on every frame on the client's cluster: one task per frame.
+
+    Parameters
+    ----------
+    client : distributed.Client
+    frames : iterable
+        Each an image (edges, colour, texture), a tuple ``(left, right)`` or ``(left, right, next)``
+        (None for a view not given), a mapping with keys ``left``, ``right``, ``next``, or a
+        :class:`vmcl.datasets.StereoPair`.
+    config : Config or mapping, optional
+        Sent to the workers as :meth:`vmcl.pipeline.Config.to_dict`'s dict. Default: ``Config()``.
+    retries : int
+        Reruns of a task that raised before its future holds the error (a task whose worker died is
+        rerun elsewhere regardless).
+
+    Returns
+    -------
+    list of distributed.Future
+        One per frame, in order, each of a :class:`vmcl.result.Result`; a frame the machine refuses
+        (shape, dtype, sizes that differ) gives a future holding its error, and the others complete.
+    """
+    client = _check_client(client)
+    values = _config_dict(config)
+    retries = _check_retries(retries)
+    if isinstance(frames, (np.ndarray, str, bytes)) or not isinstance(frames, Iterable):
+        raise InputTypeError(f"frames must be an iterable of frames (a list), got {type(frames).__name__}")
+    views = [_frame(frame, f"frames[{index}]") for index, frame in enumerate(frames)]
+    batch = uuid.uuid4().hex[:8]
+    # pure=False: hashing every image for a key costs a pass over the data and finds nothing to share.
+    return [client.submit(run_frame, *view, values, key=f"vmcl-frame-{batch}-{index}", retries=retries, pure=False)
+            for index, view in enumerate(views)]
+
+
+def map_sequence(client: Client, frames: Sequence[np.ndarray], config: Config | Mapping[str, Any] | None = None,
+                 *, chunk: int = 16, overlap: int = 1, rights: Sequence[np.ndarray] | None = None,
+                 retries: int = 1) -> list[Future]:
+    """Run the machine on a video's frame pairs (t, t + 1), in chunks of ``chunk`` pairs, one per task.
+
+    Each chunk runs its pairs in order on one worker, starting ``overlap`` pairs before its first own
+    pair (the overlap's Results are dropped). :func:`stitch` of the gathered chunks gives the Results in
+    the video's order, the same as running the pairs one after the other.
+
+    Parameters
+    ----------
+    client : distributed.Client
+    frames : sequence of ndarray
+        The video's frames (the left view), at least 2.
+    config : Config or mapping, optional
+    chunk : int
+        Pairs each task returns (>= 1).
+    overlap : int
+        Pairs each chunk runs before its own (>= 0).
+    rights : sequence of ndarray, optional
+        The right view of every frame (as many as ``frames``): each pair adds stereo.
+    retries : int
+
+    Returns
+    -------
+    list of distributed.Future
+        One per chunk, in order, each of a list of (t, Result).
+    """
+    client = _check_client(client)
+    values = _config_dict(config)
+    retries = _check_retries(retries)
+    for name, value, minimum in (("chunk", chunk, 1), ("overlap", overlap, 0)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+            raise InputValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    if isinstance(frames, np.ndarray) or not isinstance(frames, Sequence):
+        raise InputTypeError(f"frames must be a sequence of images (a list), got {type(frames).__name__}")
+    if len(frames) < 2:
+        raise InputValueError(f"frames must hold at least 2 frames (one pair), got {len(frames)}")
+    for index, frame in enumerate(frames):
+        if not isinstance(frame, np.ndarray):
+            raise InputTypeError(f"frames[{index}] must be a NumPy array, got {type(frame).__name__}")
+    if rights is not None:
+        if isinstance(rights, np.ndarray) or not isinstance(rights, Sequence) or len(rights) != len(frames):
+            raise InputValueError(f"rights must be a sequence of {len(frames)} right views (one per frame), "
+                                  f"got {type(rights).__name__}")
+        for index, view in enumerate(rights):
+            if not isinstance(view, np.ndarray):
+                raise InputTypeError(f"rights[{index}] must be a NumPy array, got {type(view).__name__}")
+    pairs = len(frames) - 1
+    batch = uuid.uuid4().hex[:8]
+    futures = []
+    for start in range(0, pairs, chunk):
+        stop = min(start + chunk, pairs)
+        first = max(0, start - overlap)
+        chunk_rights = None if rights is None else list(rights[first:stop + 1])
+        futures.append(client.submit(run_chunk, list(frames[first:stop + 1]), first, start - first, values,
+                                     chunk_rights, key=f"vmcl-chunk-{batch}-{start}", retries=retries,
+                                     pure=False))
+    return futures
+
+
+def stitch(chunks: Iterable[Sequence[tuple[int, Result]]]) -> list[Result]:
+    """The Results of :func:`map_sequence`'s gathered chunks in the video's order, each pair once.
+
+    Raises
+    ------
+    ValueError
+        If a pair is missing or given twice (chunks of different calls mixed).
+    """
+    if isinstance(chunks, (str, bytes, Mapping)) or not isinstance(chunks, Iterable):
+        raise InputTypeError(f"chunks must be an iterable of map_sequence's chunks, got {type(chunks).__name__}")
+    found: dict[int, Result] = {}
+    for index, chunk in enumerate(chunks):
+        if isinstance(chunk, (str, bytes)) or not isinstance(chunk, Sequence):
+            raise InputTypeError(f"chunks[{index}] must be a list of (t, Result), got {type(chunk).__name__}")
+        for entry in chunk:
+            if not (isinstance(entry, Sequence) and len(entry) == 2 and isinstance(entry[0], int)
+                    and not isinstance(entry[0], bool) and entry[0] >= 0 and isinstance(entry[1], Result)):
+                raise InputTypeError(f"chunks[{index}] must hold (t, Result) pairs with t >= 0, got {entry!r:.80}")
+            t, result = entry
+            if t in found:
+                raise InputValueError(f"chunks[{index}] holds the pair {t} again: chunks of different sequences?")
+            found[t] = result
+    missing = sorted(set(range(len(found))) - set(found))
+    if missing:
+        raise InputValueError(f"chunks lack the pair(s) {missing[:5]}: every chunk of the sequence is needed")
+    return [found[t] for t in range(len(found))]
+
+
+# ----------------------------------------------------------------------------------- batches (vmcl batch)
+
+@dataclass(frozen=True)
+class BatchItem:
+    """One item of a batch: a name (its output folder's) and where its images are.
+
+    Attributes
+    ----------
+    name : str
+        Unique in the batch, safe as a folder name.
+    kind : str
+        "image" (one image), "scene" (a Middlebury-layout scene folder: a stereo pair) or "motion" (a
+        frame and the next one).
+    paths : tuple of Path
+        The image, the scene folder, or the frame and the next frame.
+    """
+
+    name: str
+    kind: str
+    paths: tuple[Path, ...]
+
+    def load(self) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+        """(left, right, next) as the files hold them."""
+        from vmcl.datasets import read_image, read_stereo_folder
+
+        if self.kind == "scene":
+            pair = read_stereo_folder(self.paths[0])
+            return pair.left, pair.right, None
+        if self.kind == "motion":
+            return read_image(self.paths[0]), None, read_image(self.paths[1])
+        return read_image(self.paths[0]), None, None
+
+
+def _safe_name(text: str) -> str:
+    # A folder name on every file system; a leading dot would hide it beside output_folder's own hidden folders.
+    name = re.sub(r"[^A-Za-z0-9._-]+", "_", text).strip("_.") or "item"
+    return name
+
+
+def _images_in(folder: Path) -> list[Path]:
+    return sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES
+                  and not p.name.startswith("."))
+
+
+def batch_items(inputs: Sequence[str | os.PathLike[str]], *, frames: bool = False) -> list[BatchItem]:
+    """The items of a batch over these inputs, named uniquely after their files and folders.
+
+    Parameters
+    ----------
+    inputs : sequence of str or Path
+        Image files (each an item), folders holding Middlebury-layout scenes (each scene an item, a
+        stereo pair; :func:`vmcl.datasets.find_stereo_folders`), or folders of image files (each image an
+        item).
+    frames : bool
+        The images, in the order given (a folder's sorted by name), are the frames of one sequence: item t
+        is frame t with frame t + 1 (motion), named after frame t.
+
+    Returns
+    -------
+    list of BatchItem
+        In the inputs' order. Names repeated are told apart by "-2", "-3" ... in that order, so the same
+        inputs give the same names (what a rerun's resume goes by).
+
+    Raises
+    ------
+    ValueError
+        An input that does not exist, a folder with nothing to run, fewer than 2 frames.
+    """
+    from vmcl.datasets import find_stereo_folders
+
+    if isinstance(inputs, (str, os.PathLike)) or not isinstance(inputs, Sequence):
+        raise InputTypeError(f"inputs must be a sequence of paths, got {type(inputs).__name__}")
+    if not isinstance(frames, (bool, np.bool_)):
+        raise InputTypeError(f"frames must be true or false, got {type(frames).__name__}")
+    if not inputs:
+        raise InputValueError("inputs: no input given (image files or folders)")
+    for index, entry in enumerate(inputs):
+        if not isinstance(entry, (str, os.PathLike)):
+            raise InputTypeError(f"inputs[{index}] must be a path (str or os.PathLike), got {type(entry).__name__}")
+    raw: list[tuple[str, str, tuple[Path, ...]]] = []  # (name, kind, paths)
+    images: list[Path] = []
+    for entry in inputs:
+        path = Path(entry)
+        if path.is_file():
+            images.append(path)
+        elif path.is_dir():
+            scenes = [] if frames else find_stereo_folders(path)
+            if scenes:
+                raw += [(path.name if scene == path else scene.relative_to(path).as_posix(), "scene", (scene,))
+                        for scene in scenes]
+                continue
+            found = _images_in(path)
+            if not found:
+                raise InputValueError(f"inputs: the folder {entry} holds no Middlebury-layout scene and no image "
+                                      f"file ({', '.join(IMAGE_SUFFIXES)})")
+            images += found
+        else:
+            raise InputValueError(f"inputs: no such file or folder: {entry}")
+    if frames:
+        if len(images) < 2:
+            raise InputValueError(f"inputs: --frames needs at least 2 frames, got {len(images)}")
+        raw += [(a.stem, "motion", (a, b)) for a, b in itertools.pairwise(images)]
+    else:
+        raw += [(image.stem, "image", (image,)) for image in images]
+    items, taken = [], set()
+    for name, kind, paths in raw:
+        base = _safe_name(name)
+        unique, n = base, 1
+        while unique.lower() in taken:  # lower: case-insensitive file systems would merge the folders
+            n += 1
+            unique = f"{base}-{n}"
+        taken.add(unique.lower())
+        items.append(BatchItem(unique, kind, paths))
+    return items
+
+
+@dataclass(frozen=True)
+class ItemStatus:
+    """How a batch item ended.
+
+    Attributes
+    ----------
+    name : str
+    state : str
+        "done", "skipped" (a complete output was already there) or "failed".
+    detail : str
+        The error of a failed item (its type and message), else "".
+    total_ms : float
+        The machine's wall time (NaN unless done).
+    error : BaseException or None
+        The failed item's exception.
+    """
+
+    name: str
+    state: str
+    detail: str = ""
+    total_ms: float = math.nan
+    error: BaseException | None = None
+
+
+def _finished(folder: Path) -> bool:
+    """Whether ``folder`` holds a whole vmcl output: output_folder moves the marker in with the last file."""
+    return (folder / MARKER).is_file()
+
+
+def run_batch(client: Client, items: Sequence[BatchItem], out: str | os.PathLike[str],
+              config: Config | Mapping[str, Any] | None = None, *, retries: int = 1,
+              progress: Callable[[str], None] | None = None) -> list[ItemStatus]:
+    """Run every item on the client's cluster and write each one's output into ``out``/<name>/.
+
+    Items whose folder already holds a whole vmcl output are skipped (a rerun resumes). The images are
+    read here, a few tasks ahead of the workers (twice the cluster's threads), so that a batch of any
+    length holds only those in memory; each output is written, whole or not at all, as its task ends.
+
+    Parameters
+    ----------
+    client : distributed.Client
+    items : sequence of BatchItem
+    out : str or Path
+        The batch's folder: vmcl writes only the items' folders in it.
+    config : Config or mapping, optional
+    retries : int
+        Reruns of a task that raised before the item is reported failed.
+    progress : callable, optional
+        Called with each item's name as it ends (done, skipped or failed).
+
+    Returns
+    -------
+    list of ItemStatus
+        One per item, in the items' order.
+
+    Raises
+    ------
+    ValueError
+        Before anything runs: ``out`` is not a folder, or an item's folder is there and is not a vmcl
+        output (vmcl writes only its own files).
+    """
+    client = _check_client(client)
+    values = _config_dict(config)
+    retries = _check_retries(retries)
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputValueError(f"--out {out} exists and is not a folder")
+    step = progress or (lambda name: None)
+    statuses: dict[str, ItemStatus] = {}
+    todo: list[BatchItem] = []
+    for item in items:
+        folder = out / item.name
+        if _finished(folder):
+            statuses[item.name] = ItemStatus(item.name, "skipped", "already there")
+            step(item.name)
+        elif folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
+            raise InputValueError(f"--out {out}: {folder} is there and is not a vmcl output; vmcl writes only its "
+                                  "own files: move it away or name another folder")
+        else:
+            todo.append(item)
+    batch = uuid.uuid4().hex[:8]
+    waiting = iter(todo)
+    running: dict[Future, BatchItem] = {}
+    ended = as_completed()
+
+    def fail(item: BatchItem, error: BaseException) -> None:
+        statuses[item.name] = ItemStatus(item.name, "failed", f"{type(error).__name__}: {error}", error=error)
+        step(item.name)
+
+    def refill() -> None:
+        # Workers may join or leave while the batch runs: the lookahead follows the threads there are.
+        ahead = max(2, 2 * sum(client.nthreads().values()))
+        while len(running) < ahead:
+            item = next(waiting, None)
+            if item is None:
+                return
+            try:
+                views = item.load()
+            except (InputError, OSError) as error:
+                fail(item, error)
+                continue
+            future = client.submit(render_item, *views, values, item.name, key=f"vmcl-batch-{batch}-{item.name}",
+                                   retries=retries, pure=False)
+            running[future] = item
+            ended.add(future)
+
+    refill()
+    for future in ended:
+        item = running.pop(future)
+        try:
+            if future.status == "finished":
+                output = future.result()
+                with output_folder(out / item.name) as work:
+                    for name, data in output.files.items():
+                        (work / name).write_bytes(data)
+                statuses[item.name] = ItemStatus(item.name, "done", total_ms=output.total_ms)
+                step(item.name)
+            else:
+                fail(item, future.exception())
+        except (InputError, OSError) as error:  # its folder became unwritable or foreign meanwhile
+            fail(item, error)
+        finally:
+            future.release()
+        refill()
+    return [statuses[item.name] for item in items]
+
+
+# ----------------------------------------------------------------------------------- a local cluster
+
+@dataclass(frozen=True)
+class LocalClusterSize:
+    """Workers and threads for a LocalCluster on this computer, and why."""
+
+    workers: int
+    threads: int
+    reason: str
+
+
+def local_cluster_size(workers: int | None = None, threads: int | None = None) -> LocalClusterSize:
+    """The LocalCluster ``vmcl batch`` starts without a scheduler: 1 worker of 1 thread unless told.
+
+    PoCL runs every kernel on all of the CPU's cores from one process, and a GPU runs one queue's kernels
+    one after the other, so one worker already keeps the device busy. A second worker process or thread
+    could overlap one item's host work (the Python between kernels, PNG and npz encoding, pickling) with
+    another's kernels; on a shared 2-core CPU that overlap measured within the run-to-run noise
+    (benchmarks/results/distributed.md), while each worker costs a context, its kernel builds and its
+    memory. For several devices, start one ``dask worker`` per device, each with its ``VMCL_DEVICE``, and
+    name their scheduler with ``--scheduler``.
+    """
+    for name, value in (("workers", workers), ("threads", threads)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
+            raise InputValueError(f"--{name} must be an integer >= 1, got {value!r}")
+    if workers is not None and threads is not None:
+        return LocalClusterSize(workers, threads, "as asked")
+    return LocalClusterSize(workers or 1, threads or 1,
+                            "one worker keeps the device busy: PoCL's kernels use every core")
+
+
+@contextlib.contextmanager
+def cluster_client(scheduler: str | None = None, *, workers: int | None = None, threads: int | None = None,
+                   device: str | int | None = None, worker_logs: bool = False) -> Iterator[tuple[Client, str]]:
+    """A Client of ``scheduler``, else of a new LocalCluster (closed after), with MachinePlugin registered.
+
+    Yields the client and a line saying what it runs on (the workers, threads and dashboard). A local
+    cluster's own log lines are kept from the terminal unless ``worker_logs``: a task's error is reported
+    with its item, and a worker that dies is restarted by its nanny and its tasks rerun elsewhere.
+    """
+    import logging
+
+    plugin = MachinePlugin(device)
+    with contextlib.ExitStack() as stack:
+        if scheduler is not None:
+            try:
+                client = stack.enter_context(Client(scheduler, timeout="20s"))
+            except (OSError, TimeoutError) as error:
+                raise InputValueError(f"--scheduler {scheduler}: cannot connect ({error})") from None
+            threads_there = client.nthreads()
+            where = (f"Dask scheduler {scheduler}: {len(threads_there)} worker(s), "
+                     f"{sum(threads_there.values())} thread(s)")
+        else:
+            size = local_cluster_size(workers, threads)
+            cluster = stack.enter_context(LocalCluster(n_workers=size.workers, threads_per_worker=size.threads,
+                                                       processes=True,
+                                                       silence_logs=logging.WARNING if worker_logs else logging.CRITICAL))
+            client = stack.enter_context(Client(cluster))
+            where = f"local Dask cluster: {size.workers} worker(s) x {size.threads} thread(s) ({size.reason})"
+        if "dashboard" in client.scheduler_info().get("services", {}):
+            # A local scheduler serves the dashboard's pages only with bokeh installed (a remote one: its own).
+            missing = scheduler is None and importlib.util.find_spec("bokeh") is None
+            where += f"; dashboard {client.dashboard_link}{' (pip install bokeh to see it)' if missing else ''}"
+        client.register_plugin(plugin)
+        yield client, where
