@@ -383,7 +383,7 @@ def test_without_an_opencl_platform_the_hint_alone_and_exit_2(tmp_path, images, 
 
 
 def test_ctrl_c_is_one_line_exit_130_and_leaves_the_previous_output(tmp_path):
-    s = scenes.render(scenes.preset("cues", shape=(192, 192)), seed=0, noise=0.01)
+    s = scenes.render(scenes.preset("cues", shape=(512, 512)), seed=0, noise=0.01)
     paths = []
     for name, image in (("left", s.left), ("right", s.right), ("next", s.left_next)):
         paths.append(tmp_path / f"{name}.png")
@@ -397,6 +397,8 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_the_previous_output(tmp_path):
     deadline = time.monotonic() + 120
     while not _leftovers(tmp_path) and process.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)  # the hidden folder appears once --out is checked, as the run starts
+    # 512 x 512 with every cue takes seconds: the signal lands mid-run even when this process was starved.
+    assert process.poll() is None, "the run ended before it could be interrupted"
     process.send_signal(signal.SIGINT)
     _, error = process.communicate(timeout=300)
     # PoCL's in-process compiler may add its own "N errors generated." when the signal lands during a

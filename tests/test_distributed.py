@@ -32,6 +32,7 @@ from vmcl.distributed import (
     run_batch,
     stitch,
     worker_machine,
+    write_zarr,
 )
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
@@ -324,3 +325,90 @@ def test_batch_items_are_named_uniquely_and_safely(tmp_path):
         batch_items([tmp_path / "missing"])
     with pytest.raises(ValueError, match="at least 2 frames"):
         batch_items([tmp_path / "x" / "A.PNG"], frames=True)
+
+
+# ------------------------------------------------------------------------------------------------ vmcl batch --zarr
+
+def _zarr_rows(store: Path) -> tuple[np.ndarray, dict]:
+    zarr = pytest.importorskip("zarr")
+    array = zarr.open_array(str(store), mode="r")
+    return array[...], dict(array.attrs)
+
+
+def test_batch_zarr_stacks_each_items_field_in_order_and_fills_the_failed(client, tmp_path, capsys):
+    pytest.importorskip("zarr")
+    folders = _scene_folders(tmp_path / "data", 3, 64)
+    broken = tmp_path / "broken.png"
+    broken.write_text("not an image")  # fails when read: its rows are the fill value
+    single = _png(tmp_path / "single.png", _scene(7).left)  # runs, but a single image has no disparity
+    out = tmp_path / "batch"
+    argv = ["batch", str(tmp_path / "data"), str(broken), str(single), "--out", str(out), "--config",
+            str(_fast_toml(tmp_path)), "--zarr", "disparity", "--zarr", "labels",
+            "--scheduler", client.scheduler_info()["address"], "--quiet"]
+    names = [folder.name for folder in folders] + ["broken", "single"]
+    for run in ("first", "resumed"):
+        assert main(argv) == 2, run  # the broken item is bad input
+        printed = capsys.readouterr().out
+        assert ("4 done, 0 skipped" if run == "first" else "0 done, 4 skipped") in printed, run
+        assert "disparity: " in printed and "2 item(s) filled with NaN (failed, or no disparity): broken, single" in printed
+        assert "1 item(s) filled with 0 (failed, or no labels): broken" in printed
+        for field in ("disparity", "labels"):
+            rows, attrs = _zarr_rows(out / f"{field}.zarr")
+            assert attrs["written_by"] == "vmcl" and attrs["items"] == names, field
+            present = [name for name in names if name != "broken" and (field == "labels" or name != "single")]
+            for index, name in enumerate(names):
+                if name in present:
+                    with np.load(out / name / "fields.npz") as fields:
+                        want = fields[field]
+                    assert rows[index].dtype == want.dtype and rows[index].tobytes() == want.tobytes(), (field, name)
+                elif field == "disparity":
+                    assert np.isnan(rows[index]).all(), name
+                else:
+                    assert not rows[index].any(), name
+            stacked = np.stack([np.load(out / name / "fields.npz")[field] for name in present])
+            assert rows[[names.index(name) for name in present]].tobytes() == stacked.tobytes(), field
+        assert _no_partial_folders(out)
+        # Spoil a row: the resumed run rewrites the store from the folders, not from what it held.
+        __import__("zarr").open_array(str(out / "disparity.zarr"), mode="r+")[0] = -1.0
+
+
+def test_batch_zarr_refuses_items_of_different_sizes_before_any_work(tmp_path, capsys):
+    pytest.importorskip("zarr")
+    data = tmp_path / "data"
+    data.mkdir()
+    _png(data / "a.png", _scene(0, 64).left)
+    _png(data / "b.png", _scene(1, 64).left[:48, :40])
+    out = tmp_path / "batch"
+    # No scheduler is named and none is needed: the refusal comes before the cluster starts.
+    assert main(["batch", str(data), "--out", str(out), "--zarr", "disparity", "--quiet"]) == 2
+    error = capsys.readouterr().err
+    assert "--zarr disparity" in error and "64 x 64 (a)" in error and "48 x 40 (b)" in error
+    assert not out.exists()
+
+
+def test_batch_zarr_refuses_a_store_it_did_not_write_and_leaves_it(tmp_path, capsys, monkeypatch):
+    zarr = pytest.importorskip("zarr")
+    data = tmp_path / "data"
+    data.mkdir()
+    _png(data / "a.png", _scene(0, 64).left)
+    out = tmp_path / "batch"
+    (out / "disparity.zarr").mkdir(parents=True)
+    (out / "disparity.zarr" / "notes.txt").write_text("mine")
+    foreign = zarr.open_array(str(out / "labels.zarr"), mode="w", shape=(2, 2), dtype="uint8")
+    foreign[...] = 7
+    before = sorted((p.relative_to(out), p.read_bytes()) for p in out.rglob("*") if p.is_file())
+    for field in ("disparity", "labels"):
+        assert main(["batch", str(data), "--out", str(out), "--zarr", field, "--quiet"]) == 2
+        assert f"--zarr {field}: {out / field}.zarr is there and vmcl did not write it" in capsys.readouterr().err
+    assert sorted((p.relative_to(out), p.read_bytes()) for p in out.rglob("*") if p.is_file()) == before
+    assert sorted(p.name for p in out.iterdir()) == ["disparity.zarr", "labels.zarr"]  # no item ran
+    items = batch_items([data])
+    with pytest.raises(ValueError, match="did not write it"):
+        write_zarr(out, items, "labels")
+    with pytest.raises(ValueError, match="field: 'nope' is not a field"):
+        write_zarr(out, items, "nope")
+    with pytest.raises(TypeError, match="items"):
+        write_zarr(out, "a.png", "disparity")
+    monkeypatch.setitem(__import__("sys").modules, "zarr", None)  # as if zarr were not installed
+    assert main(["batch", str(data), "--out", str(tmp_path / "other"), "--zarr", "disparity", "--quiet"]) == 2
+    assert "pip install 'vmcl[dask]'" in capsys.readouterr().err

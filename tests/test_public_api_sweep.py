@@ -372,6 +372,10 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.distributed:batch_items", inputs=[path("png")], frames=False, kinds={"inputs": "names", "frames": _B}),
     _e("vmcl.distributed:local_cluster_size", workers=None, threads=None, kinds={"workers": _I, "threads": _I}),
     _e("vmcl.distributed:MachinePlugin", device=None, kinds={"device": _C}),
+    _e("vmcl.distributed:check_zarr", out=make("batch_out"), items=make("batch_items"), fields=["disparity"],
+       kinds={"out": _P, "items": _O, "fields": "names"}),
+    _e("vmcl.distributed:write_zarr", out=make("batch_out"), items=make("batch_items"), field="disparity",
+       kinds={"out": _P, "items": _O, "field": _C}),
 )
 
 # Public names that take no input to check: records vmcl returns, enums, plumbing that takes a Machine
@@ -410,7 +414,7 @@ EXEMPT = {
     "vmcl.distributed:run_chunk", "vmcl.distributed:render_item",
     # Records vmcl returns, and the worker's Machine (no arguments).
     "vmcl.distributed:BatchItem", "vmcl.distributed:ItemOutput", "vmcl.distributed:ItemStatus",
-    "vmcl.distributed:LocalClusterSize", "vmcl.distributed:worker_machine",
+    "vmcl.distributed:LocalClusterSize", "vmcl.distributed:worker_machine", "vmcl.distributed:ZarrStore",
 }
 
 PUBLIC_MODULES = (
@@ -831,6 +835,24 @@ def _head(ctx):
     return head
 
 
+def _batch_out(ctx) -> str:
+    """A batch's folder holding one finished item, "a" (its fields.npz only), as write_zarr reads it."""
+    import numpy as np
+
+    from vmcl.output_folder import output_folder
+
+    out = Path(tempfile.mkdtemp(dir=ctx["tmp"]))
+    with output_folder(out / "a") as work:
+        np.savez_compressed(work / "fields.npz", disparity=np.ones((16, 16), np.float32))
+    return str(out)
+
+
+def _batch_items(ctx):
+    from vmcl.distributed import BatchItem
+
+    return [BatchItem("a", "image", (Path(_path("png", ctx)),))]
+
+
 def _foreign_device_array(ctx):
     import numpy as np
     import pyopencl as cl
@@ -908,6 +930,8 @@ def _makers():
         "vision_machine": vision_machine,
         "foreign_device_array": _foreign_device_array,
         "stereo_pair": _stereo_pair,
+        "batch_out": _batch_out,
+        "batch_items": _batch_items,
         "stereo_methods": _stereo_methods,
         "evaluations": _evaluations,
         "stereo_sgbm": lambda ctx: __import__("vmcl.stereo_evaluation", fromlist=["stereo_sgbm"]).stereo_sgbm(16),

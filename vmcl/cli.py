@@ -8,6 +8,7 @@ dense fields out (:mod:`vmcl.pipeline`, :mod:`vmcl.report`).
     vmcl eval stereo|flow|edges --data DIR
     vmcl info
     vmcl batch INPUTS... --out DIR [--frames] [--config C.toml] [--scheduler ADDRESS] [--workers N] [--threads N]
+               [--zarr FIELD ...]
     (each takes --quiet / -q, no progress bars, and --debug, tracebacks for every error)
 
 Exit statuses: 0 done; 2 bad input (a missing, unreadable, truncated or corrupt file, images of
@@ -32,6 +33,9 @@ with ``--frames`` a frame and the next, as one task on a Dask cluster (:mod:`vmc
 what ``vmcl run`` writes into ``--out``/<item>/ as each finishes, each folder whole or absent. Items
 already there are skipped (a rerun resumes); an item that fails is listed with its error in the table at
 the end while the others complete, and the exit status is then 2 if every failure was bad input, else 1.
+``--zarr FIELD`` also stacks that field of every item into the Zarr array ``--out``/FIELD.zarr, rewritten
+from the items' fields.npz after each run (:func:`vmcl.distributed.write_zarr`); items of different sizes
+are refused before any work.
 
 Stages that take time show a progress bar on stderr (tqdm); ``--quiet`` keeps only the results.
 """
@@ -58,6 +62,7 @@ __all__ = [
     "EXIT_BAD_INPUT",
     "EXIT_DEFECT",
     "EXIT_INTERRUPTED",
+    "FIELD_NAMES",
     "SCENES",
     "BadInput",
     "evaluation_tables",
@@ -248,12 +253,16 @@ def write_output(result, folder: Path, title: str) -> None:
     np.savez_compressed(folder / "fields.npz", allow_pickle=True, **result_fields(result))
 
 
+FIELD_NAMES = ("edges", "support", "labels", "hue", "colour_edges", "density", "texture_edges", "sparse_disparity",
+               "first_pass_disparity", "stereo_discontinuity", "half_occluded", "out_of_range", "disparity",
+               "raw_flow", "flow")
+"""The Result fields fields.npz holds when the run made them; with ``restored_<cue>``, ``<cue>_line_h`` and
+``<cue>_line_v`` for each cue restored (:func:`result_fields`)."""
+
+
 def result_fields(result) -> dict[str, np.ndarray]:
     """The run's fields as named arrays for fields.npz."""
-    names = ("edges", "support", "labels", "hue", "colour_edges", "density", "texture_edges", "sparse_disparity",
-             "first_pass_disparity", "stereo_discontinuity", "half_occluded", "out_of_range", "disparity",
-             "raw_flow", "flow")
-    out = {name: getattr(result, name) for name in names if getattr(result, name) is not None}
+    out = {name: getattr(result, name) for name in FIELD_NAMES if getattr(result, name) is not None}
     for cue, restored in result.restored.items():
         out[f"restored_{cue}"] = restored
     for cue, (line_h, line_v) in result.lines.items():
@@ -421,6 +430,12 @@ def _batch(args) -> int:
 
     config = _config(args.config)
     items = distributed.batch_items(args.inputs, frames=args.frames)
+    fields = list(dict.fromkeys(args.zarr))
+    if fields:
+        try:  # before any work: the stores' names and places, and one image size over the items
+            distributed.check_zarr(Path(args.out), items, fields)
+        except ImportError as error:
+            raise BadInput(str(error)) from None
     with distributed.cluster_client(args.scheduler, workers=args.workers, threads=args.threads,
                                     worker_logs=args.debug) as (client, where):
         print(f"{len(items)} item(s) on the {where}", file=sys.stderr)
@@ -431,6 +446,14 @@ def _batch(args) -> int:
     counts = {state: sum(s.state == state for s in statuses) for state in ("done", "skipped", "failed")}
     _print_table(f"Batch into {args.out}: {counts['done']} done, {counts['skipped']} skipped (already there), "
                  f"{counts['failed']} failed", rows)
+    for field in fields:  # from the folders on disk: a resumed batch's store holds every finished item
+        store = distributed.write_zarr(Path(args.out), items, field)
+        line = f"{field}: {store.path} ({' x '.join(map(str, store.shape))} {store.dtype})"
+        if store.filled:
+            fill = "NaN" if store.dtype.kind in "fc" else "0"
+            shown = ", ".join(store.filled[:5]) + (f" and {len(store.filled) - 5} more" if len(store.filled) > 5 else "")
+            line += f"; {len(store.filled)} item(s) filled with {fill} (failed, or no {field}): {shown}"
+        print(line)
     failed = [s for s in statuses if s.state == "failed"]
     if not failed:
         return 0
@@ -489,6 +512,10 @@ def parser() -> argparse.ArgumentParser:
                        help="a Dask scheduler (tcp://host:8786); default: a local cluster on this computer")
     batch.add_argument("--workers", type=int, help="the local cluster's worker processes (default 1)")
     batch.add_argument("--threads", type=int, help="threads per local worker (default 1)")
+    batch.add_argument("--zarr", action="append", default=[], metavar="FIELD",
+                       help="also stack this field of fields.npz (disparity, labels, flow, ...) over the items into "
+                            "the Zarr array OUT/FIELD.zarr (items x H x W[ x C], the items' order; failed items "
+                            "filled with NaN or 0); repeatable; needs the zarr package")
     return top
 
 

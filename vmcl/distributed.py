@@ -16,6 +16,9 @@ dict, and return :class:`vmcl.result.Result` (NumPy fields and a Config dataclas
 - :func:`batch_items` and :func:`run_batch` are the ``vmcl batch`` command: every item an output folder
   written whole or not at all (:func:`vmcl.output_folder.output_folder`), finished items skipped on a
   rerun, failed items reported by name with their error while the rest complete.
+- :func:`check_zarr` and :func:`write_zarr` are ``vmcl batch --zarr FIELD``: one field of every item stacked
+  into a Zarr array ``out``/<FIELD>.zarr of shape (items, H, W[, C]), rewritten from the items' fields.npz
+  after each run (the ``zarr`` package, in the ``dask`` extra).
 
 Dask reruns the tasks of a worker that died on another worker (``distributed.scheduler.allowed-failures``,
 3 by default, bounds how many deaths one task may witness); a task that raises is run once more
@@ -38,6 +41,8 @@ import json
 import math
 import os
 import re
+import secrets
+import shutil
 import tempfile
 import threading
 import uuid
@@ -61,12 +66,15 @@ from vmcl.result import Result
 
 __all__ = [
     "IMAGE_SUFFIXES",
+    "ZARR_WRITER",
     "BatchItem",
     "ItemOutput",
     "ItemStatus",
     "LocalClusterSize",
     "MachinePlugin",
+    "ZarrStore",
     "batch_items",
+    "check_zarr",
     "cluster_client",
     "local_cluster_size",
     "map_frames",
@@ -77,6 +85,7 @@ __all__ = [
     "run_frame",
     "stitch",
     "worker_machine",
+    "write_zarr",
 ]
 
 IMAGE_SUFFIXES = (".png", ".ppm", ".pgm", ".pnm", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
@@ -666,6 +675,281 @@ def run_batch(client: Client, items: Sequence[BatchItem], out: str | os.PathLike
             future.release()
         refill()
     return [statuses[item.name] for item in items]
+
+
+# ----------------------------------------------------------------------------------- one field over the batch (Zarr)
+
+ZARR_WRITER = "vmcl"
+"""The value of the attribute ``written_by`` of every Zarr store vmcl writes: it replaces only those."""
+
+_ZARR_INSTALL = "vmcl batch --zarr needs the zarr package: pip install 'vmcl[dask]'"
+_CUE_FIELD = re.compile(r"restored_[a-z][a-z0-9_]*|[a-z][a-z0-9_]*_line_[hv]")
+
+
+@dataclass(frozen=True)
+class ZarrStore:
+    """A Zarr array :func:`write_zarr` wrote: one field of every item of a batch.
+
+    Attributes
+    ----------
+    path : Path
+        ``out``/<field>.zarr.
+    field : str
+        The name of the field in each item's fields.npz.
+    shape : tuple of int
+        (items, H, W[, C]), the items in the batch's order.
+    dtype : numpy.dtype
+    filled : tuple of str
+        The items whose row holds the fill value (NaN for floats, 0 for integers, False for booleans):
+        those without a finished output (failed, or not run yet) or whose result lacks the field.
+    """
+
+    path: Path
+    field: str
+    shape: tuple[int, ...]
+    dtype: np.dtype
+    filled: tuple[str, ...]
+
+
+def _zarr() -> Any:
+    """The zarr module, or the ImportError that says how to install it."""
+    try:
+        import zarr
+    except ImportError:
+        raise ImportError(_ZARR_INSTALL) from None
+    return zarr
+
+
+def _check_field(field: Any, argument: str = "field") -> str:
+    from vmcl.cli import FIELD_NAMES
+
+    if not isinstance(field, str):
+        raise InputTypeError(f"{argument} must be the name of a field of fields.npz (a str), got {type(field).__name__}")
+    if field not in FIELD_NAMES and not _CUE_FIELD.fullmatch(field):
+        raise InputValueError(f"{argument}: {field!r} is not a field of fields.npz; the fields are "
+                              f"{', '.join(FIELD_NAMES)}, restored_<cue>, <cue>_line_h and <cue>_line_v")
+    return field
+
+
+def _check_items(items: Any) -> list[BatchItem]:
+    if isinstance(items, (str, bytes, os.PathLike, Mapping)) or not isinstance(items, Sequence):
+        raise InputTypeError(f"items must be a sequence of BatchItem (batch_items' list), got {type(items).__name__}")
+    if not items:
+        raise InputValueError("items: no item given (a Zarr array over the batch needs at least one)")
+    names: set[str] = set()
+    for index, item in enumerate(items):
+        if not isinstance(item, BatchItem):
+            raise InputTypeError(f"items[{index}] must be a BatchItem, got {type(item).__name__}")
+        if item.name in names:
+            raise InputValueError(f"items[{index}]: the name {item.name!r} is there twice (batch_items names them "
+                                  "uniquely)")
+        names.add(item.name)
+    return list(items)
+
+
+def _check_out(out: Any) -> Path:
+    if not isinstance(out, (str, os.PathLike)):
+        raise InputTypeError(f"out must be a path (str or os.PathLike), got {type(out).__name__}")
+    path = Path(out)
+    if path.exists() and not path.is_dir():
+        raise InputValueError(f"out: {path} exists and is not a folder")
+    return path
+
+
+def _zarr_target(out: Path, field: str) -> Path:
+    """``out``/<field>.zarr, refused unless it is absent or a store vmcl wrote."""
+    target = out / f"{field}.zarr"
+    if not target.exists() and not target.is_symlink():
+        return target
+    zarr = _zarr()
+    ours = False
+    if target.is_dir() and not target.is_symlink():
+        try:
+            ours = zarr.open_array(store=str(target), mode="r").attrs.get("written_by") == ZARR_WRITER
+        except Exception:  # noqa: BLE001 - anything zarr cannot open as an array is not vmcl's store
+            ours = False
+    if not ours:
+        raise InputValueError(f"--zarr {field}: {target} is there and vmcl did not write it (a vmcl store has the "
+                              f"attribute written_by: {ZARR_WRITER}); vmcl writes only its own files: move it away "
+                              "or name another --out")
+    return target
+
+
+def _size_text(size: tuple[int, ...], names: list[str]) -> str:
+    shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+    return f"{' x '.join(map(str, size))} ({shown})"
+
+
+def check_zarr(out: str | os.PathLike[str], items: Sequence[BatchItem], fields: Sequence[str]) -> None:
+    """Refuse, before a batch runs, the ``--zarr`` stores :func:`write_zarr` could not write after it.
+
+    Every item's images are read here, once (their size only is kept), so with ``--zarr`` a batch reads
+    its images twice; an item whose images cannot be read is left to fail in the batch (its row filled).
+
+    Parameters
+    ----------
+    out : str or Path
+        The batch's folder (it need not exist yet).
+    items : sequence of BatchItem
+    fields : sequence of str
+        The fields of fields.npz to stack (:data:`vmcl.cli.FIELD_NAMES`, ``restored_<cue>``,
+        ``<cue>_line_h``, ``<cue>_line_v``).
+
+    Raises
+    ------
+    ImportError
+        The zarr package is missing (it comes with ``pip install 'vmcl[dask]'``).
+    ValueError
+        A name that is not a field, items whose images differ in size (one array cannot hold them; the
+        sizes found are named), or a ``out``/<field>.zarr that vmcl did not write.
+    """
+    out = _check_out(out)
+    items = _check_items(items)
+    if isinstance(fields, (str, bytes)) or not isinstance(fields, Sequence):
+        raise InputTypeError(f"fields must be a sequence of field names, got {type(fields).__name__}")
+    names = [_check_field(field, f"fields[{index}]") for index, field in enumerate(fields)]
+    if not names:
+        return
+    _zarr()
+    for name in dict.fromkeys(names):
+        _zarr_target(out, name)
+    sizes: dict[tuple[int, ...], list[str]] = {}
+    for item in items:
+        try:
+            left = item.load()[0]
+        except (InputError, OSError):
+            continue  # the batch reports it (and its row is filled)
+        sizes.setdefault(tuple(left.shape[:2]), []).append(item.name)
+    if len(sizes) > 1:
+        found = "; ".join(_size_text(size, found) for size, found in sizes.items())
+        raise InputValueError(f"--zarr {' '.join(dict.fromkeys(names))}: one array over the batch needs the items' "
+                              f"images of one size, and they have {len(sizes)}: {found}; run the sizes as "
+                              "separate batches, or leave out --zarr")
+
+
+def _fill_value(dtype: np.dtype) -> Any:
+    if dtype.kind == "b":
+        return False
+    if dtype.kind in "iu":
+        return 0
+    if dtype.kind in "fc":
+        return np.nan
+    raise InputValueError(f"field: fields.npz holds it as {dtype}, which vmcl does not put into a Zarr array")
+
+
+def _item_field(folder: Path, field: str) -> np.ndarray | None:
+    """The field from the item's fields.npz, if the item's output is whole and holds it."""
+    if not _finished(folder) or not (folder / "fields.npz").is_file():
+        return None
+    try:
+        with np.load(folder / "fields.npz", allow_pickle=False) as fields:
+            return fields[field] if field in fields.files else None
+    except (OSError, ValueError) as error:
+        raise InputValueError(f"out: {folder / 'fields.npz'} cannot be read ({error}); remove the item's folder "
+                              "to run it again") from None
+
+
+def _new_array(zarr: Any, path: Path, shape: tuple[int, ...], dtype: np.dtype) -> Any:
+    # One chunk per item: a row is written as its item is read. Rows that are the fill value are stored
+    # too, so that a NaN's bits read back as written.
+    options: dict[str, Any] = {"shape": shape, "chunks": (1, *shape[1:]), "dtype": dtype,
+                               "fill_value": _fill_value(dtype)}
+    if int(zarr.__version__.split(".")[0]) >= 3:
+        options["config"] = {"write_empty_chunks": True}
+    else:
+        options["write_empty_chunks"] = True
+    return zarr.open_array(store=str(path), mode="w-", **options)
+
+
+def _replace(work: Path, target: Path) -> None:
+    """Move the whole store ``work`` to ``target``, the previous store there going only once it is in."""
+    old = None
+    if target.exists():
+        old = target.with_name(f".{target.name}.old-{secrets.token_hex(4)}")
+        os.replace(target, old)
+    try:
+        os.replace(work, target)
+    except BaseException:
+        if old is not None:
+            os.replace(old, target)
+        raise
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def write_zarr(out: str | os.PathLike[str], items: Sequence[BatchItem], field: str) -> ZarrStore:
+    """Stack one field of every item's output in ``out`` into the Zarr array ``out``/<field>.zarr.
+
+    The rows follow the items' order and come from the items' fields.npz on disk, so the store is always
+    that of the folders, whichever run wrote them (``vmcl batch`` calls this after every run, a resumed one
+    too). It is written into a hidden store beside its place and moved there when whole: a previous vmcl
+    store is replaced only then, and a store vmcl did not write is refused. The array has one chunk per
+    item and the attributes ``written_by`` ("vmcl"), ``field``, ``items`` (the names, in order) and
+    ``filled``.
+
+    Parameters
+    ----------
+    out : str or Path
+        The batch's folder (:func:`run_batch`'s ``out``).
+    items : sequence of BatchItem
+        The batch's items, in order.
+    field : str
+        A name of fields.npz (:data:`vmcl.cli.FIELD_NAMES`, ``restored_<cue>``, ``<cue>_line_h``,
+        ``<cue>_line_v``).
+
+    Returns
+    -------
+    ZarrStore
+        Its path, shape (items, H, W[, C]), dtype and the items whose row is the fill value (NaN for
+        floats, 0 for integers, False for booleans): items without a whole output (failed) or without
+        the field (disparity of a single image).
+
+    Raises
+    ------
+    ImportError
+        The zarr package is missing (it comes with ``pip install 'vmcl[dask]'``).
+    ValueError
+        No item's output holds the field, the items' fields differ in shape or dtype, an unreadable
+        fields.npz, or a ``out``/<field>.zarr that vmcl did not write.
+
+    Examples
+    --------
+    >>> store = write_zarr("results", batch_items(["data"]), "disparity")  # doctest: +SKIP
+    >>> zarr.open_array(str(store.path), mode="r")[0]  # the first item's disparity  # doctest: +SKIP
+    """
+    out = _check_out(out)
+    items = _check_items(items)
+    field = _check_field(field)
+    zarr = _zarr()
+    target = _zarr_target(out, field)
+    work = out / f".{field}.zarr.partial-{secrets.token_hex(4)}"
+    array: Any = None
+    first = ""
+    filled: list[str] = []
+    try:
+        for index, item in enumerate(items):
+            values = _item_field(out / item.name, field)
+            if values is None:
+                filled.append(item.name)
+                continue
+            if array is None:
+                array = _new_array(zarr, work, (len(items), *values.shape), values.dtype)
+                first = item.name
+            elif values.shape != array.shape[1:] or values.dtype != array.dtype:
+                raise InputValueError(
+                    f"--zarr {field}: the items' {field} in {out} differ: {first}'s is {np.dtype(array.dtype)} "
+                    f"{tuple(array.shape[1:])}, {item.name}'s {values.dtype} {values.shape}; one array cannot hold "
+                    "both")
+            array[index] = values
+        if array is None:
+            raise InputValueError(f"--zarr {field}: no item in {out} holds {field!r} (failed, not run yet, or a "
+                                  f"result without it: disparity needs a stereo pair, flow a next frame)")
+        array.attrs.update({"written_by": ZARR_WRITER, "field": field, "items": [item.name for item in items],
+                            "filled": filled})
+        _replace(work, target)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return ZarrStore(target, field, tuple(array.shape), np.dtype(array.dtype), tuple(filled))
 
 
 # ----------------------------------------------------------------------------------- a local cluster
