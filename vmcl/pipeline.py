@@ -175,8 +175,8 @@ class StereoConfig:
     backfill_floor, backfill_weight : float
         Intensity matches whose correlation is at or below the floor weigh 0; a perfect one (or a
         confirmed semi-global match) weighs ``backfill_weight`` (the feature matches weigh 1). The
-        default, 1, was fitted with the semi-global matcher (benchmarks/stereo_fit.py); with intensity
-        matches beside edge matches, 0.2 did better (the earlier default).
+        default, 1, was fitted with the semi-global matcher (benchmarks/stereo_fit.py); intensity
+        matches beside edge matches were fitted at 0.2, the earlier default.
     occluded_weight : float
         In [0, 1]: the weight of the semi-global matcher's half-occluded pixels.
     census_threshold, p1, p2, edge_gain

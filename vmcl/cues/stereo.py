@@ -188,14 +188,14 @@ def _dense_match(run: RunInputs, span: tuple[int, int]) -> _Dense | None:
 
 
 UNCONFIRMED_NOTE = 0.5
-"""Share of the pixels the left-right check leaves unconfirmed above which the run's notes say so. On the
-training pairs it stayed at or below 0.29 (the untextured "shadows" scene), and rose to 0.53-0.78 with
-the right view rotated by 10 degrees."""
+"""Share of the pixels the left-right check leaves unconfirmed above which the run's notes say so: well
+above what the rectified training pairs leave (the untextured "shadows" scene leaves the most), and
+below what a right view turned by 10 degrees leaves (tests/test_disparity_range.py)."""
 
 
 OUT_OF_RANGE_NOTE = 0.01
-"""Share of the pixels matched best at an end of the range above which the run's notes say so (on the
-training pairs, with the range found from the images: at most 0.5%)."""
+"""Share of the pixels matched best, and poorly, at an end of the range above which the run's notes say
+so (well above what the training pairs give with the range found from the images)."""
 
 
 def _confirmation_note(run: RunInputs, found: SemiGlobalMatch) -> str | None:

@@ -32,7 +32,7 @@ __all__ = ["MAX_DISPARITY", "DisparityRange", "estimate_range", "fallback_range"
 
 MAX_DISPARITY = 0.5
 """The widest disparity searched by default, either sign, as a share of the image width: near objects of
-a wide-baseline rig reach 40% of the width (a third, the first default, missed them)."""
+a wide-baseline rig reach 40% of the width."""
 
 _PYRAMID_PASSES = 2
 """Binomial passes before each halving: two passes of [1 2 1] / 4 are Burt and Adelson's 5-tap
@@ -115,8 +115,7 @@ def estimate_range(left: ArrayLike, right: ArrayLike, *, max_disparity: float = 
         margin). Near objects small in the image shrink to a few pixels at the coarse levels, where too
         few of their matches are confident to reach the quantiles, and a disparity missing from the
         range is lost to every pixel that has it, while one too many only costs matching time. The
-        value is that asymmetry's allowance, not a fit: without it, the range found on Middlebury
-        teddy stopped at 44 px where 2% of its visible pixels lie beyond (to 52.75).
+        value is that asymmetry's allowance, not a fit.
     min_share : float
         In (0, 1]: the range is decided only when the confident matches are at least this share of the
         coarse pixels (and at least ``patch**2`` of them); else ``decided`` is False and the range is

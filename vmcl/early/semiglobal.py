@@ -71,14 +71,14 @@ EDGE_GAIN = 0.1
 
 POOR_MATCH = 0.25
 """A winner at an end of the range is out of range when more than this share of its census bits differ:
-the matches found at the range ends on the training pairs were all wrong, and the range found from the
-images may end right at a true disparity, whose match is good."""
+where the search stopped, the match is poor; a good match at the end is kept, since a range may end
+right at a true disparity."""
 
 _NOISE_MEDIAN = 0.6745 * 6
 """The median magnitude of Immerkaer's mask on Gaussian noise, in units of the noise's standard deviation."""
 _LINES_PER_GROUP = 16
 """Scanlines per work-group of the message kernel: left to the device, PoCL put a whole direction's lines
-in one work-group, which one CPU thread runs (teddy's 8 directions: 174 ms, against 84 ms in groups of 16)."""
+in one work-group, which one CPU thread runs; in groups of 16 every core takes a share."""
 _LANES = 16  # disparities per vector in the message kernel (LANES in kernels/semiglobal.cl)
 _PRIVATE_STEP = 64  # the private message arrays are sized in steps of this many disparities
 
@@ -143,15 +143,14 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         Move each kept winner to the vertex of the symmetric V through the summed costs at d - 1, d, d + 1
         (the equiangular fit: d + (s- - s+) / (2 (max(s-, s+) - s))), offsets within half a pixel; a
         winner at either end of the disparities that compete stays whole. Hamming costs grow linearly
-        away from the match, which the V follows; on rendered slanted planes it came out a little
-        closer than the parabola (mean absolute error 0.136 against 0.149 px on the test's plane).
+        away from the match, which the V follows (on rendered slanted planes it came out closer than
+        the parabola).
     tolerance : int
         >= 0: the most the right view's winner may differ from the left one's for the pixel to be kept.
     median : bool
         Replace each kept disparity by the median of the kept ones in its 3 x 3 neighbourhood (after the
-        check, before the fill), which removes isolated wrong winners (Hirschmueller's filter). On every
-        training pair of benchmarks/stereo_training.py it lowered the filled disparity's bad-1 rate
-        (by 0.1 to 1.7 points).
+        check, before the fill), which removes isolated wrong winners (Hirschmueller's filter);
+        benchmarks/results/stereo.md gives the matcher with and without it.
     machine : vmcl.Machine, optional
 
     Returns
