@@ -83,16 +83,12 @@ def motorcycle() -> StereoPair | None:
 def pairs(root: Path) -> list[StereoPair]:
     found = [read_stereo_folder(folder) for folder in find_stereo_folders(root)] if root.is_dir() else []
     # Folder names repeat across the groups (2001 venus, v2 venus): each pair is named by group/scene.
-    named = [_renamed(pair, f"{pair.folder.parent.name}/{pair.folder.name}") for pair in found]
+    named = [replace(pair, name=f"{pair.folder.parent.name}/{pair.folder.name}") for pair in found]
     extra = motorcycle()
     return named + ([extra] if extra is not None else [])
 
 
-def _renamed(pair: StereoPair, name: str) -> StereoPair:
-    return replace(pair, name=name)
-
-
-def test_pair(all_pairs: list[StereoPair], scene: str) -> StereoPair | None:
+def scene_pair(all_pairs: list[StereoPair], scene: str) -> StereoPair | None:
     """The test pair of a scene: the v2 evaluation folder's (with masks), or Motorcycle."""
     for pair in all_pairs:
         if pair.name in (f"middlebury_stereo_v2eval/{scene}", scene):
@@ -194,7 +190,7 @@ def main(argv: list[str] | None = None) -> int:
         evaluations.append(evaluate_pair(pair, [vmcl_machine, *opencv_baselines(pair)]))
         print(f"evaluated {pair.name}", file=sys.stderr)
     lines += markdown_tables(evaluations)
-    test = [p for p in (test_pair(every, scene) for scene in TEST_SCENES) if p is not None]
+    test = [p for p in (scene_pair(every, scene) for scene in TEST_SCENES) if p is not None]
     rows = stages(test, machine)
     names = [p.name for p in test]
     lines += ["", "## Stages on and off (test pairs; the defaults were fitted on training pairs)", "",
@@ -208,7 +204,7 @@ def main(argv: list[str] | None = None) -> int:
                                                for n in names) + " |" for row in rows]
     lines += ["", "## Speed (medians of interleaved rounds, ms)", ""]
     for scene in ("teddy", "motorcycle"):
-        pair = test_pair(every, scene)
+        pair = scene_pair(every, scene)
         if pair is None:
             continue
         timings = speed(pair, args.repeat, machine)
@@ -217,7 +213,7 @@ def main(argv: list[str] | None = None) -> int:
         lines += [f"### {pair.name}, {width} x {height}", "", "| method | ms | x SGBM 3WAY |", "|---|---|---|"]
         lines += [f"| {name} | {ms:.1f} | {ms / reference:.1f} |" for name, ms in timings.items()]
         lines.append("")
-    teddy = test_pair(every, "teddy")
+    teddy = scene_pair(every, "teddy")
     if teddy is not None:
         kernels = kernel_times(teddy, args.repeat)
         lines += ["## Device time per kernel, the depth machine on teddy (profiled, medians)", "",

@@ -181,7 +181,7 @@ def _dense_match(run: RunInputs, span: tuple[int, int]) -> _Dense | None:
         confidence = mask_confidence(filled, occluded, weight=s.backfill_weight, masked_weight=s.occluded_weight,
                                      machine=run.machine)
         fields = {"half_occluded": occluded, "out_of_range": on_device(found.out_of_range)}
-        return _Dense(filled, on_device(confidence), fields, _confirmation_note(run, found))
+        return _Dense(filled, on_device(confidence), fields, _matcher_notes(run, found))
     dense = _match(run, None, span, features="intensity")
     return _Dense(on_device(dense.disparity), on_device(score_confidence(
         dense.score, floor=s.backfill_floor, weight=s.backfill_weight, machine=run.machine)), {})
@@ -198,7 +198,7 @@ OUT_OF_RANGE_NOTE = 0.01
 so (well above what the training pairs give with the range found from the images)."""
 
 
-def _confirmation_note(run: RunInputs, found: SemiGlobalMatch) -> str | None:
+def _matcher_notes(run: RunInputs, found: SemiGlobalMatch) -> str | None:
     """What the run's notes should say of the semi-global matches: that most failed the left-right check
     (the pair is likely not rectified), and how many matched best at an end of the range."""
     counts = [cm_reduce.reduce(on_device(mask), "sum", machine=run.machine)
