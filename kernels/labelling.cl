@@ -16,7 +16,9 @@
  * each input's slot (vmcl.labelling.SLOT_DEFINES); the support bits
  * BIT_STEREO, BIT_MOTION, BIT_COLOUR, BIT_TEXTURE, BIT_BRIGHTNESS; HAS_STEREO, HAS_MOTION, HAS_COLOUR
  * (which restored fields exist; the inputs of a missing one are 0, whiteness included, which needs
- * colour); RGB (the image has three channels); CANDIDATE_BITS; CODES (the outputs' label codes).
+ * colour); RGB (the image has three channels); CANDIDATE_BITS; CODES (the outputs' label codes);
+ * HAS_PROBABILITY (with CLASSIFY: the image's probability of boundary is given, and the strength
+ * starts from it).
  * Fields: image float32 (H, W) or (H, W, 3) in [0, 1]; disparity, hue float32 (H, W); flow float32
  * (H, W, 2); NaN values (hue outside its valid range) are skipped by the window ranges and the crease.
  */
@@ -66,7 +68,8 @@ __kernel void label_features(__global const uchar *support, __global const float
                              __global const float *disparity, __global const float *flow,
                              __global const float *hue,
 #if CLASSIFY
-                             __constant const float *weights, __global uchar *labels,
+                             __constant const float *weights, __global const float *image_probability,
+                             __global uchar *labels, __global float *strength,
 #else
                              __global float *features,
 #endif
@@ -77,8 +80,10 @@ __kernel void label_features(__global const uchar *support, __global const float
     size_t i = (size_t)y * W + x;
 #if CLASSIFY
     /* Only candidates are labelled: the others (most pixels) skip the inputs. */
+    float seen = HAS_PROBABILITY ? image_probability[i] : 0.0f;
     if (!(support[i] & CANDIDATE_BITS)) {
         labels[i] = 0;
+        strength[i] = seen;
         return;
     }
 #endif
@@ -136,13 +141,25 @@ __kernel void label_features(__global const uchar *support, __global const float
 
 #if CLASSIFY
     uchar label = 0;
-    float best = -INFINITY;
+    float best = -INFINITY, score[NC];
     for (int c = 0; c < NC; c++) {
         float s = weights[c];  /* row 0: the bias */
         for (int k = 0; k < NF; k++) s += weights[(k + 1) * NC + c] * in[k];
+        score[c] = s;
         if (s > best) { best = s; label = codes[c]; }
     }
     labels[i] = label;
+    /* The support for "some discontinuity": 1 - the softmax's share of class 0, NONE (the fit's model).
+     * With the image's probability of boundary, which already weighs brightness, colour and texture,
+     * the classifier adds what the image cannot see: the lines of stereo and motion. */
+    float total = 0.0f;
+    for (int c = 0; c < NC; c++) total += exp(score[c] - best);
+    float some = 1.0f - exp(score[0] - best) / total;
+#if HAS_PROBABILITY
+    strength[i] = (support[i] & (BIT_STEREO | BIT_MOTION)) ? fmax(seen, some) : seen;
+#else
+    strength[i] = some;
+#endif
 #else
     for (int k = 0; k < NF; k++) features[(size_t)k * W * H + i] = in[k];
 #endif

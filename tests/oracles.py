@@ -122,3 +122,59 @@ def semiglobal_winners(total, d_min, cost=None, poor=None):
         if ks:
             right[y, x] = d_min + min(ks, key=lambda k: (total[y, x + d_min + k, k], k))
     return left, right, out_of_range
+
+
+def _smoothed(plane, sigma):
+    """The exact Gaussian of vmcl.early.filters.gaussian_taps with clamped borders, in float64."""
+    from scipy import ndimage
+
+    from vmcl.early.filters import gaussian_taps
+
+    taps = gaussian_taps(sigma).astype(np.float64)
+    return ndimage.correlate1d(ndimage.correlate1d(plane.astype(np.float64), taps, axis=1, mode="nearest"),
+                               taps, axis=0, mode="nearest")
+
+
+def _centred(plane):
+    """Centred differences (gx, gy) with clamped borders."""
+    p = np.pad(plane, 1, mode="edge")
+    return 0.5 * (p[1:-1, 2:] - p[1:-1, :-2]), 0.5 * (p[2:, 1:-1] - p[:-2, 1:-1])
+
+
+def texton_bank(lightness, sigmas=(1.0, 2.0)):
+    """The texton filter bank of vmcl.early.boundary_probability, compressed, (H, W, 18)."""
+    out = []
+    for sigma in sigmas:
+        s = _smoothed(lightness, sigma)
+        p = np.pad(s, 1, mode="edge")
+        gx, gy = _centred(s)
+        gxx, gyy = p[1:-1, 2:] - 2 * s + p[1:-1, :-2], p[2:, 1:-1] - 2 * s + p[:-2, 1:-1]
+        gxy = 0.25 * (p[2:, 2:] - p[2:, :-2] - p[:-2, 2:] + p[:-2, :-2])
+        for k in range(4):
+            c, si = np.cos(k * np.pi / 4), np.sin(k * np.pi / 4)
+            out += [sigma * (gx * c + gy * si), sigma**2 * (gxx * c * c + 2 * gxy * c * si + gyy * si * si)]
+        out.append(sigma**2 * (gxx + gyy))
+    r = np.stack(out, axis=-1)
+    n = np.linalg.norm(r, axis=-1, keepdims=True)
+    return r * np.where(n > 0, np.log1p(n / 0.03) / np.where(n > 0, n, 1), 0)
+
+
+def oriented_gradients(lab, labels, ntextons, scales, orientations=8, ratio=2.0):
+    """The boundary classifier's features (orientations, H, W, 8 len(scales)) from the (3, H, W) L*a*b*
+    planes (each / 100) and the texton labels; the texture tensor integrated at the texture's scale."""
+    plain = []
+    for sigma in scales:
+        grads = [_centred(_smoothed(p, sigma)) for p in lab]
+        tex = [_centred(_smoothed((labels == k).astype(np.float64), ratio * sigma)) for k in range(ntextons)]
+        tx, txy, ty = (_smoothed(sum((ratio * sigma) ** 2 * a * b for a, b in pairs), ratio * sigma)
+                       for pairs in ([(gx, gx) for gx, _ in tex], [(gx, gy) for gx, gy in tex],
+                                     [(gy, gy) for _, gy in tex]))
+        per_orientation = []
+        for o in range(orientations):
+            c, s = np.cos(o * np.pi / orientations), np.sin(o * np.pi / orientations)
+            f = [np.abs(sigma * (c * gx + s * gy)) for gx, gy in grads]
+            f.append(np.sqrt(np.maximum(c * c * tx + 2 * c * s * txy + s * s * ty, 0)))
+            per_orientation.append(np.stack(f, axis=-1))
+        plain.append(np.stack(per_orientation))
+    plain = np.concatenate(plain, axis=-1)
+    return np.concatenate([plain, np.sqrt(plain)], axis=-1)

@@ -234,7 +234,28 @@ def test_bsds_golden_split(datasets_root):
     assert golden.expected["ods_f"] == 0.704628 and golden.expected["ois_f"] == 0.708698
     assert all(0 <= image.edge_map.min() and image.edge_map.max() <= 1 for image in golden.images)
     with pytest.raises(ValueError, match="split"):
-        datasets.load_bsds(datasets_root, split="train")
+        datasets.load_bsds(datasets_root, split="validation")
+
+
+def test_bsds_train_split_and_any_bsds_folder(datasets_root, tmp_path):
+    train = datasets.load_bsds(datasets_root, split="train")
+    assert len(train.images) == 200 and train.split == "train"
+    assert not {image.name for image in train.images} & {image.name for image in datasets.load_bsds(datasets_root).images}
+    # The distribution's layout: images/ and groundTruth/ side by side, here with a test split.
+    source = datasets_root / "bsds500" / "test" / "100007"
+    for kind, suffix in (("images", "jpg"), ("groundTruth", "mat")):
+        (tmp_path / "data" / kind / "test").mkdir(parents=True)
+        (tmp_path / "data" / kind / "test" / f"100007.{suffix}").write_bytes((source / f"100007.{suffix}").read_bytes())
+    found = datasets.read_bsds_folder(tmp_path / "data")
+    assert [image.name for image in found] == ["100007"]
+    np.testing.assert_array_equal(found[0].boundaries, datasets.load_bsds(datasets_root).images[0].boundaries)
+    (tmp_path / "data" / "groundTruth" / "test" / "100007.mat").unlink()
+    with pytest.raises(ValueError, match="without their ground truth"):
+        datasets.read_bsds_folder(tmp_path / "data")
+    with pytest.raises(FileNotFoundError, match="no BSDS images"):
+        datasets.read_bsds_folder(tmp_path / "data" / "images")
+    with pytest.raises(FileNotFoundError, match="no such folder"):
+        datasets.read_bsds_folder(tmp_path / "missing")
 
 
 def test_missing_root_names_the_path(tmp_path):

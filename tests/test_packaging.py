@@ -17,3 +17,11 @@ def test_every_package_is_listed_for_the_wheel():
     found = {".".join(init.parent.relative_to(ROOT).parts) for top in ("vmcl", "hardware")
              for init in (ROOT / top).rglob("__init__.py")}
     assert found - listed == set(), f"packages missing from pyproject.toml's list: {sorted(found - listed)}"
+
+
+def test_every_data_file_of_the_packages_ships_in_the_wheel():
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]
+    for top in ("vmcl", "hardware"):
+        for found in (ROOT / top).rglob("*.json"):
+            package = ".".join(found.parent.relative_to(ROOT).parts)
+            assert found.name in data.get(package, []), f"{found.relative_to(ROOT)} is not in pyproject's package-data"

@@ -128,7 +128,7 @@ def test_one_grey_image_gives_edges_and_texture_only(small_scene, machine):
     assert result.density is not None and result.hue is None
     assert result.disparity is None and result.flow is None
     assert set(result.lines) <= {"texture"}
-    assert list(result.stages) == ["upload", "edges", "texture", "mrf texture", "integrate", "download"]
+    assert list(result.stages) == ["upload", "edges", "boundaries", "texture", "mrf texture", "integrate", "download"]
 
 
 def test_each_input_adds_its_cues(small_scene, machine):
@@ -189,7 +189,7 @@ def test_timings_per_stage_and_kernel(small_scene):
     start = time.perf_counter()
     result = VisionMachine().run(s.left, s.right)  # its own profiling Machine
     wall_ms = (time.perf_counter() - start) * 1e3
-    assert list(result.stages) == ["upload", "edges", "stereo", "colour", "texture", "mrf stereo",
+    assert list(result.stages) == ["upload", "edges", "boundaries", "stereo", "colour", "texture", "mrf stereo",
                                    "mrf colour", "mrf texture", "integrate", "download"]
     assert all(ms > 0 for ms in result.stages.values()) and result.total_ms <= wall_ms
     # One in-order queue: kernels never overlap, so their device times add up to less than the run's wall time.
@@ -201,6 +201,29 @@ def test_timings_per_stage_and_kernel(small_scene):
 
 
 # -- integration -----------------------------------------------------------------------------------
+
+def test_soft_map_of_one_image_is_its_probability_of_boundary(small_scene, machine):
+    from vmcl.early.boundary_probability import boundary_probability
+
+    result = VisionMachine(machine=machine).run(small_scene.left)
+    expected = boundary_probability(small_scene.left, machine=machine).probability
+    np.testing.assert_array_equal(result.boundary_strength, expected)
+    assert result.boundary_strength.dtype == np.float32
+
+
+def test_soft_map_adds_the_classifier_where_stereo_or_motion_lines_are(cues_scene, cues_run, machine):
+    from vmcl.early.boundary_probability import boundary_probability
+
+    image_only = boundary_probability(cues_run.image, machine=machine).probability
+    strength = cues_run.boundary_strength
+    assert strength.min() >= 0 and strength.max() <= 1
+    unseen = (cues_run.support & (Cue.STEREO | Cue.MOTION)) != 0
+    np.testing.assert_array_equal(strength[~unseen], image_only[~unseen])
+    assert np.all(strength[unseen] >= image_only[unseen])
+    # The depth-only outline (the plate) gains strength from the depth and motion lines.
+    depth_only = cues_scene.labels == Label.DEPTH
+    assert strength[depth_only].mean() > 1.5 * image_only[depth_only].mean()
+
 
 def test_integrate_matches_boundary_maps_and_labels(machine):
     rng = np.random.default_rng(1)

@@ -189,6 +189,15 @@ TABLE: tuple[Entry, ...] = (
               "quantile": _N, "margin": _I, "widen": _N, "min_share": _N, "machine": _M}),
     _e("vmcl.early.disparity_range:fallback_range", width=16, max_disparity=1 / 3,
        kinds={"width": _I, "max_disparity": _N}),
+    _e("vmcl.early.boundary_probability:boundary_probability", image=RGB, model=None,
+       kinds={"image": _A, "model": _O, "machine": _M}),
+    _e("vmcl.early.boundary_probability:oriented_gradients", image=IMG, model=None,
+       kinds={"image": _A, "model": _O, "machine": _M}),
+    _e("vmcl.early.boundary_probability:bank_responses", image=RGB, kinds={"image": _A, "machine": _M}),
+    _e("vmcl.boundary_evaluation:canny_sweep", image=RGB, count=3, kinds={"image": _A, "count": _I, "machine": _M}),
+    _e("vmcl.boundary_evaluation:opencv_canny_sweep", image=arr((16, 16, 3), "uint8", "randint:255"), count=3,
+       kinds={"image": _A, "count": _I}),
+    _e("vmcl.boundary_evaluation:sweep_thresholds", count=3, kinds={"count": _I}),
     _e("vmcl.early.texture:density", image=IMG, fine_sigma=1.0, coarse_sigma=2.0, threshold=0.1, radius=4,
        kinds={"image": _A, "fine_sigma": _N, "coarse_sigma": _N, "threshold": _N, "radius": _I, "machine": _M}),
     _e("vmcl.early.texture:texture_edges", image=IMG, fine_sigma=1.0, coarse_sigma=2.0, threshold=0.1, radius=4,
@@ -243,6 +252,10 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.labelling:features", support=SUPPORT, image=IMG, disparity=None, flow=None, hue=None,
        kinds={"support": _A, "image": _A, "disparity": _OA, "flow": _OA, "hue": _OA, "machine": _M}),
     _e("vmcl.labelling:fit_targets", truth=arr((16, 16), "uint8", "randint:7"), kinds={"truth": _A}),
+    _e("vmcl.labelling:classify", support=SUPPORT, image=IMG, disparity=IMG, flow=None, hue=None, texture=True,
+       labeller=None, probability=arr((16, 16)),
+       kinds={"support": _A, "image": _A, "disparity": _OA, "flow": _OA, "hue": _OA, "texture": _B,
+              "labeller": _O, "probability": _OA, "machine": _M}),
     _e("vmcl.labelling:label", support=SUPPORT, image=IMG, disparity=IMG, flow=None, hue=None, texture=True,
        labeller=None,
        kinds={"support": _A, "image": _A, "disparity": _OA, "flow": _OA, "hue": _OA, "texture": _B,
@@ -309,6 +322,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.datasets:load_flow", name="Venus", root=path("empty_dir"), colour=False,
        kinds={"name": _C, "root": _P, "colour": _B}),
     _e("vmcl.datasets:load_bsds", root=path("empty_dir"), split="test", kinds={"root": _P, "split": _C}),
+    _e("vmcl.datasets:read_bsds_folder", folder=path("empty_dir"), kinds={"folder": _P}),
     _e("vmcl.datasets:read_stereo_folder", folder=path("stereo_dir"), kinds={"folder": _P}),
     _e("vmcl.datasets:write_stereo_folder", folder=path("new_dir"), left=arr((16, 16), "uint8"),
        right=arr((16, 16), "uint8"), disparity=IMG, ndisp=16,
@@ -337,6 +351,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.report:labels_image", image=RGB, labels=arr((16, 16), "uint8", "randint:7"),
        kinds={"image": _A, "labels": _A}),
     _e("vmcl.report:support_image", image=RGB, support=SUPPORT, kinds={"image": _A, "support": _A}),
+    _e("vmcl.report:strength_image", strength=arr((16, 16), "float32", "rand"), kinds={"strength": _A}),
     _e("vmcl.pictures:field_image", values=IMG, kinds={"values": _A}),
     _e("vmcl.pictures:to_uint8", rgb=arr((16, 16, 3)), kinds={"rgb": _A}),
     _e("vmcl.report:encode_png", rgb=arr((16, 16, 3), "uint8", "randint:256"), kinds={"rgb": _A}),
@@ -389,6 +404,11 @@ EXEMPT = {
     "vmcl.metrics:DetectionScores", "vmcl.metrics:DisparityScores", "vmcl.metrics:FlowScores",
     "vmcl.datasets:BSDSImage", "vmcl.datasets:BSDSSet", "vmcl.datasets:FlowPair", "vmcl.datasets:StereoPair",
     "vmcl.early.semiglobal:SemiGlobalMatch", "vmcl.early.disparity_range:DisparityRange",
+    "vmcl.early.boundary_probability:BoundaryProbability", "vmcl.labelling:Labelling",
+    # Checked on construction (tests/test_early_boundary_probability.py); load and save read and write files.
+    "vmcl.early.boundary_probability:BoundaryModel", "vmcl.early.boundary_probability:feature_names",
+    # Need BSDS images with human boundaries: tests/test_boundary_evaluation.py runs them.
+    "vmcl.boundary_evaluation:boundary_maps", "vmcl.boundary_evaluation:score_maps", "vmcl.boundary_evaluation:MapSet",
     "vmcl.stereo_evaluation:MethodScores", "vmcl.stereo_evaluation:MatchedComparison",
     "vmcl.stereo_evaluation:PairEvaluation", "vmcl.stereo_evaluation:StereoMethod",
     "vmcl.result:Result", "vmcl.pipeline:Config", "vmcl.early.registration:WarpTable",
@@ -421,10 +441,10 @@ PUBLIC_MODULES = (
     "vmcl.cm.doubling", "vmcl.cm.filters", "vmcl.cm.news", "vmcl.cm.reduce", "vmcl.cm.router", "vmcl.cm.scan",
     "vmcl.early.color", "vmcl.early.edges", "vmcl.early.filters", "vmcl.early.motion", "vmcl.early.noise",
     "vmcl.early.registration", "vmcl.early.sign_correlation", "vmcl.early.stereo", "vmcl.early.texture",
-    "vmcl.early.semiglobal", "vmcl.early.disparity_range",
+    "vmcl.early.semiglobal", "vmcl.early.disparity_range", "vmcl.early.boundary_probability",
     "vmcl.mrf", "vmcl.integrate", "vmcl.labels", "vmcl.cues", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
     "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pictures", "vmcl.pipeline", "vmcl.result", "vmcl.machine",
-    "vmcl.stereo_evaluation", "vmcl.distributed",
+    "vmcl.stereo_evaluation", "vmcl.distributed", "vmcl.boundary_evaluation",
 )
 
 
@@ -817,6 +837,7 @@ def _result(ctx):
     image = rng.random((16, 16, 3)).astype(np.float32)
     return Result(image=image, edges=rng.random((16, 16)) < 0.2, support=rng.integers(0, 32, (16, 16), np.uint8),
                   labels=rng.integers(0, 7, (16, 16), np.uint8), config=Config(),
+                  boundary_strength=rng.random((16, 16)).astype(np.float32),
                   disparity=rng.random((16, 16)).astype(np.float32),
                   sparse_disparity=rng.random((16, 16)).astype(np.float32),
                   flow=rng.random((16, 16, 2)).astype(np.float32))
@@ -1058,7 +1079,7 @@ def _run_case(case: dict, ctx: dict) -> dict:
 
 
 def _expect_missing(target: str) -> bool:
-    return target.startswith("vmcl.datasets:load_")
+    return target.startswith(("vmcl.datasets:load_", "vmcl.datasets:read_bsds_folder"))
 
 
 def _serve() -> None:

@@ -253,8 +253,8 @@ def write_output(result, folder: Path, title: str) -> None:
     np.savez_compressed(folder / "fields.npz", allow_pickle=True, **result_fields(result))
 
 
-FIELD_NAMES = ("edges", "support", "labels", "hue", "colour_edges", "density", "texture_edges", "sparse_disparity",
-               "first_pass_disparity", "stereo_discontinuity", "half_occluded", "out_of_range", "disparity",
+FIELD_NAMES = ("edges", "support", "labels", "boundary_strength", "hue", "colour_edges", "density", "texture_edges",
+               "sparse_disparity", "first_pass_disparity", "stereo_discontinuity", "half_occluded", "out_of_range", "disparity",
                "raw_flow", "flow")
 """The Result fields fields.npz holds when the run made them; with ``restored_<cue>``, ``<cue>_line_h`` and
 ``<cue>_line_v`` for each cue restored (:func:`result_fields`)."""
@@ -357,38 +357,23 @@ def _eval_flow(args, root: Path) -> int:
 
 
 def _eval_edges(args, root: Path) -> int:
-    import cv2
-
-    from vmcl import metrics
-    from vmcl.datasets import load_bsds
-    from vmcl.pipeline import Config, TextureConfig, VisionMachine
+    from vmcl.boundary_evaluation import boundary_maps, score_maps
+    from vmcl.datasets import load_bsds, read_bsds_folder
 
     try:
-        bsds = load_bsds(root)
+        images = load_bsds(root).images if (root / "bsds500" / "test").is_dir() else read_bsds_folder(root)
     except FileNotFoundError as error:
-        raise BadInput(f"--data {root}: no BSDS500 test images ({error})") from None
-    vm = VisionMachine(Config(texture=TextureConfig(enabled=True)))
-    maps: dict[str, list] = {"vmcl cartoon (integrated)": [], "vmcl Canny (brightness edges)": [],
-                             "OpenCV Canny": []}
-    times = dict.fromkeys(maps, 0.0)
-    with _progress(args, len(bsds.images), "edges") as step:
-        for item in bsds.images:
-            result, ms = _timed(vm.run, item.image)
-            maps["vmcl cartoon (integrated)"].append(result.discontinuities | result.edges)
-            maps["vmcl Canny (brightness edges)"].append(result.edges)
-            times["vmcl cartoon (integrated)"] += ms
-            grey = cv2.cvtColor(item.image, cv2.COLOR_RGB2GRAY)
-            edges, ms_cv = _timed(cv2.Canny, cv2.GaussianBlur(grey, (0, 0), 2.0), 25, 50)
-            maps["OpenCV Canny"].append(edges > 0)
-            times["OpenCV Canny"] += ms_cv
-            step(item.name)
-    truths = [item.boundaries for item in bsds.images]
-    rows = [("method", "ODS F", "precision", "recall", "ms per image")]
-    for label, edge_maps in maps.items():
-        s = metrics.evaluate_boundaries([m.astype(np.float32) for m in edge_maps], truths, thresholds=[0.5])
-        took = times[label] or times["vmcl cartoon (integrated)"]
-        rows.append((label, _fmt(s.ods_f), _fmt(s.ods_precision), _fmt(s.ods_recall), f"{took / len(truths):.0f}"))
-    _print_table(f"Boundaries (BSDS500, {len(truths)} test images; binary maps, one threshold)", rows)
+        raise BadInput(f"--data {root}: no BSDS500 images ({error})") from None
+    with _progress(args, len(images), "images") as step:
+        sets = boundary_maps(images, thresholds=args.thresholds, progress=step)
+    rows = [("method", "ODS F", "OIS F", "AP", "ms per image")]
+    for maps in sets:
+        s = score_maps(maps, images, workers=args.workers)
+        swept = maps.thresholds > 1
+        rows.append((maps.name, _fmt(s.ods_f), _fmt(s.ois_f) if swept else "-",
+                     _fmt(s.average_precision) if swept else "-", f"{maps.ms_per_image:.0f}"))
+    _print_table(f"Boundaries (BSDS500 benchmark, {len(images)} images, {args.thresholds} thresholds; "
+                 "match distance 0.0075 of the diagonal)", rows)
     return 0
 
 
@@ -491,8 +476,13 @@ def parser() -> argparse.ArgumentParser:
     evaluate.add_argument("benchmark", choices=("stereo", "flow", "edges"))
     evaluate.add_argument("--data", required=True,
                           help="stereo: a scene folder in a Middlebury layout (2001, 2003, v2, 2005/2006, "
-                               "2014/2021) or any folder holding such folders; flow, edges: the data sets "
-                               "folder laid out as ../shared/datasets")
+                               "2014/2021) or any folder holding such folders; flow: the data sets folder "
+                               "laid out as ../shared/datasets; edges: that folder (its bsds500/test images) or "
+                               "any BSDS-layout folder (<id>/<id>.jpg + .mat, or images/ and groundTruth/)")
+    evaluate.add_argument("--thresholds", type=int, default=30,
+                          help="edges: thresholds of each sweep (the BSDS benchmark's own count is 99; each "
+                               "costs one matching per image and annotator)")
+    evaluate.add_argument("--workers", type=int, default=1, help="edges: processes for the matching")
 
     commands.add_parser("info", parents=[quiet], help="OpenCL platforms and devices, the kernel cache")
 

@@ -44,6 +44,7 @@ __all__ = [
     "load_bsds",
     "load_flow",
     "load_stereo",
+    "read_bsds_folder",
     "read_disparity",
     "read_flo",
     "read_image",
@@ -920,7 +921,7 @@ class BSDSSet:
     Attributes
     ----------
     split : str
-        "test" or "golden".
+        "test", "train", "golden", or "folder" (read_bsds_folder).
     images : list of BSDSImage
         In sorted (string) order of their ids.
     expected : dict of str to float
@@ -947,6 +948,39 @@ def _bsds_annotations(path: Path) -> tuple[np.ndarray, np.ndarray]:
     return boundaries, segmentations
 
 
+def _bsds_items(pairs: list[tuple[str, Path, Path]]) -> list[BSDSImage]:
+    return [BSDSImage(name, read_image(image), *_bsds_annotations(truth)) for name, image, truth in pairs]
+
+
+def read_bsds_folder(folder) -> list[BSDSImage]:
+    """The images of a BSDS-layout folder with their human boundaries and segmentations.
+
+    Two layouts are read: one folder per image holding ``<id>.jpg`` and ``<id>.mat`` (as under
+    ``shared/datasets/bsds500/test``), or the BSDS500 distribution's ``images/`` and ``groundTruth/``
+    folders side by side (``BSR/BSDS500/data``; its ``test`` split where the folders hold splits). An
+    image without its ``.mat`` is refused by name; the images are in sorted (string) order of their ids.
+    """
+    folder = _as_path(folder, "folder")
+    if not folder.is_dir():
+        raise FileNotFoundError(f"no such folder: {folder}")
+    if (folder / "images").is_dir() and (folder / "groundTruth").is_dir():
+        images, truths = folder / "images", folder / "groundTruth"
+        if (images / "test").is_dir() and (truths / "test").is_dir():
+            images, truths = images / "test", truths / "test"
+        found = sorted(images.glob("*.jpg"))
+        pairs = [(p.stem, p, truths / f"{p.stem}.mat") for p in found]
+    else:
+        found = sorted(p / f"{p.name}.jpg" for p in folder.iterdir() if (p / f"{p.name}.jpg").is_file())
+        pairs = [(p.stem, p, p.with_suffix(".mat")) for p in found]
+    if not pairs:
+        raise FileNotFoundError(f"{folder}: no BSDS images (<id>/<id>.jpg, or images/ and groundTruth/ folders)")
+    missing = [str(truth) for _, _, truth in pairs if not truth.is_file()]
+    if missing:
+        raise InputValueError(f"{folder}: images without their ground truth: {', '.join(missing[:3])}"
+                              + (f" and {len(missing) - 3} more" if len(missing) > 3 else ""))
+    return _bsds_items(pairs)
+
+
 def load_bsds(root, *, split: str = "test") -> BSDSSet:
     """Load BSDS500 images with their human boundaries and segmentations.
 
@@ -954,9 +988,10 @@ def load_bsds(root, *, split: str = "test") -> BSDSSet:
     ----------
     root : str or Path
         The data sets folder (``shared/datasets``).
-    split : {"test", "golden"}
-        "test": the BSDS500 test images present under bsds500/test (10 here); "golden": the boundary
-        benchmark's own 5-image test (bench/data) with its edge maps and expected figures.
+    split : {"test", "train", "golden"}
+        "test": the BSDS500 test images present under bsds500/test (10 here); "train": the 200 training
+        images (the only ones to fit to); "golden": the boundary benchmark's own 5-image test
+        (bench/data) with its edge maps and expected figures.
 
     Returns
     -------
@@ -968,16 +1003,11 @@ def load_bsds(root, *, split: str = "test") -> BSDSSet:
     segmentation", IEEE TPAMI 33(5):898-916, 2011.
     """
     base = _as_path(root, "root") / "bsds500"
-    check_choice(split, "split", ("test", "golden"))
-    if split == "test":
-        folders = sorted(p for p in (base / "test").glob("*") if p.is_dir())
-        if not folders:
-            raise FileNotFoundError(f"no BSDS500 test images under {base / 'test'}")
-        images = [
-            BSDSImage(f.name, read_image(f / f"{f.name}.jpg"), *_bsds_annotations(f / f"{f.name}.mat"))
-            for f in folders
-        ]
-        return BSDSSet(split, images)
+    check_choice(split, "split", ("test", "train", "golden"))
+    if split in ("test", "train"):
+        if not (base / split).is_dir():
+            raise FileNotFoundError(f"no BSDS500 {split} images under {base / split}")
+        return BSDSSet(split, read_bsds_folder(base / split))
     if split != "golden":
         raise InputValueError(f"split must be 'test' or 'golden', got {split!r}")
     golden = base / "bench_golden"

@@ -37,6 +37,7 @@ import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pyopencl.array as cl_array
@@ -295,7 +296,7 @@ def fit_targets(truth: np.ndarray) -> np.ndarray:
     return out
 
 
-def _run(support, image, disparity, flow, hue, texture, labeller, machine, classify: bool):
+def _run(support, image, disparity, flow, hue, texture, labeller, machine, classify: bool, probability=None):
     s, host = device_field(support, "support", machine, ndims=(2,), dtypes=(np.uint8,))
     shape = s.shape
     img, _ = device_field(image, "image", machine, ndims=(2, 3), dtypes=(np.float32,))
@@ -320,16 +321,38 @@ def _run(support, image, disparity, flow, hue, texture, labeller, machine, class
                "HAS_STEREO": int("stereo" in present), "HAS_MOTION": int("motion" in present),
                "HAS_COLOUR": int("colour" in present), "CANDIDATE_BITS": candidate_bits(present),
                "CODES": ",".join(str(int(c)) for c in CLASSES), **BIT_DEFINES, **SLOT_DEFINES}
-    kernel = machine.kernel("labelling", "label_features", **defines)
     height, width = shape
     if classify:
-        out = machine.empty(shape, np.uint8)
-        args += [labeller.on_device(present, machine), out]
-    else:
-        out = machine.empty((len(FEATURES),) + shape, np.float32)
-        args += [out]
-    machine.launch(kernel, (width, height), *args, np.int64(width), np.int64(height))
+        labels, strength = machine.empty(shape, np.uint8), machine.empty(shape, np.float32)
+        if probability is not None:
+            probability, _ = device_field(probability, "probability", machine, ndims=(2,), dtypes=(np.float32,))
+            if probability.shape != shape:
+                raise InputValueError(f"probability must have the support's shape {shape}, got {probability.shape}")
+        kernel = machine.kernel("labelling", "label_features", HAS_PROBABILITY=int(probability is not None), **defines)
+        args += [labeller.on_device(present, machine), placeholder if probability is None else probability, labels,
+                 strength]
+        machine.launch(kernel, (width, height), *args, np.int64(width), np.int64(height))
+        return Labelling(labels.get(), strength.get()) if host else Labelling(labels, strength)
+    out = machine.empty((len(FEATURES),) + shape, np.float32)
+    kernel = machine.kernel("labelling", "label_features", HAS_PROBABILITY=0, **defines)
+    machine.launch(kernel, (width, height), *args, out, np.int64(width), np.int64(height))
     return out.get() if host else out
+
+
+class Labelling(NamedTuple):
+    """The classifier's output at every pixel.
+
+    Attributes
+    ----------
+    labels : uint8 (H, W)
+        The :class:`vmcl.labels.Label` code of the largest support at each candidate; 0 (NONE) elsewhere.
+    strength : float32 (H, W) in [0, 1]
+        The strength of a discontinuity (:func:`classify`): the classifier's support for some
+        discontinuity is 1 minus the softmax's probability of NONE (the model the weights were fitted as).
+    """
+
+    labels: ArrayLike
+    strength: ArrayLike
 
 
 def features(support: ArrayLike, image: ArrayLike, *, disparity: ArrayLike | None = None,
@@ -367,11 +390,31 @@ def label(support: ArrayLike, image: ArrayLike, *, disparity: ArrayLike | None =
     -------
     uint8 (H, W): NumPy for NumPy support, a device array for a device support.
     """
+    return classify(support, image, disparity=disparity, flow=flow, hue=hue, texture=texture, labeller=labeller,
+                    machine=machine).labels
+
+
+def classify(support: ArrayLike, image: ArrayLike, *, disparity: ArrayLike | None = None,
+             flow: ArrayLike | None = None, hue: ArrayLike | None = None, texture: bool = True,
+             labeller: LinearLabeller | None = None, probability: ArrayLike | None = None,
+             machine: Machine | None = None) -> Labelling:
+    """:func:`label`'s labels with the strength of a discontinuity at every pixel.
+
+    Parameters as :func:`label`'s, and:
+
+    probability : (H, W) float32 in [0, 1], optional
+        The image's probability of boundary (:func:`vmcl.early.boundary_probability.boundary_probability`).
+        With it the strength is this probability, raised to the classifier's support where a stereo or
+        motion line marks a candidate (what one image cannot show); without it, the classifier's
+        support at the candidates and 0 elsewhere.
+
+    Returns a :class:`Labelling`: NumPy fields for NumPy support, device arrays for a device support.
+    """
     machine = machine_for(machine)
     if labeller is not None and not isinstance(labeller, LinearLabeller):
         raise InputTypeError(f"labeller must be a LinearLabeller or None, got {type(labeller).__name__}")
     return _run(support, image, disparity, flow, hue, texture, labeller or default_labeller(), machine,
-                classify=True)
+                classify=True, probability=probability)
 
 
 @functools.cache
@@ -380,5 +423,5 @@ def default_labeller() -> LinearLabeller:
     return LinearLabeller.load()
 
 
-__all__ = ["CANDIDATE_BITS", "CLASSES", "FEATURES", "INPUTS", "KEYS", "LinearLabeller", "candidate_bits",
-           "default_labeller", "features", "fit_targets", "label"]
+__all__ = ["CANDIDATE_BITS", "CLASSES", "FEATURES", "INPUTS", "KEYS", "Labelling", "LinearLabeller", "candidate_bits",
+           "classify", "default_labeller", "features", "fit_targets", "label"]

@@ -42,7 +42,7 @@ from vmcl import integrate as _integrate
 from vmcl import labelling
 from vmcl.cm.core import check_choice, check_int, check_real
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
-from vmcl.early import disparity_range, edges, motion, semiglobal, stereo
+from vmcl.early import boundary_probability, disparity_range, edges, motion, semiglobal, stereo
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.labels import CUES
 from vmcl.machine import Machine, on_device
@@ -559,7 +559,7 @@ class VisionMachine:
     def stages(self, *, right: bool, next: bool, rgb: bool) -> list[str]:
         """The names of the stages :meth:`run` goes through for these inputs, in order."""
         active = self.cues(right=right, next=next, rgb=rgb)
-        names = ["upload", "edges", *(cue.name for cue in active)]
+        names = ["upload", "edges", "boundaries", *(cue.name for cue in active)]
         for cue in active:
             names += [f"mrf {cue.name}"] + [stage for stage in [cue.refine_stage(self.config)] if stage]
         return names + ["integrate", "download"]
@@ -624,6 +624,8 @@ class _Run:
             brightness = edges.canny(left, sigma=e.sigma, low_threshold=e.low_threshold,
                                      high_threshold=e.high_threshold, use_quantiles=e.use_quantiles,
                                      machine=self.m)
+        with self.stage("boundaries"):
+            image_boundaries = on_device(boundary_probability.boundary_probability(left, machine=self.m).probability)
         run = RunInputs(self.m, self.c, left, others_d.get("right"), others_d.get("next"), brightness)
         measured = {}
         for cue in active:
@@ -650,22 +652,26 @@ class _Run:
         with self.stage("integrate"):
             integration = _integrate.integrate(lines, edges=brightness, machine=self.m)
             support, labels = on_device(integration.support), on_device(integration.labels)
+            strength = image_boundaries
             if vm.labeller is not None:
-                labels = on_device(labelling.label(
+                found_labels = labelling.classify(
                     support, left, disparity=restored.get("stereo"), flow=restored.get("motion"),
-                    hue=restored.get("colour"), texture="texture" in lines, labeller=vm.labeller, machine=self.m))
+                    hue=restored.get("colour"), texture="texture" in lines, labeller=vm.labeller,
+                    probability=image_boundaries, machine=self.m)
+                labels, strength = on_device(found_labels.labels), on_device(found_labels.strength)
         with self.stage("download"):
             host = {name: array.get() for name, array in fields.items()}
             host_restored = {cue: array.get() for cue, array in restored.items()}
             host_lines = {cue: (h.get().astype(bool), v.get().astype(bool)) for cue, (h, v) in lines.items()}
             edge_map, host_support, host_labels = brightness.get(), support.get(), labels.get()
+            host_strength = strength.get()
         as_bool = ("colour_edges", "texture_edges", "stereo_discontinuity", "half_occluded", "out_of_range")
         host = {name: (value.astype(bool) if name in as_bool else value) for name, value in host.items()}
         for cue in active:
             if cue.restored_as and cue.name in host_restored:
                 host[cue.restored_as] = host_restored[cue.name]
         self.result = Result(image=image, edges=edge_map.astype(bool), support=host_support, labels=host_labels,
-                             config=self.c, restored=host_restored, lines=host_lines, stages=self.stages,
+                             boundary_strength=host_strength, config=self.c, restored=host_restored, lines=host_lines, stages=self.stages,
                              kernels=self.m.timings(reset=True) if self.m.profile else {}, notes=self.notes,
                              **host)
 

@@ -35,6 +35,7 @@ __all__ = [
     "images",
     "images_with_captions",
     "labels_image",
+    "strength_image",
     "support_image",
     "write_report",
 ]
@@ -123,6 +124,24 @@ def support_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
     return picture
 
 
+def strength_image(strength: np.ndarray) -> np.ndarray:
+    """The cartoon's soft map (:attr:`vmcl.result.Result.boundary_strength`) as a picture: black for 0,
+    white for 1, the contours drawn dark on white paper as boundary benchmarks show them.
+
+    Parameters
+    ----------
+    strength : float (H, W) in [0, 1]
+
+    Returns
+    -------
+    uint8 RGB (H, W, 3)
+    """
+    strength = real_host_array(strength, "strength", ndims=(2,))
+    if strength.dtype.kind != "f" or not np.isfinite(strength).all() or strength.min() < 0 or strength.max() > 1:
+        raise InputValueError("strength must be finite floats in [0, 1]")
+    return to_uint8(np.repeat(255 * (1 - strength[..., None]), 3, axis=2))
+
+
 def images(result: Result) -> dict[str, np.ndarray]:
     """The report's pictures of a run, by file stem, in the order the report shows them."""
     return {stem: picture for stem, (picture, _) in images_with_captions(result).items()}
@@ -135,6 +154,7 @@ def images_with_captions(result: Result) -> dict[str, tuple[np.ndarray, str]]:
         raise InputTypeError(f"result must be a vmcl.result.Result, got {type(result).__name__}")
     grey = _grey(result.image)
     out = {"cartoon": (labels_image(result.image, result.labels), _CAPTIONS["cartoon"]),
+           "strength": (strength_image(result.boundary_strength), _CAPTIONS["strength"]),
            "support": (support_image(result.image, result.support), _CAPTIONS["support"]),
            "input": (to_uint8(255 * np.repeat(grey[..., None], 3, axis=2) if result.image.ndim == 2
                                else 255 * np.clip(result.image, 0, 1)), _CAPTIONS["input"])}
@@ -148,6 +168,7 @@ def images_with_captions(result: Result) -> dict[str, tuple[np.ndarray, str]]:
 _CAPTIONS = {
     "cartoon": "The cartoon, the discontinuities by label: depth red, orientation purple, albedo blue, "
                "shadow dark grey, specular yellow, texture green",
+    "strength": "The cartoon's soft map: the strength of a boundary, from white (none) to black (certain)",
     "support": "The cues' support: discontinuities by cue (red stereo, orange motion, blue colour, green texture; "
                "grey: brightness edges no cue supports) over the faded image",
     "input": "The left image",

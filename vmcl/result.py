@@ -60,6 +60,12 @@ class Result:
     labels : uint8 (H, W)
         The cartoon: :class:`vmcl.labels.Label` codes of the discontinuity pixels (``labels.method``
         says how they are chosen; :mod:`vmcl.labelling` by default).
+    boundary_strength : float32 (H, W) in [0, 1]
+        The cartoon's soft map: the image's probability of boundary from brightness, colour and texture
+        (:mod:`vmcl.early.boundary_probability`, thinned to one-pixel contours), raised to the linear
+        classifier's support for a discontinuity where a stereo or motion line marks a candidate
+        (:func:`vmcl.labelling.classify`; with ``labels.method = "rule"``, the image's probability
+        alone). Threshold it, or sweep it, to compare with an edge detector.
     stages : dict of str to float
         Wall time of each stage in ms, in the order run (device work included: each stage ends with
         the queue drained).
@@ -76,6 +82,7 @@ class Result:
     edges: np.ndarray
     support: np.ndarray
     labels: np.ndarray
+    boundary_strength: np.ndarray
     config: Config
     hue: np.ndarray | None = None
     colour_edges: np.ndarray | None = None

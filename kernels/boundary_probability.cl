@@ -1,0 +1,287 @@
+/* boundary_probability.cl: the probability of a boundary at every pixel from brightness, colour and
+ * texture gradients at several scales (vmcl/early/boundary_probability.py). One work-item per pixel
+ * over a (W, H) grid; ids past the field idle. Borders clamp.
+ *
+ *   lab              CIE L*a*b* (D65, sRGB companding) of an RGB or grey image, each divided by 100
+ *   bank             the filter-bank responses (first and second directional derivatives and the
+ *                    Laplacian of the lightness at two scales), compressed by their norm
+ *   nearest          each pixel's texton: the nearest of NT centres to its responses
+ *   histogram_rows   a row pass of the Gaussian over the textons' indicator planes: NT planes out
+ *   planes_rows      a row pass of the Gaussian over a stack of float planes
+ *   planes_cols      the column pass over a stack of float planes
+ *   components       one scale's gradient components: (gx, gy) of L, a and b, and the texture tensor
+ *                    (sum over textons of gx^2, gx gy, gy^2 of the smoothed indicator planes), which
+ *                    the host then integrates (smooths) at the texture's scale
+ *   oriented         the features at each of NORIENT orientations (for fitting)
+ *   probability      the logistic classifier at each orientation; the largest wins
+ *   thin             non-maximum suppression across the winning orientation
+ *
+ * Defines: IN_T and CHANNELS (lab); NBANK (bank), NT (nearest, histogram_rows, components); VEC
+ * (planes_*); NSCALES, NORIENT, NFEAT
+ * (oriented, probability).
+ */
+#include "vmcl.h"
+
+#define AT(f, xx, yy) ((f)[(yy) * W + (xx)])
+#define PLANE(f, p, xx, yy) ((f)[IDX3((xx), (yy), (p), W, H)])
+
+#ifdef IN_T
+static float srgb_linear(float c)
+{
+    return c <= 0.04045f ? c / 12.92f : pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+static float lab_f(float t)
+{
+    return t > 0.008856452f ? cbrt(t) : t * 7.787037f + 16.0f / 116.0f;
+}
+
+/* out: the (3, H, W) planes L, a, b. scale: the input's full scale (255 for uint8, 65535 for uint16,
+ * 1 for float). */
+__kernel void lab(__global const IN_T *in, __global float *out, float scale, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    size_t i = (size_t)y * W + x, n = (size_t)W * H;
+    __global float *L = out, *A = out + n, *B = out + 2 * n;
+#if CHANNELS == 3
+    float r = srgb_linear(clamp((float)in[3 * i] / scale, 0.0f, 1.0f));
+    float g = srgb_linear(clamp((float)in[3 * i + 1] / scale, 0.0f, 1.0f));
+    float b = srgb_linear(clamp((float)in[3 * i + 2] / scale, 0.0f, 1.0f));
+    float fx = lab_f((0.412453f * r + 0.357580f * g + 0.180423f * b) / 0.950456f);
+    float fy = lab_f(0.212671f * r + 0.715160f * g + 0.072169f * b);
+    float fz = lab_f((0.019334f * r + 0.119193f * g + 0.950227f * b) / 1.088754f);
+    L[i] = (116.0f * fy - 16.0f) / 100.0f;
+    A[i] = 5.0f * (fx - fy);
+    B[i] = 2.0f * (fy - fz);
+#else
+    /* Grey: the lightness of a neutral colour of that luminance; no chroma. */
+    L[i] = (116.0f * lab_f(srgb_linear(clamp((float)in[i] / scale, 0.0f, 1.0f))) - 16.0f) / 100.0f;
+    A[i] = 0.0f;
+    B[i] = 0.0f;
+#endif
+}
+#endif
+
+#ifdef NBANK
+/* The bank at one scale: the first and second derivatives along 0, 45, 90 and 135 degrees, then the
+ * Laplacian, each scale-normalised (sigma for first, sigma^2 for second derivatives). */
+static void bank_at(__global const float *s, float sigma, long x, long y, long W, long H, float *out)
+{
+    long xm = max(x - 1, 0L), xp = min(x + 1, W - 1), ym = max(y - 1, 0L), yp = min(y + 1, H - 1);
+    float c = AT(s, x, y);
+    float gx = 0.5f * (AT(s, xp, y) - AT(s, xm, y)), gy = 0.5f * (AT(s, x, yp) - AT(s, x, ym));
+    float gxx = AT(s, xp, y) - 2.0f * c + AT(s, xm, y), gyy = AT(s, x, yp) - 2.0f * c + AT(s, x, ym);
+    float gxy = 0.25f * (AT(s, xp, yp) - AT(s, xm, yp) - AT(s, xp, ym) + AT(s, xm, ym));
+    float s2 = sigma * sigma;
+    for (int k = 0; k < 4; k++) {
+        float t = k * (M_PI_F / 4.0f), co = cos(t), si = sin(t);
+        out[2 * k] = sigma * (gx * co + gy * si);
+        out[2 * k + 1] = s2 * (gxx * co * co + 2.0f * gxy * co * si + gyy * si * si);
+    }
+    out[8] = s2 * (gxx + gyy);
+}
+
+/* Responses are compressed by their norm n to log(1 + n / 0.03) (Malik et al. 2001), so the textons
+ * describe the shape of the local pattern more than its contrast. out: (H, W, NBANK). */
+__kernel void bank(__global const float *fine, __global const float *coarse, __global float *out,
+                   float fine_sigma, float coarse_sigma, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    float r[NBANK];
+    bank_at(fine, fine_sigma, x, y, W, H, r);
+    bank_at(coarse, coarse_sigma, x, y, W, H, r + NBANK / 2);
+    float n = 0.0f;
+    for (int j = 0; j < NBANK; j++) n += r[j] * r[j];
+    n = sqrt(n);
+    float gain = n > 0.0f ? log1p(n / 0.03f) / n : 0.0f;
+    __global float *dst = out + ((size_t)y * W + x) * NBANK;
+    for (int j = 0; j < NBANK; j++) dst[j] = gain * r[j];
+}
+
+#ifdef NT
+/* The nearest of the NT texton centres (NT x NBANK) in the compressed response space. */
+__kernel void nearest(__global const float *responses, __global const float *centres, __global uchar *label,
+                      long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    __global const float *r = responses + ((size_t)y * W + x) * NBANK;
+    int best = 0;
+    float best_d = INFINITY;
+    for (int k = 0; k < NT; k++) {
+        float d = 0.0f;
+        for (int j = 0; j < NBANK; j++) {
+            float e = r[j] - centres[k * NBANK + j];
+            d += e * e;
+        }
+        if (d < best_d) { best_d = d; best = k; }
+    }
+    AT(label, x, y) = (uchar)best;
+}
+#endif
+#endif
+
+#ifdef NT
+/* Each pixel's share of each texton in the Gaussian row window: one pass over the taps, the weight
+ * added to the texton met (a histogram), not NT passes. */
+__kernel void histogram_rows(__global const uchar *label, __global float *out, __global const float *taps, int radius,
+                             long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    float acc[NT];
+    for (int k = 0; k < NT; k++) acc[k] = 0.0f;
+    for (int t = -radius; t <= radius; t++)
+        acc[AT(label, clamp(x + t, 0L, W - 1), y)] += taps[t + radius];
+    for (int k = 0; k < NT; k++) PLANE(out, k, x, y) = acc[k];
+}
+#endif
+
+#ifdef VEC
+/* The Gaussian's row and column passes over a (P, H, W) stack into planes first .. first + P - 1 of
+ * out, work-item (k, y, p) standing for the VEC pixels [k VEC, (k + 1) VEC) of row y of plane p: one vector step where the window lies inside
+ * the row (PoCL then runs the CPU's SIMD lanes over contiguous loads), pixel by pixel at a border. */
+#define T float
+__kernel void planes_rows(__global const float *in, __global float *out, __global const float *taps, int r,
+                          long first, long W, long H)
+{
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1), p = get_global_id(2);
+    if (x0 >= W || y >= H) return;
+    __global const float *row = in + (p * H + y) * W;
+    __global float *target = out + ((first + p) * H + y) * W;
+    if (x0 >= r && x0 + VEC + r <= W) {
+        VT acc = (VT)0.0f;
+        for (int k = -r; k <= r; k++) acc += taps[k + r] * VLOAD(row + x0 + k);
+        VSTORE(acc, target + x0);
+        return;
+    }
+    for (long x = x0; x < min(x0 + VEC, W); x++) {
+        float acc = 0.0f;
+        for (int k = -r; k <= r; k++) acc += taps[k + r] * row[clamp(x + k, 0L, W - 1)];
+        target[x] = acc;
+    }
+}
+
+__kernel void planes_cols(__global const float *in, __global float *out, __global const float *taps, int r,
+                          long first, long W, long H)
+{
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1), p = get_global_id(2);
+    if (x0 >= W || y >= H) return;
+    __global const float *plane = in + p * H * W;
+    out += first * H * W;
+    if (x0 + VEC <= W) {
+        VT acc = (VT)0.0f;
+        for (int k = -r; k <= r; k++) acc += taps[k + r] * VLOAD(plane + clamp(y + k, 0L, H - 1) * W + x0);
+        VSTORE(acc, out + (p * H + y) * W + x0);
+        return;
+    }
+    for (long x = x0; x < W; x++) {
+        float acc = 0.0f;
+        for (int k = -r; k <= r; k++) acc += taps[k + r] * plane[clamp(y + k, 0L, H - 1) * W + x];
+        out[(p * H + y) * W + x] = acc;
+    }
+}
+#endif
+
+#ifdef NT
+/* Centred differences, scale-normalised: sigma times the gradient of a field smoothed at sigma gives a
+ * step the same peak at every scale. lab: 3 planes smoothed at sigma; hist: NT planes smoothed at
+ * texture_sigma. comp: this scale's 6 planes from plane 6 k: gx, gy of L, a and b; tensor: the 3 planes
+ * txx, txy, tyy of the texture tensor before its integration (the host smooths them). */
+__kernel void components(__global const float *lab, __global const float *hist, __global float *comp,
+                         __global float *tensor, float sigma, float texture_sigma, int nt, int k, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    long xm = max(x - 1, 0L), xp = min(x + 1, W - 1), ym = max(y - 1, 0L), yp = min(y + 1, H - 1);
+    for (int p = 0; p < 3; p++) {
+        PLANE(comp, 6 * k + 2 * p, x, y) = 0.5f * sigma * (PLANE(lab, p, xp, y) - PLANE(lab, p, xm, y));
+        PLANE(comp, 6 * k + 2 * p + 1, x, y) = 0.5f * sigma * (PLANE(lab, p, x, yp) - PLANE(lab, p, x, ym));
+    }
+    float txx = 0.0f, txy = 0.0f, tyy = 0.0f;
+    for (int k = 0; k < nt; k++) {
+        float gx = 0.5f * texture_sigma * (PLANE(hist, k, xp, y) - PLANE(hist, k, xm, y));
+        float gy = 0.5f * texture_sigma * (PLANE(hist, k, x, yp) - PLANE(hist, k, x, ym));
+        txx += gx * gx; txy += gx * gy; tyy += gy * gy;
+    }
+    PLANE(tensor, 0, x, y) = txx;
+    PLANE(tensor, 1, x, y) = txy;
+    PLANE(tensor, 2, x, y) = tyy;
+}
+#endif
+
+#ifdef NORIENT
+/* The features across orientation theta (the boundary's normal at theta), 4 per scale: |d/dn| of L,
+ * a and b, and the norm of the texton histograms' derivative; then the square root of each (the
+ * classifier is linear in both, which lets it bend its response to contrast). comp: NSCALES x 6 planes,
+ * tensors: NSCALES x 3 (the integrated texture tensors). */
+static void features_at(__global const float *comp, __global const float *tensors, int o, long x, long y, long W,
+                        long H, float *f)
+{
+    float t = o * (M_PI_F / NORIENT), c = cos(t), s = sin(t);
+    for (int sc = 0; sc < NSCALES; sc++) {
+        for (int p = 0; p < 3; p++)
+            f[4 * sc + p] = fabs(c * PLANE(comp, 6 * sc + 2 * p, x, y) + s * PLANE(comp, 6 * sc + 2 * p + 1, x, y));
+        float q = c * c * PLANE(tensors, 3 * sc, x, y) + 2.0f * c * s * PLANE(tensors, 3 * sc + 1, x, y)
+                  + s * s * PLANE(tensors, 3 * sc + 2, x, y);
+        f[4 * sc + 3] = sqrt(max(q, 0.0f));
+    }
+    for (int j = 0; j < 4 * NSCALES; j++) f[4 * NSCALES + j] = sqrt(f[j]);
+}
+
+/* out: (NORIENT, H, W, NFEAT). */
+__kernel void oriented(__global const float *comp, __global const float *tensors, __global float *out, long W,
+                       long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    float f[NFEAT];
+    for (int o = 0; o < NORIENT; o++) {
+        features_at(comp, tensors, o, x, y, W, H, f);
+        __global float *dst = out + (((size_t)o * H + y) * W + x) * NFEAT;
+        for (int j = 0; j < NFEAT; j++) dst[j] = f[j];
+    }
+}
+
+/* weights: bias, then NFEAT weights. theta: the index of the winning orientation. */
+__kernel void probability(__global const float *comp, __global const float *tensors, __constant float *weights,
+                          __global float *p, __global uchar *theta, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    float f[NFEAT];
+    float best = -INFINITY;
+    int best_o = 0;
+    for (int o = 0; o < NORIENT; o++) {
+        features_at(comp, tensors, o, x, y, W, H, f);
+        float z = weights[0];
+        for (int j = 0; j < NFEAT; j++) z += weights[1 + j] * f[j];
+        if (z > best) { best = z; best_o = o; }
+    }
+    AT(p, x, y) = 1.0f / (1.0f + exp(-best));
+    AT(theta, x, y) = (uchar)best_o;
+}
+
+static float bilinear(__global const float *f, float fx, float fy, long W, long H)
+{
+    fx = clamp(fx, 0.0f, (float)(W - 1));
+    fy = clamp(fy, 0.0f, (float)(H - 1));
+    long x0 = (long)fx, y0 = (long)fy;
+    long x1 = min(x0 + 1, W - 1), y1 = min(y0 + 1, H - 1);
+    float ax = fx - x0, ay = fy - y0;
+    return (1 - ay) * ((1 - ax) * AT(f, x0, y0) + ax * AT(f, x1, y0)) + ay * ((1 - ax) * AT(f, x0, y1) + ax * AT(f, x1, y1));
+}
+
+/* A pixel keeps its probability when no point one pixel away along the normal has more. */
+__kernel void thin(__global const float *p, __global const uchar *theta, __global float *out, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    float t = AT(theta, x, y) * (M_PI_F / NORIENT), c = cos(t), s = sin(t);
+    float v = AT(p, x, y);
+    float a = bilinear(p, x + c, y + s, W, H), b = bilinear(p, x - c, y - s, W, H);
+    AT(out, x, y) = (v >= a && v >= b) ? v : 0.0f;
+}
+#endif

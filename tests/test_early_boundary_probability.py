@@ -1,0 +1,122 @@
+"""The probability of boundary: its colour space, filter bank and gradients against NumPy oracles, what a
+probability must do (bounds, monotone in contrast, thin), the shipped model, and the fit's refusal of the
+test images."""
+
+import importlib.util
+import itertools
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from skimage import color
+
+from tests import oracles
+from vmcl.early import boundary_probability as bp
+
+FIT_SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "boundary_fit.py"
+
+
+def _smooth_rgb(seed=0, shape=(40, 56)):
+    rng = np.random.default_rng(seed)
+    noise = rng.random(shape + (3,))
+    return np.clip(oracles._smoothed(noise[..., 0], 1.5)[..., None] * 0.5 + noise * 0.5, 0, 1).astype(np.float32)
+
+
+def _lab_oracle(rgb):
+    return np.moveaxis(color.rgb2lab(rgb.astype(np.float64)), -1, 0) / 100.0
+
+
+def test_lab_matches_scikit_image():
+    rgb = _smooth_rgb()
+    model = bp.BoundaryModel.load()
+    found = bp.oriented_gradients(rgb, model=model)
+    assert found.shape == (bp.ORIENTATIONS, 40, 56, len(model.features))
+    # The colour space itself: the bank's responses rest on L* alone.
+    responses = bp.bank_responses(rgb)
+    expected = oracles.texton_bank(_lab_oracle(rgb)[0])
+    np.testing.assert_allclose(responses, expected, atol=2e-4)
+
+
+def test_oriented_gradients_match_the_oracle():
+    rgb = _smooth_rgb(1)
+    model = bp.BoundaryModel.load()
+    found = bp.oriented_gradients(rgb, model=model)
+    lab = _lab_oracle(rgb)
+    responses = oracles.texton_bank(lab[0])
+    distances = ((responses[..., None, :] - model.centres[None, None].astype(np.float64)) ** 2).sum(-1)
+    labels = distances.argmin(-1)
+    expected = oracles.oriented_gradients(lab, labels, len(model.centres), model.scales)
+    # A pixel whose two nearest textons are within rounding of each other may take either.
+    ordered = np.sort(distances, axis=-1)
+    assert (ordered[..., 1] - ordered[..., 0] > 1e-4).mean() > 0.99
+    close = np.isclose(found, expected, atol=2e-4, rtol=1e-3)
+    assert close.mean() > 0.995, f"{(~close).sum()} of {close.size} features differ"
+
+
+def test_a_grey_image_has_no_colour_gradient():
+    step = np.zeros((32, 32), np.float32)
+    step[:, 16:] = 0.5
+    found = bp.oriented_gradients(step)
+    names = bp.BoundaryModel.load().features
+    colour = [j for j, name in enumerate(names) if name.split()[-2] in ("a", "b")]
+    assert colour and np.all(found[..., colour] == 0)
+    lightness = names.index("L 1.5")
+    assert found[0, 16, 15, lightness] > 0.05  # across the step (normal along x) ...
+    assert found[4, 16, 15, lightness] < 1e-6  # ... and nothing along it
+
+
+def test_probability_is_bounded_thin_and_monotone_in_contrast():
+    peaks = []
+    for contrast in (0.02, 0.05, 0.1, 0.2, 0.4):
+        step = np.full((48, 48), 0.3, np.float32)
+        step[:, 24:] += contrast
+        found = bp.boundary_probability(step)
+        for field in (found.probability, found.dense):
+            assert field.dtype == np.float32 and field.min() >= 0 and field.max() <= 1
+        row = found.probability[24]
+        assert np.argmax(row) in (23, 24)
+        # Thin: beside the step's contour, nothing survives suppression.
+        assert row[21] == 0 and row[26] == 0
+        assert abs(found.orientation[24, 23]) < 1e-6  # the normal points along x
+        peaks.append(float(row.max()))
+    assert all(b > a for a, b in itertools.pairwise(peaks)), peaks
+    assert peaks[-1] > 0.7 and peaks[0] < 0.5
+
+
+def test_device_in_device_out(machine):
+    rgb = _smooth_rgb(2)
+    host = bp.boundary_probability(rgb, machine=machine)
+    device = bp.boundary_probability(machine.to_device(rgb), machine=machine)
+    assert not isinstance(device.probability, np.ndarray)
+    np.testing.assert_array_equal(device.probability.get(), host.probability)
+
+
+def test_model_round_trip_and_refusals(tmp_path):
+    model = bp.BoundaryModel.load()
+    assert "BSDS500 train" in model.fitted_on and model.features == bp.FEATURES
+    model.save(tmp_path / "m.json")
+    again = bp.BoundaryModel.load(tmp_path / "m.json")
+    np.testing.assert_allclose(again.weights, model.weights, atol=1e-5)
+    (tmp_path / "bad.json").write_text(json.dumps({"scales": [1.0]}))
+    with pytest.raises(ValueError, match="bad.json"):
+        bp.BoundaryModel.load(tmp_path / "bad.json")
+    with pytest.raises(ValueError, match="weights"):
+        bp.BoundaryModel((1.0,), model.centres, np.zeros(3, np.float32))
+    with pytest.raises(TypeError, match="model"):
+        bp.boundary_probability(np.zeros((8, 8), np.float32), model="shipped")
+    with pytest.raises(ValueError, match="image"):
+        bp.boundary_probability(np.zeros((8, 8, 4), np.float32))
+
+
+def test_a_flat_image_has_no_gradient_even_at_its_borders():
+    found = bp.oriented_gradients(np.full((24, 40), 0.25, np.float32))
+    assert np.all(found == 0)
+
+
+def test_the_fit_refuses_the_test_split():
+    spec = importlib.util.spec_from_file_location("boundary_fit", FIT_SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    with pytest.raises(SystemExit, match="train split only"):
+        module.training_images(Path("/nonexistent"), "test")

@@ -1,0 +1,170 @@
+"""The boundary evaluation: the cartoon's soft map beside Canny's detectors on human boundaries (BSDS500).
+
+One harness, used by ``vmcl eval edges`` and by benchmarks/boundaries.py, so that every boundary figure
+vmcl reports comes from the same reading of the data and the same sweeps:
+
+- the data: any BSDS-layout folder (:func:`vmcl.datasets.read_bsds_folder`);
+- the maps (:func:`boundary_maps`): the monocular machine's soft map at its defaults
+  (:attr:`vmcl.result.Result.boundary_strength`), swept; its cartoon (labels != 0), binary; vmcl's
+  Canny and OpenCV's Canny, each swept over the same number of hysteresis thresholds (:func:`canny_sweep`);
+- the figures (:func:`score_maps`): the BSDS benchmark's ODS and OIS F-measures and average precision,
+  its one-to-one matching at 0.0075 of the image diagonal and its thinning
+  (:func:`vmcl.metrics.evaluate_boundaries`).
+
+A Canny sweep: Gaussian smoothing of width 2 (the machine's own, :class:`vmcl.pipeline.EdgesConfig`),
+high thresholds spaced geometrically over the range a photograph's contrasts span, the low threshold 0.4
+of the high (Canny's 2:1 to 3:1 advice). Raising both thresholds together can only remove edges, so each
+pixel is given the last level at which it is an edge, and the sweep is scored at the levels.
+
+References
+----------
+D. Martin, C. Fowlkes and J. Malik, "Learning to detect natural image boundaries using local brightness,
+color, and texture cues", IEEE TPAMI 26(5):530-549, 2004. P. Arbelaez, M. Maire, C. Fowlkes and
+J. Malik, "Contour detection and hierarchical image segmentation", IEEE TPAMI 33(5):898-916, 2011.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from vmcl.cm.core import check_int
+from vmcl.datasets import BSDSImage
+from vmcl.early.edges import canny
+from vmcl.errors import InputValueError
+from vmcl.machine import Machine
+from vmcl.metrics import BoundaryScores, evaluate_boundaries
+
+__all__ = ["CANNY_SIGMA", "LOW_RATIO", "MapSet", "boundary_maps", "canny_sweep", "opencv_canny_sweep", "score_maps",
+           "sweep_thresholds"]
+
+CANNY_SIGMA = 2.0
+"""The Canny sweeps' Gaussian width, the machine's own (EdgesConfig.sigma)."""
+
+LOW_RATIO = 0.4
+"""The low hysteresis threshold over the high one."""
+
+MAX_LEVELS = 1000
+"""The most levels a sweep takes (each is a detector run, and each threshold a matching per annotator)."""
+
+_VMCL_LEVELS = (0.004, 0.4)  # Gaussian-smoothed gradient magnitudes of an image in [0, 1]
+_OPENCV_LEVELS = (4.0, 800.0)  # cv2.Canny's L2 Sobel magnitudes of an 8-bit image
+
+
+@dataclass(frozen=True)
+class MapSet:
+    """One method's maps over a set of images.
+
+    Attributes
+    ----------
+    name : str
+    maps : list of float32 (H, W) arrays
+        Values in [0, 1]; a pixel is a boundary at threshold t where its value is >= t.
+    thresholds : int
+        The thresholds to sweep (1: the map is binary, scored at 0.5).
+    ms_per_image : float
+        Wall time of making one map, the mean over the images.
+    """
+
+    name: str
+    maps: list
+    thresholds: int
+    ms_per_image: float
+
+
+def _levels(span: tuple[float, float], count: int) -> np.ndarray:
+    return np.geomspace(span[0], span[1], count)
+
+
+def _nested(edge_sets: Sequence[np.ndarray]) -> np.ndarray:
+    """Each pixel's value: (k + 1) / (count + 1) for the last level k where it is an edge, 0 if none."""
+    count = len(edge_sets)
+    out = np.zeros(edge_sets[0].shape, np.float32)
+    for k, edges in enumerate(edge_sets):
+        out[edges] = (k + 1) / (count + 1)
+    return out
+
+
+def _count(count) -> int:
+    return check_int(count, "count", minimum=1, maximum=MAX_LEVELS)
+
+
+def sweep_thresholds(count: int) -> np.ndarray:
+    """The thresholds at which a sweep of ``count`` levels is scored: (k + 1) / (count + 1)."""
+    return (np.arange(_count(count)) + 1.0) / (count + 1)
+
+
+def _image(image) -> np.ndarray:
+    from vmcl.pipeline import as_image
+
+    return as_image(image, "image")
+
+
+def canny_sweep(image: np.ndarray, count: int, *, machine: Machine | None = None) -> np.ndarray:
+    """vmcl Canny swept over ``count`` high thresholds: float32 (H, W) of each pixel's last level
+    (:func:`sweep_thresholds`), 0 where it is never an edge. ``image``: grey or RGB, as the machine takes it."""
+    count = _count(count)
+    # Thresholds are in units of an image in [0, 1] (as_image's); canny makes RGB grey itself.
+    scaled = _image(image)
+    return _nested([canny(scaled, sigma=CANNY_SIGMA, low_threshold=LOW_RATIO * level, high_threshold=level,
+                          machine=machine) for level in _levels(_VMCL_LEVELS, count)])
+
+
+def opencv_canny_sweep(image: np.ndarray, count: int) -> np.ndarray:
+    """OpenCV's Canny (L2 gradient, after a Gaussian of :data:`CANNY_SIGMA`) swept as :func:`canny_sweep`."""
+    count = _count(count)
+    image = np.round(_image(image) * 255).astype(np.uint8)  # OpenCV's Canny takes 8-bit images
+    grey = cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) if image.ndim == 3 else image
+    smoothed = cv2.GaussianBlur(grey, (0, 0), CANNY_SIGMA)
+    return _nested([cv2.Canny(smoothed, LOW_RATIO * level, level, L2gradient=True) > 0
+                    for level in _levels(_OPENCV_LEVELS, count)])
+
+
+def _timed(make: Callable[[BSDSImage], np.ndarray], images: Sequence[BSDSImage]) -> tuple[list, float]:
+    maps, total = [], 0.0
+    for item in images:
+        start = time.perf_counter()
+        maps.append(make(item))
+        total += time.perf_counter() - start
+    return maps, 1e3 * total / max(len(images), 1)
+
+
+def boundary_maps(images: Sequence[BSDSImage], *, thresholds: int = 30, machine: Machine | None = None,
+                  progress: Callable[[str], None] | None = None) -> list[MapSet]:
+    """The maps of every method on ``images``: the soft map, the cartoon, vmcl's and OpenCV's Canny.
+
+    The machine runs as a user runs it on one image: its defaults (the monocular machine with all its cues).
+    """
+    from vmcl.pipeline import VisionMachine
+
+    thresholds = check_int(thresholds, "thresholds", minimum=2, maximum=MAX_LEVELS)
+    vm = VisionMachine(machine=machine)
+    results, soft_ms, cartoons = [], 0.0, []
+    for item in images:
+        start = time.perf_counter()
+        result = vm.run(item.image)
+        soft_ms += (time.perf_counter() - start) * 1e3
+        results.append(result.boundary_strength)
+        cartoons.append(result.discontinuities.astype(np.float32))
+        if progress is not None:
+            progress(item.name)
+    vmcl_canny, canny_ms = _timed(lambda item: canny_sweep(item.image, thresholds, machine=vm.machine), images)
+    cv_canny, cv_ms = _timed(lambda item: opencv_canny_sweep(item.image, thresholds), images)
+    run_ms = soft_ms / max(len(images), 1)
+    return [MapSet("vmcl cartoon, soft map (boundary_strength), swept", results, thresholds, run_ms),
+            MapSet("vmcl cartoon, labels != 0 (binary)", cartoons, 1, run_ms),
+            MapSet("vmcl Canny, threshold sweep", vmcl_canny, thresholds, canny_ms),
+            MapSet("OpenCV Canny, threshold sweep", cv_canny, thresholds, cv_ms)]
+
+
+def score_maps(maps: MapSet, images: Sequence[BSDSImage], *, workers: int = 1) -> BoundaryScores:
+    """The BSDS benchmark's scores of one method's maps against the images' human boundaries."""
+    if len(maps.maps) != len(images):
+        raise InputValueError(f"{maps.name}: {len(maps.maps)} maps for {len(images)} images")
+    # A swept map is scored at the benchmark's own evenly spaced thresholds, which are the sweeps' levels.
+    levels = [0.5] if maps.thresholds == 1 else sweep_thresholds(maps.thresholds)
+    return evaluate_boundaries(maps.maps, [item.boundaries for item in images], thresholds=levels, workers=workers)

@@ -1,0 +1,358 @@
+"""The probability of a boundary at every pixel of one image, from brightness, colour and texture.
+
+Seed sections "Integration via labeling with a linear classifier" and "Texture": the integration stage
+combines the cues' discontinuities by a linear classifier. On a photograph the monocular cues are the
+brightness, the colour and the texture; each is measured here as an oriented gradient at three scales
+and the twelve gradients are combined by logistic regression fitted to human boundaries (Martin,
+Fowlkes and Malik's probability of boundary, with Gaussian derivatives for their half-discs).
+
+The cues
+--------
+- Brightness and colour: CIE L*, a* and b* (a* the red-green and b* the yellow-blue opponent channel,
+  the second chromatic channel beside the seed's red-green hue), each smoothed by a Gaussian of width
+  sigma and differentiated across the boundary's normal, scale-normalised by sigma so a step gives the
+  same peak at every scale.
+- Texture: every pixel is labelled with its nearest texton, a cluster of the responses of a small
+  filter bank (first and second directional derivatives at four orientations and the Laplacian, at two
+  scales) compressed by their norm (Malik et al. 2001); the textons' indicator planes are smoothed at
+  twice the scale, and the texture gradient across a normal is the norm of the histograms' derivative,
+  read from a 2 x 2 tensor (the sum over textons of the gradient's outer product) so that any
+  orientation costs three products. The tensor is integrated (smoothed) at the texture's scale, as a
+  structure tensor is: a contrast edge is a band of textons of its own, and the histograms' derivative
+  peaks on either side of such a band; integration merges the two peaks into one on the band.
+
+At each of eight orientations the classifier's linear score of the gradients (and of their square
+roots, which lets it bend its response to contrast) is computed, the best orientation wins, and its
+logistic is the probability. Non-maximum suppression across the winning orientation thins it to the
+one-pixel contours a boundary benchmark scores.
+
+The texton centres, the scales and the weights are a :class:`BoundaryModel`; the one shipped with vmcl
+(``boundary_probability.json``) was fitted by benchmarks/boundary_fit.py to the BSDS500 training images
+and nothing else.
+
+NumPy in gives NumPy out; device arrays in give device arrays out.
+
+References
+----------
+D. Martin, C. Fowlkes and J. Malik, "Learning to detect natural image boundaries using local brightness,
+color, and texture cues", IEEE TPAMI 26(5):530-549, 2004.
+J. Malik, S. Belongie, T. Leung and J. Shi, "Contour and texture analysis for image segmentation",
+IJCV 43(1):7-27, 2001.
+T. Poggio et al., "The MIT Vision Machine", Proc. DARPA Image Understanding Workshop, 177-198, 1988.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+import pyopencl.array as cl_array
+
+from vmcl.cm.core import IMAGE_TYPES, ArrayLike, image_field, machine_for, result, vector_kernel
+from vmcl.early.filters import gaussian_taps
+from vmcl.errors import InputTypeError, InputValueError
+from vmcl.machine import Machine
+
+__all__ = [
+    "BANK_SIGMAS",
+    "FEATURES",
+    "MODEL_FILE",
+    "ORIENTATIONS",
+    "BoundaryModel",
+    "BoundaryProbability",
+    "bank_responses",
+    "boundary_probability",
+    "oriented_gradients",
+]
+
+MODEL_FILE = Path(__file__).with_name("boundary_probability.json")
+
+ORIENTATIONS = 8
+"""Orientations of the normal, evenly over [0, pi)."""
+
+BANK_SIGMAS = (1.0, 2.0)
+"""The two scales of the texton filter bank, in pixels."""
+
+BANK_SIZE = 18
+"""Responses per pixel: 9 per scale (first and second derivatives at four orientations, the Laplacian)."""
+
+TEXTURE_RATIO = 2.0
+"""The texture gradient's scale over the brightness's: a histogram needs more pixels than a mean."""
+
+_CUES = ("L", "a", "b", "texture")
+
+_FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0, np.dtype(np.float32): 1.0}
+
+
+def feature_names(scales: tuple[float, ...]) -> tuple[str, ...]:
+    """The classifier's inputs for these scales: each cue's gradient, then the square roots."""
+    plain = tuple(f"{cue} {s:g}" for s in scales for cue in _CUES)
+    return plain + tuple(f"sqrt {name}" for name in plain)
+
+
+FEATURES = feature_names((1.5, 3.0, 6.0))
+"""The inputs of the shipped model."""
+
+
+@dataclass(frozen=True, eq=False)
+class BoundaryModel:
+    """What the probability of boundary is computed with.
+
+    Attributes
+    ----------
+    scales : tuple of float
+        Gaussian widths of the brightness and colour gradients (the texture's are TEXTURE_RATIO times).
+    centres : (K, BANK_SIZE) float32 array
+        The texton centres, in the compressed filter-bank space; K <= 255.
+    weights : (1 + 8 len(scales),) float32 array
+        The logistic regression's bias, then one weight per feature (:func:`feature_names`).
+    fitted_on : str
+        What the model was fitted to.
+    """
+
+    scales: tuple[float, ...]
+    centres: np.ndarray
+    weights: np.ndarray
+    fitted_on: str = ""
+
+    def __post_init__(self):
+        if not isinstance(self.scales, tuple) or not self.scales or not all(
+                isinstance(s, (int, float)) and 0 < s <= 64 for s in self.scales):
+            raise InputValueError(f"scales must be a non-empty tuple of widths in (0, 64], got {self.scales!r}")
+        for name, value, shape in (("centres", self.centres, (None, BANK_SIZE)),
+                                   ("weights", self.weights, (1 + 8 * len(self.scales),))):
+            if not isinstance(value, np.ndarray) or value.dtype.kind != "f":
+                raise InputTypeError(f"{name} must be a float NumPy array, got {type(value).__name__}")
+            if value.ndim != len(shape) or any(want is not None and got != want
+                                               for got, want in zip(value.shape, shape)):
+                raise InputValueError(f"{name} must have shape {shape} (None: any), got {value.shape}")
+            if not np.isfinite(value).all():
+                raise InputValueError(f"{name} must be finite")
+        if not 1 <= len(self.centres) <= 255:
+            raise InputValueError(f"centres must hold 1..255 textons, got {len(self.centres)}")
+
+    @property
+    def features(self) -> tuple[str, ...]:
+        return feature_names(self.scales)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike | None = None) -> BoundaryModel:
+        """The model in ``path`` (default: the one fitted to BSDS500's training images, shipped with vmcl)."""
+        if path is not None and not isinstance(path, (str, os.PathLike)):
+            raise InputTypeError(f"path must be a str, an os.PathLike or None, got {type(path).__name__}")
+        path = MODEL_FILE if path is None else Path(path)
+        try:
+            data = json.loads(Path(path).read_text(encoding="utf-8"))
+            return cls(tuple(float(s) for s in data["scales"]), np.asarray(data["centres"], np.float32),
+                       np.asarray(data["weights"], np.float32), str(data.get("fitted_on", "")))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
+            raise InputValueError(f"{path}: cannot be read as a boundary model ({error})") from None
+
+    def save(self, path: str | os.PathLike) -> None:
+        data = {"scales": list(self.scales), "features": list(self.features), "fitted_on": self.fitted_on,
+                "centres": np.round(self.centres.astype(np.float64), 5).tolist(),
+                "weights": np.round(self.weights.astype(np.float64), 5).tolist()}
+        Path(path).write_text(json.dumps(data, indent=1) + "\n")
+
+
+class BoundaryProbability(NamedTuple):
+    """The probability of boundary.
+
+    Attributes
+    ----------
+    probability : float32 (H, W) in [0, 1]
+        Thinned: 0 where a neighbour across the boundary's normal is more probable.
+    orientation : float32 (H, W)
+        The normal's angle in [0, pi) that won, radians (x right, y down).
+    dense : float32 (H, W) in [0, 1]
+        The probability before thinning.
+    """
+
+    probability: ArrayLike
+    orientation: ArrayLike
+    dense: ArrayLike
+
+
+_LOADED: dict[str, BoundaryModel] = {}
+
+
+def _model(model: BoundaryModel | None) -> BoundaryModel:
+    if model is None:
+        if "shipped" not in _LOADED:
+            _LOADED["shipped"] = BoundaryModel.load()
+        return _LOADED["shipped"]
+    if not isinstance(model, BoundaryModel):
+        raise InputTypeError(f"model must be a BoundaryModel or None, got {type(model).__name__}")
+    return model
+
+
+def _image(image, machine: Machine, model_scales: tuple[float, ...], planes: int) -> tuple[cl_array.Array, bool]:
+    widest = max(model_scales) * TEXTURE_RATIO
+    return image_field(image, machine, what="the probability of boundary", footprint=4 * planes, largest=4 * planes,
+                       widths={"the texture's widest Gaussian": widest})
+
+
+def _lab(machine: Machine, data: cl_array.Array) -> cl_array.Array:
+    """The (3, H, W) planes L*, a*, b*, each divided by 100."""
+    height, width = data.shape[:2]
+    planes = machine.empty((3, height, width), np.float32)
+    kernel = machine.kernel("boundary_probability", "lab", IN_T=IMAGE_TYPES[data.dtype],
+                            CHANNELS=3 if data.ndim == 3 else 1)
+    machine.launch(kernel, (width, height), data, planes, np.float32(_FULL_SCALE[data.dtype]),
+                   np.int64(width), np.int64(height))
+    return planes
+
+
+def _planes_pass(machine: Machine, name: str, planes: cl_array.Array, out: cl_array.Array, taps: np.ndarray,
+                 count: int, first: int = 0) -> None:
+    """One pass of the Gaussian of ``taps`` over the first ``count`` planes of ``planes``, written to planes
+    ``first`` .. ``first + count - 1`` of ``out``."""
+    height, width = out.shape[1:]
+    size = (-(-width // machine.vector_width), height, count)
+    machine.launch(vector_kernel(machine, "boundary_probability", name), size, planes, out, machine.to_device(taps),
+                   np.int32(len(taps) // 2), np.int64(first), np.int64(width), np.int64(height),
+                   local_size=machine.row_local_size(size))
+
+
+def _smooth(machine: Machine, planes: cl_array.Array, sigma: float, count: int | None = None) -> cl_array.Array:
+    """The first ``count`` (default all) planes of a (P, H, W) stack smoothed by the exact Gaussian of
+    ``sigma``, (count, H, W)."""
+    height, width = planes.shape[1:]
+    count = planes.shape[0] if count is None else count
+    taps = gaussian_taps(sigma)
+    rows = machine.empty((count, height, width), np.float32)
+    out = machine.empty((count, height, width), np.float32)
+    _planes_pass(machine, "planes_rows", planes, rows, taps, count)
+    _planes_pass(machine, "planes_cols", rows, out, taps, count)
+    return out
+
+
+def _bank(machine: Machine, lab: cl_array.Array) -> cl_array.Array:
+    """The compressed filter-bank responses of the lightness (plane 0 of ``lab``), (H, W, BANK_SIZE)."""
+    height, width = lab.shape[1:]
+    fine, coarse = (_smooth(machine, lab, s, count=1) for s in BANK_SIGMAS)
+    out = machine.empty((height, width, BANK_SIZE), np.float32)
+    machine.launch(machine.kernel("boundary_probability", "bank", NBANK=BANK_SIZE), (width, height),
+                   fine, coarse, out, *map(np.float32, BANK_SIGMAS), np.int64(width), np.int64(height))
+    return out
+
+
+def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) -> tuple[cl_array.Array, cl_array.Array]:
+    """Every scale's gradients of L*, a* and b*, (6 len(scales), H, W), and its integrated texture tensor,
+    (3 len(scales), H, W)."""
+    height, width = data.shape[:2]
+    dims = (np.int64(width), np.int64(height))
+    lab = _lab(machine, data)
+    responses = _bank(machine, lab)
+    count = len(model.centres)
+    labels = machine.empty((height, width), np.uint8)
+    machine.launch(machine.kernel("boundary_probability", "nearest", NBANK=BANK_SIZE, NT=count), (width, height),
+                   responses, machine.to_device(model.centres), labels, *dims)
+    comp = machine.empty((6 * len(model.scales), height, width), np.float32)
+    tensors = machine.empty((3 * len(model.scales), height, width), np.float32)
+    histograms = machine.empty((count, height, width), np.float32)
+    rows = machine.empty((count, height, width), np.float32)
+    tensor = machine.empty((3, height, width), np.float32)
+    for k, sigma in enumerate(model.scales):
+        texture_sigma = TEXTURE_RATIO * sigma
+        taps = gaussian_taps(texture_sigma)
+        machine.launch(machine.kernel("boundary_probability", "histogram_rows", NT=count), (width, height),
+                       labels, rows, machine.to_device(taps), np.int32(len(taps) // 2), *dims)
+        _planes_pass(machine, "planes_cols", rows, histograms, taps, count)
+        machine.launch(machine.kernel("boundary_probability", "components", NT=count), (width, height),
+                       _smooth(machine, lab, sigma), histograms, comp, tensor, np.float32(sigma),
+                       np.float32(texture_sigma), np.int32(count), np.int32(k), *dims)
+        # The tensor integrated at the texture's scale: a band of textons of its own (a contrast edge's)
+        # gives the histograms' derivative a peak either side of the band, which integration merges.
+        _planes_pass(machine, "planes_rows", tensor, rows, taps, 3)
+        _planes_pass(machine, "planes_cols", rows, tensors, taps, 3, first=3 * k)
+    return comp, tensors
+
+
+def _defines(model: BoundaryModel) -> dict:
+    return {"NORIENT": ORIENTATIONS, "NSCALES": len(model.scales), "NFEAT": 8 * len(model.scales)}
+
+
+def bank_responses(image: ArrayLike, *, machine: Machine | None = None) -> ArrayLike:
+    """The texton filter bank's compressed responses at every pixel, float32 (H, W, BANK_SIZE): what the
+    texton centres cluster (benchmarks/boundary_fit.py fits them by k-means)."""
+    machine = machine_for(machine)
+    data, host = _image(image, machine, BANK_SIGMAS, BANK_SIZE + 4)
+    return result(_bank(machine, _lab(machine, data)), host)
+
+
+def oriented_gradients(image: ArrayLike, *, model: BoundaryModel | None = None,
+                       machine: Machine | None = None) -> ArrayLike:
+    """The classifier's inputs at every pixel and orientation, float32 (ORIENTATIONS, H, W, n features).
+
+    Parameters
+    ----------
+    image : ndarray or pyopencl.array.Array, (H, W) or (H, W, 3)
+        uint8, uint16 or float in [0, 1] (sRGB); grey images have no colour gradient.
+    model : BoundaryModel, optional
+        Its scales and texton centres are used (default: the shipped model).
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    float32 array; feature j at orientation o (normal angle o pi / ORIENTATIONS) is named
+    ``model.features[j]``.
+    """
+    machine = machine_for(machine)
+    model = _model(model)
+    nfeat = 8 * len(model.scales)
+    data, host = _image(image, machine, model.scales, len(model.centres) * 2 + ORIENTATIONS * nfeat)
+    height, width = data.shape[:2]
+    comp, tensors = _components(machine, data, model)
+    out = machine.empty((ORIENTATIONS, height, width, nfeat), np.float32)
+    machine.launch(machine.kernel("boundary_probability", "oriented", **_defines(model)), (width, height), comp,
+                   tensors, out, np.int64(width), np.int64(height))
+    return result(out, host)
+
+
+def boundary_probability(image: ArrayLike, *, model: BoundaryModel | None = None,
+                         machine: Machine | None = None) -> BoundaryProbability:
+    """The probability of a boundary at every pixel, from brightness, colour and texture.
+
+    Parameters
+    ----------
+    image : ndarray or pyopencl.array.Array, (H, W) or (H, W, 3)
+        uint8, uint16 or float in [0, 1] (sRGB); a grey image gives no colour gradient.
+    model : BoundaryModel, optional
+        Default: the model fitted to BSDS500's training images (:data:`MODEL_FILE`).
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    BoundaryProbability
+        The thinned probability, the winning normal's angle and the probability before thinning.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from vmcl.early.boundary_probability import boundary_probability
+    >>> step = np.zeros((48, 48), np.float32); step[:, 24:] = 0.6
+    >>> p = boundary_probability(step).probability
+    >>> int(np.argmax(p[24])) in (23, 24), bool(p[24, 5] < 0.05)
+    (True, True)
+    """
+    machine = machine_for(machine)
+    model = _model(model)
+    data, host = _image(image, machine, model.scales, len(model.centres) * 2 + 9 * len(model.scales) + 12)
+    height, width = data.shape[:2]
+    dims = (np.int64(width), np.int64(height))
+    comp, tensors = _components(machine, data, model)
+    dense = machine.empty((height, width), np.float32)
+    theta = machine.empty((height, width), np.uint8)
+    defines = _defines(model)
+    machine.launch(machine.kernel("boundary_probability", "probability", **defines), (width, height), comp, tensors,
+                   machine.to_device(model.weights), dense, theta, *dims)
+    thinned = machine.empty((height, width), np.float32)
+    machine.launch(machine.kernel("boundary_probability", "thin", **defines), (width, height), dense, theta, thinned,
+                   *dims)
+    orientation = theta.astype(np.float32) * np.float32(np.pi / ORIENTATIONS)
+    return BoundaryProbability(result(thinned, host), result(orientation, host), result(dense, host))
