@@ -104,7 +104,7 @@ def at(features: np.ndarray, orientation: np.ndarray) -> np.ndarray:
 def fit(images, machine: vmcl.Machine) -> bp.BoundaryModel:
     rng = np.random.default_rng(SEED)
     centres = fit_textons(images, machine, rng)
-    unfitted = bp.BoundaryModel(SCALES, centres, np.zeros(1 + 8 * len(SCALES), np.float32))
+    unfitted = bp.BoundaryModel(SCALES, centres, np.zeros(1 + len(bp.feature_names(SCALES)), np.float32))
     features, targets = sample(images, unfitted, machine, rng)
     plain = 4 * len(SCALES)
     means = features[..., :plain].reshape(-1, plain).mean(axis=0)

@@ -317,6 +317,25 @@ def pipeline_figures(f: ResultsFile) -> str:
             f"{seconds('512', 'meanfield')} with mean field, {seconds('512', 'icm')} with ICM")
 
 
+def boundaries_figures(f: ResultsFile) -> str:
+    table = f.table("map", "ODS F", "OIS F", "AP")
+
+    def ods(name: str) -> str:
+        return table.cell({"map": name}, "ODS F")
+
+    soft = "vmcl cartoon, soft map (boundary_strength), swept"
+    return (f"ODS F: the cartoon's soft map {ods(soft)} (OIS {table.cell({'map': soft}, 'OIS F')}, AP "
+            f"{table.cell({'map': soft}, 'AP')}), the binary cartoon {ods('vmcl cartoon, labels != 0 (binary)')}, "
+            f"vmcl Canny {ods('vmcl Canny, threshold sweep')}, OpenCV Canny {ods('OpenCV Canny, threshold sweep')}")
+
+
+def boundary_fit_figures(f: ResultsFile) -> str:
+    table = f.table("map", "ODS F", "OIS F", "AP")
+    return (f"held-out training images, ODS F: probability of boundary "
+            f"{table.cell({'map': 'vmcl probability of boundary'}, 'ODS F')}, vmcl Canny "
+            f"{table.cell({'map': 'vmcl Canny, threshold sweep'}, 'ODS F')}")
+
+
 def distributed_figures(f: ResultsFile) -> str:
     rates = f.table("setup", "workers", "items per second")
 
@@ -377,6 +396,10 @@ def head_figures(f: ResultsFile) -> str:
 BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("edges", ("Canny (σ 1.4, smoothing included) against cv2.GaussianBlur + cv2.Canny and skimage; "
                "hysteresis variants"), edges_figures),
+    ("boundaries", ("BSDS500 test images: the cartoon's soft map swept beside the binary cartoon, vmcl's and "
+                    "OpenCV's Canny sweeps (ODS, OIS, AP)"), boundaries_figures),
+    ("boundary_fit", "the probability of boundary's fit to BSDS500's training images, checked on held-out ones",
+     boundary_fit_figures),
     ("stereo", ("the depth machine against StereoBM/SGBM on every Middlebury pair and Motorcycle; each stage on "
                 "and off; speed"), stereo_figures),
     ("disparity_range", "the disparity range found from the images, on rendered (training) and real (test) pairs",

@@ -12,12 +12,13 @@
  *   components       one scale's gradient components: (gx, gy) of L, a and b, and the texture tensor
  *                    (sum over textons of gx^2, gx gy, gy^2 of the smoothed indicator planes), which
  *                    the host then integrates (smooths) at the texture's scale
+ *   strongest        each gradient's largest value over the orientations (the surround's source)
  *   oriented         the features at each of NORIENT orientations (for fitting)
  *   probability      the logistic classifier at each orientation; the largest wins
  *   thin             non-maximum suppression across the winning orientation
  *
  * Defines: IN_T and CHANNELS (lab); NBANK (bank), NT (nearest, histogram_rows, components); VEC
- * (planes_*); NSCALES, NORIENT, NFEAT
+ * (planes_*); NSCALES, NORIENT, NFEAT, SURROUND_FLOOR
  * (oriented, probability).
  */
 #include "vmcl.h"
@@ -213,41 +214,69 @@ __kernel void components(__global const float *lab, __global const float *hist, 
 #endif
 
 #ifdef NORIENT
-/* The features across orientation theta (the boundary's normal at theta), 4 per scale: |d/dn| of L,
- * a and b, and the norm of the texton histograms' derivative; then the square root of each (the
- * classifier is linear in both, which lets it bend its response to contrast). comp: NSCALES x 6 planes,
- * tensors: NSCALES x 3 (the integrated texture tensors). */
-static void features_at(__global const float *comp, __global const float *tensors, int o, long x, long y, long W,
-                        long H, float *f)
+/* The gradients across orientation theta (the boundary's normal at theta), 4 per scale: |d/dn| of L,
+ * a and b, and the norm of the texton histograms' derivative. comp: NSCALES x 6 planes, tensors:
+ * NSCALES x 3 (the integrated texture tensors). */
+static void gradients_at(__global const float *comp, __global const float *tensors, int o, long x, long y, long W,
+                         long H, float *g)
 {
     float t = o * (M_PI_F / NORIENT), c = cos(t), s = sin(t);
     for (int sc = 0; sc < NSCALES; sc++) {
         for (int p = 0; p < 3; p++)
-            f[4 * sc + p] = fabs(c * PLANE(comp, 6 * sc + 2 * p, x, y) + s * PLANE(comp, 6 * sc + 2 * p + 1, x, y));
+            g[4 * sc + p] = fabs(c * PLANE(comp, 6 * sc + 2 * p, x, y) + s * PLANE(comp, 6 * sc + 2 * p + 1, x, y));
         float q = c * c * PLANE(tensors, 3 * sc, x, y) + 2.0f * c * s * PLANE(tensors, 3 * sc + 1, x, y)
                   + s * s * PLANE(tensors, 3 * sc + 2, x, y);
-        f[4 * sc + 3] = sqrt(max(q, 0.0f));
+        g[4 * sc + 3] = sqrt(max(q, 0.0f));
     }
-    for (int j = 0; j < 4 * NSCALES; j++) f[4 * NSCALES + j] = sqrt(f[j]);
+}
+
+/* The classifier's inputs: the gradients g, their square roots (the classifier is linear in both,
+ * which lets it bend its response to contrast), and the square roots of g over the surround's mean
+ * gradient (surround: 4 NSCALES planes) plus SURROUND_FLOOR: a gradient among many like it (a texture's
+ * inner edges) counts less than the same gradient alone, the surround suppression of contour detectors. */
+static void features_at(__global const float *comp, __global const float *tensors, __global const float *surround,
+                        int o, long x, long y, long W, long H, float *f)
+{
+    const int n = 4 * NSCALES;
+    gradients_at(comp, tensors, o, x, y, W, H, f);
+    for (int j = 0; j < n; j++) {
+        f[n + j] = sqrt(f[j]);
+        f[2 * n + j] = sqrt(f[j] / (SURROUND_FLOOR + PLANE(surround, j, x, y)));
+    }
+}
+
+/* Each gradient's largest value over the orientations, (4 NSCALES, H, W): what the surround averages. */
+__kernel void strongest(__global const float *comp, __global const float *tensors, __global float *out, long W,
+                        long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    float g[4 * NSCALES], top[4 * NSCALES];
+    for (int j = 0; j < 4 * NSCALES; j++) top[j] = 0.0f;
+    for (int o = 0; o < NORIENT; o++) {
+        gradients_at(comp, tensors, o, x, y, W, H, g);
+        for (int j = 0; j < 4 * NSCALES; j++) top[j] = fmax(top[j], g[j]);
+    }
+    for (int j = 0; j < 4 * NSCALES; j++) PLANE(out, j, x, y) = top[j];
 }
 
 /* out: (NORIENT, H, W, NFEAT). */
-__kernel void oriented(__global const float *comp, __global const float *tensors, __global float *out, long W,
-                       long H)
+__kernel void oriented(__global const float *comp, __global const float *tensors, __global const float *surround,
+                       __global float *out, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     float f[NFEAT];
     for (int o = 0; o < NORIENT; o++) {
-        features_at(comp, tensors, o, x, y, W, H, f);
+        features_at(comp, tensors, surround, o, x, y, W, H, f);
         __global float *dst = out + (((size_t)o * H + y) * W + x) * NFEAT;
         for (int j = 0; j < NFEAT; j++) dst[j] = f[j];
     }
 }
 
 /* weights: bias, then NFEAT weights. theta: the index of the winning orientation. */
-__kernel void probability(__global const float *comp, __global const float *tensors, __constant float *weights,
-                          __global float *p, __global uchar *theta, long W, long H)
+__kernel void probability(__global const float *comp, __global const float *tensors, __global const float *surround,
+                          __constant float *weights, __global float *p, __global uchar *theta, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -255,7 +284,7 @@ __kernel void probability(__global const float *comp, __global const float *tens
     float best = -INFINITY;
     int best_o = 0;
     for (int o = 0; o < NORIENT; o++) {
-        features_at(comp, tensors, o, x, y, W, H, f);
+        features_at(comp, tensors, surround, o, x, y, W, H, f);
         float z = weights[0];
         for (int j = 0; j < NFEAT; j++) z += weights[1 + j] * f[j];
         if (z > best) { best = z; best_o = o; }

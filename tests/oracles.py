@@ -159,9 +159,11 @@ def texton_bank(lightness, sigmas=(1.0, 2.0)):
     return r * np.where(n > 0, np.log1p(n / 0.03) / np.where(n > 0, n, 1), 0)
 
 
-def oriented_gradients(lab, labels, ntextons, scales, orientations=8, ratio=2.0):
-    """The boundary classifier's features (orientations, H, W, 8 len(scales)) from the (3, H, W) L*a*b*
-    planes (each / 100) and the texton labels; the texture tensor integrated at the texture's scale."""
+def oriented_gradients(lab, labels, ntextons, scales, orientations=8, ratio=2.0, surround_sigma=10.0,
+                       floor=0.02):
+    """The boundary classifier's features (orientations, H, W, 12 len(scales)) from the (3, H, W) L*a*b*
+    planes (each / 100) and the texton labels; the texture tensor integrated at the texture's scale; the
+    surround is the Gaussian mean of each gradient's largest value over the orientations."""
     plain = []
     for sigma in scales:
         grads = [_centred(_smoothed(p, sigma)) for p in lab]
@@ -177,4 +179,6 @@ def oriented_gradients(lab, labels, ntextons, scales, orientations=8, ratio=2.0)
             per_orientation.append(np.stack(f, axis=-1))
         plain.append(np.stack(per_orientation))
     plain = np.concatenate(plain, axis=-1)
-    return np.concatenate([plain, np.sqrt(plain)], axis=-1)
+    strongest = plain.max(axis=0)
+    surround = np.stack([_smoothed(strongest[..., j], surround_sigma) for j in range(plain.shape[-1])], axis=-1)
+    return np.concatenate([plain, np.sqrt(plain), np.sqrt(plain / (floor + surround))], axis=-1)

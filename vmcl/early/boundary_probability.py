@@ -21,9 +21,11 @@ The cues
   structure tensor is: a contrast edge is a band of textons of its own, and the histograms' derivative
   peaks on either side of such a band; integration merges the two peaks into one on the band.
 
-At each of eight orientations the classifier's linear score of the gradients (and of their square
-roots, which lets it bend its response to contrast) is computed, the best orientation wins, and its
-logistic is the probability. Non-maximum suppression across the winning orientation thins it to the
+At each of eight orientations the classifier's linear score of the gradients is computed (of the
+gradients, their square roots, which let it bend its response to contrast, and the square roots of each
+gradient over the mean of its strongest values in a surround of SURROUND_SIGMA pixels: surround
+suppression, which weighs a gradient among many like it, a texture's inner edges, below the same
+gradient alone), the best orientation wins, and its logistic is the probability. Non-maximum suppression across the winning orientation thins it to the
 one-pixel contours a boundary benchmark scores.
 
 The texton centres, the scales and the weights are a :class:`BoundaryModel`; the one shipped with vmcl
@@ -83,15 +85,22 @@ BANK_SIZE = 18
 TEXTURE_RATIO = 2.0
 """The texture gradient's scale over the brightness's: a histogram needs more pixels than a mean."""
 
+SURROUND_SIGMA = 10.0
+"""Width of the Gaussian surround whose mean gradient each gradient is compared with, in pixels."""
+
+SURROUND_FLOOR = 0.02
+"""Added to the surround's mean gradient, so that a gradient in a flat surround is not made infinite."""
+
 _CUES = ("L", "a", "b", "texture")
 
 _FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0, np.dtype(np.float32): 1.0}
 
 
 def feature_names(scales: tuple[float, ...]) -> tuple[str, ...]:
-    """The classifier's inputs for these scales: each cue's gradient, then the square roots."""
+    """The classifier's inputs for these scales: each cue's gradient, the square roots, then the square
+    roots of each gradient over its surround's mean."""
     plain = tuple(f"{cue} {s:g}" for s in scales for cue in _CUES)
-    return plain + tuple(f"sqrt {name}" for name in plain)
+    return plain + tuple(f"sqrt {name}" for name in plain) + tuple(f"sqrt {name} / surround" for name in plain)
 
 
 FEATURES = feature_names((1.5, 3.0, 6.0))
@@ -108,7 +117,7 @@ class BoundaryModel:
         Gaussian widths of the brightness and colour gradients (the texture's are TEXTURE_RATIO times).
     centres : (K, BANK_SIZE) float32 array
         The texton centres, in the compressed filter-bank space; K <= 255.
-    weights : (1 + 8 len(scales),) float32 array
+    weights : (1 + 12 len(scales),) float32 array
         The logistic regression's bias, then one weight per feature (:func:`feature_names`).
     fitted_on : str
         What the model was fitted to.
@@ -124,7 +133,7 @@ class BoundaryModel:
                 isinstance(s, (int, float)) and 0 < s <= 64 for s in self.scales):
             raise InputValueError(f"scales must be a non-empty tuple of widths in (0, 64], got {self.scales!r}")
         for name, value, shape in (("centres", self.centres, (None, BANK_SIZE)),
-                                   ("weights", self.weights, (1 + 8 * len(self.scales),))):
+                                   ("weights", self.weights, (1 + 12 * len(self.scales),))):
             if not isinstance(value, np.ndarray) or value.dtype.kind != "f":
                 raise InputTypeError(f"{name} must be a float NumPy array, got {type(value).__name__}")
             if value.ndim != len(shape) or any(want is not None and got != want
@@ -274,7 +283,18 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
 
 
 def _defines(model: BoundaryModel) -> dict:
-    return {"NORIENT": ORIENTATIONS, "NSCALES": len(model.scales), "NFEAT": 8 * len(model.scales)}
+    return {"NORIENT": ORIENTATIONS, "NSCALES": len(model.scales), "NFEAT": 12 * len(model.scales),
+            "SURROUND_FLOOR": f"{SURROUND_FLOOR!r}f"}
+
+
+def _inputs(machine: Machine, data: cl_array.Array, model: BoundaryModel) -> tuple[cl_array.Array, ...]:
+    """What the features are read from: the gradients' components, the texture tensors and the surround."""
+    height, width = data.shape[:2]
+    comp, tensors = _components(machine, data, model)
+    strongest = machine.empty((4 * len(model.scales), height, width), np.float32)
+    machine.launch(machine.kernel("boundary_probability", "strongest", **_defines(model)), (width, height), comp,
+                   tensors, strongest, np.int64(width), np.int64(height))
+    return comp, tensors, _smooth(machine, strongest, SURROUND_SIGMA)
 
 
 def bank_responses(image: ArrayLike, *, machine: Machine | None = None) -> ArrayLike:
@@ -304,13 +324,12 @@ def oriented_gradients(image: ArrayLike, *, model: BoundaryModel | None = None,
     """
     machine = machine_for(machine)
     model = _model(model)
-    nfeat = 8 * len(model.scales)
+    nfeat = len(model.features)
     data, host = _image(image, machine, model.scales, len(model.centres) * 2 + ORIENTATIONS * nfeat)
     height, width = data.shape[:2]
-    comp, tensors = _components(machine, data, model)
     out = machine.empty((ORIENTATIONS, height, width, nfeat), np.float32)
-    machine.launch(machine.kernel("boundary_probability", "oriented", **_defines(model)), (width, height), comp,
-                   tensors, out, np.int64(width), np.int64(height))
+    machine.launch(machine.kernel("boundary_probability", "oriented", **_defines(model)), (width, height),
+                   *_inputs(machine, data, model), out, np.int64(width), np.int64(height))
     return result(out, host)
 
 
@@ -342,15 +361,14 @@ def boundary_probability(image: ArrayLike, *, model: BoundaryModel | None = None
     """
     machine = machine_for(machine)
     model = _model(model)
-    data, host = _image(image, machine, model.scales, len(model.centres) * 2 + 9 * len(model.scales) + 12)
+    data, host = _image(image, machine, model.scales, len(model.centres) * 2 + 17 * len(model.scales) + 12)
     height, width = data.shape[:2]
     dims = (np.int64(width), np.int64(height))
-    comp, tensors = _components(machine, data, model)
     dense = machine.empty((height, width), np.float32)
     theta = machine.empty((height, width), np.uint8)
     defines = _defines(model)
-    machine.launch(machine.kernel("boundary_probability", "probability", **defines), (width, height), comp, tensors,
-                   machine.to_device(model.weights), dense, theta, *dims)
+    machine.launch(machine.kernel("boundary_probability", "probability", **defines), (width, height),
+                   *_inputs(machine, data, model), machine.to_device(model.weights), dense, theta, *dims)
     thinned = machine.empty((height, width), np.float32)
     machine.launch(machine.kernel("boundary_probability", "thin", **defines), (width, height), dense, theta, thinned,
                    *dims)
