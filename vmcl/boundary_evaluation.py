@@ -81,11 +81,10 @@ def _levels(span: tuple[float, float], count: int) -> np.ndarray:
 
 
 def _nested(edge_sets: Sequence[np.ndarray]) -> np.ndarray:
-    """Each pixel's value: (k + 1) / (count + 1) for the last level k where it is an edge, 0 if none."""
-    count = len(edge_sets)
+    """Each pixel's value: the last level's threshold (:func:`sweep_thresholds`) where it is an edge, 0 if none."""
     out = np.zeros(edge_sets[0].shape, np.float32)
-    for k, edges in enumerate(edge_sets):
-        out[edges] = (k + 1) / (count + 1)
+    for edges, level in zip(edge_sets, sweep_thresholds(len(edge_sets))):
+        out[edges] = level
     return out
 
 
@@ -94,8 +93,10 @@ def _count(count) -> int:
 
 
 def sweep_thresholds(count: int) -> np.ndarray:
-    """The thresholds at which a sweep of ``count`` levels is scored: (k + 1) / (count + 1)."""
-    return (np.arange(_count(count)) + 1.0) / (count + 1)
+    """The thresholds at which a sweep of ``count`` levels is scored: (k + 1) / (count + 1), rounded to
+    float32 as the sweeps' maps hold them (5 / 6 in float32 is below 5 / 6, and would fail its own level)."""
+    levels = (np.arange(_count(count)) + 1.0) / (count + 1)
+    return levels.astype(np.float32).astype(np.float64)
 
 
 def _image(image) -> np.ndarray:

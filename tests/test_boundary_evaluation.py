@@ -1,0 +1,72 @@
+"""The boundary evaluation harness: Canny sweeps nest the detectors' edge sets, the scores follow the
+benchmark on maps whose answer is known, and `vmcl eval edges` reads a BSDS-layout folder."""
+
+import numpy as np
+import pytest
+import scipy.io
+
+from vmcl.boundary_evaluation import (MapSet, boundary_maps, canny_sweep, opencv_canny_sweep, score_maps,
+                                      sweep_thresholds)
+from vmcl.cli import main
+from vmcl.datasets import BSDSImage, read_bsds_folder
+from vmcl.early.edges import canny
+
+
+def _disc_image(size=96):
+    """A bright disc on a dark ground, its one annotator's boundary the disc's outline."""
+    yy, xx = np.mgrid[:size, :size]
+    inside = (yy - size / 2) ** 2 + (xx - size / 2) ** 2 < (size / 4) ** 2
+    image = np.where(inside[..., None], 200, 40).astype(np.uint8).repeat(3, axis=2)
+    outline = inside & ~np.roll(inside, 1, 0) | inside & ~np.roll(inside, -1, 0) | inside & ~np.roll(inside, 1, 1) \
+        | inside & ~np.roll(inside, -1, 1)
+    segmentation = np.where(inside, 2, 1).astype(np.uint16)
+    return BSDSImage("disc", image, outline[None], segmentation[None])
+
+
+def test_canny_sweep_nests_the_detectors_edges(machine):
+    item = _disc_image()
+    image = item.image.astype(np.float32) / 255
+    image += np.random.default_rng(0).normal(0, 0.05, image.shape).astype(np.float32)
+    image = np.clip(image, 0, 1)
+    swept = canny_sweep(image, 5, machine=machine)
+    levels = np.geomspace(0.004, 0.4, 5)
+    for k, t in enumerate(sweep_thresholds(5)):
+        expected = canny(image, sigma=2.0, low_threshold=0.4 * levels[k], high_threshold=levels[k], machine=machine)
+        np.testing.assert_array_equal(swept >= t, expected)
+    assert opencv_canny_sweep(item.image, 5).max() > 0
+
+
+def test_scores_of_known_maps():
+    item = _disc_image()
+    perfect = MapSet("perfect", [item.boundaries[0].astype(np.float32)], 1, 0.0)
+    assert score_maps(perfect, [item]).ods_f == pytest.approx(1.0)
+    empty = MapSet("empty", [np.zeros(item.boundaries[0].shape, np.float32)], 5, 0.0)
+    assert score_maps(empty, [item]).ods_f == 0.0
+    with pytest.raises(ValueError, match="1 maps for 2 images"):
+        score_maps(perfect, [item, item])
+
+
+def test_the_soft_map_of_a_disc_finds_its_outline(machine):
+    item = _disc_image()
+    sets = boundary_maps([item], thresholds=9, machine=machine)
+    assert [s.name for s in sets][0].startswith("vmcl cartoon, soft map")
+    scores = {s.name: score_maps(s, [item]) for s in sets}
+    assert scores[sets[0].name].ods_f > 0.9
+    assert all(0 <= m.min() and m.max() <= 1 for s in sets for m in s.maps)
+
+
+def test_eval_edges_reads_a_bsds_folder(tmp_path, capsys):
+    item = _disc_image(64)
+    folder = tmp_path / "bsds" / "disc"
+    folder.mkdir(parents=True)
+    import cv2
+
+    cv2.imwrite(str(folder / "disc.jpg"), item.image[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, 100])
+    cell = np.empty((1, 1), dtype=object)
+    cell[0, 0] = {"Boundaries": item.boundaries[0].astype(np.uint8), "Segmentation": item.segmentations[0]}
+    scipy.io.savemat(folder / "disc.mat", {"groundTruth": cell})
+    assert [i.name for i in read_bsds_folder(tmp_path / "bsds")] == ["disc"]
+    assert main(["eval", "edges", "--data", str(tmp_path / "bsds"), "--thresholds", "5", "-q"]) == 0
+    out = capsys.readouterr().out
+    assert "soft map" in out and "OpenCV Canny" in out and "ODS F" in out
+    assert main(["eval", "edges", "--data", str(tmp_path / "missing"), "-q"]) == 2
