@@ -17,7 +17,7 @@
  *   probability      the logistic classifier at each orientation; the largest wins
  *   thin             non-maximum suppression across the winning orientation
  *
- * Defines: IN_T and CHANNELS (lab); NBANK (bank), NT (nearest, histogram_rows, components); VEC
+ * Defines: IN_T, CHANNELS and LINEAR_TABLE (lab); NBANK (bank), NT (nearest, histogram_rows, components); VEC
  * (planes_*); NSCALES, NORIENT, NFEAT, SURROUND_FLOOR
  * (oriented, probability).
  */
@@ -37,18 +37,23 @@ static float lab_f(float t)
     return t > 0.008856452f ? cbrt(t) : t * 7.787037f + 16.0f / 116.0f;
 }
 
+#if LINEAR_TABLE
+/* 8-bit input: its 256 linear values, tabulated by the host (the power law is the kernel's dearest step). */
+#define LINEAR(v) linear[(int)(v)]
+#else
+#define LINEAR(v) srgb_linear(clamp((float)(v) / scale, 0.0f, 1.0f))
+#endif
+
 /* out: the (3, H, W) planes L, a, b. scale: the input's full scale (255 for uint8, 65535 for uint16,
- * 1 for float). */
-__kernel void lab(__global const IN_T *in, __global float *out, float scale, long W, long H)
+ * 1 for float). linear: with LINEAR_TABLE, the linear value of each 8-bit level. */
+__kernel void lab(__global const IN_T *in, __global float *out, __constant float *linear, float scale, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     size_t i = (size_t)y * W + x, n = (size_t)W * H;
     __global float *L = out, *A = out + n, *B = out + 2 * n;
 #if CHANNELS == 3
-    float r = srgb_linear(clamp((float)in[3 * i] / scale, 0.0f, 1.0f));
-    float g = srgb_linear(clamp((float)in[3 * i + 1] / scale, 0.0f, 1.0f));
-    float b = srgb_linear(clamp((float)in[3 * i + 2] / scale, 0.0f, 1.0f));
+    float r = LINEAR(in[3 * i]), g = LINEAR(in[3 * i + 1]), b = LINEAR(in[3 * i + 2]);
     float fx = lab_f((0.412453f * r + 0.357580f * g + 0.180423f * b) / 0.950456f);
     float fy = lab_f(0.212671f * r + 0.715160f * g + 0.072169f * b);
     float fz = lab_f((0.019334f * r + 0.119193f * g + 0.950227f * b) / 1.088754f);
@@ -57,7 +62,7 @@ __kernel void lab(__global const IN_T *in, __global float *out, float scale, lon
     B[i] = 2.0f * (fy - fz);
 #else
     /* Grey: the lightness of a neutral colour of that luminance; no chroma. */
-    L[i] = (116.0f * lab_f(srgb_linear(clamp((float)in[i] / scale, 0.0f, 1.0f))) - 16.0f) / 100.0f;
+    L[i] = (116.0f * lab_f(LINEAR(in[i])) - 16.0f) / 100.0f;
     A[i] = 0.0f;
     B[i] = 0.0f;
 #endif
@@ -74,9 +79,10 @@ static void bank_at(__global const float *s, float sigma, long x, long y, long W
     float gx = 0.5f * (AT(s, xp, y) - AT(s, xm, y)), gy = 0.5f * (AT(s, x, yp) - AT(s, x, ym));
     float gxx = AT(s, xp, y) - 2.0f * c + AT(s, xm, y), gyy = AT(s, x, yp) - 2.0f * c + AT(s, x, ym);
     float gxy = 0.25f * (AT(s, xp, yp) - AT(s, xm, yp) - AT(s, xp, ym) + AT(s, xm, ym));
+    const float cosines[4] = {1.0f, M_SQRT1_2_F, 0.0f, -M_SQRT1_2_F}, sines[4] = {0.0f, M_SQRT1_2_F, 1.0f, M_SQRT1_2_F};
     float s2 = sigma * sigma;
     for (int k = 0; k < 4; k++) {
-        float t = k * (M_PI_F / 4.0f), co = cos(t), si = sin(t);
+        float co = cosines[k], si = sines[k];
         out[2 * k] = sigma * (gx * co + gy * si);
         out[2 * k + 1] = s2 * (gxx * co * co + 2.0f * gxy * co * si + gyy * si * si);
     }
@@ -234,15 +240,21 @@ static void gradients_at(__global const float *comp, __global const float *tenso
  * which lets it bend its response to contrast), and the square roots of g over the surround's mean
  * gradient (surround: 4 NSCALES planes) plus SURROUND_FLOOR: a gradient among many like it (a texture's
  * inner edges) counts less than the same gradient alone, the surround suppression of contour detectors. */
-static void features_at(__global const float *comp, __global const float *tensors, __global const float *surround,
+static void features_at(__global const float *comp, __global const float *tensors, const float *inv_surround,
                         int o, long x, long y, long W, long H, float *f)
 {
     const int n = 4 * NSCALES;
     gradients_at(comp, tensors, o, x, y, W, H, f);
     for (int j = 0; j < n; j++) {
         f[n + j] = sqrt(f[j]);
-        f[2 * n + j] = sqrt(f[j] / (SURROUND_FLOOR + PLANE(surround, j, x, y)));
+        f[2 * n + j] = f[n + j] * inv_surround[j];
     }
+}
+
+/* 1 / sqrt(SURROUND_FLOOR + surround) of each gradient at (x, y): the same at every orientation. */
+static void inverse_surround(__global const float *surround, long x, long y, long W, long H, float *inv)
+{
+    for (int j = 0; j < 4 * NSCALES; j++) inv[j] = rsqrt(SURROUND_FLOOR + PLANE(surround, j, x, y));
 }
 
 /* Each gradient's largest value over the orientations, (4 NSCALES, H, W): what the surround averages. */
@@ -266,9 +278,10 @@ __kernel void oriented(__global const float *comp, __global const float *tensors
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
-    float f[NFEAT];
+    float f[NFEAT], inv[4 * NSCALES];
+    inverse_surround(surround, x, y, W, H, inv);
     for (int o = 0; o < NORIENT; o++) {
-        features_at(comp, tensors, surround, o, x, y, W, H, f);
+        features_at(comp, tensors, inv, o, x, y, W, H, f);
         __global float *dst = out + (((size_t)o * H + y) * W + x) * NFEAT;
         for (int j = 0; j < NFEAT; j++) dst[j] = f[j];
     }
@@ -280,11 +293,12 @@ __kernel void probability(__global const float *comp, __global const float *tens
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
-    float f[NFEAT];
+    float f[NFEAT], inv[4 * NSCALES];
+    inverse_surround(surround, x, y, W, H, inv);
     float best = -INFINITY;
     int best_o = 0;
     for (int o = 0; o < NORIENT; o++) {
-        features_at(comp, tensors, surround, o, x, y, W, H, f);
+        features_at(comp, tensors, inv, o, x, y, W, H, f);
         float z = weights[0];
         for (int j = 0; j < NFEAT; j++) z += weights[1 + j] * f[j];
         if (z > best) { best = z; best_o = o; }

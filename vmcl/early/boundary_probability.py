@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import json
 import os
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
@@ -205,26 +206,52 @@ def _image(image, machine: Machine, model_scales: tuple[float, ...], planes: int
                        widths={"the texture's widest Gaussian": widest})
 
 
+def _srgb_linear(levels: np.ndarray) -> np.ndarray:
+    """sRGB's decoding of values in [0, 1] to linear light (IEC 61966-2-1)."""
+    return np.where(levels <= 0.04045, levels / 12.92, ((levels + 0.055) / 1.055) ** 2.4)
+
+
+_LINEAR_8BIT = _srgb_linear(np.arange(256) / 255.0).astype(np.float32)
+
+_CONSTANTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _constant(machine: Machine, key: object, make) -> cl_array.Array:
+    """A read-only table on the device, uploaded once per machine and key: a write to the device waits
+    for the queue to drain, which a pipeline keeping its fields on the device must not do every call."""
+    cache = _CONSTANTS.setdefault(machine, {})
+    if key not in cache:
+        cache[key] = machine.to_device(np.ascontiguousarray(make(), np.float32))
+    return cache[key]
+
+
+def _taps(machine: Machine, sigma: float) -> tuple[cl_array.Array, int]:
+    taps = gaussian_taps(sigma)
+    return _constant(machine, ("taps", sigma), lambda: taps), len(taps) // 2
+
+
 def _lab(machine: Machine, data: cl_array.Array) -> cl_array.Array:
     """The (3, H, W) planes L*, a*, b*, each divided by 100."""
     height, width = data.shape[:2]
     planes = machine.empty((3, height, width), np.float32)
+    table = data.dtype == np.uint8
     kernel = machine.kernel("boundary_probability", "lab", IN_T=IMAGE_TYPES[data.dtype],
-                            CHANNELS=3 if data.ndim == 3 else 1)
-    machine.launch(kernel, (width, height), data, planes, np.float32(_FULL_SCALE[data.dtype]),
+                            CHANNELS=3 if data.ndim == 3 else 1, LINEAR_TABLE=int(table))
+    linear = _constant(machine, ("linear", table), lambda: _LINEAR_8BIT if table else np.zeros(1))
+    machine.launch(kernel, (width, height), data, planes, linear, np.float32(_FULL_SCALE[data.dtype]),
                    np.int64(width), np.int64(height))
     return planes
 
 
-def _planes_pass(machine: Machine, name: str, planes: cl_array.Array, out: cl_array.Array, taps: np.ndarray,
+def _planes_pass(machine: Machine, name: str, planes: cl_array.Array, out: cl_array.Array, sigma: float,
                  count: int, first: int = 0) -> None:
-    """One pass of the Gaussian of ``taps`` over the first ``count`` planes of ``planes``, written to planes
+    """One pass of the Gaussian of ``sigma`` over the first ``count`` planes of ``planes``, written to planes
     ``first`` .. ``first + count - 1`` of ``out``."""
     height, width = out.shape[1:]
     size = (-(-width // machine.vector_width), height, count)
-    machine.launch(vector_kernel(machine, "boundary_probability", name), size, planes, out, machine.to_device(taps),
-                   np.int32(len(taps) // 2), np.int64(first), np.int64(width), np.int64(height),
-                   local_size=machine.row_local_size(size))
+    taps, radius = _taps(machine, sigma)
+    machine.launch(vector_kernel(machine, "boundary_probability", name), size, planes, out, taps, np.int32(radius),
+                   np.int64(first), np.int64(width), np.int64(height), local_size=machine.row_local_size(size))
 
 
 def _smooth(machine: Machine, planes: cl_array.Array, sigma: float, count: int | None = None) -> cl_array.Array:
@@ -232,11 +259,10 @@ def _smooth(machine: Machine, planes: cl_array.Array, sigma: float, count: int |
     ``sigma``, (count, H, W)."""
     height, width = planes.shape[1:]
     count = planes.shape[0] if count is None else count
-    taps = gaussian_taps(sigma)
     rows = machine.empty((count, height, width), np.float32)
     out = machine.empty((count, height, width), np.float32)
-    _planes_pass(machine, "planes_rows", planes, rows, taps, count)
-    _planes_pass(machine, "planes_cols", rows, out, taps, count)
+    _planes_pass(machine, "planes_rows", planes, rows, sigma, count)
+    _planes_pass(machine, "planes_cols", rows, out, sigma, count)
     return out
 
 
@@ -260,7 +286,7 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
     count = len(model.centres)
     labels = machine.empty((height, width), np.uint8)
     machine.launch(machine.kernel("boundary_probability", "nearest", NBANK=BANK_SIZE, NT=count), (width, height),
-                   responses, machine.to_device(model.centres), labels, *dims)
+                   responses, _constant(machine, ("centres", model), lambda: model.centres), labels, *dims)
     comp = machine.empty((6 * len(model.scales), height, width), np.float32)
     tensors = machine.empty((3 * len(model.scales), height, width), np.float32)
     histograms = machine.empty((count, height, width), np.float32)
@@ -268,17 +294,17 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
     tensor = machine.empty((3, height, width), np.float32)
     for k, sigma in enumerate(model.scales):
         texture_sigma = TEXTURE_RATIO * sigma
-        taps = gaussian_taps(texture_sigma)
+        taps, radius = _taps(machine, texture_sigma)
         machine.launch(machine.kernel("boundary_probability", "histogram_rows", NT=count), (width, height),
-                       labels, rows, machine.to_device(taps), np.int32(len(taps) // 2), *dims)
-        _planes_pass(machine, "planes_cols", rows, histograms, taps, count)
+                       labels, rows, taps, np.int32(radius), *dims)
+        _planes_pass(machine, "planes_cols", rows, histograms, texture_sigma, count)
         machine.launch(machine.kernel("boundary_probability", "components", NT=count), (width, height),
                        _smooth(machine, lab, sigma), histograms, comp, tensor, np.float32(sigma),
                        np.float32(texture_sigma), np.int32(count), np.int32(k), *dims)
         # The tensor integrated at the texture's scale: a band of textons of its own (a contrast edge's)
         # gives the histograms' derivative a peak either side of the band, which integration merges.
-        _planes_pass(machine, "planes_rows", tensor, rows, taps, 3)
-        _planes_pass(machine, "planes_cols", rows, tensors, taps, 3, first=3 * k)
+        _planes_pass(machine, "planes_rows", tensor, rows, texture_sigma, 3)
+        _planes_pass(machine, "planes_cols", rows, tensors, texture_sigma, 3, first=3 * k)
     return comp, tensors
 
 
@@ -368,7 +394,8 @@ def boundary_probability(image: ArrayLike, *, model: BoundaryModel | None = None
     theta = machine.empty((height, width), np.uint8)
     defines = _defines(model)
     machine.launch(machine.kernel("boundary_probability", "probability", **defines), (width, height),
-                   *_inputs(machine, data, model), machine.to_device(model.weights), dense, theta, *dims)
+                   *_inputs(machine, data, model), _constant(machine, ("weights", model), lambda: model.weights), dense,
+                   theta, *dims)
     thinned = machine.empty((height, width), np.float32)
     machine.launch(machine.kernel("boundary_probability", "thin", **defines), (width, height), dense, theta, thinned,
                    *dims)
