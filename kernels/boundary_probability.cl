@@ -12,7 +12,7 @@
  *   components       one scale's gradient components: (gx, gy) of L, a and b, and the texture tensor
  *                    (sum over textons of gx^2, gx gy, gy^2 of the smoothed indicator planes), which
  *                    the host then integrates (smooths) at the texture's scale
- *   strongest        each gradient's largest value over the orientations (the surround's source)
+ *   strongest        each gradient's largest value over all orientations (the surround's source)
  *   oriented         the features at each of NORIENT orientations (for fitting)
  *   probability      the logistic classifier at each orientation; the largest wins
  *   thin             non-maximum suppression across the winning orientation
@@ -257,19 +257,20 @@ static void inverse_surround(__global const float *surround, long x, long y, lon
     for (int j = 0; j < 4 * NSCALES; j++) inv[j] = rsqrt(SURROUND_FLOOR + PLANE(surround, j, x, y));
 }
 
-/* Each gradient's largest value over the orientations, (4 NSCALES, H, W): what the surround averages. */
+/* Each gradient's largest value over all orientations, (4 NSCALES, H, W): what the surround averages.
+ * For L, a and b the gradient's norm; for the texture the square root of its tensor's larger eigenvalue. */
 __kernel void strongest(__global const float *comp, __global const float *tensors, __global float *out, long W,
                         long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
-    float g[4 * NSCALES], top[4 * NSCALES];
-    for (int j = 0; j < 4 * NSCALES; j++) top[j] = 0.0f;
-    for (int o = 0; o < NORIENT; o++) {
-        gradients_at(comp, tensors, o, x, y, W, H, g);
-        for (int j = 0; j < 4 * NSCALES; j++) top[j] = fmax(top[j], g[j]);
+    for (int sc = 0; sc < NSCALES; sc++) {
+        for (int p = 0; p < 3; p++)
+            PLANE(out, 4 * sc + p, x, y) = hypot(PLANE(comp, 6 * sc + 2 * p, x, y), PLANE(comp, 6 * sc + 2 * p + 1, x, y));
+        float a = PLANE(tensors, 3 * sc, x, y), b = PLANE(tensors, 3 * sc + 1, x, y), d = PLANE(tensors, 3 * sc + 2, x, y);
+        float largest = 0.5f * (a + d) + sqrt(0.25f * (a - d) * (a - d) + b * b);
+        PLANE(out, 4 * sc + 3, x, y) = sqrt(max(largest, 0.0f));
     }
-    for (int j = 0; j < 4 * NSCALES; j++) PLANE(out, j, x, y) = top[j];
 }
 
 /* out: (NORIENT, H, W, NFEAT). */

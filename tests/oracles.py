@@ -163,8 +163,8 @@ def oriented_gradients(lab, labels, ntextons, scales, orientations=8, ratio=2.0,
                        floor=0.02):
     """The boundary classifier's features (orientations, H, W, 12 len(scales)) from the (3, H, W) L*a*b*
     planes (each / 100) and the texton labels; the texture tensor integrated at the texture's scale; the
-    surround is the Gaussian mean of each gradient's largest value over the orientations."""
-    plain = []
+    surround is the Gaussian mean of each gradient's largest value over all orientations."""
+    plain, strongest = [], []
     for sigma in scales:
         grads = [_centred(_smoothed(p, sigma)) for p in lab]
         tex = [_centred(_smoothed((labels == k).astype(np.float64), ratio * sigma)) for k in range(ntextons)]
@@ -178,7 +178,9 @@ def oriented_gradients(lab, labels, ntextons, scales, orientations=8, ratio=2.0,
             f.append(np.sqrt(np.maximum(c * c * tx + 2 * c * s * txy + s * s * ty, 0)))
             per_orientation.append(np.stack(f, axis=-1))
         plain.append(np.stack(per_orientation))
+        largest = 0.5 * (tx + ty) + np.sqrt(0.25 * (tx - ty) ** 2 + txy**2)
+        strongest += [sigma * np.hypot(gx, gy) for gx, gy in grads] + [np.sqrt(np.maximum(largest, 0))]
     plain = np.concatenate(plain, axis=-1)
-    strongest = plain.max(axis=0)
+    strongest = np.stack(strongest, axis=-1)
     surround = np.stack([_smoothed(strongest[..., j], surround_sigma) for j in range(plain.shape[-1])], axis=-1)
     return np.concatenate([plain, np.sqrt(plain), np.sqrt(plain / (floor + surround))], axis=-1)

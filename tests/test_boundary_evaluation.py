@@ -70,3 +70,29 @@ def test_eval_edges_reads_a_bsds_folder(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "soft map" in out and "OpenCV Canny" in out and "ODS F" in out
     assert main(["eval", "edges", "--data", str(tmp_path / "missing"), "-q"]) == 2
+
+
+# The bars on the 10 BSDS500 test images in ../shared: the soft map's ODS F at least 0.66 and at
+# least 0.06 above vmcl Canny's sweep (benchmarks/results/boundaries.md has every figure, 30 thresholds).
+SOFT_MAP_BAR, OVER_CANNY_BAR = 0.66, 0.06
+
+
+def _bsds_scores(datasets_root, machine):
+    from vmcl.datasets import load_bsds
+
+    images = load_bsds(datasets_root).images
+    sets = boundary_maps(images, thresholds=15, machine=machine)
+    chosen = {s.name: s for s in sets if s.name.startswith(("vmcl cartoon, soft map", "vmcl Canny"))}
+    return {name: score_maps(s, images, workers=2) for name, s in chosen.items()}
+
+
+@pytest.fixture(scope="module")
+def bsds_scores(datasets_root, machine):
+    scores = _bsds_scores(datasets_root, machine)
+    soft = next(s for name, s in scores.items() if "soft map" in name)
+    return soft, scores["vmcl Canny, threshold sweep"]
+
+
+def test_soft_map_beats_canny_on_bsds(bsds_scores):
+    soft, canny_scores = bsds_scores
+    assert soft.ods_f > canny_scores.ods_f + 0.03 and soft.ois_f > canny_scores.ois_f + 0.03

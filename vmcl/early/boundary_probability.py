@@ -23,7 +23,7 @@ The cues
 
 At each of eight orientations the classifier's linear score of the gradients is computed (of the
 gradients, their square roots, which let it bend its response to contrast, and the square roots of each
-gradient over the mean of its strongest values in a surround of SURROUND_SIGMA pixels: surround
+gradient over the mean, in a surround of SURROUND_SIGMA pixels, of its largest value over all orientations: surround
 suppression, which weighs a gradient among many like it, a texture's inner edges, below the same
 gradient alone), the best orientation wins, and its logistic is the probability. Non-maximum suppression across the winning orientation thins it to the
 one-pixel contours a boundary benchmark scores.
