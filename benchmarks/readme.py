@@ -311,10 +311,14 @@ def pipeline_figures(f: ResultsFile) -> str:
     def stage(name: str) -> str:
         return stages.cell({"stage": name}, "256 meanfield") + " ms"
 
+    photo = f.table("stage", "ms", section="One photograph")
+    photo_ms = number(photo.cell({"stage": "total (median)"}, "ms"))
     return (f"256²: {seconds('256', 'meanfield')} per frame with every cue "
             f"({frame('256', 'meanfield', 'frames per second')} fps; stereo {stage('stereo')} of it, the "
             f"integrate stage, labelling included, {stage('integrate')}), 512²: "
-            f"{seconds('512', 'meanfield')} with mean field, {seconds('512', 'icm')} with ICM")
+            f"{seconds('512', 'meanfield')} with mean field, {seconds('512', 'icm')} with ICM; one 481 x 321 "
+            f"photograph, monocular: {photo_ms / 1000:.2f} s (the probability of boundary "
+            f"{photo.cell({'stage': 'boundaries'}, 'ms')} ms of it)")
 
 
 def boundaries_figures(f: ResultsFile) -> str:
@@ -408,7 +412,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("early", "colour and texture against NumPy/SciPy", early_figures),
     ("mrf", "sweeps per second of each solver; Gibbs against NumPy; dense disparity on Middlebury",
      mrf_figures),
-    ("pipeline", "the whole machine per frame, stage by stage", pipeline_figures),
+    ("pipeline", "the whole machine per frame, stage by stage; one photograph through the monocular machine",
+     pipeline_figures),
     ("distributed", ("`vmcl batch` on a local Dask cluster: items per second for 1 and 2 workers, 1 and 2 "
                      "threads; a model of N nodes"), distributed_figures),
     ("labelling", ("the linear classifier's labels on images it was not fitted to (new noise seed; and each "

@@ -72,27 +72,21 @@ def test_eval_edges_reads_a_bsds_folder(tmp_path, capsys):
     assert main(["eval", "edges", "--data", str(tmp_path / "missing"), "-q"]) == 2
 
 
-# The bars on the 10 BSDS500 test images in ../shared: the soft map's ODS F at least 0.66 and at
-# least 0.06 above vmcl Canny's sweep (benchmarks/results/boundaries.md has every figure, 30 thresholds).
+# On the 10 BSDS500 test images in ../shared: the soft map's ODS F at least 0.66 and at least 0.06 above
+# vmcl Canny's sweep (measured 0.665 and +0.109 with 30 thresholds, benchmarks/results/boundaries.md).
+# Here 15 thresholds keep the matching to a few minutes.
 SOFT_MAP_BAR, OVER_CANNY_BAR = 0.66, 0.06
 
 
-def _bsds_scores(datasets_root, machine):
+def test_soft_map_on_bsds_beats_canny_by_the_bars(datasets_root, machine):
     from vmcl.datasets import load_bsds
 
     images = load_bsds(datasets_root).images
-    sets = boundary_maps(images, thresholds=15, machine=machine)
-    chosen = {s.name: s for s in sets if s.name.startswith(("vmcl cartoon, soft map", "vmcl Canny"))}
-    return {name: score_maps(s, images, workers=2) for name, s in chosen.items()}
-
-
-@pytest.fixture(scope="module")
-def bsds_scores(datasets_root, machine):
-    scores = _bsds_scores(datasets_root, machine)
-    soft = next(s for name, s in scores.items() if "soft map" in name)
-    return soft, scores["vmcl Canny, threshold sweep"]
-
-
-def test_soft_map_beats_canny_on_bsds(bsds_scores):
-    soft, canny_scores = bsds_scores
-    assert soft.ods_f > canny_scores.ods_f + 0.03 and soft.ois_f > canny_scores.ois_f + 0.03
+    sets = {s.name: s for s in boundary_maps(images, thresholds=15, machine=machine)}
+    soft = score_maps(sets["vmcl cartoon, soft map (boundary_strength), swept"], images, workers=2)
+    canny_scores = score_maps(sets["vmcl Canny, threshold sweep"], images, workers=2)
+    print(f"BSDS500 test (10 images, 15 thresholds): soft map ODS {soft.ods_f:.4f} OIS {soft.ois_f:.4f}; "
+          f"vmcl Canny ODS {canny_scores.ods_f:.4f}")
+    assert soft.ods_f >= SOFT_MAP_BAR
+    assert soft.ods_f >= canny_scores.ods_f + OVER_CANNY_BAR
+    assert soft.ois_f > canny_scores.ois_f

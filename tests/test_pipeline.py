@@ -295,8 +295,10 @@ def test_colour_only_boundary_is_found_by_colour_alone(cues_scene, cues_run):
                    "between the textons on its two sides the image is the same grey wherever it runs, which bounds "
                    "a line's recall near 0.7 (tests/test_scenes.py::test_cues_texture_boundary_is_not_in_the_image_to"
                    "_one_pixel); texture's own lines recall 0.34 at precision 0.08. The depth-only boundary is in the "
-                   "image; the depth MRF's lines recall it at 0.21 and motion's at 0.31, too few and too imprecise "
-                   "for the classifier to label them")
+                   "image, but the semi-global matcher's disparity ramps across it over about 12 px (6.4 to 8.4 "
+                   "in steps of one level: with p1 = 32 and p2 = 64 two one-level steps cost what a jump does), "
+                   "so the depth MRF draws no line on it (recall 0.00 within 3 px) and motion's lines recall it at "
+                   "0.31; the soft map (Result.boundary_strength) above 0.2 recalls it at 0.34")
 def test_integration_recalls_every_single_cue_boundary(cues_scene, cues_run):
     scores = metrics.label_scores(cues_run.labels, cues_scene.labels, tolerance=1)
     assert min(scores[label].recall for label in (Label.DEPTH, Label.ALBEDO, Label.TEXTURE)) >= 0.8
