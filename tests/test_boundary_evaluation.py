@@ -5,8 +5,14 @@ import numpy as np
 import pytest
 import scipy.io
 
-from vmcl.boundary_evaluation import (MapSet, boundary_maps, canny_sweep, opencv_canny_sweep, score_maps,
-                                      sweep_thresholds)
+from vmcl.boundary_evaluation import (
+    MapSet,
+    boundary_maps,
+    canny_sweep,
+    opencv_canny_sweep,
+    score_maps,
+    sweep_thresholds,
+)
 from vmcl.cli import main
 from vmcl.datasets import BSDSImage, read_bsds_folder
 from vmcl.early.edges import canny
@@ -49,7 +55,7 @@ def test_scores_of_known_maps():
 def test_the_soft_map_of_a_disc_finds_its_outline(machine):
     item = _disc_image()
     sets = boundary_maps([item], thresholds=9, machine=machine)
-    assert [s.name for s in sets][0].startswith("vmcl cartoon, soft map")
+    assert sets[0].name.startswith("vmcl cartoon, soft map")
     scores = {s.name: score_maps(s, [item]) for s in sets}
     assert scores[sets[0].name].ods_f > 0.9
     assert all(0 <= m.min() and m.max() <= 1 for s in sets for m in s.maps)
