@@ -2,9 +2,10 @@
 
 Seed sections "Integration via labeling with a linear classifier" and "Texture": the integration stage
 combines the cues' discontinuities by a linear classifier. On a photograph the monocular cues are the
-brightness, the colour and the texture; each is measured here as an oriented gradient at three scales
-and the twelve gradients are combined by logistic regression fitted to human boundaries (Martin,
-Fowlkes and Malik's probability of boundary, with Gaussian derivatives for their half-discs).
+brightness, the colour and the texture; each is measured here as an oriented gradient at the model's
+scales (three in the shipped model), and the gradients are combined by logistic regression fitted to
+human boundaries (Martin, Fowlkes and Malik's probability of boundary, with Gaussian derivatives for
+their half-discs).
 
 The cues
 --------
