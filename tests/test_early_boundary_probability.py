@@ -27,12 +27,12 @@ def _lab_oracle(rgb):
     return np.moveaxis(color.rgb2lab(rgb.astype(np.float64)), -1, 0) / 100.0
 
 
-def test_lab_matches_scikit_image():
+def test_filter_bank_on_the_lightness_matches_the_oracle():
     rgb = _smooth_rgb()
     model = bp.BoundaryModel.load()
     found = bp.oriented_gradients(rgb, model=model)
     assert found.shape == (bp.ORIENTATIONS, 40, 56, len(model.features))
-    # The colour space itself: the bank's responses rest on L* alone.
+    # The bank rests on L* alone, so this also checks the colour space against scikit-image's rgb2lab.
     responses = bp.bank_responses(rgb)
     expected = oracles.texton_bank(_lab_oracle(rgb)[0])
     np.testing.assert_allclose(responses, expected, atol=2e-4)

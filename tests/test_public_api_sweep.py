@@ -425,6 +425,7 @@ EXEMPT = {
     # Device-level building blocks of the early layer: they take images already checked by
     # vmcl.cm.core.image_field, and the sweeps of gaussian, canny and zero_crossings reach them.
     "vmcl.early.filters:separable_gaussian", "vmcl.early.filters:discrete_laplacian", "vmcl.early.filters:grey_field",
+    "vmcl.early.filters:device_taps",
     # Needs a head that has run a calibration pattern in front of it; table_for_fixation covers the glue.
     "vmcl.eyehead:calibrate_vergences",
     # Need a running Dask cluster: tests/test_distributed.py starts one and checks their refusals.

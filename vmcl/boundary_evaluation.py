@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from vmcl.cm.core import check_int
+from vmcl.cm.core import check_int, machine_for
 from vmcl.datasets import BSDSImage
 from vmcl.early.edges import canny
 from vmcl.errors import InputValueError
@@ -109,10 +109,12 @@ def canny_sweep(image: np.ndarray, count: int, *, machine: Machine | None = None
     """vmcl Canny swept over ``count`` high thresholds: float32 (H, W) of each pixel's last level
     (:func:`sweep_thresholds`), 0 where it is never an edge. ``image``: grey or RGB, as the machine takes it."""
     count = _count(count)
-    # Thresholds are in units of an image in [0, 1] (as_image's); canny makes RGB grey itself.
-    scaled = _image(image)
+    machine = machine_for(machine)
+    # Thresholds are in units of an image in [0, 1] (as_image's); canny makes RGB grey itself. The image
+    # goes to the device once for all the levels.
+    scaled = machine.to_device(_image(image))
     return _nested([canny(scaled, sigma=CANNY_SIGMA, low_threshold=LOW_RATIO * level, high_threshold=level,
-                          machine=machine) for level in _levels(_VMCL_LEVELS, count)])
+                          machine=machine).get().astype(bool) for level in _levels(_VMCL_LEVELS, count)])
 
 
 def opencv_canny_sweep(image: np.ndarray, count: int) -> np.ndarray:

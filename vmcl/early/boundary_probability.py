@@ -57,7 +57,7 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm.core import IMAGE_TYPES, ArrayLike, image_field, machine_for, result, vector_kernel
-from vmcl.early.filters import gaussian_taps
+from vmcl.early.filters import device_taps
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
@@ -226,9 +226,6 @@ def _constant(machine: Machine, key: object, make) -> cl_array.Array:
     return cache[key]
 
 
-def _taps(machine: Machine, sigma: float) -> tuple[cl_array.Array, int]:
-    taps = gaussian_taps(sigma)
-    return _constant(machine, ("taps", sigma), lambda: taps), len(taps) // 2
 
 
 def _lab(machine: Machine, data: cl_array.Array) -> cl_array.Array:
@@ -250,7 +247,7 @@ def _planes_pass(machine: Machine, name: str, planes: cl_array.Array, out: cl_ar
     ``first`` .. ``first + count - 1`` of ``out``."""
     height, width = out.shape[1:]
     size = (-(-width // machine.vector_width), height, count)
-    taps, radius = _taps(machine, sigma)
+    taps, radius = device_taps(machine, (sigma,))
     machine.launch(vector_kernel(machine, "boundary_probability", name), size, planes, out, taps, np.int32(radius),
                    np.int64(first), np.int64(width), np.int64(height), local_size=machine.row_local_size(size))
 
@@ -295,7 +292,7 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
     tensor = machine.empty((3, height, width), np.float32)
     for k, sigma in enumerate(model.scales):
         texture_sigma = TEXTURE_RATIO * sigma
-        taps, radius = _taps(machine, texture_sigma)
+        taps, radius = device_taps(machine, (texture_sigma,))
         machine.launch(machine.kernel("boundary_probability", "histogram_rows", NT=count), (width, height),
                        labels, rows, taps, np.int32(radius), *dims)
         _planes_pass(machine, "planes_cols", rows, histograms, texture_sigma, count)

@@ -49,6 +49,7 @@ __all__ = [
     "TRUNCATE",
     "Method",
     "binomial_passes",
+    "device_taps",
     "difference_of_gaussians",
     "discrete_laplacian",
     "gaussian",
@@ -99,7 +100,7 @@ def binomial_passes(sigma: float) -> int:
 _TAPS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def _taps(machine: Machine, sigmas: tuple[float, ...]) -> tuple[cl_array.Array, int]:
+def device_taps(machine: Machine, sigmas: tuple[float, ...]) -> tuple[cl_array.Array, int]:
     """The packed taps of one or two widths on the device, and their common radius. Uploaded once per
     machine and widths: a write to the device waits for the queue to drain, which a pipeline that keeps
     its fields on the device must not do on every call."""
@@ -124,7 +125,7 @@ def separable_gaussian(machine: Machine, data: cl_array.Array, sigmas: tuple[flo
     """
     height, width = data.shape[:2]
     planes = len(sigmas)
-    taps_device, radius = _taps(machine, sigmas)
+    taps_device, radius = device_taps(machine, sigmas)
     if data.ndim == 3:
         data = grey_field(machine, data)
     rows = machine.empty((planes, height, width), np.float32)
