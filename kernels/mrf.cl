@@ -102,6 +102,19 @@ __kernel void fill_step(__global const float *in, __global float *out, long step
     for (int c = 0; c < NCOMP; ++c) out[i * NCOMP + c] = n ? sum[c] / (float)n : NAN;
 }
 
+/* A warm start (vmcl.mrf.restore's start): f takes the given field wherever all its components hold a
+ * value, and keeps the filled data elsewhere. */
+__kernel void start_from(__global const float *start, __global float *f, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    long i = y * W + x;
+    int complete = 1;
+    for (int c = 0; c < NCOMP; ++c) complete &= isfinite(start[i * NCOMP + c]);
+    if (complete)
+        for (int c = 0; c < NCOMP; ++c) f[i * NCOMP + c] = start[i * NCOMP + c];
+}
+
 /* The start of the constant kind: the nearest level (NaN, where nothing was filled, to level 0). */
 __kernel void quantise(__global float *f, __constant float *levels, long W, long H)
 {

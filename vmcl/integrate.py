@@ -109,7 +109,7 @@ def _shape(shape) -> tuple[int, int]:
 
 def restore_cue(data: ArrayLike, *, confidence: ArrayLike | None, coupling: ArrayLike, kind: str,
                 candidates_only: bool, settings: Settings, method: str, seed: int = 0,
-                machine: Machine | None = None) -> Restoration:
+                start: ArrayLike | None = None, machine: Machine | None = None) -> Restoration:
     """Restore one cue's measurements by its line-process MRF, coupled to an edge field.
 
     The piecewise smooth cues (stereo, motion) are coupled to the brightness edges: a line site costs
@@ -129,6 +129,8 @@ def restore_cue(data: ArrayLike, *, confidence: ArrayLike | None, coupling: Arra
     method : str
         A solver of :data:`vmcl.mrf.SOLVERS`.
     seed : int
+    start : array of the data's shape, optional
+        A warm start, as :func:`vmcl.mrf.restore` takes it.
     machine : vmcl.Machine, optional
 
     Returns
@@ -147,7 +149,7 @@ def restore_cue(data: ArrayLike, *, confidence: ArrayLike | None, coupling: Arra
         model = dataclasses.replace(model, require_edge=True)
     check_choice(method, "method", SOLVERS)
     return restore(data, confidence=confidence, edges=coupling, kind=kind, method=method, model=model,
-                   schedule=settings.schedule(method), seed=seed, machine=machine)
+                   schedule=settings.schedule(method), seed=seed, start=start, machine=machine)
 
 
 def boundary(line_h: ArrayLike, line_v: ArrayLike, *, machine: Machine | None = None) -> ArrayLike:

@@ -29,7 +29,7 @@ import math
 import sys
 import time
 import typing
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,7 +39,7 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl import integrate as _integrate
-from vmcl import labelling
+from vmcl import labelling, temporal
 from vmcl.cm.core import check_choice, check_int, check_real
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
 from vmcl.early import boundary_probability, disparity_range, edges, motion, semiglobal, stereo
@@ -52,6 +52,7 @@ from vmcl.result import Result
 
 __all__ = [
     "FLOAT_MARGIN",
+    "WARM_SCHEDULE",
     "ColourConfig",
     "Config",
     "EdgesConfig",
@@ -61,6 +62,7 @@ __all__ = [
     "Result",
     "StereoConfig",
     "TextureConfig",
+    "TimeConfig",
     "VisionMachine",
     "as_image",
 ]
@@ -361,14 +363,15 @@ class MrfConfig:
         check_choice(self.schedule, "mrf.schedule", _SCHEDULES)
         check_int(self.seed, "mrf.seed", minimum=0, maximum=2**64 - 1)
 
-    def settings(self, cue: str, default: Settings | None = None) -> Settings:
+    def settings(self, cue: str, default: Settings | None = None, *, warm: bool = False) -> Settings:
         """The MRF settings of ``cue``: ``default`` (the cue's own, :attr:`vmcl.cues.CueModule.settings`),
-        else its preset (for :data:`vmcl.labels.CUES`) or ``Settings()``, with the schedule and this
-        configuration's overrides."""
+        else its preset (for :data:`vmcl.labels.CUES`) or ``Settings()``, with the schedule (with
+        ``warm``, :data:`WARM_SCHEDULE`) and this configuration's overrides."""
+        schedule = WARM_SCHEDULE if warm else _SCHEDULES[self.schedule]
         if cue in CUES:
             base = default if default is not None else preset(cue)
-            return base.override({**_SCHEDULES[self.schedule], **getattr(self, cue)}, prefix=f"mrf.{cue}")
-        return (default or Settings()).override(_SCHEDULES[self.schedule], prefix=f"mrf.{cue}")
+            return base.override({**schedule, **getattr(self, cue)}, prefix=f"mrf.{cue}")
+        return (default or Settings()).override(schedule, prefix=f"mrf.{cue}")
 
 
 @dataclass(frozen=True)
@@ -409,13 +412,62 @@ class LabelsConfig:
         return labelling.LinearLabeller.load(self.weights) if self.weights else labelling.default_labeller()
 
 
+@dataclass(frozen=True)
+class TimeConfig:
+    """What :meth:`VisionMachine.stream` carries from frame to frame (:mod:`vmcl.temporal`).
+
+    Parameters
+    ----------
+    enabled : bool
+        Temporal terms on (the stream then differs from independent runs); off, each frame of a stream
+        is exactly :meth:`VisionMachine.run` on that frame and the next.
+    gain : float
+        >= 0, the weight of the carried field's information against the new measurement's.
+    memory : float
+        > 0, the most information the past can carry, in frames' worth of a unit-confidence measurement
+        (the Kalman prediction's process noise is its inverse).
+    tolerance : float
+        > 0, the largest change of smoothed brightness (images in [0, 1]) along the flow that keeps
+        time unbroken at a pixel.
+    scene_cut : float
+        In (0, 1]: when a larger share of the pixels is broken, the frame starts cold.
+    warm : bool
+        Start each MRF from the carried field with :data:`WARM_SCHEDULE` (mean field); off, the full
+        schedule from the data.
+    """
+
+    enabled: bool = True
+    gain: float = 1.0
+    memory: float = 2.0
+    tolerance: float = 0.05
+    scene_cut: float = 0.5
+    warm: bool = True
+
+    def __post_init__(self) -> None:
+        _check_field_types("time", self)
+        check_real(self.gain, "time.gain", minimum=0)
+        check_real(self.memory, "time.memory", above=0)
+        check_real(self.tolerance, "time.tolerance", above=0)
+        check_real(self.scene_cut, "time.scene_cut", above=0, maximum=1)
+
+    def memory_of(self, machine: Machine) -> temporal.Memory:
+        """A new stream's :class:`vmcl.temporal.Memory` with these settings."""
+        return temporal.Memory(machine, tolerance=self.tolerance, memory=self.memory, gain=self.gain,
+                               scene_cut=self.scene_cut)
+
+
 _SCHEDULES = {
     "fast": {"mf_t0": 2.0, "mf_factor": 0.6, "mf_steps": 6, "mf_iterations": 2, "quench": 2},
     "preset": {},
 }
 
+WARM_SCHEDULE = {"mf_t0": 0.43, "mf_factor": 0.6, "mf_steps": 3, "mf_iterations": 1, "quench": 2}
+"""The mean-field schedule of a warm start (:attr:`TimeConfig.warm`): the last three temperatures of the
+"fast" schedule, one sweep each, then 2 ICM sweeps (5 sweeps against its 14). Its first temperature is
+cold enough that the carried field's lines form at once where its jumps are, and the field keeps them."""
+
 _SECTIONS = {"edges": EdgesConfig, "stereo": StereoConfig, "motion": MotionConfig, "colour": ColourConfig,
-             "texture": TextureConfig, "mrf": MrfConfig, "labels": LabelsConfig}
+             "texture": TextureConfig, "mrf": MrfConfig, "labels": LabelsConfig, "time": TimeConfig}
 
 
 @dataclass(frozen=True)
@@ -440,6 +492,7 @@ class Config:
     texture: TextureConfig = field(default_factory=TextureConfig)
     mrf: MrfConfig = field(default_factory=MrfConfig)
     labels: LabelsConfig = field(default_factory=LabelsConfig)
+    time: TimeConfig = field(default_factory=TimeConfig)
 
     def __post_init__(self) -> None:
         # A Config made in Python is checked like one read from TOML: each section of its own class
@@ -556,10 +609,12 @@ class VisionMachine:
         given = {name for name, present in (("right", right), ("next", next), ("rgb", rgb)) if present}
         return [cue for cue in registered() if cue.needs <= given and cue.enabled(self.config)]
 
-    def stages(self, *, right: bool, next: bool, rgb: bool) -> list[str]:
-        """The names of the stages :meth:`run` goes through for these inputs, in order."""
+    def stages(self, *, right: bool, next: bool, rgb: bool, streaming: bool = False) -> list[str]:
+        """The names of the stages :meth:`run` (or, with ``streaming``, a frame of :meth:`stream` with
+        the temporal terms on) goes through for these inputs, in order."""
         active = self.cues(right=right, next=next, rgb=rgb)
-        names = ["upload", "edges", "boundaries", *(cue.name for cue in active)]
+        carried = ["time"] if streaming and self.config.time.enabled else []
+        names = ["upload", *carried, "edges", "boundaries", *(cue.name for cue in active)]
         for cue in active:
             names += [f"mrf {cue.name}"] + [stage for stage in [cue.refine_stage(self.config)] if stage]
         return names + ["integrate", "download"]
@@ -588,15 +643,77 @@ class VisionMachine:
         ValueError, TypeError
             Bad images (shape, dtype, NaN, sizes that differ) or a configuration the modules refuse.
         """
-        image = as_image(left, "left")
-        others = {}
-        for name, array in (("right", right), ("next", next)):
-            if array is not None:
-                others[name] = as_image(array, name)
-                if others[name].shape != image.shape:
-                    raise InputValueError(f"{name} has shape {others[name].shape}, left has {image.shape}: "
-                                     "the images must have the same size and channels")
-        return _Run(self, image, others, progress).result
+        image, others = _inputs(left, right, next)
+        return _Run(self, image, others, progress, None).result
+
+    def stream(self, frames: Iterable[np.ndarray], rights: Iterable[np.ndarray] | None = None, *,
+               progress: Callable[[str], None] | None = None) -> Iterator[Result]:
+        """Run the machine over a sequence: one Result per frame, the temporal terms carried between them.
+
+        Parameters
+        ----------
+        frames : iterable of arrays
+            The left view's frames in order, each as :meth:`run` takes ``left`` (all of one size and
+            channels). Read lazily, one frame ahead: frame t's Result comes once frame t + 1 is read.
+        rights : iterable of arrays, optional
+            The right view's frames (a stereo sequence), as many as ``frames``.
+        progress : callable, optional
+            Called with each stage's name, as :meth:`run` calls it (the stages of :meth:`stages` with
+            ``streaming=True``).
+
+        Yields
+        ------
+        Result
+            Frame t's, with motion from t to t + 1 (the last frame has none). With ``config.time``
+            enabled (the default), each cue's MRF also holds the previous frame's restoration carried
+            along the flow (:mod:`vmcl.temporal`), and ``notes`` says where time was broken; disabled,
+            each Result is ``run(frame t, right t, frame t + 1)``.
+
+        Raises
+        ------
+        ValueError, TypeError
+            As :meth:`run`, naming the frame; also when ``rights`` ends before or after ``frames``.
+        """
+        memory = self.config.time.memory_of(self.machine) if self.config.time.enabled else None
+        lefts = iter(frames)
+        seconds = iter(rights) if rights is not None else None
+        index, current = 0, next(lefts, None)
+        if current is None:
+            return
+        right = self._stream_right(seconds, index)
+        while current is not None:
+            following = next(lefts, None)
+            try:
+                image, others = _inputs(current, right, following)
+            except InputError as error:
+                raise type(error)(f"frame {index}: {error}") from None
+            yield _Run(self, image, others, progress, memory).result
+            index, current = index + 1, following
+            right = self._stream_right(seconds, index) if current is not None else None
+        if seconds is not None and next(seconds, None) is not None:
+            raise InputValueError(f"rights holds more frames than frames ({index})")
+
+    @staticmethod
+    def _stream_right(rights: Iterator[np.ndarray] | None, index: int) -> np.ndarray | None:
+        if rights is None:
+            return None
+        right = next(rights, None)
+        if right is None:
+            raise InputValueError(f"rights ended at frame {index}: a stereo sequence needs a right view per frame")
+        return right
+
+
+def _inputs(left: Any, right: Any, next: Any) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """The images of one run, checked: left and the others present, each of left's shape."""
+    image = as_image(left, "left")
+    others = {}
+    for name, array in (("right", right), ("next", next)):
+        if array is not None:
+            others[name] = as_image(array, name)
+            if others[name].shape != image.shape:
+                raise InputValueError(f"{name} has shape {others[name].shape}, left has {image.shape}: "
+                                      "the images must have the same size and channels")
+    return image, others
 
 
 def _device_lines(found: Restoration) -> tuple[cl_array.Array, cl_array.Array]:
@@ -608,9 +725,10 @@ class _Run:
     """One run of the machine: the stages in order, each timed, the fields kept on the device."""
 
     def __init__(self, vm: VisionMachine, image: np.ndarray, others: dict[str, np.ndarray],
-                 progress: Callable[[str], None] | None) -> None:
+                 progress: Callable[[str], None] | None, memory: temporal.Memory | None) -> None:
         self.m, self.c = vm.machine, vm.config
         self.progress = progress
+        self.memory, self.carries = memory, False
         self.stages: dict[str, float] = {}
         self.notes: list[str] = []
         if self.m.profile:
@@ -619,6 +737,12 @@ class _Run:
         with self.stage("upload"):
             left = self.m.to_device(image)
             others_d = {name: self.m.to_device(array) for name, array in others.items()}
+        if memory is not None:
+            with self.stage("time"):
+                self.carries = memory.begin(left)
+            if memory.broken is not None and memory.broken_share > self.c.time.scene_cut:
+                self.notes.append(f"time: {memory.broken_share:.0%} of the pixels changed since the previous "
+                                  "frame (a scene cut): this frame starts cold")
         with self.stage("edges"):
             e = self.c.edges
             brightness = edges.canny(left, sigma=e.sigma, low_threshold=e.low_threshold,
@@ -649,6 +773,8 @@ class _Run:
                     found = self.restore(cue, again) or found
             if found is not None:
                 lines[cue.name], restored[cue.name] = _device_lines(found), on_device(found.field)
+        if memory is not None:
+            memory.end(restored.get("motion"))
         with self.stage("integrate"):
             integration = _integrate.integrate(lines, edges=brightness, machine=self.m)
             support, labels = on_device(integration.support), on_device(integration.labels)
@@ -685,16 +811,29 @@ class _Run:
             self.progress(name)
 
     def restore(self, cue: CueModule, measured: Measurement) -> Restoration | None:
-        """Restore one cue's measurement coupled to its edges (None, with a note, when it holds no data)."""
+        """Restore one cue's measurement coupled to its edges (None, with a note, when it holds no data).
+
+        In a stream with the temporal terms on, the measurement is first fused with the cue's previous
+        restoration carried to this frame, which is also the MRF's warm start (:mod:`vmcl.temporal`).
+        """
+        data, confidence, start, warm = measured.data, measured.confidence, None, False
+        if self.memory is not None:
+            carried = self.memory.carry(cue.name) if self.carries else None
+            data, confidence = self.memory.fuse(data, confidence, carried)
+            if carried is not None and self.c.time.warm:
+                start, warm = carried.prediction, True
         try:
-            return _integrate.restore_cue(measured.data, confidence=measured.confidence, coupling=measured.coupling,
-                                          kind=cue.kind, candidates_only=cue.candidates_only,
-                                          settings=self.c.mrf.settings(cue.name, cue.settings),
-                                          method=self.c.mrf.method,
-                                          seed=self.c.mrf.seed, machine=self.m)
+            found = _integrate.restore_cue(data, confidence=confidence, coupling=measured.coupling,
+                                           kind=cue.kind, candidates_only=cue.candidates_only,
+                                           settings=self.c.mrf.settings(cue.name, cue.settings, warm=warm),
+                                           method=self.c.mrf.method, seed=self.c.mrf.seed, start=start,
+                                           machine=self.m)
         except NothingToRestore:
             # The one refusal a good run can meet: the module found nothing (no match, no flow, no
             # valid hue) for the MRF to restore. The cue is then absent from the result.
             self.notes.append(f"{cue.name}: the early module gave no data, so no {cue.name} field or "
                               "discontinuities")
             return None
+        if self.memory is not None and confidence is not None:
+            self.memory.remember(cue.name, on_device(found.field), confidence, nearest=cue.kind == "constant")
+        return found

@@ -45,10 +45,13 @@ class Lattice:
     edges : device uint8 (H, W) or None
     kind : {"smooth", "constant"}
     model : EnergyModel
+    start : device array of the data's shape, float32, or None
+        A warm start: f begins there wherever it holds a value (else at the filled data).
     """
 
     def __init__(self, machine: Machine, data: cl_array.Array, confidence: cl_array.Array | None,
-                 edges: cl_array.Array | None, kind: str, model: EnergyModel) -> None:
+                 edges: cl_array.Array | None, kind: str, model: EnergyModel,
+                 start: cl_array.Array | None = None) -> None:
         self.machine = machine
         self.model = model
         self.kind = kind
@@ -73,6 +76,8 @@ class Lattice:
         self.nlevels = 1
         self.levels = machine.to_device(np.zeros(1, np.float32))
         self._prepare(data, confidence)
+        if start is not None:
+            machine.launch(self.kernel("start_from"), self.grid, start, self.f, *self.dims)
         if kind == "constant":
             low = float(cm_reduce.reduce(self.f, "min", machine=machine).get())
             high = float(cm_reduce.reduce(self.f, "max", machine=machine).get())

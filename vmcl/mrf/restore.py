@@ -68,7 +68,8 @@ class Restoration:
 
 def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: ArrayLike | None = None,
             kind: str = "smooth", method: str = "anneal", model: EnergyModel | None = None,
-            schedule: Any = None, seed: int = 0, machine: Machine | None = None) -> Restoration:
+            schedule: Any = None, seed: int = 0, start: ArrayLike | None = None,
+            machine: Machine | None = None) -> Restoration:
     """Restore ``data`` under the line-process MRF prior and find its discontinuities.
 
     Parameters
@@ -101,6 +102,10 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
     seed : int
         0 <= seed < 2**64, keys the random numbers of "anneal" and "mpm" (ignored by the deterministic
         methods). The same seed gives the same bits at any local size.
+    start : array of the data's shape, optional
+        A warm start: the field begins here wherever all its components are finite (NaN elsewhere: there
+        it begins at the filled data), e.g. the previous frame's restoration carried along the flow
+        (:mod:`vmcl.temporal`), with a schedule that starts cold enough to keep it. Device arrays: float32.
     machine : vmcl.Machine, optional
 
     Returns
@@ -115,8 +120,8 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
 
     Notes
     -----
-    The start is the data with its gaps filled (a jump fill of neighbour means), no lines; the constant
-    kind starts from the nearest levels. The sweeps are enqueued back to back and read back once.
+    The start is the data with its gaps filled (a jump fill of neighbour means), or ``start`` where it
+    holds values, and no lines; the constant kind starts from the nearest levels. The sweeps are enqueued back to back and read back once.
 
     Examples
     --------
@@ -156,7 +161,12 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
         raise InputValueError(f"kind='constant' takes scalar data (H, W), got shape {g.shape}")
     gamma = _pixel_field(confidence, "confidence", (height, width), np.float32, machine)
     e = _pixel_field(edges, "edges", (height, width), np.uint8, machine)
-    lattice = Lattice(machine, g, gamma, e, kind, model)
+    first = None
+    if start is not None:
+        first, _ = _data(start, machine, "start")
+        if first.shape != g.shape:
+            raise InputValueError(f"start must have the data's shape {g.shape}, got {first.shape}")
+    lattice = Lattice(machine, g, gamma, e, kind, model, first)
     if not float(cm_reduce.reduce(lattice.w, "max", machine=machine).get()) > 0:
         raise NothingToRestore("data has no value with a positive confidence: nothing to restore")
     sweeps = solver.solve(lattice, schedule, int(seed))
@@ -168,16 +178,16 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
     return Restoration(lattice.f, line_h, line_v, total, sweeps)
 
 
-def _data(data: Any, machine: Machine) -> tuple[cl_array.Array, bool]:
+def _data(data: Any, machine: Machine, name: str = "data") -> tuple[cl_array.Array, bool]:
     if isinstance(data, np.ndarray):
         if data.dtype.kind not in "iuf":
-            raise InputTypeError(f"data must be a real array (integer or float), got dtype {data.dtype}")
+            raise InputTypeError(f"{name} must be a real array (integer or float), got dtype {data.dtype}")
         data = data.astype(np.float32)
-    g, host = field(data, "data", machine, ndims=(2, 3), dtypes=(np.float32,))
+    g, host = field(data, name, machine, ndims=(2, 3), dtypes=(np.float32,))
     if g.ndim == 3 and not 1 <= g.shape[2] <= 4:
-        raise InputValueError(f"data must be (H, W) or (H, W, C) with C in 1..4, got shape {g.shape}")
+        raise InputValueError(f"{name} must be (H, W) or (H, W, C) with C in 1..4, got shape {g.shape}")
     if min(g.shape[:2]) < 2:
-        raise InputValueError(f"data must be at least 2 x 2 pixels, got shape {g.shape}")
+        raise InputValueError(f"{name} must be at least 2 x 2 pixels, got shape {g.shape}")
     return g, host
 
 

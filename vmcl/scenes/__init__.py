@@ -51,6 +51,7 @@ Modules
 - :mod:`~vmcl.scenes.shading`: albedo regions, effective illumination, shadows, highlights and the image;
 - :mod:`~vmcl.scenes.discontinuities`: the ground-truth labels on the dual lattice and the pixel grid;
 - :mod:`~vmcl.scenes.rendering`: :func:`render` and the :class:`Scene` it returns;
+- :mod:`~vmcl.scenes.sequences`: :func:`render_sequence`, N frames of a moving world (:func:`advance`);
 - :mod:`~vmcl.scenes.presets`: the ready-made worlds, :func:`preset` and :data:`PRESETS`.
 
 References
@@ -67,6 +68,7 @@ discontinuities", IEEE SMC 19(6), 1989.
 from vmcl.labels import Label as Label
 from vmcl.scenes.presets import PRESETS, preset
 from vmcl.scenes.rendering import Scene, render
+from vmcl.scenes.sequences import advance, render_sequence
 from vmcl.scenes.world import Body, Camera, Face, Light, Mark, Motion, Texture, World, box, fold
 
 __all__ = [
@@ -80,8 +82,10 @@ __all__ = [
     "Scene",
     "Texture",
     "World",
+    "advance",
     "box",
     "fold",
     "preset",
     "render",
+    "render_sequence",
 ]

@@ -101,7 +101,7 @@ def _grid(cam: Pinhole, values: np.ndarray, pixels: np.ndarray, fill) -> np.ndar
     return out.reshape(cam.h, cam.w, *values.shape[1:])
 
 
-def render(world: World, *, seed: int = 0, noise: float = 0.0) -> Scene:
+def render(world: World, *, seed: int = 0, noise: float = 0.0, frame: int = 0) -> Scene:
     """Render the left and right views at t, the left view at t + 1, and the ground truth.
 
     Parameters
@@ -112,6 +112,10 @@ def render(world: World, *, seed: int = 0, noise: float = 0.0) -> Scene:
         Seeds the random textures and the noise; the same seed gives the same bits.
     noise : float
         Standard deviation of Gaussian noise added independently to every pixel, channel and image.
+    frame : int
+        The frame's index in a sequence (:func:`vmcl.scenes.render_sequence`), >= 0: it keys the noise
+        with the seed, so that each frame of a sequence gets its own noise while the textures (keyed by
+        the seed alone) stay attached to their faces.
 
     Returns
     -------
@@ -136,6 +140,7 @@ def render(world: World, *, seed: int = 0, noise: float = 0.0) -> Scene:
         raise InputTypeError(f"world must be a World (see vmcl.scenes.preset), got {type(world).__name__}")
     check_int(seed, "seed", minimum=0)
     check_real(noise, "noise (a standard deviation)", minimum=0)
+    check_int(frame, "frame", minimum=0)
     cam = Pinhole(world.camera)
     spec = [f for b in world.bodies for f in b.faces]
     owner = np.array([k for k, b in enumerate(world.bodies) for _ in b.faces])
@@ -160,7 +165,8 @@ def render(world: World, *, seed: int = 0, noise: float = 0.0) -> Scene:
     nxt = shade(cam, faces_next, world, spec, regions, (rig_rot.T, -rig_rot.T @ rig_t))
 
     colour = np.asarray(world.light.colour, F32)
-    rngs = [np.random.default_rng([int(seed), view]) for view in range(3)]
+    # Frame 0 keeps the key of a single render, so a sequence's first frame is that render bit for bit.
+    rngs = [np.random.default_rng([int(seed), view] + ([int(frame)] if frame else [])) for view in range(3)]
     images = [form_image(s, cam, colour, float(noise), g) for s, g in zip((left, right, nxt), rngs)]
 
     face, p = left.face, left.points

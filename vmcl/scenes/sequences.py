@@ -1,0 +1,119 @@
+"""Sequences: a world's bodies and rig moving on for N frames, each frame rendered with its ground truth.
+
+Seed section "Fast vision: The role of time smoothness": surfaces and the brightness array change little
+from frame to frame, which the machine's temporal terms exploit; testing them needs frames whose flow,
+disparity and labels are exact at every t. Each body repeats its :class:`~vmcl.scenes.Motion` at every
+step (a constant world-frame velocity) and the rig repeats its own in its own frame (a camera that keeps
+walking and turning as it did in the first step). Frame k is the world re-expressed in the rig's frame
+at k and rendered by :func:`~vmcl.scenes.render`, so its ``left_next`` and flow look one step further,
+and frame k + 1's ``left`` is frame k's ``left_next`` up to noise.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import cv2
+import numpy as np
+
+from vmcl.cm.core import check_int
+from vmcl.errors import InputTypeError
+from vmcl.scenes.rendering import Scene, render
+from vmcl.scenes.world import Body, Face, Motion, World
+
+__all__ = ["advance", "render_sequence"]
+
+
+def _matrix(motion: Motion) -> np.ndarray:
+    """A motion as a 4 x 4 homogeneous transform."""
+    rot, trans = motion.matrix()
+    out = np.eye(4)
+    out[:3, :3], out[:3, 3] = rot, trans
+    return out
+
+
+def _motion(transform: np.ndarray) -> Motion:
+    """A 4 x 4 rigid transform as a Motion about the origin."""
+    rvec = cv2.Rodrigues(np.ascontiguousarray(transform[:3, :3]))[0].ravel()
+    return Motion(translation=tuple(float(v) for v in transform[:3, 3]),
+                  rotation=tuple(float(v) for v in rvec))
+
+
+def _moved(face: Face, transform: np.ndarray) -> Face:
+    """The face carried by a rigid transform; its (s, t) coordinates, and so its texture and marks,
+    move with it."""
+    rot, trans = transform[:3, :3], transform[:3, 3]
+    def vector(v) -> tuple[float, float, float]:
+        return tuple(float(c) for c in rot @ np.asarray(v, float))  # type: ignore[return-value]
+    origin = tuple(float(c) for c in rot @ np.asarray(face.origin, float) + trans)
+    return dataclasses.replace(face, origin=origin, u_axis=vector(face.u_axis), v_axis=vector(face.v_axis))
+
+
+def advance(world: World, steps: int) -> World:
+    """The world ``steps`` frames on, expressed in the rig's frame at that time.
+
+    Parameters
+    ----------
+    world : World
+        At frame 0; each body's and the rig's motion is the step from one frame to the next.
+    steps : int
+        >= 0; 0 returns the world as given.
+
+    Returns
+    -------
+    World
+        Bodies moved ``steps`` times, everything (faces, each body's motion, the light's direction and
+        illumination gradient) re-expressed in the rig's frame at frame ``steps``; the rig's own
+        motion is unchanged (it is a motion in the rig's frame).
+    """
+    if not isinstance(world, World):
+        raise InputTypeError(f"world must be a World (see vmcl.scenes.preset), got {type(world).__name__}")
+    steps = check_int(steps, "steps", minimum=0)
+    if steps == 0:
+        return world
+    rig = np.linalg.matrix_power(_matrix(world.camera.motion), steps)  # rig frame at k -> world frame at 0
+    to_rig = np.linalg.inv(rig)
+    bodies = []
+    for body in world.bodies:
+        step = _matrix(body.motion)
+        carried = to_rig @ np.linalg.matrix_power(step, steps)
+        bodies.append(Body(faces=tuple(_moved(f, carried) for f in body.faces),
+                           motion=_motion(to_rig @ step @ rig), name=body.name))
+    rot, trans = to_rig[:3, :3], to_rig[:3, 3]
+    light = world.light
+    light = dataclasses.replace(
+        light, direction=tuple(float(c) for c in rot @ np.asarray(light.direction, float)),
+        gradient=tuple(float(c) for c in rot @ np.asarray(light.gradient, float)),
+        gradient_origin=tuple(float(c) for c in rot @ np.asarray(light.gradient_origin, float) + trans))
+    return World(camera=world.camera, light=light, bodies=tuple(bodies))
+
+
+def render_sequence(world: World, frames: int, *, seed: int = 0, noise: float = 0.0) -> tuple[Scene, ...]:
+    """Render ``frames`` consecutive frames of a moving world.
+
+    Parameters
+    ----------
+    world : World
+        Frame 0 (:func:`vmcl.scenes.preset` gives ready-made ones, each with moving bodies or rig).
+    frames : int
+        >= 1.
+    seed : int
+        Seeds the textures (the same at every frame) and, with the frame's index, each frame's noise.
+    noise : float
+        Standard deviation of the Gaussian noise of every image.
+
+    Returns
+    -------
+    tuple of Scene
+        Scene k holds frame k's stereo pair, its next left view and the ground truth from k to k + 1
+        (flow, disparity, labels at k); the last scene's ``left_next`` is frame ``frames``.
+
+    Examples
+    --------
+    >>> from vmcl import scenes
+    >>> frames = scenes.render_sequence(scenes.preset("cues", shape=(64, 64)), 3, seed=0)
+    >>> len(frames), bool(abs(frames[1].left - frames[0].left_next).max() < 1e-4)
+    (3, True)
+    """
+    frames = check_int(frames, "frames", minimum=1)
+    return tuple(render(advance(world, k), seed=seed, noise=noise, frame=k) for k in range(frames))
