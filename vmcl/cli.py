@@ -5,6 +5,7 @@ dense fields out (:mod:`vmcl.pipeline`, :mod:`vmcl.report`).
 
     vmcl demo [--out DIR] [--data SCENE|motorcycle] [--size N]
     vmcl run LEFT [RIGHT] [--next NEXT] [--config C.toml] --out DIR
+    vmcl run FRAMES [RIGHT_FRAMES] [--fps N] [--config C.toml] --out DIR
     vmcl eval stereo|flow|edges --data DIR
     vmcl info
     vmcl batch INPUTS... --out DIR [--frames] [--config C.toml] [--scheduler ADDRESS] [--workers N] [--threads N]
@@ -36,6 +37,11 @@ the end while the others complete, and the exit status is then 2 if every failur
 ``--zarr FIELD`` also stacks that field of every item into the Zarr array ``--out``/FIELD.zarr, rewritten
 from the items' fields.npz after each run (:func:`vmcl.distributed.write_zarr`); items of different sizes
 are refused before any work.
+
+``vmcl run`` on a sequence (a folder of frames, a quoted glob pattern or a video file, and for a stereo
+sequence the right view's likewise) streams it through the machine with the temporal terms
+(:meth:`vmcl.pipeline.VisionMachine.stream`, the ``[time]`` settings) and writes what
+:mod:`vmcl.sequence_output` describes: each frame's fields and videos of the cartoon, flow and disparity.
 
 Stages that take time show a progress bar on stderr (tqdm); ``--quiet`` keeps only the results.
 """
@@ -221,8 +227,13 @@ def _demo(args) -> int:
 # -- run -----------------------------------------------------------------------------------------------
 
 def _run(args) -> int:
+    from vmcl.frame_sources import is_sequence
     from vmcl.pipeline import VisionMachine
 
+    if is_sequence(args.left):
+        return _run_sequence(args)
+    if args.right and is_sequence(args.right):
+        raise BadInput(f"right {args.right} is a sequence but left {args.left} is one image")
     config = _config(args.config)
     left = _read(args.left, "left")
     right = _read(args.right, "right") if args.right else None
@@ -239,6 +250,60 @@ def _run(args) -> int:
         write_output(result, work, f"Vision Machine: {Path(args.left).name}")
     print(f"{result.total_ms:.0f} ms; report: {Path(args.out) / 'report.html'}")
     return 0
+
+
+def _frames(spec: str, what: str):
+    from vmcl.frame_sources import open_frames
+
+    try:
+        return open_frames(spec)
+    except FileNotFoundError as error:
+        raise BadInput(f"{what}: {error}") from None
+    except (InputError, OSError) as error:
+        raise BadInput(f"{what}: {error}") from None
+
+
+def _run_sequence(args) -> int:
+    from vmcl.pipeline import VisionMachine
+    from vmcl.sequence_output import SequenceWriter
+
+    if args.next:
+        raise BadInput("--next is for one image; a sequence's next frames are its own")
+    config = _config(args.config)
+    lefts = _frames(args.left, "left")
+    rights = _frames(args.right, "right") if args.right else None
+    if rights is not None and None not in (lefts.count, rights.count) and lefts.count != rights.count:
+        raise BadInput(f"left has {lefts.count} frames ({lefts.description}), right {rights.count} "
+                       f"({rights.description}): a stereo sequence needs a right view per frame")
+    if not args.fps > 0:
+        raise BadInput(f"--fps must be > 0, got {args.fps}")
+    vm = VisionMachine(config)
+    frames = 0
+    with output_folder(Path(args.out)) as work:
+        writer = SequenceWriter(work, fps=args.fps, title=f"Vision Machine: {lefts.description}")
+        with _progress(args, lefts.count or 0, "frames", unit="frame") as step:
+            results = vm.stream(_reading(lefts, "left"), _reading(rights, "right") if rights else None)
+            try:
+                for result in results:
+                    writer.add(result)
+                    frames += 1
+                    step(f"frame {frames}")
+            except InputError as error:
+                raise BadInput(str(error)) from None
+            finally:
+                writer.close()
+    print(f"{frames} frames; videos and fields in {args.out}")
+    return 0
+
+
+def _reading(source, what: str):
+    """The source's frames, a read failure reported as bad input naming the file."""
+    try:
+        yield from source.frames()
+    except FileNotFoundError as error:
+        raise BadInput(f"{what}: {error}") from None
+    except (InputError, OSError) as error:
+        raise BadInput(f"{what}: {error}") from None
 
 
 def write_output(result, folder: Path, title: str) -> None:
@@ -465,10 +530,13 @@ def parser() -> argparse.ArgumentParser:
     demo.add_argument("--size", type=int, default=256, help="scene size in pixels (64..1024, default 256)")
     demo.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config)")
 
-    run = commands.add_parser("run", parents=[quiet], help="run the machine on image files")
-    run.add_argument("left", help="left image (any file OpenCV reads)")
-    run.add_argument("right", nargs="?", help="right image of a rectified pair: adds stereo")
-    run.add_argument("--next", help="the left view's next frame: adds motion")
+    run = commands.add_parser("run", parents=[quiet], help="run the machine on image files or a sequence")
+    run.add_argument("left", help="left image (any file OpenCV reads), or a sequence: a folder of frames, a glob "
+                                  "pattern (quoted) or a video file")
+    run.add_argument("right", nargs="?", help="right image of a rectified pair (adds stereo), or the right "
+                                              "view's sequence")
+    run.add_argument("--next", help="the left view's next frame: adds motion (one image only)")
+    run.add_argument("--fps", type=float, default=10.0, help="a sequence's videos' frame rate (default 10)")
     run.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config)")
     run.add_argument("--out", required=True, help="output folder: new, empty or a previous vmcl output")
 

@@ -35,18 +35,20 @@ def _matrix(motion: Motion) -> np.ndarray:
 def _motion(transform: np.ndarray) -> Motion:
     """A 4 x 4 rigid transform as a Motion about the origin."""
     rvec = cv2.Rodrigues(np.ascontiguousarray(transform[:3, :3]))[0].ravel()
-    return Motion(translation=tuple(float(v) for v in transform[:3, 3]),
-                  rotation=tuple(float(v) for v in rvec))
+    return Motion(translation=_triple(transform[:3, 3]), rotation=_triple(rvec))
+
+
+def _triple(values: np.ndarray) -> tuple[float, float, float]:
+    return float(values[0]), float(values[1]), float(values[2])
 
 
 def _moved(face: Face, transform: np.ndarray) -> Face:
     """The face carried by a rigid transform; its (s, t) coordinates, and so its texture and marks,
     move with it."""
     rot, trans = transform[:3, :3], transform[:3, 3]
-    def vector(v) -> tuple[float, float, float]:
-        return tuple(float(c) for c in rot @ np.asarray(v, float))  # type: ignore[return-value]
-    origin = tuple(float(c) for c in rot @ np.asarray(face.origin, float) + trans)
-    return dataclasses.replace(face, origin=origin, u_axis=vector(face.u_axis), v_axis=vector(face.v_axis))
+    return dataclasses.replace(face, origin=_triple(rot @ np.asarray(face.origin, float) + trans),
+                               u_axis=_triple(rot @ np.asarray(face.u_axis, float)),
+                               v_axis=_triple(rot @ np.asarray(face.v_axis, float)))
 
 
 def advance(world: World, steps: int) -> World:
@@ -82,9 +84,9 @@ def advance(world: World, steps: int) -> World:
     rot, trans = to_rig[:3, :3], to_rig[:3, 3]
     light = world.light
     light = dataclasses.replace(
-        light, direction=tuple(float(c) for c in rot @ np.asarray(light.direction, float)),
-        gradient=tuple(float(c) for c in rot @ np.asarray(light.gradient, float)),
-        gradient_origin=tuple(float(c) for c in rot @ np.asarray(light.gradient_origin, float) + trans))
+        light, direction=_triple(rot @ np.asarray(light.direction, float)),
+        gradient=_triple(rot @ np.asarray(light.gradient, float)),
+        gradient_origin=_triple(rot @ np.asarray(light.gradient_origin, float) + trans))
     return World(camera=world.camera, light=light, bodies=tuple(bodies))
 
 

@@ -1,0 +1,124 @@
+"""Frame sequences from disk: a folder of images, a glob pattern, or a video file, read lazily in order.
+
+What ``vmcl run`` and :meth:`vmcl.pipeline.VisionMachine.stream` take as a sequence. Images are read with
+:func:`vmcl.datasets.read_image` (so damaged files are refused by name); videos with OpenCV's
+VideoCapture, whose BGR frames are returned as RGB.
+"""
+
+from __future__ import annotations
+
+import glob
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from vmcl.datasets import read_image
+from vmcl.errors import InputTypeError, InputValueError
+
+__all__ = ["IMAGE_SUFFIXES", "VIDEO_SUFFIXES", "FrameSource", "is_sequence", "open_frames"]
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".ppm", ".pgm", ".pbm", ".bmp", ".tif", ".tiff", ".webp")
+"""The file suffixes (any case) a folder's frames are taken from."""
+
+VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".mpg", ".mpeg", ".wmv")
+"""The file suffixes (any case) read as videos."""
+
+_GLOB_CHARACTERS = set("*?[")
+
+
+@dataclass(frozen=True)
+class FrameSource:
+    """A sequence of frames on disk.
+
+    Attributes
+    ----------
+    description : str
+        What it is, for messages ("12 images in frames/", "video clip.mp4").
+    count : int or None
+        The number of frames (a video's own count may be an estimate), None when unknown.
+    paths : tuple of Path
+        The image files in order (empty for a video).
+    video : Path or None
+    """
+
+    description: str
+    count: int | None
+    paths: tuple[Path, ...] = ()
+    video: Path | None = None
+
+    def frames(self) -> Iterator[np.ndarray]:
+        """The frames in order, read one at a time: uint8 or uint16, (H, W) grey or (H, W, 3) RGB."""
+        if self.video is None:
+            for path in self.paths:
+                yield read_image(path)
+            return
+        import cv2
+
+        capture = cv2.VideoCapture(str(self.video))
+        try:
+            while True:
+                ok, frame = capture.read()
+                if not ok:
+                    return
+                yield cv2.cvtColor(frame, cv2.COLOR_BGR2RGB) if frame.ndim == 3 else frame
+        finally:
+            capture.release()
+
+
+def is_sequence(spec: str | Path) -> bool:
+    """Whether ``spec`` names a sequence (a folder, a glob pattern or a video file), not one image."""
+    text = str(spec)
+    path = Path(text)
+    return path.is_dir() or bool(_GLOB_CHARACTERS & set(text)) or path.suffix.lower() in VIDEO_SUFFIXES
+
+
+def open_frames(spec: str | Path) -> FrameSource:
+    """The frames ``spec`` names.
+
+    Parameters
+    ----------
+    spec : str or Path
+        A folder (its files with :data:`IMAGE_SUFFIXES`, sorted by name), a glob pattern
+        (``frames/*.png``: the matches, sorted) or a video file (:data:`VIDEO_SUFFIXES`).
+
+    Returns
+    -------
+    FrameSource
+
+    Raises
+    ------
+    FileNotFoundError
+        The folder or video does not exist, or the pattern matches nothing.
+    ValueError
+        The folder holds no images, or OpenCV cannot open the video.
+    """
+    if not isinstance(spec, (str, Path)):
+        raise InputTypeError(f"spec must be a path or pattern, got {type(spec).__name__}")
+    text = str(spec)
+    path = Path(text)
+    if path.is_dir():
+        paths = tuple(sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES))
+        if not paths:
+            raise InputValueError(f"{path}: the folder holds no images ({', '.join(IMAGE_SUFFIXES)})")
+        return FrameSource(f"{len(paths)} images in {path}", len(paths), paths)
+    if path.suffix.lower() in VIDEO_SUFFIXES and not _GLOB_CHARACTERS & set(text):
+        if not path.is_file():
+            raise FileNotFoundError(f"{path}: no such video file")
+        import cv2
+
+        capture = cv2.VideoCapture(str(path))
+        try:
+            if not capture.isOpened():
+                raise InputValueError(f"{path}: OpenCV cannot read this video")
+            count = int(capture.get(cv2.CAP_PROP_FRAME_COUNT))
+        finally:
+            capture.release()
+        return FrameSource(f"video {path}", count if count > 0 else None, video=path)
+    if _GLOB_CHARACTERS & set(text):
+        paths = tuple(sorted(Path(p) for p in glob.glob(text) if Path(p).is_file()))
+        if not paths:
+            raise FileNotFoundError(f"{text}: the pattern matches no file")
+        return FrameSource(f"{len(paths)} files matching {text}", len(paths), paths)
+    raise InputValueError(f"{text}: not a folder, a glob pattern or a video file ({', '.join(VIDEO_SUFFIXES)})")

@@ -1,0 +1,109 @@
+"""What ``vmcl run`` writes for a sequence: every frame's fields and videos of the cartoon, flow and disparity.
+
+The folder (one that :func:`vmcl.output_folder.output_folder` prepared) receives
+
+- ``fields_NNNNNN.npz``: each frame's fields, as ``fields.npz`` holds them for one run
+  (:func:`vmcl.cli.result_fields`);
+- ``cartoon.mp4``, ``flow.mp4``, ``disparity.mp4``: the labelled cartoon (:func:`vmcl.report.labels_image`),
+  the restored flow in the Middlebury colour wheel and the restored disparity (turbo), one video frame per
+  frame, for the fields the run made. Colour scales are fixed by the first frame that has the field
+  (its largest speed, its disparity range), so that colours mean the same speed or depth throughout;
+- ``sequence.md``: per frame, the time taken and the notes.
+
+Videos are MPEG-4 (OpenCV's VideoWriter, fourcc mp4v). Files lie flat in the folder, as
+:mod:`vmcl.output_folder` lists and replaces them.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from vmcl.errors import InputValueError
+from vmcl.result import Result
+
+__all__ = ["FOURCC", "SequenceWriter"]
+
+FOURCC = "mp4v"
+"""The videos' codec, as OpenCV's VideoWriter names it."""
+
+
+class SequenceWriter:
+    """Writes a stream's Results into a folder, frame by frame; :meth:`close` finishes the videos.
+
+    Parameters
+    ----------
+    folder : Path
+        An existing folder vmcl may write into.
+    fps : float
+        The videos' frame rate, > 0.
+    title : str
+        The summary's heading.
+    """
+
+    def __init__(self, folder: Path, *, fps: float, title: str) -> None:
+        if not fps > 0:
+            raise InputValueError(f"fps must be > 0, got {fps!r}")
+        self.folder, self.fps, self.title = Path(folder), float(fps), title
+        self.writers: dict[str, object] = {}
+        self.scales: dict[str, tuple[float, float]] = {}
+        self.rows: list[str] = []
+        self.frames = 0
+
+    def add(self, result: Result) -> None:
+        """Write the next frame's Result."""
+        from vmcl.cli import result_fields
+
+        index = self.frames
+        np.savez_compressed(self.folder / f"fields_{index:06d}.npz", allow_pickle=True,
+                            **result_fields(result))
+        for stem, picture in self.pictures(result).items():
+            self.write(stem, picture)
+        notes = "; ".join(result.notes) if result.notes else ""
+        self.rows.append(f"| {index} | {result.total_ms:.0f} | {notes} |")
+        self.frames += 1
+
+    def pictures(self, result: Result) -> dict[str, np.ndarray]:
+        """This frame's video pictures (uint8 RGB) by video name."""
+        from vmcl.pictures import disparity_image, flow_image
+        from vmcl.report import labels_image
+
+        out = {"cartoon": labels_image(result.image, result.labels)}
+        if result.flow is not None:
+            if "flow" not in self.scales:
+                speed = np.hypot(result.flow[..., 0], result.flow[..., 1])
+                finite = speed[np.isfinite(speed)]
+                self.scales["flow"] = (0.0, max(float(finite.max()) if finite.size else 1.0, 1e-3))
+            out["flow"] = flow_image(result.flow, max_flow=self.scales["flow"][1])
+        if result.disparity is not None:
+            if "disparity" not in self.scales:
+                finite = result.disparity[np.isfinite(result.disparity)]
+                low, high = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+                self.scales["disparity"] = (low, max(high, low + 1e-3))
+            low, high = self.scales["disparity"]
+            out["disparity"] = disparity_image(result.disparity, vmin=low, vmax=high)
+        return out
+
+    def write(self, stem: str, picture: np.ndarray) -> None:
+        import cv2
+
+        writer = self.writers.get(stem)
+        if writer is None:
+            height, width = picture.shape[:2]
+            writer = cv2.VideoWriter(str(self.folder / f"{stem}.mp4"), cv2.VideoWriter.fourcc(*FOURCC), self.fps,
+                                     (width, height))
+            if not writer.isOpened():
+                raise OSError(f"OpenCV cannot write the video {self.folder / f'{stem}.mp4'} (codec {FOURCC})")
+            self.writers[stem] = writer
+        writer.write(cv2.cvtColor(picture, cv2.COLOR_RGB2BGR))  # type: ignore[attr-defined]
+
+    def close(self) -> None:
+        """Finish the videos and write the summary."""
+        for writer in self.writers.values():
+            writer.release()  # type: ignore[attr-defined]
+        self.writers = {}
+        lines = [f"# {self.title}", "", f"{self.frames} frames; videos: "
+                 + (", ".join(f"{stem}.mp4" for stem in sorted(self.scales.keys() | {"cartoon"})) if self.frames else "none"),
+                 "", "| frame | ms | notes |", "|---|---|---|", *self.rows, ""]
+        (self.folder / "sequence.md").write_text("\n".join(lines), encoding="utf-8")
