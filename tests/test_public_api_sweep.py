@@ -307,8 +307,9 @@ TABLE: tuple[Entry, ...] = (
        kinds={"left": _T, "crease": _T, "right": _T, "height": _N, "colour": _T}),
     _e("vmcl.scenes:preset", name="blocks", shape=tup(64, 64), specular=False,
        kinds={"name": _C, "shape": _T, "specular": _B}),
-    _e("vmcl.scenes:render", world=make("world"), seed=0, noise=0.0,
-       kinds={"world": _O, "seed": _I, "noise": _N}),
+    _e("vmcl.scenes:render", world=make("world"), seed=0, noise=0.0, frame=0,
+       kinds={"world": _O, "seed": _I, "noise": _N, "frame": _I}),
+    _e("vmcl.scenes:advance", world=make("world"), steps=1, kinds={"world": _O, "steps": _I}),
     # ------------------------------------------------------------------ datasets
     _e("vmcl.datasets:read_image", path=path("png"), kinds={"path": _P}),
     _e("vmcl.datasets:read_mask", path=path("png"), value=255, kinds={"path": _P, "value": _I}),
@@ -374,6 +375,8 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.pipeline:MrfConfig", method="meanfield", seed=0, schedule="fast",
        kinds={"method": _C, "seed": _I, "schedule": _C}),
     _e("vmcl.pipeline:LabelsConfig", method="linear", weights=None, kinds={"method": _C, "weights": _P}),
+    _e("vmcl.pipeline:TimeConfig", enabled=True, gain=1.0, memory=2.0, tolerance=0.05, scene_cut=0.5, warm=True,
+       kinds={"enabled": _B, "gain": _N, "memory": _N, "tolerance": _N, "scene_cut": _N, "warm": _B}),
     _e("vmcl.pipeline:VisionMachine", config=None, kinds={"config": _O, "machine": _M}),
     _e("vmcl.pipeline:VisionMachine.run", self=make("vision_machine"), left=IMG, right=None, next=None,
        kinds={"left": _A, "right": _OA, "next": _OA}),
@@ -420,6 +423,9 @@ EXEMPT = {
     "vmcl.cues:RunInputs",
     # Narrows a result vmcl made on the device for the type checker; a host array there is vmcl's defect.
     "vmcl.machine:on_device",
+    # A loop of advance and render (both swept) whose length is its frames argument, so the sweep's valid
+    # counts change its result's shape; tests/test_temporal.py checks it.
+    "vmcl.scenes:render_sequence",
     # Change the machine's cues for the whole process: tests/test_cues.py checks their refusals.
     "vmcl.labels:add_cue", "vmcl.labels:remove_cue", "vmcl.cues:register", "vmcl.cues:unregister",
     # Device-level building blocks of the early layer: they take images already checked by

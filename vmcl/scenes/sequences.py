@@ -21,7 +21,10 @@ from vmcl.errors import InputTypeError
 from vmcl.scenes.rendering import Scene, render
 from vmcl.scenes.world import Body, Face, Motion, World
 
-__all__ = ["advance", "render_sequence"]
+__all__ = ["MAX_FRAMES", "advance", "render_sequence"]
+
+MAX_FRAMES = 1000
+"""The most frames :func:`render_sequence` renders into one tuple (and steps :func:`advance` takes)."""
 
 
 def _matrix(motion: Motion) -> np.ndarray:
@@ -59,7 +62,7 @@ def advance(world: World, steps: int) -> World:
     world : World
         At frame 0; each body's and the rig's motion is the step from one frame to the next.
     steps : int
-        >= 0; 0 returns the world as given.
+        0 .. :data:`MAX_FRAMES`; 0 returns the world as given.
 
     Returns
     -------
@@ -70,7 +73,7 @@ def advance(world: World, steps: int) -> World:
     """
     if not isinstance(world, World):
         raise InputTypeError(f"world must be a World (see vmcl.scenes.preset), got {type(world).__name__}")
-    steps = check_int(steps, "steps", minimum=0)
+    steps = check_int(steps, "steps", minimum=0, maximum=MAX_FRAMES)
     if steps == 0:
         return world
     rig = np.linalg.matrix_power(_matrix(world.camera.motion), steps)  # rig frame at k -> world frame at 0
@@ -98,7 +101,8 @@ def render_sequence(world: World, frames: int, *, seed: int = 0, noise: float = 
     world : World
         Frame 0 (:func:`vmcl.scenes.preset` gives ready-made ones, each with moving bodies or rig).
     frames : int
-        >= 1.
+        1 .. :data:`MAX_FRAMES` (a longer sequence: :func:`advance` and :func:`vmcl.scenes.render` frame by
+        frame).
     seed : int
         Seeds the textures (the same at every frame) and, with the frame's index, each frame's noise.
     noise : float
@@ -117,5 +121,5 @@ def render_sequence(world: World, frames: int, *, seed: int = 0, noise: float = 
     >>> len(frames), bool(abs(frames[1].left - frames[0].left_next).max() < 1e-4)
     (3, True)
     """
-    frames = check_int(frames, "frames", minimum=1)
+    frames = check_int(frames, "frames", minimum=1, maximum=MAX_FRAMES)
     return tuple(render(advance(world, k), seed=seed, noise=noise, frame=k) for k in range(frames))

@@ -1,0 +1,81 @@
+"""`vmcl run` on sequences: folders, glob patterns and videos in; each frame's fields and the videos out."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from vmcl import scenes
+from vmcl.cli import main
+from vmcl.frame_sources import open_frames
+
+FRAMES = 3
+
+
+@pytest.fixture(scope="module")
+def sequence(tmp_path_factory):
+    """Left and right folders of a rendered stereo sequence, and the left frames as a video."""
+    root = tmp_path_factory.mktemp("sequence")
+    frames = scenes.render_sequence(scenes.preset("blocks", shape=(64, 64)), FRAMES, seed=0, noise=0.01)
+    for side in ("left", "right"):
+        (root / side).mkdir()
+        for k, frame in enumerate(frames):
+            image = np.round(getattr(frame, side) * 255).clip(0, 255).astype(np.uint8)
+            cv2.imwrite(str(root / side / f"frame_{k:02d}.png"), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
+    (root / "left" / "notes.txt").write_text("not a frame")
+    writer = cv2.VideoWriter(str(root / "clip.avi"), cv2.VideoWriter.fourcc(*"MJPG"), 5, (64, 64))
+    for k in range(FRAMES):
+        writer.write(cv2.imread(str(root / "left" / f"frame_{k:02d}.png")))
+    writer.release()
+    return root
+
+
+def test_a_stereo_sequence_gives_each_frames_fields_and_the_videos(tmp_path, sequence):
+    out = tmp_path / "out"
+    assert main(["run", str(sequence / "left"), str(sequence / "right"), "--out", str(out), "-q"]) == 0
+    fields = sorted(out.glob("fields_*.npz"))
+    assert [p.name for p in fields] == [f"fields_{k:06d}.npz" for k in range(FRAMES)]
+    with np.load(fields[0]) as first, np.load(fields[-1]) as last:
+        assert first["disparity"].shape == (64, 64) and first["flow"].shape == (64, 64, 2)
+        assert "flow" not in last  # the last frame has no next
+    for stem, count in (("cartoon", FRAMES), ("disparity", FRAMES), ("flow", FRAMES - 1)):
+        video = cv2.VideoCapture(str(out / f"{stem}.mp4"))
+        assert video.isOpened(), stem
+        assert int(video.get(cv2.CAP_PROP_FRAME_COUNT)) == count, stem
+        video.release()
+    assert "| 2 |" in (out / "sequence.md").read_text()
+
+
+def test_a_glob_and_a_video_are_sequences_too(tmp_path, sequence):
+    assert main(["run", str(sequence / "left" / "frame_0[01].png"), "--out", str(tmp_path / "glob"), "-q"]) == 0
+    assert len(list((tmp_path / "glob").glob("fields_*.npz"))) == 2
+    assert main(["run", str(sequence / "clip.avi"), "--out", str(tmp_path / "video"), "-q"]) == 0
+    assert len(list((tmp_path / "video").glob("fields_*.npz"))) == FRAMES
+    source = open_frames(sequence / "clip.avi")
+    frame = next(source.frames())
+    assert frame.shape == (64, 64, 3) and source.count == FRAMES
+
+
+@pytest.mark.parametrize("case, message", [
+    ("short_right", "left has 3 frames"),
+    ("no_match", "matches no file"),
+    ("missing_video", "no such video file"),
+    ("next", "--next is for one image"),
+    ("empty_folder", "holds no images"),
+])
+def test_bad_sequences_are_one_line_and_exit_2(tmp_path, sequence, capsys, case, message):
+    (tmp_path / "empty").mkdir()
+    right = tmp_path / "right"
+    right.mkdir()
+    (right / "a.png").write_bytes((sequence / "right" / "frame_00.png").read_bytes())
+    argv = {"short_right": [str(sequence / "left"), str(right)],
+            "no_match": [str(tmp_path / "*.png")],
+            "missing_video": [str(tmp_path / "none.mp4")],
+            "next": [str(sequence / "left"), "--next", str(sequence / "left" / "frame_01.png")],
+            "empty_folder": [str(tmp_path / "empty")]}[case]
+    out = tmp_path / "out"
+    assert main(["run", *argv, "--out", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1, err
+    assert not out.exists()

@@ -1,0 +1,170 @@
+"""Time: rendered sequences, the streaming machine and its temporal terms (seed section "Fast vision: The
+role of time smoothness"), against the sequences' exact ground truth."""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+
+import numpy as np
+import pytest
+
+from vmcl import scenes
+from vmcl.metrics import evaluate_flow
+from vmcl.pipeline import (
+    WARM_SCHEDULE,
+    ColourConfig,
+    Config,
+    MrfConfig,
+    TextureConfig,
+    TimeConfig,
+    VisionMachine,
+)
+
+# Depth and motion only: the cues whose fields the ground truth gives at every frame.
+_DEPTH_AND_MOTION = {"colour": ColourConfig(enabled=False), "texture": TextureConfig(enabled=False)}
+
+
+@pytest.mark.parametrize("name", ["blocks", "corridor", "cues"])
+def test_each_frame_of_a_sequence_continues_the_last(name):
+    frames = scenes.render_sequence(scenes.preset(name, shape=(64, 80)), 3, seed=4)
+    for before, after in itertools.pairwise(frames):
+        seen = np.isfinite(before.left_next) & np.isfinite(after.left)
+        assert (np.isfinite(before.left_next) == np.isfinite(after.left)).all()
+        np.testing.assert_allclose(after.left[seen], before.left_next[seen], atol=1e-4)
+    assert scenes.advance(frames[0].world, 0) is frames[0].world
+
+
+def test_a_sequences_first_frame_is_the_single_render_and_frames_get_their_own_noise():
+    world = scenes.preset("cues", shape=(64, 64))
+    first, second = scenes.render_sequence(world, 2, seed=3, noise=0.05)
+    np.testing.assert_array_equal(first.left, scenes.render(world, seed=3, noise=0.05).left)
+    clean = scenes.render_sequence(world, 2, seed=3)
+    # Same textures, different noise draws: the noise of frame 1 is not frame 0's again.
+    assert not np.allclose(second.left - clean[1].left, first.left - clean[0].left)
+
+
+def _errors(results, frames):
+    """Per frame (from the second): mean |disparity error| and flow EPE, and the signed error fields."""
+    rows = []
+    for result, frame in zip(results, frames):
+        visible = ~frame.occluded_stereo & np.isfinite(frame.disparity)
+        moving = ~frame.occluded_motion & np.isfinite(frame.flow).all(axis=-1)
+        rows.append((np.where(visible, result.disparity - frame.disparity, np.nan),
+                     np.where(moving[..., None], result.flow - frame.flow, np.nan),
+                     evaluate_flow(result.flow, frame.flow, mask=moving).epe))
+    return rows
+
+
+def _flicker(rows):
+    """Mean change of the signed error between consecutive frames: disparity, flow."""
+    d = [np.nanmean(np.abs(b[0] - a[0])) for a, b in itertools.pairwise(rows)]
+    f = [np.nanmean(np.linalg.norm(b[1] - a[1], axis=-1)) for a, b in itertools.pairwise(rows)]
+    return float(np.mean(d)), float(np.mean(f))
+
+
+@pytest.fixture(scope="module")
+def noisy_sequence():
+    frames = scenes.render_sequence(scenes.preset("blocks", shape=(96, 96)), 6, seed=2, noise=0.03)
+    return frames, [f.left for f in frames], [f.right for f in frames]
+
+
+@pytest.fixture(scope="module")
+def streamed(noisy_sequence, machine):
+    frames, lefts, rights = noisy_sequence
+    out = {}
+    for label, time in (("off", TimeConfig(enabled=False)), ("warm", TimeConfig()), ("cold", TimeConfig(warm=False))):
+        vm = VisionMachine(Config(time=time, **_DEPTH_AND_MOTION), machine=machine)
+        # The last frame has no next, so no flow: scored up to the one before it.
+        out[label] = _errors(list(vm.stream(lefts, rights))[1:-1], frames[1:-1])
+    return out
+
+
+def test_the_temporal_terms_halve_the_flicker(streamed):
+    off, on = _flicker(streamed["off"]), _flicker(streamed["warm"])
+    assert on[0] <= 0.5 * off[0], (on, off)
+    assert on[1] <= 0.5 * off[1], (on, off)
+    # ... and the fields themselves are no worse.
+    assert np.mean([r[2] for r in streamed["warm"]]) <= np.mean([r[2] for r in streamed["off"]])
+
+
+def test_a_warm_start_reaches_the_cold_starts_error_in_half_the_sweeps(streamed):
+    fast = MrfConfig().settings("motion").schedule("meanfield")
+    warm = MrfConfig().settings("motion", warm=True).schedule("meanfield")
+    sweeps = [s.mf_steps * s.mf_iterations + s.quench for s in (fast, warm)]
+    assert warm.mf_t0 == WARM_SCHEDULE["mf_t0"] and 2 * sweeps[1] <= sweeps[0], sweeps
+    warm_epe = np.mean([r[2] for r in streamed["warm"]])
+    cold_epe = np.mean([r[2] for r in streamed["cold"]])
+    assert warm_epe <= 1.1 * cold_epe, (warm_epe, cold_epe)
+    warm_d = np.mean([np.nanmean(np.abs(r[0])) for r in streamed["warm"]])
+    cold_d = np.mean([np.nanmean(np.abs(r[0])) for r in streamed["cold"]])
+    assert warm_d <= 1.1 * cold_d, (warm_d, cold_d)
+
+
+def test_without_the_temporal_terms_a_stream_is_run_on_each_frame(machine):
+    frames = scenes.render_sequence(scenes.preset("cues", shape=(64, 64)), 3, seed=1, noise=0.02)
+    lefts, rights = [f.left for f in frames], [f.right for f in frames]
+    vm = VisionMachine(Config(time=TimeConfig(enabled=False)), machine=machine)
+    streamed = list(vm.stream(iter(lefts), iter(rights)))
+    assert len(streamed) == 3 and streamed[-1].flow is None
+    for k, result in enumerate(streamed):
+        alone = vm.run(lefts[k], rights[k], lefts[k + 1] if k + 1 < len(lefts) else None)
+        for name in ("disparity", "flow", "labels", "boundary_strength"):
+            expected = getattr(alone, name)
+            if expected is None:
+                assert getattr(result, name) is None
+            else:
+                np.testing.assert_array_equal(getattr(result, name), expected, err_msg=f"frame {k} {name}")
+
+
+def test_at_a_scene_cut_time_breaks_and_the_frame_starts_cold(machine):
+    first = scenes.render_sequence(scenes.preset("blocks", shape=(80, 80)), 3, seed=1, noise=0.02)
+    second = scenes.render_sequence(scenes.preset("corridor", shape=(80, 80)), 2, seed=1, noise=0.02)
+    lefts = [f.left for f in first] + [f.left for f in second]
+    vm = VisionMachine(Config(**_DEPTH_AND_MOTION), machine=machine)
+    results = list(vm.stream(lefts))
+    cut = results[3]  # the corridor's first frame, after three of the blocks
+    assert any("scene cut" in note for note in cut.notes), cut.notes
+    alone = VisionMachine(Config(**_DEPTH_AND_MOTION), machine=machine).run(lefts[3], next=lefts[4])
+    truth = second[0]
+    moving = ~truth.occluded_motion & np.isfinite(truth.flow).all(axis=-1)
+    ghosted = evaluate_flow(cut.flow, truth.flow, mask=moving).epe
+    cold = evaluate_flow(alone.flow, truth.flow, mask=moving).epe
+    assert ghosted <= 1.1 * cold, (ghosted, cold)
+    assert not any("scene cut" in note for r in results[:3] for note in r.notes)
+
+
+def test_stream_refuses_frames_that_do_not_fit(machine):
+    frames = scenes.render_sequence(scenes.preset("cues", shape=(64, 64)), 2, seed=1)
+    vm = VisionMachine(Config(time=TimeConfig(enabled=False), **_DEPTH_AND_MOTION), machine=machine)
+    with pytest.raises(ValueError, match="rights ended at frame 1"):
+        list(vm.stream([f.left for f in frames], [frames[0].right]))
+    with pytest.raises(ValueError, match="rights holds more frames"):
+        list(vm.stream([frames[0].left], [frames[0].right, frames[1].right]))
+    with pytest.raises(ValueError, match="frame 0: next has shape"):
+        list(vm.stream([frames[0].left, frames[1].left[:32]]))
+    assert list(vm.stream([])) == []
+
+
+@pytest.mark.parametrize("key, value, message", [("gain", -1.0, "time.gain"), ("memory", 0.0, "time.memory"),
+                                                  ("tolerance", 0.0, "time.tolerance"),
+                                                  ("scene_cut", 1.5, "time.scene_cut"), ("warm", 1, "time.warm")])
+def test_time_settings_are_checked_naming_the_key(key, value, message):
+    with pytest.raises((ValueError, TypeError), match=message):
+        Config.from_dict({"time": {key: value}})
+
+
+def test_the_warm_schedule_keeps_a_users_overrides():
+    mine = MrfConfig(motion={"beta": 3.0}).settings("motion", warm=True)
+    assert mine.model.beta == 3.0
+    assert dataclasses.asdict(mine.schedule("meanfield"))["mf_steps"] == WARM_SCHEDULE["mf_steps"]
+
+
+def test_render_sequence_refuses_bad_counts_and_worlds():
+    world = scenes.preset("cues", shape=(64, 64))
+    for frames in (0, scenes.sequences.MAX_FRAMES + 1):
+        with pytest.raises(ValueError, match="frames"):
+            scenes.render_sequence(world, frames)
+    with pytest.raises(TypeError, match="world must be a World"):
+        scenes.render_sequence("cues", 2)
+    assert len(scenes.render_sequence(world, 1)) == 1
