@@ -386,39 +386,36 @@ def _eval_stereo(args, root: Path) -> int:
 
 
 def _eval_flow(args, root: Path) -> int:
-    import cv2
+    from vmcl.datasets import find_flow_folders, read_flow_folder
+    from vmcl.flow_evaluation import evaluate_sequence
 
-    from vmcl import metrics
-    from vmcl.datasets import FLOW_SCENES, load_flow
-    from vmcl.pipeline import MotionConfig, VisionMachine
-
-    names = [n for n in FLOW_SCENES if (root / "middlebury_flow" / n).is_dir() or (root / n.lower()).is_dir()]
-    if not names:
-        raise BadInput(f"--data {root}: no Middlebury flow sequence found")
-    rows = [("sequence", "method", "EPE px", "AAE deg", "density", "ms")]
-    with _progress(args, len(names), "flow") as step:
-        for name in names:
+    folders = find_flow_folders(root)
+    if not folders:
+        raise BadInput(f"--data {root}: no flow sequence found (numbered frames with flowNN.flo, gt/*.flo or "
+                       "Sintel's flow/)")
+    rows: list[tuple[object, ...]] = [("sequence", "method", "EPE px", "matched", "unmatched", "AAE deg", "ms")]
+    machine = None
+    with _progress(args, len(folders), "flow", unit="sequence") as step:
+        for folder in folders:
             try:
-                pair = load_flow(name, root)
-            except FileNotFoundError:
-                step(name)
-                continue
-            grey = [cv2.cvtColor(f, cv2.COLOR_RGB2GRAY) if f.ndim == 3 else f for f in (pair.frame0, pair.frame1)]
-            vm = VisionMachine(_only(motion=MotionConfig(levels=3)))
-            vm.run(pair.frame0, next=pair.frame1)
-            ours, ms = _timed(vm.run, pair.frame0, next=pair.frame1)
-            methods = [("vmcl (MRF)", ours.flow, ms), ("vmcl raw", ours.raw_flow, ms)]
-            farneback, ms_f = _timed(cv2.calcOpticalFlowFarneback, *grey, None, 0.5, 4, 15, 3, 5, 1.2, 0)
-            methods.append(("OpenCV Farneback", farneback, ms_f))
-            dis = cv2.DISOpticalFlow.create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM)
-            dis_flow, ms_d = _timed(dis.calc, *grey, None)
-            methods.append(("OpenCV DIS", dis_flow, ms_d))
-            for label, field, took in methods:
-                s = metrics.evaluate_flow(field, pair.flow, mask=pair.mask)
-                rows.append((name, label, _fmt(s.epe), _fmt(s.aae, 2), _fmt(s.density), f"{took:.0f}"))
-            step(name)
-    _print_table("Optical flow (Middlebury; average endpoint and angular errors)", rows)
+                sequence = read_flow_folder(folder)
+            except (InputError, OSError) as error:
+                raise BadInput(f"{folder}: {error}") from None
+            from vmcl.machine import default_machine
+
+            machine = machine or default_machine()
+            for row in evaluate_sequence(sequence, machine=machine):
+                rows.append((sequence.name, row.method, _fmt(row.epe), _fmt_optional(row.epe_matched),
+                             _fmt_optional(row.epe_unmatched), _fmt(row.aae, 2), f"{row.ms:.0f}"))
+            step(sequence.name)
+    _print_table("Optical flow (average endpoint error over the valid pixels; matched / unmatched where the data "
+                 "marks occlusions; vmcl sequence: the frames before the scored one streamed with the temporal terms)",
+                 rows)
     return 0
+
+
+def _fmt_optional(value: float | None) -> str:
+    return "-" if value is None else _fmt(value)
 
 
 def _eval_edges(args, root: Path) -> int:
@@ -544,8 +541,9 @@ def parser() -> argparse.ArgumentParser:
     evaluate.add_argument("benchmark", choices=("stereo", "flow", "edges"))
     evaluate.add_argument("--data", required=True,
                           help="stereo: a scene folder in a Middlebury layout (2001, 2003, v2, 2005/2006, "
-                               "2014/2021) or any folder holding such folders; flow: the data sets folder "
-                               "laid out as ../shared/datasets; edges: that folder (its bsds500/test images) or "
+                               "2014/2021) or any folder holding such folders; flow: a folder of numbered frames "
+                               "with ground truth (Middlebury, Sintel or Yosemite layout) or any folder holding "
+                               "such folders; edges: that folder (its bsds500/test images) or "
                                "any BSDS-layout folder (<id>/<id>.jpg + .mat, or images/ and groundTruth/)")
     evaluate.add_argument("--thresholds", type=int, default=30,
                           help="edges: thresholds of each sweep (the BSDS benchmark's own count is 99; each "

@@ -18,6 +18,7 @@ nothing is downloaded and nothing is silently resized or rescaled. A stereo scen
 from __future__ import annotations
 
 import os
+import re
 import sys
 import tempfile
 import zlib
@@ -39,7 +40,9 @@ __all__ = [
     "BSDSImage",
     "BSDSSet",
     "FlowPair",
+    "FlowSequence",
     "StereoPair",
+    "find_flow_folders",
     "find_stereo_folders",
     "load_bsds",
     "load_flow",
@@ -47,6 +50,7 @@ __all__ = [
     "read_bsds_folder",
     "read_disparity",
     "read_flo",
+    "read_flow_folder",
     "read_image",
     "read_mask",
     "read_pfm",
@@ -885,6 +889,162 @@ def load_flow(name: str, root, *, colour: bool = False) -> FlowPair:
         mask=mask,
         folder=folder,
     )
+
+
+@dataclass(frozen=True)
+class FlowSequence:
+    """A folder of frames in order with the ground-truth flow of one of them.
+
+    Attributes
+    ----------
+    name : str
+        The folder's name (with its parent's for Sintel's passes: "clean/alley_1").
+    frames : tuple of Path
+        The frames in the order of their numbers.
+    index : int
+        The frame the ground truth starts from: the flow is from ``frames[index]`` to
+        ``frames[index + 1]``; the frames before it are the sequence's past.
+    flow : (H, W, 2) float32 array
+        (u, v), NaN where unknown.
+    mask : (H, W) bool array
+        The pixels to score: known flow, not marked invalid (Sintel), not Yosemite's sky.
+    occluded : (H, W) bool array or None
+        Pixels that leave the view or are hidden in the next frame (Sintel's occlusion maps), when given.
+    """
+
+    name: str
+    frames: tuple[Path, ...]
+    index: int
+    flow: np.ndarray
+    mask: np.ndarray
+    occluded: np.ndarray | None = None
+
+
+_NUMBERED = re.compile(r"(\d+)$")
+
+
+def _number(path: Path) -> int | None:
+    found = _NUMBERED.search(path.stem)
+    return int(found.group(1)) if found else None
+
+
+def _flow_truth(folder: Path) -> tuple[Path, Path | None, Path | None] | None:
+    """(the .flo, its invalid map, its occlusion map) of a flow folder, or None when it has none.
+
+    Middlebury: flowNN.flo beside frameNN.png; this layout of Sintel's excerpts: gt/frame_NNNN.flo with
+    gt/invalid/ and gt/occlusions/; Sintel's own: <pass>/<scene> beside flow/<scene>, invalid/<scene>,
+    occlusions/<scene>; Yosemite: correct_yos.flo.
+    """
+    here = sorted(folder.glob("*.flo"))
+    if len(here) == 1:
+        return here[0], None, None
+    gt = folder / "gt"
+    below = sorted(gt.glob("*.flo")) if gt.is_dir() else []
+    if len(below) == 1:
+        name = below[0].with_suffix(".png").name
+        invalid, occlusions = gt / "invalid" / name, gt / "occlusions" / name
+        return below[0], invalid if invalid.is_file() else None, occlusions if occlusions.is_file() else None
+    beside = folder.parent.parent / "flow" / folder.name
+    flows = sorted(beside.glob("*.flo")) if beside.is_dir() else []
+    if flows:
+        # Sintel's own layout has a flow for every frame but the last: the sequence ends at its last flow.
+        name = flows[-1].with_suffix(".png").name
+        invalid = folder.parent.parent / "invalid" / folder.name / name
+        occlusions = folder.parent.parent / "occlusions" / folder.name / name
+        return flows[-1], invalid if invalid.is_file() else None, occlusions if occlusions.is_file() else None
+    return None
+
+
+def _flow_frames(folder: Path) -> list[Path]:
+    return sorted((p for p in folder.iterdir() if p.is_file() and p.suffix.lower() == ".png" and _number(p) is not None),
+                  key=lambda p: (_number(p), p.name))
+
+
+def read_flow_folder(folder) -> FlowSequence:
+    """Read a folder of frames with ground-truth flow: Middlebury's layout, Sintel's, or Yosemite's.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Numbered PNG frames (frame07.png ... frame14.png, frame_0001.png ...) and one flow: flowNN.flo
+        beside them for frame NN (Middlebury), gt/frame_NNNN.flo with gt/invalid/ and gt/occlusions/
+        masks, or Sintel's <pass>/<scene> folders with flow/<scene>/ beside the pass (the last flow is
+        scored), or Yosemite's yos9.png, yos10.png and correct_yos.flo.
+
+    Returns
+    -------
+    FlowSequence
+
+    Raises
+    ------
+    FileNotFoundError
+        No such folder.
+    ValueError
+        No flow, fewer than two numbered frames, no frame after the flow's first, or sizes that differ.
+    """
+    folder = _as_path(folder, "folder")
+    if not folder.is_dir():
+        raise FileNotFoundError(f"no such folder: {folder}")
+    truth = _flow_truth(folder)
+    if truth is None:
+        raise InputValueError(f"folder {folder} holds no ground-truth flow (flowNN.flo, gt/*.flo or Sintel's flow/)")
+    flo, invalid, occlusions = truth
+    frames = _flow_frames(folder)
+    if len(frames) < 2:
+        raise InputValueError(f"folder {folder} holds fewer than two numbered frames (*NN.png)")
+    numbers = [_number(p) for p in frames]
+    wanted = _number(flo)
+    if wanted is None:  # Yosemite's correct_yos.flo: the flow between its two frames
+        if len(frames) != 2:
+            raise InputValueError(f"{flo} has no frame number and the folder holds {len(frames)} frames, not two")
+        wanted = numbers[0]
+    if wanted not in numbers or numbers.index(wanted) + 1 >= len(frames):
+        raise InputValueError(f"{flo} is the flow from frame {wanted}, which the folder lacks or which has no next frame")
+    index = numbers.index(wanted)
+    flow = read_flo(flo)
+    size = read_image(frames[index]).shape[:2]
+    if flow.shape[:2] != size:
+        raise InputValueError(f"{flo} is {flow.shape[1]} x {flow.shape[0]}, the frames {size[1]} x {size[0]}")
+    mask = np.isfinite(flow).all(axis=-1)
+    if invalid is not None:
+        mask &= ~read_mask(invalid)
+    if flo.name == "correct_yos.flo":  # Yosemite's sky is stored as exactly (1, 0), not measured
+        mask &= ~((flow[..., 0] == 1.0) & (flow[..., 1] == 0.0))
+    occluded = read_mask(occlusions) if occlusions is not None else None
+    name = folder.name if invalid is None and occlusions is None else f"{folder.parent.name}/{folder.name}"
+    return FlowSequence(name, tuple(frames), index, flow, mask, occluded)
+
+
+def find_flow_folders(root, *, depth: int = 4) -> list[Path]:
+    """The folders at or below ``root`` that :func:`read_flow_folder` reads (sorted; hidden ones skipped).
+
+    Parameters
+    ----------
+    root : str or Path
+    depth : int
+        Levels below ``root`` searched, >= 1.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``root`` is not a folder.
+    """
+    root = _as_path(root, "root")
+    check_int(depth, "depth", minimum=1)
+    if not root.is_dir():
+        raise FileNotFoundError(f"no such folder: {root}")
+    def holds(folder: Path) -> bool:
+        return _flow_truth(folder) is not None and len(_flow_frames(folder)) >= 2
+    if holds(root):
+        return [root]
+    found: list[Path] = []
+    level = [root]
+    for _ in range(depth):
+        below = sorted(child for parent in level for child in parent.iterdir()
+                       if child.is_dir() and not child.name.startswith("."))
+        found += [child for child in below if holds(child)]
+        level = [child for child in below if not holds(child)]
+    return sorted(found)
 
 
 # --------------------------------------------------------------------------------------------- BSDS

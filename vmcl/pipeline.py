@@ -250,20 +250,25 @@ class MotionConfig:
     Parameters
     ----------
     enabled : bool
-    delta, patch, levels, features
+    delta, patch, features
         As :func:`vmcl.early.motion.flow` takes them.
+    levels : int or None
+        The pyramid's levels, as :func:`vmcl.early.motion.flow` takes them; None (default): found
+        from the image's size (:func:`vmcl.early.motion.pyramid_levels`), so that the search reaches a
+        fixed share of the image. The run's notes say when much of the flow lies at the search's limit.
     weigh_by_score : bool
         The motion MRF weighs each estimate by :func:`vmcl.mrf.score_confidence` of its score; off,
         every estimate weighs 1.
     confidence_floor : float
-        In [0, 1): that weighting's floor, in the features' score units (the default was chosen with
-        "brightness" features; see :func:`vmcl.mrf.score_confidence`).
+        In [0, 1): that weighting's floor (:func:`vmcl.mrf.score_confidence`) as a correlation of the
+        brightness, the squared-difference features' score; for "sign_log" it is carried to the sign
+        correlation's units by the arcsine law.
     """
 
     enabled: bool = True
     delta: int = 4
     patch: int = 11
-    levels: int = 2
+    levels: int | None = None
     features: str = "brightness"
     weigh_by_score: bool = True
     confidence_floor: float = 0.7
@@ -274,7 +279,8 @@ class MotionConfig:
         check_int(self.patch, "motion.patch", minimum=1)
         if self.patch % 2 == 0:
             raise InputValueError(f"motion.patch must be odd (a window centred on the pixel), got {self.patch}")
-        check_int(self.levels, "motion.levels", minimum=1)
+        if self.levels is not None:
+            check_int(self.levels, "motion.levels", minimum=1)
         check_choice(self.features, "motion.features", motion.FEATURES)
         check_unit_interval(self.confidence_floor, "motion.confidence_floor", closed_above=False)
 

@@ -9,14 +9,19 @@ from __future__ import annotations
 
 import numpy as np
 
+from vmcl.cm import reduce as cm_reduce
 from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import motion
+from vmcl.early.sign_correlation import arcsine_law
 from vmcl.labels import Label
 from vmcl.machine import on_device
 from vmcl.mrf import score_confidence
 from vmcl.pictures import flow_image
 
-__all__ = ["MotionCue"]
+__all__ = ["LIMIT_SHARE", "MotionCue"]
+
+LIMIT_SHARE = 0.005
+"""The share of pixels whose flow lies at the search's limit from which the run notes it."""
 
 
 class MotionCue(CueModule):
@@ -31,12 +36,35 @@ class MotionCue(CueModule):
 
     def measure(self, run: RunInputs) -> Measurement:
         mc = run.config.motion
-        found = motion.flow(run.left, run.needed("next"), delta=mc.delta, patch=mc.patch, levels=mc.levels,
+        levels = mc.levels
+        if levels is None:
+            levels = motion.pyramid_levels(tuple(run.left.shape), patch=mc.patch, delta=mc.delta)
+        found = motion.flow(run.left, run.needed("next"), delta=mc.delta, patch=mc.patch, levels=levels,
                             features=mc.features, machine=run.machine)
-        confidence = (on_device(score_confidence(found.score, floor=mc.confidence_floor, machine=run.machine))
+        confidence = (on_device(score_confidence(found.score, floor=self.floor(mc.confidence_floor, mc.features),
+                                                 machine=run.machine))
                       if mc.weigh_by_score else None)
         flow = on_device(found.flow)  # device input, device output
-        return Measurement(flow, confidence, run.brightness, fields={"raw_flow": flow})
+        return Measurement(flow, confidence, run.brightness, fields={"raw_flow": flow},
+                           notes=self.limit_note(flow, motion.reach(mc.delta, levels), levels, run.machine))
+
+    @staticmethod
+    def floor(correlation: float, features: str) -> float:
+        """The confidence floor in the features' score units, from a floor on the correlation of the
+        brightness (the squared-difference scores' units): the sign of the LoG scores the arcsine law of
+        the correlation (:mod:`vmcl.early.sign_correlation`); edges' Dice scores take it as it is."""
+        return float(arcsine_law(correlation)) if features == "sign_log" else correlation
+
+    @staticmethod
+    def limit_note(flow, limit: int, levels: int, machine) -> tuple[str, ...]:
+        """A note when a noticeable share of the flow lies at the search's limit: the motion there may be
+        larger than the search reaches."""
+        at_limit = (abs(flow) >= limit - 0.5).astype(np.float32)  # per component; NaN compares false
+        share = float(cm_reduce.reduce(at_limit, "sum", machine=machine).get()) / flow.size * 2
+        if share < LIMIT_SHARE:
+            return ()
+        return ((f"motion: {share:.1%} of the pixels' flow lies at the search's limit of {limit} px ({levels} "
+                "pyramid levels): the motion there may be larger; raise [motion] levels or delta"),)
 
     def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
         if result.flow is None:

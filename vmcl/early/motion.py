@@ -41,6 +41,7 @@ from vmcl.machine import Machine
 
 __all__ = [
     "BOUNDARY_SCORE",
+    "COARSEST_SIDE",
     "DEFAULT_SIGMA",
     "EDGE_QUANTILES",
     "FEATURES",
@@ -51,6 +52,8 @@ __all__ = [
     "FlowResult",
     "Method",
     "flow",
+    "pyramid_levels",
+    "reach",
     "votes",
 ]
 
@@ -73,6 +76,9 @@ SPEED_PENALTY = 1e-3
 
 PYRAMID_SIGMA = 1.0
 """Gaussian smoothing before each halving of the pyramid."""
+
+COARSEST_SIDE = 32
+"""The smallest side of the coarsest level :func:`pyramid_levels` goes down to, in pixels."""
 
 BOUNDARY_SCORE = {"brightness": 0.9, "log": 0.9, "sign_log": float(arcsine_law(0.9)), "edges": 0.5}
 """Default ``boundary_score`` per feature: the sign correlation's is the arcsine law's image of 0.9."""
@@ -130,6 +136,46 @@ def _most_levels(shape: tuple[int, ...], patch: int, delta: int) -> int:
     while min(-(-n // 2) for n in sides) >= max(patch, delta + 1) and max(sides) > 1:
         sides, levels = tuple(-(-n // 2) for n in sides), levels + 1
     return levels
+
+
+def pyramid_levels(shape: tuple[int, ...], *, patch: int, delta: int, coarsest: int = COARSEST_SIDE) -> int:
+    """The pyramid levels that let :func:`flow` find its own displacement range on an image this size.
+
+    The image is halved (rounding up) while its smaller side stays at least ``coarsest`` pixels and the
+    coarsest level still holds the patch and a displacement of delta. The search then
+    reaches about ``delta (2**levels - 1)`` pixels (:func:`reach`): a fixed share of the image's size,
+    whatever its resolution.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The image's (H, W[, C]).
+    patch, delta : int
+        As :func:`flow` takes them.
+    coarsest : int
+        The smallest side of the coarsest level, >= 1; default :data:`COARSEST_SIDE`.
+
+    Returns
+    -------
+    int, >= 1
+    """
+    if not isinstance(shape, tuple) or len(shape) not in (2, 3):
+        raise InputTypeError(f"shape must be a tuple (H, W) or (H, W, C), got {shape!r}")
+    sides = [check_int(n, "shape", minimum=1) for n in shape[:2]]
+    patch = check_int(patch, "patch", minimum=1)
+    delta = check_int(delta, "delta", minimum=1)
+    coarsest = check_int(coarsest, "coarsest", minimum=1)
+    most = _most_levels(tuple(sides), patch, delta)
+    levels = 1
+    while levels < most and min(-(-n // 2 ** levels) for n in sides) >= coarsest:
+        levels += 1
+    return levels
+
+
+def reach(delta: int, levels: int) -> int:
+    """The largest displacement, in pixels along each axis, that :func:`flow` can find with these
+    settings: delta at the coarsest level, doubled at each finer one, plus delta at each."""
+    return check_int(delta, "delta", minimum=1) * (2 ** check_int(levels, "levels", minimum=1) - 1)
 
 
 def _check(shape: tuple[int, ...], delta, patch, features, sigma, levels=1) -> tuple[int, int, float, int]:

@@ -1,0 +1,98 @@
+"""Flow sequences read from any folder in the field's layouts, and `vmcl eval flow` on them."""
+
+from __future__ import annotations
+
+import shutil
+
+import cv2
+import numpy as np
+import pytest
+
+from vmcl import datasets, scenes
+from vmcl.cli import main
+from vmcl.flow_evaluation import baselines, evaluate_sequence, motion_only
+from vmcl.metrics import evaluate_flow
+from vmcl.pipeline import VisionMachine
+
+
+def _png(path, image):
+    cv2.imwrite(str(path), cv2.cvtColor(np.round(image * 255).clip(0, 255).astype(np.uint8), cv2.COLOR_RGB2BGR))
+
+
+@pytest.fixture(scope="module")
+def rendered(tmp_path_factory):
+    """A rendered 4-frame sequence in Middlebury's layout (flow for frame 12) and in this Sintel layout."""
+    root = tmp_path_factory.mktemp("flows")
+    frames = scenes.render_sequence(scenes.preset("blocks", shape=(64, 80)), 4, seed=0, noise=0.01)
+    middlebury, sintel = root / "mine" / "Blocks", root / "clean" / "blocks"
+    for folder in (middlebury, sintel / "gt" / "invalid"):
+        folder.mkdir(parents=True)
+    for k, frame in enumerate(frames):
+        _png(middlebury / f"frame{10 + k}.png", frame.left)
+        _png(sintel / f"frame_{k + 1:04d}.png", frame.left)
+    _png(middlebury / "frame14.png", frames[-1].left_next)
+    truth = frames[2].flow
+    datasets.write_flo(middlebury / "flow12.flo", truth)
+    datasets.write_flo(sintel / "gt" / "frame_0002.flo", frames[1].flow)
+    invalid = np.zeros((64, 80), np.uint8)
+    invalid[:, :4] = 255
+    cv2.imwrite(str(sintel / "gt" / "invalid" / "frame_0002.png"), invalid)
+    return root, frames
+
+
+def test_a_middlebury_layout_folder_is_read_with_its_past(rendered):
+    root, frames = rendered
+    sequence = datasets.read_flow_folder(root / "mine" / "Blocks")
+    assert [p.name for p in sequence.frames][:3] == ["frame10.png", "frame11.png", "frame12.png"]
+    assert sequence.index == 2 and sequence.name == "Blocks" and sequence.occluded is None
+    np.testing.assert_array_equal(sequence.mask, np.isfinite(frames[2].flow).all(axis=-1))
+
+
+def test_a_sintel_layout_folder_is_read_with_its_invalid_pixels_left_out(rendered):
+    root, _ = rendered
+    assert datasets.find_flow_folders(root) == [root / "clean" / "blocks", root / "mine" / "Blocks"]
+    sequence = datasets.read_flow_folder(root / "clean" / "blocks")
+    assert sequence.index == 1 and sequence.name == "clean/blocks"
+    assert not sequence.mask[:, :4].any() and sequence.mask[:, 4:].any()
+
+
+def test_folders_without_flow_or_frames_are_refused(tmp_path, rendered):
+    root, _ = rendered
+    with pytest.raises(ValueError, match="no ground-truth flow"):
+        datasets.read_flow_folder(tmp_path)
+    lonely = tmp_path / "lonely"
+    lonely.mkdir()
+    shutil.copy(root / "mine" / "Blocks" / "flow12.flo", lonely / "flow12.flo")
+    shutil.copy(root / "mine" / "Blocks" / "frame12.png", lonely / "frame12.png")
+    with pytest.raises(ValueError, match="fewer than two numbered frames"):
+        datasets.read_flow_folder(lonely)
+    shutil.copy(root / "mine" / "Blocks" / "frame10.png", lonely / "frame10.png")
+    with pytest.raises(ValueError, match="no next frame"):
+        datasets.read_flow_folder(lonely)
+    with pytest.raises(FileNotFoundError):
+        datasets.read_flow_folder(tmp_path / "none")
+
+
+def test_the_evaluation_scores_every_method_against_the_truth(rendered, machine):
+    root, frames = rendered
+    sequence = datasets.read_flow_folder(root / "mine" / "Blocks")
+    rows = {row.method: row for row in evaluate_sequence(sequence, machine=machine)}
+    assert set(rows) == {"vmcl two frames", "vmcl sequence", *baselines()}
+    # Every method finds the motion: each lands below a zero flow's error.
+    zero = float(np.nanmean(np.linalg.norm(frames[2].flow, axis=-1)))
+    for row in rows.values():
+        assert 0 < row.epe < 0.8 * zero, (row.method, row.epe, zero)
+        assert row.epe_matched is None and row.ms > 0
+    # The machine's row is its flow scored over the mask, as the metrics score it directly.
+    images = [datasets.read_image(path) for path in sequence.frames[2:4]]
+    direct = VisionMachine(motion_only(), machine=machine).run(images[0], next=images[1])
+    expected = evaluate_flow(direct.flow, sequence.flow, mask=sequence.mask)
+    assert rows["vmcl two frames"].epe == pytest.approx(expected.epe, rel=1e-6)
+
+
+def test_eval_flow_prints_each_sequence_and_method(rendered, capsys):
+    root, _ = rendered
+    assert main(["eval", "flow", "--data", str(root / "mine"), "-q"]) == 0
+    out = capsys.readouterr().out
+    assert "Blocks" in out and "vmcl sequence" in out and "OpenCV DIS medium" in out
+    assert main(["eval", "flow", "--data", str(root / "mine" / "Blocks" / "flow12.flo"), "-q"]) == 2
