@@ -79,3 +79,14 @@ def test_bad_sequences_are_one_line_and_exit_2(tmp_path, sequence, capsys, case,
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1, err
     assert not out.exists()
+
+
+def test_open_frames_refuses_what_is_not_a_sequence(tmp_path, sequence):
+    with pytest.raises(TypeError, match="spec must be a path"):
+        open_frames(3)
+    with pytest.raises(ValueError, match="not a folder, a glob pattern or a video"):
+        open_frames(sequence / "left" / "frame_00.png")
+    (tmp_path / "broken.mp4").write_bytes(b"not a video")
+    with pytest.raises(ValueError, match="OpenCV cannot read this video"):
+        open_frames(tmp_path / "broken.mp4")
+    assert open_frames(sequence / "left").count == FRAMES  # notes.txt is not a frame

@@ -141,6 +141,9 @@ TABLE: tuple[Entry, ...] = (
        kinds={"frame0": _A, "frame1": _A, "delta": _I, "patch": _I, "features": _C, "subpixel": _B,
               "levels": _I, "sigma": _ON, "speed_penalty": _N, "method": _C, "boundary_score": _ON,
               "machine": _M}),
+    _e("vmcl.early.motion:pyramid_levels", shape=tup(64, 64), patch=11, delta=4, coarsest=32,
+       kinds={"shape": _T, "patch": _I, "delta": _I, "coarsest": _I}),
+    _e("vmcl.early.motion:reach", delta=4, levels=2, kinds={"delta": _I, "levels": _I}),
     _e("vmcl.early.motion:votes", frame0=IMG, frame1=IMG, delta=2, patch=5, features="brightness", sigma=None,
        kinds={"frame0": _A, "frame1": _A, "delta": _I, "patch": _I, "features": _C, "sigma": _ON,
               "machine": _M}),
@@ -329,6 +332,10 @@ TABLE: tuple[Entry, ...] = (
        right=arr((16, 16), "uint8"), disparity=IMG, ndisp=16,
        kinds={"folder": _P, "left": _A, "right": _A, "disparity": _A, "ndisp": _I}),
     _e("vmcl.datasets:find_stereo_folders", root=path("empty_dir"), depth=4, kinds={"root": _P, "depth": _I}),
+    _e("vmcl.datasets:read_flow_folder", folder=path("flow_dir"), kinds={"folder": _P}),
+    _e("vmcl.datasets:find_flow_folders", root=path("empty_dir"), depth=4, kinds={"root": _P, "depth": _I}),
+    # ------------------------------------------------------------------ sequences
+    _e("vmcl.flow_evaluation:motion_only", config=None, kinds={"config": _O}),
     # ------------------------------------------------------------------ stereo evaluation
     _e("vmcl.stereo_evaluation:grey", image=arr((16, 16), "uint8", "randint:256"), kinds={"image": _A}),
     _e("vmcl.stereo_evaluation:stereo_bm", num_disparities=16, kinds={"num_disparities": _I}),
@@ -368,7 +375,7 @@ TABLE: tuple[Entry, ...] = (
        kinds={"sigma": _N, "low_threshold": _ON, "high_threshold": _ON, "use_quantiles": _B}),
     _e("vmcl.pipeline:StereoConfig", d_min=None, d_max=None, max_disparity=0.05, patch=11, backfill_floor=0.9,
        kinds={"d_min": _I, "d_max": _I, "max_disparity": _N, "patch": _I, "backfill_floor": _N}),
-    _e("vmcl.pipeline:MotionConfig", delta=4, patch=11, levels=2, features="brightness", confidence_floor=0.7,
+    _e("vmcl.pipeline:MotionConfig", delta=4, patch=11, levels=None, features="brightness", confidence_floor=0.7,
        kinds={"delta": _I, "patch": _I, "levels": _I, "features": _C, "confidence_floor": _N}),
     _e("vmcl.pipeline:TextureConfig", fine_sigma=1.0, coarse_sigma=4.0, threshold=0.08, radius=24,
        kinds={"fine_sigma": _N, "coarse_sigma": _N, "threshold": _N, "radius": _I}),
@@ -383,7 +390,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.machine:Machine", device=None, profile=False, local_size=None,
        kinds={"device": _C, "profile": _B, "local_size": _I}),
     # ------------------------------------------------------------------ distributed (what needs no cluster)
-    _e("vmcl.distributed:run_frame", left=IMG, right=None, next=None, config={"motion": {"levels": 1}},
+    _e("vmcl.distributed:run_frame", left=IMG, right=None, next=None, config={"motion": {"delta": 4}},
        kinds={"left": _A, "right": _OA, "next": _OA, "config": "mapping"},
        aliases={"config": ("config", "edges.", "stereo.", "motion.", "colour.", "texture.", "mrf.", "labels.")}),
     _e("vmcl.distributed:stitch", chunks=[[tup(0, make("result"))]], kinds={"chunks": _O}),
@@ -426,6 +433,15 @@ EXEMPT = {
     # A loop of advance and render (both swept) whose length is its frames argument, so the sweep's valid
     # counts change its result's shape; tests/test_temporal.py checks it.
     "vmcl.scenes:render_sequence",
+    # Results and what reads or writes whole sequences: tests/test_flow_evaluation.py, tests/test_cli_sequences.py
+    # and tests/test_temporal.py check them; the readers they call (read_flow_folder, open_frames) are swept.
+    "vmcl.datasets:FlowSequence", "vmcl.flow_evaluation:FlowRow", "vmcl.flow_evaluation:evaluate_sequence",
+    "vmcl.flow_evaluation:baselines", "vmcl.frame_sources:FrameSource", "vmcl.sequence_output:SequenceWriter",
+    # Any folder of images is a valid sequence whose length sets the result's shape; tests/test_cli_sequences.py
+    # checks their refusals.
+    "vmcl.frame_sources:open_frames", "vmcl.frame_sources:is_sequence",
+    # A stream's device state, made and fed only by VisionMachine.stream from checked images and Configs.
+    "vmcl.temporal:Memory", "vmcl.temporal:Carried",
     # Change the machine's cues for the whole process: tests/test_cues.py checks their refusals.
     "vmcl.labels:add_cue", "vmcl.labels:remove_cue", "vmcl.cues:register", "vmcl.cues:unregister",
     # Device-level building blocks of the early layer: they take images already checked by
@@ -451,7 +467,8 @@ PUBLIC_MODULES = (
     "vmcl.early.semiglobal", "vmcl.early.disparity_range", "vmcl.early.boundary_probability",
     "vmcl.mrf", "vmcl.integrate", "vmcl.labels", "vmcl.cues", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
     "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pictures", "vmcl.pipeline", "vmcl.result", "vmcl.machine",
-    "vmcl.stereo_evaluation", "vmcl.distributed", "vmcl.boundary_evaluation",
+    "vmcl.stereo_evaluation", "vmcl.distributed", "vmcl.boundary_evaluation", "vmcl.flow_evaluation",
+    "vmcl.frame_sources", "vmcl.sequence_output", "vmcl.temporal",
 )
 
 
@@ -763,6 +780,16 @@ def _path(kind, ctx):
         target = target.with_suffix(".npz")
     elif kind == "stereo_dir":
         return str(_stereo_dir(ctx))
+    elif kind == "flow_dir":
+        import cv2
+
+        from vmcl.datasets import write_flo
+
+        folder = Path(tempfile.mkdtemp(dir=root))
+        for name in ("frame10.png", "frame11.png"):
+            cv2.imwrite(str(folder / name), np.arange(256, dtype=np.uint8).reshape(16, 16))
+        write_flo(folder / "flow10.flo", np.zeros((16, 16, 2), np.float32))
+        return str(folder)
     return str(target)
 
 

@@ -1040,6 +1040,8 @@ def find_flow_folders(root, *, depth: int = 4) -> list[Path]:
     found: list[Path] = []
     level = [root]
     for _ in range(depth):
+        if not level:  # nothing left to search, however deep the search may go
+            break
         below = sorted(child for parent in level for child in parent.iterdir()
                        if child.is_dir() and not child.name.startswith("."))
         found += [child for child in below if holds(child)]

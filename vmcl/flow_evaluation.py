@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vmcl.datasets import FlowSequence, read_image
+from vmcl.errors import InputTypeError
 from vmcl.machine import Machine
 from vmcl.metrics import evaluate_flow
 
@@ -59,7 +60,10 @@ def motion_only(config=None):
 
     from vmcl.pipeline import ColourConfig, Config, StereoConfig, TextureConfig
 
-    config = config or Config()
+    if config is None:
+        config = Config()
+    if not isinstance(config, Config):
+        raise InputTypeError(f"config must be a vmcl.pipeline.Config or None, got {type(config).__name__}")
     return replace(config, stereo=StereoConfig(enabled=False), colour=ColourConfig(enabled=False),
                    texture=TextureConfig(enabled=False))
 

@@ -175,7 +175,7 @@ def pyramid_levels(shape: tuple[int, ...], *, patch: int, delta: int, coarsest: 
 def reach(delta: int, levels: int) -> int:
     """The largest displacement, in pixels along each axis, that :func:`flow` can find with these
     settings: delta at the coarsest level, doubled at each finer one, plus delta at each."""
-    return check_int(delta, "delta", minimum=1) * (2 ** check_int(levels, "levels", minimum=1) - 1)
+    return check_int(delta, "delta", minimum=1) * (2 ** check_int(levels, "levels", minimum=1, maximum=64) - 1)
 
 
 def _check(shape: tuple[int, ...], delta, patch, features, sigma, levels=1) -> tuple[int, int, float, int]:
