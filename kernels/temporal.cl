@@ -6,7 +6,9 @@
  *             the brightness at the carried position disagrees with this frame's by more than the
  *             tolerance, or where the position left the image
  *   fuse      the cue's new measurement and the prediction as one data term: the information-weighted
- *             mean, with the information summed (the Kalman update, which the MRF's data term then holds)
+ *             mean, with the information summed (the Kalman update, which the MRF's data term then holds),
+ *             except where the two differ by more than the cue's jump (time broken for that cue), and the
+ *             MRF's warm start: the prediction where it was used
  *
  * Layout: fields are H x W x NCOMP interleaved (NCOMP 1..4), one work-item per pixel. The carried position
  * of pixel x is x - u(x), u the previous frame's flow at x: the flow maps the previous frame's pixels onto
@@ -84,15 +86,28 @@ __kernel void predict(__global const float *field, __global const float *informa
 
 __kernel void fuse(__global const float *data, __global const float *confidence, int has_confidence,
                    __global const float *prediction, __global const float *weight, int has_prediction, float gain,
-                   __global float *fused, __global float *information, long W, long H)
+                   float jump, __global float *fused, __global float *information, __global float *start,
+                   long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     long i = y * W + x;
     float c = has_confidence ? confidence[i] : 1.0f;
+    int measured = 1;
     for (int k = 0; k < NCOMP; ++k)
-        if (!isfinite(data[i * NCOMP + k])) c = 0.0f;
+        if (!isfinite(data[i * NCOMP + k])) measured = 0;
+    if (!measured) c = 0.0f;
     float t = has_prediction ? gain * weight[i] : 0.0f;
+    /* Time is broken for this cue where the new measurement and the carried value differ by more than
+     * the jump (the surface or its motion changed): the pixel keeps the measurement alone. */
+    if (t > 0.0f && measured && c > 0.0f) {
+        float d2 = 0.0f;
+        for (int k = 0; k < NCOMP; ++k) {
+            float d = data[i * NCOMP + k] - prediction[i * NCOMP + k];
+            d2 += d * d;
+        }
+        if (d2 > jump * jump) t = 0.0f;
+    }
     float total = c + t;
     for (int k = 0; k < NCOMP; ++k) {
         float value = NAN;
@@ -100,6 +115,7 @@ __kernel void fuse(__global const float *data, __global const float *confidence,
             value = ((c > 0.0f ? c * data[i * NCOMP + k] : 0.0f)
                      + (t > 0.0f ? t * prediction[i * NCOMP + k] : 0.0f)) / total;
         fused[i * NCOMP + k] = value;
+        start[i * NCOMP + k] = t > 0.0f ? prediction[i * NCOMP + k] : NAN;
     }
     information[i] = total;
 }

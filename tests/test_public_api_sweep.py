@@ -312,7 +312,7 @@ TABLE: tuple[Entry, ...] = (
        kinds={"name": _C, "shape": _T, "specular": _B}),
     _e("vmcl.scenes:render", world=make("world"), seed=0, noise=0.0, frame=0,
        kinds={"world": _O, "seed": _I, "noise": _N, "frame": _I}),
-    _e("vmcl.scenes:advance", world=make("world"), steps=1, kinds={"world": _O, "steps": _I}),
+    _e("vmcl.scenes:advance", world=make("world"), steps=1, speeds=None, kinds={"world": _O, "steps": _I, "speeds": _OA}),
     # ------------------------------------------------------------------ datasets
     _e("vmcl.datasets:read_image", path=path("png"), kinds={"path": _P}),
     _e("vmcl.datasets:read_mask", path=path("png"), value=255, kinds={"path": _P, "value": _I}),

@@ -267,9 +267,9 @@ class MotionConfig:
 
     enabled: bool = True
     delta: int = 4
-    patch: int = 11
+    patch: int = 21
     levels: int | None = None
-    features: str = "brightness"
+    features: str = "sign_log"
     weigh_by_score: bool = True
     confidence_floor: float = 0.7
 
@@ -422,6 +422,11 @@ class LabelsConfig:
 class TimeConfig:
     """What :meth:`VisionMachine.stream` carries from frame to frame (:mod:`vmcl.temporal`).
 
+    The defaults of gain, memory and jump were chosen by benchmarks/time_fit.py on rendered sequences
+    whose speeds change from frame to frame: there the carried fields are worth little against each new
+    measurement, and the weight put on them is small. Sequences of steadier motion gain more from a
+    larger gain and memory (benchmarks/results/time_fit.md).
+
     Parameters
     ----------
     enabled : bool
@@ -435,6 +440,10 @@ class TimeConfig:
     tolerance : float
         > 0, the largest change of smoothed brightness (images in [0, 1]) along the flow that keeps
         time unbroken at a pixel.
+    jump : float
+        > 0, the largest change (pixels) between a piecewise smooth cue's carried value and its new
+        measurement (disparity; flow, as a vector) that keeps time unbroken for that cue at a pixel: a
+        larger one says the surface or its motion changed, and the measurement stands alone.
     scene_cut : float
         In (0, 1]: when a larger share of the pixels is broken, the frame starts cold.
     warm : bool
@@ -443,9 +452,10 @@ class TimeConfig:
     """
 
     enabled: bool = True
-    gain: float = 1.0
-    memory: float = 2.0
+    gain: float = 0.25
+    memory: float = 1.0
     tolerance: float = 0.05
+    jump: float = 0.5
     scene_cut: float = 0.5
     warm: bool = True
 
@@ -454,6 +464,7 @@ class TimeConfig:
         check_real(self.gain, "time.gain", minimum=0)
         check_real(self.memory, "time.memory", above=0)
         check_real(self.tolerance, "time.tolerance", above=0)
+        check_real(self.jump, "time.jump", above=0)
         check_real(self.scene_cut, "time.scene_cut", above=0, maximum=1)
 
     def memory_of(self, machine: Machine) -> temporal.Memory:
@@ -825,9 +836,10 @@ class _Run:
         data, confidence, start, warm = measured.data, measured.confidence, None, False
         if self.memory is not None:
             carried = self.memory.carry(cue.name) if self.carries else None
-            data, confidence = self.memory.fuse(data, confidence, carried)
+            jump = self.c.time.jump if cue.kind == "smooth" else math.inf
+            data, confidence, fused_start = self.memory.fuse(data, confidence, carried, jump)
             if carried is not None and self.c.time.warm:
-                start, warm = carried.prediction, True
+                start, warm = fused_start, True
         try:
             found = _integrate.restore_cue(data, confidence=confidence, coupling=measured.coupling,
                                            kind=cue.kind, candidates_only=cue.candidates_only,

@@ -24,6 +24,7 @@ schedule.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -139,21 +140,30 @@ class Memory:
             self.carried[cue] = Carried(prediction, weight)
         return self.carried[cue]
 
-    def fuse(self, data: cl_array.Array, confidence: cl_array.Array | None,
-             carried: Carried | None) -> tuple[cl_array.Array, cl_array.Array]:
-        """The measurement and the carried field as one data term: (data, confidence) for the MRF."""
+    def fuse(self, data: cl_array.Array, confidence: cl_array.Array | None, carried: Carried | None,
+             jump: float = math.inf) -> tuple[cl_array.Array, cl_array.Array, cl_array.Array]:
+        """The measurement and the carried field as one data term, and the MRF's warm start.
+
+        ``jump``: where the measurement and the carried value differ by more than this (the cue's units;
+        Euclidean over its components), time is broken for the cue at that pixel.
+
+        Returns (data, confidence, start): the fused data and its information for the MRF, and the carried
+        value where it entered the data (NaN elsewhere).
+        """
         m = self.machine
         height, width = data.shape[:2]
         ncomp = 1 if data.ndim == 2 else data.shape[2]
         fused = m.empty(data.shape, np.float32)
+        start = m.empty(data.shape, np.float32)
         information = m.empty((height, width), np.float32)
         prediction = carried.prediction if carried is not None else data
         weight = carried.weight if carried is not None else information
         m.launch(m.kernel("temporal", "fuse", NCOMP=ncomp), (width, height), data,
                  confidence if confidence is not None else information, np.int32(confidence is not None),
-                 prediction, weight, np.int32(carried is not None), np.float32(self.gain), fused, information,
+                 prediction, weight, np.int32(carried is not None), np.float32(self.gain),
+                 np.float32(min(jump, np.finfo(np.float32).max)), fused, information, start,
                  np.int64(width), np.int64(height))
-        return fused, information
+        return fused, information, start
 
     def remember(self, cue: str, field: cl_array.Array, information: cl_array.Array, nearest: bool) -> None:
         """Keep a cue's restoration of this frame and its information for the next frame."""

@@ -16,8 +16,8 @@ import dataclasses
 import cv2
 import numpy as np
 
-from vmcl.cm.core import check_int
-from vmcl.errors import InputTypeError
+from vmcl.cm.core import check_int, check_real, real_host_array
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.scenes.rendering import Scene, render
 from vmcl.scenes.world import Body, Face, Motion, World
 
@@ -54,7 +54,25 @@ def _moved(face: Face, transform: np.ndarray) -> Face:
                                v_axis=_triple(rot @ np.asarray(face.v_axis, float)))
 
 
-def advance(world: World, steps: int) -> World:
+def _scaled(motion: Motion, speed: float) -> Motion:
+    """The motion at ``speed`` times its size: translation and rotation angle scaled, same centre."""
+    return Motion(translation=_triple(speed * np.asarray(motion.translation, float)),
+                  rotation=_triple(speed * np.asarray(motion.rotation, float)), centre=motion.centre)
+
+
+def _speeds(speeds, steps: int, bodies: int) -> np.ndarray:
+    if speeds is None:
+        return np.ones((steps + 1, bodies + 1))
+    table = real_host_array(speeds, "speeds", ndims=(2,)).astype(float)
+    if table.shape != (steps + 1, bodies + 1):
+        raise InputValueError(f"speeds must have shape (steps + 1, bodies + 1) = {(steps + 1, bodies + 1)}, "
+                              f"got {table.shape}")
+    if not np.isfinite(table).all() or (table < 0).any():
+        raise InputValueError("speeds must be finite and >= 0")
+    return table
+
+
+def advance(world: World, steps: int, *, speeds=None) -> World:
     """The world ``steps`` frames on, expressed in the rig's frame at that time.
 
     Parameters
@@ -63,26 +81,35 @@ def advance(world: World, steps: int) -> World:
         At frame 0; each body's and the rig's motion is the step from one frame to the next.
     steps : int
         0 .. :data:`MAX_FRAMES`; 0 returns the world as given.
+    speeds : (steps + 1, bodies + 1) NumPy array of real numbers >= 0, optional
+        ``speeds[j, b]`` scales body b's motion in the step from frame j to j + 1 (its translation and
+        its rotation angle), ``speeds[j, -1]`` the rig's; row ``steps`` sets the motions the returned
+        world holds (its next step). Default all 1: every step is the world's own motion.
 
     Returns
     -------
     World
         Bodies moved ``steps`` times, everything (faces, each body's motion, the light's direction and
-        illumination gradient) re-expressed in the rig's frame at frame ``steps``; the rig's own
-        motion is unchanged (it is a motion in the rig's frame).
+        illumination gradient) re-expressed in the rig's frame at frame ``steps``; the rig's motion is
+        its own (a motion in the rig's frame) at that step's speed.
     """
     if not isinstance(world, World):
         raise InputTypeError(f"world must be a World (see vmcl.scenes.preset), got {type(world).__name__}")
     steps = check_int(steps, "steps", minimum=0, maximum=MAX_FRAMES)
-    if steps == 0:
+    table = _speeds(speeds, steps, len(world.bodies))
+    if steps == 0 and speeds is None:
         return world
-    rig = np.linalg.matrix_power(_matrix(world.camera.motion), steps)  # rig frame at k -> world frame at 0
+    rig = np.eye(4)  # rig frame at k -> world frame at 0: the rig's steps composed in its own frame
+    for j in range(steps):
+        rig = rig @ _matrix(_scaled(world.camera.motion, table[j, -1]))
     to_rig = np.linalg.inv(rig)
     bodies = []
-    for body in world.bodies:
-        step = _matrix(body.motion)
-        carried = to_rig @ np.linalg.matrix_power(step, steps)
-        bodies.append(Body(faces=tuple(_moved(f, carried) for f in body.faces),
+    for b, body in enumerate(world.bodies):
+        pose = np.eye(4)  # the body's steps composed in the world frame at 0
+        for j in range(steps):
+            pose = _matrix(_scaled(body.motion, table[j, b])) @ pose
+        step = _matrix(_scaled(body.motion, table[steps, b]))
+        bodies.append(Body(faces=tuple(_moved(f, to_rig @ pose) for f in body.faces),
                            motion=_motion(to_rig @ step @ rig), name=body.name))
     rot, trans = to_rig[:3, :3], to_rig[:3, 3]
     light = world.light
@@ -90,10 +117,12 @@ def advance(world: World, steps: int) -> World:
         light, direction=_triple(rot @ np.asarray(light.direction, float)),
         gradient=_triple(rot @ np.asarray(light.gradient, float)),
         gradient_origin=_triple(rot @ np.asarray(light.gradient_origin, float) + trans))
-    return World(camera=world.camera, light=light, bodies=tuple(bodies))
+    camera = dataclasses.replace(world.camera, motion=_scaled(world.camera.motion, table[steps, -1]))
+    return World(camera=camera, light=light, bodies=tuple(bodies))
 
 
-def render_sequence(world: World, frames: int, *, seed: int = 0, noise: float = 0.0) -> tuple[Scene, ...]:
+def render_sequence(world: World, frames: int, *, seed: int = 0, noise: float = 0.0,
+                    wobble: float = 0.0) -> tuple[Scene, ...]:
     """Render ``frames`` consecutive frames of a moving world.
 
     Parameters
@@ -107,6 +136,10 @@ def render_sequence(world: World, frames: int, *, seed: int = 0, noise: float = 
         Seeds the textures (the same at every frame) and, with the frame's index, each frame's noise.
     noise : float
         Standard deviation of the Gaussian noise of every image.
+    wobble : float
+        >= 0: each step's speed of every body and of the rig is ``max(0, 1 + wobble z)``, z standard
+        normal, drawn per step from the seed (motions that change from frame to frame, as real ones
+        do; :func:`advance`'s ``speeds``). 0: constant velocities.
 
     Returns
     -------
@@ -122,4 +155,13 @@ def render_sequence(world: World, frames: int, *, seed: int = 0, noise: float = 
     (3, True)
     """
     frames = check_int(frames, "frames", minimum=1, maximum=MAX_FRAMES)
-    return tuple(render(advance(world, k), seed=seed, noise=noise, frame=k) for k in range(frames))
+    check_int(seed, "seed", minimum=0)
+    wobble = check_real(wobble, "wobble", minimum=0)
+    if not isinstance(world, World):
+        raise InputTypeError(f"world must be a World (see vmcl.scenes.preset), got {type(world).__name__}")
+    shape = (frames, len(world.bodies) + 1)
+    table = np.maximum(0.0, 1.0 + wobble * np.random.default_rng([int(seed), 1]).standard_normal(shape))
+    if wobble == 0:
+        table = np.ones(shape)
+    return tuple(render(advance(world, k, speeds=table[:k + 1] if wobble else None), seed=seed, noise=noise, frame=k)
+                 for k in range(frames))
