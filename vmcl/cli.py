@@ -25,9 +25,9 @@ when all are written; replacing a previous output touches only the files it list
 if the move fails or is interrupted part way. A new folder gets the mode the umask gives; an existing one
 keeps its own.
 
-Images must be at least 16 x 16 pixels. Motion (``--next``) halves the frames ``[motion] levels - 1``
-times and its coarsest level must hold a ``[motion] patch``: with the defaults (2 levels, patch 11) the
-frames must be at least 21 x 21; ``levels = 1`` takes 16 x 16.
+Images must be at least 16 x 16 pixels. Motion (``--next``) compares patches of ``[motion] patch``
+pixels (21 by default), so its frames must be at least that wide and high; its pyramid's levels follow
+the frames' size unless ``[motion] levels`` sets them.
 
 ``vmcl batch`` (the ``dask`` extra) runs every item, an image, a Middlebury-layout scene folder's pair or
 with ``--frames`` a frame and the next, as one task on a Dask cluster (:mod:`vmcl.distributed`), and writes
