@@ -154,6 +154,27 @@ def test_at_a_scene_cut_time_breaks_and_the_frame_starts_cold(machine):
     assert not any("scene cut" in note for r in results[:3] for note in r.notes)
 
 
+def test_where_an_object_appears_time_breaks_and_nothing_ghosts(machine):
+    world = scenes.preset("blocks", shape=(96, 96))
+    # A crate that appears at frame 3 in front of the scene, moving to the right.
+    crate = scenes.Body(scenes.box((0.9, -0.2, 3.0), (0.9, 0.9, 0.9), colour=(0.8, 0.35, 0.3),
+                                   texture=scenes.Texture("noise", 0.05, 0.4)),
+                        scenes.Motion((0.08, 0.0, 0.0)), name="crate")
+    with_crate = dataclasses.replace(world, bodies=(*world.bodies, crate))
+    before = scenes.render_sequence(world, 3, seed=2, noise=0.01)
+    after = [scenes.render(scenes.advance(with_crate, k), seed=2, noise=0.01, frame=k) for k in (3, 4)]
+    lefts = [f.left for f in before] + [f.left for f in after]
+    vm = VisionMachine(Config(time=TimeConfig(**STEADY), **_DEPTH_AND_MOTION), machine=machine)
+    appeared = list(vm.stream(lefts))[3]
+    alone = VisionMachine(Config(**_DEPTH_AND_MOTION), machine=machine).run(lefts[3], next=lefts[4])
+    truth = after[0]
+    crate_pixels = (truth.bodies == len(world.bodies)) & ~truth.occluded_motion
+    assert crate_pixels.sum() > 200
+    ghosted = evaluate_flow(appeared.flow, truth.flow, mask=crate_pixels).epe
+    cold = evaluate_flow(alone.flow, truth.flow, mask=crate_pixels).epe
+    assert ghosted <= 1.1 * cold + 0.05, (ghosted, cold)
+
+
 def test_stream_refuses_frames_that_do_not_fit(machine):
     frames = scenes.render_sequence(scenes.preset("cues", shape=(64, 64)), 2, seed=1)
     vm = VisionMachine(Config(time=TimeConfig(enabled=False), **_DEPTH_AND_MOTION), machine=machine)
