@@ -15,7 +15,9 @@ from vmcl.pipeline import (
     WARM_SCHEDULE,
     ColourConfig,
     Config,
+    MotionConfig,
     MrfConfig,
+    StereoConfig,
     TextureConfig,
     TimeConfig,
     VisionMachine,
@@ -213,3 +215,25 @@ def test_render_sequence_refuses_bad_counts_and_worlds():
     with pytest.raises(ValueError, match="speeds must have shape"):
         scenes.advance(world, 2, speeds=np.ones((2, 2)))
     assert len(scenes.render_sequence(world, 1)) == 1
+
+
+def _panning(name: str, speed: float) -> scenes.Scene:
+    """The preset with still bodies and the rig sliding sideways by ``speed`` world units per frame."""
+    world = scenes.preset(name, shape=(256, 256))
+    bodies = tuple(dataclasses.replace(b, motion=scenes.Motion()) for b in world.bodies)
+    camera = dataclasses.replace(world.camera, motion=scenes.Motion((speed, 0.0, 0.0)))
+    return scenes.render(dataclasses.replace(world, bodies=bodies, camera=camera), seed=1, noise=0.01)
+
+
+def test_motion_finds_a_large_motion_with_no_range_given(machine):
+    scene = _panning("cues", 0.5)  # flow from 14 to 28 px across the scene's depths
+    known = ~scene.occluded_motion & np.isfinite(scene.flow).all(axis=-1)
+    assert np.nanmax(np.abs(scene.flow[known])) > 25
+    config = Config(stereo=StereoConfig(enabled=False), **_DEPTH_AND_MOTION)
+    result = VisionMachine(config, machine=machine).run(scene.left, next=scene.left_next)
+    assert evaluate_flow(result.flow, scene.flow, mask=known).epe < 0.5
+    assert not any("limit" in note for note in result.notes)
+    # With the pyramid cut to 2 levels the search reaches 12 px, and the run says so.
+    short = Config(stereo=StereoConfig(enabled=False), motion=MotionConfig(levels=2), **_DEPTH_AND_MOTION)
+    notes = VisionMachine(short, machine=machine).run(scene.left, next=scene.left_next).notes
+    assert any("search's limit of 12 px" in note for note in notes), notes

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from vmcl.cm import reduce as cm_reduce
 from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import motion
 from vmcl.early.sign_correlation import arcsine_law
@@ -21,7 +20,7 @@ from vmcl.pictures import flow_image
 __all__ = ["LIMIT_SHARE", "MotionCue"]
 
 LIMIT_SHARE = 0.005
-"""The share of pixels whose flow lies at the search's limit from which the run notes it."""
+"""The share of the coarsest level's estimates at the edge of its range from which the run notes it."""
 
 
 class MotionCue(CueModule):
@@ -46,7 +45,7 @@ class MotionCue(CueModule):
                       if mc.weigh_by_score else None)
         flow = on_device(found.flow)  # device input, device output
         return Measurement(flow, confidence, run.brightness, fields={"raw_flow": flow},
-                           notes=self.limit_note(flow, motion.reach(mc.delta, levels), levels, run.machine))
+                           notes=self.limit_note(found.limit_share, motion.reach(mc.delta, levels), levels))
 
     @staticmethod
     def floor(correlation: float, features: str) -> float:
@@ -56,15 +55,14 @@ class MotionCue(CueModule):
         return float(arcsine_law(correlation)) if features == "sign_log" else correlation
 
     @staticmethod
-    def limit_note(flow, limit: int, levels: int, machine) -> tuple[str, ...]:
-        """A note when a noticeable share of the flow lies at the search's limit: the motion there may be
-        larger than the search reaches."""
-        at_limit = (abs(flow) >= limit - 0.5).astype(np.float32)  # per component; NaN compares false
-        share = float(cm_reduce.reduce(at_limit, "sum", machine=machine).get()) / flow.size * 2
+    def limit_note(share: float, limit: int, levels: int) -> tuple[str, ...]:
+        """A note when a noticeable share of the coarsest level's flow lies at the edge of its range: the
+        motion there may be larger than the search reaches."""
         if share < LIMIT_SHARE:
             return ()
-        return ((f"motion: {share:.1%} of the pixels' flow lies at the search's limit of {limit} px ({levels} "
-                "pyramid levels): the motion there may be larger; raise [motion] levels or delta"),)
+        return ((f"motion: {share:.1%} of the coarsest level's flow lies at the edge of its range, so motion "
+                f"may exceed the search's limit of {limit} px ({levels} pyramid levels); raise [motion] levels "
+                "or delta"),)
 
     def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
         if result.flow is None:

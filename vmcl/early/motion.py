@@ -31,6 +31,7 @@ from typing import Literal
 import numpy as np
 import pyopencl.array as cl_array
 
+from vmcl.cm import reduce as cm_reduce
 from vmcl.cm import scan
 from vmcl.cm.core import ArrayLike, check_bool, check_choice, check_int, check_real, field, machine_for
 from vmcl.early import edges as _edges
@@ -101,11 +102,15 @@ class FlowResult:
     boundaries : bool (H, W); uint8 0/1 on the device
         Pixels with an estimate whose score is below ``boundary_score``: the paper's evidence of
         occlusions and motion discontinuities.
+    limit_share : float
+        The share of the coarsest level's estimates that lie at the edge of its range (a component
+        equal to +-delta): motion there may exceed what the search reaches (:func:`reach`).
     """
 
     flow: ArrayLike
     score: ArrayLike
     boundaries: ArrayLike
+    limit_share: float = 0.0
 
 
 def _frames(frame0, frame1, machine: Machine) -> tuple[cl_array.Array, cl_array.Array, bool]:
@@ -475,7 +480,7 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     _require_memory(machine, d0.shape, 3 * n * n if table else 6 * n, n * n if table else n,
                     f"motion.flow over {n} x {n} displacements (method {method!r})")
     pyramids = [_pyramid(machine, d, levels) for d in (d0, d1)]
-    coarse = None
+    coarse, limit_share = None, 0.0
     for image0, image1 in zip(reversed(pyramids[0]), reversed(pyramids[1])):
         f0 = _features(machine, image0, features, sigma)
         f1 = _features(machine, image1, features, sigma)
@@ -484,10 +489,13 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
             f1, pred = _warp(machine, f1, _patch_mean(machine, coarse, radius), features)
         flow_out, score, boundaries = _level(machine, f0, f1, pred, delta, radius, features, speed_penalty,
                                              method, subpixel, boundary_score)
+        if coarse is None:  # the coarsest level: its range bounds the whole search's
+            at_edge = (abs(flow_out) >= delta - 1e-3).astype(np.float32)
+            limit_share = float(cm_reduce.reduce(at_edge, "sum", machine=machine).get()) / flow_out.size * 2
         coarse = flow_out
     if host:
-        return FlowResult(flow_out.get(), score.get(), boundaries.get().view(np.bool_))
-    return FlowResult(flow_out, score, boundaries)
+        return FlowResult(flow_out.get(), score.get(), boundaries.get().view(np.bool_), limit_share)
+    return FlowResult(flow_out, score, boundaries, limit_share)
 
 
 def votes(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, features: Features = "brightness",
