@@ -199,6 +199,8 @@ machine_module.Machine.program = recording
 scene = scenes.render(scenes.preset("cues", shape=(64, 64)), seed=3, noise=0.01)
 VisionMachine().run(scene.left, scene.right, scene.left_next)
 VisionMachine().run(scene.left.mean(axis=2))
+frames = scenes.render_sequence(scenes.preset("cues", shape=(64, 64)), 3, seed=3, noise=0.01)
+list(VisionMachine().stream([f.left for f in frames]))
 for dtype in (np.float32, np.int32, np.uint8):
     field = np.arange(64, dtype=dtype).reshape(8, 8)
     for border in news.BORDERS:

@@ -390,7 +390,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.machine:Machine", device=None, profile=False, local_size=None,
        kinds={"device": _C, "profile": _B, "local_size": _I}),
     # ------------------------------------------------------------------ distributed (what needs no cluster)
-    _e("vmcl.distributed:run_frame", left=IMG, right=None, next=None, config={"motion": {"delta": 4}},
+    _e("vmcl.distributed:run_frame", left=IMG, right=None, next=None, config={"motion": {"patch": 11}},
        kinds={"left": _A, "right": _OA, "next": _OA, "config": "mapping"},
        aliases={"config": ("config", "edges.", "stereo.", "motion.", "colour.", "texture.", "mrf.", "labels.")}),
     _e("vmcl.distributed:stitch", chunks=[[tup(0, make("result"))]], kinds={"chunks": _O}),
@@ -935,8 +935,8 @@ def _makers():
         from vmcl.pipeline import Config, VisionMachine
 
         if "vm" not in ctx:
-            # One pyramid level: two would not fit the 16 x 16 images with the default patch.
-            config = Config.from_dict({"mrf": {"schedule": "fast"}, "motion": {"levels": 1}})
+            # An 11-pixel patch: the default 21 would not fit the 16 x 16 images.
+            config = Config.from_dict({"mrf": {"schedule": "fast"}, "motion": {"patch": 11}})
             ctx["vm"] = VisionMachine(config, machine=ctx["machine"])
         return ctx["vm"]
 

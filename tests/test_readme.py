@@ -54,8 +54,8 @@ def test_a_changed_figure_in_a_results_file_is_noticed(generator, results_copy: 
 
 def test_a_renamed_row_fails_loudly(generator, results_copy: Path):
     motion = results_copy / "motion.md"
-    motion.write_text(motion.read_text().replace("| mean EPE |", "| average EPE |"))
-    with pytest.raises(LookupError, match="mean EPE"):
+    motion.write_text(motion.read_text().replace("| mean of the 5 Middlebury pairs |", "| average |"))
+    with pytest.raises(LookupError, match="mean of the 5 Middlebury pairs"):
         generator.generated_block(results_copy)
 
 
