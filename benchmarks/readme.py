@@ -277,6 +277,13 @@ def time_fit_figures(f: ResultsFile) -> str:
             f"(flow and disparity errors {best}x those with time off)")
 
 
+def first_run_figures(f: ResultsFile) -> str:
+    table = f.table("run", "wall s")
+    column = "spent building (s, against the same run with caches filled)"
+    return (f"first `vmcl demo` with empty caches: {table.cell({'run': 'first run, empty caches, 256 x 256'}, column)} s "
+            f"building; a second size: {table.cell({'run': 'first run at a second size, 128 x 128'}, column)} s")
+
+
 def early_figures(f: ResultsFile) -> str:
     t = f.table("implementation", "speed-up over NumPy/SciPy")
     sizes = dict.fromkeys(row[t.index("size")] for row in t.rows)
@@ -440,6 +447,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("labelling", ("the linear classifier's labels on images it was not fitted to (new noise seed; and each "
                    "preset left out of the fit), beside the rule labels; its cost"), labelling_figures),
     ("ground_truth", "scene rendering; BSDS evaluation", ground_truth_figures),
+    ("first_run", "a fresh install's first runs: time spent building kernels, at a first and a second size",
+     first_run_figures),
     ("protocol", ("damaged frames the eye-head protocol's parser accepts (flips, bursts, inserted, lost and "
                  "cut bytes, LEN errors, a flag inside a frame)"), protocol_figures),
     ("head", "eye-head protocol (v2: flag-delimited, byte-stuffed frames) on the simulator's clock",

@@ -155,7 +155,8 @@ def test_vector_width_is_sixteen_on_cpus_and_one_elsewhere(machine):
 def test_row_local_size_groups_rows_on_cpus(machine):
     if machine.is_cpu:
         assert machine.row_local_size((1000, 7)) == (64, 1)
-        assert machine.row_local_size((5, 7, 2)) == (5, 1, 1)
+        # Whatever the width: one work-group size is one PoCL build for every image size.
+        assert machine.row_local_size((5, 7, 2)) == (64, 1, 1)
     else:
         assert machine.row_local_size((1000, 7)) is None
     assert vmcl.Machine(machine.device, local_size=7).row_local_size((1000, 7)) is None
@@ -239,3 +240,33 @@ def test_compiler_warnings_reach_the_vmcl_machine_logger(monkeypatch, caplog, ca
     # clang's "1 warning generated." went to the log, not the terminal.
     assert "generated" not in capfd.readouterr().err
     assert any("1 warning generated." in r.getMessage() for r in caplog.records if r.levelno == logging.DEBUG)
+
+
+def test_kernel_sources_are_the_same_wherever_vmcl_is_installed():
+    from vmcl.machine import kernel_source, kernels_dir
+
+    source = kernel_source("mrf")
+    # The headers are inlined (no include path in the build options, which key PoCL's cache) ...
+    assert "#include" not in source and str(kernels_dir()) not in source
+    assert (kernels_dir() / "philox.h").read_text().splitlines()[0] in source
+    # ... with #line directives so that compiler messages name each file's own lines.
+    lines = source.splitlines()
+    back = lines.index('#line 32 "mrf.cl"')  # after its two includes, lines 30 and 31
+    assert lines[back + 1] == (kernels_dir() / "mrf.cl").read_text().splitlines()[31]
+    with pytest.raises(ValueError, match="names no kernel file"):
+        kernel_source("../kernels/mrf")
+
+
+def test_a_launch_on_a_cpu_takes_one_work_group_size_whatever_the_image():
+    calls = []
+
+    def kernel(queue, global_size, local_size, *args):  # stands for a cl.Kernel: records its launch
+        calls.append((global_size, local_size))
+
+    machine = vmcl.Machine()  # not profiling: the launch keeps no event of the stand-in
+    for width in (5, 64, 300):
+        machine.launch(kernel, (width, 3))
+    if machine.is_cpu:
+        assert calls == [((64, 3), (64, 1)), ((64, 3), (64, 1)), ((320, 3), (64, 1))]
+    else:
+        assert [local for _, local in calls] == [None] * 3

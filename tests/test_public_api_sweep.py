@@ -387,6 +387,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.pipeline:VisionMachine", config=None, kinds={"config": _O, "machine": _M}),
     _e("vmcl.pipeline:VisionMachine.run", self=make("vision_machine"), left=IMG, right=None, next=None,
        kinds={"left": _A, "right": _OA, "next": _OA}),
+    _e("vmcl.machine:kernel_source", family="mrf", kinds={"family": _C}),
     _e("vmcl.machine:Machine", device=None, profile=False, local_size=None,
        kinds={"device": _C, "profile": _B, "local_size": _I}),
     # ------------------------------------------------------------------ distributed (what needs no cluster)

@@ -30,14 +30,20 @@ import pyopencl.tools as cl_tools
 from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = [
+    "CPU_GROUP",
     "INSTALL_HINT",
     "Machine",
     "NoOpenCLPlatformError",
     "default_machine",
+    "kernel_source",
     "kernels_dir",
     "list_devices",
     "on_device",
 ]
+
+CPU_GROUP = 64
+"""Work-items per work-group, along the first dimension, of every launch on a CPU device that does not fix
+its own (:meth:`Machine.launch`)."""
 
 INSTALL_HINT = (
     "No OpenCL platform found. vmcl needs an OpenCL driver; on Debian or Ubuntu install PoCL with\n"
@@ -114,6 +120,41 @@ def _choose_device(device: cl.Device | str | None) -> cl.Device:
     raise InputValueError(f"{source}: no OpenCL device matches {wanted!r}; available: {names}")
 
 
+_INCLUDE = re.compile(r'^[ \t]*#[ \t]*include[ \t]+"([^"]+)"[ \t]*$')
+
+
+def kernel_source(family: str) -> str:
+    """The OpenCL source of kernels/<family>.cl with its ``#include "x.h"`` lines replaced by those files.
+
+    The build then needs no include path, so its source and options are the same wherever vmcl is
+    installed, and so are the keys of PoCL's and pyopencl's kernel caches: a second checkout or a
+    reinstall finds the kernels the first one built. ``#line`` directives keep the compiler's messages
+    pointing at each file's own lines. A header is inlined once per program.
+    """
+    if not isinstance(family, str):
+        raise InputTypeError(f"family must be the name of a kernel file (a str), got {type(family).__name__}")
+    folder = kernels_dir()
+    if "/" in family or "\\" in family or not (folder / f"{family}.cl").is_file():
+        raise InputValueError(f"family {family!r} names no kernel file in {folder}")
+    seen: set[str] = set()
+
+    def expand(name: str) -> list[str]:
+        lines = []
+        for number, line in enumerate((folder / name).read_text().splitlines(), start=1):
+            found = _INCLUDE.match(line)
+            if found is None:
+                lines.append(line)
+                continue
+            header = found.group(1)
+            if header not in seen:
+                seen.add(header)
+                lines += [f'#line 1 "{header}"', *expand(header)]
+            lines.append(f'#line {number + 1} "{name}"')
+        return lines
+
+    return "\n".join(expand(f"{family}.cl")) + "\n"
+
+
 def _log_build(family: str, defines: tuple, build_log: str) -> None:
     """Log a build's compiler output on "vmcl.machine": vmcl's own warnings at WARNING, driver notes at DEBUG.
 
@@ -177,8 +218,10 @@ class Machine:
         Record the device time of every kernel launched through :meth:`launch`; see :meth:`timings`.
     local_size : int, optional
         Work-group size along the first dimension for every launch that does not fix its own (the
-        global size is rounded up to a multiple; kernels ignore the extra work-items). Default: the
-        driver's choice. Results never depend on it; tests use it to prove that.
+        global size is rounded up to a multiple; kernels ignore the extra work-items). Default: on CPU
+        devices :data:`CPU_GROUP` (PoCL compiles a kernel once per work-group size, so a size that does
+        not follow the image's lets a new image size reuse every kernel built), elsewhere the driver's
+        choice. Results never depend on it; tests use it to prove that.
 
     Attributes
     ----------
@@ -237,9 +280,8 @@ class Machine:
         with self._lock:
             program = self._programs.get(key)
             if program is None:
-                folder = kernels_dir()
-                source = (folder / f"{family}.cl").read_text()
-                options = [f"-I{folder}"] + [f"-D{name}={value}" for name, value in key[1]]
+                source = kernel_source(family)
+                options = [f"-D{name}={value}" for name, value in key[1]]
                 with warnings.catch_warnings(record=True) as caught, _clang_stderr_to_log():
                     # pyopencl only says "non-empty compiler output" here; the log itself is read below.
                     warnings.simplefilter("always")
@@ -274,6 +316,8 @@ class Machine:
             raise InputValueError("device arrays passed to kernels must not be views with an offset; copy the view")
         if local_size is None and self.local_size is not None:
             local_size = (self.local_size,) + (1,) * (len(global_size) - 1)
+        elif local_size is None and self.is_cpu:
+            local_size = (CPU_GROUP,) + (1,) * (len(global_size) - 1)
         if local_size is not None:
             global_size = tuple(-(-g // size) * size for g, size in zip(global_size, local_size))
         with self._launch_lock:
@@ -287,13 +331,14 @@ class Machine:
     def row_local_size(self, global_size: tuple[int, ...]) -> tuple[int, ...] | None:
         """The work-group shape for a launch whose first dimension runs along image rows.
 
-        On CPU devices, groups of up to 64 work-items along the row: on PoCL they ran row kernels
-        faster than the driver's own choice (binomial filter, motion). Elsewhere, or when the
-        Machine fixes ``local_size``, None (the driver's or the Machine's choice).
+        On CPU devices, :data:`CPU_GROUP` work-items along the row whatever the image's width: on PoCL
+        they ran row kernels faster than the driver's own choice (binomial filter, motion), and one size
+        is one build. Elsewhere, or when the Machine fixes ``local_size``, None (the driver's or the
+        Machine's choice).
         """
         if not self.is_cpu or self.local_size is not None:
             return None
-        return (min(64, global_size[0]),) + (1,) * (len(global_size) - 1)
+        return (CPU_GROUP,) + (1,) * (len(global_size) - 1)
 
     # -- memory -----------------------------------------------------------------------------------
 
