@@ -11,7 +11,9 @@ labelled map. The depth discontinuities of this first pass are fed back to the s
 in a second pass, which the stereo MRF restores again.
 
 Any subset of inputs works: one image gives edges, colour (when RGB) and texture; a right image adds
-stereo; a next frame adds motion. Every field stays on the device from the one upload of each image to
+stereo; a next frame adds motion. Over a sequence, :meth:`VisionMachine.stream` runs each frame with the
+next one and carries each cue's restoration to the next frame (:mod:`vmcl.temporal`, the seed's "Fast
+vision: The role of time smoothness"). Every field stays on the device from the one upload of each image to
 the one download of each output; :class:`Result` holds the NumPy fields with the wall time of every stage
 and, on a profiling Machine, the device time of every kernel.
 
