@@ -29,12 +29,12 @@
 #ifdef IN_T
 static float srgb_linear(float c)
 {
-    return c <= 0.04045f ? c / 12.92f : pow((c + 0.055f) / 1.055f, 2.4f);
+    return c <= 0.04045f ? c / 12.92f : exp2(2.4f * log2((c + 0.055f) / 1.055f));
 }
 
 static float lab_f(float t)
 {
-    return t > 0.008856452f ? cbrt(t) : t * 7.787037f + 16.0f / 116.0f;
+    return t > 0.008856452f ? exp2(log2(t) * (1.0f / 3.0f)) : t * 7.787037f + 16.0f / 116.0f;
 }
 
 #if LINEAR_TABLE
@@ -220,18 +220,24 @@ __kernel void components(__global const float *lab, __global const float *hist, 
 #endif
 
 #ifdef NORIENT
-/* The gradients across orientation theta (the boundary's normal at theta), 4 per scale: |d/dn| of L,
- * a and b, and the norm of the texton histograms' derivative. comp: NSCALES x 6 planes, tensors:
- * NSCALES x 3 (the integrated texture tensors). */
-static void gradients_at(__global const float *comp, __global const float *tensors, int o, long x, long y, long W,
-                         long H, float *g)
+/* One pixel's derivative components and texture tensors, read from global memory once for all the
+ * orientations: comp holds NSCALES x 6 planes (d/dx, d/dy of L, a and b), tensors NSCALES x 3. */
+static void pixel_at(__global const float *comp, __global const float *tensors, long x, long y, long W, long H,
+                     float *d, float *t)
 {
-    float t = o * (M_PI_F / NORIENT), c = cos(t), s = sin(t);
+    for (int j = 0; j < 6 * NSCALES; j++) d[j] = PLANE(comp, j, x, y);
+    for (int j = 0; j < 3 * NSCALES; j++) t[j] = PLANE(tensors, j, x, y);
+}
+
+/* The gradients across orientation theta (the boundary's normal at theta, (c, s) = (cos, sin) theta), 4 per
+ * scale: |d/dn| of L, a and b, and the norm of the texton histograms' derivative (from the integrated
+ * texture tensor). */
+static void gradients_at(const float *d, const float *t3, float c, float s, float *g)
+{
     for (int sc = 0; sc < NSCALES; sc++) {
         for (int p = 0; p < 3; p++)
-            g[4 * sc + p] = fabs(c * PLANE(comp, 6 * sc + 2 * p, x, y) + s * PLANE(comp, 6 * sc + 2 * p + 1, x, y));
-        float q = c * c * PLANE(tensors, 3 * sc, x, y) + 2.0f * c * s * PLANE(tensors, 3 * sc + 1, x, y)
-                  + s * s * PLANE(tensors, 3 * sc + 2, x, y);
+            g[4 * sc + p] = fabs(c * d[6 * sc + 2 * p] + s * d[6 * sc + 2 * p + 1]);
+        float q = c * c * t3[3 * sc] + 2.0f * c * s * t3[3 * sc + 1] + s * s * t3[3 * sc + 2];
         g[4 * sc + 3] = sqrt(max(q, 0.0f));
     }
 }
@@ -240,11 +246,10 @@ static void gradients_at(__global const float *comp, __global const float *tenso
  * which lets it bend its response to contrast), and the square roots of g over the surround's mean
  * gradient (surround: 4 NSCALES planes) plus SURROUND_FLOOR: a gradient among many like it (a texture's
  * inner edges) counts less than the same gradient alone, the surround suppression of contour detectors. */
-static void features_at(__global const float *comp, __global const float *tensors, const float *inv_surround,
-                        int o, long x, long y, long W, long H, float *f)
+static void features_at(const float *d, const float *t3, const float *inv_surround, float c, float s, float *f)
 {
     const int n = 4 * NSCALES;
-    gradients_at(comp, tensors, o, x, y, W, H, f);
+    gradients_at(d, t3, c, s, f);
     for (int j = 0; j < n; j++) {
         f[n + j] = sqrt(f[j]);
         f[2 * n + j] = f[n + j] * inv_surround[j];
@@ -257,6 +262,13 @@ static void inverse_surround(__global const float *surround, long x, long y, lon
     for (int j = 0; j < 4 * NSCALES; j++) inv[j] = rsqrt(SURROUND_FLOOR + PLANE(surround, j, x, y));
 }
 
+/* The length of (a, b): the gradients here are small (images in [0, 1]), so no rescaling against
+ * overflow is needed, which makes hypot() several times dearer on CPUs. */
+static float norm2(float a, float b)
+{
+    return sqrt(a * a + b * b);
+}
+
 /* Each gradient's largest value over all orientations, (4 NSCALES, H, W): what the surround averages.
  * For L, a and b the gradient's norm; for the texture the square root of its tensor's larger eigenvalue. */
 __kernel void strongest(__global const float *comp, __global const float *tensors, __global float *out, long W,
@@ -266,40 +278,44 @@ __kernel void strongest(__global const float *comp, __global const float *tensor
     if (x >= W || y >= H) return;
     for (int sc = 0; sc < NSCALES; sc++) {
         for (int p = 0; p < 3; p++)
-            PLANE(out, 4 * sc + p, x, y) = hypot(PLANE(comp, 6 * sc + 2 * p, x, y), PLANE(comp, 6 * sc + 2 * p + 1, x, y));
+            PLANE(out, 4 * sc + p, x, y) = norm2(PLANE(comp, 6 * sc + 2 * p, x, y), PLANE(comp, 6 * sc + 2 * p + 1, x, y));
         float a = PLANE(tensors, 3 * sc, x, y), b = PLANE(tensors, 3 * sc + 1, x, y), d = PLANE(tensors, 3 * sc + 2, x, y);
         float largest = 0.5f * (a + d) + sqrt(0.25f * (a - d) * (a - d) + b * b);
         PLANE(out, 4 * sc + 3, x, y) = sqrt(max(largest, 0.0f));
     }
 }
 
-/* out: (NORIENT, H, W, NFEAT). */
+/* out: (NORIENT, H, W, NFEAT). directions: (cos, sin) of each orientation's angle, o pi / NORIENT (a table:
+ * the trigonometric functions were a large share of the classifier's time). */
 __kernel void oriented(__global const float *comp, __global const float *tensors, __global const float *surround,
-                       __global float *out, long W, long H)
+                       __constant float *directions, __global float *out, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
-    float f[NFEAT], inv[4 * NSCALES];
+    float f[NFEAT], inv[4 * NSCALES], d[6 * NSCALES], t3[3 * NSCALES];
     inverse_surround(surround, x, y, W, H, inv);
+    pixel_at(comp, tensors, x, y, W, H, d, t3);
     for (int o = 0; o < NORIENT; o++) {
-        features_at(comp, tensors, inv, o, x, y, W, H, f);
+        features_at(d, t3, inv, directions[2 * o], directions[2 * o + 1], f);
         __global float *dst = out + (((size_t)o * H + y) * W + x) * NFEAT;
         for (int j = 0; j < NFEAT; j++) dst[j] = f[j];
     }
 }
 
-/* weights: bias, then NFEAT weights. theta: the index of the winning orientation. */
+/* weights: bias, then NFEAT weights. directions: as for oriented. theta: the index of the winning orientation. */
 __kernel void probability(__global const float *comp, __global const float *tensors, __global const float *surround,
-                          __constant float *weights, __global float *p, __global uchar *theta, long W, long H)
+                          __constant float *directions, __constant float *weights, __global float *p,
+                          __global uchar *theta, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
-    float f[NFEAT], inv[4 * NSCALES];
+    float f[NFEAT], inv[4 * NSCALES], d[6 * NSCALES], t3[3 * NSCALES];
     inverse_surround(surround, x, y, W, H, inv);
+    pixel_at(comp, tensors, x, y, W, H, d, t3);
     float best = -INFINITY;
     int best_o = 0;
     for (int o = 0; o < NORIENT; o++) {
-        features_at(comp, tensors, inv, o, x, y, W, H, f);
+        features_at(d, t3, inv, directions[2 * o], directions[2 * o + 1], f);
         float z = weights[0];
         for (int j = 0; j < NFEAT; j++) z += weights[1 + j] * f[j];
         if (z > best) { best = z; best_o = o; }
@@ -319,11 +335,13 @@ static float bilinear(__global const float *f, float fx, float fy, long W, long 
 }
 
 /* A pixel keeps its probability when no point one pixel away along the normal has more. */
-__kernel void thin(__global const float *p, __global const uchar *theta, __global float *out, long W, long H)
+__kernel void thin(__global const float *p, __global const uchar *theta, __constant float *directions,
+                   __global float *out, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
-    float t = AT(theta, x, y) * (M_PI_F / NORIENT), c = cos(t), s = sin(t);
+    int o = AT(theta, x, y);
+    float c = directions[2 * o], s = directions[2 * o + 1];
     float v = AT(p, x, y);
     float a = bilinear(p, x + c, y + s, W, H), b = bilinear(p, x - c, y - s, W, H);
     AT(out, x, y) = (v >= a && v >= b) ? v : 0.0f;

@@ -306,6 +306,14 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
     return comp, tensors
 
 
+def _directions(machine: Machine) -> cl_array.Array:
+    """(cos, sin) of each orientation's angle, o pi / ORIENTATIONS, as the classifier's kernels read them."""
+    def table() -> np.ndarray:
+        angles = np.arange(ORIENTATIONS) * (np.pi / ORIENTATIONS)
+        return np.stack([np.cos(angles), np.sin(angles)], axis=1).astype(np.float32).ravel()
+    return _constant(machine, ("directions", ORIENTATIONS), table)
+
+
 def _defines(model: BoundaryModel) -> dict:
     return {"NORIENT": ORIENTATIONS, "NSCALES": len(model.scales), "NFEAT": 12 * len(model.scales),
             "SURROUND_FLOOR": f"{SURROUND_FLOOR!r}f"}
@@ -353,7 +361,7 @@ def oriented_gradients(image: ArrayLike, *, model: BoundaryModel | None = None,
     height, width = data.shape[:2]
     out = machine.empty((ORIENTATIONS, height, width, nfeat), np.float32)
     machine.launch(machine.kernel("boundary_probability", "oriented", **_defines(model)), (width, height),
-                   *_inputs(machine, data, model), out, np.int64(width), np.int64(height))
+                   *_inputs(machine, data, model), _directions(machine), out, np.int64(width), np.int64(height))
     return result(out, host)
 
 
@@ -392,10 +400,10 @@ def boundary_probability(image: ArrayLike, *, model: BoundaryModel | None = None
     theta = machine.empty((height, width), np.uint8)
     defines = _defines(model)
     machine.launch(machine.kernel("boundary_probability", "probability", **defines), (width, height),
-                   *_inputs(machine, data, model), _constant(machine, ("weights", model), lambda: model.weights), dense,
-                   theta, *dims)
+                   *_inputs(machine, data, model), _directions(machine),
+                   _constant(machine, ("weights", model), lambda: model.weights), dense, theta, *dims)
     thinned = machine.empty((height, width), np.float32)
-    machine.launch(machine.kernel("boundary_probability", "thin", **defines), (width, height), dense, theta, thinned,
-                   *dims)
+    machine.launch(machine.kernel("boundary_probability", "thin", **defines), (width, height), dense, theta,
+                   _directions(machine), thinned, *dims)
     orientation = theta.astype(np.float32) * np.float32(np.pi / ORIENTATIONS)
     return BoundaryProbability(result(thinned, host), result(orientation, host), result(dense, host))
