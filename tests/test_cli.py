@@ -110,6 +110,16 @@ def test_info_names_the_chosen_device(capsys):
     assert " * " in printed and "kernel binary cache" in printed
 
 
+def test_info_counts_what_the_kernel_cache_holds(tmp_path, capsys, monkeypatch):
+    cache = tmp_path / "kcache"
+    for group, program, size in (("AB", "ONE", 2**20), ("AB", "TWO", 2**20), ("CD", "THREE", 2 * 2**20)):
+        (cache / group / program).mkdir(parents=True)
+        (cache / group / program / "program.so").write_bytes(b"x" * size)
+    monkeypatch.setenv("POCL_CACHE_DIR", str(cache))
+    assert main(["info"]) == 0
+    assert f"{cache} (PoCL's; other drivers keep their own): 3 programs built, 4 MiB" in capsys.readouterr().out
+
+
 # -- --out: vmcl writes only its own files -------------------------------------------------------------
 
 def _snapshot(folder):

@@ -463,8 +463,17 @@ def _info(args) -> int:
     print(f"chosen (*): VMCL_DEVICE={os.environ.get('VMCL_DEVICE', '')!r}, else the first (GPUs first)")
     print(f"kernel sources: {kernels_dir()}")
     cache = os.environ.get("POCL_CACHE_DIR") or Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "pocl" / "kcache"
-    print(f"kernel binary cache: {cache} (PoCL's; other drivers keep their own)")
+    print(f"kernel binary cache: {cache} (PoCL's; other drivers keep their own){_cache_contents(Path(cache))}")
     return 0
+
+
+def _cache_contents(cache: Path) -> str:
+    """What PoCL's cache holds: its programs (one folder each, under two-letter folders) and their size."""
+    if not cache.is_dir():
+        return ": empty (the first run builds every kernel)"
+    programs = [p for group in cache.iterdir() if group.is_dir() for p in group.iterdir() if p.is_dir()]
+    size = sum(f.stat().st_size for p in programs for f in p.rglob("*") if f.is_file())
+    return f": {len(programs)} programs built, {size / 2**20:.0f} MiB"
 
 
 # -- batch ---------------------------------------------------------------------------------------------
