@@ -388,22 +388,20 @@ def _eval_stereo(args, root: Path) -> int:
 def _eval_flow(args, root: Path) -> int:
     from vmcl.datasets import find_flow_folders, read_flow_folder
     from vmcl.flow_evaluation import evaluate_sequence
+    from vmcl.machine import default_machine
 
     folders = find_flow_folders(root)
     if not folders:
         raise BadInput(f"--data {root}: no flow sequence found (numbered frames with flowNN.flo, gt/*.flo or "
                        "Sintel's flow/)")
     rows: list[tuple[object, ...]] = [("sequence", "method", "EPE px", "matched", "unmatched", "AAE deg", "ms")]
-    machine = None
+    machine = default_machine()
     with _progress(args, len(folders), "flow", unit="sequence") as step:
         for folder in folders:
             try:
                 sequence = read_flow_folder(folder)
             except (InputError, OSError) as error:
                 raise BadInput(f"{folder}: {error}") from None
-            from vmcl.machine import default_machine
-
-            machine = machine or default_machine()
             for row in evaluate_sequence(sequence, machine=machine):
                 rows.append((sequence.name, row.method, _fmt(row.epe), _fmt_optional(row.epe_matched),
                              _fmt_optional(row.epe_unmatched), _fmt(row.aae, 2), f"{row.ms:.0f}"))

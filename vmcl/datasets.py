@@ -728,11 +728,17 @@ def find_stereo_folders(root, *, depth: int = 4) -> list[Path]:
     FileNotFoundError
         If ``root`` is not a folder.
     """
+    return _find_folders(root, depth, lambda folder: _stereo_layout(folder) is not None)
+
+
+def _find_folders(root, depth: int, holds: Callable[[Path], bool]) -> list[Path]:
+    """The folders at or below ``root`` (``depth`` levels at most, hidden ones skipped) that ``holds``
+    accepts, sorted; ``root`` alone when it does; a folder accepted is not searched further."""
     root = _as_path(root, "root")
     check_int(depth, "depth", minimum=1)
     if not root.is_dir():
         raise FileNotFoundError(f"no such folder: {root}")
-    if _stereo_layout(root) is not None:
+    if holds(root):
         return [root]
     found: list[Path] = []
     level = [root]
@@ -741,8 +747,8 @@ def find_stereo_folders(root, *, depth: int = 4) -> list[Path]:
             break
         below = sorted(child for parent in level for child in parent.iterdir()
                        if child.is_dir() and not child.name.startswith("."))
-        found += [child for child in below if _stereo_layout(child) is not None]
-        level = [child for child in below if _stereo_layout(child) is None]
+        found += [child for child in below if holds(child)]
+        level = [child for child in below if not holds(child)]
     return sorted(found)
 
 
@@ -1029,24 +1035,7 @@ def find_flow_folders(root, *, depth: int = 4) -> list[Path]:
     FileNotFoundError
         If ``root`` is not a folder.
     """
-    root = _as_path(root, "root")
-    check_int(depth, "depth", minimum=1)
-    if not root.is_dir():
-        raise FileNotFoundError(f"no such folder: {root}")
-    def holds(folder: Path) -> bool:
-        return _flow_truth(folder) is not None and len(_flow_frames(folder)) >= 2
-    if holds(root):
-        return [root]
-    found: list[Path] = []
-    level = [root]
-    for _ in range(depth):
-        if not level:  # nothing left to search, however deep the search may go
-            break
-        below = sorted(child for parent in level for child in parent.iterdir()
-                       if child.is_dir() and not child.name.startswith("."))
-        found += [child for child in below if holds(child)]
-        level = [child for child in below if not holds(child)]
-    return sorted(found)
+    return _find_folders(root, depth, lambda folder: _flow_truth(folder) is not None and len(_flow_frames(folder)) >= 2)
 
 
 # --------------------------------------------------------------------------------------------- BSDS

@@ -108,7 +108,7 @@ class Memory:
         ones.fill(1.0, queue=m.queue)
         scratch = m.empty((height, width), np.float32)
         self._predict(ones, ones, previous, grey, 1, False, scratch, m.empty((height, width), np.float32))
-        share = float(cm_reduce.reduce(_as_float(m, self.broken), "sum", machine=m).get()) / (height * width)
+        share = float(cm_reduce.reduce(self.broken, "sum", machine=m).get()) / (height * width)
         self.broken_share = share
         self.previous_grey = previous
         if share > self.scene_cut:
@@ -174,7 +174,3 @@ class Memory:
         self.fields, self.next_fields = self.next_fields, {}
         self.flow = flow
 
-
-def _as_float(machine: Machine, mask: cl_array.Array) -> cl_array.Array:
-    """A uint8 mask as float32, for a sum."""
-    return mask.astype(np.float32, queue=machine.queue)

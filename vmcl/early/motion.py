@@ -480,7 +480,7 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     _require_memory(machine, d0.shape, 3 * n * n if table else 6 * n, n * n if table else n,
                     f"motion.flow over {n} x {n} displacements (method {method!r})")
     pyramids = [_pyramid(machine, d, levels) for d in (d0, d1)]
-    coarse, limit_share = None, 0.0
+    coarse = None
     for image0, image1 in zip(reversed(pyramids[0]), reversed(pyramids[1])):
         f0 = _features(machine, image0, features, sigma)
         f1 = _features(machine, image1, features, sigma)
@@ -490,9 +490,11 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
         flow_out, score, boundaries = _level(machine, f0, f1, pred, delta, radius, features, speed_penalty,
                                              method, subpixel, boundary_score)
         if coarse is None:  # the coarsest level: its range bounds the whole search's
-            at_edge = (abs(flow_out) >= delta - 1e-3).astype(np.float32)
-            limit_share = float(cm_reduce.reduce(at_edge, "sum", machine=machine).get()) / flow_out.size * 2
+            at_edge = cm_reduce.reduce((abs(flow_out) >= delta - 1e-3).astype(np.float32), "sum", machine=machine)
+            coarsest_size = flow_out.size
         coarse = flow_out
+    # Read back once the finer levels are enqueued, so the queue does not drain between levels.
+    limit_share = float(at_edge.get()) / coarsest_size * 2
     if host:
         return FlowResult(flow_out.get(), score.get(), boundaries.get().view(np.bool_), limit_share)
     return FlowResult(flow_out, score, boundaries, limit_share)
