@@ -5,7 +5,7 @@ Seed sections "The integration stage and MRF", "MRF models", "Organization of in
 flow, colour, texture) as piecewise smooth or piecewise constant and finds its discontinuities at once,
 helped by brightness edges; :func:`energy` evaluates the energy of any configuration on the host;
 :func:`score_confidence`, :func:`mask_confidence` and :func:`backfill` make its data and confidence from the early modules'
-measurements.
+measurements; :func:`sample` draws a configuration at a fixed temperature (the Gibbs sampler held there).
 
 What a restoration is told comes in two halves: the energy (:class:`EnergyModel`, with its
 :class:`LinePrior`) and the schedule of the chosen solver. :data:`SOLVERS` registers the solvers by
@@ -21,6 +21,7 @@ a user's flat overrides to them::
 """
 
 from vmcl.mrf.data import backfill, mask_confidence, score_confidence
+from vmcl.mrf.draw import sample
 from vmcl.mrf.energy import EnergyModel, LinePrior, energy
 from vmcl.mrf.icm import IcmSchedule
 from vmcl.mrf.meanfield import MeanFieldSchedule
@@ -32,4 +33,4 @@ from vmcl.mrf.solvers import SOLVERS
 
 __all__ = ["SOLVERS", "AnnealSchedule", "EnergyModel", "IcmSchedule", "LinePrior", "MeanFieldSchedule",
            "MpmSchedule", "NothingToRestore", "Restoration", "Settings", "backfill", "boundary_map", "energy",
-           "mask_confidence", "preset", "restore", "score_confidence"]
+           "mask_confidence", "preset", "restore", "sample", "score_confidence"]

@@ -20,13 +20,13 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as cm_reduce
-from vmcl.cm.core import ArrayLike, check_choice, check_int, field, machine_for
+from vmcl.cm.core import ArrayLike, check_choice, check_int, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.mrf.energy import KINDS, EnergyModel, host_field
+from vmcl.mrf.inputs import device_data, device_pixels
 from vmcl.mrf.lattice import Lattice
 from vmcl.mrf.solvers import SOLVERS
 
@@ -155,15 +155,15 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
     check_int(seed, "seed", minimum=0, maximum=2**64 - 1)
     if model.alpha <= 0:
         raise InputValueError("model.alpha must be > 0: without the data term nothing anchors the field")
-    g, host = _data(data, machine)
+    g, host = device_data(data, machine)
     height, width = g.shape[:2]
     if kind == "constant" and g.ndim == 3 and g.shape[2] != 1:
         raise InputValueError(f"kind='constant' takes scalar data (H, W), got shape {g.shape}")
-    gamma = _pixel_field(confidence, "confidence", (height, width), np.float32, machine)
-    e = _pixel_field(edges, "edges", (height, width), np.uint8, machine)
+    gamma = device_pixels(confidence, "confidence", (height, width), np.float32, machine)
+    e = device_pixels(edges, "edges", (height, width), np.uint8, machine)
     first = None
     if start is not None:
-        first, _ = _data(start, machine, "start")
+        first, _ = device_data(start, machine, "start")
         if first.shape != g.shape:
             raise InputValueError(f"start must have the data's shape {g.shape}, got {first.shape}")
     lattice = Lattice(machine, g, gamma, e, kind, model, first)
@@ -176,41 +176,6 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
         return Restoration(lattice.f.get().reshape(np.shape(data)), line_h.get().astype(bool),
                            line_v.get().astype(bool), total, sweeps)
     return Restoration(lattice.f, line_h, line_v, total, sweeps)
-
-
-def _data(data: Any, machine: Machine, name: str = "data") -> tuple[cl_array.Array, bool]:
-    if isinstance(data, np.ndarray):
-        if data.dtype.kind not in "iuf":
-            raise InputTypeError(f"{name} must be a real array (integer or float), got dtype {data.dtype}")
-        data = data.astype(np.float32)
-    g, host = field(data, name, machine, ndims=(2, 3), dtypes=(np.float32,))
-    if g.ndim == 3 and not 1 <= g.shape[2] <= 4:
-        raise InputValueError(f"{name} must be (H, W) or (H, W, C) with C in 1..4, got shape {g.shape}")
-    if min(g.shape[:2]) < 2:
-        raise InputValueError(f"{name} must be at least 2 x 2 pixels, got shape {g.shape}")
-    return g, host
-
-
-def _pixel_field(x: Any, name: str, shape: tuple[int, int], dtype: type, machine: Machine) -> cl_array.Array | None:
-    """An optional (H, W) per-pixel input on the device: confidence (float32) or edges (uint8)."""
-    if x is None:
-        return None
-    if isinstance(x, np.ndarray):
-        if x.shape != shape:
-            raise InputValueError(f"{name} must have the data's shape {shape}, got {x.shape}")
-        if dtype is np.uint8:
-            if x.dtype != np.bool_ and x.dtype.kind not in "iu":
-                raise InputTypeError(f"{name} must be boolean or integer (non-zero: an edge), got {x.dtype}")
-            return machine.to_device((x != 0).astype(np.uint8))
-        if x.dtype.kind not in "iuf":
-            raise InputTypeError(f"{name} must be real, got dtype {x.dtype}")
-        if not np.all(np.isfinite(x)) or np.any(x < 0):
-            raise InputValueError(f"{name} must be finite and >= 0")
-        return machine.to_device(x.astype(np.float32))
-    device, _ = field(x, name, machine, ndims=(2,), dtypes=(dtype,))
-    if device.shape != shape:
-        raise InputValueError(f"{name} must have the data's shape {shape}, got {device.shape}")
-    return device
 
 
 def boundary_map(line_h: np.ndarray, line_v: np.ndarray) -> np.ndarray:
