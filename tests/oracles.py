@@ -184,3 +184,70 @@ def oriented_gradients(lab, labels, ntextons, scales, orientations=8, ratio=2.0,
     strongest = np.stack(strongest, axis=-1)
     surround = np.stack([_smoothed(strongest[..., j], surround_sigma) for j in range(plain.shape[-1])], axis=-1)
     return np.concatenate([plain, np.sqrt(plain), np.sqrt(plain / (floor + surround))], axis=-1)
+
+
+def pseudolikelihood(f, line_h, line_v, theta, *, data=None, confidence=None, edges=None, kind="smooth",
+                     levels=None):
+    """The negative log pseudolikelihood of (f, l) at natural parameters ``theta`` (vmcl.learn's order),
+    from vmcl.mrf.energy alone: each conditional from the energy of the site's states (a pixel of the
+    smooth kind: the quadratic through three values of its f; the constant kind: every level; a line
+    site: on and off), scaled by 1 / T. Every site of the lattice is scored."""
+    from vmcl import mrf
+
+    f = np.asarray(f, np.float64)
+    scale = theta["coupling"] if kind == "smooth" else 1.0
+    beta = theta["line"] / scale if theta["line"] / scale > 0 else 1.0
+    prior = mrf.LinePrior(**{k: theta[k] / scale / beta for k in ("line", "end", "continuation", "turn", "junction",
+                                                                   "crossing", "parallel")})
+    model = mrf.EnergyModel(alpha=theta["alpha"] / scale, beta=beta, prior=prior,
+                            edge_gain=theta["edge_gain"] / scale / beta,
+                            kappa=theta["coupling"] if kind == "constant" else 1.0)
+    g = np.zeros_like(f) if data is None else np.asarray(data, np.float64)
+    gamma = np.zeros(f.shape[:2]) if data is None else (np.ones(f.shape[:2]) if confidence is None else confidence)
+
+    def u(field, lh, lv):
+        return scale * mrf.energy(field, lh, lv, data=g, confidence=gamma, edges=edges, kind=kind, model=model)
+
+    total = 0.0
+    height, width = f.shape[:2]
+    for y in range(height):
+        for x in range(width):
+            if kind == "smooth":
+                ncomp = 1 if f.ndim == 2 else f.shape[2]
+                for c in range(ncomp):
+                    values = []
+                    for v in (-1.0, 0.0, 1.0):
+                        trial = f.copy()
+                        if f.ndim == 2:
+                            trial[y, x] = v
+                        else:
+                            trial[y, x, c] = v
+                        values.append(u(trial, line_h, line_v))
+                    a2 = (values[0] + values[2] - 2 * values[1]) / 2  # U = a2 v^2 + a1 v + a0
+                    a1 = (values[2] - values[0]) / 2
+                    if a2 <= 0:
+                        continue  # no data and no bond: no conditional
+                    mean = -a1 / (2 * a2)
+                    value = f[y, x] if f.ndim == 2 else f[y, x, c]
+                    total += a2 * (value - mean) ** 2 - 0.5 * np.log(a2 / np.pi)
+            else:
+                energies = []
+                for level in levels:
+                    trial = f.copy()
+                    trial[y, x] = level
+                    energies.append(u(trial, line_h, line_v))
+                energies = np.array(energies)
+                observed = u(f, line_h, line_v)
+                total += observed - energies.min() + np.log(np.sum(np.exp(energies.min() - energies)))
+    for lines, shape in ((line_h, (height, width - 1)), (line_v, (height - 1, width))):
+        for y in range(shape[0]):
+            for x in range(shape[1]):
+                states = []
+                for state in (False, True):
+                    lh, lv = line_h.copy(), line_v.copy()
+                    (lh if lines is line_h else lv)[y, x] = state
+                    states.append(u(f, lh, lv))
+                de = states[1] - states[0]
+                on = bool(lines[y, x])
+                total += np.logaddexp(0.0, de if on else -de)  # P(on) = 1 / (1 + e^dE)
+    return total

@@ -238,13 +238,24 @@ class _Lattice:
             if np.any(valid & ~np.isin(self.f.reshape(shape), levels)):
                 raise InputValueError("field holds values that are not among the levels; give levels= or a field "
                                       "of levels")
-        self.counts = self._counts(valid)
+        self.counts = {"pixels": self._scored_pixels(valid, lh, lv, gamma),
+                       "lines": int(np.count_nonzero(self.line_observed.get() >= 0)) if self.lines else 0}
 
-    def _counts(self, valid: np.ndarray) -> dict[str, int]:
-        pixels = int(np.count_nonzero(self.potts_observed.get() >= 0)) if self.potts_observed is not None \
-            else int(np.count_nonzero(valid))
-        lines = int(np.count_nonzero(self.line_observed.get() >= 0)) if self.line_observed is not None else 0
-        return {"pixels": pixels, "lines": lines}
+    def _scored_pixels(self, valid: np.ndarray, lh: np.ndarray, lv: np.ndarray, gamma: np.ndarray) -> int:
+        """Pixels whose conditional is scored: valid, every bonded neighbour valid, and (smooth kind)
+        anchored by data or a bond; the constant kind's count comes from its features kernel."""
+        if self.potts_observed is not None:
+            return int(np.count_nonzero(self.potts_observed.get() >= 0))
+        ok = valid.copy()
+        bonded = np.zeros(valid.shape, int)
+        pad = np.pad(valid, 1, constant_values=True)
+        for keep, neighbour in ((np.pad(~lh[:, :-1].astype(bool), ((0, 0), (1, 0))), pad[1:-1, :-2]),
+                                (np.pad(~lh[:, :-1].astype(bool), ((0, 0), (0, 1))), pad[1:-1, 2:]),
+                                (np.pad(~lv[:-1, :].astype(bool), ((1, 0), (0, 0))), pad[:-2, 1:-1]),
+                                (np.pad(~lv[:-1, :].astype(bool), ((0, 1), (0, 0))), pad[2:, 1:-1])):
+            ok &= ~keep | neighbour
+            bonded += keep
+        return int(np.count_nonzero(ok & ((bonded > 0) | (gamma > 0))))
 
     def terms(self, theta: np.ndarray, pixels: bool) -> tuple[float, np.ndarray, np.ndarray]:
         """The negative log pseudolikelihood over this example's scored sites, its gradient and Hessian in

@@ -1,0 +1,140 @@
+"""Maximum pseudolikelihood (vmcl.learn): the device's sums against the energy's own conditionals, and
+parameters found again in fields drawn by vmcl's Gibbs sampler at known parameters."""
+
+import numpy as np
+import pytest
+
+from oracles import pseudolikelihood as oracle_pseudolikelihood
+from vmcl import mrf
+from vmcl.errors import InputTypeError, InputValueError
+from vmcl.learn import PARAMETERS, Example, fit_pseudolikelihood
+from vmcl.learn.pseudolikelihood import pseudolikelihood_terms
+
+THETA = dict(zip(PARAMETERS, (0.8, 1.3, 2.0, 0.7, 0.6, 0.3, 1.1, 1.7, 2.2, 0.9)))
+
+
+def _configuration(rng, shape, kind):
+    height, width = shape[:2]
+    if kind == "smooth":
+        f = rng.normal(0, 1, shape)
+    else:
+        f = rng.choice([0.0, 0.5, 1.0], size=shape)
+    return (f, rng.random((height, width - 1)) < 0.4, rng.random((height - 1, width)) < 0.4,
+            rng.random((height, width)) < 0.3)
+
+
+@pytest.mark.parametrize("kind, shape", [("smooth", (5, 6)), ("smooth", (4, 5, 2)), ("constant", (5, 6))])
+def test_value_and_gradient_match_the_energy(machine, kind, shape):
+    rng = np.random.default_rng(7)
+    f, lh, lv, edges = _configuration(rng, shape, kind)
+    data = f + rng.normal(0, 0.3, shape)
+    gamma = rng.uniform(0.2, 1.0, shape[:2])
+    levels = (0.0, 0.5, 1.0) if kind == "constant" else None
+    example = Example(f, lh, lv, data=data, confidence=gamma, edges=edges)
+    value, grad, hess = pseudolikelihood_terms([example], THETA, kind=kind, levels=levels, machine=machine)
+
+    def oracle(theta):
+        return oracle_pseudolikelihood(f, lh, lv, theta, data=data, confidence=gamma, edges=edges, kind=kind,
+                                       levels=levels)
+
+    assert value == pytest.approx(oracle(THETA), rel=1e-4)
+    step = 1e-4
+    for k, name in enumerate(PARAMETERS):
+        up, down = dict(THETA), dict(THETA)
+        up[name] += step
+        down[name] -= step
+        assert grad[k] == pytest.approx((oracle(up) - oracle(down)) / (2 * step), rel=2e-3, abs=2e-3), name
+    assert np.allclose(hess, hess.T)
+    assert np.all(np.linalg.eigvalsh(hess) > -1e-4)  # convex
+
+
+@pytest.mark.parametrize("coupling", [0.1, 0.2, 0.3, 0.44, 0.5])
+def test_ising_coupling_recovered(machine, coupling):
+    """Ising fields (two levels, no lines, no data) of 128 x 128 drawn by vmcl.mrf.sample at J, Potts cost
+    kappa = 2 J at T = 1; four independent fields pooled. Above the critical J = 0.4407 the chain starts
+    ordered (from a random start it would coarsen for far longer than the test runs)."""
+    ising = mrf.EnergyModel(alpha=0.0, kappa=2 * coupling, levels=(0.0, 1.0))
+    examples = []
+    for seed in range(4):
+        start = np.random.default_rng(seed).integers(0, 2, (128, 128)).astype(np.float32)
+        if coupling > 0.44:
+            start[:] = 1.0
+        drawn = mrf.sample(start, confidence=np.zeros((128, 128)), kind="constant", model=ising, lines=False,
+                           start=start, sweeps=1000, seed=seed, machine=machine)
+        examples.append(Example(drawn.field))
+    fit = fit_pseudolikelihood(examples, kind="constant", levels=(0.0, 1.0), machine=machine)
+    assert fit.converged and fit.fitted == ("coupling",)
+    assert abs(fit.theta["coupling"] / 2 - coupling) < 0.01
+
+
+def test_line_process_potentials_recovered(machine):
+    """A smooth field with its line process drawn at T = 1 from the posterior given noisy blocks and
+    edges (the true block boundaries and 5% random pixels), 16 draws of 192 x 192: every potential,
+    the data weight and the edge coupling within 10%, and the model they make within 10% of the truth."""
+    prior = mrf.LinePrior(line=1.0, end=0.4, continuation=0.5, turn=0.7, junction=1.0, crossing=1.2, parallel=0.6)
+    model = mrf.EnergyModel(alpha=1.0, beta=2.0, prior=prior, edge_gain=0.5)
+    examples = []
+    for seed in range(16):
+        rng = np.random.default_rng(seed)
+        truth = np.zeros((192, 192), np.float32)
+        for _ in range(12):
+            y, x = rng.integers(0, 152, 2)
+            h, w = rng.integers(20, 60, 2)
+            truth[y:y + h, x:x + w] = rng.uniform(-3, 3)
+        noisy = truth + rng.normal(0, 0.5, truth.shape).astype(np.float32)
+        gy, gx = np.gradient(truth)
+        edges = (np.hypot(gx, gy) > 0) | (rng.random(truth.shape) < 0.05)
+        drawn = mrf.sample(noisy, edges=edges, model=model, sweeps=300, seed=seed, machine=machine)
+        examples.append(Example(drawn.field, drawn.line_h, drawn.line_v, data=noisy, edges=edges))
+    fit = fit_pseudolikelihood(examples, machine=machine)
+    truth = {"alpha": 1.0, "coupling": 1.0, "line": 2.0, "edge_gain": 1.0, "end": 0.8, "continuation": 1.0,
+             "turn": 1.4, "junction": 2.0, "crossing": 2.4, "parallel": 1.2}
+    assert fit.converged and set(fit.fitted) == set(PARAMETERS)
+    for name, value in truth.items():
+        assert fit.theta[name] == pytest.approx(value, rel=0.1), name
+    found = fit.model()
+    assert fit.temperature == pytest.approx(1.0, rel=0.01)
+    assert (found.alpha, found.beta, found.edge_gain) == pytest.approx((1.0, 2.0, 0.5), rel=0.1)
+    for name in ("end", "continuation", "turn", "junction", "crossing", "parallel"):
+        assert getattr(found.prior, name) == pytest.approx(getattr(prior, name), rel=0.1), name
+
+
+def test_held_parameters_and_defaults(machine):
+    f = np.random.default_rng(0).normal(size=(16, 16))
+    fit = fit_pseudolikelihood([Example(f)], machine=machine)
+    assert fit.fitted == ("coupling",)  # no data, no lines: only the membrane's 1 / T
+    assert fit.theta["alpha"] == 0.0 and fit.sites == {"pixels": 256, "lines": 0}
+    # White noise of variance 1 read as a membrane: f_i given its n neighbours is N(mean, 1 / (2 c n)),
+    # off by 1 + 1 / n from the noise's own spread about the neighbours' mean, so c is near 1 / (2 n (1 + 1 / n)).
+    assert 0.05 < fit.theta["coupling"] < 0.2
+    held = fit_pseudolikelihood([Example(f, np.zeros((16, 15)), np.zeros((15, 16)))], fixed={"continuation": 0.0},
+                                machine=machine)
+    assert held.theta["continuation"] == 0.0 and "continuation" not in held.fitted and "edge_gain" not in held.fitted
+
+
+def test_unknown_pixels_are_left_out(machine):
+    f = np.random.default_rng(0).normal(size=(12, 12))
+    holes = f.copy()
+    holes[3:6, 3:6] = np.nan
+    whole = fit_pseudolikelihood([Example(f)], machine=machine)
+    with_holes = fit_pseudolikelihood([Example(holes)], machine=machine)
+    # 9 unknown pixels, and their 12 bonded neighbours whose conditionals read them
+    assert with_holes.sites["pixels"] == whole.sites["pixels"] - 9 - 12
+
+
+def test_refusals(machine):
+    f = np.zeros((8, 8))
+    with pytest.raises(InputTypeError, match="examples"):
+        fit_pseudolikelihood([], machine=machine)
+    with pytest.raises(InputTypeError, match="examples"):
+        fit_pseudolikelihood([f], machine=machine)
+    with pytest.raises(InputValueError, match="line_h must have shape"):
+        fit_pseudolikelihood([Example(f, np.zeros((8, 8)), np.zeros((7, 8)))], machine=machine)
+    with pytest.raises(InputValueError, match="unknown parameter 'beta'"):
+        fit_pseudolikelihood([Example(f)], fixed={"beta": 1.0}, machine=machine)
+    with pytest.raises(InputValueError, match="not among the levels"):
+        fit_pseudolikelihood([Example(np.eye(8) * 0.5)], kind="constant", levels=(0.0, 1.0), machine=machine)
+    with pytest.raises(InputValueError, match="2..64 distinct levels"):
+        fit_pseudolikelihood([Example(np.arange(100.0).reshape(10, 10))], kind="constant", machine=machine)
+    with pytest.raises(InputValueError, match="data must have the field's shape"):
+        fit_pseudolikelihood([Example(f, data=np.zeros((8, 9)))], machine=machine)
