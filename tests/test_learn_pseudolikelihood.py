@@ -3,8 +3,8 @@ parameters found again in fields drawn by vmcl's Gibbs sampler at known paramete
 
 import numpy as np
 import pytest
-
 from oracles import pseudolikelihood as oracle_pseudolikelihood
+
 from vmcl import mrf
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.learn import PARAMETERS, Example, fit_pseudolikelihood

@@ -1,10 +1,17 @@
 """Learning the machine's parameters from examples and from the data (seed section "Learning and
 parameter estimation").
 
-:func:`fit_pseudolikelihood` estimates the line-process MRF's parameters from examples whose desired
-solution is given (Besag's maximum pseudolikelihood, on the device).
+From examples whose desired solution is given: :func:`fit_pseudolikelihood` estimates the line-process
+MRF's parameters by Besag's maximum pseudolikelihood, on the device. From the data alone:
+:func:`cross_validate` chooses a cue's smoothing weight by held-out measurements, :func:`estimate_noise`
+the measurements' noise by stochastic EM, and :func:`scan_temperature` the MPM temperature away from the
+phase transition.
 """
 
+from vmcl.learn.cross_validation import CrossValidation, cross_validate
+from vmcl.learn.noise import NoiseEstimate, estimate_noise
 from vmcl.learn.pseudolikelihood import PARAMETERS, Example, PseudolikelihoodFit, fit_pseudolikelihood
+from vmcl.learn.temperature import TemperatureScan, scan_temperature
 
-__all__ = ["PARAMETERS", "Example", "PseudolikelihoodFit", "fit_pseudolikelihood"]
+__all__ = ["PARAMETERS", "CrossValidation", "Example", "NoiseEstimate", "PseudolikelihoodFit", "TemperatureScan",
+           "cross_validate", "estimate_noise", "fit_pseudolikelihood", "scan_temperature"]

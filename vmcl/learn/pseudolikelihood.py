@@ -239,7 +239,7 @@ class _Lattice:
                 raise InputValueError("field holds values that are not among the levels; give levels= or a field "
                                       "of levels")
         self.counts = {"pixels": self._scored_pixels(valid, lh, lv, gamma),
-                       "lines": int(np.count_nonzero(self.line_observed.get() >= 0)) if self.lines else 0}
+                       "lines": 0 if self.line_observed is None else int(np.count_nonzero(self.line_observed.get() >= 0))}
 
     def _scored_pixels(self, valid: np.ndarray, lh: np.ndarray, lv: np.ndarray, gamma: np.ndarray) -> int:
         """Pixels whose conditional is scored: valid, every bonded neighbour valid, and (smooth kind)
@@ -262,7 +262,7 @@ class _Lattice:
         all of :data:`PARAMETERS` (the pixel sites only with ``pixels``)."""
         size = len(PARAMETERS)
         value, grad, hess = 0.0, np.zeros(size), np.zeros((size, size))
-        parts = []
+        parts: list[tuple[tuple[int, ...], tuple[float, np.ndarray, np.ndarray]]] = []
         n = self.height * self.width
         if pixels and self.kind == "smooth":
             rows = self._sum_rows("gaussian_terms", 2, (n + CHUNK - 1) // CHUNK, self.d_f, self.d_g, self.d_gamma,
