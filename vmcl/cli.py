@@ -7,6 +7,7 @@ dense fields out (:mod:`vmcl.pipeline`, :mod:`vmcl.report`).
     vmcl run LEFT [RIGHT] [--next NEXT] [--config C.toml] --out DIR
     vmcl run FRAMES [RIGHT_FRAMES] [--fps N] [--config C.toml] --out DIR
     vmcl eval stereo|flow|edges --data DIR
+    vmcl fit stereo|motion --data DIR [--data DIR ...] --out FITTED.toml [--config C.toml] [--jump PX] [--fix NAME=VALUE]
     vmcl info
     vmcl batch INPUTS... --out DIR [--frames] [--config C.toml] [--scheduler ADDRESS] [--workers N] [--threads N]
                [--zarr FIELD ...]
@@ -42,6 +43,12 @@ are refused before any work.
 sequence the right view's likewise) streams it through the machine with the temporal terms
 (:meth:`vmcl.pipeline.VisionMachine.stream`, the ``[time]`` settings) and writes what
 :mod:`vmcl.sequence_output` describes: each frame's fields and videos of the cartoon, flow and disparity.
+
+``vmcl fit`` learns a cue's MRF parameters from every example with ground truth below ``--data`` (stereo
+pairs with their disparity, frame pairs with their flow): the machine's own measurements beside the truth,
+by maximum pseudolikelihood (:mod:`vmcl.learn.cue_fit`). It writes a TOML file that ``--config`` loads, with
+a ``[fitted]`` table naming the data, the code and a hash of the parameters, checked when loaded
+(:mod:`vmcl.fitted`); it replaces only a file an earlier ``vmcl fit`` wrote.
 
 Stages that take time show a progress bar on stderr (tqdm); ``--quiet`` keeps only the results.
 """
@@ -344,6 +351,43 @@ def _eval(args) -> int:
     return {"stereo": _eval_stereo, "flow": _eval_flow, "edges": _eval_edges}[args.benchmark](args, root)
 
 
+def _fit(args) -> int:
+    from vmcl.fitted import check_writable, write_fitted
+    from vmcl.learn.cue_fit import fit_cue
+    from vmcl.learn.pseudolikelihood import PARAMETERS
+    from vmcl.pipeline import VisionMachine
+
+    for root in args.data:
+        if not Path(root).is_dir():
+            raise BadInput(f"--data {root}: no such folder")
+    out = Path(args.out)
+    if out.suffix != ".toml":
+        raise BadInput(f"--out {out}: the fitted parameters are a TOML file; name it *.toml")
+    check_writable(out)  # before the long fit, not after it
+    fixed = {}
+    for item in args.fix:
+        name, _, value = item.partition("=")
+        if name not in PARAMETERS:
+            raise BadInput(f"--fix {item}: the parameters are {', '.join(PARAMETERS)}")
+        try:
+            fixed[name] = float(value)
+        except ValueError:
+            raise BadInput(f"--fix {item}: {value!r} is not a number") from None
+    vm = VisionMachine(_config(args.config))
+    print(f"Fitting the {args.cue} MRF to the examples under {', '.join(args.data)} ...", file=sys.stderr)
+    found = fit_cue(args.cue, args.data, vm=vm, jump=args.jump, fixed=fixed)
+    written = write_fitted(out, found.tables, found.provenance)
+    fit = found.fit
+    rows: list[tuple[object, ...]] = [("parameter", "natural (per T)", "standard error", "fitted")]
+    rows += [(name, f"{fit.theta[name]:.4g}", f"{fit.standard_error[name]:.2g}" if name in fit.standard_error else "",
+              "yes" if name in fit.fitted else "held") for name in PARAMETERS]
+    _print_table(f"{args.cue}: {len(found.provenance['data'])} example(s), {fit.sites['pixels']} pixel and "
+                 f"{fit.sites['lines']} line sites, {fit.iterations} Newton steps"
+                 f"{'' if fit.converged else ' (not converged)'}", rows)
+    print(f"Wrote {written}: [mrf.{args.cue}] at T = {fit.temperature:.4g}; load it with --config {written}")
+    return 0
+
+
 def _only(**sections):
     """A Config with the cues not named switched off (an evaluation runs what it measures)."""
     from vmcl.pipeline import ColourConfig, Config, MotionConfig, StereoConfig, TextureConfig
@@ -557,6 +601,19 @@ def parser() -> argparse.ArgumentParser:
                                "costs one matching per image and annotator)")
     evaluate.add_argument("--workers", type=int, default=1, help="edges: processes for the matching")
 
+    fit = commands.add_parser("fit", parents=[quiet],
+                              help="learn a cue's MRF parameters from a data set with ground truth")
+    fit.add_argument("cue", choices=("stereo", "motion"))
+    fit.add_argument("--data", required=True, action="append",
+                     help="a folder of examples with ground truth, searched as `vmcl eval` searches it (stereo: "
+                          "Middlebury-layout scenes; motion: frames with flow); repeatable")
+    fit.add_argument("--out", required=True, help="the TOML file to write: new, or one `vmcl fit` wrote")
+    fit.add_argument("--config", help="TOML configuration of the machine whose measurements are fitted")
+    fit.add_argument("--jump", type=float, default=1.0,
+                     help="a true discontinuity: neighbours more than this many pixels apart (default 1)")
+    fit.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
+                     help="hold a natural parameter (e.g. coupling=1) instead of fitting it; repeatable")
+
     commands.add_parser("info", parents=[quiet], help="OpenCL platforms and devices, the kernel cache")
 
     batch = commands.add_parser("batch", parents=[quiet],
@@ -588,7 +645,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command == "demo" and not 64 <= args.size <= 1024:
         print("vmcl: error: --size must be within 64..1024", file=sys.stderr)
         return EXIT_BAD_INPUT
-    handler = {"demo": _demo, "run": _run, "eval": _eval, "info": _info, "batch": _batch}[args.command]
+    handler = {"demo": _demo, "run": _run, "eval": _eval, "fit": _fit, "info": _info, "batch": _batch}[args.command]
     try:
         return handler(args)
     except KeyboardInterrupt:

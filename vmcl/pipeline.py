@@ -35,13 +35,13 @@ from collections.abc import Callable, Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import pyopencl.array as cl_array
 
+from vmcl import fitted, labelling, temporal
 from vmcl import integrate as _integrate
-from vmcl import labelling, temporal
 from vmcl.cm.core import check_choice, check_int, check_real
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
 from vmcl.early import boundary_probability, disparity_range, edges, motion, semiglobal, stereo
@@ -57,6 +57,7 @@ __all__ = [
     "WARM_SCHEDULE",
     "ColourConfig",
     "Config",
+    "CueData",
     "EdgesConfig",
     "LabelsConfig",
     "MotionConfig",
@@ -546,14 +547,18 @@ class Config:
     def from_toml(cls, path: str | Path) -> Config:
         """Read a Config from a TOML file.
 
-        Raises ValueError on bad TOML (or text that is not UTF-8) or keys, TypeError on mistyped values,
-        OSError if the file cannot be read.
+        A file ``vmcl fit`` wrote carries a ``[fitted]`` table: its parameters are checked against the
+        hash recorded there (:func:`vmcl.fitted.check_fitted`), and a warning says when another vmcl
+        version fitted them.
+
+        Raises ValueError on bad TOML (or text that is not UTF-8), keys, or fitted parameters edited since
+        they were fitted; TypeError on mistyped values; OSError if the file cannot be read.
         """
         try:
             values = tomllib.loads(Path(path).read_text(encoding="utf-8"))
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
             raise InputValueError(f"{path}: not valid TOML ({error})") from None
-        return cls.from_dict(values)
+        return cls.from_dict(fitted.check_fitted(values, str(path)))
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """The configuration as nested plain values (for the report)."""
@@ -592,6 +597,24 @@ def as_image(array: Any, name: str) -> np.ndarray:
         raise InputValueError(f"{name}: float images hold brightness in [0, 1], got values in [{low:.3g}, {high:.3g}]; "
                               "divide by the image's full scale (e.g. 255) first")
     return np.ascontiguousarray(array, np.float32)
+
+
+class CueData(NamedTuple):
+    """One cue's measurement as its MRF receives it (:meth:`VisionMachine.measure`), on the host.
+
+    Attributes
+    ----------
+    data : (H, W) or (H, W, 2) float32 array
+        NaN where the module gave no value.
+    confidence : (H, W) float32 array or None
+        The data term's weight (None: 1 wherever there is data).
+    coupling : (H, W) bool array
+        The edges the cue's line sites are coupled to.
+    """
+
+    data: np.ndarray
+    confidence: np.ndarray | None
+    coupling: np.ndarray
 
 
 class VisionMachine:
@@ -664,6 +687,25 @@ class VisionMachine:
         """
         image, others = _inputs(left, right, next)
         return _Run(self, image, others, progress, None).result
+
+    def measure(self, left: np.ndarray, right: np.ndarray | None = None,
+                next: np.ndarray | None = None) -> dict[str, CueData]:
+        """What each cue's early module gives its MRF, before any restoration: the data to learn from.
+
+        Parameters
+        ----------
+        left, right, next
+            As for :meth:`run`.
+
+        Returns
+        -------
+        dict of str to CueData
+            By cue name (the cues :meth:`run` would run for these inputs): the MRF's data (NaN where
+            none), its confidence and the edges its lines are coupled to, on the host. Stereo's are
+            those of its first pass (before the feedback pass re-matches along the restored lines).
+        """
+        image, others = _inputs(left, right, next)
+        return _Run(self, image, others, None, None, measure_only=True).measured
 
     def stream(self, frames: Iterable[np.ndarray], rights: Iterable[np.ndarray] | None = None, *,
                progress: Callable[[str], None] | None = None) -> Iterator[Result]:
@@ -744,7 +786,8 @@ class _Run:
     """One run of the machine: the stages in order, each timed, the fields kept on the device."""
 
     def __init__(self, vm: VisionMachine, image: np.ndarray, others: dict[str, np.ndarray],
-                 progress: Callable[[str], None] | None, memory: temporal.Memory | None) -> None:
+                 progress: Callable[[str], None] | None, memory: temporal.Memory | None, *,
+                 measure_only: bool = False) -> None:
         self.m, self.c = vm.machine, vm.config
         self.progress = progress
         self.memory, self.carries = memory, False
@@ -779,6 +822,10 @@ class _Run:
                     # The module's own argument names (patch, levels) are the cue's Config keys.
                     raise type(error)(f"{cue.name} (the [{cue.name}] settings on this image): {error}") from None
             self.notes.extend(measured[cue.name].notes)
+        if measure_only:
+            self.measured = {name: CueData(m.data.get(), None if m.confidence is None else m.confidence.get(),
+                                           m.coupling.get().astype(bool)) for name, m in measured.items()}
+            return
         fields = {name: array for m in measured.values() for name, array in m.fields.items()}
         lines, restored = {}, {}
         for cue in active:

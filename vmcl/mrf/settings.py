@@ -14,7 +14,7 @@ from typing import Any
 
 from vmcl.cm.core import check_choice
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.mrf.energy import EnergyModel
+from vmcl.mrf.energy import EnergyModel, LinePrior
 from vmcl.mrf.solvers import SOLVERS
 
 __all__ = ["Settings"]
@@ -77,8 +77,8 @@ class Settings:
         Parameters
         ----------
         overrides : mapping of str to value
-            Field name -> new value. A name is any field of :class:`EnergyModel` (alpha, beta, prior,
-            kappa, levels, edge_gain, require_edge, edge_radius) or of any registered schedule (t0,
+            Field name -> new value. A name is any field of :class:`EnergyModel` (alpha, beta, prior
+            (a :class:`LinePrior`, or a mapping of some of its entries, the others its defaults), kappa, levels, edge_gain, require_edge, edge_radius) or of any registered schedule (t0,
             t_factor, sweeps, quench; mpm_temperature, burn_in, samples; mf_t0, mf_factor, mf_steps,
             mf_iterations, quench; icm_sweeps): :meth:`override_keys`. A name that several schedules
             share sets it in each: ``quench`` is both annealing's and mean field's.
@@ -113,10 +113,23 @@ class Settings:
         return Settings(model, schedules)
 
     @staticmethod
+    def _prior(table: Mapping[str, Any], label: str) -> LinePrior:
+        """A line prior given as a table of its entries (a TOML ``[mrf.<cue>.prior]`` table); the entries
+        left out keep :class:`LinePrior`'s defaults."""
+        known = [item.name for item in dataclasses.fields(LinePrior)]
+        for key in table:
+            if key not in known:
+                raise InputValueError(f"unknown key {label}.{key}; the keys are {', '.join(known)}")
+            LinePrior.CHECKS[key](table[key], f"{label}.{key}")
+        return LinePrior(**table)
+
+    @staticmethod
     def _replaced(settings: Any, overrides: Mapping[str, Any], prefix: str | None) -> Any:
         """``settings`` (the model or a schedule) with the overrides of its own fields, checked by the
         label the user knows before the dataclass checks them again as ``Class.field``."""
         own = {item.name: overrides[item.name] for item in dataclasses.fields(settings) if item.name in overrides}
+        if isinstance(own.get("prior"), Mapping):
+            own["prior"] = Settings._prior(own["prior"], "prior" if prefix is None else f"{prefix}.prior")
         if prefix is not None:
             for name, value in own.items():
                 type(settings).CHECKS[name](value, f"{prefix}.{name}")

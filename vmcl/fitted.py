@@ -1,0 +1,170 @@
+"""Fitted parameter files: what they were fitted on, and a check that they are what was fitted.
+
+Seed section "Learning and parameter estimation". A configuration that ``vmcl fit`` learns is a TOML file
+that :meth:`vmcl.pipeline.Config.from_toml` loads like any other, plus a ``[fitted]`` table that says
+where it came from: the data (each example's name and one SHA-256 over their files), the vmcl version and
+a hash of the learning code, the method, the date, and the SHA-256 of the parameter tables themselves.
+Loading checks that hash (a file edited by hand, or damaged, is refused with a sentence saying so: drop
+the ``[fitted]`` table to keep the edit as one's own configuration) and warns when the file was fitted
+by another vmcl version.
+"""
+
+from __future__ import annotations
+
+import datetime
+import hashlib
+import json
+import math
+import os
+import warnings
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+from vmcl.errors import InputValueError
+
+__all__ = ["FITTED_BY", "check_fitted", "check_writable", "code_sha256", "files_sha256", "parameters_sha256", "write_fitted"]
+
+FITTED_BY = "vmcl fit"
+"""The ``[fitted]`` table's ``written_by``: the mark of a file vmcl wrote, which it may replace."""
+
+
+def parameters_sha256(tables: Mapping[str, Any]) -> str:
+    """SHA-256 of the parameter tables in a canonical form (JSON, sorted keys), the same before writing
+    and after TOML reads them back."""
+    text = json.dumps(tables, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def files_sha256(paths: Iterable[Path]) -> str:
+    """One SHA-256 over files, in the order given: each file's name and bytes."""
+    digest = hashlib.sha256()
+    for path in paths:
+        digest.update(Path(path).name.encode() + b"\0")
+        digest.update(Path(path).read_bytes())
+    return digest.hexdigest()
+
+
+def code_sha256(*modules: Any) -> str:
+    """SHA-256 of the source files of ``modules`` (modules or paths): the learning code's version."""
+    paths = [Path(m) if isinstance(m, (str, Path)) else Path(m.__file__) for m in modules]
+    return files_sha256(paths)
+
+
+def check_fitted(values: dict[str, Any], source: str) -> dict[str, Any]:
+    """A loaded configuration without its ``[fitted]`` table, once the table's hash is checked.
+
+    Parameters
+    ----------
+    values : dict
+        The TOML file's tables.
+    source : str
+        The file's name, for the messages.
+
+    Raises
+    ------
+    InputValueError
+        The table lacks its hash, or the parameters differ from those fitted.
+    """
+    from vmcl import __version__
+
+    rest = {key: value for key, value in values.items() if key != "fitted"}
+    fitted = values.get("fitted")
+    if fitted is None:
+        return rest
+    if not isinstance(fitted, Mapping) or not isinstance(fitted.get("parameters_sha256"), str):
+        raise InputValueError(f"{source}: the [fitted] table has no parameters_sha256, so what was fitted "
+                              "cannot be checked")
+    if parameters_sha256(rest) != fitted["parameters_sha256"]:
+        raise InputValueError(f"{source}: its parameters differ from those fitted (their SHA-256 does not match "
+                              "[fitted] parameters_sha256): edited or damaged since `vmcl fit` wrote it; remove the "
+                              "[fitted] table to use it as your own configuration")
+    if fitted.get("vmcl") != __version__:
+        warnings.warn(f"{source} was fitted by vmcl {fitted.get('vmcl')}, this is vmcl {__version__}: its "
+                      "parameters may not suit this version's modules", UserWarning, stacklevel=3)
+    return rest
+
+
+def write_fitted(path: str | Path, tables: Mapping[str, Any], provenance: Mapping[str, Any]) -> Path:
+    """Write parameter tables and their ``[fitted]`` table as TOML, replacing only a file vmcl fitted.
+
+    Parameters
+    ----------
+    path : str or Path
+        A new file, or one an earlier ``vmcl fit`` wrote (anything else is refused, untouched).
+    tables : mapping
+        Nested tables of numbers and strings (e.g. ``{"mrf": {"stereo": {...}}}``).
+    provenance : mapping
+        The ``[fitted]`` entries besides those this adds (written_by, vmcl, date, parameters_sha256).
+
+    Returns
+    -------
+    Path
+        The file written (written beside it first, then moved into place).
+    """
+    from vmcl import __version__
+
+    target = check_writable(path)
+    fitted = {"written_by": FITTED_BY, "vmcl": __version__,
+              "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+              **provenance, "parameters_sha256": parameters_sha256(tables)}
+    lines = ["# Parameters learned by `vmcl fit`; [fitted] says from what. Load with vmcl run --config.", ""]
+    lines += _toml_tables({**tables, "fitted": fitted}, ())
+    temporary = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    temporary.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    os.replace(temporary, target)
+    return target
+
+
+def check_writable(path: str | Path) -> Path:
+    """``path`` as a Path, if :func:`write_fitted` may write it: a new file or one ``vmcl fit`` wrote.
+
+    Raises
+    ------
+    InputValueError
+        The file exists and is someone else's.
+    """
+    target = Path(path)
+    if target.exists() and not _written_by_vmcl(target):
+        raise InputValueError(f"{target} exists and is not a file `vmcl fit` wrote: choose a new name")
+    return target
+
+
+def _written_by_vmcl(path: Path) -> bool:
+    from vmcl.pipeline import tomllib
+
+    try:
+        values = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False
+    fitted = values.get("fitted")
+    return isinstance(fitted, Mapping) and fitted.get("written_by") == FITTED_BY
+
+
+def _toml_tables(tables: Mapping[str, Any], prefix: tuple[str, ...]) -> list[str]:
+    scalars = {k: v for k, v in tables.items() if not isinstance(v, Mapping)}
+    out = []
+    if scalars and prefix:
+        out.append(f"[{'.'.join(prefix)}]")
+        out += [f"{key} = {_toml_value(value)}" for key, value in scalars.items()]
+        out.append("")
+    for key, value in tables.items():
+        if isinstance(value, Mapping):
+            out += _toml_tables(value, (*prefix, key))
+    return out
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise InputValueError(f"a fitted value must be finite, got {value}")
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)  # a TOML basic string: JSON's escapes are TOML's
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise InputValueError(f"cannot write {type(value).__name__} {value!r} to TOML")

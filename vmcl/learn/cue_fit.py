@@ -1,0 +1,164 @@
+"""Fit a cue's MRF to a data set with ground truth: what ``vmcl fit`` runs.
+
+Seed section "Learning and parameter estimation". Every example of the data set (a stereo pair with its
+true disparity, a frame pair with its true flow) gives the cue's measurement as the machine makes it
+(:meth:`vmcl.pipeline.VisionMachine.measure`) beside the truth (:func:`vmcl.learn.examples.truth_example`);
+:func:`vmcl.learn.fit_pseudolikelihood` fits the cue's MRF to all of them at once; the result is the
+``[mrf.<cue>]`` table a Config loads, with what it was fitted on (:mod:`vmcl.fitted`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vmcl import datasets
+from vmcl.cm.core import check_choice, check_real
+from vmcl.errors import InputValueError
+from vmcl.fitted import code_sha256, files_sha256
+from vmcl.learn import examples as learn_examples
+from vmcl.learn import pseudolikelihood
+from vmcl.learn.pseudolikelihood import PRIOR_PARAMETERS, Example, PseudolikelihoodFit, fit_pseudolikelihood
+from vmcl.machine import Machine
+
+__all__ = ["FITTABLE_CUES", "CueFit", "cue_examples", "fit_cue"]
+
+FITTABLE_CUES = ("stereo", "motion")
+"""The cues whose ground truth the data set readers give: disparity (stereo), flow (motion)."""
+
+
+@dataclass(frozen=True)
+class CueFit:
+    """A cue's fitted MRF.
+
+    Attributes
+    ----------
+    cue : str
+    fit : PseudolikelihoodFit
+    tables : dict
+        ``{"mrf": {cue: {...}}}``: the fitted model as a Config's overrides (alpha, beta, edge_gain and the
+        prior's table), to write with :func:`vmcl.fitted.write_fitted`.
+    provenance : dict
+        The ``[fitted]`` entries: the examples' names, one SHA-256 over their files, the code's hash, the
+        method, the scored sites and the fitted natural parameters.
+    """
+
+    cue: str
+    fit: PseudolikelihoodFit
+    tables: dict[str, Any]
+    provenance: dict[str, Any]
+
+
+def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
+                 jump: float = learn_examples.DEFAULT_JUMP) -> tuple[list[Example], list[str], list[Path]]:
+    """The examples of every data set folder at or below ``roots`` for ``cue``.
+
+    Parameters
+    ----------
+    cue : {"stereo", "motion"}
+    roots : sequence of str or Path
+        Folders :func:`vmcl.datasets.find_stereo_folders` (stereo) or :func:`vmcl.datasets.find_flow_folders`
+        (motion) searches.
+    vm : vmcl.pipeline.VisionMachine
+        The machine whose measurements are the data (its Config decides the early modules' settings).
+    jump : float
+        The truth's discontinuities (:func:`vmcl.learn.examples.jump_lines`).
+
+    Returns
+    -------
+    (examples, names, files)
+        The examples, their folders' names, and the files read (for the data's hash).
+
+    Raises
+    ------
+    InputValueError
+        No folder with ground truth for the cue below ``roots``.
+    """
+    check_choice(cue, "cue", FITTABLE_CUES)
+    examples, names, files = [], [], []
+    for root in roots:
+        if cue == "stereo":
+            for folder in datasets.find_stereo_folders(root):
+                pair = datasets.read_stereo_folder(folder)
+                mask = pair.masks.get("nonocc", np.isfinite(pair.disparity))
+                measured = vm.measure(pair.left, pair.right)["stereo"]
+                examples.append(learn_examples.truth_example(pair.disparity, measured.data, measured.confidence,
+                                                             measured.coupling, valid=mask, jump=jump))
+                names.append(pair.name)
+                files += sorted(p for p in Path(folder).iterdir() if p.is_file())
+        else:
+            for folder in datasets.find_flow_folders(root):
+                sequence = datasets.read_flow_folder(folder)
+                first = datasets.read_image(sequence.frames[sequence.index])
+                second = datasets.read_image(sequence.frames[sequence.index + 1])
+                measured = vm.measure(first, next=second)["motion"]
+                examples.append(learn_examples.truth_example(sequence.flow, measured.data, measured.confidence,
+                                                             measured.coupling, valid=sequence.mask, jump=jump))
+                names.append(sequence.name)
+                files += sorted(p for p in Path(folder).iterdir() if p.is_file())
+    if not examples:
+        reader = "stereo folders (Middlebury layout)" if cue == "stereo" else "flow folders with ground truth"
+        raise InputValueError(f"no {reader} at or below {', '.join(map(str, roots))}: nothing to fit {cue} to")
+    return examples, names, files
+
+
+def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: float = learn_examples.DEFAULT_JUMP,
+            fixed: Mapping[str, float] | None = None, ridge: float = 1e-6,
+            machine: Machine | None = None) -> CueFit:
+    """Fit ``cue``'s MRF by maximum pseudolikelihood to every example below ``roots``.
+
+    Parameters
+    ----------
+    cue : {"stereo", "motion"}
+    roots : sequence of str or Path
+        Data set folders (see :func:`cue_examples`).
+    vm : vmcl.pipeline.VisionMachine, optional
+        Whose measurements are the data; default the default Config's machine on ``machine``.
+    jump, fixed, ridge
+        As :func:`vmcl.learn.examples.jump_lines` and :func:`vmcl.learn.fit_pseudolikelihood` take them.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    CueFit
+    """
+    from vmcl.pipeline import VisionMachine
+
+    check_choice(cue, "cue", FITTABLE_CUES)
+    check_real(jump, "jump", above=0)
+    vm = VisionMachine(machine=machine) if vm is None else vm
+    examples, names, files = cue_examples(cue, roots, vm, jump=jump)
+    fit = fit_pseudolikelihood(examples, kind="smooth", fixed=fixed, ridge=ridge, machine=vm.machine)
+    model = fit.model()
+    table = {"alpha": model.alpha, "beta": model.beta, "edge_gain": model.edge_gain,
+             "prior": {name: getattr(model.prior, name) for name in PRIOR_PARAMETERS}}
+    provenance = {
+        "what": f"mrf.{cue}",
+        "method": "maximum pseudolikelihood (vmcl.learn.fit_pseudolikelihood)",
+        "data": names,
+        "data_sha256": files_sha256(files),
+        "code_sha256": code_sha256(pseudolikelihood, learn_examples, _kernel_path()),
+        "jump": float(jump),
+        "ridge": float(ridge),
+        "fixed": sorted(dict(fixed or {})),
+        "sites": [fit.sites["pixels"], fit.sites["lines"]],
+        "temperature": fit.temperature,
+        "converged": fit.converged,
+    }
+    return CueFit(cue, fit, {"mrf": {cue: {k: _plain(v) for k, v in table.items()}}}, provenance)
+
+
+def _kernel_path() -> Path:
+    from vmcl.machine import kernels_dir
+
+    return kernels_dir() / "pseudolikelihood.cl"
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: float(v) for k, v in value.items()}
+    return float(value)
