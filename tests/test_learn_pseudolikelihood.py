@@ -8,7 +8,7 @@ from oracles import pseudolikelihood as oracle_pseudolikelihood
 from vmcl import mrf
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.learn import PARAMETERS, Example, fit_pseudolikelihood
-from vmcl.learn.pseudolikelihood import pseudolikelihood_terms
+from vmcl.learn.pseudolikelihood import Pseudolikelihood
 
 THETA = dict(zip(PARAMETERS, (0.8, 1.3, 2.0, 0.7, 0.6, 0.3, 1.1, 1.7, 2.2, 0.9)))
 
@@ -31,7 +31,7 @@ def test_value_and_gradient_match_the_energy(machine, kind, shape):
     gamma = rng.uniform(0.2, 1.0, shape[:2])
     levels = (0.0, 0.5, 1.0) if kind == "constant" else None
     example = Example(f, lh, lv, data=data, confidence=gamma, edges=edges)
-    value, grad, hess = pseudolikelihood_terms([example], THETA, kind=kind, levels=levels, machine=machine)
+    value, grad, hess = Pseudolikelihood([example], kind=kind, levels=levels, machine=machine).terms(THETA)
 
     def oracle(theta):
         return oracle_pseudolikelihood(f, lh, lv, theta, data=data, confidence=gamma, edges=edges, kind=kind,

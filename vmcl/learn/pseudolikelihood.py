@@ -50,8 +50,8 @@ from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.mrf.energy import KINDS, EnergyModel, LinePrior, host_field
 
-__all__ = ["LINE_PARAMETERS", "PARAMETERS", "PRIOR_PARAMETERS", "Example", "PseudolikelihoodFit",
-           "fit_pseudolikelihood", "pseudolikelihood_terms"]
+__all__ = ["LINE_PARAMETERS", "PARAMETERS", "PRIOR_PARAMETERS", "Example", "Pseudolikelihood", "PseudolikelihoodFit",
+           "fit_pseudolikelihood"]
 
 PARAMETERS = ("alpha", "coupling", "line", "edge_gain", "end", "continuation", "turn", "junction", "crossing",
               "parallel")
@@ -322,54 +322,67 @@ def _levels(given: Any, fields: list[np.ndarray]) -> np.ndarray:
     return values
 
 
-def pseudolikelihood_terms(examples: Sequence[Example], theta: Mapping[str, float], *, kind: str = "smooth",
-                           levels: Sequence[float] | None = None,
-                           machine: Machine | None = None) -> tuple[float, np.ndarray, np.ndarray]:
-    """The negative log pseudolikelihood of ``examples`` at ``theta``, its gradient and Hessian.
+class Pseudolikelihood:
+    """The negative log pseudolikelihood of examples, prepared on the device.
+
+    The examples' fields and each site's features (which do not depend on theta) are computed once, when
+    it is made; each :meth:`terms` is then one pass over every site.
 
     Parameters
     ----------
     examples : sequence of Example
-    theta : mapping of str to float
-        A value for every name of :data:`PARAMETERS`.
-    kind, levels, machine
-        As for :func:`fit_pseudolikelihood`.
+    kind : {"smooth", "constant"}
+    levels : sequence of float, optional
+        The constant kind's levels (default: the distinct values of the fields, 2 to 64).
+    machine : vmcl.Machine, optional
 
-    Returns
-    -------
-    (value, gradient (10,), Hessian (10, 10))
-        Sums over every scored site, in the order of :data:`PARAMETERS` (no ridge).
+    Attributes
+    ----------
+    levels : tuple of float or None
+    sites : dict of str to int
+        Scored "pixels" and "lines".
+    has_data, has_lines, has_edges : bool
+        Whether any example gives data, a line process, brightness edges.
     """
-    machine = machine_for(machine)
-    check_choice(kind, "kind", KINDS)
-    missing = [name for name in PARAMETERS if name not in theta]
-    if missing:
-        raise InputValueError(f"theta needs a value for {', '.join(missing)}")
-    vector = np.array([check_real(theta[name], f"theta[{name!r}]") for name in PARAMETERS], np.float64)
-    lattices = _prepared(examples, kind, levels, machine)[0]
-    return _total(lattices, vector)
 
+    def __init__(self, examples: Sequence[Example], *, kind: str = "smooth", levels: Sequence[float] | None = None,
+                 machine: Machine | None = None) -> None:
+        machine = machine_for(machine)
+        check_choice(kind, "kind", KINDS)
+        if isinstance(examples, Example):
+            examples = [examples]
+        if not isinstance(examples, Sequence) or not examples or not all(isinstance(e, Example) for e in examples):
+            raise InputTypeError("examples must be a non-empty sequence of vmcl.learn.Example")
+        found = None
+        if kind == "constant":
+            found = _levels(levels, [host_field(e.field, "field", ndims=(2, 3)) for e in examples])
+        self.kind = kind
+        self._lattices = [_Lattice(e, kind, found, machine) for e in examples]
+        self.levels = None if found is None else tuple(float(v) for v in found)
+        self.sites = {"pixels": sum(lat.counts["pixels"] for lat in self._lattices),
+                      "lines": sum(lat.counts["lines"] for lat in self._lattices)}
+        self.has_data = any(lat.data for lat in self._lattices)
+        self.has_lines = any(lat.lines for lat in self._lattices)
+        self.has_edges = any(lat.edges for lat in self._lattices)
 
-def _prepared(examples: Sequence[Example], kind: str, levels: Any,
-              machine: Machine) -> tuple[list[_Lattice], np.ndarray | None]:
-    if isinstance(examples, Example):
-        examples = [examples]
-    if not isinstance(examples, Sequence) or not examples \
-            or not all(isinstance(e, Example) for e in examples):
-        raise InputTypeError("examples must be a non-empty sequence of vmcl.learn.Example")
-    found = None
-    if kind == "constant":
-        found = _levels(levels, [host_field(e.field, "field", ndims=(2, 3)) for e in examples])
-    return [_Lattice(e, kind, found, machine) for e in examples], found
-
-
-def _total(lattices: list[_Lattice], theta: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
-    size = len(PARAMETERS)
-    value, grad, hess = 0.0, np.zeros(size), np.zeros((size, size))
-    for lattice in lattices:
-        v, g, h = lattice.terms(theta, pixels=True)
-        value, grad, hess = value + v, grad + g, hess + h
-    return value, grad, hess
+    def terms(self, theta: Mapping[str, float] | np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+        """The value at ``theta`` (a mapping with every name of :data:`PARAMETERS`, or their vector in
+        that order), its gradient (10,) and Hessian (10, 10): sums over every scored site, no ridge."""
+        if isinstance(theta, Mapping):
+            missing = [name for name in PARAMETERS if name not in theta]
+            if missing:
+                raise InputValueError(f"theta needs a value for {', '.join(missing)}")
+            vector = np.array([check_real(theta[name], f"theta[{name!r}]") for name in PARAMETERS], np.float64)
+        else:
+            vector = np.asarray(theta, np.float64)
+            if vector.shape != (len(PARAMETERS),):
+                raise InputValueError(f"theta must hold {len(PARAMETERS)} values, got shape {vector.shape}")
+        size = len(PARAMETERS)
+        value, grad, hess = 0.0, np.zeros(size), np.zeros((size, size))
+        for lattice in self._lattices:
+            v, g, h = lattice.terms(vector, pixels=True)
+            value, grad, hess = value + v, grad + g, hess + h
+        return value, grad, hess
 
 
 def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
@@ -428,25 +441,24 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
         if name not in PARAMETERS:
             raise InputValueError(f"fixed: unknown parameter {name!r}; the parameters are {', '.join(PARAMETERS)}")
         check_real(value, f"fixed[{name!r}]")
-    lattices, found_levels = _prepared(examples, kind, levels, machine)
+    problem = Pseudolikelihood(examples, kind=kind, levels=levels, machine=machine)
     held = dict(fixed)
-    if not any(lat.data for lat in lattices):
+    if not problem.has_data:
         held.setdefault("alpha", 0.0)
-    if not any(lat.lines for lat in lattices):
+    if not problem.has_lines:
         held.update({name: fixed.get(name, 0.0) for name in LINE_PARAMETERS if name != "coupling"})
-    elif not any(lat.edges for lat in lattices):
+    elif not problem.has_edges:
         held.setdefault("edge_gain", 0.0)
     free = [i for i, name in enumerate(PARAMETERS) if name not in held]
     if not free:
         raise InputValueError("every parameter is held: nothing to fit")
-    sites = {"pixels": sum(lat.counts["pixels"] for lat in lattices),
-             "lines": sum(lat.counts["lines"] for lat in lattices)}
+    sites = dict(problem.sites)
     scored = max(sites["pixels"] + sites["lines"], 1)
     weight = ridge * scored
     theta = np.array([held.get(name, _START[name]) for name in PARAMETERS], np.float64)
 
     def objective(point: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
-        value, grad, hess = _total(lattices, point)
+        value, grad, hess = problem.terms(point)
         sub = point[free]
         return (value + 0.5 * weight * float(sub @ sub), grad[free] + weight * sub,
                 hess[np.ix_(free, free)] + weight * np.eye(len(free)))
@@ -479,10 +491,10 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
         history.append(value / scored)
     covariance = np.linalg.pinv(hess)
     errors = {PARAMETERS[i]: float(math.sqrt(max(covariance[k, k], 0.0))) for k, i in enumerate(free)}
-    plain = _total(lattices, theta)[0]
+    plain = problem.terms(theta)[0]
     return PseudolikelihoodFit(theta={name: float(v) for name, v in zip(PARAMETERS, theta)}, standard_error=errors,
                                fitted=tuple(PARAMETERS[i] for i in free), kind=kind,
-                               levels=None if found_levels is None else tuple(float(v) for v in found_levels),
+                               levels=problem.levels,
                                value=plain / scored, sites=sites, iterations=iterations, converged=converged,
                                history=history)
 
