@@ -172,7 +172,7 @@ def numpy_step(example: Example, theta: np.ndarray) -> tuple[float, np.ndarray, 
         near = (at(np.pad(edges, 1), 0, 1) if kind == 0 else at(np.pad(edges, 1), 1, 0)) | edges
         x[..., 0] = -(other - f) ** 2
         x[..., 1] = 1.0
-        x[..., 2] = -near
+        x[..., 2] = -near.astype(float)
         for others, bit, exists_vertex in vertices[kind]:
             x[..., 3:8] += exists_vertex[..., None] * (onehot[others | (1 << bit)] - onehot[others])
         if kind == 0:

@@ -229,6 +229,37 @@ TABLE: tuple[Entry, ...] = (
        kinds={"f": _A, "line_h": _A, "line_v": _A, "data": _A, "confidence": _OA, "edges": _OA, "kind": _C,
               "model": _O}),
     _e("vmcl.mrf:preset", cue="stereo", kinds={"cue": _C}),
+    _e("vmcl.mrf:sample", data=arr((12, 12)), confidence=None, edges=None, kind="smooth", model=None,
+       temperature=1.0, sweeps=2, lines=True, start=None, seed=0,
+       kinds={"data": _A, "confidence": _OA, "edges": _OA, "kind": _C, "model": _O, "temperature": _N,
+              "sweeps": _I, "lines": _B, "start": _OA, "seed": _I, "machine": _M}),
+    # ------------------------------------------------------------------ learn
+    _e("vmcl.learn:fit_pseudolikelihood", examples=[make("example")], kind="smooth", levels=None, fixed=None,
+       ridge=1e-6, tolerance=1e-9, max_iterations=20,
+       kinds={"examples": _O, "kind": _C, "fixed": _O, "ridge": _N, "tolerance": _N, "max_iterations": _I,
+              "machine": _M}),
+    _e("vmcl.learn:Pseudolikelihood", examples=[make("example")], kind="smooth", levels=None,
+       kinds={"examples": _O, "kind": _C, "machine": _M}),
+    _e("vmcl.learn:Pseudolikelihood.terms", self=make("pseudolikelihood"), theta=make("theta"),
+       kinds={"theta": _O}),
+    _e("vmcl.learn:cross_validate", data=IMG, confidence=None, edges=None, kind="smooth", model=None, method="icm",
+       candidates=[0.5, 1.0], holdout=0.25, folds=1, seed=0,
+       kinds={"data": _A, "confidence": _OA, "edges": _OA, "kind": _C, "model": _O, "method": _C,
+              "holdout": _N, "folds": _I, "seed": _I, "machine": _M}),
+    _e("vmcl.learn:estimate_noise", data=IMG, confidence=None, edges=None, kind="smooth", model=None, sigma=None,
+       iterations=2, burn_in=0, sweeps=1, seed=0,
+       kinds={"data": _A, "confidence": _OA, "kind": _C, "model": _O, "sigma": _ON, "burn_in": _I, "sweeps": _I, "seed": _I, "machine": _M}),
+    _e("vmcl.learn:scan_temperature", data=IMG, kind="smooth", model=None, temperatures=[0.5, 1.0, 2.0],
+       sweeps=1, lines=True, margin=1.5, seed=0,
+       kinds={"data": _A, "kind": _C, "model": _O, "sweeps": _I, "lines": _B, "margin": _N,
+              "seed": _I, "machine": _M}),
+    _e("vmcl.learn.examples:jump_lines", field=IMG, jump=1.0, valid=None,
+       kinds={"field": _A, "jump": _N, "valid": _OA}),
+    _e("vmcl.learn.examples:truth_example", truth=IMG, data=IMG, confidence=None, edges=MASK, valid=None, jump=1.0,
+       kinds={"truth": _A, "jump": _N, "valid": _OA}),
+    _e("vmcl.fitted:check_writable", path=path("missing"), kinds={"path": _P}),
+    _e("vmcl.fitted:check_fitted", values={"edges": {"sigma": 1.0}}, source="x.toml",
+       kinds={"values": "mapping"}),
     _e("vmcl.mrf:restore", data=arr((12, 12)), confidence=None, edges=None, kind="smooth", method="icm",
        model=make("energy_model"), schedule=make("icm_schedule"), seed=0,
        kinds={"data": _A, "confidence": _OA, "edges": _OA, "kind": _C, "method": _C, "model": _O,
@@ -387,6 +418,8 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.pipeline:VisionMachine", config=None, kinds={"config": _O, "machine": _M}),
     _e("vmcl.pipeline:VisionMachine.run", self=make("vision_machine"), left=IMG, right=None, next=None,
        kinds={"left": _A, "right": _OA, "next": _OA}),
+    _e("vmcl.pipeline:VisionMachine.measure", self=make("vision_machine"), left=IMG, right=None, next=None,
+       kinds={"left": _A, "right": _OA, "next": _OA}),
     _e("vmcl.machine:kernel_source", family="mrf", kinds={"family": _C}),
     _e("vmcl.machine:Machine", device=None, profile=False, local_size=None,
        kinds={"device": _C, "profile": _B, "local_size": _I}),
@@ -459,6 +492,13 @@ EXEMPT = {
     # Records vmcl returns, and the worker's Machine (no arguments).
     "vmcl.distributed:BatchItem", "vmcl.distributed:ItemOutput", "vmcl.distributed:ItemStatus",
     "vmcl.distributed:LocalClusterSize", "vmcl.distributed:worker_machine", "vmcl.distributed:ZarrStore",
+    # Records of vmcl.learn, checked when a fit reads them (tests/test_learn_pseudolikelihood.py).
+    "vmcl.learn:Example", "vmcl.learn:PseudolikelihoodFit", "vmcl.learn:CrossValidation", "vmcl.learn:NoiseEstimate",
+    "vmcl.learn:TemperatureScan", "vmcl.learn.cue_fit:CueFit", "vmcl.pipeline:CueData",
+    # Need data set folders with ground truth: tests/test_learn_fit.py runs them and their refusals.
+    "vmcl.learn.cue_fit:fit_cue", "vmcl.learn.cue_fit:cue_examples",
+    # Hash and write what vmcl itself made (fit_cue's tables, the files it read); tests/test_learn_fit.py.
+    "vmcl.fitted:parameters_sha256", "vmcl.fitted:files_sha256", "vmcl.fitted:code_sha256", "vmcl.fitted:write_fitted",
 }
 
 PUBLIC_MODULES = (
@@ -469,7 +509,8 @@ PUBLIC_MODULES = (
     "vmcl.mrf", "vmcl.integrate", "vmcl.labels", "vmcl.cues", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
     "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pictures", "vmcl.pipeline", "vmcl.result", "vmcl.machine",
     "vmcl.stereo_evaluation", "vmcl.distributed", "vmcl.boundary_evaluation", "vmcl.flow_evaluation",
-    "vmcl.frame_sources", "vmcl.sequence_output", "vmcl.temporal",
+    "vmcl.frame_sources", "vmcl.sequence_output", "vmcl.temporal", "vmcl.learn", "vmcl.learn.examples",
+    "vmcl.learn.cue_fit", "vmcl.fitted",
 )
 
 
@@ -984,6 +1025,10 @@ def _makers():
         "head": _head,
         "result": _result,
         "vision_machine": vision_machine,
+        "example": _example,
+        "pseudolikelihood": lambda ctx: __import__("vmcl.learn", fromlist=["Pseudolikelihood"]).Pseudolikelihood(
+            [_example(ctx)], machine=ctx["machine"]),
+        "theta": lambda ctx: dict.fromkeys(__import__("vmcl.learn", fromlist=["PARAMETERS"]).PARAMETERS, 0.5),
         "foreign_device_array": _foreign_device_array,
         "stereo_pair": _stereo_pair,
         "batch_out": _batch_out,
@@ -992,6 +1037,17 @@ def _makers():
         "evaluations": _evaluations,
         "stereo_sgbm": lambda ctx: __import__("vmcl.stereo_evaluation", fromlist=["stereo_sgbm"]).stereo_sgbm(16),
     }
+
+
+def _example(ctx):
+    import numpy as np
+
+    from vmcl.learn import Example
+
+    rng = np.random.default_rng(0)
+    field = rng.normal(size=(16, 16)).astype(np.float32)
+    return Example(field, rng.random((16, 15)) < 0.2, rng.random((15, 16)) < 0.2, data=field + 0.1,
+                   edges=rng.random((16, 16)) < 0.3)
 
 
 _MAKERS: dict = {}

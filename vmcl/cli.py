@@ -364,11 +364,14 @@ def _fit(args) -> int:
     if out.suffix != ".toml":
         raise BadInput(f"--out {out}: the fitted parameters are a TOML file; name it *.toml")
     check_writable(out)  # before the long fit, not after it
-    fixed = {}
+    fixed = {"coupling": 1.0}
     for item in args.fix:
         name, _, value = item.partition("=")
         if name not in PARAMETERS:
             raise BadInput(f"--fix {item}: the parameters are {', '.join(PARAMETERS)}")
+        if value == "free":
+            fixed.pop(name, None)
+            continue
         try:
             fixed[name] = float(value)
         except ValueError:
@@ -612,7 +615,8 @@ def parser() -> argparse.ArgumentParser:
     fit.add_argument("--jump", type=float, default=1.0,
                      help="a true discontinuity: neighbours more than this many pixels apart (default 1)")
     fit.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
-                     help="hold a natural parameter (e.g. coupling=1) instead of fitting it; repeatable")
+                     help="hold a natural parameter instead of fitting it; repeatable (default: coupling=1, the "
+                          "energy's units; --fix coupling=free fits it too)")
 
     commands.add_parser("info", parents=[quiet], help="OpenCL platforms and devices, the kernel cache")
 

@@ -21,7 +21,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from vmcl.errors import InputValueError
+from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = ["FITTED_BY", "check_fitted", "check_writable", "code_sha256", "files_sha256", "parameters_sha256", "write_fitted"]
 
@@ -68,6 +68,8 @@ def check_fitted(values: dict[str, Any], source: str) -> dict[str, Any]:
     """
     from vmcl import __version__
 
+    if not isinstance(values, Mapping):
+        raise InputTypeError(f"values must be the mapping of a TOML file's tables, got {type(values).__name__}")
     rest = {key: value for key, value in values.items() if key != "fitted"}
     fitted = values.get("fitted")
     if fitted is None:
@@ -124,6 +126,8 @@ def check_writable(path: str | Path) -> Path:
     InputValueError
         The file exists and is someone else's.
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputTypeError(f"path must be a str or a path, got {type(path).__name__}")
     target = Path(path)
     if target.exists() and not _written_by_vmcl(target):
         raise InputValueError(f"{target} exists and is not a file `vmcl fit` wrote: choose a new name")

@@ -10,8 +10,15 @@ phase transition.
 
 from vmcl.learn.cross_validation import CrossValidation, cross_validate
 from vmcl.learn.noise import NoiseEstimate, estimate_noise
-from vmcl.learn.pseudolikelihood import PARAMETERS, Example, PseudolikelihoodFit, fit_pseudolikelihood
+from vmcl.learn.pseudolikelihood import (
+                                         PARAMETERS,
+                                         Example,
+                                         Pseudolikelihood,
+                                         PseudolikelihoodFit,
+                                         fit_pseudolikelihood,
+)
 from vmcl.learn.temperature import TemperatureScan, scan_temperature
 
-__all__ = ["PARAMETERS", "CrossValidation", "Example", "NoiseEstimate", "PseudolikelihoodFit", "TemperatureScan",
+__all__ = ["PARAMETERS", "CrossValidation", "Example", "NoiseEstimate", "Pseudolikelihood", "PseudolikelihoodFit",
+           "TemperatureScan",
            "cross_validate", "estimate_noise", "fit_pseudolikelihood", "scan_temperature"]

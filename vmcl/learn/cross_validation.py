@@ -124,8 +124,8 @@ def cross_validate(data: ArrayLike, *, confidence: ArrayLike | None = None, edge
     where = np.flatnonzero(measured)
     per_fold = int(holdout * where.size)
     if per_fold < 10:
-        raise InputValueError(f"data has {where.size} measurements: too few to hold out {holdout:.0%} per fold "
-                              "(at least 10 each)")
+        raise InputValueError(f"data has {where.size} measurements with a positive confidence: too few to hold "
+                              f"out a share holdout={holdout:g} of them per fold (at least 10 each)")
     order = np.random.default_rng(seed).permutation(where)
     edge_map = None if edges is None else to_host(edges)
     errors = np.zeros((len(weights), folds))

@@ -118,8 +118,14 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
         Data set folders (see :func:`cue_examples`).
     vm : vmcl.pipeline.VisionMachine, optional
         Whose measurements are the data; default the default Config's machine on ``machine``.
-    jump, fixed, ridge
+    jump, ridge
         As :func:`vmcl.learn.examples.jump_lines` and :func:`vmcl.learn.fit_pseudolikelihood` take them.
+    fixed : mapping of str to float, optional
+        Natural parameters held; default ``{"coupling": 1.0}``: the membrane's weight at T = 1, the units
+        the presets' schedules are measured in. Ground truth is far smoother inside its surfaces than a
+        membrane sample (a plane's neighbours predict it exactly), so a free coupling grows without bound
+        and takes the data weight to 0; held, the data weight and the line potentials are fitted in the
+        energy's own units. ``{}`` fits everything.
     machine : vmcl.Machine, optional
 
     Returns
@@ -131,6 +137,7 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
     check_choice(cue, "cue", FITTABLE_CUES)
     check_real(jump, "jump", above=0)
     vm = VisionMachine(machine=machine) if vm is None else vm
+    fixed = {"coupling": 1.0} if fixed is None else fixed
     examples, names, files = cue_examples(cue, roots, vm, jump=jump)
     fit = fit_pseudolikelihood(examples, kind="smooth", fixed=fixed, ridge=ridge, machine=vm.machine)
     model = fit.model()
@@ -144,7 +151,7 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
         "code_sha256": code_sha256(pseudolikelihood, learn_examples, _kernel_path()),
         "jump": float(jump),
         "ridge": float(ridge),
-        "fixed": sorted(dict(fixed or {})),
+        "fixed": sorted(fixed),
         "sites": [fit.sites["pixels"], fit.sites["lines"]],
         "temperature": fit.temperature,
         "converged": fit.converged,

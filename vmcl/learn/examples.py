@@ -44,7 +44,7 @@ def jump_lines(field: np.ndarray, *, jump: float = DEFAULT_JUMP,
     values = f.reshape(*f.shape[:2], -1)
     known = np.all(np.isfinite(values), axis=2)
     if valid is not None:
-        mask = np.asarray(valid, bool)
+        mask = host_field(valid, "valid", ndims=(2,), empty=True) != 0
         if mask.shape != known.shape:
             raise InputValueError(f"valid must have the field's shape {known.shape}, got {mask.shape}")
         known &= mask
@@ -72,6 +72,9 @@ def truth_example(truth: np.ndarray, data: np.ndarray, confidence: np.ndarray | 
     f = host_field(truth, "truth", ndims=(2, 3)).astype(np.float32)
     known = np.all(np.isfinite(f.reshape(*f.shape[:2], -1)), axis=2)
     if valid is not None:
-        known &= np.asarray(valid, bool)
+        mask = host_field(valid, "valid", ndims=(2,), empty=True)
+        if mask.shape != known.shape:
+            raise InputValueError(f"valid must have the truth's shape {known.shape}, got {mask.shape}")
+        known &= mask != 0
     line_h, line_v = jump_lines(f, jump=jump, valid=known)
     return Example(f, line_h, line_v, data=data, confidence=confidence, edges=edges, valid=known)

@@ -62,7 +62,7 @@ def estimate_noise(data: ArrayLike, *, confidence: ArrayLike | None = None, edge
     model : EnergyModel, optional
         The prior (its alpha is replaced at every iteration); default ``EnergyModel()``.
     sigma : float, optional
-        Where to start, > 0; default the spread of the data about their 4-neighbour mean.
+        Where to start, in 1e-6 .. 1e6 (the data's units); default the spread of the data about their 4-neighbour mean.
     iterations : int
         EM iterations, 2 .. 10000.
     burn_in : int
@@ -94,7 +94,7 @@ def estimate_noise(data: ArrayLike, *, confidence: ArrayLike | None = None, edge
     if np.count_nonzero(measured) < 2:
         raise InputValueError("data has fewer than 2 measurements with a positive confidence")
     ncomp = 1 if g.ndim == 2 else g.shape[2]
-    current = _initial_sigma(g, measured) if sigma is None else check_real(sigma, "sigma", above=0)
+    current = _initial_sigma(g, measured) if sigma is None else check_real(sigma, "sigma", minimum=1e-6, maximum=1e6)
     edge_map = None if edges is None else to_host(edges)
     field = None
     variances, history = [], []

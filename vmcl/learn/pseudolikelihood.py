@@ -150,7 +150,8 @@ class PseudolikelihoodFit:
         Raises
         ------
         InputValueError
-            The fit left the energy's domain: alpha < 0, or a coupling that is not positive.
+            The fit gives no usable energy: a data weight of 0 (at its bound) or a coupling that is not
+            positive.
         """
         base = EnergyModel() if base is None else base
         if not isinstance(base, EnergyModel):
@@ -159,9 +160,11 @@ class PseudolikelihoodFit:
         if not self.theta["coupling"] > 0:
             raise InputValueError(f"the fitted coupling is {self.theta['coupling']:.4g}, not > 0: the examples are "
                                   "rougher inside regions than across their lines, so no MRF of this kind fits them")
-        if self.theta["alpha"] < 0:
-            raise InputValueError(f"the fitted data weight is {self.theta['alpha']:.4g} < 0: the data disagree with "
-                                  "the desired fields more than the neighbours do")
+        if not self.theta["alpha"] > 0:
+            raise InputValueError(f"the fitted data weight is {self.theta['alpha']:.4g}: the desired fields are "
+                                  "predicted by their neighbours better than by any share of the data (e.g. exactly "
+                                  "planar ground truth, whose fitted coupling then grows without bound); hold the "
+                                  "coupling (fixed={'coupling': 1.0}) to fit the data weight in the energy's units")
         line = self.theta["line"] / scale
         beta = line if line > 0 else 1.0
         prior = LinePrior(**{name: self.theta[name] / scale / beta for name in PRIOR_PARAMETERS})
@@ -374,9 +377,12 @@ class Pseudolikelihood:
                 raise InputValueError(f"theta needs a value for {', '.join(missing)}")
             vector = np.array([check_real(theta[name], f"theta[{name!r}]") for name in PARAMETERS], np.float64)
         else:
-            vector = np.asarray(theta, np.float64)
-            if vector.shape != (len(PARAMETERS),):
-                raise InputValueError(f"theta must hold {len(PARAMETERS)} values, got shape {vector.shape}")
+            if not isinstance(theta, np.ndarray) or theta.dtype.kind not in "iuf":
+                raise InputTypeError(f"theta must be a mapping of {', '.join(PARAMETERS)} to numbers, or their "
+                                     f"real vector, got {type(theta).__name__}")
+            vector = theta.astype(np.float64)
+            if vector.shape != (len(PARAMETERS),) or not np.all(np.isfinite(vector)):
+                raise InputValueError(f"theta must hold {len(PARAMETERS)} finite values, got shape {vector.shape}")
         size = len(PARAMETERS)
         value, grad, hess = 0.0, np.zeros(size), np.zeros((size, size))
         for lattice in self._lattices:
@@ -434,9 +440,9 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
     check_real(ridge, "ridge", minimum=0)
     check_real(tolerance, "tolerance", above=0)
     check_int(max_iterations, "max_iterations", minimum=1, maximum=1000)
+    if fixed is not None and not isinstance(fixed, Mapping):
+        raise InputTypeError(f"fixed must be a mapping of parameter names to values, got {type(fixed).__name__}")
     fixed = dict(fixed or {})
-    if not isinstance(fixed, Mapping):
-        raise InputTypeError("fixed must be a mapping of parameter names to values")
     for name, value in fixed.items():
         if name not in PARAMETERS:
             raise InputValueError(f"fixed: unknown parameter {name!r}; the parameters are {', '.join(PARAMETERS)}")
@@ -467,17 +473,22 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
     if not math.isfinite(value):
         raise InputValueError("the pseudolikelihood is not finite at the start; check the examples' fields")
     history, converged, iterations = [value / scored], False, 0
+    bounded = [k for k, i in enumerate(free) if PARAMETERS[i] in LOWER_BOUNDS]
     for iterations in range(1, max_iterations + 1):
-        step = -_solve(hess, grad)
+        step = _bounded_step(theta[free], grad, hess, bounded, [LOWER_BOUNDS.get(PARAMETERS[i], 0.0) for i in free])
         decrement = float(-grad @ step)
         if decrement / scored < tolerance:
             converged = True
             iterations -= 1
             break
-        t = 1.0
+        # the longest step that keeps every bounded parameter in its domain
+        t = min([1.0] + [(LOWER_BOUNDS[PARAMETERS[free[k]]] - theta[free[k]]) / step[k] for k in bounded
+                         if step[k] < 0])
         while True:
             trial = theta.copy()
             trial[free] += t * step
+            for k in bounded:
+                trial[free[k]] = max(trial[free[k]], LOWER_BOUNDS[PARAMETERS[free[k]]])
             new = objective(trial)
             if math.isfinite(new[0]) and new[0] <= value - 1e-4 * t * decrement:
                 break
@@ -502,6 +513,26 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
 # Where Newton starts: the hand-set presets' shape at T = 1 (any start converges; the objective is convex).
 _START = {"alpha": 1.0, "coupling": 1.0, "line": 1.0, "edge_gain": 0.5, "end": 0.5, "continuation": 0.0,
           "turn": 0.25, "junction": 0.75, "crossing": 1.5, "parallel": 1.0}
+
+
+LOWER_BOUNDS = {"alpha": 0.0}
+"""The fitted parameters' domain: a data term that rewards disagreeing with the data is no energy of the
+model (the coupling needs no bound: the pixels' conditionals are not finite without it)."""
+
+
+def _bounded_step(point: np.ndarray, grad: np.ndarray, hess: np.ndarray, bounded: list[int],
+                  lows: list[float]) -> np.ndarray:
+    """The Newton step, with the bounded parameters that sit on their bound and would leave the domain
+    held there (an active set)."""
+    step = -_solve(hess, grad)
+    held = [k for k in bounded if point[k] <= lows[k] and step[k] < 0]
+    if not held:
+        return step
+    moving = [k for k in range(point.size) if k not in held]
+    step = np.zeros_like(point)
+    if moving:
+        step[moving] = -_solve(hess[np.ix_(moving, moving)], grad[moving])
+    return step
 
 
 def _solve(hess: np.ndarray, grad: np.ndarray) -> np.ndarray:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vmcl.cm.core import ArrayLike, check_bool, check_choice, check_int, check_real, machine_for
+from vmcl.cm.core import ArrayLike, check_bool, check_choice, check_int, check_real, machine_for, to_host
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.mrf import EnergyModel, sample
@@ -83,6 +83,7 @@ def scan_temperature(data: ArrayLike, *, confidence: ArrayLike | None = None, ed
     check_bool(lines, "lines")
     check_real(margin, "margin", minimum=1)
     check_int(sweeps, "sweeps", minimum=1, maximum=1_000_000)
+    check_int(seed, "seed", minimum=0, maximum=2**64 - 1 - 1000)
     if temperatures is None:
         temperatures = DEFAULT_TEMPERATURES
     if isinstance(temperatures, (str, bytes)) or not isinstance(temperatures, Sequence):
@@ -103,9 +104,9 @@ def scan_temperature(data: ArrayLike, *, confidence: ArrayLike | None = None, ed
 
 
 def _density(drawn, kind: str, lines: bool) -> float:
-    line_h, line_v = np.asarray(drawn.line_h), np.asarray(drawn.line_v)
+    line_h, line_v = to_host(drawn.line_h), to_host(drawn.line_v)
     if lines or kind == "smooth":
         return float((line_h.sum() + line_v.sum()) / (line_h.size + line_v.size))
-    f = np.asarray(drawn.field)
+    f = to_host(drawn.field)
     walls = np.count_nonzero(f[:, 1:] != f[:, :-1]) + np.count_nonzero(f[1:] != f[:-1])
     return float(walls / (f[:, 1:].size + f[1:].size))

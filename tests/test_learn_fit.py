@@ -1,0 +1,144 @@
+"""`vmcl fit` and the fitted files it writes: learned from folders with ground truth, loaded by a Config,
+checked against edits, and never written over a file vmcl did not write."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from vmcl import fitted, scenes
+from vmcl.cli import main
+from vmcl.datasets import write_stereo_folder
+from vmcl.errors import InputValueError
+from vmcl.learn.examples import jump_lines
+from vmcl.mrf import LinePrior, preset
+from vmcl.pipeline import Config, VisionMachine
+
+
+@pytest.fixture(scope="module")
+def stereo_data(tmp_path_factory):
+    """Two rendered stereo scenes in a Middlebury layout (im2/im6/disp2, the 2001 venus layout)."""
+    root = tmp_path_factory.mktemp("stereo_data")
+    for name, seed in (("blocks", 0), ("cues", 1)):
+        scene = scenes.render(scenes.preset(name, shape=(80, 96)), seed=seed, noise=0.01)
+        truth = np.where(scene.occluded_stereo, np.nan, scene.disparity)
+        write_stereo_folder(root / name, (scene.left * 255).astype(np.uint8), (scene.right * 255).astype(np.uint8),
+                            truth)
+    return root
+
+
+def test_fit_writes_a_config_that_loads_and_runs(stereo_data, tmp_path, capsys):
+    out = tmp_path / "stereo.toml"
+    assert main(["fit", "stereo", "--data", str(stereo_data), "--out", str(out), "-q"]) == 0
+    printed = capsys.readouterr().out
+    assert "2 example(s)" in printed and f"Wrote {out}" in printed
+    config = Config.from_toml(out)
+    table = config.mrf.stereo
+    assert set(table) == {"alpha", "beta", "edge_gain", "prior"}
+    assert set(table["prior"]) == {"line", "end", "continuation", "turn", "junction", "crossing", "parallel"}
+    settings = config.mrf.settings("stereo", preset("stereo"))
+    assert settings.model.alpha == table["alpha"] and settings.model.prior == LinePrior(**table["prior"])
+    from vmcl.pipeline import tomllib
+
+    provenance = tomllib.loads(out.read_text())["fitted"]
+    assert provenance["data"] == ["blocks", "cues"] and provenance["what"] == "mrf.stereo"
+    assert len(provenance["data_sha256"]) == 64 and provenance["written_by"] == fitted.FITTED_BY
+    scene = scenes.render(scenes.preset("blocks", shape=(64, 64)), seed=3)
+    assert VisionMachine(config).run(scene.left, scene.right).disparity.shape == (64, 64)
+    # a second fit replaces the file vmcl wrote; --fix holds a parameter
+    assert "T = 1;" in printed  # the coupling held at 1 by default
+    assert main(["fit", "stereo", "--data", str(stereo_data), "--out", str(out), "--fix", "coupling=free", "-q"]) == 2
+    assert "the fitted data weight is 0" in capsys.readouterr().err  # planar truth: see fit_cue
+
+
+def test_an_edited_fitted_file_is_refused(stereo_data, tmp_path, capsys):
+    out = tmp_path / "stereo.toml"
+    assert main(["fit", "stereo", "--data", str(stereo_data), "--out", str(out), "-q"]) == 0
+    text = out.read_text()
+    edited = tmp_path / "edited.toml"
+    edited.write_text(text.replace("[mrf.stereo]\n", "[mrf.stereo]\nseed_of_doubt = 1\n", 1)
+                      .replace("alpha = ", "alpha = 1", 1))
+    with pytest.raises(InputValueError, match="edited or damaged"):
+        Config.from_toml(edited)
+    # without its [fitted] table the same edit is the user's own configuration
+    own = tmp_path / "own.toml"
+    own.write_text(text.split("[fitted]")[0])
+    Config.from_toml(own)
+
+
+def test_another_version_warns(tmp_path):
+    out = fitted.write_fitted(tmp_path / "a.toml", {"mrf": {"stereo": {"alpha": 0.5}}}, {"data": ["x"]})
+    out.write_text(out.read_text().replace('vmcl = "', 'vmcl = "0.0.'))
+    with pytest.warns(UserWarning, match="fitted by vmcl 0.0."):
+        assert Config.from_toml(out).mrf.stereo == {"alpha": 0.5}
+
+
+def test_fit_never_writes_over_a_file_it_did_not_write(stereo_data, tmp_path, capsys):
+    mine = tmp_path / "mine.toml"
+    mine.write_text("[edges]\nsigma = 2.0\n")
+    before = mine.read_bytes()
+    assert main(["fit", "stereo", "--data", str(stereo_data), "--out", str(mine), "-q"]) == 2
+    assert "not a file `vmcl fit` wrote" in capsys.readouterr().err
+    assert mine.read_bytes() == before
+    with pytest.raises(InputValueError, match="not a file `vmcl fit` wrote"):
+        fitted.write_fitted(mine, {"mrf": {}}, {})
+    assert mine.read_bytes() == before
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--data", "{empty}"], "nothing to fit stereo to"),
+    (["--data", "{missing}"], "no such folder"),
+    (["--data", "{data}", "--fix", "beta=1"], "the parameters are alpha"),
+    (["--data", "{data}", "--fix", "alpha=x"], "is not a number"),
+])
+def test_fit_refusals_are_one_line(stereo_data, tmp_path, capsys, args, message):
+    (tmp_path / "empty").mkdir()
+    filled = [a.format(empty=tmp_path / "empty", missing=tmp_path / "missing", data=stereo_data) for a in args]
+    out = tmp_path / "x.toml"
+    assert main(["fit", "stereo", *filled, "--out", str(out), "-q"]) == 2
+    assert message in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_hash_survives_the_toml_round_trip(tmp_path):
+    tables = {"mrf": {"motion": {"alpha": 1e-05, "beta": 0.1 + 0.2, "prior": {"end": -0.0, "line": 1.0}}}}
+    out = fitted.write_fitted(tmp_path / "m.toml", tables, {"data": ['quote " and \\ back']})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        config = Config.from_toml(out)
+    assert config.mrf.motion["beta"] == 0.1 + 0.2
+
+
+def test_measure_gives_each_cue_its_mrf_data():
+    scene = scenes.render(scenes.preset("cues", shape=(64, 64)), seed=0)
+    vm = VisionMachine()
+    measured = vm.measure(scene.left, scene.right, scene.left_next)
+    assert set(measured) == {"stereo", "motion", "colour", "texture"}
+    stereo = measured["stereo"]
+    assert stereo.data.shape == (64, 64) and stereo.data.dtype == np.float32
+    assert measured["motion"].data.shape == (64, 64, 2)
+    # the piecewise smooth cues are coupled to the run's brightness edges
+    result = vm.run(scene.left, scene.right, scene.left_next)
+    assert np.array_equal(stereo.coupling, result.edges)
+    finite = np.isfinite(stereo.data) & scene.visible_stereo if hasattr(scene, "visible_stereo") else \
+        np.isfinite(stereo.data) & ~scene.occluded_stereo
+    assert np.mean(np.abs(stereo.data[finite] - scene.disparity[finite]) <= 1) > 0.8
+
+
+def test_jump_lines_mark_the_jumps_between_known_pixels():
+    field = np.zeros((4, 5))
+    field[:, 3:] = 2.0
+    field[0, 0] = np.nan
+    line_h, line_v = jump_lines(field)
+    assert line_h[:, 2].all() and line_h.sum() == 4 and not line_v.any()
+    vector = np.zeros((3, 3, 2))
+    vector[2, :, 1] = 1.5
+    assert jump_lines(vector)[1][1].all() and jump_lines(vector, jump=2.0)[1].sum() == 0
+
+
+def test_prior_tables_in_a_config(tmp_path):
+    config = Config.from_dict({"mrf": {"stereo": {"prior": {"end": 2.0}}}})
+    prior = config.mrf.settings("stereo").model.prior
+    assert prior == LinePrior(end=2.0)
+    with pytest.raises(InputValueError, match=r"unknown key mrf.stereo.prior.ends"):
+        Config.from_dict({"mrf": {"stereo": {"prior": {"ends": 2.0}}}}).mrf.settings("stereo")
