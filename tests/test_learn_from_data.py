@@ -66,3 +66,24 @@ def test_scan_finds_the_ising_transition(machine):
     assert scan.transition == pytest.approx(critical, rel=0.1)
     assert scan.chosen == pytest.approx(scan.transition / 1.5)
     assert np.all(np.diff(scan.density) > -0.02)  # more walls when hotter, within a draw's noise
+
+
+def test_the_machine_cross_validates_each_cues_weight_when_asked(machine):
+    """[mrf] cross_validate: each cue's alpha chosen on the image (a note names it, one of the candidates
+    around the cue's own alpha); without it no such note."""
+    from vmcl import scenes
+    from vmcl.cues.stereo import StereoCue
+    from vmcl.learn.cross_validation import DEFAULT_FACTORS
+    from vmcl.pipeline import Config, VisionMachine
+
+    scene = scenes.render(scenes.preset("blocks", shape=(64, 64)), seed=0, noise=0.01)
+    only = {"motion": {"enabled": False}, "colour": {"enabled": False}, "texture": {"enabled": False}}
+    found = VisionMachine(Config.from_dict({**only, "mrf": {"cross_validate": True}}), machine=machine).run(
+        scene.left, scene.right)
+    notes = [n for n in found.notes if "chosen by cross-validation" in n]
+    assert len(notes) == 1 and notes[0].startswith("stereo: data weight alpha ")
+    chosen = float(notes[0].split("alpha ")[1].split(" ")[0])
+    own = StereoCue.settings.model.alpha
+    assert any(chosen == pytest.approx(own * factor) for factor in DEFAULT_FACTORS)
+    plain = VisionMachine(Config.from_dict(only), machine=machine).run(scene.left, scene.right)
+    assert not [n for n in plain.notes if "cross-validation" in n]

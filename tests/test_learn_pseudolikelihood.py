@@ -67,12 +67,16 @@ def test_ising_coupling_recovered(machine, coupling):
     assert abs(fit.theta["coupling"] / 2 - coupling) < 0.01
 
 
-def test_line_process_potentials_recovered(machine):
+PRIOR = mrf.LinePrior(line=1.0, end=0.4, continuation=0.5, turn=0.7, junction=1.0, crossing=1.2, parallel=0.6)
+TRUTH = {"alpha": 1.0, "coupling": 1.0, "line": 2.0, "edge_gain": 1.0, "end": 0.8, "continuation": 1.0, "turn": 1.4,
+         "junction": 2.0, "crossing": 2.4, "parallel": 1.2}  # EnergyModel(alpha 1, beta 2, PRIOR, edge_gain 0.5) at T = 1
+
+
+@pytest.fixture(scope="module")
+def line_process_draws(machine):
     """A smooth field with its line process drawn at T = 1 from the posterior given noisy blocks and
-    edges (the true block boundaries and 5% random pixels), 16 draws of 192 x 192: every potential,
-    the data weight and the edge coupling within 10%, and the model they make within 10% of the truth."""
-    prior = mrf.LinePrior(line=1.0, end=0.4, continuation=0.5, turn=0.7, junction=1.0, crossing=1.2, parallel=0.6)
-    model = mrf.EnergyModel(alpha=1.0, beta=2.0, prior=prior, edge_gain=0.5)
+    edges (the true block boundaries and 5% random pixels): 16 draws of 192 x 192."""
+    model = mrf.EnergyModel(alpha=1.0, beta=2.0, prior=PRIOR, edge_gain=0.5)
     examples = []
     for seed in range(16):
         rng = np.random.default_rng(seed)
@@ -86,17 +90,36 @@ def test_line_process_potentials_recovered(machine):
         edges = (np.hypot(gx, gy) > 0) | (rng.random(truth.shape) < 0.05)
         drawn = mrf.sample(noisy, edges=edges, model=model, sweeps=300, seed=seed, machine=machine)
         examples.append(Example(drawn.field, drawn.line_h, drawn.line_v, data=noisy, edges=edges))
-    fit = fit_pseudolikelihood(examples, machine=machine)
-    truth = {"alpha": 1.0, "coupling": 1.0, "line": 2.0, "edge_gain": 1.0, "end": 0.8, "continuation": 1.0,
-             "turn": 1.4, "junction": 2.0, "crossing": 2.4, "parallel": 1.2}
+    return examples
+
+
+def test_line_process_potentials_recovered(machine, line_process_draws):
+    """Every potential, the data weight and the edge coupling within 10%, and the model they make within
+    10% of the truth."""
+    fit = fit_pseudolikelihood(line_process_draws, machine=machine)
     assert fit.converged and set(fit.fitted) == set(PARAMETERS)
-    for name, value in truth.items():
+    for name, value in TRUTH.items():
         assert fit.theta[name] == pytest.approx(value, rel=0.1), name
     found = fit.model()
     assert fit.temperature == pytest.approx(1.0, rel=0.01)
     assert (found.alpha, found.beta, found.edge_gain) == pytest.approx((1.0, 2.0, 0.5), rel=0.1)
     for name in ("end", "continuation", "turn", "junction", "crossing", "parallel"):
-        assert getattr(found.prior, name) == pytest.approx(getattr(prior, name), rel=0.1), name
+        assert getattr(found.prior, name) == pytest.approx(getattr(PRIOR, name), rel=0.1), name
+
+
+def test_one_kind_of_site_alone(machine, line_process_draws):
+    """The pixels' conditionals alone give the data weight and the coupling; the lines' alone give the
+    line potentials and the coupling; each model takes what its sites do not inform from the base."""
+    pixels = fit_pseudolikelihood(line_process_draws, sites="pixels", machine=machine)
+    assert set(pixels.fitted) == {"alpha", "coupling"} and pixels.sites["lines"] == 0
+    assert (pixels.theta["alpha"], pixels.theta["coupling"]) == pytest.approx((1.0, 1.0), rel=0.05)
+    base = mrf.EnergyModel(alpha=3.0, beta=7.0)
+    assert pixels.model(base).beta == 7.0 and pixels.model(base).alpha == pytest.approx(1.0, rel=0.05)
+    lines = fit_pseudolikelihood(line_process_draws, sites="lines", machine=machine)
+    assert "alpha" not in lines.fitted and lines.sites["pixels"] == 0
+    for name in ("coupling", "line", "edge_gain", "end", "parallel"):
+        assert lines.theta[name] == pytest.approx(TRUTH[name], rel=0.1), name
+    assert lines.model(base).alpha == 3.0 and lines.model(base).beta == pytest.approx(2.0, rel=0.1)
 
 
 def test_held_parameters_and_defaults(machine):

@@ -212,6 +212,11 @@ for dtype in (np.float32, np.int32, np.uint8):
         router.send(field.ravel(), where % 7, size=7, combine=combine)
 image = np.zeros((8, 8), np.float32)
 registration.warp(image, np.zeros((8, 8, 2), np.float32))
+from vmcl.learn import Example, fit_pseudolikelihood
+step = np.zeros((8, 8), np.float32)
+step[:, 4:] = 1.0
+fit_pseudolikelihood([Example(step + image, np.zeros((8, 7)), np.zeros((7, 8)), data=step)])
+fit_pseudolikelihood([Example(step)], kind="constant")
 for record in records:
     print(f"{record.levelname}: {record.getMessage()}")
 print("built:", " ".join(sorted(built)))

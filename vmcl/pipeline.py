@@ -40,7 +40,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl import fitted, labelling, temporal
+from vmcl import fitted, labelling, learn, temporal
 from vmcl import integrate as _integrate
 from vmcl.cm.core import check_choice, check_int, check_real
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
@@ -352,6 +352,11 @@ class MrfConfig:
         disparity map alone, benchmarks/results/mrf.md compares the two schedules' time, energy and
         error.
         "preset": each cue's preset schedule.
+    cross_validate : bool
+        Choose each cue's data weight alpha per image, by held-out measurements
+        (:func:`vmcl.learn.cross_validate`: 9 candidates from 1/16 to 16 times the cue's own alpha, 3 folds
+        of 10%), instead of the fixed one. 27 more restorations per cue; off by default.
+        benchmarks/results/learn.md measures it on the stereo pairs.
     stereo, motion, colour, texture : mapping of str to value
         Overrides of :func:`vmcl.mrf.preset`'s measured settings per cue (any field of
         :class:`vmcl.mrf.EnergyModel` or of a solver's schedule, e.g. ``{"beta": 3.0}``; see
@@ -361,6 +366,7 @@ class MrfConfig:
     method: str = "meanfield"
     seed: int = 0
     schedule: str = "fast"
+    cross_validate: bool = False
     stereo: Mapping[str, Any] = field(default_factory=dict)
     motion: Mapping[str, Any] = field(default_factory=dict)
     colour: Mapping[str, Any] = field(default_factory=dict)
@@ -889,12 +895,14 @@ class _Run:
             data, confidence, fused_start = self.memory.fuse(data, confidence, carried, jump)
             if carried is not None and self.c.time.warm:
                 start, warm = fused_start, True
+        settings = self.c.mrf.settings(cue.name, cue.settings, warm=warm)
         try:
+            if self.c.mrf.cross_validate:
+                settings = self.cross_validated(cue, settings, data, confidence, measured.coupling)
             found = _integrate.restore_cue(data, confidence=confidence, coupling=measured.coupling,
                                            kind=cue.kind, candidates_only=cue.candidates_only,
-                                           settings=self.c.mrf.settings(cue.name, cue.settings, warm=warm),
-                                           method=self.c.mrf.method, seed=self.c.mrf.seed, start=start,
-                                           machine=self.m)
+                                           settings=settings, method=self.c.mrf.method, seed=self.c.mrf.seed,
+                                           start=start, machine=self.m)
         except NothingToRestore:
             # The one refusal a good run can meet: the module found nothing (no match, no flow, no
             # valid hue) for the MRF to restore. The cue is then absent from the result.
@@ -904,3 +912,20 @@ class _Run:
         if self.memory is not None and confidence is not None:
             self.memory.remember(cue.name, on_device(found.field), confidence, nearest=cue.kind == "constant")
         return found
+
+    def cross_validated(self, cue: CueModule, settings: Settings, data: Any, confidence: Any, coupling: Any) -> Settings:
+        """``settings`` with the data weight chosen on this image by held-out measurements (a note says which)."""
+        model = settings.model
+        if cue.candidates_only:
+            model = dataclasses.replace(model, require_edge=True)
+        try:
+            chosen = learn.cross_validate(data, confidence=confidence, edges=coupling, kind=cue.kind, model=model,
+                                          method=self.c.mrf.method, schedule=settings.schedule(self.c.mrf.method),
+                                          seed=self.c.mrf.seed, machine=self.m)
+        except InputValueError as error:
+            # Too few measurements to hold any out: the cue keeps its own weight.
+            self.notes.append(f"{cue.name}: no cross-validation ({error}); alpha {model.alpha:g} kept")
+            return settings
+        self.notes.append(f"{cue.name}: data weight alpha {chosen.alpha:g} chosen by cross-validation "
+                          f"({model.alpha:g} without)")
+        return settings.override({"alpha": chosen.alpha})

@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -62,6 +62,9 @@ PRIOR_PARAMETERS = ("line", "end", "continuation", "turn", "junction", "crossing
 """The :class:`vmcl.mrf.LinePrior` entries among them."""
 CHUNK = 64
 """Sites summed by one work-item before the host adds the partial sums in float64."""
+SITES = ("all", "pixels", "lines")
+"""Which conditionals a pseudolikelihood scores: every site's, the pixels' (the field given its
+neighbours, its data and the lines) or the line sites' (each line given the field and the other lines)."""
 
 
 @dataclass(frozen=True)
@@ -110,6 +113,8 @@ class PseudolikelihoodFit:
     fitted : tuple of str
         The parameters that were fitted; the others were held.
     kind : {"smooth", "constant"}
+    scored : {"all", "pixels", "lines"}
+        The conditionals scored.
     levels : tuple of float or None
         The constant kind's levels.
     value : float
@@ -126,6 +131,7 @@ class PseudolikelihoodFit:
     standard_error: dict[str, float]
     fitted: tuple[str, ...]
     kind: str
+    scored: str
     levels: tuple[float, ...] | None
     value: float
     sites: dict[str, int]
@@ -144,8 +150,10 @@ class PseudolikelihoodFit:
 
         beta is the line's cost (so the prior's ``line`` is 1), or 1 where the fitted line cost is not
         positive; the prior's other entries and ``edge_gain`` are in units of it. Fields the fit does
-        not touch (levels, require_edge, edge_radius) come from ``base`` (default ``EnergyModel()``);
-        the constant kind's levels are the fitted ones.
+        not touch (levels, require_edge, edge_radius, and kappa for the smooth kind) come from ``base``
+        (default ``EnergyModel()``);
+        the constant kind's levels are the fitted ones. A fit of the line sites alone takes alpha from
+        ``base``; one of the pixel sites alone takes beta, the prior and edge_gain from it.
 
         Raises
         ------
@@ -160,7 +168,7 @@ class PseudolikelihoodFit:
         if not self.theta["coupling"] > 0:
             raise InputValueError(f"the fitted coupling is {self.theta['coupling']:.4g}, not > 0: the examples are "
                                   "rougher inside regions than across their lines, so no MRF of this kind fits them")
-        if not self.theta["alpha"] > 0:
+        if self.scored != "lines" and not self.theta["alpha"] > 0:
             raise InputValueError(f"the fitted data weight is {self.theta['alpha']:.4g}: the desired fields are "
                                   "predicted by their neighbours better than by any share of the data (e.g. exactly "
                                   "planar ground truth, whose fitted coupling then grows without bound); hold the "
@@ -168,12 +176,15 @@ class PseudolikelihoodFit:
         line = self.theta["line"] / scale
         beta = line if line > 0 else 1.0
         prior = LinePrior(**{name: self.theta[name] / scale / beta for name in PRIOR_PARAMETERS})
-        changes: dict[str, Any] = {"alpha": self.theta["alpha"] / scale, "beta": beta, "prior": prior,
-                                   "edge_gain": self.theta["edge_gain"] / scale / beta}
+        changes: dict[str, Any] = {}
+        if self.scored != "lines":
+            changes["alpha"] = self.theta["alpha"] / scale
+        if self.scored != "pixels":
+            changes.update(beta=beta, prior=prior, edge_gain=self.theta["edge_gain"] / scale / beta)
         if self.kind == "constant":
             changes["kappa"] = self.theta["coupling"]
             changes["levels"] = self.levels
-        return EnergyModel(**{**{f: getattr(base, f) for f in ("levels", "require_edge", "edge_radius")}, **changes})
+        return replace(base, **changes)
 
 
 class _Lattice:
@@ -260,9 +271,9 @@ class _Lattice:
             bonded += keep
         return int(np.count_nonzero(ok & ((bonded > 0) | (gamma > 0))))
 
-    def terms(self, theta: np.ndarray, pixels: bool) -> tuple[float, np.ndarray, np.ndarray]:
+    def terms(self, theta: np.ndarray, pixels: bool, lines: bool) -> tuple[float, np.ndarray, np.ndarray]:
         """The negative log pseudolikelihood over this example's scored sites, its gradient and Hessian in
-        all of :data:`PARAMETERS` (the pixel sites only with ``pixels``)."""
+        all of :data:`PARAMETERS` (the pixel sites with ``pixels``, the line sites with ``lines``)."""
         size = len(PARAMETERS)
         value, grad, hess = 0.0, np.zeros(size), np.zeros((size, size))
         parts: list[tuple[tuple[int, ...], tuple[float, np.ndarray, np.ndarray]]] = []
@@ -275,7 +286,7 @@ class _Lattice:
         elif pixels:
             rows = self._softmax(self.potts_features, self.potts_observed, n, self.nlevels, theta[:2])
             parts.append(((0, 1), rows))
-        if self.line_features is not None:
+        if lines and self.line_features is not None:
             rows = self._softmax(self.line_features, self.line_observed, 2 * n, 2, theta[1:])
             parts.append((tuple(range(1, size)), rows))
         for index, (v, g, h) in parts:
@@ -337,6 +348,8 @@ class Pseudolikelihood:
     kind : {"smooth", "constant"}
     levels : sequence of float, optional
         The constant kind's levels (default: the distinct values of the fields, 2 to 64).
+    sites : {"all", "pixels", "lines"}
+        The conditionals scored (:data:`SITES`).
     machine : vmcl.Machine, optional
 
     Attributes
@@ -349,9 +362,10 @@ class Pseudolikelihood:
     """
 
     def __init__(self, examples: Sequence[Example], *, kind: str = "smooth", levels: Sequence[float] | None = None,
-                 machine: Machine | None = None) -> None:
+                 sites: str = "all", machine: Machine | None = None) -> None:
         machine = machine_for(machine)
         check_choice(kind, "kind", KINDS)
+        self.scored = check_choice(sites, "sites", SITES)
         if isinstance(examples, Example):
             examples = [examples]
         if not isinstance(examples, Sequence) or not examples or not all(isinstance(e, Example) for e in examples):
@@ -362,8 +376,8 @@ class Pseudolikelihood:
         self.kind = kind
         self._lattices = [_Lattice(e, kind, found, machine) for e in examples]
         self.levels = None if found is None else tuple(float(v) for v in found)
-        self.sites = {"pixels": sum(lat.counts["pixels"] for lat in self._lattices),
-                      "lines": sum(lat.counts["lines"] for lat in self._lattices)}
+        self.sites = {"pixels": sum(lat.counts["pixels"] for lat in self._lattices) if sites != "lines" else 0,
+                      "lines": sum(lat.counts["lines"] for lat in self._lattices) if sites != "pixels" else 0}
         self.has_data = any(lat.data for lat in self._lattices)
         self.has_lines = any(lat.lines for lat in self._lattices)
         self.has_edges = any(lat.edges for lat in self._lattices)
@@ -386,14 +400,15 @@ class Pseudolikelihood:
         size = len(PARAMETERS)
         value, grad, hess = 0.0, np.zeros(size), np.zeros((size, size))
         for lattice in self._lattices:
-            v, g, h = lattice.terms(vector, pixels=True)
+            v, g, h = lattice.terms(vector, pixels=self.scored in ("all", "pixels"),
+                                    lines=self.scored in ("all", "lines"))
             value, grad, hess = value + v, grad + g, hess + h
         return value, grad, hess
 
 
 def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
                          levels: Sequence[float] | None = None, fixed: Mapping[str, float] | None = None,
-                         ridge: float = 1e-6, tolerance: float = 1e-9, max_iterations: int = 100,
+                         sites: str = "all", ridge: float = 1e-6, tolerance: float = 1e-9, max_iterations: int = 100,
                          machine: Machine | None = None) -> PseudolikelihoodFit:
     """Fit the line-process MRF's natural parameters to examples by maximum pseudolikelihood.
 
@@ -408,7 +423,11 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
     fixed : mapping of str to float, optional
         Parameters of :data:`PARAMETERS` held at these natural values instead of fitted. Held by
         default, at 0: ``alpha`` when no example has data, ``edge_gain`` when none has edges, and every
-        line parameter when none has lines.
+        line parameter when none has lines; and those the scored ``sites`` do not depend on.
+    sites : {"all", "pixels", "lines"}
+        The conditionals scored (:data:`SITES`). "lines" fits the line process given the examples'
+        fields: give the fields the lines are to be decided on (e.g. the measurements themselves);
+        the data weight is then not fitted, and :meth:`PseudolikelihoodFit.model` takes it from its base.
     ridge : float
         >= 0: the penalty ridge * sites * |theta|^2 / 2 on the fitted parameters (see the module notes).
     tolerance : float
@@ -447,19 +466,19 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
         if name not in PARAMETERS:
             raise InputValueError(f"fixed: unknown parameter {name!r}; the parameters are {', '.join(PARAMETERS)}")
         check_real(value, f"fixed[{name!r}]")
-    problem = Pseudolikelihood(examples, kind=kind, levels=levels, machine=machine)
+    problem = Pseudolikelihood(examples, kind=kind, levels=levels, sites=sites, machine=machine)
     held = dict(fixed)
-    if not problem.has_data:
+    if not problem.has_data or sites == "lines":
         held.setdefault("alpha", 0.0)
-    if not problem.has_lines:
+    if not problem.has_lines or sites == "pixels":
         held.update({name: fixed.get(name, 0.0) for name in LINE_PARAMETERS if name != "coupling"})
     elif not problem.has_edges:
         held.setdefault("edge_gain", 0.0)
     free = [i for i, name in enumerate(PARAMETERS) if name not in held]
     if not free:
         raise InputValueError("every parameter is held: nothing to fit")
-    sites = dict(problem.sites)
-    scored = max(sites["pixels"] + sites["lines"], 1)
+    counts = dict(problem.sites)
+    scored = max(counts["pixels"] + counts["lines"], 1)
     weight = ridge * scored
     theta = np.array([held.get(name, _START[name]) for name in PARAMETERS], np.float64)
 
@@ -481,16 +500,15 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
             converged = True
             iterations -= 1
             break
-        # the longest step that keeps every bounded parameter in its domain
-        t = min([1.0] + [(LOWER_BOUNDS[PARAMETERS[free[k]]] - theta[free[k]]) / step[k] for k in bounded
-                         if step[k] < 0])
-        while True:
+        t = 1.0
+        while True:  # a projected line search: the bounded parameters are clamped to their domain
             trial = theta.copy()
             trial[free] += t * step
             for k in bounded:
                 trial[free[k]] = max(trial[free[k]], LOWER_BOUNDS[PARAMETERS[free[k]]])
             new = objective(trial)
-            if math.isfinite(new[0]) and new[0] <= value - 1e-4 * t * decrement:
+            # Armijo's condition on the step actually taken (the clamped one)
+            if math.isfinite(new[0]) and new[0] <= value + 1e-4 * float(grad @ (trial[free] - theta[free])):
                 break
             t *= 0.5
             if t < 1e-10:
@@ -504,9 +522,9 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
     errors = {PARAMETERS[i]: float(math.sqrt(max(covariance[k, k], 0.0))) for k, i in enumerate(free)}
     plain = problem.terms(theta)[0]
     return PseudolikelihoodFit(theta={name: float(v) for name, v in zip(PARAMETERS, theta)}, standard_error=errors,
-                               fitted=tuple(PARAMETERS[i] for i in free), kind=kind,
+                               fitted=tuple(PARAMETERS[i] for i in free), kind=kind, scored=sites,
                                levels=problem.levels,
-                               value=plain / scored, sites=sites, iterations=iterations, converged=converged,
+                               value=plain / scored, sites=counts, iterations=iterations, converged=converged,
                                history=history)
 
 
@@ -522,12 +540,12 @@ model (the coupling needs no bound: the pixels' conditionals are not finite with
 
 def _bounded_step(point: np.ndarray, grad: np.ndarray, hess: np.ndarray, bounded: list[int],
                   lows: list[float]) -> np.ndarray:
-    """The Newton step, with the bounded parameters that sit on their bound and would leave the domain
-    held there (an active set)."""
-    step = -_solve(hess, grad)
-    held = [k for k in bounded if point[k] <= lows[k] and step[k] < 0]
+    """The projected Newton step: the bounded parameters that sit on their bound with a gradient that
+    points out of the domain are held there (the binding set), the others take the Newton step of the
+    problem reduced to them."""
+    held = [k for k in bounded if point[k] <= lows[k] and grad[k] > 0]
     if not held:
-        return step
+        return -_solve(hess, grad)
     moving = [k for k in range(point.size) if k not in held]
     step = np.zeros_like(point)
     if moving:
