@@ -18,7 +18,19 @@ Run: python benchmarks/learn.py
    tsukuba, venus and teddy (nonocc masks), with the per-image cross-validated data weight
    (vmcl.learn.cross_validate, from each pair's own measurements, as ``[mrf] cross_validate`` runs it)
    beside them, on the training pairs too.
-3. Speed. One pseudolikelihood step (the value, gradient and Hessian over every site, as Newton takes it)
+3. Left-out presets: the stereo MRF fitted (coupling held at 1, as `vmcl fit` does) on corridor, shadows
+   and textures (256 x 256, seeds 0 and 1), then restoring blocks and cues (both seeds): bad-1 on the
+   visible pixels and the depth discontinuities' F within 1 px, hand-set and learned, with the pipeline's
+   mean-field schedule and with the presets' annealing (tests/test_learn_quality.py asserts the first).
+4. The constant cues' MRFs (colour and texture) on BSDS500. Fitted on training images only (the first
+   BSDS_TRAIN of the 200, sorted by name): each cue's measurement beside its desired solution, the
+   first annotator's segmentation (each segment at the level nearest the median of its measurements, the
+   levels spread over the image's own range as the restoration spreads them; lines between segments),
+   with lines forbidden far from the cue's candidates as the machine forbids them. Then the cartoon's
+   soft map and the binary cartoon (the machine's defaults otherwise), hand-set and learned, on the last
+   BSDS_HELD_OUT training images by name (not fitted to) and on the 10 test images: ODS F by the BSDS
+   benchmark's protocol (vmcl.boundary_evaluation, 30 thresholds).
+5. Speed. One pseudolikelihood step (the value, gradient and Hessian over every site, as Newton takes it)
    on one 375 x 450 example, on the device and in NumPy (the same sums, vectorised), best of 5.
 
 Writes benchmarks/results/learn.md.
@@ -37,11 +49,14 @@ from stereo_training import SHARED, middlebury_pairs, rendered_pairs
 
 import vmcl
 from vmcl import datasets, metrics, mrf, scenes
+from vmcl.boundary_evaluation import MapSet, score_maps
 from vmcl.cues.stereo import StereoCue
 from vmcl.integrate import restore_cue
+from vmcl.labels import Label
 from vmcl.learn import PARAMETERS, Example, cross_validate, fit_pseudolikelihood
-from vmcl.learn.examples import truth_example
+from vmcl.learn.examples import jump_lines, truth_example
 from vmcl.learn.pseudolikelihood import Pseudolikelihood
+from vmcl.mrf.energy import resolve_levels
 from vmcl.pipeline import Config, VisionMachine
 
 ONLY_STEREO = {"motion": {"enabled": False}, "colour": {"enabled": False}, "texture": {"enabled": False}}
@@ -119,6 +134,87 @@ def cross_validated(measured, hand: mrf.Settings, machine: vmcl.Machine) -> mrf.
     found = cross_validate(measured.data, confidence=measured.confidence, edges=measured.coupling, model=hand.model,
                            schedule=hand.schedule("meanfield"), machine=machine)
     return hand.override({"alpha": found.alpha})
+
+
+BSDS_TRAIN = 30
+BSDS_HELD_OUT = 10
+CONSTANT_CUES = ("colour", "texture")
+
+
+def segment_field(data: np.ndarray, segmentation: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """Each segment at the level nearest the median of its measurements (the image's median where it
+    has none)."""
+    field = np.empty(data.shape, np.float32)
+    fallback = float(np.nanmedian(data))
+    for label in np.unique(segmentation):
+        where = segmentation == label
+        values = data[where & np.isfinite(data)]
+        target = float(np.median(values)) if values.size else fallback
+        field[where] = levels[int(np.argmin(np.abs(levels - target)))]
+    return field
+
+
+def constant_examples(images, cue: str, vm: VisionMachine, model: mrf.EnergyModel) -> list[Example]:
+    found = []
+    for item in images:
+        measured = vm.measure(item.image)[cue]
+        data = measured.data
+        levels = resolve_levels(model, float(np.nanmin(data)), float(np.nanmax(data)))
+        segmentation = item.segmentations[0].astype(np.float64)
+        line_h, line_v = jump_lines(segmentation, jump=0.5)
+        found.append(Example(segment_field(data, item.segmentations[0], levels), line_h, line_v, data=data,
+                             confidence=measured.confidence, edges=measured.coupling, levels=tuple(levels)))
+    return found
+
+
+def cartoon_ods(images, config: Config, machine: vmcl.Machine) -> tuple[float, float]:
+    """ODS F of the cartoon's soft map and of the binary cartoon on ``images``."""
+    vm = VisionMachine(config, machine=machine)
+    results = [vm.run(item.image) for item in images]
+    soft = MapSet("soft", [r.boundary_strength for r in results], 30, 0.0)
+    binary = MapSet("binary", [r.discontinuities.astype(np.float32) for r in results], 1, 0.0)
+    return (score_maps(soft, images, workers=2).ods_f, score_maps(binary, images, workers=2).ods_f)
+
+
+def constant_cues(machine: vmcl.Machine) -> list[str]:
+    """The BSDS section's lines."""
+    training = sorted(datasets.load_bsds(SHARED, split="train").images, key=lambda item: item.name)
+    train, held_out = training[:BSDS_TRAIN], training[-BSDS_HELD_OUT:]
+    test = datasets.load_bsds(SHARED, split="test").images
+    vm = VisionMachine(machine=machine)
+    overrides, rows = {}, []
+    for cue in CONSTANT_CUES:
+        hand = Config().mrf.settings(cue)
+        examples = constant_examples(train, cue, vm, hand.model)
+        fit = fit_pseudolikelihood(examples, kind="constant", edge_radius=hand.model.edge_radius, machine=machine)
+        model = fit.model(hand.model)
+        overrides[cue] = {"alpha": model.alpha, "beta": model.beta, "kappa": model.kappa,
+                          "edge_gain": model.edge_gain,
+                          "prior": {k: getattr(model.prior, k) for k in ("line", "end", "continuation", "turn",
+                                                                         "junction", "crossing", "parallel")}}
+        rows.append((cue, hand.model, model, fit))
+    learned_config = Config.from_dict({"mrf": overrides})
+    held = (cartoon_ods(held_out, Config(), machine), cartoon_ods(held_out, learned_config, machine))
+    hand_ods = cartoon_ods(test, Config(), machine)
+    learned_ods = cartoon_ods(test, learned_config, machine)
+    lines = ["", "## The colour and texture MRFs: learned from BSDS500 training images", "",
+             f"{BSDS_TRAIN} training images; in the energy's units (T = 1):", "",
+             ("| cue | settings | alpha | kappa | beta | edge_gain | end | continuation | turn | junction | crossing "
+             "| parallel | sites (pixels, lines) |"), "|---" * 13 + "|"]
+    for cue, hand_model, model, fit in rows:
+        for name, m, sites in (("hand-set", hand_model, ""), ("learned", model,
+                                                                f"{fit.sites['pixels']}, {fit.sites['lines']}")):
+            lines.append(f"| {cue} | {name} | {m.alpha:.4g} | {m.kappa:.4g} | {m.beta:.4g} | {m.edge_gain:.4g} | "
+                         + " | ".join(f"{getattr(m.prior, k):.4g}" for k in
+                                      ("end", "continuation", "turn", "junction", "crossing", "parallel"))
+                         + f" | {sites} |")
+    lines += ["", (f"The cartoon (ODS F) on {BSDS_HELD_OUT} training images the fit did not see (the last by name: "
+              "what a decision to ship may read) and on the 10 BSDS500 test images:"), "",
+              ("| colour and texture MRFs | held-out training: soft map | held-out training: binary | test: soft map | "
+              "test: binary |"), "|---|---|---|---|---|",
+              f"| hand-set | {held[0][0]:.3f} | {held[0][1]:.3f} | {hand_ods[0]:.3f} | {hand_ods[1]:.3f} |",
+              f"| learned | {held[1][0]:.3f} | {held[1][1]:.3f} | {learned_ods[0]:.3f} | {learned_ods[1]:.3f} |"]
+    return lines
 
 
 def numpy_step(example: Example, theta: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
@@ -229,6 +325,41 @@ def speed(machine: vmcl.Machine, repeat: int = 5) -> tuple[tuple[int, int], floa
     return scene.left.shape[:2], min(device), min(host), abs(value_d - value_h) / abs(value_h)
 
 
+def left_out_presets(machine: vmcl.Machine) -> list[str]:
+    """The section's lines: the stereo MRF fitted on three presets, scored on two others."""
+    vm = VisionMachine(Config.from_dict(ONLY_STEREO), machine=machine)
+
+    def measured(names: tuple[str, ...]) -> list:
+        found = []
+        for name in names:
+            for seed in (0, 1):
+                scene = scenes.render(scenes.preset(name, shape=(256, 256)), seed=seed, noise=0.01)
+                found.append((scene, vm.measure(scene.left, scene.right)["stereo"]))
+        return found
+
+    train, test = measured(("corridor", "shadows", "textures")), measured(("blocks", "cues"))
+    examples = [truth_example(np.where(scene.occluded_stereo, np.nan, scene.disparity), m.data, m.confidence,
+                              m.coupling) for scene, m in train]
+    model = fit_pseudolikelihood(examples, fixed={"coupling": 1.0}, machine=machine).model()
+    learned = {"alpha": model.alpha, "beta": model.beta, "edge_gain": model.edge_gain, "prior": model.prior}
+    lines = ["", "## The stereo MRF on left-out presets", "",
+             "Fitted on corridor, shadows, textures; scored on blocks and cues (seeds 0, 1; means):", "",
+             "| settings | solver | bad-1 % (visible) | depth discontinuity F |", "|---|---|---|---|"]
+    for schedule, method in (("fast", "meanfield"), ("preset", "anneal")):
+        hand = Config.from_dict({"mrf": {"schedule": schedule}}).mrf.settings("stereo", StereoCue.settings)
+        for name, settings in (("hand-set", hand), ("learned", hand.override(learned))):
+            bad, found = [], []
+            for scene, m in test:
+                restored = restore_cue(m.data, confidence=m.confidence, coupling=m.coupling, kind="smooth",
+                                       candidates_only=False, settings=settings, method=method, machine=machine)
+                bad.append(100 * metrics.evaluate_disparity(restored.field, scene.disparity,
+                                                            mask=~scene.occluded_stereo).bad[1.0])
+                found.append(metrics.detection_scores(mrf.boundary_map(restored.line_h, restored.line_v),
+                                                      scene.labels == Label.DEPTH, tolerance=1.0).f)
+            lines.append(f"| {name} | {method} ({schedule} schedule) | {np.mean(bad):.2f} | {np.mean(found):.3f} |")
+    return lines
+
+
 def main() -> int:
     machine = vmcl.Machine()
     out = Path(__file__).parent / "results" / "learn.md"
@@ -298,6 +429,12 @@ def main() -> int:
     lines += ["", "The data weights cross-validation chose on the test pairs: "
               + ", ".join(f"{scene} {s.model.alpha:g}" for (scene, *_), s in zip(tests, settings))
               + f" (the hand-set alpha: {hand.model.alpha:g})."]
+
+    print("left-out presets ...", file=sys.stderr)
+    lines += left_out_presets(machine)
+
+    print("colour and texture ...", file=sys.stderr)
+    lines += constant_cues(machine)
 
     print("speed ...", file=sys.stderr)
     shape, device_ms, host_ms, difference = speed(machine)

@@ -82,10 +82,12 @@ inline float bond(__global const float *f, long i, long j)
 
 /* One line site per work-item, (x, y, type): two options (off: features 0; on: the change of every
  * clique that holds the site, whose dot product with theta is dE / T) and the observed state, or -1
- * where the site does not exist or either pixel lies outside `valid`. */
+ * where the site does not exist, either pixel lies outside `valid`, or the model forbids a line there
+ * (`usable`, per site as `observed` is laid out: a line far from every edge under require_edge). */
 __kernel void line_features(__global const float *f, __global const uchar *lh, __global const uchar *lv,
                             __global const uchar *edges, int has_edges, __global const uchar *valid,
-                            __global float *features, __global int *observed, long W, long H)
+                            __global const uchar *usable, __global float *features, __global int *observed,
+                            long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     int type = get_global_id(2);
@@ -95,7 +97,7 @@ __kernel void line_features(__global const float *f, __global const uchar *lh, _
     float on[LINE_K];
     for (int k = 0; k < LINE_K; ++k) on[k] = 0.0f;
     __global float *out = features + site * 2 * LINE_K;
-    if (!exists || !valid[i] || !valid[j]) {
+    if (!exists || !valid[i] || !valid[j] || !usable[site]) {
         observed[site] = -1;
         for (int k = 0; k < 2 * LINE_K; ++k) out[k] = 0.0f;
         return;

@@ -161,3 +161,31 @@ def test_refusals(machine):
         fit_pseudolikelihood([Example(np.arange(100.0).reshape(10, 10))], kind="constant", machine=machine)
     with pytest.raises(InputValueError, match="data must have the field's shape"):
         fit_pseudolikelihood([Example(f, data=np.zeros((8, 9)))], machine=machine)
+
+
+def test_each_example_may_bring_its_own_levels(machine):
+    """The constant kind's levels spread over each image's own range: the pooled terms are the sum of each
+    example's terms with its levels."""
+    rng = np.random.default_rng(3)
+    first = Example(rng.choice([0.0, 0.5, 1.0], (8, 9)), data=rng.random((8, 9)), levels=(0.0, 0.5, 1.0))
+    second = Example(rng.choice([0.2, 0.3], (7, 6)), data=rng.random((7, 6)), levels=(0.2, 0.3))
+    pooled = Pseudolikelihood([first, second], kind="constant", machine=machine).terms(THETA)
+    alone = [Pseudolikelihood([e], kind="constant", machine=machine).terms(THETA) for e in (first, second)]
+    assert pooled[0] == pytest.approx(alone[0][0] + alone[1][0], rel=1e-6)
+    assert np.allclose(pooled[1], alone[0][1] + alone[1][1], rtol=1e-5, atol=1e-6)
+
+
+def test_lines_the_model_forbids_are_not_scored(machine):
+    """With edge_radius (the model's require_edge) only line sites with an edge pixel within the radius
+    of either pixel are scored."""
+    rng = np.random.default_rng(4)
+    f = rng.normal(size=(10, 12))
+    edges = np.zeros((10, 12), bool)
+    edges[:, 3] = True
+    example = Example(f, rng.random((10, 11)) < 0.3, rng.random((9, 12)) < 0.3, edges=edges)
+    everywhere = Pseudolikelihood([example], machine=machine).sites["lines"]
+    assert everywhere == 10 * 11 + 9 * 12
+    near = Pseudolikelihood([example], edge_radius=0, machine=machine).sites["lines"]
+    # radius 0: an edge pixel at either end; lh sites (y, 2) and (y, 3), lv sites (y, 3)
+    assert near == 10 * 2 + 9
+    assert Pseudolikelihood([example], edge_radius=1, machine=machine).sites["lines"] == 10 * 4 + 9 * 3

@@ -48,7 +48,8 @@ import numpy as np
 from vmcl.cm.core import check_choice, check_int, check_real, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
-from vmcl.mrf.energy import KINDS, EnergyModel, LinePrior, host_field
+from vmcl.mrf.checks import MAX_COUNT
+from vmcl.mrf.energy import KINDS, EnergyModel, LinePrior, host_field, line_costs
 
 __all__ = ["LINE_PARAMETERS", "PARAMETERS", "PRIOR_PARAMETERS", "Example", "Pseudolikelihood", "PseudolikelihoodFit",
            "fit_pseudolikelihood"]
@@ -87,6 +88,9 @@ class Example:
         Brightness edge pixels (non-zero), which lower a line's cost (``edge_gain``).
     valid : (H, W) bool array, optional
         Where the example holds (default everywhere the field is finite).
+    levels : sequence of float, optional
+        The constant kind's levels in this example (e.g. spread over its own data's range, as
+        :func:`vmcl.mrf.restore` spreads a count of levels); default those the fit is given.
     """
 
     field: Any
@@ -96,6 +100,7 @@ class Example:
     confidence: Any = None
     edges: Any = None
     valid: Any = None
+    levels: Any = None
 
 
 @dataclass(frozen=True)
@@ -183,14 +188,16 @@ class PseudolikelihoodFit:
             changes.update(beta=beta, prior=prior, edge_gain=self.theta["edge_gain"] / scale / beta)
         if self.kind == "constant":
             changes["kappa"] = self.theta["coupling"]
-            changes["levels"] = self.levels
+            if self.levels is not None:  # one set for every example (else each had its own: base's stay)
+                changes["levels"] = self.levels
         return replace(base, **changes)
 
 
 class _Lattice:
     """One example on the device: its fields, and the features that do not depend on theta."""
 
-    def __init__(self, example: Example, kind: str, levels: np.ndarray | None, machine: Machine) -> None:
+    def __init__(self, example: Example, kind: str, levels: np.ndarray | None, edge_radius: int | None,
+                 machine: Machine) -> None:
         self.machine = machine
         f = host_field(example.field, "field", ndims=(2, 3)).astype(np.float32)
         if f.ndim == 3 and not 1 <= f.shape[2] <= 4:
@@ -235,13 +242,21 @@ class _Lattice:
         if self.lines:
             self.line_features = machine.empty(2 * n * 2 * len(LINE_PARAMETERS), np.float32)
             self.line_observed = machine.empty(2 * n, np.int32)
+            usable = np.ones((2, *shape), np.uint8)
+            if edge_radius is not None:
+                # the sites the model forbids (b = +inf): line_costs decides them as the restoration does
+                forbid = EnergyModel(require_edge=True, edge_radius=edge_radius)
+                cost_h, cost_v = line_costs(shape, edges if self.edges else None, forbid)
+                usable[0, :, :-1], usable[1, :-1, :] = np.isfinite(cost_h), np.isfinite(cost_v)
             program = machine.kernel("pseudolikelihood", "line_features", NCOMP=self.ncomp, KIND=kind_define)
             machine.launch(program, (self.width, self.height, 2), self.d_f, self.d_lh, self.d_lv,
-                           put(edges.astype(np.uint8)), np.int32(self.edges), self.d_valid, self.line_features,
-                           self.line_observed, *dims)
+                           put(edges.astype(np.uint8)), np.int32(self.edges), self.d_valid, put(usable),
+                           self.line_features, self.line_observed, *dims)
         self.potts_features = self.potts_observed = None
         self.nlevels = 0
         if kind == "constant":
+            if example.levels is not None:
+                levels = _levels(example.levels, [])
             assert levels is not None
             self.nlevels = int(levels.size)
             self.potts_features = machine.empty(n * self.nlevels * 2, np.float32)
@@ -324,7 +339,10 @@ def _pixels(x: Any, name: str, shape: tuple[int, ...]) -> np.ndarray:
 
 def _levels(given: Any, fields: list[np.ndarray]) -> np.ndarray:
     if given is not None:
-        levels = np.asarray(given, np.float32)
+        try:
+            levels = np.asarray(given, np.float32)
+        except (TypeError, ValueError):
+            raise InputValueError(f"levels must be 2..64 distinct finite values, got {given!r}") from None
         if levels.ndim != 1 or not 2 <= levels.size <= 64 or not np.all(np.isfinite(levels)) \
                 or np.unique(levels).size != levels.size:
             raise InputValueError(f"levels must be 2..64 distinct finite values, got {given!r}")
@@ -350,6 +368,9 @@ class Pseudolikelihood:
         The constant kind's levels (default: the distinct values of the fields, 2 to 64).
     sites : {"all", "pixels", "lines"}
         The conditionals scored (:data:`SITES`).
+    edge_radius : int, optional
+        The model's ``require_edge``: line sites with no edge pixel within this Chebyshev radius of either
+        pixel are forbidden, so not scored (as the constant cues' MRFs run, coupled to their candidates).
     machine : vmcl.Machine, optional
 
     Attributes
@@ -362,7 +383,7 @@ class Pseudolikelihood:
     """
 
     def __init__(self, examples: Sequence[Example], *, kind: str = "smooth", levels: Sequence[float] | None = None,
-                 sites: str = "all", machine: Machine | None = None) -> None:
+                 sites: str = "all", edge_radius: int | None = None, machine: Machine | None = None) -> None:
         machine = machine_for(machine)
         check_choice(kind, "kind", KINDS)
         self.scored = check_choice(sites, "sites", SITES)
@@ -370,11 +391,13 @@ class Pseudolikelihood:
             examples = [examples]
         if not isinstance(examples, Sequence) or not examples or not all(isinstance(e, Example) for e in examples):
             raise InputTypeError("examples must be a non-empty sequence of vmcl.learn.Example")
+        if edge_radius is not None:
+            check_int(edge_radius, "edge_radius", minimum=0, maximum=MAX_COUNT)
         found = None
-        if kind == "constant":
-            found = _levels(levels, [host_field(e.field, "field", ndims=(2, 3)) for e in examples])
+        if kind == "constant" and (levels is not None or any(e.levels is None for e in examples)):
+            found = _levels(levels, [host_field(e.field, "field", ndims=(2, 3)) for e in examples if e.levels is None])
         self.kind = kind
-        self._lattices = [_Lattice(e, kind, found, machine) for e in examples]
+        self._lattices = [_Lattice(e, kind, found, edge_radius, machine) for e in examples]
         self.levels = None if found is None else tuple(float(v) for v in found)
         self.sites = {"pixels": sum(lat.counts["pixels"] for lat in self._lattices) if sites != "lines" else 0,
                       "lines": sum(lat.counts["lines"] for lat in self._lattices) if sites != "pixels" else 0}
@@ -408,7 +431,7 @@ class Pseudolikelihood:
 
 def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
                          levels: Sequence[float] | None = None, fixed: Mapping[str, float] | None = None,
-                         sites: str = "all", ridge: float = 1e-6, tolerance: float = 1e-9, max_iterations: int = 100,
+                         sites: str = "all", edge_radius: int | None = None, ridge: float = 1e-6, tolerance: float = 1e-9, max_iterations: int = 100,
                          machine: Machine | None = None) -> PseudolikelihoodFit:
     """Fit the line-process MRF's natural parameters to examples by maximum pseudolikelihood.
 
@@ -428,6 +451,8 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
         The conditionals scored (:data:`SITES`). "lines" fits the line process given the examples'
         fields: give the fields the lines are to be decided on (e.g. the measurements themselves);
         the data weight is then not fitted, and :meth:`PseudolikelihoodFit.model` takes it from its base.
+    edge_radius : int, optional
+        Fit the model with ``require_edge`` at this radius (see :class:`Pseudolikelihood`).
     ridge : float
         >= 0: the penalty ridge * sites * |theta|^2 / 2 on the fitted parameters (see the module notes).
     tolerance : float
@@ -466,7 +491,8 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
         if name not in PARAMETERS:
             raise InputValueError(f"fixed: unknown parameter {name!r}; the parameters are {', '.join(PARAMETERS)}")
         check_real(value, f"fixed[{name!r}]")
-    problem = Pseudolikelihood(examples, kind=kind, levels=levels, sites=sites, machine=machine)
+    problem = Pseudolikelihood(examples, kind=kind, levels=levels, sites=sites, edge_radius=edge_radius,
+                               machine=machine)
     held = dict(fixed)
     if not problem.has_data or sites == "lines":
         held.setdefault("alpha", 0.0)
