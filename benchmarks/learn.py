@@ -54,9 +54,8 @@ from vmcl.cues.stereo import StereoCue
 from vmcl.integrate import restore_cue
 from vmcl.labels import Label
 from vmcl.learn import PARAMETERS, Example, cross_validate, fit_pseudolikelihood
-from vmcl.learn.examples import jump_lines, truth_example
+from vmcl.learn.examples import segmentation_example, truth_example
 from vmcl.learn.pseudolikelihood import Pseudolikelihood
-from vmcl.mrf.energy import resolve_levels
 from vmcl.pipeline import Config, VisionMachine
 
 ONLY_STEREO = {"motion": {"enabled": False}, "colour": {"enabled": False}, "texture": {"enabled": False}}
@@ -141,29 +140,14 @@ BSDS_HELD_OUT = 10
 CONSTANT_CUES = ("colour", "texture")
 
 
-def segment_field(data: np.ndarray, segmentation: np.ndarray, levels: np.ndarray) -> np.ndarray:
-    """Each segment at the level nearest the median of its measurements (the image's median where it
-    has none)."""
-    field = np.empty(data.shape, np.float32)
-    fallback = float(np.nanmedian(data))
-    for label in np.unique(segmentation):
-        where = segmentation == label
-        values = data[where & np.isfinite(data)]
-        target = float(np.median(values)) if values.size else fallback
-        field[where] = levels[int(np.argmin(np.abs(levels - target)))]
-    return field
-
-
 def constant_examples(images, cue: str, vm: VisionMachine, model: mrf.EnergyModel) -> list[Example]:
+    """Each image's first annotator's segmentation as the desired solution of ``cue``'s MRF (what
+    `vmcl fit colour|texture` fits to)."""
     found = []
     for item in images:
         measured = vm.measure(item.image)[cue]
-        data = measured.data
-        levels = resolve_levels(model, float(np.nanmin(data)), float(np.nanmax(data)))
-        segmentation = item.segmentations[0].astype(np.float64)
-        line_h, line_v = jump_lines(segmentation, jump=0.5)
-        found.append(Example(segment_field(data, item.segmentations[0], levels), line_h, line_v, data=data,
-                             confidence=measured.confidence, edges=measured.coupling, levels=tuple(levels)))
+        found.append(segmentation_example(measured.data, measured.confidence, measured.coupling,
+                                          item.segmentations[0], model))
     return found
 
 

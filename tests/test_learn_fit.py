@@ -142,3 +142,25 @@ def test_prior_tables_in_a_config(tmp_path):
     assert prior == LinePrior(end=2.0)
     with pytest.raises(InputValueError, match=r"unknown key mrf.stereo.prior.ends"):
         Config.from_dict({"mrf": {"stereo": {"prior": {"ends": 2.0}}}}).mrf.settings("stereo")
+
+
+def test_fit_colour_from_a_bsds_folder(datasets_root, tmp_path, capsys):
+    """Two BSDS training images in the distribution's layout (images/train, groundTruth/train, beside a
+    test split the fit must not read): the colour MRF fitted to their first annotators' segmentations."""
+    source = datasets_root / "bsds500" / "train"
+    names = sorted(p.name for p in source.iterdir() if p.is_dir())[:2]
+    for split, chosen in (("train", names), ("test", sorted(p.name for p in source.iterdir() if p.is_dir())[2:3])):
+        for kind, suffix in (("images", "jpg"), ("groundTruth", "mat")):
+            folder = tmp_path / "data" / kind / split
+            folder.mkdir(parents=True)
+            for name in chosen:
+                (folder / f"{name}.{suffix}").write_bytes((source / name / f"{name}.{suffix}").read_bytes())
+    out = tmp_path / "colour.toml"
+    assert main(["fit", "colour", "--data", str(tmp_path / "data"), "--out", str(out), "-q"]) == 0
+    assert "colour: 2 example(s)" in capsys.readouterr().out
+    from vmcl.pipeline import tomllib
+
+    written = tomllib.loads(out.read_text())
+    assert written["fitted"]["data"] == names
+    table = Config.from_toml(out).mrf.colour
+    assert {"alpha", "beta", "kappa", "edge_gain", "prior"} <= set(table) and table["kappa"] > 0

@@ -7,7 +7,8 @@ dense fields out (:mod:`vmcl.pipeline`, :mod:`vmcl.report`).
     vmcl run LEFT [RIGHT] [--next NEXT] [--config C.toml] --out DIR
     vmcl run FRAMES [RIGHT_FRAMES] [--fps N] [--config C.toml] --out DIR
     vmcl eval stereo|flow|edges --data DIR
-    vmcl fit stereo|motion --data DIR [--data DIR ...] --out FITTED.toml [--config C.toml] [--jump PX] [--fix NAME=VALUE]
+    vmcl fit stereo|motion|colour|texture --data DIR [--data DIR ...] --out FITTED.toml [--config C.toml] [--jump PX]
+             [--fix NAME=VALUE]
     vmcl info
     vmcl batch INPUTS... --out DIR [--frames] [--config C.toml] [--scheduler ADDRESS] [--workers N] [--threads N]
                [--zarr FIELD ...]
@@ -364,7 +365,7 @@ def _fit(args) -> int:
     if out.suffix != ".toml":
         raise BadInput(f"--out {out}: the fitted parameters are a TOML file; name it *.toml")
     check_writable(out)  # before the long fit, not after it
-    fixed = {"coupling": 1.0}
+    fixed = {"coupling": 1.0} if args.cue in ("stereo", "motion") else {}
     for item in args.fix:
         name, _, value = item.partition("=")
         if name not in PARAMETERS:
@@ -606,17 +607,18 @@ def parser() -> argparse.ArgumentParser:
 
     fit = commands.add_parser("fit", parents=[quiet],
                               help="learn a cue's MRF parameters from a data set with ground truth")
-    fit.add_argument("cue", choices=("stereo", "motion"))
+    fit.add_argument("cue", choices=("stereo", "motion", "colour", "texture"))
     fit.add_argument("--data", required=True, action="append",
                      help="a folder of examples with ground truth, searched as `vmcl eval` searches it (stereo: "
-                          "Middlebury-layout scenes; motion: frames with flow); repeatable")
+                          "Middlebury-layout scenes; motion: frames with flow; colour, texture: a BSDS-layout "
+                          "folder of training images, their first annotator's segmentation); repeatable")
     fit.add_argument("--out", required=True, help="the TOML file to write: new, or one `vmcl fit` wrote")
     fit.add_argument("--config", help="TOML configuration of the machine whose measurements are fitted")
     fit.add_argument("--jump", type=float, default=1.0,
                      help="a true discontinuity: neighbours more than this many pixels apart (default 1)")
     fit.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
-                     help="hold a natural parameter instead of fitting it; repeatable (default: coupling=1, the "
-                          "energy's units; --fix coupling=free fits it too)")
+                     help="hold a natural parameter instead of fitting it; repeatable (stereo and motion hold "
+                          "coupling=1, the energy's units, unless --fix coupling=free)")
 
     commands.add_parser("info", parents=[quiet], help="OpenCL platforms and devices, the kernel cache")
 

@@ -1103,21 +1103,23 @@ def _bsds_items(pairs: list[tuple[str, Path, Path]]) -> list[BSDSImage]:
     return [BSDSImage(name, read_image(image), *_bsds_annotations(truth)) for name, image, truth in pairs]
 
 
-def read_bsds_folder(folder) -> list[BSDSImage]:
+def read_bsds_folder(folder, *, split: str = "test") -> list[BSDSImage]:
     """The images of a BSDS-layout folder with their human boundaries and segmentations.
 
     Two layouts are read: one folder per image holding ``<id>.jpg`` and ``<id>.mat`` (as under
     ``shared/datasets/bsds500/test``), or the BSDS500 distribution's ``images/`` and ``groundTruth/``
-    folders side by side (``BSR/BSDS500/data``; its ``test`` split where the folders hold splits). An
-    image without its ``.mat`` is refused by name; the images are in sorted (string) order of their ids.
+    folders side by side (``BSR/BSDS500/data``; its ``split`` where the folders hold splits: "test" to
+    evaluate, "train" to fit). An image without its ``.mat`` is refused by name; the images are in sorted
+    (string) order of their ids.
     """
     folder = _as_path(folder, "folder")
+    check_choice(split, "split", ("test", "train", "val"))
     if not folder.is_dir():
         raise FileNotFoundError(f"no such folder: {folder}")
     if (folder / "images").is_dir() and (folder / "groundTruth").is_dir():
         images, truths = folder / "images", folder / "groundTruth"
-        if (images / "test").is_dir() and (truths / "test").is_dir():
-            images, truths = images / "test", truths / "test"
+        if (images / split).is_dir() and (truths / split).is_dir():
+            images, truths = images / split, truths / split
         found = sorted(images.glob("*.jpg"))
         pairs = [(p.stem, p, truths / f"{p.stem}.mat") for p in found]
     else:

@@ -18,6 +18,7 @@ import numpy as np
 
 from vmcl import datasets
 from vmcl.cm.core import check_choice, check_real
+from vmcl.cues import registered
 from vmcl.errors import InputValueError
 from vmcl.fitted import code_sha256, files_sha256
 from vmcl.learn import examples as learn_examples
@@ -27,8 +28,9 @@ from vmcl.machine import Machine
 
 __all__ = ["FITTABLE_CUES", "CueFit", "cue_examples", "fit_cue"]
 
-FITTABLE_CUES = ("stereo", "motion")
-"""The cues whose ground truth the data set readers give: disparity (stereo), flow (motion)."""
+FITTABLE_CUES = ("stereo", "motion", "colour", "texture")
+"""The cues whose ground truth the data set readers give: disparity (stereo), flow (motion), human
+segmentations (colour and texture, from BSDS-layout folders)."""
 
 
 @dataclass(frozen=True)
@@ -59,10 +61,12 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
 
     Parameters
     ----------
-    cue : {"stereo", "motion"}
+    cue : {"stereo", "motion", "colour", "texture"}
     roots : sequence of str or Path
         Folders :func:`vmcl.datasets.find_stereo_folders` (stereo) or :func:`vmcl.datasets.find_flow_folders`
-        (motion) searches.
+        (motion) searches, or BSDS-layout folders (colour, texture: :func:`vmcl.datasets.read_bsds_folder`,
+        its training split in the distribution's layout), whose first annotator's segmentation is the
+        desired solution (:func:`vmcl.learn.examples.segmentation_example`).
     vm : vmcl.pipeline.VisionMachine
         The machine whose measurements are the data (its Config decides the early modules' settings).
     jump : float
@@ -90,6 +94,22 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
                                                              measured.coupling, valid=mask, jump=jump))
                 names.append(pair.name)
                 files += sorted(p for p in Path(folder).iterdir() if p.is_file())
+        elif cue in ("colour", "texture"):
+            model = vm.config.mrf.settings(cue).model
+            try:
+                images = datasets.read_bsds_folder(root, split="train")
+            except FileNotFoundError:
+                images = []
+            for item in images:
+                measured = vm.measure(item.image)
+                if cue not in measured:
+                    raise InputValueError(f"{item.name}: the {cue} cue does not run on this image (grey, or "
+                                          f"[{cue}] enabled = false)")
+                found = measured[cue]
+                examples.append(learn_examples.segmentation_example(found.data, found.confidence, found.coupling,
+                                                                    item.segmentations[0], model))
+                names.append(item.name)
+            files += sorted(p for p in Path(root).rglob("*") if p.suffix in (".jpg", ".mat") and p.is_file())
         else:
             for folder in datasets.find_flow_folders(root):
                 sequence = datasets.read_flow_folder(folder)
@@ -101,7 +121,8 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
                 names.append(sequence.name)
                 files += sorted(p for p in Path(folder).iterdir() if p.is_file())
     if not examples:
-        reader = "stereo folders (Middlebury layout)" if cue == "stereo" else "flow folders with ground truth"
+        reader = {"stereo": "stereo folders (Middlebury layout)", "motion": "flow folders with ground truth"}.get(
+            cue, "BSDS-layout images with segmentations")
         raise InputValueError(f"no {reader} at or below {', '.join(map(str, roots))}: nothing to fit {cue} to")
     return examples, names, files
 
@@ -113,7 +134,7 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
 
     Parameters
     ----------
-    cue : {"stereo", "motion"}
+    cue : {"stereo", "motion", "colour", "texture"}
     roots : sequence of str or Path
         Data set folders (see :func:`cue_examples`).
     vm : vmcl.pipeline.VisionMachine, optional
@@ -121,11 +142,13 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
     jump, ridge
         As :func:`vmcl.learn.examples.jump_lines` and :func:`vmcl.learn.fit_pseudolikelihood` take them.
     fixed : mapping of str to float, optional
-        Natural parameters held; default ``{"coupling": 1.0}``: the membrane's weight at T = 1, the units
+        Natural parameters held; default, for the piecewise smooth cues (stereo, motion),
+        ``{"coupling": 1.0}``: the membrane's weight at T = 1, the units
         the presets' schedules are measured in. Ground truth is far smoother inside its surfaces than a
         membrane sample (a plane's neighbours predict it exactly), so a free coupling grows without bound
         and takes the data weight to 0; held, the data weight and the line potentials are fitted in the
-        energy's own units. ``{}`` fits everything.
+        energy's own units. ``{}`` fits everything (the default of the piecewise constant cues, whose
+        Potts cost kappa is a parameter of the energy at T = 1).
     machine : vmcl.Machine, optional
 
     Returns
@@ -137,19 +160,25 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
     check_choice(cue, "cue", FITTABLE_CUES)
     check_real(jump, "jump", above=0)
     vm = VisionMachine(machine=machine) if vm is None else vm
-    fixed = {"coupling": 1.0} if fixed is None else fixed
+    module = next(c for c in registered() if c.name == cue)
+    fixed = ({"coupling": 1.0} if module.kind == "smooth" else {}) if fixed is None else fixed
     examples, names, files = cue_examples(cue, roots, vm, jump=jump)
-    fit = fit_pseudolikelihood(examples, kind="smooth", fixed=fixed, ridge=ridge, machine=vm.machine)
-    model = fit.model()
+    base = vm.config.mrf.settings(cue, module.settings).model
+    fit = fit_pseudolikelihood(examples, kind=module.kind, fixed=fixed, ridge=ridge,
+                               edge_radius=base.edge_radius if module.candidates_only else None,
+                               machine=vm.machine)
+    model = fit.model(base)
     table = {"alpha": model.alpha, "beta": model.beta, "edge_gain": model.edge_gain,
              "prior": {name: getattr(model.prior, name) for name in PRIOR_PARAMETERS}}
+    if module.kind == "constant":
+        table["kappa"] = model.kappa
     provenance = {
         "what": f"mrf.{cue}",
         "method": "maximum pseudolikelihood (vmcl.learn.fit_pseudolikelihood)",
         "data": names,
         "data_sha256": files_sha256(files),
         "code_sha256": code_sha256(pseudolikelihood, learn_examples, _kernel_path()),
-        "jump": float(jump),
+        "jump": float(jump) if module.kind == "smooth" else "segment boundaries (first annotator)",
         "ridge": float(ridge),
         "fixed": sorted(fixed),
         "sites": [fit.sites["pixels"], fit.sites["lines"]],

@@ -2,8 +2,10 @@
 
 Seed section "Learning and parameter estimation", the second stage ("data and desired solution are
 given"). The desired solution of a cue's MRF is its true field (a disparity map, a flow field) with its
-line process where the true field jumps; the data, its confidence and the coupling edges are what the
-cue's early module gives the MRF on the same images (:meth:`vmcl.pipeline.VisionMachine.measure`).
+line process where the true field jumps; for the piecewise constant cues (colour, texture), which have no
+true field, a human segmentation: each segment at one level, lines between segments. The data, its
+confidence and the coupling edges are what the cue's early module gives the MRF on the same images
+(:meth:`vmcl.pipeline.VisionMachine.measure`).
 """
 
 from __future__ import annotations
@@ -11,11 +13,11 @@ from __future__ import annotations
 import numpy as np
 
 from vmcl.cm.core import check_real
-from vmcl.errors import InputValueError
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.learn.pseudolikelihood import Example
-from vmcl.mrf.energy import host_field
+from vmcl.mrf.energy import EnergyModel, host_field, resolve_levels
 
-__all__ = ["DEFAULT_JUMP", "jump_lines", "truth_example"]
+__all__ = ["DEFAULT_JUMP", "jump_lines", "segmentation_example", "truth_example"]
 
 DEFAULT_JUMP = 1.0
 """A true field's discontinuity: neighbours more than this apart (pixels of disparity or flow), the
@@ -78,3 +80,42 @@ def truth_example(truth: np.ndarray, data: np.ndarray, confidence: np.ndarray | 
         known &= mask != 0
     line_h, line_v = jump_lines(f, jump=jump, valid=known)
     return Example(f, line_h, line_v, data=data, confidence=confidence, edges=edges, valid=known)
+
+
+def segmentation_example(data: np.ndarray, confidence: np.ndarray | None, edges: np.ndarray,
+                         segmentation: np.ndarray, model: EnergyModel) -> Example:
+    """An :class:`Example` of a piecewise constant cue from a segmentation of its image (e.g. a BSDS
+    annotator's): each segment at the level nearest the median of its measurements (the image's median
+    where it has none), the levels spread over the data's range as :func:`vmcl.mrf.restore` spreads
+    ``model.levels``; lines between different segments.
+
+    Parameters
+    ----------
+    data, confidence, edges
+        The cue's measurement (:class:`vmcl.pipeline.CueData`'s fields), scalar.
+    segmentation : (H, W) integer array
+        Segment labels.
+    model : EnergyModel
+        The cue's energy (its levels: a count, or the levels themselves).
+    """
+    if not isinstance(model, EnergyModel):
+        raise InputTypeError(f"model must be a vmcl.mrf.EnergyModel, got {type(model).__name__}")
+    g = host_field(data, "data", ndims=(2,)).astype(np.float64)
+    labels = np.asarray(segmentation)
+    if labels.shape != g.shape or labels.dtype.kind not in "iu":
+        raise InputValueError(f"segmentation must be integer labels of the data's shape {g.shape}, got "
+                              f"{labels.dtype} {labels.shape}")
+    finite = np.isfinite(g)
+    if not finite.any():
+        raise InputValueError("data has no measurement: no level to give any segment")
+    levels = resolve_levels(model, float(g[finite].min()), float(g[finite].max()))
+    field = np.empty(g.shape, np.float32)
+    fallback = float(np.median(g[finite]))
+    for label in np.unique(labels):
+        where = labels == label
+        values = g[where & finite]
+        target = float(np.median(values)) if values.size else fallback
+        field[where] = levels[int(np.argmin(np.abs(levels - target)))]
+    line_h, line_v = jump_lines(labels.astype(np.float64), jump=0.5)
+    return Example(field, line_h, line_v, data=data, confidence=confidence, edges=edges,
+                   levels=tuple(float(v) for v in levels))
