@@ -39,20 +39,8 @@
 #define PHASE_F 0u
 #define PHASE_LINES 2u
 
-/* rho(f_i, f_j): the smoothness cost of the bond between two pixels when no line breaks it. */
-inline float bond_cost(__global const float *f, long i, long j, float kappa)
-{
-#if KIND == 0
-    float s = 0.0f;
-    for (int c = 0; c < NCOMP; ++c) {
-        float d = f[i * NCOMP + c] - f[j * NCOMP + c];
-        s += d * d;
-    }
-    return s;
-#else
-    return f[i] != f[j] ? kappa : 0.0f;
-#endif
-}
+/* rho(f_i, f_j), bond_cost: shared with the pseudolikelihood's features. */
+#include "bond.h"
 
 /* ---------------------------------------------------------------------------------- preparation */
 

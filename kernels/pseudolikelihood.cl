@@ -39,6 +39,7 @@
 #ifndef CHUNK
 #define CHUNK 64
 #endif
+#include "bond.h"
 
 /* The line site's features, in the order of theta[1:] (vmcl/learn/pseudolikelihood.py LINE_PARAMS). */
 #define LINE_K 9
@@ -66,20 +67,6 @@ inline void vertex_change(float *x, int others, int bit)
     x[after] += 1.0f;
 }
 
-inline float bond(__global const float *f, long i, long j)
-{
-#if KIND == 0
-    float s = 0.0f;
-    for (int c = 0; c < NCOMP; ++c) {
-        float d = f[i * NCOMP + c] - f[j * NCOMP + c];
-        s += d * d;
-    }
-    return s;
-#else
-    return f[i] != f[j] ? 1.0f : 0.0f;
-#endif
-}
-
 /* One line site per work-item, (x, y, type): two options (off: features 0; on: the change of every
  * clique that holds the site, whose dot product with theta is dE / T) and the observed state, or -1
  * where the site does not exist, either pixel lies outside `valid`, or the model forbids a line there
@@ -102,7 +89,7 @@ __kernel void line_features(__global const float *f, __global const uchar *lh, _
         for (int k = 0; k < 2 * LINE_K; ++k) out[k] = 0.0f;
         return;
     }
-    on[F_COUPLING] = -bond(f, i, j);
+    on[F_COUPLING] = -bond_cost(f, i, j, 1.0f);
     on[F_LINE] = 1.0f;
     on[F_EDGE] = has_edges && (edges[i] || edges[j]) ? -1.0f : 0.0f;
     if (type == 0) {

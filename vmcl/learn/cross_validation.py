@@ -28,6 +28,7 @@ from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.mrf import SOLVERS, EnergyModel, NothingToRestore, restore
 from vmcl.mrf.energy import KINDS, host_field
+from vmcl.mrf.inputs import device_pixels
 
 __all__ = ["DEFAULT_FACTORS", "CrossValidation", "cross_validate"]
 
@@ -120,6 +121,8 @@ def cross_validate(data: ArrayLike, *, confidence: ArrayLike | None = None, edge
         host_field(confidence, "confidence", ndims=(2,)).astype(np.float32)
     if gamma.shape != shape:
         raise InputValueError(f"confidence must have the data's shape {shape}, got {gamma.shape}")
+    if not np.all(np.isfinite(gamma)) or np.any(gamma < 0):
+        raise InputValueError("confidence must be finite and >= 0")
     measured = np.all(np.isfinite(g.reshape(*shape, -1)), axis=2) & (gamma > 0)
     where = np.flatnonzero(measured)
     per_fold = int(holdout * where.size)
@@ -127,23 +130,25 @@ def cross_validate(data: ArrayLike, *, confidence: ArrayLike | None = None, edge
         raise InputValueError(f"data has {where.size} measurements with a positive confidence: too few to hold "
                               f"out a share holdout={holdout:g} of them per fold (at least 10 each)")
     order = np.random.default_rng(seed).permutation(where)
-    edge_map = None if edges is None else to_host(edges)
+    # On the device once: each restoration below reads them there, and only its field comes back.
+    device_g = machine.to_device(g)
+    edge_map = device_pixels(edges, "edges", shape, np.uint8, machine)
     errors = np.zeros((len(weights), folds))
     for fold in range(folds):
         held = order[fold * per_fold:(fold + 1) * per_fold]
         kept = gamma.copy().ravel()
         kept[held] = 0.0
-        kept = kept.reshape(shape)
+        device_kept = machine.to_device(kept.reshape(shape))
         truth = g.reshape(shape[0] * shape[1], -1)[held]
         w = gamma.ravel()[held]
         for k, alpha in enumerate(weights):
             trial = replace(model, alpha=alpha)
             try:
-                found = restore(g, confidence=kept, edges=edge_map, kind=kind, method=method, model=trial,
-                                schedule=schedule, seed=seed, machine=machine)
+                found = restore(device_g, confidence=device_kept, edges=edge_map, kind=kind, method=method,
+                                model=trial, schedule=schedule, seed=seed, machine=machine)
             except NothingToRestore:
                 raise InputValueError("data has nothing left to restore once a share is held out") from None
-            guess = np.asarray(found.field, np.float64).reshape(shape[0] * shape[1], -1)[held]
+            guess = to_host(found.field).astype(np.float64).reshape(shape[0] * shape[1], -1)[held]
             errors[k, fold] = float(np.sum(w * np.sum((guess - truth) ** 2, axis=1)) / np.sum(w))
     scores = errors.mean(axis=1)
     best = int(np.argmin(scores))

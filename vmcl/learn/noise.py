@@ -26,6 +26,7 @@ from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.mrf import EnergyModel, sample
 from vmcl.mrf.energy import KINDS, host_field
+from vmcl.mrf.inputs import device_pixels
 
 __all__ = ["NoiseEstimate", "estimate_noise"]
 
@@ -90,19 +91,24 @@ def estimate_noise(data: ArrayLike, *, confidence: ArrayLike | None = None, edge
     gamma = np.ones(shape) if confidence is None else host_field(confidence, "confidence", ndims=(2,))
     if gamma.shape != shape:
         raise InputValueError(f"confidence must have the data's shape {shape}, got {gamma.shape}")
+    if not np.all(np.isfinite(gamma)) or np.any(gamma < 0):
+        raise InputValueError("confidence must be finite and >= 0")
     measured = np.all(np.isfinite(g.reshape(*shape, -1)), axis=2) & (gamma > 0)
     if np.count_nonzero(measured) < 2:
         raise InputValueError("data has fewer than 2 measurements with a positive confidence")
     ncomp = 1 if g.ndim == 2 else g.shape[2]
     current = _initial_sigma(g, measured) if sigma is None else check_real(sigma, "sigma", minimum=1e-6, maximum=1e6)
-    edge_map = None if edges is None else to_host(edges)
-    field = None
+    # On the device once; each draw starts from the last, which stays there (only its field comes back).
+    device_g, device_gamma = machine.to_device(g.astype(np.float32)), machine.to_device(gamma.astype(np.float32))
+    edge_map = device_pixels(edges, "edges", shape, np.uint8, machine)
+    start = None
     variances, history = [], []
     for k in range(int(iterations)):
         trial = replace(model, alpha=1.0 / (2.0 * current**2))
-        drawn = sample(g.astype(np.float32), confidence=gamma, edges=edge_map, kind=kind, model=trial,
-                       sweeps=int(sweeps), start=field, seed=seed * 100003 + k, machine=machine)
-        field = np.asarray(drawn.field)
+        drawn = sample(device_g, confidence=device_gamma, edges=edge_map, kind=kind, model=trial,
+                       sweeps=int(sweeps), start=start, seed=seed * 100003 + k, machine=machine)
+        start = drawn.field
+        field = to_host(drawn.field)
         residual = np.sum((field.reshape(*shape, -1) - g.reshape(*shape, -1)) ** 2, axis=2)
         variance = float(np.sum(gamma[measured] * residual[measured]) / (ncomp * np.count_nonzero(measured)))
         current = max(float(np.sqrt(variance)), 1e-6)

@@ -130,6 +130,8 @@ class PseudolikelihoodFit:
         Newton steps taken.
     converged : bool
         Whether the Newton decrement fell below the tolerance.
+    history : list of float
+        The objective per scored site (ridge included) at the start and after each Newton step.
     """
 
     theta: dict[str, float]
@@ -294,7 +296,8 @@ class _Lattice:
         parts: list[tuple[tuple[int, ...], tuple[float, np.ndarray, np.ndarray]]] = []
         n = self.height * self.width
         if pixels and self.kind == "smooth":
-            rows = self._sum_rows("gaussian_terms", 2, (n + CHUNK - 1) // CHUNK, self.d_f, self.d_g, self.d_gamma,
+            kernel = self.machine.kernel("pseudolikelihood", "gaussian_terms", NCOMP=self.ncomp, KIND=0, CHUNK=CHUNK)
+            rows = self._sum_rows(kernel, 2, (n + CHUNK - 1) // CHUNK, self.d_f, self.d_g, self.d_gamma,
                                   self.d_lh, self.d_lv, self.d_valid, np.float32(theta[0]), np.float32(theta[1]),
                                   *self.dims)
             parts.append(((0, 1), rows))
@@ -318,8 +321,8 @@ class _Lattice:
                               np.int64(sites))
 
     def _sum_rows(self, kernel: Any, k: int, items: int, *args: Any) -> tuple[float, np.ndarray, np.ndarray]:
-        if isinstance(kernel, str):
-            kernel = self.machine.kernel("pseudolikelihood", kernel, NCOMP=self.ncomp, KIND=0, CHUNK=CHUNK)
+        """Launch ``kernel`` over ``items`` chunks and add its rows (value, gradient, Hessian's upper
+        triangle) in float64; the output comes from the machine's buffer pool."""
         width = 1 + k + k * (k + 1) // 2
         out = self.machine.empty(items * width, np.float32)
         self.machine.launch(kernel, (items,), *args, out)

@@ -9,14 +9,13 @@ two levels and no lines is the Ising model, with more levels the Potts model.
 
 from __future__ import annotations
 
-import numpy as np
-
+from vmcl.cm import reduce as cm_reduce
 from vmcl.cm.core import ArrayLike, check_bool, check_choice, check_int, check_real, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.mrf.energy import KINDS, EnergyModel
-from vmcl.mrf.inputs import device_data, device_pixels
-from vmcl.mrf.lattice import SWEEP_ORDER, Lattice, philox_key
+from vmcl.mrf.inputs import lattice_of
+from vmcl.mrf.lattice import SWEEP_ORDER, philox_key
 from vmcl.mrf.restore import Restoration
 
 __all__ = ["MAX_SWEEPS", "sample"]
@@ -87,28 +86,12 @@ def sample(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Array
     check_int(sweeps, "sweeps", minimum=1, maximum=MAX_SWEEPS)
     check_bool(lines, "lines")
     check_int(seed, "seed", minimum=0, maximum=2**64 - 1)
-    g, host = device_data(data, machine)
-    height, width = g.shape[:2]
-    if kind == "constant" and g.ndim == 3 and g.shape[2] != 1:
-        raise InputValueError(f"kind='constant' takes scalar data (H, W), got shape {g.shape}")
-    gamma = device_pixels(confidence, "confidence", (height, width), np.float32, machine)
-    e = device_pixels(edges, "edges", (height, width), np.uint8, machine)
-    first = None
-    if start is not None:
-        first, _ = device_data(start, machine, "start")
-        if first.shape != g.shape:
-            raise InputValueError(f"start must have the data's shape {g.shape}, got {first.shape}")
-    lattice = Lattice(machine, g, gamma, e, kind, model, first)
-    if first is None and not float(lattice.w.get().max()) > 0:
+    lattice, host = lattice_of(data, confidence, edges, start, kind, model, machine)
+    if start is None and not float(cm_reduce.reduce(lattice.w, "max", machine=machine).get()) > 0:
         raise InputValueError("data has no value with a positive confidence and no start is given: "
                               "nothing says where the field begins")
     order = SWEEP_ORDER if lines else tuple(step for step in SWEEP_ORDER if step[0] == "f")
     key = philox_key(int(seed))
     for k in range(int(sweeps)):
         lattice.sweep("sample", float(temperature), k, key, order)
-    total = lattice.energy()
-    line_h, line_v = lattice.lines()
-    if host:
-        return Restoration(lattice.f.get().reshape(g.shape), line_h.get().astype(bool), line_v.get().astype(bool),
-                           total, int(sweeps))
-    return Restoration(lattice.f, line_h, line_v, total, int(sweeps))
+    return Restoration.read(lattice, int(sweeps), host)

@@ -15,8 +15,10 @@ import pyopencl.array as cl_array
 from vmcl.cm.core import field
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
+from vmcl.mrf.energy import EnergyModel
+from vmcl.mrf.lattice import Lattice
 
-__all__ = ["device_data", "device_pixels"]
+__all__ = ["device_data", "device_pixels", "lattice_of"]
 
 
 def device_data(data: Any, machine: Machine, name: str = "data") -> tuple[cl_array.Array, bool]:
@@ -54,3 +56,24 @@ def device_pixels(x: Any, name: str, shape: tuple[int, int], dtype: type, machin
     if device.shape != shape:
         raise InputValueError(f"{name} must have the data's shape {shape}, got {device.shape}")
     return device
+
+
+def lattice_of(data: Any, confidence: Any, edges: Any, start: Any, kind: str, model: EnergyModel,
+               machine: Machine) -> tuple[Lattice, bool]:
+    """The checked arguments on the device as a :class:`Lattice`, and whether the data came from the host.
+
+    The data as :func:`device_data` takes it (scalar for the constant kind), the confidence and edges as
+    :func:`device_pixels` takes them, the start of the data's shape.
+    """
+    g, host = device_data(data, machine)
+    height, width = g.shape[:2]
+    if kind == "constant" and g.ndim == 3 and g.shape[2] != 1:
+        raise InputValueError(f"kind='constant' takes scalar data (H, W), got shape {g.shape}")
+    gamma = device_pixels(confidence, "confidence", (height, width), np.float32, machine)
+    e = device_pixels(edges, "edges", (height, width), np.uint8, machine)
+    first = None
+    if start is not None:
+        first, _ = device_data(start, machine, "start")
+        if first.shape != g.shape:
+            raise InputValueError(f"start must have the data's shape {g.shape}, got {first.shape}")
+    return Lattice(machine, g, gamma, e, kind, model, first), host

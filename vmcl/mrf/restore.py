@@ -26,7 +26,7 @@ from vmcl.cm.core import ArrayLike, check_choice, check_int, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.mrf.energy import KINDS, EnergyModel, host_field
-from vmcl.mrf.inputs import device_data, device_pixels
+from vmcl.mrf.inputs import lattice_of
 from vmcl.mrf.lattice import Lattice
 from vmcl.mrf.solvers import SOLVERS
 
@@ -64,6 +64,16 @@ class Restoration:
     line_v: ArrayLike
     energy: float
     sweeps: int
+
+    @classmethod
+    def read(cls, lattice: Lattice, sweeps: int, host: bool) -> Restoration:
+        """The lattice's state after ``sweeps`` sweeps: NumPy arrays (lines as bool) when the data came
+        from the host, the device arrays otherwise."""
+        total = lattice.energy()
+        line_h, line_v = lattice.lines()
+        if host:
+            return cls(lattice.f.get(), line_h.get().astype(bool), line_v.get().astype(bool), total, sweeps)
+        return cls(lattice.f, line_h, line_v, total, sweeps)
 
 
 def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: ArrayLike | None = None,
@@ -155,27 +165,10 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
     check_int(seed, "seed", minimum=0, maximum=2**64 - 1)
     if model.alpha <= 0:
         raise InputValueError("model.alpha must be > 0: without the data term nothing anchors the field")
-    g, host = device_data(data, machine)
-    height, width = g.shape[:2]
-    if kind == "constant" and g.ndim == 3 and g.shape[2] != 1:
-        raise InputValueError(f"kind='constant' takes scalar data (H, W), got shape {g.shape}")
-    gamma = device_pixels(confidence, "confidence", (height, width), np.float32, machine)
-    e = device_pixels(edges, "edges", (height, width), np.uint8, machine)
-    first = None
-    if start is not None:
-        first, _ = device_data(start, machine, "start")
-        if first.shape != g.shape:
-            raise InputValueError(f"start must have the data's shape {g.shape}, got {first.shape}")
-    lattice = Lattice(machine, g, gamma, e, kind, model, first)
+    lattice, host = lattice_of(data, confidence, edges, start, kind, model, machine)
     if not float(cm_reduce.reduce(lattice.w, "max", machine=machine).get()) > 0:
         raise NothingToRestore("data has no value with a positive confidence: nothing to restore")
-    sweeps = solver.solve(lattice, schedule, int(seed))
-    total = lattice.energy()
-    line_h, line_v = lattice.lines()
-    if host:
-        return Restoration(lattice.f.get().reshape(np.shape(data)), line_h.get().astype(bool),
-                           line_v.get().astype(bool), total, sweeps)
-    return Restoration(lattice.f, line_h, line_v, total, sweeps)
+    return Restoration.read(lattice, solver.solve(lattice, schedule, int(seed)), host)
 
 
 def boundary_map(line_h: np.ndarray, line_v: np.ndarray) -> np.ndarray:
