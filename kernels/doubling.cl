@@ -33,21 +33,34 @@ __kernel void jump_step(__global const int *value, __global const int *pointer,
     pointer_out[i] = pointer[p];
 }
 
-/* prev[next[i]] = i (next is a permutation on rings); the principal's predecessor link is cut by
- * making the principal point to itself, so ranking along prev measures the distance from it. */
-__kernel void reverse_ring(__global const int *next, __global const int *principal,
-                           __global int *prev, __global int *rank, long n)
+/* prev[next[i]] = i: the rings walked backwards. Every node starts as its own window's largest key,
+ * at distance 0. */
+__kernel void ring_init(__global const int *next, __global const int *key, __global int *prev,
+                        __global int *top, __global int *distance, long n)
 {
     long i = get_global_id(0);
     if (i >= n) return;
-    int j = next[i];
-    if (principal[j] == j) {
-        prev[j] = j;
-        rank[j] = 0;
-    } else {
-        prev[j] = (int)i;
-        rank[j] = 1;
-    }
+    prev[next[i]] = (int)i;
+    top[i] = key[i];
+    distance[i] = 0;
+}
+
+/* One doubling step backwards along a ring: node i knows the largest key among itself and the span - 1
+ * nodes behind it, and how far behind it lies; the node span behind knows the same of the span nodes
+ * before those. The larger wins, the nearer on a tie (the same node met again round a short ring), so
+ * once span reaches the ring's length every node holds its ring's principal and its distance from it
+ * (going forwards from the principal to i is going backwards from i to it). */
+__kernel void principal_step(__global const int *top, __global const int *distance, __global const int *prev,
+                             __global int *top_out, __global int *distance_out, __global int *prev_out,
+                             int span, long n)
+{
+    long i = get_global_id(0);
+    if (i >= n) return;
+    int p = prev[i];
+    int mine = top[i], theirs = top[p];
+    top_out[i] = max(mine, theirs);
+    distance_out[i] = theirs > mine ? distance[p] + span : distance[i];
+    prev_out[i] = prev[p];
 }
 
 /* Lists: tails (next = -1) point to themselves with rank 0, every other node has rank 1. */

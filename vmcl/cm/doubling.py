@@ -86,31 +86,52 @@ def rank(next: ArrayLike, *, machine: Machine | None = None) -> tuple[ArrayLike,
     return result(distance, host), result(tail, host)
 
 
-def principal(next: ArrayLike, *, machine: Machine | None = None) -> tuple[ArrayLike, ArrayLike]:
-    """The principal (largest address) of every ring, and each node's distance from it.
+def principal(next: ArrayLike, *, keys: ArrayLike | None = None, check: bool = True,
+              machine: Machine | None = None) -> tuple[ArrayLike, ArrayLike]:
+    """The principal (largest address, or largest key) of every ring, and each node's distance from it.
 
     Parameters
     ----------
     next : int32 array (n,)
         A permutation: next[i] is the node after i, so the nodes form disjoint rings.
+    keys : int32 array (n,), optional
+        Distinct values that rank the nodes: the principal of a ring is its node of largest key. Default:
+        the addresses themselves (the paper's principal). Keys let a caller choose which node of a ring
+        is its principal (vmcl.group.curves makes a curve's endpoint the principal of its ring).
 
     Returns
     -------
     principal : int32 (n,)
-        The largest address in i's ring.
+        The largest address (or key) in i's ring.
     distance : int32 (n,)
         Number of ``next`` steps from the principal to i (0 at the principal).
     """
     machine = machine_for(machine)
-    data, host = _pointers(next, machine, lowest=0)
+    if not check_bool(check, "check") and isinstance(next, cl_array.Array):
+        data, host = field(next, "next", machine, ndims=(1,), dtypes=(np.int32,))
+    else:
+        data, host = _pointers(next, machine, lowest=0)
     if host and np.bincount(np.asarray(next), minlength=data.size).max() != 1:
         raise InputValueError("next must be a permutation (every node the successor of exactly one node) to form rings")
     n = data.size
-    addresses = machine.to_device(np.arange(n, dtype=np.int32))
-    top, _ = _jump(machine, addresses, data, 1)
-    prev, distance = machine.empty(n, np.int32), machine.empty(n, np.int32)
-    machine.launch(machine.kernel("doubling", "reverse_ring"), (n,), data, top, prev, distance, np.int64(n))
-    distance, _ = _jump(machine, distance, prev, 0)
+    if keys is None:
+        key = machine.to_device(np.arange(n, dtype=np.int32))
+    else:
+        key, key_host = field(keys, "keys", machine, ndims=(1,), dtypes=(np.int32,))
+        if key.size != n:
+            raise InputValueError(f"keys must have one value per node ({n}), got {key.size}")
+        if key_host and np.unique(np.asarray(keys)).size != n:
+            raise InputValueError("keys must be distinct")
+    # One pass backwards: each node carries the largest key it has seen and how far behind it lies, so the
+    # principal and the distances come from the same ceil(log2 n) steps.
+    buffers = [[machine.empty(n, np.int32) for _ in range(3)] for _ in range(2)]
+    top, distance, prev = buffers[0]
+    machine.launch(machine.kernel("doubling", "ring_init"), (n,), data, key, prev, top, distance, np.int64(n))
+    step = machine.kernel("doubling", "principal_step")
+    for k in range(_steps(n)):
+        target = buffers[(k + 1) % 2]
+        machine.launch(step, (n,), top, distance, prev, *target, np.int32(1 << k), np.int64(n))
+        top, distance, prev = target
     return result(top, host), result(distance, host)
 
 

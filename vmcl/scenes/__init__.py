@@ -52,7 +52,9 @@ Modules
 - :mod:`~vmcl.scenes.discontinuities`: the ground-truth labels on the dual lattice and the pixel grid;
 - :mod:`~vmcl.scenes.rendering`: :func:`render` and the :class:`Scene` it returns;
 - :mod:`~vmcl.scenes.sequences`: :func:`render_sequence`, N frames of a moving world (:func:`advance`);
-- :mod:`~vmcl.scenes.presets`: the ready-made worlds, :func:`preset` and :data:`PRESETS`.
+- :mod:`~vmcl.scenes.presets`: the ready-made worlds, :func:`preset` and :data:`PRESETS`;
+- :mod:`~vmcl.scenes.occlusion`: 2-D occlusion scenes, opaque grey polygons stacked in depth
+  (:func:`render_occlusion`, :func:`occlusion_scene`), with every junction (T, L, ...) exact.
 
 References
 ----------
@@ -66,6 +68,7 @@ discontinuities", IEEE SMC 19(6), 1989.
 # Label is not re-exported in __all__ (its home is vmcl.labels), but scenes.Label has always reached it and
 # the render example and the README use that spelling.
 from vmcl.labels import Label as Label
+from vmcl.scenes.occlusion import Junction, OcclusionScene, occlusion_scene, render_occlusion
 from vmcl.scenes.presets import PRESETS, preset
 from vmcl.scenes.rendering import Scene, render
 from vmcl.scenes.sequences import advance, render_sequence
@@ -76,16 +79,20 @@ __all__ = [
     "Body",
     "Camera",
     "Face",
+    "Junction",
     "Light",
     "Mark",
     "Motion",
+    "OcclusionScene",
     "Scene",
     "Texture",
     "World",
     "advance",
     "box",
     "fold",
+    "occlusion_scene",
     "preset",
     "render",
+    "render_occlusion",
     "render_sequence",
 ]

@@ -1,0 +1,307 @@
+"""Edge pixels linked into curves on the machine, with each curve's length, curvature and strength.
+
+Seed section "Saliency, grouping, and segmentation": the saliency operation works on curves, not pixels.
+Each edge pixel finds its neighbours among the edge pixels (mixed adjacency: a diagonal neighbour only
+where no 4-neighbour shares the corner, so a one-pixel-thin staircase is a chain, not a string of
+triangles). Pixels with three or more links are branch pixels, where curves meet: they split the curves
+and are where the junctions are (:mod:`vmcl.group.junctions`). Every other edge pixel has at most two
+links, so the curve pixels form paths and closed loops. Each curve is walked both ways as a ring of
+"tour" nodes, and distance doubling over the rings (:func:`vmcl.cm.doubling.principal`, the paper's use
+of it) gives every pixel its curve (the ring's principal) and its arc position in O(log n) steps.
+
+The host then orders the pixels along their curves and measures each curve: its length (steps of 1 and
+sqrt 2), its curvature (the turning of the tangent of the positions smoothed along the arc), its mean
+gradient magnitude and its end tangents.
+
+Coordinates are (x, y): x the column, y the row, as image pixels are addressed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import NamedTuple, overload
+
+import numpy as np
+import pyopencl.array as cl_array
+
+from vmcl.cm import doubling
+from vmcl.cm.core import ArrayLike, check_real, field, machine_for
+from vmcl.cm.scan import exclusive_sum_into
+from vmcl.errors import InputValueError
+from vmcl.machine import Machine
+
+__all__ = ["BRANCH", "Curve", "Curves", "link_edges"]
+
+BRANCH = -2
+"""The value :attr:`Curves.labels` holds at branch pixels (off the edges: -1)."""
+
+_TANGENT_SPAN = 5  # pixels back from an end along which its tangent is measured
+_SQRT2 = math.sqrt(2.0)
+
+
+@dataclass(frozen=True)
+class Curve:
+    """One curve of :class:`Curves`.
+
+    Attributes
+    ----------
+    points : int32 (n, 2)
+        Its pixels (x, y) in arc order.
+    closed : bool
+        A loop (its last pixel links back to its first).
+    length : float
+        Arc length in pixels (steps of 1 along the axes, sqrt 2 on diagonals; a loop's closing step counted).
+    mean_curvature : float
+        Mean |curvature| in radians per pixel (the tangent's total turning over the length).
+    total_curvature : float
+        The tangent's total turning, in radians.
+    magnitude : float
+        Mean gradient magnitude over the pixels (NaN when no magnitude was given).
+    tangents : float64 (2, 2)
+        Unit tangents pointing out of the curve at its first and last pixel (NaN for loops and single pixels).
+    """
+
+    points: np.ndarray
+    closed: bool
+    length: float
+    mean_curvature: float
+    total_curvature: float
+    magnitude: float
+    tangents: np.ndarray
+
+
+@dataclass(frozen=True)
+class Curves:
+    """What :func:`link_edges` returns: the curves as per-pixel maps and as a host sequence of :class:`Curve`.
+
+    Attributes
+    ----------
+    labels : int32 (H, W)
+        The curve index of each curve pixel, :data:`BRANCH` (-2) at branch pixels, -1 off the edges;
+        NumPy for NumPy input, a device array for device input.
+    position : int32 (H, W)
+        Each curve pixel's arc position (0 at its curve's first pixel), -1 elsewhere; like ``labels``.
+    tangent : float32 (H, W)
+        Each curve pixel's tangent direction in radians (atan2(dy, dx), pointing along increasing arc
+        position), from the positions smoothed along the arc; NaN elsewhere; like ``labels``.
+    points : int32 (N, 2)
+        Every curve pixel (x, y), curve after curve, each in arc order; curve i holds
+        ``points[offsets[i]:offsets[i + 1]]``.
+    offsets : int64 (C + 1,)
+    closed, length, mean_curvature, total_curvature, magnitude : arrays (C,)
+        Per curve, as :class:`Curve` describes.
+    tangents : float64 (C, 2, 2)
+        Out-pointing unit tangents at each curve's first and last pixel.
+    branches : int32 (B, 2)
+        The branch pixels (x, y), in raster order.
+
+    Curves are numbered in the raster order of their principal (for an open curve, the end it starts at:
+    of its two ends, the one later in raster order).
+    """
+
+    labels: ArrayLike
+    position: ArrayLike
+    tangent: ArrayLike
+    points: np.ndarray
+    offsets: np.ndarray
+    closed: np.ndarray
+    length: np.ndarray
+    mean_curvature: np.ndarray
+    total_curvature: np.ndarray
+    magnitude: np.ndarray
+    tangents: np.ndarray
+    branches: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.offsets) - 1
+
+    def __getitem__(self, i: int) -> Curve:
+        if not -len(self) <= i < len(self):
+            raise IndexError(f"curve {i} out of range for {len(self)} curves")
+        i %= len(self)
+        return Curve(self.points[self.offsets[i]:self.offsets[i + 1]], bool(self.closed[i]), float(self.length[i]),
+                     float(self.mean_curvature[i]), float(self.total_curvature[i]), float(self.magnitude[i]),
+                     self.tangents[i])
+
+    def __iter__(self) -> Iterator[Curve]:
+        return (self[i] for i in range(len(self)))
+
+    @property
+    def sizes(self) -> np.ndarray:
+        """The number of pixels of each curve."""
+        return np.diff(self.offsets)
+
+    def curve_of_points(self) -> np.ndarray:
+        """The curve index of each row of :attr:`points`."""
+        return np.repeat(np.arange(len(self)), self.sizes)
+
+
+@overload
+def link_edges(edges: np.ndarray, *, magnitude: np.ndarray | None = None, smoothing: float = 2.0,
+               machine: Machine | None = None) -> Curves: ...
+@overload
+def link_edges(edges: cl_array.Array, *, magnitude: cl_array.Array | None = None, smoothing: float = 2.0,
+               machine: Machine | None = None) -> Curves: ...
+def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothing: float = 2.0,
+               machine: Machine | None = None) -> Curves:
+    """Link the pixels of an edge map into curves, split at branch pixels.
+
+    Parameters
+    ----------
+    edges : (H, W) bool or uint8 array (non-zero is an edge), NumPy or device
+        E.g. :func:`vmcl.early.edges.canny`'s output.
+    magnitude : (H, W) float32 array, optional
+        The gradient magnitude the edges came from (``canny(..., return_gradient=True)``): each curve's
+        mean is its strength.
+    smoothing : float
+        Width (Gaussian sigma, in pixels along the arc) of the smoothing of the positions before the
+        tangent and curvature are measured, >= 0; 0 takes the pixels as they are.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    Curves
+        Maps (NumPy or device, as ``edges`` came) and per-curve arrays on the host.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ring = np.zeros((16, 16), bool); ring[4, 4:12] = ring[11, 4:12] = ring[4:12, 4] = ring[4:12, 11] = True
+    >>> found = link_edges(ring)
+    >>> len(found), bool(found.closed[0]), int(found.sizes[0])
+    (1, True, 28)
+    """
+    machine = machine_for(machine)
+    if isinstance(edges, np.ndarray) and edges.dtype == np.bool_:
+        edges = edges.view(np.uint8)
+    mask, host = field(edges, "edges", machine, ndims=(2,), dtypes=(np.uint8,))
+    smoothing = check_real(smoothing, "smoothing", minimum=0)
+    strength = None
+    if magnitude is not None:
+        strength, _ = field(magnitude, "magnitude", machine, ndims=(2,), dtypes=(np.float32,))
+        if strength.shape != mask.shape:
+            raise InputValueError(f"magnitude has shape {strength.shape}, edges {mask.shape}: they must match")
+    found = _link_on_device(machine, mask, strength, smoothing)
+    curves = _measure(found, mask.shape)
+    if not host:
+        curves = _with_device_maps(curves, machine)
+    return curves
+
+
+class _Linked(NamedTuple):
+    """The device's answer: every curve pixel's flat address, curve key, arc position, loop flag, gradient
+    magnitude (NaN without one), the tangent's turn and the step to the next pixel, the tangent's direction,
+    and the branch
+    pixels' flat addresses."""
+
+    pixel: np.ndarray
+    curve: np.ndarray
+    position: np.ndarray
+    closed: np.ndarray
+    magnitude: np.ndarray
+    turn: np.ndarray
+    step: np.ndarray
+    angle: np.ndarray
+    branches: np.ndarray
+
+
+def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.Array | None,
+                    smoothing: float) -> _Linked:
+    height, width = mask.shape
+    n = mask.size
+    size = (width, height)
+    sizes = (np.int32(width), np.int32(height))
+    links, curve_links, branch = (machine.empty(mask.shape, np.uint8) for _ in range(3))
+    is_curve, index = machine.empty(n, np.int32), machine.empty(n, np.int32)
+    machine.launch(machine.kernel("curves", "link_pixels"), size, mask, links, *sizes)
+    machine.launch(machine.kernel("curves", "split_branches"), size, mask, links, curve_links, branch, is_curve,
+                   *sizes)
+    exclusive_sum_into(machine, is_curve, index)
+    total = machine.empty(1, np.int32)
+    machine.launch(machine.kernel("curves", "count_curve_pixels"), (1,), index, is_curve, total, np.int64(n))
+    count = int(total.get()[0])
+    if count == 0:
+        branches = np.flatnonzero(branch.get())
+        empty = np.zeros(0, np.int32)
+        nothing = np.zeros(0, np.float32)
+        return _Linked(empty, empty, empty, np.zeros(0, bool), nothing, nothing, nothing, nothing, branches)
+    if 4 * count >= 2**31:
+        raise InputValueError(f"edges holds {count} curve pixels; at most {2**29 - 1} can be linked")
+    next_node, key = machine.empty(2 * count, np.int32), machine.empty(2 * count, np.int32)
+    pixel = machine.empty(count, np.int32)
+    machine.launch(machine.kernel("curves", "tour"), size, curve_links, is_curve, index, next_node, key, pixel,
+                   *sizes, np.int32(count))
+    top, distance = doubling.principal(next_node, keys=key, check=False, machine=machine)
+    packed, forward, angle = machine.empty(8 * count, np.int32), machine.empty(count, np.int32), machine.empty(count, np.float32)
+    machine.launch(machine.kernel("curves", "arc_positions"), (count,), top, distance, pixel,
+                   mask if strength is None else strength, np.int32(strength is not None), forward, packed,
+                   np.int32(count))
+    weights = machine.to_device(_tangent_weights(smoothing))
+    machine.launch(machine.kernel("curves", "arc_tangents"), (count,), next_node, pixel, forward, weights, angle,
+                   np.int32(weights.size), np.int32(width), np.int32(count))
+    machine.launch(machine.kernel("curves", "arc_turns"), (count,), next_node, pixel, forward, angle, packed,
+                   np.int32(width), np.int32(count))
+    fields = packed.get().reshape(8, count)
+    branches = np.flatnonzero(branch.get())
+    real = fields[4:].view(np.float32)
+    return _Linked(fields[0], fields[1], fields[2], fields[3].astype(bool), real[0], real[1], real[2], real[3], branches)
+
+
+def _tangent_weights(smoothing: float) -> np.ndarray:
+    """The derivative of a Gaussian of width ``smoothing`` at 1, 2, ... 3 sigma along the arc (its
+    positive half; the kernel negates it behind); 0: the central difference."""
+    if smoothing == 0:
+        return np.ones(1, np.float32)
+    t = np.arange(1, int(math.ceil(3 * smoothing)) + 1)
+    return (t * np.exp(-0.5 * (t / smoothing) ** 2)).astype(np.float32)
+
+
+def _measure(found: _Linked, shape: tuple[int, int]) -> Curves:
+    height, width = shape
+    order = np.lexsort((found.position, found.curve))
+    pixel = found.pixel[order]
+    keys = found.curve[order]
+    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]]) if keys.size else np.zeros(0, np.int64)
+    offsets = np.r_[starts, keys.size].astype(np.int64)
+    points = np.stack([pixel % width, pixel // width], axis=1).astype(np.int32)
+    closed = found.closed[order][starts]
+    sizes = np.diff(offsets)
+    curve = np.repeat(np.arange(len(starts), dtype=np.int32), sizes)
+    labels = np.full(height * width, -1, np.int32)
+    position = np.full(height * width, -1, np.int32)
+    labels[pixel] = curve
+    labels[found.branches] = BRANCH
+    position[pixel] = found.position[order]
+    tangent = np.full(height * width, np.nan, np.float32)
+    tangent[found.pixel] = found.angle
+    if len(starts):
+        def per_curve(values: np.ndarray) -> np.ndarray:
+            return np.add.reduceat(values[order].astype(np.float64), starts)
+        length, total, magnitude = per_curve(found.step), per_curve(found.turn), per_curve(found.magnitude) / sizes
+    else:
+        length = total = magnitude = np.zeros(0)
+    mean = np.divide(total, length, out=np.zeros(len(starts)), where=length > 0)
+    branch_points = np.stack([found.branches % width, found.branches // width], axis=1).astype(np.int32)
+    return Curves(labels.reshape(height, width), position.reshape(height, width), tangent.reshape(height, width),
+                  points, offsets, closed, length, mean, total, magnitude, _end_tangents(points, offsets, closed),
+                  branch_points)
+
+
+def _end_tangents(points: np.ndarray, offsets: np.ndarray, closed: np.ndarray) -> np.ndarray:
+    """Unit tangents pointing out of each curve at its first and last pixel, along the chord to the pixel
+    a few steps in (NaN for loops and single pixels)."""
+    first, last = offsets[:-1], offsets[1:] - 1
+    span = np.minimum(_TANGENT_SPAN, last - first)
+    chords = np.stack([points[first] - points[first + span], points[last] - points[last - span]], axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        tangents = chords / np.linalg.norm(chords, axis=2, keepdims=True)
+    tangents[closed] = np.nan
+    return tangents
+
+
+def _with_device_maps(curves: Curves, machine: Machine) -> Curves:
+    maps = (machine.to_device(np.asarray(m)) for m in (curves.labels, curves.position, curves.tangent))
+    return Curves(*maps, curves.points, curves.offsets, curves.closed, curves.length, curves.mean_curvature,
+                  curves.total_curvature, curves.magnitude, curves.tangents, curves.branches)
