@@ -46,6 +46,7 @@ from vmcl.cm.core import check_choice, check_int, check_real
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
 from vmcl.early import boundary_probability, disparity_range, edges, motion, semiglobal, stereo
 from vmcl.errors import InputError, InputTypeError, InputValueError
+from vmcl.group import Grouping, group, saliency_strength, structural_saliency
 from vmcl.labels import CUES
 from vmcl.machine import Machine, on_device
 from vmcl.mrf import SOLVERS, NothingToRestore, Restoration, Settings, preset
@@ -54,11 +55,13 @@ from vmcl.result import Result
 
 __all__ = [
     "FLOAT_MARGIN",
+    "SALIENCY",
     "WARM_SCHEDULE",
     "ColourConfig",
     "Config",
     "CueData",
     "EdgesConfig",
+    "GroupingConfig",
     "LabelsConfig",
     "MotionConfig",
     "MrfConfig",
@@ -124,17 +127,79 @@ class EdgesConfig:
         Hysteresis thresholds on the gradient magnitude (image in [0, 1]); None: the noise rule.
     use_quantiles : bool
         The thresholds are quantiles of the gradient magnitudes.
+    saliency : {"none", "local", "structural"}
+        Which edges the MRFs are coupled to (the seed's saliency operation before the MRF stage uses
+        the intensity edges): "none" (default), all of Canny's; "local", those on curves of local
+        saliency at least ``grouping.threshold``; "structural", those of structural saliency at least
+        ``grouping.structural_threshold`` (:mod:`vmcl.group`).
     """
 
     sigma: float = 2.0
     low_threshold: float | None = None
     high_threshold: float | None = None
     use_quantiles: bool = False
+    saliency: str = "none"
 
     def __post_init__(self) -> None:
         _check_field_types("edges", self)
         check_real(self.sigma, "edges.sigma", above=0)
         _check_thresholds("edges", self.low_threshold, self.high_threshold, self.use_quantiles)
+        check_choice(self.saliency, "edges.saliency", SALIENCY)
+
+
+SALIENCY = ("none", "local", "structural")
+"""The choices of ``EdgesConfig.saliency``."""
+
+
+@dataclass(frozen=True)
+class GroupingConfig:
+    """The grouping stage (:func:`vmcl.group.group`): curves, their saliency, junctions and T-junction pairs.
+
+    The thresholds were fitted on the BSDS500 training images (benchmarks/grouping_fit.py): each is the
+    one that gave the best F-measure of the edges it keeps there.
+
+    Parameters
+    ----------
+    enabled : bool
+        Run the stage; the Result's ``grouping`` is None without it (``edges.saliency`` other than
+        "none" runs what it needs either way).
+    threshold : float
+        The local saliency (gradient magnitude times pixels**length_exponent, image in [0, 1]) a curve
+        needs to stay among the salient edges, >= 0.
+    length_exponent, curvature_scale : float
+        The local saliency's (:func:`vmcl.group.local_saliency.local_saliency`).
+    gap : float
+        The longest gap, in pixels, a broken T-junction's stem is followed across (>= 0).
+    alignment : float
+        How far (degrees) two T-junctions' stems may point off the line between them and still be paired.
+    structural_threshold : float
+        The structural saliency an edge pixel needs to stay among the structurally salient edges, >= 0.
+    iterations : int
+        The structural saliency network's iterations (>= 1).
+    gap_attenuation : float
+        Its attenuation per pixel of gap, in [0, 1].
+    """
+
+    enabled: bool = True
+    threshold: float = 0.0
+    length_exponent: float = 0.5
+    curvature_scale: float = 0.5
+    gap: float = 6.0
+    alignment: float = 20.0
+    structural_threshold: float = 0.0
+    iterations: int = 30
+    gap_attenuation: float = 0.85
+
+    def __post_init__(self) -> None:
+        _check_field_types("grouping", self)
+        check_real(self.threshold, "grouping.threshold", minimum=0)
+        check_real(self.length_exponent, "grouping.length_exponent", minimum=0)
+        check_real(self.curvature_scale, "grouping.curvature_scale", above=0)
+        check_real(self.gap, "grouping.gap", minimum=0)
+        check_real(self.alignment, "grouping.alignment", above=0, below=90)
+        check_real(self.structural_threshold, "grouping.structural_threshold", minimum=0)
+        check_int(self.iterations, "grouping.iterations", minimum=1)
+        check_real(self.gap_attenuation, "grouping.gap_attenuation", minimum=0, maximum=1)
 
 
 DENSE_MATCHERS = ("semiglobal", "intensity")
@@ -492,15 +557,16 @@ WARM_SCHEDULE = {"mf_t0": 0.43, "mf_factor": 0.6, "mf_steps": 3, "mf_iterations"
 "fast" schedule, one sweep each, then 2 ICM sweeps (5 sweeps against its 14). Its first temperature is
 cold enough that the carried field's lines form at once where its jumps are, and the field keeps them."""
 
-_SECTIONS = {"edges": EdgesConfig, "stereo": StereoConfig, "motion": MotionConfig, "colour": ColourConfig,
-             "texture": TextureConfig, "mrf": MrfConfig, "labels": LabelsConfig, "time": TimeConfig}
+_SECTIONS = {"edges": EdgesConfig, "grouping": GroupingConfig, "stereo": StereoConfig, "motion": MotionConfig,
+             "colour": ColourConfig, "texture": TextureConfig, "mrf": MrfConfig, "labels": LabelsConfig,
+             "time": TimeConfig}
 
 
 @dataclass(frozen=True)
 class Config:
     """Everything the machine can be told, with documented defaults; see each section's class.
 
-    Load one from TOML with :meth:`from_toml` (sections ``[edges]``, ``[stereo]``, ``[motion]``,
+    Load one from TOML with :meth:`from_toml` (sections ``[edges]``, ``[grouping]``, ``[stereo]``, ``[motion]``,
     ``[colour]``, ``[texture]``, ``[mrf]`` and ``[mrf.stereo]`` ... for the MRF settings' overrides, ``[labels]``); unknown keys
     are refused with a ValueError naming them, and values of the wrong type (each field's annotation: bool,
     int, float, str, None where allowed; true is not an integer) with a TypeError naming ``section.key``.
@@ -512,6 +578,7 @@ class Config:
     """
 
     edges: EdgesConfig = field(default_factory=EdgesConfig)
+    grouping: GroupingConfig = field(default_factory=GroupingConfig)
     stereo: StereoConfig = field(default_factory=StereoConfig)
     motion: MotionConfig = field(default_factory=MotionConfig)
     colour: ColourConfig = field(default_factory=ColourConfig)
@@ -662,7 +729,8 @@ class VisionMachine:
         the temporal terms on) goes through for these inputs, in order."""
         active = self.cues(right=right, next=next, rgb=rgb)
         carried = ["time"] if streaming and self.config.time.enabled else []
-        names = ["upload", *carried, "edges", "boundaries", *(cue.name for cue in active)]
+        grouping = ["grouping"] if self.config.grouping.enabled or self.config.edges.saliency != "none" else []
+        names = ["upload", *carried, "edges", *grouping, "boundaries", *(cue.name for cue in active)]
         for cue in active:
             names += [f"mrf {cue.name}"] + [stage for stage in [cue.refine_stage(self.config)] if stage]
         return names + ["integrate", "download"]
@@ -813,9 +881,13 @@ class _Run:
                                   "frame (a scene cut): this frame starts cold")
         with self.stage("edges"):
             e = self.c.edges
-            brightness = edges.canny(left, sigma=e.sigma, low_threshold=e.low_threshold,
-                                     high_threshold=e.high_threshold, use_quantiles=e.use_quantiles,
-                                     machine=self.m)
+            canny = edges.canny(left, sigma=e.sigma, low_threshold=e.low_threshold, high_threshold=e.high_threshold,
+                                use_quantiles=e.use_quantiles, return_gradient=True, machine=self.m)
+            brightness = canny.edges
+        self.grouping = None
+        if self.c.grouping.enabled or e.saliency != "none":
+            with self.stage("grouping"):
+                self.grouping, brightness = self.group(image, canny)
         with self.stage("boundaries"):
             image_boundaries = on_device(boundary_probability.boundary_probability(left, machine=self.m).probability)
         run = RunInputs(self.m, self.c, left, others_d.get("right"), others_d.get("next"), brightness)
@@ -868,10 +940,28 @@ class _Run:
         for cue in active:
             if cue.restored_as and cue.name in host_restored:
                 host[cue.restored_as] = host_restored[cue.name]
-        self.result = Result(image=image, edges=edge_map.astype(bool), support=host_support, labels=host_labels,
+        self.result = Result(image=image, edges=edge_map.astype(bool), grouping=self.grouping,
+                             support=host_support, labels=host_labels,
                              boundary_strength=host_strength, config=self.c, restored=host_restored, lines=host_lines, stages=self.stages,
                              kernels=self.m.timings(reset=True) if self.m.profile else {}, notes=self.notes,
                              **host)
+
+    def group(self, image: np.ndarray, canny: edges.CannyResult) -> tuple[Grouping, cl_array.Array]:
+        """The grouping of Canny's edges, and the edges the MRFs are coupled to (``edges.saliency``)."""
+        g = self.c.grouping
+        found = group(canny.edges, magnitude=canny.magnitude, image=image, threshold=g.threshold,
+                      length_exponent=g.length_exponent, curvature_scale=g.curvature_scale, gap=g.gap,
+                      alignment=g.alignment, machine=self.m)
+        saliency = self.c.edges.saliency
+        if saliency == "local":
+            return found, self.m.to_device(found.salient.astype(np.uint8))
+        if saliency == "structural":
+            network = structural_saliency(canny.edges, tangent=self.m.to_device(found.curves.tangent),
+                                          strength=saliency_strength(canny.edges, canny.magnitude, machine=self.m),
+                                          iterations=g.iterations, gap_attenuation=g.gap_attenuation, machine=self.m)
+            kept = (network.saliency.get() >= g.structural_threshold) & canny.edges.get().astype(bool)
+            return found, self.m.to_device(kept.astype(np.uint8))
+        return found, canny.edges
 
     @contextmanager
     def stage(self, name: str) -> Iterator[None]:

@@ -23,6 +23,7 @@ from vmcl.cm.core import real_host_array
 from vmcl.cues import registered
 from vmcl.early.filters import GREY_WEIGHTS
 from vmcl.errors import InputTypeError, InputValueError
+from vmcl.group import Grouping
 from vmcl.labels import Cue, Label
 from vmcl.pictures import to_uint8
 from vmcl.result import Result
@@ -31,7 +32,9 @@ __all__ = [
     "BRIGHTNESS_ONLY",
     "CUE_COLOURS",
     "LABEL_COLOURS",
+    "JUNCTION_COLOURS",
     "encode_png",
+    "grouping_image",
     "images",
     "images_with_captions",
     "labels_image",
@@ -47,6 +50,13 @@ CUE_COLOURS = {Cue.STEREO: (230, 40, 40), Cue.MOTION: (250, 150, 20), Cue.COLOUR
 LABEL_COLOURS = {Label.DEPTH: (230, 40, 40), Label.ORIENTATION: (150, 60, 200), Label.ALBEDO: (40, 110, 240),
                  Label.SHADOW: (60, 60, 60), Label.SPECULAR: (240, 200, 0), Label.TEXTURE: (30, 180, 60)}
 """RGB of each physical label in the labelled cartoon."""
+
+JUNCTION_COLOURS = {"T": (230, 40, 40), "Y": (30, 160, 60), "arrow": (40, 110, 240), "L": (240, 170, 0),
+                    "X": (170, 40, 200)}
+"""RGB of each junction type in the grouping picture."""
+
+_PAIR_COLOUR = (0, 170, 190)
+_CURVE_DARK, _CURVE_LIGHT = np.array([150, 150, 150]), np.array([20, 20, 20])
 
 BRIGHTNESS_ONLY = (200, 200, 200)
 """RGB of brightness edges no cue supports (drawn under the cues)."""
@@ -124,6 +134,45 @@ def support_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
     return picture
 
 
+def grouping_image(image: np.ndarray, grouping: Grouping) -> np.ndarray:
+    """The grouping over the faded image: each curve in grey, darker the more locally salient it is (its
+    rank among the curves), the T-junction pairs joined by a cyan line, and each junction as a small
+    square coloured by type (:data:`JUNCTION_COLOURS`), a T's with a tick towards the occluding side.
+
+    Parameters
+    ----------
+    image : float (H, W) or (H, W, 3) in [0, 1]
+    grouping : vmcl.group.Grouping of the same image
+
+    Returns
+    -------
+    uint8 RGB (H, W, 3)
+    """
+    if not isinstance(grouping, Grouping):
+        raise InputTypeError(f"grouping must be a vmcl.group.Grouping, got {type(grouping).__name__}")
+    labels = np.asarray(grouping.curves.labels)
+    _overlay_argument(labels, "grouping.curves.labels", _image_argument(image, "image"))
+    picture = _faded(image)
+    count = len(grouping.saliency)
+    if count:
+        rank = np.empty(count)
+        rank[np.argsort(grouping.saliency, kind="stable")] = np.arange(count) / max(count - 1, 1)
+        on = labels >= 0
+        picture[on] = to_uint8(_CURVE_DARK + rank[labels[on], None] * (_CURVE_LIGHT - _CURVE_DARK))
+    junctions = grouping.junctions
+    for a, b in grouping.pairs:
+        cv2.line(picture, tuple(int(v) for v in np.rint(junctions.points[a])),
+                 tuple(int(v) for v in np.rint(junctions.points[b])), _PAIR_COLOUR, 1)
+    for point, kind, occluder in zip(junctions.points, junctions.kinds, junctions.occluder):
+        x, y = (int(v) for v in np.rint(point))
+        colour = JUNCTION_COLOURS[str(kind)]
+        cv2.rectangle(picture, (x - 1, y - 1), (x + 1, y + 1), colour, -1)
+        if kind == "T":
+            tip = np.rint(point + 4 * occluder).astype(int)
+            cv2.line(picture, (x, y), (int(tip[0]), int(tip[1])), colour, 1)
+    return picture
+
+
 def strength_image(strength: np.ndarray) -> np.ndarray:
     """The cartoon's soft map (:attr:`vmcl.result.Result.boundary_strength`) as a picture: black for 0,
     white for 1, the contours drawn dark on white paper as boundary benchmarks show them.
@@ -162,6 +211,8 @@ def images_with_captions(result: Result) -> dict[str, tuple[np.ndarray, str]]:
         out.update(cue.pictures(result))
     edges = np.where(result.edges, int(Cue.BRIGHTNESS), 0).astype(np.uint8)
     out["edges"] = (support_image(result.image, edges), _CAPTIONS["edges"])
+    if result.grouping is not None:
+        out["grouping"] = (grouping_image(result.image, result.grouping), _CAPTIONS["grouping"])
     return out
 
 
@@ -172,7 +223,10 @@ _CAPTIONS = {
     "support": "The cues' support: discontinuities by cue (red stereo, orange motion, blue colour, green texture; "
                "grey: brightness edges no cue supports) over the faded image",
     "input": "The left image",
-    "edges": "Canny's brightness edges",
+    "edges": "Canny's brightness edges (those the MRFs are coupled to)",
+    "grouping": "Grouping: the edge curves, darker the more salient; junctions by type (T red, with a tick "
+                "towards the occluding side; Y green; arrow blue; L orange; X purple); paired T-junctions "
+                "joined in cyan",
 }
 
 
@@ -191,6 +245,14 @@ def _table(header: Sequence[object], rows: Sequence[Sequence[object]]) -> str:
     head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>" for row in rows)
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def _grouping_table(grouping: Grouping) -> str:
+    counts = grouping.junctions.counts()
+    rows = [("curves", len(grouping.curves)), *((f"{kind} junctions", n) for kind, n in counts.items()),
+            ("T-junctions repaired across a gap", int(np.count_nonzero(grouping.junctions.gap > 0))),
+            ("T-junction pairs", len(grouping.pairs)), ("groups of curves", len(grouping.groups))]
+    return _table(("what", "count"), rows)
 
 
 def write_report(result: Result, folder: str | Path, *, title: str = "Vision Machine run",
@@ -243,6 +305,8 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
     for name, rows in (evaluation or {}).items():
         header, *body = rows
         sections.append(f"<h2>{html.escape(name)}</h2>" + _table(header, body))
+    if result.grouping is not None:
+        sections.append("<h2>Grouping</h2>" + _grouping_table(result.grouping))
     sections.append("<h2>Fields</h2>" + "".join(figures))
     stage_rows = [(name, f"{ms:.1f}") for name, ms in result.stages.items()] + [("total", f"{result.total_ms:.1f}")]
     sections.append("<h2>Time per stage</h2>" + _table(("stage", "wall ms"), stage_rows))

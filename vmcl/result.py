@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
+    from vmcl.group import Grouping
     from vmcl.pipeline import Config
 
 
@@ -28,6 +29,9 @@ class Result:
         The left image in [0, 1], as the machine saw it.
     edges : bool (H, W)
         Canny's brightness edges.
+    grouping : vmcl.group.Grouping or None
+        The edges' curves, their local saliency, junctions (T, Y, arrow, L, X), repairs and T-junction
+        pairs (None with ``grouping.enabled`` off).
     hue, colour_edges : float32 (H, W) (NaN where not valid), bool (H, W)
         The hue H = R / (R + G) and its albedo-edge candidates (RGB input only).
     density, texture_edges : float32 (H, W), bool (H, W)
@@ -84,6 +88,7 @@ class Result:
     labels: np.ndarray
     boundary_strength: np.ndarray
     config: Config
+    grouping: Grouping | None = None
     hue: np.ndarray | None = None
     colour_edges: np.ndarray | None = None
     density: np.ndarray | None = None

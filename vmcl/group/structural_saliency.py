@@ -41,7 +41,7 @@ from vmcl.errors import InputValueError
 from vmcl.group.curves import link_edges
 from vmcl.machine import Machine
 
-__all__ = ["StructuralSaliency", "structural_saliency"]
+__all__ = ["StructuralSaliency", "saliency_strength", "structural_saliency"]
 
 
 class StructuralSaliency(NamedTuple):
@@ -136,6 +136,31 @@ def structural_saliency(edges: ArrayLike, *, tangent: ArrayLike | None = None, s
     saliency = machine.empty(mask.shape, np.float32)
     machine.launch(machine.kernel("structural_saliency", "pixel_saliency"), (width, height), current, saliency, *sizes)
     return StructuralSaliency(result(saliency, host), result(current, host))
+
+
+def saliency_strength(edges: ArrayLike, magnitude: ArrayLike, *, machine: Machine | None = None) -> ArrayLike:
+    """Each edge pixel's gradient magnitude over the median magnitude on the edges (0 off the edges): a
+    ``strength`` for :func:`structural_saliency` that does not depend on the image's contrast.
+
+    Parameters
+    ----------
+    edges : (H, W) bool or uint8 array, NumPy or device
+    magnitude : (H, W) float32 array
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    float32 (H, W), NumPy or device as ``edges`` came.
+    """
+    machine = machine_for(machine)
+    if isinstance(edges, np.ndarray) and edges.dtype == np.bool_:
+        edges = edges.view(np.uint8)
+    mask, host = field(edges, "edges", machine, ndims=(2,), dtypes=(np.uint8,))
+    strength = _matching(magnitude, "magnitude", mask, machine).get()
+    on = mask.get().astype(bool)
+    median = float(np.median(strength[on])) if on.any() else 0.0
+    scaled = np.where(on, strength / median if median > 0 else on.astype(np.float32), 0).astype(np.float32)
+    return scaled if host else machine.to_device(scaled)
 
 
 def _matching(x: ArrayLike, name: str, mask: cl_array.Array, machine: Machine) -> cl_array.Array:
