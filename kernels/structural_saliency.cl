@@ -9,8 +9,9 @@
  *     E'(i) = sigma(i) + rho(i) max_j f(i, j) E(j)
  * sigma: the element's own strength (0 for virtual), rho: 1 for actual, the gap attenuation for virtual;
  * f(i, j) = exp(-curvature_scale * 2 alpha tan(alpha / 2) / ds), alpha the turn from i to j and ds the
- * element's length, the discrete form of the integral of squared curvature. After n iterations E(i) is
- * the saliency of the best curve of n elements that starts with i.
+ * element's length, the discrete form of the integral of squared curvature; a turn into or out of a
+ * gap is counted from the edge of the virtual element's 45-degree sector (within a gap, in full). After n iterations E(i) is the saliency of the best curve of n elements that
+ * starts with i.
  */
 #include "vmcl.h"
 
@@ -73,7 +74,9 @@ __kernel void prepare(__global const uchar *links, __global const float *tangent
             /* A virtual element stands for any direction within half a step's sector of its own (its
              * direction is only known to the grid's 45 degrees), so a turn into or out of a gap is
              * counted from the sector's edge. */
-            if (!actual || !((links[q] >> kk) & 1)) alpha = fmax(0.0f, alpha - M_PI_F / 8.0f);
+            /* Into or out of a gap only: within one, turns cost in full, lest a curve loop back through
+             * empty space and count its own pixels again. */
+            if (actual != ((links[q] >> kk) & 1)) alpha = fmax(0.0f, alpha - M_PI_F / 8.0f);
             f = alpha < M_PI_2_F ? exp(-curvature_scale * 2.0f * alpha * tan(0.5f * alpha) / ds) : 0.0f;
         }
         coupling[c * plane + e] = f;

@@ -1,6 +1,7 @@
 """NumPy oracles for the Connection Machine primitives, written for clarity, not speed."""
 
 import itertools
+import math
 
 import numpy as np
 
@@ -251,3 +252,111 @@ def pseudolikelihood(f, line_h, line_v, theta, *, data=None, confidence=None, ed
                 on = bool(lines[y, x])
                 total += np.logaddexp(0.0, de if on else -de)  # P(on) = 1 / (1 + e^dE)
     return total
+
+
+# --- grouping (vmcl.group) --------------------------------------------------------------------------
+
+STEPS = [(1, 0), (1, -1), (0, -1), (-1, -1), (-1, 0), (-1, 1), (0, 1), (1, 1)]  # E NE N NW W SW S SE
+
+
+def edge_links(mask):
+    """(H, W) uint8 link bits of an edge mask: 4-neighbours always, a diagonal one only where neither
+    pixel sharing its corner is an edge (mixed adjacency)."""
+    mask = np.asarray(mask, bool)
+    h, w = mask.shape
+    padded = np.pad(mask, 1)
+
+    def at(dx, dy):
+        return padded[1 + dy:1 + dy + h, 1 + dx:1 + dx + w]
+
+    links = np.zeros((h, w), np.uint8)
+    for k, (dx, dy) in enumerate(STEPS):
+        linked = mask & at(dx, dy)
+        if dx and dy:
+            linked &= ~at(dx, 0) & ~at(0, dy)
+        links |= (linked.astype(np.uint8) << k)
+    return links
+
+
+def trace_curves(mask):
+    """A plain tracer: the edge pixels with at most two links, split at the others (branch pixels), as a
+    set of frozensets of (x, y), plus the set of branch pixels. Components are found by walking the
+    links between curve pixels."""
+    links = edge_links(mask)
+    degree = np.vectorize(lambda b: bin(int(b)).count("1"))(links) if links.size else links
+    mask = np.asarray(mask, bool)
+    curve = mask & (degree <= 2)
+    seen = np.zeros(mask.shape, bool)
+    curves = set()
+    for y, x in zip(*np.nonzero(curve)):
+        if seen[y, x]:
+            continue
+        stack, members = [(x, y)], []
+        seen[y, x] = True
+        while stack:
+            cx, cy = stack.pop()
+            members.append((int(cx), int(cy)))
+            for k, (dx, dy) in enumerate(STEPS):
+                nx, ny = cx + dx, cy + dy
+                if links[cy, cx] >> k & 1 and curve[ny, nx] and not seen[ny, nx]:
+                    seen[ny, nx] = True
+                    stack.append((nx, ny))
+        curves.add(frozenset(members))
+    branches = {(int(x), int(y)) for y, x in zip(*np.nonzero(mask & (degree >= 3)))}
+    return curves, branches
+
+
+def structural_saliency(mask, tangent, strength, iterations, gap_attenuation, curvature_scale):
+    """Sha'ashua and Ullman's network in NumPy (float64), element for element as
+    kernels/structural_saliency.cl defines it; returns (pixel saliency (H, W), elements (8, H, W))."""
+    mask = np.asarray(mask, bool)
+    h, w = mask.shape
+    links = edge_links(mask)
+    step_angle = np.array([math.atan2(dy, dx) for dx, dy in STEPS])
+    ys, xs = np.mgrid[0:h, 0:w]
+    actual = np.stack([(links >> k) & 1 for k in range(8)]).astype(bool)
+
+    def element_angle(k, y, x):
+        t = tangent[y, x]
+        own = actual[k, y, x] & np.isfinite(t)
+        d = np.remainder(t - step_angle[k] + math.pi, 2 * math.pi) - math.pi
+        oriented = np.where(np.abs(d) > math.pi / 2, t + math.pi, t)
+        return np.where(own, oriented, step_angle[k])
+
+    def turn(a, b):
+        d = np.remainder(np.abs(a - b), 2 * math.pi)
+        return np.where(d > math.pi, 2 * math.pi - d, d)
+
+    sigma = np.zeros((8, h, w))
+    rho = np.zeros((8, h, w))
+    coupling = np.zeros((3, 8, h, w))
+    qx, qy = np.zeros((8, h, w), int), np.zeros((8, h, w), int)
+    for k, (dx, dy) in enumerate(STEPS):
+        inside = (xs + dx >= 0) & (xs + dx < w) & (ys + dy >= 0) & (ys + dy < h)
+        cx, cy = np.clip(xs + dx, 0, w - 1), np.clip(ys + dy, 0, h - 1)
+        qx[k], qy[k] = cx, cy
+        sigma[k] = np.where(actual[k], 0.5 * (strength + strength[cy, cx]), 0)
+        rho[k] = np.where(actual[k], 1.0, gap_attenuation)
+        own = element_angle(k, ys, xs)
+        ds = math.sqrt(2) if k % 2 else 1.0
+        for c in range(3):
+            kk = (k + c + 7) % 8
+            alpha = turn(own, element_angle(kk, cy, cx))
+            crossing = actual[k] != actual[kk, cy, cx]
+            alpha = np.where(crossing, np.maximum(0, alpha - math.pi / 8), alpha)
+            with np.errstate(invalid="ignore"):
+                f = np.where(alpha < math.pi / 2, np.exp(-curvature_scale * 2 * alpha * np.tan(alpha / 2) / ds), 0)
+            coupling[c, k] = np.where(inside, f, 0)
+    saliency = sigma.copy()
+    for _ in range(iterations - 1):
+        best = np.zeros((8, h, w))
+        for k in range(8):
+            for c in range(3):
+                kk = (k + c + 7) % 8
+                best[k] = np.maximum(best[k], coupling[c, k] * saliency[kk, qy[k], qx[k]])
+        saliency = sigma + rho * best
+    pixel = np.zeros((h, w))
+    for k in range(8):
+        back = np.max([saliency[(k + c) % 8] for c in (3, 4, 5)], axis=0)
+        pixel = np.maximum(pixel, saliency[k] + back)
+    return pixel, saliency

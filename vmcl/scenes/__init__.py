@@ -53,6 +53,8 @@ Modules
 - :mod:`~vmcl.scenes.rendering`: :func:`render` and the :class:`Scene` it returns;
 - :mod:`~vmcl.scenes.sequences`: :func:`render_sequence`, N frames of a moving world (:func:`advance`);
 - :mod:`~vmcl.scenes.presets`: the ready-made worlds, :func:`preset` and :data:`PRESETS`;
+- :mod:`~vmcl.scenes.clutter`: shapes in clutter, a closed smooth contour among random short segments
+  (:func:`clutter_display`), for structural saliency;
 - :mod:`~vmcl.scenes.occlusion`: 2-D occlusion scenes, opaque grey polygons stacked in depth
   (:func:`render_occlusion`, :func:`occlusion_scene`), with every junction (T, L, ...) exact.
 
@@ -68,6 +70,7 @@ discontinuities", IEEE SMC 19(6), 1989.
 # Label is not re-exported in __all__ (its home is vmcl.labels), but scenes.Label has always reached it and
 # the render example and the README use that spelling.
 from vmcl.labels import Label as Label
+from vmcl.scenes.clutter import ClutterDisplay, clutter_display
 from vmcl.scenes.occlusion import Junction, OcclusionScene, occlusion_scene, render_occlusion
 from vmcl.scenes.presets import PRESETS, preset
 from vmcl.scenes.rendering import Scene, render
@@ -78,6 +81,7 @@ __all__ = [
     "PRESETS",
     "Body",
     "Camera",
+    "ClutterDisplay",
     "Face",
     "Junction",
     "Light",
@@ -89,6 +93,7 @@ __all__ = [
     "World",
     "advance",
     "box",
+    "clutter_display",
     "fold",
     "occlusion_scene",
     "preset",
