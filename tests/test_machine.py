@@ -217,6 +217,11 @@ step = np.zeros((8, 8), np.float32)
 step[:, 4:] = 1.0
 fit_pseudolikelihood([Example(step + image, np.zeros((8, 7)), np.zeros((7, 8)), data=step)])
 fit_pseudolikelihood([Example(step)], kind="constant")
+from vmcl.group import link_edges, structural_saliency
+ring = np.zeros((12, 12), bool)
+ring[2, 2:10] = ring[9, 2:10] = ring[2:10, 2] = ring[2:10, 9] = True
+link_edges(ring)
+structural_saliency(ring, iterations=3)
 for record in records:
     print(f"{record.levelname}: {record.getMessage()}")
 print("built:", " ".join(sorted(built)))

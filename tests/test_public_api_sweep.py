@@ -260,6 +260,37 @@ TABLE: tuple[Entry, ...] = (
        kinds={"data": _A, "confidence": _OA, "segmentation": _A, "model": _O}),
     _e("vmcl.learn.examples:truth_example", truth=IMG, data=IMG, confidence=None, edges=MASK, valid=None, jump=1.0,
        kinds={"truth": _A, "jump": _N, "valid": _OA}),
+    # ------------------------------------------------------------------ group
+    _e("vmcl.group:link_edges", edges=MASK, magnitude=None, smoothing=2.0,
+       kinds={"edges": _A, "magnitude": _OA, "smoothing": _N, "machine": _M}),
+    _e("vmcl.group:structural_saliency", edges=MASK, tangent=None, strength=None, iterations=4, gap_attenuation=0.85,
+       curvature_scale=1.0, kinds={"edges": _A, "tangent": _OA, "strength": _OA, "iterations": _I,
+                                   "gap_attenuation": _N, "curvature_scale": _N, "machine": _M}),
+    _e("vmcl.group:saliency_strength", edges=MASK, magnitude=IMG, kinds={"edges": _A, "magnitude": _A, "machine": _M}),
+    _e("vmcl.group:find_junctions", curves=make("curves"), gap=6.0, min_length=5, corner=60.0, straight=25.0,
+       merge=3.0, kinds={"curves": _O, "gap": _N, "min_length": _I, "corner": _N, "straight": _N, "merge": _N}),
+    _e("vmcl.group:group_curves", junctions=make("junctions"), image=None, alignment=20.0, max_distance=100.0,
+       contrast=0.1, kinds={"junctions": _O, "image": _OA, "alignment": _N, "max_distance": _N, "contrast": _N}),
+    _e("vmcl.group:repair_edges", edges=MASK, junctions=make("junctions"), kinds={"edges": _A, "junctions": _O}),
+    _e("vmcl.group:local_saliency", curves=make("curves"), length_exponent=0.5, curvature_scale=0.5,
+       kinds={"curves": _O, "length_exponent": _N, "curvature_scale": _N}),
+    _e("vmcl.group:saliency_map", curves=make("curves"), values=make("curve_values"),
+       kinds={"curves": _O, "values": _A}),
+    _e("vmcl.group:salient_edges", curves=make("curves"), saliency=make("curve_values"), threshold=0.5,
+       kinds={"curves": _O, "saliency": _A, "threshold": _N}),
+    _e("vmcl.group:group", edges=MASK, magnitude=None, image=None, threshold=0.0, length_exponent=0.5,
+       curvature_scale=0.5, gap=6.0, alignment=20.0,
+       kinds={"edges": _A, "magnitude": _OA, "image": _OA, "threshold": _N, "length_exponent": _N,
+              "curvature_scale": _N, "gap": _N, "alignment": _N, "machine": _M}),
+    _e("vmcl.scenes:clutter_display", shape=tup(64, 64), segments=20, length=tup(5.0, 10.0), gaps=2, gap_length=3,
+       seed=0, kinds={"shape": _T, "segments": _I, "length": _T, "gaps": _I, "gap_length": _I, "seed": _I}),
+    # The scene's shape, polygons, seed and margin decide how many junctions it has, so valid changes of them
+    # change the result's structure; tests/test_scenes_occlusion.py checks their refusals.
+    _e("vmcl.scenes:render_occlusion", shape=tup(32, 32), polygons=3, seed=0, noise=0.0, antialias=True, margin=2,
+       kinds={"noise": _N, "antialias": _B}),
+    _e("vmcl.scenes:occlusion_scene", polygons=make("polygons"), greys=[0.2, 0.8], shape=tup(32, 32),
+       background=0.5, noise=0.0, seed=0, antialias=True, margin=2,
+       kinds={"background": _N, "noise": _N, "antialias": _B}),
     _e("vmcl.fitted:check_writable", path=path("missing"), kinds={"path": _P}),
     _e("vmcl.fitted:check_fitted", values={"edges": {"sigma": 1.0}}, source="x.toml",
        kinds={"values": "mapping"}),
@@ -396,6 +427,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.report:strength_image", strength=arr((16, 16), "float32", "rand"), kinds={"strength": _A}),
     _e("vmcl.pictures:field_image", values=IMG, kinds={"values": _A}),
     _e("vmcl.pictures:to_uint8", rgb=arr((16, 16, 3)), kinds={"rgb": _A}),
+    _e("vmcl.report:grouping_image", image=IMG, grouping=make("grouping"), kinds={"image": _A, "grouping": _O}),
     _e("vmcl.report:encode_png", rgb=arr((16, 16, 3), "uint8", "randint:256"), kinds={"rgb": _A}),
     _e("vmcl.report:images", result=make("result"), kinds={"result": _O}),
     _e("vmcl.report:images_with_captions", result=make("result"), kinds={"result": _O}),
@@ -406,7 +438,12 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.pipeline:Config.from_dict", values={"edges": {"sigma": 1.5}}, kinds={"values": "mapping"},
        aliases={"values": ("config", "edges.", "stereo.", "motion.", "colour.", "texture.", "mrf.", "labels.")}),
     _e("vmcl.pipeline:EdgesConfig", sigma=2.0, low_threshold=None, high_threshold=None, use_quantiles=False,
-       kinds={"sigma": _N, "low_threshold": _ON, "high_threshold": _ON, "use_quantiles": _B}),
+       saliency="none", kinds={"sigma": _N, "low_threshold": _ON, "high_threshold": _ON, "use_quantiles": _B,
+                               "saliency": _C}),
+    _e("vmcl.pipeline:GroupingConfig", enabled=True, threshold=0.5, length_exponent=0.5, curvature_scale=0.5, gap=6.0,
+       alignment=20.0, structural_threshold=5.0, iterations=30, gap_attenuation=0.85,
+       kinds={"enabled": _B, "threshold": _N, "length_exponent": _N, "curvature_scale": _N, "gap": _N,
+              "alignment": _N, "structural_threshold": _N, "iterations": _I, "gap_attenuation": _N}),
     _e("vmcl.pipeline:StereoConfig", d_min=None, d_max=None, max_disparity=0.05, patch=11, backfill_floor=0.9,
        kinds={"d_min": _I, "d_max": _I, "max_disparity": _N, "patch": _I, "backfill_floor": _N}),
     _e("vmcl.pipeline:MotionConfig", delta=4, patch=11, levels=None, features="brightness", confidence_floor=0.7,
@@ -502,6 +539,9 @@ EXEMPT = {
     "vmcl.learn.cue_fit:fit_cue", "vmcl.learn.cue_fit:cue_examples",
     # Hash and write what vmcl itself made (fit_cue's tables, the files it read); tests/test_learn_fit.py.
     "vmcl.fitted:parameters_sha256", "vmcl.fitted:files_sha256", "vmcl.fitted:code_sha256", "vmcl.fitted:write_fitted",
+    # Records of vmcl.group and the scenes it is tested on, made by the calls above.
+    "vmcl.group:Curve", "vmcl.group:Curves", "vmcl.group:Junctions", "vmcl.group:Grouping",
+    "vmcl.group:StructuralSaliency", "vmcl.scenes:ClutterDisplay", "vmcl.scenes:Junction", "vmcl.scenes:OcclusionScene",
 }
 
 PUBLIC_MODULES = (
@@ -513,7 +553,7 @@ PUBLIC_MODULES = (
     "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pictures", "vmcl.pipeline", "vmcl.result", "vmcl.machine",
     "vmcl.stereo_evaluation", "vmcl.distributed", "vmcl.boundary_evaluation", "vmcl.flow_evaluation",
     "vmcl.frame_sources", "vmcl.sequence_output", "vmcl.temporal", "vmcl.learn", "vmcl.learn.examples",
-    "vmcl.learn.cue_fit", "vmcl.fitted",
+    "vmcl.learn.cue_fit", "vmcl.fitted", "vmcl.group",
 )
 
 
@@ -1007,6 +1047,13 @@ def _makers():
 
     return {
         "chain": lambda ctx: np.append(np.arange(1, 16, dtype=np.int32), np.int32(-1)),
+        "curves": _curves,
+        "grouping": lambda ctx: __import__("vmcl.group", fromlist=["group"]).group(
+            np.eye(16, dtype=bool) | np.eye(16, dtype=bool)[::-1], machine=ctx["machine"]),
+        "junctions": lambda ctx: __import__("vmcl.group", fromlist=["find_junctions"]).find_junctions(_curves(ctx)),
+        "curve_values": lambda ctx: np.linspace(0.0, 1.0, len(_curves(ctx))),
+        "polygons": lambda ctx: [np.array([[4.0, 4.0], [20.0, 4.0], [20.0, 20.0], [4.0, 20.0]]),
+                                 np.array([[12.0, 12.0], [28.0, 12.0], [28.0, 28.0], [12.0, 28.0]])],
         "ring": lambda ctx: np.roll(np.arange(16, dtype=np.int32), -1),
         "device_one": lambda ctx: ctx["machine"].to_device(np.ones(1, np.float32)),
         "dots": _dots,
@@ -1040,6 +1087,18 @@ def _makers():
         "evaluations": _evaluations,
         "stereo_sgbm": lambda ctx: __import__("vmcl.stereo_evaluation", fromlist=["stereo_sgbm"]).stereo_sgbm(16),
     }
+
+
+def _curves(ctx):
+    import numpy as np
+
+    from vmcl.group import link_edges
+
+    drawing = np.zeros((16, 16), bool)
+    drawing[8, 1:15] = True
+    drawing[2:8, 7] = True
+    drawing[12, 2:6] = True
+    return link_edges(drawing, machine=ctx["machine"])
 
 
 def _example(ctx):

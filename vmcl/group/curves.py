@@ -27,7 +27,7 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import doubling
-from vmcl.cm.core import ArrayLike, check_real, field, machine_for
+from vmcl.cm.core import WIDEST, ArrayLike, check_real, field, machine_for
 from vmcl.cm.scan import exclusive_sum_into
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
@@ -157,7 +157,7 @@ def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothin
         mean is its strength.
     smoothing : float
         Width (Gaussian sigma, in pixels along the arc) of the smoothing of the positions before the
-        tangent and curvature are measured, >= 0; 0 takes the pixels as they are.
+        tangent and curvature are measured, in [0, 32]; 0 takes the pixels as they are.
     machine : vmcl.Machine, optional
 
     Returns
@@ -177,7 +177,7 @@ def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothin
     if isinstance(edges, np.ndarray) and edges.dtype == np.bool_:
         edges = edges.view(np.uint8)
     mask, host = field(edges, "edges", machine, ndims=(2,), dtypes=(np.uint8,))
-    smoothing = check_real(smoothing, "smoothing", minimum=0)
+    smoothing = check_real(smoothing, "smoothing", minimum=0, maximum=WIDEST)
     strength = None
     if magnitude is not None:
         strength, _ = field(magnitude, "magnitude", machine, ndims=(2,), dtypes=(np.float32,))

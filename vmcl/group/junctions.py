@@ -29,8 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vmcl.cm.core import check_int, check_real, to_host
-from vmcl.errors import InputTypeError
+from vmcl.cm.core import check_int, check_real, real_host_array, to_host
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.group.curves import BRANCH, Curves
 
 __all__ = ["KINDS", "Junctions", "find_junctions", "group_curves", "repair_edges"]
@@ -70,7 +70,7 @@ class Junctions:
         otherwise.
     gap : float64 (J,)
         For a T found across a gap, the gap's length in pixels (0 where the curves touch).
-    fills : tuple of int32 (k, 2) arrays
+    fills : list of int32 (k, 2) arrays
         Per junction, the pixels (x, y) that close its gap (empty where there is none).
     """
 
@@ -81,7 +81,7 @@ class Junctions:
     stem: np.ndarray
     occluder: np.ndarray
     gap: np.ndarray
-    fills: tuple[np.ndarray, ...]
+    fills: list[np.ndarray]
 
     def __len__(self) -> int:
         return len(self.points)
@@ -150,7 +150,7 @@ class _Found:
         column = list(zip(*rows)) if rows else [[] for _ in range(8)]
         return Junctions(np.array(column[0], float).reshape(count, 2), np.array(column[1], dtype="<U5"), arms_out,
                          curves_out, np.array(column[4], np.int32), np.array(column[5], float).reshape(count, 2),
-                         np.array(column[6], float), tuple(column[7]))
+                         np.array(column[6], float), list(column[7]))
 
 
 def _turn(a: float, b: float) -> float:
@@ -355,7 +355,8 @@ def _first_hit(labels: np.ndarray, start: np.ndarray, tangent: np.ndarray, gap: 
     ``cone`` of its tangent, with its distance. A cone rather than a ray: Canny bends a stem towards the
     bar in the last pixels before it breaks, so the end's tangent points a little off."""
     height, width = labels.shape
-    reach = int(math.ceil(gap))
+    # No gap reaches farther than the image's diagonal, however long it is allowed to be.
+    reach = int(math.ceil(min(gap, math.hypot(height, width))))
     x0, y0 = max(0, start[0] - reach), max(0, start[1] - reach)
     window = labels[y0:min(height, start[1] + reach + 1), x0:min(width, start[0] + reach + 1)]
     ys, xs = np.nonzero((window != -1) & (window != own))
@@ -422,9 +423,12 @@ def _corners(curves: Curves, long_enough: np.ndarray, corner: float, found: _Fou
 
 def repair_edges(edges: np.ndarray, junctions: Junctions) -> np.ndarray:
     """``edges`` (a host bool (H, W) map) with every junction's gap filled (:attr:`Junctions.fills`)."""
-    mask = np.array(to_host(edges), dtype=bool)
-    if mask.ndim != 2:
-        raise InputTypeError(f"edges must be a 2-D map, got shape {mask.shape}")
+    if not isinstance(junctions, Junctions):
+        raise InputTypeError(f"junctions must be a vmcl.group.Junctions, got {type(junctions).__name__}")
+    mask = real_host_array(to_host(edges), "edges", ndims=(2,)).astype(bool)
+    for fill in junctions.fills:
+        if len(fill) and (fill.max(axis=0) >= mask.shape[::-1]).any():
+            raise InputValueError(f"edges ({mask.shape}) is smaller than the map the junctions were found in")
     for fill in junctions.fills:
         if len(fill):
             mask[fill[:, 1], fill[:, 0]] = True

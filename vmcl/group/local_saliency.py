@@ -15,8 +15,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from vmcl.cm.core import check_real, to_host
-from vmcl.errors import InputTypeError
+from vmcl.cm.core import check_real, real_host_array, to_host
+from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.group.curves import BRANCH, Curves
 
 __all__ = ["local_saliency", "salient_edges", "saliency_map"]
@@ -57,9 +57,9 @@ def saliency_map(curves: Curves, values: np.ndarray) -> np.ndarray:
     """Per-curve values painted onto the curves' pixels: float32 (H, W), 0 off the curves and on branch
     pixels (which belong to no one curve)."""
     curves = _curves(curves)
-    values = np.asarray(values, dtype=np.float64)
+    values = real_host_array(values, "values", ndims=(1,), empty=True).astype(np.float64)
     if values.shape != (len(curves),):
-        raise InputTypeError(f"values must hold one value per curve ({len(curves)}), got shape {values.shape}")
+        raise InputValueError(f"values must hold one value per curve ({len(curves)}), got shape {values.shape}")
     labels = np.asarray(to_host(curves.labels))
     painted = np.zeros(labels.shape, np.float32)
     on = labels >= 0
@@ -71,8 +71,13 @@ def salient_edges(curves: Curves, saliency: np.ndarray, threshold: float) -> np.
     """The edge map pruned to the curves whose saliency is at least ``threshold`` (bool (H, W)); branch
     pixels stay where a kept curve touches them."""
     threshold = check_real(threshold, "threshold", minimum=0)
+    curves = _curves(curves)
+    try:
+        painted = saliency_map(curves, saliency)
+    except InputError as error:
+        raise type(error)(str(error).replace("values", "saliency", 1)) from None
     labels = np.asarray(to_host(curves.labels))
-    keep = (saliency_map(curves, saliency) >= threshold) & (labels >= 0)
+    keep = (painted >= threshold) & (labels >= 0)
     branch = labels == BRANCH
     if branch.any():
         from scipy import ndimage

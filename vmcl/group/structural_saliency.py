@@ -43,7 +43,10 @@ from vmcl.errors import InputValueError
 from vmcl.group.curves import link_edges
 from vmcl.machine import Machine
 
-__all__ = ["StructuralSaliency", "saliency_strength", "structural_saliency"]
+__all__ = ["MAX_ITERATIONS", "StructuralSaliency", "saliency_strength", "structural_saliency"]
+
+MAX_ITERATIONS = 10_000
+"""The most iterations :func:`structural_saliency` runs: curves longer than any image's perimeter."""
 
 
 class StructuralSaliency(NamedTuple):
@@ -79,7 +82,8 @@ def structural_saliency(edges: ArrayLike, *, tangent: ArrayLike | None = None, s
         Each edge pixel's local strength, the elements' sigma (e.g. the gradient magnitude over its
         median on the edges); >= 0. Default: 1 on every edge pixel.
     iterations : int
-        Network iterations, >= 1: the length (in elements) of the curves the measure looks along.
+        Network iterations, in [1, :data:`MAX_ITERATIONS`]: the length (in elements) of the curves the
+        measure looks along.
     gap_attenuation : float
         rho of a virtual element, in [0, 1]: a gap of g pixels keeps gap_attenuation**g of what lies beyond.
         The defaults (30 iterations, 0.85) were chosen on shapes-in-clutter displays of training seeds
@@ -105,7 +109,7 @@ def structural_saliency(edges: ArrayLike, *, tangent: ArrayLike | None = None, s
     if isinstance(edges, np.ndarray) and edges.dtype == np.bool_:
         edges = edges.view(np.uint8)
     mask, host = field(edges, "edges", machine, ndims=(2,), dtypes=(np.uint8,))
-    iterations = check_int(iterations, "iterations", minimum=1)
+    iterations = check_int(iterations, "iterations", minimum=1, maximum=MAX_ITERATIONS)
     gap_attenuation = check_real(gap_attenuation, "gap_attenuation", minimum=0, maximum=1)
     curvature_scale = check_real(curvature_scale, "curvature_scale", minimum=0)
     height, width = mask.shape
@@ -120,7 +124,7 @@ def structural_saliency(edges: ArrayLike, *, tangent: ArrayLike | None = None, s
                        np.int64(mask.size))
     else:
         weights = _matching(strength, "strength", mask, machine)
-        if host and (not np.all(np.isfinite(np.asarray(strength))) or np.min(strength) < 0):
+        if isinstance(strength, np.ndarray) and (not np.all(np.isfinite(strength)) or np.min(strength) < 0):
             raise InputValueError("strength must be finite and >= 0")
     machine.require_memory("structural_saliency", 8 * 6 * 4 * mask.size, 8 * 3 * 4 * mask.size)
     sizes = (np.int32(width), np.int32(height))

@@ -18,7 +18,10 @@ import numpy as np
 from vmcl.cm.core import check_int, check_real
 from vmcl.errors import InputTypeError, InputValueError
 
-__all__ = ["ClutterDisplay", "clutter_display"]
+__all__ = ["LARGEST", "ClutterDisplay", "clutter_display"]
+
+LARGEST = 16384
+"""The largest side :func:`clutter_display` draws, in pixels."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,9 +53,9 @@ def clutter_display(shape: tuple[int, int] = (256, 256), *, segments: int = 200,
     Parameters
     ----------
     shape : (int, int)
-        (H, W), each at least 64.
+        (H, W), each from 64 to :data:`LARGEST`.
     segments : int
-        The number of clutter segments, >= 0.
+        The number of clutter segments, from 0 to one per pixel.
     length : (float, float)
         The segments' lengths are drawn uniformly from this range, in pixels (0 < low <= high).
     gaps : int
@@ -60,6 +63,7 @@ def clutter_display(shape: tuple[int, int] = (256, 256), *, segments: int = 200,
     gap_length : int
         Pixels removed at each gap (the contour pixels nearest its place), >= 1.
     seed : int
+        >= 0.
 
     Returns
     -------
@@ -67,11 +71,11 @@ def clutter_display(shape: tuple[int, int] = (256, 256), *, segments: int = 200,
     """
     if not (isinstance(shape, tuple) and len(shape) == 2):
         raise InputTypeError(f"shape must be a pair (H, W), got {shape!r}")
-    height, width = (check_int(n, "shape", minimum=64) for n in shape)
-    segments = check_int(segments, "segments", minimum=0)
-    gaps = check_int(gaps, "gaps", minimum=0)
-    gap_length = check_int(gap_length, "gap_length", minimum=1)
-    seed = check_int(seed, "seed")
+    height, width = (check_int(n, "shape", minimum=64, maximum=LARGEST) for n in shape)
+    segments = check_int(segments, "segments", minimum=0, maximum=height * width)
+    gaps = check_int(gaps, "gaps", minimum=0, maximum=height * width)
+    gap_length = check_int(gap_length, "gap_length", minimum=1, maximum=height * width)
+    seed = check_int(seed, "seed", minimum=0)
     if not (isinstance(length, tuple) and len(length) == 2):
         raise InputTypeError(f"length must be a pair (low, high), got {length!r}")
     low, high = (check_real(v, "length", above=0) for v in length)
