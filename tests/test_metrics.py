@@ -262,3 +262,41 @@ def test_more_workers_than_images_is_one_worker_per_image():
     # 60 (see the test above); a worker count that overflowed or crashed would not score at all.
     assert many.ods_f == pytest.approx(one.ods_f, abs=0.05) and many.ods_f > 0.9
     assert many.ois_f == pytest.approx(one.ois_f, abs=0.05)
+
+
+# --------------------------------------------------------------------------------------------- points
+
+
+def test_match_points_is_one_to_one_and_takes_the_most_matches():
+    from vmcl.metrics import match_points
+
+    truth = np.array([[0.0, 0.0], [3.0, 0.0]])
+    # The middle detection is nearest to both; matching it to the first would leave the second unmatched.
+    found = np.array([[1.6, 0.0], [-1.0, 0.0], [10.0, 10.0]])
+    matches = match_points(truth, found, tolerance=2.0)
+    assert sorted(map(tuple, matches.tolist())) == [(0, 1), (1, 0)]
+    assert match_points(truth, np.zeros((0, 2)), tolerance=2.0).shape == (0, 2)
+
+
+def test_point_scores_set_aside_detections_near_ignored_points():
+    from vmcl.metrics import point_scores
+
+    truth = np.array([[0.0, 0.0], [20.0, 0.0]])
+    found = np.array([[0.5, 0.0], [40.0, 0.0], [60.0, 1.0]])
+    plain = point_scores(truth, found, tolerance=1.0)
+    assert (plain.precision, plain.recall, plain.n_predicted) == (pytest.approx(1 / 3), 0.5, 3)
+    aside = point_scores(truth, found, tolerance=1.0, ignore=np.array([[60.0, 0.0]]))
+    assert (aside.precision, aside.n_predicted) == (pytest.approx(0.5), 2)
+
+
+def test_segmentation_junctions_where_three_segments_meet():
+    from vmcl.metrics import segmentation_junctions
+
+    labels = np.zeros((20, 30), np.int32)
+    labels[:, 15:] = 1
+    labels[10:, :15] = 2  # a T: segment 2 below-left meets 0 and 1 at (15, 10)
+    points = segmentation_junctions(labels)
+    np.testing.assert_allclose(points, [[15.0, 10.0]], atol=0.5)
+    assert segmentation_junctions(np.zeros((5, 5), np.int32)).shape == (0, 2)
+    with pytest.raises(ValueError, match="segmentation"):
+        segmentation_junctions(np.zeros((5, 5), np.float32))

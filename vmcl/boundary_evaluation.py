@@ -39,8 +39,8 @@ from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 from vmcl.metrics import BoundaryScores, evaluate_boundaries
 
-__all__ = ["CANNY_SIGMA", "LOW_RATIO", "MapSet", "boundary_maps", "canny_sweep", "opencv_canny_sweep", "score_maps",
-           "sweep_thresholds"]
+__all__ = ["CANNY_SIGMA", "LOCAL_SPAN", "LOW_RATIO", "STRUCTURAL_SPAN", "MapSet", "boundary_maps", "canny_sweep",
+           "local_saliency_sweep", "opencv_canny_sweep", "score_maps", "structural_saliency_sweep", "sweep_thresholds"]
 
 CANNY_SIGMA = 2.0
 """The Canny sweeps' Gaussian width, the machine's own (EdgesConfig.sigma)."""
@@ -125,6 +125,66 @@ def opencv_canny_sweep(image: np.ndarray, count: int) -> np.ndarray:
     smoothed = cv2.GaussianBlur(grey, (0, 0), CANNY_SIGMA)
     return _nested([cv2.Canny(smoothed, LOW_RATIO * level, level, L2gradient=True) > 0
                     for level in _levels(_OPENCV_LEVELS, count)])
+
+
+LOCAL_SPAN = (0.005, 20.0)
+"""Local saliencies (gradient magnitude times pixels**0.5, image in [0, 1]) that :func:`local_saliency_sweep`
+maps to 0 and 1, log-spaced between: the range the BSDS500 training images' curves span."""
+STRUCTURAL_SPAN = (0.05, 5000.0)
+"""Structural saliencies times relative strength that :func:`structural_saliency_sweep` maps to 0 and 1."""
+
+
+def _log_levels(values: np.ndarray, span: tuple[float, float]) -> np.ndarray:
+    """Values mapped to [0, 1] on a log scale over ``span`` (0 where a value is 0)."""
+    low, high = span
+    with np.errstate(divide="ignore"):
+        levels = np.log(np.maximum(values, 0) / low) / np.log(high / low)
+    return np.where(values > 0, np.clip(levels, 1e-6, 1), 0).astype(np.float32)
+
+
+def _all_edges(image: np.ndarray, machine: Machine):
+    """Canny at the sweeps' lowest level, with its gradient: every edge a sweep can keep."""
+    return canny(machine.to_device(_image(image)), sigma=CANNY_SIGMA, low_threshold=LOW_RATIO * _VMCL_LEVELS[0],
+                 high_threshold=_VMCL_LEVELS[0], return_gradient=True, machine=machine)
+
+
+def local_saliency_sweep(image: np.ndarray, *, length_exponent: float | None = None,
+                         curvature_scale: float | None = None, machine: Machine | None = None) -> np.ndarray:
+    """Canny pruned by local saliency, as a sweep: every edge of vmcl Canny at the sweep's lowest level,
+    each pixel given its curve's local saliency (:func:`vmcl.group.local_saliency`, the ``[grouping]``
+    defaults unless given), mapped to [0, 1] by :data:`LOCAL_SPAN`."""
+    from vmcl.group import link_edges, local_saliency, saliency_map
+    from vmcl.pipeline import GroupingConfig
+
+    machine = machine_for(machine)
+    defaults = GroupingConfig()
+    found = _all_edges(image, machine)
+    curves = link_edges(found.edges, magnitude=found.magnitude, machine=machine)
+    values = local_saliency(curves, length_exponent=defaults.length_exponent if length_exponent is None
+                            else length_exponent,
+                            curvature_scale=defaults.curvature_scale if curvature_scale is None else curvature_scale)
+    return _log_levels(saliency_map(curves, values), LOCAL_SPAN)
+
+
+def structural_saliency_sweep(image: np.ndarray, *, iterations: int | None = None,
+                              gap_attenuation: float | None = None, machine: Machine | None = None) -> np.ndarray:
+    """Canny pruned by structural saliency, as a sweep: every edge of vmcl Canny at the sweep's lowest level,
+    each given its structural saliency (:func:`vmcl.group.structural_saliency`, elements of strength
+    :func:`vmcl.group.saliency_strength`) times that strength, mapped to [0, 1] by :data:`STRUCTURAL_SPAN`:
+    the measure ``edges.saliency = "structural"`` prunes by."""
+    from vmcl.group import saliency_strength, structural_saliency
+    from vmcl.pipeline import GroupingConfig
+
+    machine = machine_for(machine)
+    defaults = GroupingConfig()
+    found = _all_edges(image, machine)
+    strength = saliency_strength(found.edges, found.magnitude, machine=machine)
+    network = structural_saliency(found.edges, strength=strength,
+                                  iterations=defaults.iterations if iterations is None else iterations,
+                                  gap_attenuation=defaults.gap_attenuation if gap_attenuation is None
+                                  else gap_attenuation, machine=machine)
+    values = (network.saliency * strength).get() * found.edges.get()
+    return _log_levels(values, STRUCTURAL_SPAN)
 
 
 def _timed(make: Callable[[BSDSImage], np.ndarray], images: Sequence[BSDSImage]) -> tuple[list, float]:

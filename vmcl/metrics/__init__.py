@@ -17,7 +17,9 @@ to the host):
   thinning;
 - :mod:`~vmcl.metrics.detections`: labelled discontinuities, per physical label (depth, orientation,
   albedo, shadow, specular, texture), precision and recall of predicted discontinuity pixels within a
-  tolerance of t pixels, the measure the seed paper's labelling stage needs.
+  tolerance of t pixels, the measure the seed paper's labelling stage needs;
+- :mod:`~vmcl.metrics.points`: detected points (junctions, corners) matched one to one within a
+  tolerance, and the junctions of human segmentations (where three or more segments meet).
 
 Two private modules serve them all: ``_inputs`` (argument checks and the copy of device arrays to the
 host) and ``_rates`` (ratios and the F-measure, 0 where nothing is counted).
@@ -26,6 +28,7 @@ host) and ``_rates`` (ratios and the F-measure, 0 where nothing is counted).
 from vmcl.metrics.boundaries import BoundaryCounts, BoundaryScores, boundary_counts, evaluate_boundaries
 from vmcl.metrics.detections import DetectionScores, detection_scores, label_scores
 from vmcl.metrics.flow import FlowScores, angular_error, endpoint_error, evaluate_flow
+from vmcl.metrics.points import match_points, point_scores, segmentation_junctions
 from vmcl.metrics.stereo import BAD_PIXEL_THRESHOLDS, DisparityScores, evaluate_disparity
 
 __all__ = [
@@ -43,4 +46,7 @@ __all__ = [
     "evaluate_disparity",
     "evaluate_flow",
     "label_scores",
+    "match_points",
+    "point_scores",
+    "segmentation_junctions",
 ]

@@ -153,6 +153,27 @@ class OcclusionScene:
         """
         return tuple(j for j in self.junctions if j.kind == "T")
 
+    def resolvable(self, *, separation: float = 6.0, widest_merge: float = 30.0) -> np.ndarray:
+        """Which T-junctions (of :meth:`t_junctions`, in order) a detector working at a few pixels' scale can
+        resolve: no other junction of the scene within ``separation`` pixels, and every angle between
+        its arms at least ``widest_merge`` degrees. Closer junctions blur into one compound junction at
+        that scale, and arms at a narrower angle into one edge.
+
+        Returns
+        -------
+        bool (T,)
+        """
+        separation = check_real(separation, "separation", minimum=0)
+        widest_merge = check_real(widest_merge, "widest_merge", minimum=0, maximum=120)
+        everything = np.array([[j.x, j.y] for j in self.junctions]).reshape(-1, 2)
+        keep = []
+        for j in self.t_junctions():
+            others = np.sort(np.linalg.norm(everything - [j.x, j.y], axis=1))[1:]
+            arms = np.array(j.arms)
+            angles = np.degrees(np.diff(np.r_[arms, arms[0] + 2 * math.pi]))
+            keep.append((not len(others) or others[0] >= separation) and angles.min() >= widest_merge)
+        return np.array(keep, bool)
+
     def t_pairs(self) -> list[tuple[int, int]]:
         """Pairs of T-junctions at both ends of one hidden stretch of one straight edge.
 

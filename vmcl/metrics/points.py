@@ -1,0 +1,117 @@
+"""Detected points (junctions, corners) against true ones: one-to-one matching within a tolerance, and the
+junctions of human segmentations.
+
+A detection is right when it is matched, one to one, to a true point within the tolerance (the matching
+that matches the most, nearest first among equals: a linear assignment on the distances); true points a
+method is not asked for can be set aside (``ignore``), and detections near them count neither way.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+from scipy.optimize import linear_sum_assignment
+
+from vmcl.cm.core import check_real, real_host_array
+from vmcl.errors import InputValueError
+from vmcl.metrics._rates import f_measure
+from vmcl.metrics.detections import DetectionScores
+
+__all__ = ["match_points", "point_scores", "segmentation_junctions"]
+
+
+def _points(x, name: str) -> np.ndarray:
+    points = real_host_array(np.asarray(x, dtype=float) if isinstance(x, (list, tuple)) else x, name, ndims=(2,),
+                             empty=True).astype(float)
+    if points.shape[1:] != (2,) and points.size:
+        raise InputValueError(f"{name} must be (N, 2) points (x, y), got shape {points.shape}")
+    if not np.isfinite(points).all():
+        raise InputValueError(f"{name} holds NaN or infinite coordinates")
+    return points.reshape(-1, 2)
+
+
+def match_points(truth, found, *, tolerance: float) -> np.ndarray:
+    """One-to-one matches of ``found`` to ``truth`` within ``tolerance``: int (M, 2) rows (truth index,
+    found index), as many as can be made, nearest first among equally many.
+
+    Parameters
+    ----------
+    truth, found : (N, 2) arrays of points (x, y)
+    tolerance : float
+        The farthest a match may be, >= 0.
+    """
+    truth, found = _points(truth, "truth"), _points(found, "found")
+    tolerance = check_real(tolerance, "tolerance", minimum=0)
+    if not len(truth) or not len(found):
+        return np.zeros((0, 2), int)
+    distance = np.linalg.norm(truth[:, None] - found[None], axis=2)
+    # Pairs beyond the tolerance cost more than any set of real matches, so the assignment takes as many
+    # matches as possible and, among those, the nearest.
+    far = 1.0 + distance.shape[0] * (tolerance + 1.0)
+    rows, cols = linear_sum_assignment(np.where(distance <= tolerance, distance, far))
+    keep = distance[rows, cols] <= tolerance
+    return np.stack([rows[keep], cols[keep]], axis=1)
+
+
+def point_scores(truth, found, *, tolerance: float, ignore=None) -> DetectionScores:
+    """Precision and recall of detected points within ``tolerance`` (:func:`match_points`).
+
+    Parameters
+    ----------
+    truth, found : (N, 2) arrays of points (x, y)
+    tolerance : float
+    ignore : (K, 2) array of points, optional
+        True points set aside: detections within ``tolerance`` of one, and not matched, count neither
+        as right nor as wrong.
+
+    Returns
+    -------
+    DetectionScores
+        With counts of points; precision over the detections that count.
+    """
+    truth, found = _points(truth, "truth"), _points(found, "found")
+    matches = match_points(truth, found, tolerance=tolerance)
+    counted = np.ones(len(found), bool)
+    if ignore is not None and len(found):
+        aside = _points(ignore, "ignore")
+        if len(aside):
+            near = np.linalg.norm(found[:, None] - aside[None], axis=2).min(axis=1) <= tolerance
+            counted &= ~near
+    counted[matches[:, 1]] = True
+    hits = len(matches)
+    predicted = int(counted.sum())
+    precision = hits / predicted if predicted else float("nan")
+    recall = hits / len(truth) if len(truth) else float("nan")
+    return DetectionScores(precision, recall, float(f_measure(precision, recall)), predicted, len(truth))
+
+
+def segmentation_junctions(segmentation, *, merge: float = 2.0) -> np.ndarray:
+    """Where three or more segments of a label map meet: float (N, 2) points (x, y).
+
+    Every 2 x 2 block of pixels holding three or more labels marks its centre (a pixel corner); marks
+    within ``merge`` pixels of each other are one junction, at their mean.
+
+    Parameters
+    ----------
+    segmentation : (H, W) integer array
+        A segmentation (e.g. one BSDS annotator's).
+    merge : float
+        >= 0.
+    """
+    labels = real_host_array(segmentation, "segmentation", ndims=(2,))
+    if labels.dtype.kind not in "biu":
+        raise InputValueError(f"segmentation must hold integer labels, got dtype {labels.dtype}")
+    merge = check_real(merge, "merge", minimum=0)
+    if min(labels.shape) < 2:
+        return np.zeros((0, 2))
+    blocks = np.sort(np.stack([labels[:-1, :-1], labels[:-1, 1:], labels[1:, :-1], labels[1:, 1:]]), axis=0)
+    distinct = 1 + np.count_nonzero(np.diff(blocks, axis=0), axis=0)
+    marks = distinct >= 3
+    if not marks.any():
+        return np.zeros((0, 2))
+    # Marks farther apart than the map's size merge anyway: a merge distance beyond it changes nothing.
+    steps = int(np.ceil(min(merge, sum(labels.shape)) / 2))
+    grown = ndimage.binary_dilation(marks, iterations=steps) if steps else marks
+    groups, count = ndimage.label(grown, structure=np.ones((3, 3)))
+    centres = np.array(ndimage.center_of_mass(marks, groups, np.arange(1, count + 1)))
+    return centres[:, ::-1] + 0.5
