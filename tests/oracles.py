@@ -283,7 +283,7 @@ def trace_curves(mask):
     set of frozensets of (x, y), plus the set of branch pixels. Components are found by walking the
     links between curve pixels."""
     links = edge_links(mask)
-    degree = np.vectorize(lambda b: bin(int(b)).count("1"))(links) if links.size else links
+    degree = np.vectorize(lambda b: int(b).bit_count())(links) if links.size else links
     mask = np.asarray(mask, bool)
     curve = mask & (degree <= 2)
     seen = np.zeros(mask.shape, bool)

@@ -11,7 +11,14 @@ from oracles import structural_saliency as numpy_network
 from scipy import ndimage
 
 from vmcl.errors import InputError
-from vmcl.group import link_edges, local_saliency, saliency_map, saliency_strength, salient_edges, structural_saliency
+from vmcl.group import (
+    link_edges,
+    local_saliency,
+    saliency_map,
+    saliency_strength,
+    salient_edges,
+    structural_saliency,
+)
 from vmcl.scenes import clutter_display
 
 TRIALS = range(20)  # the displays' test seeds; the defaults were chosen on seeds 100-119

@@ -65,10 +65,10 @@ def test_structurally_salient_edges_couple_the_mrfs(scene, machine):
 
     grey = as_image(scene.image, "image")
     gradient = canny(grey, sigma=2.0, return_gradient=True, machine=machine)
-    network = structural_saliency(gradient.edges, tangent=link_edges(gradient.edges).tangent,
-                                  strength=saliency_strength(gradient.edges, gradient.magnitude),
+    strength = saliency_strength(gradient.edges, gradient.magnitude)
+    network = structural_saliency(gradient.edges, tangent=link_edges(gradient.edges).tangent, strength=strength,
                                   iterations=20, gap_attenuation=0.85, machine=machine).saliency
-    np.testing.assert_array_equal(result.edges, canny_edges & (network >= 20.0))
+    np.testing.assert_array_equal(result.edges, canny_edges & (network * strength >= 20.0))
     assert 0 < result.edges.sum() < canny_edges.sum()
 
 

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from vmcl.cm.core import check_int, machine_for
+from vmcl.cm.core import check_int, machine_for, to_host
 from vmcl.datasets import BSDSImage
 from vmcl.early.edges import canny
 from vmcl.errors import InputValueError
@@ -183,7 +183,7 @@ def structural_saliency_sweep(image: np.ndarray, *, iterations: int | None = Non
                                   iterations=defaults.iterations if iterations is None else iterations,
                                   gap_attenuation=defaults.gap_attenuation if gap_attenuation is None
                                   else gap_attenuation, machine=machine)
-    values = (network.saliency * strength).get() * found.edges.get()
+    values = to_host(network.saliency) * to_host(strength) * to_host(found.edges)
     return _log_levels(values, STRUCTURAL_SPAN)
 
 

@@ -173,7 +173,8 @@ class GroupingConfig:
     alignment : float
         How far (degrees) two T-junctions' stems may point off the line between them and still be paired.
     structural_threshold : float
-        The structural saliency an edge pixel needs to stay among the structurally salient edges, >= 0.
+        What an edge pixel's structural saliency times its strength (:func:`vmcl.group.saliency_strength`)
+        must reach for it to stay among the structurally salient edges, >= 0.
     iterations : int
         The structural saliency network's iterations (>= 1).
     gap_attenuation : float
@@ -883,7 +884,7 @@ class _Run:
             e = self.c.edges
             canny = edges.canny(left, sigma=e.sigma, low_threshold=e.low_threshold, high_threshold=e.high_threshold,
                                 use_quantiles=e.use_quantiles, return_gradient=True, machine=self.m)
-            brightness = canny.edges
+            brightness = on_device(canny.edges)
         self.grouping = None
         if self.c.grouping.enabled or e.saliency != "none":
             with self.stage("grouping"):
@@ -949,19 +950,24 @@ class _Run:
     def group(self, image: np.ndarray, canny: edges.CannyResult) -> tuple[Grouping, cl_array.Array]:
         """The grouping of Canny's edges, and the edges the MRFs are coupled to (``edges.saliency``)."""
         g = self.c.grouping
-        found = group(canny.edges, magnitude=canny.magnitude, image=image, threshold=g.threshold,
+        canny_edges = on_device(canny.edges)
+        found = group(canny_edges, magnitude=canny.magnitude, image=image, threshold=g.threshold,
                       length_exponent=g.length_exponent, curvature_scale=g.curvature_scale, gap=g.gap,
                       alignment=g.alignment, machine=self.m)
         saliency = self.c.edges.saliency
         if saliency == "local":
             return found, self.m.to_device(found.salient.astype(np.uint8))
         if saliency == "structural":
-            network = structural_saliency(canny.edges, tangent=self.m.to_device(found.curves.tangent),
-                                          strength=saliency_strength(canny.edges, canny.magnitude, machine=self.m),
+            strength = on_device(saliency_strength(canny_edges, canny.magnitude, machine=self.m))
+            network = structural_saliency(canny_edges, tangent=self.m.to_device(np.asarray(found.curves.tangent)),
+                                          strength=strength,
                                           iterations=g.iterations, gap_attenuation=g.gap_attenuation, machine=self.m)
-            kept = (network.saliency.get() >= g.structural_threshold) & canny.edges.get().astype(bool)
+            # The measure the threshold was fitted to (vmcl.boundary_evaluation.structural_saliency_sweep):
+            # the network's saliency times the edge's own strength.
+            measure = on_device(network.saliency).get() * strength.get()
+            kept = (measure >= g.structural_threshold) & canny_edges.get().astype(bool)
             return found, self.m.to_device(kept.astype(np.uint8))
-        return found, canny.edges
+        return found, canny_edges
 
     @contextmanager
     def stage(self, name: str) -> Iterator[None]:

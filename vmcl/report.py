@@ -31,8 +31,8 @@ from vmcl.result import Result
 __all__ = [
     "BRIGHTNESS_ONLY",
     "CUE_COLOURS",
-    "LABEL_COLOURS",
     "JUNCTION_COLOURS",
+    "LABEL_COLOURS",
     "encode_png",
     "grouping_image",
     "images",

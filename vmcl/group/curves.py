@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import NamedTuple, overload
+from typing import NamedTuple
 
 import numpy as np
 import pyopencl.array as cl_array
@@ -138,12 +138,6 @@ class Curves:
         return np.repeat(np.arange(len(self)), self.sizes)
 
 
-@overload
-def link_edges(edges: np.ndarray, *, magnitude: np.ndarray | None = None, smoothing: float = 2.0,
-               machine: Machine | None = None) -> Curves: ...
-@overload
-def link_edges(edges: cl_array.Array, *, magnitude: cl_array.Array | None = None, smoothing: float = 2.0,
-               machine: Machine | None = None) -> Curves: ...
 def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothing: float = 2.0,
                machine: Machine | None = None) -> Curves:
     """Link the pixels of an edge map into curves, split at branch pixels.
@@ -184,7 +178,7 @@ def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothin
         if strength.shape != mask.shape:
             raise InputValueError(f"magnitude has shape {strength.shape}, edges {mask.shape}: they must match")
     found = _link_on_device(machine, mask, strength, smoothing)
-    curves = _measure(found, mask.shape)
+    curves = _measure(found, (int(mask.shape[0]), int(mask.shape[1])))
     if not host:
         curves = _with_device_maps(curves, machine)
     return curves
@@ -254,7 +248,7 @@ def _tangent_weights(smoothing: float) -> np.ndarray:
     positive half; the kernel negates it behind); 0: the central difference."""
     if smoothing == 0:
         return np.ones(1, np.float32)
-    t = np.arange(1, int(math.ceil(3 * smoothing)) + 1)
+    t = np.arange(1, math.ceil(3 * smoothing) + 1)
     return (t * np.exp(-0.5 * (t / smoothing) ** 2)).astype(np.float32)
 
 
@@ -302,6 +296,7 @@ def _end_tangents(points: np.ndarray, offsets: np.ndarray, closed: np.ndarray) -
 
 
 def _with_device_maps(curves: Curves, machine: Machine) -> Curves:
-    maps = (machine.to_device(np.asarray(m)) for m in (curves.labels, curves.position, curves.tangent))
-    return Curves(*maps, curves.points, curves.offsets, curves.closed, curves.length, curves.mean_curvature,
+    labels, position, tangent = (machine.to_device(np.asarray(m)) for m in (curves.labels, curves.position,
+                                                                            curves.tangent))
+    return Curves(labels, position, tangent, curves.points, curves.offsets, curves.closed, curves.length, curves.mean_curvature,
                   curves.total_curvature, curves.magnitude, curves.tangents, curves.branches)

@@ -83,8 +83,8 @@ def group(edges: ArrayLike, *, magnitude: ArrayLike | None = None, image: np.nda
     machine = machine_for(machine)
     threshold = check_real(threshold, "threshold", minimum=0)
     linked = link_edges(edges, magnitude=magnitude, machine=machine)
-    curves = Curves(*(np.asarray(to_host(m)) for m in (linked.labels, linked.position, linked.tangent)),
-                    linked.points, linked.offsets, linked.closed, linked.length, linked.mean_curvature,
+    labels, position, tangent = (np.asarray(to_host(m)) for m in (linked.labels, linked.position, linked.tangent))
+    curves = Curves(labels, position, tangent, linked.points, linked.offsets, linked.closed, linked.length, linked.mean_curvature,
                     linked.total_curvature, linked.magnitude, linked.tangents, linked.branches)
     saliency = local_saliency(curves, length_exponent=length_exponent, curvature_scale=curvature_scale)
     junctions = find_junctions(curves, gap=gap)

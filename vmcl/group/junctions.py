@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vmcl.cm.core import check_int, check_real, real_host_array, to_host
+from vmcl.cm.core import ArrayLike, check_int, check_real, real_host_array, to_host
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.group.curves import BRANCH, Curves
 
@@ -314,7 +314,7 @@ def _branch_junctions(curves: Curves, labels: np.ndarray, found: _Found) -> np.n
 def _gap_junctions(curves: Curves, labels: np.ndarray, long_enough: np.ndarray, touching: np.ndarray,
                    corners: dict[int, np.ndarray], gap: float, min_length: int, found: _Found) -> None:
     """T-junctions where a free curve end, followed along its tangent, meets another curve within ``gap``."""
-    height, width = labels.shape
+    _height, _width = labels.shape
     position = np.asarray(to_host(curves.position))
     curve, end, pixel = _ends(curves)
     free = long_enough[curve] & ~touching[curve, end]
@@ -356,7 +356,7 @@ def _first_hit(labels: np.ndarray, start: np.ndarray, tangent: np.ndarray, gap: 
     bar in the last pixels before it breaks, so the end's tangent points a little off."""
     height, width = labels.shape
     # No gap reaches farther than the image's diagonal, however long it is allowed to be.
-    reach = int(math.ceil(min(gap, math.hypot(height, width))))
+    reach = math.ceil(min(gap, math.hypot(height, width)))
     x0, y0 = max(0, start[0] - reach), max(0, start[1] - reach)
     window = labels[y0:min(height, start[1] + reach + 1), x0:min(width, start[0] + reach + 1)]
     ys, xs = np.nonzero((window != -1) & (window != own))
@@ -415,13 +415,13 @@ def _corners(curves: Curves, long_enough: np.ndarray, corner: float, found: _Fou
         corners[int(c)] = at
         for j in at:
             point = curves.points[curves.offsets[c] + j].astype(float)
-            arms = [_arm(curves, c, j, sign, point) for sign in (-1, 1)]
+            arms = [_arm(curves, int(c), int(j), sign, point) for sign in (-1, 1)]
             if all(arm is not None for arm in arms):
                 found.add(point, [arm[0] for arm in arms if arm is not None], [c, c])
     return corners
 
 
-def repair_edges(edges: np.ndarray, junctions: Junctions) -> np.ndarray:
+def repair_edges(edges: ArrayLike, junctions: Junctions) -> np.ndarray:
     """``edges`` (a host bool (H, W) map) with every junction's gap filled (:attr:`Junctions.fills`)."""
     if not isinstance(junctions, Junctions):
         raise InputTypeError(f"junctions must be a vmcl.group.Junctions, got {type(junctions).__name__}")

@@ -19,7 +19,7 @@ from vmcl.cm.core import check_real, real_host_array, to_host
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.group.curves import BRANCH, Curves
 
-__all__ = ["local_saliency", "salient_edges", "saliency_map"]
+__all__ = ["local_saliency", "saliency_map", "salient_edges"]
 
 
 def _curves(curves) -> Curves:

@@ -86,14 +86,14 @@ def clutter_display(shape: tuple[int, int] = (256, 256), *, segments: int = 200,
     for _ in range(segments):
         x, y = rng.uniform(0, width), rng.uniform(0, height)
         a, size = rng.uniform(0, math.pi), rng.uniform(low, high)
-        cv2.line(clutter, (int(x), int(y)), (int(round(x + size * math.cos(a))), int(round(y + size * math.sin(a)))),
+        cv2.line(clutter, (int(x), int(y)), (round(x + size * math.cos(a)), round(y + size * math.sin(a))),
                  1, 1)
     small = min(height, width)
     centre = (float(rng.uniform(0.35, 0.65) * width), float(rng.uniform(0.35, 0.65) * height))
     radii = (float(rng.uniform(0.12, 0.23) * small), float(rng.uniform(0.12, 0.23) * small))
     angle = float(rng.uniform(0, 180))
     figure = np.zeros((height, width), np.uint8)
-    cv2.ellipse(figure, (int(round(centre[0])), int(round(centre[1]))), (int(round(radii[0])), int(round(radii[1]))),
+    cv2.ellipse(figure, (round(centre[0]), round(centre[1])), (round(radii[0]), round(radii[1])),
                 angle, 0, 360, 1, 1)
     if gaps:
         ys, xs = np.nonzero(figure)
