@@ -206,3 +206,27 @@ __kernel void arc_turns(__global const int *next, __global const int *pixel, __g
     out[OUT_ANGLE * N + i] = as_int(angle[i]);
     out[OUT_STEP * N + i] = as_int(step);
 }
+
+/* The maps before the curves are drawn in: -1 (BRANCH, -2, at branch pixels), no position, no tangent. */
+__kernel void clear_maps(__global const uchar *branch, __global int *labels, __global int *position,
+                         __global float *tangent, long n)
+{
+    long p = get_global_id(0);
+    if (p >= n) return;
+    labels[p] = branch[p] ? -2 : -1;
+    position[p] = -1;
+    tangent[p] = NAN;
+}
+
+/* Each curve pixel's curve index (numbered by the host, which orders the curves), arc position and
+ * tangent drawn into the maps. */
+__kernel void draw_maps(__global const int *packed, __global const int *ids, __global int *labels,
+                        __global int *position, __global float *tangent, int N)
+{
+    int i = get_global_id(0);
+    if (i >= N) return;
+    int p = packed[OUT_PIXEL * N + i];
+    labels[p] = ids[i];
+    position[p] = packed[OUT_POSITION * N + i];
+    tangent[p] = as_float(packed[OUT_ANGLE * N + i]);
+}

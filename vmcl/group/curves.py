@@ -18,6 +18,7 @@ Coordinates are (x, y): x the column, y the row, as image pixels are addressed.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -178,17 +179,17 @@ def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothin
         if strength.shape != mask.shape:
             raise InputValueError(f"magnitude has shape {strength.shape}, edges {mask.shape}: they must match")
     found = _link_on_device(machine, mask, strength, smoothing)
-    curves = _measure(found, (int(mask.shape[0]), int(mask.shape[1])))
-    if not host:
-        curves = _with_device_maps(curves, machine)
-    return curves
+    shape = (int(mask.shape[0]), int(mask.shape[1]))
+    curves, ids = _measure(found, shape)
+    maps = _host_maps(found, ids, shape) if host else _device_maps(machine, found, ids, shape)
+    return dataclasses.replace(curves, labels=maps[0], position=maps[1], tangent=maps[2])
 
 
 class _Linked(NamedTuple):
     """The device's answer: every curve pixel's flat address, curve key, arc position, loop flag, gradient
     magnitude (NaN without one), the tangent's turn and the step to the next pixel, the tangent's direction,
-    and the branch
-    pixels' flat addresses."""
+    the branch pixels' flat addresses, and on the device the packed fields (None without curve pixels) and
+    the branch mask."""
 
     pixel: np.ndarray
     curve: np.ndarray
@@ -199,6 +200,8 @@ class _Linked(NamedTuple):
     step: np.ndarray
     angle: np.ndarray
     branches: np.ndarray
+    packed: cl_array.Array | None
+    branch: cl_array.Array
 
 
 def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.Array | None,
@@ -207,6 +210,8 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     n = mask.size
     size = (width, height)
     sizes = (np.int32(width), np.int32(height))
+    # Uploaded first: a blocking copy waits for every kernel queued before it.
+    weights = machine.to_device(_tangent_weights(smoothing))
     links, curve_links, branch = (machine.empty(mask.shape, np.uint8) for _ in range(3))
     is_curve, index = machine.empty(n, np.int32), machine.empty(n, np.int32)
     machine.launch(machine.kernel("curves", "link_pixels"), size, mask, links, *sizes)
@@ -220,7 +225,8 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
         branches = np.flatnonzero(branch.get())
         empty = np.zeros(0, np.int32)
         nothing = np.zeros(0, np.float32)
-        return _Linked(empty, empty, empty, np.zeros(0, bool), nothing, nothing, nothing, nothing, branches)
+        return _Linked(empty, empty, empty, np.zeros(0, bool), nothing, nothing, nothing, nothing, branches, None,
+                       branch)
     if 4 * count >= 2**31:
         raise InputValueError(f"edges holds {count} curve pixels; at most {2**29 - 1} can be linked")
     next_node, key = machine.empty(2 * count, np.int32), machine.empty(2 * count, np.int32)
@@ -232,7 +238,6 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     machine.launch(machine.kernel("curves", "arc_positions"), (count,), top, distance, pixel,
                    mask if strength is None else strength, np.int32(strength is not None), forward, packed,
                    np.int32(count))
-    weights = machine.to_device(_tangent_weights(smoothing))
     machine.launch(machine.kernel("curves", "arc_tangents"), (count,), next_node, pixel, forward, weights, angle,
                    np.int32(weights.size), np.int32(width), np.int32(count))
     machine.launch(machine.kernel("curves", "arc_turns"), (count,), next_node, pixel, forward, angle, packed,
@@ -240,7 +245,8 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     fields = packed.get().reshape(8, count)
     branches = np.flatnonzero(branch.get())
     real = fields[4:].view(np.float32)
-    return _Linked(fields[0], fields[1], fields[2], fields[3].astype(bool), real[0], real[1], real[2], real[3], branches)
+    return _Linked(fields[0], fields[1], fields[2], fields[3].astype(bool), real[0], real[1], real[2], real[3], branches,
+                   packed, branch)
 
 
 def _tangent_weights(smoothing: float) -> np.ndarray:
@@ -252,8 +258,10 @@ def _tangent_weights(smoothing: float) -> np.ndarray:
     return (t * np.exp(-0.5 * (t / smoothing) ** 2)).astype(np.float32)
 
 
-def _measure(found: _Linked, shape: tuple[int, int]) -> Curves:
-    height, width = shape
+def _measure(found: _Linked, shape: tuple[int, int]) -> tuple[Curves, np.ndarray]:
+    """The curves in arc order and their measures (maps left empty), and each curve pixel's curve index
+    in the device's order."""
+    width = shape[1]
     order = np.lexsort((found.position, found.curve))
     pixel = found.pixel[order]
     keys = found.curve[order]
@@ -262,14 +270,8 @@ def _measure(found: _Linked, shape: tuple[int, int]) -> Curves:
     points = np.stack([pixel % width, pixel // width], axis=1).astype(np.int32)
     closed = found.closed[order][starts]
     sizes = np.diff(offsets)
-    curve = np.repeat(np.arange(len(starts), dtype=np.int32), sizes)
-    labels = np.full(height * width, -1, np.int32)
-    position = np.full(height * width, -1, np.int32)
-    labels[pixel] = curve
-    labels[found.branches] = BRANCH
-    position[pixel] = found.position[order]
-    tangent = np.full(height * width, np.nan, np.float32)
-    tangent[found.pixel] = found.angle
+    ids = np.empty(keys.size, np.int32)
+    ids[order] = np.repeat(np.arange(len(starts), dtype=np.int32), sizes)
     if len(starts):
         def per_curve(values: np.ndarray) -> np.ndarray:
             return np.add.reduceat(values[order].astype(np.float64), starts)
@@ -278,9 +280,38 @@ def _measure(found: _Linked, shape: tuple[int, int]) -> Curves:
         length = total = magnitude = np.zeros(0)
     mean = np.divide(total, length, out=np.zeros(len(starts)), where=length > 0)
     branch_points = np.stack([found.branches % width, found.branches // width], axis=1).astype(np.int32)
-    return Curves(labels.reshape(height, width), position.reshape(height, width), tangent.reshape(height, width),
-                  points, offsets, closed, length, mean, total, magnitude, _end_tangents(points, offsets, closed),
-                  branch_points)
+    nothing = np.zeros(0)
+    return Curves(nothing, nothing, nothing, points, offsets, closed, length, mean, total, magnitude,
+                  _end_tangents(points, offsets, closed), branch_points), ids
+
+
+def _host_maps(found: _Linked, ids: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The labels, position and tangent maps, on the host."""
+    size = shape[0] * shape[1]
+    labels, position = np.full(size, -1, np.int32), np.full(size, -1, np.int32)
+    tangent = np.full(size, np.nan, np.float32)
+    labels[found.pixel] = ids
+    labels[found.branches] = BRANCH
+    position[found.pixel] = found.position
+    tangent[found.pixel] = found.angle
+    return labels.reshape(shape), position.reshape(shape), tangent.reshape(shape)
+
+
+def _device_maps(machine: Machine, found: _Linked, ids: np.ndarray,
+                 shape: tuple[int, int]) -> tuple[cl_array.Array, cl_array.Array, cl_array.Array]:
+    """The labels, position and tangent maps, drawn on the device from the fields it already holds: only
+    the curve indices (four bytes per curve pixel) go up."""
+    labels, position = machine.empty(shape, np.int32), machine.empty(shape, np.int32)
+    tangent = machine.empty(shape, np.float32)
+    size = shape[0] * shape[1]
+    # Uploaded before the maps are cleared: a blocking copy waits for every kernel queued before it.
+    ids_device = machine.to_device(ids) if found.packed is not None else None
+    machine.launch(machine.kernel("curves", "clear_maps"), (size,), found.branch, labels, position, tangent,
+                   np.int64(size))
+    if found.packed is not None:
+        machine.launch(machine.kernel("curves", "draw_maps"), (ids.size,), found.packed, ids_device, labels,
+                       position, tangent, np.int32(ids.size))
+    return labels, position, tangent
 
 
 def _end_tangents(points: np.ndarray, offsets: np.ndarray, closed: np.ndarray) -> np.ndarray:
@@ -293,10 +324,3 @@ def _end_tangents(points: np.ndarray, offsets: np.ndarray, closed: np.ndarray) -
         tangents = chords / np.linalg.norm(chords, axis=2, keepdims=True)
     tangents[closed] = np.nan
     return tangents
-
-
-def _with_device_maps(curves: Curves, machine: Machine) -> Curves:
-    labels, position, tangent = (machine.to_device(np.asarray(m)) for m in (curves.labels, curves.position,
-                                                                            curves.tangent))
-    return Curves(labels, position, tangent, curves.points, curves.offsets, curves.closed, curves.length, curves.mean_curvature,
-                  curves.total_curvature, curves.magnitude, curves.tangents, curves.branches)
