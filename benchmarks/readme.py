@@ -430,6 +430,41 @@ def learn_figures(f: ResultsFile) -> str:
             "NumPy")
 
 
+def grouping_figures(f: ResultsFile) -> str:
+    maps = f.table("map", "ODS F", "OIS F", "AP")
+    scenes = f.table("measure", "vmcl", "bar")
+    junctions = f.table("detector", "precision", "recall")
+    speed = f.table("stage", "wall ms", "device ms")
+
+    def ods(name: str) -> str:
+        return maps.cell({"map": name}, "ODS F")
+
+    def scene(measure: str) -> str:
+        return scenes.cell({"measure": measure}, "vmcl").split(" ")[0]
+
+    def junction(name: str) -> str:
+        return (f"{junctions.cell({'detector': name}, 'precision')} / "
+                f"{junctions.cell({'detector': name}, 'recall')}")
+
+    curves = speed.rows[1][speed.index("over Canny (wall)")]
+    return (f"BSDS test ODS F: Canny {ods('vmcl Canny, threshold sweep')}, pruned by local saliency "
+            f"{ods('Canny pruned by local saliency')}, by structural saliency "
+            f"{ods('Canny pruned by structural saliency')}; junctions' precision / recall within 6 px "
+            f"{junction('vmcl junctions (T, Y, arrow, X)')} against goodFeaturesToTrack "
+            f"{junction('goodFeaturesToTrack (Shi-Tomasi)')} at the same count; occlusion scenes: T-junction "
+            f"recall {scene('T-junction recall within 3 px (resolvable)')}, precision "
+            f"{scene('T-junction precision within 3 px')}, broken ones repaired "
+            f"{scene('broken T-junctions repaired within 2 px')}; curves and local saliency at 512² {curves} "
+            "Canny's time")
+
+
+def grouping_fit_figures(f: ResultsFile) -> str:
+    chosen = re.search(r"^Chosen: (.*)\.$", f.text, re.MULTILINE)
+    if chosen is None:
+        raise LookupError("grouping_fit.md states no choice")
+    return "BSDS training images: " + chosen.group(1)
+
+
 def ground_truth_figures(f: ResultsFile) -> str:
     rendering = f.table("preset", "median (ms)")
     seconds = [number(row[rendering.index("median (ms)")]) / 1000 for row in rendering.rows]
@@ -484,6 +519,11 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
                "on training pairs beside the hand-set one on the test pairs, cross-validated data weights, the "
                "colour and texture MRFs fitted on BSDS training images, the speed of a pseudolikelihood step"),
      learn_figures),
+    ("grouping", ("grouping: Canny pruned by local and structural saliency on BSDS test images; junctions "
+                  "against human segmentations beside corner detectors; T-junctions, repairs and pairs on "
+                  "occlusion scenes; shapes in clutter; speed"), grouping_figures),
+    ("grouping_fit", "the grouping settings chosen on BSDS training images and rendered training displays",
+     grouping_fit_figures),
     ("ground_truth", "scene rendering; BSDS evaluation", ground_truth_figures),
     ("first_run", "a fresh install's first runs: time spent building kernels, at a first and a second size",
      first_run_figures),

@@ -116,21 +116,26 @@ class _Found:
         # Candidates with more arms first: their point is the better estimate of the junction's.
         order = sorted(range(len(self.candidates)), key=lambda i: (-len(self.candidates[i][1]), i))
         merged: list[tuple[np.ndarray, list[float], list[int], float, np.ndarray]] = []
+        points = np.array([c[0] for c in self.candidates]).reshape(-1, 2)
+        taken_points: list[int] = []  # the candidate each merged junction's point came from
         for i in order:
             point, arms, curves, gap, fill = self.candidates[i]
-            for k, target in enumerate(merged):
-                if np.linalg.norm(target[0] - point) <= self.merge:
-                    for arm, curve in zip(arms, curves):
-                        # One curve's arms measured from two candidates differ more than two curves' do.
-                        if all(_turn(arm, other) > (_SAME_CURVE_ARM if curve == other_curve else _SAME_ARM)
-                               for other, other_curve in zip(target[1], target[2])):
-                            target[1].append(arm)
-                            target[2].append(curve)
-                    if len(fill) > len(target[4]):
-                        merged[k] = (target[0], target[1], target[2], gap, fill)
-                    break
-            else:
+            near = (np.flatnonzero(np.hypot(*(points[taken_points] - point).T) <= self.merge)
+                    if taken_points else np.zeros(0, int))
+            if not len(near):
                 merged.append((point, list(arms), list(curves), gap, fill))
+                taken_points.append(i)
+                continue
+            k = int(near[0])
+            target = merged[k]
+            for arm, curve in zip(arms, curves):
+                # One curve's arms measured from two candidates differ more than two curves' do.
+                if all(_turn(arm, other) > (_SAME_CURVE_ARM if curve == other_curve else _SAME_ARM)
+                       for other, other_curve in zip(target[1], target[2])):
+                    target[1].append(arm)
+                    target[2].append(curve)
+            if len(fill) > len(target[4]):
+                merged[k] = (target[0], target[1], target[2], gap, fill)
         return merged
 
     def junctions(self) -> Junctions:
@@ -249,11 +254,16 @@ def _arm(curves: Curves, c: int, at: int, step: int, origin: np.ndarray) -> tupl
     oriented away from ``origin``; the chord to the farthest where fewer than three pixels are left.
     None where no pixel lies apart from the origin. The first pixels are skipped where the curve allows
     because Canny rounds curves where they meet."""
-    start, size = curves.offsets[c], curves.sizes[c]
+    start, size, closed = int(curves.offsets[c]), int(curves.sizes[c]), bool(curves.closed[c])
     fallback = None
     for first, last in _ARM_WINDOWS:
         steps = at + step * np.arange(first, last + 1)
-        steps = np.unique(steps % size if curves.closed[c] else np.clip(steps, 0, size - 1))
+        if closed:
+            steps = np.unique(steps % size) if last - first >= size else steps % size
+        else:
+            inside = steps[(steps >= 0) & (steps < size)]
+            # Past an open curve's end the window holds at its last pixel.
+            steps = inside if len(inside) else np.array([min(max(at + step * first, 0), size - 1)])
         pixels = curves.points[start + steps].astype(float)
         centre = pixels.mean(axis=0)
         away = centre - origin
@@ -263,9 +273,14 @@ def _arm(curves: Curves, c: int, at: int, step: int, origin: np.ndarray) -> tupl
             fallback = fallback or (math.atan2(away[1], away[0]), centre)
             continue
         centred = pixels - centre
-        _, _, axes = np.linalg.svd(centred, full_matrices=False)
-        axis = axes[0] if axes[0] @ away >= 0 else -axes[0]
-        if np.abs(centred @ axes[1]).max() <= 1.0:
+        # The principal axis of the 2 x 2 scatter matrix in closed form.
+        sxx, syy, sxy = (centred[:, 0] ** 2).sum(), (centred[:, 1] ** 2).sum(), (centred[:, 0] * centred[:, 1]).sum()
+        theta = 0.5 * math.atan2(2 * sxy, sxx - syy)
+        axis = np.array([math.cos(theta), math.sin(theta)])
+        if axis @ away < 0:
+            axis = -axis
+        across = np.abs(centred[:, 1] * axis[0] - centred[:, 0] * axis[1]).max()
+        if across <= 1.0:
             return math.atan2(axis[1], axis[0]), centre
         fallback = fallback or (math.atan2(axis[1], axis[0]), centre)
     return fallback
@@ -298,10 +313,13 @@ def _branch_junctions(curves: Curves, labels: np.ndarray, found: _Found) -> np.n
     clipped = np.clip(around, 0, [width - 1, height - 1])
     cluster_of = np.where(inside, clusters[clipped[..., 1], clipped[..., 0]], 0).max(axis=1)
     touching[curve, end] = cluster_of > 0
-    centres = np.array(ndimage.center_of_mass(np.ones_like(clusters), clusters, np.arange(1, count + 1)))
+    # Each cluster's centre: the mean of its branch pixels.
+    members = clusters[curves.branches[:, 1], curves.branches[:, 0]]
+    weight = np.bincount(members, minlength=count + 1)[1:]
+    centres = np.stack([np.bincount(members, curves.branches[:, k], count + 1)[1:] / weight for k in (0, 1)], axis=1)
     for c in range(1, count + 1):
         here = np.flatnonzero((cluster_of == c) & (curves.sizes[curve] >= _MIN_ARM))
-        centre = centres[c - 1][::-1]
+        centre = centres[c - 1]
         fitted = [(_arm(curves, curve[i], 0 if end[i] == 0 else curves.sizes[curve[i]] - 1, 1 - 2 * end[i], centre),
                    curve[i]) for i in here]
         arms = [(arm, k) for arm, k in fitted if arm is not None]
