@@ -11,6 +11,10 @@
  */
 #include "vmcl.h"
 
+/* Pixels per work-item in the whole-image passes: most pixels are no edge and cost next to nothing, so
+ * a work-item per pixel would spend more on itself than on its pixel. */
+#define RUN 16
+
 __constant int DX[8] = {1, 1, 0, -1, -1, -1, 0, 1};
 __constant int DY[8] = {0, -1, -1, -1, 0, 1, 1, 1};
 
@@ -19,46 +23,55 @@ inline int is_edge(__global const uchar *edges, int x, int y, int W, int H)
     return x >= 0 && y >= 0 && x < W && y < H && edges[(size_t)y * W + x] != 0;
 }
 
+/* The link bits of edge pixel (x, y): bit k set where its neighbour k is an edge pixel linked to it. */
+inline uint links_of(__global const uchar *edges, int x, int y, int W, int H)
+{
+    uint bits = 0;
+    for (int k = 0; k < 8; k++) {
+        if (!is_edge(edges, x + DX[k], y + DY[k], W, H)) continue;
+        if ((k & 1) && (is_edge(edges, x + DX[k], y, W, H) || is_edge(edges, x, y + DY[k], W, H))) continue;
+        bits |= 1u << k;
+    }
+    return bits;
+}
+
 /* links[p]: bit k set where p and its neighbour k are both edge pixels and linked (0 off the edges). */
 __kernel void link_pixels(__global const uchar *edges, __global uchar *links, int W, int H)
 {
-    int x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    size_t p = (size_t)y * W + x;
-    uchar bits = 0;
-    if (edges[p]) {
-        for (int k = 0; k < 8; k++) {
-            if (!is_edge(edges, x + DX[k], y + DY[k], W, H)) continue;
-            if ((k & 1) && (is_edge(edges, x + DX[k], y, W, H) || is_edge(edges, x, y + DY[k], W, H))) continue;
-            bits |= (uchar)(1 << k);
-        }
+    int x0 = get_global_id(0) * RUN, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    for (int x = x0; x < min(x0 + RUN, W); x++) {
+        size_t p = (size_t)y * W + x;
+        links[p] = edges[p] ? (uchar)links_of(edges, x, y, W, H) : 0;
     }
-    links[p] = bits;
 }
 
 /* Curve pixels are edge pixels with at most two links; the others (three or more) are branch pixels,
  * where curves meet and split. curve_links keeps the links between curve pixels; branch marks the
  * branch pixels; is_curve (int, for the scan that numbers them) the curve pixels. */
-__kernel void split_branches(__global const uchar *edges, __global const uchar *links, __global uchar *curve_links,
-                             __global uchar *branch, __global int *is_curve, int W, int H)
+__kernel void split_branches(__global const uchar *edges, __global uchar *curve_links, __global uchar *branch,
+                             __global int *is_curve, int W, int H)
 {
-    int x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    size_t p = (size_t)y * W + x;
-    uint own = links[p];
-    uint degree = popcount(own);
-    uchar kept = 0;
-    if (degree <= 2) {
-        while (own) {
-            int k = 31 - clz(own & -own);
-            own &= own - 1;
-            size_t q = (size_t)(y + DY[k]) * W + (x + DX[k]);
-            if (popcount((uint)links[q]) <= 2) kept |= (uchar)(1 << k);
+    int x0 = get_global_id(0) * RUN, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    for (int x = x0; x < min(x0 + RUN, W); x++) {
+        size_t p = (size_t)y * W + x;
+        uint own = edges[p] ? links_of(edges, x, y, W, H) : 0;
+        uint degree = popcount(own);
+        uchar kept = 0;
+        if (degree <= 2) {
+            /* A neighbour's links are found again here rather than read from a pass of their own: only
+             * edge pixels of at most two links look, at no more than two neighbours. */
+            while (own) {
+                int k = 31 - clz(own & -own);
+                own &= own - 1;
+                if (popcount(links_of(edges, x + DX[k], y + DY[k], W, H)) <= 2) kept |= (uchar)(1 << k);
+            }
         }
+        curve_links[p] = kept;
+        branch[p] = (uchar)(degree >= 3);
+        is_curve[p] = edges[p] != 0 && degree <= 2;
     }
-    curve_links[p] = kept;
-    branch[p] = (uchar)(degree >= 3);
-    is_curve[p] = edges[p] != 0 && degree <= 2;
 }
 
 /* The number of curve pixels, from the exclusive scan that numbers them. */
@@ -95,24 +108,26 @@ inline int link_of(uchar bits, int s)
 __kernel void tour(__global const uchar *curve_links, __global const int *is_curve, __global const int *index,
                    __global int *next, __global int *key, __global int *pixel, int W, int H, int N)
 {
-    int x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    size_t p = (size_t)y * W + x;
-    if (!is_curve[p]) return;
-    int i = index[p];
-    uchar bits = curve_links[p];
-    pixel[i] = (int)p;
-    for (int s = 0; s < 2; s++) {
-        int node = 2 * i + s;
-        int k = link_of(bits, s);
-        if (k < 0) {
-            next[node] = 2 * i + (1 - s);
-            key[node] = 2 * N + node;
-        } else {
-            size_t q = (size_t)(y + DY[k]) * W + (x + DX[k]);
-            int arrived = slot_of(curve_links[q], (k + 4) & 7);
-            next[node] = 2 * index[q] + (1 - arrived);
-            key[node] = node;
+    int x0 = get_global_id(0) * RUN, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    for (int x = x0; x < min(x0 + RUN, W); x++) {
+        size_t p = (size_t)y * W + x;
+        if (!is_curve[p]) continue;
+        int i = index[p];
+        uchar bits = curve_links[p];
+        pixel[i] = (int)p;
+        for (int s = 0; s < 2; s++) {
+            int node = 2 * i + s;
+            int k = link_of(bits, s);
+            if (k < 0) {
+                next[node] = 2 * i + (1 - s);
+                key[node] = 2 * N + node;
+            } else {
+                size_t q = (size_t)(y + DY[k]) * W + (x + DX[k]);
+                int arrived = slot_of(curve_links[q], (k + 4) & 7);
+                next[node] = 2 * index[q] + (1 - arrived);
+                key[node] = node;
+            }
         }
     }
 }
@@ -211,11 +226,12 @@ __kernel void arc_turns(__global const int *next, __global const int *pixel, __g
 __kernel void clear_maps(__global const uchar *branch, __global int *labels, __global int *position,
                          __global float *tangent, long n)
 {
-    long p = get_global_id(0);
-    if (p >= n) return;
-    labels[p] = branch[p] ? -2 : -1;
-    position[p] = -1;
-    tangent[p] = NAN;
+    long p0 = get_global_id(0) * RUN;
+    for (long p = p0; p < min(p0 + RUN, n); p++) {
+        labels[p] = branch[p] ? -2 : -1;
+        position[p] = -1;
+        tangent[p] = NAN;
+    }
 }
 
 /* Each curve pixel's curve index (numbered by the host, which orders the curves), arc position and

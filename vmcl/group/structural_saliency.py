@@ -40,7 +40,7 @@ import pyopencl.array as cl_array
 
 from vmcl.cm.core import ArrayLike, check_int, check_real, field, machine_for, result
 from vmcl.errors import InputValueError
-from vmcl.group.curves import link_edges
+from vmcl.group.curves import RUN, link_edges
 from vmcl.machine import Machine
 
 __all__ = ["MAX_ITERATIONS", "StructuralSaliency", "saliency_strength", "structural_saliency"]
@@ -129,7 +129,7 @@ def structural_saliency(edges: ArrayLike, *, tangent: ArrayLike | None = None, s
     machine.require_memory("structural_saliency", 8 * 6 * 4 * mask.size, 8 * 3 * 4 * mask.size)
     sizes = (np.int32(width), np.int32(height))
     links = machine.empty(mask.shape, np.uint8)
-    machine.launch(machine.kernel("curves", "link_pixels"), (width, height), mask, links, *sizes)
+    machine.launch(machine.kernel("curves", "link_pixels"), (-(-width // RUN), height), mask, links, *sizes)
     elements = (8, height, width)
     sigma, rho = machine.empty(elements, np.float32), machine.empty(elements, np.float32)
     coupling = machine.empty((3, *elements), np.float32)
