@@ -128,7 +128,8 @@ def test_one_grey_image_gives_edges_and_texture_only(small_scene, machine):
     assert result.density is not None and result.hue is None
     assert result.disparity is None and result.flow is None
     assert set(result.lines) <= {"texture"}
-    assert list(result.stages) == ["upload", "edges", "boundaries", "texture", "mrf texture", "integrate", "download"]
+    assert list(result.stages) == ["upload", "edges", "grouping", "boundaries", "texture", "mrf texture", "integrate",
+                                   "download"]
 
 
 def test_each_input_adds_its_cues(small_scene, machine):
@@ -180,8 +181,10 @@ def test_fields_stay_on_the_device(small_scene, machine, monkeypatch):
     large_gets = [size for size in gets if size >= pixels // 2]
     # Fields read back: the downloads at the end (edges, hue, colour edges, density, texture edges,
     # sparse and first-pass disparity, discontinuity flags, raw flow, four restored fields, support,
-    # labels and eight line fields). Everything else read back is a scalar (thresholds, energies).
-    assert len(large_gets) <= 25
+    # labels and eight line fields), and the grouping stage's reads of its curves (the branch mask and the
+    # curve labels, arc positions and tangents, for the junctions found on the host: docs/architecture.md).
+    # Everything else read back is a scalar (thresholds, energies).
+    assert len(large_gets) <= 25 + 4
 
 
 def test_timings_per_stage_and_kernel(small_scene):
@@ -189,7 +192,8 @@ def test_timings_per_stage_and_kernel(small_scene):
     start = time.perf_counter()
     result = VisionMachine().run(s.left, s.right)  # its own profiling Machine
     wall_ms = (time.perf_counter() - start) * 1e3
-    assert list(result.stages) == ["upload", "edges", "boundaries", "stereo", "colour", "texture", "mrf stereo",
+    assert list(result.stages) == ["upload", "edges", "grouping", "boundaries", "stereo", "colour", "texture",
+                                   "mrf stereo",
                                    "mrf colour", "mrf texture", "integrate", "download"]
     assert all(ms > 0 for ms in result.stages.values()) and result.total_ms <= wall_ms
     # One in-order queue: kernels never overlap, so their device times add up to less than the run's wall time.

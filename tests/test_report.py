@@ -38,7 +38,7 @@ def test_report_parses_and_every_inline_image_decodes(run, tmp_path):
     parser.feed(page)
     parser.close()
     assert {"html", "body", "table", "img"} <= set(parser.tags)
-    assert len(parser.sources) == len(written) - 1 == 10  # every PNG is inline too
+    assert len(parser.sources) == len(written) - 1 == 11  # every PNG is inline too
     for source in parser.sources:
         prefix, data = source.split(",", 1)
         assert prefix == "data:image/png;base64"
