@@ -10,7 +10,6 @@ finds and classifies the junctions and repairs the T-junctions Canny broke
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -88,7 +87,7 @@ def group(edges: ArrayLike, *, magnitude: ArrayLike | None = None, image: np.nda
                     linked.total_curvature, linked.magnitude, linked.tangents, linked.branches)
     saliency = local_saliency(curves, length_exponent=length_exponent, curvature_scale=curvature_scale)
     junctions = find_junctions(curves, gap=gap)
-    pairs, groups = group_curves(junctions, image=image, alignment=alignment, max_distance=math.inf)
+    pairs, groups = group_curves(junctions, image=image, alignment=alignment)
     mask = curves.labels != -1
     return Grouping(curves, saliency, salient_edges(curves, saliency, threshold), junctions,
                     repair_edges(mask, junctions), pairs, groups)
