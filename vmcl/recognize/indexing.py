@@ -1,0 +1,390 @@
+"""Indexing: candidate (model, pose) pairs from invariant keys of corner pairs, by geometric hashing.
+
+Seed section "Recognition": indexing finds "a small set of candidate models" from "simple
+viewpoint-invariant combinations of features". Two corners A and B (each a position, the bisector of its
+angle and the angle's opening) give a key that a similarity does not change: the openings of A and B,
+and the directions of their bisectors measured from the line A -> B. The library's table maps every key
+to the model views' corner pairs that have it (built once per library, with each pair entered in the two
+nearest bins of every coordinate so a key near a bin's edge still meets it). For an image, every
+ordered pair of nearby corners looks its key up; each entry it meets fixes the similarity taking the
+model pair onto the image pair, and votes for (view, rotation, scale, where the view's centre lands),
+binned, on the device (kernels/indexing.cl, one work-item per image pair, votes counted in a hashed
+accumulator). The bins with the most votes are the candidates; their votes' similarities are pooled
+into each candidate's pose. Candidate generation looks at the entries that share a key with the image's
+pairs only: with keys this discriminative, a larger library adds few entries per key.
+
+:func:`vote_numpy` is the same vote in NumPy, the reference the kernel is tested and timed against.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pyopencl.array as cl_array
+
+from vmcl.cm.core import check_int, check_real, machine_for
+from vmcl.errors import InputTypeError, InputValueError
+from vmcl.machine import Machine
+from vmcl.recognize.models import Library
+
+__all__ = ["ANGLE_BINS", "KEYS", "OPENING_BINS", "Candidates", "Index", "corner_pairs", "index_for", "pair_keys", "vote",
+           "vote_numpy"]
+
+ANGLE_BINS = 16
+"""Bins of a bisector's direction from the line between the two corners (22.5 degrees each)."""
+OPENING_BINS = 9
+"""Bins of a corner's opening over (0, 180) degrees (20 degrees each)."""
+KEYS = ANGLE_BINS * ANGLE_BINS * OPENING_BINS * OPENING_BINS
+
+_ROTATION_BINS = 24  # the pose bins: 15 degrees of rotation,
+_ROTATION_BIN = 2 * math.pi / _ROTATION_BINS
+_SCALE_BIN = 0.2  # 0.2 of log scale (22 %),
+_POSITION_BIN = 0.25  # a quarter of the view's radius (at the pose's scale) for where its centre lands
+_VOTE_TABLE_BITS = 18
+_MIN_SEPARATION = 4.0  # pixels: closer corners are one junction's, with no direction between them
+
+
+def corner_pairs(corners: np.ndarray, *, neighbours: int = 8, groups: np.ndarray | None = None) -> np.ndarray:
+    """Ordered pairs (i, j) of corners: each corner with its ``neighbours`` nearest (at least 4 px away),
+    and, given ``groups`` (a label per corner, -1 for none), every two corners of one group.
+
+    Returns
+    -------
+    int64 (P, 2), each unordered pair in both orders, no pair twice.
+    """
+    corners = np.asarray(corners, np.float64).reshape(-1, 2)
+    n = len(corners)
+    neighbours = check_int(neighbours, "neighbours", minimum=0)
+    if n < 2:
+        return np.zeros((0, 2), np.int64)
+    d = np.hypot(corners[:, None, 0] - corners[None, :, 0], corners[:, None, 1] - corners[None, :, 1])
+    far = d >= _MIN_SEPARATION
+    d_far = np.where(far, d, np.inf)
+    k = min(neighbours, n - 1)
+    take = np.zeros((n, n), bool)
+    if k:
+        nearest = np.argsort(d_far, axis=1, kind="stable")[:, :k]
+        take[np.repeat(np.arange(n), k), nearest.ravel()] = True
+    if groups is not None:
+        groups = np.asarray(groups)
+        take |= (groups[:, None] == groups[None, :]) & (groups[:, None] >= 0)
+    take &= far
+    take |= take.T
+    i, j = np.nonzero(take)
+    return np.stack([i, j], axis=1).astype(np.int64)
+
+
+def _angle_coordinates(corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray,
+                       pairs: np.ndarray) -> np.ndarray:
+    """The four key coordinates of each pair, in bins (continuous): the two bisectors' directions from
+    the line A -> B, and the two openings."""
+    a, b = pairs[:, 0], pairs[:, 1]
+    step = corners[b] - corners[a]
+    line = np.arctan2(step[:, 1], step[:, 0])
+    turn = 2 * math.pi / ANGLE_BINS
+    first = np.mod(bisector[a] - line, 2 * math.pi) / turn
+    second = np.mod(bisector[b] - line, 2 * math.pi) / turn
+    width = math.pi / OPENING_BINS
+    return np.stack([first, second, opening[a] / width, opening[b] / width], axis=1)
+
+
+def _flatten(bins: np.ndarray) -> np.ndarray:
+    return ((bins[..., 0] * ANGLE_BINS + bins[..., 1]) * OPENING_BINS + bins[..., 2]) * OPENING_BINS + bins[..., 3]
+
+
+def pair_keys(corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pairs: np.ndarray, *,
+              soft: bool = False) -> np.ndarray:
+    """The invariant key of each ordered corner pair.
+
+    Parameters
+    ----------
+    corners, bisector, opening : arrays
+        As :class:`vmcl.recognize.features.Features` holds them.
+    pairs : int (P, 2)
+    soft : bool
+        Each pair's keys in the two nearest bins of every coordinate (16 keys, (P, 16)), as the library's
+        table enters them; otherwise the one bin it falls in, (P,).
+
+    Returns
+    -------
+    int32 (P,) or (P, 16)
+    """
+    coords = _angle_coordinates(np.asarray(corners, np.float64), np.asarray(bisector, np.float64),
+                                np.asarray(opening, np.float64), np.asarray(pairs, np.int64).reshape(-1, 2))
+    sizes = np.array([ANGLE_BINS, ANGLE_BINS, OPENING_BINS, OPENING_BINS])
+    cyclic = np.array([True, True, False, False])
+    home = np.floor(coords).astype(np.int64)
+    if not soft:
+        home = np.where(cyclic, np.mod(home, sizes), np.clip(home, 0, sizes - 1))
+        return _flatten(home).astype(np.int32)
+    other = np.where(coords - home >= 0.5, home + 1, home - 1)
+    combos = np.array([[(c >> d) & 1 for d in range(4)] for c in range(16)], bool)  # (16, 4)
+    bins = np.where(combos[None], other[:, None, :], home[:, None, :])
+    bins = np.where(cyclic, np.mod(bins, sizes), np.clip(bins, 0, sizes - 1))
+    return _flatten(bins).astype(np.int32)
+
+
+@dataclass(frozen=True, eq=False)
+class Index:
+    """A library's table: for every key, the model views' corner pairs that have it.
+
+    Attributes
+    ----------
+    offsets : int32 (KEYS + 1,)
+        Key k's entries are ``offsets[k]:offsets[k + 1]``.
+    entry_view : int32 (E,)
+        The view (a row of ``views``) of each entry.
+    entry_points : float32 (E, 4)
+        The entry's corners A and B (Ax, Ay, Bx, By) in the view's frame.
+    frames : float32 (V, 4)
+        Each view's centre (x, y) and radius.
+    views : int32 (V, 2)
+        Each view's (model, view) in the library.
+    """
+
+    offsets: np.ndarray
+    entry_view: np.ndarray
+    entry_points: np.ndarray
+    frames: np.ndarray
+    views: np.ndarray
+
+    @classmethod
+    def build(cls, library: Library, *, neighbours: int = 8) -> Index:
+        """The table of every view of ``library``, each corner paired with its ``neighbours`` nearest."""
+        if not isinstance(library, Library):
+            raise InputTypeError(f"library must be a vmcl.recognize.Library, got {type(library).__name__}")
+        keys, views, points = [], [], []
+        frames, ids = [], []
+        for row, (m, v, view) in enumerate(library.views()):
+            frames.append([*view.centre, view.radius, 0.0])
+            ids.append((m, v))
+            pairs = corner_pairs(view.corners, neighbours=neighbours)
+            if not len(pairs):
+                continue
+            k = pair_keys(view.corners, view.bisector, view.opening, pairs, soft=True)
+            keys.append(k.ravel())
+            views.append(np.full(k.size, row, np.int32))
+            p = np.concatenate([view.corners[pairs[:, 0]], view.corners[pairs[:, 1]]], axis=1)
+            points.append(np.repeat(p, k.shape[1], axis=0))
+        key = np.concatenate(keys) if keys else np.zeros(0, np.int32)
+        # A pair entered twice under one key (its soft bins clipped to the same edge bin) votes once.
+        entry_view = np.concatenate(views) if views else np.zeros(0, np.int32)
+        entry_points = (np.concatenate(points) if points else np.zeros((0, 4))).astype(np.float32)
+        unique = np.unique(np.column_stack([key, entry_view, entry_points.view(np.int32)]), axis=0,
+                           return_index=True)[1]
+        order = unique[np.argsort(key[unique], kind="stable")]
+        counts = np.bincount(key[order], minlength=KEYS)
+        offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+        return cls(offsets, entry_view[order], entry_points[order], np.array(frames, np.float32).reshape(-1, 4),
+                   np.array(ids, np.int32).reshape(-1, 2))
+
+    def __len__(self) -> int:
+        return len(self.entry_view)
+
+
+@dataclass(frozen=True)
+class Candidates:
+    """What :func:`vote` returns: candidate poses, most votes first.
+
+    Attributes
+    ----------
+    views : int32 (C,)
+        The row of :attr:`Index.views` (the model and view) of each candidate.
+    similarity : float64 (C, 4)
+        Each candidate's similarity (zr, zi, tx, ty): x' = zr x - zi y + tx, y' = zi x + zr y + ty.
+    votes : int32 (C,)
+    """
+
+    views: np.ndarray
+    similarity: np.ndarray
+    votes: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.views)
+
+    def matrices(self) -> np.ndarray:
+        """Each candidate's similarity as a 2 x 3 affine matrix, (C, 2, 3)."""
+        zr, zi, tx, ty = self.similarity.T
+        return np.stack([np.stack([zr, -zi, tx], 1), np.stack([zi, zr, ty], 1)], 1)
+
+
+def _check_inputs(index: Any, corners: Any, pairs: Any, scales: Any, candidates: Any,
+                  min_votes: Any) -> tuple[np.ndarray, tuple[float, float], int, int]:
+    if not isinstance(index, Index):
+        raise InputTypeError(f"index must be a vmcl.recognize.Index, got {type(index).__name__}")
+    pairs = np.asarray(pairs)
+    if pairs.ndim != 2 or pairs.shape[1] != 2 or not np.issubdtype(pairs.dtype, np.integer):
+        raise InputValueError(f"pairs must be an int (P, 2) array, got {pairs.dtype} {pairs.shape}")
+    if len(pairs) and (pairs.min() < 0 or pairs.max() >= len(corners)):
+        raise InputValueError(f"pairs must index the {len(corners)} corners")
+    if not isinstance(scales, (tuple, list)) or len(scales) != 2:
+        raise InputTypeError(f"scales must be a pair (low, high), got {scales!r}")
+    low, high = (check_real(v, "scales", above=0) for v in scales)
+    if low > high:
+        raise InputValueError(f"scales must be (low, high) with low <= high, got {scales!r}")
+    return pairs, (low, high), check_int(candidates, "candidates", minimum=1), check_int(min_votes, "min_votes", minimum=1)
+
+
+def _pair_points(corners: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    return np.concatenate([corners[pairs[:, 0]], corners[pairs[:, 1]]], axis=1).astype(np.float32)
+
+
+def _chosen(votes: np.ndarray, candidates: int, min_votes: int) -> np.ndarray:
+    """The bins with the most votes (at least ``min_votes``), ``candidates`` at most: each bin's slot, -1
+    for the rest."""
+    top = np.argsort(-votes, kind="stable")[:candidates]
+    top = top[votes[top] >= min_votes]
+    chosen = np.full(votes.size, -1, np.int32)
+    chosen[top] = np.arange(len(top), dtype=np.int32)
+    return chosen
+
+
+def _pool(found: np.ndarray, info: np.ndarray) -> Candidates:
+    """Each (bin, view)'s hypotheses pooled into one candidate: the median similarity, the count as votes."""
+    if not len(info):
+        return Candidates(np.zeros(0, np.int32), np.zeros((0, 4)), np.zeros(0, np.int32))
+    order = np.lexsort((info[:, 1], info[:, 0]))
+    info, found = info[order], found[order]
+    starts = np.flatnonzero(np.concatenate([[True], np.any(info[1:] != info[:-1], axis=1)]))
+    stops = np.append(starts[1:], len(info))
+    views = info[starts, 1].astype(np.int32)
+    votes = (stops - starts).astype(np.int32)
+    similarity = np.array([np.median(found[a:b].astype(np.float64), axis=0) for a, b in zip(starts, stops)])
+    rank = np.lexsort((views, -votes))
+    return Candidates(views[rank], similarity[rank], votes[rank])
+
+
+def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pairs: np.ndarray, *,
+         scales: tuple[float, float] = (0.25, 4.0), candidates: int = 1024, min_votes: int = 2,
+         machine: Machine | None = None) -> Candidates:
+    """Candidate poses of the library's views in an image, by geometric hashing on the device.
+
+    Parameters
+    ----------
+    index : Index
+    corners, bisector, opening : arrays
+        The image's corners (:class:`vmcl.recognize.features.Features`).
+    pairs : int (P, 2)
+        The ordered corner pairs to look up (:func:`corner_pairs`).
+    scales : (float, float)
+        The range of scales (image size over view size) a pose may have.
+    candidates : int
+        The most pose bins kept, >= 1.
+    min_votes : int
+        The fewest votes a kept bin has, >= 1 (each corner correspondence votes twice, once per order).
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    Candidates
+    """
+    corners = np.asarray(corners, np.float64).reshape(-1, 2)
+    pairs, (low, high), candidates, min_votes = _check_inputs(index, corners, pairs, scales, candidates, min_votes)
+    machine = machine_for(machine)
+    if not len(pairs) or not len(index):
+        return _pool(np.zeros((0, 4)), np.zeros((0, 2), np.int32))
+    table = _device_table(index, machine)
+    keys = machine.to_device(pair_keys(corners, bisector, opening, pairs))
+    points = machine.to_device(_pair_points(corners, pairs))
+    size = 1 << _VOTE_TABLE_BITS
+    votes = machine.empty(size, np.int32)
+    votes.fill(0)
+    chosen = machine.empty(size, np.int32)
+    count = machine.empty(1, np.int32)
+    count.fill(0)
+    kernel = machine.kernel("indexing", "vote")
+    common = (np.int32(len(pairs)), np.float32(_ROTATION_BIN), np.int32(_ROTATION_BINS), np.float32(_SCALE_BIN),
+              np.float32(_POSITION_BIN),
+              np.float32(low), np.float32(high), np.uint32(size - 1))
+    capacity = 1 << 16
+    found, info = machine.empty((capacity, 4), np.float32), machine.empty((capacity, 2), np.int32)
+    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, chosen, count, found, info, *common,
+                   np.int32(capacity), np.int32(0))
+    chosen.set(_chosen(votes.get(), candidates, min_votes))
+    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, chosen, count, found, info, *common,
+                   np.int32(capacity), np.int32(1))
+    n = min(int(count.get()[0]), capacity)
+    return _pool(found.get()[:n], info.get()[:n])
+
+
+def _device_table(index: Index, machine: Machine) -> tuple[cl_array.Array, ...]:
+    def upload() -> tuple[cl_array.Array, ...]:
+        return tuple(machine.to_device(a) for a in (index.offsets, index.entry_view,
+                                                     np.ascontiguousarray(index.entry_points),
+                                                     np.ascontiguousarray(index.frames)))
+    cache = index.__dict__.setdefault("_device", {})
+    if id(machine) not in cache:
+        cache[id(machine)] = (machine, upload())
+    return cache[id(machine)][1]
+
+
+def _coordinates_numpy(image: np.ndarray, model: np.ndarray, frames: np.ndarray, views: np.ndarray,
+                       low: float, high: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """kernels/indexing.cl's pose_coordinates over arrays (float32, as the kernel computes): (in range,
+    similarities (n, 4), pose coordinates in bins (n, 4))."""
+    f32 = np.float32
+    mx, my = model[:, 2] - model[:, 0], model[:, 3] - model[:, 1]
+    ix, iy = image[:, 2] - image[:, 0], image[:, 3] - image[:, 1]
+    norm = mx * mx + my * my
+    with np.errstate(divide="ignore", invalid="ignore"):
+        zr, zi = (ix * mx + iy * my) / norm, (iy * mx - ix * my) / norm
+        scale = np.sqrt(zr * zr + zi * zi)
+        tx = image[:, 0] - (zr * model[:, 0] - zi * model[:, 1])
+        ty = image[:, 1] - (zi * model[:, 0] + zr * model[:, 1])
+        frame = frames[views]
+        cx = zr * frame[:, 0] - zi * frame[:, 1] + tx
+        cy = zi * frame[:, 0] + zr * frame[:, 1] + ty
+        cell = f32(_POSITION_BIN) * frame[:, 2] * scale
+        coords = np.stack([(np.arctan2(zi, zr) + f32(math.pi)) / f32(_ROTATION_BIN), np.log(scale) / f32(_SCALE_BIN),
+                           cx / cell, cy / cell], axis=1)
+    ok = (norm > 0) & (scale >= low) & (scale <= high)
+    return ok, np.stack([zr, zi, tx, ty], axis=1), coords
+
+
+def _combo_bins(coords: np.ndarray, views: np.ndarray, mask: int) -> np.ndarray:
+    """kernels/indexing.cl's combo_bin for all 16 combos: (n, 16) hashed bins."""
+    home = np.floor(coords)
+    other = np.where(coords - home >= 0.5, home + 1, home - 1)
+    combos = np.array([[(c >> d) & 1 for d in range(4)] for c in range(16)], bool)
+    bins = np.where(combos[None], other[:, None, :], home[:, None, :]).astype(np.int64)
+    bins[..., 0] = np.mod(bins[..., 0], _ROTATION_BINS)
+    ints = [bins[..., d].astype(np.uint32) for d in range(4)]
+    h = np.repeat(views.astype(np.uint32)[:, None] * np.uint32(73856093), 16, axis=1)
+    for value, prime in zip(ints, (19349663, 83492791, 2654435761, 40503)):
+        h ^= value * np.uint32(prime) + np.uint32(0x9E3779B9) + (h << np.uint32(6)) + (h >> np.uint32(2))
+    return (h & np.uint32(mask)).astype(np.int64)
+
+
+def vote_numpy(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pairs: np.ndarray, *,
+               scales: tuple[float, float] = (0.25, 4.0), candidates: int = 128, min_votes: int = 2) -> Candidates:
+    """:func:`vote` in NumPy on the host: the reference the kernel is tested and timed against."""
+    corners = np.asarray(corners, np.float64).reshape(-1, 2)
+    pairs, (low, high), candidates, min_votes = _check_inputs(index, corners, pairs, scales, candidates, min_votes)
+    if not len(pairs) or not len(index):
+        return _pool(np.zeros((0, 4)), np.zeros((0, 2), np.int32))
+    keys = pair_keys(corners, bisector, opening, pairs)
+    points = _pair_points(corners, pairs)
+    starts, stops = index.offsets[keys], index.offsets[keys + 1]
+    lengths = stops - starts
+    which = np.repeat(np.arange(len(pairs)), lengths)
+    entries = np.repeat(starts - np.concatenate([[0], np.cumsum(lengths)[:-1]]), lengths) + np.arange(lengths.sum())
+    views = index.entry_view[entries]
+    size = 1 << _VOTE_TABLE_BITS
+    ok, similarity, coords = _coordinates_numpy(points[which], index.entry_points[entries], index.frames, views,
+                                                np.float32(low), np.float32(high))
+    bins = _combo_bins(coords[ok], views[ok], size - 1)
+    votes = np.bincount(bins.ravel(), minlength=size)
+    chosen = _chosen(votes, candidates, min_votes)
+    slots = chosen[bins]
+    best = np.where(slots >= 0, slots, np.iinfo(np.int32).max).min(axis=1)
+    keep = best < np.iinfo(np.int32).max
+    return _pool(similarity[ok][keep], np.stack([best[keep], views[ok][keep]], axis=1))
+
+
+def index_for(library: Library, *, neighbours: int = 8) -> Index:
+    """The library's :class:`Index`, built once per library and ``neighbours``."""
+    return library.cached(("index", neighbours), lambda: Index.build(library, neighbours=neighbours))
+

@@ -1,0 +1,321 @@
+"""Models learned from example images, and the library folder they are kept in.
+
+Seed section "Learning in a three-stage recognition scheme": models are learned from examples. A model is
+its boundary features in its own frame, as seen in each example: a 2-D object has one view, a 3-D object
+a few views around it (recognised at viewpoints between them by aligning the nearest, section
+"Recognition"'s alignment, after Ullman and Basri). :func:`learn` builds a model from images of the
+object alone (or with a mask saying which pixels are the object's); a :class:`Library` is a folder of
+model files (``NAME.vmodel.npz``) any user can add to with ``vmcl learn``.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vmcl.cm.core import check_bool, check_int, machine_for
+from vmcl.errors import InputTypeError, InputValueError
+from vmcl.machine import Machine
+from vmcl.recognize.features import Features, image_features
+
+__all__ = ["MODEL_SUFFIX", "Library", "Model", "View", "learn", "load_model", "save_model", "view_of"]
+
+MODEL_SUFFIX = ".vmodel.npz"
+"""The suffix of a model file in a library folder."""
+
+_FORMAT = "vmcl-model"
+_VERSION = 1
+_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9 _.+-]{0,63}$")
+_MAX_POINTS = 1500  # boundary points kept per view: enough to verify a pose, few enough to test many
+
+
+@dataclass(frozen=True, eq=False)
+class View:
+    """One view of a model: its features in the frame of the image it was learned from.
+
+    Attributes
+    ----------
+    corners : float64 (F, 2)
+    bisector, opening : float64 (F,)
+        As :class:`vmcl.recognize.features.Features` holds them.
+    points : float64 (N, 2)
+        The boundary, thinned to one point per ``spacing`` x ``spacing`` cell.
+    tangent : float64 (N,)
+        The boundary's tangent at each point (radians modulo pi, NaN where unknown).
+    centre : float64 (2,)
+        The boundary's centroid.
+    radius : float
+        The boundary's rms distance from its centroid (the scale the pose search measures in).
+    shape : (int, int)
+        The example image's (H, W).
+    length : float
+        The boundary's length in pixels (its edge pixels, before thinning).
+    """
+
+    corners: np.ndarray
+    bisector: np.ndarray
+    opening: np.ndarray
+    points: np.ndarray
+    tangent: np.ndarray
+    centre: np.ndarray
+    radius: float
+    shape: tuple[int, int]
+    length: float
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """A named object: one view (2-D) or several (3-D, in the order they were learned).
+
+    Attributes
+    ----------
+    name : str
+    views : tuple of View
+    sources : tuple of str
+        Where each view was learned from (file names, or "array").
+    """
+
+    name: str
+    views: tuple[View, ...]
+    sources: tuple[str, ...]
+
+
+def _check_name(name: Any) -> str:
+    if not isinstance(name, str):
+        raise InputTypeError(f"name must be a str, got {type(name).__name__}")
+    if not _NAME.match(name):
+        raise InputValueError("name must be 1 to 64 letters, digits, spaces or _ . + - (starting with a letter "
+                              f"or digit), got {name!r}")
+    return name
+
+
+def view_of(features: Features, *, mask: np.ndarray | None = None, spacing: int = 2) -> View:
+    """A model view from an example's features.
+
+    Parameters
+    ----------
+    features : Features
+    mask : bool (H, W) array, optional
+        The object's pixels; features outside it (dilated by 2 px) are left out. Default: every feature.
+    spacing : int
+        The boundary is thinned to one point per ``spacing`` x ``spacing`` cell (>= 1), and further (a
+        coarser grid) where that leaves more than 1500 points.
+
+    Returns
+    -------
+    View
+    """
+    if not isinstance(features, Features):
+        raise InputTypeError(f"features must be vmcl.recognize.Features, got {type(features).__name__}")
+    spacing = check_int(spacing, "spacing", minimum=1)
+    corners, bisector, opening = features.corners, features.bisector, features.opening
+    points, tangent = features.points, features.tangent
+    if mask is not None:
+        mask = np.asarray(mask)
+        if mask.shape != features.shape:
+            raise InputValueError(f"mask must have the image's shape {features.shape}, got {mask.shape}")
+        grown = _dilate(mask.astype(bool), 2)
+        keep_c = grown[corners[:, 1].round().astype(int), corners[:, 0].round().astype(int)] if len(corners) else \
+            np.zeros(0, bool)
+        corners, bisector, opening = corners[keep_c], bisector[keep_c], opening[keep_c]
+        keep_p = grown[points[:, 1].astype(int), points[:, 0].astype(int)]
+        points, tangent = points[keep_p], tangent[keep_p]
+    length = float(len(points))
+    if len(points) < 8:
+        raise InputValueError(f"the example shows too little boundary to learn from ({len(points)} edge pixels)")
+    while True:
+        cells = np.unique((points // spacing).astype(np.int64) @ np.array([1, 1 << 32]), return_index=True)[1]
+        if len(cells) <= _MAX_POINTS:
+            break
+        spacing += 1
+    kept = np.sort(cells)
+    points, tangent = points[kept], tangent[kept]
+    centre = points.mean(axis=0)
+    radius = float(np.sqrt(((points - centre) ** 2).sum(axis=1).mean()))
+    return View(corners.copy(), bisector.copy(), opening.copy(), points.copy(), tangent.copy(), centre,
+                max(radius, 1.0), features.shape, length)
+
+
+def _dilate(mask: np.ndarray, r: int) -> np.ndarray:
+    out = mask.copy()
+    h, w = mask.shape
+    for dy in range(-r, r + 1):
+        for dx in range(-r, r + 1):
+            src = mask[max(0, -dy):h - max(0, dy), max(0, -dx):w - max(0, dx)]
+            out[max(0, dy):h - max(0, -dy), max(0, dx):w - max(0, -dx)] |= src
+    return out
+
+
+def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = None, sigma: float = 1.5,
+          corner: float = 45.0, sources: Sequence[str] | None = None, machine: Machine | None = None) -> Model:
+    """A model from example images: one view per image.
+
+    Parameters
+    ----------
+    name : str
+        1 to 64 letters, digits, spaces or ``_ . + -``.
+    images : sequence of (H, W) or (H, W, 3) arrays
+        The examples: one image of a 2-D object, or views around a 3-D object (at most a few degrees
+        apart for the views between them to be recognised; 20 degrees apart is tested). Each shows the
+        object alone, or with ``masks``.
+    masks : sequence of bool (H, W) arrays, optional
+        The object's pixels in each image.
+    sigma, corner : float
+        Canny's smoothing and the corner turn, as :func:`vmcl.recognize.image_features` takes them.
+    sources : sequence of str, optional
+        Where each image came from, kept in the model.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    Model
+    """
+    name = _check_name(name)
+    machine = machine_for(machine)
+    if isinstance(images, np.ndarray) or not isinstance(images, Sequence) or not images:
+        raise InputTypeError("images must be a non-empty sequence of images")
+    if masks is not None and len(masks) != len(images):
+        raise InputValueError(f"masks must hold one mask per image ({len(images)}), got {len(masks)}")
+    if sources is not None and len(sources) != len(images):
+        raise InputValueError(f"sources must hold one name per image ({len(images)}), got {len(sources)}")
+    views = []
+    for i, image in enumerate(images):
+        features = image_features(image, sigma=sigma, corner=corner, machine=machine)
+        views.append(view_of(features, mask=None if masks is None else masks[i]))
+    return Model(name, tuple(views), tuple(sources) if sources is not None else ("array",) * len(views))
+
+
+def _model_path(folder: Path, name: str) -> Path:
+    return folder / f"{name}{MODEL_SUFFIX}"
+
+
+def save_model(model: Model, folder: str | Path, *, replace: bool = False) -> Path:
+    """Write a model into a library folder (created if missing) as ``NAME.vmodel.npz``.
+
+    Parameters
+    ----------
+    model : Model
+    folder : str or Path
+    replace : bool
+        Replace a model file of the same name. Without it an existing file is an error; a file that is
+        not a vmcl model is never replaced.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
+    if not isinstance(model, Model):
+        raise InputTypeError(f"model must be a vmcl.recognize.Model, got {type(model).__name__}")
+    replace = check_bool(replace, "replace")
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise InputValueError(f"folder must be a directory, got the file {folder}")
+    path = _model_path(folder, _check_name(model.name))
+    if path.exists():
+        if not replace:
+            raise InputValueError(f"{path} exists; pass replace=True (vmcl learn --replace) to replace it")
+        load_model(path)  # refuses a file that is not a vmcl model
+    folder.mkdir(parents=True, exist_ok=True)
+    arrays: dict[str, np.ndarray] = {}
+    for i, view in enumerate(model.views):
+        arrays.update({f"v{i}_corners": view.corners, f"v{i}_bisector": view.bisector, f"v{i}_opening": view.opening,
+                       f"v{i}_points": view.points, f"v{i}_tangent": view.tangent,
+                       f"v{i}_centre": view.centre,
+                       f"v{i}_frame": np.array([view.radius, *view.shape, view.length], np.float64)})
+    meta = {"format": _FORMAT, "version": _VERSION, "name": model.name, "views": len(model.views),
+            "sources": list(model.sources)}
+    partial = path.with_name(path.name + ".partial")
+    with open(partial, "wb") as handle:
+        np.savez_compressed(handle, meta=np.array(json.dumps(meta)), **arrays)
+    partial.replace(path)
+    return path
+
+
+def load_model(path: str | Path) -> Model:
+    """Read a model file written by :func:`save_model`.
+
+    Raises
+    ------
+    vmcl.errors.InputValueError
+        The file is missing or not a vmcl model.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputValueError(f"path must be a model file, {path} is not a file")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+            if meta.get("format") != _FORMAT:
+                raise ValueError("not a model")
+            if meta.get("version") != _VERSION:
+                raise InputValueError(f"{path} is a vmcl model of format version {meta.get('version')}; this vmcl "
+                                      f"reads version {_VERSION}")
+            views = []
+            for i in range(int(meta["views"])):
+                frame = data[f"v{i}_frame"]
+                views.append(View(data[f"v{i}_corners"], data[f"v{i}_bisector"], data[f"v{i}_opening"],
+                                  data[f"v{i}_points"], data[f"v{i}_tangent"],
+                                  data[f"v{i}_centre"], float(frame[0]),
+                                  (int(frame[1]), int(frame[2])), float(frame[3])))
+            return Model(_check_name(meta["name"]), tuple(views), tuple(str(s) for s in meta["sources"]))
+    except InputValueError:
+        raise
+    except (ValueError, KeyError, OSError, EOFError) as error:
+        raise InputValueError(f"{path} is not a vmcl model file ({error})") from None
+
+
+class Library:
+    """Models to recognise: given as a sequence, or read from a folder of ``*.vmodel.npz`` files.
+
+    Parameters
+    ----------
+    models : sequence of Model
+        Distinct names.
+    """
+
+    def __init__(self, models: Sequence[Model]) -> None:
+        models = tuple(models)
+        for m in models:
+            if not isinstance(m, Model):
+                raise InputTypeError(f"models must hold vmcl.recognize.Model, got {type(m).__name__}")
+        names = [m.name for m in models]
+        if len(set(names)) != len(names):
+            raise InputValueError(f"models must have distinct names, got {sorted(names)}")
+        self.models = models
+        self._indices: dict[Any, Any] = {}
+
+    @classmethod
+    def load(cls, folder: str | Path) -> Library:
+        """Every model file in a folder (sorted by name)."""
+        folder = Path(folder)
+        if not folder.is_dir():
+            raise InputValueError(f"folder must be a directory of model files, got {folder}")
+        return cls([load_model(p) for p in sorted(folder.glob(f"*{MODEL_SUFFIX}"))])
+
+    def __len__(self) -> int:
+        return len(self.models)
+
+    def __iter__(self) -> Iterator[Model]:
+        return iter(self.models)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(m.name for m in self.models)
+
+    def views(self) -> list[tuple[int, int, View]]:
+        """Every (model index, view index, view), model after model."""
+        return [(m, v, view) for m, model in enumerate(self.models) for v, view in enumerate(model.views)]
+
+    def cached(self, key: Any, build: Any) -> Any:
+        """What ``build()`` gives, made once per ``key`` (the index per Machine and settings)."""
+        if key not in self._indices:
+            self._indices[key] = build()
+        return self._indices[key]
+

@@ -1,0 +1,381 @@
+"""Recognition in one call: selection, indexing, alignment and verification of a library's models.
+
+Seed section "Recognition": "a three-stage recognition scheme": selection (:mod:`vmcl.recognize.selection`),
+indexing (:mod:`vmcl.recognize.indexing`) and verification (:mod:`vmcl.recognize.verification`), on the
+discontinuities the machine found. :func:`recognize` takes an image (its Canny edges), an edge map, the
+machine's :class:`vmcl.result.Result` (its cartoon: the labelled discontinuities) or ready
+:class:`vmcl.recognize.features.Features`, and returns the recognised objects, each with its model's name,
+the view it was aligned from, its pose, its score and its boundary in the image.
+
+A detection is kept where at least ``min_score`` of the model's boundary that lands in the image is
+supported, by at least ``min_support`` distinct edge pixels; candidates are taken in the order of the
+edge pixels they explain, and one whose silhouette lies mostly (half or more) on those already kept is
+dropped. A 3-D object's views are aligned by an
+affine map (a view near the one seen differs from it by nearly an affine map in orthographic projection,
+Ullman and Basri's observation); a 2-D object's by ``transform``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import cv2
+import numpy as np
+from scipy import special
+
+from vmcl.cm.core import check_choice, check_int, check_real, machine_for
+from vmcl.errors import InputTypeError
+from vmcl.machine import Machine
+from vmcl.recognize.features import Features, edge_features, image_features
+from vmcl.recognize.indexing import Candidates, corner_pairs, index_for, vote
+from vmcl.recognize.models import Library, View
+from vmcl.recognize.selection import corner_regions, select_regions
+from vmcl.recognize.verification import TRANSFORMS, Transform, distance_transform, refine, support
+
+__all__ = ["Detection", "recognize"]
+
+_CORNER_TURN = np.radians(30)  # a view's corner and an image corner match within 3 px, their bisectors
+_CORNER_OPENING = np.radians(25)  # this close in direction and their openings this close
+_ANGLE = np.radians(25)  # the most a supporting edge's tangent may differ from the model's
+_MARGIN = 10  # px around a pose over which the chance of support is measured
+_SCREEN_POINTS = 96  # boundary points per candidate in the coarse test
+_SCREEN_TOLERANCE = 4.0  # pixels
+_OVERLAP = 0.5  # a pose whose silhouette lies this much inside those kept already is dropped
+_MAX_STRETCH = 1.3  # the most an affine view alignment may stretch one direction over the other
+
+
+@dataclass(frozen=True, eq=False)
+class Detection:
+    """One recognised object.
+
+    Attributes
+    ----------
+    name : str
+        Its model's name.
+    view : int
+        The model view it was aligned from.
+    transform : float64 (3, 3)
+        The pose: the homography taking the view's frame to the image (last row (0, 0, 1) for
+        similarities and affine maps).
+    score : float
+        The fraction of the model's boundary (inside the image) that the image's edges support.
+    votes : int
+        The indexing votes of the candidate it came from.
+    significance : float
+        -log10 of its number of false alarms: how unlikely its support is by chance, given how many
+        candidates were tested and how crowded with edges the image is around it (kept where >= 0).
+    corners_found : float
+        The fraction of the view's corners (those inside the image) that an image corner matches: within
+        3 px, its bisector within 30 degrees and its opening within 25.
+    corners : float64 (C, 2)
+        The view's corners in the image.
+    boundary : float64 (N, 2)
+        The view's boundary points in the image.
+    supported : bool (N,)
+        Which of them an image edge supports.
+    """
+
+    name: str
+    view: int
+    transform: np.ndarray
+    score: float
+    votes: int
+    significance: float
+    corners_found: float
+    corners: np.ndarray
+    boundary: np.ndarray
+    supported: np.ndarray
+
+    def locate(self, points: np.ndarray) -> np.ndarray:
+        """Points (x, y) of the view's frame carried into the image by the pose."""
+        p = np.asarray(points, np.float64).reshape(-1, 2)
+        h = p @ self.transform[:, :2].T + self.transform[:, 2]
+        return h[:, :2] / h[:, 2:3]
+
+
+def _features(data: Any, sigma: float, machine: Machine) -> Features:
+    if isinstance(data, Features):
+        return data
+    # A Result (duck-typed, so this layer does not import the pipeline): its cartoon's discontinuities.
+    if hasattr(data, "labels") and hasattr(data, "edges") and hasattr(data, "config"):
+        labels = np.asarray(data.labels) if data.labels is not None else None
+        edges = labels != 0 if labels is not None and labels.any() else np.asarray(data.edges, bool)
+        return edge_features(edges, machine=machine)
+    if isinstance(data, np.ndarray) and data.ndim == 2 and data.dtype == np.bool_:
+        return edge_features(data, machine=machine)
+    if isinstance(data, np.ndarray):
+        return image_features(data, sigma=sigma, machine=machine)
+    raise InputTypeError("image must be an image or edge map (NumPy array), a vmcl Result or vmcl.recognize.Features, "
+                         f"got {type(data).__name__}")
+
+
+def recognize(image: Any, library: Library, *, transform: Transform = "similarity", sigma: float = 1.5,
+              scales: tuple[float, float] = (0.25, 4.0), min_score: float = 0.3, min_significance: float = 0.0,
+              min_support: int = 40,
+              candidates: int = 1024, verify: int = 64, min_votes: int = 2, neighbours: int = 8, regions: int = 8,
+              tolerance: float = 2.0, machine: Machine | None = None) -> list[Detection]:
+    """Find a library's objects in an image.
+
+    Parameters
+    ----------
+    image : array, Result or Features
+        A grey or RGB image (its Canny edges at ``sigma``), a bool edge map, a :class:`vmcl.result.Result`
+        (its cartoon) or :class:`vmcl.recognize.features.Features`.
+    library : Library
+    transform : {"similarity", "affine", "homography"}
+        The pose a 2-D model is aligned by (3-D models' views: at least affine).
+    sigma : float
+        Canny's smoothing for an image, > 0.
+    scales : (float, float)
+        The sizes (image over model view) searched.
+    min_score : float
+        The fraction of a model's boundary that must be supported, in (0, 1].
+    min_significance : float
+        The least significance (-log10 of the number of false alarms, :attr:`Detection.significance`) a
+        detection needs.
+    min_support : int
+        The fewest distinct image edge pixels a detection explains, >= 1.
+    candidates : int
+        Pose bins kept from the vote, >= 1 (their hypotheses are pooled into candidate poses).
+    verify : int
+        Candidate poses refined and verified, >= 1: those a coarse test of each unrefined pose supports
+        best.
+    min_votes : int
+        The fewest indexing votes a candidate needs, >= 1.
+    neighbours : int
+        Each corner is paired with this many nearest corners for indexing, >= 1.
+    regions : int
+        The most salient regions whose corners are also paired among themselves (selection), >= 0.
+    tolerance : float
+        The distance (pixels) within which an edge supports a model point, > 0.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    list of Detection
+        Best score first.
+    """
+    machine = machine_for(machine)
+    if not isinstance(library, Library):
+        raise InputTypeError(f"library must be a vmcl.recognize.Library, got {type(library).__name__}")
+    transform = check_choice(transform, "transform", TRANSFORMS)
+    sigma = check_real(sigma, "sigma", above=0)
+    min_score = check_real(min_score, "min_score", above=0, maximum=1)
+    min_significance = check_real(min_significance, "min_significance")
+    min_support = check_int(min_support, "min_support", minimum=1)
+    candidates = check_int(candidates, "candidates", minimum=1)
+    verify = check_int(verify, "verify", minimum=1)
+    neighbours = check_int(neighbours, "neighbours", minimum=1)
+    regions = check_int(regions, "regions", minimum=0)
+    tolerance = check_real(tolerance, "tolerance", above=0)
+    features = _features(image, sigma, machine)
+    if not len(library) or len(features) < 2:
+        return []
+    groups = None
+    if regions:
+        selected = select_regions(features.edges, features.saliency_map, machine=machine)
+        groups = corner_regions(selected, features.corners, features.bisector, top=regions)
+    pairs = corner_pairs(features.corners, neighbours=neighbours, groups=groups)
+    index = index_for(library)
+    found = vote(index, features.corners, features.bisector, features.opening, pairs, scales=scales,
+                 candidates=candidates, min_votes=min_votes, machine=machine)
+    return _verify(found, index.views, library, features, transform, min_score, min_significance, min_support,
+                   tolerance, verify, machine)
+
+
+def _screen(found: Candidates, views: list[tuple[int, int, View]], nearest: np.ndarray, tangent_map: np.ndarray,
+            keep: int, machine: Machine) -> Candidates:
+    """The ``keep`` candidates whose unrefined poses a coarse test supports best (a sample of each view's
+    boundary, within _SCREEN_TOLERANCE px)."""
+    if len(found) <= keep:
+        return found
+    ranges, points, tangents = [], [], []
+    start = 0
+    for row in found.views:
+        view = views[row][2]
+        step = max(1, len(view.points) // _SCREEN_POINTS)
+        points.append(view.points[::step])
+        tangents.append(view.tangent[::step])
+        ranges.append((start, start + len(points[-1])))
+        start += len(points[-1])
+    tested = refine(nearest, tangent_map, np.concatenate(points), np.concatenate(tangents), np.array(ranges),
+                    found.matrices(), tolerance=_SCREEN_TOLERANCE, start=_SCREEN_TOLERANCE, angle=30.0, iterations=0,
+                    machine=machine)
+    best = np.lexsort((-found.votes, -tested.score))[:keep]
+    return Candidates(found.views[best], found.similarity[best], found.votes[best])
+
+
+def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features: Features, transform: Transform,
+            min_score: float, min_significance: float, min_support: int, tolerance: float, verify: int,
+            machine: Machine) -> list[Detection]:
+    if not len(found):
+        return []
+    views = library.views()
+    nearest, distance = distance_transform(features.edges, machine=machine)
+    tangent_map = features.tangent_map
+    found = _screen(found, views, nearest, tangent_map, verify, machine)
+    ranges, points, tangents = [], [], []
+    start = 0
+    for row in found.views:
+        view = views[row][2]
+        points.append(view.points)
+        tangents.append(view.tangent)
+        ranges.append((start, start + len(view.points)))
+        start += len(view.points)
+    all_points, all_tangents = np.concatenate(points), np.concatenate(tangents)
+    solid = np.array([len(library.models[view_ids[row][0]].views) > 1 for row in found.views])
+    transforms = found.matrices()
+    verified = [refine(nearest, tangent_map, all_points, all_tangents, np.array(ranges), transforms,
+                       transform=transform, tolerance=tolerance, machine=machine)]
+    if solid.any() and transform == "similarity":
+        # A 3-D object's view is aligned by an affine map, from the similarity fitted first.
+        again = np.flatnonzero(solid)
+        verified.append(refine(nearest, tangent_map, all_points, all_tangents, np.array(ranges)[again],
+                               verified[0].transforms[again], transform="affine", tolerance=tolerance, start=4.0,
+                               iterations=4, machine=machine))
+    score, inside = verified[0].score.copy(), verified[0].inside.copy()
+    poses = verified[0].transforms.copy()
+    if len(verified) > 1:
+        # The affine pose replaces the similarity only where it stays near one (a view near the one seen
+        # differs from it by a little foreshortening, not by any affine map).
+        again = np.flatnonzero(solid)
+        for k, c in enumerate(again):
+            stretch = np.linalg.svd(verified[1].transforms[k][:2, :2], compute_uv=False)
+            if stretch[0] <= _MAX_STRETCH * stretch[1]:
+                score[c], inside[c], poses[c] = verified[1].score[k], verified[1].inside[k], verified[1].transforms[k]
+    h, w = features.shape
+    # The final poses tested once more (all candidates in one launch): each candidate's distinct supported
+    # image edge pixels are what it explains.
+    final = support(nearest, tangent_map, all_points, all_tangents, np.array(ranges), poses, machine=machine)
+    ok = final.inside & (final.distance <= tolerance) & (final.angle <= _ANGLE)
+    address = np.round(final.edge[:, 1]).astype(np.int64) * w + np.round(final.edge[:, 0]).astype(np.int64)
+    near_edges = _integral(distance <= tolerance)
+    chance_angle = 2 * _ANGLE / np.pi
+    explained, coverage, significance = [], np.zeros(len(found)), np.zeros(len(found))
+    corners_found = np.zeros(len(found))
+    for c in range(len(found)):
+        view = views[found.views[c]][2]
+        start, stop = ranges[c]
+        pixels = np.unique(address[start:stop][ok[start:stop]])
+        explained.append(pixels)
+        # The most distinct pixels its points can reach: one each, or fewer where the pose shrinks them
+        # closer than a pixel apart; its coverage is the share of those it explains.
+        spread = view.length / max(len(view.points), 1) * _scale(poses[c])
+        expected = max(inside[c] * min(1.0, spread), 1.0)
+        coverage[c] = min(len(pixels) / expected, 1.0)
+        # A contrario: how unlikely that much support is by chance. Stretches of boundary 2 * tolerance
+        # long are the independent trials; each is supported by chance with the probability that a point
+        # near the pose lies within tolerance of some edge running its way.
+        chance = _box_mean(near_edges, _apply(poses[c], view.points), (h, w)) * chance_angle
+        trials = expected / (2 * tolerance)
+        significance[c] = _significance(coverage[c] * trials, trials, chance, len(found))
+        corners_found[c] = _corner_fraction(poses[c], view, features)
+    order = np.lexsort((-found.votes, -significance))
+    import os
+    if os.environ.get("VMCL_DEBUG"): globals()["_debug"] = (found, poses, score, coverage, significance, corners_found, explained)
+    detections: list[Detection] = []
+    kept: list[int] = []
+    taken = np.zeros((h, w), bool)  # the silhouettes (convex hulls) of the objects kept so far
+    for c in order:
+        if significance[c] < min_significance or coverage[c] < min_score or len(explained[c]) < min_support:
+            continue
+        view = views[found.views[c]][2]
+        hull = _silhouette(_apply(poses[c], view.points), (h, w))
+        area = int(hull.sum())
+        # Two objects do not lie in one place: a pose that mostly covers one already kept is another
+        # reading of the same edges.
+        if area == 0 or (hull & taken).sum() >= _OVERLAP * area:
+            continue
+        taken |= hull
+        kept.append(c)
+    # A kept pose whose support is mostly another's, larger one's (a part of an object read as a smaller
+    # object) is dropped.
+    for c in kept:
+        mine = explained[c]
+        if any(len(explained[o]) > len(mine) and np.isin(mine, explained[o]).mean() >= _OVERLAP for o in kept if o != c):
+            continue
+        view = views[found.views[c]][2]
+        model, view_index = (int(v) for v in view_ids[found.views[c]])
+        boundary = _apply(poses[c], view.points)
+        detections.append(Detection(library.models[model].name, view_index, poses[c], float(score[c]),
+                                    int(found.votes[c]), float(significance[c]), float(corners_found[c]),
+                                    _apply(poses[c], view.corners),
+                                    boundary, _edge_support(boundary, nearest, tolerance, w, h) >= 0))
+    return detections
+
+
+def _corner_fraction(pose: np.ndarray, view: View, features: Features) -> float:
+    if not len(view.corners):
+        return 0.0
+    h, w = features.shape
+    at = _apply(pose, view.corners)
+    inside = (at[:, 0] >= 0) & (at[:, 1] >= 0) & (at[:, 0] <= w - 1) & (at[:, 1] <= h - 1)
+    if not inside.any() or not len(features.corners):
+        return 0.0
+    turned = np.stack([np.cos(view.bisector), np.sin(view.bisector)], 1) @ pose[:2, :2].T
+    bisector = np.arctan2(turned[:, 1], turned[:, 0])
+    near = np.hypot(at[:, None, 0] - features.corners[None, :, 0], at[:, None, 1] - features.corners[None, :, 1]) <= 3
+    same_way = np.abs(np.angle(np.exp(1j * (bisector[:, None] - features.bisector[None])))) <= _CORNER_TURN
+    alike = np.abs(view.opening[:, None] - features.opening[None]) <= _CORNER_OPENING
+    return float((near & same_way & alike).any(axis=1)[inside].mean())
+
+
+def _silhouette(points: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """The convex hull of points, as a bool mask of the image."""
+    mask = np.zeros(shape, np.uint8)
+    span = np.clip(points, -4 * max(shape), 4 * max(shape))
+    hull = cv2.convexHull(np.round(span).astype(np.int32))
+    cv2.fillConvexPoly(mask, hull, 1)
+    return mask.astype(bool)
+
+
+def _integral(mask: np.ndarray) -> np.ndarray:
+    """The summed-area table of a mask, with a leading row and column of zeros."""
+    table = np.zeros((mask.shape[0] + 1, mask.shape[1] + 1), np.float64)
+    table[1:, 1:] = np.cumsum(np.cumsum(mask, axis=0), axis=1)
+    return table
+
+
+def _box_mean(table: np.ndarray, points: np.ndarray, shape: tuple[int, int]) -> float:
+    """The mask's mean over the bounding box of points (within the image), widened by _MARGIN px."""
+    h, w = shape
+    x0, y0 = (int(np.clip(np.floor(points[:, k].min()) - _MARGIN, 0, n - 1)) for k, n in ((0, w), (1, h)))
+    x1, y1 = (int(np.clip(np.ceil(points[:, k].max()) + _MARGIN, 0, n - 1)) + 1 for k, n in ((0, w), (1, h)))
+    if x1 <= x0 or y1 <= y0:
+        return 1.0
+    total = table[y1, x1] - table[y0, x1] - table[y1, x0] + table[y0, x0]
+    return float(total / ((x1 - x0) * (y1 - y0)))
+
+
+def _significance(hits: float, trials: float, chance: float, tests: int) -> float:
+    """-log10 of the number of false alarms: ``tests`` times the chance of at least ``hits`` successes in
+    ``trials`` Bernoulli trials of probability ``chance`` (the binomial tail, continuous in its counts)."""
+    if hits <= 0 or trials <= 0:
+        return -np.inf
+    chance = min(max(chance, 1e-6), 1 - 1e-6)
+    tail = special.betainc(hits, max(trials - hits + 1, 1e-9), chance)
+    return float(-np.log10(max(tail, 1e-300)) - np.log10(tests))
+
+
+def _scale(pose: np.ndarray) -> float:
+    """The pose's linear scale: the square root of its linear part's determinant (at the origin)."""
+    return float(np.sqrt(abs(np.linalg.det(pose[:2, :2] / pose[2, 2]))))
+
+
+def _apply(matrix: np.ndarray, p: np.ndarray) -> np.ndarray:
+    h = np.asarray(p, np.float64).reshape(-1, 2) @ matrix[:, :2].T + matrix[:, 2]
+    return h[:, :2] / h[:, 2:3]
+
+
+def _edge_support(boundary: np.ndarray, nearest: np.ndarray, tolerance: float, w: int, h: int) -> np.ndarray:
+    """The image edge pixel (flat address) supporting each posed boundary point, -1 for none."""
+    x, y = np.floor(boundary[:, 0] + 0.5).astype(np.int64), np.floor(boundary[:, 1] + 0.5).astype(np.int64)
+    inside = (x >= 0) & (y >= 0) & (x < w) & (y < h)
+    q = np.full(len(boundary), -1, np.int64)
+    q[inside] = nearest[y[inside], x[inside]]
+    ok = q >= 0
+    qx, qy = q % w, q // w
+    ok &= np.hypot(boundary[:, 0] - qx, boundary[:, 1] - qy) <= tolerance
+    return np.where(ok, q, -1)
+
