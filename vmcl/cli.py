@@ -234,6 +234,20 @@ def _demo(args) -> int:
 
 # -- run -----------------------------------------------------------------------------------------------
 
+def _with_models(config, models: str | None):
+    """The configuration with ``vmcl run --models`` as its recognition library (checked to be one)."""
+    import dataclasses
+
+    from vmcl.pipeline import RecognitionConfig
+
+    if models is None:
+        return config
+    if not Path(models).is_dir():
+        raise BadInput(f"--models {models}: not a folder (make one with vmcl learn NAME IMAGES... --library "
+                       f"{models})")
+    return dataclasses.replace(config, recognition=RecognitionConfig(models=str(models)))
+
+
 def _run(args) -> int:
     from vmcl.frame_sources import is_sequence
     from vmcl.pipeline import VisionMachine
@@ -242,7 +256,7 @@ def _run(args) -> int:
         return _run_sequence(args)
     if args.right and is_sequence(args.right):
         raise BadInput(f"right {args.right} is a sequence but left {args.left} is one image")
-    config = _config(args.config)
+    config = _with_models(_config(args.config), args.models)
     left = _read(args.left, "left")
     right = _read(args.right, "right") if args.right else None
     next_ = _read(args.next, "next") if args.next else None
@@ -256,7 +270,31 @@ def _run(args) -> int:
         vm = VisionMachine(config)
         result = _run_machine(vm, args, left, right, next_)
         write_output(result, work, f"Vision Machine: {Path(args.left).name}")
+    if result.recognition is not None:
+        found = ", ".join(f"{d.name} ({d.score:.2f})" for d in result.recognition) or "nothing"
+        print(f"recognised: {found}")
     print(f"{result.total_ms:.0f} ms; report: {Path(args.out) / 'report.html'}")
+    return 0
+
+
+def _learn(args) -> int:
+    from vmcl.recognize import learn, save_model
+
+    images = [_read(path, "example") for path in args.images]
+    masks = None
+    if args.mask:
+        if len(args.mask) != len(images):
+            raise BadInput(f"--mask given {len(args.mask)} times for {len(images)} images: give one mask per image")
+        masks = [_read(path, "mask") for path in args.mask]
+        for path, mask, image in zip(args.mask, masks, images):
+            if mask.shape[:2] != image.shape[:2]:
+                raise BadInput(f"mask {path} is {mask.shape[1]} x {mask.shape[0]}, its image "
+                               f"{image.shape[1]} x {image.shape[0]}: a mask must have its image's size")
+        masks = [(m if m.ndim == 2 else m.mean(axis=2)) > np.iinfo(m.dtype).max // 2 for m in masks]
+    model = learn(args.name, images, masks=masks, sources=[Path(p).name for p in args.images])
+    path = save_model(model, args.library, replace=args.replace)
+    corners = sum(len(v.corners) for v in model.views)
+    print(f"{model.name}: {len(model.views)} view{'s' * (len(model.views) != 1)}, {corners} corners; wrote {path}")
     return 0
 
 
@@ -277,7 +315,7 @@ def _run_sequence(args) -> int:
 
     if args.next:
         raise BadInput("--next is for one image; a sequence's next frames are its own")
-    config = _config(args.config)
+    config = _with_models(_config(args.config), args.models)
     lefts = _frames(args.left, "left")
     rights = _frames(args.right, "right") if args.right else None
     if rights is not None and None not in (lefts.count, rights.count) and lefts.count != rights.count:
@@ -591,6 +629,18 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--fps", type=float, default=10.0, help="a sequence's videos' frame rate (default 10)")
     run.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config)")
     run.add_argument("--out", required=True, help="output folder: new, empty or a previous vmcl output")
+    run.add_argument("--models", help="a library folder of models (vmcl learn): recognise them in the left image")
+
+    learn = commands.add_parser("learn", parents=[quiet],
+                                help="learn an object's model from example images into a library folder")
+    learn.add_argument("name", help="the model's name (letters, digits, spaces, _ . + -)")
+    learn.add_argument("images", nargs="+", metavar="IMAGE",
+                       help="the examples: one image of a flat object, or a few views around a 3-D one, in order")
+    learn.add_argument("--library", required=True, help="the library folder (created if missing)")
+    learn.add_argument("--mask", action="append", default=[], metavar="MASK",
+                       help="an image, white where the object is, per example (default: the whole image is the "
+                            "object); repeat once per example")
+    learn.add_argument("--replace", action="store_true", help="replace the library's model of this name")
 
     evaluate = commands.add_parser("eval", parents=[quiet], help="benchmarks beside OpenCV's baselines")
     evaluate.add_argument("benchmark", choices=("stereo", "flow", "edges"))
@@ -651,7 +701,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command == "demo" and not 64 <= args.size <= 1024:
         print("vmcl: error: --size must be within 64..1024", file=sys.stderr)
         return EXIT_BAD_INPUT
-    handler = {"demo": _demo, "run": _run, "eval": _eval, "fit": _fit, "info": _info, "batch": _batch}[args.command]
+    handler = {"demo": _demo, "run": _run, "eval": _eval, "fit": _fit, "info": _info, "batch": _batch,
+               "learn": _learn}[args.command]
     try:
         return handler(args)
     except KeyboardInterrupt:

@@ -51,6 +51,7 @@ from vmcl.labels import CUES
 from vmcl.machine import Machine, on_device
 from vmcl.mrf import SOLVERS, NothingToRestore, Restoration, Settings, preset
 from vmcl.mrf.data import check_unit_interval
+from vmcl.recognize import Library, recognize
 from vmcl.result import Result
 
 __all__ = [
@@ -458,6 +459,22 @@ class MrfConfig:
 
 
 @dataclass(frozen=True)
+class RecognitionConfig:
+    """The recognition stage (:func:`vmcl.recognize.recognize`): a library's objects found in the left image.
+
+    Parameters
+    ----------
+    models : str
+        A library folder of model files (``vmcl learn``); "" (the default) runs no recognition.
+    """
+
+    models: str = ""
+
+    def __post_init__(self) -> None:
+        _check_field_types("recognition", self)
+
+
+@dataclass(frozen=True)
 class LabelsConfig:
     """How the integration stage labels the discontinuities (:mod:`vmcl.labelling`).
 
@@ -562,7 +579,7 @@ cold enough that the carried field's lines form at once where its jumps are, and
 
 _SECTIONS = {"edges": EdgesConfig, "grouping": GroupingConfig, "stereo": StereoConfig, "motion": MotionConfig,
              "colour": ColourConfig, "texture": TextureConfig, "mrf": MrfConfig, "labels": LabelsConfig,
-             "time": TimeConfig}
+             "time": TimeConfig, "recognition": RecognitionConfig}
 
 
 @dataclass(frozen=True)
@@ -589,6 +606,7 @@ class Config:
     mrf: MrfConfig = field(default_factory=MrfConfig)
     labels: LabelsConfig = field(default_factory=LabelsConfig)
     time: TimeConfig = field(default_factory=TimeConfig)
+    recognition: RecognitionConfig = field(default_factory=RecognitionConfig)
 
     def __post_init__(self) -> None:
         # A Config made in Python is checked like one read from TOML: each section of its own class
@@ -721,6 +739,8 @@ class VisionMachine:
         self.machine = machine or Machine(profile=True)
         # Read once per machine; None with the rule labels.
         self.labeller = self.config.labels.labeller() if self.config.labels.method == "linear" else None
+        # The model library, read once (its index is built at the first run); None without recognition.
+        self.library = Library.load(self.config.recognition.models) if self.config.recognition.models else None
 
     def cues(self, *, right: bool, next: bool, rgb: bool) -> list[CueModule]:
         """The registered cues (:func:`vmcl.cues.registered`) that run for these inputs, in order."""
@@ -736,7 +756,7 @@ class VisionMachine:
         names = ["upload", *carried, "edges", *grouping, "boundaries", *(cue.name for cue in active)]
         for cue in active:
             names += [f"mrf {cue.name}"] + [stage for stage in [cue.refine_stage(self.config)] if stage]
-        return names + ["integrate", "download"]
+        return names + ["integrate", "download"] + (["recognition"] if self.library is not None else [])
 
     def run(self, left: np.ndarray, right: np.ndarray | None = None, next: np.ndarray | None = None, *,
             progress: Callable[[str], None] | None = None) -> Result:
@@ -948,6 +968,10 @@ class _Run:
                              boundary_strength=host_strength, config=self.c, restored=host_restored, lines=host_lines, stages=self.stages,
                              kernels=self.m.timings(reset=True) if self.m.profile else {}, notes=self.notes,
                              **host)
+        if vm.library is not None:
+            with self.stage("recognition"):
+                # On the left image's own edges, at the scale the models were learned at.
+                self.result.recognition = recognize(image, vm.library, machine=self.m)
 
     def group(self, image: np.ndarray, canny: edges.CannyResult) -> tuple[Grouping, cl_array.Array]:
         """The grouping of Canny's edges, and the edges the MRFs are coupled to (``edges.saliency``)."""

@@ -26,6 +26,7 @@ from vmcl.errors import InputTypeError, InputValueError
 from vmcl.group import Grouping
 from vmcl.labels import Cue, Label
 from vmcl.pictures import to_uint8
+from vmcl.recognize import Detection
 from vmcl.result import Result
 
 __all__ = [
@@ -38,6 +39,7 @@ __all__ = [
     "images",
     "images_with_captions",
     "labels_image",
+    "recognition_image",
     "strength_image",
     "support_image",
     "write_report",
@@ -56,6 +58,8 @@ JUNCTION_COLOURS = {"T": (230, 40, 40), "Y": (30, 160, 60), "arrow": (40, 110, 2
 """RGB of each junction type in the grouping picture."""
 
 _PAIR_COLOUR = (0, 170, 190)
+_OBJECT_COLOURS = ((0, 200, 80), (230, 120, 0), (40, 110, 240), (200, 40, 200), (0, 170, 190), (200, 170, 0))
+_UNSUPPORTED = (120, 20, 20)
 _CURVE_DARK, _CURVE_LIGHT = np.array([150, 150, 150]), np.array([20, 20, 20])
 
 BRIGHTNESS_ONLY = (200, 200, 200)
@@ -173,6 +177,39 @@ def grouping_image(image: np.ndarray, grouping: Grouping) -> np.ndarray:
     return picture
 
 
+def recognition_image(image: np.ndarray, detections: Sequence[Detection]) -> np.ndarray:
+    """The recognised objects over the faded image: each model's boundary where the image supports it in
+    its colour, unsupported in dark red, its corners as small squares, its name at its first corner.
+
+    Parameters
+    ----------
+    image : float (H, W) or (H, W, 3) in [0, 1]
+    detections : sequence of vmcl.recognize.Detection
+
+    Returns
+    -------
+    uint8 RGB (H, W, 3)
+    """
+    picture = _faded(_image_argument(image, "image"))
+    h, w = picture.shape[:2]
+    for k, detection in enumerate(detections):
+        if not isinstance(detection, Detection):
+            raise InputTypeError(f"detections must hold vmcl.recognize.Detection, got {type(detection).__name__}")
+        colour = _OBJECT_COLOURS[k % len(_OBJECT_COLOURS)]
+        at = np.rint(detection.boundary).astype(np.int64)
+        inside = (at[:, 0] >= 0) & (at[:, 1] >= 0) & (at[:, 0] < w) & (at[:, 1] < h)
+        picture[at[inside & ~detection.supported, 1], at[inside & ~detection.supported, 0]] = _UNSUPPORTED
+        picture[at[inside & detection.supported, 1], at[inside & detection.supported, 0]] = colour
+        for x, y in np.rint(detection.corners).astype(np.int64):
+            if 0 <= x < w and 0 <= y < h:
+                cv2.rectangle(picture, (int(x) - 1, int(y) - 1), (int(x) + 1, int(y) + 1), colour, -1)
+        if len(at[inside]):
+            x, y = at[inside].min(axis=0)
+            cv2.putText(picture, detection.name, (int(x), max(int(y) - 3, 10)), cv2.FONT_HERSHEY_SIMPLEX, 0.4, colour,
+                        1, cv2.LINE_AA)
+    return picture
+
+
 def strength_image(strength: np.ndarray) -> np.ndarray:
     """The cartoon's soft map (:attr:`vmcl.result.Result.boundary_strength`) as a picture: black for 0,
     white for 1, the contours drawn dark on white paper as boundary benchmarks show them.
@@ -213,6 +250,8 @@ def images_with_captions(result: Result) -> dict[str, tuple[np.ndarray, str]]:
     out["edges"] = (support_image(result.image, edges), _CAPTIONS["edges"])
     if result.grouping is not None:
         out["grouping"] = (grouping_image(result.image, result.grouping), _CAPTIONS["grouping"])
+    if result.recognition is not None:
+        out["recognition"] = (recognition_image(result.image, result.recognition), _CAPTIONS["recognition"])
     return out
 
 
@@ -227,6 +266,8 @@ _CAPTIONS = {
     "grouping": "Grouping: the edge curves, darker the more salient; junctions by type (T red, with a tick "
                 "towards the occluding side; Y green; arrow blue; L orange; X purple); paired T-junctions "
                 "joined in cyan",
+    "recognition": "Recognition: each object found, its model's boundary where the image's edges support it "
+                   "(unsupported in dark red), its corners and its name",
 }
 
 
@@ -307,6 +348,11 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
         sections.append(f"<h2>{html.escape(name)}</h2>" + _table(header, body))
     if result.grouping is not None:
         sections.append("<h2>Grouping</h2>" + _grouping_table(result.grouping))
+    if result.recognition is not None:
+        rows = [(d.name, d.view, f"{d.score:.2f}", f"{d.significance:.1f}",
+                 ", ".join(f"({x:.1f}, {y:.1f})" for x, y in d.corners)) for d in result.recognition]
+        sections.append("<h2>Recognition</h2>" + (_table(("object", "view", "score", "significance",
+                                                          "corners (x, y)"), rows) if rows else "<p>No object found.</p>"))
     sections.append("<h2>Fields</h2>" + "".join(figures))
     stage_rows = [(name, f"{ms:.1f}") for name, ms in result.stages.items()] + [("total", f"{result.total_ms:.1f}")]
     sections.append("<h2>Time per stage</h2>" + _table(("stage", "wall ms"), stage_rows))

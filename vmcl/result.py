@@ -13,6 +13,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     from vmcl.group import Grouping
+    from vmcl.recognize import Detection
     from vmcl.pipeline import Config
 
 
@@ -32,6 +33,8 @@ class Result:
     grouping : vmcl.group.Grouping or None
         The edges' curves, their local saliency, junctions (T, Y, arrow, L, X), repairs and T-junction
         pairs (None with ``grouping.enabled`` off).
+    recognition : list of vmcl.recognize.Detection or None
+        The library's objects found in the left image, best first (None without ``recognition.models``).
     hue, colour_edges : float32 (H, W) (NaN where not valid), bool (H, W)
         The hue H = R / (R + G) and its albedo-edge candidates (RGB input only).
     density, texture_edges : float32 (H, W), bool (H, W)
@@ -89,6 +92,7 @@ class Result:
     boundary_strength: np.ndarray
     config: Config
     grouping: Grouping | None = None
+    recognition: list[Detection] | None = None
     hue: np.ndarray | None = None
     colour_edges: np.ndarray | None = None
     density: np.ndarray | None = None

@@ -7,16 +7,19 @@ machine's :class:`vmcl.result.Result` (its cartoon: the labelled discontinuities
 :class:`vmcl.recognize.features.Features`, and returns the recognised objects, each with its model's name,
 the view it was aligned from, its pose, its score and its boundary in the image.
 
-A detection is kept where at least ``min_score`` of the model's boundary that lands in the image is
-supported, by at least ``min_support`` distinct edge pixels; candidates are taken in the order of the
-edge pixels they explain, and one whose silhouette lies mostly (half or more) on those already kept is
-dropped. A 3-D object's views are aligned by an
-affine map (a view near the one seen differs from it by nearly an affine map in orthographic projection,
-Ullman and Basri's observation); a 2-D object's by ``transform``.
+Each verified candidate's significance is judged a contrario: -log10 of its number of false alarms, the
+chance that its boundary support and its matched corners arise by accident among the image's edges
+around it, times the candidates tested. Candidates are kept greedily, most significant first, each
+scored again on the edge pixels no kept object explains yet (so a second reading of an object's edges
+explains little), and one whose silhouette lies mostly on kept ones is dropped. A 3-D object's views are
+aligned by an affine map near a similarity (a view near the one seen differs from it by a little
+foreshortening in orthographic projection, Ullman and Basri's observation); a 2-D object's by
+``transform``.
 """
 
 from __future__ import annotations
 
+import heapq
 from dataclasses import dataclass
 from typing import Any
 
@@ -35,8 +38,9 @@ from vmcl.recognize.verification import TRANSFORMS, Transform, distance_transfor
 
 __all__ = ["Detection", "recognize"]
 
-_CORNER_TURN = np.radians(30)  # a view's corner and an image corner match within 3 px, their bisectors
-_CORNER_OPENING = np.radians(25)  # this close in direction and their openings this close
+_CORNER_REACH = 3.0  # px: a view's corner and an image corner match this close,
+_CORNER_TURN = np.radians(30)  # their bisectors this close in direction
+_CORNER_OPENING = np.radians(25)  # and their openings this close
 _ANGLE = np.radians(25)  # the most a supporting edge's tangent may differ from the model's
 _MARGIN = 10  # px around a pose over which the chance of support is measured
 _SCREEN_POINTS = 96  # boundary points per candidate in the coarse test
@@ -67,7 +71,7 @@ class Detection:
         candidates were tested and how crowded with edges the image is around it (kept where >= 0).
     corners_found : float
         The fraction of the view's corners (those inside the image) that an image corner matches: within
-        3 px, its bisector within 30 degrees and its opening within 25.
+        3 px, its bisector within 30 degrees and its opening within 25 (evidence the significance counts).
     corners : float64 (C, 2)
         The view's corners in the image.
     boundary : float64 (N, 2)
@@ -113,7 +117,7 @@ def _features(data: Any, sigma: float, machine: Machine) -> Features:
 def recognize(image: Any, library: Library, *, transform: Transform = "similarity", sigma: float = 1.5,
               scales: tuple[float, float] = (0.25, 4.0), min_score: float = 0.3, min_significance: float = 0.0,
               min_support: int = 40,
-              candidates: int = 1024, verify: int = 64, min_votes: int = 2, neighbours: int = 8, regions: int = 8,
+              candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 8, regions: int = 8,
               tolerance: float = 2.0, machine: Machine | None = None) -> list[Detection]:
     """Find a library's objects in an image.
 
@@ -253,6 +257,9 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
     near_edges = _integral(distance <= tolerance)
     chance_angle = 2 * _ANGLE / np.pi
     explained, coverage, significance = [], np.zeros(len(found)), np.zeros(len(found))
+    expected, trials, chance = np.zeros(len(found)), np.zeros(len(found)), np.zeros(len(found))
+    corner_surprise = np.zeros(len(found))
+    tests = np.log10(len(found))
     corners_found = np.zeros(len(found))
     for c in range(len(found)):
         view = views[found.views[c]][2]
@@ -262,63 +269,82 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
         # The most distinct pixels its points can reach: one each, or fewer where the pose shrinks them
         # closer than a pixel apart; its coverage is the share of those it explains.
         spread = view.length / max(len(view.points), 1) * _scale(poses[c])
-        expected = max(inside[c] * min(1.0, spread), 1.0)
-        coverage[c] = min(len(pixels) / expected, 1.0)
+        expected[c] = max(inside[c] * min(1.0, spread), 1.0)
+        coverage[c] = min(len(pixels) / expected[c], 1.0)
         # A contrario: how unlikely that much support is by chance. Stretches of boundary 2 * tolerance
         # long are the independent trials; each is supported by chance with the probability that a point
         # near the pose lies within tolerance of some edge running its way.
-        chance = _box_mean(near_edges, _apply(poses[c], view.points), (h, w)) * chance_angle
-        trials = expected / (2 * tolerance)
-        significance[c] = _significance(coverage[c] * trials, trials, chance, len(found))
-        corners_found[c] = _corner_fraction(poses[c], view, features)
-    order = np.lexsort((-found.votes, -significance))
-    import os
-    if os.environ.get("VMCL_DEBUG"): globals()["_debug"] = (found, poses, score, coverage, significance, corners_found, explained)
-    detections: list[Detection] = []
+        chance[c] = _box_mean(near_edges, _apply(poses[c], view.points), (h, w)) * chance_angle
+        trials[c] = expected[c] / (2 * tolerance)
+        matched, landed, corner_chance = _corner_matches(poses[c], view, features)
+        corners_found[c] = matched / max(landed, 1)
+        # The corners it matches are further evidence, independent of the boundary's.
+        corner_surprise[c] = _surprise(matched, landed, corner_chance)
+        significance[c] = _surprise(coverage[c] * trials[c], trials[c], chance[c]) + corner_surprise[c] - tests
+    # Greedy explanation: the most significant candidate is kept, and every other is scored again on the
+    # edge pixels no kept object explains yet (a second reading of an object's edges, or a part of it read
+    # as a smaller object, explains little that is new); a candidate whose silhouette lies mostly on kept
+    # ones is dropped (two objects do not lie in one place).
+    claimed = np.zeros(h * w, bool)
+    taken = np.zeros((h, w), bool)
+    heap = [(-significance[c], int(c)) for c in range(len(found)) if significance[c] >= min_significance]
+    heapq.heapify(heap)
     kept: list[int] = []
-    taken = np.zeros((h, w), bool)  # the silhouettes (convex hulls) of the objects kept so far
-    for c in order:
-        if significance[c] < min_significance or coverage[c] < min_score or len(explained[c]) < min_support:
+    while heap:
+        stale, c = heapq.heappop(heap)
+        fresh = explained[c][~claimed[explained[c]]]
+        cover = min(len(fresh) / expected[c], 1.0)
+        now = _surprise(cover * trials[c], trials[c], chance[c]) + corner_surprise[c] - tests
+        if now < min_significance or cover < min_score or len(fresh) < min_support:
+            continue
+        if heap and now < -heap[0][0]:
+            heapq.heappush(heap, (-now, c))
             continue
         view = views[found.views[c]][2]
         hull = _silhouette(_apply(poses[c], view.points), (h, w))
         area = int(hull.sum())
-        # Two objects do not lie in one place: a pose that mostly covers one already kept is another
-        # reading of the same edges.
         if area == 0 or (hull & taken).sum() >= _OVERLAP * area:
             continue
         taken |= hull
+        claimed[explained[c]] = True
+        significance[c], coverage[c] = now, cover
         kept.append(c)
-    # A kept pose whose support is mostly another's, larger one's (a part of an object read as a smaller
-    # object) is dropped.
+    detections: list[Detection] = []
     for c in kept:
-        mine = explained[c]
-        if any(len(explained[o]) > len(mine) and np.isin(mine, explained[o]).mean() >= _OVERLAP for o in kept if o != c):
-            continue
         view = views[found.views[c]][2]
         model, view_index = (int(v) for v in view_ids[found.views[c]])
         boundary = _apply(poses[c], view.points)
+        start, stop = ranges[c]
         detections.append(Detection(library.models[model].name, view_index, poses[c], float(score[c]),
                                     int(found.votes[c]), float(significance[c]), float(corners_found[c]),
-                                    _apply(poses[c], view.corners),
-                                    boundary, _edge_support(boundary, nearest, tolerance, w, h) >= 0))
+                                    _apply(poses[c], view.corners), boundary, ok[start:stop].copy()))
     return detections
 
 
-def _corner_fraction(pose: np.ndarray, view: View, features: Features) -> float:
-    if not len(view.corners):
-        return 0.0
+def _corner_matches(pose: np.ndarray, view: View, features: Features) -> tuple[int, int, float]:
+    """How many of the view's corners (of those that land in the image) an image corner matches, how many
+    land there, and the chance that one is matched by accident (the image's corners around the pose,
+    each covering a disc of _CORNER_REACH px and a share of the bisectors and openings)."""
     h, w = features.shape
+    if not len(view.corners):
+        return 0, 0, 0.0
     at = _apply(pose, view.corners)
     inside = (at[:, 0] >= 0) & (at[:, 1] >= 0) & (at[:, 0] <= w - 1) & (at[:, 1] <= h - 1)
     if not inside.any() or not len(features.corners):
-        return 0.0
+        return 0, int(inside.sum()), 0.0
     turned = np.stack([np.cos(view.bisector), np.sin(view.bisector)], 1) @ pose[:2, :2].T
     bisector = np.arctan2(turned[:, 1], turned[:, 0])
-    near = np.hypot(at[:, None, 0] - features.corners[None, :, 0], at[:, None, 1] - features.corners[None, :, 1]) <= 3
+    near = np.hypot(at[:, None, 0] - features.corners[None, :, 0],
+                    at[:, None, 1] - features.corners[None, :, 1]) <= _CORNER_REACH
     same_way = np.abs(np.angle(np.exp(1j * (bisector[:, None] - features.bisector[None])))) <= _CORNER_TURN
     alike = np.abs(view.opening[:, None] - features.opening[None]) <= _CORNER_OPENING
-    return float((near & same_way & alike).any(axis=1)[inside].mean())
+    matched = int((near & same_way & alike).any(axis=1)[inside].sum())
+    low = at[inside].min(axis=0) - _MARGIN
+    high = at[inside].max(axis=0) + _MARGIN
+    around = np.all((features.corners >= low) & (features.corners <= high), axis=1).sum()
+    area = max(float(np.prod(high - low)), 1.0)
+    chance = min(around * np.pi * _CORNER_REACH ** 2 / area, 1.0) * (_CORNER_TURN / np.pi) * (2 * _CORNER_OPENING / np.pi)
+    return matched, int(inside.sum()), float(chance)
 
 
 def _silhouette(points: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
@@ -348,14 +374,14 @@ def _box_mean(table: np.ndarray, points: np.ndarray, shape: tuple[int, int]) -> 
     return float(total / ((x1 - x0) * (y1 - y0)))
 
 
-def _significance(hits: float, trials: float, chance: float, tests: int) -> float:
-    """-log10 of the number of false alarms: ``tests`` times the chance of at least ``hits`` successes in
-    ``trials`` Bernoulli trials of probability ``chance`` (the binomial tail, continuous in its counts)."""
+def _surprise(hits: float, trials: float, chance: float) -> float:
+    """-log10 of the chance of at least ``hits`` successes in ``trials`` Bernoulli trials of probability
+    ``chance`` (the binomial tail, continuous in its counts); 0 for no hits."""
     if hits <= 0 or trials <= 0:
-        return -np.inf
+        return 0.0
     chance = min(max(chance, 1e-6), 1 - 1e-6)
     tail = special.betainc(hits, max(trials - hits + 1, 1e-9), chance)
-    return float(-np.log10(max(tail, 1e-300)) - np.log10(tests))
+    return float(-np.log10(max(tail, 1e-300)))
 
 
 def _scale(pose: np.ndarray) -> float:
@@ -366,16 +392,3 @@ def _scale(pose: np.ndarray) -> float:
 def _apply(matrix: np.ndarray, p: np.ndarray) -> np.ndarray:
     h = np.asarray(p, np.float64).reshape(-1, 2) @ matrix[:, :2].T + matrix[:, 2]
     return h[:, :2] / h[:, 2:3]
-
-
-def _edge_support(boundary: np.ndarray, nearest: np.ndarray, tolerance: float, w: int, h: int) -> np.ndarray:
-    """The image edge pixel (flat address) supporting each posed boundary point, -1 for none."""
-    x, y = np.floor(boundary[:, 0] + 0.5).astype(np.int64), np.floor(boundary[:, 1] + 0.5).astype(np.int64)
-    inside = (x >= 0) & (y >= 0) & (x < w) & (y < h)
-    q = np.full(len(boundary), -1, np.int64)
-    q[inside] = nearest[y[inside], x[inside]]
-    ok = q >= 0
-    qx, qy = q % w, q // w
-    ok &= np.hypot(boundary[:, 0] - qx, boundary[:, 1] - qy) <= tolerance
-    return np.where(ok, q, -1)
-
