@@ -282,6 +282,71 @@ TABLE: tuple[Entry, ...] = (
        curvature_scale=0.5, gap=6.0, alignment=20.0,
        kinds={"edges": _A, "magnitude": _OA, "image": _OA, "threshold": _N, "length_exponent": _N,
               "curvature_scale": _N, "gap": _N, "alignment": _N, "machine": _M}),
+    # ------------------------------------------------------------------ recognize
+    _e("vmcl.recognize:image_features", image=arr((32, 32)), sigma=1.5, corner=45.0, gap=6.0,
+       kinds={"image": _A, "sigma": _N, "corner": _N, "gap": _N, "machine": _M}),
+    _e("vmcl.recognize:edge_features", edges=MASK, magnitude=None, corner=45.0, gap=6.0,
+       kinds={"edges": _A, "magnitude": _OA, "corner": _N, "gap": _N, "machine": _M}),
+    _e("vmcl.recognize:view_of", features=make("object_features"), mask=None, spacing=2,
+       kinds={"features": _O, "mask": _OA, "spacing": _I}),
+    _e("vmcl.recognize:learn", name="ell", images=[make("object_image")], masks=None, sigma=1.5, corner=45.0,
+       sources=None, kinds={"name": _C, "images": _O, "masks": _O, "sigma": _N, "corner": _N, "sources": _O,
+                            "machine": _M}),
+    _e("vmcl.recognize:save_model", model=make("model"), folder=path("new_dir"), replace=False,
+       kinds={"model": _O, "folder": _P, "replace": _B}),
+    _e("vmcl.recognize:load_model", path=path("vmodel"), kinds={"path": _P}),
+    _e("vmcl.recognize:Library", models=[make("model")], kinds={"models": _O}),
+    _e("vmcl.recognize:Library.load", folder=path("library"), kinds={"folder": _P}),
+    _e("vmcl.recognize:Index.build", library=make("library"), neighbours=8, kinds={"library": _O, "neighbours": _I}),
+    _e("vmcl.recognize:index_for", library=make("library"), neighbours=8, kinds={"library": _O, "neighbours": _I}),
+    _e("vmcl.recognize:corner_pairs", corners=arr((5, 2), "float64"), neighbours=3, groups=None,
+       kinds={"corners": _A, "neighbours": _I, "groups": _OA}),
+    _e("vmcl.recognize:pair_keys", corners=arr((5, 2), "float64"), bisector=arr((5,), "float64"),
+       opening=arr((5,), "float64"), pairs=make("corner_pairs"), soft=False,
+       kinds={"corners": _A, "bisector": _A, "opening": _A, "pairs": _A, "soft": _B}),
+    _e("vmcl.recognize:vote", index=make("index"), corners=arr((5, 2), "float64"), bisector=arr((5,), "float64"),
+       opening=arr((5,), "float64"), pairs=make("corner_pairs"), scales=tup(0.25, 4.0), candidates=64, min_votes=2,
+       kinds={"index": _O, "corners": _A, "bisector": _A, "opening": _A, "pairs": _A, "scales": _T,
+              "candidates": _I, "min_votes": _I, "machine": _M}),
+    _e("vmcl.recognize:vote_numpy", index=make("index"), corners=arr((5, 2), "float64"),
+       bisector=arr((5,), "float64"), opening=arr((5,), "float64"), pairs=make("corner_pairs"), scales=tup(0.25, 4.0),
+       candidates=64, min_votes=2,
+       kinds={"index": _O, "corners": _A, "bisector": _A, "opening": _A, "pairs": _A, "scales": _T,
+              "candidates": _I, "min_votes": _I}),
+    _e("vmcl.recognize:select_regions", edges=MASK, saliency_map=IMG, min_area=4, max_fraction=0.5,
+       kinds={"edges": _A, "saliency_map": _A, "min_area": _I, "max_fraction": _N, "machine": _M}),
+    _e("vmcl.recognize:corner_regions", regions=make("regions"), corners=arr((5, 2), "float64"),
+       bisector=arr((5,), "float64"), reach=3.0, top=8,
+       kinds={"regions": _O, "corners": _A, "bisector": _A, "reach": _N, "top": _I}),
+    _e("vmcl.recognize:distance_transform", edges=MASK, kinds={"edges": _A, "machine": _M}),
+    _e("vmcl.recognize:distance_transform_numpy", edges=MASK, kinds={"edges": _A}),
+    _e("vmcl.recognize:support", nearest=make("nearest"), tangent_map=IMG, points=arr((6, 2), "float64"),
+       tangents=arr((6,), "float64"), point_ranges=make("point_ranges"), transforms=make("transforms"),
+       kinds={"nearest": _A, "tangent_map": _A, "points": _A, "tangents": _A, "point_ranges": _A,
+              "transforms": _A, "machine": _M}),
+    _e("vmcl.recognize:support_numpy", nearest=make("nearest"), tangent_map=IMG, points=arr((6, 2), "float64"),
+       tangents=arr((6,), "float64"), point_ranges=make("point_ranges"), transforms=make("transforms"),
+       kinds={"nearest": _A, "tangent_map": _A, "points": _A, "tangents": _A, "point_ranges": _A,
+              "transforms": _A}),
+    _e("vmcl.recognize:refine", nearest=make("nearest"), tangent_map=IMG, points=arr((6, 2), "float64"),
+       tangents=arr((6,), "float64"), point_ranges=make("point_ranges"), transforms=make("transforms"),
+       transform="similarity", tolerance=2.0, angle=25.0, start=4.0, iterations=2,
+       kinds={"nearest": _A, "tangent_map": _A, "points": _A, "tangents": _A, "point_ranges": _A,
+              "transforms": _A, "transform": _C, "tolerance": _N, "angle": _N, "start": _N, "iterations": _I,
+              "machine": _M}),
+    # The image's content decides how many objects are found (the result's length): valid changes of the
+    # thresholds change it, so they are checked for their refusals only in tests/test_recognize.py.
+    _e("vmcl.recognize:recognize", image=make("object_image"), library=make("library"),
+       kinds={"image": _A, "library": _O, "transform": _C, "machine": _M}),
+    _e("vmcl.scenes:object_view", name="ell", yaw=0.0, shape=tup(48, 48), scale=None, background=0.2, albedo=0.8,
+       noise=0.0, seed=0, kinds={"name": _C, "yaw": _N, "shape": _T, "scale": _ON, "background": _N,
+                                 "albedo": _N, "noise": _N, "seed": _I}),
+    # How many objects a scene holds is its objects argument: tests/test_scenes_recognition.py checks the rest.
+    _e("vmcl.scenes:recognition_scene", shape=tup(96, 96), objects=1, library=None, occlusion=tup(0.0, 0.9),
+       clutter=1, views=tup(-40.0, 40.0), size=tup(15.0, 20.0), noise=0.0, seed=0,
+       kinds={"library": _O, "occlusion": _T, "clutter": _I, "views": _T, "size": _T, "noise": _N, "seed": _I}),
+    _e("vmcl.report:recognition_image", image=arr((48, 48)), detections=[],
+       kinds={"image": _A, "detections": _O}),
     _e("vmcl.scenes:clutter_display", shape=tup(64, 64), segments=20, length=tup(5.0, 10.0), gaps=2, gap_length=3,
        seed=0, kinds={"shape": _T, "segments": _I, "length": _T, "gaps": _I, "gap_length": _I, "seed": _I}),
     # The scene's shape, polygons, seed and margin decide how many junctions it has, so valid changes of them
@@ -552,6 +617,11 @@ EXEMPT = {
     # Records of vmcl.group and the scenes it is tested on, made by the calls above.
     "vmcl.group:Curve", "vmcl.group:Curves", "vmcl.group:Junctions", "vmcl.group:Grouping",
     "vmcl.group:StructuralSaliency", "vmcl.scenes:ClutterDisplay", "vmcl.scenes:Junction", "vmcl.scenes:OcclusionScene",
+    # Records of vmcl.recognize and the scenes it is tested on, made by the calls above.
+    "vmcl.recognize:Features", "vmcl.recognize:View", "vmcl.recognize:Model", "vmcl.recognize:Index",
+    "vmcl.recognize:Candidates", "vmcl.recognize:Detection", "vmcl.recognize:NearestEdge", "vmcl.recognize:Support",
+    "vmcl.recognize:Verified", "vmcl.recognize:Regions", "vmcl.scenes:SceneObject", "vmcl.scenes:Placement",
+    "vmcl.scenes:RecognitionScene", "vmcl.pipeline:RecognitionConfig",
 }
 
 PUBLIC_MODULES = (
@@ -563,7 +633,7 @@ PUBLIC_MODULES = (
     "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pictures", "vmcl.pipeline", "vmcl.result", "vmcl.machine",
     "vmcl.stereo_evaluation", "vmcl.distributed", "vmcl.boundary_evaluation", "vmcl.flow_evaluation",
     "vmcl.frame_sources", "vmcl.sequence_output", "vmcl.temporal", "vmcl.learn", "vmcl.learn.examples",
-    "vmcl.learn.cue_fit", "vmcl.fitted", "vmcl.group",
+    "vmcl.learn.cue_fit", "vmcl.fitted", "vmcl.group", "vmcl.recognize",
 )
 
 
@@ -875,6 +945,12 @@ def _path(kind, ctx):
         target = target.with_suffix(".npz")
     elif kind == "stereo_dir":
         return str(_stereo_dir(ctx))
+    elif kind in ("vmodel", "library"):
+        from vmcl.recognize import save_model
+
+        folder = Path(tempfile.mkdtemp(dir=root))
+        written = save_model(_MAKERS["model"](ctx), folder)
+        return str(written if kind == "vmodel" else folder)
     elif kind == "flow_dir":
         import cv2
 
@@ -1056,6 +1132,20 @@ def _makers():
         return Camera((64, 64), 64.0, 0.15)
 
     return {
+        "object_image": lambda ctx: __import__("vmcl.scenes", fromlist=["object_view"]).object_view(
+            "ell", shape=(48, 48))[0],
+        "object_features": lambda ctx: __import__("vmcl.recognize", fromlist=["image_features"]).image_features(
+            _MAKERS["object_image"](ctx), machine=ctx["machine"]),
+        "model": _model,
+        "library": lambda ctx: __import__("vmcl.recognize", fromlist=["Library"]).Library([_model(ctx)]),
+        "index": lambda ctx: __import__("vmcl.recognize", fromlist=["Index"]).Index.build(_MAKERS["library"](ctx)),
+        "corner_pairs": lambda ctx: np.array([[0, 1], [1, 0], [2, 3], [3, 2], [1, 4]], np.int64),
+        "regions": lambda ctx: __import__("vmcl.recognize", fromlist=["select_regions"]).select_regions(
+            _array(MASK, ctx), np.ones((16, 16)), min_area=4, machine=ctx["machine"]),
+        "nearest": lambda ctx: __import__("vmcl.recognize", fromlist=["distance_transform"]).distance_transform(
+            np.eye(16, dtype=bool), machine=ctx["machine"]).nearest,
+        "point_ranges": lambda ctx: np.array([[0, 4], [2, 6]], np.int64),
+        "transforms": lambda ctx: np.array([[[1.0, 0.0, 2.0], [0.0, 1.0, 1.0]], [[0.9, -0.1, 3.0], [0.1, 0.9, 2.0]]]),
         "chain": lambda ctx: np.append(np.arange(1, 16, dtype=np.int32), np.int32(-1)),
         "curves": _curves,
         "grouping": lambda ctx: __import__("vmcl.group", fromlist=["group"]).group(
@@ -1097,6 +1187,12 @@ def _makers():
         "evaluations": _evaluations,
         "stereo_sgbm": lambda ctx: __import__("vmcl.stereo_evaluation", fromlist=["stereo_sgbm"]).stereo_sgbm(16),
     }
+
+
+def _model(ctx):
+    from vmcl.recognize import learn
+
+    return learn("ell", [_MAKERS["object_image"](ctx)], machine=ctx["machine"])
 
 
 def _curves(ctx):

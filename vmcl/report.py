@@ -192,6 +192,9 @@ def recognition_image(image: np.ndarray, detections: Sequence[Detection]) -> np.
     """
     picture = _faded(_image_argument(image, "image"))
     h, w = picture.shape[:2]
+    if isinstance(detections, (str, Detection)) or not isinstance(detections, Sequence):
+        raise InputTypeError(f"detections must be a sequence (a list) of vmcl.recognize.Detection, got "
+                             f"{type(detections).__name__}")
     for k, detection in enumerate(detections):
         if not isinstance(detection, Detection):
             raise InputTypeError(f"detections must hold vmcl.recognize.Detection, got {type(detection).__name__}")

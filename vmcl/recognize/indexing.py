@@ -25,9 +25,10 @@ from typing import Any
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import check_int, check_real, machine_for
+from vmcl.cm.core import check_bool, check_int, check_real, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
+from vmcl.recognize.arguments import angles, index_pairs, points
 from vmcl.recognize.models import Library
 
 __all__ = ["ANGLE_BINS", "KEYS", "OPENING_BINS", "Candidates", "Index", "corner_pairs", "index_for", "pair_keys", "vote",
@@ -38,6 +39,7 @@ ANGLE_BINS = 16
 OPENING_BINS = 9
 """Bins of a corner's opening over (0, 180) degrees (20 degrees each)."""
 KEYS = ANGLE_BINS * ANGLE_BINS * OPENING_BINS * OPENING_BINS
+"""The number of distinct keys."""
 
 _ROTATION_BINS = 24  # the pose bins: 15 degrees of rotation,
 _ROTATION_BIN = 2 * math.pi / _ROTATION_BINS
@@ -55,9 +57,12 @@ def corner_pairs(corners: np.ndarray, *, neighbours: int = 8, groups: np.ndarray
     -------
     int64 (P, 2), each unordered pair in both orders, no pair twice.
     """
-    corners = np.asarray(corners, np.float64).reshape(-1, 2)
+    corners = points(corners, "corners")
     n = len(corners)
     neighbours = check_int(neighbours, "neighbours", minimum=0)
+    if groups is not None:
+        if not isinstance(groups, np.ndarray) or groups.dtype.kind not in "iu" or groups.shape != (n,):
+            raise InputValueError(f"groups must be an integer ({n},) array, one label per corner")
     if n < 2:
         return np.zeros((0, 2), np.int64)
     d = np.hypot(corners[:, None, 0] - corners[None, :, 0], corners[:, None, 1] - corners[None, :, 1])
@@ -112,8 +117,12 @@ def pair_keys(corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pa
     -------
     int32 (P,) or (P, 16)
     """
-    coords = _angle_coordinates(np.asarray(corners, np.float64), np.asarray(bisector, np.float64),
-                                np.asarray(opening, np.float64), np.asarray(pairs, np.int64).reshape(-1, 2))
+    corners = points(corners, "corners")
+    bisector = angles(bisector, "bisector", len(corners), "corners")
+    opening = angles(opening, "opening", len(corners), "corners", low=0.0, high=math.pi)
+    pairs = index_pairs(pairs, "pairs", len(corners))
+    soft = check_bool(soft, "soft")
+    coords = _angle_coordinates(corners, bisector, opening, pairs)
     sizes = np.array([ANGLE_BINS, ANGLE_BINS, OPENING_BINS, OPENING_BINS])
     cyclic = np.array([True, True, False, False])
     home = np.floor(coords).astype(np.int64)
@@ -156,7 +165,8 @@ class Index:
         """The table of every view of ``library``, each corner paired with its ``neighbours`` nearest."""
         if not isinstance(library, Library):
             raise InputTypeError(f"library must be a vmcl.recognize.Library, got {type(library).__name__}")
-        keys, views, points = [], [], []
+        neighbours = check_int(neighbours, "neighbours", minimum=1, maximum=1000)
+        keys, views, pair_points = [], [], []
         frames, ids = [], []
         for row, (m, v, view) in enumerate(library.views()):
             frames.append([*view.centre, view.radius, 0.0])
@@ -168,11 +178,11 @@ class Index:
             keys.append(k.ravel())
             views.append(np.full(k.size, row, np.int32))
             p = np.concatenate([view.corners[pairs[:, 0]], view.corners[pairs[:, 1]]], axis=1)
-            points.append(np.repeat(p, k.shape[1], axis=0))
+            pair_points.append(np.repeat(p, k.shape[1], axis=0))
         key = np.concatenate(keys) if keys else np.zeros(0, np.int32)
         # A pair entered twice under one key (its soft bins clipped to the same edge bin) votes once.
         entry_view = np.concatenate(views) if views else np.zeros(0, np.int32)
-        entry_points = (np.concatenate(points) if points else np.zeros((0, 4))).astype(np.float32)
+        entry_points = (np.concatenate(pair_points) if pair_points else np.zeros((0, 4))).astype(np.float32)
         unique = np.unique(np.column_stack([key, entry_view, entry_points.view(np.int32)]), axis=0,
                            return_index=True)[1]
         order = unique[np.argsort(key[unique], kind="stable")]
@@ -211,21 +221,21 @@ class Candidates:
         return np.stack([np.stack([zr, -zi, tx], 1), np.stack([zi, zr, ty], 1)], 1)
 
 
-def _check_inputs(index: Any, corners: Any, pairs: Any, scales: Any, candidates: Any,
-                  min_votes: Any) -> tuple[np.ndarray, tuple[float, float], int, int]:
+def _check_inputs(index: Any, corners: Any, bisector: Any, opening: Any, pairs: Any, scales: Any, candidates: Any,
+                  min_votes: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, tuple[float, float], int, int]:
     if not isinstance(index, Index):
         raise InputTypeError(f"index must be a vmcl.recognize.Index, got {type(index).__name__}")
-    pairs = np.asarray(pairs)
-    if pairs.ndim != 2 or pairs.shape[1] != 2 or not np.issubdtype(pairs.dtype, np.integer):
-        raise InputValueError(f"pairs must be an int (P, 2) array, got {pairs.dtype} {pairs.shape}")
-    if len(pairs) and (pairs.min() < 0 or pairs.max() >= len(corners)):
-        raise InputValueError(f"pairs must index the {len(corners)} corners")
+    corners = points(corners, "corners")
+    bisector = angles(bisector, "bisector", len(corners), "corners")
+    opening = angles(opening, "opening", len(corners), "corners", low=0.0, high=math.pi)
+    pairs = index_pairs(pairs, "pairs", len(corners))
     if not isinstance(scales, (tuple, list)) or len(scales) != 2:
         raise InputTypeError(f"scales must be a pair (low, high), got {scales!r}")
-    low, high = (check_real(v, "scales", above=0) for v in scales)
+    low, high = (check_real(v, "scales", above=0, maximum=1e6) for v in scales)
     if low > high:
         raise InputValueError(f"scales must be (low, high) with low <= high, got {scales!r}")
-    return pairs, (low, high), check_int(candidates, "candidates", minimum=1), check_int(min_votes, "min_votes", minimum=1)
+    return (corners, bisector, opening, pairs, (low, high), check_int(candidates, "candidates", minimum=1, maximum=1 << 20),
+            check_int(min_votes, "min_votes", minimum=1))
 
 
 def _pair_points(corners: np.ndarray, pairs: np.ndarray) -> np.ndarray:
@@ -281,9 +291,9 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     -------
     Candidates
     """
-    corners = np.asarray(corners, np.float64).reshape(-1, 2)
-    pairs, (low, high), candidates, min_votes = _check_inputs(index, corners, pairs, scales, candidates, min_votes)
     machine = machine_for(machine)
+    corners, bisector, opening, pairs, (low, high), candidates, min_votes = _check_inputs(
+        index, corners, bisector, opening, pairs, scales, candidates, min_votes)
     if not len(pairs) or not len(index):
         return _pool(np.zeros((0, 4)), np.zeros((0, 2), np.int32))
     table = _device_table(index, machine)
@@ -361,8 +371,8 @@ def _combo_bins(coords: np.ndarray, views: np.ndarray, mask: int) -> np.ndarray:
 def vote_numpy(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pairs: np.ndarray, *,
                scales: tuple[float, float] = (0.25, 4.0), candidates: int = 128, min_votes: int = 2) -> Candidates:
     """:func:`vote` in NumPy on the host: the reference the kernel is tested and timed against."""
-    corners = np.asarray(corners, np.float64).reshape(-1, 2)
-    pairs, (low, high), candidates, min_votes = _check_inputs(index, corners, pairs, scales, candidates, min_votes)
+    corners, bisector, opening, pairs, (low, high), candidates, min_votes = _check_inputs(
+        index, corners, bisector, opening, pairs, scales, candidates, min_votes)
     if not len(pairs) or not len(index):
         return _pool(np.zeros((0, 4)), np.zeros((0, 2), np.int32))
     keys = pair_keys(corners, bisector, opening, pairs)
@@ -386,5 +396,8 @@ def vote_numpy(index: Index, corners: np.ndarray, bisector: np.ndarray, opening:
 
 def index_for(library: Library, *, neighbours: int = 8) -> Index:
     """The library's :class:`Index`, built once per library and ``neighbours``."""
+    if not isinstance(library, Library):
+        raise InputTypeError(f"library must be a vmcl.recognize.Library, got {type(library).__name__}")
+    neighbours = check_int(neighbours, "neighbours", minimum=1, maximum=1000)
     return library.cached(("index", neighbours), lambda: Index.build(library, neighbours=neighbours))
 

@@ -22,6 +22,7 @@ import numpy as np
 from vmcl.cm.core import check_bool, check_int, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
+from vmcl.recognize.arguments import edge_map
 from vmcl.recognize.features import Features, image_features
 
 __all__ = ["MODEL_SUFFIX", "Library", "Model", "View", "learn", "load_model", "save_model", "view_of"]
@@ -117,10 +118,10 @@ def view_of(features: Features, *, mask: np.ndarray | None = None, spacing: int 
     corners, bisector, opening = features.corners, features.bisector, features.opening
     points, tangent = features.points, features.tangent
     if mask is not None:
-        mask = np.asarray(mask)
+        mask = edge_map(mask, "mask")
         if mask.shape != features.shape:
             raise InputValueError(f"mask must have the image's shape {features.shape}, got {mask.shape}")
-        grown = _dilate(mask.astype(bool), 2)
+        grown = _dilate(mask, 2)
         keep_c = grown[corners[:, 1].round().astype(int), corners[:, 0].round().astype(int)] if len(corners) else \
             np.zeros(0, bool)
         corners, bisector, opening = corners[keep_c], bisector[keep_c], opening[keep_c]
@@ -178,12 +179,14 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
     """
     name = _check_name(name)
     machine = machine_for(machine)
-    if isinstance(images, np.ndarray) or not isinstance(images, Sequence) or not images:
-        raise InputTypeError("images must be a non-empty sequence of images")
-    if masks is not None and len(masks) != len(images):
-        raise InputValueError(f"masks must hold one mask per image ({len(images)}), got {len(masks)}")
-    if sources is not None and len(sources) != len(images):
-        raise InputValueError(f"sources must hold one name per image ({len(images)}), got {len(sources)}")
+    if isinstance(images, (np.ndarray, str)) or not isinstance(images, Sequence) or not images:
+        raise InputTypeError("images must be a non-empty sequence (a list) of images")
+    if masks is not None and (isinstance(masks, (np.ndarray, str)) or not isinstance(masks, Sequence)
+                              or len(masks) != len(images)):
+        raise InputValueError(f"masks must be a list of one mask per image ({len(images)})")
+    if sources is not None and (isinstance(sources, str) or not isinstance(sources, Sequence)
+                                or len(sources) != len(images) or not all(isinstance(x, str) for x in sources)):
+        raise InputValueError(f"sources must be a list of one str per image ({len(images)})")
     views = []
     for i, image in enumerate(images):
         features = image_features(image, sigma=sigma, corner=corner, machine=machine)
@@ -214,6 +217,8 @@ def save_model(model: Model, folder: str | Path, *, replace: bool = False) -> Pa
     if not isinstance(model, Model):
         raise InputTypeError(f"model must be a vmcl.recognize.Model, got {type(model).__name__}")
     replace = check_bool(replace, "replace")
+    if not isinstance(folder, (str, Path)):
+        raise InputTypeError(f"folder must be a str or Path, got {type(folder).__name__}")
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise InputValueError(f"folder must be a directory, got the file {folder}")
@@ -246,6 +251,8 @@ def load_model(path: str | Path) -> Model:
     vmcl.errors.InputValueError
         The file is missing or not a vmcl model.
     """
+    if not isinstance(path, (str, Path)):
+        raise InputTypeError(f"path must be a str or Path, got {type(path).__name__}")
     path = Path(path)
     if not path.is_file():
         raise InputValueError(f"path must be a model file, {path} is not a file")
@@ -281,6 +288,8 @@ class Library:
     """
 
     def __init__(self, models: Sequence[Model]) -> None:
+        if isinstance(models, (str, Model)) or not isinstance(models, Sequence):
+            raise InputTypeError(f"models must be a sequence (a list) of vmcl.recognize.Model, got {type(models).__name__}")
         models = tuple(models)
         for m in models:
             if not isinstance(m, Model):
@@ -294,6 +303,8 @@ class Library:
     @classmethod
     def load(cls, folder: str | Path) -> Library:
         """Every model file in a folder (sorted by name)."""
+        if not isinstance(folder, (str, Path)):
+            raise InputTypeError(f"folder must be a str or Path, got {type(folder).__name__}")
         folder = Path(folder)
         if not folder.is_dir():
             raise InputValueError(f"folder must be a directory of model files, got {folder}")

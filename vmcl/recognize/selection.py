@@ -16,8 +16,9 @@ import numpy as np
 
 from vmcl.cm import doubling
 from vmcl.cm.core import check_int, check_real, machine_for
-from vmcl.errors import InputValueError
+from vmcl.errors import InputTypeError
 from vmcl.machine import Machine
+from vmcl.recognize.arguments import angles, edge_map, points, real_map
 
 __all__ = ["Regions", "corner_regions", "select_regions"]
 
@@ -66,12 +67,8 @@ def select_regions(edges: np.ndarray, saliency_map: np.ndarray, *, min_area: int
     Regions
     """
     machine = machine_for(machine)
-    edges = np.asarray(edges)
-    if edges.ndim != 2 or edges.dtype != np.bool_:
-        raise InputValueError(f"edges must be a bool (H, W) array, got {edges.dtype} {edges.shape}")
-    saliency_map = np.asarray(saliency_map, np.float64)
-    if saliency_map.shape != edges.shape:
-        raise InputValueError(f"saliency_map must have the edges' shape {edges.shape}, got {saliency_map.shape}")
+    edges = edge_map(edges, "edges")
+    saliency_map = real_map(saliency_map, "saliency_map", edges.shape, "edges")
     min_area = check_int(min_area, "min_area", minimum=1)
     max_fraction = check_real(max_fraction, "max_fraction", above=0, maximum=1)
     labels = np.asarray(doubling.label(~edges, connectivity=4, relabel=True, machine=machine)).astype(np.int32) - 1
@@ -99,8 +96,14 @@ def corner_regions(regions: Regions, corners: np.ndarray, bisector: np.ndarray, 
                    top: int = 8) -> np.ndarray:
     """The region each corner opens into (``reach`` px along its bisector), among the ``top`` ranked
     regions; -1 for a corner whose region is not among them."""
+    if not isinstance(regions, Regions):
+        raise InputTypeError(f"regions must be vmcl.recognize.Regions (select_regions'), got {type(regions).__name__}")
+    corners = points(corners, "corners")
+    bisector = angles(bisector, "bisector", len(corners), "corners")
+    reach = check_real(reach, "reach", minimum=0, maximum=1e6)
+    top = check_int(top, "top", minimum=0)
     h, w = regions.labels.shape
-    at = np.asarray(corners, np.float64).reshape(-1, 2) + reach * np.stack([np.cos(bisector), np.sin(bisector)], 1)
+    at = corners + reach * np.stack([np.cos(bisector), np.sin(bisector)], 1)
     x = np.clip(np.round(at[:, 0]).astype(np.int64), 0, w - 1)
     y = np.clip(np.round(at[:, 1]).astype(np.int64), 0, h - 1)
     region = regions.labels[y, x]

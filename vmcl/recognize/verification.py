@@ -25,6 +25,7 @@ import numpy as np
 from vmcl.cm.core import check_choice, check_int, check_real, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
+from vmcl.recognize.arguments import angles, edge_map, points, real_map
 
 __all__ = ["TRANSFORMS", "NearestEdge", "Support", "Verified", "distance_transform", "distance_transform_numpy",
            "refine", "support", "support_numpy"]
@@ -41,15 +42,6 @@ class NearestEdge(NamedTuple):
 
     nearest: np.ndarray
     distance: np.ndarray
-
-
-def _check_edges(edges: Any) -> np.ndarray:
-    edges = np.asarray(edges)
-    if edges.ndim != 2 or edges.dtype not in (np.bool_, np.uint8):
-        raise InputValueError(f"edges must be a bool or uint8 (H, W) array, got {edges.dtype} {edges.shape}")
-    if edges.size >= 2**31:
-        raise InputValueError(f"edges must have fewer than 2**31 pixels, got {edges.size}")
-    return edges
 
 
 def _distance(nearest: np.ndarray, width: int) -> np.ndarray:
@@ -74,7 +66,7 @@ def distance_transform(edges: Any, *, machine: Machine | None = None) -> Nearest
         ``distance``: float32 (H, W), inf where the image has no edge pixel.
     """
     machine = machine_for(machine)
-    edges = _check_edges(edges)
+    edges = edge_map(edges, "edges")
     h, w = edges.shape
     mask = machine.to_device(np.ascontiguousarray(edges.astype(np.uint8)))
     rows, nearest = machine.empty((h, w), np.int32), machine.empty((h, w), np.int32)
@@ -90,7 +82,7 @@ def distance_transform_numpy(edges: Any) -> NearestEdge:
     """:func:`distance_transform` by SciPy (``scipy.ndimage.distance_transform_edt``)."""
     from scipy import ndimage
 
-    edges = _check_edges(edges)
+    edges = edge_map(edges, "edges")
     h, w = edges.shape
     if not edges.any():
         return NearestEdge(np.full((h, w), -1, np.int32), np.full((h, w), np.inf, np.float32))
@@ -110,41 +102,46 @@ class Support(NamedTuple):
 
 
 def _homographies(transforms: Any) -> np.ndarray:
-    t = np.asarray(transforms, np.float64)
+    if not isinstance(transforms, np.ndarray) or transforms.dtype.kind not in "iuf":
+        raise InputTypeError("transforms must be a real NumPy array")
+    t = transforms.astype(np.float64)
     if t.ndim != 3 or t.shape[1:] not in ((2, 3), (3, 3)):
         raise InputValueError(f"transforms must be (C, 2, 3) affine or (C, 3, 3) homography arrays, got {t.shape}")
     if t.shape[1] == 2:
         t = np.concatenate([t, np.broadcast_to(np.array([0.0, 0.0, 1.0]), (len(t), 1, 3))], axis=1)
-    if not np.isfinite(t).all():
-        raise InputValueError("transforms must be finite")
+    if not np.isfinite(t).all() or np.abs(t).max(initial=0) > 1e9:
+        raise InputValueError("transforms must be finite, within 1e9")
     return t
 
 
-def _items(points: np.ndarray, point_ranges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _items(point_ranges: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     counts = point_ranges[:, 1] - point_ranges[:, 0]
     candidate = np.repeat(np.arange(len(point_ranges)), counts)
     first = np.repeat(point_ranges[:, 0] - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)
     return first + np.arange(counts.sum()), candidate
 
 
-def _check_support(nearest: Any, tangent_map: Any, points: Any, tangents: Any, point_ranges: Any,
+def _check_support(nearest: Any, tangent_map: Any, points_: Any, tangents: Any, point_ranges: Any,
                    transforms: Any) -> tuple[np.ndarray, ...]:
-    nearest = np.asarray(nearest)
-    tangent_map = np.asarray(tangent_map, np.float32)
-    if nearest.ndim != 2 or nearest.dtype != np.int32 or tangent_map.shape != nearest.shape:
-        raise InputValueError("nearest must be int32 (H, W) (distance_transform's) and tangent_map float (H, W) "
-                              f"alike, got {nearest.dtype} {nearest.shape} and {tangent_map.shape}")
-    points = np.asarray(points, np.float64).reshape(-1, 2)
-    tangents = np.asarray(tangents, np.float64).reshape(-1)
-    if len(tangents) != len(points):
-        raise InputValueError(f"tangents must have one value per point ({len(points)}), got {len(tangents)}")
-    ranges = np.asarray(point_ranges, np.int64).reshape(-1, 2)
+    if not isinstance(nearest, np.ndarray) or nearest.dtype != np.int32 or nearest.ndim != 2 or nearest.size == 0:
+        raise InputValueError("nearest must be an int32 (H, W) array (distance_transform's nearest)")
+    if nearest.min() < -1 or nearest.max() >= nearest.size:
+        raise InputValueError(f"nearest must hold flat addresses of its pixels (0 to {nearest.size - 1}) or -1")
+    tangent_map = real_map(tangent_map, "tangent_map", nearest.shape, "nearest", unknown=True).astype(np.float32)
+    points_ = points(points_, "points")
+    tangents = angles(tangents, "tangents", len(points_), "points", unknown=True)
     homographies = _homographies(transforms)
-    if len(ranges) != len(homographies):
-        raise InputValueError(f"point_ranges must hold one (start, stop) per transform ({len(homographies)})")
-    if len(ranges) and (ranges.min() < 0 or ranges.max() > len(points) or np.any(ranges[:, 1] < ranges[:, 0])):
-        raise InputValueError(f"point_ranges must be (start, stop) slices of the {len(points)} points")
-    return nearest, tangent_map, points, tangents, ranges, homographies
+    if not isinstance(point_ranges, np.ndarray) or point_ranges.dtype.kind not in "iu":
+        raise InputTypeError("point_ranges must be an integer NumPy array")
+    ranges = point_ranges.astype(np.int64)
+    if ranges.shape != (len(homographies), 2):
+        raise InputValueError(f"point_ranges must hold one (start, stop) per transform, shape ({len(homographies)}, 2), "
+                              f"got {ranges.shape}")
+    if len(ranges) and (ranges.min() < 0 or ranges.max() > len(points_) or np.any(ranges[:, 1] < ranges[:, 0])):
+        raise InputValueError(f"point_ranges must be (start, stop) slices of the {len(points_)} points")
+    if int((ranges[:, 1] - ranges[:, 0]).sum()) >= 2**31:
+        raise InputValueError("point_ranges must cover fewer than 2**31 points in all")
+    return np.ascontiguousarray(nearest), tangent_map, points_, tangents, ranges, homographies
 
 
 def support(nearest: Any, tangent_map: Any, points: Any, tangents: Any, point_ranges: Any, transforms: Any, *,
@@ -175,7 +172,7 @@ def support(nearest: Any, tangent_map: Any, points: Any, tangents: Any, point_ra
     machine = machine_for(machine)
     nearest, tangent_map, points, tangents, ranges, homographies = _check_support(
         nearest, tangent_map, points, tangents, point_ranges, transforms)
-    point_of_item, candidate_of_item = _items(points, ranges)
+    point_of_item, candidate_of_item = _items(ranges)
     items = len(point_of_item)
     if items == 0:
         return Support(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0, bool))
@@ -196,7 +193,7 @@ def support_numpy(nearest: Any, tangent_map: Any, points: Any, tangents: Any, po
     """:func:`support` in NumPy on the host: the reference the kernel is tested and timed against."""
     nearest, tangent_map, points, tangents, ranges, homographies = _check_support(
         nearest, tangent_map, points, tangents, point_ranges, transforms)
-    point_of_item, candidate_of_item = _items(points, ranges)
+    point_of_item, candidate_of_item = _items(ranges)
     h, w = nearest.shape
     m = homographies[candidate_of_item]
     p = points[point_of_item]
@@ -307,18 +304,16 @@ def refine(nearest: Any, tangent_map: Any, points: Any, tangents: Any, point_ran
     """
     machine = machine_for(machine)
     transform = check_choice(transform, "transform", TRANSFORMS)
-    tolerance = check_real(tolerance, "tolerance", above=0)
+    tolerance = check_real(tolerance, "tolerance", above=0, maximum=1e6)
     angle_limit = math.radians(check_real(angle, "angle", above=0, maximum=90))
-    start = check_real(start, "start", minimum=tolerance)
-    iterations = check_int(iterations, "iterations", minimum=0)
+    start = check_real(start, "start", minimum=tolerance, maximum=1e6)
+    iterations = check_int(iterations, "iterations", minimum=0, maximum=1000)
     nearest, tangent_map, points, tangents, ranges, current = _check_support(
         nearest, tangent_map, points, tangents, point_ranges, transforms)
-    if not isinstance(nearest, np.ndarray):
-        raise InputTypeError("nearest must be a NumPy array")
     current = current.copy()
     counts = ranges[:, 1] - ranges[:, 0]
     bounds = np.concatenate([[0], np.cumsum(counts)])
-    point_of_item, _ = _items(points, ranges)
+    point_of_item, _ = _items(ranges)
     tol_schedule = start * (tolerance / start) ** (np.arange(iterations) / max(iterations - 1, 1))
     for tol in tol_schedule:
         found = support(nearest, tangent_map, points, tangents, ranges, current, machine=machine)

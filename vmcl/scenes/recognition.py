@@ -302,11 +302,11 @@ OBJECTS: tuple[SceneObject, ...] = _library()
 _BY_NAME = {o.name: o for o in OBJECTS}
 
 
-def _object(name: str) -> SceneObject:
+def _object(name: str, what: str = "name") -> SceneObject:
     if not isinstance(name, str):
-        raise InputTypeError(f"name must be the name of one of vmcl.scenes.OBJECTS, got {type(name).__name__}")
+        raise InputTypeError(f"{what} must be the name of one of vmcl.scenes.OBJECTS, got {type(name).__name__}")
     if name not in _BY_NAME:
-        raise InputValueError(f"name must be one of {sorted(_BY_NAME)}, got {name!r}")
+        raise InputValueError(f"{what} must be one of {sorted(_BY_NAME)}, got {name!r}")
     return _BY_NAME[name]
 
 
@@ -477,7 +477,9 @@ def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, 
     """
     h, w = _check_shape(shape)
     count = check_int(objects, "objects", minimum=1, maximum=6)
-    names = tuple(o.name for o in OBJECTS) if library is None else tuple(_object(n).name for n in library)
+    if library is not None and (isinstance(library, str) or not isinstance(library, (tuple, list))):
+        raise InputTypeError(f"library must be a tuple of object names, got {type(library).__name__}")
+    names = tuple(o.name for o in OBJECTS) if library is None else tuple(_object(n, "library").name for n in library)
     if len(set(names)) < count:
         raise InputValueError(f"library must hold at least objects={count} distinct names, got {len(set(names))}")
     low, high = _pair(occlusion, "occlusion", 0.0, 0.95)
