@@ -222,6 +222,9 @@ ring = np.zeros((12, 12), bool)
 ring[2, 2:10] = ring[9, 2:10] = ring[2:10, 2] = ring[2:10, 9] = True
 link_edges(ring)
 structural_saliency(ring, iterations=3)
+from vmcl.recognize import Library, learn, recognize
+ell, _ = scenes.object_view("ell", shape=(48, 48))
+recognize(ell, Library([learn("ell", [ell])]))
 for record in records:
     print(f"{record.levelname}: {record.getMessage()}")
 print("built:", " ".join(sorted(built)))

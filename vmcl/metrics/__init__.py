@@ -19,7 +19,9 @@ to the host):
   albedo, shadow, specular, texture), precision and recall of predicted discontinuity pixels within a
   tolerance of t pixels, the measure the seed paper's labelling stage needs;
 - :mod:`~vmcl.metrics.points`: detected points (junctions, corners) matched one to one within a
-  tolerance, and the junctions of human segmentations (where three or more segments meet).
+  tolerance, and the junctions of human segmentations (where three or more segments meet);
+- :mod:`~vmcl.metrics.recognition`: recognised objects against a scene's, the recognition rate, false
+  detections per image and the pose's error at the model's corners.
 
 Two private modules serve them all: ``_inputs`` (argument checks and the copy of device arrays to the
 host) and ``_rates`` (ratios and the F-measure, 0 where nothing is counted).
@@ -29,6 +31,7 @@ from vmcl.metrics.boundaries import BoundaryCounts, BoundaryScores, boundary_cou
 from vmcl.metrics.detections import DetectionScores, detection_scores, label_scores
 from vmcl.metrics.flow import FlowScores, angular_error, endpoint_error, evaluate_flow
 from vmcl.metrics.points import match_points, point_scores, segmentation_junctions
+from vmcl.metrics.recognition import RecognitionScores, recognition_scores
 from vmcl.metrics.stereo import BAD_PIXEL_THRESHOLDS, DisparityScores, evaluate_disparity
 
 __all__ = [
@@ -38,6 +41,7 @@ __all__ = [
     "DetectionScores",
     "DisparityScores",
     "FlowScores",
+    "RecognitionScores",
     "angular_error",
     "boundary_counts",
     "detection_scores",
@@ -48,5 +52,6 @@ __all__ = [
     "label_scores",
     "match_points",
     "point_scores",
+    "recognition_scores",
     "segmentation_junctions",
 ]

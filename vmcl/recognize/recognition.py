@@ -115,7 +115,7 @@ def _features(data: Any, sigma: float, machine: Machine) -> Features:
 
 
 def recognize(image: Any, library: Library, *, transform: Transform = "similarity", sigma: float = 1.5,
-              scales: tuple[float, float] = (0.25, 4.0), min_score: float = 0.3, min_significance: float = 0.0,
+              scales: tuple[float, float] = (0.25, 4.0), min_score: float = 0.3, min_significance: float = 35.0,
               min_support: int = 40,
               candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 8, regions: int = 8,
               tolerance: float = 2.0, machine: Machine | None = None) -> list[Detection]:
@@ -137,7 +137,9 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
         The fraction of a model's boundary that must be supported, in (0, 1].
     min_significance : float
         The least significance (-log10 of the number of false alarms, :attr:`Detection.significance`) a
-        detection needs.
+        detection needs. The default is the least that kept false detections to at most 0.1 per image on
+        rendered training scenes (benchmarks/recognition_fit.py, results/recognition_fit.md); 0 is the
+        a contrario criterion's own (one false alarm expected), which in clutter admits look-alikes.
     min_support : int
         The fewest distinct image edge pixels a detection explains, >= 1.
     candidates : int

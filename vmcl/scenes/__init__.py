@@ -73,19 +73,22 @@ from vmcl.labels import Label as Label
 from vmcl.scenes.clutter import ClutterDisplay, clutter_display
 from vmcl.scenes.occlusion import Junction, OcclusionScene, occlusion_scene, render_occlusion
 from vmcl.scenes.presets import PRESETS, preset
-from vmcl.scenes.recognition import (OBJECTS, TILT, Placement, RecognitionScene, SceneObject, object_view,
-                                     recognition_scene)
+from vmcl.scenes.recognition import (LEARNED_YAWS, OBJECTS, TILT, Placement, RecognitionScene, SceneObject,
+                                     example_library, example_views, object_view, recognition_scene)
 from vmcl.scenes.rendering import Scene, render
 from vmcl.scenes.sequences import advance, render_sequence
 from vmcl.scenes.world import Body, Camera, Face, Light, Mark, Motion, Texture, World, box, fold
 
 __all__ = [
+    "LEARNED_YAWS",
     "OBJECTS",
     "PRESETS",
     "TILT",
     "Placement",
     "RecognitionScene",
     "SceneObject",
+    "example_library",
+    "example_views",
     "object_view",
     "recognition_scene",
     "Body",

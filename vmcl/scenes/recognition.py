@@ -25,11 +25,19 @@ import numpy as np
 
 from vmcl.cm.core import check_int, check_real
 from vmcl.errors import InputTypeError, InputValueError
+from vmcl.machine import Machine
+from vmcl.recognize import Library, learn
 
-__all__ = ["OBJECTS", "TILT", "Placement", "RecognitionScene", "SceneObject", "object_view", "recognition_scene"]
+__all__ = ["LEARNED_YAWS", "OBJECTS", "TILT", "Placement", "RecognitionScene", "SceneObject", "example_library",
+           "example_views", "object_view", "recognition_scene"]
 
 TILT = 25.0
 """The elevation (degrees) every 3-D object is seen from: the camera looks 25 degrees down on it."""
+
+LEARNED_YAWS = (-40.0, -20.0, 0.0, 20.0, 40.0)
+"""The views (yaw, degrees) a 3-D object is learned from by :func:`example_views`: five, 20 degrees apart,
+spanning the range :func:`recognition_scene` draws views from, so a scene's view lies at most 10 degrees
+from one of them."""
 
 _SUPERSAMPLE = 4  # each pixel is the mean of 4 x 4 samples, so edge pixels carry their coverage
 _SHIFT = 4  # cv2.fillPoly's fractional bits: vertices placed to 1/16 of a fine pixel
@@ -388,6 +396,40 @@ def object_view(name: str, *, yaw: float = 0.0, shape: tuple[int, int] = (200, 2
     if noise > 0:
         image += np.random.default_rng(seed).normal(0, noise, image.shape).astype(np.float32)
     return image, placement
+
+
+def example_views(name: str, *, shape: tuple[int, int] = (200, 200)) -> list[tuple[np.ndarray, Placement]]:
+    """The examples a model of the object is learned from: one view of a 2-D object, the views at
+    :data:`LEARNED_YAWS` of a 3-D one (:func:`object_view`'s defaults otherwise).
+
+    Returns
+    -------
+    list of (image, Placement)
+    """
+    obj = _object(name)
+    return [object_view(name, yaw=yaw, shape=shape) for yaw in (LEARNED_YAWS if obj.solid else (0.0,))]
+
+
+def example_library(names: tuple[str, ...] | None = None, *,
+                    machine: Machine | None = None) -> tuple[Library, dict[str, list[Placement]]]:
+    """The library learned from :func:`example_views` of the objects (default: all of :data:`OBJECTS`),
+    with the placements of each model's views (which put its corners in its frame, for
+    :func:`vmcl.metrics.recognition_scores`).
+
+    Returns
+    -------
+    library : vmcl.recognize.Library
+    learned : dict of str to list of Placement
+    """
+    if names is not None and (isinstance(names, str) or not isinstance(names, (tuple, list))):
+        raise InputTypeError(f"names must be a tuple of object names, got {type(names).__name__}")
+    chosen = [o.name for o in OBJECTS] if names is None else [_object(n, "names").name for n in names]
+    models, learned = [], {}
+    for name in chosen:
+        views = example_views(name)
+        models.append(learn(name, [image for image, _ in views], machine=machine))
+        learned[name] = [placement for _, placement in views]
+    return Library(models), learned
 
 
 def _draw(canvas: _Canvas, obj: SceneObject, owner: int, yaw: float, scale: float, angle: float,

@@ -1,0 +1,79 @@
+"""`vmcl learn` and `vmcl run --models`, and the pipeline's recognition stage."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+from vmcl.cli import main
+from vmcl.pipeline import Config, VisionMachine
+from vmcl.recognize import Library, load_model
+from vmcl.scenes import object_view, recognition_scene
+
+
+def _png(path, image):
+    cv2.imwrite(str(path), np.round(np.clip(image, 0, 1) * 255).astype(np.uint8))
+    return path
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("recognition")
+    paths = {name: _png(folder / f"{name}.png", object_view(name, shape=(160, 160))[0]) for name in ("ell", "arrow")}
+    scene = recognition_scene((300, 400), seed=6, library=("ell", "arrow"), objects=2, occlusion=(0.0, 0.1), clutter=2)
+    paths["scene"] = _png(folder / "scene.png", scene.image)
+    paths["fast"] = folder / "fast.toml"
+    paths["fast"].write_text('[mrf]\nmethod = "icm"\n')
+    return paths
+
+
+def test_learn_writes_models_and_run_recognises_them(tmp_path, files, capsys):
+    library = tmp_path / "library"
+    for name in ("ell", "arrow"):
+        assert main(["learn", name, str(files[name]), "--library", str(library), "-q"]) == 0
+    assert Library.load(library).names == ("arrow", "ell")
+    assert load_model(library / "ell.vmodel.npz").sources == ("ell.png",)
+    capsys.readouterr()
+    out = tmp_path / "run"
+    assert main(["run", str(files["scene"]), "--models", str(library), "--config", str(files["fast"]),
+                 "--out", str(out), "-q"]) == 0
+    printed = capsys.readouterr().out
+    assert "recognised:" in printed and "ell" in printed and "arrow" in printed
+    assert (out / "recognition.png").exists()
+    assert "Recognition" in (out / "report.html").read_text()
+
+
+def test_learn_refuses_to_replace_a_model_unless_asked(tmp_path, files, capsys):
+    library = tmp_path / "library"
+    assert main(["learn", "ell", str(files["ell"]), "--library", str(library), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["learn", "ell", str(files["ell"]), "--library", str(library), "-q"]) == 2
+    assert "--replace" in capsys.readouterr().err
+    assert main(["learn", "ell", str(files["ell"]), "--library", str(library), "--replace", "-q"]) == 0
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (["learn", "ell", "{ell}", "--library", "{tmp}/lib", "--mask", "{ell}", "--mask", "{ell}"], "--mask given 2 times"),
+    (["learn", "../ell", "{ell}", "--library", "{tmp}/lib"], "name must be"),
+    (["learn", "ell", "{tmp}/absent.png", "--library", "{tmp}/lib"], "no such file"),
+    (["run", "{scene}", "--models", "{tmp}/absent", "--out", "{tmp}/out"], "--models"),
+])
+def test_bad_recognition_commands_are_one_line_and_exit_2(tmp_path, files, capsys, arguments, message):
+    argv = [a.format(ell=files["ell"], scene=files["scene"], tmp=tmp_path) for a in arguments]
+    assert main([*argv, "-q"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_pipeline_recognises_as_a_stage(tmp_path, files):
+    library = tmp_path / "library"
+    assert main(["learn", "ell", str(files["ell"]), "--library", str(library), "-q"]) == 0
+    config = Config.from_dict({"recognition": {"models": str(library)}, "mrf": {"method": "icm"}})
+    machine = VisionMachine(config)
+    assert machine.stages(right=False, next=False, rgb=False)[-1] == "recognition"
+    image = cv2.imread(str(files["scene"]), cv2.IMREAD_GRAYSCALE)
+    result = machine.run(image)
+    assert "recognition" in result.stages
+    assert [d.name for d in result.recognition] == ["ell"]
+    assert VisionMachine().run(image).recognition is None

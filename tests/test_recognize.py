@@ -1,0 +1,248 @@
+"""vmcl.recognize: features, models and the library folder, indexing, the distance transform, support and
+refinement kernels against their NumPy and SciPy references, selection, and recognition of objects of known
+identity and pose."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from vmcl.errors import InputError
+from vmcl.recognize import (Index, Library, corner_pairs, distance_transform, distance_transform_numpy,
+                            image_features, learn, load_model, pair_keys, recognize, refine, save_model,
+                            select_regions, corner_regions, support, support_numpy, vote, vote_numpy)
+from vmcl.scenes import object_view, recognition_scene
+
+
+@pytest.fixture(scope="module")
+def ell_model():
+    image, placement = object_view("ell", shape=(160, 160))
+    return learn("ell", [image]), image, placement
+
+
+def _similarity(scale, angle, tx, ty):
+    a = math.radians(angle)
+    return np.array([[scale * math.cos(a), -scale * math.sin(a), tx], [scale * math.sin(a), scale * math.cos(a), ty]])
+
+
+# ------------------------------------------------------------------------------------------- features
+
+
+def test_an_objects_corners_are_found_where_they_are_with_their_angles(ell_model):
+    model, image, placement = ell_model
+    view = model.views[0]
+    # Every corner of the drawing has a feature within 2 px; the ell's corners are right angles.
+    distance = np.hypot(*(view.corners[:, None, :] - placement.corners[None]).transpose(2, 0, 1))
+    assert (distance.min(axis=0) <= 2.0).all()
+    near = distance.min(axis=1) <= 2.0
+    assert np.allclose(view.opening[near], math.pi / 2, atol=math.radians(12))
+
+
+# ------------------------------------------------------------------------------------------- indexing
+
+
+def test_corner_pairs_are_the_nearest_neighbours_both_ways():
+    rng = np.random.default_rng(1)
+    corners = rng.uniform(0, 100, (12, 2))
+    pairs = corner_pairs(corners, neighbours=3)
+    got = {tuple(p) for p in pairs}
+    d = np.hypot(*(corners[:, None] - corners[None]).transpose(2, 0, 1))
+    d[d < 4.0] = np.inf  # closer corners are one junction's (and a corner is not its own neighbour)
+    expected = {(i, int(j)) for i in range(12) for j in np.argsort(d[i])[:3]}
+    expected |= {(j, i) for i, j in expected}
+    assert got == expected
+    groups = np.array([0] * 4 + [-1] * 8)
+    with_groups = {tuple(p) for p in corner_pairs(corners, neighbours=0, groups=groups)}
+    assert with_groups == {(i, j) for i in range(4) for j in range(4) if i != j}
+
+
+def test_keys_do_not_change_under_a_similarity():
+    rng = np.random.default_rng(2)
+    corners = rng.uniform(0, 100, (8, 2))
+    bisector = rng.uniform(-math.pi, math.pi, 8)
+    opening = rng.uniform(0.3, 2.8, 8)
+    pairs = corner_pairs(corners, neighbours=7)
+    m = _similarity(1.7, 33.0, 12.0, -5.0)
+    moved = corners @ m[:, :2].T + m[:, 2]
+    turned = np.angle(np.exp(1j * (bisector + math.radians(33.0))))
+    hard = pair_keys(moved, turned, opening, pairs)
+    soft = pair_keys(corners, bisector, opening, pairs, soft=True)
+    # The image's key is one of the 16 the table enters each pair under.
+    assert all(k in row for k, row in zip(hard, soft))
+
+
+def test_the_vote_finds_the_pose_and_agrees_with_numpy(ell_model):
+    model, _, _ = ell_model
+    other, _ = object_view("arrow", shape=(160, 160))
+    library = Library([learn("arrow", [other]), model])
+    index = Index.build(library)
+    view = model.views[0]
+    m = _similarity(1.3, 50.0, 40.0, 20.0)
+    corners = view.corners @ m[:, :2].T + m[:, 2]
+    bisector = view.bisector + math.radians(50.0)
+    pairs = corner_pairs(corners)
+    device = vote(index, corners, bisector, view.opening, pairs)
+    host = vote_numpy(index, corners, bisector, view.opening, pairs)
+    assert index.views[device.views[0]][0] == 1  # the ell
+    assert np.allclose(device.matrices()[0], m, atol=1e-3)
+    # The same arithmetic in float32; a pose at a bin's edge may fall either side in the two (their atan2
+    # and log round differently), so the best candidates agree and the rest nearly.
+    assert np.array_equal(device.views[:10], host.views[:10]) and np.array_equal(device.votes[:10], host.votes[:10])
+    assert np.allclose(device.similarity[:10], host.similarity[:10], atol=1e-3)
+    assert abs(len(device) - len(host)) <= 0.1 * len(host)
+
+
+# ----------------------------------------------------------------------------------- distance, support
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_distance_transform_is_scipys(seed):
+    rng = np.random.default_rng(seed)
+    edges = rng.random((37, 53)) < [0.001, 0.02, 0.3][seed]
+    edges[5, 7] = True
+    found = distance_transform(edges)
+    reference = distance_transform_numpy(edges)
+    assert np.allclose(found.distance, ndimage.distance_transform_edt(~edges), atol=1e-5)
+    assert np.allclose(found.distance, reference.distance, atol=1e-5)
+    # Each pixel's nearest edge pixel is an edge pixel at that distance.
+    assert edges.ravel()[found.nearest.ravel()].all()
+
+
+def test_no_edges_leaves_every_pixel_without_a_nearest_one():
+    found = distance_transform(np.zeros((9, 11), bool))
+    assert (found.nearest == -1).all() and np.isinf(found.distance).all()
+
+
+def test_support_agrees_with_numpy_for_affine_maps_and_homographies():
+    rng = np.random.default_rng(3)
+    edges = rng.random((40, 50)) < 0.05
+    nearest = distance_transform(edges).nearest
+    tangent_map = np.where(edges, rng.uniform(-math.pi, math.pi, edges.shape), np.nan).astype(np.float32)
+    points = rng.uniform(-5, 55, (30, 2))
+    tangents = rng.uniform(-math.pi, math.pi, 30)
+    tangents[::7] = np.nan
+    ranges = np.array([[0, 30], [5, 20], [0, 30]])
+    transforms = np.array([[[1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0.9, -0.2, 3], [0.2, 0.9, -2], [0, 0, 1]],
+                           [[1, 0.05, 1], [0.02, 1.1, 0], [1e-3, -2e-3, 1]]], float)
+    device = support(nearest, tangent_map, points, tangents, ranges, transforms)
+    host = support_numpy(nearest, tangent_map, points, tangents, ranges, transforms)
+    assert np.array_equal(device.inside, host.inside)
+    assert np.allclose(device.edge[host.inside], host.edge[host.inside])
+    assert np.allclose(device.distance[host.inside], host.distance[host.inside], atol=1e-4)
+    assert np.allclose(device.angle[host.inside], host.angle[host.inside], atol=1e-4)
+
+
+@pytest.mark.parametrize("kind", ["similarity", "affine", "homography"])
+def test_refinement_recovers_a_known_pose(ell_model, kind):
+    model, image, _ = ell_model
+    view = model.views[0]
+    if kind == "similarity":
+        truth = np.vstack([_similarity(1.2, 20.0, 15.0, -10.0), [0, 0, 1]])
+    elif kind == "affine":
+        truth = np.array([[1.1, 0.15, 5.0], [-0.1, 0.95, 8.0], [0, 0, 1]])
+    else:
+        truth = np.array([[1.0, 0.05, 4.0], [0.02, 1.05, 2.0], [4e-4, 2e-4, 1.0]])
+    scene = cv2.warpPerspective(image, truth, (220, 220), flags=cv2.INTER_LINEAR)
+    features = image_features(scene)
+    nearest = distance_transform(features.edges).nearest
+    start = truth.copy()
+    start[:2, 2] += (2.5, -2.0)  # a few pixels off
+    found = refine(nearest, features.tangent_map, view.points, view.tangent, np.array([[0, len(view.points)]]),
+                   start[None], transform=kind)
+    corners = view.corners
+    def carry(h):
+        p = corners @ h[:2, :2].T + h[:2, 2]
+        return p / (corners @ h[2, :2] + h[2, 2])[:, None]
+    error = np.hypot(*(carry(found.transforms[0]) - carry(truth)).T)
+    assert error.max() < 1.0
+    assert found.score[0] > 0.9
+
+
+# ------------------------------------------------------------------------------------------- selection
+
+
+def test_regions_are_the_components_off_the_edges_ranked_by_saliency():
+    edges = np.zeros((40, 40), bool)
+    edges[10, 5:30] = edges[30, 5:30] = edges[10:31, 5] = edges[10:31, 29] = True  # a box
+    edges[2:8, 34:39] = False
+    saliency = np.where(edges, 2.0, 0.0)
+    regions = select_regions(edges, saliency, min_area=4, max_fraction=0.9)
+    labels, count = ndimage.label(~edges)
+    assert len(regions.area) == count == 2
+    inside = regions.labels[20, 20]
+    assert regions.area[inside] == 19 * 23
+    assert regions.ranked[0] in (0, 1) and set(regions.ranked) == {0, 1}
+    corners = np.array([[6.0, 11.0]])
+    assert corner_regions(regions, corners, np.array([math.pi / 4]), top=2)[0] == inside
+    assert corner_regions(regions, corners, np.array([math.pi / 4 + math.pi]), top=2)[0] != inside
+
+
+# ------------------------------------------------------------------------------------------- models
+
+
+def test_models_round_trip_through_a_library_folder(ell_model, tmp_path):
+    model, _, _ = ell_model
+    path = save_model(model, tmp_path / "lib")
+    assert path.name == "ell.vmodel.npz"
+    again = load_model(path)
+    assert again.name == "ell" and np.array_equal(again.views[0].points, model.views[0].points)
+    assert np.array_equal(again.views[0].corners, model.views[0].corners)
+    assert Library.load(tmp_path / "lib").names == ("ell",)
+    with pytest.raises(InputError, match="replace"):
+        save_model(model, tmp_path / "lib")
+    save_model(model, tmp_path / "lib", replace=True)
+    # A file vmcl did not write is never replaced.
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "ell.vmodel.npz").write_bytes(b"not a model")
+    with pytest.raises(InputError, match="not a vmcl model"):
+        save_model(model, tmp_path / "other", replace=True)
+    assert (tmp_path / "other" / "ell.vmodel.npz").read_bytes() == b"not a model"
+
+
+@pytest.mark.parametrize("name", ["", "../up", ".hidden", "a/b", "x" * 65])
+def test_model_names_that_are_not_plain_file_names_are_refused(name):
+    image, _ = object_view("ell", shape=(64, 64))
+    with pytest.raises(InputError, match="name"):
+        learn(name, [image])
+
+
+# ------------------------------------------------------------------------------------------- recognition
+
+
+def test_an_object_is_recognised_at_its_pose_among_others():
+    names = ["ell", "arrow", "star", "house"]
+    views = {n: object_view(n, shape=(160, 160)) for n in names}
+    library = Library([learn(n, [views[n][0]]) for n in names])
+    scene = recognition_scene(seed=3, library=("ell", "arrow", "star", "house"), objects=2, occlusion=(0.0, 0.1))
+    found = recognize(scene.image, library)
+    for placement in scene.placements:
+        view_placement = views[placement.name][1]
+        hits = [d for d in found if d.name == placement.name]
+        assert hits, f"{placement.name} not found"
+        # Each true corner to the nearest found one (the star's pose is one of five equal ones).
+        found_corners = hits[0].locate(view_placement.corners)
+        error = np.hypot(*(placement.corners[:, None] - found_corners[None]).transpose(2, 0, 1)).min(axis=1)
+        assert error.max() < 2.0
+    assert len(found) == len(scene.placements)
+
+
+def test_nothing_is_recognised_in_an_empty_image(ell_model):
+    model, _, _ = ell_model
+    assert recognize(np.full((64, 64), 0.5, np.float32), Library([model])) == []
+
+
+def test_bad_recognition_arguments_are_refused_by_name(ell_model):
+    model, image, _ = ell_model
+    library = Library([model])
+    for kwargs, name in (({"transform": "projective"}, "transform"), ({"min_score": 0.0}, "min_score"),
+                         ({"scales": (2.0, 1.0)}, "scales"), ({"verify": 0}, "verify")):
+        with pytest.raises(InputError, match=name):
+            recognize(image, library, **kwargs)
+    with pytest.raises(InputError, match="library"):
+        recognize(image, [model])
+    with pytest.raises(InputError, match="image"):
+        recognize([[0.0]], library)

@@ -1,0 +1,70 @@
+"""vmcl.scenes.recognition: the object library, views to learn from, and scenes with exact identity and pose."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from vmcl.errors import InputError
+from vmcl.scenes import OBJECTS, TILT, object_view, recognition_scene
+
+
+def test_the_library_holds_twenty_objects_at_least_with_curved_and_solid_ones():
+    names = [o.name for o in OBJECTS]
+    assert len(names) == len(set(names)) >= 20
+    assert sum(o.curved for o in OBJECTS) >= 5 and sum(o.solid for o in OBJECTS) >= 5
+    for o in OBJECTS:
+        if not o.solid:
+            # The unit frame: the outline's area that of the unit disc.
+            x, y = o.outline[:, 0], o.outline[:, 1]
+            area = abs((x * np.roll(y, -1) - np.roll(x, -1) * y).sum()) / 2
+            assert area == pytest.approx(math.pi, rel=1e-9)
+
+
+def test_a_view_puts_the_corners_where_the_placement_says():
+    image, placement = object_view("ell", shape=(120, 120), scale=30.0, background=0.0, albedo=1.0)
+    corners = placement.corners
+    assert corners.shape == (6, 2)
+    # Each corner lies on the boundary: of the four points 2 px off it diagonally, some are inside the
+    # object (1) and some outside (0).
+    for x, y in corners:
+        around = [image[int(round(y + dy)), int(round(x + dx))] for dx in (-2, 2) for dy in (-2, 2)]
+        assert max(around) == 1.0 and min(around) == 0.0
+    m = placement.matrix()
+    assert np.allclose(m[:, :2] @ OBJECTS[0].corners.T + m[:, 2:], corners.T)
+    assert image.dtype == np.float32 and 0 <= image.min() and image.max() <= 1
+
+
+def test_a_solid_objects_view_shows_its_visible_vertices_projected():
+    block = next(o for o in OBJECTS if o.name == "block")
+    _, placement = object_view("block", yaw=30.0, shape=(100, 100), scale=20.0)
+    a, t = math.radians(30.0), math.radians(TILT)
+    turn = np.array([[math.cos(a), 0, math.sin(a)], [0, 1, 0], [-math.sin(a), 0, math.cos(a)]])
+    tip = np.array([[1, 0, 0], [0, math.cos(t), -math.sin(t)], [0, math.sin(t), math.cos(t)]])
+    projected = (block.vertices @ (tip @ turn).T)[:, :2] * 20.0 + 49.5
+    assert np.allclose(placement.corners, projected[placement.corner_ids])
+    # A box seen from above and the side shows 7 of its 8 vertices.
+    assert len(placement.corner_ids) == 7
+
+
+def test_scenes_hide_each_object_within_the_occlusion_range_and_are_reproducible():
+    for seed in range(4):
+        scene = recognition_scene(seed=seed)
+        assert len(scene.placements) == 2
+        assert len({p.name for p in scene.placements}) == 2
+        for p in scene.placements:
+            assert 0.3 <= p.occluded <= 0.6  # the occluder's range, plus what clutter in front may add
+            assert 45 <= p.scale <= 60
+    again = recognition_scene(seed=3)
+    assert np.array_equal(again.image, recognition_scene(seed=3).image)
+
+
+@pytest.mark.parametrize("kwargs", [
+    {"objects": 0}, {"objects": 7}, {"library": ("ell",), "objects": 2}, {"library": ("nothing",)},
+    {"occlusion": (0.5, 0.2)}, {"size": (0.0, 10.0)}, {"shape": (10, 10)}, {"seed": -1}])
+def test_bad_scene_arguments_are_refused_by_name(kwargs):
+    name = next(iter(kwargs))
+    with pytest.raises(InputError, match=name if name != "objects" or kwargs.get("library") is None else "library"):
+        recognition_scene(**kwargs)

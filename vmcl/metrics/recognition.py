@@ -1,0 +1,105 @@
+"""Recognised objects against the objects a scene holds: recognition rate, false detections and pose error.
+
+The figures model-based recognition reports (Grimson's and Huttenlocher's): the fraction of the objects
+present that are found, the false detections per image, and the pose's error at the model's corners. A
+detection finds an object when it names it and its pose carries the model's corners onto the object's:
+each of the object's visible corners lies, on average, within ``tolerance`` (a fraction of the object's
+size) of the nearest carried corner. Nearest, not the corner of the same index: a symmetric object (a
+star) has several right poses. The pose error is that mean distance in pixels; each object is found at
+most once (the detection with the smallest error), and every other detection is false.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from vmcl.cm.core import check_real
+from vmcl.errors import InputTypeError, InputValueError
+from vmcl.recognize import Detection
+from vmcl.scenes import Placement
+
+__all__ = ["RecognitionScores", "recognition_scores"]
+
+
+@dataclass(frozen=True)
+class RecognitionScores:
+    """What :func:`recognition_scores` returns for one image.
+
+    Attributes
+    ----------
+    found : tuple of bool
+        Per object of the scene (its placements' order), whether a detection found it.
+    pose_error : tuple of float
+        Per object, the found pose's mean corner error in pixels (NaN where not found).
+    false : int
+        Detections that found no object.
+    """
+
+    found: tuple[bool, ...]
+    pose_error: tuple[float, ...]
+    false: int
+
+
+def _corner_error(detection: Detection, learned: Placement, truth: Placement) -> float:
+    carried = detection.locate(learned.corners)
+    distance = np.hypot(truth.corners[:, None, 0] - carried[None, :, 0], truth.corners[:, None, 1] - carried[None, :, 1])
+    return float(distance.min(axis=1).mean())
+
+
+def recognition_scores(detections: Sequence[Detection], placements: Sequence[Placement],
+                       learned: Mapping[str, Sequence[Placement]], *, tolerance: float = 0.25) -> RecognitionScores:
+    """Score one image's detections against the objects it holds.
+
+    Parameters
+    ----------
+    detections : sequence of vmcl.recognize.Detection
+    placements : sequence of vmcl.scenes.Placement
+        The objects in the image (:attr:`vmcl.scenes.RecognitionScene.placements`).
+    learned : mapping of str to sequence of Placement
+        Per model name, the placement of the object in each view it was learned from (in the view's
+        order, :func:`vmcl.scenes.object_view`'s), which puts the model's corners in its frame.
+    tolerance : float
+        The largest mean corner error for a detection to find an object, as a fraction of the object's
+        scale (its rms radius in pixels), > 0.
+
+    Returns
+    -------
+    RecognitionScores
+    """
+    for name, values in (("detections", detections), ("placements", placements)):
+        if isinstance(values, str) or not isinstance(values, Sequence):
+            raise InputTypeError(f"{name} must be a sequence, got {type(values).__name__}")
+    if not all(isinstance(d, Detection) for d in detections):
+        raise InputTypeError("detections must hold vmcl.recognize.Detection")
+    if not all(isinstance(p, Placement) for p in placements):
+        raise InputTypeError("placements must hold vmcl.scenes.Placement")
+    if not isinstance(learned, Mapping):
+        raise InputTypeError(f"learned must be a mapping of model name to placements, got {type(learned).__name__}")
+    tolerance = check_real(tolerance, "tolerance", above=0)
+    errors = np.full((len(placements), len(detections)), np.inf)
+    for j, detection in enumerate(detections):
+        views = learned.get(detection.name)
+        if views is None:
+            continue
+        if not 0 <= detection.view < len(views):
+            raise InputValueError(f"learned[{detection.name!r}] has {len(views)} views; a detection is of view "
+                                  f"{detection.view}")
+        for i, placement in enumerate(placements):
+            if placement.name == detection.name:
+                error = _corner_error(detection, views[detection.view], placement)
+                if error <= tolerance * placement.scale:
+                    errors[i, j] = error
+    found, pose_error, used = [], [], set()
+    for i in range(len(placements)):
+        free = [j for j in np.argsort(errors[i]) if np.isfinite(errors[i, j]) and j not in used]
+        if free:
+            used.add(int(free[0]))
+            found.append(True)
+            pose_error.append(float(errors[i, free[0]]))
+        else:
+            found.append(False)
+            pose_error.append(float("nan"))
+    return RecognitionScores(tuple(found), tuple(pose_error), len(detections) - len(used))
