@@ -466,6 +466,41 @@ def grouping_fit_figures(f: ResultsFile) -> str:
     return "BSDS training images: " + chosen.group(1)
 
 
+def recognition_figures(f: ResultsFile) -> str:
+    scenes = f.table("objects", "recognition rate")
+    graf = f.table("method", "mean corner error px")
+    from_sift = "mean px from SIFT's"
+    box = f.table("method", from_sift)
+    speed = f.table("step", "ms")
+    grown = f.table("models", "vote ms", "ratio to 10 models")
+    false = re.search(r"^False detections per image: ([0-9.]+)", f.text, re.MULTILINE)
+    if false is None:
+        raise LookupError("recognition.md states no false detections")
+
+    def rate(kind: str) -> str:
+        return scenes.cell({"objects": kind}, "recognition rate")
+
+    flat = "flat (2-D)"
+    return (f"test scenes (30-50 % hidden, clutter): recognition rate {rate('all')} (flat {rate(flat)}, solid "
+            f"{rate('solid (3-D, views between the learned ones)')}; bar 0.9), {false.group(1)} false detections "
+            f"per image (bar 0.1), flat objects' corners {scenes.cell({'objects': flat}, 'median px')} px "
+            f"(median) off; graf1 -> graf3 corner error "
+            f"{graf.cell({'method': 'vmcl (learn graf1, recognize in graf3, homography)'}, 'mean corner error px')} "
+            f"against ORB {graf.cell({'method': 'ORB + RANSAC'}, 'mean corner error px')} and SIFT "
+            f"{graf.cell({'method': 'SIFT + RANSAC'}, 'mean corner error px')}; box found "
+            f"{box.cell({'method': 'vmcl (homography)'}, from_sift)} px from SIFT's "
+            f"corners; {speed.cell({'step': 'recognize beyond the features (selection, indexing, verification)'}, 'ms')} "
+            f"ms beyond the edges at 512 x 384 with 20 models; the vote {grown.rows[-1][grown.index('ratio to 10 models')]}x "
+            "slower for 100x the models")
+
+
+def recognition_fit_figures(f: ResultsFile) -> str:
+    chosen = re.search(r"^Chosen: (.*?) \(", f.text, re.MULTILINE)
+    if chosen is None:
+        raise LookupError("recognition_fit.md states no choice")
+    return "rendered training scenes: " + chosen.group(1)
+
+
 def ground_truth_figures(f: ResultsFile) -> str:
     rendering = f.table("preset", "median (ms)")
     seconds = [number(row[rendering.index("median (ms)")]) / 1000 for row in rendering.rows]
@@ -525,6 +560,10 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
                   "occlusion scenes; shapes in clutter; speed"), grouping_figures),
     ("grouping_fit", "the grouping settings chosen on BSDS training images and rendered training displays",
      grouping_fit_figures),
+    ("recognition", ("recognition: rendered test scenes of 27 objects learned from at most 5 views, hidden and "
+                     "cluttered; OpenCV's graf and box samples beside ORB and SIFT; speed, kernels against NumPy, "
+                     "the vote as the library grows"), recognition_figures),
+    ("recognition_fit", "recognition's decision threshold chosen on rendered training scenes", recognition_fit_figures),
     ("ground_truth", "scene rendering; BSDS evaluation", ground_truth_figures),
     ("first_run", "a fresh install's first runs: time spent building kernels, at a first and a second size",
      first_run_figures),

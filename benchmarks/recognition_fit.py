@@ -23,7 +23,7 @@ from vmcl.scenes import example_library, recognition_scene
 
 RESULTS = Path(__file__).parent / "results" / "recognition_fit.md"
 SEEDS = range(0, 60)
-THRESHOLDS = (0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 50.0)
+THRESHOLDS = (0.0, 10.0, 20.0, 25.0, 27.5, 30.0, 32.5, 35.0, 37.5, 40.0, 50.0)
 MAX_FALSE = 0.1
 
 

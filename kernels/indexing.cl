@@ -4,8 +4,9 @@
  * a bucket of the library's table; each entry there is a model view's corner pair (A, B) with the same
  * key. The similarity that takes A to a and B to b is z = (b - a) / (B - A) as a complex number, with
  * x' = z (x - A) + a; the entry votes for (view, rotation, log scale, where the view's centre lands) in
- * the 16 bins nearest its pose, in a hashed accumulator. In the emit pass each entry with a chosen bin
- * among its 16 writes its hypothesis (the similarity) to a list, once, for the best ranked of them.
+ * the 16 bins nearest its pose, in a hashed accumulator. In the emit pass each entry whose best bin among
+ * its 16 has at least the cutoff's votes (the host's choice) writes its hypothesis (the similarity) to a
+ * list, once, naming that bin.
  */
 #include "vmcl.h"
 
@@ -58,7 +59,7 @@ inline uint combo_bin(float4 coords, int combo, int view, int rot_bins, uint mas
 
 __kernel void vote(__global const int *pair_key, __global const float4 *pair_points, __global const int *offsets,
                    __global const int *entry_view, __global const float4 *entry_points, __global const float4 *frames,
-                   __global int *votes, __global const int *chosen, __global int *count, __global float4 *found,
+                   __global int *votes, int cutoff, __global int *count, __global float4 *found,
                    __global int2 *found_info, int pairs, float rot_bin, int rot_bins, float scale_bin, float pos_bin,
                    float low, float high, uint mask, int capacity, int emit)
 {
@@ -77,11 +78,16 @@ __kernel void vote(__global const int *pair_key, __global const float4 *pair_poi
             for (int combo = 0; combo < 16; combo++) atomic_inc(&votes[combo_bin(coords, combo, view, rot_bins, mask)]);
             continue;
         }
-        /* Emitted once, to the best ranked chosen bin among its 16. */
-        int best = -1;
+        /* Emitted once, to the bin with the most votes among its 16 (the lowest address among equals), if
+         * that bin has at least the cutoff's. */
+        int best = -1, most = cutoff - 1;
         for (int combo = 0; combo < 16; combo++) {
-            int slot = chosen[combo_bin(coords, combo, view, rot_bins, mask)];
-            if (slot >= 0 && (best < 0 || slot < best)) best = slot;
+            int h = (int)combo_bin(coords, combo, view, rot_bins, mask);
+            int v = votes[h];
+            if (v > most || (v == most && best >= 0 && h < best)) {
+                most = v;
+                best = h;
+            }
         }
         if (best >= 0) {
             int at = atomic_inc(count);

@@ -242,14 +242,10 @@ def _pair_points(corners: np.ndarray, pairs: np.ndarray) -> np.ndarray:
     return np.concatenate([corners[pairs[:, 0]], corners[pairs[:, 1]]], axis=1).astype(np.float32)
 
 
-def _chosen(votes: np.ndarray, candidates: int, min_votes: int) -> np.ndarray:
-    """The bins with the most votes (at least ``min_votes``), ``candidates`` at most: each bin's slot, -1
-    for the rest."""
-    top = np.argsort(-votes, kind="stable")[:candidates]
-    top = top[votes[top] >= min_votes]
-    chosen = np.full(votes.size, -1, np.int32)
-    chosen[top] = np.arange(len(top), dtype=np.int32)
-    return chosen
+def _cutoff(votes: np.ndarray, candidates: int, min_votes: int) -> int:
+    """The votes a bin needs to be kept: those of the ``candidates``-th best bin, and at least ``min_votes``."""
+    k = min(candidates, votes.size)
+    return max(int(np.partition(votes, votes.size - k)[votes.size - k]), min_votes)
 
 
 def _pool(found: np.ndarray, info: np.ndarray) -> Candidates:
@@ -282,7 +278,7 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     scales : (float, float)
         The range of scales (image size over view size) a pose may have.
     candidates : int
-        The most pose bins kept, >= 1.
+        The pose bins kept: those with at least the votes of the ``candidates``-th best, >= 1.
     min_votes : int
         The fewest votes a kept bin has, >= 1 (each corner correspondence votes twice, once per order).
     machine : vmcl.Machine, optional
@@ -302,7 +298,6 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     size = 1 << _VOTE_TABLE_BITS
     votes = machine.empty(size, np.int32)
     votes.fill(0)
-    chosen = machine.empty(size, np.int32)
     count = machine.empty(1, np.int32)
     count.fill(0)
     kernel = machine.kernel("indexing", "vote")
@@ -311,10 +306,10 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
               np.float32(low), np.float32(high), np.uint32(size - 1))
     capacity = 1 << 16
     found, info = machine.empty((capacity, 4), np.float32), machine.empty((capacity, 2), np.int32)
-    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, chosen, count, found, info, *common,
+    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, np.int32(0), count, found, info, *common,
                    np.int32(capacity), np.int32(0))
-    chosen.set(_chosen(votes.get(), candidates, min_votes))
-    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, chosen, count, found, info, *common,
+    cutoff = np.int32(_cutoff(votes.get(), candidates, min_votes))
+    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, cutoff, count, found, info, *common,
                    np.int32(capacity), np.int32(1))
     n = min(int(count.get()[0]), capacity)
     return _pool(found.get()[:n], info.get()[:n])
@@ -387,10 +382,11 @@ def vote_numpy(index: Index, corners: np.ndarray, bisector: np.ndarray, opening:
                                                 np.float32(low), np.float32(high))
     bins = _combo_bins(coords[ok], views[ok], size - 1)
     votes = np.bincount(bins.ravel(), minlength=size)
-    chosen = _chosen(votes, candidates, min_votes)
-    slots = chosen[bins]
-    best = np.where(slots >= 0, slots, np.iinfo(np.int32).max).min(axis=1)
-    keep = best < np.iinfo(np.int32).max
+    cutoff = _cutoff(votes, candidates, min_votes)
+    # Each hypothesis's best bin: the most votes, the lowest address among equals.
+    order = np.lexsort((bins, -votes[bins]), axis=1) if len(bins) else np.zeros((0, 16), np.int64)
+    best = np.take_along_axis(bins, order[:, :1], axis=1)[:, 0]
+    keep = votes[best] >= cutoff
     return _pool(similarity[ok][keep], np.stack([best[keep], views[ok][keep]], axis=1))
 
 

@@ -115,9 +115,9 @@ def _features(data: Any, sigma: float, machine: Machine) -> Features:
 
 
 def recognize(image: Any, library: Library, *, transform: Transform = "similarity", sigma: float = 1.5,
-              scales: tuple[float, float] = (0.25, 4.0), min_score: float = 0.3, min_significance: float = 35.0,
+              scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float = 32.5,
               min_support: int = 40,
-              candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 8, regions: int = 8,
+              candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 12, regions: int = 8,
               tolerance: float = 2.0, machine: Machine | None = None) -> list[Detection]:
     """Find a library's objects in an image.
 
@@ -132,7 +132,9 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     sigma : float
         Canny's smoothing for an image, > 0.
     scales : (float, float)
-        The sizes (image over model view) searched.
+        The sizes searched, as the object's size in the image over its size in the example it was learned
+        from: by default half to twice (widen it for objects much nearer or farther than when learned; a
+        wider range admits more small look-alikes among clutter).
     min_score : float
         The fraction of a model's boundary that must be supported, in (0, 1].
     min_significance : float
@@ -276,7 +278,8 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
         # A contrario: how unlikely that much support is by chance. Stretches of boundary 2 * tolerance
         # long are the independent trials; each is supported by chance with the probability that a point
         # near the pose lies within tolerance of some edge running its way.
-        chance[c] = _box_mean(near_edges, _apply(poses[c], view.points), (h, w)) * chance_angle
+        near, area = _box_count(near_edges, _apply(poses[c], view.points), (h, w))
+        chance[c] = near / area * chance_angle if area else 1.0
         trials[c] = expected[c] / (2 * tolerance)
         matched, landed, corner_chance = _corner_matches(poses[c], view, features)
         corners_found[c] = matched / max(landed, 1)
@@ -365,15 +368,16 @@ def _integral(mask: np.ndarray) -> np.ndarray:
     return table
 
 
-def _box_mean(table: np.ndarray, points: np.ndarray, shape: tuple[int, int]) -> float:
-    """The mask's mean over the bounding box of points (within the image), widened by _MARGIN px."""
+def _box_count(table: np.ndarray, points: np.ndarray, shape: tuple[int, int]) -> tuple[float, float]:
+    """The mask's count over the bounding box of points (within the image), widened by _MARGIN px, and
+    the box's area."""
     h, w = shape
     x0, y0 = (int(np.clip(np.floor(points[:, k].min()) - _MARGIN, 0, n - 1)) for k, n in ((0, w), (1, h)))
     x1, y1 = (int(np.clip(np.ceil(points[:, k].max()) + _MARGIN, 0, n - 1)) + 1 for k, n in ((0, w), (1, h)))
     if x1 <= x0 or y1 <= y0:
-        return 1.0
+        return 0.0, 0.0
     total = table[y1, x1] - table[y0, x1] - table[y1, x0] + table[y0, x0]
-    return float(total / ((x1 - x0) * (y1 - y0)))
+    return float(total), float((x1 - x0) * (y1 - y0))
 
 
 def _surprise(hits: float, trials: float, chance: float) -> float:

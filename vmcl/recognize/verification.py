@@ -172,20 +172,33 @@ def support(nearest: Any, tangent_map: Any, points: Any, tangents: Any, point_ra
     machine = machine_for(machine)
     nearest, tangent_map, points, tangents, ranges, homographies = _check_support(
         nearest, tangent_map, points, tangents, point_ranges, transforms)
-    point_of_item, candidate_of_item = _items(ranges)
-    items = len(point_of_item)
-    if items == 0:
-        return Support(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0, bool))
-    h, w = nearest.shape
-    found, status = machine.empty((items, 4), np.float32), machine.empty(items, np.uint8)
-    machine.launch(machine.kernel("verification", "support"), (items,), machine.to_device(nearest),
-                   machine.to_device(tangent_map), machine.to_device(points.astype(np.float32)),
-                   machine.to_device(tangents.astype(np.float32)), machine.to_device(point_of_item.astype(np.int32)),
-                   machine.to_device(candidate_of_item.astype(np.int32)),
-                   machine.to_device(homographies.reshape(-1, 9).astype(np.float32)), found, status, np.int32(items),
-                   np.int32(w), np.int32(h))
-    f = found.get().astype(np.float64)
-    return Support(f[:, :2], f[:, 2], f[:, 3], status.get() == 0)
+    return _SupportTest(machine, nearest, tangent_map, points, tangents, ranges)(homographies)
+
+
+class _SupportTest:
+    """The support kernel's inputs on the device, uploaded once for the poses a refinement tries."""
+
+    def __init__(self, machine: Machine, nearest: np.ndarray, tangent_map: np.ndarray, points: np.ndarray,
+                 tangents: np.ndarray, ranges: np.ndarray) -> None:
+        self.machine = machine
+        point_of_item, candidate_of_item = _items(ranges)
+        self.items = len(point_of_item)
+        self.height, self.width = nearest.shape
+        if self.items:
+            self.inputs = tuple(machine.to_device(a) for a in (
+                nearest, tangent_map, points.astype(np.float32), tangents.astype(np.float32),
+                point_of_item.astype(np.int32), candidate_of_item.astype(np.int32)))
+
+    def __call__(self, homographies: np.ndarray) -> Support:
+        if self.items == 0:
+            return Support(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros(0, bool))
+        m = self.machine
+        found, status = m.empty((self.items, 4), np.float32), m.empty(self.items, np.uint8)
+        m.launch(m.kernel("verification", "support"), (self.items,), *self.inputs,
+                 m.to_device(homographies.reshape(-1, 9).astype(np.float32)), found, status, np.int32(self.items),
+                 np.int32(self.width), np.int32(self.height))
+        f = found.get().astype(np.float64)
+        return Support(f[:, :2], f[:, 2], f[:, 3], status.get() == 0)
 
 
 def support_numpy(nearest: Any, tangent_map: Any, points: Any, tangents: Any, point_ranges: Any,
@@ -315,8 +328,9 @@ def refine(nearest: Any, tangent_map: Any, points: Any, tangents: Any, point_ran
     bounds = np.concatenate([[0], np.cumsum(counts)])
     point_of_item, _ = _items(ranges)
     tol_schedule = start * (tolerance / start) ** (np.arange(iterations) / max(iterations - 1, 1))
+    test = _SupportTest(machine, nearest, tangent_map, points, tangents, ranges)
     for tol in tol_schedule:
-        found = support(nearest, tangent_map, points, tangents, ranges, current, machine=machine)
+        found = test(current)
         ok = found.inside & (found.distance <= tol) & (found.angle <= angle_limit)
         for c in range(len(ranges)):
             s = slice(bounds[c], bounds[c + 1])
@@ -332,7 +346,7 @@ def refine(nearest: Any, tangent_map: Any, points: Any, tangents: Any, point_ran
             normal = np.where(np.isfinite(e)[:, None], np.stack([-np.sin(e), np.cos(e)], axis=1),
                               away / np.maximum(length, 1e-9)[:, None])
             current[c] = _solve(transform, p, q, normal, current[c])
-    found = support(nearest, tangent_map, points, tangents, ranges, current, machine=machine)
+    found = test(current)
     ok = found.inside & (found.distance <= tolerance) & (found.angle <= angle_limit)
     candidate = np.repeat(np.arange(len(ranges)), counts)
     supported = np.bincount(candidate, weights=ok, minlength=len(ranges))
