@@ -253,12 +253,18 @@ def _pool(found: np.ndarray, info: np.ndarray) -> Candidates:
     if not len(info):
         return Candidates(np.zeros(0, np.int32), np.zeros((0, 4)), np.zeros(0, np.int32))
     order = np.lexsort((info[:, 1], info[:, 0]))
-    info, found = info[order], found[order]
+    info, found = info[order], found[order].astype(np.float64)
     starts = np.flatnonzero(np.concatenate([[True], np.any(info[1:] != info[:-1], axis=1)]))
     stops = np.append(starts[1:], len(info))
     views = info[starts, 1].astype(np.int32)
     votes = (stops - starts).astype(np.int32)
-    similarity = np.array([np.median(found[a:b].astype(np.float64), axis=0) for a, b in zip(starts, stops)])
+    # Each group's median, column by column: its values sorted within the group, the middle one (or two).
+    group = np.repeat(np.arange(len(starts)), votes)
+    low, high = starts + (votes - 1) // 2, starts + votes // 2
+    similarity = np.empty((len(starts), 4))
+    for column in range(4):
+        ranked = found[np.lexsort((found[:, column], group)), column]
+        similarity[:, column] = 0.5 * (ranked[low] + ranked[high])
     rank = np.lexsort((views, -votes))
     return Candidates(views[rank], similarity[rank], votes[rank])
 
