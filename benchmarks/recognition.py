@@ -34,8 +34,22 @@ import cv2
 import numpy as np
 
 from vmcl.metrics import recognition_scores
-from vmcl.recognize import (Index, Library, Model, View, corner_pairs, distance_transform, distance_transform_numpy,
-                            image_features, learn, recognize, support, support_numpy, vote, vote_numpy)
+from vmcl.recognize import (
+    Index,
+    Library,
+    Model,
+    View,
+    corner_pairs,
+    distance_transform,
+    distance_transform_numpy,
+    image_features,
+    learn,
+    recognize,
+    support,
+    support_numpy,
+    vote,
+    vote_numpy,
+)
 from vmcl.scenes import OBJECTS, example_library, recognition_scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -72,8 +86,8 @@ def scenes_section() -> list[str]:
     total_found = counts[False][0] + counts[True][0]
     total = counts[False][1] + counts[True][1]
     lines = ["## Rendered scenes (test seeds 1000..1099)", "",
-             f"{len(TEST_SEEDS)} scenes, {total} objects ({counts[False][1]} flat, {counts[True][1]} solid), each "
-             "30-50 % hidden, among clutter; 27 models learned from at most 5 views.", "",
+             (f"{len(TEST_SEEDS)} scenes, {total} objects ({counts[False][1]} flat, {counts[True][1]} solid), each "
+              "30-50 % hidden, among clutter; 27 models learned from at most 5 views."), "",
              "| objects | recognition rate | pose error at the corners: mean px | median px | within 2 px |",
              "|---|---|---|---|---|"]
     for kind, label in ((False, "flat (2-D)"), (True, "solid (3-D, views between the learned ones)")):
@@ -82,8 +96,8 @@ def scenes_section() -> list[str]:
                      f"{e.mean() if len(e) else float('nan'):.2f} | {np.median(e) if len(e) else float('nan'):.2f} | "
                      f"{(e <= 2).mean() if len(e) else float('nan'):.3f} |")
     lines += [f"| all | {total_found / total:.3f} | | | |", "",
-              f"False detections per image: {false / len(TEST_SEEDS):.3f} (bar: at most 0.1). Recognition rate bar: "
-              "at least 0.9; pose error bar: at most 2 px.", ""]
+              (f"False detections per image: {false / len(TEST_SEEDS):.3f} (bar: at most 0.1). Recognition rate bar: "
+               "at least 0.9; pose error bar: at most 2 px."), ""]
     return lines
 
 
@@ -113,7 +127,7 @@ def _feature_homography(detector, norm: int, model: np.ndarray, scene: np.ndarra
 
 def _homography_xml(path: Path) -> np.ndarray:
     """The 3 x 3 matrix of an OpenCV storage file's first node (read as XML: OpenCV 5's reader refuses it)."""
-    import xml.etree.ElementTree as ElementTree
+    from xml.etree import ElementTree
 
     node = next(iter(ElementTree.parse(path).getroot()))
     return np.array(node.findtext("data").split(), float).reshape(3, 3)
@@ -131,8 +145,9 @@ def samples_section(data: Path) -> list[str]:
     graf1, graf3 = _read_grey(folder / "graf1.png"), _read_grey(folder / "graf3.png")
     truth = _homography_xml(folder / "H1to3p.xml")
     library = Library([learn("graf", [graf1])])
-    lines = ["## OpenCV's samples", "", "graf1 -> graf3: the mean error (px) at graf1's four image corners against "
-             "the true homography H1to3p.", "", "| method | mean corner error px | time ms |", "|---|---|---|"]
+    lines = ["## OpenCV's samples", "", ("graf1 -> graf3: the mean error (px) at graf1's four image corners against "
+                                         "the true homography H1to3p."), "",
+             "| method | mean corner error px | time ms |", "|---|---|---|"]
     start = time.perf_counter()
     found = recognize(graf3, library, transform="homography")
     ms = (time.perf_counter() - start) * 1e3
@@ -168,9 +183,9 @@ def samples_section(data: Path) -> list[str]:
         rows.append(f"| SIFT + RANSAC | {_fmt(sift_corners)} | 0 |")
         cv2.polylines(picture, [np.round(sift_corners).astype(np.int32)], True, (0, 0, 220), 1)
     cv2.imwrite(str(ROOT / "benchmarks" / "results" / "recognition_box.png"), picture)
-    lines += ["", "box.png found in box_in_scene.png: its corners (clockwise from the top left of box.png) and "
-              "their mean distance from SIFT + RANSAC's (no ground truth). The picture "
-              "(results/recognition_box.png) draws vmcl's homography in green, SIFT's in red.", "",
+    lines += ["", ("box.png found in box_in_scene.png: its corners (clockwise from the top left of box.png) and "
+                   "their mean distance from SIFT + RANSAC's (no ground truth). The picture "
+                   "(results/recognition_box.png) draws vmcl's homography in green, SIFT's in red."), "",
               "| method | corners (x, y) | mean px from SIFT's |", "|---|---|---|", *rows, ""]
     return lines
 
@@ -226,13 +241,14 @@ def speed_section() -> list[str]:
     transforms = found.matrices()[:128]
     sargs = (nearest, features.tangent_map, points, tangents, ranges, transforms)
     support_ms, support_np_ms = _timed(lambda: support(*sargs)), _timed(lambda: support_numpy(*sargs))
-    lines = ["## Speed", "", f"A 512 x 384 scene (seed 1000) against a 20-model library ({len(index)} table entries), "
-             f"median of {REPEATS} runs on this machine's OpenCL device (PoCL on the CPU).", "",
+    lines = ["## Speed", "", (f"A 512 x 384 scene (seed 1000) against a 20-model library ({len(index)} table "
+                              f"entries), median of {REPEATS} runs on this machine's OpenCL device (PoCL on the CPU)."),
+             "",
              "| step | ms |", "|---|---|", f"| edges, curves and corners (image_features) | {edge_ms:.0f} |",
              f"| recognize from the image | {total_ms:.0f} |",
              f"| recognize beyond the features (selection, indexing, verification) | {beyond:.0f} |", "",
-             f"Kernels against the same steps in NumPy / SciPy ({len(pairs)} corner pairs; {len(chosen)} candidates, "
-             f"{len(points)} model points):", "", "| step | device ms | NumPy ms | ratio |", "|---|---|---|---|",
+             (f"Kernels against the same steps in NumPy / SciPy ({len(pairs)} corner pairs; {len(chosen)} "
+              f"candidates, {len(points)} model points):"), "", "| step | device ms | NumPy ms | ratio |", "|---|---|---|---|",
              f"| indexing vote (both passes) | {vote_ms:.2f} | {vote_np_ms:.2f} | {vote_np_ms / vote_ms:.1f} |",
              f"| distance transform | {dt_ms:.2f} | {dt_np_ms:.2f} | {dt_np_ms / dt_ms:.1f} |",
              f"| support test | {support_ms:.2f} | {support_np_ms:.2f} | {support_np_ms / support_ms:.1f} |", ""]
@@ -243,7 +259,7 @@ def speed_section() -> list[str]:
     base = None
     for size in (10, 30, 100, 300, 1000):
         grown = Index.build(Library(synthetic[:size]))
-        ms = _timed(lambda: vote(grown, features.corners, features.bisector, features.opening, pairs))
+        ms = _timed(lambda grown=grown: vote(grown, features.corners, features.bisector, features.opening, pairs))
         base = base or ms
         lines.append(f"| {size} | {len(grown)} | {ms:.2f} | {ms / base:.2f} | {math.sqrt(size / 10):.2f} |")
     lines.append("")
@@ -257,9 +273,9 @@ def main() -> int:
     args = parser.parse_args()
     start = time.perf_counter()
     body = scenes_section() + samples_section(Path(args.data)) + speed_section()
-    head = ["# Recognition", "", f"`python benchmarks/recognition.py` on {platform.node() or 'this machine'} "
-            f"({time.strftime('%Y-%m-%d')}), {time.perf_counter() - start:.0f} s; no GPU was lent, so every "
-            "figure is PoCL on the CPU.", ""]
+    head = ["# Recognition", "", (f"`python benchmarks/recognition.py` on {platform.node() or 'this machine'} "
+                                  f"({time.strftime('%Y-%m-%d')}), {time.perf_counter() - start:.0f} s; no GPU was "
+                                  "lent, so every figure is PoCL on the CPU."), ""]
     Path(args.out).write_text("\n".join(head + body))
     print("\n".join(head + body))
     return 0

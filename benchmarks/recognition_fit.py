@@ -22,7 +22,7 @@ from vmcl.recognize import recognize
 from vmcl.scenes import example_library, recognition_scene
 
 RESULTS = Path(__file__).parent / "results" / "recognition_fit.md"
-SEEDS = range(0, 60)
+SEEDS = range(60)
 THRESHOLDS = (0.0, 10.0, 20.0, 25.0, 27.5, 30.0, 32.5, 35.0, 37.5, 40.0, 50.0)
 MAX_FALSE = 0.1
 
@@ -45,15 +45,15 @@ def main() -> int:
     seconds = time.perf_counter() - start
     chosen = next((t for t in THRESHOLDS if rows[t][2] / len(SEEDS) <= MAX_FALSE), THRESHOLDS[-1])
     lines = ["# Recognition: the significance threshold, fitted on training scenes", "",
-             f"`python benchmarks/recognition_fit.py` on {platform.node() or 'this machine'} "
-             f"({time.strftime('%Y-%m-%d')}), {len(SEEDS)} training scenes (seeds {SEEDS.start}..{SEEDS.stop - 1}), "
-             f"{len(library)} models, {seconds:.0f} s.", "",
+             (f"`python benchmarks/recognition_fit.py` on {platform.node() or 'this machine'} "
+              f"({time.strftime('%Y-%m-%d')}), {len(SEEDS)} training scenes (seeds {SEEDS.start}..{SEEDS.stop - 1}), "
+              f"{len(library)} models, {seconds:.0f} s."), "",
              "| min_significance | recognition rate | false detections per image |", "|---|---|---|"]
     for t in THRESHOLDS:
         found, objects, false = rows[t]
         lines.append(f"| {t:g} | {found / objects:.3f} | {false / len(SEEDS):.3f} |")
-    lines += ["", f"Chosen: min_significance = {chosen:g} (the least whose false detections per image are at most "
-              f"{MAX_FALSE:g}).", ""]
+    lines += ["", (f"Chosen: min_significance = {chosen:g} (the least whose false detections per image are at most "
+                   f"{MAX_FALSE:g})."), ""]
     RESULTS.write_text("\n".join(lines))
     print("\n".join(lines))
     return 0

@@ -12,9 +12,26 @@ import pytest
 from scipy import ndimage
 
 from vmcl.errors import InputError
-from vmcl.recognize import (Index, Library, corner_pairs, distance_transform, distance_transform_numpy,
-                            image_features, learn, load_model, pair_keys, recognize, refine, save_model,
-                            select_regions, corner_regions, support, support_numpy, vote, vote_numpy)
+from vmcl.recognize import (
+    Index,
+    Library,
+    corner_pairs,
+    corner_regions,
+    distance_transform,
+    distance_transform_numpy,
+    image_features,
+    learn,
+    load_model,
+    pair_keys,
+    recognize,
+    refine,
+    save_model,
+    select_regions,
+    support,
+    support_numpy,
+    vote,
+    vote_numpy,
+)
 from vmcl.scenes import object_view, recognition_scene
 
 
@@ -33,7 +50,7 @@ def _similarity(scale, angle, tx, ty):
 
 
 def test_an_objects_corners_are_found_where_they_are_with_their_angles(ell_model):
-    model, image, placement = ell_model
+    model, _, placement = ell_model
     view = model.views[0]
     # Every corner of the drawing has a feature within 2 px; the ell's corners are right angles.
     distance = np.hypot(*(view.corners[:, None, :] - placement.corners[None]).transpose(2, 0, 1))
@@ -171,7 +188,7 @@ def test_regions_are_the_components_off_the_edges_ranked_by_saliency():
     edges[2:8, 34:39] = False
     saliency = np.where(edges, 2.0, 0.0)
     regions = select_regions(edges, saliency, min_area=4, max_fraction=0.9)
-    labels, count = ndimage.label(~edges)
+    _, count = ndimage.label(~edges)
     assert len(regions.area) == count == 2
     inside = regions.labels[20, 20]
     assert regions.area[inside] == 19 * 23

@@ -30,7 +30,7 @@ def test_a_view_puts_the_corners_where_the_placement_says():
     # Each corner lies on the boundary: of the four points 2 px off it diagonally, some are inside the
     # object (1) and some outside (0).
     for x, y in corners:
-        around = [image[int(round(y + dy)), int(round(x + dx))] for dx in (-2, 2) for dy in (-2, 2)]
+        around = [image[round(y + dy), round(x + dx)] for dx in (-2, 2) for dy in (-2, 2)]
         assert max(around) == 1.0 and min(around) == 0.0
     m = placement.matrix()
     assert np.allclose(m[:, :2] @ OBJECTS[0].corners.T + m[:, 2:], corners.T)

@@ -953,7 +953,7 @@ class _Run:
                     probability=image_boundaries, machine=self.m)
                 labels, strength = on_device(found_labels.labels), on_device(found_labels.strength)
         with self.stage("download"):
-            host = {name: array.get() for name, array in fields.items()}
+            host: dict[str, Any] = {name: array.get() for name, array in fields.items()}
             host_restored = {cue: array.get() for cue, array in restored.items()}
             host_lines = {cue: (h.get().astype(bool), v.get().astype(bool)) for cue, (h, v) in lines.items()}
             edge_map, host_support, host_labels = brightness.get(), support.get(), labels.get()

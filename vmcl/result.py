@@ -13,8 +13,8 @@ import numpy as np
 
 if TYPE_CHECKING:
     from vmcl.group import Grouping
-    from vmcl.recognize import Detection
     from vmcl.pipeline import Config
+    from vmcl.recognize import Detection
 
 
 @dataclass

@@ -12,8 +12,17 @@ from vmcl.recognize.indexing import Candidates, Index, corner_pairs, index_for, 
 from vmcl.recognize.models import MODEL_SUFFIX, Library, Model, View, learn, load_model, save_model, view_of
 from vmcl.recognize.recognition import Detection, recognize
 from vmcl.recognize.selection import Regions, corner_regions, select_regions
-from vmcl.recognize.verification import (TRANSFORMS, NearestEdge, Support, Verified, distance_transform,
-                                         distance_transform_numpy, refine, support, support_numpy)
+from vmcl.recognize.verification import (
+                                         TRANSFORMS,
+                                         NearestEdge,
+                                         Support,
+                                         Verified,
+                                         distance_transform,
+                                         distance_transform_numpy,
+                                         refine,
+                                         support,
+                                         support_numpy,
+)
 
 __all__ = ["MODEL_SUFFIX", "TRANSFORMS", "Candidates", "Detection", "Features", "Index", "Library", "Model",
            "NearestEdge", "Regions", "Support", "Verified", "View", "corner_pairs", "corner_regions",

@@ -60,9 +60,9 @@ def corner_pairs(corners: np.ndarray, *, neighbours: int = 8, groups: np.ndarray
     corners = points(corners, "corners")
     n = len(corners)
     neighbours = check_int(neighbours, "neighbours", minimum=0)
-    if groups is not None:
-        if not isinstance(groups, np.ndarray) or groups.dtype.kind not in "iu" or groups.shape != (n,):
-            raise InputValueError(f"groups must be an integer ({n},) array, one label per corner")
+    if groups is not None and (not isinstance(groups, np.ndarray) or groups.dtype.kind not in "iu"
+                               or groups.shape != (n,)):
+        raise InputValueError(f"groups must be an integer ({n},) array, one label per corner")
     if n < 2:
         return np.zeros((0, 2), np.int64)
     d = np.hypot(corners[:, None, 0] - corners[None, :, 0], corners[:, None, 1] - corners[None, :, 1])

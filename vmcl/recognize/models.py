@@ -238,7 +238,7 @@ def save_model(model: Model, folder: str | Path, *, replace: bool = False) -> Pa
             "sources": list(model.sources)}
     partial = path.with_name(path.name + ".partial")
     with open(partial, "wb") as handle:
-        np.savez_compressed(handle, meta=np.array(json.dumps(meta)), **arrays)
+        np.savez_compressed(handle, allow_pickle=False, meta=np.array(json.dumps(meta)), **arrays)
     partial.replace(path)
     return path
 

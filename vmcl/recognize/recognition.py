@@ -26,6 +26,7 @@ from typing import Any
 import cv2
 import numpy as np
 from scipy import special
+from scipy.spatial import cKDTree
 
 from vmcl.cm.core import check_choice, check_int, check_real, machine_for
 from vmcl.errors import InputTypeError
@@ -233,29 +234,34 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
         start += len(view.points)
     all_points, all_tangents = np.concatenate(points), np.concatenate(tangents)
     solid = np.array([len(library.models[view_ids[row][0]].views) > 1 for row in found.views])
-    transforms = found.matrices()
-    verified = [refine(nearest, tangent_map, all_points, all_tangents, np.array(ranges), transforms,
-                       transform=transform, tolerance=tolerance, machine=machine)]
-    if solid.any() and transform == "similarity":
-        # A 3-D object's view is aligned by an affine map, from the similarity fitted first.
-        again = np.flatnonzero(solid)
-        verified.append(refine(nearest, tangent_map, all_points, all_tangents, np.array(ranges)[again],
-                               verified[0].transforms[again], transform="affine", tolerance=tolerance, start=4.0,
-                               iterations=4, machine=machine))
-    score, inside = verified[0].score.copy(), verified[0].inside.copy()
-    poses = verified[0].transforms.copy()
-    if len(verified) > 1:
-        # The affine pose replaces the similarity only where it stays near one (a view near the one seen
-        # differs from it by a little foreshortening, not by any affine map).
-        again = np.flatnonzero(solid)
-        for k, c in enumerate(again):
-            stretch = np.linalg.svd(verified[1].transforms[k][:2, :2], compute_uv=False)
-            if stretch[0] <= _MAX_STRETCH * stretch[1]:
-                score[c], inside[c], poses[c] = verified[1].score[k], verified[1].inside[k], verified[1].transforms[k]
+    ranges_array = np.array(ranges)
+
+    def refined(rows: np.ndarray, starts: np.ndarray, kind: Transform, first: float = 8.0, steps: int = 6):
+        return refine(nearest, tangent_map, all_points, all_tangents, ranges_array[rows], starts, transform=kind,
+                      tolerance=tolerance, start=first, iterations=steps, machine=machine)
+
+    # Coarse to fine: every pose is fitted as a similarity first, then, where it may be more, as an affine map
+    # and a homography from there (a similarity's few parameters reach a distant pose; the others refine it).
+    everyone = np.arange(len(found))
+    first = refined(everyone, found.matrices(), "similarity")
+    score, inside, poses = first.score.copy(), first.inside.copy(), first.transforms.copy()
+    affine = np.flatnonzero(solid | (transform != "similarity"))
+    if len(affine):
+        second = refined(affine, poses[affine], "affine", 4.0, 4)
+        for k, row in enumerate(affine):
+            stretch = np.linalg.svd(second.transforms[k][:2, :2], compute_uv=False)
+            # A 3-D object's view is aligned by an affine map only where it stays near a similarity (a view
+            # near the one seen differs from it by a little foreshortening, not by any affine map).
+            if not solid[row] or stretch[0] <= _MAX_STRETCH * stretch[1]:
+                score[row], inside[row], poses[row] = second.score[k], second.inside[k], second.transforms[k]
+    homography = np.flatnonzero(~solid) if transform == "homography" else np.zeros(0, int)
+    if len(homography):
+        third = refined(homography, poses[homography], "homography", 3.0, 4)
+        score[homography], inside[homography], poses[homography] = third.score, third.inside, third.transforms
     h, w = features.shape
     # The final poses tested once more (all candidates in one launch): each candidate's distinct supported
     # image edge pixels are what it explains.
-    final = support(nearest, tangent_map, all_points, all_tangents, np.array(ranges), poses, machine=machine)
+    final = support(nearest, tangent_map, all_points, all_tangents, ranges_array, poses, machine=machine)
     ok = final.inside & (final.distance <= tolerance) & (final.angle <= _ANGLE)
     address = np.round(final.edge[:, 1]).astype(np.int64) * w + np.round(final.edge[:, 0]).astype(np.int64)
     near_edges = _integral(distance <= tolerance)
@@ -265,6 +271,7 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
     corner_surprise = np.zeros(len(found))
     tests = np.log10(len(found))
     corners_found = np.zeros(len(found))
+    tree = cKDTree(features.corners.reshape(-1, 2))
     for c in range(len(found)):
         view = views[found.views[c]][2]
         start, stop = ranges[c]
@@ -281,7 +288,7 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
         near, area = _box_count(near_edges, _apply(poses[c], view.points), (h, w))
         chance[c] = near / area * chance_angle if area else 1.0
         trials[c] = expected[c] / (2 * tolerance)
-        matched, landed, corner_chance = _corner_matches(poses[c], view, features)
+        matched, landed, corner_chance = _corner_matches(poses[c], view, features, tree)
         corners_found[c] = matched / max(landed, 1)
         # The corners it matches are further evidence, independent of the boundary's.
         corner_surprise[c] = _surprise(matched, landed, corner_chance)
@@ -292,28 +299,29 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
     # ones is dropped (two objects do not lie in one place).
     claimed = np.zeros(h * w, bool)
     taken = np.zeros((h, w), bool)
-    heap = [(-significance[c], int(c)) for c in range(len(found)) if significance[c] >= min_significance]
+    heap: list[tuple[float, int]] = [(-float(significance[c]), c) for c in range(len(found))
+                                     if significance[c] >= min_significance]
     heapq.heapify(heap)
     kept: list[int] = []
     while heap:
-        stale, c = heapq.heappop(heap)
-        fresh = explained[c][~claimed[explained[c]]]
-        cover = min(len(fresh) / expected[c], 1.0)
-        now = _surprise(cover * trials[c], trials[c], chance[c]) + corner_surprise[c] - tests
+        _, pick = heapq.heappop(heap)
+        fresh = explained[pick][~claimed[explained[pick]]]
+        cover = min(len(fresh) / expected[pick], 1.0)
+        now = _surprise(cover * trials[pick], trials[pick], chance[pick]) + corner_surprise[pick] - tests
         if now < min_significance or cover < min_score or len(fresh) < min_support:
             continue
         if heap and now < -heap[0][0]:
-            heapq.heappush(heap, (-now, c))
+            heapq.heappush(heap, (-now, pick))
             continue
-        view = views[found.views[c]][2]
-        hull = _silhouette(_apply(poses[c], view.points), (h, w))
+        view = views[found.views[pick]][2]
+        hull = _silhouette(_apply(poses[pick], view.points), (h, w))
         area = int(hull.sum())
         if area == 0 or (hull & taken).sum() >= _OVERLAP * area:
             continue
         taken |= hull
-        claimed[explained[c]] = True
-        significance[c], coverage[c] = now, cover
-        kept.append(c)
+        claimed[explained[pick]] = True
+        significance[pick], coverage[pick] = now, cover
+        kept.append(pick)
     detections: list[Detection] = []
     for c in kept:
         view = views[found.views[c]][2]
@@ -326,7 +334,7 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
     return detections
 
 
-def _corner_matches(pose: np.ndarray, view: View, features: Features) -> tuple[int, int, float]:
+def _corner_matches(pose: np.ndarray, view: View, features: Features, tree: cKDTree) -> tuple[int, int, float]:
     """How many of the view's corners (of those that land in the image) an image corner matches, how many
     land there, and the chance that one is matched by accident (the image's corners around the pose,
     each covering a disc of _CORNER_REACH px and a share of the bisectors and openings)."""
@@ -339,11 +347,12 @@ def _corner_matches(pose: np.ndarray, view: View, features: Features) -> tuple[i
         return 0, int(inside.sum()), 0.0
     turned = np.stack([np.cos(view.bisector), np.sin(view.bisector)], 1) @ pose[:2, :2].T
     bisector = np.arctan2(turned[:, 1], turned[:, 0])
-    near = np.hypot(at[:, None, 0] - features.corners[None, :, 0],
-                    at[:, None, 1] - features.corners[None, :, 1]) <= _CORNER_REACH
-    same_way = np.abs(np.angle(np.exp(1j * (bisector[:, None] - features.bisector[None])))) <= _CORNER_TURN
-    alike = np.abs(view.opening[:, None] - features.opening[None]) <= _CORNER_OPENING
-    matched = int((near & same_way & alike).any(axis=1)[inside].sum())
+    matched = 0
+    for k in np.flatnonzero(inside):
+        near = tree.query_ball_point(at[k], _CORNER_REACH)
+        if near and np.any((np.abs(np.angle(np.exp(1j * (bisector[k] - features.bisector[near])))) <= _CORNER_TURN)
+                           & (np.abs(view.opening[k] - features.opening[near]) <= _CORNER_OPENING)):
+            matched += 1
     low = at[inside].min(axis=0) - _MARGIN
     high = at[inside].max(axis=0) + _MARGIN
     around = np.all((features.corners >= low) & (features.corners <= high), axis=1).sum()

@@ -98,7 +98,7 @@ class SceneObject:
         if self.vertices is None:
             return np.arange(len(self.corners))
         rotated = _rotate(self.vertices, yaw)
-        seen = set()
+        seen: set[int] = set()
         for face in self.faces:
             p = rotated[list(face)]
             if np.cross(p[1] - p[0], p[2] - p[0])[2] < -1e-9:
@@ -555,16 +555,16 @@ def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, 
         placed.append((obj, yaw, scale, float(rng.uniform(-180, 180)), (float(centre[0]), float(centre[1])),
                        _albedo(rng, obj, yaw, background)))
     placements = []
-    for k, (obj, yaw, scale, angle, centre, albedo) in enumerate(placed):
-        placements.append(_draw(canvas, obj, k, yaw, scale, angle, centre, albedo))
+    for k, (obj, yaw, scale, angle, where, albedo) in enumerate(placed):
+        placements.append(_draw(canvas, obj, k, yaw, scale, angle, where, albedo))
     # One occluder per object, placed again until each object is hidden within the range.
-    for k, (obj, yaw, scale, angle, centre, albedo) in enumerate(placed):
+    for k, (obj, yaw, scale, angle, where, albedo) in enumerate(placed):
         own = np.zeros(canvas.grey.shape, bool)
         for face in obj.projected(yaw)[1]:
-            own |= canvas.area(_apply(_similarity(scale, angle, centre), face))
+            own |= canvas.area(_apply(_similarity(scale, angle, where), face))
         total = max(int(own.sum()), 1)
         for _ in range(400):
-            at = np.array(centre) + rng.normal(0, scale, 2)
+            at = np.array(where) + rng.normal(0, scale, 2)
             blob = _random_blob(rng, at, scale * rng.uniform(0.6, 1.1))
             hidden = own & (canvas.area(blob) | (canvas.owner != k))
             if low <= hidden.sum() / total <= high:
@@ -574,10 +574,10 @@ def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, 
         at = rng.uniform([0, 0], [w, h])
         if all(np.hypot(*(at - c)) > 2.2 * s for c, s in zip(centres, (p[2] for p in placed))):
             canvas.paint(_bar(rng, at, rng.uniform(15, 50)), _grey(rng, [background]), -2)
-    for k, (obj, yaw, scale, angle, centre, albedo) in enumerate(placed):
+    for k, (obj, yaw, scale, angle, where, albedo) in enumerate(placed):
         own = np.zeros(canvas.grey.shape, bool)
         for face in obj.projected(yaw)[1]:
-            own |= canvas.area(_apply(_similarity(scale, angle, centre), face))
+            own |= canvas.area(_apply(_similarity(scale, angle, where), face))
         hidden = float((own & (canvas.owner != k)).sum() / max(int(own.sum()), 1))
         p = placements[k]
         placements[k] = Placement(p.name, p.yaw, p.scale, p.angle, p.centre, p.corners, p.corner_ids, hidden)
