@@ -345,6 +345,11 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.scenes:recognition_scene", shape=tup(96, 96), objects=1, library=None, occlusion=tup(0.0, 0.9),
        clutter=1, views=tup(-40.0, 40.0), size=tup(15.0, 20.0), noise=0.0, seed=0,
        kinds={"library": _O, "occlusion": _T, "clutter": _I, "views": _T, "size": _T, "noise": _N, "seed": _I}),
+    _e("vmcl.scenes:example_views", name="ell", shape=tup(48, 48), kinds={"name": _C, "shape": _T}),
+    _e("vmcl.scenes:example_library", names=["ell"], kinds={"names": _O, "machine": _M}),
+    _e("vmcl.metrics:recognition_scores", detections=[], placements=[make("placement")],
+       learned={"ell": [make("placement")]}, tolerance=0.25,
+       kinds={"detections": _O, "learned": _O, "tolerance": _N}),
     _e("vmcl.report:recognition_image", image=arr((48, 48)), detections=[],
        kinds={"image": _A, "detections": _O}),
     _e("vmcl.scenes:clutter_display", shape=tup(64, 64), segments=20, length=tup(5.0, 10.0), gaps=2, gap_length=3,
@@ -621,7 +626,7 @@ EXEMPT = {
     "vmcl.recognize:Features", "vmcl.recognize:View", "vmcl.recognize:Model", "vmcl.recognize:Index",
     "vmcl.recognize:Candidates", "vmcl.recognize:Detection", "vmcl.recognize:NearestEdge", "vmcl.recognize:Support",
     "vmcl.recognize:Verified", "vmcl.recognize:Regions", "vmcl.scenes:SceneObject", "vmcl.scenes:Placement",
-    "vmcl.scenes:RecognitionScene", "vmcl.pipeline:RecognitionConfig",
+    "vmcl.scenes:RecognitionScene", "vmcl.pipeline:RecognitionConfig", "vmcl.metrics:RecognitionScores",
 }
 
 PUBLIC_MODULES = (
@@ -1137,6 +1142,8 @@ def _makers():
         "object_features": lambda ctx: __import__("vmcl.recognize", fromlist=["image_features"]).image_features(
             _MAKERS["object_image"](ctx), machine=ctx["machine"]),
         "model": _model,
+        "placement": lambda ctx: __import__("vmcl.scenes", fromlist=["object_view"]).object_view(
+            "ell", shape=(48, 48))[1],
         "library": lambda ctx: __import__("vmcl.recognize", fromlist=["Library"]).Library([_model(ctx)]),
         "index": lambda ctx: __import__("vmcl.recognize", fromlist=["Index"]).Index.build(_MAKERS["library"](ctx)),
         "corner_pairs": lambda ctx: np.array([[0, 1], [1, 0], [2, 3], [3, 2], [1, 4]], np.int64),

@@ -263,3 +263,31 @@ def test_bad_recognition_arguments_are_refused_by_name(ell_model):
         recognize(image, [model])
     with pytest.raises(InputError, match="image"):
         recognize([[0.0]], library)
+
+
+def test_recognition_scores_find_objects_by_their_corners():
+    from vmcl.metrics import recognition_scores
+    from vmcl.recognize import Detection
+    from vmcl.scenes import Placement
+
+    _, learned = object_view("ell", shape=(160, 160))
+    truth_matrix = _similarity(50.0, 30.0, 200.0, 150.0)
+    base = next(o for o in __import__("vmcl.scenes", fromlist=["OBJECTS"]).OBJECTS if o.name == "ell")
+    corners = base.corners @ truth_matrix[:, :2].T + truth_matrix[:, 2]
+    placement = Placement("ell", 0.0, 50.0, 30.0, (200.0, 150.0), corners, np.arange(len(corners)), 0.4)
+    # The pose from the learned view's frame to the scene: the scene's map after the view's inverse.
+    view_matrix = np.vstack([learned.matrix(), [0, 0, 1]])
+    pose = np.vstack([truth_matrix, [0, 0, 1]]) @ np.linalg.inv(view_matrix)
+
+    def detection(name, transform):
+        return Detection(name, 0, transform, 0.8, 4, 40.0, 1.0, np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, bool))
+
+    shifted = pose.copy()
+    shifted[0, 2] += 0.3 * 50.0  # farther than a quarter of the object's scale
+    scores = recognition_scores([detection("arrow", pose), detection("ell", shifted), detection("ell", pose)],
+                                [placement], {"ell": [learned], "arrow": [learned]})
+    assert scores.found == (True,) and scores.pose_error[0] < 1e-6 and scores.false == 2
+    missed = recognition_scores([detection("ell", shifted)], [placement], {"ell": [learned]})
+    assert missed.found == (False,) and np.isnan(missed.pose_error[0]) and missed.false == 1
+    with pytest.raises(InputError, match="placements"):
+        recognition_scores([], [3], {"ell": [learned]})

@@ -235,7 +235,7 @@ def _check_inputs(index: Any, corners: Any, bisector: Any, opening: Any, pairs: 
     if low > high:
         raise InputValueError(f"scales must be (low, high) with low <= high, got {scales!r}")
     return (corners, bisector, opening, pairs, (low, high), check_int(candidates, "candidates", minimum=1, maximum=1 << 20),
-            check_int(min_votes, "min_votes", minimum=1))
+            check_int(min_votes, "min_votes", minimum=1, maximum=2**31 - 1))
 
 
 def _pair_points(corners: np.ndarray, pairs: np.ndarray) -> np.ndarray:
