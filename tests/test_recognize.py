@@ -291,3 +291,20 @@ def test_recognition_scores_find_objects_by_their_corners():
     assert missed.found == (False,) and np.isnan(missed.pose_error[0]) and missed.false == 1
     with pytest.raises(InputError, match="placements"):
         recognition_scores([], [3], {"ell": [learned]})
+
+
+def test_depth_explains_occlusion(ell_model):
+    model, image, _ = ell_model
+    scene = image.copy()
+    scene[:, 85:] = 0.5  # a nearer surface hides the right part of the ell
+    depth = np.full(scene.shape, 5.0, np.float32)
+    depth[:, 85:] = 12.0
+    library = Library([model])
+    plain = recognize(scene, library, min_significance=0)
+    explained = recognize(scene, library, min_significance=0, depth=depth)
+    assert plain and explained and plain[0].name == explained[0].name == "ell"
+    assert np.allclose(plain[0].transform, explained[0].transform)
+    # The hidden boundary no longer counts against it.
+    assert explained[0].significance > plain[0].significance + 5
+    with pytest.raises(InputError, match="depth"):
+        recognize(scene, library, depth=depth[:10])

@@ -31,6 +31,7 @@ from scipy.spatial import cKDTree
 from vmcl.cm.core import check_choice, check_int, check_real, machine_for
 from vmcl.errors import InputTypeError
 from vmcl.machine import Machine
+from vmcl.recognize.arguments import real_map
 from vmcl.recognize.features import Features, edge_features, image_features
 from vmcl.recognize.indexing import Candidates, corner_pairs, index_for, vote
 from vmcl.recognize.models import Library, View
@@ -46,6 +47,7 @@ _ANGLE = np.radians(25)  # the most a supporting edge's tangent may differ from 
 _MARGIN = 10  # px around a pose over which the chance of support is measured
 _SCREEN_POINTS = 96  # boundary points per candidate in the coarse test
 _SCREEN_TOLERANCE = 4.0  # pixels
+_NEARER = 1.0  # disparity: a surface this much nearer than an object hides it
 _OVERLAP = 0.5  # a pose whose silhouette lies this much inside those kept already is dropped
 _MAX_STRETCH = 1.3  # the most an affine view alignment may stretch one direction over the other
 
@@ -99,6 +101,15 @@ class Detection:
         return h[:, :2] / h[:, 2:3]
 
 
+def _depth(image: Any, depth: Any, shape: tuple[int, int]) -> np.ndarray | None:
+    """The depth map occlusion is explained by: ``depth`` if given, else a Result's disparity, else None."""
+    if depth is None and hasattr(image, "disparity") and hasattr(image, "config"):
+        depth = image.disparity
+    if depth is None:
+        return None
+    return real_map(depth, "depth", shape, "the image", unknown=True)
+
+
 def _features(data: Any, sigma: float, machine: Machine) -> Features:
     if isinstance(data, Features):
         return data
@@ -119,7 +130,8 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
               scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float = 32.5,
               min_support: int = 40,
               candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 12, regions: int = 8,
-              tolerance: float = 2.0, machine: Machine | None = None) -> list[Detection]:
+              tolerance: float = 2.0, depth: np.ndarray | None = None,
+              machine: Machine | None = None) -> list[Detection]:
     """Find a library's objects in an image.
 
     Parameters
@@ -158,6 +170,10 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
         The most salient regions whose corners are also paired among themselves (selection), >= 0.
     tolerance : float
         The distance (pixels) within which an edge supports a model point, > 0.
+    depth : (H, W) float array, optional
+        A disparity map (larger nearer, NaN unknown; a Result's ``disparity`` by default): a model's points
+        that find no edge where a surface nearer than the object lies are explained as occluded and left
+        out of its coverage (the depth discontinuities explain the occlusion).
     machine : vmcl.Machine, optional
 
     Returns
@@ -190,7 +206,7 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     found = vote(index, features.corners, features.bisector, features.opening, pairs, scales=scales,
                  candidates=candidates, min_votes=min_votes, machine=machine)
     return _verify(found, index.views, library, features, transform, min_score, min_significance, min_support,
-                   tolerance, verify, machine)
+                   tolerance, verify, _depth(image, depth, features.shape), machine)
 
 
 def _screen(found: Candidates, views: list[tuple[int, int, View]], nearest: np.ndarray, tangent_map: np.ndarray,
@@ -217,7 +233,7 @@ def _screen(found: Candidates, views: list[tuple[int, int, View]], nearest: np.n
 
 def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features: Features, transform: Transform,
             min_score: float, min_significance: float, min_support: int, tolerance: float, verify: int,
-            machine: Machine) -> list[Detection]:
+            depth: np.ndarray | None, machine: Machine) -> list[Detection]:
     if not len(found):
         return []
     views = library.views()
@@ -280,12 +296,14 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
         # The most distinct pixels its points can reach: one each, or fewer where the pose shrinks them
         # closer than a pixel apart; its coverage is the share of those it explains.
         spread = view.length / max(len(view.points), 1) * _scale(poses[c])
-        expected[c] = max(inside[c] * min(1.0, spread), 1.0)
+        posed = _apply(poses[c], view.points)
+        hidden = _hidden(posed, ok[start:stop], final.inside[start:stop], depth) if depth is not None else 0
+        expected[c] = max((inside[c] - hidden) * min(1.0, spread), 1.0)
         coverage[c] = min(len(pixels) / expected[c], 1.0)
         # A contrario: how unlikely that much support is by chance. Stretches of boundary 2 * tolerance
         # long are the independent trials; each is supported by chance with the probability that a point
         # near the pose lies within tolerance of some edge running its way.
-        near, area = _box_count(near_edges, _apply(poses[c], view.points), (h, w))
+        near, area = _box_count(near_edges, posed, (h, w))
         chance[c] = near / area * chance_angle if area else 1.0
         trials[c] = expected[c] / (2 * tolerance)
         matched, landed, corner_chance = _corner_matches(poses[c], view, features, tree)
@@ -359,6 +377,20 @@ def _corner_matches(pose: np.ndarray, view: View, features: Features, tree: cKDT
     area = max(float(np.prod(high - low)), 1.0)
     chance = min(around * np.pi * _CORNER_REACH ** 2 / area, 1.0) * (_CORNER_TURN / np.pi) * (2 * _CORNER_OPENING / np.pi)
     return matched, int(inside.sum()), float(chance)
+
+
+def _hidden(posed: np.ndarray, supported: np.ndarray, inside: np.ndarray, depth: np.ndarray) -> int:
+    """How many of a candidate's unsupported points (those in the image) a nearer surface explains: the
+    depth map (disparity, larger nearer) where they land exceeds the object's own (its median at the
+    supported points) by more than _NEARER."""
+    h, w = depth.shape
+    x = np.clip(np.round(posed[:, 0]).astype(np.int64), 0, w - 1)
+    y = np.clip(np.round(posed[:, 1]).astype(np.int64), 0, h - 1)
+    here = depth[y, x]
+    own = here[supported & np.isfinite(here)]
+    if not len(own):
+        return 0
+    return int(np.count_nonzero(inside & ~supported & (here > np.median(own) + _NEARER)))
 
 
 def _silhouette(points: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
