@@ -77,3 +77,21 @@ def test_the_pipeline_recognises_as_a_stage(tmp_path, files):
     assert "recognition" in result.stages
     assert [d.name for d in result.recognition] == ["ell"]
     assert VisionMachine().run(image).recognition is None
+
+
+def test_a_stereo_runs_disparity_reaches_recognition(tmp_path, files, monkeypatch):
+    from vmcl import pipeline
+
+    library = tmp_path / "library"
+    assert main(["learn", "ell", str(files["ell"]), "--library", str(library), "-q"]) == 0
+    seen = {}
+
+    def spy(image, found_library, **kwargs):
+        seen.update(kwargs)
+        return []
+
+    monkeypatch.setattr(pipeline, "recognize", spy)
+    config = Config.from_dict({"recognition": {"models": str(library)}, "mrf": {"method": "icm"}})
+    image = cv2.imread(str(files["scene"]), cv2.IMREAD_GRAYSCALE)
+    result = VisionMachine(config).run(image, np.roll(image, -2, axis=1))
+    assert result.disparity is not None and seen["depth"] is result.disparity

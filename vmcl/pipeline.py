@@ -970,8 +970,9 @@ class _Run:
                              **host)
         if vm.library is not None:
             with self.stage("recognition"):
-                # On the left image's own edges, at the scale the models were learned at.
-                self.result.recognition = recognize(image, vm.library, machine=self.m)
+                # On the left image's own edges, at the scale the models were learned at; a stereo run's
+                # disparity explains the boundary its nearer surfaces hide.
+                self.result.recognition = recognize(image, vm.library, depth=self.result.disparity, machine=self.m)
 
     def group(self, image: np.ndarray, canny: edges.CannyResult) -> tuple[Grouping, cl_array.Array]:
         """The grouping of Canny's edges, and the edges the MRFs are coupled to (``edges.saliency``)."""
