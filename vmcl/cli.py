@@ -242,9 +242,11 @@ def _with_models(config, models: str | None):
 
     if models is None:
         return config
-    if not Path(models).is_dir():
-        raise BadInput(f"--models {models}: not a folder (make one with vmcl learn NAME IMAGES... --library "
-                       f"{models})")
+    from vmcl.recognize import MODEL_SUFFIX
+
+    if not Path(models).is_dir() or not any(Path(models).glob(f"*{MODEL_SUFFIX}")):
+        raise BadInput(f"--models {models}: not a folder of models (make one with vmcl learn NAME IMAGES... "
+                       f"--library {models})")
     return dataclasses.replace(config, recognition=RecognitionConfig(models=str(models)))
 
 
