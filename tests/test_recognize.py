@@ -326,3 +326,4 @@ def test_solids_are_recognised_at_views_between_the_learned_ones():
     # The nearest learned view aligned by a near-similarity affine map: the corners within a few pixels
     # (benchmarks/results/recognition.md measures them on occluded scenes).
     assert np.median(errors) < 3.0 and max(errors) < 6.0
+

@@ -25,7 +25,8 @@ from typing import Any
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import check_bool, check_int, check_real, machine_for
+from vmcl.cm.core import check_bool, check_int, check_real, machine_for, to_host
+from vmcl.cm.reduce import histogram
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.recognize.arguments import angles, index_pairs, points
@@ -46,6 +47,7 @@ _ROTATION_BIN = 2 * math.pi / _ROTATION_BINS
 _SCALE_BIN = 0.2  # 0.2 of log scale (22 %),
 _POSITION_BIN = 0.25  # a quarter of the view's radius (at the pose's scale) for where its centre lands
 _VOTE_TABLE_BITS = 18
+_COUNT_BINS = 1024  # the vote counts the cutoff is read from; a bin with more is counted above them
 _MIN_SEPARATION = 4.0  # pixels: closer corners are one junction's, with no direction between them
 
 
@@ -242,6 +244,18 @@ def _pair_points(corners: np.ndarray, pairs: np.ndarray) -> np.ndarray:
     return np.concatenate([corners[pairs[:, 0]], corners[pairs[:, 1]]], axis=1).astype(np.float32)
 
 
+def _cutoff_from_counts(counts: np.ndarray, size: int, candidates: int, min_votes: int) -> int:
+    """:func:`_cutoff` from the histogram of the bins' votes (``counts[v]``: the bins with v votes, for v below
+    _COUNT_BINS; the rest have more): the device sends the histogram, not the bins."""
+    above = size - int(counts.sum())  # bins with _COUNT_BINS votes or more
+    if above >= candidates:
+        return max(_COUNT_BINS, min_votes)
+    # The bins with at least v votes, for every v: the cutoff is the highest v with `candidates` of them.
+    at_least = above + np.cumsum(counts[::-1])[::-1]
+    reaching = np.flatnonzero(at_least >= min(candidates, size))
+    return max(int(reaching[-1]) if len(reaching) else 0, min_votes)
+
+
 def _cutoff(votes: np.ndarray, candidates: int, min_votes: int) -> int:
     """The votes a bin needs to be kept: those of the ``candidates``-th best bin, and at least ``min_votes``."""
     k = min(candidates, votes.size)
@@ -314,7 +328,8 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     found, info = machine.empty((capacity, 4), np.float32), machine.empty((capacity, 2), np.int32)
     machine.launch(kernel, (len(pairs),), keys, points, *table, votes, np.int32(0), count, found, info, *common,
                    np.int32(capacity), np.int32(0))
-    cutoff = np.int32(_cutoff(votes.get(), candidates, min_votes))
+    counts = np.asarray(to_host(histogram(votes, _COUNT_BINS, (0, _COUNT_BINS), machine=machine)))
+    cutoff = np.int32(_cutoff_from_counts(counts, size, candidates, min_votes))
     machine.launch(kernel, (len(pairs),), keys, points, *table, votes, cutoff, count, found, info, *common,
                    np.int32(capacity), np.int32(1))
     n = min(int(count.get()[0]), capacity)
