@@ -96,10 +96,12 @@ def test_boundary_counts_match_distance():
     # The diagonal of a 100 x 100 image is 141.4 px, so the match distance is 1.06 px.
     near = metrics.boundary_counts(_square(100, shift=1).astype(bool), [truth], thresholds=1)
     far = metrics.boundary_counts(_square(100, shift=2).astype(bool), [truth], thresholds=1)
-    # The benchmark's matcher adds random outlier edges to its assignment graph and now and then leaves
-    # one pair unmatched (seen in about 1 call in 20, in the official C++ code as well): hence >= 59.
+    # The benchmark's matcher adds random outlier edges (seeded from the clock) to its assignment graph and
+    # now and then leaves a pair or two unmatched, in the official C++ code as well: over 300 calls, 60
+    # matched 272 times, 59 25 times, 58 3 times. Hence >= 57: the shift of one pixel is within reach, the
+    # shift of two (below) is not.
     assert near.total_truth[0] == near.total_predicted[0] == 60
-    assert near.matched_truth[0] >= 59 and near.matched_predicted[0] >= 59
+    assert near.matched_truth[0] >= 57 and near.matched_predicted[0] >= 57
     assert far.matched_truth[0] == 0 and far.matched_predicted[0] == 0
 
 
