@@ -459,11 +459,16 @@ def grouping_figures(f: ResultsFile) -> str:
             "Canny's time")
 
 
-def grouping_fit_figures(f: ResultsFile) -> str:
-    chosen = re.search(r"^Chosen: (.*)\.$", f.text, re.MULTILINE)
+def stated_choice(f: ResultsFile) -> str:
+    """What a fit's results file says it chose: its "Chosen: ..." line, without a closing parenthesis."""
+    chosen = re.search(r"^Chosen: (.*?)(?: \(.*\))?\.$", f.text, re.MULTILINE)
     if chosen is None:
-        raise LookupError("grouping_fit.md states no choice")
-    return "BSDS training images: " + chosen.group(1)
+        raise LookupError(f"{f.name}.md states no choice")
+    return chosen.group(1)
+
+
+def grouping_fit_figures(f: ResultsFile) -> str:
+    return "BSDS training images: " + stated_choice(f)
 
 
 def recognition_figures(f: ResultsFile) -> str:
@@ -495,10 +500,7 @@ def recognition_figures(f: ResultsFile) -> str:
 
 
 def recognition_fit_figures(f: ResultsFile) -> str:
-    chosen = re.search(r"^Chosen: (.*?) \(", f.text, re.MULTILINE)
-    if chosen is None:
-        raise LookupError("recognition_fit.md states no choice")
-    return "rendered training scenes: " + chosen.group(1)
+    return "rendered training scenes: " + stated_choice(f)
 
 
 def ground_truth_figures(f: ResultsFile) -> str:

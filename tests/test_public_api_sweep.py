@@ -318,6 +318,8 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.recognize:corner_regions", regions=make("regions"), corners=arr((5, 2), "float64"),
        bisector=arr((5,), "float64"), reach=3.0, top=8,
        kinds={"regions": _O, "corners": _A, "bisector": _A, "reach": _N, "top": _I}),
+    _e("vmcl.recognize:carry", transform=arr((3, 3), "float64"), points=arr((5, 2), "float64"),
+       kinds={"transform": _A, "points": _A}),
     _e("vmcl.recognize:distance_transform", edges=MASK, kinds={"edges": _A, "machine": _M}),
     _e("vmcl.recognize:distance_transform_numpy", edges=MASK, kinds={"edges": _A}),
     _e("vmcl.recognize:support", nearest=make("nearest"), tangent_map=IMG, points=arr((6, 2), "float64"),

@@ -17,6 +17,7 @@ from vmcl.recognize.verification import (
                                          NearestEdge,
                                          Support,
                                          Verified,
+                                         carry,
                                          distance_transform,
                                          distance_transform_numpy,
                                          refine,
@@ -25,7 +26,7 @@ from vmcl.recognize.verification import (
 )
 
 __all__ = ["MODEL_SUFFIX", "TRANSFORMS", "Candidates", "Detection", "Features", "Index", "Library", "Model",
-           "NearestEdge", "Regions", "Support", "Verified", "View", "corner_pairs", "corner_regions",
+           "NearestEdge", "Regions", "Support", "Verified", "View", "carry", "corner_pairs", "corner_regions",
            "distance_transform", "distance_transform_numpy", "edge_features", "image_features", "index_for", "learn",
            "load_model", "pair_keys", "recognize", "refine", "save_model", "select_regions", "support",
            "support_numpy", "view_of", "vote", "vote_numpy"]

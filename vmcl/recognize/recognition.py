@@ -36,7 +36,7 @@ from vmcl.recognize.features import Features, edge_features, image_features
 from vmcl.recognize.indexing import Candidates, corner_pairs, index_for, vote
 from vmcl.recognize.models import Library, View
 from vmcl.recognize.selection import corner_regions, select_regions
-from vmcl.recognize.verification import TRANSFORMS, Transform, distance_transform, refine, support
+from vmcl.recognize.verification import TRANSFORMS, Transform, carry, distance_transform, refine, support
 
 __all__ = ["Detection", "recognize"]
 
@@ -96,9 +96,7 @@ class Detection:
 
     def locate(self, points: np.ndarray) -> np.ndarray:
         """Points (x, y) of the view's frame carried into the image by the pose."""
-        p = np.asarray(points, np.float64).reshape(-1, 2)
-        h = p @ self.transform[:, :2].T + self.transform[:, 2]
-        return h[:, :2] / h[:, 2:3]
+        return carry(self.transform, points)
 
 
 def _depth(image: Any, depth: Any, shape: tuple[int, int]) -> np.ndarray | None:
@@ -179,7 +177,7 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     Returns
     -------
     list of Detection
-        Best score first.
+        In the order they were kept: most significant first.
     """
     machine = machine_for(machine)
     if not isinstance(library, Library):
@@ -209,23 +207,27 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
                    tolerance, verify, _depth(image, depth, features.shape), machine)
 
 
+def _gathered(found: Candidates, views: list[tuple[int, int, View]],
+              most: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every candidate's view's boundary points and tangents, one after another (each thinned to about
+    ``most`` when given), and each candidate's (start, stop) among them."""
+    chosen = [views[row][2] for row in found.views]
+    steps = [1 if most is None else max(1, len(v.points) // most) for v in chosen]
+    points = [v.points[::k] for v, k in zip(chosen, steps)]
+    tangents = [v.tangent[::k] for v, k in zip(chosen, steps)]
+    sizes = np.array([len(p) for p in points], np.int64)
+    stops = np.cumsum(sizes)
+    return np.concatenate(points), np.concatenate(tangents), np.stack([stops - sizes, stops], axis=1)
+
+
 def _screen(found: Candidates, views: list[tuple[int, int, View]], nearest: np.ndarray, tangent_map: np.ndarray,
             keep: int, machine: Machine) -> Candidates:
     """The ``keep`` candidates whose unrefined poses a coarse test supports best (a sample of each view's
     boundary, within _SCREEN_TOLERANCE px)."""
     if len(found) <= keep:
         return found
-    ranges, points, tangents = [], [], []
-    start = 0
-    for row in found.views:
-        view = views[row][2]
-        step = max(1, len(view.points) // _SCREEN_POINTS)
-        points.append(view.points[::step])
-        tangents.append(view.tangent[::step])
-        ranges.append((start, start + len(points[-1])))
-        start += len(points[-1])
-    tested = refine(nearest, tangent_map, np.concatenate(points), np.concatenate(tangents), np.array(ranges),
-                    found.matrices(), tolerance=_SCREEN_TOLERANCE, start=_SCREEN_TOLERANCE, angle=30.0, iterations=0,
+    points, tangents, ranges = _gathered(found, views, _SCREEN_POINTS)
+    tested = refine(nearest, tangent_map, points, tangents, ranges, found.matrices(), tolerance=_SCREEN_TOLERANCE, start=_SCREEN_TOLERANCE, angle=30.0, iterations=0,
                     machine=machine)
     best = np.lexsort((-found.votes, -tested.score))[:keep]
     return Candidates(found.views[best], found.similarity[best], found.votes[best])
@@ -240,17 +242,8 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
     nearest, distance = distance_transform(features.edges, machine=machine)
     tangent_map = features.tangent_map
     found = _screen(found, views, nearest, tangent_map, verify, machine)
-    ranges, points, tangents = [], [], []
-    start = 0
-    for row in found.views:
-        view = views[row][2]
-        points.append(view.points)
-        tangents.append(view.tangent)
-        ranges.append((start, start + len(view.points)))
-        start += len(view.points)
-    all_points, all_tangents = np.concatenate(points), np.concatenate(tangents)
+    all_points, all_tangents, ranges_array = _gathered(found, views)
     solid = np.array([len(library.models[view_ids[row][0]].views) > 1 for row in found.views])
-    ranges_array = np.array(ranges)
 
     def refined(rows: np.ndarray, starts: np.ndarray, kind: Transform, first: float = 8.0, steps: int = 6):
         return refine(nearest, tangent_map, all_points, all_tangents, ranges_array[rows], starts, transform=kind,
@@ -290,13 +283,13 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
     tree = cKDTree(features.corners.reshape(-1, 2))
     for c in range(len(found)):
         view = views[found.views[c]][2]
-        start, stop = ranges[c]
+        start, stop = ranges_array[c]
         pixels = np.unique(address[start:stop][ok[start:stop]])
         explained.append(pixels)
         # The most distinct pixels its points can reach: one each, or fewer where the pose shrinks them
         # closer than a pixel apart; its coverage is the share of those it explains.
         spread = view.length / max(len(view.points), 1) * _scale(poses[c])
-        posed = _apply(poses[c], view.points)
+        posed = carry(poses[c], view.points)
         hidden = _hidden(posed, ok[start:stop], final.inside[start:stop], depth) if depth is not None else 0
         expected[c] = max((inside[c] - hidden) * min(1.0, spread), 1.0)
         coverage[c] = min(len(pixels) / expected[c], 1.0)
@@ -332,7 +325,7 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
             heapq.heappush(heap, (-now, pick))
             continue
         view = views[found.views[pick]][2]
-        hull = _silhouette(_apply(poses[pick], view.points), (h, w))
+        hull = _silhouette(carry(poses[pick], view.points), (h, w))
         area = int(hull.sum())
         if area == 0 or (hull & taken).sum() >= _OVERLAP * area:
             continue
@@ -344,11 +337,11 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
     for c in kept:
         view = views[found.views[c]][2]
         model, view_index = (int(v) for v in view_ids[found.views[c]])
-        boundary = _apply(poses[c], view.points)
-        start, stop = ranges[c]
+        boundary = carry(poses[c], view.points)
+        start, stop = ranges_array[c]
         detections.append(Detection(library.models[model].name, view_index, poses[c], float(score[c]),
                                     int(found.votes[c]), float(significance[c]), float(corners_found[c]),
-                                    _apply(poses[c], view.corners), boundary, ok[start:stop].copy()))
+                                    carry(poses[c], view.corners), boundary, ok[start:stop].copy()))
     return detections
 
 
@@ -359,7 +352,7 @@ def _corner_matches(pose: np.ndarray, view: View, features: Features, tree: cKDT
     h, w = features.shape
     if not len(view.corners):
         return 0, 0, 0.0
-    at = _apply(pose, view.corners)
+    at = carry(pose, view.corners)
     inside = (at[:, 0] >= 0) & (at[:, 1] >= 0) & (at[:, 0] <= w - 1) & (at[:, 1] <= h - 1)
     if not inside.any() or not len(features.corners):
         return 0, int(inside.sum()), 0.0
@@ -434,8 +427,3 @@ def _surprise(hits: float, trials: float, chance: float) -> float:
 def _scale(pose: np.ndarray) -> float:
     """The pose's linear scale: the square root of its linear part's determinant (at the origin)."""
     return float(np.sqrt(abs(np.linalg.det(pose[:2, :2] / pose[2, 2]))))
-
-
-def _apply(matrix: np.ndarray, p: np.ndarray) -> np.ndarray:
-    h = np.asarray(p, np.float64).reshape(-1, 2) @ matrix[:, :2].T + matrix[:, 2]
-    return h[:, :2] / h[:, 2:3]

@@ -25,10 +25,11 @@ import numpy as np
 from vmcl.cm.core import check_choice, check_int, check_real, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
-from vmcl.recognize.arguments import angles, edge_map, points, real_map
+from vmcl.recognize.arguments import angles, edge_map, real_map
+from vmcl.recognize.arguments import points as point_array
 
-__all__ = ["TRANSFORMS", "NearestEdge", "Support", "Verified", "distance_transform", "distance_transform_numpy",
-           "refine", "support", "support_numpy"]
+__all__ = ["TRANSFORMS", "NearestEdge", "Support", "Verified", "carry", "distance_transform",
+           "distance_transform_numpy", "refine", "support", "support_numpy"]
 
 Transform = Literal["similarity", "affine", "homography"]
 TRANSFORMS: tuple[Transform, ...] = ("similarity", "affine", "homography")
@@ -128,7 +129,7 @@ def _check_support(nearest: Any, tangent_map: Any, points_: Any, tangents: Any, 
     if nearest.min() < -1 or nearest.max() >= nearest.size:
         raise InputValueError(f"nearest must hold flat addresses of its pixels (0 to {nearest.size - 1}) or -1")
     tangent_map = real_map(tangent_map, "tangent_map", nearest.shape, "nearest", unknown=True).astype(np.float32)
-    points_ = points(points_, "points")
+    points_ = point_array(points_, "points")
     tangents = angles(tangents, "tangents", len(points_), "points", unknown=True)
     homographies = _homographies(transforms)
     if not isinstance(point_ranges, np.ndarray) or point_ranges.dtype.kind not in "iu":
@@ -340,7 +341,7 @@ def refine(nearest: Any, tangent_map: Any, points: Any, tangents: Any, point_ran
             p = points[point_of_item[s][use]]
             q = found.edge[s][use]
             e = tangent_map[q[:, 1].astype(np.int64), q[:, 0].astype(np.int64)].astype(np.float64)
-            posed = _apply(current[c], p)
+            posed = _carried(current[c], p)
             away = posed - q
             length = np.hypot(away[:, 0], away[:, 1])
             normal = np.where(np.isfinite(e)[:, None], np.stack([-np.sin(e), np.cos(e)], axis=1),
@@ -355,6 +356,15 @@ def refine(nearest: Any, tangent_map: Any, points: Any, tangents: Any, point_ran
     return Verified(current, score, supported.astype(np.int64), inside.astype(np.int64), found)
 
 
-def _apply(matrix: np.ndarray, p: np.ndarray) -> np.ndarray:
-    h = p @ matrix[:, :2].T + matrix[:, 2]
+def carry(transform: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Points (x, y), (N, 2), carried by a 2 x 3 affine map or a 3 x 3 homography; float64 (N, 2)."""
+    if isinstance(transform, np.ndarray) and transform.ndim == 2:
+        transform = _homographies(transform[None])[0]
+    else:
+        _homographies(transform)  # refuses it by name
+    return _carried(transform, point_array(points, "points"))
+
+
+def _carried(transform: np.ndarray, p: np.ndarray) -> np.ndarray:
+    h = p @ transform[:, :2].T + transform[:, 2]
     return h[:, :2] / h[:, 2:3]
