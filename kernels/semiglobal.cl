@@ -286,15 +286,18 @@ __kernel void median_kept(__global const float *disparity, __global float *out, 
 
 /* Half-occluded pixels take the background's disparity: of the nearest kept disparities to their left
  * and right on the row, the smaller (the farther surface, which the nearer one hides from one view).
- * One work-item per row; `filled` is the disparity with them filled (NaN where a row has no kept pixel);
- * other pixels are copied. */
-__kernel void fill_occluded(__global const float *disparity, __global const uchar *occluded, __global float *filled,
-                            long W, long H)
+ * An unconfirmed pixel (half-occluded or mismatched) where the surface on its right, carried on to it,
+ * would be seen left of the right image's first column (x < that surface's disparity) is hidden by the
+ * frame, not by a nearer surface: it is half-occluded, and takes that surface's disparity whatever lies
+ * to its left. One work-item per row; `filled` is the disparity with them filled (NaN where a row has no
+ * kept pixel); other pixels are copied. */
+__kernel void fill_occluded(__global const float *disparity, __global uchar *occluded, __global uchar *mismatched,
+                            __global float *filled, long W, long H)
 {
     long y = get_global_id(0);
     if (y >= H) return;
     __global const float *row = disparity + y * W;
-    __global const uchar *hidden = occluded + y * W;
+    __global uchar *hidden = occluded + y * W, *wrong = mismatched + y * W;
     __global float *out = filled + y * W;
     /* Left to right: the nearest kept value on the left; then right to left, the smaller of it and the
      * nearest on the right (fmin ignores a NaN: a side with none gives way to the other). */
@@ -305,7 +308,14 @@ __kernel void fill_occluded(__global const float *disparity, __global const ucha
     }
     last = NAN;
     for (long x = W - 1; x >= 0; x--) {
-        if (!isnan(row[x])) last = row[x];
-        else if (hidden[x]) out[x] = fmin(out[x], last);
+        if (!isnan(row[x])) {
+            last = row[x];
+        } else if ((hidden[x] || wrong[x]) && (float)x < last) {
+            out[x] = last;
+            hidden[x] = 1;
+            wrong[x] = 0;
+        } else if (hidden[x]) {
+            out[x] = fmin(out[x], last);
+        }
     }
 }

@@ -50,16 +50,27 @@ def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, machine):
                                          for d2 in range(d_min, d_max + 1))
     np.testing.assert_array_equal(np.isfinite(found.disparity), kept)
     np.testing.assert_array_equal(found.disparity[kept], want_left[kept])
-    np.testing.assert_array_equal(found.occluded, occluded)
-    np.testing.assert_array_equal(found.mismatched, ~kept & ~occluded & ~want_out)
     np.testing.assert_array_equal(found.out_of_range, want_out)
-    # Filled: the smaller of the nearest kept disparities on the row, for half-occluded pixels only.
+    # Filled: an unconfirmed pixel left of where the kept surface on its right would leave the right image
+    # is hidden by the frame and takes that surface's disparity; another half-occluded pixel takes the
+    # smaller of the nearest kept disparities on the row; mismatched pixels stay without.
+    mismatched = ~kept & ~occluded & ~want_out
+    framed = 0
     for y in range(height):
-        for x in np.flatnonzero(occluded[y]):
-            sides = [found.disparity[y, x2] for x2 in (*range(x - 1, -1, -1),) if kept[y, x2]][:1]
-            sides += [found.disparity[y, x2] for x2 in range(x + 1, width) if kept[y, x2]][:1]
-            want = min(sides) if sides else np.nan
-            np.testing.assert_equal(found.filled[y, x], want)
+        for x in np.flatnonzero(occluded[y] | mismatched[y]):
+            right_side = [found.disparity[y, x2] for x2 in range(x + 1, width) if kept[y, x2]][:1]
+            if right_side and x < right_side[0]:
+                occluded[y, x], mismatched[y, x] = True, False
+                np.testing.assert_equal(found.filled[y, x], right_side[0])
+                framed += 1
+                continue
+            if not occluded[y, x]:
+                continue
+            sides = [found.disparity[y, x2] for x2 in range(x - 1, -1, -1) if kept[y, x2]][:1] + right_side
+            np.testing.assert_equal(found.filled[y, x], min(sides) if sides else np.nan)
+    assert framed > 0
+    np.testing.assert_array_equal(found.occluded, occluded)
+    np.testing.assert_array_equal(found.mismatched, mismatched)
     np.testing.assert_array_equal(found.filled[~occluded], found.disparity[~occluded])
 
 

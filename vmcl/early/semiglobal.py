@@ -90,8 +90,11 @@ class SemiGlobalMatch:
     disparity : float32 (H, W), d with I_left(x, y) = I_right(x - d, y), to a fraction of a pixel; NaN where
         the right view does not confirm the left winner.
     filled : float32 (H, W), ``disparity`` with the half-occluded pixels given their background's value
-        (the smaller of the nearest kept disparities left and right on the row); mismatched pixels NaN.
-    occluded : bool (H, W), half-occluded pixels: no disparity of the range is confirmed by the right view.
+        (the smaller of the nearest kept disparities left and right on the row), or, where the frame hides
+        them, the value of the surface on their right; mismatched pixels NaN.
+    occluded : bool (H, W), half-occluded pixels: no disparity of the range is confirmed by the right view,
+        or the pixel is unconfirmed and the kept surface on its right, carried on to it, would be seen left
+        of the right image (x < its disparity: the frame hides it).
     mismatched : bool (H, W), unconfirmed pixels that are not half-occluded (the winner was wrong).
     out_of_range : bool (H, W), pixels whose winner was an end of the range (d_min or d_max, where the
         image lets the range go on) with a poor census cost there (more than :data:`POOR_MATCH` of the
@@ -272,5 +275,6 @@ def _select(machine: Machine, sums: cl_array.Array, costs: cl_array.Array, dims,
         machine.launch(machine.kernel("semiglobal", "median_kept"), (width, height), disparity, smoothed, *dims)
         disparity = smoothed
     filled = machine.empty((height, width), np.float32)
-    machine.launch(machine.kernel("semiglobal", "fill_occluded"), (height,), disparity, occluded, filled, *dims)
+    machine.launch(machine.kernel("semiglobal", "fill_occluded"), (height,), disparity, occluded, mismatched, filled,
+                   *dims)
     return disparity, filled, occluded, mismatched, out_of_range
