@@ -8,7 +8,8 @@ import pytest
 from oracles import semiglobal_sums, semiglobal_winners
 
 from vmcl import scenes
-from vmcl.early.semiglobal import CENSUS_BITS, DIRECTIONS, POOR_MATCH, match_semiglobal
+from vmcl.early.semiglobal import CENSUS_BITS, CENSUS_SIZE, DIRECTIONS, JUMP, POOR_MATCH, match_semiglobal
+from vmcl.early.weighted_median import weighted_median
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.scenes import Body, Camera, Face, Light, Texture, World
 
@@ -34,7 +35,7 @@ def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, machine):
     total, cost = semiglobal_sums(left, right, d_min, d_max, p1, p2, DIRECTIONS[paths], CENSUS_BITS // 2)
     want_left, want_right, want_out = semiglobal_winners(total, d_min, cost, int(POOR_MATCH * CENSUS_BITS))
     found = match_semiglobal(left, right, d_min=d_min, d_max=d_max, census_threshold=0, p1=p1, p2=p2, edge_gain=0,
-                             paths=paths, subpixel=False, median=False, machine=machine)
+                             paths=paths, subpixel=False, median=False, refine=False, machine=machine)
     height, width = left.shape
     kept = np.zeros((height, width), bool)
     occluded = np.zeros((height, width), bool)
@@ -165,6 +166,56 @@ def test_half_occluded_pixels_are_found(machine):
     assert recall >= 0.9 and precision >= 0.9, (recall, precision)
     wall = np.nanmin(scene.disparity)
     assert np.mean(np.abs(found.filled[flagged & hidden] - wall) <= 1) > 0.85
+
+
+def test_refinement_is_the_weighted_median_near_jumps(machine):
+    """refine=True gives the pixels within half a census window of a jump of ``filled`` (or without a value),
+    except the half-occluded, the weighted median of the kept disparities around them; the rest of the
+    match is unchanged."""
+    scene = _occluding_plate()
+    raw = match_semiglobal(scene.left, scene.right, refine=False, machine=machine)
+    found = match_semiglobal(scene.left, scene.right, refine_radius=5, refine_colour=0.2, machine=machine)
+    for name in ("disparity", "occluded", "mismatched", "out_of_range"):
+        np.testing.assert_array_equal(getattr(found, name), getattr(raw, name))
+    filled = raw.filled
+    pairs = np.zeros(filled.shape, np.int32)
+    jump = lambda a, b: (np.isnan(a) != np.isnan(b)) | (np.abs(a - b) > JUMP)  # noqa: E731
+    pairs[:, :-1] |= jump(filled[:, :-1], filled[:, 1:])
+    pairs[:-1, :] |= jump(filled[:-1, :], filled[1:, :])
+    band = CENSUS_SIZE[0] // 2
+    padded = np.pad(pairs, band)
+    near = sum(padded[dy:dy + filled.shape[0], dx:dx + filled.shape[1]]
+               for dy in range(2 * band + 1) for dx in range(2 * band + 1)) > 0
+    where = ~raw.occluded & (near | np.isnan(filled))
+    assert where.sum() > 300
+    want = weighted_median(filled, scene.left, low=raw.d_min, high=raw.d_max, where=where,
+                           voters=~raw.occluded & np.isfinite(filled), radius=5, sigma_colour=0.2, sigma_space=5.0,
+                           machine=machine)
+    np.testing.assert_array_equal(found.filled, want)
+
+
+def test_refinement_gives_depth_edges_back_to_the_brightness_edges(machine):
+    """On the rendered "blocks" scene the census window carries the blocks' disparity over the floor and the
+    wall beside them; refined, the pixels within 4 px of a depth jump are wrong less than half as often
+    (measured on seeds 3 to 5: 4.1 / 4.2 / 3.1% to 1.5 / 1.5 / 1.2% of those not half-occluded)."""
+    scene = scenes.render(scenes.preset("blocks", shape=(256, 256)), seed=3, noise=0.01)
+    visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
+    truth = np.nan_to_num(scene.disparity, nan=-99)
+    jumps = np.zeros(truth.shape, bool)
+    for axis in (0, 1):
+        step = np.abs(np.diff(truth, axis=axis)) > 1
+        jumps[(slice(1, None),) if axis == 0 else (slice(None), slice(1, None))] |= step
+        jumps[(slice(None, -1),) if axis == 0 else (slice(None), slice(None, -1))] |= step
+    padded = np.pad(jumps, 4)
+    near = np.zeros(truth.shape, bool)
+    for dy in range(9):
+        for dx in range(9):
+            near |= padded[dy:dy + truth.shape[0], dx:dx + truth.shape[1]]
+    assert (visible & near).sum() > 5000
+    bad = [np.mean(~(np.abs(m.filled - scene.disparity) <= 1)[visible & near & ~m.occluded])
+           for m in (match_semiglobal(scene.left, scene.right, refine=refine, machine=machine)
+                     for refine in (False, True))]
+    assert bad[1] < 0.5 * bad[0], bad
 
 
 def test_disparities_beyond_the_range_are_flagged_out_of_range(machine):

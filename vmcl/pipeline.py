@@ -256,6 +256,10 @@ class StereoConfig:
     census_threshold, p1, p2, edge_gain
         The semi-global matcher's census margin and smoothness prices, as
         :func:`vmcl.early.semiglobal.match_semiglobal` takes them.
+    refine, refine_radius, refine_colour
+        The semi-global matcher's weighted median at depth jumps (pixels near a jump take the median of
+        the confirmed disparities of their own colour around them), as
+        :func:`vmcl.early.semiglobal.match_semiglobal` takes them.
     shiftable : bool
         Intensity matches (the backfill, or ``features = "intensity"``) score each pixel by the best
         patch that holds it (:func:`vmcl.early.stereo.match`'s ``shiftable``), so that the nearer
@@ -286,6 +290,9 @@ class StereoConfig:
     p1: int = semiglobal.P1
     p2: float = semiglobal.P2
     edge_gain: float = semiglobal.EDGE_GAIN
+    refine: bool = True
+    refine_radius: int = semiglobal.REFINE_RADIUS
+    refine_colour: float = semiglobal.REFINE_COLOUR
     shiftable: bool = True
     intensity_sigma: float = 1.0
 
@@ -309,6 +316,8 @@ class StereoConfig:
         check_int(self.p1, "stereo.p1", minimum=0, maximum=255)
         check_real(self.p2, "stereo.p2", minimum=self.p1, maximum=8000)
         check_real(self.edge_gain, "stereo.edge_gain", minimum=0)
+        check_int(self.refine_radius, "stereo.refine_radius", minimum=1)
+        check_real(self.refine_colour, "stereo.refine_colour", above=0)
         if not self.feature_matches and not self.backfill:
             raise InputValueError("stereo: feature_matches and backfill are both off, which leaves no matcher")
         if not 0 < self.intensity_sigma < math.inf:

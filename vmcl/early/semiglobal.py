@@ -40,15 +40,17 @@ from vmcl.cm.core import (
     machine_for,
     mask_result,
 )
+from vmcl.cm.scan import box_sum
 from vmcl.early.disparity_range import estimate_range
 from vmcl.early.filters import grey_field
 from vmcl.early.noise import threshold_field
 from vmcl.early.stereo import check_pair, check_range
+from vmcl.early.weighted_median import weighted_median
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "P1", "P2", "POOR_MATCH",
-           "SemiGlobalMatch", "match_semiglobal"]
+__all__ = ["CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "JUMP", "P1", "P2", "POOR_MATCH",
+           "REFINE_COLOUR", "REFINE_RADIUS", "SemiGlobalMatch", "match_semiglobal"]
 
 CENSUS_SIZE = (9, 7)  # width, height of the census window: 62 neighbours in a 64-bit code
 CENSUS_BITS = CENSUS_SIZE[0] * CENSUS_SIZE[1] - 1
@@ -68,6 +70,13 @@ P2 = 64.0
 """Default price of a jump where the brightness does not change, in census bits."""
 EDGE_GAIN = 0.1
 """Default lowering of the jump's price per unit of noise in the brightness change."""
+
+REFINE_RADIUS = 9
+"""Default radius of the weighted median's window at depth jumps, in pixels (its spatial scale too)."""
+REFINE_COLOUR = 0.1
+"""Default colour distance (in [0, 1] levels) at which a voter of the weighted median weighs 1/e."""
+JUMP = 1.5
+"""Neighbours differing by more than this many pixels of disparity mark a jump the weighted median refines."""
 
 POOR_MATCH = 0.25
 """A winner at an end of the range is out of range when more than this share of its census bits differ:
@@ -115,7 +124,8 @@ class SemiGlobalMatch:
 def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max: int | None = None,
                      census_threshold: float = CENSUS_THRESHOLD, p1: int = P1, p2: float = P2,
                      edge_gain: float = EDGE_GAIN, paths: int = 8,
-                     subpixel: bool = True, tolerance: int = 1, median: bool = True,
+                     subpixel: bool = True, tolerance: int = 1, median: bool = True, refine: bool = True,
+                     refine_radius: int = REFINE_RADIUS, refine_colour: float = REFINE_COLOUR,
                      machine: Machine | None = None
                      ) -> SemiGlobalMatch:
     """Match a rectified pair densely: census costs, min-sum messages along scanlines, both views checked.
@@ -154,6 +164,17 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         Replace each kept disparity by the median of the kept ones in its 3 x 3 neighbourhood (after the
         check, before the fill), which removes isolated wrong winners (Hirschmueller's filter);
         benchmarks/results/stereo.md gives the matcher with and without it.
+    refine : bool
+        Give every pixel within half a census window of a depth jump (neighbours of ``filled`` differing
+        by more than :data:`JUMP`), and every mismatched pixel, the weighted median of the kept disparities
+        around it, weighted by their likeness in colour to it (:func:`vmcl.early.weighted_median.weighted_median`):
+        the census window carries the nearer surface's disparity up to half its width over the farther
+        one, and the brightness edge between them says where each ends. Half-occluded pixels keep their
+        background's value.
+    refine_radius : int
+        >= 1: the weighted median's window radius, and its spatial scale, in pixels.
+    refine_colour : float
+        > 0: its colour scale (levels in [0, 1]).
     machine : vmcl.Machine, optional
 
     Returns
@@ -184,19 +205,24 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     subpixel = check_bool(subpixel, "subpixel")
     tolerance = check_int(tolerance, "tolerance", minimum=0, maximum=2**31 - 1)
     median = check_bool(median, "median")
+    refine = check_bool(refine, "refine")
     height, width = left.shape[:2]
+    refine_radius = check_int(refine_radius, "refine_radius", minimum=1, maximum=2**31 - 1)
+    refine_colour = check_real(refine_colour, "refine_colour", above=0)
     d_min, d_max = _range(left, right, d_min, d_max, machine)
     depth = d_max - d_min + 1
     cells = height * width * _LANES * math.ceil(depth / _LANES)
     machine.require_memory(f"semi-global matching of a {height} x {width} pair over {depth} disparities",
                            3 * cells + 40 * height * width, 2 * cells)
     host = isinstance(left, np.ndarray)
-    views = [grey_field(machine, machine.to_device(image) if isinstance(image, np.ndarray) else image)
-             for image in (left, right)]
+    images = [machine.to_device(image) if isinstance(image, np.ndarray) else image for image in (left, right)]
+    views = [grey_field(machine, image) for image in images]
     dims = (np.int64(width), np.int64(height))
     costs, sums = _aggregate(machine, views, d_min, depth, census_threshold, p1, p2, edge_gain, paths)
     found = _select(machine, sums, costs, dims, d_min, depth, subpixel, tolerance, median)
     disparity, filled, occluded, mismatched, out_of_range = found
+    if refine:
+        filled = _refine(machine, filled, occluded, images[0], d_min, d_max, refine_radius, refine_colour)
     return SemiGlobalMatch(disparity.get() if host else disparity, filled.get() if host else filled,
                            mask_result(occluded, host), mask_result(mismatched, host), mask_result(out_of_range, host),
                            d_min=d_min, d_max=d_max)
@@ -251,6 +277,22 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
                        np.int32(dy), np.uint16(p1), np.float32(p2), np.float32(edge_gain), noise,
                        np.int32(index == 0), local_size=(_LINES_PER_GROUP,))
     return costs, sums
+
+
+def _refine(machine: Machine, filled: cl_array.Array, occluded: cl_array.Array, left: cl_array.Array, d_min: int,
+            d_max: int, radius: int, colour: float) -> cl_array.Array:
+    """``filled`` with the pixels near its depth jumps, and those without a value, given the weighted median
+    of the kept disparities around them (half-occluded pixels keep theirs)."""
+    height, width = filled.shape
+    dims = (np.int64(width), np.int64(height))
+    flags = machine.empty((height, width), np.int32)
+    machine.launch(machine.kernel("semiglobal", "jump_flags"), (width, height), filled, flags, *dims, np.float32(JUMP))
+    near = box_sum(flags, CENSUS_SIZE[0] // 2, machine=machine)
+    where, voters = (machine.empty((height, width), np.uint8) for _ in range(2))
+    machine.launch(machine.kernel("semiglobal", "refine_targets"), (width, height), filled, occluded, near, where,
+                   voters, *dims)
+    return weighted_median(filled, left, low=d_min, high=d_max, where=where, voters=voters, radius=radius,
+                           sigma_colour=colour, sigma_space=float(radius), machine=machine)
 
 
 def _select(machine: Machine, sums: cl_array.Array, costs: cl_array.Array, dims, d_min: int, depth: int,

@@ -1,0 +1,99 @@
+"""The weighted median whose support stops at brightness edges: exact against a NumPy oracle, a fattened step
+given back its edge, the voters and chosen pixels honoured, bad input refused naming the argument."""
+
+import numpy as np
+import pytest
+
+from vmcl.early.weighted_median import MAX_BINS, weighted_median
+from vmcl.errors import InputTypeError, InputValueError
+
+
+def _oracle(values, image, where, voters, low, high, radius, sigma_colour, sigma_space):
+    """The definition, pixel by pixel in float64."""
+    height, width = values.shape
+    levels = image.astype(np.float64) / (255.0 if image.dtype == np.uint8 else 1.0)
+    levels = levels.reshape(height, width, -1)
+    step = max(1.0, float(np.ceil((high - low + 1) / MAX_BINS)))
+    bins = min(MAX_BINS, int(np.ceil((high - low + 1) / step)) + 1)
+    want = values.astype(np.float64).copy()
+    for y, x in zip(*np.nonzero(where)):
+        ws, vs = [], []
+        for yy in range(max(0, y - radius), min(height, y + radius + 1)):
+            for xx in range(max(0, x - radius), min(width, x + radius + 1)):
+                if not voters[yy, xx] or np.isnan(values[yy, xx]):
+                    continue
+                ws.append(np.exp(-np.linalg.norm(levels[yy, xx] - levels[y, x]) / sigma_colour
+                                 - np.hypot(xx - x, yy - y) / sigma_space))
+                vs.append(values[yy, xx])
+        if not ws:
+            continue
+        ws, vs = np.array(ws), np.array(vs, np.float64)
+        b = np.clip(np.floor((vs - (low - 0.5 * step)) / step).astype(int), 0, bins - 1)
+        cum = np.cumsum(np.bincount(b, weights=ws, minlength=bins))
+        k = int(np.argmax(cum >= cum[-1] / 2))
+        want[y, x] = (ws[b == k] * vs[b == k]).sum() / ws[b == k].sum()
+    return want
+
+
+@pytest.mark.parametrize(("channels", "low", "high"), [(3, 0.0, 10.0), (1, -3.0, 40.0)])
+def test_matches_numpy_oracle(channels, low, high, machine):
+    rng = np.random.default_rng(channels)
+    values = rng.uniform(low, high, (30, 41)).astype(np.float32)
+    values[rng.uniform(size=values.shape) < 0.05] = np.nan
+    shape = (30, 41, 3) if channels == 3 else (30, 41)
+    image = rng.integers(0, 256, shape).astype(np.uint8)
+    where = rng.uniform(size=values.shape) < 0.4
+    voters = rng.uniform(size=values.shape) < 0.8
+    found = weighted_median(values, image, low=low, high=high, where=where, voters=voters, radius=3,
+                            sigma_colour=0.2, sigma_space=3.0, machine=machine)
+    want = _oracle(values, image, where, voters, low, high, 3, 0.2, 3.0)
+    np.testing.assert_array_equal(np.isnan(found), np.isnan(want))
+    np.testing.assert_allclose(found[~np.isnan(want)], want[~np.isnan(want)], atol=2e-5)
+    np.testing.assert_array_equal(found[~where], values[~where])
+
+
+def test_a_fattened_step_goes_back_to_the_brightness_edge(machine):
+    """A disparity step carried 3 px past the brightness edge (a census window's fattening) returns to the
+    edge; pixels far from the edge keep their fractions of a pixel."""
+    image = np.zeros((24, 40), np.float32)
+    image[:, 20:] = 0.8
+    truth = np.where(np.arange(40) < 20, 12.25, 3.5).astype(np.float32)[None].repeat(24, 0)
+    fattened = truth.copy()
+    fattened[:, 20:23] = 12.25
+    near = np.zeros(truth.shape, bool)
+    near[:, 16:27] = True
+    found = weighted_median(fattened, image, low=0, high=20, where=near, machine=machine)
+    np.testing.assert_allclose(found, truth, atol=1e-5)
+
+
+def test_device_input_gives_device_output_equal_to_host(machine):
+    rng = np.random.default_rng(5)
+    values = rng.uniform(0, 9, (12, 15)).astype(np.float32)
+    image = rng.uniform(0, 1, (12, 15)).astype(np.float32)
+    host = weighted_median(values, image, low=0, high=9, radius=2, machine=machine)
+    device = weighted_median(machine.to_device(values), machine.to_device(image), low=0, high=9, radius=2,
+                             machine=machine)
+    np.testing.assert_array_equal(device.get(), host)
+
+
+def test_a_pixel_without_voters_keeps_its_value(machine):
+    values = np.arange(20, dtype=np.float32).reshape(4, 5)
+    found = weighted_median(values, np.zeros((4, 5), np.float32), low=0, high=19,
+                            voters=np.zeros((4, 5), bool), machine=machine)
+    np.testing.assert_array_equal(found, values)
+
+
+@pytest.mark.parametrize(("kwargs", "error", "pattern"), [
+    ({"low": 5.0, "high": 1.0}, InputValueError, "low must not exceed high"),
+    ({"radius": 0}, InputValueError, "radius"),
+    ({"sigma_colour": 0.0}, InputValueError, "sigma_colour"),
+    ({"sigma_space": -1.0}, InputValueError, "sigma_space"),
+    ({"where": np.zeros((3, 3), bool)}, InputValueError, "where"),
+    ({"voters": "all"}, InputTypeError, "voters"),
+    ({"image": np.zeros((6, 5), np.float32)}, InputValueError, "image"),
+    ({"values": np.zeros((6, 6), np.int64)}, InputTypeError, "values"),
+])
+def test_bad_input_is_refused_naming_it(kwargs, error, pattern, machine):
+    call = {"values": np.zeros((6, 6), np.float32), "image": np.zeros((6, 6), np.float32), "low": 0.0, "high": 4.0}
+    with pytest.raises(error, match=pattern):
+        weighted_median(**{**call, **kwargs}, machine=machine)

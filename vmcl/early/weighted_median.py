@@ -1,0 +1,124 @@
+"""A field's weighted median over windows whose support stops at brightness edges.
+
+Seed sections "Stereo" and "Organization of integration": depth discontinuities coincide with brightness
+edges. A matcher's window straddles a depth edge and carries the nearer surface's disparity a few pixels
+over the farther one's (the foreground "fattens"); a pixel near a jump can be given back its own
+surface's value by letting only the neighbours of its own colour vote. Each chosen pixel takes the weighted
+median of the voters' values in its window, a voter q weighing
+
+    exp(-|I(q) - I(p)| / sigma_colour - |q - p| / sigma_space),
+
+so that neighbours across a brightness edge hardly count (the joint weighted median of Ma, Li, Ma, Zhang,
+"Constant time weighted median filtering for stereo matching and beyond", ICCV 2013, and of the occlusion
+filling of Hosni, Rhemann, Bleyer, Rother, Gelautz, "Fast cost-volume filtering for visual correspondence
+and beyond", PAMI 35(2), 2013). The median is taken over bins of ``step`` units; the pixel takes the
+weighted mean of the voters in the median's bin, so that a value keeps its fraction of a bin.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from vmcl.cm.core import (
+    IMAGE_TYPES,
+    ArrayLike,
+    check_int,
+    check_real,
+    field,
+    flags_field,
+    image_field,
+    machine_for,
+    result,
+)
+from vmcl.errors import InputTypeError, InputValueError
+from vmcl.machine import Machine
+
+__all__ = ["MAX_BINS", "weighted_median"]
+
+MAX_BINS = 1024
+"""The most bins a pixel's histogram holds; a wider span of values gets bins of several units."""
+
+_BIN_STEP = 64  # the private histograms are sized in steps of this many bins (one program per size)
+_HALF_RANGE = float(np.finfo(np.float32).max) / 4
+_LEVELS = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0, np.dtype(np.float32): 1.0}
+
+
+def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: float, where: ArrayLike | None = None,
+                    voters: ArrayLike | None = None, radius: int = 9, sigma_colour: float = 0.1,
+                    sigma_space: float = 9.0, machine: Machine | None = None) -> ArrayLike:
+    """Replace each chosen pixel's value by the weighted median of its voters' values around it.
+
+    Parameters
+    ----------
+    values : float32 (H, W) array or device array
+        The field (e.g. a disparity map), NaN where it has no value.
+    image : (H, W) or (H, W, 3) array or device array; uint8, uint16 or float
+        The brightness the weights follow, grey or RGB, its levels scaled to [0, 1] by its type's range
+        (uint8 by 255, uint16 by 65535; a float image is taken to be in [0, 1] already).
+    low, high : float
+        The span of the voters' values (e.g. a disparity range), low <= high, each within a quarter of
+        float32's range; values outside it count in the first or last bin.
+    where : bool or uint8 (H, W), optional
+        The pixels to replace (default every pixel); the others keep their value.
+    voters : bool or uint8 (H, W), optional
+        The pixels whose values vote (default every pixel with a value); NaN values never vote.
+    radius : int
+        >= 1: the window is (2 radius + 1) pixels square (clipped by the image's borders).
+    sigma_colour : float
+        > 0: the colour distance (Euclidean, in the [0, 1] scale) at which a voter's weight falls by e.
+    sigma_space : float
+        > 0: the distance in pixels at which a voter's weight falls by e.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    float32 (H, W), as the input came (NumPy for NumPy ``values``, else a device array): the field with the
+    chosen pixels replaced; a chosen pixel without any voter in its window keeps its own value.
+
+    Notes
+    -----
+    The median is taken over bins ``step = max(1, ceil((high - low + 1) / MAX_BINS))`` units wide, starting
+    half a unit below ``low`` (whole values sit mid-bin); the result is the weighted mean of the voters in
+    the median's bin. Each chosen pixel visits ``(2 radius + 1)^2`` neighbours.
+
+    Raises
+    ------
+    InputTypeError, InputValueError
+        Naming the argument: a field that is not float32 (H, W), an image or mask of another shape,
+        ``low > high``, a parameter outside its range.
+    """
+    machine = machine_for(machine)
+    if isinstance(values, np.ndarray) and values.dtype.kind == "f":
+        values = values.astype(np.float32, copy=False)
+    data, host = field(values, "values", machine, ndims=(2,), dtypes=(np.float32,))
+    height, width = data.shape
+    picture, image_host = image_field(image, machine, what="a weighted median", footprint=6)
+    if image_host != host:
+        raise InputTypeError("image must be a NumPy array when values is one, and a device array when values is one")
+    if picture.shape[:2] != (height, width):
+        raise InputValueError(f"image must have values' height and width {(height, width)}, got shape {picture.shape}")
+    # Half of float32's range each way, so that the span and the bins' edges stay finite in float32.
+    low = check_real(low, "low", minimum=-_HALF_RANGE, maximum=_HALF_RANGE)
+    high = check_real(high, "high", minimum=-_HALF_RANGE, maximum=_HALF_RANGE)
+    if low > high:
+        raise InputValueError(f"low must not exceed high, got low {low} and high {high}")
+    radius = check_int(radius, "radius", minimum=1, maximum=2**31 - 1)
+    sigma_colour = check_real(sigma_colour, "sigma_colour", above=0)
+    sigma_space = check_real(sigma_space, "sigma_space", above=0)
+    span = high - low + 1
+    step = max(1.0, float(math.ceil(span / MAX_BINS)))
+    bins = min(MAX_BINS, int(math.ceil(span / step)) + 1)
+    chosen = flags_field(np.ones((height, width), np.uint8) if where is None else where, (height, width), "where",
+                         machine)
+    voting = flags_field(np.ones((height, width), np.uint8) if voters is None else voters, (height, width), "voters",
+                         machine)
+    out = machine.empty((height, width), np.float32)
+    kernel = machine.kernel("weighted_median", "weighted_median", IN_T=IMAGE_TYPES[picture.dtype],
+                            CHANNELS=3 if picture.ndim == 3 else 1, NBINS=_BIN_STEP * math.ceil(bins / _BIN_STEP))
+    machine.launch(kernel, (width, height), data, voting, chosen, picture, out, np.int64(width), np.int64(height),
+                   np.int32(min(radius, max(height, width))), np.float32(1 / sigma_colour), np.float32(1 / sigma_space),
+                   np.float32(1 / _LEVELS[picture.dtype]), np.float32(low - 0.5 * step), np.float32(step),
+                   np.int32(bins))
+    return result(out, host)
