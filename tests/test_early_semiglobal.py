@@ -179,9 +179,8 @@ def test_refinement_is_the_weighted_median_near_jumps(machine):
         np.testing.assert_array_equal(getattr(found, name), getattr(raw, name))
     filled = raw.filled
     pairs = np.zeros(filled.shape, np.int32)
-    jump = lambda a, b: (np.isnan(a) != np.isnan(b)) | (np.abs(a - b) > JUMP)  # noqa: E731
-    pairs[:, :-1] |= jump(filled[:, :-1], filled[:, 1:])
-    pairs[:-1, :] |= jump(filled[:-1, :], filled[1:, :])
+    for a, b in ((filled[:, :-1], filled[:, 1:]), (filled[:-1, :], filled[1:, :])):
+        pairs[:a.shape[0], :a.shape[1]] |= (np.isnan(a) != np.isnan(b)) | (np.abs(a - b) > JUMP)
     band = CENSUS_SIZE[0] // 2
     padded = np.pad(pairs, band)
     near = sum(padded[dy:dy + filled.shape[0], dx:dx + filled.shape[1]]

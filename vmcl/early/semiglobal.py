@@ -291,8 +291,10 @@ def _refine(machine: Machine, filled: cl_array.Array, occluded: cl_array.Array, 
     where, voters = (machine.empty((height, width), np.uint8) for _ in range(2))
     machine.launch(machine.kernel("semiglobal", "refine_targets"), (width, height), filled, occluded, near, where,
                    voters, *dims)
-    return weighted_median(filled, left, low=d_min, high=d_max, where=where, voters=voters, radius=radius,
-                           sigma_colour=colour, sigma_space=float(radius), machine=machine)
+    refined = weighted_median(filled, left, low=d_min, high=d_max, where=where, voters=voters, radius=radius,
+                              sigma_colour=colour, sigma_space=float(radius), machine=machine)
+    assert isinstance(refined, cl_array.Array)  # device values in, device values out
+    return refined
 
 
 def _select(machine: Machine, sums: cl_array.Array, costs: cl_array.Array, dims, d_min: int, depth: int,

@@ -109,7 +109,7 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
     sigma_space = check_real(sigma_space, "sigma_space", above=0)
     span = high - low + 1
     step = max(1.0, float(math.ceil(span / MAX_BINS)))
-    bins = min(MAX_BINS, int(math.ceil(span / step)) + 1)
+    bins = min(MAX_BINS, math.ceil(span / step) + 1)
     chosen = flags_field(np.ones((height, width), np.uint8) if where is None else where, (height, width), "where",
                          machine)
     voting = flags_field(np.ones((height, width), np.uint8) if voters is None else voters, (height, width), "voters",
