@@ -42,16 +42,16 @@ from vmcl.early.disparity_range import estimate_range, fallback_range
 from vmcl.early.semiglobal import match_semiglobal
 from vmcl.metrics import evaluate_disparity
 from vmcl.pipeline import Config, VisionMachine
-from vmcl.stereo_evaluation import evaluate_pair, markdown_tables, opencv_baselines, vmcl_method
+from vmcl.stereo_evaluation import DEPTH_ONLY, evaluate_pair, markdown_tables, opencv_baselines, vmcl_method
 
 ROOT = Path(__file__).resolve().parents[1]
 TEST_SCENES = ("tsukuba", "venus", "teddy", "motorcycle")
 MOTORCYCLE_DISPARITIES = 68  # calib.txt's ndisp = 270 for the full-size pair, divided by 4, rounded up
-ONLY_STEREO = {"motion": {"enabled": False}, "colour": {"enabled": False}, "texture": {"enabled": False}}
 
 # name -> stereo section of the Config; the first is the machine's default.
 STAGES: dict[str, dict] = {
     "default: semi-global matches alone": {},
+    "semi-global matches alone, no weighted median at depth jumps": {"refine": False},
     "edge matches + semi-global backfill": {"feature_matches": True},
     "edge matches + semi-global backfill, no feedback": {"feature_matches": True, "feedback": False},
     "edge matches + intensity backfill, shiftable (previous default)": {"feature_matches": True,
@@ -61,9 +61,11 @@ STAGES: dict[str, dict] = {
                                                    "backfill_weight": 0.2, "shiftable": False},
     "edge matches alone": {"feature_matches": True, "backfill": False},
 }
-# The semi-global matcher's own output (half-occluded pixels filled, no MRF), with and without its median.
-MATCHER_ROWS = {"semi-global matcher alone (filled, no MRF)": True,
-                "semi-global matcher alone (filled, no MRF), no median": False}
+# The semi-global matcher's own output (half-occluded pixels filled, no MRF), with and without its 3 x 3
+# median and its weighted median at depth jumps (match_semiglobal's keywords).
+MATCHER_ROWS = {"semi-global matcher alone (filled, no MRF)": {},
+                "semi-global matcher alone (filled, no MRF), no weighted median at depth jumps": {"refine": False},
+                "semi-global matcher alone (filled, no MRF), no median": {"median": False}}
 
 
 def motorcycle() -> StereoPair | None:
@@ -108,16 +110,16 @@ class StageRow:
 
 def stages(test: list[StereoPair], machine: vmcl.Machine) -> list[StageRow]:
     """Bad-1 and bad-0.5 of each stage variant's restored disparity on the test pairs."""
-    variants: dict[str, object] = {**STAGES, **MATCHER_ROWS}
+    variants: dict[str, dict] = {**STAGES, **MATCHER_ROWS}
     rows = []
     for stage, variant in variants.items():
         rates = {}
         for pair in test:
             _, mask = region(pair)
-            if isinstance(variant, bool):
-                disparity = match_semiglobal(pair.left, pair.right, median=variant, machine=machine).filled
+            if stage in MATCHER_ROWS:
+                disparity = match_semiglobal(pair.left, pair.right, **variant, machine=machine).filled
             else:
-                method = vmcl_method(Config.from_dict({"stereo": variant, **ONLY_STEREO}), machine=machine)
+                method = vmcl_method(Config.from_dict({**DEPTH_ONLY, "stereo": variant}), machine=machine)
                 disparity = method.compute(pair.left, pair.right)
             scores = evaluate_disparity(disparity, pair.disparity, mask=mask)
             rates[pair.name] = (scores.bad[1.0], scores.bad[0.5])
@@ -156,7 +158,7 @@ def speed(pair: StereoPair, repeat: int, machine: vmcl.Machine) -> dict[str, flo
 def kernel_times(pair: StereoPair, repeat: int) -> list[tuple[str, int, float]]:
     """(kernel, launches per run, median device ms per run) of the depth machine (a profiled Machine, whose
     runs each report their own kernels)."""
-    vm = VisionMachine(Config.from_dict(ONLY_STEREO), machine=vmcl.Machine(profile=True))
+    vm = VisionMachine(Config.from_dict(DEPTH_ONLY), machine=vmcl.Machine(profile=True))
     vm.run(pair.left, pair.right)
     per_run: dict[str, list[tuple[int, float]]] = {}
     for _ in range(repeat):
@@ -196,7 +198,8 @@ def main(argv: list[str] | None = None) -> int:
     lines += ["", "## Stages on and off (test pairs; the defaults were fitted on training pairs)", "",
               ("Bad 1 and bad 0.5 (%) of the restored disparity (Middlebury v2: nonocc mask; Motorcycle: every "
                "pixel of known disparity). The rows 'semi-global matcher alone' are the matcher's output with its "
-               "half-occluded pixels filled, restored by no MRF, with and without its median filter; every other "
+               "half-occluded pixels filled, restored by no MRF, with and without its median filter and its weighted "
+               "median at depth jumps; every other "
                "row is the whole depth machine with the Config's stereo section changed as named."), "",
               "| stage | " + " | ".join(f"{n} bad 1 | {n} bad 0.5" for n in names) + " |",
               "|---" * (1 + 2 * len(names)) + "|"]

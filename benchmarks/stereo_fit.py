@@ -1,6 +1,6 @@
 """Fit the stereo cue's defaults on the training pairs: the semi-global matcher's census margin and
-smoothness prices, whether the feature matcher still earns its place beside it, then the stereo MRF's
-weights on those matches.
+smoothness prices, whether the feature matcher still earns its place beside it, the weighted median at
+depth jumps, then the stereo MRF's weights on those matches.
 
 Run: python benchmarks/stereo_fit.py
 
@@ -8,12 +8,14 @@ Every combination of the grid below runs the Vision Machine (stereo only, every 
 default) on every training pair of benchmarks/stereo_training.py: the rendered scenes and Middlebury
 sawtooth and map, never a pair a benchmark reports. A combination's score is the mean of two means of
 the restored disparity's bad-1 rate (on the evaluated pixels), over the rendered pairs and over the real
-ones, which weigh equally so that the many rendered pairs do not decide alone. Two stages, each a grid: the
-matcher's (GRID), whose best combination gives vmcl.early.semiglobal's CENSUS_THRESHOLD, P1, P2, EDGE_GAIN
-and StereoConfig's feature_matches; then, with those, the MRF's (MRF_GRID): the weight of the matches in the
-MRF's data (StereoConfig.backfill_weight) and the stereo MRF's alpha and beta (vmcl.mrf.presets.STEREO,
-which was measured on sparse edge matches). Writes benchmarks/results/stereo_fit.md, every combination of
-each stage, best first.
+ones, which weigh equally so that the many rendered pairs do not decide alone. Three stages, each a grid:
+the matcher's (GRID, the weighted median at jumps off), whose best combination gives
+vmcl.early.semiglobal's CENSUS_THRESHOLD, P1, P2, EDGE_GAIN and StereoConfig's feature_matches; then, with
+those, the weighted median's (REFINE_GRID: off, or its radius and colour scale), which gives
+StereoConfig's refine and vmcl.early.semiglobal's REFINE_RADIUS and REFINE_COLOUR; then the MRF's
+(MRF_GRID): the weight of the matches in the MRF's data (StereoConfig.backfill_weight) and the stereo
+MRF's alpha and beta (vmcl.mrf.presets.STEREO, which was measured on sparse edge matches). Writes
+benchmarks/results/stereo_fit.md, every combination of each stage, best first.
 """
 
 from __future__ import annotations
@@ -32,6 +34,8 @@ from vmcl.pipeline import Config, VisionMachine
 
 GRID = {"feature_matches": (True, False), "census_threshold": (2.0, 3.0, 4.0), "p1": (32, 48, 64),
         "p2": (64.0, 96.0, 128.0), "edge_gain": (0.0, 0.1)}
+REFINE_GRID = [{"refine": False}] + [{"refine": True, "refine_radius": radius, "refine_colour": colour}
+                                     for radius in (5, 9, 13) for colour in (0.05, 0.1, 0.2)]
 MRF_GRID = {"backfill_weight": (0.2, 1.0), "alpha": (0.25, 1.0, 4.0), "beta": (0.5, 2.0, 8.0)}
 ONLY_STEREO = {"motion": {"enabled": False}, "colour": {"enabled": False}, "texture": {"enabled": False}}
 
@@ -44,21 +48,24 @@ def score(machine: vmcl.Machine, rendered: list, real: list, config: dict) -> tu
     return (float(np.mean(rates[:len(rendered)])) + float(np.mean(rates[len(rendered):]))) / 2, rates
 
 
-def stage(machine: vmcl.Machine, rendered: list, real: list, grid: dict, config) -> list[tuple]:
-    """(score, values, rates) of every combination of ``grid``, best first; ``config(values)`` makes its
-    Config dictionary."""
+def stage(machine: vmcl.Machine, rendered: list, real: list, grid: dict | list[dict], config) -> list[tuple]:
+    """(score, values, rates) of every combination of ``grid`` (a dictionary of each key's values, or a list
+    of the combinations), best first; ``config(values)`` makes its Config dictionary."""
+    combinations = grid if isinstance(grid, list) else [dict(zip(grid, values))
+                                                         for values in itertools.product(*grid.values())]
     rows = []
-    for values in itertools.product(*grid.values()):
-        found, rates = score(machine, rendered, real, config(dict(zip(grid, values))))
+    for values in combinations:
+        found, rates = score(machine, rendered, real, config(values))
         rows.append((found, values, rates))
-        print(f"{dict(zip(grid, values))}: {found:.4f}", file=sys.stderr)
+        print(f"{values}: {found:.4f}", file=sys.stderr)
     return sorted(rows, key=lambda row: row[0])
 
 
-def table(grid: dict, rows: list[tuple], names: list[str]) -> list[str]:
-    lines = ["| score | " + " | ".join(grid) + " | " + " | ".join(names) + " |",
-             "|---" * (1 + len(grid) + len(names)) + "|"]
-    return lines + [f"| {found:.4f} | " + " | ".join(str(v) for v in values) + " | "
+def table(rows: list[tuple], names: list[str]) -> list[str]:
+    keys = list(dict.fromkeys(key for _, values, _ in rows for key in values))
+    lines = ["| score | " + " | ".join(keys) + " | " + " | ".join(names) + " |",
+             "|---" * (1 + len(keys) + len(names)) + "|"]
+    return lines + [f"| {found:.4f} | " + " | ".join(str(values.get(key, "-")) for key in keys) + " | "
                     + " | ".join(f"{r:.3f}" for r in rates) + " |" for found, values, rates in rows]
 
 
@@ -66,8 +73,10 @@ def main() -> int:
     machine = vmcl.Machine()
     rendered, real = rendered_pairs(), middlebury_pairs()
     names = [p.name for p in rendered + real]
-    matcher = stage(machine, rendered, real, GRID, lambda values: {"stereo": values})
-    chosen = dict(zip(GRID, matcher[0][1]))
+    matcher = stage(machine, rendered, real, GRID, lambda values: {"stereo": {**values, "refine": False}})
+    chosen = matcher[0][1]
+    refinement = stage(machine, rendered, real, REFINE_GRID, lambda values: {"stereo": {**chosen, **values}})
+    chosen = {**chosen, **refinement[0][1]}
     weights = stage(machine, rendered, real, MRF_GRID, lambda values: {
         "stereo": {**chosen, "backfill_weight": values["backfill_weight"]},
         "mrf": {"stereo": {"alpha": values["alpha"], "beta": values["beta"]}}})
@@ -75,8 +84,9 @@ def main() -> int:
              (f"Measured {datetime.datetime.now():%Y-%m-%d %H:%M}. The Vision Machine, stereo only, each pair's "
               "range found from the images. Score: the mean of the rendered pairs' mean and the real pairs' "
               "mean of the restored disparity's bad-1. Best first; each stage's first row gives the defaults."),
-             "", "## Stage 1: the matcher", "", *table(GRID, matcher, names), "",
-             f"## Stage 2: the MRF's weights, with {chosen}", "", *table(MRF_GRID, weights, names)]
+             "", "## Stage 1: the matcher (the weighted median at depth jumps off)", "", *table(matcher, names), "",
+             f"## Stage 2: the weighted median at depth jumps, with {matcher[0][1]}", "", *table(refinement, names),
+             "", f"## Stage 3: the MRF's weights, with {chosen}", "", *table(weights, names)]
     out = Path(__file__).resolve().parent / "results" / "stereo_fit.md"
     out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines[:10]))

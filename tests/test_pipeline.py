@@ -215,6 +215,29 @@ def test_soft_map_of_one_image_is_its_probability_of_boundary(small_scene, machi
     assert result.boundary_strength.dtype == np.float32
 
 
+@pytest.mark.parametrize("method", ["linear", "rule"])
+def test_without_the_image_probability_the_stage_is_left_out_and_the_rest_unchanged(small_scene, machine, method):
+    """labels.boundary_probability = false skips the stage "boundaries"; the fields and labels are those of a
+    full run, and the strength is the classifier's (or, for the rule labels, the candidates themselves)."""
+    full = VisionMachine(Config.from_dict({"labels": {"method": method}}), machine=machine).run(
+        small_scene.left, small_scene.right)
+    config = Config.from_dict({"labels": {"method": method, "boundary_probability": False}})
+    vm = VisionMachine(config, machine=machine)
+    found = vm.run(small_scene.left, small_scene.right)
+    assert "boundaries" not in found.stages
+    assert list(found.stages) == vm.stages(right=True, next=False, rgb=small_scene.left.ndim == 3)
+    np.testing.assert_array_equal(found.disparity, full.disparity)
+    np.testing.assert_array_equal(found.labels, full.labels)
+    if method == "rule":
+        np.testing.assert_array_equal(found.boundary_strength, (found.support != 0).astype(np.float32))
+    else:  # the classifier's support for some discontinuity at the candidates, 0 elsewhere
+        candidates = found.support != 0
+        assert candidates.sum() > 100
+        assert not found.boundary_strength[~candidates].any()
+        assert 0 < found.boundary_strength[candidates].min() and found.boundary_strength.max() <= 1
+        assert not np.array_equal(found.boundary_strength, full.boundary_strength)
+
+
 def test_soft_map_adds_the_classifier_where_stereo_or_motion_lines_are(cues_scene, cues_run, machine):
     from vmcl.early.boundary_probability import boundary_probability
 

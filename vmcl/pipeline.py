@@ -499,10 +499,18 @@ class LabelsConfig:
         A JSON file of :class:`vmcl.labelling.LinearLabeller` weights (relative to the working
         directory), read and checked when the Config is made; None: the fitted ones shipped. Only
         "linear" uses them.
+    boundary_probability : bool
+        Run the stage "boundaries": the left image's probability of boundary
+        (:func:`vmcl.early.boundary_probability.boundary_probability`), which the soft map
+        ``Result.boundary_strength`` follows (True, the default). False leaves it out (a run that wants
+        no soft map, e.g. depth alone, saves its time): the strength is then the linear classifier's
+        support at the candidates and 0 elsewhere (the "rule" method's, the candidates themselves). The
+        labels do not depend on it.
     """
 
     method: str = "linear"
     weights: str | None = None
+    boundary_probability: bool = True
 
     def __post_init__(self):
         _check_field_types("labels", self)
@@ -762,7 +770,8 @@ class VisionMachine:
         active = self.cues(right=right, next=next, rgb=rgb)
         carried = ["time"] if streaming and self.config.time.enabled else []
         grouping = ["grouping"] if self.config.grouping.enabled or self.config.edges.saliency != "none" else []
-        names = ["upload", *carried, "edges", *grouping, "boundaries", *(cue.name for cue in active)]
+        boundaries = ["boundaries"] if self.config.labels.boundary_probability else []
+        names = ["upload", *carried, "edges", *grouping, *boundaries, *(cue.name for cue in active)]
         for cue in active:
             names += [f"mrf {cue.name}"] + [stage for stage in [cue.refine_stage(self.config)] if stage]
         return names + ["integrate", "download"] + (["recognition"] if self.library is not None else [])
@@ -920,8 +929,11 @@ class _Run:
         if self.c.grouping.enabled or e.saliency != "none":
             with self.stage("grouping"):
                 self.grouping, brightness = self.group(image, canny)
-        with self.stage("boundaries"):
-            image_boundaries = on_device(boundary_probability.boundary_probability(left, machine=self.m).probability)
+        image_boundaries = None
+        if self.c.labels.boundary_probability:
+            with self.stage("boundaries"):
+                image_boundaries = on_device(boundary_probability.boundary_probability(left,
+                                                                                       machine=self.m).probability)
         run = RunInputs(self.m, self.c, left, others_d.get("right"), others_d.get("next"), brightness)
         measured = {}
         for cue in active:
@@ -966,7 +978,9 @@ class _Run:
             host_restored = {cue: array.get() for cue, array in restored.items()}
             host_lines = {cue: (h.get().astype(bool), v.get().astype(bool)) for cue, (h, v) in lines.items()}
             edge_map, host_support, host_labels = brightness.get(), support.get(), labels.get()
-            host_strength = strength.get()
+            # Without the image's probability the "rule" labels leave no strength: the candidates are it.
+            host_strength = (strength.get() if strength is not None
+                             else (host_support != 0).astype(np.float32))
         as_bool = ("colour_edges", "texture_edges", "stereo_discontinuity", "half_occluded", "out_of_range")
         host = {name: (value.astype(bool) if name in as_bool else value) for name, value in host.items()}
         for cue in active:

@@ -49,6 +49,7 @@ from vmcl.metrics import evaluate_disparity
 
 __all__ = [
     "BM_BLOCK",
+    "DEPTH_ONLY",
     "SGBM_BLOCK",
     "SGBM_MODES",
     "THRESHOLDS",
@@ -78,6 +79,11 @@ SGBM_MODES = {"MODE_SGBM": cv2.STEREO_SGBM_MODE_SGBM, "3WAY": cv2.STEREO_SGBM_MO
 """StereoSGBM's modes compared: OpenCV's default (5 directions) and its faster 3-way variant."""
 THRESHOLDS = (0.5, 1.0, 2.0)
 """The bad-pixel thresholds reported, in pixels."""
+
+DEPTH_ONLY = {"motion": {"enabled": False}, "colour": {"enabled": False}, "texture": {"enabled": False},
+              "grouping": {"enabled": False}, "labels": {"boundary_probability": False}}
+"""The Config (as :meth:`vmcl.pipeline.Config.from_dict` takes it) of the depth-only machine the evaluation
+runs: stereo with its defaults and nothing the disparity does not depend on."""
 
 _CN = 1  # channels of the images OpenCV's matchers are given (grey)
 _KNOWN = "known"  # the region of a scene without masks: every pixel of known disparity
@@ -291,8 +297,8 @@ def vmcl_method(config=None, *, machine: Machine | None = None) -> StereoMethod:
     Parameters
     ----------
     config : vmcl.pipeline.Config, optional
-        Default: stereo with its defaults, every other cue switched off (an evaluation runs what it
-        measures). The stereo section finds its disparity range from the images unless the config sets
+        Default: stereo with its defaults, every other cue, the grouping and the image's probability of
+        boundary switched off (an evaluation runs what it measures: none of them changes the disparity). The stereo section finds its disparity range from the images unless the config sets
         one (the note says which).
     machine : vmcl.Machine, optional
         As :class:`vmcl.pipeline.VisionMachine` takes it.
@@ -302,11 +308,10 @@ def vmcl_method(config=None, *, machine: Machine | None = None) -> StereoMethod:
     StereoMethod
         "vmcl (dense, MRF)"; one VisionMachine serves every pair.
     """
-    from vmcl.pipeline import ColourConfig, Config, MotionConfig, StereoConfig, TextureConfig, VisionMachine
+    from vmcl.pipeline import Config, VisionMachine
 
     if config is None:
-        config = Config(stereo=StereoConfig(), motion=MotionConfig(enabled=False), colour=ColourConfig(enabled=False),
-                        texture=TextureConfig(enabled=False))
+        config = Config.from_dict(DEPTH_ONLY)
     elif not isinstance(config, Config):
         raise InputTypeError(f"config must be a vmcl.pipeline.Config or None, got {type(config).__name__}")
     if not config.stereo.enabled:
