@@ -24,8 +24,8 @@
 
 __kernel void weighted_median(__global const float *values, __global const uchar *voters,
                               __global const uchar *where, __global const IN_T *image, __global float *out,
-                              long W, long H, int radius, float inv_colour, float inv_space, float scale,
-                              float low, float step, int bins)
+                              long W, long H, int radius, float inv_colour, __global const float *spatial,
+                              float scale, float low, float step, int bins)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -37,7 +37,9 @@ __kernel void weighted_median(__global const float *values, __global const uchar
     float centre[CHANNELS];
     for (int c = 0; c < CHANNELS; c++) centre[c] = scale * (float)image[i * CHANNELS + c];
     float total = 0.0f;
+    int side = 2 * radius + 1;
     for (long yy = max(y - radius, (long)0); yy <= min(y + radius, H - 1); yy++) {
+        __global const float *row = spatial + (yy - y + radius) * side + radius - x;
         for (long xx = max(x - radius, (long)0); xx <= min(x + radius, W - 1); xx++) {
             size_t j = yy * W + xx;
             float v = values[j];
@@ -47,8 +49,7 @@ __kernel void weighted_median(__global const float *values, __global const uchar
                 float d = scale * (float)image[j * CHANNELS + c] - centre[c];
                 colour += d * d;
             }
-            float w = exp(-sqrt(colour) * inv_colour
-                          - sqrt((float)((xx - x) * (xx - x) + (yy - y) * (yy - y))) * inv_space);
+            float w = row[xx] * exp(-sqrt(colour) * inv_colour);
             int b = clamp((int)floor((v - low) / step), 0, bins - 1);
             weight[b] += w;
             sum[b] += w * v;

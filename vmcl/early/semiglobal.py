@@ -64,16 +64,16 @@ DIRECTIONS = {8: ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (
 # results/stereo_fit.md gives every combination tried): never on a pair a benchmark reports.
 CENSUS_THRESHOLD = 3.0
 """Default census margin, in units of the noise's standard deviation."""
-P1 = 32
+P1 = 48
 """Default price of a change of one disparity between neighbours, in census bits."""
 P2 = 64.0
 """Default price of a jump where the brightness does not change, in census bits."""
-EDGE_GAIN = 0.1
+EDGE_GAIN = 0.0
 """Default lowering of the jump's price per unit of noise in the brightness change."""
 
 REFINE_RADIUS = 9
 """Default radius of the weighted median's window at depth jumps, in pixels (its spatial scale too)."""
-REFINE_COLOUR = 0.1
+REFINE_COLOUR = 0.05
 """Default colour distance (in [0, 1] levels) at which a voter of the weighted median weighs 1/e."""
 JUMP = 1.5
 """Neighbours differing by more than this many pixels of disparity mark a jump the weighted median refines."""

@@ -114,11 +114,17 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
                          machine)
     voting = flags_field(np.ones((height, width), np.uint8) if voters is None else voters, (height, width), "voters",
                          machine)
+    reach = min(radius, max(height, width) - 1)  # no window reaches further than the image
+    side = 2 * reach + 1
+    machine.require_memory(f"a weighted median's table of {side} x {side} spatial weights", 4 * side * side,
+                           4 * side * side)
+    offsets = np.arange(-reach, reach + 1, dtype=np.float64)
+    spatial = np.exp(-np.hypot(offsets[:, None], offsets[None, :]) / sigma_space).astype(np.float32)
     out = machine.empty((height, width), np.float32)
     kernel = machine.kernel("weighted_median", "weighted_median", IN_T=IMAGE_TYPES[picture.dtype],
                             CHANNELS=3 if picture.ndim == 3 else 1, NBINS=_BIN_STEP * math.ceil(bins / _BIN_STEP))
     machine.launch(kernel, (width, height), data, voting, chosen, picture, out, np.int64(width), np.int64(height),
-                   np.int32(min(radius, max(height, width))), np.float32(1 / sigma_colour), np.float32(1 / sigma_space),
+                   np.int32(reach), np.float32(1 / sigma_colour), machine.to_device(spatial),
                    np.float32(1 / _LEVELS[picture.dtype]), np.float32(low - 0.5 * step), np.float32(step),
                    np.int32(bins))
     return result(out, host)
