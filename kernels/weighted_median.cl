@@ -25,7 +25,7 @@
 __kernel void weighted_median(__global const float *values, __global const uchar *voters,
                               __global const uchar *where, __global const IN_T *image, __global float *out,
                               long W, long H, int radius, float inv_colour, __global const float *spatial,
-                              float scale, float low, float step, int bins)
+                              float scale, float low, float step, int bins, int stride)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -38,9 +38,11 @@ __kernel void weighted_median(__global const float *values, __global const uchar
     for (int c = 0; c < CHANNELS; c++) centre[c] = scale * (float)image[i * CHANNELS + c];
     float total = 0.0f;
     int side = 2 * radius + 1;
-    for (long yy = max(y - radius, (long)0); yy <= min(y + radius, H - 1); yy++) {
+    /* The window's rows and columns at multiples of `stride` from the centre's. */
+    long top = y - (min(y, (long)radius) / stride) * stride, first = x - (min(x, (long)radius) / stride) * stride;
+    for (long yy = top; yy <= min(y + radius, H - 1); yy += stride) {
         __global const float *row = spatial + (yy - y + radius) * side + radius - x;
-        for (long xx = max(x - radius, (long)0); xx <= min(x + radius, W - 1); xx++) {
+        for (long xx = first; xx <= min(x + radius, W - 1); xx += stride) {
             size_t j = yy * W + xx;
             float v = values[j];
             if (!voters[j] || isnan(v)) continue;

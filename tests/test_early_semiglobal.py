@@ -174,7 +174,8 @@ def test_refinement_is_the_weighted_median_near_jumps(machine):
     match is unchanged."""
     scene = _occluding_plate()
     raw = match_semiglobal(scene.left, scene.right, refine=False, machine=machine)
-    found = match_semiglobal(scene.left, scene.right, refine_radius=5, refine_colour=0.2, machine=machine)
+    found = match_semiglobal(scene.left, scene.right, refine_radius=5, refine_colour=0.2, refine_stride=2,
+                             machine=machine)
     for name in ("disparity", "occluded", "mismatched", "out_of_range"):
         np.testing.assert_array_equal(getattr(found, name), getattr(raw, name))
     filled = raw.filled
@@ -189,7 +190,7 @@ def test_refinement_is_the_weighted_median_near_jumps(machine):
     assert where.sum() > 300
     want = weighted_median(filled, scene.left, low=raw.d_min, high=raw.d_max, where=where,
                            voters=~raw.occluded & np.isfinite(filled), radius=5, sigma_colour=0.2, sigma_space=5.0,
-                           machine=machine)
+                           stride=2, machine=machine)
     np.testing.assert_array_equal(found.filled, want)
 
 

@@ -8,7 +8,7 @@ from vmcl.early.weighted_median import MAX_BINS, weighted_median
 from vmcl.errors import InputTypeError, InputValueError
 
 
-def _oracle(values, image, where, voters, low, high, radius, sigma_colour, sigma_space):
+def _oracle(values, image, where, voters, low, high, radius, sigma_colour, sigma_space, stride=1):
     """The definition, pixel by pixel in float64."""
     height, width = values.shape
     levels = image.astype(np.float64) / (255.0 if image.dtype == np.uint8 else 1.0)
@@ -20,7 +20,7 @@ def _oracle(values, image, where, voters, low, high, radius, sigma_colour, sigma
         ws, vs = [], []
         for yy in range(max(0, y - radius), min(height, y + radius + 1)):
             for xx in range(max(0, x - radius), min(width, x + radius + 1)):
-                if not voters[yy, xx] or np.isnan(values[yy, xx]):
+                if (yy - y) % stride or (xx - x) % stride or not voters[yy, xx] or np.isnan(values[yy, xx]):
                     continue
                 ws.append(np.exp(-np.linalg.norm(levels[yy, xx] - levels[y, x]) / sigma_colour
                                  - np.hypot(xx - x, yy - y) / sigma_space))
@@ -35,8 +35,9 @@ def _oracle(values, image, where, voters, low, high, radius, sigma_colour, sigma
     return want
 
 
-@pytest.mark.parametrize(("channels", "low", "high"), [(3, 0.0, 10.0), (1, -3.0, 40.0)])
-def test_matches_numpy_oracle(channels, low, high, machine):
+@pytest.mark.parametrize(("channels", "low", "high", "stride"), [(3, 0.0, 10.0, 1), (1, -3.0, 40.0, 1), (3, 0.0, 10.0, 2),
+                                                                  (1, -3.0, 40.0, 3)])
+def test_matches_numpy_oracle(channels, low, high, stride, machine):
     rng = np.random.default_rng(channels)
     values = rng.uniform(low, high, (30, 41)).astype(np.float32)
     values[rng.uniform(size=values.shape) < 0.05] = np.nan
@@ -45,8 +46,8 @@ def test_matches_numpy_oracle(channels, low, high, machine):
     where = rng.uniform(size=values.shape) < 0.4
     voters = rng.uniform(size=values.shape) < 0.8
     found = weighted_median(values, image, low=low, high=high, where=where, voters=voters, radius=3,
-                            sigma_colour=0.2, sigma_space=3.0, machine=machine)
-    want = _oracle(values, image, where, voters, low, high, 3, 0.2, 3.0)
+                            sigma_colour=0.2, sigma_space=3.0, stride=stride, machine=machine)
+    want = _oracle(values, image, where, voters, low, high, 3, 0.2, 3.0, stride)
     np.testing.assert_array_equal(np.isnan(found), np.isnan(want))
     np.testing.assert_allclose(found[~np.isnan(want)], want[~np.isnan(want)], atol=2e-5)
     np.testing.assert_array_equal(found[~where], values[~where])
@@ -88,6 +89,7 @@ def test_a_pixel_without_voters_keeps_its_value(machine):
     ({"radius": 0}, InputValueError, "radius"),
     ({"sigma_colour": 0.0}, InputValueError, "sigma_colour"),
     ({"sigma_space": -1.0}, InputValueError, "sigma_space"),
+    ({"stride": 0}, InputValueError, "stride"),
     ({"where": np.zeros((3, 3), bool)}, InputValueError, "where"),
     ({"voters": "all"}, InputTypeError, "voters"),
     ({"image": np.zeros((6, 5), np.float32)}, InputValueError, "image"),

@@ -256,7 +256,7 @@ class StereoConfig:
     census_threshold, p1, p2, edge_gain
         The semi-global matcher's census margin and smoothness prices, as
         :func:`vmcl.early.semiglobal.match_semiglobal` takes them.
-    refine, refine_radius, refine_colour
+    refine, refine_radius, refine_colour, refine_stride
         The semi-global matcher's weighted median at depth jumps (pixels near a jump take the median of
         the confirmed disparities of their own colour around them), as
         :func:`vmcl.early.semiglobal.match_semiglobal` takes them.
@@ -293,6 +293,7 @@ class StereoConfig:
     refine: bool = True
     refine_radius: int = semiglobal.REFINE_RADIUS
     refine_colour: float = semiglobal.REFINE_COLOUR
+    refine_stride: int = semiglobal.REFINE_STRIDE
     shiftable: bool = True
     intensity_sigma: float = 1.0
 
@@ -318,6 +319,7 @@ class StereoConfig:
         check_real(self.edge_gain, "stereo.edge_gain", minimum=0)
         check_int(self.refine_radius, "stereo.refine_radius", minimum=1)
         check_real(self.refine_colour, "stereo.refine_colour", above=0)
+        check_int(self.refine_stride, "stereo.refine_stride", minimum=1, maximum=2**31 - 1)
         if not self.feature_matches and not self.backfill:
             raise InputValueError("stereo: feature_matches and backfill are both off, which leaves no matcher")
         if not 0 < self.intensity_sigma < math.inf:

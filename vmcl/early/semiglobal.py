@@ -50,7 +50,7 @@ from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 __all__ = ["CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "JUMP", "P1", "P2", "POOR_MATCH",
-           "REFINE_COLOUR", "REFINE_RADIUS", "SemiGlobalMatch", "match_semiglobal"]
+           "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "SemiGlobalMatch", "match_semiglobal"]
 
 CENSUS_SIZE = (9, 7)  # width, height of the census window: 62 neighbours in a 64-bit code
 CENSUS_BITS = CENSUS_SIZE[0] * CENSUS_SIZE[1] - 1
@@ -75,6 +75,8 @@ REFINE_RADIUS = 9
 """Default radius of the weighted median's window at depth jumps, in pixels (its spatial scale too)."""
 REFINE_COLOUR = 0.05
 """Default colour distance (in [0, 1] levels) at which a voter of the weighted median weighs 1/e."""
+REFINE_STRIDE = 1
+"""Default step between the weighted median's voters, in pixels (2: a quarter of the window votes)."""
 JUMP = 1.5
 """Neighbours differing by more than this many pixels of disparity mark a jump the weighted median refines."""
 
@@ -126,6 +128,7 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
                      edge_gain: float = EDGE_GAIN, paths: int = 8,
                      subpixel: bool = True, tolerance: int = 1, median: bool = True, refine: bool = True,
                      refine_radius: int = REFINE_RADIUS, refine_colour: float = REFINE_COLOUR,
+                     refine_stride: int = REFINE_STRIDE,
                      machine: Machine | None = None
                      ) -> SemiGlobalMatch:
     """Match a rectified pair densely: census costs, min-sum messages along scanlines, both views checked.
@@ -175,6 +178,8 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         >= 1: the weighted median's window radius, and its spatial scale, in pixels.
     refine_colour : float
         > 0: its colour scale (levels in [0, 1]).
+    refine_stride : int
+        >= 1: the step between its voters (its ``stride``).
     machine : vmcl.Machine, optional
 
     Returns
@@ -209,6 +214,7 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     height, width = left.shape[:2]
     refine_radius = check_int(refine_radius, "refine_radius", minimum=1, maximum=2**31 - 1)
     refine_colour = check_real(refine_colour, "refine_colour", above=0)
+    refine_stride = check_int(refine_stride, "refine_stride", minimum=1, maximum=2**31 - 1)
     d_min, d_max = _range(left, right, d_min, d_max, machine)
     depth = d_max - d_min + 1
     cells = height * width * _LANES * math.ceil(depth / _LANES)
@@ -222,7 +228,8 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     found = _select(machine, sums, costs, dims, d_min, depth, subpixel, tolerance, median)
     disparity, filled, occluded, mismatched, out_of_range = found
     if refine:
-        filled = _refine(machine, filled, occluded, images[0], d_min, d_max, refine_radius, refine_colour)
+        filled = _refine(machine, filled, occluded, images[0], d_min, d_max, refine_radius, refine_colour,
+                         refine_stride)
     return SemiGlobalMatch(disparity.get() if host else disparity, filled.get() if host else filled,
                            mask_result(occluded, host), mask_result(mismatched, host), mask_result(out_of_range, host),
                            d_min=d_min, d_max=d_max)
@@ -280,7 +287,7 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
 
 
 def _refine(machine: Machine, filled: cl_array.Array, occluded: cl_array.Array, left: cl_array.Array, d_min: int,
-            d_max: int, radius: int, colour: float) -> cl_array.Array:
+            d_max: int, radius: int, colour: float, stride: int) -> cl_array.Array:
     """``filled`` with the pixels near its depth jumps, and those without a value, given the weighted median
     of the kept disparities around them (half-occluded pixels keep theirs)."""
     height, width = filled.shape
@@ -292,7 +299,7 @@ def _refine(machine: Machine, filled: cl_array.Array, occluded: cl_array.Array, 
     machine.launch(machine.kernel("semiglobal", "refine_targets"), (width, height), filled, occluded, near, where,
                    voters, *dims)
     refined = weighted_median(filled, left, low=d_min, high=d_max, where=where, voters=voters, radius=radius,
-                              sigma_colour=colour, sigma_space=float(radius), machine=machine)
+                              sigma_colour=colour, sigma_space=float(radius), stride=stride, machine=machine)
     assert isinstance(refined, cl_array.Array)  # device values in, device values out
     return refined
 
