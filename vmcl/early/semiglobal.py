@@ -75,7 +75,7 @@ REFINE_RADIUS = 9
 """Default radius of the weighted median's window at depth jumps, in pixels (its spatial scale too)."""
 REFINE_COLOUR = 0.05
 """Default colour distance (in [0, 1] levels) at which a voter of the weighted median weighs 1/e."""
-REFINE_STRIDE = 1
+REFINE_STRIDE = 2
 """Default step between the weighted median's voters, in pixels (2: a quarter of the window votes)."""
 JUMP = 1.5
 """Neighbours differing by more than this many pixels of disparity mark a jump the weighted median refines."""
