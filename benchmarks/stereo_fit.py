@@ -102,7 +102,8 @@ def main() -> int:
     lines = ["# The stereo cue's defaults, fitted on the training pairs", "",
              (f"Measured {datetime.datetime.now():%Y-%m-%d %H:%M}. The Vision Machine, stereo only, each pair's "
               "range found from the images. Score: the mean of the rendered pairs' mean and the real pairs' "
-              "mean of the restored disparity's bad-1. Best first; each stage's first row gives the defaults."),
+              "mean of the restored disparity's bad-1. Best first; the first row of stages 1 and 3 gives the "
+              "defaults, stage 2 says its choice."),
              "", "## Stage 1: the matcher (the weighted median at depth jumps off)", "", *table(matcher, names), "",
              f"## Stage 2: the weighted median at depth jumps, with {matcher[0][1]}", "",
              (f"Chosen: the fewest voters per refined pixel among the settings within {REFINE_TOLERANCE} of the best "

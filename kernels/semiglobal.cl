@@ -323,7 +323,7 @@ __kernel void fill_occluded(__global const float *disparity, __global uchar *occ
 /* The pixels the weighted median refines (vmcl/early/weighted_median.py) and those that vote. A census
  * window straddling a depth edge carries the nearer surface's disparity up to half its width over the
  * farther one: every pixel within that band of a jump of `filled` (neighbours differing by more than
- * `jump`, or one without a value beside one with) is refined, as is every pixel without a value;
+ * `jump`, or one without a value beside one with) is refined, as is every mismatched pixel;
  * half-occluded pixels keep their background's value. The kept (confirmed) pixels vote.
  *
  * jump_flags marks each pixel whose right or lower neighbour makes a jump with it; the host sums the
@@ -343,12 +343,13 @@ __kernel void jump_flags(__global const float *filled, __global int *flags, long
 }
 
 __kernel void refine_targets(__global const float *filled, __global const uchar *occluded,
-                             __global const int *near, __global uchar *where, __global uchar *voters, long W,
-                             long H)
+                             __global const uchar *out_of_range, __global const int *near, __global uchar *where,
+                             __global uchar *voters, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     size_t i = y * W + x;
     voters[i] = !occluded[i] && !isnan(filled[i]);
-    where[i] = !occluded[i] && (isnan(filled[i]) || near[i] > 0);
+    /* Out-of-range pixels stay unmatched: their match lies beyond the range, which no neighbour knows. */
+    where[i] = !occluded[i] && !out_of_range[i] && (isnan(filled[i]) || near[i] > 0);
 }

@@ -170,7 +170,7 @@ def test_half_occluded_pixels_are_found(machine):
 
 def test_refinement_is_the_weighted_median_near_jumps(machine):
     """refine=True gives the pixels within half a census window of a jump of ``filled`` (or without a value),
-    except the half-occluded, the weighted median of the kept disparities around them; the rest of the
+    except the half-occluded and out-of-range ones, the weighted median of the kept disparities around them; the rest of the
     match is unchanged."""
     scene = _occluding_plate()
     raw = match_semiglobal(scene.left, scene.right, refine=False, machine=machine)
@@ -186,7 +186,7 @@ def test_refinement_is_the_weighted_median_near_jumps(machine):
     padded = np.pad(pairs, band)
     near = sum(padded[dy:dy + filled.shape[0], dx:dx + filled.shape[1]]
                for dy in range(2 * band + 1) for dx in range(2 * band + 1)) > 0
-    where = ~raw.occluded & (near | np.isnan(filled))
+    where = ~raw.occluded & ~raw.out_of_range & (near | np.isnan(filled))
     assert where.sum() > 300
     want = weighted_median(filled, scene.left, low=raw.d_min, high=raw.d_max, where=where,
                            voters=~raw.occluded & np.isfinite(filled), radius=5, sigma_colour=0.2, sigma_space=5.0,
@@ -216,6 +216,25 @@ def test_refinement_gives_depth_edges_back_to_the_brightness_edges(machine):
            for m in (match_semiglobal(scene.left, scene.right, refine=refine, machine=machine)
                      for refine in (False, True))]
     assert bad[1] < 0.6 * bad[0], bad
+
+
+def test_refinement_leaves_out_of_range_pixels_without_a_value(machine):
+    """Out-of-range pixels (the plate beyond a range cut at 15) are unmatched, refined or not."""
+    scene = _occluding_plate()
+    found = match_semiglobal(scene.left, scene.right, d_min=0, d_max=15, machine=machine)
+    assert found.out_of_range.sum() > 100
+    assert not np.isfinite(found.filled[found.out_of_range]).any()
+
+
+def test_refinement_refuses_float_images_off_the_unit_scale(machine):
+    """The weighted median's colour scale is in [0, 1] levels: a float pair in 0..255 is refused by name (the
+    census alone does not care, so refine=False takes it)."""
+    left, right = _textured_pair(shape=(24, 40), seed=2)
+    with pytest.raises(InputValueError, match="left: float images hold brightness in"):
+        match_semiglobal(255 * left, 255 * right, d_min=0, d_max=6, machine=machine)
+    plain = match_semiglobal(255 * left, 255 * right, d_min=0, d_max=6, refine=False, machine=machine)
+    unit = match_semiglobal(left, right, d_min=0, d_max=6, refine=False, machine=machine)
+    np.testing.assert_array_equal(plain.filled, unit.filled)
 
 
 def test_disparities_beyond_the_range_are_flagged_out_of_range(machine):

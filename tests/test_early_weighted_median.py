@@ -11,7 +11,7 @@ from vmcl.errors import InputTypeError, InputValueError
 def _oracle(values, image, where, voters, low, high, radius, sigma_colour, sigma_space, stride=1):
     """The definition, pixel by pixel in float64."""
     height, width = values.shape
-    levels = image.astype(np.float64) / (255.0 if image.dtype == np.uint8 else 1.0)
+    levels = image.astype(np.float64) / {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}.get(image.dtype, 1.0)
     levels = levels.reshape(height, width, -1)
     step = max(1.0, float(np.ceil((high - low + 1) / MAX_BINS)))
     bins = min(MAX_BINS, int(np.ceil((high - low + 1) / step)) + 1)
@@ -35,14 +35,16 @@ def _oracle(values, image, where, voters, low, high, radius, sigma_colour, sigma
     return want
 
 
-@pytest.mark.parametrize(("channels", "low", "high", "stride"), [(3, 0.0, 10.0, 1), (1, -3.0, 40.0, 1), (3, 0.0, 10.0, 2),
-                                                                  (1, -3.0, 40.0, 3)])
-def test_matches_numpy_oracle(channels, low, high, stride, machine):
+@pytest.mark.parametrize(("channels", "low", "high", "stride", "dtype"), [
+    (3, 0.0, 10.0, 1, np.uint8), (1, -3.0, 40.0, 1, np.uint8), (3, 0.0, 10.0, 2, np.uint16), (1, -3.0, 40.0, 3, np.uint8),
+    (3, 0.0, 10.0, 1, np.float32)])
+def test_matches_numpy_oracle(channels, low, high, stride, dtype, machine):
     rng = np.random.default_rng(channels)
     values = rng.uniform(low, high, (30, 41)).astype(np.float32)
     values[rng.uniform(size=values.shape) < 0.05] = np.nan
     shape = (30, 41, 3) if channels == 3 else (30, 41)
-    image = rng.integers(0, 256, shape).astype(np.uint8)
+    image = (rng.uniform(0, 1, shape).astype(np.float32) if dtype == np.float32
+             else rng.integers(0, np.iinfo(dtype).max + 1, shape).astype(dtype))
     where = rng.uniform(size=values.shape) < 0.4
     voters = rng.uniform(size=values.shape) < 0.8
     found = weighted_median(values, image, low=low, high=high, where=where, voters=voters, radius=3,
@@ -90,6 +92,8 @@ def test_a_pixel_without_voters_keeps_its_value(machine):
     ({"sigma_colour": 0.0}, InputValueError, "sigma_colour"),
     ({"sigma_space": -1.0}, InputValueError, "sigma_space"),
     ({"stride": 0}, InputValueError, "stride"),
+    ({"sigma_colour": 1e-40}, InputValueError, "sigma_colour must be at least"),
+    ({"image": np.full((6, 6), 255.0, np.float32)}, InputValueError, "image: float images hold brightness in"),
     ({"where": np.zeros((3, 3), bool)}, InputValueError, "where"),
     ({"voters": "all"}, InputTypeError, "voters"),
     ({"image": np.zeros((6, 5), np.float32)}, InputValueError, "image"),

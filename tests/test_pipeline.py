@@ -325,9 +325,9 @@ def test_colour_only_boundary_is_found_by_colour_alone(cues_scene, cues_run):
                    "between the textons on its two sides the image is the same grey wherever it runs, which bounds "
                    "a line's recall near 0.7 (tests/test_scenes.py::test_cues_texture_boundary_is_not_in_the_image_to"
                    "_one_pixel); texture's own lines recall 0.34 at precision 0.08. The depth-only boundary is in the "
-                   "image, but the semi-global matcher's disparity ramps across it over about 12 px (6.4 to 8.4 "
-                   "in steps of one level: with p1 = 32 and p2 = 64 two one-level steps cost what a jump does), "
-                   "so the depth MRF draws no line on it (recall 0.00 within 3 px) and motion's lines recall it at "
+                   "image, but the disparity jumps there by about two levels (6.4 to 8.4); with the matcher's p1 = 48 "
+                   "and p2 = 64 a jump is cheaper than two one-level steps, yet the depth MRF draws no line on so "
+                   "small a jump (its lines recall the outline 0.00 within 3 px on seeds 0 to 2) and motion's lines recall it at "
                    "0.43 within 3 px; the soft map (Result.boundary_strength) above 0.2 recalls it at 0.37")
 def test_integration_recalls_every_single_cue_boundary(cues_scene, cues_run):
     scores = metrics.label_scores(cues_run.labels, cues_scene.labels, tolerance=1)

@@ -42,7 +42,7 @@ import pyopencl.array as cl_array
 
 from vmcl import fitted, labelling, learn, temporal
 from vmcl import integrate as _integrate
-from vmcl.cm.core import check_choice, check_int, check_real
+from vmcl.cm.core import UNIT_MARGIN, check_choice, check_int, check_real, check_unit_image
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
 from vmcl.early import boundary_probability, disparity_range, edges, motion, semiglobal, stereo
 from vmcl.errors import InputError, InputTypeError, InputValueError
@@ -317,7 +317,7 @@ class StereoConfig:
         check_int(self.p1, "stereo.p1", minimum=0, maximum=255)
         check_real(self.p2, "stereo.p2", minimum=self.p1, maximum=8000)
         check_real(self.edge_gain, "stereo.edge_gain", minimum=0)
-        check_int(self.refine_radius, "stereo.refine_radius", minimum=1)
+        check_int(self.refine_radius, "stereo.refine_radius", minimum=1, maximum=2**31 - 1)
         check_real(self.refine_colour, "stereo.refine_colour", above=0)
         check_int(self.refine_stride, "stereo.refine_stride", minimum=1, maximum=2**31 - 1)
         if not self.feature_matches and not self.backfill:
@@ -679,8 +679,9 @@ class Config:
                        for k, v in dataclasses.asdict(getattr(self, name)).items()} for name in _SECTIONS}
 
 
-FLOAT_MARGIN = 0.5
-"""How far outside [0, 1] a float image's pixels may lie (noise) before :func:`as_image` refuses it."""
+FLOAT_MARGIN = UNIT_MARGIN
+"""How far outside [0, 1] a float image's pixels may lie (noise) before :func:`as_image` refuses it
+(:data:`vmcl.cm.core.UNIT_MARGIN`)."""
 
 
 def as_image(array: Any, name: str) -> np.ndarray:
@@ -702,13 +703,7 @@ def as_image(array: Any, name: str) -> np.ndarray:
         raise InputTypeError(f"{name} must be uint8, uint16 or float, got {array.dtype}")
     if not np.isfinite(array).all():
         raise InputValueError(f"{name} has NaN or infinite pixels")
-    # The modules' thresholds and the MRFs' weights are set for brightness in [0, 1]; an image on another
-    # scale (0..255 floats, or 1e30) would be processed as something else, so it is refused, not rescaled:
-    # dividing by the true full scale is the caller's knowledge. The margin admits noisy renderings.
-    low, high = float(array.min()), float(array.max())
-    if low < -FLOAT_MARGIN or high > 1 + FLOAT_MARGIN:
-        raise InputValueError(f"{name}: float images hold brightness in [0, 1], got values in [{low:.3g}, {high:.3g}]; "
-                              "divide by the image's full scale (e.g. 255) first")
+    check_unit_image(array, name)
     return np.ascontiguousarray(array, np.float32)
 
 

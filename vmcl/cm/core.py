@@ -24,6 +24,7 @@ from vmcl.machine import Machine, default_machine
 
 __all__ = [
     "IMAGE_TYPES",
+    "UNIT_MARGIN",
     "WIDEST",
     "ArrayLike",
     "check_bool",
@@ -33,6 +34,7 @@ __all__ = [
     "check_real",
     "check_real_dtype",
     "check_sigma",
+    "check_unit_image",
     "check_widths",
     "device_memory",
     "field",
@@ -359,6 +361,22 @@ def finite_float32(x: Any, name: str) -> Any:
             if not np.isfinite(x).all():
                 raise InputValueError(f"{name} has values beyond float32's range")
     return x
+
+
+UNIT_MARGIN = 0.5
+"""How far outside [0, 1] a float image's brightness may reach and still be read on the [0, 1] scale (noisy
+renderings overshoot; an image in 0..255 is far outside)."""
+
+
+def check_unit_image(image: np.ndarray, name: str) -> None:
+    """Refuse, naming ``name``, a host float image whose brightness is not on the [0, 1] scale (within
+    :data:`UNIT_MARGIN`): the thresholds and weights it meets are set for that scale, and an image on
+    another (0..255 floats) would be processed as something else. Dividing by the full scale is the
+    caller's knowledge, so it is refused, not rescaled."""
+    low, high = float(np.min(image)), float(np.max(image))
+    if low < -UNIT_MARGIN or high > 1 + UNIT_MARGIN:
+        raise InputValueError(f"{name}: float images hold brightness in [0, 1], got values in [{low:.3g}, "
+                              f"{high:.3g}]; divide by the image's full scale (e.g. 255) first")
 
 
 def image_field(image: Any, machine: Machine, *, what: str, footprint: int, largest: int = 4,

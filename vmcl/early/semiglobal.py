@@ -36,6 +36,7 @@ from vmcl.cm.core import (
     check_bool,
     check_int,
     check_real,
+    check_unit_image,
     finite_float32,
     machine_for,
     mask_result,
@@ -102,7 +103,9 @@ class SemiGlobalMatch:
         the right view does not confirm the left winner.
     filled : float32 (H, W), ``disparity`` with the half-occluded pixels given their background's value
         (the smaller of the nearest kept disparities left and right on the row), or, where the frame hides
-        them, the value of the surface on their right; mismatched pixels NaN.
+        them, the value of the surface on their right; with ``refine``, the pixels near depth jumps and
+        the mismatched ones given the weighted median of the kept disparities around them (mismatched
+        pixels without kept ones around stay NaN; without ``refine`` all do); out-of-range pixels NaN.
     occluded : bool (H, W), half-occluded pixels: no disparity of the range is confirmed by the right view,
         or the pixel is unconfirmed and the kept surface on its right, carried on to it, would be seen left
         of the right image (x < its disparity: the frame hides it).
@@ -173,7 +176,8 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         around it, weighted by their likeness in colour to it (:func:`vmcl.early.weighted_median.weighted_median`):
         the census window carries the nearer surface's disparity up to half its width over the farther
         one, and the brightness edge between them says where each ends. Half-occluded pixels keep their
-        background's value.
+        background's value; out-of-range pixels stay without. A float pair on the host must hold
+        brightness in [0, 1] (the colour scale's units).
     refine_radius : int
         >= 1: the weighted median's window radius, and its spatial scale, in pixels.
     refine_colour : float
@@ -211,6 +215,9 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     tolerance = check_int(tolerance, "tolerance", minimum=0, maximum=2**31 - 1)
     median = check_bool(median, "median")
     refine = check_bool(refine, "refine")
+    if refine and isinstance(left, np.ndarray) and left.dtype == np.float32:
+        # The weighted median's colour scale is in [0, 1] levels (the census is in units of the noise).
+        check_unit_image(left, "left")
     height, width = left.shape[:2]
     refine_radius = check_int(refine_radius, "refine_radius", minimum=1, maximum=2**31 - 1)
     refine_colour = check_real(refine_colour, "refine_colour", above=0)
@@ -228,8 +235,8 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     found = _select(machine, sums, costs, dims, d_min, depth, subpixel, tolerance, median)
     disparity, filled, occluded, mismatched, out_of_range = found
     if refine:
-        filled = _refine(machine, filled, occluded, images[0], d_min, d_max, refine_radius, refine_colour,
-                         refine_stride)
+        filled = _refine(machine, filled, occluded, out_of_range, images[0], d_min, d_max, refine_radius,
+                         refine_colour, refine_stride)
     return SemiGlobalMatch(disparity.get() if host else disparity, filled.get() if host else filled,
                            mask_result(occluded, host), mask_result(mismatched, host), mask_result(out_of_range, host),
                            d_min=d_min, d_max=d_max)
@@ -286,18 +293,18 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
     return costs, sums
 
 
-def _refine(machine: Machine, filled: cl_array.Array, occluded: cl_array.Array, left: cl_array.Array, d_min: int,
-            d_max: int, radius: int, colour: float, stride: int) -> cl_array.Array:
-    """``filled`` with the pixels near its depth jumps, and those without a value, given the weighted median
-    of the kept disparities around them (half-occluded pixels keep theirs)."""
+def _refine(machine: Machine, filled: cl_array.Array, occluded: cl_array.Array, out_of_range: cl_array.Array,
+            left: cl_array.Array, d_min: int, d_max: int, radius: int, colour: float, stride: int) -> cl_array.Array:
+    """``filled`` with the pixels near its depth jumps, and the mismatched ones, given the weighted median of
+    the kept disparities around them (half-occluded pixels keep theirs, out-of-range ones stay without)."""
     height, width = filled.shape
     dims = (np.int64(width), np.int64(height))
     flags = machine.empty((height, width), np.int32)
     machine.launch(machine.kernel("semiglobal", "jump_flags"), (width, height), filled, flags, *dims, np.float32(JUMP))
     near = box_sum(flags, CENSUS_SIZE[0] // 2, machine=machine)
     where, voters = (machine.empty((height, width), np.uint8) for _ in range(2))
-    machine.launch(machine.kernel("semiglobal", "refine_targets"), (width, height), filled, occluded, near, where,
-                   voters, *dims)
+    machine.launch(machine.kernel("semiglobal", "refine_targets"), (width, height), filled, occluded, out_of_range,
+                   near, where, voters, *dims)
     refined = weighted_median(filled, left, low=d_min, high=d_max, where=where, voters=voters, radius=radius,
                               sigma_colour=colour, sigma_space=float(radius), stride=stride, machine=machine)
     assert isinstance(refined, cl_array.Array)  # device values in, device values out

@@ -26,6 +26,7 @@ from vmcl.cm.core import (
     ArrayLike,
     check_int,
     check_real,
+    check_unit_image,
     field,
     flags_field,
     image_field,
@@ -56,7 +57,8 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
         The field (e.g. a disparity map), NaN where it has no value.
     image : (H, W) or (H, W, 3) array or device array; uint8, uint16 or float
         The brightness the weights follow, grey or RGB, its levels scaled to [0, 1] by its type's range
-        (uint8 by 255, uint16 by 65535; a float image is taken to be in [0, 1] already).
+        (uint8 by 255, uint16 by 65535; a float image must be in [0, 1] already: a NumPy one outside it is
+        refused, a device one is not read back to be checked).
     low, high : float
         The span of the voters' values (e.g. a disparity range), low <= high, each within a quarter of
         float32's range; values outside it count in the first or last bin.
@@ -83,8 +85,9 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
     Notes
     -----
     The median is taken over bins ``step = max(1, ceil((high - low + 1) / MAX_BINS))`` units wide, starting
-    half a unit below ``low`` (whole values sit mid-bin); the result is the weighted mean of the voters in
-    the median's bin. Each chosen pixel visits ``(2 radius + 1)^2`` neighbours.
+    half a bin below ``low`` (whole values sit mid-bin when ``step`` is 1); the result is the weighted mean
+    of the voters in the median's bin. Each chosen pixel visits up to ``(2 (radius // stride) + 1)^2``
+    neighbours (fewer at the image's border).
 
     Raises
     ------
@@ -99,16 +102,21 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
     height, width = data.shape
     picture, image_host = image_field(image, machine, what="a weighted median", footprint=6)
     if image_host != host:
-        raise InputTypeError("image must be a NumPy array when values is one, and a device array when values is one")
+        raise InputTypeError("values and image must both be NumPy arrays or both device arrays")
+    if isinstance(image, np.ndarray) and picture.dtype == np.float32:
+        check_unit_image(image, "image")
     if picture.shape[:2] != (height, width):
         raise InputValueError(f"image must have values' height and width {(height, width)}, got shape {picture.shape}")
-    # Half of float32's range each way, so that the span and the bins' edges stay finite in float32.
+    # A quarter of float32's range each way, so that the span and the bins' edges stay finite in float32.
     low = check_real(low, "low", minimum=-_HALF_RANGE, maximum=_HALF_RANGE)
     high = check_real(high, "high", minimum=-_HALF_RANGE, maximum=_HALF_RANGE)
     if low > high:
         raise InputValueError(f"low must not exceed high, got low {low} and high {high}")
     radius = check_int(radius, "radius", minimum=1, maximum=2**31 - 1)
     sigma_colour = check_real(sigma_colour, "sigma_colour", above=0)
+    if not np.isfinite(np.float32(1 / sigma_colour)):
+        raise InputValueError(f"sigma_colour must be at least {1 / float(np.finfo(np.float32).max):.1e} (its "
+                              f"inverse must fit float32), got {sigma_colour}")
     sigma_space = check_real(sigma_space, "sigma_space", above=0)
     stride = check_int(stride, "stride", minimum=1, maximum=2**31 - 1)
     span = high - low + 1
