@@ -1,6 +1,7 @@
 """Fit the stereo cue's defaults on the training pairs: the semi-global matcher's census margin and
-smoothness prices, whether the feature matcher still earns its place beside it, the weighted median at
-depth jumps, then the stereo MRF's weights on those matches.
+smoothness prices, whether the feature matcher still earns its place beside it, the weight of the pixels'
+brightness difference beside the census, the weighted median at depth jumps, then the stereo MRF's
+weights on those matches.
 
 Run: python benchmarks/stereo_fit.py
 
@@ -8,14 +9,15 @@ Every combination of the grid below runs the Vision Machine (stereo only, every 
 default) on every training pair of benchmarks/stereo_training.py: the rendered scenes and Middlebury
 sawtooth and map, never a pair a benchmark reports. A combination's score is the mean of two means of
 the restored disparity's bad-1 rate (on the evaluated pixels), over the rendered pairs and over the real
-ones, which weigh equally so that the many rendered pairs do not decide alone. Three stages, each a grid:
-the matcher's (GRID, the weighted median at jumps off), whose best combination gives
-vmcl.early.semiglobal's CENSUS_THRESHOLD, P1, P2, EDGE_GAIN and StereoConfig's feature_matches; then, with
-those, the weighted median's (REFINE_GRID: off, or its radius, colour scale and stride; the cheapest
-within REFINE_TOLERANCE of the best), which gives StereoConfig's refine and vmcl.early.semiglobal's
-REFINE_RADIUS, REFINE_COLOUR and REFINE_STRIDE; then the MRF's
-(MRF_GRID): the weight of the matches in the MRF's data (StereoConfig.backfill_weight) and the stereo
-MRF's alpha and beta (vmcl.mrf.presets.STEREO, which was measured on sparse edge matches). Writes
+ones, which weigh equally so that the many rendered pairs do not decide alone. Four stages, each a grid:
+the matcher's (GRID: the census alone, the weighted median at jumps off), whose best combination gives
+vmcl.early.semiglobal's CENSUS_THRESHOLD, P1, P2, EDGE_GAIN and StereoConfig's feature_matches; then
+the brightness difference's weight (AD_GRID; the best gives AD_WEIGHT); then, with those, the weighted
+median's (REFINE_GRID: off, or its radius, colour scale and stride; the cheapest within
+REFINE_TOLERANCE of the best), which gives StereoConfig's refine and vmcl.early.semiglobal's
+REFINE_RADIUS, REFINE_COLOUR and REFINE_STRIDE; then the MRF's (MRF_GRID): the weight of the matches in
+the MRF's data (StereoConfig.backfill_weight) and the stereo MRF's alpha and beta
+(vmcl.mrf.presets.STEREO, which was measured on sparse edge matches). Writes
 benchmarks/results/stereo_fit.md, every combination of each stage, best first.
 """
 
@@ -36,6 +38,7 @@ from vmcl.stereo_evaluation import DEPTH_ONLY
 
 GRID = {"feature_matches": (True, False), "census_threshold": (2.0, 3.0, 4.0), "p1": (32, 48, 64),
         "p2": (64.0, 96.0, 128.0), "edge_gain": (0.0, 0.1)}
+AD_GRID = {"ad_weight": (0.0, 1.0, 2.0, 4.0)}
 REFINE_GRID = [{"refine": False}] + [{"refine": True, "refine_radius": radius, "refine_colour": colour,
                                       "refine_stride": stride}
                                      for radius in (5, 9, 13) for colour in (0.05, 0.1, 0.2) for stride in (1, 2)]
@@ -93,7 +96,10 @@ def main() -> int:
     rendered, real = rendered_pairs(), middlebury_pairs()
     names = [p.name for p in rendered + real]
     matcher = stage(machine, rendered, real, GRID, lambda values: {"stereo": {**values, "refine": False}})
-    chosen = matcher[0][1]
+    census = matcher[0][1]
+    data_term = stage(machine, rendered, real, AD_GRID, lambda values: {"stereo": {**census, **values,
+                                                                                  "refine": False}})
+    chosen = {**census, **data_term[0][1]}
     refinement = stage(machine, rendered, real, REFINE_GRID, lambda values: {"stereo": {**chosen, **values}})
     chosen = {**chosen, **cheapest_refinement(refinement)}
     weights = stage(machine, rendered, real, MRF_GRID, lambda values: {
@@ -102,13 +108,14 @@ def main() -> int:
     lines = ["# The stereo cue's defaults, fitted on the training pairs", "",
              (f"Measured {datetime.datetime.now():%Y-%m-%d %H:%M}. The Vision Machine, stereo only, each pair's "
               "range found from the images. Score: the mean of the rendered pairs' mean and the real pairs' "
-              "mean of the restored disparity's bad-1. Best first; the first row of stages 1 and 3 gives the "
-              "defaults, stage 2 says its choice."),
+              "mean of the restored disparity's bad-1. Best first; the first row of stages 1, 2 and 4 gives the "
+              "defaults, stage 3 says its choice."),
              "", "## Stage 1: the matcher (the weighted median at depth jumps off)", "", *table(matcher, names), "",
-             f"## Stage 2: the weighted median at depth jumps, with {matcher[0][1]}", "",
+             f"## Stage 2: the brightness difference beside the census, with {census}", "", *table(data_term, names),
+             "", f"## Stage 3: the weighted median at depth jumps, with {chosen}", "",
              (f"Chosen: the fewest voters per refined pixel among the settings within {REFINE_TOLERANCE} of the best "
               f"score: {cheapest_refinement(refinement)}."), "", *table(refinement, names),
-             "", f"## Stage 3: the MRF's weights, with {chosen}", "", *table(weights, names)]
+             "", f"## Stage 4: the MRF's weights, with {chosen}", "", *table(weights, names)]
     out = Path(__file__).resolve().parent / "results" / "stereo_fit.md"
     out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines[:10]))

@@ -35,7 +35,7 @@ def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, machine):
     total, cost = semiglobal_sums(left, right, d_min, d_max, p1, p2, DIRECTIONS[paths], CENSUS_BITS // 2)
     want_left, want_right, want_out = semiglobal_winners(total, d_min, cost, int(POOR_MATCH * CENSUS_BITS))
     found = match_semiglobal(left, right, d_min=d_min, d_max=d_max, census_threshold=0, p1=p1, p2=p2, edge_gain=0,
-                             paths=paths, subpixel=False, median=False, refine=False, machine=machine)
+                             ad_weight=0.0, paths=paths, subpixel=False, median=False, refine=False, machine=machine)
     height, width = left.shape
     kept = np.zeros((height, width), bool)
     occluded = np.zeros((height, width), bool)
@@ -73,6 +73,19 @@ def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, machine):
     np.testing.assert_array_equal(found.occluded, occluded)
     np.testing.assert_array_equal(found.mismatched, mismatched)
     np.testing.assert_array_equal(found.filled[~occluded], found.disparity[~occluded])
+
+
+def test_the_absolute_difference_alone_finds_the_shift(machine):
+    """With a census margin no neighbour exceeds, every census cost is 0: the brightness difference term
+    (ad_weight) is then the only evidence, and it finds the pair's shift of 3 where the census alone
+    cannot."""
+    left, right = _textured_pair(shape=(24, 40), seed=3)
+    inner = (slice(None), slice(8, 36))
+    found = {weight: match_semiglobal(left, right, d_min=0, d_max=6, census_threshold=1e6, ad_weight=weight,
+                                      refine=False, machine=machine).filled[inner]
+             for weight in (0.0, 4.0)}
+    assert np.mean(np.abs(found[4.0] - 3) <= 0.5) > 0.9
+    assert np.mean(np.abs(found[0.0] - 3) <= 0.5) < 0.2
 
 
 def test_subpixel_offset_is_the_equiangular_vertex_of_the_sums(machine):

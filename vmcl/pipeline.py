@@ -253,8 +253,9 @@ class StereoConfig:
         matches beside edge matches were fitted at 0.2, the earlier default.
     occluded_weight : float
         In [0, 1]: the weight of the semi-global matcher's half-occluded pixels.
-    census_threshold, p1, p2, edge_gain
-        The semi-global matcher's census margin and smoothness prices, as
+    census_threshold, ad_weight, p1, p2, edge_gain
+        The semi-global matcher's census margin, the weight of the pixels' brightness difference beside the
+        census, and the smoothness prices, as
         :func:`vmcl.early.semiglobal.match_semiglobal` takes them.
     refine, refine_radius, refine_colour, refine_stride
         The semi-global matcher's weighted median at depth jumps (pixels near a jump take the median of
@@ -287,6 +288,7 @@ class StereoConfig:
     backfill_weight: float = 1.0
     occluded_weight: float = 0.1
     census_threshold: float = semiglobal.CENSUS_THRESHOLD
+    ad_weight: float = semiglobal.AD_WEIGHT
     p1: int = semiglobal.P1
     p2: float = semiglobal.P2
     edge_gain: float = semiglobal.EDGE_GAIN
@@ -314,6 +316,7 @@ class StereoConfig:
         check_unit_interval(self.occluded_weight, "stereo.occluded_weight", closed_above=True)
         check_choice(self.dense, "stereo.dense", DENSE_MATCHERS)
         check_real(self.census_threshold, "stereo.census_threshold", minimum=0)
+        check_real(self.ad_weight, "stereo.ad_weight", minimum=0, maximum=24)
         check_int(self.p1, "stereo.p1", minimum=0, maximum=255)
         check_real(self.p2, "stereo.p2", minimum=self.p1, maximum=8000)
         check_real(self.edge_gain, "stereo.edge_gain", minimum=0)

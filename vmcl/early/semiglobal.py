@@ -50,7 +50,8 @@ from vmcl.early.weighted_median import weighted_median
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "JUMP", "P1", "P2", "POOR_MATCH",
+__all__ = ["AD_CAP", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "JUMP", "P1", "P2",
+           "POOR_MATCH",
            "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "SemiGlobalMatch", "match_semiglobal"]
 
 CENSUS_SIZE = (9, 7)  # width, height of the census window: 62 neighbours in a 64-bit code
@@ -65,6 +66,11 @@ DIRECTIONS = {8: ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (
 # results/stereo_fit.md gives every combination tried): never on a pair a benchmark reports.
 CENSUS_THRESHOLD = 3.0
 """Default census margin, in units of the noise's standard deviation."""
+AD_WEIGHT = 0.0
+"""Default weight of the pixels' absolute brightness difference in the data term, in census bits per noise
+standard deviation (0: the census alone)."""
+AD_CAP = 8.0
+"""The absolute difference counts up to this many noise standard deviations."""
 P1 = 48
 """Default price of a change of one disparity between neighbours, in census bits."""
 P2 = 64.0
@@ -127,7 +133,8 @@ class SemiGlobalMatch:
 
 
 def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max: int | None = None,
-                     census_threshold: float = CENSUS_THRESHOLD, p1: int = P1, p2: float = P2,
+                     census_threshold: float = CENSUS_THRESHOLD, ad_weight: float = AD_WEIGHT, p1: int = P1,
+                     p2: float = P2,
                      edge_gain: float = EDGE_GAIN, paths: int = 8,
                      subpixel: bool = True, tolerance: int = 1, median: bool = True, refine: bool = True,
                      refine_radius: int = REFINE_RADIUS, refine_colour: float = REFINE_COLOUR,
@@ -147,6 +154,11 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         >= 0: a neighbour sets its census bit when it is darker than the centre by more than this times the
         noise's standard deviation, estimated from the left view (J. Immerkaer's mask, with the median of
         its magnitude for the mean), so that noise on a flat patch leaves its bits unset rather than random.
+    ad_weight : float
+        In [0, 24]: the weight, in census bits per noise standard deviation, of the two pixels' absolute
+        brightness difference (capped at :data:`AD_CAP` standard deviations) added to the census cost: a
+        pixel's own evidence, which the census window's straddling of a depth edge does not blur (the
+        AD-census cost of Mei et al., 2011, in the census's units). 0: the census alone.
     p1 : int
         In [0, 255]: the price of a change of one disparity between neighbours (slanted surfaces), in
         census bits (a code has :data:`CENSUS_BITS`).
@@ -205,6 +217,8 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     check_pair(left, right, machine)
     left, right = (finite_float32(image, name) for name, image in (("left", left), ("right", right)))
     census_threshold = check_real(census_threshold, "census_threshold", minimum=0)
+    # A cost must fit a byte: CENSUS_BITS + 24 * AD_CAP = 254.
+    ad_weight = check_real(ad_weight, "ad_weight", minimum=0, maximum=24)
     p1 = check_int(p1, "p1", minimum=0, maximum=255)
     p2 = check_real(p2, "p2", minimum=p1, maximum=8000)
     edge_gain = check_real(edge_gain, "edge_gain", minimum=0)
@@ -231,8 +245,9 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     images = [machine.to_device(image) if isinstance(image, np.ndarray) else image for image in (left, right)]
     views = [grey_field(machine, image) for image in images]
     dims = (np.int64(width), np.int64(height))
-    costs, sums = _aggregate(machine, views, d_min, depth, census_threshold, p1, p2, edge_gain, paths)
-    found = _select(machine, sums, costs, dims, d_min, depth, subpixel, tolerance, median)
+    costs, sums = _aggregate(machine, views, d_min, depth, census_threshold, ad_weight, p1, p2, edge_gain, paths)
+    found = _select(machine, sums, costs, dims, d_min, depth, subpixel, tolerance, median,
+                    int(POOR_MATCH * (CENSUS_BITS + ad_weight * AD_CAP)))
     disparity, filled, occluded, mismatched, out_of_range = found
     if refine:
         filled = _refine(machine, filled, occluded, out_of_range, images[0], d_min, d_max, refine_radius,
@@ -260,7 +275,8 @@ def _range(left, right, d_min, d_max, machine: Machine) -> tuple[int, int]:
 
 
 def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth: int, census_threshold: float,
-               p1: int, p2: float, edge_gain: float, paths: int) -> tuple[cl_array.Array, cl_array.Array]:
+               ad_weight: float, p1: int, p2: float, edge_gain: float, paths: int
+               ) -> tuple[cl_array.Array, cl_array.Array]:
     """The (H, W, S) uint8 census costs and uint16 sum of the messages along every direction, S = D rounded
     up to whole vectors."""
     height, width = views[0].shape
@@ -279,8 +295,10 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
     for view, code in zip(views, codes):
         machine.launch(build, (width, height), view, code, *dims, np.float32(census_threshold), noise)
     costs = machine.empty((height, width, stride), np.uint8)
-    machine.launch(machine.kernel("semiglobal", "census_costs"), (width, height), *codes, costs, *dims,
-                   np.int32(depth), np.int32(stride), np.int32(d_min), np.uint8(CENSUS_BITS // 2))
+    outside = CENSUS_BITS // 2 + round(ad_weight * AD_CAP / 2)
+    machine.launch(machine.kernel("semiglobal", "census_costs"), (width, height), *codes, *views, costs, *dims,
+                   np.int32(depth), np.int32(stride), np.int32(d_min), np.uint8(outside), np.float32(ad_weight),
+                   np.float32(AD_CAP), noise)
     del codes
     sums = machine.empty((height, width, stride), np.uint16)
     aggregate = machine.kernel("semiglobal", "aggregate", MAX_D=_PRIVATE_STEP * math.ceil(depth / _PRIVATE_STEP))
@@ -312,7 +330,7 @@ def _refine(machine: Machine, filled: cl_array.Array, occluded: cl_array.Array, 
 
 
 def _select(machine: Machine, sums: cl_array.Array, costs: cl_array.Array, dims, d_min: int, depth: int,
-            subpixel: bool, tolerance: int, median: bool) -> tuple[cl_array.Array, ...]:
+            subpixel: bool, tolerance: int, median: bool, poor: int) -> tuple[cl_array.Array, ...]:
     """Both views' winners, the check, and the filled disparity: (disparity, filled, occluded, mismatched,
     out_of_range)."""
     width, height = int(dims[0]), int(dims[1])
@@ -322,7 +340,7 @@ def _select(machine: Machine, sums: cl_array.Array, costs: cl_array.Array, dims,
     out_of_range = machine.empty((height, width), np.uint8)
     machine.launch(machine.kernel("semiglobal", "select_left"), (width, height), sums, costs, disparity, winners[0],
                    out_of_range, *dims, np.int32(depth), stride, np.int32(d_min), np.int32(subpixel),
-                   np.int32(POOR_MATCH * CENSUS_BITS))
+                   np.int32(poor))
     machine.launch(machine.kernel("semiglobal", "select_right"), (width, height), sums, winners[1], *dims,
                    np.int32(depth), stride, np.int32(d_min))
     occluded, mismatched = (machine.empty((height, width), np.uint8) for _ in range(2))
