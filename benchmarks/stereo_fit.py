@@ -38,7 +38,7 @@ from vmcl.stereo_evaluation import DEPTH_ONLY
 
 GRID = {"feature_matches": (True, False), "census_threshold": (2.0, 3.0, 4.0), "p1": (32, 48, 64),
         "p2": (64.0, 96.0, 128.0), "edge_gain": (0.0, 0.1)}
-AD_GRID = {"ad_weight": (0.0, 1.0, 2.0, 4.0)}
+AD_GRID = {"ad_weight": (0.0, 1.0, 2.0, 4.0, 8.0, 16.0)}
 REFINE_GRID = [{"refine": False}] + [{"refine": True, "refine_radius": radius, "refine_colour": colour,
                                       "refine_stride": stride}
                                      for radius in (5, 9, 13) for colour in (0.05, 0.1, 0.2) for stride in (1, 2)]

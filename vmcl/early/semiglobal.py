@@ -66,9 +66,9 @@ DIRECTIONS = {8: ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (
 # results/stereo_fit.md gives every combination tried): never on a pair a benchmark reports.
 CENSUS_THRESHOLD = 3.0
 """Default census margin, in units of the noise's standard deviation."""
-AD_WEIGHT = 0.0
+AD_WEIGHT = 4.0
 """Default weight of the pixels' absolute brightness difference in the data term, in census bits per noise
-standard deviation (0: the census alone)."""
+standard deviation (0: the census alone; benchmarks/results/stereo_fit.md, stage 2)."""
 AD_CAP = 8.0
 """The absolute difference counts up to this many noise standard deviations."""
 P1 = 48
@@ -80,7 +80,7 @@ EDGE_GAIN = 0.0
 
 REFINE_RADIUS = 9
 """Default radius of the weighted median's window at depth jumps, in pixels (its spatial scale too)."""
-REFINE_COLOUR = 0.05
+REFINE_COLOUR = 0.1
 """Default colour distance (in [0, 1] levels) at which a voter of the weighted median weighs 1/e."""
 REFINE_STRIDE = 2
 """Default step between the weighted median's voters, in pixels (2: a quarter of the window votes)."""
