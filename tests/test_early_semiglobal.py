@@ -91,10 +91,10 @@ def test_the_absolute_difference_alone_finds_the_shift(machine):
 def test_subpixel_offset_is_the_equiangular_vertex_of_the_sums(machine):
     left, right = _textured_pair(seed=1)
     total, _ = semiglobal_sums(left, right, 0, 5, 7, 40, DIRECTIONS[8], CENSUS_BITS // 2)
-    whole = match_semiglobal(left, right, d_min=0, d_max=5, census_threshold=0, p1=7, p2=40, edge_gain=0,
-                             subpixel=False, median=False, machine=machine).disparity
-    refined = match_semiglobal(left, right, d_min=0, d_max=5, census_threshold=0, p1=7, p2=40, edge_gain=0,
-                               median=False, machine=machine).disparity
+    whole = match_semiglobal(left, right, d_min=0, d_max=5, census_threshold=0, ad_weight=0, p1=7, p2=40,
+                             edge_gain=0, subpixel=False, median=False, machine=machine).disparity
+    refined = match_semiglobal(left, right, d_min=0, d_max=5, census_threshold=0, ad_weight=0, p1=7, p2=40,
+                               edge_gain=0, median=False, machine=machine).disparity
     np.testing.assert_array_equal(np.isfinite(whole), np.isfinite(refined))
     width = left.shape[1]
     checked = 0
@@ -137,7 +137,7 @@ def _slanted_plane(size=96):
 
 def test_subpixel_disparity_follows_a_slanted_plane(machine):
     """Whole-pixel winners on a plane whose disparity varies continuously are off by a quarter pixel on
-    average; the V through the neighbouring sums brings them below 0.15 px (measured 0.30 and 0.136)."""
+    average; the V through the neighbouring sums brings them below 0.15 px (measured 0.29 and 0.094)."""
     scene = _slanted_plane()
     visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
     errors = {}
@@ -167,8 +167,8 @@ def _occluding_plate():
 
 def test_half_occluded_pixels_are_found(machine):
     """The left-right check flags the wall the plate hides from the right camera (and the strip at the left
-    border the right view does not hold), with recall and precision of at least 0.9 (measured 0.935 and
-    0.949); filled, most take the wall's disparity (measured 88%; the rest took a neighbour's mismatch)."""
+    border the right view does not hold), with recall and precision of at least 0.9 (measured 0.938 and
+    0.993); filled, most take the wall's disparity (measured 99%)."""
     scene = _occluding_plate()
     hidden = scene.occluded_stereo & np.isfinite(scene.disparity)
     assert hidden.sum() > 500
@@ -209,8 +209,8 @@ def test_refinement_is_the_weighted_median_near_jumps(machine):
 
 def test_refinement_gives_depth_edges_back_to_the_brightness_edges(machine):
     """On the rendered "blocks" scene the census window carries the blocks' disparity over the floor and the
-    wall beside them; refined, the pixels within 4 px of a depth jump are wrong at most 60% as often
-    (measured on seeds 3 to 5: 5.3 / 4.5 / 4.2% to 2.6 / 1.5 / 1.6% of those not half-occluded)."""
+    wall beside them; refined, the pixels within 4 px of a depth jump are wrong at most 75% as often
+    (measured on seeds 3 to 5: 3.7 / 3.4 / 3.0% to 2.5 / 2.1 / 1.7% of those not half-occluded)."""
     scene = scenes.render(scenes.preset("blocks", shape=(256, 256)), seed=3, noise=0.01)
     visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
     truth = np.nan_to_num(scene.disparity, nan=-99)
@@ -228,7 +228,7 @@ def test_refinement_gives_depth_edges_back_to_the_brightness_edges(machine):
     bad = [np.mean(~(np.abs(m.filled - scene.disparity) <= 1)[visible & near & ~m.occluded])
            for m in (match_semiglobal(scene.left, scene.right, refine=refine, machine=machine)
                      for refine in (False, True))]
-    assert bad[1] < 0.6 * bad[0], bad
+    assert bad[1] < 0.75 * bad[0], bad
 
 
 def test_refinement_leaves_out_of_range_pixels_without_a_value(machine):
@@ -251,10 +251,10 @@ def test_refinement_refuses_float_images_off_the_unit_scale(machine):
 
 
 def test_disparities_beyond_the_range_are_flagged_out_of_range(machine):
-    """The plate (d = 24) searched over 0..15 only: a sixth of its pixels match best at the range's end, and
-    poorly, and are flagged out of range, unmatched (measured 17%; about a quarter more fail the left-right
-    check, and the rest take wrong disparities that both views confirm); the wall (d = 6), inside the
-    range, is hardly touched."""
+    """The plate (d = 24) searched over 0..15 only: a fifth of its pixels match best at the range's end, and
+    poorly, and are flagged out of range, unmatched (measured 22%; the others fail the left-right check or
+    take wrong disparities that both views confirm); the wall (d = 6), inside the range, is hardly
+    touched."""
     scene = _occluding_plate()
     visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
     found = match_semiglobal(scene.left, scene.right, d_min=0, d_max=15, machine=machine)

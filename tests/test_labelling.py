@@ -278,7 +278,9 @@ def test_linear_labels_find_the_shadows_the_rule_cannot_name(shadows_runs):
     assert linear[Label.SHADOW].recall >= 0.8      # measured 0.90 (the rule has no SHADOW label)
     assert linear[Label.SHADOW].precision >= 0.6   # measured 0.80
     f = {m: metrics.detection_scores(r.discontinuities, scene.labels > 0, tolerance=1).f for m, r in runs.items()}
-    assert f["linear"] >= 0.85 and f["rule"] < 0.4  # measured 0.92 and 0.23
+    # measured 0.92 and 0.55 (0.23 before the stereo matcher weighed the pixels' brightness difference: the
+    # rule labels every cue's line, and the cleaner depth lines on this untextured scene leave it fewer)
+    assert f["linear"] >= 0.85 and f["rule"] < 0.7
 
 
 @pytest.mark.parametrize("call, error, match", [
