@@ -201,7 +201,7 @@ __kernel void select_left(__global const ushort *total, __global const uchar *co
         winner[y * W + x] = d_min - 1;
         return;
     }
-    /* A winner at an end of the range itself, whose own census cost is poor (more than `poor` bits differ),
+    /* A winner at an end of the range itself, whose own cost is poor (above `poor`),
      * is where the search stopped rather than a match: the seed's sign of an area outside the matcher's
      * disparity range (low scores at the range's limit). Unmatched, and flagged as such. A good match at
      * the end is kept: the range may end right at the true disparity. */

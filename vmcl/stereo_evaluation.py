@@ -297,8 +297,9 @@ def vmcl_method(config=None, *, machine: Machine | None = None) -> StereoMethod:
     Parameters
     ----------
     config : vmcl.pipeline.Config, optional
-        Default: stereo with its defaults, every other cue, the grouping and the image's probability of
-        boundary switched off (an evaluation runs what it measures: none of them changes the disparity). The stereo section finds its disparity range from the images unless the config sets
+        Default: :data:`DEPTH_ONLY`, stereo with its defaults, every other cue, the grouping and the image's
+        probability of boundary switched off (an evaluation runs what it measures: none of them changes the
+        disparity). The stereo section finds its disparity range from the images unless the config sets
         one (the note says which).
     machine : vmcl.Machine, optional
         As :class:`vmcl.pipeline.VisionMachine` takes it.

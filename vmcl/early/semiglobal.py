@@ -51,8 +51,7 @@ from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 __all__ = ["AD_CAP", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "JUMP", "P1", "P2",
-           "POOR_MATCH",
-           "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "SemiGlobalMatch", "match_semiglobal"]
+           "POOR_MATCH", "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "SemiGlobalMatch", "match_semiglobal"]
 
 CENSUS_SIZE = (9, 7)  # width, height of the census window: 62 neighbours in a 64-bit code
 CENSUS_BITS = CENSUS_SIZE[0] * CENSUS_SIZE[1] - 1
@@ -88,9 +87,9 @@ JUMP = 1.5
 """Neighbours differing by more than this many pixels of disparity mark a jump the weighted median refines."""
 
 POOR_MATCH = 0.25
-"""A winner at an end of the range is out of range when more than this share of its census bits differ:
-where the search stopped, the match is poor; a good match at the end is kept, since a range may end
-right at a true disparity."""
+"""A winner at an end of the range is out of range when its cost there exceeds this share of the largest
+cost (every census bit differing, and the brightness difference at its cap): where the search stopped,
+the match is poor; a good match at the end is kept, since a range may end right at a true disparity."""
 
 _NOISE_MEDIAN = 0.6745 * 6
 """The median magnitude of Immerkaer's mask on Gaussian noise, in units of the noise's standard deviation."""
@@ -117,8 +116,8 @@ class SemiGlobalMatch:
         of the right image (x < its disparity: the frame hides it).
     mismatched : bool (H, W), unconfirmed pixels that are not half-occluded (the winner was wrong).
     out_of_range : bool (H, W), pixels whose winner was an end of the range (d_min or d_max, where the
-        image lets the range go on) with a poor census cost there (more than :data:`POOR_MATCH` of the
-        bits differ): the search stopped there, so the match may lie beyond it (the seed's areas outside
+        image lets the range go on) with a poor cost there (above :data:`POOR_MATCH` of the largest
+        cost): the search stopped there, so the match may lie beyond it (the seed's areas outside
         the matcher's disparity range). Unmatched, neither occluded nor mismatched.
     d_min, d_max : int, the range searched.
     """

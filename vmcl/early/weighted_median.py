@@ -18,8 +18,10 @@ weighted mean of the voters in the median's bin, so that a value keeps its fract
 from __future__ import annotations
 
 import math
+import weakref
 
 import numpy as np
+import pyopencl.array as cl_array
 
 from vmcl.cm.core import (
     IMAGE_TYPES,
@@ -42,6 +44,7 @@ MAX_BINS = 1024
 """The most bins a pixel's histogram holds; a wider span of values gets bins of several units."""
 
 _BIN_STEP = 64  # the private histograms are sized in steps of this many bins (one program per size)
+_SPATIAL: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _HALF_RANGE = float(np.finfo(np.float32).max) / 4
 _LEVELS = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0, np.dtype(np.float32): 1.0}
 
@@ -128,15 +131,28 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
                          machine)
     reach = min(radius, max(height, width) - 1)  # no window reaches further than the image
     side = 2 * reach + 1
-    machine.require_memory(f"a weighted median's table of {side} x {side} spatial weights", 4 * side * side,
-                           4 * side * side)
-    offsets = np.arange(-reach, reach + 1, dtype=np.float64)
-    spatial = np.exp(-np.hypot(offsets[:, None], offsets[None, :]) / sigma_space).astype(np.float32)
+    spatial = _spatial_weights(machine, reach, sigma_space)
     out = machine.empty((height, width), np.float32)
     kernel = machine.kernel("weighted_median", "weighted_median", IN_T=IMAGE_TYPES[picture.dtype],
                             CHANNELS=3 if picture.ndim == 3 else 1, NBINS=_BIN_STEP * math.ceil(bins / _BIN_STEP))
     machine.launch(kernel, (width, height), data, voting, chosen, picture, out, np.int64(width), np.int64(height),
-                   np.int32(reach), np.float32(1 / sigma_colour), machine.to_device(spatial),
+                   np.int32(reach), np.float32(1 / sigma_colour), spatial,
                    np.float32(1 / _LEVELS[picture.dtype]), np.float32(low - 0.5 * step), np.float32(step),
                    np.int32(bins), np.int32(min(stride, side)))
     return result(out, host)
+
+
+def _spatial_weights(machine: Machine, reach: int, sigma_space: float) -> cl_array.Array:
+    """The (2 reach + 1)^2 table of exp(-|q - p| / sigma_space) on the device, uploaded once per machine
+    and window (as :func:`vmcl.early.filters.device_taps` keeps its taps): a write to the device waits for
+    the queue to drain, which the matcher, whose fields stay on the device, must not do on every call."""
+    cache = _SPATIAL.setdefault(machine, {})
+    key = (reach, sigma_space)
+    if key not in cache:
+        side = 2 * reach + 1
+        machine.require_memory(f"a weighted median's table of {side} x {side} spatial weights", 4 * side * side,
+                               4 * side * side)
+        offsets = np.arange(-reach, reach + 1, dtype=np.float64)
+        table = np.exp(-np.hypot(offsets[:, None], offsets[None, :]) / sigma_space).astype(np.float32)
+        cache[key] = machine.to_device(table)
+    return cache[key]
