@@ -44,6 +44,7 @@ from vmcl.cm.core import (
 from vmcl.cm.scan import box_sum
 from vmcl.early.disparity_range import estimate_range
 from vmcl.early.filters import grey_field
+from vmcl.early.histogram_matching import match_histogram
 from vmcl.early.noise import threshold_field
 from vmcl.early.stereo import check_pair, check_range
 from vmcl.early.weighted_median import weighted_median
@@ -132,8 +133,8 @@ class SemiGlobalMatch:
 
 
 def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max: int | None = None,
-                     census_threshold: float = CENSUS_THRESHOLD, ad_weight: float = AD_WEIGHT, p1: int = P1,
-                     p2: float = P2,
+                     census_threshold: float = CENSUS_THRESHOLD, ad_weight: float = AD_WEIGHT,
+                     match_histograms: bool = True, p1: int = P1, p2: float = P2,
                      edge_gain: float = EDGE_GAIN, paths: int = 8,
                      subpixel: bool = True, tolerance: int = 1, median: bool = True, refine: bool = True,
                      refine_radius: int = REFINE_RADIUS, refine_colour: float = REFINE_COLOUR,
@@ -158,6 +159,11 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         brightness difference (capped at :data:`AD_CAP` standard deviations) added to the census cost: a
         pixel's own evidence, which the census window's straddling of a depth edge does not blur (the
         AD-census cost of Mei et al., 2011, in the census's units). 0: the census alone.
+    match_histograms : bool
+        Take that difference after giving each of the right view's grey levels the left view's level of the
+        same rank (:func:`vmcl.early.histogram_matching.match_histogram`), so that the two cameras' exposure
+        and response differences do not count as a mismatch (the census, which compares each pixel with its
+        neighbours only, is blind to them anyway).
     p1 : int
         In [0, 255]: the price of a change of one disparity between neighbours (slanted surfaces), in
         census bits (a code has :data:`CENSUS_BITS`).
@@ -218,6 +224,7 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     census_threshold = check_real(census_threshold, "census_threshold", minimum=0)
     # A cost must fit a byte: CENSUS_BITS + 24 * AD_CAP = 254.
     ad_weight = check_real(ad_weight, "ad_weight", minimum=0, maximum=24)
+    match_histograms = check_bool(match_histograms, "match_histograms")
     p1 = check_int(p1, "p1", minimum=0, maximum=255)
     p2 = check_real(p2, "p2", minimum=p1, maximum=8000)
     edge_gain = check_real(edge_gain, "edge_gain", minimum=0)
@@ -244,7 +251,8 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     images = [machine.to_device(image) if isinstance(image, np.ndarray) else image for image in (left, right)]
     views = [grey_field(machine, image) for image in images]
     dims = (np.int64(width), np.int64(height))
-    costs, sums = _aggregate(machine, views, d_min, depth, census_threshold, ad_weight, p1, p2, edge_gain, paths)
+    costs, sums = _aggregate(machine, views, d_min, depth, census_threshold, ad_weight, match_histograms, p1, p2,
+                             edge_gain, paths)
     found = _select(machine, sums, costs, dims, d_min, depth, subpixel, tolerance, median,
                     int(POOR_MATCH * (CENSUS_BITS + ad_weight * AD_CAP)))
     disparity, filled, occluded, mismatched, out_of_range = found
@@ -274,7 +282,7 @@ def _range(left, right, d_min, d_max, machine: Machine) -> tuple[int, int]:
 
 
 def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth: int, census_threshold: float,
-               ad_weight: float, p1: int, p2: float, edge_gain: float, paths: int
+               ad_weight: float, match_histograms: bool, p1: int, p2: float, edge_gain: float, paths: int
                ) -> tuple[cl_array.Array, cl_array.Array]:
     """The (H, W, S) uint8 census costs and uint16 sum of the messages along every direction, S = D rounded
     up to whole vectors."""
@@ -293,9 +301,14 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
     build = machine.kernel("semiglobal", "census", CENSUS_W=CENSUS_SIZE[0], CENSUS_H=CENSUS_SIZE[1])
     for view, code in zip(views, codes):
         machine.launch(build, (width, height), view, code, *dims, np.float32(census_threshold), noise)
+    levels = list(views)
+    if ad_weight > 0 and match_histograms:
+        matched = match_histogram(views[1], views[0], machine=machine)
+        assert isinstance(matched, cl_array.Array)  # device field in, device field out
+        levels[1] = matched
     costs = machine.empty((height, width, stride), np.uint8)
     outside = CENSUS_BITS // 2 + round(ad_weight * AD_CAP / 2)
-    machine.launch(machine.kernel("semiglobal", "census_costs"), (width, height), *codes, *views, costs, *dims,
+    machine.launch(machine.kernel("semiglobal", "census_costs"), (width, height), *codes, *levels, costs, *dims,
                    np.int32(depth), np.int32(stride), np.int32(d_min), np.uint8(outside), np.float32(ad_weight),
                    np.float32(AD_CAP), noise)
     del codes
