@@ -12,7 +12,8 @@ the restored disparity's bad-1 rate (on the evaluated pixels), over the rendered
 ones, which weigh equally so that the many rendered pairs do not decide alone. Four stages, each a grid:
 the matcher's (GRID: the census alone, the weighted median at jumps off), whose best combination gives
 vmcl.early.semiglobal's CENSUS_THRESHOLD, P1, P2, EDGE_GAIN and StereoConfig's feature_matches; then
-the brightness difference's weight (AD_GRID; the best gives AD_WEIGHT); then, with those, the weighted
+the brightness difference's weight, taken with or without the cameras' difference matched (AD_GRID; the
+best gives AD_WEIGHT and StereoConfig's match_exposure); then, with those, the weighted
 median's (REFINE_GRID: off, or its radius, colour scale and stride; the cheapest within
 REFINE_TOLERANCE of the best), which gives StereoConfig's refine and vmcl.early.semiglobal's
 REFINE_RADIUS, REFINE_COLOUR and REFINE_STRIDE; then the MRF's (MRF_GRID): the weight of the matches in
@@ -38,7 +39,7 @@ from vmcl.stereo_evaluation import DEPTH_ONLY
 
 GRID = {"feature_matches": (True, False), "census_threshold": (2.0, 3.0, 4.0), "p1": (32, 48, 64),
         "p2": (64.0, 96.0, 128.0), "edge_gain": (0.0, 0.1)}
-AD_GRID = {"ad_weight": (0.0, 1.0, 2.0, 4.0, 8.0, 16.0)}
+AD_GRID = {"match_exposure": (True, False), "ad_weight": (0.0, 1.0, 2.0, 4.0, 8.0, 16.0)}
 REFINE_GRID = [{"refine": False}] + [{"refine": True, "refine_radius": radius, "refine_colour": colour,
                                       "refine_stride": stride}
                                      for radius in (5, 9, 13) for colour in (0.05, 0.1, 0.2) for stride in (1, 2)]
@@ -95,7 +96,8 @@ def main() -> int:
     machine = vmcl.Machine()
     rendered, real = rendered_pairs(), middlebury_pairs()
     names = [p.name for p in rendered + real]
-    matcher = stage(machine, rendered, real, GRID, lambda values: {"stereo": {**values, "refine": False}})
+    matcher = stage(machine, rendered, real, GRID, lambda values: {"stereo": {**values, "ad_weight": 0.0,
+                                                                             "refine": False}})
     census = matcher[0][1]
     data_term = stage(machine, rendered, real, AD_GRID, lambda values: {"stereo": {**census, **values,
                                                                                   "refine": False}})
@@ -110,7 +112,7 @@ def main() -> int:
               "range found from the images. Score: the mean of the rendered pairs' mean and the real pairs' "
               "mean of the restored disparity's bad-1. Best first; the first row of stages 1, 2 and 4 gives the "
               "defaults, stage 3 says its choice."),
-             "", "## Stage 1: the matcher (the weighted median at depth jumps off)", "", *table(matcher, names), "",
+             "", "## Stage 1: the matcher (the census alone, the weighted median at depth jumps off)", "", *table(matcher, names), "",
              f"## Stage 2: the brightness difference beside the census, with {census}", "", *table(data_term, names),
              "", f"## Stage 3: the weighted median at depth jumps, with {chosen}", "",
              (f"Chosen: the fewest voters per refined pixel among the settings within {REFINE_TOLERANCE} of the best "

@@ -2,7 +2,10 @@
 
 Training pairs: the rendered scenes of vmcl.scenes (every preset at 256 x 256, two noise seeds; visible
 pixels evaluated), one world with near objects whose disparities reach about 0.3 W, and the Middlebury 2001
-pairs that no table reports as a test figure (sawtooth and map; every pixel of known disparity). The
+pairs that no table reports as a test figure (sawtooth and map; every pixel of known disparity), each also
+with its right view's brightness response changed (EXPOSURE_GAMMA: two cameras rarely agree on exposure
+and response, and these pairs were taken with one camera, so only a variant shows a cost's sensitivity
+to it). The
 test pairs (Middlebury v2 tsukuba, venus and teddy with their masks, scikit-image's Motorcycle, and any
 pair a user evaluates) are never used to choose a default.
 """
@@ -19,6 +22,9 @@ from vmcl.scenes import Body, Camera, Face, Light, Texture, World
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "datasets"
 MIDDLEBURY_TRAINING = ("sawtooth", "map")
+EXPOSURE_GAMMA = 1.15
+"""The exposure variant's right view: its levels, scaled to [0, 1], raised to this power (mid-tones about 5%
+darker, black and white unchanged), rounded back to whole levels."""
 
 
 class Pair(NamedTuple):
@@ -58,12 +64,22 @@ def rendered_pairs(seeds: tuple[int, ...] = (0, 1)) -> list[Pair]:
 
 
 def middlebury_pairs(root: Path = SHARED) -> list[Pair]:
-    """The Middlebury training pairs under ``root`` (none when it is absent)."""
+    """The Middlebury training pairs under ``root`` (none when it is absent), each followed by its exposure
+    variant."""
     found = []
     for name in MIDDLEBURY_TRAINING if root.is_dir() else ():
         pair = datasets.load_stereo(name, root)
-        found.append(Pair(name, pair.left, pair.right, pair.disparity, np.isfinite(pair.disparity)))
+        known = np.isfinite(pair.disparity)
+        found.append(Pair(name, pair.left, pair.right, pair.disparity, known))
+        found.append(Pair(f"{name} (exposure)", pair.left, exposure_variant(pair.right), pair.disparity, known))
     return found
+
+
+def exposure_variant(view: np.ndarray) -> np.ndarray:
+    """An 8-bit view with its response changed by :data:`EXPOSURE_GAMMA`."""
+    if view.dtype != np.uint8:
+        raise TypeError(f"the training views are 8-bit, got {view.dtype}")
+    return np.rint(255 * (view / 255.0) ** EXPOSURE_GAMMA).astype(np.uint8)
 
 
 def training_pairs(root: Path = SHARED) -> list[Pair]:

@@ -49,6 +49,89 @@ __kernel void census(__global const float *image, __global ulong *codes, long W,
     codes[y * W + x] = code;
 }
 
+/* The two cameras' brightness difference, from the pixels whose census match is sure (the census is
+ * blind to it): each pixel whose best census cost is at most `sure` bits, and whose best cost away from
+ * that disparity's neighbours is at least `margin` bits worse, votes for its match's difference
+ * (left - right, in quarters of the noise's standard deviation, +-TONE_REACH sigmas) in the histogram
+ * of the right pixel's brightness bin (TONE_BINS equal bins over [low, high], the right view's span). */
+#define TONE_BINS 32
+#define TONE_REACH 16
+#define TONE_STEPS (8 * TONE_REACH + 1)
+__kernel void tone_votes(__global const ulong *left, __global const ulong *right, __global const float *left_grey,
+                         __global const float *right_grey, __global int *votes, long W, long H, int D, int d_min,
+                         int sure, int margin, __global const float *noise, __global const float *low,
+                         __global const float *high)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    ulong code = left[y * W + x];
+    int best = 255, at = -1;
+    for (int k = 0; k < D; k++) {
+        long xr = x - (d_min + k);
+        if (xr < 0 || xr >= W) continue;
+        int c = popcount(code ^ right[y * W + xr]);
+        if (c < best) { best = c; at = k; }
+    }
+    if (at < 0 || best > sure) return;
+    for (int k = 0; k < D; k++) {
+        long xr = x - (d_min + k);
+        if (abs(k - at) <= 1 || xr < 0 || xr >= W) continue;
+        if (popcount(code ^ right[y * W + xr]) < best + margin) return;
+    }
+    float r = right_grey[y * W + x - (d_min + at)], span = high[0] - low[0];
+    int bin = span > 0.0f ? clamp((int)((r - low[0]) / span * TONE_BINS), 0, TONE_BINS - 1) : 0;
+    float step = (left_grey[y * W + x] - r) / fmax(noise[0], FLT_MIN) * 4.0f;
+    int s = (int)clamp(rint(step), -4.0f * TONE_REACH, 4.0f * TONE_REACH) + 4 * TONE_REACH;
+    atomic_inc(votes + bin * TONE_STEPS + s);
+}
+
+/* Each brightness bin's offset: the median of its votes (in levels), where it has at least `least`;
+ * a bin with fewer takes the offset interpolated between the nearest bins that have enough, or the
+ * nearest one's beyond the last; 0 everywhere when no bin has enough. One work-item: the bins are few. */
+__kernel void tone_offsets(__global const int *votes, __global float *offset, int least,
+                           __global const float *noise)
+{
+    if (get_global_id(0) != 0) return;
+    float unit = noise[0] / 4.0f;
+    int known[TONE_BINS], count = 0;
+    for (int b = 0; b < TONE_BINS; b++) {
+        __global const int *h = votes + b * TONE_STEPS;
+        long total = 0;
+        for (int s = 0; s < TONE_STEPS; s++) total += h[s];
+        if (total < least) continue;
+        long running = 0;
+        int s = 0;
+        while (2 * (running + h[s]) < total) running += h[s++];
+        offset[b] = (float)(s - 4 * TONE_REACH) * unit;
+        known[count++] = b;
+    }
+    for (int b = 0; b < TONE_BINS; b++) {
+        if (count == 0) { offset[b] = 0.0f; continue; }
+        int k = 0;
+        while (k < count && known[k] < b) k++;
+        if (k < count && known[k] == b) continue;
+        if (k == 0) offset[b] = offset[known[0]];
+        else if (k == count) offset[b] = offset[known[count - 1]];
+        else {
+            int a = known[k - 1], c = known[k];
+            offset[b] = offset[a] + (offset[c] - offset[a]) * (float)(b - a) / (float)(c - a);
+        }
+    }
+}
+
+/* The right view's brightness moved by its bin's offset, interpolated linearly between bin centres
+ * (constant beyond the first and last), so that it reads as the left camera would have seen it. */
+__kernel void apply_tone(__global const float *grey, __global float *out, __global const float *offset, long n,
+                         __global const float *low, __global const float *high)
+{
+    long i = get_global_id(0);
+    if (i >= n) return;
+    float v = grey[i], span = high[0] - low[0];
+    float place = span > 0.0f ? clamp((v - low[0]) / span * TONE_BINS - 0.5f, 0.0f, TONE_BINS - 1.0f) : 0.0f;
+    int b = min((int)place, TONE_BINS - 2);
+    out[i] = v + mix(offset[b], offset[b + 1], place - (float)b);
+}
+
 /* C(x, y, d) = Hamming distance between the left code at x and the right code at x - d, plus
  * `ad_weight` times the two pixels' absolute brightness difference in units of the noise's standard
  * deviation (noise[0]), capped at `ad_cap` (the pixel's own evidence, which a window straddling a depth

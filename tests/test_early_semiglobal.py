@@ -88,6 +88,25 @@ def test_the_absolute_difference_alone_finds_the_shift(machine):
     assert np.mean(np.abs(found[0.0] - 3) <= 0.5) < 0.2
 
 
+def test_a_different_exposure_of_the_right_view_costs_little_with_the_exposure_matched(machine):
+    """The right camera's response differs (its levels raised to the power 1.3: mid-tones darker, black and
+    white unchanged). The census does not see it; the brightness difference does, unless the right view is
+    first moved by the difference measured on the sure census matches. Measured on this scene: 0.158 bad-1
+    with the same exposure, 0.162 with the other one matched, 0.302 without."""
+    scene = scenes.render(scenes.preset("corridor", shape=(128, 128)), seed=0, noise=0.01)
+    evaluated = ~scene.occluded_stereo & np.isfinite(scene.disparity)
+
+    def bad(right, matched):
+        found = match_semiglobal(scene.left, right, match_exposure=matched, machine=machine).filled
+        return np.mean(~(np.abs(found - scene.disparity)[evaluated] <= 1))
+
+    darker = np.clip(scene.right, 0, 1) ** 1.3
+    same = bad(scene.right, True)
+    assert abs(same - bad(scene.right, False)) < 0.005  # nothing to match: the measured difference is about 0
+    assert abs(bad(darker, True) - same) < 0.02
+    assert bad(darker, False) > same + 0.1
+
+
 def test_subpixel_offset_is_the_equiangular_vertex_of_the_sums(machine):
     left, right = _textured_pair(seed=1)
     total, _ = semiglobal_sums(left, right, 0, 5, 7, 40, DIRECTIONS[8], CENSUS_BITS // 2)

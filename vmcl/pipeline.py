@@ -253,7 +253,7 @@ class StereoConfig:
         matches beside edge matches were fitted at 0.2, the earlier default.
     occluded_weight : float
         In [0, 1]: the weight of the semi-global matcher's half-occluded pixels.
-    census_threshold, ad_weight, match_histograms, p1, p2, edge_gain
+    census_threshold, ad_weight, match_exposure, p1, p2, edge_gain
         The semi-global matcher's census margin, the weight of the pixels' brightness difference beside the
         census, whether that difference is taken after matching the right view's brightness histogram to
         the left's, and the smoothness prices, as
@@ -290,7 +290,7 @@ class StereoConfig:
     occluded_weight: float = 0.1
     census_threshold: float = semiglobal.CENSUS_THRESHOLD
     ad_weight: float = semiglobal.AD_WEIGHT
-    match_histograms: bool = True
+    match_exposure: bool = True
     p1: int = semiglobal.P1
     p2: float = semiglobal.P2
     edge_gain: float = semiglobal.EDGE_GAIN

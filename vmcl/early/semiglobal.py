@@ -29,6 +29,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm.core import (
@@ -37,14 +38,15 @@ from vmcl.cm.core import (
     check_int,
     check_real,
     check_unit_image,
+    device_memory,
     finite_float32,
     machine_for,
     mask_result,
 )
+from vmcl.cm.reduce import reduce
 from vmcl.cm.scan import box_sum
 from vmcl.early.disparity_range import estimate_range
 from vmcl.early.filters import grey_field
-from vmcl.early.histogram_matching import match_histogram
 from vmcl.early.noise import threshold_field
 from vmcl.early.stereo import check_pair, check_range
 from vmcl.early.weighted_median import weighted_median
@@ -52,7 +54,8 @@ from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 __all__ = ["AD_CAP", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "JUMP", "P1", "P2",
-           "POOR_MATCH", "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "SemiGlobalMatch", "match_semiglobal"]
+           "POOR_MATCH", "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "TONE_BINS", "SemiGlobalMatch",
+           "match_semiglobal"]
 
 CENSUS_SIZE = (9, 7)  # width, height of the census window: 62 neighbours in a 64-bit code
 CENSUS_BITS = CENSUS_SIZE[0] * CENSUS_SIZE[1] - 1
@@ -91,6 +94,17 @@ POOR_MATCH = 0.25
 """A winner at an end of the range is out of range when its cost there exceeds this share of the largest
 cost (every census bit differing, and the brightness difference at its cap): where the search stopped,
 the match is poor; a good match at the end is kept, since a range may end right at a true disparity."""
+
+TONE_BINS = 32
+"""Brightness bins over the right view's span in which the cameras' difference is measured (TONE_BINS in
+kernels/semiglobal.cl)."""
+_TONE_STEPS = 8 * 16 + 1  # the difference's histogram: quarters of the noise's deviation, +-16 (TONE_STEPS)
+_TONE_SURE = CENSUS_BITS // 4
+"""A census match votes for the cameras' difference when at most this many bits differ..."""
+_TONE_MARGIN = 6
+"""...and every disparity but the best and its neighbours costs at least this many bits more."""
+_TONE_LEAST = 64
+"""Votes a brightness bin needs for its own median; bins with fewer are interpolated from their neighbours."""
 
 _NOISE_MEDIAN = 0.6745 * 6
 """The median magnitude of Immerkaer's mask on Gaussian noise, in units of the noise's standard deviation."""
@@ -134,7 +148,7 @@ class SemiGlobalMatch:
 
 def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max: int | None = None,
                      census_threshold: float = CENSUS_THRESHOLD, ad_weight: float = AD_WEIGHT,
-                     match_histograms: bool = True, p1: int = P1, p2: float = P2,
+                     match_exposure: bool = True, p1: int = P1, p2: float = P2,
                      edge_gain: float = EDGE_GAIN, paths: int = 8,
                      subpixel: bool = True, tolerance: int = 1, median: bool = True, refine: bool = True,
                      refine_radius: int = REFINE_RADIUS, refine_colour: float = REFINE_COLOUR,
@@ -159,11 +173,12 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         brightness difference (capped at :data:`AD_CAP` standard deviations) added to the census cost: a
         pixel's own evidence, which the census window's straddling of a depth edge does not blur (the
         AD-census cost of Mei et al., 2011, in the census's units). 0: the census alone.
-    match_histograms : bool
-        Take that difference after giving each of the right view's grey levels the left view's level of the
-        same rank (:func:`vmcl.early.histogram_matching.match_histogram`), so that the two cameras' exposure
-        and response differences do not count as a mismatch (the census, which compares each pixel with its
-        neighbours only, is blind to them anyway).
+    match_exposure : bool
+        Take that difference after moving the right view's brightness by the two cameras' difference,
+        measured where the census match is sure (the median difference of such matches in each of
+        :data:`TONE_BINS` brightness bins), so that differences of exposure and response between the
+        cameras do not count as a mismatch (the census, which compares each pixel with its neighbours
+        only, is blind to them).
     p1 : int
         In [0, 255]: the price of a change of one disparity between neighbours (slanted surfaces), in
         census bits (a code has :data:`CENSUS_BITS`).
@@ -224,7 +239,7 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     census_threshold = check_real(census_threshold, "census_threshold", minimum=0)
     # A cost must fit a byte: CENSUS_BITS + 24 * AD_CAP = 254.
     ad_weight = check_real(ad_weight, "ad_weight", minimum=0, maximum=24)
-    match_histograms = check_bool(match_histograms, "match_histograms")
+    match_exposure = check_bool(match_exposure, "match_exposure")
     p1 = check_int(p1, "p1", minimum=0, maximum=255)
     p2 = check_real(p2, "p2", minimum=p1, maximum=8000)
     edge_gain = check_real(edge_gain, "edge_gain", minimum=0)
@@ -251,7 +266,7 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     images = [machine.to_device(image) if isinstance(image, np.ndarray) else image for image in (left, right)]
     views = [grey_field(machine, image) for image in images]
     dims = (np.int64(width), np.int64(height))
-    costs, sums = _aggregate(machine, views, d_min, depth, census_threshold, ad_weight, match_histograms, p1, p2,
+    costs, sums = _aggregate(machine, views, d_min, depth, census_threshold, ad_weight, match_exposure, p1, p2,
                              edge_gain, paths)
     found = _select(machine, sums, costs, dims, d_min, depth, subpixel, tolerance, median,
                     int(POOR_MATCH * (CENSUS_BITS + ad_weight * AD_CAP)))
@@ -282,7 +297,7 @@ def _range(left, right, d_min, d_max, machine: Machine) -> tuple[int, int]:
 
 
 def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth: int, census_threshold: float,
-               ad_weight: float, match_histograms: bool, p1: int, p2: float, edge_gain: float, paths: int
+               ad_weight: float, match_exposure: bool, p1: int, p2: float, edge_gain: float, paths: int
                ) -> tuple[cl_array.Array, cl_array.Array]:
     """The (H, W, S) uint8 census costs and uint16 sum of the messages along every direction, S = D rounded
     up to whole vectors."""
@@ -302,10 +317,8 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
     for view, code in zip(views, codes):
         machine.launch(build, (width, height), view, code, *dims, np.float32(census_threshold), noise)
     levels = list(views)
-    if ad_weight > 0 and match_histograms:
-        matched = match_histogram(views[1], views[0], machine=machine)
-        assert isinstance(matched, cl_array.Array)  # device field in, device field out
-        levels[1] = matched
+    if ad_weight > 0 and match_exposure:
+        levels[1] = _exposure_matched(machine, codes, views, d_min, depth, noise)
     costs = machine.empty((height, width, stride), np.uint8)
     outside = CENSUS_BITS // 2 + round(ad_weight * AD_CAP / 2)
     machine.launch(machine.kernel("semiglobal", "census_costs"), (width, height), *codes, *levels, costs, *dims,
@@ -321,6 +334,25 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
                        np.int32(dy), np.uint16(p1), np.float32(p2), np.float32(edge_gain), noise,
                        np.int32(index == 0), local_size=(_LINES_PER_GROUP,))
     return costs, sums
+
+
+def _exposure_matched(machine: Machine, codes: list[cl_array.Array], views: list[cl_array.Array], d_min: int,
+                      depth: int, noise: cl_array.Array) -> cl_array.Array:
+    """The right view's grey levels moved by the cameras' difference, per brightness bin, measured on the
+    sure census matches (kernels/semiglobal.cl tone_votes); all on the device."""
+    height, width = views[1].shape
+    dims = (np.int64(width), np.int64(height))
+    low, high = (reduce(views[1], op, machine=machine) for op in ("min", "max"))
+    votes = machine.empty((TONE_BINS, _TONE_STEPS), np.int32)
+    cl.enqueue_fill_buffer(machine.queue, device_memory(votes), np.int32(0), 0, votes.nbytes)
+    machine.launch(machine.kernel("semiglobal", "tone_votes"), (width, height), *codes, *views, votes, *dims,
+                   np.int32(depth), np.int32(d_min), np.int32(_TONE_SURE), np.int32(_TONE_MARGIN), noise, low, high)
+    offset = machine.empty((TONE_BINS,), np.float32)
+    machine.launch(machine.kernel("semiglobal", "tone_offsets"), (1,), votes, offset, np.int32(_TONE_LEAST), noise)
+    moved = machine.empty((height, width), np.float32)
+    machine.launch(machine.kernel("semiglobal", "apply_tone"), (height * width,), views[1], moved, offset,
+                   np.int64(height * width), low, high)
+    return moved
 
 
 def _refine(machine: Machine, filled: cl_array.Array, occluded: cl_array.Array, out_of_range: cl_array.Array,
