@@ -78,7 +78,17 @@ __kernel void tone_votes(__global const ulong *left, __global const ulong *right
         if (abs(k - at) <= 1 || xr < 0 || xr >= W) continue;
         if (popcount(code ^ right[y * W + xr]) < best + margin) return;
     }
-    float r = right_grey[y * W + x - (d_min + at)], span = high[0] - low[0];
+    /* The match to a fraction of a pixel (the equiangular vertex of the census costs at the best disparity
+     * and its neighbours), and the right view read there: at a whole disparity, a pixel on a brightness
+     * edge would be compared with its match moved by up to half a pixel across the edge. */
+    long xr = x - (d_min + at);
+    int below = at > 0 && xr + 1 < W ? popcount(code ^ right[y * W + xr + 1]) : best;
+    int above = at + 1 < D && xr > 0 ? popcount(code ^ right[y * W + xr - 1]) : best;
+    int rise = max(below, above) - best;
+    float shift = rise > 0 ? (float)(below - above) / (2.0f * (float)rise) : 0.0f;
+    long toward = shift > 0.0f ? xr - 1 : xr + 1;
+    float r = mix(right_grey[y * W + xr], right_grey[y * W + clamp(toward, (long)0, W - 1)], fabs(shift));
+    float span = high[0] - low[0];
     int bin = span > 0.0f ? clamp((int)((r - low[0]) / span * TONE_BINS), 0, TONE_BINS - 1) : 0;
     float step = (left_grey[y * W + x] - r) / fmax(noise[0], FLT_MIN) * 4.0f;
     int s = (int)clamp(rint(step), -4.0f * TONE_REACH, 4.0f * TONE_REACH) + 4 * TONE_REACH;
@@ -102,7 +112,9 @@ __kernel void tone_offsets(__global const int *votes, __global float *offset, in
         long running = 0;
         int s = 0;
         while (2 * (running + h[s]) < total) running += h[s++];
-        offset[b] = (float)(s - 4 * TONE_REACH) * unit;
+        /* The median read within its step, the step's votes spread evenly over it. */
+        float inside = ((float)total / 2.0f - (float)running) / (float)h[s] - 0.5f;
+        offset[b] = ((float)(s - 4 * TONE_REACH) + inside) * unit;
         known[count++] = b;
     }
     for (int b = 0; b < TONE_BINS; b++) {
