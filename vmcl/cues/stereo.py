@@ -48,7 +48,7 @@ class StereoCue(CueModule):
     label = Label.DEPTH
     fields = ("sparse_disparity", "stereo_discontinuity", "first_pass_disparity", "half_occluded", "out_of_range")
     # The stereo MRF's weights for the dense matches: the preset's, with the data weight alpha and the
-    # smoothness beta fitted on the training pairs (benchmarks/stereo_fit.py, stage 2). The preset itself
+    # smoothness beta fitted on the training pairs (benchmarks/stereo_fit.py, stage 4). The preset itself
     # was measured on sparse edge matches.
     settings = mrf_preset("stereo").override({"alpha": DENSE_ALPHA, "beta": DENSE_BETA})
     restored_as = "disparity"
