@@ -51,19 +51,28 @@ __kernel void census(__global const float *image, __global ulong *codes, long W,
 
 /* The two cameras' brightness difference, from the pixels whose census match is sure (the census is
  * blind to it): each pixel whose best census cost is at most `sure` bits, and whose best cost away from
- * that disparity's neighbours is at least `margin` bits worse, votes for its match's difference
- * (left - right, in quarters of the noise's standard deviation, +-TONE_REACH sigmas) in the histogram
- * of the right pixel's brightness bin (TONE_BINS equal bins over [low, high], the right view's span). */
+ * that disparity and its neighbours is at least `margin` bits worse (at least one such disparity must
+ * compete), votes for its match's difference (left - right) in the histogram of the pair's mean
+ * brightness bin (TONE_BINS equal bins over the two views' joint span). The mean, not the right
+ * view's brightness alone: binned by one noisy value, a bin's difference would lean against that
+ * value's noise (the darkest bin holds the pixels whose noise made them darker). The difference is
+ * counted in steps of TONE_STEP of the span, up to TONE_REACH steps either way (a quarter of the span). */
 #define TONE_BINS 32
-#define TONE_REACH 16
-#define TONE_STEPS (8 * TONE_REACH + 1)
+#define TONE_REACH 128
+#define TONE_SPAN_ARGS __global const float *low_left, __global const float *low_right, \
+                       __global const float *high_left, __global const float *high_right
+#define TONE_LOW fmin(low_left[0], low_right[0])
+#define TONE_HIGH fmax(high_left[0], high_right[0])
+#define TONE_STEPS (2 * TONE_REACH + 1)
+#define TONE_STEP (1.0f / 512.0f)
 __kernel void tone_votes(__global const ulong *left, __global const ulong *right, __global const float *left_grey,
                          __global const float *right_grey, __global int *votes, long W, long H, int D, int d_min,
-                         int sure, int margin, __global const float *noise, __global const float *low,
-                         __global const float *high)
+                         int sure, int margin, TONE_SPAN_ARGS)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
+    float low = TONE_LOW, span = TONE_HIGH - low;
+    if (!(span > 0.0f)) return;
     ulong code = left[y * W + x];
     int best = 255, at = -1;
     for (int k = 0; k < D; k++) {
@@ -73,37 +82,42 @@ __kernel void tone_votes(__global const ulong *left, __global const ulong *right
         if (c < best) { best = c; at = k; }
     }
     if (at < 0 || best > sure) return;
+    int competitors = 0;
     for (int k = 0; k < D; k++) {
         long xr = x - (d_min + k);
         if (abs(k - at) <= 1 || xr < 0 || xr >= W) continue;
         if (popcount(code ^ right[y * W + xr]) < best + margin) return;
+        competitors++;
     }
+    if (competitors == 0) return;
     /* The match to a fraction of a pixel (the equiangular vertex of the census costs at the best disparity
-     * and its neighbours), and the right view read there: at a whole disparity, a pixel on a brightness
-     * edge would be compared with its match moved by up to half a pixel across the edge. */
+     * and its two neighbours; whole where a neighbour is outside the range or the image), and the right
+     * view read there: at a whole disparity, a pixel on a brightness edge would be compared with its match
+     * moved by up to half a pixel across the edge. */
     long xr = x - (d_min + at);
-    int below = at > 0 && xr + 1 < W ? popcount(code ^ right[y * W + xr + 1]) : best;
-    int above = at + 1 < D && xr > 0 ? popcount(code ^ right[y * W + xr - 1]) : best;
-    int rise = max(below, above) - best;
-    float shift = rise > 0 ? (float)(below - above) / (2.0f * (float)rise) : 0.0f;
-    long toward = shift > 0.0f ? xr - 1 : xr + 1;
-    float r = mix(right_grey[y * W + xr], right_grey[y * W + clamp(toward, (long)0, W - 1)], fabs(shift));
-    float span = high[0] - low[0];
-    int bin = span > 0.0f ? clamp((int)((r - low[0]) / span * TONE_BINS), 0, TONE_BINS - 1) : 0;
-    float step = (left_grey[y * W + x] - r) / fmax(noise[0], FLT_MIN) * 4.0f;
-    int s = (int)clamp(rint(step), -4.0f * TONE_REACH, 4.0f * TONE_REACH) + 4 * TONE_REACH;
+    float shift = 0.0f;
+    if (at > 0 && at + 1 < D && xr + 1 < W && xr > 0) {
+        int below = popcount(code ^ right[y * W + xr + 1]), above = popcount(code ^ right[y * W + xr - 1]);
+        int rise = max(below, above) - best;
+        shift = rise > 0 ? (float)(below - above) / (2.0f * (float)rise) : 0.0f;
+    }
+    float r = mix(right_grey[y * W + xr], right_grey[y * W + (shift > 0.0f ? xr - 1 : xr + 1)], fabs(shift));
+    float l = left_grey[y * W + x];
+    int bin = clamp((int)((0.5f * (l + r) - low) / span * TONE_BINS), 0, TONE_BINS - 1);
+    float step = (l - r) / (span * TONE_STEP);
+    int s = (int)clamp(rint(step), (float)-TONE_REACH, (float)TONE_REACH) + TONE_REACH;
     atomic_inc(votes + bin * TONE_STEPS + s);
 }
 
-/* Each brightness bin's offset: the median of its votes (in levels), where it has at least `least`;
+/* Each brightness bin's offset: the median of its votes (in levels), where it has at least `least` (>= 1);
  * a bin with fewer takes the offset interpolated between the nearest bins that have enough, or the
  * nearest one's beyond the last; 0 everywhere when no bin has enough. One work-item: the bins are few. */
-__kernel void tone_offsets(__global const int *votes, __global float *offset, int least,
-                           __global const float *noise)
+__kernel void tone_offsets(__global const int *votes, __global float *offset, int least, TONE_SPAN_ARGS)
 {
     if (get_global_id(0) != 0) return;
-    float unit = noise[0] / 4.0f;
+    float unit = (TONE_HIGH - TONE_LOW) * TONE_STEP;
     int known[TONE_BINS], count = 0;
+    least = max(least, 1);
     for (int b = 0; b < TONE_BINS; b++) {
         __global const int *h = votes + b * TONE_STEPS;
         long total = 0;
@@ -114,7 +128,7 @@ __kernel void tone_offsets(__global const int *votes, __global float *offset, in
         while (2 * (running + h[s]) < total) running += h[s++];
         /* The median read within its step, the step's votes spread evenly over it. */
         float inside = ((float)total / 2.0f - (float)running) / (float)h[s] - 0.5f;
-        offset[b] = ((float)(s - 4 * TONE_REACH) + inside) * unit;
+        offset[b] = ((float)(s - TONE_REACH) + inside) * unit;
         known[count++] = b;
     }
     for (int b = 0; b < TONE_BINS; b++) {
@@ -131,17 +145,26 @@ __kernel void tone_offsets(__global const int *votes, __global float *offset, in
     }
 }
 
-/* The right view's brightness moved by its bin's offset, interpolated linearly between bin centres
- * (constant beyond the first and last), so that it reads as the left camera would have seen it. */
+/* The offset of the pair's mean brightness m, interpolated linearly between bin centres (constant beyond
+ * the first and last). */
+inline float tone_offset(__global const float *offset, float m, float low, float span)
+{
+    float place = clamp((m - low) / span * TONE_BINS - 0.5f, 0.0f, TONE_BINS - 1.0f);
+    int b = min((int)place, TONE_BINS - 2);
+    return mix(offset[b], offset[b + 1], place - (float)b);
+}
+
+/* The right view's brightness moved by the offset, so that it reads as the left camera would have seen it.
+ * The offsets are indexed by the pair's mean m = v + offset(m) / 2, which one step from m = v finds to
+ * within the offsets' change over half an offset. */
 __kernel void apply_tone(__global const float *grey, __global float *out, __global const float *offset, long n,
-                         __global const float *low, __global const float *high)
+                         TONE_SPAN_ARGS)
 {
     long i = get_global_id(0);
     if (i >= n) return;
-    float v = grey[i], span = high[0] - low[0];
-    float place = span > 0.0f ? clamp((v - low[0]) / span * TONE_BINS - 0.5f, 0.0f, TONE_BINS - 1.0f) : 0.0f;
-    int b = min((int)place, TONE_BINS - 2);
-    out[i] = v + mix(offset[b], offset[b + 1], place - (float)b);
+    float v = grey[i], low = TONE_LOW, span = TONE_HIGH - low;
+    if (!(span > 0.0f)) { out[i] = v; return; }
+    out[i] = v + tone_offset(offset, v + 0.5f * tone_offset(offset, v, low, span), low, span);
 }
 
 /* C(x, y, d) = Hamming distance between the left code at x and the right code at x - d, plus

@@ -255,8 +255,8 @@ class StereoConfig:
         In [0, 1]: the weight of the semi-global matcher's half-occluded pixels.
     census_threshold, ad_weight, match_exposure, p1, p2, edge_gain
         The semi-global matcher's census margin, the weight of the pixels' brightness difference beside the
-        census, whether that difference is taken after matching the right view's brightness histogram to
-        the left's, and the smoothness prices, as
+        census, whether that difference is taken after the cameras' exposure difference, measured on the
+        surest census matches, is taken out, and the smoothness prices, as
         :func:`vmcl.early.semiglobal.match_semiglobal` takes them.
     refine, refine_radius, refine_colour, refine_stride
         The semi-global matcher's weighted median at depth jumps (pixels near a jump take the median of
@@ -290,7 +290,7 @@ class StereoConfig:
     occluded_weight: float = 0.1
     census_threshold: float = semiglobal.CENSUS_THRESHOLD
     ad_weight: float = semiglobal.AD_WEIGHT
-    match_exposure: bool = True
+    match_exposure: bool = semiglobal.MATCH_EXPOSURE
     p1: int = semiglobal.P1
     p2: float = semiglobal.P2
     edge_gain: float = semiglobal.EDGE_GAIN

@@ -53,9 +53,9 @@ from vmcl.early.weighted_median import weighted_median
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["AD_CAP", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "JUMP", "P1", "P2",
-           "POOR_MATCH", "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "TONE_BINS", "SemiGlobalMatch",
-           "match_semiglobal"]
+__all__ = ["AD_CAP", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "JUMP",
+           "MATCH_EXPOSURE", "P1", "P2", "POOR_MATCH", "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "TONE_BINS", "TONE_STEPS",
+           "SemiGlobalMatch", "match_semiglobal"]
 
 CENSUS_SIZE = (9, 7)  # width, height of the census window: 62 neighbours in a 64-bit code
 CENSUS_BITS = CENSUS_SIZE[0] * CENSUS_SIZE[1] - 1
@@ -95,16 +95,22 @@ POOR_MATCH = 0.25
 cost (every census bit differing, and the brightness difference at its cap): where the search stopped,
 the match is poor; a good match at the end is kept, since a range may end right at a true disparity."""
 
+MATCH_EXPOSURE = True
+"""Default: the cameras' exposure difference is measured and taken out before the brightness difference
+(benchmarks/results/stereo_fit.md, stage 2)."""
 TONE_BINS = 32
-"""Brightness bins over the right view's span in which the cameras' difference is measured (TONE_BINS in
+"""Bins of the pair's mean brightness, over the two views' joint span, in which the cameras' difference is
+measured (TONE_BINS in kernels/semiglobal.cl)."""
+TONE_STEPS = 2 * 128 + 1
+"""Steps of the histogram of a bin's differences: 1/512 of the joint span each, 128 either way (TONE_STEPS in
 kernels/semiglobal.cl)."""
-_TONE_STEPS = 8 * 16 + 1  # the difference's histogram: quarters of the noise's deviation, +-16 (TONE_STEPS)
+# Not fitted (the training pairs say only that the measurement works): a sure match is one whose census
+# differs in at most a quarter of its bits, with no other disparity, its neighbours apart, within 6 bits
+# (a tenth of the code) of it; a bin's own median needs 64 votes, enough for the median of differences of
+# two noisy pixels to settle within about a fifth of their spread.
 _TONE_SURE = CENSUS_BITS // 4
-"""A census match votes for the cameras' difference when at most this many bits differ..."""
 _TONE_MARGIN = 6
-"""...and every disparity but the best and its neighbours costs at least this many bits more."""
 _TONE_LEAST = 64
-"""Votes a brightness bin needs for its own median; bins with fewer are interpolated from their neighbours."""
 
 _NOISE_MEDIAN = 0.6745 * 6
 """The median magnitude of Immerkaer's mask on Gaussian noise, in units of the noise's standard deviation."""
@@ -148,7 +154,7 @@ class SemiGlobalMatch:
 
 def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max: int | None = None,
                      census_threshold: float = CENSUS_THRESHOLD, ad_weight: float = AD_WEIGHT,
-                     match_exposure: bool = True, p1: int = P1, p2: float = P2,
+                     match_exposure: bool = MATCH_EXPOSURE, p1: int = P1, p2: float = P2,
                      edge_gain: float = EDGE_GAIN, paths: int = 8,
                      subpixel: bool = True, tolerance: int = 1, median: bool = True, refine: bool = True,
                      refine_radius: int = REFINE_RADIUS, refine_colour: float = REFINE_COLOUR,
@@ -178,7 +184,8 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         measured where the census match is sure (the median difference of such matches in each of
         :data:`TONE_BINS` brightness bins), so that differences of exposure and response between the
         cameras do not count as a mismatch (the census, which compares each pixel with its neighbours
-        only, is blind to them).
+        only, is blind to them). Differences up to a quarter of the two views' joint brightness span are
+        measured. No effect when ``ad_weight`` is 0.
     p1 : int
         In [0, 255]: the price of a change of one disparity between neighbours (slanted surfaces), in
         census bits (a code has :data:`CENSUS_BITS`).
@@ -318,13 +325,13 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
         machine.launch(build, (width, height), view, code, *dims, np.float32(census_threshold), noise)
     levels = list(views)
     if ad_weight > 0 and match_exposure:
-        levels[1] = _exposure_matched(machine, codes, views, d_min, depth, noise)
+        levels[1] = _exposure_matched(machine, codes, views, d_min, depth)
     costs = machine.empty((height, width, stride), np.uint8)
     outside = CENSUS_BITS // 2 + round(ad_weight * AD_CAP / 2)
     machine.launch(machine.kernel("semiglobal", "census_costs"), (width, height), *codes, *levels, costs, *dims,
                    np.int32(depth), np.int32(stride), np.int32(d_min), np.uint8(outside), np.float32(ad_weight),
                    np.float32(AD_CAP), noise)
-    del codes
+    del codes, levels
     sums = machine.empty((height, width, stride), np.uint16)
     aggregate = machine.kernel("semiglobal", "aggregate", MAX_D=_PRIVATE_STEP * math.ceil(depth / _PRIVATE_STEP))
     for index, (dx, dy) in enumerate(DIRECTIONS[paths]):
@@ -337,21 +344,21 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
 
 
 def _exposure_matched(machine: Machine, codes: list[cl_array.Array], views: list[cl_array.Array], d_min: int,
-                      depth: int, noise: cl_array.Array) -> cl_array.Array:
+                      depth: int) -> cl_array.Array:
     """The right view's grey levels moved by the cameras' difference, per brightness bin, measured on the
     sure census matches (kernels/semiglobal.cl tone_votes); all on the device."""
     height, width = views[1].shape
     dims = (np.int64(width), np.int64(height))
-    low, high = (reduce(views[1], op, machine=machine) for op in ("min", "max"))
-    votes = machine.empty((TONE_BINS, _TONE_STEPS), np.int32)
+    span = [reduce(view, op, machine=machine) for op in ("min", "max") for view in views]
+    votes = machine.empty((TONE_BINS, TONE_STEPS), np.int32)
     cl.enqueue_fill_buffer(machine.queue, device_memory(votes), np.int32(0), 0, votes.nbytes)
     machine.launch(machine.kernel("semiglobal", "tone_votes"), (width, height), *codes, *views, votes, *dims,
-                   np.int32(depth), np.int32(d_min), np.int32(_TONE_SURE), np.int32(_TONE_MARGIN), noise, low, high)
+                   np.int32(depth), np.int32(d_min), np.int32(_TONE_SURE), np.int32(_TONE_MARGIN), *span)
     offset = machine.empty((TONE_BINS,), np.float32)
-    machine.launch(machine.kernel("semiglobal", "tone_offsets"), (1,), votes, offset, np.int32(_TONE_LEAST), noise)
+    machine.launch(machine.kernel("semiglobal", "tone_offsets"), (1,), votes, offset, np.int32(_TONE_LEAST), *span)
     moved = machine.empty((height, width), np.float32)
     machine.launch(machine.kernel("semiglobal", "apply_tone"), (height * width,), views[1], moved, offset,
-                   np.int64(height * width), low, high)
+                   np.int64(height * width), *span)
     return moved
 
 
