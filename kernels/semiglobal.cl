@@ -101,7 +101,9 @@ __kernel void tone_votes(__global const ulong *left, __global const ulong *right
         int rise = max(below, above) - best;
         shift = rise > 0 ? (float)(below - above) / (2.0f * (float)rise) : 0.0f;
     }
-    float r = mix(right_grey[y * W + xr], right_grey[y * W + (shift > 0.0f ? xr - 1 : xr + 1)], fabs(shift));
+    float r = right_grey[y * W + xr];
+    if (shift != 0.0f)  /* both neighbours are inside the image then */
+        r = mix(r, right_grey[y * W + (shift > 0.0f ? xr - 1 : xr + 1)], fabs(shift));
     float l = left_grey[y * W + x];
     int bin = clamp((int)((0.5f * (l + r) - low) / span * TONE_BINS), 0, TONE_BINS - 1);
     float step = (l - r) / (span * TONE_STEP);
