@@ -23,16 +23,54 @@ inline int is_edge(__global const uchar *edges, int x, int y, int W, int H)
     return x >= 0 && y >= 0 && x < W && y < H && edges[(size_t)y * W + x] != 0;
 }
 
+/* The links among a pixel's neighbours: bit k of `around` set where neighbour k is an edge pixel; a
+ * diagonal one is dropped where either 4-neighbour sharing its corner (k - 1 and k + 1) is an edge pixel. */
+inline uint links_among(uint around)
+{
+    uint four = around & 0x55u;
+    uint shared = ((four << 1) | (four >> 1) | ((four & 1u) << 7)) & 0xaau;
+    return around & ~shared;
+}
+
 /* The link bits of edge pixel (x, y): bit k set where its neighbour k is an edge pixel linked to it. */
 inline uint links_of(__global const uchar *edges, int x, int y, int W, int H)
 {
+    uint around = 0;
+    for (int k = 0; k < 8; k++)
+        around |= (uint)is_edge(edges, x + DX[k], y + DY[k], W, H) << k;
+    return links_among(around);
+}
+
+/* Edge bits of row yy (0 outside the image) over the columns x0 - 2 .. x0 + RUN + 1: bit i is column x0 - 2 + i. */
+inline uint row_bits(__global const uchar *edges, int x0, int yy, int W, int H)
+{
+    if (yy < 0 || yy >= H) return 0;
+    __global const uchar *row = edges + (size_t)yy * W;
     uint bits = 0;
-    for (int k = 0; k < 8; k++) {
-        if (!is_edge(edges, x + DX[k], y + DY[k], W, H)) continue;
-        if ((k & 1) && (is_edge(edges, x + DX[k], y, W, H) || is_edge(edges, x, y + DY[k], W, H))) continue;
-        bits |= 1u << k;
+    int i = 0;
+    if (x0 >= 2 && x0 + RUN - 2 <= W) {
+        /* The first 16 columns at once: each non-zero byte selects its bit, and the bits are or-ed together. */
+        const ushort16 bit = (ushort16)(1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192, 16384, 32768);
+        ushort16 set = select((ushort16)0, bit, convert_short16(vload16(0, row + x0 - 2)) != (short16)0);
+        ushort8 a = set.lo | set.hi;
+        ushort4 b = a.lo | a.hi;
+        ushort2 c = b.lo | b.hi;
+        bits = (uint)(c.x | c.y);
+        i = 16;
+    }
+    for (; i < RUN + 4; i++) {
+        int x = x0 - 2 + i;
+        if (x >= 0 && x < W && row[x]) bits |= 1u << i;
     }
     return bits;
+}
+
+/* The neighbour bits (bit k: neighbour k is an edge pixel) of bit i of the middle of three rows' bits. */
+inline uint around_bit(uint up, uint middle, uint down, int i)
+{
+    return ((middle >> (i + 1)) & 1u) | ((up >> (i + 1)) & 1u) << 1 | ((up >> i) & 1u) << 2
+           | ((up >> (i - 1)) & 1u) << 3 | ((middle >> (i - 1)) & 1u) << 4 | ((down >> (i - 1)) & 1u) << 5
+           | ((down >> i) & 1u) << 6 | ((down >> (i + 1)) & 1u) << 7;
 }
 
 /* links[p]: bit k set where p and its neighbour k are both edge pixels and linked (0 off the edges). */
@@ -48,15 +86,46 @@ __kernel void link_pixels(__global const uchar *edges, __global uchar *links, in
 
 /* Curve pixels are edge pixels with at most two links; the others (three or more) are branch pixels,
  * where curves meet and split. curve_links keeps the links between curve pixels; branch marks the
- * branch pixels; is_curve (int, for the scan that numbers them) the curve pixels. */
+ * branch pixels; is_curve (int, for the scan that numbers them) the curve pixels. The branch pixels'
+ * flat addresses are also listed, in no particular order (a few in an image; the host sorts them):
+ * counts[1] (zeroed before) counts them, and the list has room for every pixel. */
 __kernel void split_branches(__global const uchar *edges, __global uchar *curve_links, __global uchar *branch,
-                             __global int *is_curve, int W, int H)
+                             __global int *is_curve, __global int *branch_list, __global int *counts, int W, int H)
 {
     int x0 = get_global_id(0) * RUN, y = get_global_id(1);
     if (x0 >= W || y >= H) return;
-    for (int x = x0; x < min(x0 + RUN, W); x++) {
-        size_t p = (size_t)y * W + x;
-        uint own = edges[p] ? links_of(edges, x, y, W, H) : 0;
+    size_t p0 = (size_t)y * W + x0;
+    int end = min(x0 + RUN, W);
+    if (end == x0 + RUN) {
+        vstore16((uchar16)0, 0, curve_links + p0);
+        vstore16((uchar16)0, 0, branch + p0);
+        vstore16((int16)0, 0, is_curve + p0);
+    } else {
+        for (size_t p = p0; p < p0 + (size_t)(end - x0); p++) {
+            curve_links[p] = 0;
+            branch[p] = 0;
+            is_curve[p] = 0;
+        }
+    }
+    /* The run's pixels and their neighbours' neighbours, as bits of the five rows around it; most runs
+     * hold no edge pixel (Canny marks a few percent of an image) and stay as they were cleared. */
+    if (end == x0 + RUN) {
+        ulong2 run = as_ulong2(vload16(0, edges + p0));
+        if ((run.x | run.y) == 0) return;
+    }
+    uint rows[5];
+    rows[2] = row_bits(edges, x0, y, W, H);
+    rows[0] = row_bits(edges, x0, y - 2, W, H);
+    rows[1] = row_bits(edges, x0, y - 1, W, H);
+    rows[3] = row_bits(edges, x0, y + 1, W, H);
+    rows[4] = row_bits(edges, x0, y + 2, W, H);
+    /* Only the run's edge pixels (bits 2 .. end - x0 + 1 of the middle row) have links. */
+    uint own_edges = rows[2] & (((1u << (end - x0)) - 1u) << 2);
+    while (own_edges) {
+        int i = 31 - clz(own_edges & -own_edges);
+        own_edges &= own_edges - 1;
+        size_t p = (size_t)y * W + x0 + i - 2;
+        uint own = links_among(around_bit(rows[1], rows[2], rows[3], i));
         uint degree = popcount(own);
         uchar kept = 0;
         if (degree <= 2) {
@@ -65,19 +134,22 @@ __kernel void split_branches(__global const uchar *edges, __global uchar *curve_
             while (own) {
                 int k = 31 - clz(own & -own);
                 own &= own - 1;
-                if (popcount(links_of(edges, x + DX[k], y + DY[k], W, H)) <= 2) kept |= (uchar)(1 << k);
+                int r = 2 + DY[k];
+                if (popcount(links_among(around_bit(rows[r - 1], rows[r], rows[r + 1], i + DX[k]))) <= 2)
+                    kept |= (uchar)(1 << k);
             }
         }
         curve_links[p] = kept;
         branch[p] = (uchar)(degree >= 3);
-        is_curve[p] = edges[p] != 0 && degree <= 2;
+        if (degree >= 3) branch_list[atomic_inc(&counts[1])] = (int)p;
+        is_curve[p] = degree <= 2;
     }
 }
 
-/* The number of curve pixels, from the exclusive scan that numbers them. */
-__kernel void count_curve_pixels(__global const int *index, __global const int *is_curve, __global int *total, long n)
+/* The number of curve pixels (counts[0]), from the exclusive scan that numbers them. */
+__kernel void count_curve_pixels(__global const int *index, __global const int *is_curve, __global int *counts, long n)
 {
-    if (get_global_id(0) == 0) total[0] = index[n - 1] + is_curve[n - 1];
+    if (get_global_id(0) == 0) counts[0] = index[n - 1] + is_curve[n - 1];
 }
 
 /* The slot (0 or 1) of direction k among the set bits of a curve pixel's links, in increasing k. */
@@ -110,6 +182,13 @@ __kernel void tour(__global const uchar *curve_links, __global const int *is_cur
 {
     int x0 = get_global_id(0) * RUN, y = get_global_id(1);
     if (x0 >= W || y >= H) return;
+    if (x0 + RUN <= W) {
+        int16 run = vload16(0, is_curve + (size_t)y * W + x0);
+        int8 either = run.lo | run.hi;
+        int4 any4 = either.lo | either.hi;
+        int2 any2 = any4.lo | any4.hi;
+        if ((any2.x | any2.y) == 0) return;
+    }
     for (int x = x0; x < min(x0 + RUN, W); x++) {
         size_t p = (size_t)y * W + x;
         if (!is_curve[p]) continue;
@@ -132,9 +211,10 @@ __kernel void tour(__global const uchar *curve_links, __global const int *is_cur
     }
 }
 
-/* The packed answer the host reads back at once: field f of curve pixel i at out[f * N + i]. */
+/* The packed answer the host reads back at once, in arc order: field f of the curve pixel in slot j at
+ * out[f * N + j], curve after curve (in increasing key), each from its first pixel to its last. */
 #define OUT_PIXEL 0
-#define OUT_CURVE 1
+#define OUT_SIZE 1
 #define OUT_POSITION 2
 #define OUT_CLOSED 3
 #define OUT_MAGNITUDE 4
@@ -142,84 +222,97 @@ __kernel void tour(__global const uchar *curve_links, __global const int *is_cur
 #define OUT_STEP 6
 #define OUT_ANGLE 7
 
-/* Each curve pixel's curve (the largest key of its rings: the same for every pixel of a curve), its arc
- * position from the curve's start, and its forward node (the one that walks towards larger positions).
- * A path's two nodes share one ring whose principal is the turn at one end: the node leaving towards the
- * path lies at distance position + 1, the one coming back at 2n - position (0 at the start itself). A
- * closed curve's pixels have one node in each of two rings; the ring of the larger principal sets the
- * direction and the start. */
-__kernel void arc_positions(__global const int *top, __global const int *distance, __global const int *pixel,
-                            __global const float *magnitude, int has_magnitude, __global int *forward,
-                            __global int *out, int N)
+/* Each curve pixel's curve key (the largest key of its rings: the same for every pixel of a curve), its
+ * arc position from the curve's start, and whether its curve is closed. A path's two nodes share one
+ * ring whose principal is the turn at one end: the node leaving towards the path lies at distance
+ * position + 1, the one coming back at 2n - position (0 at the start itself). A closed curve's pixels
+ * have one node in each of two rings; the ring of the larger principal sets the direction and the
+ * start. Keys lie in [0, 4N): a node's own number, or 2N + node for a turn. */
+__kernel void arc_positions(__global const int *top, __global const int *distance, __global int *key,
+                            __global int *position, __global int *closed, int N)
 {
     int i = get_global_id(0);
     if (i >= N) return;
     int ta = top[2 * i], tb = top[2 * i + 1], da = distance[2 * i], db = distance[2 * i + 1];
-    int p = pixel[i], position;
-    out[OUT_PIXEL * N + i] = p;
     if (ta == tb) {
-        position = (da == 0 || db == 0) ? 0 : min(da, db) - 1;
-        out[OUT_CURVE * N + i] = ta;
-        out[OUT_CLOSED * N + i] = 0;
-        forward[i] = da == position + 1 ? 2 * i : 2 * i + 1;
+        position[i] = (da == 0 || db == 0) ? 0 : min(da, db) - 1;
+        key[i] = ta;
+        closed[i] = 0;
     } else {
-        position = ta > tb ? da : db;
-        out[OUT_CURVE * N + i] = max(ta, tb);
-        out[OUT_CLOSED * N + i] = 1;
-        forward[i] = ta > tb ? 2 * i : 2 * i + 1;
+        position[i] = ta > tb ? da : db;
+        key[i] = max(ta, tb);
+        closed[i] = 1;
     }
-    out[OUT_POSITION * N + i] = position;
-    out[OUT_MAGNITUDE * N + i] = has_magnitude ? as_int(magnitude[p]) : as_int(NAN);
 }
 
-/* The node after u along the tour, or u itself where the tour turns round (an open curve's end): walks
- * along a curve hold at its ends. */
-inline int walk(__global const int *next, int u)
+/* Each curve's number of pixels, at its key (zeroed before): one more than its pixels' largest position. */
+__kernel void curve_sizes(__global const int *key, __global const int *position, __global int *size_of_key, int N)
 {
-    int v = next[u];
-    return (v >> 1) == (u >> 1) ? u : v;
+    int i = get_global_id(0);
+    if (i >= N) return;
+    atomic_max(&size_of_key[key[i]], position[i] + 1);
 }
 
-inline float2 position_of(__global const int *pixel, int node, int W)
+/* The curve pixels put in arc order: slot = its curve's offset (the exclusive sum of the sizes of the
+ * curves of smaller key) + its position. The walks along a curve then read neighbouring slots. */
+__kernel void arrange(__global const int *key, __global const int *position, __global const int *closed,
+                      __global const int *pixel, __global const float *magnitude, int has_magnitude,
+                      __global const int *size_of_key, __global const int *offset_of_key, __global int *out, int N)
 {
-    int p = pixel[node >> 1];
+    int i = get_global_id(0);
+    if (i >= N) return;
+    int k = key[i], slot = offset_of_key[k] + position[i], p = pixel[i];
+    out[OUT_PIXEL * N + slot] = p;
+    out[OUT_SIZE * N + slot] = size_of_key[k];
+    out[OUT_POSITION * N + slot] = position[i];
+    out[OUT_CLOSED * N + slot] = closed[i];
+    out[OUT_MAGNITUDE * N + slot] = has_magnitude ? as_int(magnitude[p]) : as_int(NAN);
+}
+
+/* The slot of arc position q (ahead of or behind the curve's own range) on a curve of `size` pixels
+ * starting at slot `start`: round a closed curve, held at an open curve's ends. */
+inline int slot_at(int start, int size, int closed, int q)
+{
+    return start + (closed ? (q % size + size) % size : clamp(q, 0, size - 1));
+}
+
+inline float2 position_of(__global const int *out, int j, int W, int N)
+{
+    int p = out[OUT_PIXEL * N + j];
     return (float2)((float)(p % W), (float)(p / W));
 }
 
 /* The tangent direction at each curve pixel: a derivative filter along the arc (weights[t - 1] for the
  * pixels t ahead and, negated, t behind, t = 1..radius; ends held), applied to the positions. */
-__kernel void arc_tangents(__global const int *next, __global const int *pixel, __global const int *forward,
-                           __constant float *weights, __global float *angle, int radius, int W, int N)
+__kernel void arc_tangents(__global int *out, __constant float *weights, int radius, int W, int N)
 {
-    int i = get_global_id(0);
-    if (i >= N) return;
-    int ahead = forward[i], behind = forward[i] ^ 1;
+    int j = get_global_id(0);
+    if (j >= N) return;
+    int position = out[OUT_POSITION * N + j], size = out[OUT_SIZE * N + j], closed = out[OUT_CLOSED * N + j];
+    int start = j - position;
     float2 tangent = (float2)(0.0f, 0.0f);
-    for (int t = 1; t <= radius; t++) {
-        ahead = walk(next, ahead);
-        behind = walk(next, behind);
-        tangent += weights[t - 1] * (position_of(pixel, ahead, W) - position_of(pixel, behind, W));
-    }
-    angle[i] = atan2(tangent.y, tangent.x);
+    for (int t = 1; t <= radius; t++)
+        tangent += weights[t - 1] * (position_of(out, slot_at(start, size, closed, position + t), W, N)
+                                     - position_of(out, slot_at(start, size, closed, position - t), W, N));
+    out[OUT_ANGLE * N + j] = as_int(atan2(tangent.y, tangent.x));
 }
 
 /* The tangent's turning from each curve pixel to the next along the arc (|angle difference| in
  * [0, pi]), and the step's length (1 or sqrt 2; 0 after an open curve's last pixel). */
-__kernel void arc_turns(__global const int *next, __global const int *pixel, __global const int *forward,
-                        __global const float *angle, __global int *out, int W, int N)
+__kernel void arc_turns(__global int *out, int W, int N)
 {
-    int i = get_global_id(0);
-    if (i >= N) return;
-    int u = forward[i], v = walk(next, u);
+    int j = get_global_id(0);
+    if (j >= N) return;
+    int position = out[OUT_POSITION * N + j];
+    int k = slot_at(j - position, out[OUT_SIZE * N + j], out[OUT_CLOSED * N + j], position + 1);
     float turn = 0.0f, step = 0.0f;
-    if (v != u) {
-        float d = fabs(angle[v >> 1] - angle[i]);
+    if (k != j) {
+        float d = fabs(as_float(out[OUT_ANGLE * N + k]) - as_float(out[OUT_ANGLE * N + j]));
         turn = d > M_PI_F ? 2.0f * M_PI_F - d : d;
-        step = length(position_of(pixel, v, W) - position_of(pixel, u, W));
+        step = length(position_of(out, k, W, N) - position_of(out, j, W, N));
     }
-    out[OUT_TURN * N + i] = as_int(turn);
-    out[OUT_ANGLE * N + i] = as_int(angle[i]);
-    out[OUT_STEP * N + i] = as_int(step);
+    out[OUT_TURN * N + j] = as_int(turn);
+    out[OUT_STEP * N + j] = as_int(step);
 }
 
 /* The maps before the curves are drawn in: -1 (BRANCH, -2, at branch pixels), no position, no tangent. */
@@ -227,6 +320,12 @@ __kernel void clear_maps(__global const uchar *branch, __global int *labels, __g
                          __global float *tangent, long n)
 {
     long p0 = get_global_id(0) * RUN;
+    if (p0 + RUN <= n) {
+        vstore16((int16)(-1) - convert_int16(vload16(0, branch + p0)), 0, labels + p0);
+        vstore16((int16)(-1), 0, position + p0);
+        vstore16((float16)(NAN), 0, tangent + p0);
+        return;
+    }
     for (long p = p0; p < min(p0 + RUN, n); p++) {
         labels[p] = branch[p] ? -2 : -1;
         position[p] = -1;

@@ -369,6 +369,16 @@ class Machine:
             return cl_array.Array(None, dims, dtype, allocator=self.pool, strides=strides, _fast=True,
                                   _size=size, _context=self.context, _queue=self.queue)
 
+    def full(self, shape: tuple[int, ...] | int, dtype: Any, value: Any) -> cl_array.Array:
+        """A device array from the pool with every element ``value``, filled on the queue (nothing waits)."""
+        return self.fill(self.empty(shape, dtype), value)
+
+    def fill(self, array: cl_array.Array, value: Any) -> cl_array.Array:
+        """Set every element of a device array from :meth:`empty` to ``value``, on the queue; returns it."""
+        if array.size:
+            cl.enqueue_fill_buffer(self.queue, array.base_data, array.dtype.type(value), 0, array.nbytes)
+        return array
+
     def require_memory(self, what: str, total: int, largest: int | None = None) -> None:
         """Refuse, before anything is allocated, work that this device cannot hold.
 

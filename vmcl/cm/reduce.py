@@ -19,7 +19,6 @@ from vmcl.cm.core import (
     check_choice,
     check_int,
     check_real,
-    device_memory,
     field,
     machine_for,
     result,
@@ -193,13 +192,11 @@ def _count(machine: Machine, data: cl_array.Array, bins: int, lo: float, hi: flo
     counts_bytes = 4 * math.prod(shape)
     machine.require_memory(f"{tiles_y * tiles_x} histograms of {bins} bins", data.nbytes + counts_bytes,
                            max(data.nbytes, counts_bytes))
-    out = machine.empty(shape, np.int32)
+    out = machine.full(shape, np.int32, 0) if accumulate else machine.empty(shape, np.int32)
     local = 1 if machine.is_cpu else min(256, machine.device.max_work_group_size)
     # A one-work-item group counts without atomics (a CPU runs each group on one thread anyway).
     defines = dict(OP=0, ACC="int", SHARED_COUNTS=int(local > 1), TO_TOP=int(top is not None),
                    **type_defines(data.dtype))
-    if accumulate:
-        cl.enqueue_fill_buffer(machine.queue, device_memory(out), np.int32(0), 0, out.nbytes)
     # A range too narrow or too wide for float32 overflows here; the kernel rescales such ranges.
     with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
         scale = np.float32(bins) / (np.float32(hi) - np.float32(lo))

@@ -144,13 +144,12 @@ def send(values: ArrayLike, address: ArrayLike, *, size: int | tuple[int, ...], 
         raise InputValueError(f"address must have the shape of values {data.shape}, got {where.shape}")
     n = data.size
     defines = dict(COMBINE_OP=_COMBINE[combine], **type_defines(data.dtype))
-    counts = machine.empty(destinations, np.int32)
+    counts = machine.full(destinations, np.int32, 0)
     offsets = machine.empty(destinations, np.int32)
     cursor = machine.empty(destinations, np.int32)
     slots = machine.empty(n, np.int32)
     out = machine.empty(shape, data.dtype)
     queue = machine.queue
-    cl.enqueue_fill_buffer(queue, device_memory(counts), np.int32(0), 0, counts.nbytes)
     machine.launch(machine.kernel("router", "count_senders", **defines), (n,), where, counts, np.int64(n))
     exclusive_sum_into(machine, counts, offsets)
     # pyopencl's overloads type a device copy's ends as Buffer, but enqueue_copy dispatches on

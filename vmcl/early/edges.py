@@ -26,7 +26,6 @@ import math
 from typing import Literal, NamedTuple, overload
 
 import numpy as np
-import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm import doubling as _doubling
@@ -35,7 +34,6 @@ from vmcl.cm.core import (
     check_bool,
     check_choice,
     check_sigma,
-    device_memory,
     field,
     image_field,
     launch_flat,
@@ -199,7 +197,7 @@ def _hysteresis(machine: Machine, state: cl_array.Array, marks: cl_array.Array |
     changed = machine.empty(1, np.int32)
     current = state
     while True:
-        cl.enqueue_fill_buffer(machine.queue, device_memory(changed), np.int32(0), 0, changed.nbytes)
+        machine.fill(changed, 0)
         for _ in range(_CHECK_EVERY):
             launch_rows(machine, step, *size, current, spare, changed, *map(np.int64, size))
             current, spare = spare, current

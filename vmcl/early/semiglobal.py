@@ -29,7 +29,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm.core import (
@@ -38,7 +37,6 @@ from vmcl.cm.core import (
     check_int,
     check_real,
     check_unit_image,
-    device_memory,
     finite_float32,
     machine_for,
     mask_result,
@@ -350,8 +348,7 @@ def _exposure_matched(machine: Machine, codes: list[cl_array.Array], views: list
     height, width = views[1].shape
     dims = (np.int64(width), np.int64(height))
     span = [reduce(view, op, machine=machine) for op in ("min", "max") for view in views]
-    votes = machine.empty((TONE_BINS, TONE_STEPS), np.int32)
-    cl.enqueue_fill_buffer(machine.queue, device_memory(votes), np.int32(0), 0, votes.nbytes)
+    votes = machine.full((TONE_BINS, TONE_STEPS), np.int32, 0)
     machine.launch(machine.kernel("semiglobal", "tone_votes"), (width, height), *codes, *views, votes, *dims,
                    np.int32(depth), np.int32(d_min), np.int32(_TONE_SURE), np.int32(_TONE_MARGIN), *span)
     offset = machine.empty((TONE_BINS,), np.float32)

@@ -41,7 +41,6 @@ from vmcl.cm.core import (
     check_context,
     check_int,
     check_real,
-    device_memory,
     machine_for,
 )
 from vmcl.cm.core import field as device_field
@@ -529,15 +528,9 @@ def _feature_maps(machine: Machine, left, right, features: Features, sigma: floa
             total = cm_reduce.reduce(brightness, "sum", machine=machine)
             machine.launch(machine.kernel("stereo", "subtract_mean"), (brightness.size,), brightness, total,
                            np.int64(brightness.size))
-            maps[side] = _filled(machine, brightness.shape, np.uint8, 1)
+            maps[side] = machine.full(brightness.shape, np.uint8, 1)
             maps[side + "_attr"] = brightness
     return maps
-
-
-def _filled(machine: Machine, shape, dtype, value) -> cl_array.Array:
-    array = machine.empty(shape, dtype)
-    cl.enqueue_fill_buffer(machine.queue, device_memory(array), np.dtype(dtype).type(value), 0, array.nbytes)
-    return array
 
 
 class _Support:

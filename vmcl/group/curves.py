@@ -9,9 +9,11 @@ links, so the curve pixels form paths and closed loops. Each curve is walked bot
 "tour" nodes, and distance doubling over the rings (:func:`vmcl.cm.doubling.principal`, the paper's use
 of it) gives every pixel its curve (the ring's principal) and its arc position in O(log n) steps.
 
-The host then orders the pixels along their curves and measures each curve: its length (steps of 1 and
-sqrt 2), its curvature (the turning of the tangent of the positions smoothed along the arc), its mean
-gradient magnitude and its end tangents.
+Each curve's size (its largest arc position + 1, gathered at its ring's key) and an exclusive sum of the
+sizes put every pixel in its slot, curve after curve in arc order, on the device; the tangents and turns
+are then read from neighbouring slots. The host reads the pixels in that order and measures each curve:
+its length (steps of 1 and sqrt 2), its curvature (the turning of the tangent of the positions smoothed
+along the arc), its mean gradient magnitude and its end tangents.
 
 Coordinates are (x, y): x the column, y the row, as image pixels are addressed.
 """
@@ -187,13 +189,13 @@ def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothin
 
 
 class _Linked(NamedTuple):
-    """The device's answer: every curve pixel's flat address, curve key, arc position, loop flag, gradient
-    magnitude (NaN without one), the tangent's turn and the step to the next pixel, the tangent's direction,
-    the branch pixels' flat addresses, and on the device the packed fields (None without curve pixels) and
-    the branch mask."""
+    """The device's answer, every curve pixel in arc order (curve after curve, in the order of their
+    keys): its flat address, its curve's size, arc position, loop flag, gradient magnitude (NaN without
+    one), the tangent's turn and the step to the next pixel, the tangent's direction; the branch pixels'
+    flat addresses; and on the device the packed fields (None without curve pixels) and the branch mask."""
 
     pixel: np.ndarray
-    curve: np.ndarray
+    size: np.ndarray
     position: np.ndarray
     closed: np.ndarray
     magnitude: np.ndarray
@@ -211,21 +213,26 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     n = mask.size
     size = (-(-width // RUN), height)  # work-items of RUN pixels along each row
     sizes = (np.int32(width), np.int32(height))
-    # Uploaded first: a blocking copy waits for every kernel queued before it.
-    weights = machine.to_device(_tangent_weights(smoothing))
+    # Copied without waiting (nothing is written to the host array, which lives until the read below).
+    tangent_weights = _tangent_weights(smoothing)
+    weights = machine.empty(tangent_weights.size, np.float32)
+    weights.set(tangent_weights, async_=True)
     curve_links, branch = (machine.empty(mask.shape, np.uint8) for _ in range(2))
-    is_curve, index = machine.empty(n, np.int32), machine.empty(n, np.int32)
-    machine.launch(machine.kernel("curves", "split_branches"), size, mask, curve_links, branch, is_curve, *sizes)
+    is_curve, index, branch_list = (machine.empty(n, np.int32) for _ in range(3))
+    counts = machine.full(2, np.int32, 0)  # curve pixels, branch pixels
+    machine.launch(machine.kernel("curves", "split_branches"), size, mask, curve_links, branch, is_curve,
+                   branch_list, counts, *sizes)
     exclusive_sum_into(machine, is_curve, index)
-    total = machine.empty(1, np.int32)
-    machine.launch(machine.kernel("curves", "count_curve_pixels"), (1,), index, is_curve, total, np.int64(n))
-    count = int(total.get()[0])
+    machine.launch(machine.kernel("curves", "count_curve_pixels"), (1,), index, is_curve, counts, np.int64(n))
+    count, branch_count = (int(c) for c in counts.get())
+    # Read back with the curves' fields below: the read waits on nothing of its own.
+    listed, listed_event = branch_list[:max(branch_count, 1)].get_async()
     if count == 0:
-        branches = np.flatnonzero(branch.get())
+        listed_event.wait()
         empty = np.zeros(0, np.int32)
         nothing = np.zeros(0, np.float32)
-        return _Linked(empty, empty, empty, np.zeros(0, bool), nothing, nothing, nothing, nothing, branches, None,
-                       branch)
+        return _Linked(empty, empty, empty, np.zeros(0, bool), nothing, nothing, nothing, nothing,
+                       np.sort(listed[:branch_count]), None, branch)
     if 4 * count >= 2**31:
         raise InputValueError(f"edges holds {count} curve pixels; at most {2**29 - 1} can be linked")
     next_node, key = machine.empty(2 * count, np.int32), machine.empty(2 * count, np.int32)
@@ -233,19 +240,27 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     machine.launch(machine.kernel("curves", "tour"), size, curve_links, is_curve, index, next_node, key, pixel,
                    *sizes, np.int32(count))
     top, distance = doubling.principal(next_node, keys=key, check=False, machine=machine)
-    packed, forward, angle = machine.empty(8 * count, np.int32), machine.empty(count, np.int32), machine.empty(count, np.float32)
-    machine.launch(machine.kernel("curves", "arc_positions"), (count,), top, distance, pixel,
-                   mask if strength is None else strength, np.int32(strength is not None), forward, packed,
+    curve, position, closed = (machine.empty(count, np.int32) for _ in range(3))
+    machine.launch(machine.kernel("curves", "arc_positions"), (count,), top, distance, curve, position, closed,
                    np.int32(count))
-    machine.launch(machine.kernel("curves", "arc_tangents"), (count,), next_node, pixel, forward, weights, angle,
-                   np.int32(weights.size), np.int32(width), np.int32(count))
-    machine.launch(machine.kernel("curves", "arc_turns"), (count,), next_node, pixel, forward, angle, packed,
+    # Curves are put in the order of their keys (the old raster order of their principals) by the offsets
+    # of their sizes, summed over the key range, so the host reads them in arc order and sorts nothing.
+    size_of_key, offset_of_key = machine.full(4 * count, np.int32, 0), machine.empty(4 * count, np.int32)
+    machine.launch(machine.kernel("curves", "curve_sizes"), (count,), curve, position, size_of_key, np.int32(count))
+    exclusive_sum_into(machine, size_of_key, offset_of_key)
+    packed = machine.empty(8 * count, np.int32)
+    machine.launch(machine.kernel("curves", "arrange"), (count,), curve, position, closed, pixel,
+                   mask if strength is None else strength, np.int32(strength is not None), size_of_key,
+                   offset_of_key, packed, np.int32(count))
+    machine.launch(machine.kernel("curves", "arc_tangents"), (count,), packed, weights, np.int32(weights.size),
                    np.int32(width), np.int32(count))
+    machine.launch(machine.kernel("curves", "arc_turns"), (count,), packed, np.int32(width), np.int32(count))
     fields = packed.get().reshape(8, count)
-    branches = np.flatnonzero(branch.get())
+    # The read above waited for every command before it: the branch list is read, the weights copied.
+    del tangent_weights
     real = fields[4:].view(np.float32)
-    return _Linked(fields[0], fields[1], fields[2], fields[3].astype(bool), real[0], real[1], real[2], real[3], branches,
-                   packed, branch)
+    return _Linked(fields[0], fields[1], fields[2], fields[3].astype(bool), real[0], real[1], real[2], real[3],
+                   np.sort(listed[:branch_count]), packed, branch)
 
 
 def _tangent_weights(smoothing: float) -> np.ndarray:
@@ -258,24 +273,17 @@ def _tangent_weights(smoothing: float) -> np.ndarray:
 
 
 def _measure(found: _Linked, shape: tuple[int, int]) -> tuple[Curves, np.ndarray]:
-    """The curves in arc order and their measures (maps left empty), and each curve pixel's curve index
-    in the device's order."""
+    """The curves and their measures (maps left empty), and each curve pixel's curve index."""
     width = shape[1]
-    # One sort on a combined key (curve, then arc position) is faster than lexsort's two.
-    order = np.argsort(found.curve.astype(np.int64) * (int(found.position.max(initial=0)) + 1) + found.position,
-                       kind="stable")
-    pixel = found.pixel[order]
-    keys = found.curve[order]
-    starts = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]]) if keys.size else np.zeros(0, np.int64)
-    offsets = np.r_[starts, keys.size].astype(np.int64)
-    points = np.stack([pixel % width, pixel // width], axis=1).astype(np.int32)
-    closed = found.closed[order][starts]
-    sizes = np.diff(offsets)
-    ids = np.empty(keys.size, np.int32)
-    ids[order] = np.repeat(np.arange(len(starts), dtype=np.int32), sizes)
+    starts = np.flatnonzero(found.position == 0)
+    sizes = found.size[starts].astype(np.int64)
+    offsets = np.r_[starts, found.pixel.size].astype(np.int64)
+    points = np.stack([found.pixel % width, found.pixel // width], axis=1).astype(np.int32)
+    closed = found.closed[starts]
+    ids = np.repeat(np.arange(len(starts), dtype=np.int32), sizes)
     if len(starts):
         def per_curve(values: np.ndarray) -> np.ndarray:
-            return np.add.reduceat(values[order].astype(np.float64), starts)
+            return np.add.reduceat(values.astype(np.float64), starts)
         length, total, magnitude = per_curve(found.step), per_curve(found.turn), per_curve(found.magnitude) / sizes
     else:
         length = total = magnitude = np.zeros(0)
