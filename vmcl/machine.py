@@ -376,7 +376,10 @@ class Machine:
     def fill(self, array: cl_array.Array, value: Any) -> cl_array.Array:
         """Set every element of a device array from :meth:`empty` to ``value``, on the queue; returns it."""
         if array.size:
-            cl.enqueue_fill_buffer(self.queue, array.base_data, array.dtype.type(value), 0, array.nbytes)
+            memory = array.base_data
+            # The pool hands out PooledBuffers, which are memory objects (pyopencl also types SVM and None here).
+            assert isinstance(memory, cl.MemoryObjectHolder)
+            cl.enqueue_fill_buffer(self.queue, memory, array.dtype.type(value), 0, array.nbytes)
         return array
 
     def require_memory(self, what: str, total: int, largest: int | None = None) -> None:
