@@ -91,6 +91,17 @@ def test_empty_arrays_are_pyopencl_arrays_of_that_layout(shape, dtype, machine):
         machine.empty((3, -1), dtype)
 
 
+@pytest.mark.parametrize("shape, dtype, value", [((37, 5), np.float32, -2.5), (9, np.int32, 7), ((3, 4, 5), np.uint8, 255),
+                                                 ((0, 3), np.int16, 1), (5, np.float32, np.nan)])
+def test_full_and_fill_set_every_element(shape, dtype, value, machine):
+    array = machine.full(shape, dtype, value)
+    assert array.shape == (shape if isinstance(shape, tuple) else (shape,)) and array.dtype == dtype
+    np.testing.assert_array_equal(array.get(), np.full(shape, value, dtype))
+    if array.size:
+        array.set(np.zeros(shape, dtype))
+    np.testing.assert_array_equal(machine.fill(array, 1).get(), np.ones(shape, dtype))
+
+
 def test_empty_refuses_non_integer_shapes_even_after_equal_ones(machine):
     """The layout cache must not let 5.0 pass because 5 was seen (equal as dict keys)."""
     machine.empty(5, np.float32)
