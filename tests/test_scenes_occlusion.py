@@ -193,6 +193,17 @@ def test_noise_is_gaussian_seeded_and_not_clipped():
 # ---------------------------------------------------------------------------------- hand-built junctions
 
 
+def test_outside_is_the_border_strip_without_known_junctions():
+    scene = occlusion_scene([square(40, 40, 120, 120)], [0.5], shape=(200, 100), margin=8)
+    assert scene.margin == 8
+    points = np.array([[7.9, 50], [8, 50], [91, 50], [91.1, 50], [50, 7.5], [50, 191], [50, 191.5], [50, 100]])
+    np.testing.assert_array_equal(scene.outside(points), [True, False, False, True, True, False, True, False])
+    assert all(not scene.outside(np.array([[j.x, j.y]]))[0] for j in scene.junctions)
+    assert scene.outside(np.zeros((0, 2))).shape == (0,)
+    with pytest.raises(ValueError, match="points"):
+        scene.outside(np.zeros((3, 3)))
+
+
 def test_square_behind_square_gives_two_t_junctions_and_visible_corners():
     back, front = square(40, 40, 120, 120), square(80, 80, 160, 160)
     scene = occlusion_scene([back, front], [0.2, 0.8], shape=(200, 200))

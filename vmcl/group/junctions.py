@@ -9,7 +9,8 @@ for grouping in images", MIT AI TR 1989). A junction is where curves meet:
 - across a gap: Canny's non-maximum suppression breaks the stem of a T short of the bar (near the bar the
   stem's gradient is not a maximum across the bar's), so a curve end whose tangent, followed for up to
   ``gap`` pixels, reaches another curve makes a T-junction there, with the bar's two directions as its
-  other arms; the pixels along the way are its repair;
+  other arms (a side of the bar shorter than three pixels is no arm: met by its end, the two curves
+  make a corner, which Canny breaks as it breaks T's); the pixels along the way are its repair;
 - at corners: where a curve's tangent turns sharply within a few pixels, an L.
 
 Arms are classified by the angles between neighbouring arms: three arms with one angle near 180 degrees
@@ -358,6 +359,10 @@ def _gap_junctions(curves: Curves, labels: np.ndarray, long_enough: np.ndarray, 
                 at = int(near[np.argmin(np.abs(near - at))])
                 point = curves.points[curves.offsets[bar] + at]
             for sign in (-1, 1):
+                # Pixels of the bar beyond the meeting point on this side (a loop goes on either way).
+                beyond = _MIN_ARM if curves.closed[bar] else (at if sign < 0 else curves.sizes[bar] - 1 - at)
+                if beyond < _MIN_ARM:
+                    continue
                 arm = _arm(curves, bar, at, sign, point)
                 if arm is not None and all(_turn(arm[0], other[0]) > _SAME_ARM for other in arms):
                     arms.append(arm)

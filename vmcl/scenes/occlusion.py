@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from vmcl.cm.core import check_bool, check_int, check_real
+from vmcl.cm.core import check_bool, check_int, check_real, real_host_array
 from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = [
@@ -130,6 +130,8 @@ class OcclusionScene:
         Every visible junction at least ``margin`` px inside the image, sorted by (y, x). Junctions
         closer than a pixel to each other are all kept: each is exact, but an image cannot separate
         them.
+    margin : float
+        How far inside the image (from the first and last pixel centres) the junctions are known.
     """
 
     image: np.ndarray
@@ -138,11 +140,28 @@ class OcclusionScene:
     greys: tuple[float, ...]
     background: float
     junctions: tuple[Junction, ...]
+    margin: float = 8.0
 
     @property
     def shape(self) -> tuple[int, int]:
         """(H, W)."""
         return (int(self.image.shape[0]), int(self.image.shape[1]))
+
+    def outside(self, points) -> np.ndarray:
+        """Which points (x, y) lie in the border strip where :attr:`junctions` are not known (closer than
+        :attr:`margin` to the image's first or last pixel centre): detections there can be neither right
+        nor wrong.
+
+        Returns
+        -------
+        bool (N,)
+        """
+        points = real_host_array(points, "points", ndims=(2,), empty=True)
+        if points.shape[1] != 2:
+            raise InputValueError(f"points must be (N, 2) positions (x, y), got shape {points.shape}")
+        height, width = self.shape
+        x, y = points[:, 0], points[:, 1]
+        return (x < self.margin) | (y < self.margin) | (x > width - 1 - self.margin) | (y > height - 1 - self.margin)
 
     def t_junctions(self) -> tuple[Junction, ...]:
         """The T-junctions among :attr:`junctions`, in their order.
@@ -339,7 +358,7 @@ def occlusion_scene(polygons: Sequence[Any], greys: Sequence[float], *, shape: t
     for array in (image, regions, *shapes):
         array.setflags(write=False)
     return OcclusionScene(image=image, regions=regions.astype(np.int32, copy=False), polygons=tuple(shapes),
-                          greys=tuple(greys_), background=background, junctions=tuple(junctions))
+                          greys=tuple(greys_), background=background, junctions=tuple(junctions), margin=margin)
 
 
 # ---------------------------------------------------------------------------------------------- checks
