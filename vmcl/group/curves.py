@@ -101,8 +101,8 @@ class Curves:
     branches : int32 (B, 2)
         The branch pixels (x, y), in raster order.
 
-    Curves are numbered in the raster order of their principal (for an open curve, the end it starts at:
-    of its two ends, the one later in raster order).
+    Curves are numbered closed curves first, then open ones, each in the raster order of its principal
+    (for an open curve, the end it starts at: of its two ends, the one later in raster order).
     """
 
     labels: ArrayLike
@@ -240,16 +240,17 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     machine.launch(machine.kernel("curves", "tour"), size, curve_links, is_curve, index, next_node, key, pixel,
                    *sizes, np.int32(count))
     top, distance = doubling.principal(next_node, keys=key, check=False, machine=machine)
-    curve, position, closed = (machine.empty(count, np.int32) for _ in range(3))
-    machine.launch(machine.kernel("curves", "arc_positions"), (count,), top, distance, curve, position, closed,
+    curve_key, position, closed = (machine.empty(count, np.int32) for _ in range(3))
+    machine.launch(machine.kernel("curves", "arc_positions"), (count,), top, distance, curve_key, position, closed,
                    np.int32(count))
-    # Curves are put in the order of their keys (the old raster order of their principals) by the offsets
-    # of their sizes, summed over the key range, so the host reads them in arc order and sorts nothing.
+    # Curves are put in the order of their keys (see Curves) by the offsets of their sizes, summed over the
+    # key range, so the host reads them in arc order and sorts nothing.
     size_of_key, offset_of_key = machine.full(4 * count, np.int32, 0), machine.empty(4 * count, np.int32)
-    machine.launch(machine.kernel("curves", "curve_sizes"), (count,), curve, position, size_of_key, np.int32(count))
+    machine.launch(machine.kernel("curves", "curve_sizes"), (count,), curve_key, position, size_of_key,
+                   np.int32(count))
     exclusive_sum_into(machine, size_of_key, offset_of_key)
     packed = machine.empty(8 * count, np.int32)
-    machine.launch(machine.kernel("curves", "arrange"), (count,), curve, position, closed, pixel,
+    machine.launch(machine.kernel("curves", "arrange"), (count,), curve_key, position, closed, pixel,
                    mask if strength is None else strength, np.int32(strength is not None), size_of_key,
                    offset_of_key, packed, np.int32(count))
     machine.launch(machine.kernel("curves", "arc_tangents"), (count,), packed, weights, np.int32(weights.size),
