@@ -227,41 +227,41 @@ __kernel void tour(__global const uchar *curve_links, __global const int *is_cur
  * ring whose principal is the turn at one end: the node leaving towards the path lies at distance
  * position + 1, the one coming back at 2n - position (0 at the start itself). A closed curve's pixels
  * have one node in each of two rings; the ring of the larger principal sets the direction and the
- * start. Keys lie in [0, 4N): a node's own number, or 2N + node for a turn. */
+ * start. Keys lie in [0, 4N): a node's own number, or 2N + node for a turn. Each curve's number of
+ * pixels, one more than its largest position, is gathered at its key (size_of_key, zeroed before). */
 __kernel void arc_positions(__global const int *top, __global const int *distance, __global int *key,
-                            __global int *position, __global int *closed, int N)
+                            __global int *position, __global int *closed, __global int *size_of_key, int N)
 {
     int i = get_global_id(0);
     if (i >= N) return;
     int ta = top[2 * i], tb = top[2 * i + 1], da = distance[2 * i], db = distance[2 * i + 1];
+    int k, q;
     if (ta == tb) {
-        position[i] = (da == 0 || db == 0) ? 0 : min(da, db) - 1;
-        key[i] = ta;
+        q = (da == 0 || db == 0) ? 0 : min(da, db) - 1;
+        k = ta;
         closed[i] = 0;
     } else {
-        position[i] = ta > tb ? da : db;
-        key[i] = max(ta, tb);
+        q = ta > tb ? da : db;
+        k = max(ta, tb);
         closed[i] = 1;
     }
-}
-
-/* Each curve's number of pixels, at its key (zeroed before): one more than its pixels' largest position. */
-__kernel void curve_sizes(__global const int *key, __global const int *position, __global int *size_of_key, int N)
-{
-    int i = get_global_id(0);
-    if (i >= N) return;
-    atomic_max(&size_of_key[key[i]], position[i] + 1);
+    key[i] = k;
+    position[i] = q;
+    atomic_max(&size_of_key[k], q + 1);
 }
 
 /* The curve pixels put in arc order: slot = its curve's offset (the exclusive sum of the sizes of the
- * curves of smaller key) + its position. The walks along a curve then read neighbouring slots. */
+ * curves of smaller key) + its position. The walks along a curve then read neighbouring slots. starts
+ * marks each curve's first slot (for the scan that numbers the curves). */
 __kernel void arrange(__global const int *key, __global const int *position, __global const int *closed,
                       __global const int *pixel, __global const float *magnitude, int has_magnitude,
-                      __global const int *size_of_key, __global const int *offset_of_key, __global int *out, int N)
+                      __global const int *size_of_key, __global const int *offset_of_key, __global int *out,
+                      __global int *starts, int N)
 {
     int i = get_global_id(0);
     if (i >= N) return;
     int k = key[i], slot = offset_of_key[k] + position[i], p = pixel[i];
+    starts[slot] = position[i] == 0;
     out[OUT_PIXEL * N + slot] = p;
     out[OUT_SIZE * N + slot] = size_of_key[k];
     out[OUT_POSITION * N + slot] = position[i];
@@ -333,15 +333,15 @@ __kernel void clear_maps(__global const uchar *branch, __global int *labels, __g
     }
 }
 
-/* Each curve pixel's curve index (numbered by the host, which orders the curves), arc position and
- * tangent drawn into the maps. */
-__kernel void draw_maps(__global const int *packed, __global const int *ids, __global int *labels,
+/* Each curve pixel's curve index (the number of curves before its own: the exclusive sum of the curve
+ * starts, read at its curve's first slot), arc position and tangent drawn into the maps. */
+__kernel void draw_maps(__global const int *packed, __global const int *curve_before, __global int *labels,
                         __global int *position, __global float *tangent, int N)
 {
-    int i = get_global_id(0);
-    if (i >= N) return;
-    int p = packed[OUT_PIXEL * N + i];
-    labels[p] = ids[i];
-    position[p] = packed[OUT_POSITION * N + i];
-    tangent[p] = as_float(packed[OUT_ANGLE * N + i]);
+    int j = get_global_id(0);
+    if (j >= N) return;
+    int p = packed[OUT_PIXEL * N + j], q = packed[OUT_POSITION * N + j];
+    labels[p] = curve_before[j - q];
+    position[p] = q;
+    tangent[p] = as_float(packed[OUT_ANGLE * N + j]);
 }

@@ -181,10 +181,10 @@ def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothin
         strength, _ = field(magnitude, "magnitude", machine, ndims=(2,), dtypes=(np.float32,))
         if strength.shape != mask.shape:
             raise InputValueError(f"magnitude has shape {strength.shape}, edges {mask.shape}: they must match")
-    found = _link_on_device(machine, mask, strength, smoothing)
+    found = _link_on_device(machine, mask, strength, smoothing, draw_maps=not host)
     shape = (int(mask.shape[0]), int(mask.shape[1]))
     curves, ids = _measure(found, shape)
-    maps = _host_maps(found, ids, shape) if host else _device_maps(machine, found, ids, shape)
+    maps = _host_maps(found, ids, shape) if found.maps is None else found.maps
     return dataclasses.replace(curves, labels=maps[0], position=maps[1], tangent=maps[2])
 
 
@@ -192,7 +192,7 @@ class _Linked(NamedTuple):
     """The device's answer, every curve pixel in arc order (curve after curve, in the order of their
     keys): its flat address, its curve's size, arc position, loop flag, gradient magnitude (NaN without
     one), the tangent's turn and the step to the next pixel, the tangent's direction; the branch pixels'
-    flat addresses; and on the device the packed fields (None without curve pixels) and the branch mask."""
+    flat addresses; and the labels, position and tangent maps on the device, where they were drawn."""
 
     pixel: np.ndarray
     size: np.ndarray
@@ -203,12 +203,13 @@ class _Linked(NamedTuple):
     step: np.ndarray
     angle: np.ndarray
     branches: np.ndarray
-    packed: cl_array.Array | None
-    branch: cl_array.Array
+    maps: tuple[cl_array.Array, cl_array.Array, cl_array.Array] | None
 
 
 def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.Array | None,
-                    smoothing: float) -> _Linked:
+                    smoothing: float, *, draw_maps: bool) -> _Linked:
+    """The curves' fields in arc order, read back, and with ``draw_maps`` the labels, position and tangent
+    maps drawn on the device (queued before the read, so they are drawn while the host measures)."""
     height, width = mask.shape
     n = mask.size
     size = (-(-width // RUN), height)  # work-items of RUN pixels along each row
@@ -228,11 +229,12 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     # Read back with the curves' fields below: the read waits on nothing of its own.
     listed, listed_event = branch_list[:max(branch_count, 1)].get_async()
     if count == 0:
+        maps = _draw_maps(machine, (height, width), branch, None, None) if draw_maps else None
         listed_event.wait()
         empty = np.zeros(0, np.int32)
         nothing = np.zeros(0, np.float32)
         return _Linked(empty, empty, empty, np.zeros(0, bool), nothing, nothing, nothing, nothing,
-                       np.sort(listed[:branch_count]), None, branch)
+                       np.sort(listed[:branch_count]), maps)
     if 4 * count >= 2**31:
         raise InputValueError(f"edges holds {count} curve pixels; at most {2**29 - 1} can be linked")
     next_node, key = machine.empty(2 * count, np.int32), machine.empty(2 * count, np.int32)
@@ -241,27 +243,26 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
                    *sizes, np.int32(count))
     top, distance = doubling.principal(next_node, keys=key, check=False, machine=machine)
     curve_key, position, closed = (machine.empty(count, np.int32) for _ in range(3))
+    size_of_key, offset_of_key = machine.full(4 * count, np.int32, 0), machine.empty(4 * count, np.int32)
     machine.launch(machine.kernel("curves", "arc_positions"), (count,), top, distance, curve_key, position, closed,
-                   np.int32(count))
+                   size_of_key, np.int32(count))
     # Curves are put in the order of their keys (see Curves) by the offsets of their sizes, summed over the
     # key range, so the host reads them in arc order and sorts nothing.
-    size_of_key, offset_of_key = machine.full(4 * count, np.int32, 0), machine.empty(4 * count, np.int32)
-    machine.launch(machine.kernel("curves", "curve_sizes"), (count,), curve_key, position, size_of_key,
-                   np.int32(count))
     exclusive_sum_into(machine, size_of_key, offset_of_key)
-    packed = machine.empty(8 * count, np.int32)
+    packed, starts = machine.empty(8 * count, np.int32), machine.empty(count, np.int32)
     machine.launch(machine.kernel("curves", "arrange"), (count,), curve_key, position, closed, pixel,
                    mask if strength is None else strength, np.int32(strength is not None), size_of_key,
-                   offset_of_key, packed, np.int32(count))
+                   offset_of_key, packed, starts, np.int32(count))
     machine.launch(machine.kernel("curves", "arc_tangents"), (count,), packed, weights, np.int32(weights.size),
                    np.int32(width), np.int32(count))
     machine.launch(machine.kernel("curves", "arc_turns"), (count,), packed, np.int32(width), np.int32(count))
+    maps = _draw_maps(machine, (height, width), branch, packed, starts) if draw_maps else None
     fields = packed.get().reshape(8, count)
     # The read above waited for every command before it: the branch list is read, the weights copied.
     del tangent_weights
     real = fields[4:].view(np.float32)
     return _Linked(fields[0], fields[1], fields[2], fields[3].astype(bool), real[0], real[1], real[2], real[3],
-                   np.sort(listed[:branch_count]), packed, branch)
+                   np.sort(listed[:branch_count]), maps)
 
 
 def _tangent_weights(smoothing: float) -> np.ndarray:
@@ -307,20 +308,20 @@ def _host_maps(found: _Linked, ids: np.ndarray, shape: tuple[int, int]) -> tuple
     return labels.reshape(shape), position.reshape(shape), tangent.reshape(shape)
 
 
-def _device_maps(machine: Machine, found: _Linked, ids: np.ndarray,
-                 shape: tuple[int, int]) -> tuple[cl_array.Array, cl_array.Array, cl_array.Array]:
-    """The labels, position and tangent maps, drawn on the device from the fields it already holds: only
-    the curve indices (four bytes per curve pixel) go up."""
+def _draw_maps(machine: Machine, shape: tuple[int, int], branch: cl_array.Array, packed: cl_array.Array | None,
+               starts: cl_array.Array | None) -> tuple[cl_array.Array, cl_array.Array, cl_array.Array]:
+    """The labels, position and tangent maps, drawn on the device from the fields it holds (the curves'
+    packed fields in arc order and their first slots; None without curve pixels): nothing goes up."""
     labels, position = machine.empty(shape, np.int32), machine.empty(shape, np.int32)
     tangent = machine.empty(shape, np.float32)
     size = shape[0] * shape[1]
-    # Uploaded before the maps are cleared: a blocking copy waits for every kernel queued before it.
-    ids_device = machine.to_device(ids) if found.packed is not None else None
-    machine.launch(machine.kernel("curves", "clear_maps"), (-(-size // RUN),), found.branch, labels, position,
+    machine.launch(machine.kernel("curves", "clear_maps"), (-(-size // RUN),), branch, labels, position,
                    tangent, np.int64(size))
-    if found.packed is not None:
-        machine.launch(machine.kernel("curves", "draw_maps"), (ids.size,), found.packed, ids_device, labels,
-                       position, tangent, np.int32(ids.size))
+    if packed is not None and starts is not None:
+        curve_before = machine.empty(starts.size, np.int32)
+        exclusive_sum_into(machine, starts, curve_before)
+        machine.launch(machine.kernel("curves", "draw_maps"), (starts.size,), packed, curve_before, labels,
+                       position, tangent, np.int32(starts.size))
     return labels, position, tangent
 
 
