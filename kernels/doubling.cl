@@ -63,6 +63,35 @@ __kernel void principal_step(__global const int *top, __global const int *distan
     prev_out[i] = prev[p];
 }
 
+/* Two doubling steps in one launch (spans `span` and 2 span): node i combines itself with the node span
+ * behind it, the node 2 span behind with the one 3 span behind, then the two results, exactly as the two
+ * steps of principal_step would (the same comparisons in the same order), so the answer is the same at
+ * half the launches, each of which costs more than its arithmetic. */
+inline void take_larger(int *top, int *distance, int their_top, int their_distance, int span)
+{
+    if (their_top > *top) {
+        *top = their_top;
+        *distance = their_distance + span;
+    }
+}
+
+__kernel void principal_two_steps(__global const int *top, __global const int *distance, __global const int *prev,
+                                  __global int *top_out, __global int *distance_out, __global int *prev_out,
+                                  int span, long n)
+{
+    long i = get_global_id(0);
+    if (i >= n) return;
+    int a = prev[i], b = prev[a], c = prev[b];
+    int near_top = top[i], near_distance = distance[i];
+    take_larger(&near_top, &near_distance, top[a], distance[a], span);
+    int far_top = top[b], far_distance = distance[b];
+    take_larger(&far_top, &far_distance, top[c], distance[c], span);
+    take_larger(&near_top, &near_distance, far_top, far_distance, 2 * span);
+    top_out[i] = near_top;
+    distance_out[i] = near_distance;
+    prev_out[i] = prev[c];
+}
+
 /* Lists: tails (next = -1) point to themselves with rank 0, every other node has rank 1. */
 __kernel void list_init(__global const int *next, __global int *pointer, __global int *rank, long n)
 {
