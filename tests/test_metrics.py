@@ -186,6 +186,28 @@ def test_detection_scores_tolerance():
     assert math.isnan(empty.precision) and empty.recall == 0.0
 
 
+def test_a_tolerance_map_gives_each_true_pixel_its_own():
+    truth = np.zeros((20, 30), dtype=bool)
+    truth[:, 5] = truth[:, 20] = True
+    tolerance = np.ones(truth.shape)
+    tolerance[:, 20] = 4.0  # the right boundary is known only to 4 px
+    predicted = np.zeros_like(truth)
+    predicted[:, 8] = predicted[:, 23] = True  # both 3 px off
+    scores = metrics.detection_scores(predicted, truth, tolerance=tolerance)
+    assert (scores.precision, scores.recall) == (0.5, 0.5)
+    # Each side is judged by its own true pixels' tolerance; a constant map is the number.
+    for value in (1.0, 3.0):
+        flat = metrics.detection_scores(predicted, truth, tolerance=np.full(truth.shape, value))
+        assert flat == metrics.detection_scores(predicted, truth, tolerance=value)
+    labels = np.where(truth, 2, 0).astype(np.uint8)
+    found = metrics.label_scores(np.where(predicted, 2, 0).astype(np.uint8), labels, tolerance=tolerance)
+    assert (found[2].precision, found[2].recall) == (0.5, 0.5)
+    with pytest.raises(ValueError, match="tolerance has shape"):
+        metrics.detection_scores(predicted, truth, tolerance=np.ones((3, 3)))
+    with pytest.raises(ValueError, match="tolerance must hold finite"):
+        metrics.detection_scores(predicted, truth, tolerance=-tolerance)
+
+
 def test_label_scores_per_label():
     truth = np.zeros((10, 10), dtype=np.uint8)
     truth[:, 3] = 1  # depth

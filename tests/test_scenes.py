@@ -228,6 +228,18 @@ def test_cues_texture_boundary_is_not_in_the_image_to_one_pixel(seed):
     assert bound[Label.DEPTH] > 0.9  # measured 1.00, 0.99, 0.98
 
 
+def test_texture_only_boundaries_are_matched_within_half_the_coarser_texel_spacing():
+    """The "cues" wall's sparse region has blobs every 18 px, the wall around it every 9 px (both at the
+    wall's depth): its texture-only boundary is matched within 9 px, every other boundary within 1 px."""
+    scene = scenes.render(scenes.preset("cues", shape=(256, 256)), seed=0)
+    texture = scene.labels == Label.TEXTURE
+    assert texture.sum() > 400 and scene.tolerance.dtype == np.float32
+    np.testing.assert_allclose(scene.tolerance[texture], 9.0, rtol=1e-5)
+    assert np.all(scene.tolerance[~texture] == 1.0)
+    blocks = scenes.render(scenes.preset("blocks", shape=SIZE), seed=0)
+    assert not (blocks.labels == Label.TEXTURE).any() and np.all(blocks.tolerance == 1.0)
+
+
 def test_shadows_preset_strong_gradient(rendered):
     scene = rendered["shadows"]
     wall = scene.surfaces == 0

@@ -2,7 +2,8 @@
 
 Per physical label (depth, orientation, albedo, shadow, specular, texture), precision and recall of
 predicted discontinuity pixels within a tolerance of t pixels, the measure the seed paper's labelling
-stage needs.
+stage needs. The tolerance may differ from one true pixel to another (a rendered scene's
+``Scene.tolerance``: texture-only boundaries are found only to within their texels).
 """
 
 from __future__ import annotations
@@ -51,15 +52,45 @@ def _within(target: np.ndarray, tolerance: float) -> np.ndarray:
     return ndimage.distance_transform_edt(~target) <= tolerance
 
 
-def detection_scores(predicted, truth, *, tolerance: float = 1.0) -> DetectionScores:
+def _tolerance(tolerance, shape: tuple[int, ...]) -> float | np.ndarray:
+    """A number >= 0, or a map of them of ``shape`` (one per true pixel)."""
+    if isinstance(tolerance, np.ndarray) and tolerance.ndim > 0:
+        if not np.issubdtype(tolerance.dtype, np.floating) and not np.issubdtype(tolerance.dtype, np.integer):
+            raise InputTypeError(f"tolerance must be a number or an array of real numbers, got dtype {tolerance.dtype}")
+        if tolerance.shape != shape:
+            raise InputValueError(f"tolerance has shape {tolerance.shape}, the maps have shape {shape}")
+        if not np.all(np.isfinite(tolerance)) or (tolerance < 0).any():
+            raise InputValueError("tolerance must hold finite distances >= 0")
+        return tolerance
+    return check_real(tolerance, "tolerance", minimum=0)
+
+
+def _found(predicted: np.ndarray, truth: np.ndarray, tolerance: float | np.ndarray) -> tuple[int, int]:
+    """Predicted pixels within the tolerance of a true pixel, and true pixels with a predicted pixel within
+    theirs; a map gives each true pixel its own (pixels of equal tolerance are matched together)."""
+    if not isinstance(tolerance, np.ndarray):
+        return (int(np.count_nonzero(predicted & _within(truth, tolerance))),
+                int(np.count_nonzero(truth & _within(predicted, tolerance))))
+    near = np.zeros(predicted.shape, bool)
+    found_truth = 0
+    for value in np.unique(tolerance[truth]):
+        these = truth & (tolerance == value)
+        near |= _within(these, float(value))
+        found_truth += int(np.count_nonzero(these & _within(predicted, float(value))))
+    return int(np.count_nonzero(predicted & near)), found_truth
+
+
+def detection_scores(predicted, truth, *, tolerance: float | np.ndarray = 1.0) -> DetectionScores:
     """Precision and recall of predicted boundary pixels against true ones, within ``tolerance`` px.
 
     Parameters
     ----------
     predicted, truth : (H, W) bool arrays
         Predicted and true boundary pixels.
-    tolerance : float
-        Largest Euclidean distance, in pixels, at which a pixel counts as found (0: same pixel).
+    tolerance : float or (H, W) array
+        Largest Euclidean distance, in pixels, at which a pixel counts as found (0: same pixel). A map
+        gives each true pixel its own: a true pixel is found by a predicted pixel within its tolerance,
+        and a predicted pixel is right when it lies within the tolerance of a true pixel.
 
     Returns
     -------
@@ -77,10 +108,9 @@ def detection_scores(predicted, truth, *, tolerance: float = 1.0) -> DetectionSc
     if predicted.ndim != 2:
         raise InputValueError(f"predicted must be a 2-D boolean array, got shape {predicted.shape}")
     truth = as_mask(truth, "truth", predicted.shape, "predicted")
-    tolerance = check_real(tolerance, "tolerance", minimum=0)
+    tolerance = _tolerance(tolerance, predicted.shape)
     n_predicted, n_true = int(predicted.sum()), int(truth.sum())
-    found_predicted = np.count_nonzero(predicted & _within(truth, tolerance))
-    found_truth = np.count_nonzero(truth & _within(predicted, tolerance))
+    found_predicted, found_truth = _found(predicted, truth, tolerance)
     precision = found_predicted / n_predicted if n_predicted else np.nan
     recall = found_truth / n_true if n_true else np.nan
     f = float(f_measure(precision, recall)) if n_predicted and n_true else float("nan")
@@ -91,7 +121,7 @@ def label_scores(
     predicted,
     truth,
     *,
-    tolerance: float = 1.0,
+    tolerance: float | np.ndarray = 1.0,
     labels: Sequence[int] | None = None,
 ) -> Mapping[int, DetectionScores]:
     """Per physical label, precision and recall of labelled discontinuity pixels within ``tolerance``.
@@ -100,8 +130,9 @@ def label_scores(
     ----------
     predicted, truth : (H, W) integer arrays
         Label maps with the codes of :class:`vmcl.labels.Label` (0 = no discontinuity).
-    tolerance : float
-        Largest Euclidean distance in pixels at which a pixel counts as found.
+    tolerance : float or (H, W) array
+        Largest Euclidean distance in pixels at which a pixel counts as found; a map gives each true
+        pixel its own (e.g. a rendered scene's ``Scene.tolerance``), as :func:`detection_scores` takes it.
     labels : sequence of int, optional
         Labels to score; default: every non-zero label present in either map.
 
@@ -119,7 +150,7 @@ def label_scores(
             raise InputValueError(f"{name} must be a 2-D integer label map, got shape {array.shape}")
     if predicted.shape != truth.shape:
         raise InputValueError(f"predicted has shape {predicted.shape}, truth has shape {truth.shape}")
-    check_real(tolerance, "tolerance", minimum=0)
+    tolerance = _tolerance(tolerance, truth.shape)
     if labels is None:
         labels = sorted((set(np.unique(predicted).tolist()) | set(np.unique(truth).tolist())) - {0})
     labels = [check_int(lab, "labels[]") for lab in check_sequence(labels, "labels")]

@@ -1,5 +1,11 @@
 """Ground-truth discontinuity labels: a :class:`~vmcl.labels.Label` for every line site of the dual
-lattice between 4-neighbours, and for the pixels (the rules are in the notes of :mod:`vmcl.scenes`).
+lattice between 4-neighbours, and for the pixels (the rules are in the notes of :mod:`vmcl.scenes`), with
+the tolerance each labelled pixel is matched within.
+
+A texture-only boundary (TEXTURE) runs between two patterns of the same colour: between the texels on its
+two sides the image is the same, so no method can place it closer than the texels allow. It is matched
+within half the texel spacing of the coarser texture on its two sides (in pixels, at the pixel's depth);
+every other boundary within 1 pixel.
 """
 
 from __future__ import annotations
@@ -13,8 +19,10 @@ __all__ = ["discontinuity_labels"]
 _PRECEDENCE = (Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.TEXTURE, Label.SHADOW, Label.SPECULAR)
 
 
-def discontinuity_labels(depth, body, face, hue, look, region, shadow, highlight):
-    """Labels of the line sites between horizontal and vertical neighbours, and of the pixels."""
+def discontinuity_labels(depth, body, face, hue, look, region, shadow, highlight, texel):
+    """Labels of the line sites between horizontal and vertical neighbours, of the pixels, and each
+    labelled pixel's match tolerance (``texel``: the texel spacing in pixels at each pixel, 0 where its
+    pattern has none)."""
 
     def sites(a, b):
         code = np.zeros(body[a].shape, np.uint8)
@@ -43,4 +51,13 @@ def discontinuity_labels(depth, body, face, hue, look, region, shadow, highlight
     labels = np.zeros((h, w), np.uint8)
     has = best < len(_PRECEDENCE)
     labels[has] = np.array(_PRECEDENCE, np.uint8)[best[has]]
-    return labels, line_h, line_v
+    # A TEXTURE pixel's tolerance: half the coarser texel spacing of the two sides of its TEXTURE sites.
+    half_spacing = np.zeros((h, w), np.float32)
+    for code, step in ((line_h, (0, 1)), (line_v, (1, 0))):
+        ys, xs = np.nonzero(code == Label.TEXTURE)
+        coarser = np.maximum(texel[ys, xs], texel[ys + step[0], xs + step[1]])
+        np.maximum.at(half_spacing, (ys, xs), 0.5 * coarser.astype(np.float32))
+    tolerance = np.ones((h, w), np.float32)
+    textured = labels == Label.TEXTURE
+    tolerance[textured] = np.maximum(1.0, half_spacing[textured])
+    return labels, line_h, line_v, tolerance

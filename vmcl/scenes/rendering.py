@@ -15,7 +15,7 @@ from vmcl.scenes.discontinuities import discontinuity_labels
 from vmcl.scenes.points import F32, transform
 from vmcl.scenes.raycast import NEAR, FaceArrays, Pinhole, camera_blocked
 from vmcl.scenes.shading import Regions, form_image, shade
-from vmcl.scenes.world import World
+from vmcl.scenes.world import TEXEL_KINDS, World
 
 __all__ = ["Scene", "render"]
 
@@ -55,6 +55,10 @@ class Scene:
     labels : (H, W) uint8
         :class:`~vmcl.labels.Label` codes on the pixel grid (see the notes of :mod:`vmcl.scenes` for which
         pixel carries a label).
+    tolerance : (H, W) float32
+        The distance in pixels within which each labelled pixel counts as found (the ``tolerance`` of
+        :func:`vmcl.metrics.label_scores`): 1, except on texture-only boundaries (TEXTURE), half the
+        texel spacing of the coarser texture on their two sides (:mod:`vmcl.scenes.discontinuities`).
     line_h : (H, W - 1) uint8
         Labels of the sites between (y, x) and (y, x + 1).
     line_v : (H - 1, W) uint8
@@ -80,6 +84,7 @@ class Scene:
     occluded_stereo: np.ndarray
     occluded_motion: np.ndarray
     labels: np.ndarray
+    tolerance: np.ndarray
     line_h: np.ndarray
     line_v: np.ndarray
     regions: np.ndarray
@@ -191,10 +196,15 @@ def render(world: World, *, seed: int = 0, noise: float = 0.0, frame: int = 0) -
     region = _grid(cam, left.region, left.pixels, -1)
     shadow = _grid(cam, left.shadow, left.pixels, False)
     highlight = _grid(cam, left.highlight, left.pixels, False)
-    labels, line_h, line_v = discontinuity_labels(np.where(np.isfinite(depth), depth, np.inf), bodies,
-                                                  surfaces, _grid(cam, regions.hue[left.region], left.pixels, -1),
-                                                  _grid(cam, regions.look[left.region], left.pixels, -1),
-                                                  region, shadow, highlight)
+    look = _grid(cam, regions.look[left.region], left.pixels, -1)
+    # Each pattern's texel spacing (cell or period; none for flat and gradient patterns) in pixels at the
+    # pixel's depth; the appended 0 is read by pixels with no surface (look -1).
+    spacing = np.array([t.scale if t.kind in TEXEL_KINDS else 0.0 for t, _ in regions.textures] + [0.0], F32)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        texel = np.where(np.isfinite(depth), spacing[look] * F32(cam.f) / depth, 0.0).astype(F32)
+    labels, line_h, line_v, tolerance = discontinuity_labels(
+        np.where(np.isfinite(depth), depth, np.inf), bodies, surfaces,
+        _grid(cam, regions.hue[left.region], left.pixels, -1), look, region, shadow, highlight, texel)
     return Scene(
         world=world,
         seed=int(seed),
@@ -213,6 +223,7 @@ def render(world: World, *, seed: int = 0, noise: float = 0.0, frame: int = 0) -
         occluded_stereo=_grid(cam, occluded_stereo, left.pixels, False),
         occluded_motion=_grid(cam, occluded_motion, left.pixels, False),
         labels=labels,
+        tolerance=tolerance,
         line_h=line_h,
         line_v=line_v,
         regions=region,

@@ -14,7 +14,7 @@ import numpy as np
 from vmcl.cm.core import check_int, check_real
 from vmcl.errors import InputTypeError, InputValueError
 
-__all__ = ["Body", "Camera", "Face", "Light", "Mark", "Motion", "Texture", "World", "box", "fold"]
+__all__ = ["TEXEL_KINDS", "Body", "Camera", "Face", "Light", "Mark", "Motion", "Texture", "World", "box", "fold"]
 
 
 def _numbers(value, name: str, count: int) -> tuple[float, ...]:
@@ -60,6 +60,10 @@ def _rotation(rvec) -> np.ndarray:
     k = r / angle
     cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     return np.eye(3) + math.sin(angle) * cross + (1 - math.cos(angle)) * cross @ cross
+
+
+TEXEL_KINDS = ("noise", "stripes", "blobs")
+"""The :class:`Texture` kinds made of repeated elements (texels), whose ``scale`` is their spacing."""
 
 
 @dataclass(frozen=True)
