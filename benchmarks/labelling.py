@@ -12,8 +12,10 @@ labels (labels.method = "rule") so that the classifier's inputs do not depend on
   were not fitted to (same geometry), also as one grey image (no stereo, motion or colour).
 - Leave one preset out: weights fitted to the other four presets (seeds 0 and 1) label the fifth (seed
   2), a scene of a kind they never saw.
-Scores are the ground truth's: discontinuities within 1 px (vmcl.metrics.detection_scores) and per label
-(vmcl.metrics.label_scores), beside the rule labelling of the same run.
+Scores are the ground truth's: discontinuities within the scene's tolerance (Scene.tolerance: 1 px,
+texture-only boundaries half their texel spacing; vmcl.metrics.detection_scores) and per label
+(vmcl.metrics.label_scores), beside the rule labelling of the same run. The fit's targets reach as far
+(vmcl.labelling.fit_targets).
 """
 
 from __future__ import annotations
@@ -37,16 +39,17 @@ FIT_SEEDS, TEST_SEED = (0, 1), 2
 
 
 def runs(vm: VisionMachine) -> dict[tuple[str, bool, int], tuple]:
-    """(preset, specular, seed) -> (Result with rule labels, ground-truth labels) of every scene."""
+    """(preset, specular, seed) -> (Result with rule labels, ground-truth labels, their tolerance) of every scene."""
     out = {}
     for name in scenes.PRESETS:
         for specular in (False, True):
             for seed in FIT_SEEDS + (TEST_SEED,):
                 scene = scenes.render(scenes.preset(name, shape=SHAPE, specular=specular), seed=seed, noise=0.01)
-                out[name, specular, seed] = (vm.run(scene.left, scene.right, scene.left_next), scene.labels)
+                out[name, specular, seed] = (vm.run(scene.left, scene.right, scene.left_next), scene.labels,
+                                             scene.tolerance)
                 if not specular and seed == TEST_SEED:
                     grey = np.ascontiguousarray(scene.left @ np.array([0.2125, 0.7154, 0.0721], np.float32))
-                    out[name, "grey", seed] = (vm.run(grey), scene.labels)
+                    out[name, "grey", seed] = (vm.run(grey), scene.labels, scene.tolerance)
     return out
 
 
@@ -56,14 +59,15 @@ def fields(result) -> dict:
 
 def fit(samples, machine, fitted_on: str, input_sets=None) -> labelling.LinearLabeller:
     return labelling.LinearLabeller.fit(
-        ((labelling.features(r.support, r.image, machine=machine, **fields(r)), r.support, truth)
-         for r, truth in samples), fitted_on=fitted_on, input_sets=input_sets)
+        ((labelling.features(r.support, r.image, machine=machine, **fields(r)), r.support, truth, tolerance)
+         for r, truth, tolerance in samples), fitted_on=fitted_on, input_sets=input_sets)
 
 
-def scores(predicted: np.ndarray, truth: np.ndarray) -> tuple[float, dict[int, metrics.DetectionScores]]:
-    overall = metrics.detection_scores(predicted != 0, truth != 0, tolerance=1)
+def scores(predicted: np.ndarray, truth: np.ndarray, tolerance: np.ndarray
+           ) -> tuple[float, dict[int, metrics.DetectionScores]]:
+    overall = metrics.detection_scores(predicted != 0, truth != 0, tolerance=tolerance)
     kinds = [int(c) for c in labelling.CLASSES[1:]]
-    return overall.f, metrics.label_scores(predicted, truth, tolerance=1, labels=kinds)
+    return overall.f, metrics.label_scores(predicted, truth, tolerance=tolerance, labels=kinds)
 
 
 def _pr(score: metrics.DetectionScores) -> str:
@@ -81,10 +85,10 @@ def header() -> list[str]:
 
 def table(rows_in, labeller, machine) -> list[str]:
     lines = header()
-    for key, (r, truth) in rows_in:
+    for key, (r, truth, tolerance) in rows_in:
         predicted = labelling.label(r.support, r.image, labeller=labeller, machine=machine, **fields(r))
-        f, per = scores(predicted, truth)
-        f_rule, _ = scores(r.labels, truth)
+        f, per = scores(predicted, truth, tolerance)
+        f_rule, _ = scores(r.labels, truth, tolerance)
         name = key[0] + {True: " (specular)", False: "", "grey": " (grey, one image)"}[key[1]]
         f_text = [f"{v:.2f}" if np.isfinite(v) else "none" for v in (f, f_rule)]
         lines.append("| " + " | ".join([name, *f_text] + [_pr(per[int(c)]) for c in
@@ -130,8 +134,10 @@ def main() -> None:
            "Written by benchmarks/labelling.py, which also fits vmcl/labelling.json."), "",
            (f"{len(data)} runs of the machine in {took:.0f} s; fitting the weights for the "
            f"{2 ** len(labelling.INPUTS)} sets of inputs took {fit_s:.0f} s."), "",
-           ("Cells are precision / recall within 1 px per label ('-': no such pixel predicted or in the "
-           "truth); F is the discontinuity F within 1 px whatever the label ('none': nothing labelled). "
+           ("Cells are precision / recall per label within the scene's tolerance (1 px; texture-only "
+           "boundaries half the coarser texel spacing of their two sides, Scene.tolerance) ('-': no such pixel "
+           "predicted or in the truth); F is the discontinuity F within the same tolerance whatever the label "
+           "('none': nothing labelled). "
            "'rule' is labels.method = \"rule\" on the same run."), "",
            f"## Shipped weights (fitted to seeds {FIT_SEEDS}) on seed {TEST_SEED}", ""]
     out += table([(k, v) for k, v in colour_runs.items() if k[2] == TEST_SEED], shipped, vm.machine)

@@ -257,6 +257,23 @@ def test_fit_targets_take_a_4_neighbour_label_by_precedence():
     out = labelling.fit_targets(truth)
     assert out[2, 2] == Label.DEPTH        # DEPTH precedes SHADOW
     assert out[1, 2] == Label.SHADOW and out[2, 4] == Label.DEPTH and out[1, 1] == 0
+    np.testing.assert_array_equal(labelling.fit_targets(truth, np.ones((5, 5), np.float32)), out)
+
+
+def test_fit_targets_reach_as_far_as_the_truth_is_known():
+    """A texture-only boundary known to 3 px is fitted on the pixels within 3 px of it; a 1-px boundary
+    nearer them keeps its own (precedence), and the tolerance of other pixels changes nothing."""
+    truth = np.zeros((9, 12), np.uint8)
+    truth[:, 4] = Label.TEXTURE
+    truth[:, 10] = Label.ALBEDO
+    tolerance = np.ones(truth.shape, np.float32)
+    tolerance[:, 4] = 3.0
+    tolerance[:, 0] = 7.0  # no true pixel there
+    out = labelling.fit_targets(truth, tolerance)
+    assert np.all(out[:, 1:8] == Label.TEXTURE) and np.all(out[:, 0] == 0)
+    assert np.all(out[:, 9:12] == Label.ALBEDO) and np.all(out[:, 8] == 0)
+    with pytest.raises(ValueError, match="tolerance has shape"):
+        labelling.fit_targets(truth, np.ones((3, 3)))
 
 
 # -- on images the weights were not fitted to (seed 2: new texture elements and noise, the fitted geometry) --

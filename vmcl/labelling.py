@@ -194,15 +194,16 @@ class LinearLabeller:
         Path(path).write_text(json.dumps(data, indent=1) + "\n")
 
     @classmethod
-    def fit(cls, samples: Iterable[tuple[np.ndarray, np.ndarray, np.ndarray]], *, l2: float = 1e-3,
+    def fit(cls, samples: Iterable[tuple[np.ndarray, ...]], *, l2: float = 1e-3,
             fitted_on: str = "", input_sets: Iterable[Iterable[str]] | None = None) -> LinearLabeller:
-        """Fit the weights to (features, support, truth) samples, for every combination of inputs.
+        """Fit the weights to (features, support, truth[, tolerance]) samples, for every combination of inputs.
 
         Parameters
         ----------
-        samples : iterable of (features, support, truth)
+        samples : iterable of (features, support, truth) or (features, support, truth, tolerance)
             features: float32 (len(FEATURES), H, W) from :func:`features` with every input present;
-            support: uint8 (H, W), :class:`vmcl.labels.Cue` bits; truth: the scene's Label map.
+            support: uint8 (H, W), :class:`vmcl.labels.Cue` bits; truth: the scene's Label map;
+            tolerance: the scene's match tolerance per true pixel (:func:`fit_targets`).
         l2 : float
             Weight decay on the non-bias weights.
         fitted_on : str
@@ -228,8 +229,11 @@ class LinearLabeller:
         rows, bits, targets = [], [], []
         index_of = np.zeros(256, np.int64)  # Label code -> output row
         index_of[[int(c) for c in CLASSES]] = np.arange(len(CLASSES))
-        for feats, support, truth in samples:
-            feats, support, truth = np.asarray(feats, np.float32), np.asarray(support), np.asarray(truth)
+        for sample in samples:
+            if len(sample) not in (3, 4):
+                raise InputValueError(f"a sample must be (features, support, truth[, tolerance]), got {len(sample)} items")
+            feats, support, truth = np.asarray(sample[0], np.float32), np.asarray(sample[1]), np.asarray(sample[2])
+            tolerance = np.asarray(sample[3]) if len(sample) == 4 else None
             if feats.shape != (len(FEATURES),) + support.shape or truth.shape != support.shape:
                 raise InputValueError(f"a sample's features must be ({len(FEATURES)}, H, W) and its support and truth "
                                  f"(H, W); got {feats.shape}, {support.shape}, {truth.shape}")
@@ -238,7 +242,7 @@ class LinearLabeller:
             candidates = (support & CANDIDATE_BITS) != 0
             rows.append(np.moveaxis(feats, 0, -1)[candidates])
             bits.append(support[candidates])
-            targets.append(index_of[fit_targets(truth)[candidates]])
+            targets.append(index_of[fit_targets(truth, tolerance)[candidates]])
         if not rows or not sum(len(r) for r in rows):
             raise InputValueError("samples must hold at least one candidate pixel (support bits set)")
         x_all, bits_all, y_all = (np.concatenate(a) for a in (rows, bits, targets))
@@ -280,18 +284,33 @@ class LinearLabeller:
         return cls(weights, fitted_on)
 
 
-def fit_targets(truth: np.ndarray) -> np.ndarray:
-    """The label each pixel is fitted to: the truth's on it or on a 4-neighbour, in precedence order."""
+def fit_targets(truth: np.ndarray, tolerance: np.ndarray | None = None) -> np.ndarray:
+    """The label each pixel is fitted to: the truth's on it or on a 4-neighbour (within 1 px), in
+    precedence order.
+
+    With ``tolerance`` (a rendered scene's ``Scene.tolerance``: per true pixel, the distance within which
+    it counts as found), a true pixel reaches every pixel within its tolerance (at least 1 px): a
+    texture-only boundary, known only to within its texels, is fitted on the lines near it, as it is scored.
+    """
+    from scipy import ndimage
+
     real_host_array(truth, "truth", ndims=(2,), empty=True)
     if truth.dtype.kind not in "iu":
         raise InputTypeError(f"truth must be an integer Label map, got dtype {truth.dtype}")
-    padded = np.pad(truth, 1)
-    h, w = truth.shape
+    reach = np.ones(truth.shape)
+    if tolerance is not None:
+        real_host_array(tolerance, "tolerance", ndims=(2,), empty=True)
+        if tolerance.shape != truth.shape:
+            raise InputValueError(f"tolerance has shape {tolerance.shape}, truth {truth.shape}: they must match")
+        if not np.all(np.isfinite(tolerance)):
+            raise InputValueError("tolerance must hold finite distances")
+        reach = np.maximum(1.0, tolerance)
     out = np.zeros(truth.shape, np.uint8)
     for label in reversed(_FIT_PRECEDENCE):
+        mine = truth == label
         near = np.zeros(truth.shape, bool)
-        for dy, dx in ((1, 1), (0, 1), (2, 1), (1, 0), (1, 2)):
-            near |= padded[dy:dy + h, dx:dx + w] == label
+        for value in np.unique(reach[mine]):
+            near |= ndimage.distance_transform_edt(~(mine & (reach == value))) <= value
         out[near] = label
     return out
 
