@@ -145,8 +145,8 @@ def occlusion_measures(seeds: range, machine: vmcl.Machine) -> dict[str, str]:
         hits += len(matches)
         truths += int(keep.sum())
         # Detections in the border strip where the scene knows no junctions count neither way.
-        ignore = np.concatenate([points[~keep], found[scene.outside(found)]])
-        counted += point_scores(points[keep], found, tolerance=3.0, ignore=ignore).n_predicted
+        counted += point_scores(points[keep], found, tolerance=3.0, ignore=points[~keep],
+                                exclude=scene.outside(found)).n_predicted
         kept = [j for j, k in zip(truth_ts, keep) if k]
         for r, c in matches:
             x, y = np.clip(np.rint(found[c] + 4 * junctions.occluder[ts[c]]).astype(int), 0, 255)

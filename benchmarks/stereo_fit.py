@@ -17,8 +17,8 @@ best gives AD_WEIGHT and StereoConfig's match_exposure); then, with those, the w
 median's (REFINE_GRID: off, or its radius, colour scale and stride; the cheapest within
 REFINE_TOLERANCE of the best), which gives StereoConfig's refine and vmcl.early.semiglobal's
 REFINE_RADIUS, REFINE_COLOUR and REFINE_STRIDE; then the MRF's (MRF_GRID): the weight of the matches in
-the MRF's data (StereoConfig.backfill_weight) and the stereo MRF's alpha and beta
-(vmcl.mrf.presets.STEREO, which was measured on sparse edge matches). Writes
+the MRF's data (StereoConfig.backfill_weight) and the stereo MRF's alpha and beta (vmcl.cues.stereo's
+DENSE_ALPHA and DENSE_BETA), the best depth lines within MRF_TOLERANCE of the best score. Writes
 benchmarks/results/stereo_fit.md, every combination of each stage, best first.
 """
 
@@ -34,6 +34,7 @@ from stereo_training import middlebury_pairs, rendered_pairs
 
 import vmcl
 from vmcl import metrics
+from vmcl.mrf import boundary_map
 from vmcl.pipeline import Config, VisionMachine
 from vmcl.stereo_evaluation import DEPTH_ONLY
 
@@ -47,28 +48,50 @@ REFINE_TOLERANCE = 0.0005
 """The weighted median's setting is the cheapest (fewest voters visited) of those whose score is within this
 of the best: the scores of neighbouring settings differ by about this much from run to run of the grid
 (the matcher's rows alternated within 0.0003), so a closer score does not pay for more work."""
-MRF_GRID = {"backfill_weight": (0.2, 1.0), "alpha": (0.25, 1.0, 4.0), "beta": (0.5, 2.0, 8.0)}
+MRF_GRID = {"backfill_weight": (0.2, 1.0), "alpha": (0.25, 1.0, 4.0, 16.0), "beta": (0.25, 0.5, 2.0, 8.0)}
+MRF_TOLERANCE = 0.001
+"""The MRF's setting is, among those whose score is within this of the best (about twice the grid's
+run-to-run noise; the MRF's rows all lay within 0.003 of each other), the one whose lines find the rendered
+scenes' depth discontinuities best: the MRF is where the machine draws them (seed, "Detection of Depth
+Discontinuities"), and the disparity's error alone hardly tells its settings apart."""
+LINES_LEFT_OUT = "cues"
+"""The preset whose depth lines do not enter the MRF's choice: its depth-only outline is a test of the cartoon
+(tests/test_pipeline.py)."""
 
 
-def score(machine: vmcl.Machine, rendered: list, real: list, config: dict) -> tuple[float, list[float]]:
-    """The mean of the rendered pairs' and the real pairs' mean bad-1 of the restored disparity."""
+def score(machine: vmcl.Machine, rendered: list, real: list, config: dict) -> tuple[float, list[float], float]:
+    """The mean of the rendered pairs' and the real pairs' mean bad-1 of the restored disparity, the rates,
+    and the mean F (within 1 px) of the stereo MRF's lines against the rendered pairs' depth discontinuities
+    (but those of LINES_LEFT_OUT)."""
     vm = VisionMachine(Config.from_dict({**DEPTH_ONLY, **config}), machine=machine)
-    rates = [metrics.evaluate_disparity(vm.run(p.left, p.right).disparity, p.disparity, mask=p.mask).bad[1.0]
-             for p in rendered + real]
-    return (float(np.mean(rates[:len(rendered)])) + float(np.mean(rates[len(rendered):]))) / 2, rates
+    rates, lines_f = [], []
+    for p in rendered + real:
+        result = vm.run(p.left, p.right)
+        rates.append(metrics.evaluate_disparity(result.disparity, p.disparity, mask=p.mask).bad[1.0])
+        if p.depth_edges is not None and not p.name.startswith(LINES_LEFT_OUT):
+            found = boundary_map(*result.lines["stereo"])
+            lines_f.append(np.nan_to_num(metrics.detection_scores(found, p.depth_edges, tolerance=1).f))
+    found_score = (float(np.mean(rates[:len(rendered)])) + float(np.mean(rates[len(rendered):]))) / 2
+    return found_score, rates, float(np.mean(lines_f))
 
 
 def stage(machine: vmcl.Machine, rendered: list, real: list, grid: dict | list[dict], config) -> list[tuple]:
-    """(score, values, rates) of every combination of ``grid`` (a dictionary of each key's values, or a list
-    of the combinations), best first; ``config(values)`` makes its Config dictionary."""
+    """(score, values, rates, depth lines F) of every combination of ``grid`` (a dictionary of each key's
+    values, or a list of the combinations), best score first; ``config(values)`` makes its Config dictionary."""
     combinations = grid if isinstance(grid, list) else [dict(zip(grid, values))
                                                          for values in itertools.product(*grid.values())]
     rows = []
     for values in combinations:
-        found, rates = score(machine, rendered, real, config(values))
-        rows.append((found, values, rates))
-        print(f"{values}: {found:.4f}", file=sys.stderr)
+        found, rates, lines_f = score(machine, rendered, real, config(values))
+        rows.append((found, values, rates, lines_f))
+        print(f"{values}: {found:.4f}, depth lines F {lines_f:.3f}", file=sys.stderr)
     return sorted(rows, key=lambda row: row[0])
+
+
+def best_lines(rows: list[tuple]) -> dict:
+    """The MRF stage's choice (MRF_TOLERANCE): the best depth lines within the tolerance of the best score."""
+    best = rows[0][0]
+    return max((row for row in rows if row[0] <= best + MRF_TOLERANCE), key=lambda row: row[3])[1]
 
 
 def voters_visited(values: dict) -> int:
@@ -81,15 +104,15 @@ def voters_visited(values: dict) -> int:
 def cheapest_refinement(rows: list[tuple]) -> dict:
     """The refinement stage's choice (REFINE_TOLERANCE): the fewest voters within the tolerance of the best."""
     best = rows[0][0]
-    return min((values for found, values, _ in rows if found <= best + REFINE_TOLERANCE), key=voters_visited)
+    return min((values for found, values, _, _ in rows if found <= best + REFINE_TOLERANCE), key=voters_visited)
 
 
 def table(rows: list[tuple], names: list[str]) -> list[str]:
-    keys = list(dict.fromkeys(key for _, values, _ in rows for key in values))
-    lines = ["| score | " + " | ".join(keys) + " | " + " | ".join(names) + " |",
-             "|---" * (1 + len(keys) + len(names)) + "|"]
-    return lines + [f"| {found:.4f} | " + " | ".join(str(values.get(key, "-")) for key in keys) + " | "
-                    + " | ".join(f"{r:.3f}" for r in rates) + " |" for found, values, rates in rows]
+    keys = list(dict.fromkeys(key for _, values, _, _ in rows for key in values))
+    lines = ["| score | depth lines F | " + " | ".join(keys) + " | " + " | ".join(names) + " |",
+             "|---" * (2 + len(keys) + len(names)) + "|"]
+    return lines + [f"| {found:.4f} | {lines_f:.3f} | " + " | ".join(str(values.get(key, "-")) for key in keys)
+                    + " | " + " | ".join(f"{r:.3f}" for r in rates) + " |" for found, values, rates, lines_f in rows]
 
 
 def main() -> int:
@@ -107,17 +130,22 @@ def main() -> int:
     weights = stage(machine, rendered, real, MRF_GRID, lambda values: {
         "stereo": {**chosen, "backfill_weight": values["backfill_weight"]},
         "mrf": {"stereo": {"alpha": values["alpha"], "beta": values["beta"]}}})
+    mrf_choice = best_lines(weights)
     lines = ["# The stereo cue's defaults, fitted on the training pairs", "",
              (f"Measured {datetime.datetime.now():%Y-%m-%d %H:%M}. The Vision Machine, stereo only, each pair's "
               "range found from the images. Score: the mean of the rendered pairs' mean and the real pairs' "
-              "mean of the restored disparity's bad-1. Best first; the first row of stages 1, 2 and 4 gives the "
-              "defaults, stage 3 says its choice."),
+              "mean of the restored disparity's bad-1. Depth lines F: the stereo MRF's lines against the "
+              f"rendered pairs' depth discontinuities (within 1 px; {LINES_LEFT_OUT} left out), their mean. "
+              "Best score first; the first row of stages 1 and 2 gives the defaults, stages 3 and 4 say "
+              "their choice."),
              "", "## Stage 1: the matcher (the census alone, the weighted median at depth jumps off)", "", *table(matcher, names), "",
              f"## Stage 2: the brightness difference beside the census, with {census}", "", *table(data_term, names),
              "", f"## Stage 3: the weighted median at depth jumps, with {chosen}", "",
              (f"Chosen: the fewest voters per refined pixel among the settings within {REFINE_TOLERANCE} of the best "
               f"score: {cheapest_refinement(refinement)}."), "", *table(refinement, names),
-             "", f"## Stage 4: the MRF's weights, with {chosen}", "", *table(weights, names)]
+             "", f"## Stage 4: the MRF's weights, with {chosen}", "",
+             (f"Chosen: the best depth lines among the settings within {MRF_TOLERANCE} of the best score: "
+              f"{mrf_choice}."), "", *table(weights, names)]
     out = Path(__file__).resolve().parent / "results" / "stereo_fit.md"
     out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines[:10]))

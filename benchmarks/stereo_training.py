@@ -18,6 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from vmcl import datasets, scenes
+from vmcl.labels import Label
 from vmcl.scenes import Body, Camera, Face, Light, Texture, World
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "datasets"
@@ -33,6 +34,8 @@ class Pair(NamedTuple):
     right: np.ndarray
     disparity: np.ndarray
     mask: np.ndarray
+    depth_edges: np.ndarray | None = None
+    """A rendered pair's depth discontinuities (the pixels its ground truth labels DEPTH); None for real pairs."""
 
 
 def near_world(shape: tuple[int, int] = (192, 256)) -> World:
@@ -57,9 +60,10 @@ def rendered_pairs(seeds: tuple[int, ...] = (0, 1)) -> list[Pair]:
         for name, world in worlds:
             s = scenes.render(world, seed=seed, noise=0.01)
             found.append(Pair(f"{name} (seed {seed})", s.left, s.right, s.disparity,
-                              ~s.occluded_stereo & np.isfinite(s.disparity)))
+                              ~s.occluded_stereo & np.isfinite(s.disparity), s.labels == Label.DEPTH))
     s = scenes.render(near_world(), seed=0, noise=0.01)
-    found.append(Pair("near objects", s.left, s.right, s.disparity, ~s.occluded_stereo & np.isfinite(s.disparity)))
+    found.append(Pair("near objects", s.left, s.right, s.disparity, ~s.occluded_stereo & np.isfinite(s.disparity),
+                      s.labels == Label.DEPTH))
     return found
 
 

@@ -272,8 +272,15 @@ def test_fit_targets_reach_as_far_as_the_truth_is_known():
     out = labelling.fit_targets(truth, tolerance)
     assert np.all(out[:, 1:8] == Label.TEXTURE) and np.all(out[:, 0] == 0)
     assert np.all(out[:, 9:12] == Label.ALBEDO) and np.all(out[:, 8] == 0)
+    # A lower-precedence label's own pixels and 4-neighbours keep their label inside a wide reach.
+    truth[:, 10] = 0
+    truth[:, 7] = Label.SHADOW
+    out = labelling.fit_targets(truth, tolerance)
+    assert np.all(out[:, 6:9] == Label.SHADOW) and np.all(out[:, 1:6] == Label.TEXTURE)
     with pytest.raises(ValueError, match="tolerance has shape"):
         labelling.fit_targets(truth, np.ones((3, 3)))
+    with pytest.raises(ValueError, match="tolerance must hold finite distances >= 0"):
+        labelling.fit_targets(truth, -tolerance)
 
 
 # -- on images the weights were not fitted to (seed 2: new texture elements and noise, the fitted geometry) --

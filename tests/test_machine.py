@@ -102,6 +102,17 @@ def test_full_and_fill_set_every_element(shape, dtype, value, machine):
     np.testing.assert_array_equal(machine.fill(array, 1).get(), np.ones(shape, dtype))
 
 
+def test_fill_refuses_views_and_values_its_dtype_cannot_hold(machine):
+    whole = machine.full(8, np.int32, 0)
+    for array, value, match in [(whole[4:], 7, "not a view"), (whole, 2.5, "cannot be held exactly"),
+                                (machine.empty(3, np.uint8), 300, "cannot be held"), (whole, np.nan, "cannot be held")]:
+        with pytest.raises(ValueError, match=match):
+            machine.fill(array, value)
+    np.testing.assert_array_equal(whole.get(), np.zeros(8, np.int32))  # nothing was written
+    with pytest.raises(TypeError, match="array must be a pyopencl.array.Array"):
+        machine.fill(np.zeros(3), 0)
+
+
 def test_empty_refuses_non_integer_shapes_even_after_equal_ones(machine):
     """The layout cache must not let 5.0 pass because 5 was seen (equal as dict keys)."""
     machine.empty(5, np.float32)

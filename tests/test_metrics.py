@@ -311,6 +311,11 @@ def test_point_scores_set_aside_detections_near_ignored_points():
     assert (plain.precision, plain.recall, plain.n_predicted) == (pytest.approx(1 / 3), 0.5, 3)
     aside = point_scores(truth, found, tolerance=1.0, ignore=np.array([[60.0, 0.0]]))
     assert (aside.precision, aside.n_predicted) == (pytest.approx(0.5), 2)
+    # Excluded detections count neither way unless they match a true point.
+    excluded = point_scores(truth, found, tolerance=1.0, exclude=np.array([True, False, True]))
+    assert (excluded.precision, excluded.recall, excluded.n_predicted) == (0.5, 0.5, 2)
+    with pytest.raises(ValueError, match="exclude must be a bool array"):
+        point_scores(truth, found, tolerance=1.0, exclude=np.array([True, False]))
 
 
 def test_segmentation_junctions_where_three_segments_meet():

@@ -182,21 +182,24 @@ def _demo_inputs(args) -> tuple[str, dict, dict]:
 
 
 def evaluation_tables(result, truth: dict) -> dict[str, list[tuple]]:
-    """Tables of the run's scores against whatever ground truth there is (for the terminal and report)."""
+    """Tables of the run's scores against whatever ground truth there is (for the terminal and report):
+    ``truth`` may hold "labels" (with "tolerance", a rendered scene's per-pixel match tolerance), "disparity"
+    and "flow"."""
     from vmcl import metrics
     from vmcl.labels import Label
 
     tables = {}
     if "labels" in truth:
         rows: list[tuple[object, ...]] = [("discontinuities", "precision", "recall", "F", "true px")]
-        # The scene's tolerance: 1 px, texture-only boundaries half their texel spacing (Scene.tolerance).
+        # A rendered scene's tolerance: 1 px, texture-only boundaries half their texel spacing (Scene.tolerance).
         tolerance = truth.get("tolerance", 1.0)
         overall = metrics.detection_scores(result.discontinuities, truth["labels"] > 0, tolerance=tolerance)
         rows.append(("all (integrated)", _fmt(overall.precision), _fmt(overall.recall), _fmt(overall.f), overall.n_true))
         for label, score in metrics.label_scores(result.labels, truth["labels"], tolerance=tolerance).items():
             rows.append((Label(label).name.lower(), _fmt(score.precision), _fmt(score.recall), _fmt(score.f),
                          score.n_true))
-        tables["Discontinuities within 1 px (texture-only: half their texel spacing)"] = rows
+        within = "1 px" if "tolerance" not in truth else "1 px (texture-only: half their texel spacing)"
+        tables[f"Discontinuities within {within}"] = rows
     if "disparity" in truth and result.disparity is not None:
         rows = [("disparity", "bad 0.5", "bad 1", "bad 2", "density")]
         known = np.isfinite(truth["disparity"])

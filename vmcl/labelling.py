@@ -42,6 +42,7 @@ from typing import NamedTuple
 import numpy as np
 import pyopencl.array as cl_array
 
+from vmcl import metrics
 from vmcl.cm.core import ArrayLike, check_bool, check_real, machine_for, real_host_array
 from vmcl.cm.core import field as device_field
 from vmcl.errors import InputTypeError, InputValueError
@@ -78,7 +79,8 @@ CLASSES = (Label.NONE, Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.SHADO
 WEIGHTS_FILE = Path(__file__).with_name("labelling.json")
 
 # The label a pixel is fitted to: the ground truth's on it or on a 4-neighbour (a line of the MRF sits
-# on either side of the site it marks), in the ground truth's own precedence.
+# on either side of the site it marks), or within a true pixel's wider tolerance, in the ground truth's own
+# precedence (fit_targets).
 _FIT_PRECEDENCE = (Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.TEXTURE, Label.SHADOW, Label.SPECULAR)
 
 
@@ -230,8 +232,8 @@ class LinearLabeller:
         index_of = np.zeros(256, np.int64)  # Label code -> output row
         index_of[[int(c) for c in CLASSES]] = np.arange(len(CLASSES))
         for sample in samples:
-            if len(sample) not in (3, 4):
-                raise InputValueError(f"a sample must be (features, support, truth[, tolerance]), got {len(sample)} items")
+            if not isinstance(sample, (tuple, list)) or len(sample) not in (3, 4):
+                raise InputValueError(f"samples must hold (features, support, truth[, tolerance]) tuples, got {sample!r:.60}")
             feats, support, truth = np.asarray(sample[0], np.float32), np.asarray(sample[1]), np.asarray(sample[2])
             tolerance = np.asarray(sample[3]) if len(sample) == 4 else None
             if feats.shape != (len(FEATURES),) + support.shape or truth.shape != support.shape:
@@ -289,29 +291,19 @@ def fit_targets(truth: np.ndarray, tolerance: np.ndarray | None = None) -> np.nd
     precedence order.
 
     With ``tolerance`` (a rendered scene's ``Scene.tolerance``: per true pixel, the distance within which
-    it counts as found), a true pixel reaches every pixel within its tolerance (at least 1 px): a
-    texture-only boundary, known only to within its texels, is fitted on the lines near it, as it is scored.
+    it counts as found), a true pixel also reaches the pixels farther within its tolerance: a texture-only
+    boundary, known only to within its texels, is fitted on the lines near it, as it is scored. Such far
+    reaches come first, so that every label's own pixels and their 4-neighbours still take that label.
     """
-    from scipy import ndimage
-
     real_host_array(truth, "truth", ndims=(2,), empty=True)
     if truth.dtype.kind not in "iu":
         raise InputTypeError(f"truth must be an integer Label map, got dtype {truth.dtype}")
-    reach = np.ones(truth.shape)
     if tolerance is not None:
         real_host_array(tolerance, "tolerance", ndims=(2,), empty=True)
-        if tolerance.shape != truth.shape:
-            raise InputValueError(f"tolerance has shape {tolerance.shape}, truth {truth.shape}: they must match")
-        if not np.all(np.isfinite(tolerance)):
-            raise InputValueError("tolerance must hold finite distances")
-        reach = np.maximum(1.0, tolerance)
     out = np.zeros(truth.shape, np.uint8)
-    for label in reversed(_FIT_PRECEDENCE):
-        mine = truth == label
-        near = np.zeros(truth.shape, bool)
-        for value in np.unique(reach[mine]):
-            near |= ndimage.distance_transform_edt(~(mine & (reach == value))) <= value
-        out[near] = label
+    for reach in ([] if tolerance is None else [tolerance]) + [1.0]:
+        for label in reversed(_FIT_PRECEDENCE):
+            out[metrics.within_tolerance(truth == label, reach)] = label
     return out
 
 

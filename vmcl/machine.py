@@ -206,6 +206,15 @@ def _clang_stderr_to_log():
                 os.write(2, b"".join(others))
 
 
+def device_memory(x: cl_array.Array) -> cl.MemoryObjectHolder:
+    """The memory object under ``x``, a non-empty array from :meth:`Machine.empty`, for the
+    ``cl.enqueue_*`` calls that take one (pyopencl types ``base_data`` as memory, SVM pointer or None)."""
+    memory = x.base_data
+    # The Machine's pool hands out PooledBuffers, which are memory objects; only an empty array has none.
+    assert isinstance(memory, cl.MemoryObjectHolder), f"no device memory under an array of shape {x.shape}"
+    return memory
+
+
 class Machine:
     """An OpenCL device with a context, an in-order queue, program/kernel caches and a buffer pool.
 
@@ -374,12 +383,25 @@ class Machine:
         return self.fill(self.empty(shape, dtype), value)
 
     def fill(self, array: cl_array.Array, value: Any) -> cl_array.Array:
-        """Set every element of a device array from :meth:`empty` to ``value``, on the queue; returns it."""
+        """Set every element of a device array from :meth:`empty` to ``value``, on the queue; returns it.
+
+        A view with an offset is refused (as :meth:`launch` refuses one), and so is a value its dtype cannot
+        hold exactly (2.5 for int32, 300 for uint8): nothing is silently rounded or wrapped.
+        """
+        if not isinstance(array, cl_array.Array):
+            raise InputTypeError(f"array must be a pyopencl.array.Array, got {type(array).__name__}")
+        if array.offset or not array.flags.c_contiguous:
+            raise InputValueError("array must be a whole C-contiguous device array, not a view; copy the view")
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            try:
+                held = array.dtype.type(value)
+            except (TypeError, ValueError, OverflowError) as error:
+                raise InputValueError(f"value {value!r} cannot be held by the array's dtype {array.dtype}") from error
+        if not (held == value or (array.dtype.kind == "f" and np.isnan(held) and np.isnan(value))):
+            raise InputValueError(f"value {value!r} cannot be held exactly by the array's dtype {array.dtype}")
         if array.size:
-            memory = array.base_data
-            # The pool hands out PooledBuffers, which are memory objects (pyopencl also types SVM and None here).
-            assert isinstance(memory, cl.MemoryObjectHolder)
-            cl.enqueue_fill_buffer(self.queue, memory, array.dtype.type(value), 0, array.nbytes)
+            cl.enqueue_fill_buffer(self.queue, device_memory(array), held, 0, array.nbytes)
         return array
 
     def require_memory(self, what: str, total: int, largest: int | None = None) -> None:

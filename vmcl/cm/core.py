@@ -20,7 +20,7 @@ import pyopencl.array as cl_array
 from numpy.typing import DTypeLike
 
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.machine import Machine, default_machine
+from vmcl.machine import Machine, default_machine, device_memory
 
 __all__ = [
     "IMAGE_TYPES",
@@ -195,15 +195,6 @@ def mask_result(mask: cl_array.Array, host: bool) -> ArrayLike:
     """A call's 0/1 uint8 device mask as its input came: a bool NumPy array for host input (a view of the
     copied bytes), else the device array itself."""
     return mask.get().view(np.bool_) if host else mask
-
-
-def device_memory(x: cl_array.Array) -> cl.MemoryObjectHolder:
-    """The memory object under ``x``, a non-empty array from :meth:`vmcl.Machine.empty`, for the
-    ``cl.enqueue_*`` calls that take one (pyopencl types ``base_data`` as memory, SVM pointer or None)."""
-    memory = x.base_data
-    # The Machine's pool hands out PooledBuffers, which are memory objects; only an empty array has none.
-    assert isinstance(memory, cl.MemoryObjectHolder), f"no device memory under an array of shape {x.shape}"
-    return memory
 
 
 def type_defines(dtype: np.dtype) -> dict[str, Any]:

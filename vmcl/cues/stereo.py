@@ -33,10 +33,10 @@ from vmcl.pictures import disparity_image
 __all__ = ["StereoCue"]
 
 
-DENSE_ALPHA = 0.25
+DENSE_ALPHA = 1.0
 """The stereo MRF's data weight for the dense matches (the preset's is 1)."""
-DENSE_BETA = 0.5
-"""The stereo MRF's smoothness weight for the dense matches (the preset's is 2)."""
+DENSE_BETA = 0.25
+"""The stereo MRF's line weight for the dense matches (the preset's is 2)."""
 
 
 class StereoCue(CueModule):
@@ -48,8 +48,9 @@ class StereoCue(CueModule):
     label = Label.DEPTH
     fields = ("sparse_disparity", "stereo_discontinuity", "first_pass_disparity", "half_occluded", "out_of_range")
     # The stereo MRF's weights for the dense matches: the preset's, with the data weight alpha and the
-    # smoothness beta fitted on the training pairs (benchmarks/stereo_fit.py, stage 4). The preset itself
-    # was measured on sparse edge matches.
+    # line weight beta fitted on the training pairs (benchmarks/stereo_fit.py, stage 4: the best depth lines
+    # among the settings whose disparity error is within a tolerance of the best). The preset itself was
+    # measured on sparse edge matches.
     settings = mrf_preset("stereo").override({"alpha": DENSE_ALPHA, "beta": DENSE_BETA})
     restored_as = "disparity"
 

@@ -214,7 +214,7 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     n = mask.size
     size = (-(-width // RUN), height)  # work-items of RUN pixels along each row
     sizes = (np.int32(width), np.int32(height))
-    # Copied without waiting (nothing is written to the host array, which lives until the read below).
+    # Copied without waiting: pyopencl holds the host array until the copy is done.
     tangent_weights = _tangent_weights(smoothing)
     weights = machine.empty(tangent_weights.size, np.float32)
     weights.set(tangent_weights, async_=True)
@@ -256,10 +256,11 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     machine.launch(machine.kernel("curves", "arc_tangents"), (count,), packed, weights, np.int32(weights.size),
                    np.int32(width), np.int32(count))
     machine.launch(machine.kernel("curves", "arc_turns"), (count,), packed, np.int32(width), np.int32(count))
+    # The read is queued before the maps are drawn, so the host measures the curves while the device draws.
+    read, reading = packed.get_async()
     maps = _draw_maps(machine, (height, width), branch, packed, starts) if draw_maps else None
-    fields = packed.get().reshape(8, count)
-    # The read above waited for every command before it: the branch list is read, the weights copied.
-    del tangent_weights
+    reading.wait()  # and with it the branch list's read, queued earlier
+    fields = read.reshape(8, count)
     real = fields[4:].view(np.float32)
     return _Linked(fields[0], fields[1], fields[2], fields[3].astype(bool), real[0], real[1], real[2], real[3],
                    np.sort(listed[:branch_count]), maps)

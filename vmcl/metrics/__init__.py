@@ -28,7 +28,7 @@ host) and ``_rates`` (ratios and the F-measure, 0 where nothing is counted).
 """
 
 from vmcl.metrics.boundaries import BoundaryCounts, BoundaryScores, boundary_counts, evaluate_boundaries
-from vmcl.metrics.detections import DetectionScores, detection_scores, label_scores
+from vmcl.metrics.detections import DetectionScores, detection_scores, label_scores, within_tolerance
 from vmcl.metrics.flow import FlowScores, angular_error, endpoint_error, evaluate_flow
 from vmcl.metrics.points import match_points, point_scores, segmentation_junctions
 from vmcl.metrics.recognition import RecognitionScores, recognition_scores
@@ -54,4 +54,5 @@ __all__ = [
     "point_scores",
     "recognition_scores",
     "segmentation_junctions",
+    "within_tolerance",
 ]

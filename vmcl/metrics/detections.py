@@ -19,7 +19,7 @@ from vmcl.errors import InputTypeError, InputValueError
 from vmcl.metrics._inputs import as_mask, check_sequence
 from vmcl.metrics._rates import f_measure
 
-__all__ = ["DetectionScores", "detection_scores", "label_scores"]
+__all__ = ["DetectionScores", "detection_scores", "label_scores", "within_tolerance"]
 
 
 @dataclass(frozen=True)
@@ -65,19 +65,35 @@ def _tolerance(tolerance, shape: tuple[int, ...]) -> float | np.ndarray:
     return check_real(tolerance, "tolerance", minimum=0)
 
 
-def _found(predicted: np.ndarray, truth: np.ndarray, tolerance: float | np.ndarray) -> tuple[int, int]:
-    """Predicted pixels within the tolerance of a true pixel, and true pixels with a predicted pixel within
-    theirs; a map gives each true pixel its own (pixels of equal tolerance are matched together)."""
+def within_tolerance(truth, tolerance) -> np.ndarray:
+    """The pixels within the tolerance of a true pixel, each true pixel reaching as far as its own.
+
+    Parameters
+    ----------
+    truth : (H, W) bool array
+    tolerance : float or (H, W) array
+        A distance in pixels for every true pixel, or a map of them (e.g. a rendered scene's
+        ``Scene.tolerance``); >= 0.
+
+    Returns
+    -------
+    bool (H, W)
+
+    Notes
+    -----
+    One Euclidean distance transform per distinct tolerance among the true pixels: a map of a few values
+    (a scene's: 1 px and its textures' half spacings, in half-pixel steps) costs a few.
+    """
+    truth = np.asarray(to_host(truth))
+    if truth.dtype != bool or truth.ndim != 2:
+        raise InputTypeError(f"truth must be a 2-D boolean array, got {truth.dtype} of shape {truth.shape}")
+    tolerance = _tolerance(tolerance, truth.shape)
     if not isinstance(tolerance, np.ndarray):
-        return (int(np.count_nonzero(predicted & _within(truth, tolerance))),
-                int(np.count_nonzero(truth & _within(predicted, tolerance))))
-    near = np.zeros(predicted.shape, bool)
-    found_truth = 0
+        return _within(truth, tolerance)
+    near = np.zeros(truth.shape, bool)
     for value in np.unique(tolerance[truth]):
-        these = truth & (tolerance == value)
-        near |= _within(these, float(value))
-        found_truth += int(np.count_nonzero(these & _within(predicted, float(value))))
-    return int(np.count_nonzero(predicted & near)), found_truth
+        near |= _within(truth & (tolerance == value), float(value))
+    return near
 
 
 def detection_scores(predicted, truth, *, tolerance: float | np.ndarray = 1.0) -> DetectionScores:
@@ -110,7 +126,10 @@ def detection_scores(predicted, truth, *, tolerance: float | np.ndarray = 1.0) -
     truth = as_mask(truth, "truth", predicted.shape, "predicted")
     tolerance = _tolerance(tolerance, predicted.shape)
     n_predicted, n_true = int(predicted.sum()), int(truth.sum())
-    found_predicted, found_truth = _found(predicted, truth, tolerance)
+    found_predicted = int(np.count_nonzero(predicted & within_tolerance(truth, tolerance)))
+    # A true pixel is found by a prediction within its own tolerance: one distance map serves every tolerance.
+    to_predicted = ndimage.distance_transform_edt(~predicted) if predicted.any() else np.full(truth.shape, np.inf)
+    found_truth = int(np.count_nonzero(truth & (to_predicted <= tolerance)))
     precision = found_predicted / n_predicted if n_predicted else np.nan
     recall = found_truth / n_true if n_true else np.nan
     f = float(f_measure(precision, recall)) if n_predicted and n_true else float("nan")

@@ -53,7 +53,7 @@ def match_points(truth, found, *, tolerance: float) -> np.ndarray:
     return np.stack([rows[keep], cols[keep]], axis=1)
 
 
-def point_scores(truth, found, *, tolerance: float, ignore=None) -> DetectionScores:
+def point_scores(truth, found, *, tolerance: float, ignore=None, exclude=None) -> DetectionScores:
     """Precision and recall of detected points within ``tolerance`` (:func:`match_points`).
 
     Parameters
@@ -63,6 +63,9 @@ def point_scores(truth, found, *, tolerance: float, ignore=None) -> DetectionSco
     ignore : (K, 2) array of points, optional
         True points set aside: detections within ``tolerance`` of one, and not matched, count neither
         as right nor as wrong.
+    exclude : (N,) bool array, optional
+        Detections set aside (e.g. where the truth is not known): unless matched, they count neither as
+        right nor as wrong.
 
     Returns
     -------
@@ -77,6 +80,12 @@ def point_scores(truth, found, *, tolerance: float, ignore=None) -> DetectionSco
         if len(aside):
             near = np.linalg.norm(found[:, None] - aside[None], axis=2).min(axis=1) <= tolerance
             counted &= ~near
+    if exclude is not None:
+        excluded = np.asarray(exclude)
+        if excluded.dtype != bool or excluded.shape != (len(found),):
+            raise InputValueError(f"exclude must be a bool array of one value per found point ({len(found)}), "
+                                  f"got {excluded.dtype} of shape {excluded.shape}")
+        counted &= ~excluded
     counted[matches[:, 1]] = True
     hits = len(matches)
     predicted = int(counted.sum())

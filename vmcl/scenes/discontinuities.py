@@ -4,8 +4,8 @@ the tolerance each labelled pixel is matched within.
 
 A texture-only boundary (TEXTURE) runs between two patterns of the same colour: between the texels on its
 two sides the image is the same, so no method can place it closer than the texels allow. It is matched
-within half the texel spacing of the coarser texture on its two sides (in pixels, at the pixel's depth);
-every other boundary within 1 pixel.
+within half the texel spacing of the coarser texture on its two sides (in pixels at the pixel's depth,
+rounded up to half pixels); every other boundary within 1 pixel.
 """
 
 from __future__ import annotations
@@ -19,10 +19,12 @@ __all__ = ["discontinuity_labels"]
 _PRECEDENCE = (Label.DEPTH, Label.ORIENTATION, Label.ALBEDO, Label.TEXTURE, Label.SHADOW, Label.SPECULAR)
 
 
-def discontinuity_labels(depth, body, face, hue, look, region, shadow, highlight, texel):
+def discontinuity_labels(depth, body, face, hue, look, region, shadow, highlight, texel=None):
     """Labels of the line sites between horizontal and vertical neighbours, of the pixels, and each
     labelled pixel's match tolerance (``texel``: the texel spacing in pixels at each pixel, 0 where its
-    pattern has none)."""
+    pattern has none; without it, every tolerance is 1)."""
+    if texel is None:
+        texel = np.zeros(depth.shape, np.float32)
 
     def sites(a, b):
         code = np.zeros(body[a].shape, np.uint8)
@@ -59,5 +61,7 @@ def discontinuity_labels(depth, body, face, hue, look, region, shadow, highlight
         np.maximum.at(half_spacing, (ys, xs), 0.5 * coarser.astype(np.float32))
     tolerance = np.ones((h, w), np.float32)
     textured = labels == Label.TEXTURE
-    tolerance[textured] = np.maximum(1.0, half_spacing[textured])
+    # Rounded up to half pixels: a slanted face's spacing changes from pixel to pixel, and the metrics
+    # match each distinct tolerance on its own (vmcl.metrics.within_tolerance).
+    tolerance[textured] = np.maximum(1.0, np.ceil(2.0 * half_spacing[textured]) / 2.0)
     return labels, line_h, line_v, tolerance

@@ -58,7 +58,8 @@ class Scene:
     tolerance : (H, W) float32
         The distance in pixels within which each labelled pixel counts as found (the ``tolerance`` of
         :func:`vmcl.metrics.label_scores`): 1, except on texture-only boundaries (TEXTURE), half the
-        texel spacing of the coarser texture on their two sides (:mod:`vmcl.scenes.discontinuities`).
+        texel spacing of the coarser texture on their two sides, rounded up to half pixels
+        (:mod:`vmcl.scenes.discontinuities`).
     line_h : (H, W - 1) uint8
         Labels of the sites between (y, x) and (y, x + 1).
     line_v : (H - 1, W) uint8
