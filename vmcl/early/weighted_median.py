@@ -117,7 +117,7 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
         raise InputValueError(f"low must not exceed high, got low {low} and high {high}")
     radius = check_int(radius, "radius", minimum=1, maximum=2**31 - 1)
     sigma_colour = check_real(sigma_colour, "sigma_colour", above=0)
-    if not np.isfinite(np.float32(1 / sigma_colour)):
+    if 1 / sigma_colour > float(np.finfo(np.float32).max):  # compared in float64: no overflowing cast
         raise InputValueError(f"sigma_colour must be at least {1 / float(np.finfo(np.float32).max):.1e} (its "
                               f"inverse must fit float32), got {sigma_colour}")
     sigma_space = check_real(sigma_space, "sigma_space", above=0)
