@@ -300,10 +300,15 @@ def fit_targets(truth: np.ndarray, tolerance: np.ndarray | None = None) -> np.nd
         raise InputTypeError(f"truth must be an integer Label map, got dtype {truth.dtype}")
     if tolerance is not None:
         real_host_array(tolerance, "tolerance", ndims=(2,), empty=True)
+        if tolerance.shape != truth.shape:
+            raise InputValueError(f"tolerance has shape {tolerance.shape}, truth {truth.shape}: they must match")
     out = np.zeros(truth.shape, np.uint8)
-    for reach in ([] if tolerance is None else [tolerance]) + [1.0]:
+    if tolerance is not None:
+        # Only true pixels known to more than 1 px reach farther than the pass below paints anyway.
         for label in reversed(_FIT_PRECEDENCE):
-            out[metrics.within_tolerance(truth == label, reach)] = label
+            out[metrics.within_tolerance((truth == label) & (tolerance > 1), tolerance)] = label
+    for label in reversed(_FIT_PRECEDENCE):
+        out[metrics.within_tolerance(truth == label, 1.0)] = label
     return out
 
 
