@@ -10,6 +10,7 @@
  * triangle with the two 4-links, and every pixel of a one-pixel-thin curve would look like a branch.
  */
 #include "vmcl.h"
+#include "angles.h"
 
 /* Pixels per work-item in the whole-image passes: most pixels are no edge and cost next to nothing, so
  * a work-item per pixel would spend more on itself than on its pixel. */
@@ -85,12 +86,14 @@ __kernel void link_pixels(__global const uchar *edges, __global uchar *links, in
 }
 
 /* Curve pixels are edge pixels with at most two links; the others (three or more) are branch pixels,
- * where curves meet and split. curve_links keeps the links between curve pixels; branch marks the
- * branch pixels; is_curve (int, for the scan that numbers them) the curve pixels. The branch pixels'
- * flat addresses are also listed, in no particular order (a few in an image; the host sorts them):
- * counts[1] (zeroed before) counts them, and the list has room for every pixel. */
-__kernel void split_branches(__global const uchar *edges, __global uchar *curve_links, __global uchar *branch,
-                             __global int *is_curve, __global int *branch_list, __global int *counts, int W, int H)
+ * where curves meet and split. curve_links keeps the links between curve pixels; is_curve (int, for the
+ * scan that numbers them) marks the curve pixels. The branch pixels' flat addresses are listed, in no
+ * particular order (a few in an image; the host sorts them): counts[1] (zeroed before) counts them, and
+ * the list has room for every pixel. With `draw`, the maps are cleared as well (labels -1, -2 at branch
+ * pixels; no position; no tangent), so the curves can be drawn into them as they are put in order. */
+__kernel void split_branches(__global const uchar *edges, __global uchar *curve_links, __global int *is_curve,
+                             __global int *branch_list, __global int *counts, __global int *labels,
+                             __global int *position, __global float *tangent, int draw, int W, int H)
 {
     int x0 = get_global_id(0) * RUN, y = get_global_id(1);
     if (x0 >= W || y >= H) return;
@@ -98,13 +101,21 @@ __kernel void split_branches(__global const uchar *edges, __global uchar *curve_
     int end = min(x0 + RUN, W);
     if (end == x0 + RUN) {
         vstore16((uchar16)0, 0, curve_links + p0);
-        vstore16((uchar16)0, 0, branch + p0);
         vstore16((int16)0, 0, is_curve + p0);
+        if (draw) {
+            vstore16((int16)(-1), 0, labels + p0);
+            vstore16((int16)(-1), 0, position + p0);
+            vstore16((float16)(NAN), 0, tangent + p0);
+        }
     } else {
         for (size_t p = p0; p < p0 + (size_t)(end - x0); p++) {
             curve_links[p] = 0;
-            branch[p] = 0;
             is_curve[p] = 0;
+            if (draw) {
+                labels[p] = -1;
+                position[p] = -1;
+                tangent[p] = NAN;
+            }
         }
     }
     /* The run's pixels and their neighbours' neighbours, as bits of the five rows around it; most runs
@@ -140,8 +151,10 @@ __kernel void split_branches(__global const uchar *edges, __global uchar *curve_
             }
         }
         curve_links[p] = kept;
-        branch[p] = (uchar)(degree >= 3);
-        if (degree >= 3) branch_list[atomic_inc(&counts[1])] = (int)p;
+        if (degree >= 3) {
+            branch_list[atomic_inc(&counts[1])] = (int)p;
+            if (draw) labels[p] = -2;
+        }
         is_curve[p] = degree <= 2;
     }
 }
@@ -228,7 +241,9 @@ __kernel void tour(__global const uchar *curve_links, __global const int *is_cur
  * position + 1, the one coming back at 2n - position (0 at the start itself). A closed curve's pixels
  * have one node in each of two rings; the ring of the larger principal sets the direction and the
  * start. Keys lie in [0, 4N): a node's own number, or 2N + node for a turn. Each curve's number of
- * pixels, one more than its largest position, is gathered at its key (size_of_key, zeroed before). */
+ * pixels, one more than its largest position, is gathered at its key, beside a 1 that counts the curve
+ * (size_of_key holds the pairs (size, 1) at 2k and 2k + 1, zeroed before): one scan of the pairs gives
+ * each curve its first slot and its number. */
 __kernel void arc_positions(__global const int *top, __global const int *distance, __global int *key,
                             __global int *position, __global int *closed, __global int *size_of_key, int N)
 {
@@ -247,33 +262,48 @@ __kernel void arc_positions(__global const int *top, __global const int *distanc
     }
     key[i] = k;
     position[i] = q;
-    atomic_max(&size_of_key[k], q + 1);
+    atomic_max(&size_of_key[2 * k], q + 1);
+    if (q == 0) size_of_key[2 * k + 1] = 1;  /* one pixel of each curve stands at its start */
 }
 
 /* The curve pixels put in arc order: slot = its curve's offset (the exclusive sum of the sizes of the
- * curves of smaller key) + its position. The walks along a curve then read neighbouring slots. starts
- * marks each curve's first slot (for the scan that numbers the curves). */
+ * curves of smaller key) + its position. The walks along a curve then read neighbouring slots. With
+ * `draw`, the pixel's curve number (the exclusive count of the curves of smaller key) and position go
+ * into the maps. */
 __kernel void arrange(__global const int *key, __global const int *position, __global const int *closed,
                       __global const int *pixel, __global const float *magnitude, int has_magnitude,
                       __global const int *size_of_key, __global const int *offset_of_key, __global int *out,
-                      __global int *starts, int N)
+                      __global int *labels, __global int *position_map, int draw, int W, int N)
 {
     int i = get_global_id(0);
     if (i >= N) return;
-    int k = key[i], slot = offset_of_key[k] + position[i], p = pixel[i];
-    starts[slot] = position[i] == 0;
+    int k = key[i], slot = offset_of_key[2 * k] + position[i], p = pixel[i];
+    if (draw) {
+        labels[p] = offset_of_key[2 * k + 1];
+        position_map[p] = position[i];
+    }
     out[OUT_PIXEL * N + slot] = p;
-    out[OUT_SIZE * N + slot] = size_of_key[k];
+    out[OUT_SIZE * N + slot] = size_of_key[2 * k];
     out[OUT_POSITION * N + slot] = position[i];
     out[OUT_CLOSED * N + slot] = closed[i];
     out[OUT_MAGNITUDE * N + slot] = has_magnitude ? as_int(magnitude[p]) : as_int(NAN);
+    /* The turn and step fields hold the pixel's column and row (as floats) until arc_turns writes
+     * them: arc_tangents reads a dozen positions per pixel, and dividing each address by the width
+     * cost more than the filter itself. */
+    out[OUT_TURN * N + slot] = as_int((float)(p % W));
+    out[OUT_STEP * N + slot] = as_int((float)(p / W));
 }
 
 /* The slot of arc position q (ahead of or behind the curve's own range) on a curve of `size` pixels
  * starting at slot `start`: round a closed curve, held at an open curve's ends. */
 inline int slot_at(int start, int size, int closed, int q)
 {
-    return start + (closed ? (q % size + size) % size : clamp(q, 0, size - 1));
+    if (!closed) return start + clamp(q, 0, size - 1);
+    /* Within one turn of the loop (every q the filters ask for on all but the tiniest loops) a
+     * subtraction or an addition wraps it; the remainder is for the rest. */
+    if (q >= size) q = q < 2 * size ? q - size : q % size;
+    else if (q < 0) q = q >= -size ? q + size : (q % size + size) % size;
+    return start + q;
 }
 
 inline float2 position_of(__global const int *out, int j, int W, int N)
@@ -282,19 +312,27 @@ inline float2 position_of(__global const int *out, int j, int W, int N)
     return (float2)((float)(p % W), (float)(p / W));
 }
 
+DEFINE_ATAN2(fast_atan2, float, int)
+
 /* The tangent direction at each curve pixel: a derivative filter along the arc (weights[t - 1] for the
  * pixels t ahead and, negated, t behind, t = 1..radius; ends held), applied to the positions. */
-__kernel void arc_tangents(__global int *out, __constant float *weights, int radius, int W, int N)
+__kernel void arc_tangents(__global int *out, __constant float *weights, int radius, __global float *tangent_map,
+                           int draw, int N)
 {
     int j = get_global_id(0);
     if (j >= N) return;
     int position = out[OUT_POSITION * N + j], size = out[OUT_SIZE * N + j], closed = out[OUT_CLOSED * N + j];
     int start = j - position;
+    __global const float *x = (__global const float *)out + OUT_TURN * N;
+    __global const float *y = (__global const float *)out + OUT_STEP * N;
     float2 tangent = (float2)(0.0f, 0.0f);
-    for (int t = 1; t <= radius; t++)
-        tangent += weights[t - 1] * (position_of(out, slot_at(start, size, closed, position + t), W, N)
-                                     - position_of(out, slot_at(start, size, closed, position - t), W, N));
-    out[OUT_ANGLE * N + j] = as_int(atan2(tangent.y, tangent.x));
+    for (int t = 1; t <= radius; t++) {
+        int ahead = slot_at(start, size, closed, position + t), behind = slot_at(start, size, closed, position - t);
+        tangent += weights[t - 1] * (float2)(x[ahead] - x[behind], y[ahead] - y[behind]);
+    }
+    float angle = fast_atan2(tangent.y, tangent.x);
+    out[OUT_ANGLE * N + j] = as_int(angle);
+    if (draw) tangent_map[out[OUT_PIXEL * N + j]] = angle;
 }
 
 /* The tangent's turning from each curve pixel to the next along the arc (|angle difference| in
@@ -313,35 +351,4 @@ __kernel void arc_turns(__global int *out, int W, int N)
     }
     out[OUT_TURN * N + j] = as_int(turn);
     out[OUT_STEP * N + j] = as_int(step);
-}
-
-/* The maps before the curves are drawn in: -1 (BRANCH, -2, at branch pixels), no position, no tangent. */
-__kernel void clear_maps(__global const uchar *branch, __global int *labels, __global int *position,
-                         __global float *tangent, long n)
-{
-    long p0 = get_global_id(0) * RUN;
-    if (p0 + RUN <= n) {
-        vstore16((int16)(-1) - convert_int16(vload16(0, branch + p0)), 0, labels + p0);
-        vstore16((int16)(-1), 0, position + p0);
-        vstore16((float16)(NAN), 0, tangent + p0);
-        return;
-    }
-    for (long p = p0; p < min(p0 + RUN, n); p++) {
-        labels[p] = branch[p] ? -2 : -1;
-        position[p] = -1;
-        tangent[p] = NAN;
-    }
-}
-
-/* Each curve pixel's curve index (the number of curves before its own: the exclusive sum of the curve
- * starts, read at its curve's first slot), arc position and tangent drawn into the maps. */
-__kernel void draw_maps(__global const int *packed, __global const int *curve_before, __global int *labels,
-                        __global int *position, __global float *tangent, int N)
-{
-    int j = get_global_id(0);
-    if (j >= N) return;
-    int p = packed[OUT_PIXEL * N + j], q = packed[OUT_POSITION * N + j];
-    labels[p] = curve_before[j - q];
-    position[p] = q;
-    tangent[p] = as_float(packed[OUT_ANGLE * N + j]);
 }

@@ -45,28 +45,11 @@ __kernel void ring_init(__global const int *next, __global const int *key, __glo
     distance[i] = 0;
 }
 
-/* One doubling step backwards along a ring: node i knows the largest key among itself and the span - 1
- * nodes behind it, and how far behind it lies; the node span behind knows the same of the span nodes
- * before those. The larger wins, the nearer on a tie (the same node met again round a short ring), so
- * once span reaches the ring's length every node holds its ring's principal and its distance from it
- * (going forwards from the principal to i is going backwards from i to it). */
-__kernel void principal_step(__global const int *top, __global const int *distance, __global const int *prev,
-                             __global int *top_out, __global int *distance_out, __global int *prev_out,
-                             int span, long n)
-{
-    long i = get_global_id(0);
-    if (i >= n) return;
-    int p = prev[i];
-    int mine = top[i], theirs = top[p];
-    top_out[i] = max(mine, theirs);
-    distance_out[i] = theirs > mine ? distance[p] + span : distance[i];
-    prev_out[i] = prev[p];
-}
-
-/* Two doubling steps in one launch (spans `span` and 2 span): node i combines itself with the node span
- * behind it, the node 2 span behind with the one 3 span behind, then the two results, exactly as the two
- * steps of principal_step would (the same comparisons in the same order), so the answer is the same at
- * half the launches, each of which costs more than its arithmetic. */
+/* Doubling steps backwards along a ring. Before a step, node i knows the largest key among itself and
+ * the span - 1 nodes behind it, and how far behind it lies; the node span behind knows the same of the
+ * span nodes before those. The larger wins, the nearer on a tie (the same node met again round a short
+ * ring), so once span reaches the ring's length every node holds its ring's principal and its distance
+ * from it (going forwards from the principal to i is going backwards from i to it). */
 inline void take_larger(int *top, int *distance, int their_top, int their_distance, int span)
 {
     if (their_top > *top) {
@@ -75,22 +58,29 @@ inline void take_larger(int *top, int *distance, int their_top, int their_distan
     }
 }
 
-__kernel void principal_two_steps(__global const int *top, __global const int *distance, __global const int *prev,
-                                  __global int *top_out, __global int *distance_out, __global int *prev_out,
-                                  int span, long n)
+/* STEPS doubling steps in one launch (a define, so the loop unrolls; built only where it is given):
+ * node i folds in the windows of the 2^STEPS - 1 nodes span, 2 span, ... behind it, nearest first. A
+ * strict "larger" keeps the nearer of equal keys in any order of folding, so this is exactly what STEPS
+ * launches of one step would give; each launch costs more than its arithmetic, and a few more
+ * dependent reads per node cost less than the launches they save. */
+#ifdef STEPS
+__kernel void principal_steps(__global const int *top, __global const int *distance, __global const int *prev,
+                              __global int *top_out, __global int *distance_out, __global int *prev_out,
+                              int span, long n)
 {
     long i = get_global_id(0);
     if (i >= n) return;
-    int a = prev[i], b = prev[a], c = prev[b];
-    int near_top = top[i], near_distance = distance[i];
-    take_larger(&near_top, &near_distance, top[a], distance[a], span);
-    int far_top = top[b], far_distance = distance[b];
-    take_larger(&far_top, &far_distance, top[c], distance[c], span);
-    take_larger(&near_top, &near_distance, far_top, far_distance, 2 * span);
-    top_out[i] = near_top;
-    distance_out[i] = near_distance;
-    prev_out[i] = prev[c];
+    const int windows = 1 << STEPS;
+    int best = top[i], behind = distance[i], p = prev[i];
+    for (int w = 1; w < windows; w++) {
+        take_larger(&best, &behind, top[p], distance[p], w * span);
+        p = prev[p];
+    }
+    top_out[i] = best;
+    distance_out[i] = behind;
+    prev_out[i] = p;
 }
+#endif
 
 /* Lists: tails (next = -1) point to themselves with rank 0, every other node has rank 1. */
 __kernel void list_init(__global const int *next, __global int *pointer, __global int *rank, long n)

@@ -23,6 +23,7 @@
  */
 #define T float
 #include "vmcl.h"
+#include "angles.h"
 
 #ifndef INTERPOLATE
 #define INTERPOLATE 1
@@ -69,25 +70,6 @@
 #define SV(dx, dy) NV(s, dx, dy)
 #define SS(dx, dy) NS(s, dx, dy)
 
-/* atan2(gy, gx) by Cephes' atanf polynomial (relative error about 2e-7 on [0, tan(pi/8)]), in selects
- * only, so the vector path stays vector code: PoCL's own vector atan2 cost ten times the rest of this
- * kernel. The ratio of the smaller to the larger component is folded about tan(pi/8) with one
- * division, then the octant is restored. A zero gradient has direction 0. Defined for the float vector
- * (F, I) = (VT, VIT) and for float (float, int). */
-#define DEFINE_ATAN2(NAME, F, I)                                                           \
-    __attribute__((always_inline)) inline F NAME(F gy, F gx)                               \
-    {                                                                                      \
-        F ax = fabs(gx), ay = fabs(gy), lo = min(ax, ay), hi = max(ax, ay);                \
-        I folded = lo > 0.414213562373095f * hi;                                           \
-        F t = (folded ? lo - hi : lo) / (folded ? lo + hi : hi), z = t * t;                \
-        F a = (((8.05374449538e-2f * z - 1.38776856032e-1f) * z + 1.99777106478e-1f) * z   \
-               - 3.33329491539e-1f) * z * t + t;                                           \
-        a = folded ? a + M_PI_4_F : a;                                                     \
-        a = ay > ax ? M_PI_2_F - a : a;                                                    \
-        a = gx < 0.0f ? M_PI_F - a : a;                                                    \
-        a = hi > 0.0f ? a : 0.0f;                                                          \
-        return gy < 0.0f ? -a : a;                                                         \
-    }
 /* sqrt(gx^2 + gy^2) over float32's whole range. Where the larger component lies outside
  * [2^-50, 2^50] (and is not 0), the squares could overflow or underflow, so both components are scaled
  * by the power of two that brings it near 1, which is exact, and the result is scaled back: magnitudes

@@ -1,7 +1,8 @@
 /* scan.cl: the Connection Machine's scans (Blelloch 1987) along rows and columns: "grid-scans".
  *
  * Defines: T (float|int), OP (OP_PLUS|OP_MAX|OP_MIN|OP_COPY), SEGMENTED (0|1), EXCLUSIVE (0|1),
- * VEC (1 or 16, column kernels only).
+ * VEC (1 or 16, column kernels only). T_IS_PAIR (1: T is int2, pairs summed componentwise) builds the
+ * row kernels alone: the column kernels' vectors of T would be vectors of vectors.
  *
  * State of a running scan: (have, s). have = 0 before the first element of a line, so the next element
  * starts a segment whatever its flag says; that is how copy-scan, which has no identity, gets its first
@@ -145,6 +146,7 @@ __kernel void chunk_carries(__global const T *total, __global const uchar *resta
     }
 }
 
+#if !T_IS_PAIR
 /* Column scans of a stack of planes (P, H, W): work-item (k, c, p) scans columns
  * [col0 + k*VEC, col0 + (k+1)*VEC) of plane p over rows [c*chunk, min((c+1)*chunk, H)), VEC columns at
  * a time so every row step is one contiguous vector load. Carries and totals are laid out per column:
@@ -262,3 +264,4 @@ __kernel void shift_exclusive(__global const T *inclusive, __global const uchar 
     long pos = (i / stride) % n;
     out[i] = (pos == 0 || FLAG(flags, i)) ? IDENTITY : inclusive[i - stride];
 }
+#endif

@@ -6,7 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from oracles import scan as scan_oracle
 
-from vmcl.cm.scan import scan
+from vmcl.cm.scan import exclusive_sum_into, scan
+from vmcl.errors import InputValueError
 
 OPS = ["plus", "max", "min", "copy"]
 METHODS = ["work_efficient", "hillis_steele"]
@@ -142,3 +143,17 @@ def test_choices_of_the_wrong_type_are_a_type_error(kwargs, match, machine):
 
     with pytest.raises(InputTypeError, match=match):
         scan(np.zeros(5, np.float32), machine=machine, **kwargs)
+
+
+@pytest.mark.parametrize("pairs", [1, 2, 97, 20011])
+def test_exclusive_sums_of_pairs_scan_each_component(pairs, machine):
+    # Long enough inputs are cut into chunks, whose carries must hold both components.
+    counts = np.random.default_rng(pairs).integers(0, 1000, (pairs, 2)).astype(np.int32)
+    out = machine.empty(2 * pairs, np.int32)
+    exclusive_sum_into(machine, machine.to_device(counts.ravel()), out, pairs=True)
+    np.testing.assert_array_equal(out.get().reshape(pairs, 2), np.cumsum(counts, axis=0) - counts)
+
+
+def test_exclusive_sums_of_pairs_refuse_an_odd_length(machine):
+    with pytest.raises(InputValueError, match="even number"):
+        exclusive_sum_into(machine, machine.to_device(np.ones(3, np.int32)), machine.empty(3, np.int32), pairs=True)

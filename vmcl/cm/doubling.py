@@ -34,6 +34,7 @@ __all__ = ["LabelMethod", "label", "principal", "rank"]
 
 LabelMethod = Literal["doubling", "iterative"]
 _CHECK_EVERY = 16  # spreading-activation passes between reads of the "changed" flag
+STEPS_PER_LAUNCH = 2  # doubling steps folded into one launch of principal_steps
 
 
 def _steps(n: int) -> int:
@@ -127,15 +128,15 @@ def principal(next: ArrayLike, *, keys: ArrayLike | None = None, check: bool = T
     buffers = [[machine.empty(n, np.int32) for _ in range(3)] for _ in range(2)]
     top, distance, prev = buffers[0]
     machine.launch(machine.kernel("doubling", "ring_init"), (n,), data, key, prev, top, distance, np.int64(n))
-    one, two = machine.kernel("doubling", "principal_step"), machine.kernel("doubling", "principal_two_steps")
     steps, k, launches = _steps(n), 0, 0
     while k < steps:
-        # Two steps per launch while two remain (the same result as one at a time, in half the launches).
-        both = k + 2 <= steps
+        # Several steps per launch (the same result as one at a time, in a fraction of the launches).
+        now = min(STEPS_PER_LAUNCH, steps - k)
         target = buffers[(launches + 1) % 2]
-        machine.launch(two if both else one, (n,), top, distance, prev, *target, np.int32(1 << k), np.int64(n))
+        machine.launch(machine.kernel("doubling", "principal_steps", STEPS=now), (n,), top, distance, prev, *target,
+                       np.int32(1 << k), np.int64(n))
         top, distance, prev = target
-        k, launches = k + (2 if both else 1), launches + 1
+        k, launches = k + now, launches + 1
     return result(top, host), result(distance, host)
 
 

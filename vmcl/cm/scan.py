@@ -18,6 +18,7 @@ from typing import Literal, overload
 import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
+from pyopencl import cltypes
 
 from vmcl.cm.core import (
     ArrayLike,
@@ -173,10 +174,22 @@ def column_groups(width: int) -> list[tuple[int, int, int]]:
     return [group for group in groups if group[2]]
 
 
-def exclusive_sum_into(machine: Machine, counts: cl_array.Array, out: cl_array.Array) -> None:
-    """Exclusive plus-scan of a flat int32 device array into ``out``: offsets from counts."""
-    scan_rows_into(machine, counts.reshape(counts.size), None, out.reshape(out.size),
-                   dict(type_defines(np.dtype(np.int32)), OP=OPS["plus"], SEGMENTED=0, EXCLUSIVE=1))
+def exclusive_sum_into(machine: Machine, counts: cl_array.Array, out: cl_array.Array, *, pairs: bool = False) -> None:
+    """Exclusive plus-scan of a flat int32 device array into ``out``: offsets from counts.
+
+    With ``pairs``, the arrays hold (a, b) pairs in consecutive elements, and the a's and the b's are
+    summed each on their own in the same passes: two scans for the launches of one.
+    """
+    if not pairs:
+        scan_rows_into(machine, counts.reshape(counts.size), None, out.reshape(out.size),
+                       dict(type_defines(np.dtype(np.int32)), OP=OPS["plus"], SEGMENTED=0, EXCLUSIVE=1))
+        return
+    if counts.size % 2 or out.size % 2:
+        raise InputValueError(f"pairs need an even number of elements, got {counts.size} and {out.size}")
+    # OpenCL's int2 adds componentwise, so the scan's kernels need nothing but the type.
+    defines = {"T": "int2", "T_IS_FLOAT": 0, "T_IS_PAIR": 1, "OP": OPS["plus"], "SEGMENTED": 0, "EXCLUSIVE": 1}
+    scan_rows_into(machine, counts.reshape(counts.size).view(cltypes.int2), None,
+                   out.reshape(out.size).view(cltypes.int2), defines)
 
 
 def _scan_cols(machine: Machine, data: cl_array.Array, flags: cl_array.Array | None,

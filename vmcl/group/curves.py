@@ -209,7 +209,7 @@ class _Linked(NamedTuple):
 def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.Array | None,
                     smoothing: float, *, draw_maps: bool) -> _Linked:
     """The curves' fields in arc order, read back, and with ``draw_maps`` the labels, position and tangent
-    maps drawn on the device (queued before the read, so they are drawn while the host measures)."""
+    maps drawn on the device as the curves are put in order (cleared by the first pass)."""
     height, width = mask.shape
     n = mask.size
     size = (-(-width // RUN), height)  # work-items of RUN pixels along each row
@@ -218,23 +218,28 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     tangent_weights = _tangent_weights(smoothing)
     weights = machine.empty(tangent_weights.size, np.float32)
     weights.set(tangent_weights, async_=True)
-    curve_links, branch = (machine.empty(mask.shape, np.uint8) for _ in range(2))
+    curve_links = machine.empty(mask.shape, np.uint8)
     is_curve, index, branch_list = (machine.empty(n, np.int32) for _ in range(3))
     counts = machine.full(2, np.int32, 0)  # curve pixels, branch pixels
-    machine.launch(machine.kernel("curves", "split_branches"), size, mask, curve_links, branch, is_curve,
-                   branch_list, counts, *sizes)
+    if draw_maps:
+        maps = (machine.empty(mask.shape, np.int32), machine.empty(mask.shape, np.int32),
+                machine.empty(mask.shape, np.float32))
+    # Without maps the kernels write none, and any buffer stands in for them.
+    drawn = maps if draw_maps else (is_curve, is_curve, is_curve)
+    draw = np.int32(draw_maps)
+    machine.launch(machine.kernel("curves", "split_branches"), size, mask, curve_links, is_curve, branch_list,
+                   counts, *drawn, draw, *sizes)
     exclusive_sum_into(machine, is_curve, index)
     machine.launch(machine.kernel("curves", "count_curve_pixels"), (1,), index, is_curve, counts, np.int64(n))
     count, branch_count = (int(c) for c in counts.get())
     # Read back with the curves' fields below: the read waits on nothing of its own.
     listed, listed_event = branch_list[:max(branch_count, 1)].get_async()
     if count == 0:
-        maps = _draw_maps(machine, (height, width), branch, None, None) if draw_maps else None
         listed_event.wait()
         empty = np.zeros(0, np.int32)
         nothing = np.zeros(0, np.float32)
         return _Linked(empty, empty, empty, np.zeros(0, bool), nothing, nothing, nothing, nothing,
-                       np.sort(listed[:branch_count]), maps)
+                       np.sort(listed[:branch_count]), maps if draw_maps else None)
     if 4 * count >= 2**31:
         raise InputValueError(f"edges holds {count} curve pixels; at most {2**29 - 1} can be linked")
     next_node, key = machine.empty(2 * count, np.int32), machine.empty(2 * count, np.int32)
@@ -243,27 +248,25 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
                    *sizes, np.int32(count))
     top, distance = doubling.principal(next_node, keys=key, check=False, machine=machine)
     curve_key, position, closed = (machine.empty(count, np.int32) for _ in range(3))
-    size_of_key, offset_of_key = machine.full(4 * count, np.int32, 0), machine.empty(4 * count, np.int32)
+    # (size, 1) pairs per key: their exclusive sums are each curve's first slot and its number.
+    size_of_key, offset_of_key = machine.full(8 * count, np.int32, 0), machine.empty(8 * count, np.int32)
     machine.launch(machine.kernel("curves", "arc_positions"), (count,), top, distance, curve_key, position, closed,
                    size_of_key, np.int32(count))
     # Curves are put in the order of their keys (see Curves) by the offsets of their sizes, summed over the
     # key range, so the host reads them in arc order and sorts nothing.
-    exclusive_sum_into(machine, size_of_key, offset_of_key)
-    packed, starts = machine.empty(8 * count, np.int32), machine.empty(count, np.int32)
+    exclusive_sum_into(machine, size_of_key, offset_of_key, pairs=True)
+    packed = machine.empty(8 * count, np.int32)
     machine.launch(machine.kernel("curves", "arrange"), (count,), curve_key, position, closed, pixel,
                    mask if strength is None else strength, np.int32(strength is not None), size_of_key,
-                   offset_of_key, packed, starts, np.int32(count))
+                   offset_of_key, packed, drawn[0], drawn[1], draw, np.int32(width), np.int32(count))
     machine.launch(machine.kernel("curves", "arc_tangents"), (count,), packed, weights, np.int32(weights.size),
-                   np.int32(width), np.int32(count))
+                   drawn[2], draw, np.int32(count))
     machine.launch(machine.kernel("curves", "arc_turns"), (count,), packed, np.int32(width), np.int32(count))
-    # The read is queued before the maps are drawn, so the host measures the curves while the device draws.
-    read, reading = packed.get_async()
-    maps = _draw_maps(machine, (height, width), branch, packed, starts) if draw_maps else None
-    reading.wait()  # and with it the branch list's read, queued earlier
+    read = packed.get()  # and with it the branch list's read, queued earlier
     fields = read.reshape(8, count)
     real = fields[4:].view(np.float32)
     return _Linked(fields[0], fields[1], fields[2], fields[3].astype(bool), real[0], real[1], real[2], real[3],
-                   np.sort(listed[:branch_count]), maps)
+                   np.sort(listed[:branch_count]), maps if draw_maps else None)
 
 
 def _tangent_weights(smoothing: float) -> np.ndarray:
@@ -307,23 +310,6 @@ def _host_maps(found: _Linked, ids: np.ndarray, shape: tuple[int, int]) -> tuple
     position[found.pixel] = found.position
     tangent[found.pixel] = found.angle
     return labels.reshape(shape), position.reshape(shape), tangent.reshape(shape)
-
-
-def _draw_maps(machine: Machine, shape: tuple[int, int], branch: cl_array.Array, packed: cl_array.Array | None,
-               starts: cl_array.Array | None) -> tuple[cl_array.Array, cl_array.Array, cl_array.Array]:
-    """The labels, position and tangent maps, drawn on the device from the fields it holds (the curves'
-    packed fields in arc order and their first slots; None without curve pixels): nothing goes up."""
-    labels, position = machine.empty(shape, np.int32), machine.empty(shape, np.int32)
-    tangent = machine.empty(shape, np.float32)
-    size = shape[0] * shape[1]
-    machine.launch(machine.kernel("curves", "clear_maps"), (-(-size // RUN),), branch, labels, position,
-                   tangent, np.int64(size))
-    if packed is not None and starts is not None:
-        curve_before = machine.empty(starts.size, np.int32)
-        exclusive_sum_into(machine, starts, curve_before)
-        machine.launch(machine.kernel("curves", "draw_maps"), (starts.size,), packed, curve_before, labels,
-                       position, tangent, np.int32(starts.size))
-    return labels, position, tangent
 
 
 def _end_tangents(points: np.ndarray, offsets: np.ndarray, closed: np.ndarray) -> np.ndarray:
