@@ -86,32 +86,32 @@ __kernel void link_pixels(__global const uchar *edges, __global uchar *links, in
 }
 
 /* Curve pixels are edge pixels with at most two links; the others (three or more) are branch pixels,
- * where curves meet and split. curve_links keeps the links between curve pixels; is_curve (int, for the
- * scan that numbers them) marks the curve pixels. The branch pixels' flat addresses are listed, in no
- * particular order (a few in an image; the host sorts them): counts[1] (zeroed before) counts them, and
- * the list has room for every pixel. With `draw`, the maps are cleared as well (labels -1, -2 at branch
- * pixels; no position; no tangent), so the curves can be drawn into them as they are put in order. */
-__kernel void split_branches(__global const uchar *edges, __global uchar *curve_links, __global int *is_curve,
-                             __global int *branch_list, __global int *counts, __global int *labels,
-                             __global int *position, __global float *tangent, int draw, int W, int H)
+ * where curves meet and split. curve_links keeps the links between curve pixels (written at curve pixels
+ * only: nothing reads it elsewhere). Each run's curve pixels are marked in run_bits (bit b: the run's
+ * pixel b) and counted in run_count, whose exclusive scan numbers them. The branch pixels' flat
+ * addresses are listed, in no particular order (a few in an image; the host sorts them): counts[1]
+ * (zeroed before) counts them, and the list has room for every pixel. With `draw`, the maps are cleared
+ * as well (labels -1, -2 at branch pixels; no position; no tangent), so the curves can be drawn into
+ * them as they are put in order. */
+__kernel void split_branches(__global const uchar *edges, __global uchar *curve_links, __global ushort *run_bits,
+                             __global int *run_count, __global int *branch_list, __global int *counts,
+                             __global int *labels, __global int *position, __global float *tangent, int draw,
+                             int W, int H)
 {
     int x0 = get_global_id(0) * RUN, y = get_global_id(1);
     if (x0 >= W || y >= H) return;
     size_t p0 = (size_t)y * W + x0;
     int end = min(x0 + RUN, W);
-    if (end == x0 + RUN) {
-        vstore16((uchar16)0, 0, curve_links + p0);
-        vstore16((int16)0, 0, is_curve + p0);
-        if (draw) {
+    size_t run_index = (size_t)y * ((W + RUN - 1) / RUN) + get_global_id(0);
+    run_bits[run_index] = 0;
+    run_count[run_index] = 0;
+    if (draw) {
+        if (end == x0 + RUN) {
             vstore16((int16)(-1), 0, labels + p0);
             vstore16((int16)(-1), 0, position + p0);
             vstore16((float16)(NAN), 0, tangent + p0);
-        }
-    } else {
-        for (size_t p = p0; p < p0 + (size_t)(end - x0); p++) {
-            curve_links[p] = 0;
-            is_curve[p] = 0;
-            if (draw) {
+        } else {
+            for (size_t p = p0; p < p0 + (size_t)(end - x0); p++) {
                 labels[p] = -1;
                 position[p] = -1;
                 tangent[p] = NAN;
@@ -131,7 +131,7 @@ __kernel void split_branches(__global const uchar *edges, __global uchar *curve_
     rows[3] = row_bits(edges, x0, y + 1, W, H);
     rows[4] = row_bits(edges, x0, y + 2, W, H);
     /* Only the run's edge pixels (bits 2 .. end - x0 + 1 of the middle row) have links. */
-    uint own_edges = rows[2] & (((1u << (end - x0)) - 1u) << 2);
+    uint own_edges = rows[2] & (((1u << (end - x0)) - 1u) << 2), curve_bits = 0;
     while (own_edges) {
         int i = 31 - clz(own_edges & -own_edges);
         own_edges &= own_edges - 1;
@@ -150,19 +150,30 @@ __kernel void split_branches(__global const uchar *edges, __global uchar *curve_
                     kept |= (uchar)(1 << k);
             }
         }
-        curve_links[p] = kept;
         if (degree >= 3) {
             branch_list[atomic_inc(&counts[1])] = (int)p;
             if (draw) labels[p] = -2;
+        } else {
+            curve_links[p] = kept;
+            curve_bits |= 1u << (i - 2);
         }
-        is_curve[p] = degree <= 2;
     }
+    run_bits[run_index] = (ushort)curve_bits;
+    run_count[run_index] = popcount(curve_bits);
 }
 
-/* The number of curve pixels (counts[0]), from the exclusive scan that numbers them. */
-__kernel void count_curve_pixels(__global const int *index, __global const int *is_curve, __global int *counts, long n)
+/* The number of curve pixels (counts[0]), from the exclusive scan of the runs' counts. */
+__kernel void count_curve_pixels(__global const int *run_offset, __global const int *run_count, __global int *counts,
+                                 long runs)
 {
-    if (get_global_id(0) == 0) counts[0] = index[n - 1] + is_curve[n - 1];
+    if (get_global_id(0) == 0) counts[0] = run_offset[runs - 1] + run_count[runs - 1];
+}
+
+/* The number of curve pixel (x, y): its run's offset and the curve pixels before it in the run. */
+inline int index_of(__global const ushort *run_bits, __global const int *run_offset, int x, int y, int W)
+{
+    size_t run_index = (size_t)y * ((W + RUN - 1) / RUN) + x / RUN;
+    return run_offset[run_index] + popcount((uint)run_bits[run_index] & ((1u << (x % RUN)) - 1u));
 }
 
 /* The slot (0 or 1) of direction k among the set bits of a curve pixel's links, in increasing k. */
@@ -190,37 +201,36 @@ inline int link_of(uchar bits, int s)
  * (there and back), a closed curve two rings of n (one per direction).
  * key ranks the nodes for the principal: the turn-round nodes rank above every other, so a path's
  * principal is one of its two ends. */
-__kernel void tour(__global const uchar *curve_links, __global const int *is_curve, __global const int *index,
-                   __global int *next, __global int *key, __global int *pixel, int W, int H, int N)
+__kernel void tour(__global const uchar *curve_links, __global const ushort *run_bits,
+                   __global const int *run_offset, __global int *next, __global int *key, __global int *pixel,
+                   int W, int H, int N)
 {
     int x0 = get_global_id(0) * RUN, y = get_global_id(1);
     if (x0 >= W || y >= H) return;
-    if (x0 + RUN <= W) {
-        int16 run = vload16(0, is_curve + (size_t)y * W + x0);
-        int8 either = run.lo | run.hi;
-        int4 any4 = either.lo | either.hi;
-        int2 any2 = any4.lo | any4.hi;
-        if ((any2.x | any2.y) == 0) return;
-    }
-    for (int x = x0; x < min(x0 + RUN, W); x++) {
+    size_t run_index = (size_t)y * ((W + RUN - 1) / RUN) + get_global_id(0);
+    uint bits = run_bits[run_index];
+    int i = run_offset[run_index];
+    while (bits) {
+        int b = 31 - clz(bits & -bits);
+        bits &= bits - 1;
+        int x = x0 + b;
         size_t p = (size_t)y * W + x;
-        if (!is_curve[p]) continue;
-        int i = index[p];
-        uchar bits = curve_links[p];
+        uchar links = curve_links[p];
         pixel[i] = (int)p;
         for (int s = 0; s < 2; s++) {
             int node = 2 * i + s;
-            int k = link_of(bits, s);
+            int k = link_of(links, s);
             if (k < 0) {
                 next[node] = 2 * i + (1 - s);
                 key[node] = 2 * N + node;
             } else {
-                size_t q = (size_t)(y + DY[k]) * W + (x + DX[k]);
-                int arrived = slot_of(curve_links[q], (k + 4) & 7);
-                next[node] = 2 * index[q] + (1 - arrived);
+                int qx = x + DX[k], qy = y + DY[k];
+                int arrived = slot_of(curve_links[(size_t)qy * W + qx], (k + 4) & 7);
+                next[node] = 2 * index_of(run_bits, run_offset, qx, qy, W) + (1 - arrived);
                 key[node] = node;
             }
         }
+        i++;
     }
 }
 
@@ -234,6 +244,9 @@ __kernel void tour(__global const uchar *curve_links, __global const int *is_cur
 #define OUT_TURN 5
 #define OUT_STEP 6
 #define OUT_ANGLE 7
+/* Then the pixels' (column, row) pairs, interleaved from out[OUT_POINTS * N]: the host takes them as
+ * its (N, 2) points without a pass of its own. */
+#define OUT_POINTS 8
 
 /* Each curve pixel's curve key (the largest key of its rings: the same for every pixel of a curve), its
  * arc position from the curve's start, and whether its curve is closed. A path's two nodes share one
@@ -287,11 +300,9 @@ __kernel void arrange(__global const int *key, __global const int *position, __g
     out[OUT_POSITION * N + slot] = position[i];
     out[OUT_CLOSED * N + slot] = closed[i];
     out[OUT_MAGNITUDE * N + slot] = has_magnitude ? as_int(magnitude[p]) : as_int(NAN);
-    /* The turn and step fields hold the pixel's column and row (as floats) until arc_turns writes
-     * them: arc_tangents reads a dozen positions per pixel, and dividing each address by the width
+    /* The walks along the arc read a dozen positions per pixel: dividing each address by the width
      * cost more than the filter itself. */
-    out[OUT_TURN * N + slot] = as_int((float)(p % W));
-    out[OUT_STEP * N + slot] = as_int((float)(p / W));
+    vstore2((int2)(p % W, p / W), OUT_POINTS * N / 2 + slot, out);
 }
 
 /* The slot of arc position q (ahead of or behind the curve's own range) on a curve of `size` pixels
@@ -306,10 +317,9 @@ inline int slot_at(int start, int size, int closed, int q)
     return start + q;
 }
 
-inline float2 position_of(__global const int *out, int j, int W, int N)
+inline float2 position_of(__global const int *out, int j, int N)
 {
-    int p = out[OUT_PIXEL * N + j];
-    return (float2)((float)(p % W), (float)(p / W));
+    return convert_float2(vload2(OUT_POINTS * N / 2 + j, out));
 }
 
 DEFINE_ATAN2(fast_atan2, float, int)
@@ -323,13 +333,10 @@ __kernel void arc_tangents(__global int *out, __constant float *weights, int rad
     if (j >= N) return;
     int position = out[OUT_POSITION * N + j], size = out[OUT_SIZE * N + j], closed = out[OUT_CLOSED * N + j];
     int start = j - position;
-    __global const float *x = (__global const float *)out + OUT_TURN * N;
-    __global const float *y = (__global const float *)out + OUT_STEP * N;
     float2 tangent = (float2)(0.0f, 0.0f);
-    for (int t = 1; t <= radius; t++) {
-        int ahead = slot_at(start, size, closed, position + t), behind = slot_at(start, size, closed, position - t);
-        tangent += weights[t - 1] * (float2)(x[ahead] - x[behind], y[ahead] - y[behind]);
-    }
+    for (int t = 1; t <= radius; t++)
+        tangent += weights[t - 1] * (position_of(out, slot_at(start, size, closed, position + t), N)
+                                     - position_of(out, slot_at(start, size, closed, position - t), N));
     float angle = fast_atan2(tangent.y, tangent.x);
     out[OUT_ANGLE * N + j] = as_int(angle);
     if (draw) tangent_map[out[OUT_PIXEL * N + j]] = angle;
@@ -337,7 +344,7 @@ __kernel void arc_tangents(__global int *out, __constant float *weights, int rad
 
 /* The tangent's turning from each curve pixel to the next along the arc (|angle difference| in
  * [0, pi]), and the step's length (1 or sqrt 2; 0 after an open curve's last pixel). */
-__kernel void arc_turns(__global int *out, int W, int N)
+__kernel void arc_turns(__global int *out, int N)
 {
     int j = get_global_id(0);
     if (j >= N) return;
@@ -347,7 +354,7 @@ __kernel void arc_turns(__global int *out, int W, int N)
     if (k != j) {
         float d = fabs(as_float(out[OUT_ANGLE * N + k]) - as_float(out[OUT_ANGLE * N + j]));
         turn = d > M_PI_F ? 2.0f * M_PI_F - d : d;
-        step = length(position_of(out, k, W, N) - position_of(out, j, W, N));
+        step = length(position_of(out, k, N) - position_of(out, j, N));
     }
     out[OUT_TURN * N + j] = as_int(turn);
     out[OUT_STEP * N + j] = as_int(step);

@@ -305,3 +305,20 @@ def test_a_launch_on_a_cpu_takes_one_work_group_size_whatever_the_image():
         assert calls == [((64, 3), (64, 1)), ((64, 3), (64, 1)), ((320, 3), (64, 1))]
     else:
         assert [local for _, local in calls] == [None] * 3
+
+
+def test_a_kernel_launched_again_takes_each_launch_own_scalars(machine):
+    # The machine skips setting a scalar its kernel already holds: a changed value, a zero of the other
+    # sign, a NaN after a NaN and a value of another width must each still reach the kernel.
+    kernel = machine.kernel("mrf", "set_value", NCOMP=1, KIND=0, NLEVELS=1, MODE=0)
+    out = machine.empty(8, np.float32)
+    for value, count in [(1.5, 8), (2.5, 8), (2.5, 3), (0.0, 8), (-0.0, 8), (np.nan, 8), (np.nan, 8), (7.0, 5)]:
+        machine.launch(kernel, (8,), out, np.float32(-9.0), np.int64(8))
+        machine.launch(kernel, (8,), out, np.float32(value), np.int64(count))
+        got = out.get()
+        expected = np.full(8, -9.0, np.float32)
+        expected[:count] = value
+        np.testing.assert_array_equal(got, expected)
+        assert np.array_equal(np.signbit(got), np.signbit(expected))
+    with pytest.raises(cl.LogicError):  # an int32 where the kernel wants a long is still refused
+        machine.launch(kernel, (8,), out, np.float32(1.0), np.int32(8))

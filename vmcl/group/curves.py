@@ -41,6 +41,7 @@ BRANCH = -2
 """The value :attr:`Curves.labels` holds at branch pixels (off the edges: -1)."""
 
 _TANGENT_SPAN = 5  # pixels back from an end along which its tangent is measured
+_FIELDS = 10  # int32 words per curve pixel in the packed answer (kernels/curves.cl's OUT_ fields)
 RUN = 16  # pixels per work-item of kernels/curves.cl's whole-image passes (its RUN)
 _SQRT2 = math.sqrt(2.0)
 
@@ -183,18 +184,19 @@ def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothin
             raise InputValueError(f"magnitude has shape {strength.shape}, edges {mask.shape}: they must match")
     found = _link_on_device(machine, mask, strength, smoothing, draw_maps=not host)
     shape = (int(mask.shape[0]), int(mask.shape[1]))
-    curves, ids = _measure(found, shape)
-    maps = _host_maps(found, ids, shape) if found.maps is None else found.maps
+    curves = _measure(found, shape)
+    maps = _host_maps(found, curves.sizes, shape) if found.maps is None else found.maps
     return dataclasses.replace(curves, labels=maps[0], position=maps[1], tangent=maps[2])
 
 
 class _Linked(NamedTuple):
     """The device's answer, every curve pixel in arc order (curve after curve, in the order of their
-    keys): its flat address, its curve's size, arc position, loop flag, gradient magnitude (NaN without
+    keys): its flat address and (column, row), its curve's size, arc position, loop flag, gradient magnitude (NaN without
     one), the tangent's turn and the step to the next pixel, the tangent's direction; the branch pixels'
     flat addresses; and the labels, position and tangent maps on the device, where they were drawn."""
 
     pixel: np.ndarray
+    points: np.ndarray
     size: np.ndarray
     position: np.ndarray
     closed: np.ndarray
@@ -218,19 +220,23 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     tangent_weights = _tangent_weights(smoothing)
     weights = machine.empty(tangent_weights.size, np.float32)
     weights.set(tangent_weights, async_=True)
-    curve_links = machine.empty(mask.shape, np.uint8)
-    is_curve, index, branch_list = (machine.empty(n, np.int32) for _ in range(3))
+    curve_links, branch_list = machine.empty(mask.shape, np.uint8), machine.empty(n, np.int32)
+    runs = size[0] * size[1]
+    run_bits = machine.empty(runs, np.uint16)
+    run_count, run_offset = machine.empty(runs, np.int32), machine.empty(runs, np.int32)
     counts = machine.full(2, np.int32, 0)  # curve pixels, branch pixels
     if draw_maps:
         maps = (machine.empty(mask.shape, np.int32), machine.empty(mask.shape, np.int32),
                 machine.empty(mask.shape, np.float32))
     # Without maps the kernels write none, and any buffer stands in for them.
-    drawn = maps if draw_maps else (is_curve, is_curve, is_curve)
+    drawn = maps if draw_maps else (run_count, run_count, run_count)
     draw = np.int32(draw_maps)
-    machine.launch(machine.kernel("curves", "split_branches"), size, mask, curve_links, is_curve, branch_list,
-                   counts, *drawn, draw, *sizes)
-    exclusive_sum_into(machine, is_curve, index)
-    machine.launch(machine.kernel("curves", "count_curve_pixels"), (1,), index, is_curve, counts, np.int64(n))
+    machine.launch(machine.kernel("curves", "split_branches"), size, mask, curve_links, run_bits, run_count,
+                   branch_list, counts, *drawn, draw, *sizes)
+    # Curve pixels are numbered in raster order: by their runs' offsets, then within each run.
+    exclusive_sum_into(machine, run_count, run_offset)
+    machine.launch(machine.kernel("curves", "count_curve_pixels"), (1,), run_offset, run_count, counts,
+                   np.int64(runs))
     count, branch_count = (int(c) for c in counts.get())
     # Read back with the curves' fields below: the read waits on nothing of its own.
     listed, listed_event = branch_list[:max(branch_count, 1)].get_async()
@@ -238,13 +244,14 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
         listed_event.wait()
         empty = np.zeros(0, np.int32)
         nothing = np.zeros(0, np.float32)
-        return _Linked(empty, empty, empty, np.zeros(0, bool), nothing, nothing, nothing, nothing,
+        return _Linked(empty, np.zeros((0, 2), np.int32), empty, empty, np.zeros(0, bool), nothing, nothing, nothing,
+                       nothing,
                        np.sort(listed[:branch_count]), maps if draw_maps else None)
-    if 4 * count >= 2**31:
-        raise InputValueError(f"edges holds {count} curve pixels; at most {2**29 - 1} can be linked")
+    if _FIELDS * count >= 2**31:  # the packed fields' addresses are int32
+        raise InputValueError(f"edges holds {count} curve pixels; at most {(2**31 - 1) // _FIELDS} can be linked")
     next_node, key = machine.empty(2 * count, np.int32), machine.empty(2 * count, np.int32)
     pixel = machine.empty(count, np.int32)
-    machine.launch(machine.kernel("curves", "tour"), size, curve_links, is_curve, index, next_node, key, pixel,
+    machine.launch(machine.kernel("curves", "tour"), size, curve_links, run_bits, run_offset, next_node, key, pixel,
                    *sizes, np.int32(count))
     top, distance = doubling.principal(next_node, keys=key, check=False, machine=machine)
     curve_key, position, closed = (machine.empty(count, np.int32) for _ in range(3))
@@ -255,18 +262,18 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     # Curves are put in the order of their keys (see Curves) by the offsets of their sizes, summed over the
     # key range, so the host reads them in arc order and sorts nothing.
     exclusive_sum_into(machine, size_of_key, offset_of_key, pairs=True)
-    packed = machine.empty(8 * count, np.int32)
+    packed = machine.empty(_FIELDS * count, np.int32)
     machine.launch(machine.kernel("curves", "arrange"), (count,), curve_key, position, closed, pixel,
                    mask if strength is None else strength, np.int32(strength is not None), size_of_key,
                    offset_of_key, packed, drawn[0], drawn[1], draw, np.int32(width), np.int32(count))
     machine.launch(machine.kernel("curves", "arc_tangents"), (count,), packed, weights, np.int32(weights.size),
                    drawn[2], draw, np.int32(count))
-    machine.launch(machine.kernel("curves", "arc_turns"), (count,), packed, np.int32(width), np.int32(count))
+    machine.launch(machine.kernel("curves", "arc_turns"), (count,), packed, np.int32(count))
     read = packed.get()  # and with it the branch list's read, queued earlier
-    fields = read.reshape(8, count)
+    fields = read[:8 * count].reshape(8, count)
     real = fields[4:].view(np.float32)
-    return _Linked(fields[0], fields[1], fields[2], fields[3].astype(bool), real[0], real[1], real[2], real[3],
-                   np.sort(listed[:branch_count]), maps if draw_maps else None)
+    return _Linked(fields[0], read[8 * count:].reshape(count, 2), fields[1], fields[2], fields[3].astype(bool),
+                   real[0], real[1], real[2], real[3], np.sort(listed[:branch_count]), maps if draw_maps else None)
 
 
 def _tangent_weights(smoothing: float) -> np.ndarray:
@@ -278,15 +285,13 @@ def _tangent_weights(smoothing: float) -> np.ndarray:
     return (t * np.exp(-0.5 * (t / smoothing) ** 2)).astype(np.float32)
 
 
-def _measure(found: _Linked, shape: tuple[int, int]) -> tuple[Curves, np.ndarray]:
-    """The curves and their measures (maps left empty), and each curve pixel's curve index."""
+def _measure(found: _Linked, shape: tuple[int, int]) -> Curves:
+    """The curves and their measures (maps left empty)."""
     width = shape[1]
     starts = np.flatnonzero(found.position == 0)
     sizes = found.size[starts].astype(np.int64)
     offsets = np.r_[starts, found.pixel.size].astype(np.int64)
-    points = np.stack([found.pixel % width, found.pixel // width], axis=1).astype(np.int32)
     closed = found.closed[starts]
-    ids = np.repeat(np.arange(len(starts), dtype=np.int32), sizes)
     if len(starts):
         def per_curve(values: np.ndarray) -> np.ndarray:
             return np.add.reduceat(values.astype(np.float64), starts)
@@ -296,13 +301,14 @@ def _measure(found: _Linked, shape: tuple[int, int]) -> tuple[Curves, np.ndarray
     mean = np.divide(total, length, out=np.zeros(len(starts)), where=length > 0)
     branch_points = np.stack([found.branches % width, found.branches // width], axis=1).astype(np.int32)
     nothing = np.zeros(0)
-    return Curves(nothing, nothing, nothing, points, offsets, closed, length, mean, total, magnitude,
-                  _end_tangents(points, offsets, closed), branch_points), ids
+    return Curves(nothing, nothing, nothing, found.points, offsets, closed, length, mean, total, magnitude,
+                  _end_tangents(found.points, offsets, closed), branch_points)
 
 
-def _host_maps(found: _Linked, ids: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The labels, position and tangent maps, on the host."""
+def _host_maps(found: _Linked, sizes: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The labels, position and tangent maps, on the host (``sizes``: the curves' numbers of pixels)."""
     size = shape[0] * shape[1]
+    ids = np.repeat(np.arange(len(sizes), dtype=np.int32), sizes)
     labels, position = np.full(size, -1, np.int32), np.full(size, -1, np.int32)
     tangent = np.full(size, np.nan, np.float32)
     labels[found.pixel] = ids
@@ -319,6 +325,6 @@ def _end_tangents(points: np.ndarray, offsets: np.ndarray, closed: np.ndarray) -
     span = np.minimum(_TANGENT_SPAN, last - first)
     chords = np.stack([points[first] - points[first + span], points[last] - points[last - span]], axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        tangents = chords / np.linalg.norm(chords, axis=2, keepdims=True)
+        tangents = chords / np.hypot(chords[..., :1], chords[..., 1:])
     tangents[closed] = np.nan
     return tangents
