@@ -203,7 +203,7 @@ inline int link_of(uchar bits, int s)
  * principal is one of its two ends. */
 __kernel void tour(__global const uchar *curve_links, __global const ushort *run_bits,
                    __global const int *run_offset, __global int *next, __global int *key, __global int *pixel,
-                   int W, int H, int N)
+                   __global int *size_of_key, int W, int H, int N)
 {
     int x0 = get_global_id(0) * RUN, y = get_global_id(1);
     if (x0 >= W || y >= H) return;
@@ -217,6 +217,8 @@ __kernel void tour(__global const uchar *curve_links, __global const ushort *run
         size_t p = (size_t)y * W + x;
         uchar links = curve_links[p];
         pixel[i] = (int)p;
+        /* arc_positions gathers at 4N keys, two words each: eight per curve pixel cleared here. */
+        vstore8((int8)0, i, size_of_key);
         for (int s = 0; s < 2; s++) {
             int node = 2 * i + s;
             int k = link_of(links, s);
@@ -255,7 +257,7 @@ __kernel void tour(__global const uchar *curve_links, __global const ushort *run
  * have one node in each of two rings; the ring of the larger principal sets the direction and the
  * start. Keys lie in [0, 4N): a node's own number, or 2N + node for a turn. Each curve's number of
  * pixels, one more than its largest position, is gathered at its key, beside a 1 that counts the curve
- * (size_of_key holds the pairs (size, 1) at 2k and 2k + 1, zeroed before): one scan of the pairs gives
+ * (size_of_key holds the pairs (size, 1) at 2k and 2k + 1, zeroed by the tour): one scan of the pairs gives
  * each curve its first slot and its number. */
 __kernel void arc_positions(__global const int *top, __global const int *distance, __global int *key,
                             __global int *position, __global int *closed, __global int *size_of_key, int N)

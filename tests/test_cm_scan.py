@@ -11,8 +11,9 @@ from vmcl.errors import InputValueError
 
 OPS = ["plus", "max", "min", "copy"]
 METHODS = ["work_efficient", "hillis_steele"]
-# 1 x 1, 1 x N, N x 1, primes and non-powers of two, and lines long enough to be cut into chunks.
-SHAPES = [(1,), (2,), (97,), (20011,), (1, 1), (1, 257), (257, 1), (13, 31), (3, 5, 17), (2, 9001), (9001, 2),
+# 1 x 1, 1 x N, N x 1, primes and non-powers of two, and lines long enough to be cut into chunks (on
+# a GPU from 8 Ki elements, on a CPU from 128 Ki).
+SHAPES = [(1,), (2,), (97,), (20011,), (200003,), (1, 1), (1, 257), (257, 1), (13, 31), (3, 5, 17), (2, 9001), (9001, 2),
           (5, 48, 33)]
 
 
@@ -145,7 +146,7 @@ def test_choices_of_the_wrong_type_are_a_type_error(kwargs, match, machine):
         scan(np.zeros(5, np.float32), machine=machine, **kwargs)
 
 
-@pytest.mark.parametrize("pairs", [1, 2, 97, 20011])
+@pytest.mark.parametrize("pairs", [1, 2, 97, 20011, 150001])
 def test_exclusive_sums_of_pairs_scan_each_component(pairs, machine):
     # Long enough inputs are cut into chunks, whose carries must hold both components.
     counts = np.random.default_rng(pairs).integers(0, 1000, (pairs, 2)).astype(np.int32)

@@ -322,10 +322,16 @@ class Machine:
         With a local size (the call's, else the Machine's), the global size is rounded up to a multiple
         of it; every vmcl kernel checks its ids against the field's bounds, so the extra work-items idle.
         """
-        values = [a.base_data if isinstance(a, cl_array.Array) else a for a in args]
-        if any(isinstance(a, cl_array.Array) and a.offset for a in args):
-            # base_data is the whole buffer: a view's offset would be silently lost.
-            raise InputValueError("device arrays passed to kernels must not be views with an offset; copy the view")
+        values = []
+        for a in args:
+            if isinstance(a, cl_array.Array):
+                if a.offset:
+                    # base_data is the whole buffer: a view's offset would be silently lost.
+                    raise InputValueError("device arrays passed to kernels must not be views with an offset; "
+                                          "copy the view")
+                values.append(a.base_data)
+            else:
+                values.append(a)
         if local_size is None and self.local_size is not None:
             local_size = (self.local_size,) + (1,) * (len(global_size) - 1)
         elif local_size is None and self.is_cpu:

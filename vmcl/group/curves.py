@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import weakref
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -216,10 +217,7 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     n = mask.size
     size = (-(-width // RUN), height)  # work-items of RUN pixels along each row
     sizes = (np.int32(width), np.int32(height))
-    # Copied without waiting: pyopencl holds the host array until the copy is done.
-    tangent_weights = _tangent_weights(smoothing)
-    weights = machine.empty(tangent_weights.size, np.float32)
-    weights.set(tangent_weights, async_=True)
+    weights = _device_weights(machine, smoothing)
     curve_links, branch_list = machine.empty(mask.shape, np.uint8), machine.empty(n, np.int32)
     runs = size[0] * size[1]
     run_bits = machine.empty(runs, np.uint16)
@@ -251,12 +249,12 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
         raise InputValueError(f"edges holds {count} curve pixels; at most {(2**31 - 1) // _FIELDS} can be linked")
     next_node, key = machine.empty(2 * count, np.int32), machine.empty(2 * count, np.int32)
     pixel = machine.empty(count, np.int32)
+    # (size, 1) pairs per key: their exclusive sums are each curve's first slot and its number.
+    size_of_key, offset_of_key = machine.empty(8 * count, np.int32), machine.empty(8 * count, np.int32)
     machine.launch(machine.kernel("curves", "tour"), size, curve_links, run_bits, run_offset, next_node, key, pixel,
-                   *sizes, np.int32(count))
+                   size_of_key, *sizes, np.int32(count))
     top, distance = doubling.principal(next_node, keys=key, check=False, machine=machine)
     curve_key, position, closed = (machine.empty(count, np.int32) for _ in range(3))
-    # (size, 1) pairs per key: their exclusive sums are each curve's first slot and its number.
-    size_of_key, offset_of_key = machine.full(8 * count, np.int32, 0), machine.empty(8 * count, np.int32)
     machine.launch(machine.kernel("curves", "arc_positions"), (count,), top, distance, curve_key, position, closed,
                    size_of_key, np.int32(count))
     # Curves are put in the order of their keys (see Curves) by the offsets of their sizes, summed over the
@@ -276,6 +274,21 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
                    real[0], real[1], real[2], real[3], np.sort(listed[:branch_count]), maps if draw_maps else None)
 
 
+_WEIGHTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_MAX_WEIGHTS = 64  # smoothings kept per machine; a sweep over ever new ones must not grow it forever
+
+
+def _device_weights(machine: Machine, smoothing: float) -> cl_array.Array:
+    """The tangent filter's weights on the device, uploaded once per machine and smoothing: each upload
+    is one more command on a queue whose launches are most of the curves' host time."""
+    cache = _WEIGHTS.setdefault(machine, {})
+    if smoothing not in cache:
+        if len(cache) >= _MAX_WEIGHTS:
+            cache.clear()
+        cache[smoothing] = machine.to_device(_tangent_weights(smoothing))
+    return cache[smoothing]
+
+
 def _tangent_weights(smoothing: float) -> np.ndarray:
     """The derivative of a Gaussian of width ``smoothing`` at 1, 2, ... 3 sigma along the arc (its
     positive half; the kernel negates it behind); 0: the central difference."""
@@ -290,7 +303,7 @@ def _measure(found: _Linked, shape: tuple[int, int]) -> Curves:
     width = shape[1]
     starts = np.flatnonzero(found.position == 0)
     sizes = found.size[starts].astype(np.int64)
-    offsets = np.r_[starts, found.pixel.size].astype(np.int64)
+    offsets = np.append(starts, found.pixel.size).astype(np.int64)
     closed = found.closed[starts]
     if len(starts):
         def per_curve(values: np.ndarray) -> np.ndarray:
@@ -324,7 +337,7 @@ def _end_tangents(points: np.ndarray, offsets: np.ndarray, closed: np.ndarray) -
     first, last = offsets[:-1], offsets[1:] - 1
     span = np.minimum(_TANGENT_SPAN, last - first)
     chords = np.stack([points[first] - points[first + span], points[last] - points[last - span]], axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        tangents = chords / np.hypot(chords[..., :1], chords[..., 1:])
+    norm = np.hypot(chords[..., :1], chords[..., 1:])
+    tangents = np.divide(chords, norm, out=np.full(chords.shape, np.nan), where=norm > 0)
     tangents[closed] = np.nan
     return tangents
