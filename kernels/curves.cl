@@ -198,11 +198,11 @@ inline int link_of(uchar bits, int s)
  * link slot s. Through a real link to pixel j it arrives at j and leaves by j's other slot; a slot with
  * no link (an endpoint's second, or both of an isolated pixel's) turns round at i. Every node has one
  * successor and one predecessor, so the nodes form rings: a path of n pixels is one ring of 2n nodes
- * (there and back), a closed curve two rings of n (one per direction).
- * key ranks the nodes for the principal: the turn-round nodes rank above every other, so a path's
- * principal is one of its two ends. */
+ * (there and back), a closed curve two rings of n (one per direction). Each node's predecessor is
+ * written (prev), which is what the doubling walks. key ranks the nodes for the principal: the
+ * turn-round nodes rank above every other, so a path's principal is one of its two ends. */
 __kernel void tour(__global const uchar *curve_links, __global const ushort *run_bits,
-                   __global const int *run_offset, __global int *next, __global int *key, __global int *pixel,
+                   __global const int *run_offset, __global int *prev, __global int *key, __global int *pixel,
                    __global int *size_of_key, int W, int H, int N)
 {
     int x0 = get_global_id(0) * RUN, y = get_global_id(1);
@@ -221,15 +221,16 @@ __kernel void tour(__global const uchar *curve_links, __global const ushort *run
         vstore8((int8)0, i, size_of_key);
         for (int s = 0; s < 2; s++) {
             int node = 2 * i + s;
-            int k = link_of(links, s);
+            key[node] = link_of(links, s) < 0 ? 2 * N + node : node;
+            /* The node before: the one arriving through the other slot, or this pixel's other node
+             * where that slot turns round. */
+            int k = link_of(links, 1 - s);
             if (k < 0) {
-                next[node] = 2 * i + (1 - s);
-                key[node] = 2 * N + node;
+                prev[node] = 2 * i + (1 - s);
             } else {
                 int qx = x + DX[k], qy = y + DY[k];
-                int arrived = slot_of(curve_links[(size_t)qy * W + qx], (k + 4) & 7);
-                next[node] = 2 * index_of(run_bits, run_offset, qx, qy, W) + (1 - arrived);
-                key[node] = node;
+                int leaving = slot_of(curve_links[(size_t)qy * W + qx], (k + 4) & 7);
+                prev[node] = 2 * index_of(run_bits, run_offset, qx, qy, W) + leaving;
             }
         }
         i++;

@@ -33,16 +33,12 @@ __kernel void jump_step(__global const int *value, __global const int *pointer,
     pointer_out[i] = pointer[p];
 }
 
-/* prev[next[i]] = i: the rings walked backwards. Every node starts as its own window's largest key,
- * at distance 0. */
-__kernel void ring_init(__global const int *next, __global const int *key, __global int *prev,
-                        __global int *top, __global int *distance, long n)
+/* prev[next[i]] = i: the rings walked backwards. */
+__kernel void ring_init(__global const int *next, __global int *prev, long n)
 {
     long i = get_global_id(0);
     if (i >= n) return;
     prev[next[i]] = (int)i;
-    top[i] = key[i];
-    distance[i] = 0;
 }
 
 /* Doubling steps backwards along a ring. Before a step, node i knows the largest key among itself and
@@ -64,6 +60,13 @@ inline void take_larger(int *top, int *distance, int their_top, int their_distan
  * launches of one step would give; each launch costs more than its arithmetic, and a few more
  * dependent reads per node cost less than the launches they save. */
 #ifdef STEPS
+/* The first launch (FIRST 1) starts every node as its own window's largest key (top holds the keys) at
+ * distance 0, and reads no distances. */
+#if FIRST
+#define DISTANCE(d, i) 0
+#else
+#define DISTANCE(d, i) (d)[i]
+#endif
 __kernel void principal_steps(__global const int *top, __global const int *distance, __global const int *prev,
                               __global int *top_out, __global int *distance_out, __global int *prev_out,
                               int span, long n)
@@ -71,9 +74,9 @@ __kernel void principal_steps(__global const int *top, __global const int *dista
     long i = get_global_id(0);
     if (i >= n) return;
     const int windows = 1 << STEPS;
-    int best = top[i], behind = distance[i], p = prev[i];
+    int best = top[i], behind = DISTANCE(distance, i), p = prev[i];
     for (int w = 1; w < windows; w++) {
-        take_larger(&best, &behind, top[p], distance[p], w * span);
+        take_larger(&best, &behind, top[p], DISTANCE(distance, p), w * span);
         p = prev[p];
     }
     top_out[i] = best;

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import ndimage
 
-from vmcl.cm.doubling import label, principal, rank
+from vmcl.cm.doubling import label, principal, principal_from_predecessors, rank
 from vmcl.patterns import spiral
 
 STRUCTURE = {4: ndimage.generate_binary_structure(2, 1), 8: ndimage.generate_binary_structure(2, 2)}
@@ -63,6 +63,24 @@ def test_ring_principal_and_distance(n, count, machine, machine_with_local_size)
         got_principal, got_distance = principal(nxt, machine=m)
         np.testing.assert_array_equal(got_principal, expected_principal)
         np.testing.assert_array_equal(got_distance, expected_distance)
+
+
+@pytest.mark.parametrize("n, count", [(1, 1), (2, 1), (8, 1), (999, 1), (5000, 37)])
+def test_principal_from_predecessors_matches_the_rings_given_forwards(n, count, machine):
+    rng = np.random.default_rng(n + 2)
+    nxt, expected_principal, expected_distance = _rings(rng, n, count)
+    prev = np.empty(n, np.int32)
+    prev[nxt] = np.arange(n, dtype=np.int32)
+    got_principal, got_distance = principal_from_predecessors(prev, machine=machine)
+    np.testing.assert_array_equal(got_principal, expected_principal)
+    np.testing.assert_array_equal(got_distance, expected_distance)
+    # With keys, on the device and unchecked as a kernel's own rings are: the largest key's node leads.
+    keys = rng.permutation(n).astype(np.int32)
+    forwards = principal(nxt, keys=keys, machine=machine)
+    backwards = principal_from_predecessors(machine.to_device(prev), keys=machine.to_device(keys), check=False,
+                                            machine=machine)
+    for want, got in zip(forwards, backwards):
+        np.testing.assert_array_equal(got.get(), want)
 
 
 def _check_labels(mask, connectivity, labels):
@@ -139,6 +157,12 @@ def test_large_random_field_and_repeatability(machine, machine_with_local_size):
     (lambda m: rank(np.array([1, 5], np.int32), machine=m), ValueError, r"next must hold addresses in \[-1, 1\]"),
     (lambda m: principal(np.array([1, 1], np.int32), machine=m), ValueError, "permutation"),
     (lambda m: principal(np.array([-1, 0], np.int32), machine=m), ValueError, "next must hold addresses"),
+    (lambda m: principal_from_predecessors(np.array([0, 0], np.int32), machine=m), ValueError,
+     "prev must be a permutation .every node the predecessor"),
+    (lambda m: principal_from_predecessors(np.array([2, 0], np.int32), machine=m), ValueError,
+     "prev must hold addresses"),
+    (lambda m: principal_from_predecessors(np.array([1, 0], np.int32), keys=np.array([3, 3], np.int32), machine=m),
+     ValueError, "keys must be distinct"),
     (lambda m: rank(np.zeros(0, np.int32), machine=m), ValueError, "next must not be empty"),
     (lambda m: label(np.zeros((3, 3), bool), connectivity=6, machine=m), ValueError, "connectivity must be 4 or 8"),
     (lambda m: label(np.zeros(3, bool), machine=m), ValueError, "mask must have 2 dimensions"),

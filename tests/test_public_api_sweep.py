@@ -94,6 +94,7 @@ TABLE: tuple[Entry, ...] = (
        kinds={"mask": _A, "connectivity": _I, "relabel": _B, "method": _C, "machine": _M}),
     _e("vmcl.cm.doubling:rank", next=make("chain"), kinds={"next": _A, "machine": _M}),
     _e("vmcl.cm.doubling:principal", next=make("ring"), kinds={"next": _A, "machine": _M}),
+    _e("vmcl.cm.doubling:principal_from_predecessors", prev=make("ring"), kinds={"prev": _A, "machine": _M}),
     _e("vmcl.cm.filters:binomial", image=IMG, passes=2, kinds={"image": _A, "passes": _I, "machine": _M}),
     _e("vmcl.cm.filters:max_passes", height=16, width=16, kinds={"height": _I, "width": _I}),
     _e("vmcl.cm.filters:window_max", x=IMG, radius=2, kinds={"x": _A, "radius": _I, "machine": _M}),

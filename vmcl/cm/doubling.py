@@ -30,7 +30,7 @@ from vmcl.cm.scan import exclusive_sum_into
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["LabelMethod", "label", "principal", "rank"]
+__all__ = ["LabelMethod", "label", "principal", "principal_from_predecessors", "rank"]
 
 LabelMethod = Literal["doubling", "iterative"]
 _CHECK_EVERY = 16  # spreading-activation passes between reads of the "changed" flag
@@ -41,12 +41,12 @@ def _steps(n: int) -> int:
     return max(1, math.ceil(math.log2(n))) if n > 1 else 0
 
 
-def _pointers(next: ArrayLike, machine: Machine, *, lowest: int) -> tuple[cl_array.Array, bool]:
-    data, host = field(next, "next", machine, ndims=(1,), dtypes=(np.int32,))
+def _pointers(next: ArrayLike, machine: Machine, *, lowest: int, name: str = "next") -> tuple[cl_array.Array, bool]:
+    data, host = field(next, name, machine, ndims=(1,), dtypes=(np.int32,))
     n = data.size
     low, high = (int(_reduce.reduce(data, op, machine=machine).get()) for op in ("min", "max"))
     if low < lowest or high >= n:
-        raise InputValueError(f"next must hold addresses in [{lowest}, {n - 1}], got values in [{low}, {high}]")
+        raise InputValueError(f"{name} must hold addresses in [{lowest}, {n - 1}], got values in [{low}, {high}]")
     return data, host
 
 
@@ -99,6 +99,9 @@ def principal(next: ArrayLike, *, keys: ArrayLike | None = None, check: bool = T
         Distinct values that rank the nodes: the principal of a ring is its node of largest key. Default:
         the addresses themselves (the paper's principal). Keys let a caller choose which node of a ring
         is its principal (vmcl.group.curves makes a curve's endpoint the principal of its ring).
+    check : bool
+        Check that ``next`` is a permutation of in-range addresses; False skips the check for a device
+        array the caller's own kernel built (a wrong one then gives wrong answers, not an error).
 
     Returns
     -------
@@ -108,36 +111,75 @@ def principal(next: ArrayLike, *, keys: ArrayLike | None = None, check: bool = T
         Number of ``next`` steps from the principal to i (0 at the principal).
     """
     machine = machine_for(machine)
-    if not check_bool(check, "check") and isinstance(next, cl_array.Array):
-        data, host = field(next, "next", machine, ndims=(1,), dtypes=(np.int32,))
+    data, key, host = _rings(next, "next", keys, check, machine)
+    prev = machine.empty(data.size, np.int32)
+    machine.launch(machine.kernel("doubling", "ring_init"), (data.size,), data, prev, np.int64(data.size))
+    top, distance = _principal_steps(machine, prev, key)
+    return result(top, host), result(distance, host)
+
+
+def principal_from_predecessors(prev: ArrayLike, *, keys: ArrayLike | None = None, check: bool = True,
+                                machine: Machine | None = None) -> tuple[ArrayLike, ArrayLike]:
+    """:func:`principal` of the rings given backwards: prev[i] is the node *before* i.
+
+    The doubling walks the rings backwards, so a kernel that builds rings can write each node's
+    predecessor and save :func:`principal` its first pass, which inverts ``next``. Same parameters (with
+    ``prev`` for ``next``) and results: the distance still counts the steps forwards from the principal.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> top, distance = principal_from_predecessors(np.array([2, 0, 1], np.int32))  # the ring 0 -> 1 -> 2 -> 0
+    >>> top.tolist(), distance.tolist()
+    ([2, 2, 2], [1, 2, 0])
+    """
+    machine = machine_for(machine)
+    data, key, host = _rings(prev, "prev", keys, check, machine)
+    top, distance = _principal_steps(machine, data, key)
+    return result(top, host), result(distance, host)
+
+
+def _rings(pointers: ArrayLike, name: str, keys: ArrayLike | None, check: bool,
+           machine: Machine) -> tuple[cl_array.Array, cl_array.Array, bool]:
+    """The ring pointers and the keys on the device, checked, and whether the pointers came from the host."""
+    if not check_bool(check, "check") and isinstance(pointers, cl_array.Array):
+        data, host = field(pointers, name, machine, ndims=(1,), dtypes=(np.int32,))
     else:
-        data, host = _pointers(next, machine, lowest=0)
-    if host and np.bincount(np.asarray(next), minlength=data.size).max() != 1:
-        raise InputValueError("next must be a permutation (every node the successor of exactly one node) to form rings")
+        data, host = _pointers(pointers, machine, lowest=0, name=name)
+    if host and np.bincount(np.asarray(pointers), minlength=data.size).max() != 1:
+        raise InputValueError(f"{name} must be a permutation (every node the {'successor' if name == 'next' else 'predecessor'} "
+                              "of exactly one node) to form rings")
     n = data.size
     if keys is None:
-        key = machine.to_device(np.arange(n, dtype=np.int32))
-    else:
-        key, key_host = field(keys, "keys", machine, ndims=(1,), dtypes=(np.int32,))
-        if key.size != n:
-            raise InputValueError(f"keys must have one value per node ({n}), got {key.size}")
-        if key_host and np.unique(np.asarray(keys)).size != n:
-            raise InputValueError("keys must be distinct")
-    # One pass backwards: each node carries the largest key it has seen and how far behind it lies, so the
-    # principal and the distances come from the same ceil(log2 n) steps.
+        return data, machine.to_device(np.arange(n, dtype=np.int32)), host
+    key, key_host = field(keys, "keys", machine, ndims=(1,), dtypes=(np.int32,))
+    if key.size != n:
+        raise InputValueError(f"keys must have one value per node ({n}), got {key.size}")
+    if key_host and np.unique(np.asarray(keys)).size != n:
+        raise InputValueError("keys must be distinct")
+    return data, key, host
+
+
+def _principal_steps(machine: Machine, prev: cl_array.Array, key: cl_array.Array) -> tuple[cl_array.Array, cl_array.Array]:
+    """ceil(log2 n) doubling steps backwards from every node as its own window's largest key, at distance
+    0: each node carries the largest key it has seen and how far behind it lies, so the principal and the
+    distances come from the same steps. The inputs are never written."""
+    n = prev.size
+    steps = _steps(n)
+    if steps == 0:  # at most one node: its own principal
+        return key.copy(), machine.full(n, np.int32, 0)
     buffers = [[machine.empty(n, np.int32) for _ in range(3)] for _ in range(2)]
-    top, distance, prev = buffers[0]
-    machine.launch(machine.kernel("doubling", "ring_init"), (n,), data, key, prev, top, distance, np.int64(n))
-    steps, k, launches = _steps(n), 0, 0
+    # The first launch reads the keys as the largest and 0 as the distance (FIRST), so nothing sets them up.
+    top, distance, k, launches = key, key, 0, 0
     while k < steps:
         # Several steps per launch (the same result as one at a time, in a fraction of the launches).
         now = min(STEPS_PER_LAUNCH, steps - k)
-        target = buffers[(launches + 1) % 2]
-        machine.launch(machine.kernel("doubling", "principal_steps", STEPS=now), (n,), top, distance, prev, *target,
-                       np.int32(1 << k), np.int64(n))
+        target = buffers[launches % 2]
+        machine.launch(machine.kernel("doubling", "principal_steps", STEPS=now, FIRST=int(k == 0)), (n,), top,
+                       distance, prev, *target, np.int32(1 << k), np.int64(n))
         top, distance, prev = target
         k, launches = k + now, launches + 1
-    return result(top, host), result(distance, host)
+    return top, distance
 
 
 @overload

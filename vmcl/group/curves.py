@@ -247,13 +247,13 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
                        np.sort(listed[:branch_count]), maps if draw_maps else None)
     if _FIELDS * count >= 2**31:  # the packed fields' addresses are int32
         raise InputValueError(f"edges holds {count} curve pixels; at most {(2**31 - 1) // _FIELDS} can be linked")
-    next_node, key = machine.empty(2 * count, np.int32), machine.empty(2 * count, np.int32)
+    prev_node, key = machine.empty(2 * count, np.int32), machine.empty(2 * count, np.int32)
     pixel = machine.empty(count, np.int32)
     # (size, 1) pairs per key: their exclusive sums are each curve's first slot and its number.
     size_of_key, offset_of_key = machine.empty(8 * count, np.int32), machine.empty(8 * count, np.int32)
-    machine.launch(machine.kernel("curves", "tour"), size, curve_links, run_bits, run_offset, next_node, key, pixel,
+    machine.launch(machine.kernel("curves", "tour"), size, curve_links, run_bits, run_offset, prev_node, key, pixel,
                    size_of_key, *sizes, np.int32(count))
-    top, distance = doubling.principal(next_node, keys=key, check=False, machine=machine)
+    top, distance = doubling.principal_from_predecessors(prev_node, keys=key, check=False, machine=machine)
     curve_key, position, closed = (machine.empty(count, np.int32) for _ in range(3))
     machine.launch(machine.kernel("curves", "arc_positions"), (count,), top, distance, curve_key, position, closed,
                    size_of_key, np.int32(count))
