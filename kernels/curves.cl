@@ -217,8 +217,8 @@ __kernel void tour(__global const uchar *curve_links, __global const ushort *run
         size_t p = (size_t)y * W + x;
         uchar links = curve_links[p];
         pixel[i] = (int)p;
-        /* arc_positions gathers at 4N keys, two words each: eight per curve pixel cleared here. */
-        vstore8((int8)0, i, size_of_key);
+        /* arc_positions gathers at 2N dense keys, two words each: four per curve pixel cleared here. */
+        vstore4((int4)0, i, size_of_key);
         for (int s = 0; s < 2; s++) {
             int node = 2 * i + s;
             key[node] = link_of(links, s) < 0 ? 2 * N + node : node;
@@ -256,10 +256,11 @@ __kernel void tour(__global const uchar *curve_links, __global const ushort *run
  * ring whose principal is the turn at one end: the node leaving towards the path lies at distance
  * position + 1, the one coming back at 2n - position (0 at the start itself). A closed curve's pixels
  * have one node in each of two rings; the ring of the larger principal sets the direction and the
- * start. Keys lie in [0, 4N): a node's own number, or 2N + node for a turn. Each curve's number of
- * pixels, one more than its largest position, is gathered at its key, beside a 1 that counts the curve
- * (size_of_key holds the pairs (size, 1) at 2k and 2k + 1, zeroed by the tour): one scan of the pairs gives
- * each curve its first slot and its number. */
+ * start. The rings' keys lie in [0, 4N): a node's own number, or 2N + node for a turn; the curve's key
+ * is that of its principal made dense, [0, 2N). Each curve's number of pixels, one more than its largest
+ * position, is gathered at its key, beside a 1 that counts the curve (size_of_key holds the pairs
+ * (size, 1) at 2k and 2k + 1, zeroed by the tour): one scan of the pairs gives each curve its first slot
+ * and its number. */
 __kernel void arc_positions(__global const int *top, __global const int *distance, __global int *key,
                             __global int *position, __global int *closed, __global int *size_of_key, int N)
 {
@@ -276,6 +277,9 @@ __kernel void arc_positions(__global const int *top, __global const int *distanc
         k = max(ta, tb);
         closed[i] = 1;
     }
+    /* The curve's key made dense, in the same order: a node's pixel, after N for a turn. Distinct curves
+     * have distinct principals on distinct pixels. */
+    k = k < 2 * N ? k / 2 : N + (k - 2 * N) / 2;
     key[i] = k;
     position[i] = q;
     atomic_max(&size_of_key[2 * k], q + 1);

@@ -304,9 +304,14 @@ class Machine:
                 self._programs[key] = program
         return program
 
-    def kernel(self, family: str, name: str, **defines: Any) -> cl.Kernel:
-        """A cached kernel object: fetched from its program once per (family, name, defines)."""
-        key = (family, name, tuple(sorted(defines.items())))
+    def kernel(self, family: str, name: str, *, instance: int = 0, **defines: Any) -> cl.Kernel:
+        """A cached kernel object: fetched from its program once per (family, name, defines, instance).
+
+        Instances are separate kernel objects of one kernel, each holding its own arguments: a caller that
+        launches a kernel with a few fixed sets of scalars (a step of each span) gives each set its
+        instance, and :meth:`launch` then sets none of them again (see ``_set_arguments``).
+        """
+        key = (family, name, tuple(sorted(defines.items())), instance)
         kernel = self._kernels.get(key)
         if kernel is None:
             kernel = cl.Kernel(self.program(family, **defines), name)

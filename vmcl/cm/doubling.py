@@ -175,8 +175,9 @@ def _principal_steps(machine: Machine, prev: cl_array.Array, key: cl_array.Array
         # Several steps per launch (the same result as one at a time, in a fraction of the launches).
         now = min(STEPS_PER_LAUNCH, steps - k)
         target = buffers[launches % 2]
-        machine.launch(machine.kernel("doubling", "principal_steps", STEPS=now, FIRST=int(k == 0)), (n,), top,
-                       distance, prev, *target, np.int32(1 << k), np.int64(n))
+        # A kernel object per span keeps its span set from one call to the next.
+        kernel = machine.kernel("doubling", "principal_steps", STEPS=now, FIRST=int(k == 0), instance=k)
+        machine.launch(kernel, (n,), top, distance, prev, *target, np.int32(1 << k), np.int64(n))
         top, distance, prev = target
         k, launches = k + now, launches + 1
     return top, distance

@@ -250,7 +250,7 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     prev_node, key = machine.empty(2 * count, np.int32), machine.empty(2 * count, np.int32)
     pixel = machine.empty(count, np.int32)
     # (size, 1) pairs per key: their exclusive sums are each curve's first slot and its number.
-    size_of_key, offset_of_key = machine.empty(8 * count, np.int32), machine.empty(8 * count, np.int32)
+    size_of_key, offset_of_key = machine.empty(4 * count, np.int32), machine.empty(4 * count, np.int32)
     machine.launch(machine.kernel("curves", "tour"), size, curve_links, run_bits, run_offset, prev_node, key, pixel,
                    size_of_key, *sizes, np.int32(count))
     top, distance = doubling.principal_from_predecessors(prev_node, keys=key, check=False, machine=machine)
