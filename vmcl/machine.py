@@ -304,13 +304,15 @@ class Machine:
                 self._programs[key] = program
         return program
 
-    def kernel(self, family: str, name: str, *, instance: int = 0, **defines: Any) -> cl.Kernel:
-        """A cached kernel object: fetched from its program once per (family, name, defines, instance).
+    def kernel(self, family: str, name: str, **defines: Any) -> cl.Kernel:
+        """A cached kernel object: fetched from its program once per (family, name, defines)."""
+        return self.kernel_instance(0, family, name, **defines)
 
-        Instances are separate kernel objects of one kernel, each holding its own arguments: a caller that
-        launches a kernel with a few fixed sets of scalars (a step of each span) gives each set its
-        instance, and :meth:`launch` then sets none of them again (see ``_set_arguments``).
-        """
+    def kernel_instance(self, instance: int, family: str, name: str, **defines: Any) -> cl.Kernel:
+        """Instance ``instance`` of a kernel: separate kernel objects of one kernel (0 is :meth:`kernel`'s),
+        each holding its own arguments. A caller that launches a kernel with a few fixed sets of scalars
+        (a step of each span) gives each set its instance, and :meth:`launch` then sets none of them
+        again (see ``_set_arguments``)."""
         key = (family, name, tuple(sorted(defines.items())), instance)
         kernel = self._kernels.get(key)
         if kernel is None:

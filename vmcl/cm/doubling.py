@@ -176,7 +176,7 @@ def _principal_steps(machine: Machine, prev: cl_array.Array, key: cl_array.Array
         now = min(STEPS_PER_LAUNCH, steps - k)
         target = buffers[launches % 2]
         # A kernel object per span keeps its span set from one call to the next.
-        kernel = machine.kernel("doubling", "principal_steps", STEPS=now, FIRST=int(k == 0), instance=k)
+        kernel = machine.kernel_instance(k, "doubling", "principal_steps", STEPS=now, FIRST=int(k == 0))
         machine.launch(kernel, (n,), top, distance, prev, *target, np.int32(1 << k), np.int64(n))
         top, distance, prev = target
         k, launches = k + now, launches + 1
