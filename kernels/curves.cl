@@ -341,9 +341,15 @@ __kernel void arc_tangents(__global int *out, __constant float *weights, int rad
     int position = out[OUT_POSITION * N + j], size = out[OUT_SIZE * N + j], closed = out[OUT_CLOSED * N + j];
     int start = j - position;
     float2 tangent = (float2)(0.0f, 0.0f);
-    for (int t = 1; t <= radius; t++)
-        tangent += weights[t - 1] * (position_of(out, slot_at(start, size, closed, position + t), N)
-                                     - position_of(out, slot_at(start, size, closed, position - t), N));
+    if (position >= radius && position + radius < size) {
+        /* Away from the ends (most pixels of long curves) the window is the slots either side. */
+        for (int t = 1; t <= radius; t++)
+            tangent += weights[t - 1] * (position_of(out, j + t, N) - position_of(out, j - t, N));
+    } else {
+        for (int t = 1; t <= radius; t++)
+            tangent += weights[t - 1] * (position_of(out, slot_at(start, size, closed, position + t), N)
+                                         - position_of(out, slot_at(start, size, closed, position - t), N));
+    }
     float angle = fast_atan2(tangent.y, tangent.x);
     out[OUT_ANGLE * N + j] = as_int(angle);
     if (draw) tangent_map[out[OUT_PIXEL * N + j]] = angle;
