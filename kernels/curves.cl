@@ -244,12 +244,14 @@ __kernel void tour(__global const uchar *curve_links, __global const ushort *run
 #define OUT_POSITION 2
 #define OUT_CLOSED 3
 #define OUT_MAGNITUDE 4
-#define OUT_TURN 5
-#define OUT_STEP 6
-#define OUT_ANGLE 7
-/* Then the pixels' (column, row) pairs, interleaved from out[OUT_POINTS * N]: the host takes them as
- * its (N, 2) points without a pass of its own. */
-#define OUT_POINTS 8
+/* The pixels' (column, row) pairs, interleaved over two fields from out[OUT_POINTS * N]: the host takes
+ * them as its (N, 2) points without a pass of its own. */
+#define OUT_POINTS 5
+/* The fields from OUT_TURN on are written after the others, which the host reads (and measures) while
+ * the tangents are found. */
+#define OUT_TURN 7
+#define OUT_STEP 8
+#define OUT_ANGLE 9
 
 /* Each curve pixel's curve key (the largest key of its rings: the same for every pixel of a curve), its
  * arc position from the curve's start, and whether its curve is closed. A path's two nodes share one
@@ -309,7 +311,7 @@ __kernel void arrange(__global const int *key, __global const int *position, __g
     out[OUT_MAGNITUDE * N + slot] = has_magnitude ? as_int(magnitude[p]) : as_int(NAN);
     /* The walks along the arc read a dozen positions per pixel: dividing each address by the width
      * cost more than the filter itself. */
-    vstore2((int2)(p % W, p / W), OUT_POINTS * N / 2 + slot, out);
+    vstore2((int2)(p % W, p / W), slot, out + OUT_POINTS * N);
 }
 
 /* The slot of arc position q (ahead of or behind the curve's own range) on a curve of `size` pixels
@@ -326,7 +328,7 @@ inline int slot_at(int start, int size, int closed, int q)
 
 inline float2 position_of(__global const int *out, int j, int N)
 {
-    return convert_float2(vload2(OUT_POINTS * N / 2 + j, out));
+    return convert_float2(vload2(j, out + OUT_POINTS * N));
 }
 
 DEFINE_ATAN2(fast_atan2, float, int)

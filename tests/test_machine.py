@@ -322,3 +322,23 @@ def test_a_kernel_launched_again_takes_each_launch_own_scalars(machine):
         assert np.array_equal(np.signbit(got), np.signbit(expected))
     with pytest.raises(cl.LogicError):  # an int32 where the kernel wants a long is still refused
         machine.launch(kernel, (8,), out, np.float32(1.0), np.int32(8))
+
+
+def test_read_into_copies_the_asked_elements_and_refuses_what_does_not_fit(machine):
+    data = np.arange(100, dtype=np.int32)
+    device = machine.to_device(data)
+    out = np.zeros(30, np.int32)
+    machine.read_into(out, device, offset=50).wait()
+    np.testing.assert_array_equal(out, data[50:80])
+    as_floats = np.zeros(10, np.float32)  # the bytes as they are, for fields packed in one buffer
+    machine.read_into(as_floats, device, offset=90).wait()
+    np.testing.assert_array_equal(as_floats.view(np.int32), data[90:])
+    assert machine.read_into(np.zeros(0, np.int32), device) is None
+    with pytest.raises(InputValueError, match="outside an array of 100"):
+        machine.read_into(out, device, offset=80)
+    with pytest.raises(InputValueError, match="outside"):
+        machine.read_into(out, device, offset=-1)
+    with pytest.raises(InputValueError, match="items of 4 bytes"):
+        machine.read_into(np.zeros(4, np.int64), device)
+    with pytest.raises(InputValueError, match="C-contiguous"):
+        machine.read_into(np.zeros((4, 4), np.int32)[:, 0], device)

@@ -468,6 +468,22 @@ class Machine:
         device_array.set(array, queue=self.queue)
         return device_array
 
+    def read_into(self, out: np.ndarray, array: cl_array.Array, *, offset: int = 0) -> cl.Event | None:
+        """Queue a copy of ``out.size`` elements of device ``array`` from element ``offset`` into the host
+        array ``out`` (C-contiguous, of ``array``'s item size), without waiting: the event says when it is
+        done (None when there was nothing to copy). Slicing a device array and reading the view costs
+        several times the copy itself (pyopencl builds the view on the host).
+        """
+        if not out.flags.c_contiguous or out.itemsize != array.dtype.itemsize:
+            raise InputValueError(f"out must be C-contiguous with items of {array.dtype.itemsize} bytes")
+        if offset < 0 or offset + out.size > array.size:
+            raise InputValueError(f"elements {offset}..{offset + out.size} lie outside an array of {array.size}")
+        if out.size == 0:
+            return None
+        # pyopencl's overloads type a read's source as Buffer; a pooled array's memory is one.
+        return cl.enqueue_copy(self.queue, out, device_memory(array),  # type: ignore[call-overload]
+                               src_offset=offset * out.itemsize + array.offset, is_blocking=False)
+
     def finish(self) -> None:
         self.queue.finish()
 

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
+import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm import doubling
@@ -43,6 +44,7 @@ BRANCH = -2
 
 _TANGENT_SPAN = 5  # pixels back from an end along which its tangent is measured
 _FIELDS = 10  # int32 words per curve pixel in the packed answer (kernels/curves.cl's OUT_ fields)
+_EARLY_FIELDS = 7  # of which the first seven are written before the tangents (OUT_TURN)
 RUN = 16  # pixels per work-item of kernels/curves.cl's whole-image passes (its RUN)
 _SQRT2 = math.sqrt(2.0)
 
@@ -192,9 +194,10 @@ def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothin
 
 class _Linked(NamedTuple):
     """The device's answer, every curve pixel in arc order (curve after curve, in the order of their
-    keys): its flat address and (column, row), its curve's size, arc position, loop flag, gradient magnitude (NaN without
-    one), the tangent's turn and the step to the next pixel, the tangent's direction; the branch pixels'
-    flat addresses; and the labels, position and tangent maps on the device, where they were drawn."""
+    keys): its flat address and (column, row), its curve's size, arc position, loop flag and gradient
+    magnitude (NaN without one); the branch pixels' flat addresses; the labels, position and tangent
+    maps on the device, where they were drawn; and the read of the fields written last (see
+    :meth:`arc_fields`)."""
 
     pixel: np.ndarray
     points: np.ndarray
@@ -202,11 +205,17 @@ class _Linked(NamedTuple):
     position: np.ndarray
     closed: np.ndarray
     magnitude: np.ndarray
-    turn: np.ndarray
-    step: np.ndarray
-    angle: np.ndarray
     branches: np.ndarray
     maps: tuple[cl_array.Array, cl_array.Array, cl_array.Array] | None
+    late: tuple[np.ndarray, cl.Event | None]
+
+    def arc_fields(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The tangent's turn to the next pixel, the step's length and the tangent's direction, once
+        their read is done (float32 (N,) each)."""
+        values, reading = self.late
+        if reading is not None:
+            reading.wait()
+        return values[0], values[1], values[2]
 
 
 def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.Array | None,
@@ -237,14 +246,15 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
                    np.int64(runs))
     count, branch_count = (int(c) for c in counts.get())
     # Read back with the curves' fields below: the read waits on nothing of its own.
-    listed, listed_event = branch_list[:max(branch_count, 1)].get_async()
+    listed = np.empty(branch_count, np.int32)
+    listed_event = machine.read_into(listed, branch_list)
     if count == 0:
-        listed_event.wait()
+        if listed_event is not None:
+            listed_event.wait()
         empty = np.zeros(0, np.int32)
         nothing = np.zeros(0, np.float32)
-        return _Linked(empty, np.zeros((0, 2), np.int32), empty, empty, np.zeros(0, bool), nothing, nothing, nothing,
-                       nothing,
-                       np.sort(listed[:branch_count]), maps if draw_maps else None)
+        return _Linked(empty, np.zeros((0, 2), np.int32), empty, empty, np.zeros(0, bool), nothing,
+                       np.sort(listed), maps if draw_maps else None, (np.zeros((3, 0), np.float32), None))
     if _FIELDS * count >= 2**31:  # the packed fields' addresses are int32
         raise InputValueError(f"edges holds {count} curve pixels; at most {(2**31 - 1) // _FIELDS} can be linked")
     prev_node, key = machine.empty(2 * count, np.int32), machine.empty(2 * count, np.int32)
@@ -264,14 +274,21 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     machine.launch(machine.kernel("curves", "arrange"), (count,), curve_key, position, closed, pixel,
                    mask if strength is None else strength, np.int32(strength is not None), size_of_key,
                    offset_of_key, packed, drawn[0], drawn[1], draw, np.int32(width), np.int32(count))
+    # The fields arrange wrote are read while the tangents are found: the host measures the curves
+    # meanwhile, and waits only for the last three fields.
+    early = np.empty(_EARLY_FIELDS * count, np.int32)
+    early_read = machine.read_into(early, packed)
     machine.launch(machine.kernel("curves", "arc_tangents"), (count,), packed, weights, np.int32(weights.size),
                    drawn[2], draw, np.int32(count))
     machine.launch(machine.kernel("curves", "arc_turns"), (count,), packed, np.int32(count))
-    read = packed.get()  # and with it the branch list's read, queued earlier
-    fields = read[:8 * count].reshape(8, count)
-    real = fields[4:].view(np.float32)
-    return _Linked(fields[0], read[8 * count:].reshape(count, 2), fields[1], fields[2], fields[3].astype(bool),
-                   real[0], real[1], real[2], real[3], np.sort(listed[:branch_count]), maps if draw_maps else None)
+    late = np.empty((_FIELDS - _EARLY_FIELDS, count), np.float32)
+    late_read = machine.read_into(late, packed, offset=_EARLY_FIELDS * count)
+    if early_read is not None:
+        early_read.wait()  # and with it the branch list's read, queued before it
+    fields = early[:5 * count].reshape(5, count)
+    return _Linked(fields[0], early[5 * count:].reshape(count, 2), fields[1], fields[2], fields[3].astype(bool),
+                   fields[4].view(np.float32), np.sort(listed), maps if draw_maps else None,
+                   (late, late_read))
 
 
 _WEIGHTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -299,24 +316,26 @@ def _tangent_weights(smoothing: float) -> np.ndarray:
 
 
 def _measure(found: _Linked, shape: tuple[int, int]) -> Curves:
-    """The curves and their measures (maps left empty)."""
+    """The curves and their measures (maps left empty): what needs no tangent first, while the device
+    finds them, then the rest."""
     width = shape[1]
     starts = np.flatnonzero(found.position == 0)
     sizes = found.size[starts].astype(np.int64)
     offsets = np.append(starts, found.pixel.size).astype(np.int64)
     closed = found.closed[starts]
+    branch_points = np.stack([found.branches % width, found.branches // width], axis=1).astype(np.int32)
+    end_tangents = _end_tangents(found.points, offsets, closed)
+    magnitude = np.add.reduceat(found.magnitude, starts, dtype=np.float64) / sizes if len(starts) else np.zeros(0)
+    turn, step, _ = found.arc_fields()
     if len(starts):
         # Summed in float64 as they are read (no converted copies): the host's share of the time counts.
-        length, total, magnitude = (np.add.reduceat(values, starts, dtype=np.float64)
-                                    for values in (found.step, found.turn, found.magnitude))
-        magnitude /= sizes
+        length, total = (np.add.reduceat(values, starts, dtype=np.float64) for values in (step, turn))
     else:
-        length = total = magnitude = np.zeros(0)
+        length = total = np.zeros(0)
     mean = np.divide(total, length, out=np.zeros(len(starts)), where=length > 0)
-    branch_points = np.stack([found.branches % width, found.branches // width], axis=1).astype(np.int32)
     nothing = np.zeros(0)
     return Curves(nothing, nothing, nothing, found.points, offsets, closed, length, mean, total, magnitude,
-                  _end_tangents(found.points, offsets, closed), branch_points)
+                  end_tangents, branch_points)
 
 
 def _host_maps(found: _Linked, sizes: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -328,7 +347,7 @@ def _host_maps(found: _Linked, sizes: np.ndarray, shape: tuple[int, int]) -> tup
     labels[found.pixel] = ids
     labels[found.branches] = BRANCH
     position[found.pixel] = found.position
-    tangent[found.pixel] = found.angle
+    tangent[found.pixel] = found.arc_fields()[2]
     return labels.reshape(shape), position.reshape(shape), tangent.reshape(shape)
 
 
