@@ -185,13 +185,8 @@ inline int slot_of(uchar bits, int k)
 /* The k of a curve pixel's slot s (the s-th set bit), or -1 when it has no such link. */
 inline int link_of(uchar bits, int s)
 {
-    for (int k = 0; k < 8; k++) {
-        if (bits & (1 << k)) {
-            if (s == 0) return k;
-            s--;
-        }
-    }
-    return -1;
+    uint rest = s ? bits & (bits - 1u) : bits;  /* slot 1: the lowest set bit cleared */
+    return rest ? 31 - clz(rest & -rest) : -1;
 }
 
 /* The tour of each curve: node 2i + s stands at curve pixel i (numbered by index), leaving through its
