@@ -46,7 +46,6 @@ _TANGENT_SPAN = 5  # pixels back from an end along which its tangent is measured
 _FIELDS = 10  # int32 words per curve pixel in the packed answer (kernels/curves.cl's OUT_ fields)
 _EARLY_FIELDS = 7  # of which the first seven are written before the tangents (OUT_TURN)
 RUN = 16  # pixels per work-item of kernels/curves.cl's whole-image passes (its RUN)
-_SQRT2 = math.sqrt(2.0)
 
 
 @dataclass(frozen=True)
