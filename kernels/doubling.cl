@@ -54,36 +54,29 @@ inline void take_larger(int *top, int *distance, int their_top, int their_distan
     }
 }
 
-/* STEPS doubling steps in one launch (a define, so the loop unrolls; built only where it is given):
- * node i folds in the windows of the 2^STEPS - 1 nodes span, 2 span, ... behind it, nearest first. A
- * strict "larger" keeps the nearer of equal keys in any order of folding, so this is exactly what STEPS
- * launches of one step would give; each launch costs more than its arithmetic, and a few more
- * dependent reads per node cost less than the launches they save. */
-#ifdef STEPS
-/* The first launch (FIRST 1) starts every node as its own window's largest key (top holds the keys) at
- * distance 0, and reads no distances. */
-#if FIRST
-#define DISTANCE(d, i) 0
-#else
-#define DISTANCE(d, i) (d)[i]
-#endif
+/* `steps` doubling steps in one launch: node i folds in the windows of the 2^steps - 1 nodes span,
+ * 2 span, ... behind it, nearest first. A strict "larger" keeps the nearer of equal keys in any order of
+ * folding, so this is exactly what `steps` launches of one step would give; each launch costs more than
+ * its arithmetic, and a few more dependent reads per node cost less than the launches they save. The
+ * first launch (`first` 1) starts every node as its own window's largest key (top holds the keys) at
+ * distance 0, and reads no distances. Both are arguments, not defines, so one build serves every step
+ * (a kernel object per step keeps them set: Machine.kernel_instance). */
 __kernel void principal_steps(__global const int *top, __global const int *distance, __global const int *prev,
                               __global int *top_out, __global int *distance_out, __global int *prev_out,
-                              int span, long n)
+                              int span, int steps, int first, long n)
 {
     long i = get_global_id(0);
     if (i >= n) return;
-    const int windows = 1 << STEPS;
-    int best = top[i], behind = DISTANCE(distance, i), p = prev[i];
+    int windows = 1 << steps;
+    int best = top[i], behind = first ? 0 : distance[i], p = prev[i];
     for (int w = 1; w < windows; w++) {
-        take_larger(&best, &behind, top[p], DISTANCE(distance, p), w * span);
+        take_larger(&best, &behind, top[p], first ? 0 : distance[p], w * span);
         p = prev[p];
     }
     top_out[i] = best;
     distance_out[i] = behind;
     prev_out[i] = p;
 }
-#endif
 
 /* Lists: tails (next = -1) point to themselves with rank 0, every other node has rank 1. */
 __kernel void list_init(__global const int *next, __global int *pointer, __global int *rank, long n)

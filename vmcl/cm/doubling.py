@@ -169,15 +169,16 @@ def _principal_steps(machine: Machine, prev: cl_array.Array, key: cl_array.Array
     if steps == 0:  # at most one node: its own principal
         return key.copy(), machine.full(n, np.int32, 0)
     buffers = [[machine.empty(n, np.int32) for _ in range(3)] for _ in range(2)]
-    # The first launch reads the keys as the largest and 0 as the distance (FIRST), so nothing sets them up.
+    # The first launch reads the keys as the largest and 0 as the distance (first), so nothing sets them up.
     top, distance, k, launches = key, key, 0, 0
     while k < steps:
         # Several steps per launch (the same result as one at a time, in a fraction of the launches).
         now = min(STEPS_PER_LAUNCH, steps - k)
         target = buffers[launches % 2]
-        # A kernel object per span keeps its span set from one call to the next.
-        kernel = machine.kernel_instance(k, "doubling", "principal_steps", STEPS=now, FIRST=int(k == 0))
-        machine.launch(kernel, (n,), top, distance, prev, *target, np.int32(1 << k), np.int64(n))
+        # A kernel object per first step keeps its scalars set from one call to the next.
+        kernel = machine.kernel_instance(k, "doubling", "principal_steps")
+        machine.launch(kernel, (n,), top, distance, prev, *target, np.int32(1 << k), np.int32(now), np.int32(k == 0),
+                       np.int64(n))
         top, distance, prev = target
         k, launches = k + now, launches + 1
     return top, distance
