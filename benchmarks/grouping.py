@@ -217,14 +217,18 @@ def _timed(call, runs: int) -> float:
 def _interleaved(first, second, rounds: int, runs: int) -> tuple[float, float, float]:
     """Wall times of two calls measured in alternating blocks of ``runs`` calls, after a warm-up: the median
     ms of each over all rounds, and the median over rounds of the ratio second / first. A shared machine's
-    load drifts over seconds; blocks side by side see the same load, and the first block of a run (caches,
-    the pool's first buffers) counts for neither."""
+    load drifts over seconds; blocks side by side see the same load, the order swaps every round (neither
+    always follows the other), and the first block of a run (caches, the pool's first buffers) counts for
+    neither."""
     for _ in range(5):
         first()
         second()
     ones, twos, ratios = [], [], []
-    for _ in range(rounds):
-        one, two = _timed(first, runs), _timed(second, runs)
+    for round_ in range(rounds):
+        if round_ % 2:
+            two, one = _timed(second, runs), _timed(first, runs)
+        else:
+            one, two = _timed(first, runs), _timed(second, runs)
         ones.append(one)
         twos.append(two)
         ratios.append(two / one)
@@ -265,6 +269,8 @@ def speed(images, machine: vmcl.Machine) -> list[str]:
     canny_wall, curves_wall, ratio = _interleaved(*calls(plain)[:2], SPEED_ROUNDS, SPEED_RUNS)
     canny_call, curves_and_saliency, found = calls(machine)
     canny_device, curves_device = device_ms(canny_call), device_ms(curves_and_saliency)
+    # The same on the profiling machine, whose events cost every launch (the curves make more of them).
+    profiled = _interleaved(canny_call, curves_and_saliency, SPEED_ROUNDS, SPEED_RUNS)
     edges = found.edges
     strength = saliency_strength(edges, found.magnitude, machine=machine)
     tangent = link_edges(edges, machine=machine).tangent
@@ -295,6 +301,10 @@ def speed(images, machine: vmcl.Machine) -> list[str]:
     return [f"| Canny (sigma {sigma:g}, with its gradient) | {canny_wall:.2f} | {canny_device:.2f} | 1.00 |",
             (f"| curves and local saliency | {curves_wall:.2f} | {curves_device:.2f} | "
             f"{ratio:.2f} (device {curves_device / canny_device:.2f}) |"),
+            "",
+            (f"On the profiling machine (an event per launch): Canny {profiled[0]:.2f} ms, curves and local saliency "
+             f"{profiled[1]:.2f} ms, {profiled[2]:.2f} Canny's time. The wall times are steady state: kernels built, "
+             "the machine's scalar arguments and the curves' filter weights already set up."),
             "",
             (f"Structural saliency at 512 x 512: {per_iteration:.2f} ms per iteration on the device, "
             f"{numpy_per_iteration:.0f} ms in NumPy (tests/oracles.py's network, timed at 128 x 128 and scaled by "
@@ -371,9 +381,11 @@ contour.
 ## Speed at 512 x 512
 
 Wall time: after a warm-up, {SPEED_ROUNDS} rounds of {SPEED_RUNS} calls of each, side by side, on a machine without
-profiling; each call waits for its results (the curves' maps on the device included). The milliseconds are
-medians over all rounds, the ratio the median of the rounds' ratios. Device time: the profiling machine's
-kernel time per call.
+profiling, the order swapped every round; each call waits for its results (the curves' maps on the device
+included). The milliseconds are medians over all rounds, the ratio the median of the rounds' ratios. Device
+time: the profiling machine's kernel time per call (on 2 cores a call's device time can exceed its wall time:
+kernels run on both). Until 2026-12-03 06:00 this section timed one block of each, Canny first, on the
+profiling machine, with no warm-up.
 
 | stage | wall ms | device ms | over Canny (wall) |
 |---|---|---|---|

@@ -74,6 +74,12 @@ inline uint around_bit(uint up, uint middle, uint down, int i)
            | ((down >> i) & 1u) << 6 | ((down >> (i + 1)) & 1u) << 7;
 }
 
+/* The run (RUN pixels of a row, rows one after another) that holds pixel (x, y). */
+inline size_t run_of(int x, int y, int W)
+{
+    return (size_t)y * ((W + RUN - 1) / RUN) + x / RUN;
+}
+
 /* links[p]: bit k set where p and its neighbour k are both edge pixels and linked (0 off the edges). */
 __kernel void link_pixels(__global const uchar *edges, __global uchar *links, int W, int H)
 {
@@ -102,7 +108,7 @@ __kernel void split_branches(__global const uchar *edges, __global uchar *curve_
     if (x0 >= W || y >= H) return;
     size_t p0 = (size_t)y * W + x0;
     int end = min(x0 + RUN, W);
-    size_t run_index = (size_t)y * ((W + RUN - 1) / RUN) + get_global_id(0);
+    size_t run_index = run_of(x0, y, W);
     run_bits[run_index] = 0;
     run_count[run_index] = 0;
     if (draw) {
@@ -172,7 +178,7 @@ __kernel void count_curve_pixels(__global const int *run_offset, __global const 
 /* The number of curve pixel (x, y): its run's offset and the curve pixels before it in the run. */
 inline int index_of(__global const ushort *run_bits, __global const int *run_offset, int x, int y, int W)
 {
-    size_t run_index = (size_t)y * ((W + RUN - 1) / RUN) + x / RUN;
+    size_t run_index = run_of(x, y, W);
     return run_offset[run_index] + popcount((uint)run_bits[run_index] & ((1u << (x % RUN)) - 1u));
 }
 
@@ -202,7 +208,7 @@ __kernel void tour(__global const uchar *curve_links, __global const ushort *run
 {
     int x0 = get_global_id(0) * RUN, y = get_global_id(1);
     if (x0 >= W || y >= H) return;
-    size_t run_index = (size_t)y * ((W + RUN - 1) / RUN) + get_global_id(0);
+    size_t run_index = run_of(x0, y, W);
     uint bits = run_bits[run_index];
     int i = run_offset[run_index];
     while (bits) {

@@ -12,8 +12,9 @@ from vmcl.errors import InputValueError
 OPS = ["plus", "max", "min", "copy"]
 METHODS = ["work_efficient", "hillis_steele"]
 # 1 x 1, 1 x N, N x 1, primes and non-powers of two, and lines long enough to be cut into chunks (on
-# a GPU from 8 Ki elements, on a CPU from 128 Ki).
+# a GPU from 8 Ki elements, on a CPU from 64 Ki).
 SHAPES = [(1,), (2,), (97,), (20011,), (200003,), (1, 1), (1, 257), (257, 1), (13, 31), (3, 5, 17), (2, 9001), (9001, 2),
+          (70001, 3),
           (5, 48, 33)]
 
 

@@ -145,6 +145,32 @@ def test_device_in_device_out(machine):
     np.testing.assert_array_equal(device.points, host.points)
 
 
+def _masks():
+    rng = np.random.default_rng(21)
+    yield "empty", np.zeros((7, 20), bool)
+    yield "one pixel", np.pad(np.ones((1, 1), bool), 3)
+    yield "solid block", np.pad(np.ones((6, 6), bool), 2)  # branch pixels inside, curve pixels at the corners
+    for width in (1, 5, 15, 16, 17, 33):  # narrower than a run, a run, one pixel into the next
+        for density in (0.1, 0.4):
+            yield f"random {width} wide, {density}", rng.random((23, width)) < density
+
+
+@pytest.mark.parametrize("name, mask", list(_masks()), ids=[name for name, _ in _masks()])
+def test_maps_drawn_on_the_device_equal_the_host_s(name, mask, machine):
+    # A host edge map has its maps drawn on the host from the device's fields; a device one on the device,
+    # cleared by the first pass and drawn as the curves are put in order.
+    host = link_edges(mask, machine=machine)
+    device = link_edges(machine.to_device(mask.astype(np.uint8)), machine=machine)
+    for field in ("labels", "position", "tangent"):
+        np.testing.assert_array_equal(getattr(device, field).get(), getattr(host, field), err_msg=field)
+    for field in ("points", "offsets", "closed", "length", "total_curvature", "magnitude", "tangents", "branches"):
+        np.testing.assert_array_equal(getattr(device, field), getattr(host, field), err_msg=field)
+    branches = np.zeros(mask.shape, bool)
+    branches[host.branches[:, 1], host.branches[:, 0]] = True
+    np.testing.assert_array_equal(host.labels == BRANCH, branches)
+    np.testing.assert_array_equal(host.labels != -1, mask)  # every edge pixel is a curve's or a branch
+
+
 def test_empty_map_gives_no_curves():
     found = link_edges(np.zeros((8, 9), bool))
     assert len(found) == 0 and found.points.shape == (0, 2) and (np.asarray(found.labels) == -1).all()

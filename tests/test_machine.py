@@ -312,11 +312,13 @@ def test_a_kernel_launched_again_takes_each_launch_own_scalars(machine):
     # sign, a NaN after a NaN and a value of another width must each still reach the kernel.
     kernel = machine.kernel("mrf", "set_value", NCOMP=1, KIND=0, NLEVELS=1, MODE=0)
     out = machine.empty(8, np.float32)
-    for value, count in [(1.5, 8), (2.5, 8), (2.5, 3), (0.0, 8), (-0.0, 8), (np.nan, 8), (np.nan, 8), (7.0, 5)]:
-        machine.launch(kernel, (8,), out, np.float32(-9.0), np.int64(8))
+    machine.launch(kernel, (8,), out, np.float32(-9.0), np.int64(8))
+    expected = np.full(8, -9.0, np.float32)
+    # Back to back, each launch against the scalars the one before left: the cache compares them.
+    for value, count in [(1.5, 8), (2.5, 8), (2.5, 3), (0.0, 3), (-0.0, 3), (0.0, 2), (np.nan, 2), (np.nan, 1),
+                         (7.0, 1), (7.0, 5)]:
         machine.launch(kernel, (8,), out, np.float32(value), np.int64(count))
         got = out.get()
-        expected = np.full(8, -9.0, np.float32)
         expected[:count] = value
         np.testing.assert_array_equal(got, expected)
         assert np.array_equal(np.signbit(got), np.signbit(expected))
@@ -334,6 +336,11 @@ def test_read_into_copies_the_asked_elements_and_refuses_what_does_not_fit(machi
     machine.read_into(as_floats, device, offset=90).wait()
     np.testing.assert_array_equal(as_floats.view(np.int32), data[90:])
     assert machine.read_into(np.zeros(0, np.int32), device) is None
+    view = device[10:]  # an offset into its buffer
+    machine.read_into(out[:5], view, offset=3).wait()
+    np.testing.assert_array_equal(out[:5], data[13:18])
+    with pytest.raises(InputValueError, match="array must be C-contiguous"):
+        machine.read_into(out[:5], device[::2])
     with pytest.raises(InputValueError, match="outside an array of 100"):
         machine.read_into(out, device, offset=80)
     with pytest.raises(InputValueError, match="outside"):

@@ -268,7 +268,8 @@ class Machine:
         self.pool = cl_tools.MemoryPool(cl_tools.ImmediateAllocator(self.queue))
         self._programs: dict[tuple, cl.Program] = {}
         self._kernels: dict[tuple, cl.Kernel] = {}
-        self._scalar_args: dict[int, dict[int, tuple]] = {}  # id(kernel) -> argument index -> (dtype, bytes)
+        # The machine's own kernels -> argument index -> (dtype, bytes) of the scalar each holds.
+        self._scalar_args: dict[cl.Kernel, dict[int, tuple]] = {}
         self._events: list[tuple[str, cl.Event]] = []
         self._layouts: dict[tuple, tuple] = {}  # (shape, dtype) -> (shape, dtype, strides, size) for empty()
         self._lock = threading.Lock()
@@ -305,21 +306,26 @@ class Machine:
         return program
 
     def kernel(self, family: str, name: str, **defines: Any) -> cl.Kernel:
-        """A cached kernel object: fetched from its program once per (family, name, defines)."""
+        """A cached kernel object: fetched from its program once per (family, name, defines). Launch it
+        with :meth:`launch` (see :meth:`kernel_instance`)."""
         return self.kernel_instance(0, family, name, **defines)
 
     def kernel_instance(self, instance: int, family: str, name: str, **defines: Any) -> cl.Kernel:
         """Instance ``instance`` of a kernel: separate kernel objects of one kernel (0 is :meth:`kernel`'s),
         each holding its own arguments. A caller that launches a kernel with a few fixed sets of scalars
         (a step of each span) gives each set its instance, and :meth:`launch` then sets none of them
-        again (see ``_set_arguments``)."""
+        again (see ``_set_arguments``).
+
+        Launch the machine's kernels through :meth:`launch` only: it remembers the scalars each holds,
+        and a kernel's arguments set elsewhere (``set_arg``, calling it) would leave that record wrong."""
         key = (family, name, tuple(sorted(defines.items())), instance)
         kernel = self._kernels.get(key)
         if kernel is None:
-            kernel = cl.Kernel(self.program(family, **defines), name)
-            self._kernels[key] = kernel
-            # The machine holds its kernels for its whole life, so their ids stay theirs.
-            self._scalar_args[id(kernel)] = {}
+            made = cl.Kernel(self.program(family, **defines), name)
+            with self._launch_lock:  # two threads may make one kernel: one of them is kept, and only it known
+                kernel = self._kernels.setdefault(key, made)
+                if kernel is made:
+                    self._scalar_args[kernel] = {}
         return kernel
 
     def launch(self, kernel: cl.Kernel, global_size: tuple[int, ...], *args: Any,
@@ -346,7 +352,7 @@ class Machine:
         if local_size is not None:
             global_size = tuple(-(-g // size) * size for g, size in zip(global_size, local_size))
         with self._launch_lock:
-            scalars = self._scalar_args.get(id(kernel))
+            scalars = self._scalar_args.get(kernel)
             if scalars is None:  # a kernel of the caller's own making
                 # pyopencl's KernelArg omits MemoryObjectHolder, yet a pooled array's base_data is a
                 # PooledBuffer (one), which kernels take as they take a Buffer.
@@ -476,6 +482,8 @@ class Machine:
         """
         if not out.flags.c_contiguous or out.itemsize != array.dtype.itemsize:
             raise InputValueError(f"out must be C-contiguous with items of {array.dtype.itemsize} bytes")
+        if not array.flags.c_contiguous:
+            raise InputValueError("array must be C-contiguous (a strided view's elements are not consecutive)")
         if offset < 0 or offset + out.size > array.size:
             raise InputValueError(f"elements {offset}..{offset + out.size} lie outside an array of {array.size}")
         if out.size == 0:

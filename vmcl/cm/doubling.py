@@ -34,7 +34,7 @@ __all__ = ["LabelMethod", "label", "principal", "principal_from_predecessors", "
 
 LabelMethod = Literal["doubling", "iterative"]
 _CHECK_EVERY = 16  # spreading-activation passes between reads of the "changed" flag
-STEPS_PER_LAUNCH = 2  # doubling steps folded into one launch of principal_steps
+_STEPS_PER_LAUNCH = 2  # doubling steps folded into one launch of principal_steps
 
 
 def _steps(n: int) -> int:
@@ -100,8 +100,9 @@ def principal(next: ArrayLike, *, keys: ArrayLike | None = None, check: bool = T
         the addresses themselves (the paper's principal). Keys let a caller choose which node of a ring
         is its principal (vmcl.group.curves makes a curve's endpoint the principal of its ring).
     check : bool
-        Check that ``next`` is a permutation of in-range addresses; False skips the check for a device
-        array the caller's own kernel built (a wrong one then gives wrong answers, not an error).
+        Check ``next``: its addresses in range, and for a host array that it is a permutation (a device
+        array's is not read back for that); False skips the checks for a device array the caller's own
+        kernel built (a wrong one then gives wrong answers, not an error).
 
     Returns
     -------
@@ -173,7 +174,7 @@ def _principal_steps(machine: Machine, prev: cl_array.Array, key: cl_array.Array
     top, distance, k, launches = key, key, 0, 0
     while k < steps:
         # Several steps per launch (the same result as one at a time, in a fraction of the launches).
-        now = min(STEPS_PER_LAUNCH, steps - k)
+        now = min(_STEPS_PER_LAUNCH, steps - k)
         target = buffers[launches % 2]
         # A kernel object per first step keeps its scalars set from one call to the next.
         kernel = machine.kernel_instance(k, "doubling", "principal_steps")

@@ -59,9 +59,10 @@ METHODS: tuple[Method, ...] = ("work_efficient", "hillis_steele")
 COLUMN_VEC = 16
 ROW_ILP = 4  # chunks per work-item in the row kernels (ILP in kernels/scan.cl)
 _MIN_CHUNK = 4096
-# On a CPU one work-item sums 64 Ki elements in about the time two more launches take (measured on PoCL:
-# a 16 Ki-element line 126 us of wall time in one chunk, 238 us in chunks), so shorter lines are not cut.
-_MIN_CHUNK_CPU = 65536
+# On a CPU one work-item sums a short line faster than two more launches let two share it. Measured on
+# PoCL (2 cores), an exclusive sum waited for: 16 Ki elements 227 us in one chunk, 268 us in chunks;
+# 32 Ki 274 against 301; 64 Ki 382 against 328. Lines under 64 Ki elements are not cut.
+_MIN_CHUNK_CPU = 32768
 
 
 @overload

@@ -6,14 +6,15 @@ where no 4-neighbour shares the corner, so a one-pixel-thin staircase is a chain
 triangles). Pixels with three or more links are branch pixels, where curves meet: they split the curves
 and are where the junctions are (:mod:`vmcl.group.junctions`). Every other edge pixel has at most two
 links, so the curve pixels form paths and closed loops. Each curve is walked both ways as a ring of
-"tour" nodes, and distance doubling over the rings (:func:`vmcl.cm.doubling.principal`, the paper's use
-of it) gives every pixel its curve (the ring's principal) and its arc position in O(log n) steps.
+"tour" nodes, and distance doubling over the rings (:func:`vmcl.cm.doubling.principal_from_predecessors`,
+the paper's use of it, on the rings the tour writes backwards) gives every pixel its curve (the ring's
+principal) and its arc position in O(log n) steps.
 
-Each curve's size (its largest arc position + 1, gathered at its ring's key) and an exclusive sum of the
-sizes put every pixel in its slot, curve after curve in arc order, on the device; the tangents and turns
-are then read from neighbouring slots. The host reads the pixels in that order and measures each curve:
-its length (steps of 1 and sqrt 2), its curvature (the turning of the tangent of the positions smoothed
-along the arc), its mean gradient magnitude and its end tangents.
+Each curve's size (its largest arc position + 1, gathered at its key: its principal's, made dense) and an
+exclusive sum of the sizes put every pixel in its slot, curve after curve in arc order, on the device, and
+draw the maps; the tangents and turns are then read from neighbouring slots. The host reads the pixels in
+that order and measures each curve: its length (steps of 1 and sqrt 2), its curvature (the turning of the
+tangent of the positions smoothed along the arc), its mean gradient magnitude and its end tangents.
 
 Coordinates are (x, y): x the column, y the row, as image pixels are addressed.
 """
@@ -298,11 +299,12 @@ def _device_weights(machine: Machine, smoothing: float) -> cl_array.Array:
     """The tangent filter's weights on the device, uploaded once per machine and smoothing: each upload
     is one more command on a queue whose launches are most of the curves' host time."""
     cache = _WEIGHTS.setdefault(machine, {})
-    if smoothing not in cache:
+    weights = cache.get(smoothing)  # one look-up: another thread may clear the cache meanwhile
+    if weights is None:
         if len(cache) >= _MAX_WEIGHTS:
             cache.clear()
-        cache[smoothing] = machine.to_device(_tangent_weights(smoothing))
-    return cache[smoothing]
+        weights = cache[smoothing] = machine.to_device(_tangent_weights(smoothing))
+    return weights
 
 
 def _tangent_weights(smoothing: float) -> np.ndarray:
