@@ -349,3 +349,22 @@ def test_read_into_copies_the_asked_elements_and_refuses_what_does_not_fit(machi
         machine.read_into(np.zeros(4, np.int64), device)
     with pytest.raises(InputValueError, match="C-contiguous"):
         machine.read_into(np.zeros((4, 4), np.int32)[:, 0], device)
+
+
+def test_constant_tables_are_made_and_uploaded_once_per_key(monkeypatch, machine):
+    made = []
+
+    def make(value):
+        made.append(value)
+        return np.full(3, value, np.float32)
+
+    first = machine.constant(("tests", "a"), lambda: make(1.0))
+    assert machine.constant(("tests", "a"), lambda: make(9.0)) is first  # not made again
+    np.testing.assert_array_equal(first.get(), [1.0, 1.0, 1.0])
+    np.testing.assert_array_equal(machine.constant(("tests", "b"), lambda: make(2.0)).get(), [2.0, 2.0, 2.0])
+    assert made == [1.0, 2.0]
+    # Past the bound the tables are dropped and made again as they are asked for.
+    monkeypatch.setattr(machine_module, "_MAX_CONSTANTS", 2)
+    machine.constant(("tests", "c"), lambda: make(4.0))  # a third table: the first two are dropped
+    np.testing.assert_array_equal(machine.constant(("tests", "a"), lambda: make(3.0)).get(), [3.0, 3.0, 3.0])
+    assert made == [1.0, 2.0, 4.0, 3.0]

@@ -19,6 +19,7 @@ import tempfile
 import threading
 import warnings
 from collections import defaultdict
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -52,6 +53,7 @@ INSTALL_HINT = (
 )
 
 _MAX_LAYOUTS = 4096
+_MAX_CONSTANTS = 256  # Machine.constant's tables before they are dropped and made again as needed
 """Array layouts :meth:`Machine.empty` keeps before starting over."""
 
 _log = logging.getLogger(__name__)
@@ -272,6 +274,7 @@ class Machine:
         self._scalar_args: dict[cl.Kernel, dict[int, tuple]] = {}
         self._events: list[tuple[str, cl.Event]] = []
         self._layouts: dict[tuple, tuple] = {}  # (shape, dtype) -> (shape, dtype, strides, size) for empty()
+        self._constants: dict[Any, cl_array.Array] = {}  # constant()'s tables
         self._lock = threading.Lock()
         # Held while a launch sets a kernel object's arguments and enqueues it, and while the pool
         # allocates: both mutate state that every thread using this Machine shares.
@@ -473,6 +476,19 @@ class Machine:
         device_array = self.empty(array.shape, array.dtype)
         device_array.set(array, queue=self.queue)
         return device_array
+
+    def constant(self, key: Any, make: Callable[[], np.ndarray]) -> cl_array.Array:
+        """A read-only table on the device (filter taps, weights, look-up tables): ``make()``'s array,
+        uploaded once per ``key`` for this machine's life. An upload waits for the queue to drain, which a
+        stage whose fields stay on the device must not do on every call. Keys name their caller's module
+        first, e.g. ("vmcl.group.curves", "tangent weights", smoothing); nothing may write a table.
+        """
+        table = self._constants.get(key)  # one look-up: another thread may clear the tables meanwhile
+        if table is None:
+            if len(self._constants) >= _MAX_CONSTANTS:  # a sweep over ever new settings must not grow it forever
+                self._constants.clear()
+            table = self._constants[key] = self.to_device(make())
+        return table
 
     def read_into(self, out: np.ndarray, array: cl_array.Array, *, offset: int = 0) -> cl.Event | None:
         """Queue a copy of ``out.size`` elements of device ``array`` from element ``offset`` into the host

@@ -48,7 +48,6 @@ from __future__ import annotations
 
 import json
 import os
-import weakref
 from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
@@ -214,16 +213,11 @@ def _srgb_linear(levels: np.ndarray) -> np.ndarray:
 
 _LINEAR_8BIT = _srgb_linear(np.arange(256) / 255.0).astype(np.float32)
 
-_CONSTANTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
 def _constant(machine: Machine, key: object, make) -> cl_array.Array:
-    """A read-only table on the device, uploaded once per machine and key: a write to the device waits
-    for the queue to drain, which a pipeline keeping its fields on the device must not do every call."""
-    cache = _CONSTANTS.setdefault(machine, {})
-    if key not in cache:
-        cache[key] = machine.to_device(np.ascontiguousarray(make(), np.float32))
-    return cache[key]
+    """A read-only float32 table on the device, uploaded once per machine and key
+    (:meth:`vmcl.Machine.constant`)."""
+    return machine.constant(("vmcl.early.boundary_probability", key),
+                            lambda: np.ascontiguousarray(make(), np.float32))
 
 
 

@@ -21,7 +21,6 @@ V. Torre and T. Poggio, "On edge detection", IEEE TPAMI 8(2):147-163, 1986.
 
 from __future__ import annotations
 
-import weakref
 from typing import Literal, overload
 
 import numpy as np
@@ -97,23 +96,20 @@ def binomial_passes(sigma: float) -> int:
     return max(1, round(2.0 * sigma * sigma))
 
 
-_TAPS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
 def device_taps(machine: Machine, sigmas: tuple[float, ...]) -> tuple[cl_array.Array, int]:
-    """The packed taps of one or two widths on the device, and their common radius. Uploaded once per
-    machine and widths: a write to the device waits for the queue to drain, which a pipeline that keeps
-    its fields on the device must not do on every call."""
-    cache = _TAPS.setdefault(machine, {})
-    if sigmas not in cache:
-        radius = max(int(TRUNCATE * s + 0.5) for s in sigmas)
+    """The packed taps of one or two widths on the device (:meth:`vmcl.Machine.constant`: uploaded once
+    per machine and widths), and their common radius."""
+    radius = max(int(TRUNCATE * s + 0.5) for s in sigmas)
+
+    def packed() -> np.ndarray:
         taps = np.zeros((len(sigmas), 2 * radius + 1), np.float32)
         for plane, s in enumerate(sigmas):
             t = gaussian_taps(s)
             pad = radius - len(t) // 2
             taps[plane, pad:pad + len(t)] = t
-        cache[sigmas] = (machine.to_device(taps), radius)
-    return cache[sigmas]
+        return taps
+
+    return machine.constant(("vmcl.early.filters", "taps", sigmas), packed), radius
 
 
 def separable_gaussian(machine: Machine, data: cl_array.Array, sigmas: tuple[float, ...]) -> cl_array.Array:

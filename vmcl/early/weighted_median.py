@@ -18,7 +18,6 @@ weighted mean of the voters in the median's bin, so that a value keeps its fract
 from __future__ import annotations
 
 import math
-import weakref
 
 import numpy as np
 import pyopencl.array as cl_array
@@ -44,7 +43,6 @@ MAX_BINS = 1024
 """The most bins a pixel's histogram holds; a wider span of values gets bins of several units."""
 
 _BIN_STEP = 64  # the private histograms are sized in steps of this many bins (one program per size)
-_SPATIAL: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _HALF_RANGE = float(np.finfo(np.float32).max) / 4
 _LEVELS = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0, np.dtype(np.float32): 1.0}
 
@@ -144,15 +142,13 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
 
 def _spatial_weights(machine: Machine, reach: int, sigma_space: float) -> cl_array.Array:
     """The (2 reach + 1)^2 table of exp(-|q - p| / sigma_space) on the device, uploaded once per machine
-    and window (as :func:`vmcl.early.filters.device_taps` keeps its taps): a write to the device waits for
-    the queue to drain, which the matcher, whose fields stay on the device, must not do on every call."""
-    cache = _SPATIAL.setdefault(machine, {})
-    key = (reach, sigma_space)
-    if key not in cache:
+    and window (:meth:`vmcl.Machine.constant`): the matcher's fields stay on the device, and an upload on
+    every call would wait for its queue to drain."""
+    def table() -> np.ndarray:
         side = 2 * reach + 1
         machine.require_memory(f"a weighted median's table of {side} x {side} spatial weights", 4 * side * side,
                                4 * side * side)
         offsets = np.arange(-reach, reach + 1, dtype=np.float64)
-        table = np.exp(-np.hypot(offsets[:, None], offsets[None, :]) / sigma_space).astype(np.float32)
-        cache[key] = machine.to_device(table)
-    return cache[key]
+        return np.exp(-np.hypot(offsets[:, None], offsets[None, :]) / sigma_space).astype(np.float32)
+
+    return machine.constant(("vmcl.early.weighted_median", "spatial", reach, sigma_space), table)

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import weakref
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -226,7 +225,8 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     n = mask.size
     size = (-(-width // RUN), height)  # work-items of RUN pixels along each row
     sizes = (np.int32(width), np.int32(height))
-    weights = _device_weights(machine, smoothing)
+    # Uploaded once per machine and smoothing: the launches are most of the curves' host time already.
+    weights = machine.constant(("vmcl.group.curves", "tangent weights", smoothing), lambda: _tangent_weights(smoothing))
     curve_links, branch_list = machine.empty(mask.shape, np.uint8), machine.empty(n, np.int32)
     runs = size[0] * size[1]
     run_bits = machine.empty(runs, np.uint16)
@@ -289,22 +289,6 @@ def _link_on_device(machine: Machine, mask: cl_array.Array, strength: cl_array.A
     return _Linked(fields[0], early[5 * count:].reshape(count, 2), fields[1], fields[2], fields[3].astype(bool),
                    fields[4].view(np.float32), np.sort(listed), maps if draw_maps else None,
                    (late, late_read))
-
-
-_WEIGHTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-_MAX_WEIGHTS = 64  # smoothings kept per machine; a sweep over ever new ones must not grow it forever
-
-
-def _device_weights(machine: Machine, smoothing: float) -> cl_array.Array:
-    """The tangent filter's weights on the device, uploaded once per machine and smoothing: each upload
-    is one more command on a queue whose launches are most of the curves' host time."""
-    cache = _WEIGHTS.setdefault(machine, {})
-    weights = cache.get(smoothing)  # one look-up: another thread may clear the cache meanwhile
-    if weights is None:
-        if len(cache) >= _MAX_WEIGHTS:
-            cache.clear()
-        weights = cache[smoothing] = machine.to_device(_tangent_weights(smoothing))
-    return weights
 
 
 def _tangent_weights(smoothing: float) -> np.ndarray:
