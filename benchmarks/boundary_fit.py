@@ -32,6 +32,7 @@ import vmcl
 from vmcl.boundary_evaluation import canny_sweep, sweep_thresholds
 from vmcl.datasets import load_bsds
 from vmcl.early import boundary_probability as bp
+from vmcl.fitted import code_sha256, files_sha256
 from vmcl.metrics import evaluate_boundaries
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -49,6 +50,15 @@ def training_images(root: Path, split: str):
         raise SystemExit(f"boundary_fit.py fits on BSDS500's train split only, not {split!r}: the test images are "
                          "kept for reporting")
     return load_bsds(root, split="train").images
+
+
+def provenance(root: Path, fitting) -> dict:
+    """What the model's "fitted" record says it was fitted on: the fitting images' files (their images and
+    annotations, hashed) and this script's hash."""
+    folder = Path(root) / "bsds500" / "train"
+    files = [folder / item.name / f"{item.name}{suffix}" for item in fitting for suffix in (".jpg", ".mat")]
+    return {"data_sha256": files_sha256(files), "images": len(fitting),
+            "code": "benchmarks/boundary_fit.py", "code_sha256": code_sha256(Path(__file__))}
 
 
 def fit_textons(images, machine: vmcl.Machine, rng: np.random.Generator) -> np.ndarray:
@@ -131,7 +141,7 @@ def main() -> None:
     model = bp.BoundaryModel(model.scales, model.centres, model.weights,
                              f"BSDS500 train, the first {len(fitting)} of {len(images)} images in sorted order, "
                              f"{TEXTONS} textons: benchmarks/boundary_fit.py")
-    model.save(args.model)
+    model.save(args.model, provenance(args.data, fitting))
     truths = [item.boundaries for item in held_out]
     maps = {"vmcl probability of boundary": [bp.boundary_probability(item.image, model=model, machine=machine)
                                              .probability for item in held_out],

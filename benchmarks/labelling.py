@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from vmcl import labelling, metrics, scenes
+from vmcl.fitted import code_sha256
 from vmcl.integrate import integrate
 from vmcl.labels import Label
 from vmcl.pipeline import Config, VisionMachine
@@ -128,7 +129,10 @@ def main() -> None:
     colour_runs = {k: v for k, v in data.items() if k[1] != "grey"}
     shipped = fit([v for k, v in colour_runs.items() if k[2] in FIT_SEEDS], vm.machine, fitted_on)
     fit_s = time.perf_counter() - start
-    shipped.save(labelling.WEIGHTS_FILE)
+    # The examples are rendered by vmcl.scenes from the seeds fitted_on names: the renderer's code is their data.
+    renderer = sorted(Path(scenes.__file__).parent.glob("*.py"))
+    shipped.save(labelling.WEIGHTS_FILE, {"data_sha256": code_sha256(*renderer), "code": "benchmarks/labelling.py",
+                                          "code_sha256": code_sha256(Path(__file__), labelling)})
     out = ["# Labelling: the linear classifier of the integration stage", "",
            (f"{platform.node()}, {time.strftime('%Y-%m-%d')}, device: {vm.machine.device.name}. "
            "Written by benchmarks/labelling.py, which also fits vmcl/labelling.json."), "",

@@ -95,9 +95,19 @@ def test_device_in_device_out(machine):
 def test_model_round_trip_and_refusals(tmp_path):
     model = bp.BoundaryModel.load()
     assert "BSDS500 train" in model.fitted_on and model.features == bp.FEATURES
+    assert model.record["images"] == 190 and len(model.record["data_sha256"]) == 64  # checked as it loaded
     model.save(tmp_path / "m.json")
     again = bp.BoundaryModel.load(tmp_path / "m.json")
     np.testing.assert_allclose(again.weights, model.weights, atol=1e-5)
+    edited = json.loads((tmp_path / "m.json").read_text())
+    edited["weights"][0] += 0.5
+    (tmp_path / "m.json").write_text(json.dumps(edited))
+    with pytest.raises(ValueError, match="differ from those fitted"):
+        bp.BoundaryModel.load(tmp_path / "m.json")
+    (tmp_path / "notes.json").write_text("{}")
+    with pytest.raises(ValueError, match="not a file `vmcl fit` wrote"):
+        model.save(tmp_path / "notes.json")
+    assert (tmp_path / "notes.json").read_text() == "{}"
     (tmp_path / "bad.json").write_text(json.dumps({"scales": [1.0]}))
     with pytest.raises(ValueError, match="bad.json"):
         bp.BoundaryModel.load(tmp_path / "bad.json")

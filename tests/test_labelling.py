@@ -1,5 +1,7 @@
 """vmcl.labelling: the integration stage's linear classifier (its inputs, its decision, its fit)."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -156,9 +158,29 @@ def test_weights_round_trip_and_refuse_other_features(tmp_path):
     again = LinearLabeller.load(path)
     for key, w in shipped.weights.items():
         np.testing.assert_allclose(again.weights[key], w, atol=1e-5)
-    path.write_text(path.read_text().replace('"brightness 5"', '"something else"'))
+    assert again.record["data"] == shipped.fitted_on and again.record["written_by"] == "vmcl fit"
+    edited = json.loads(path.read_text().replace('"brightness 5"', '"something else"'))
+    path.write_text(json.dumps(edited))
+    with pytest.raises(ValueError, match="differ from those fitted"):
+        LinearLabeller.load(path)
+    del edited["fitted"]  # the user's own file: no record to check, the features still are
+    path.write_text(json.dumps(edited))
     with pytest.raises(ValueError, match="other features"):
         LinearLabeller.load(path)
+
+
+def test_shipped_weights_carry_a_checked_record_and_save_never_overwrites_another_file(tmp_path):
+    record = labelling.default_labeller().record
+    assert record is not None and "seeds (0, 1)" in record["data"] and len(record["parameters_sha256"]) == 64
+    path = tmp_path / "mine.json"
+    path.write_text("my notes")
+    with pytest.raises(ValueError, match="not a file `vmcl fit` wrote"):
+        labelling.default_labeller().save(path)
+    assert path.read_text() == "my notes"
+    fresh = tmp_path / "fitted.json"
+    labelling.default_labeller().save(fresh, {"code_sha256": "0" * 64})
+    labelling.default_labeller().save(fresh)  # one vmcl fitted: replaced
+    assert LinearLabeller.load(fresh).record["data"] == labelling.default_labeller().fitted_on
     with pytest.raises(ValueError, match="must have shape"):
         LinearLabeller({"image": np.zeros((3, 3))})
     with pytest.raises(ValueError, match="no weights for the inputs"):

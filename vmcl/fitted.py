@@ -4,6 +4,8 @@ Seed section "Learning and parameter estimation". A configuration that ``vmcl fi
 that :meth:`vmcl.pipeline.Config.from_toml` loads like any other, plus a ``[fitted]`` table that says
 where it came from: the data (each example's name and one SHA-256 over their files), the vmcl version and
 a hash of the learning code, the method, the date, and the SHA-256 of the parameter tables themselves.
+The fitted JSON artefacts vmcl ships (the labelling weights, the probability-of-boundary model) carry the
+same record as a ``"fitted"`` object (:func:`write_fitted_json`, :func:`check_fitted_json`).
 Loading checks that hash (a file edited by hand, or damaged, is refused with a sentence saying so: drop
 the ``[fitted]`` table to keep the edit as one's own configuration) and warns when the file was fitted
 by another vmcl version.
@@ -23,7 +25,8 @@ from typing import Any
 
 from vmcl.errors import InputTypeError, InputValueError
 
-__all__ = ["FITTED_BY", "check_fitted", "check_writable", "code_sha256", "files_sha256", "parameters_sha256", "write_fitted"]
+__all__ = ["FITTED_BY", "check_fitted", "check_fitted_json", "check_writable", "code_sha256", "files_sha256",
+           "fitted_record", "parameters_sha256", "write_fitted", "write_fitted_json"]
 
 FITTED_BY = "vmcl fit"
 """The ``[fitted]`` table's ``written_by``: the mark of a file vmcl wrote, which it may replace."""
@@ -104,18 +107,85 @@ def write_fitted(path: str | Path, tables: Mapping[str, Any], provenance: Mappin
     Path
         The file written (written beside it first, then moved into place).
     """
+    target = check_writable(path)
+    lines = ["# Parameters learned by `vmcl fit`; [fitted] says from what. Load with vmcl run --config.", ""]
+    lines += _toml_tables({**tables, "fitted": fitted_record(tables, provenance)}, ())
+    _replace(target, "\n".join(lines) + "\n")
+    return target
+
+
+def fitted_record(parameters: Mapping[str, Any], provenance: Mapping[str, Any]) -> dict[str, Any]:
+    """What a fitted file says of itself: written by ``vmcl fit``, the vmcl version, the date,
+    ``provenance`` (what it was fitted on, by what code) and the SHA-256 of ``parameters``.
+
+    ``provenance`` may give its own ``date`` (when the fit ran), which then stands.
+    """
     from vmcl import __version__
 
+    return {"written_by": FITTED_BY, "vmcl": __version__,
+            "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+            **provenance, "parameters_sha256": parameters_sha256(parameters)}
+
+
+def write_fitted_json(path: str | Path, parameters: Mapping[str, Any], provenance: Mapping[str, Any]) -> Path:
+    """Write a fitted JSON artefact (the labelling weights, a boundary model): ``parameters`` and a
+    ``"fitted"`` object (:func:`fitted_record`), replacing only a file vmcl fitted.
+
+    Parameters
+    ----------
+    path : str or Path
+        A new file, or one an earlier fit wrote (anything else is refused, untouched).
+    parameters : mapping
+        The artefact's entries, JSON-able (lists and numbers, no NaN).
+    provenance : mapping
+        What it was fitted on: at least ``data`` and ``code_sha256``.
+
+    Returns
+    -------
+    Path
+        The file written (written beside it first, then moved into place).
+    """
+    if not isinstance(parameters, Mapping) or "fitted" in parameters:
+        raise InputValueError("parameters must be a mapping without a 'fitted' entry (the record is added here)")
     target = check_writable(path)
-    fitted = {"written_by": FITTED_BY, "vmcl": __version__,
-              "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
-              **provenance, "parameters_sha256": parameters_sha256(tables)}
-    lines = ["# Parameters learned by `vmcl fit`; [fitted] says from what. Load with vmcl run --config.", ""]
-    lines += _toml_tables({**tables, "fitted": fitted}, ())
-    temporary = target.with_name(f".{target.name}.{os.getpid()}.tmp")
-    temporary.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    os.replace(temporary, target)
+    data = {**parameters, "fitted": fitted_record(parameters, provenance)}
+    _replace(target, json.dumps(data, indent=1, allow_nan=False) + "\n")
     return target
+
+
+def check_fitted_json(data: Mapping[str, Any], source: str) -> dict[str, Any] | None:
+    """The ``"fitted"`` record of a loaded JSON artefact, once checked against its other entries; None for
+    a file without one (the user's own, used as it is).
+
+    Raises
+    ------
+    InputValueError
+        The record lacks its hash, or the entries differ from those fitted (edited or damaged).
+    """
+    record = data.get("fitted")
+    if record is None:
+        return None
+    if not isinstance(record, Mapping) or not isinstance(record.get("parameters_sha256"), str):
+        raise InputValueError(f"{source}: its 'fitted' record has no parameters_sha256, so what was fitted cannot "
+                              "be checked")
+    rest = {key: value for key, value in data.items() if key != "fitted"}
+    try:
+        found = parameters_sha256(rest)
+    except (TypeError, ValueError):
+        found = None
+    if found != record["parameters_sha256"]:
+        raise InputValueError(f"{source}: its entries differ from those fitted (their SHA-256 does not match the "
+                              "'fitted' record's parameters_sha256): edited or damaged since it was fitted; remove "
+                              "the 'fitted' record to use it as your own")
+    return dict(record)
+
+
+def _replace(target: Path, text: str) -> None:
+    # Written beside the target and moved into place: a reader never sees half a file, and a failed
+    # write leaves the old one.
+    temporary = target.with_name(f".{target.name}.{os.getpid()}.tmp")
+    temporary.write_text(text, encoding="utf-8")
+    os.replace(temporary, target)
 
 
 def check_writable(path: str | Path) -> Path:
@@ -138,8 +208,11 @@ def _written_by_vmcl(path: Path) -> bool:
     from vmcl.pipeline import tomllib
 
     try:
-        values = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        text = path.read_text(encoding="utf-8")
+        values = json.loads(text) if path.suffix == ".json" else tomllib.loads(text)
+    except (OSError, UnicodeDecodeError, ValueError):  # JSON's and TOML's decode errors are ValueErrors
+        return False
+    if not isinstance(values, Mapping):
         return False
     fitted = values.get("fitted")
     return isinstance(fitted, Mapping) and fitted.get("written_by") == FITTED_BY

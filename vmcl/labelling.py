@@ -37,7 +37,7 @@ import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import pyopencl.array as cl_array
@@ -46,6 +46,7 @@ from vmcl import metrics
 from vmcl.cm.core import ArrayLike, check_bool, check_real, machine_for, real_host_array
 from vmcl.cm.core import field as device_field
 from vmcl.errors import InputTypeError, InputValueError
+from vmcl.fitted import check_fitted_json, write_fitted_json
 from vmcl.labels import BIT_DEFINES, CUES, Cue, Label, cue_bit
 from vmcl.machine import Machine
 
@@ -130,10 +131,14 @@ class LinearLabeller:
         ..., "image" for none); row 0 is the bias.
     fitted_on : str
         What the weights were fitted to.
+    record : mapping or None
+        The file's ``"fitted"`` record when it was loaded from a fitted file (:mod:`vmcl.fitted`: the data,
+        the code's hash, the date, the parameters' hash, checked when loaded); None otherwise.
     """
 
     weights: Mapping[str, np.ndarray]
     fitted_on: str = ""
+    record: Mapping[str, Any] | None = None
     # Device copies by (machine, key): uploaded once, not per labelling.
     _on_device: dict = field(default_factory=dict, init=False, repr=False)
 
@@ -181,19 +186,37 @@ class LinearLabeller:
         if not isinstance(data, dict) or not isinstance(data.get("weights"), dict):
             # A bad file is a bad value of the argument, whatever JSON type it holds.
             raise InputValueError(f"{path}: not labelling weights (a JSON object with a 'weights' object)")
+        record = check_fitted_json(data, str(path))
         if tuple(data.get("features", ())) != FEATURES or tuple(data.get("classes", ())) != tuple(
                 c.name for c in CLASSES):
             raise InputValueError(f"{path} was fitted to other features or labels than this vmcl's")
         try:
             weights = {k: np.asarray(v, np.float32) for k, v in data["weights"].items()}
-            return cls(weights, str(data.get("fitted_on", "")))
+            return cls(weights, str(data.get("fitted_on", "")), record)
         except (ValueError, TypeError) as error:
             raise InputValueError(f"{path}: {error}") from None
 
-    def save(self, path: str | Path) -> None:
+    def save(self, path: str | Path, provenance: Mapping[str, Any] | None = None) -> Path:
+        """Write the weights as JSON with their ``"fitted"`` record (:func:`vmcl.fitted.write_fitted_json`):
+        to a new file or one vmcl fitted, never over another file.
+
+        Parameters
+        ----------
+        path : str or Path
+        provenance : mapping, optional
+            What the record says they were fitted on and by what (e.g. ``code_sha256``); its ``data``
+            defaults to :attr:`fitted_on`.
+
+        Returns
+        -------
+        Path
+            The file written.
+        """
+        if path is None or not isinstance(path, (str, os.PathLike)):
+            raise InputTypeError(f"path must be a str or an os.PathLike, got {type(path).__name__}")
         data = {"features": list(FEATURES), "classes": [c.name for c in CLASSES], "fitted_on": self.fitted_on,
                 "weights": {k: np.round(np.asarray(w, np.float64), 5).tolist() for k, w in self.weights.items()}}
-        Path(path).write_text(json.dumps(data, indent=1) + "\n")
+        return write_fitted_json(path, data, {"data": self.fitted_on, **(provenance or {})})
 
     @classmethod
     def fit(cls, samples: Iterable[tuple[np.ndarray, ...]], *, l2: float = 1e-3,

@@ -48,9 +48,10 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import pyopencl.array as cl_array
@@ -58,6 +59,7 @@ import pyopencl.array as cl_array
 from vmcl.cm.core import IMAGE_TYPES, ArrayLike, image_field, machine_for, result, vector_kernel
 from vmcl.early.filters import device_taps
 from vmcl.errors import InputTypeError, InputValueError
+from vmcl.fitted import check_fitted_json, write_fitted_json
 from vmcl.machine import Machine
 
 __all__ = [
@@ -122,12 +124,16 @@ class BoundaryModel:
         The logistic regression's bias, then one weight per feature (:func:`feature_names`).
     fitted_on : str
         What the model was fitted to.
+    record : mapping or None
+        The file's ``"fitted"`` record when it was loaded from a fitted file (:mod:`vmcl.fitted`: the data,
+        the code's hash, the date, the parameters' hash, checked when loaded); None otherwise.
     """
 
     scales: tuple[float, ...]
     centres: np.ndarray
     weights: np.ndarray
     fitted_on: str = ""
+    record: Mapping[str, Any] | None = None
 
     def __post_init__(self):
         if not isinstance(self.scales, tuple) or not self.scales or not all(
@@ -157,16 +163,39 @@ class BoundaryModel:
         path = MODEL_FILE if path is None else Path(path)
         try:
             data = json.loads(Path(path).read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+            raise InputValueError(f"{path}: cannot be read as a boundary model ({error})") from None
+        if not isinstance(data, dict):
+            raise InputValueError(f"{path}: cannot be read as a boundary model (not a JSON object)")
+        record = check_fitted_json(data, str(path))
+        try:
             return cls(tuple(float(s) for s in data["scales"]), np.asarray(data["centres"], np.float32),
-                       np.asarray(data["weights"], np.float32), str(data.get("fitted_on", "")))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as error:
+                       np.asarray(data["weights"], np.float32), str(data.get("fitted_on", "")), record)
+        except (KeyError, TypeError, ValueError) as error:
             raise InputValueError(f"{path}: cannot be read as a boundary model ({error})") from None
 
-    def save(self, path: str | os.PathLike) -> None:
+    def save(self, path: str | os.PathLike, provenance: Mapping[str, Any] | None = None) -> Path:
+        """Write the model as JSON with its ``"fitted"`` record (:func:`vmcl.fitted.write_fitted_json`): to a
+        new file or one vmcl fitted, never over another file.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+        provenance : mapping, optional
+            What the record says the model was fitted on and by what (e.g. ``data_sha256``,
+            ``code_sha256``); its ``data`` defaults to :attr:`fitted_on`.
+
+        Returns
+        -------
+        Path
+            The file written.
+        """
+        if path is None or not isinstance(path, (str, os.PathLike)):
+            raise InputTypeError(f"path must be a str or an os.PathLike, got {type(path).__name__}")
         data = {"scales": list(self.scales), "features": list(self.features), "fitted_on": self.fitted_on,
                 "centres": np.round(self.centres.astype(np.float64), 5).tolist(),
                 "weights": np.round(self.weights.astype(np.float64), 5).tolist()}
-        Path(path).write_text(json.dumps(data, indent=1) + "\n")
+        return write_fitted_json(path, data, {"data": self.fitted_on, **(provenance or {})})
 
 
 class BoundaryProbability(NamedTuple):
