@@ -1,7 +1,7 @@
 """Fit the integration stage's linear classifier (vmcl.labelling) and measure it on unseen scenes.
 
-Writes vmcl/labelling.json (the shipped weights) and benchmarks/results/labelling.md. Run from the
-repository root:
+Writes vmcl/labelling.json (the shipped weights, fitted as `vmcl fit labelling` fits them:
+vmcl.learn.labelling_fit) and benchmarks/results/labelling.md. Run from the repository root:
 
     python benchmarks/labelling.py
 
@@ -28,9 +28,9 @@ from pathlib import Path
 import numpy as np
 
 from vmcl import labelling, metrics, scenes
-from vmcl.fitted import code_sha256
 from vmcl.integrate import integrate
 from vmcl.labels import Label
+from vmcl.learn.labelling_fit import fit_labeller, labeller_provenance, rendered_runs
 from vmcl.pipeline import Config, VisionMachine
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -39,29 +39,20 @@ SHAPE = (256, 256)
 FIT_SEEDS, TEST_SEED = (0, 1), 2
 
 
-def runs(vm: VisionMachine) -> dict[tuple[str, bool, int], tuple]:
-    """(preset, specular, seed) -> (Result with rule labels, ground-truth labels, their tolerance) of every scene."""
-    out = {}
+def runs(vm: VisionMachine) -> dict[tuple[str, bool | str, int], tuple]:
+    """(preset, specular or "grey", seed) -> (Result with rule labels, ground-truth labels, their tolerance) of
+    every scene: vmcl.learn.labelling_fit's renderings of every seed, and each preset's seed-TEST_SEED view as
+    one grey image."""
+    out: dict = dict(rendered_runs(vm, seeds=FIT_SEEDS + (TEST_SEED,), shape=SHAPE))
     for name in scenes.PRESETS:
-        for specular in (False, True):
-            for seed in FIT_SEEDS + (TEST_SEED,):
-                scene = scenes.render(scenes.preset(name, shape=SHAPE, specular=specular), seed=seed, noise=0.01)
-                out[name, specular, seed] = (vm.run(scene.left, scene.right, scene.left_next), scene.labels,
-                                             scene.tolerance)
-                if not specular and seed == TEST_SEED:
-                    grey = np.ascontiguousarray(scene.left @ np.array([0.2125, 0.7154, 0.0721], np.float32))
-                    out[name, "grey", seed] = (vm.run(grey), scene.labels, scene.tolerance)
+        scene = scenes.render(scenes.preset(name, shape=SHAPE), seed=TEST_SEED, noise=0.01)
+        grey = np.ascontiguousarray(scene.left @ np.array([0.2125, 0.7154, 0.0721], np.float32))
+        out[name, "grey", TEST_SEED] = (vm.run(grey), scene.labels, scene.tolerance)
     return out
 
 
 def fields(result) -> dict:
     return {"disparity": result.disparity, "flow": result.flow, "hue": result.restored.get("colour")}
-
-
-def fit(samples, machine, fitted_on: str, input_sets=None) -> labelling.LinearLabeller:
-    return labelling.LinearLabeller.fit(
-        ((labelling.features(r.support, r.image, machine=machine, **fields(r)), r.support, truth, tolerance)
-         for r, truth, tolerance in samples), fitted_on=fitted_on, input_sets=input_sets)
 
 
 def scores(predicted: np.ndarray, truth: np.ndarray, tolerance: np.ndarray
@@ -123,16 +114,13 @@ def main() -> None:
     start = time.perf_counter()
     data = runs(vm)
     took = time.perf_counter() - start
-    fitted_on = (f"vmcl.scenes presets {', '.join(scenes.PRESETS)} at {SHAPE[0]} x {SHAPE[1]}, with and without "
-                 f"highlights, noise 0.01, seeds {FIT_SEEDS}: benchmarks/labelling.py")
+    fitted_on, provenance = labeller_provenance(seeds=FIT_SEEDS, shape=SHAPE)
     start = time.perf_counter()
     colour_runs = {k: v for k, v in data.items() if k[1] != "grey"}
-    shipped = fit([v for k, v in colour_runs.items() if k[2] in FIT_SEEDS], vm.machine, fitted_on)
+    shipped = fit_labeller([v for k, v in colour_runs.items() if k[2] in FIT_SEEDS], fitted_on=fitted_on,
+                           machine=vm.machine)
     fit_s = time.perf_counter() - start
-    # The examples are rendered by vmcl.scenes from the seeds fitted_on names: the renderer's code is their data.
-    renderer = sorted(Path(scenes.__file__).parent.glob("*.py"))
-    shipped.save(labelling.WEIGHTS_FILE, {"data_sha256": code_sha256(*renderer), "code": "benchmarks/labelling.py",
-                                          "code_sha256": code_sha256(Path(__file__), labelling)})
+    shipped.save(labelling.WEIGHTS_FILE, provenance)
     out = ["# Labelling: the linear classifier of the integration stage", "",
            (f"{platform.node()}, {time.strftime('%Y-%m-%d')}, device: {vm.machine.device.name}. "
            "Written by benchmarks/labelling.py, which also fits vmcl/labelling.json."), "",
@@ -151,8 +139,8 @@ def main() -> None:
     out += ["", f"## Leave one preset out: fitted to the other presets (seeds {FIT_SEEDS}), on seed {TEST_SEED}", ""]
     held_rows = []
     for name in scenes.PRESETS:
-        others = fit([v for k, v in colour_runs.items() if k[0] != name and k[2] in FIT_SEEDS], vm.machine, "",
-                     input_sets=[labelling.INPUTS])
+        others = fit_labeller([v for k, v in colour_runs.items() if k[0] != name and k[2] in FIT_SEEDS],
+                              input_sets=[labelling.INPUTS], machine=vm.machine)
         held_rows += table([(k, v) for k, v in colour_runs.items() if k[0] == name and k[2] == TEST_SEED], others,
                            vm.machine)[2:]
     out += header() + held_rows

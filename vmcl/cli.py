@@ -403,6 +403,10 @@ def _fit(args) -> int:
     from vmcl.learn.pseudolikelihood import PARAMETERS
     from vmcl.pipeline import VisionMachine
 
+    if args.cue == "labelling":
+        return _fit_labelling(args)
+    if not args.data:
+        raise BadInput(f"vmcl fit {args.cue} needs --data: a folder of examples with ground truth")
     for root in args.data:
         if not Path(root).is_dir():
             raise BadInput(f"--data {root}: no such folder")
@@ -434,6 +438,40 @@ def _fit(args) -> int:
                  f"{fit.sites['lines']} line sites, {fit.iterations} Newton steps"
                  f"{'' if fit.converged else ' (not converged)'}", rows)
     print(f"Wrote {written}: [mrf.{args.cue}] at T = {fit.temperature:.4g}; load it with --config {written}")
+    return 0
+
+
+def _fit_labelling(args) -> int:
+    """``vmcl fit labelling``: the linear classifier fitted to rendered scenes, written as JSON."""
+    import dataclasses
+
+    from vmcl.fitted import check_writable
+    from vmcl.learn.labelling_fit import fit_labeller, labeller_provenance, rendered_runs
+    from vmcl.pipeline import VisionMachine
+
+    if args.data:
+        raise BadInput("vmcl fit labelling takes no --data: it renders its examples (vmcl.scenes presets), "
+                       "whose labels are exact")
+    out = Path(args.out)
+    if out.suffix != ".json":
+        raise BadInput(f"--out {out}: the labelling weights are a JSON file; name it *.json")
+    if args.size < 64:
+        raise BadInput(f"--size {args.size}: the renderings must be at least 64 px")
+    if not args.seeds or min(args.seeds) < 0:
+        raise BadInput("--seeds: one or more noise seeds >= 0")
+    check_writable(out)  # before the long fit, not after it
+    config = _config(args.config)
+    # The rule labels: the classifier is fitted to the candidates, not to an earlier classifier's labels.
+    vm = VisionMachine(dataclasses.replace(config, labels=dataclasses.replace(config.labels, method="rule")))
+    shape, seeds = (args.size, args.size), tuple(args.seeds)
+    print(f"Running the machine on the rendered presets at {args.size} x {args.size}, seeds {seeds} ...",
+          file=sys.stderr)
+    runs = rendered_runs(vm, seeds=seeds, shape=shape)
+    fitted_on, provenance = labeller_provenance(seeds=seeds, shape=shape)
+    labeller = fit_labeller(runs.values(), fitted_on=fitted_on, machine=vm.machine)
+    written = labeller.save(out, provenance)
+    print(f"Wrote {written}: weights for {len(labeller.weights)} sets of inputs, fitted to {len(runs)} renderings; "
+          f"use it with [labels] weights = \"{written}\"")
     return 0
 
 
@@ -663,13 +701,20 @@ def parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--workers", type=int, default=1, help="edges: processes for the matching")
 
     fit = commands.add_parser("fit", parents=[quiet],
-                              help="learn a cue's MRF parameters from a data set with ground truth")
-    fit.add_argument("cue", choices=("stereo", "motion", "colour", "texture"))
-    fit.add_argument("--data", required=True, action="append",
+                              help="learn a cue's MRF parameters from a data set with ground truth, or the "
+                                   "labelling classifier's weights from rendered scenes")
+    fit.add_argument("cue", choices=("stereo", "motion", "colour", "texture", "labelling"))
+    fit.add_argument("--data", action="append", default=[],
                      help="a folder of examples with ground truth, searched as `vmcl eval` searches it (stereo: "
                           "Middlebury-layout scenes; motion: frames with flow; colour, texture: a BSDS-layout "
-                          "folder of training images, their first annotator's segmentation); repeatable")
-    fit.add_argument("--out", required=True, help="the TOML file to write: new, or one `vmcl fit` wrote")
+                          "folder of training images, their first annotator's segmentation); repeatable; "
+                          "needed by every cue, not by labelling (it renders its own)")
+    fit.add_argument("--out", required=True, help="the file to write (a cue: TOML; labelling: JSON): new, or one "
+                                                  "`vmcl fit` wrote")
+    fit.add_argument("--seeds", type=int, nargs="+", default=[0, 1],
+                     help="labelling: the renderings' noise seeds (default 0 1, the shipped fit's)")
+    fit.add_argument("--size", type=int, default=256,
+                     help="labelling: the renderings' size in px (default 256, the shipped fit's)")
     fit.add_argument("--config", help="TOML configuration of the machine whose measurements are fitted")
     fit.add_argument("--jump", type=float, default=1.0,
                      help="a true discontinuity: neighbours more than this many pixels apart (default 1)")

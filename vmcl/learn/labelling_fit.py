@@ -1,0 +1,127 @@
+"""Fit the integration stage's linear classifier to rendered scenes: what ``vmcl fit labelling`` runs.
+
+Seed section "Integration via labeling with a linear classifier": the network's weights are learned from
+examples whose labels are known. :mod:`vmcl.scenes` renders each preset with its exact discontinuities
+and their physical causes; the machine runs on every rendering with the rule labels (so its inputs do not
+depend on earlier weights), and :meth:`vmcl.labelling.LinearLabeller.fit` fits one weight matrix per set
+of inputs to the candidates' features against the scene's labels, within each pixel's tolerance
+(:attr:`vmcl.scenes.Scene.tolerance`). The shipped weights (``vmcl/labelling.json``) are this fit at its
+defaults (benchmarks/labelling.py writes them and measures them on seeds and presets they never saw).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from vmcl import labelling, scenes
+from vmcl.cm.core import check_int
+from vmcl.errors import InputTypeError, InputValueError
+from vmcl.fitted import code_sha256
+
+__all__ = ["DEFAULT_SEEDS", "DEFAULT_SHAPE", "RenderedRun", "fit_labeller", "labeller_provenance", "rendered_runs"]
+
+DEFAULT_SEEDS = (0, 1)
+"""The noise seeds of the shipped fit (a seed changes the textures' random elements and the noise)."""
+DEFAULT_SHAPE = (256, 256)
+
+RenderedRun = tuple[Any, np.ndarray, np.ndarray]
+"""(the machine's Result with the rule labels, the scene's true labels, their per-pixel tolerance)."""
+
+
+def rendered_runs(vm: Any, *, presets: Sequence[str] = scenes.PRESETS, seeds: Sequence[int] = DEFAULT_SEEDS,
+                  shape: tuple[int, int] = DEFAULT_SHAPE,
+                  noise: float = 0.01) -> dict[tuple[str, bool, int], RenderedRun]:
+    """The machine's runs on every preset, with and without highlights, for every seed.
+
+    Parameters
+    ----------
+    vm : vmcl.pipeline.VisionMachine
+        Its Config's ``labels.method`` must be "rule": the classifier's inputs must not depend on weights.
+    presets : sequence of str
+        Names of :data:`vmcl.scenes.PRESETS`.
+    seeds : sequence of int
+    shape : (int, int)
+        Each rendering's size, at least 64 x 64.
+    noise : float
+        The renderings' noise.
+
+    Returns
+    -------
+    dict
+        (preset, specular, seed) -> :data:`RenderedRun`.
+    """
+    from vmcl.pipeline import VisionMachine
+
+    if not isinstance(vm, VisionMachine):
+        raise InputTypeError(f"vm must be a vmcl.pipeline.VisionMachine, got {type(vm).__name__}")
+    if vm.config.labels.method != "rule":
+        raise InputValueError("vm must label by rule (labels.method = \"rule\"): the classifier is fitted to "
+                              "the candidates, not to an earlier classifier's labels")
+    presets = _names(presets)
+    seeds = [check_int(seed, "seeds", minimum=0) for seed in _sequence(seeds, "seeds")]
+    if not isinstance(shape, tuple) or len(shape) != 2:
+        raise InputTypeError(f"shape must be a (height, width) tuple, got {shape!r}")
+    height, width = (check_int(n, "shape", minimum=64) for n in shape)
+    found = {}
+    for name in presets:
+        for specular in (False, True):
+            world = scenes.preset(name, shape=(height, width), specular=specular)
+            for seed in seeds:
+                scene = scenes.render(world, seed=seed, noise=noise)
+                found[name, specular, seed] = (vm.run(scene.left, scene.right, scene.left_next), scene.labels,
+                                               scene.tolerance)
+    return found
+
+
+def fit_labeller(runs: Iterable[RenderedRun], *, fitted_on: str = "",
+                 input_sets: Iterable[Iterable[str]] | None = None, machine: Any = None) -> labelling.LinearLabeller:
+    """The linear classifier fitted to ``runs`` (:meth:`vmcl.labelling.LinearLabeller.fit`): each run's
+    candidates' features (:func:`vmcl.labelling.features`, from the run's fields) against its labels.
+
+    Parameters
+    ----------
+    runs : iterable of RenderedRun
+    fitted_on : str
+        What the weights will say they were fitted to.
+    input_sets : iterable of iterables of str, optional
+        The sets of inputs to fit weights for (default every one).
+    machine : vmcl.Machine, optional
+    """
+    def samples():
+        for result, truth, tolerance in runs:
+            fields = {"disparity": result.disparity, "flow": result.flow, "hue": result.restored.get("colour")}
+            yield (labelling.features(result.support, result.image, machine=machine, **fields), result.support,
+                   truth, tolerance)
+
+    return labelling.LinearLabeller.fit(samples(), fitted_on=fitted_on, input_sets=input_sets)
+
+
+def labeller_provenance(*, presets: Sequence[str] = scenes.PRESETS, seeds: Sequence[int] = DEFAULT_SEEDS,
+                        shape: tuple[int, int] = DEFAULT_SHAPE, noise: float = 0.01) -> tuple[str, dict[str, Any]]:
+    """What a labeller fitted by :func:`rendered_runs` and :func:`fit_labeller` was fitted on: the text of
+    its ``fitted_on`` and its ``"fitted"`` record's entries (the renderer's code, which is the examples'
+    data, and the fitting code, hashed)."""
+    fitted_on = (f"vmcl.scenes presets {', '.join(_names(presets))} at {shape[0]} x {shape[1]}, with and without "
+                 f"highlights, noise {noise:g}, seeds {tuple(int(s) for s in seeds)}")
+    renderer = sorted(Path(scenes.__file__).parent.glob("*.py"))
+    return fitted_on, {"data_sha256": code_sha256(*renderer), "code": "vmcl.learn.labelling_fit",
+                       "code_sha256": code_sha256(Path(__file__), labelling)}
+
+
+def _sequence(values: Any, name: str) -> list:
+    if isinstance(values, (str, bytes)) or not isinstance(values, Sequence) or not values:
+        raise InputTypeError(f"{name} must be a non-empty sequence, got {values!r}")
+    return list(values)
+
+
+def _names(presets: Any) -> list[str]:
+    names = _sequence(presets, "presets")
+    for name in names:
+        if name not in scenes.PRESETS:
+            raise InputValueError(f"presets: {name!r} is not a vmcl.scenes preset; they are "
+                                  f"{', '.join(scenes.PRESETS)}")
+    return names
