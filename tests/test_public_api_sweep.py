@@ -257,6 +257,15 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.learn:estimate_noise", data=IMG, confidence=None, edges=None, kind="smooth", model=None, sigma=None,
        iterations=2, burn_in=0, sweeps=1, seed=0,
        kinds={"data": _A, "confidence": _OA, "kind": _C, "model": _O, "sigma": _ON, "burn_in": _I, "sweeps": _I, "seed": _I, "machine": _M}),
+    _e("vmcl.learn:fit_restoration", examples=[make("example")], start=make("settings"), kind="smooth",
+       candidates_only=False, method="icm", parameters=["alpha", "end"], weights=None, tolerance=1.0, evaluations=3,
+       step_floor=0.1,
+       kinds={"examples": _O, "start": _O, "kind": _C, "candidates_only": _B, "method": _C, "parameters": _O,
+              "weights": _O, "tolerance": _N, "evaluations": _I, "step_floor": _N, "machine": _M}),
+    _e("vmcl.learn:restoration_error", field=IMG, line_h=LINE_H, line_v=LINE_V, example=make("example"),
+       tolerance=1.0, kinds={"field": _A, "line_h": _A, "line_v": _A, "example": _O, "tolerance": _N}),
+    _e("vmcl.learn.labelling_fit:labeller_provenance", presets=["blocks", "cues"], seeds=[0, 1], shape=tup(64, 80),
+       noise=0.01, kinds={"presets": _O, "seeds": _O, "shape": _T, "noise": _N}),
     _e("vmcl.learn:scan_temperature", data=IMG, kind="smooth", model=None, temperatures=[0.5, 1.0, 2.0],
        sweeps=1, lines=True, margin=1.5, seed=0,
        kinds={"data": _A, "kind": _C, "model": _O, "sweeps": _I, "lines": _B, "margin": _N,
@@ -626,11 +635,15 @@ EXEMPT = {
     "vmcl.distributed:LocalClusterSize", "vmcl.distributed:worker_machine", "vmcl.distributed:ZarrStore",
     # Records of vmcl.learn, checked when a fit reads them (tests/test_learn_pseudolikelihood.py).
     "vmcl.learn:Example", "vmcl.learn:PseudolikelihoodFit", "vmcl.learn:CrossValidation", "vmcl.learn:NoiseEstimate",
-    "vmcl.learn:TemperatureScan", "vmcl.learn.cue_fit:CueFit", "vmcl.pipeline:CueData",
+    "vmcl.learn:TemperatureScan", "vmcl.learn:RestorationFit", "vmcl.learn.cue_fit:CueFit", "vmcl.pipeline:CueData",
+    # Run the whole machine on rendered scenes (seconds each): tests/test_learn_labelling_fit.py runs them and
+    # their refusals.
+    "vmcl.learn.labelling_fit:rendered_runs", "vmcl.learn.labelling_fit:fit_labeller",
     # Need data set folders with ground truth: tests/test_learn_fit.py runs them and their refusals.
     "vmcl.learn.cue_fit:fit_cue", "vmcl.learn.cue_fit:cue_examples",
     # Hash and write what vmcl itself made (fit_cue's tables, the files it read); tests/test_learn_fit.py.
     "vmcl.fitted:parameters_sha256", "vmcl.fitted:files_sha256", "vmcl.fitted:code_sha256", "vmcl.fitted:write_fitted",
+    "vmcl.fitted:fitted_record", "vmcl.fitted:write_fitted_json", "vmcl.fitted:check_fitted_json",
     # Records of vmcl.group and the scenes it is tested on, made by the calls above.
     "vmcl.group:Curve", "vmcl.group:Curves", "vmcl.group:Junctions", "vmcl.group:Grouping",
     "vmcl.group:StructuralSaliency", "vmcl.scenes:ClutterDisplay", "vmcl.scenes:Junction", "vmcl.scenes:OcclusionScene",
@@ -650,7 +663,7 @@ PUBLIC_MODULES = (
     "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pictures", "vmcl.pipeline", "vmcl.result", "vmcl.machine",
     "vmcl.stereo_evaluation", "vmcl.distributed", "vmcl.boundary_evaluation", "vmcl.flow_evaluation",
     "vmcl.frame_sources", "vmcl.sequence_output", "vmcl.temporal", "vmcl.learn", "vmcl.learn.examples",
-    "vmcl.learn.cue_fit", "vmcl.fitted", "vmcl.group", "vmcl.recognize",
+    "vmcl.learn.cue_fit", "vmcl.learn.labelling_fit", "vmcl.fitted", "vmcl.group", "vmcl.recognize",
 )
 
 

@@ -127,7 +127,7 @@ def fitted_record(parameters: Mapping[str, Any], provenance: Mapping[str, Any]) 
             **provenance, "parameters_sha256": parameters_sha256(parameters)}
 
 
-def write_fitted_json(path: str | Path, parameters: Mapping[str, Any], provenance: Mapping[str, Any]) -> Path:
+def write_fitted_json(path: str | os.PathLike, parameters: Mapping[str, Any], provenance: Mapping[str, Any]) -> Path:
     """Write a fitted JSON artefact (the labelling weights, a boundary model): ``parameters`` and a
     ``"fitted"`` object (:func:`fitted_record`), replacing only a file vmcl fitted.
 
@@ -188,7 +188,7 @@ def _replace(target: Path, text: str) -> None:
     os.replace(temporary, target)
 
 
-def check_writable(path: str | Path) -> Path:
+def check_writable(path: str | os.PathLike) -> Path:
     """``path`` as a Path, if :func:`write_fitted` may write it: a new file or one ``vmcl fit`` wrote.
 
     Raises

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from vmcl import labelling, scenes
-from vmcl.cm.core import check_int
+from vmcl.cm.core import check_int, check_real
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.fitted import code_sha256
 
@@ -61,11 +61,8 @@ def rendered_runs(vm: Any, *, presets: Sequence[str] = scenes.PRESETS, seeds: Se
     if vm.config.labels.method != "rule":
         raise InputValueError("vm must label by rule (labels.method = \"rule\"): the classifier is fitted to "
                               "the candidates, not to an earlier classifier's labels")
-    presets = _names(presets)
-    seeds = [check_int(seed, "seeds", minimum=0) for seed in _sequence(seeds, "seeds")]
-    if not isinstance(shape, tuple) or len(shape) != 2:
-        raise InputTypeError(f"shape must be a (height, width) tuple, got {shape!r}")
-    height, width = (check_int(n, "shape", minimum=64) for n in shape)
+    presets, seeds, (height, width) = _names(presets), _seeds(seeds), _shape(shape)
+    check_real(noise, "noise", minimum=0)
     found = {}
     for name in presets:
         for specular in (False, True):
@@ -105,8 +102,10 @@ def labeller_provenance(*, presets: Sequence[str] = scenes.PRESETS, seeds: Seque
     """What a labeller fitted by :func:`rendered_runs` and :func:`fit_labeller` was fitted on: the text of
     its ``fitted_on`` and its ``"fitted"`` record's entries (the renderer's code, which is the examples'
     data, and the fitting code, hashed)."""
-    fitted_on = (f"vmcl.scenes presets {', '.join(_names(presets))} at {shape[0]} x {shape[1]}, with and without "
-                 f"highlights, noise {noise:g}, seeds {tuple(int(s) for s in seeds)}")
+    height, width = _shape(shape)
+    check_real(noise, "noise", minimum=0)
+    fitted_on = (f"vmcl.scenes presets {', '.join(_names(presets))} at {height} x {width}, with and without "
+                 f"highlights, noise {noise:g}, seeds {tuple(_seeds(seeds))}")
     renderer = sorted(Path(scenes.__file__).parent.glob("*.py"))
     return fitted_on, {"data_sha256": code_sha256(*renderer), "code": "vmcl.learn.labelling_fit",
                        "code_sha256": code_sha256(Path(__file__), labelling)}
@@ -116,6 +115,17 @@ def _sequence(values: Any, name: str) -> list:
     if isinstance(values, (str, bytes)) or not isinstance(values, Sequence) or not values:
         raise InputTypeError(f"{name} must be a non-empty sequence, got {values!r}")
     return list(values)
+
+
+def _seeds(seeds: Any) -> list[int]:
+    return [check_int(seed, "seeds", minimum=0) for seed in _sequence(seeds, "seeds")]
+
+
+def _shape(shape: Any) -> tuple[int, int]:
+    if not isinstance(shape, tuple) or len(shape) != 2:
+        raise InputTypeError(f"shape must be a (height, width) tuple, got {shape!r}")
+    height, width = (check_int(n, "shape", minimum=64) for n in shape)
+    return height, width
 
 
 def _names(presets: Any) -> list[str]:

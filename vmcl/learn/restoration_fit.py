@@ -121,7 +121,14 @@ def restoration_error(field: Any, line_h: Any, line_v: Any, example: Example, *,
         raise InputValueError("example has no valid pixel: nothing to score")
     distance = np.sqrt(np.sum((np.nan_to_num(found) - np.nan_to_num(desired)).reshape(*shape, -1) ** 2, axis=2))
     wrong = int(np.count_nonzero(valid & ~(distance <= tolerance)))
-    restored_lines = boundary_map(np.asarray(to_host(line_h)) != 0, np.asarray(to_host(line_v)) != 0)
+    lines = []
+    for name, value, want in (("line_h", line_h, (shape[0], shape[1] - 1)), ("line_v", line_v, (shape[0] - 1, shape[1]))):
+        host = np.asarray(to_host(value)) if isinstance(value, np.ndarray) or hasattr(value, "get") else None
+        if host is None or host.shape != want or host.dtype.kind not in "biuf":
+            raise InputValueError(f"{name} must be a real or boolean array of shape {want} (the field's line sites), "
+                                  f"got {type(value).__name__} {getattr(host, 'dtype', '')} {getattr(host, 'shape', '')}")
+        lines.append(host != 0)
+    restored_lines = boundary_map(*lines)
     if example.line_h is None:
         desired_lines = np.zeros(shape, bool)
     else:
@@ -178,6 +185,8 @@ def fit_restoration(examples: Sequence[Example], start: Settings, *, kind: str =
     machine = machine_for(machine)
     if not isinstance(start, Settings):
         raise InputTypeError(f"start must be a vmcl.mrf.Settings, got {type(start).__name__}")
+    if isinstance(examples, (str, bytes)) or not isinstance(examples, Sequence):
+        raise InputTypeError(f"examples must be a sequence of vmcl.learn.Example, got {type(examples).__name__}")
     examples = list(examples)
     if not examples:
         raise InputValueError("examples is empty: nothing to fit")
@@ -189,11 +198,13 @@ def fit_restoration(examples: Sequence[Example], start: Settings, *, kind: str =
     check_choice(kind, "kind", KINDS)
     check_bool(candidates_only, "candidates_only")
     check_choice(method, "method", SOLVERS)
+    if isinstance(parameters, (str, bytes)) or not isinstance(parameters, Sequence):
+        raise InputTypeError(f"parameters must be a sequence of names, got {type(parameters).__name__}")
     parameters = tuple(parameters)
     if not parameters:
         raise InputValueError("parameters is empty: nothing to search")
     for name in parameters:
-        check_choice(name, "a parameter", SEARCHABLE)
+        check_choice(name, "parameters", SEARCHABLE)
     share = _weights(weights, len(examples))
     check_real(tolerance, "tolerance", above=0)
     check_int(evaluations, "evaluations", minimum=1)
@@ -242,7 +253,10 @@ def fit_restoration(examples: Sequence[Example], start: Settings, *, kind: str =
 def _weights(weights: Sequence[float] | None, n: int) -> np.ndarray:
     if weights is None:
         return np.full(n, 1.0 / n)
-    w = np.asarray(weights, np.float64)
+    try:
+        w = np.asarray(weights, np.float64)
+    except (TypeError, ValueError):
+        w = np.full(0, np.nan)
     if w.shape != (n,) or not np.all(np.isfinite(w)) or np.any(w < 0) or not w.sum() > 0:
         raise InputValueError(f"weights must be {n} finite numbers >= 0, one per example, not all 0")
     return w / w.sum()
@@ -250,7 +264,7 @@ def _weights(weights: Sequence[float] | None, n: int) -> np.ndarray:
 
 def _uploaded(example: Example, machine: Machine) -> tuple[Any, Any, Any]:
     data = machine.to_device(host_field(example.data, "example.data", ndims=(2, 3)).astype(np.float32))
-    shape = data.shape[:2]
+    shape = (int(data.shape[0]), int(data.shape[1]))
     confidence = None if example.confidence is None else machine.to_device(
         host_field(example.confidence, "example.confidence", ndims=(2,)).astype(np.float32))
     edges = None if example.edges is None else device_pixels(example.edges, "example.edges", shape, np.uint8,
