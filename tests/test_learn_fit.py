@@ -51,6 +51,20 @@ def test_fit_writes_a_config_that_loads_and_runs(stereo_data, tmp_path, capsys):
     assert "the fitted data weight is 0" in capsys.readouterr().err  # planar truth: see fit_cue
 
 
+def test_fit_refined_by_the_restorations_error(stereo_data, tmp_path, capsys):
+    """--refine: the pseudolikelihood fit, then the restorations' error on the same examples, which ends no
+    higher than it starts; the file says so and loads."""
+    out = tmp_path / "refined.toml"
+    assert main(["fit", "stereo", "--data", str(stereo_data), "--out", str(out), "--refine", "-q"]) == 0
+    assert "Refined by the restorations' error" in capsys.readouterr().out
+    values = __import__("vmcl.pipeline", fromlist=["tomllib"]).tomllib.loads(out.read_text())
+    before, after = values["fitted"]["restoration_error"]
+    assert after <= before and "fit_restoration" in values["fitted"]["method"]
+    Config.from_toml(out)
+    assert main(["fit", "colour", "--data", str(stereo_data), "--out", str(tmp_path / "c.toml"), "--refine", "-q"]) == 2
+    assert "refine fits the piecewise smooth cues" in capsys.readouterr().err
+
+
 def test_an_edited_fitted_file_is_refused(stereo_data, tmp_path, capsys):
     out = tmp_path / "stereo.toml"
     assert main(["fit", "stereo", "--data", str(stereo_data), "--out", str(out), "-q"]) == 0

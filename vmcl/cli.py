@@ -428,7 +428,7 @@ def _fit(args) -> int:
             raise BadInput(f"--fix {item}: {value!r} is not a number") from None
     vm = VisionMachine(_config(args.config))
     print(f"Fitting the {args.cue} MRF to the examples under {', '.join(args.data)} ...", file=sys.stderr)
-    found = fit_cue(args.cue, args.data, vm=vm, jump=args.jump, fixed=fixed)
+    found = fit_cue(args.cue, args.data, vm=vm, jump=args.jump, fixed=fixed, refine=args.refine)
     written = write_fitted(out, found.tables, found.provenance)
     fit = found.fit
     rows: list[tuple[object, ...]] = [("parameter", "natural (per T)", "standard error", "fitted")]
@@ -437,6 +437,10 @@ def _fit(args) -> int:
     _print_table(f"{args.cue}: {len(found.provenance['data'])} example(s), {fit.sites['pixels']} pixel and "
                  f"{fit.sites['lines']} line sites, {fit.iterations} Newton steps"
                  f"{'' if fit.converged else ' (not converged)'}", rows)
+    if args.refine:
+        before, after = found.provenance["restoration_error"]
+        print(f"Refined by the restorations' error: {before:.4f} -> {after:.4f} of the examples' pixels wrong "
+              "(values, missed and false lines)")
     print(f"Wrote {written}: [mrf.{args.cue}] at T = {fit.temperature:.4g}; load it with --config {written}")
     return 0
 
@@ -711,6 +715,9 @@ def parser() -> argparse.ArgumentParser:
                           "needed by every cue, not by labelling (it renders its own)")
     fit.add_argument("--out", required=True, help="the file to write (a cue: TOML; labelling: JSON): new, or one "
                                                   "`vmcl fit` wrote")
+    fit.add_argument("--refine", action="store_true",
+                     help="stereo, motion: then move the fitted parameters to lower the errors of the machine's "
+                          "own restorations of the examples (vmcl.learn.fit_restoration)")
     fit.add_argument("--seeds", type=int, nargs="+", default=[0, 1],
                      help="labelling: the renderings' noise seeds (default 0 1, the shipped fit's)")
     fit.add_argument("--size", type=int, default=256,

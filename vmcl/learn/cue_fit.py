@@ -17,13 +17,14 @@ from typing import Any
 import numpy as np
 
 from vmcl import datasets
-from vmcl.cm.core import check_choice, check_real
+from vmcl.cm.core import check_bool, check_choice, check_real
 from vmcl.cues import registered
 from vmcl.errors import InputValueError
 from vmcl.fitted import code_sha256, files_sha256
 from vmcl.learn import examples as learn_examples
-from vmcl.learn import pseudolikelihood
+from vmcl.learn import pseudolikelihood, restoration_fit
 from vmcl.learn.pseudolikelihood import PRIOR_PARAMETERS, Example, PseudolikelihoodFit, fit_pseudolikelihood
+from vmcl.learn.restoration_fit import fit_restoration
 from vmcl.machine import Machine
 
 __all__ = ["FITTABLE_CUES", "CueFit", "cue_examples", "fit_cue"]
@@ -128,9 +129,10 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
 
 
 def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: float = learn_examples.DEFAULT_JUMP,
-            fixed: Mapping[str, float] | None = None, ridge: float = 1e-6,
+            fixed: Mapping[str, float] | None = None, ridge: float = 1e-6, refine: bool = False,
             machine: Machine | None = None) -> CueFit:
-    """Fit ``cue``'s MRF by maximum pseudolikelihood to every example below ``roots``.
+    """Fit ``cue``'s MRF by maximum pseudolikelihood to every example below ``roots`` (and optionally then
+    to its restorations' errors).
 
     Parameters
     ----------
@@ -149,6 +151,11 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
         and takes the data weight to 0; held, the data weight and the line potentials are fitted in the
         energy's own units. ``{}`` fits everything (the default of the piecewise constant cues, whose
         Potts cost kappa is a parameter of the energy at T = 1).
+    refine : bool
+        Then move the fitted parameters to lower the errors of the machine's own restorations of the
+        examples (:func:`vmcl.learn.fit_restoration`: pixels more than ``jump`` off, missed and false
+        lines; the cue's mean-field schedule). Only for the piecewise smooth cues (stereo, motion), whose
+        truth has a scale in pixels.
     machine : vmcl.Machine, optional
 
     Returns
@@ -161,6 +168,9 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
     check_real(jump, "jump", above=0)
     vm = VisionMachine(machine=machine) if vm is None else vm
     module = next(c for c in registered() if c.name == cue)
+    if check_bool(refine, "refine") and module.kind != "smooth":
+        raise InputValueError(f"refine: the {cue} cue's truth is a segmentation, with no scale in pixels to count "
+                              "a restoration's wrong values by; refine fits the piecewise smooth cues (stereo, motion)")
     fixed = ({"coupling": 1.0} if module.kind == "smooth" else {}) if fixed is None else fixed
     examples, names, files = cue_examples(cue, roots, vm, jump=jump)
     base = vm.config.mrf.settings(cue, module.settings).model
@@ -168,16 +178,26 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
                                edge_radius=base.edge_radius if module.candidates_only else None,
                                machine=vm.machine)
     model = fit.model(base)
+    error = None
+    if refine:
+        settings = vm.config.mrf.settings(cue, module.settings)
+        start = settings.override({"alpha": model.alpha, "beta": model.beta, "edge_gain": model.edge_gain,
+                                   "prior": model.prior})
+        refined = fit_restoration(examples, start, kind=module.kind, candidates_only=module.candidates_only,
+                                  tolerance=jump, machine=vm.machine)
+        model, error = refined.settings.model, (refined.start_error, refined.error, refined.evaluations)
     table = {"alpha": model.alpha, "beta": model.beta, "edge_gain": model.edge_gain,
              "prior": {name: getattr(model.prior, name) for name in PRIOR_PARAMETERS}}
     if module.kind == "constant":
         table["kappa"] = model.kappa
     provenance = {
         "what": f"mrf.{cue}",
-        "method": "maximum pseudolikelihood (vmcl.learn.fit_pseudolikelihood)",
+        "method": "maximum pseudolikelihood (vmcl.learn.fit_pseudolikelihood)" + (
+            ", then the restorations' error (vmcl.learn.fit_restoration)" if refine else ""),
         "data": names,
         "data_sha256": files_sha256(files),
-        "code_sha256": code_sha256(pseudolikelihood, learn_examples, _kernel_path()),
+        "code_sha256": code_sha256(pseudolikelihood, learn_examples, _kernel_path(),
+                                   *((restoration_fit,) if refine else ())),
         "jump": float(jump) if module.kind == "smooth" else "segment boundaries (first annotator)",
         "ridge": float(ridge),
         "fixed": sorted(fixed),
@@ -185,6 +205,9 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
         "temperature": fit.temperature,
         "converged": fit.converged,
     }
+    if error is not None:
+        provenance["restoration_error"] = [float(error[0]), float(error[1])]
+        provenance["restoration_settings_scored"] = int(error[2])
     return CueFit(cue, fit, {"mrf": {cue: {k: _plain(v) for k, v in table.items()}}}, provenance)
 
 
