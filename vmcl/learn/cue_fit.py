@@ -190,7 +190,7 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
              "prior": {name: getattr(model.prior, name) for name in PRIOR_PARAMETERS}}
     if module.kind == "constant":
         table["kappa"] = model.kappa
-    provenance = {
+    provenance: dict[str, Any] = {
         "what": f"mrf.{cue}",
         "method": "maximum pseudolikelihood (vmcl.learn.fit_pseudolikelihood)" + (
             ", then the restorations' error (vmcl.learn.fit_restoration)" if refine else ""),
