@@ -30,7 +30,7 @@ import numpy as np
 from vmcl import labelling, metrics, scenes
 from vmcl.integrate import integrate
 from vmcl.labels import Label
-from vmcl.learn.labelling_fit import fit_labeller, labeller_provenance, rendered_runs
+from vmcl.learn.labelling_fit import fit_labeller, labeller_provenance, labelling_fields, rendered_runs
 from vmcl.pipeline import Config, VisionMachine
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -49,10 +49,6 @@ def runs(vm: VisionMachine) -> dict[tuple[str, bool | str, int], tuple]:
         grey = np.ascontiguousarray(scene.left @ np.array([0.2125, 0.7154, 0.0721], np.float32))
         out[name, "grey", TEST_SEED] = (vm.run(grey), scene.labels, scene.tolerance)
     return out
-
-
-def fields(result) -> dict:
-    return {"disparity": result.disparity, "flow": result.flow, "hue": result.restored.get("colour")}
 
 
 def scores(predicted: np.ndarray, truth: np.ndarray, tolerance: np.ndarray
@@ -78,7 +74,7 @@ def header() -> list[str]:
 def table(rows_in, labeller, machine) -> list[str]:
     lines = header()
     for key, (r, truth, tolerance) in rows_in:
-        predicted = labelling.label(r.support, r.image, labeller=labeller, machine=machine, **fields(r))
+        predicted = labelling.label(r.support, r.image, labeller=labeller, machine=machine, **labelling_fields(r))
         f, per = scores(predicted, truth, tolerance)
         f_rule, _ = scores(r.labels, truth, tolerance)
         name = key[0] + {True: " (specular)", False: "", "grey": " (grey, one image)"}[key[1]]
@@ -92,7 +88,7 @@ def cost(vm: VisionMachine, size: int) -> str:
     m = vm.machine
     scene = scenes.render(scenes.preset("blocks", shape=(size, size)), seed=0, noise=0.01)
     r = vm.run(scene.left, scene.right, scene.left_next)
-    device = {k: m.to_device(np.ascontiguousarray(v)) for k, v in fields(r).items()}
+    device = {k: m.to_device(np.ascontiguousarray(v)) for k, v in labelling_fields(r).items()}
     support, image = m.to_device(r.support), m.to_device(r.image)
     lines = {cue: (m.to_device(h.astype(np.uint8)), m.to_device(v.astype(np.uint8))) for cue, (h, v) in r.lines.items()}
     edges = m.to_device(r.edges.astype(np.uint8))
@@ -114,7 +110,7 @@ def main() -> None:
     start = time.perf_counter()
     data = runs(vm)
     took = time.perf_counter() - start
-    fitted_on, provenance = labeller_provenance(seeds=FIT_SEEDS, shape=SHAPE)
+    fitted_on, provenance = labeller_provenance(seeds=FIT_SEEDS, shape=SHAPE, config=vm.config)
     start = time.perf_counter()
     colour_runs = {k: v for k, v in data.items() if k[1] != "grey"}
     shipped = fit_labeller([v for k, v in colour_runs.items() if k[2] in FIT_SEEDS], fitted_on=fitted_on,

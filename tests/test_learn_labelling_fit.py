@@ -7,7 +7,7 @@ import pytest
 from vmcl import labelling
 from vmcl.cli import main
 from vmcl.errors import InputError
-from vmcl.learn.labelling_fit import fit_labeller, labeller_provenance, rendered_runs
+from vmcl.learn.labelling_fit import fit_labeller, labeller_provenance, labelling_fields, rendered_runs
 from vmcl.pipeline import Config, VisionMachine
 
 ALL_INPUTS = "+".join(labelling.INPUTS)
@@ -19,7 +19,9 @@ def test_the_shipped_weights_are_regenerated_from_what_they_name(machine):
     vm = VisionMachine(Config.from_dict({"labels": {"method": "rule"}}), machine=machine)
     shipped = labelling.default_labeller()
     fitted_on, provenance = labeller_provenance()
-    assert shipped.fitted_on == fitted_on and shipped.record["data_sha256"] == provenance["data_sha256"]
+    assert shipped.fitted_on == fitted_on
+    assert {k: shipped.record[k] for k in ("data_sha256", "config_sha256")} == \
+        {k: provenance[k] for k in ("data_sha256", "config_sha256")}
     runs = rendered_runs(vm)
     assert len(runs) == 20  # five presets, with and without highlights, two seeds
     again = fit_labeller(runs.values(), input_sets=[labelling.INPUTS], machine=machine)
@@ -41,6 +43,12 @@ def test_rendered_runs_refusals(machine):
         rendered_runs(rule, presets=["blocks"], shape=(32, 32))
     with pytest.raises(InputError, match="vm"):
         rendered_runs(None)
+    with pytest.raises(InputError, match="runs is empty"):
+        fit_labeller([])
+    with pytest.raises(InputError, match=r"runs\[0\]"):
+        fit_labeller([(None, None, None)])
+    with pytest.raises(InputError, match="result"):
+        labelling_fields(None)
 
 
 def test_fit_labelling_writes_weights_a_config_loads(tmp_path, capsys):
@@ -59,6 +67,9 @@ def test_fit_labelling_writes_weights_a_config_loads(tmp_path, capsys):
     (["labelling", "--out", "{tmp}/w.json", "--size", "16"], "at least 64"),
     (["labelling", "--out", "{tmp}/mine.json"], "not a file `vmcl fit` wrote"),
     (["stereo", "--out", "{tmp}/s.toml"], "needs --data"),
+    (["stereo", "--out", "{tmp}/s.toml", "--data", "{tmp}", "--seeds", "3"], "an option of vmcl fit labelling"),
+    (["labelling", "--out", "{tmp}/w.json", "--refine"], "not of vmcl fit labelling"),
+    (["labelling", "--out", "{tmp}/w.json", "--jump", "2"], "not of vmcl fit labelling"),
 ])
 def test_fit_labelling_refusals_are_one_line(tmp_path, capsys, args, message):
     (tmp_path / "mine.json").write_text("{}")

@@ -39,6 +39,12 @@ def test_error_leaves_out_invalid_pixels():
     found[7, 7] = 9.0
     none_h, none_v = np.zeros((8, 7), bool), np.zeros((7, 8), bool)
     assert restoration_error(found, none_h, none_v, example) == pytest.approx(1 / 32)
+    found[6, 0] = np.nan  # no value where the truth (0) is known: wrong, not read as 0
+    assert restoration_error(found, none_h, none_v, example) == pytest.approx(2 / 32)
+    with pytest.raises(InputValueError, match="example.valid"):
+        restoration_error(found, none_h, none_v, Example(truth, valid=valid[:4], data=truth))
+    with pytest.raises(InputValueError, match="both line_h and line_v"):
+        restoration_error(found, none_h, none_v, Example(truth, line_h=none_h, data=truth))
 
 
 def _stepped_example(seed):
@@ -101,6 +107,10 @@ def test_refusals(machine):
         fit_restoration([example], start.model, machine=machine)
     with pytest.raises(InputValueError, match="parameter"):
         fit_restoration([example], start, parameters=("line",), machine=machine)
+    with pytest.raises(InputValueError, match="more than once"):
+        fit_restoration([example], start, parameters=("alpha", "alpha"), machine=machine)
+    with pytest.raises(InputValueError, match="kappa > 0"):
+        fit_restoration([example], start.override({"kappa": 0.0}), parameters=("kappa",), machine=machine)
     with pytest.raises(InputValueError, match="weights"):
         fit_restoration([example], start, weights=[1.0, 1.0], machine=machine)
     with pytest.raises(InputValueError, match="weights"):

@@ -262,6 +262,7 @@ TABLE: tuple[Entry, ...] = (
        step_floor=0.1,
        kinds={"examples": _O, "start": _O, "kind": _C, "candidates_only": _B, "method": _C, "parameters": _O,
               "weights": _O, "tolerance": _N, "evaluations": _I, "step_floor": _N, "machine": _M}),
+    _e("vmcl.learn:model_overrides", model=make("energy_model"), kappa=False, kinds={"model": _O, "kappa": _B}),
     _e("vmcl.learn:restoration_error", field=IMG, line_h=LINE_H, line_v=LINE_V, example=make("example"),
        tolerance=1.0, kinds={"field": _A, "line_h": _A, "line_v": _A, "example": _O, "tolerance": _N}),
     _e("vmcl.learn.labelling_fit:labeller_provenance", presets=["blocks", "cues"], seeds=[0, 1], shape=tup(64, 80),
@@ -639,6 +640,8 @@ EXEMPT = {
     # Run the whole machine on rendered scenes (seconds each): tests/test_learn_labelling_fit.py runs them and
     # their refusals.
     "vmcl.learn.labelling_fit:rendered_runs", "vmcl.learn.labelling_fit:fit_labeller",
+    # Reads a Result of those runs (refuses anything else by type; tests/test_learn_labelling_fit.py).
+    "vmcl.learn.labelling_fit:labelling_fields",
     # Need data set folders with ground truth: tests/test_learn_fit.py runs them and their refusals.
     "vmcl.learn.cue_fit:fit_cue", "vmcl.learn.cue_fit:cue_examples",
     # Hash and write what vmcl itself made (fit_cue's tables, the files it read); tests/test_learn_fit.py.

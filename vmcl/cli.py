@@ -8,7 +8,8 @@ dense fields out (:mod:`vmcl.pipeline`, :mod:`vmcl.report`).
     vmcl run FRAMES [RIGHT_FRAMES] [--fps N] [--config C.toml] --out DIR
     vmcl eval stereo|flow|edges --data DIR
     vmcl fit stereo|motion|colour|texture --data DIR [--data DIR ...] --out FITTED.toml [--config C.toml] [--jump PX]
-             [--fix NAME=VALUE]
+             [--fix NAME=VALUE] [--refine]
+    vmcl fit labelling --out WEIGHTS.json [--config C.toml] [--seeds N ...] [--size PX]
     vmcl info
     vmcl batch INPUTS... --out DIR [--frames] [--config C.toml] [--scheduler ADDRESS] [--workers N] [--threads N]
                [--zarr FIELD ...]
@@ -407,6 +408,10 @@ def _fit(args) -> int:
         return _fit_labelling(args)
     if not args.data:
         raise BadInput(f"vmcl fit {args.cue} needs --data: a folder of examples with ground truth")
+    for option, value in (("--seeds", args.seeds), ("--size", args.size)):
+        if value is not None:
+            raise BadInput(f"{option} is an option of vmcl fit labelling (its renderings); {args.cue} fits --data")
+    args.jump = 1.0 if args.jump is None else args.jump
     for root in args.data:
         if not Path(root).is_dir():
             raise BadInput(f"--data {root}: no such folder")
@@ -439,8 +444,12 @@ def _fit(args) -> int:
                  f"{'' if fit.converged else ' (not converged)'}", rows)
     if args.refine:
         before, after = found.provenance["restoration_error"]
+        values = found.tables["mrf"][args.cue]
         print(f"Refined by the restorations' error: {before:.4f} -> {after:.4f} of the examples' pixels wrong "
-              "(values, missed and false lines)")
+              f"(values, missed and false lines) after {found.provenance['restoration_settings_scored']} settings"
+              f"{'' if found.provenance['restoration_converged'] else ' (not converged: the evaluations ran out)'}"
+              f"; written: alpha {values['alpha']:.4g}, beta {values['beta']:.4g}, edge_gain "
+              f"{values['edge_gain']:.4g}, prior " + ", ".join(f"{k} {v:.3g}" for k, v in values["prior"].items()))
     print(f"Wrote {written}: [mrf.{args.cue}] at T = {fit.temperature:.4g}; load it with --config {written}")
     return 0
 
@@ -456,6 +465,11 @@ def _fit_labelling(args) -> int:
     if args.data:
         raise BadInput("vmcl fit labelling takes no --data: it renders its examples (vmcl.scenes presets), "
                        "whose labels are exact")
+    for option, given in (("--refine", args.refine), ("--jump", args.jump is not None), ("--fix", bool(args.fix))):
+        if given:
+            raise BadInput(f"{option} is an option of the cues' MRF fits, not of vmcl fit labelling")
+    args.seeds = [0, 1] if args.seeds is None else args.seeds
+    args.size = 256 if args.size is None else args.size
     out = Path(args.out)
     if out.suffix != ".json":
         raise BadInput(f"--out {out}: the labelling weights are a JSON file; name it *.json")
@@ -471,7 +485,7 @@ def _fit_labelling(args) -> int:
     print(f"Running the machine on the rendered presets at {args.size} x {args.size}, seeds {seeds} ...",
           file=sys.stderr)
     runs = rendered_runs(vm, seeds=seeds, shape=shape)
-    fitted_on, provenance = labeller_provenance(seeds=seeds, shape=shape)
+    fitted_on, provenance = labeller_provenance(seeds=seeds, shape=shape, config=vm.config)
     labeller = fit_labeller(runs.values(), fitted_on=fitted_on, machine=vm.machine)
     written = labeller.save(out, provenance)
     print(f"Wrote {written}: weights for {len(labeller.weights)} sets of inputs, fitted to {len(runs)} renderings; "
@@ -718,12 +732,12 @@ def parser() -> argparse.ArgumentParser:
     fit.add_argument("--refine", action="store_true",
                      help="stereo, motion: then move the fitted parameters to lower the errors of the machine's "
                           "own restorations of the examples (vmcl.learn.fit_restoration)")
-    fit.add_argument("--seeds", type=int, nargs="+", default=[0, 1],
+    fit.add_argument("--seeds", type=int, nargs="+", default=None,
                      help="labelling: the renderings' noise seeds (default 0 1, the shipped fit's)")
-    fit.add_argument("--size", type=int, default=256,
+    fit.add_argument("--size", type=int, default=None,
                      help="labelling: the renderings' size in px (default 256, the shipped fit's)")
     fit.add_argument("--config", help="TOML configuration of the machine whose measurements are fitted")
-    fit.add_argument("--jump", type=float, default=1.0,
+    fit.add_argument("--jump", type=float, default=None,
                      help="a true discontinuity: neighbours more than this many pixels apart (default 1)")
     fit.add_argument("--fix", action="append", default=[], metavar="NAME=VALUE",
                      help="hold a natural parameter instead of fitting it; repeatable (stereo and motion hold "

@@ -5,7 +5,8 @@ that :meth:`vmcl.pipeline.Config.from_toml` loads like any other, plus a ``[fitt
 where it came from: the data (each example's name and one SHA-256 over their files), the vmcl version and
 a hash of the learning code, the method, the date, and the SHA-256 of the parameter tables themselves.
 The fitted JSON artefacts vmcl ships (the labelling weights, the probability-of-boundary model) carry the
-same record as a ``"fitted"`` object (:func:`write_fitted_json`, :func:`check_fitted_json`).
+same record as a ``"fitted"`` object (:func:`write_fitted_json`, :func:`check_fitted_json`), whose hash is
+checked the same way (their version is recorded, not warned about: they ship with the code they fit).
 Loading checks that hash (a file edited by hand, or damaged, is refused with a sentence saying so: drop
 the ``[fitted]`` table to keep the edit as one's own configuration) and warns when the file was fitted
 by another vmcl version.
@@ -18,6 +19,7 @@ import hashlib
 import json
 import math
 import os
+import tempfile
 import warnings
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -77,13 +79,7 @@ def check_fitted(values: dict[str, Any], source: str) -> dict[str, Any]:
     fitted = values.get("fitted")
     if fitted is None:
         return rest
-    if not isinstance(fitted, Mapping) or not isinstance(fitted.get("parameters_sha256"), str):
-        raise InputValueError(f"{source}: the [fitted] table has no parameters_sha256, so what was fitted "
-                              "cannot be checked")
-    if parameters_sha256(rest) != fitted["parameters_sha256"]:
-        raise InputValueError(f"{source}: its parameters differ from those fitted (their SHA-256 does not match "
-                              "[fitted] parameters_sha256): edited or damaged since `vmcl fit` wrote it; remove the "
-                              "[fitted] table to use it as your own configuration")
+    _check_hash(rest, fitted, source, "the [fitted] table", "configuration")
     if fitted.get("vmcl") != __version__:
         warnings.warn(f"{source} was fitted by vmcl {fitted.get('vmcl')}, this is vmcl {__version__}: its "
                       "parameters may not suit this version's modules", UserWarning, stacklevel=3)
@@ -122,9 +118,12 @@ def fitted_record(parameters: Mapping[str, Any], provenance: Mapping[str, Any]) 
     """
     from vmcl import __version__
 
-    return {"written_by": FITTED_BY, "vmcl": __version__,
-            "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
-            **provenance, "parameters_sha256": parameters_sha256(parameters)}
+    if not isinstance(provenance, Mapping):
+        raise InputTypeError(f"provenance must be a mapping, got {type(provenance).__name__}")
+    # The marks vmcl reads back (who wrote it, which version, what it hashed) are its own, whatever
+    # provenance says.
+    return {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"), **provenance,
+            "written_by": FITTED_BY, "vmcl": __version__, "parameters_sha256": parameters_sha256(parameters)}
 
 
 def write_fitted_json(path: str | os.PathLike, parameters: Mapping[str, Any], provenance: Mapping[str, Any]) -> Path:
@@ -138,18 +137,25 @@ def write_fitted_json(path: str | os.PathLike, parameters: Mapping[str, Any], pr
     parameters : mapping
         The artefact's entries, JSON-able (lists and numbers, no NaN).
     provenance : mapping
-        What it was fitted on: at least ``data`` and ``code_sha256``.
+        What it was fitted on (``data``, ``data_sha256``, ``code_sha256`` ...).
 
     Returns
     -------
     Path
         The file written (written beside it first, then moved into place).
     """
-    if not isinstance(parameters, Mapping) or "fitted" in parameters:
-        raise InputValueError("parameters must be a mapping without a 'fitted' entry (the record is added here)")
+    if not isinstance(parameters, Mapping):
+        raise InputTypeError(f"parameters must be a mapping, got {type(parameters).__name__}")
+    if "fitted" in parameters:
+        raise InputValueError("parameters must not have a 'fitted' entry: the record is added here")
     target = check_writable(path)
-    data = {**parameters, "fitted": fitted_record(parameters, provenance)}
-    _replace(target, json.dumps(data, indent=1, allow_nan=False) + "\n")
+    try:
+        text = json.dumps({**parameters, "fitted": fitted_record(parameters, provenance)}, indent=1,
+                          allow_nan=False)
+    except (TypeError, ValueError) as error:
+        raise InputValueError(f"parameters and provenance must be plain JSON values (numbers, strings, lists, "
+                              f"mappings; no NaN): {error}") from None
+    _replace(target, text + "\n")
     return target
 
 
@@ -162,34 +168,47 @@ def check_fitted_json(data: Mapping[str, Any], source: str) -> dict[str, Any] | 
     InputValueError
         The record lacks its hash, or the entries differ from those fitted (edited or damaged).
     """
+    if not isinstance(data, Mapping):
+        raise InputTypeError(f"data must be the mapping of a JSON file's entries, got {type(data).__name__}")
     record = data.get("fitted")
     if record is None:
         return None
-    if not isinstance(record, Mapping) or not isinstance(record.get("parameters_sha256"), str):
-        raise InputValueError(f"{source}: its 'fitted' record has no parameters_sha256, so what was fitted cannot "
-                              "be checked")
-    rest = {key: value for key, value in data.items() if key != "fitted"}
-    try:
-        found = parameters_sha256(rest)
-    except (TypeError, ValueError):
-        found = None
-    if found != record["parameters_sha256"]:
-        raise InputValueError(f"{source}: its entries differ from those fitted (their SHA-256 does not match the "
-                              "'fitted' record's parameters_sha256): edited or damaged since it was fitted; remove "
-                              "the 'fitted' record to use it as your own")
+    _check_hash({key: value for key, value in data.items() if key != "fitted"}, record, source,
+                "its 'fitted' record", "file")
     return dict(record)
 
 
+def _check_hash(rest: Mapping[str, Any], record: Any, source: str, where: str, own: str) -> None:
+    """Refuse a fitted file whose entries other than the record (``rest``) are not those it hashed."""
+    if not isinstance(record, Mapping) or not isinstance(record.get("parameters_sha256"), str):
+        raise InputValueError(f"{source}: {where} has no parameters_sha256, so what was fitted cannot be checked")
+    try:
+        found = parameters_sha256(rest)
+    except (TypeError, ValueError):  # entries JSON cannot hold: not what was fitted
+        found = None
+    if found != record["parameters_sha256"]:
+        raise InputValueError(f"{source}: its parameters differ from those fitted (their SHA-256 does not match "
+                              f"the parameters_sha256 of {where}): edited or damaged since `vmcl fit` wrote it; "
+                              f"remove {where} to use it as your own {own}")
+
+
 def _replace(target: Path, text: str) -> None:
-    # Written beside the target and moved into place: a reader never sees half a file, and a failed
-    # write leaves the old one.
-    temporary = target.with_name(f".{target.name}.{os.getpid()}.tmp")
-    temporary.write_text(text, encoding="utf-8")
-    os.replace(temporary, target)
+    # Written to a new file of its own beside the target (created exclusively, so nothing else is
+    # overwritten) and moved into place: a reader never sees half a file, a failed write leaves the old
+    # one and removes only the file it created.
+    handle, name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8") as stream:
+            stream.write(text)
+        os.replace(name, target)
+    except BaseException:
+        Path(name).unlink(missing_ok=True)
+        raise
 
 
 def check_writable(path: str | os.PathLike) -> Path:
-    """``path`` as a Path, if :func:`write_fitted` may write it: a new file or one ``vmcl fit`` wrote.
+    """``path`` as a Path, if :func:`write_fitted` or :func:`write_fitted_json` may write it: a new file or
+    one ``vmcl fit`` wrote.
 
     Raises
     ------

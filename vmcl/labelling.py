@@ -216,6 +216,8 @@ class LinearLabeller:
             raise InputTypeError(f"path must be a str or an os.PathLike, got {type(path).__name__}")
         data = {"features": list(FEATURES), "classes": [c.name for c in CLASSES], "fitted_on": self.fitted_on,
                 "weights": {k: np.round(np.asarray(w, np.float64), 5).tolist() for k, w in self.weights.items()}}
+        if provenance is not None and not isinstance(provenance, Mapping):
+            raise InputTypeError(f"provenance must be a mapping or None, got {type(provenance).__name__}")
         return write_fitted_json(path, data, {"data": self.fitted_on, **(provenance or {})})
 
     @classmethod

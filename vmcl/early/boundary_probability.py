@@ -195,6 +195,8 @@ class BoundaryModel:
         data = {"scales": list(self.scales), "features": list(self.features), "fitted_on": self.fitted_on,
                 "centres": np.round(self.centres.astype(np.float64), 5).tolist(),
                 "weights": np.round(self.weights.astype(np.float64), 5).tolist()}
+        if provenance is not None and not isinstance(provenance, Mapping):
+            raise InputTypeError(f"provenance must be a mapping or None, got {type(provenance).__name__}")
         return write_fitted_json(path, data, {"data": self.fitted_on, **(provenance or {})})
 
 

@@ -17,11 +17,13 @@ from vmcl.learn.pseudolikelihood import (
                                          Pseudolikelihood,
                                          PseudolikelihoodFit,
                                          fit_pseudolikelihood,
+                                         model_overrides,
 )
 from vmcl.learn.restoration_fit import RestorationFit, fit_restoration, restoration_error
 from vmcl.learn.temperature import TemperatureScan, scan_temperature
 
 __all__ = ["PARAMETERS", "CrossValidation", "Example", "NoiseEstimate", "Pseudolikelihood", "PseudolikelihoodFit",
            "RestorationFit", "TemperatureScan",
-           "cross_validate", "estimate_noise", "fit_pseudolikelihood", "fit_restoration", "restoration_error",
+           "cross_validate", "estimate_noise", "fit_pseudolikelihood", "fit_restoration", "model_overrides",
+           "restoration_error",
            "scan_temperature"]

@@ -23,7 +23,7 @@ from vmcl.errors import InputValueError
 from vmcl.fitted import code_sha256, files_sha256
 from vmcl.learn import examples as learn_examples
 from vmcl.learn import pseudolikelihood, restoration_fit
-from vmcl.learn.pseudolikelihood import PRIOR_PARAMETERS, Example, PseudolikelihoodFit, fit_pseudolikelihood
+from vmcl.learn.pseudolikelihood import Example, PseudolikelihoodFit, fit_pseudolikelihood, model_overrides
 from vmcl.learn.restoration_fit import fit_restoration
 from vmcl.machine import Machine
 
@@ -181,15 +181,12 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
     error = None
     if refine:
         settings = vm.config.mrf.settings(cue, module.settings)
-        start = settings.override({"alpha": model.alpha, "beta": model.beta, "edge_gain": model.edge_gain,
-                                   "prior": model.prior})
+        start = settings.override(model_overrides(model))
         refined = fit_restoration(examples, start, kind=module.kind, candidates_only=module.candidates_only,
                                   tolerance=jump, machine=vm.machine)
-        model, error = refined.settings.model, (refined.start_error, refined.error, refined.evaluations)
-    table = {"alpha": model.alpha, "beta": model.beta, "edge_gain": model.edge_gain,
-             "prior": {name: getattr(model.prior, name) for name in PRIOR_PARAMETERS}}
-    if module.kind == "constant":
-        table["kappa"] = model.kappa
+        model, error = refined.settings.model, (refined.start_error, refined.error, refined.evaluations,
+                                                refined.converged)
+    table = model_overrides(model, kappa=module.kind == "constant")
     provenance: dict[str, Any] = {
         "what": f"mrf.{cue}",
         "method": "maximum pseudolikelihood (vmcl.learn.fit_pseudolikelihood)" + (
@@ -208,7 +205,8 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
     if error is not None:
         provenance["restoration_error"] = [float(error[0]), float(error[1])]
         provenance["restoration_settings_scored"] = int(error[2])
-    return CueFit(cue, fit, {"mrf": {cue: {k: _plain(v) for k, v in table.items()}}}, provenance)
+        provenance["restoration_converged"] = bool(error[3])
+    return CueFit(cue, fit, {"mrf": {cue: table}}, provenance)
 
 
 def _kernel_path() -> Path:
@@ -216,8 +214,3 @@ def _kernel_path() -> Path:
 
     return kernels_dir() / "pseudolikelihood.cl"
 
-
-def _plain(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {k: float(v) for k, v in value.items()}
-    return float(value)

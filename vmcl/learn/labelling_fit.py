@@ -11,6 +11,7 @@ defaults (benchmarks/labelling.py writes them and measures them on seeds and pre
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -22,7 +23,8 @@ from vmcl.cm.core import check_int, check_real
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.fitted import code_sha256
 
-__all__ = ["DEFAULT_SEEDS", "DEFAULT_SHAPE", "RenderedRun", "fit_labeller", "labeller_provenance", "rendered_runs"]
+__all__ = ["DEFAULT_SEEDS", "DEFAULT_SHAPE", "RenderedRun", "fit_labeller", "labeller_provenance", "labelling_fields",
+           "rendered_runs"]
 
 DEFAULT_SEEDS = (0, 1)
 """The noise seeds of the shipped fit (a seed changes the textures' random elements and the noise)."""
@@ -88,32 +90,70 @@ def fit_labeller(runs: Iterable[RenderedRun], *, fitted_on: str = "",
         The sets of inputs to fit weights for (default every one).
     machine : vmcl.Machine, optional
     """
+    from vmcl.result import Result
+
+    if not isinstance(fitted_on, str):
+        raise InputTypeError(f"fitted_on must be a str, got {type(fitted_on).__name__}")
+    try:
+        items = list(runs)
+    except TypeError:
+        raise InputTypeError(f"runs must be an iterable of (Result, labels, tolerance), got {type(runs).__name__}"
+                             ) from None
+    if not items:
+        raise InputValueError("runs is empty: nothing to fit the labeller to")
+    for k, item in enumerate(items):
+        if not (isinstance(item, tuple) and len(item) == 3 and isinstance(item[0], Result)):
+            raise InputTypeError(f"runs[{k}] must be a (vmcl.Result, labels, tolerance) tuple, got "
+                                 f"{type(item).__name__}")
+
     def samples():
-        for result, truth, tolerance in runs:
-            fields = {"disparity": result.disparity, "flow": result.flow, "hue": result.restored.get("colour")}
-            yield (labelling.features(result.support, result.image, machine=machine, **fields), result.support,
-                   truth, tolerance)
+        for result, truth, tolerance in items:
+            yield (labelling.features(result.support, result.image, machine=machine, **labelling_fields(result)),
+                   result.support, truth, tolerance)
 
     return labelling.LinearLabeller.fit(samples(), fitted_on=fitted_on, input_sets=input_sets)
 
 
+def labelling_fields(result: Any) -> dict[str, Any]:
+    """The restored fields of a run that :func:`vmcl.labelling.features` reads beside its candidates."""
+    from vmcl.result import Result
+
+    if not isinstance(result, Result):
+        raise InputTypeError(f"result must be a vmcl.Result, got {type(result).__name__}")
+    return {"disparity": result.disparity, "flow": result.flow, "hue": result.restored.get("colour")}
+
+
 def labeller_provenance(*, presets: Sequence[str] = scenes.PRESETS, seeds: Sequence[int] = DEFAULT_SEEDS,
-                        shape: tuple[int, int] = DEFAULT_SHAPE, noise: float = 0.01) -> tuple[str, dict[str, Any]]:
+                        shape: tuple[int, int] = DEFAULT_SHAPE, noise: float = 0.01,
+                        config: Any = None) -> tuple[str, dict[str, Any]]:
     """What a labeller fitted by :func:`rendered_runs` and :func:`fit_labeller` was fitted on: the text of
-    its ``fitted_on`` and its ``"fitted"`` record's entries (the renderer's code, which is the examples'
-    data, and the fitting code, hashed)."""
+    its ``fitted_on`` and its ``"fitted"`` record's entries: the renderer's code (the examples' data), the
+    fitting code, and the Config of the machine whose candidates and fields were fitted (default the
+    default Config), each hashed; the rest of the machine is the record's vmcl version."""
+    from vmcl.fitted import parameters_sha256
+    from vmcl.pipeline import Config
+
+    config = Config() if config is None else config
+    if not isinstance(config, Config):
+        raise InputTypeError(f"config must be a vmcl.pipeline.Config or None, got {type(config).__name__}")
     height, width = _shape(shape)
     check_real(noise, "noise", minimum=0)
     fitted_on = (f"vmcl.scenes presets {', '.join(_names(presets))} at {height} x {width}, with and without "
                  f"highlights, noise {noise:g}, seeds {tuple(_seeds(seeds))}")
     renderer = sorted(Path(scenes.__file__).parent.glob("*.py"))
+    # The labels are fitted with the rule labelling whatever the Config says: the method is not hashed.
+    settings = {name: {k: v for k, v in section.items() if (name, k) != ("labels", "method")}
+                for name, section in config.to_dict().items()}
     return fitted_on, {"data_sha256": code_sha256(*renderer), "code": "vmcl.learn.labelling_fit",
-                       "code_sha256": code_sha256(Path(__file__), labelling)}
+                       "code_sha256": code_sha256(Path(__file__), labelling),
+                       "config_sha256": parameters_sha256(json.loads(json.dumps(settings, default=repr)))}
 
 
 def _sequence(values: Any, name: str) -> list:
-    if isinstance(values, (str, bytes)) or not isinstance(values, Sequence) or not values:
-        raise InputTypeError(f"{name} must be a non-empty sequence, got {values!r}")
+    if isinstance(values, (str, bytes)) or not isinstance(values, Sequence):
+        raise InputTypeError(f"{name} must be a sequence, got {type(values).__name__}")
+    if not values:
+        raise InputValueError(f"{name} is empty")
     return list(values)
 
 

@@ -195,6 +195,20 @@ class PseudolikelihoodFit:
         return replace(base, **changes)
 
 
+def model_overrides(model: EnergyModel, *, kappa: bool = False) -> dict[str, Any]:
+    """The parameters a fit learns, of ``model``, as plain numbers: what :meth:`vmcl.mrf.Settings.override`
+    and a Config's ``[mrf.<cue>]`` table take (alpha, beta, edge_gain, the prior's entries as a table, and
+    with ``kappa`` the constant kind's Potts cost)."""
+    if not isinstance(model, EnergyModel):
+        raise InputTypeError(f"model must be a vmcl.mrf.EnergyModel, got {type(model).__name__}")
+    found: dict[str, Any] = {"alpha": float(model.alpha), "beta": float(model.beta),
+                             "edge_gain": float(model.edge_gain),
+                             "prior": {name: float(getattr(model.prior, name)) for name in PRIOR_PARAMETERS}}
+    if kappa:
+        found["kappa"] = float(model.kappa)
+    return found
+
+
 class _Lattice:
     """One example on the device: its fields, and the features that do not depend on theta."""
 

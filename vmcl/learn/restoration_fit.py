@@ -31,10 +31,11 @@ import numpy as np
 
 from vmcl.cm.core import check_bool, check_choice, check_int, check_real, machine_for, to_host
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.learn.pseudolikelihood import PRIOR_PARAMETERS, Example
+from vmcl.integrate import restore_cue
+from vmcl.learn.pseudolikelihood import PRIOR_PARAMETERS, Example, model_overrides
 from vmcl.machine import Machine
 from vmcl.metrics import detection_scores
-from vmcl.mrf import SOLVERS, Settings, boundary_map, restore
+from vmcl.mrf import SOLVERS, Settings, boundary_map
 from vmcl.mrf.energy import KINDS, host_field
 from vmcl.mrf.inputs import device_pixels
 
@@ -63,7 +64,8 @@ class RestorationFit:
     Attributes
     ----------
     settings : vmcl.mrf.Settings
-        The start's settings with the fitted parameters.
+        The start's settings with the fitted parameters (restored as :func:`vmcl.integrate.restore_cue`
+        restores them, which adds ``require_edge`` for ``candidates_only``).
     values : dict
         The fitted parameters by name (the prior's by their :class:`vmcl.mrf.LinePrior` names).
     error : float
@@ -95,7 +97,9 @@ def restoration_error(field: Any, line_h: Any, line_v: Any, example: Example, *,
         The restored line process.
     example : vmcl.learn.Example
         Its ``field`` and ``valid`` give the desired values, its ``line_h`` and ``line_v`` the desired
-        lines (none: no line is desired, and every restored line is false).
+        lines. Without them no line is desired and every restored line counts as false (where
+        :func:`vmcl.learn.fit_pseudolikelihood` leaves such an example's line sites unscored: a
+        restoration must still not draw lines the truth does not have).
     tolerance : float
         > 0: a restored value further than this from the desired one (Euclidean, for vector fields) is wrong.
 
@@ -115,24 +119,22 @@ def restoration_error(field: Any, line_h: Any, line_v: Any, example: Example, *,
     shape = desired.shape[:2]
     valid = np.all(np.isfinite(desired.reshape(*shape, -1)), axis=2)
     if example.valid is not None:
-        valid &= np.asarray(example.valid, bool)
+        valid &= _sites(example.valid, "example.valid", shape)
     count = int(valid.sum())
     if count == 0:
         raise InputValueError("example has no valid pixel: nothing to score")
-    distance = np.sqrt(np.sum((np.nan_to_num(found) - np.nan_to_num(desired)).reshape(*shape, -1) ** 2, axis=2))
+    # A NaN restored value is wrong wherever the truth is known: only the unknown truth is zeroed.
+    distance = np.sqrt(np.sum((found - np.nan_to_num(desired)).reshape(*shape, -1) ** 2, axis=2))
     wrong = int(np.count_nonzero(valid & ~(distance <= tolerance)))
-    lines = []
-    for name, value, want in (("line_h", line_h, (shape[0], shape[1] - 1)), ("line_v", line_v, (shape[0] - 1, shape[1]))):
-        host = np.asarray(to_host(value)) if isinstance(value, np.ndarray) or hasattr(value, "get") else None
-        if host is None or host.shape != want or host.dtype.kind not in "biuf":
-            raise InputValueError(f"{name} must be a real or boolean array of shape {want} (the field's line sites), "
-                                  f"got {type(value).__name__} {getattr(host, 'dtype', '')} {getattr(host, 'shape', '')}")
-        lines.append(host != 0)
-    restored_lines = boundary_map(*lines)
+    h_shape, v_shape = (shape[0], shape[1] - 1), (shape[0] - 1, shape[1])
+    restored_lines = boundary_map(_sites(line_h, "line_h", h_shape), _sites(line_v, "line_v", v_shape))
+    if (example.line_h is None) != (example.line_v is None):
+        raise InputValueError("example must give both line_h and line_v, or neither")
     if example.line_h is None:
         desired_lines = np.zeros(shape, bool)
     else:
-        desired_lines = boundary_map(np.asarray(example.line_h) != 0, np.asarray(example.line_v) != 0)
+        desired_lines = boundary_map(_sites(example.line_h, "example.line_h", h_shape),
+                                     _sites(example.line_v, "example.line_v", v_shape))
     scores = detection_scores(restored_lines & valid, desired_lines & valid, tolerance=1.0)
     missed = scores.n_true * (1.0 - scores.recall) if scores.n_true else 0.0
     false = scores.n_predicted * (1.0 - scores.precision) if scores.n_predicted else 0.0
@@ -180,7 +182,10 @@ def fit_restoration(examples: Sequence[Example], start: Settings, *, kind: str =
     Raises
     ------
     InputValueError
-        No example, an example without data, an unknown parameter, or weights that do not fit.
+        No example, an example without data, an unknown or repeated parameter, a scaled parameter not
+        above 0 at the start, or weights that do not fit.
+    InputTypeError
+        ``examples``, ``start`` or ``parameters`` of the wrong type.
     """
     machine = machine_for(machine)
     if not isinstance(start, Settings):
@@ -205,21 +210,22 @@ def fit_restoration(examples: Sequence[Example], start: Settings, *, kind: str =
         raise InputValueError("parameters is empty: nothing to search")
     for name in parameters:
         check_choice(name, "parameters", SEARCHABLE)
+    if len(set(parameters)) != len(parameters):
+        raise InputValueError(f"parameters names one more than once: {parameters}")
     share = _weights(weights, len(examples))
     check_real(tolerance, "tolerance", above=0)
     check_int(evaluations, "evaluations", minimum=1)
     check_real(step_floor, "step_floor", above=0)
 
-    schedule = start.schedule(method)
     # Uploaded once: every candidate restores the same data on the device; only its results come back.
     inputs = [_uploaded(example, machine) for example in examples]
 
     def error(point: np.ndarray) -> float:
-        settings = _settings(start, parameters, point, candidates_only)
+        settings = _settings(start, parameters, point)
         total = 0.0
         for example, (data, confidence, edges), w in zip(examples, inputs, share):
-            found = restore(data, confidence=confidence, edges=edges, kind=kind, method=method,
-                            model=settings.model, schedule=schedule, machine=machine)
+            found = restore_cue(data, confidence=confidence, coupling=edges, kind=kind,
+                                candidates_only=candidates_only, settings=settings, method=method, machine=machine)
             total += w * restoration_error(found.field, found.line_h, found.line_v, example, tolerance=tolerance)
         return total
 
@@ -228,11 +234,13 @@ def fit_restoration(examples: Sequence[Example], start: Settings, *, kind: str =
     steps = first.copy()
     best = start_error = error(point)
     count = 1
-    while count < evaluations and np.any(steps >= step_floor * first):
-        moved = False
+    converged = False
+    while count < evaluations:
+        moved, complete = False, True
         for k in range(len(parameters)):
             for sign in (1.0, -1.0):
                 if count >= evaluations:
+                    complete = False
                     break
                 trial = point.copy()
                 trial[k] += sign * steps[k]
@@ -243,11 +251,23 @@ def fit_restoration(examples: Sequence[Example], start: Settings, *, kind: str =
                 if value < best:
                     best, point, moved = value, trial, True
                     break
-        if not moved:
+        # Only a whole pass without a better setting shows the steps are too long for this point.
+        if complete and not moved:
             steps /= 2
-    converged = not np.any(steps >= step_floor * first)
-    settings = _settings(start, parameters, point, candidates_only=False)
+            if not np.any(steps >= step_floor * first):
+                converged = True
+                break
+    settings = _settings(start, parameters, point)
     return RestorationFit(settings, _values(parameters, point), float(best), float(start_error), count, converged)
+
+
+def _sites(value: Any, name: str, shape: tuple[int, int]) -> np.ndarray:
+    """A map of sites (pixels or line sites) as bool, if it is a real or boolean array of ``shape``."""
+    host = np.asarray(to_host(value)) if isinstance(value, np.ndarray) or hasattr(value, "get") else None
+    if host is None or host.shape != shape or host.dtype.kind not in "biuf":
+        raise InputValueError(f"{name} must be a real or boolean array of shape {shape}, got {type(value).__name__} "
+                              f"{getattr(host, 'dtype', '')} {getattr(host, 'shape', '')}")
+    return host != 0
 
 
 def _weights(weights: Sequence[float] | None, n: int) -> np.ndarray:
@@ -274,15 +294,15 @@ def _uploaded(example: Example, machine: Machine) -> tuple[Any, Any, Any]:
 
 def _point(settings: Settings, parameters: tuple[str, ...]) -> np.ndarray:
     values = _values_of(settings)
-    if any(values[name] <= 0 for name in parameters if name in _SCALED):
-        raise InputValueError("start must have alpha > 0 and beta > 0 (they are searched on a log scale)")
+    for name in parameters:
+        if name in _SCALED and not values[name] > 0:
+            raise InputValueError(f"start must have {name} > 0 to search it (on a log scale), got {values[name]}")
     return np.array([math.log2(values[name]) if name in _SCALED else values[name] for name in parameters])
 
 
 def _values_of(settings: Settings) -> dict[str, float]:
-    model = settings.model
-    return {"alpha": model.alpha, "beta": model.beta, "kappa": model.kappa, "edge_gain": model.edge_gain,
-            **{name: getattr(model.prior, name) for name in PRIOR_PARAMETERS}}
+    values = model_overrides(settings.model, kappa=True)
+    return {**{k: v for k, v in values.items() if k != "prior"}, **values["prior"]}
 
 
 def _values(parameters: tuple[str, ...], point: np.ndarray) -> dict[str, float]:
@@ -294,12 +314,10 @@ def _allowed(name: str, x: float) -> bool:
     return name not in _SCALED or -20.0 <= x <= 20.0
 
 
-def _settings(start: Settings, parameters: tuple[str, ...], point: np.ndarray, candidates_only: bool) -> Settings:
+def _settings(start: Settings, parameters: tuple[str, ...], point: np.ndarray) -> Settings:
     values = _values(parameters, point)
     prior = {name: values.pop(name) for name in PRIOR_PARAMETERS if name in values}
     overrides: dict[str, Any] = dict(values)
     if prior:
         overrides["prior"] = {**{name: getattr(start.model.prior, name) for name in PRIOR_PARAMETERS}, **prior}
-    if candidates_only:
-        overrides["require_edge"] = True
     return start.override(overrides)
