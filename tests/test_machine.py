@@ -140,6 +140,21 @@ def test_profiling_reports_each_kernel():
     assert profiled.timings() == {}
 
 
+def test_profiling_counts_the_bytes_of_each_launchs_buffers():
+    """news.cl's copy given float32 arrays of 1000 elements as source and destination, twice:
+    8000 bytes a launch, 16000 in all; the kernel known by its family."""
+    profiled = vmcl.Machine(profile=True)
+    source = profiled.to_device(np.arange(1000, dtype=np.float32))
+    target = profiled.empty((1000,), np.float32)
+    copy = profiled.kernel("news", "copy", T="float")
+    for _ in range(2):
+        profiled.launch(copy, (1000,), source, target, np.int64(1000))
+    np.testing.assert_array_equal(target.get(), np.arange(1000, dtype=np.float32))
+    times = profiled.timings()
+    assert times["copy"]["calls"] == 2 and times["copy"]["bytes"] == 16000
+    assert profiled.kernel_families()["copy"] == "news"
+
+
 def test_timings_need_profiling(machine):
     with pytest.raises(RuntimeError, match="profile=True"):
         machine.timings()

@@ -272,7 +272,8 @@ class Machine:
         self._kernels: dict[tuple, cl.Kernel] = {}
         # The machine's own kernels -> argument index -> (dtype, bytes) of the scalar each holds.
         self._scalar_args: dict[cl.Kernel, dict[int, tuple]] = {}
-        self._events: list[tuple[str, cl.Event]] = []
+        # Profiling: each launch's kernel name, the bytes of the buffers it was given, and its event.
+        self._events: list[tuple[str, int, cl.Event]] = []
         self._layouts: dict[tuple, tuple] = {}  # (shape, dtype) -> (shape, dtype, strides, size) for empty()
         self._constants: dict[Any, cl_array.Array] = {}  # constant()'s tables
         self._lock = threading.Lock()
@@ -339,6 +340,7 @@ class Machine:
         of it; every vmcl kernel checks its ids against the field's bounds, so the extra work-items idle.
         """
         values = []
+        buffer_bytes = 0
         for a in args:
             if isinstance(a, cl_array.Array):
                 if a.offset:
@@ -346,8 +348,11 @@ class Machine:
                     raise InputValueError("device arrays passed to kernels must not be views with an offset; "
                                           "copy the view")
                 values.append(a.base_data)
+                buffer_bytes += a.nbytes
             else:
                 values.append(a)
+                if isinstance(a, cl.MemoryObjectHolder):
+                    buffer_bytes += a.size
         if local_size is None and self.local_size is not None:
             local_size = (self.local_size,) + (1,) * (len(global_size) - 1)
         elif local_size is None and self.is_cpu:
@@ -364,7 +369,7 @@ class Machine:
                 self._set_arguments(kernel, scalars, values)
                 event = cl.enqueue_nd_range_kernel(self.queue, kernel, global_size, local_size)
         if self.profile:
-            self._events.append((kernel.function_name, event))
+            self._events.append((kernel.function_name, buffer_bytes, event))
         return event
 
     @staticmethod
@@ -514,21 +519,35 @@ class Machine:
     # -- timings --------------------------------------------------------------------------------
 
     def timings(self, *, reset: bool = True) -> dict[str, dict[str, float]]:
-        """Per-kernel device time since the last reset: {name: {"calls": n, "total_ms": t, "mean_ms": m}}.
+        """Per-kernel device time since the last reset: {name: {"calls": n, "total_ms": t, "mean_ms": m,
+        "bytes": b}}, b the bytes of the buffers its launches were given, summed over the launches (each
+        buffer counted once per launch: the traffic of a kernel that reads and writes each of its buffers
+        once, and a lower bound for one that reads a buffer more than once from beyond its caches; a
+        device array counts its own size, a raw buffer its allocation's).
 
         Only available with ``profile=True``; waits for the queue to drain.
         """
         if not self.profile:
             raise RuntimeError("timings() needs a Machine created with profile=True")
         self.queue.finish()
-        totals: dict[str, list[float]] = defaultdict(lambda: [0, 0.0])
-        for name, event in self._events:
+        totals: dict[str, list[float]] = defaultdict(lambda: [0, 0.0, 0])
+        for name, buffer_bytes, event in self._events:
             entry = totals[name]
             entry[0] += 1
             entry[1] += (event.profile.end - event.profile.start) * 1e-6
+            entry[2] += buffer_bytes
         if reset:
             self._events.clear()
-        return {name: {"calls": n, "total_ms": t, "mean_ms": t / n} for name, (n, t) in sorted(totals.items())}
+        return {name: {"calls": n, "total_ms": t, "mean_ms": t / n, "bytes": b}
+                for name, (n, t, b) in sorted(totals.items())}
+
+    def kernel_families(self) -> dict[str, str]:
+        """The kernels this machine has made, by name: the kernels/<family>.cl each comes from (several
+        families joined by "/" when they share a name)."""
+        found: dict[str, set[str]] = defaultdict(set)
+        for family, name, *_ in self._kernels:
+            found[name].add(family)
+        return {name: "/".join(sorted(families)) for name, families in sorted(found.items())}
 
 
 _default: Machine | None = None
