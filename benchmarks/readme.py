@@ -539,6 +539,22 @@ def protocol_figures(f: ResultsFile) -> str:
             "frames each")
 
 
+def roofline_figures(f: ResultsFile) -> str:
+    copy = re.search(r"moves ([\d.]+) GB/s", f.text)
+    parts = []
+    for size in ("256 x 256", "512 x 512"):
+        frame = re.search(rf"## {size}\n\nPer frame: (\d+) ms wall, (\d+) ms of device time in kernels "
+                          r"\((\d+)% of the wall.*?(\d+)% of the copy\.", f.text, re.DOTALL)
+        kernels = f.table("kernel", "family", "of the copy", section=size)
+        top = kernels.rows[0]
+        parts.append(f"{size}: {frame.group(2)} ms of device time per frame ({frame.group(3)}% of the "
+                     f"{frame.group(1)} ms wall, profiled), at {frame.group(4)}% of the copy on average; the "
+                     f"largest kernel {top[kernels.index('kernel')]} ({top[kernels.index('family')]}) "
+                     f"{top[kernels.index('share of device time')]} of it at {top[kernels.index('of the copy')]} "
+                     "of the copy")
+    return f"copy {copy.group(1)} GB/s; " + "; ".join(parts)
+
+
 def head_figures(f: ResultsFile) -> str:
     wire = f.table("command", "bytes (both ways)")
     return f"{wire.cell({'command': 'PING'}, 'round trip, ms')} ms PING round trip at 115200 baud"
@@ -566,6 +582,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
      mrf_figures),
     ("pipeline", "the whole machine per frame, stage by stage; one photograph through the monocular machine",
      pipeline_figures),
+    ("roofline", ("each kernel's device time, the bytes its launches are given and its bandwidth against the "
+                  "copy kernel's, for the whole machine at 256^2 and 512^2"), roofline_figures),
     ("distributed", ("`vmcl batch` on a local Dask cluster: items per second for 1 and 2 workers, 1 and 2 "
                      "threads; a model of N nodes"), distributed_figures),
     ("labelling", ("the linear classifier's labels on images it was not fitted to (new noise seed; and each "
