@@ -647,6 +647,7 @@ EXEMPT = {
     # Hash and write what vmcl itself made (fit_cue's tables, the files it read); tests/test_learn_fit.py.
     "vmcl.fitted:parameters_sha256", "vmcl.fitted:files_sha256", "vmcl.fitted:code_sha256", "vmcl.fitted:write_fitted",
     "vmcl.fitted:fitted_record", "vmcl.fitted:write_fitted_json", "vmcl.fitted:check_fitted_json",
+    "vmcl.fitted:with_data",
     # Records of vmcl.group and the scenes it is tested on, made by the calls above.
     "vmcl.group:Curve", "vmcl.group:Curves", "vmcl.group:Junctions", "vmcl.group:Grouping",
     "vmcl.group:StructuralSaliency", "vmcl.scenes:ClutterDisplay", "vmcl.scenes:Junction", "vmcl.scenes:OcclusionScene",

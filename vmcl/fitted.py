@@ -28,7 +28,7 @@ from typing import Any
 from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = ["FITTED_BY", "check_fitted", "check_fitted_json", "check_writable", "code_sha256", "files_sha256",
-           "fitted_record", "parameters_sha256", "write_fitted", "write_fitted_json"]
+           "fitted_record", "parameters_sha256", "with_data", "write_fitted", "write_fitted_json"]
 
 FITTED_BY = "vmcl fit"
 """The ``[fitted]`` table's ``written_by``: the mark of a file vmcl wrote, which it may replace."""
@@ -124,6 +124,14 @@ def fitted_record(parameters: Mapping[str, Any], provenance: Mapping[str, Any]) 
     # provenance says.
     return {"date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"), **provenance,
             "written_by": FITTED_BY, "vmcl": __version__, "parameters_sha256": parameters_sha256(parameters)}
+
+
+def with_data(data: str, provenance: Mapping[str, Any] | None) -> dict[str, Any]:
+    """A fitted artefact's provenance: ``provenance`` (None: nothing more) with ``data``, what it was
+    fitted on, unless ``provenance`` names its own."""
+    if provenance is not None and not isinstance(provenance, Mapping):
+        raise InputTypeError(f"provenance must be a mapping or None, got {type(provenance).__name__}")
+    return {"data": data, **(provenance or {})}
 
 
 def write_fitted_json(path: str | os.PathLike, parameters: Mapping[str, Any], provenance: Mapping[str, Any]) -> Path:

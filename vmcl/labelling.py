@@ -46,7 +46,7 @@ from vmcl import metrics
 from vmcl.cm.core import ArrayLike, check_bool, check_real, machine_for, real_host_array
 from vmcl.cm.core import field as device_field
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.fitted import check_fitted_json, write_fitted_json
+from vmcl.fitted import check_fitted_json, with_data, write_fitted_json
 from vmcl.labels import BIT_DEFINES, CUES, Cue, Label, cue_bit
 from vmcl.machine import Machine
 
@@ -212,13 +212,9 @@ class LinearLabeller:
         Path
             The file written.
         """
-        if path is None or not isinstance(path, (str, os.PathLike)):
-            raise InputTypeError(f"path must be a str or an os.PathLike, got {type(path).__name__}")
         data = {"features": list(FEATURES), "classes": [c.name for c in CLASSES], "fitted_on": self.fitted_on,
                 "weights": {k: np.round(np.asarray(w, np.float64), 5).tolist() for k, w in self.weights.items()}}
-        if provenance is not None and not isinstance(provenance, Mapping):
-            raise InputTypeError(f"provenance must be a mapping or None, got {type(provenance).__name__}")
-        return write_fitted_json(path, data, {"data": self.fitted_on, **(provenance or {})})
+        return write_fitted_json(path, data, with_data(self.fitted_on, provenance))
 
     @classmethod
     def fit(cls, samples: Iterable[tuple[np.ndarray, ...]], *, l2: float = 1e-3,

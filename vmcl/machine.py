@@ -545,7 +545,9 @@ class Machine:
         """The kernels this machine has made, by name: the kernels/<family>.cl each comes from (several
         families joined by "/" when they share a name)."""
         found: dict[str, set[str]] = defaultdict(set)
-        for family, name, *_ in self._kernels:
+        with self._launch_lock:  # kernels are added under it, from any thread
+            keys = list(self._kernels)
+        for family, name, *_ in keys:
             found[name].add(family)
         return {name: "/".join(sorted(families)) for name, families in sorted(found.items())}
 

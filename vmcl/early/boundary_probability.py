@@ -59,7 +59,7 @@ import pyopencl.array as cl_array
 from vmcl.cm.core import IMAGE_TYPES, ArrayLike, image_field, machine_for, result, vector_kernel
 from vmcl.early.filters import device_taps
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.fitted import check_fitted_json, write_fitted_json
+from vmcl.fitted import check_fitted_json, with_data, write_fitted_json
 from vmcl.machine import Machine
 
 __all__ = [
@@ -190,14 +190,10 @@ class BoundaryModel:
         Path
             The file written.
         """
-        if path is None or not isinstance(path, (str, os.PathLike)):
-            raise InputTypeError(f"path must be a str or an os.PathLike, got {type(path).__name__}")
         data = {"scales": list(self.scales), "features": list(self.features), "fitted_on": self.fitted_on,
                 "centres": np.round(self.centres.astype(np.float64), 5).tolist(),
                 "weights": np.round(self.weights.astype(np.float64), 5).tolist()}
-        if provenance is not None and not isinstance(provenance, Mapping):
-            raise InputTypeError(f"provenance must be a mapping or None, got {type(provenance).__name__}")
-        return write_fitted_json(path, data, {"data": self.fitted_on, **(provenance or {})})
+        return write_fitted_json(path, data, with_data(self.fitted_on, provenance))
 
 
 class BoundaryProbability(NamedTuple):
