@@ -321,34 +321,47 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
 #endif
 }
 
-/* Mean field for the constant kind: q[i, k] is the probability that pixel i takes level k; the Potts
- * interaction is replaced by its expectation kappa (1 - q_j(k)) under the neighbour's distribution. */
+/* Mean field for the constant kind: q[k n + i] (a plane per level, n = W H sites) is the probability
+ * that pixel i takes level k; the Potts interaction is replaced by its expectation kappa (1 - q_j(k))
+ * under the neighbour's distribution. SITES sites of the colour per work-item as float16 lanes, as
+ * f_update: with a plane per level a level's 16 sites are two contiguous loads (an interleaved layout
+ * made them gathers, and the update ran about 37 ns a site on PoCL's CPU device). */
 __kernel void q_update(__global float *q, __global const float *g, __global const float *w,
                        __global const float *lh, __global const float *lv, __constant float *levels,
                        float kappa, float T, int colour, long W_, long H_)
 {
-    int W = (int)W_, H = (int)H_, y = get_global_id(1);
-    int x = 2 * (int)get_global_id(0) + ((y + colour) & 1);
-    if (x >= W || y >= H) return;
-    int i = y * W + x;
-    int nb[4];
-    float keep[4];
-    neighbours(lh, lv, x, y, i, W, H, nb, keep);
-    float energy[NLEVELS];
-    float lowest = INFINITY;
+    int W = (int)W_, H = (int)H_, y = get_global_id(1), group = get_global_id(0), groups = GROUPS(W);
+    if (group >= groups || y >= H) return;
+    int n = W * H, all = n * NLEVELS, x0 = 2 * SITES * group + ((y + colour) & 1), base = y * W + x0;
+    int16 xs = x0 + 2 * LANES;
+    float16 wi = load_sites(w, base, 2, n), gi = load_sites(g, base, 2, n);
+    /* kappa times each bond's expectation of being kept (0 past the border); a neighbour's q is then read
+     * at clamped indices, finite whatever it is, and weighted by 0 there. */
+    float16 keep0 = select(ZERO16, kappa * (1.0f - load_sites(lh, base - 1, 2, n)), xs > 0);
+    float16 keep1 = select(ZERO16, kappa * (1.0f - load_sites(lh, base, 2, n)), xs < W - 1);
+    float16 keep2 = y > 0 ? kappa * (1.0f - load_sites(lv, base - W, 2, n)) : ZERO16;
+    float16 keep3 = y < H - 1 ? kappa * (1.0f - load_sites(lv, base, 2, n)) : ZERO16;
+    float16 kept = keep0 + keep1 + keep2 + keep3;
+    float16 energy[NLEVELS];
+    float16 lowest = (float16)(INFINITY);
+#pragma unroll
     for (int k = 0; k < NLEVELS; ++k) {
-        float d = levels[k] - g[i];
-        float e = w[i] * d * d;
-        for (int m = 0; m < 4; ++m) e += kappa * keep[m] * (1.0f - q[nb[m] * NLEVELS + k]);
+        int plane = k * n + base;
+        float16 d = levels[k] - gi;
+        float16 e = wi * d * d + kept;
+        e -= keep0 * load_sites(q, plane - 1, 2, all) + keep1 * load_sites(q, plane + 1, 2, all)
+           + keep2 * load_sites(q, plane - W, 2, all) + keep3 * load_sites(q, plane + W, 2, all);
         energy[k] = e;
-        lowest = min(lowest, e);
+        lowest = fmin(lowest, e);
     }
-    float total = 0.0f;
+    float16 total = ZERO16;
+#pragma unroll
     for (int k = 0; k < NLEVELS; ++k) {
-        energy[k] = exp(-(energy[k] - lowest) / T);
+        energy[k] = exp((lowest - energy[k]) / T);
         total += energy[k];
     }
-    for (int k = 0; k < NLEVELS; ++k) q[i * NLEVELS + k] = energy[k] / total;
+#pragma unroll
+    for (int k = 0; k < NLEVELS; ++k) store_sites(q, k * n + base, energy[k] / total, x0, W);
 }
 
 /* q from a field of levels: all the mass on the pixel's own level. */
@@ -356,17 +369,18 @@ __kernel void q_init(__global float *q, __global const float *f, __constant floa
 {
     long i = get_global_id(0);
     if (i >= n) return;
-    for (int k = 0; k < NLEVELS; ++k) q[i * NLEVELS + k] = levels[k] == f[i] ? 1.0f : 0.0f;
+    for (int k = 0; k < NLEVELS; ++k) q[k * n + i] = levels[k] == f[i] ? 1.0f : 0.0f;
 }
 
-/* The field of the most probable level of each pixel (mean field) or of the most frequent one (MPM). */
+/* The field of the most probable level of each pixel (mean field) or of the most frequent one (MPM);
+ * weights hold a plane of n per level. */
 __kernel void levels_mode(__global const float *weights, __global float *f, __constant float *levels, long n)
 {
     long i = get_global_id(0);
     if (i >= n) return;
     int best = 0;
     for (int k = 1; k < NLEVELS; ++k)
-        if (weights[i * NLEVELS + k] > weights[i * NLEVELS + best]) best = k;
+        if (weights[k * n + i] > weights[best * n + i]) best = k;
     f[i] = levels[best];
 }
 
@@ -413,8 +427,7 @@ inline float16 line_bond16(__global const float *f, __global const float *q, int
 #if KIND == 1 && MODE == MODE_MEAN
     float16 same = ZERO16;
     for (int k = 0; k < NLEVELS; ++k)
-        same += load_sites(q, base * NLEVELS + k, 2 * NLEVELS, n * NLEVELS)
-              * load_sites(q, (base + step) * NLEVELS + k, 2 * NLEVELS, n * NLEVELS);
+        same += load_sites(q, k * n + base, 2, n * NLEVELS) * load_sites(q, k * n + base + step, 2, n * NLEVELS);
     return kappa * (1.0f - same);
 #elif KIND == 0
     float16 s = ZERO16;
@@ -487,7 +500,8 @@ __kernel void line_update(__global float *lh, __global float *lv, __global const
 
 /* ------------------------------------------------------------------------ estimates and energy */
 
-/* Marroquin's estimators: running sums of f (smooth) or level counts (constant) and of the lines. */
+/* Marroquin's estimators: running sums of f (smooth) or level counts (constant, a plane of n per level)
+ * and of the lines. */
 __kernel void accumulate(__global const float *f, __global const float *lh, __global const float *lv,
                          __global float *sum_f, __global float *sum_h, __global float *sum_v,
                          __constant float *levels, long n)
@@ -498,7 +512,7 @@ __kernel void accumulate(__global const float *f, __global const float *lh, __gl
     for (int c = 0; c < NCOMP; ++c) sum_f[i * NCOMP + c] += f[i * NCOMP + c];
 #else
     for (int k = 0; k < NLEVELS; ++k)
-        if (levels[k] == f[i]) sum_f[i * NLEVELS + k] += 1.0f;
+        if (levels[k] == f[i]) sum_f[k * n + i] += 1.0f;
 #endif
     sum_h[i] += lh[i];
     sum_v[i] += lv[i];

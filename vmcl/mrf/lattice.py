@@ -59,9 +59,7 @@ class Lattice:
         self.ncomp = 1 if data.ndim == 2 else data.shape[2]
         self.n = self.height * self.width
         self.grid = (self.width, self.height)
-        # Colour launches: q_update takes one site of the colour per work-item (half a row), f_update and
-        # line_update sixteen, as vector lanes (kernels/mrf.cl, SITES).
-        self.half_grid = ((self.width + 1) // 2, self.height)
+        # Colour launches: sixteen sites of the colour per work-item, as vector lanes (kernels/mrf.cl, SITES).
         self.group_grid = (((self.width + 1) // 2 + 15) // 16, self.height)
         self.dims = (np.int64(self.width), np.int64(self.height))
         shape = data.shape
@@ -140,7 +138,7 @@ class Lattice:
         lines = self.kernel("line_update", mode)
         for phase, colour in order:
             if phase == "f" and q is not None:
-                self.machine.launch(f_kernel, self.half_grid, q, self.g, self.w, self.lh, self.lv, self.levels,
+                self.machine.launch(f_kernel, self.group_grid, q, self.g, self.w, self.lh, self.lv, self.levels,
                                     self.kappa, temperature, np.int32(colour), *self.dims)
             elif phase == "f":
                 self.machine.launch(f_kernel, self.group_grid, self.f, self.g, self.w, self.lh, self.lv, self.levels,
