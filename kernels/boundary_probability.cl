@@ -26,6 +26,31 @@
 #define AT(f, xx, yy) ((f)[(yy) * W + (xx)])
 #define PLANE(f, p, xx, yy) ((f)[IDX3((xx), (yy), (p), W, H)])
 
+/* Kernels that take VEC pixels of a row per work-item (VT lanes; VEC is 1 on GPUs) read a plane's chunk
+ * contiguously inside the row; a row's last, partial chunk reads its last pixel again in the lanes past
+ * the end, and stores only the lanes inside. */
+#define T float
+static VT chunk_at(__global const float *plane, long x0, long y, long W)
+{
+    __global const float *row = plane + y * W;
+    if (x0 + VEC <= W) return VLOAD(row + x0);
+    float t[VEC];
+    for (int i = 0; i < VEC; i++) t[i] = row[min(x0 + i, W - 1)];
+    return VLOAD(t);
+}
+
+/* The lanes of v inside the row, as bytes. */
+static void store_bytes(__global uchar *row, long x0, long W, VIT v)
+{
+    int t[VEC];
+#if VEC == 1
+    t[0] = v;
+#else
+    VCAT(vstore, VEC)(v, 0, t);
+#endif
+    for (int i = 0; i < VEC && x0 + i < W; i++) row[x0 + i] = (uchar)t[i];
+}
+
 #ifdef IN_T
 static float srgb_linear(float c)
 {
@@ -108,27 +133,36 @@ __kernel void bank(__global const float *fine, __global const float *coarse, __g
 }
 
 #ifdef NT
-/* The nearest of the NT texton centres (NT x NBANK) in the compressed response space. */
+/* The nearest of the NT texton centres (NT x NBANK) in the compressed response space, VEC pixels of a row
+ * per work-item: their responses are gathered once (stride NBANK), then every centre is a vector step. */
 __kernel void nearest(__global const float *responses, __global const float *centres, __global uchar *label,
                       long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    __global const float *r = responses + ((size_t)y * W + x) * NBANK;
-    int best = 0;
-    float best_d = INFINITY;
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    VT r[NBANK];
+    for (int j = 0; j < NBANK; j++) {
+        float t[VEC];
+        for (int i = 0; i < VEC; i++) t[i] = responses[((size_t)y * W + min(x0 + i, W - 1)) * NBANK + j];
+        r[j] = VLOAD(t);
+    }
+    VIT best = (VIT)0;
+    VT best_d = (VT)INFINITY;
     for (int k = 0; k < NT; k++) {
-        float d = 0.0f;
+        VT d = (VT)0.0f;
         for (int j = 0; j < NBANK; j++) {
-            float e = r[j] - centres[k * NBANK + j];
+            VT e = r[j] - centres[k * NBANK + j];
             d += e * e;
         }
-        if (d < best_d) { best_d = d; best = k; }
+        VIT closer = d < best_d;
+        best_d = select(best_d, d, closer);
+        best = select(best, (VIT)k, closer);
     }
-    AT(label, x, y) = (uchar)best;
+    store_bytes(label + y * W, x0, W, best);
 }
 #endif
 #endif
+
 
 #ifdef NT
 /* Each pixel's share of each texton in the Gaussian row window: one pass over the taps, the weight
@@ -150,7 +184,18 @@ __kernel void histogram_rows(__global const uchar *label, __global float *out, _
 /* The Gaussian's row and column passes over a (P, H, W) stack into planes first .. first + P - 1 of
  * out, work-item (k, y, p) standing for the VEC pixels [k VEC, (k + 1) VEC) of row y of plane p: one vector step where the window lies inside
  * the row (PoCL then runs the CPU's SIMD lanes over contiguous loads), pixel by pixel at a border. */
-#define T float
+/* row[a .. a + VEC), the row's end pixels repeated past its ends: one load inside the row, one pixel
+ * broadcast wholly past an end, a gather only where the chunk straddles an end. */
+static VT clamped_chunk(__global const float *row, long a, long W)
+{
+    if (a >= 0 && a + VEC <= W) return VLOAD(row + a);
+    if (a + VEC <= 0) return (VT)row[0];
+    if (a >= W) return (VT)row[W - 1];
+    float t[VEC];
+    for (int i = 0; i < VEC; i++) t[i] = row[clamp(a + i, 0L, W - 1)];
+    return VLOAD(t);
+}
+
 __kernel void planes_rows(__global const float *in, __global float *out, __global const float *taps, int r,
                           long first, long W, long H)
 {
@@ -158,17 +203,21 @@ __kernel void planes_rows(__global const float *in, __global float *out, __globa
     if (x0 >= W || y >= H) return;
     __global const float *row = in + (p * H + y) * W;
     __global float *target = out + ((first + p) * H + y) * W;
+    VT acc = (VT)0.0f;
     if (x0 >= r && x0 + VEC + r <= W) {
-        VT acc = (VT)0.0f;
         for (int k = -r; k <= r; k++) acc += taps[k + r] * VLOAD(row + x0 + k);
+    } else {
+        /* Near an end, still in vector steps: a pixel-by-pixel loop there cost more than the rest of the
+         * row at the surround's radius. */
+        for (int k = -r; k <= r; k++) acc += taps[k + r] * clamped_chunk(row, x0 + k, W);
+    }
+    if (x0 + VEC <= W) {
         VSTORE(acc, target + x0);
         return;
     }
-    for (long x = x0; x < min(x0 + VEC, W); x++) {
-        float acc = 0.0f;
-        for (int k = -r; k <= r; k++) acc += taps[k + r] * row[clamp(x + k, 0L, W - 1)];
-        target[x] = acc;
-    }
+    float t[VEC];
+    VSTORE(acc, t);
+    for (int i = 0; x0 + i < W; i++) target[x0 + i] = t[i];
 }
 
 __kernel void planes_cols(__global const float *in, __global float *out, __global const float *taps, int r,
@@ -196,48 +245,71 @@ __kernel void planes_cols(__global const float *in, __global float *out, __globa
 /* Centred differences, scale-normalised: sigma times the gradient of a field smoothed at sigma gives a
  * step the same peak at every scale. lab: 3 planes smoothed at sigma; hist: NT planes smoothed at
  * texture_sigma. comp: this scale's 6 planes from plane 6 k: gx, gy of L, a and b; tensor: the 3 planes
- * txx, txy, tyy of the texture tensor before its integration (the host smooths them). */
+ * txx, txy, tyy of the texture tensor before its integration (the host smooths them). Work-items as
+ * planes_rows: VEC pixels of a row, contiguous loads inside the row, pixel by pixel at its ends (the
+ * same arithmetic, so the two agree to the bit). */
 __kernel void components(__global const float *lab, __global const float *hist, __global float *comp,
                          __global float *tensor, float sigma, float texture_sigma, int nt, int k, long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    long xm = max(x - 1, 0L), xp = min(x + 1, W - 1), ym = max(y - 1, 0L), yp = min(y + 1, H - 1);
-    for (int p = 0; p < 3; p++) {
-        PLANE(comp, 6 * k + 2 * p, x, y) = 0.5f * sigma * (PLANE(lab, p, xp, y) - PLANE(lab, p, xm, y));
-        PLANE(comp, 6 * k + 2 * p + 1, x, y) = 0.5f * sigma * (PLANE(lab, p, x, yp) - PLANE(lab, p, x, ym));
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    long ym = max(y - 1, 0L), yp = min(y + 1, H - 1);
+    if (x0 >= 1 && x0 + VEC + 1 <= W) {
+        for (int p = 0; p < 3; p++) {
+            VT gx = 0.5f * sigma * (VLOAD(&PLANE(lab, p, x0 + 1, y)) - VLOAD(&PLANE(lab, p, x0 - 1, y)));
+            VT gy = 0.5f * sigma * (VLOAD(&PLANE(lab, p, x0, yp)) - VLOAD(&PLANE(lab, p, x0, ym)));
+            VSTORE(gx, &PLANE(comp, 6 * k + 2 * p, x0, y));
+            VSTORE(gy, &PLANE(comp, 6 * k + 2 * p + 1, x0, y));
+        }
+        VT txx = (VT)0.0f, txy = (VT)0.0f, tyy = (VT)0.0f;
+        for (int j = 0; j < nt; j++) {
+            VT gx = 0.5f * texture_sigma * (VLOAD(&PLANE(hist, j, x0 + 1, y)) - VLOAD(&PLANE(hist, j, x0 - 1, y)));
+            VT gy = 0.5f * texture_sigma * (VLOAD(&PLANE(hist, j, x0, yp)) - VLOAD(&PLANE(hist, j, x0, ym)));
+            txx += gx * gx; txy += gx * gy; tyy += gy * gy;
+        }
+        VSTORE(txx, &PLANE(tensor, 0, x0, y));
+        VSTORE(txy, &PLANE(tensor, 1, x0, y));
+        VSTORE(tyy, &PLANE(tensor, 2, x0, y));
+        return;
     }
-    float txx = 0.0f, txy = 0.0f, tyy = 0.0f;
-    for (int k = 0; k < nt; k++) {
-        float gx = 0.5f * texture_sigma * (PLANE(hist, k, xp, y) - PLANE(hist, k, xm, y));
-        float gy = 0.5f * texture_sigma * (PLANE(hist, k, x, yp) - PLANE(hist, k, x, ym));
-        txx += gx * gx; txy += gx * gy; tyy += gy * gy;
+    for (long x = x0; x < min(x0 + VEC, W); x++) {
+        long xm = max(x - 1, 0L), xp = min(x + 1, W - 1);
+        for (int p = 0; p < 3; p++) {
+            PLANE(comp, 6 * k + 2 * p, x, y) = 0.5f * sigma * (PLANE(lab, p, xp, y) - PLANE(lab, p, xm, y));
+            PLANE(comp, 6 * k + 2 * p + 1, x, y) = 0.5f * sigma * (PLANE(lab, p, x, yp) - PLANE(lab, p, x, ym));
+        }
+        float txx = 0.0f, txy = 0.0f, tyy = 0.0f;
+        for (int j = 0; j < nt; j++) {
+            float gx = 0.5f * texture_sigma * (PLANE(hist, j, xp, y) - PLANE(hist, j, xm, y));
+            float gy = 0.5f * texture_sigma * (PLANE(hist, j, x, yp) - PLANE(hist, j, x, ym));
+            txx += gx * gx; txy += gx * gy; tyy += gy * gy;
+        }
+        PLANE(tensor, 0, x, y) = txx;
+        PLANE(tensor, 1, x, y) = txy;
+        PLANE(tensor, 2, x, y) = tyy;
     }
-    PLANE(tensor, 0, x, y) = txx;
-    PLANE(tensor, 1, x, y) = txy;
-    PLANE(tensor, 2, x, y) = tyy;
 }
 #endif
 
 #ifdef NORIENT
-/* One pixel's derivative components and texture tensors, read from global memory once for all the
+/* The pixels' derivative components and texture tensors, read from global memory once for all the
  * orientations: comp holds NSCALES x 6 planes (d/dx, d/dy of L, a and b), tensors NSCALES x 3. */
-static void pixel_at(__global const float *comp, __global const float *tensors, long x, long y, long W, long H,
-                     float *d, float *t)
+static void pixel_at(__global const float *comp, __global const float *tensors, long x0, long y, long W, long H,
+                     VT *d, VT *t)
 {
-    for (int j = 0; j < 6 * NSCALES; j++) d[j] = PLANE(comp, j, x, y);
-    for (int j = 0; j < 3 * NSCALES; j++) t[j] = PLANE(tensors, j, x, y);
+    for (int j = 0; j < 6 * NSCALES; j++) d[j] = chunk_at(comp + j * H * W, x0, y, W);
+    for (int j = 0; j < 3 * NSCALES; j++) t[j] = chunk_at(tensors + j * H * W, x0, y, W);
 }
 
 /* The gradients across orientation theta (the boundary's normal at theta, (c, s) = (cos, sin) theta), 4 per
  * scale: |d/dn| of L, a and b, and the norm of the texton histograms' derivative (from the integrated
  * texture tensor). */
-static void gradients_at(const float *d, const float *t3, float c, float s, float *g)
+static void gradients_at(const VT *d, const VT *t3, float c, float s, VT *g)
 {
     for (int sc = 0; sc < NSCALES; sc++) {
         for (int p = 0; p < 3; p++)
             g[4 * sc + p] = fabs(c * d[6 * sc + 2 * p] + s * d[6 * sc + 2 * p + 1]);
-        float q = c * c * t3[3 * sc] + 2.0f * c * s * t3[3 * sc + 1] + s * s * t3[3 * sc + 2];
+        VT q = c * c * t3[3 * sc] + 2.0f * c * s * t3[3 * sc + 1] + s * s * t3[3 * sc + 2];
         g[4 * sc + 3] = sqrt(max(q, 0.0f));
     }
 }
@@ -246,7 +318,7 @@ static void gradients_at(const float *d, const float *t3, float c, float s, floa
  * which lets it bend its response to contrast), and the square roots of g over the surround's mean
  * gradient (surround: 4 NSCALES planes) plus SURROUND_FLOOR: a gradient among many like it (a texture's
  * inner edges) counts less than the same gradient alone, the surround suppression of contour detectors. */
-static void features_at(const float *d, const float *t3, const float *inv_surround, float c, float s, float *f)
+static void features_at(const VT *d, const VT *t3, const VT *inv_surround, float c, float s, VT *f)
 {
     const int n = 4 * NSCALES;
     gradients_at(d, t3, c, s, f);
@@ -256,10 +328,10 @@ static void features_at(const float *d, const float *t3, const float *inv_surrou
     }
 }
 
-/* 1 / sqrt(SURROUND_FLOOR + surround) of each gradient at (x, y): the same at every orientation. */
-static void inverse_surround(__global const float *surround, long x, long y, long W, long H, float *inv)
+/* 1 / sqrt(SURROUND_FLOOR + surround) of each gradient at the pixels: the same at every orientation. */
+static void inverse_surround(__global const float *surround, long x0, long y, long W, long H, VT *inv)
 {
-    for (int j = 0; j < 4 * NSCALES; j++) inv[j] = rsqrt(SURROUND_FLOOR + PLANE(surround, j, x, y));
+    for (int j = 0; j < 4 * NSCALES; j++) inv[j] = rsqrt(SURROUND_FLOOR + chunk_at(surround + j * H * W, x0, y, W));
 }
 
 /* The length of (a, b): the gradients here are small (images in [0, 1]), so no rescaling against
@@ -285,14 +357,16 @@ __kernel void strongest(__global const float *comp, __global const float *tensor
     }
 }
 
-/* out: (NORIENT, H, W, NFEAT). directions: (cos, sin) of each orientation's angle, o pi / NORIENT (a table:
- * the trigonometric functions were a large share of the classifier's time). */
+#if VEC == 1
+/* out: (NORIENT, H, W, NFEAT), a pixel per work-item (only built with VEC 1: it is for fitting). directions: (cos, sin) of each
+ * orientation's angle, o pi / NORIENT (a table: the trigonometric functions were a large share of the
+ * classifier's time). */
 __kernel void oriented(__global const float *comp, __global const float *tensors, __global const float *surround,
                        __constant float *directions, __global float *out, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
-    float f[NFEAT], inv[4 * NSCALES], d[6 * NSCALES], t3[3 * NSCALES];
+    VT f[NFEAT], inv[4 * NSCALES], d[6 * NSCALES], t3[3 * NSCALES];
     inverse_surround(surround, x, y, W, H, inv);
     pixel_at(comp, tensors, x, y, W, H, d, t3);
     for (int o = 0; o < NORIENT; o++) {
@@ -301,27 +375,34 @@ __kernel void oriented(__global const float *comp, __global const float *tensors
         for (int j = 0; j < NFEAT; j++) dst[j] = f[j];
     }
 }
+#endif
 
-/* weights: bias, then NFEAT weights. directions: as for oriented. theta: the index of the winning orientation. */
+/* weights: bias, then NFEAT weights. directions: as for oriented. theta: the index of the winning
+ * orientation. VEC pixels of a row per work-item. */
 __kernel void probability(__global const float *comp, __global const float *tensors, __global const float *surround,
                           __constant float *directions, __constant float *weights, __global float *p,
                           __global uchar *theta, long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    float f[NFEAT], inv[4 * NSCALES], d[6 * NSCALES], t3[3 * NSCALES];
-    inverse_surround(surround, x, y, W, H, inv);
-    pixel_at(comp, tensors, x, y, W, H, d, t3);
-    float best = -INFINITY;
-    int best_o = 0;
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    VT f[NFEAT], inv[4 * NSCALES], d[6 * NSCALES], t3[3 * NSCALES];
+    inverse_surround(surround, x0, y, W, H, inv);
+    pixel_at(comp, tensors, x0, y, W, H, d, t3);
+    VT best = (VT)(-INFINITY);
+    VIT best_o = (VIT)0;
     for (int o = 0; o < NORIENT; o++) {
         features_at(d, t3, inv, directions[2 * o], directions[2 * o + 1], f);
-        float z = weights[0];
+        VT z = (VT)weights[0];
         for (int j = 0; j < NFEAT; j++) z += weights[1 + j] * f[j];
-        if (z > best) { best = z; best_o = o; }
+        VIT better = z > best;
+        best = select(best, z, better);
+        best_o = select(best_o, (VIT)o, better);
     }
-    AT(p, x, y) = 1.0f / (1.0f + exp(-best));
-    AT(theta, x, y) = (uchar)best_o;
+    VT prob = 1.0f / (1.0f + exp(-best));
+    float pt[VEC];
+    VSTORE(prob, pt);
+    for (int i = 0; i < VEC && x0 + i < W; i++) AT(p, x0 + i, y) = pt[i];
+    store_bytes(theta + y * W, x0, W, best_o);
 }
 
 static float bilinear(__global const float *f, float fx, float fy, long W, long H)

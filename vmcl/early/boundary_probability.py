@@ -56,7 +56,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import IMAGE_TYPES, ArrayLike, image_field, machine_for, result, vector_kernel
+from vmcl.cm.core import IMAGE_TYPES, ArrayLike, image_field, launch_rows, machine_for, result, vector_kernel
 from vmcl.early.filters import device_taps
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.fitted import check_fitted_json, with_data, write_fitted_json
@@ -304,8 +304,8 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
     responses = _bank(machine, lab)
     count = len(model.centres)
     labels = machine.empty((height, width), np.uint8)
-    machine.launch(machine.kernel("boundary_probability", "nearest", NBANK=BANK_SIZE, NT=count), (width, height),
-                   responses, _constant(machine, ("centres", model), lambda: model.centres), labels, *dims)
+    launch_rows(machine, vector_kernel(machine, "boundary_probability", "nearest", NBANK=BANK_SIZE, NT=count), width,
+                height, responses, _constant(machine, ("centres", model), lambda: model.centres), labels, *dims)
     comp = machine.empty((6 * len(model.scales), height, width), np.float32)
     tensors = machine.empty((3 * len(model.scales), height, width), np.float32)
     histograms = machine.empty((count, height, width), np.float32)
@@ -317,9 +317,9 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
         machine.launch(machine.kernel("boundary_probability", "histogram_rows", NT=count), (width, height),
                        labels, rows, taps, np.int32(radius), *dims)
         _planes_pass(machine, "planes_cols", rows, histograms, texture_sigma, count)
-        machine.launch(machine.kernel("boundary_probability", "components", NT=count), (width, height),
-                       _smooth(machine, lab, sigma), histograms, comp, tensor, np.float32(sigma),
-                       np.float32(texture_sigma), np.int32(count), np.int32(k), *dims)
+        launch_rows(machine, vector_kernel(machine, "boundary_probability", "components", NT=count), width, height,
+                    _smooth(machine, lab, sigma), histograms, comp, tensor, np.float32(sigma),
+                    np.float32(texture_sigma), np.int32(count), np.int32(k), *dims)
         # The tensor integrated at the texture's scale: a band of textons of its own (a contrast edge's)
         # gives the histograms' derivative a peak either side of the band, which integration merges.
         _planes_pass(machine, "planes_rows", tensor, rows, texture_sigma, 3)
@@ -420,9 +420,9 @@ def boundary_probability(image: ArrayLike, *, model: BoundaryModel | None = None
     dense = machine.empty((height, width), np.float32)
     theta = machine.empty((height, width), np.uint8)
     defines = _defines(model)
-    machine.launch(machine.kernel("boundary_probability", "probability", **defines), (width, height),
-                   *_inputs(machine, data, model), _directions(machine),
-                   _constant(machine, ("weights", model), lambda: model.weights), dense, theta, *dims)
+    launch_rows(machine, vector_kernel(machine, "boundary_probability", "probability", **defines), width, height,
+                *_inputs(machine, data, model), _directions(machine),
+                _constant(machine, ("weights", model), lambda: model.weights), dense, theta, *dims)
     thinned = machine.empty((height, width), np.float32)
     machine.launch(machine.kernel("boundary_probability", "thin", **defines), (width, height), dense, theta,
                    _directions(machine), thinned, *dims)
