@@ -39,6 +39,19 @@ static VT chunk_at(__global const float *plane, long x0, long y, long W)
     return VLOAD(t);
 }
 
+/* v's lanes inside the row into plane p of out. */
+static void store_chunk(__global float *out, int p, long x0, long y, long W, long H, VT v)
+{
+    __global float *row = out + ((size_t)p * H + y) * W;
+    if (x0 + VEC <= W) {
+        VSTORE(v, row + x0);
+        return;
+    }
+    float t[VEC];
+    VSTORE(v, t);
+    for (int i = 0; x0 + i < W; i++) row[x0 + i] = t[i];
+}
+
 /* The lanes of v inside the row, as bytes. */
 static void store_bytes(__global uchar *row, long x0, long W, VIT v)
 {
@@ -52,44 +65,58 @@ static void store_bytes(__global uchar *row, long x0, long W, VIT v)
 }
 
 #ifdef IN_T
-static float srgb_linear(float c)
+static VT srgb_linear(VT c)
 {
-    return c <= 0.04045f ? c / 12.92f : exp2(2.4f * log2((c + 0.055f) / 1.055f));
+    return select(exp2(2.4f * log2((c + 0.055f) / 1.055f)), c / 12.92f, c <= 0.04045f);
 }
 
-static float lab_f(float t)
+static VT lab_f(VT t)
 {
-    return t > 0.008856452f ? exp2(log2(t) * (1.0f / 3.0f)) : t * 7.787037f + 16.0f / 116.0f;
+    return select(t * 7.787037f + 16.0f / 116.0f, exp2(log2(t) * (1.0f / 3.0f)), t > 0.008856452f);
 }
 
+/* Channel c of the chunk's pixels (the last pixel again past the row's end), linear: 8-bit input through
+ * its 256 linear values, tabulated by the host (the power law is the kernel's dearest step). */
+static VT linear_chunk(__global const IN_T *in, __constant float *linear, float scale, int c, long x0, long y,
+                       long W)
+{
+    float t[VEC];
+    for (int i = 0; i < VEC; i++) {
+        IN_T v = in[((size_t)y * W + min(x0 + i, W - 1)) * CHANNELS + c];
 #if LINEAR_TABLE
-/* 8-bit input: its 256 linear values, tabulated by the host (the power law is the kernel's dearest step). */
-#define LINEAR(v) linear[(int)(v)]
+        t[i] = linear[(int)v];
 #else
-#define LINEAR(v) srgb_linear(clamp((float)(v) / scale, 0.0f, 1.0f))
+        t[i] = clamp((float)v / scale, 0.0f, 1.0f);
 #endif
+    }
+#if LINEAR_TABLE
+    return VLOAD(t);
+#else
+    return srgb_linear(VLOAD(t));
+#endif
+}
 
 /* out: the (3, H, W) planes L, a, b. scale: the input's full scale (255 for uint8, 65535 for uint16,
- * 1 for float). linear: with LINEAR_TABLE, the linear value of each 8-bit level. */
+ * 1 for float). linear: with LINEAR_TABLE, the linear value of each 8-bit level. VEC pixels of a row per
+ * work-item. */
 __kernel void lab(__global const IN_T *in, __global float *out, __constant float *linear, float scale, long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    size_t i = (size_t)y * W + x, n = (size_t)W * H;
-    __global float *L = out, *A = out + n, *B = out + 2 * n;
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
 #if CHANNELS == 3
-    float r = LINEAR(in[3 * i]), g = LINEAR(in[3 * i + 1]), b = LINEAR(in[3 * i + 2]);
-    float fx = lab_f((0.412453f * r + 0.357580f * g + 0.180423f * b) / 0.950456f);
-    float fy = lab_f(0.212671f * r + 0.715160f * g + 0.072169f * b);
-    float fz = lab_f((0.019334f * r + 0.119193f * g + 0.950227f * b) / 1.088754f);
-    L[i] = (116.0f * fy - 16.0f) / 100.0f;
-    A[i] = 5.0f * (fx - fy);
-    B[i] = 2.0f * (fy - fz);
+    VT r = linear_chunk(in, linear, scale, 0, x0, y, W), g = linear_chunk(in, linear, scale, 1, x0, y, W);
+    VT b = linear_chunk(in, linear, scale, 2, x0, y, W);
+    VT fx = lab_f((0.412453f * r + 0.357580f * g + 0.180423f * b) / 0.950456f);
+    VT fy = lab_f(0.212671f * r + 0.715160f * g + 0.072169f * b);
+    VT fz = lab_f((0.019334f * r + 0.119193f * g + 0.950227f * b) / 1.088754f);
+    store_chunk(out, 0, x0, y, W, H, (116.0f * fy - 16.0f) / 100.0f);
+    store_chunk(out, 1, x0, y, W, H, 5.0f * (fx - fy));
+    store_chunk(out, 2, x0, y, W, H, 2.0f * (fy - fz));
 #else
     /* Grey: the lightness of a neutral colour of that luminance; no chroma. */
-    L[i] = (116.0f * lab_f(LINEAR(in[i])) - 16.0f) / 100.0f;
-    A[i] = 0.0f;
-    B[i] = 0.0f;
+    store_chunk(out, 0, x0, y, W, H, (116.0f * lab_f(linear_chunk(in, linear, scale, 0, x0, y, W)) - 16.0f) / 100.0f);
+    store_chunk(out, 1, x0, y, W, H, (VT)0.0f);
+    store_chunk(out, 2, x0, y, W, H, (VT)0.0f);
 #endif
 }
 #endif
@@ -336,24 +363,27 @@ static void inverse_surround(__global const float *surround, long x0, long y, lo
 
 /* The length of (a, b): the gradients here are small (images in [0, 1]), so no rescaling against
  * overflow is needed, which makes hypot() several times dearer on CPUs. */
-static float norm2(float a, float b)
+static VT norm2(VT a, VT b)
 {
     return sqrt(a * a + b * b);
 }
 
 /* Each gradient's largest value over all orientations, (4 NSCALES, H, W): what the surround averages.
- * For L, a and b the gradient's norm; for the texture the square root of its tensor's larger eigenvalue. */
+ * For L, a and b the gradient's norm; for the texture the square root of its tensor's larger eigenvalue.
+ * VEC pixels of a row per work-item. */
 __kernel void strongest(__global const float *comp, __global const float *tensors, __global float *out, long W,
                         long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    VT d[6 * NSCALES], t3[3 * NSCALES];
+    pixel_at(comp, tensors, x0, y, W, H, d, t3);
     for (int sc = 0; sc < NSCALES; sc++) {
         for (int p = 0; p < 3; p++)
-            PLANE(out, 4 * sc + p, x, y) = norm2(PLANE(comp, 6 * sc + 2 * p, x, y), PLANE(comp, 6 * sc + 2 * p + 1, x, y));
-        float a = PLANE(tensors, 3 * sc, x, y), b = PLANE(tensors, 3 * sc + 1, x, y), d = PLANE(tensors, 3 * sc + 2, x, y);
-        float largest = 0.5f * (a + d) + sqrt(0.25f * (a - d) * (a - d) + b * b);
-        PLANE(out, 4 * sc + 3, x, y) = sqrt(max(largest, 0.0f));
+            store_chunk(out, 4 * sc + p, x0, y, W, H, norm2(d[6 * sc + 2 * p], d[6 * sc + 2 * p + 1]));
+        VT a = t3[3 * sc], b = t3[3 * sc + 1], c = t3[3 * sc + 2];
+        VT largest = 0.5f * (a + c) + sqrt(0.25f * (a - c) * (a - c) + b * b);
+        store_chunk(out, 4 * sc + 3, x0, y, W, H, sqrt(max(largest, 0.0f)));
     }
 }
 
@@ -398,10 +428,7 @@ __kernel void probability(__global const float *comp, __global const float *tens
         best = select(best, z, better);
         best_o = select(best_o, (VIT)o, better);
     }
-    VT prob = 1.0f / (1.0f + exp(-best));
-    float pt[VEC];
-    VSTORE(prob, pt);
-    for (int i = 0; i < VEC && x0 + i < W; i++) AT(p, x0 + i, y) = pt[i];
+    store_chunk(p, 0, x0, y, W, H, 1.0f / (1.0f + exp(-best)));
     store_bytes(theta + y * W, x0, W, best_o);
 }
 

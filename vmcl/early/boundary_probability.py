@@ -254,11 +254,11 @@ def _lab(machine: Machine, data: cl_array.Array) -> cl_array.Array:
     height, width = data.shape[:2]
     planes = machine.empty((3, height, width), np.float32)
     table = data.dtype == np.uint8
-    kernel = machine.kernel("boundary_probability", "lab", IN_T=IMAGE_TYPES[data.dtype],
-                            CHANNELS=3 if data.ndim == 3 else 1, LINEAR_TABLE=int(table))
+    kernel = vector_kernel(machine, "boundary_probability", "lab", IN_T=IMAGE_TYPES[data.dtype],
+                           CHANNELS=3 if data.ndim == 3 else 1, LINEAR_TABLE=int(table))
     linear = _constant(machine, ("linear", table), lambda: _LINEAR_8BIT if table else np.zeros(1))
-    machine.launch(kernel, (width, height), data, planes, linear, np.float32(_FULL_SCALE[data.dtype]),
-                   np.int64(width), np.int64(height))
+    launch_rows(machine, kernel, width, height, data, planes, linear, np.float32(_FULL_SCALE[data.dtype]),
+                np.int64(width), np.int64(height))
     return planes
 
 
@@ -345,8 +345,8 @@ def _inputs(machine: Machine, data: cl_array.Array, model: BoundaryModel) -> tup
     height, width = data.shape[:2]
     comp, tensors = _components(machine, data, model)
     strongest = machine.empty((4 * len(model.scales), height, width), np.float32)
-    machine.launch(machine.kernel("boundary_probability", "strongest", **_defines(model)), (width, height), comp,
-                   tensors, strongest, np.int64(width), np.int64(height))
+    launch_rows(machine, vector_kernel(machine, "boundary_probability", "strongest", **_defines(model)), width,
+                height, comp, tensors, strongest, np.int64(width), np.int64(height))
     return comp, tensors, _smooth(machine, strongest, SURROUND_SIGMA)
 
 
