@@ -155,77 +155,7 @@ __kernel void set_value(__global float *a, float value, long n)
     if (i < n) a[i] = value;
 }
 
-/* The four neighbours of pixel i at clamped indices, with the weights 1 - l of their bonds; a missing
- * neighbour gets weight 0. No branches, so the compiler can vectorise across work-items. */
-inline void neighbours(__global const float *lh, __global const float *lv, int x, int y, int i, int W, int H,
-                       int *nb, float *keep)
-{
-    nb[0] = x > 0 ? i - 1 : i;
-    nb[1] = x < W - 1 ? i + 1 : i;
-    nb[2] = y > 0 ? i - W : i;
-    nb[3] = y < H - 1 ? i + W : i;
-    float left = lh[nb[0]], up = lv[nb[2]];
-    keep[0] = x > 0 ? 1.0f - left : 0.0f;
-    keep[1] = x < W - 1 ? 1.0f - lh[i] : 0.0f;
-    keep[2] = y > 0 ? 1.0f - up : 0.0f;
-    keep[3] = y < H - 1 ? 1.0f - lv[i] : 0.0f;
-}
-
 /* ------------------------------------------------------------------------------------ f updates */
-
-/* f at one site: heat bath (the conditional is Gaussian for the smooth kind, discrete over the levels
- * for the constant kind), its mode (ICM) or, with line expectations, the mean-field fixed point. `z`
- * holds NCOMP standard normals (smooth kind), `u` a uniform (constant kind). A smooth site with no data
- * and all four bonds broken has no conditional and keeps its value. */
-inline void f_site(__global float *f, __global const float *g, __global const float *w,
-                   __global const float *lh, __global const float *lv, __constant float *levels, float kappa,
-                   float T, int x, int y, int W, int H, const float *z, float u)
-{
-    int i = y * W + x;
-    int nb[4];
-    float keep[4];
-    neighbours(lh, lv, x, y, i, W, H, nb, keep);
-#if KIND == 0
-    float a = w[i], b[NCOMP];
-    for (int c = 0; c < NCOMP; ++c) b[c] = w[i] * g[i * NCOMP + c];
-    for (int k = 0; k < 4; ++k) {
-        a += keep[k];
-        for (int c = 0; c < NCOMP; ++c) b[c] += keep[k] * f[nb[k] * NCOMP + c];
-    }
-    if (a <= 0.0f) return;
-#if MODE == MODE_SAMPLE
-    float sd = sqrt(T / (2.0f * a));
-    for (int c = 0; c < NCOMP; ++c) f[i * NCOMP + c] = b[c] / a + sd * z[c];
-#else
-    for (int c = 0; c < NCOMP; ++c) f[i * NCOMP + c] = b[c] / a;
-#endif
-#else
-    float energy[NLEVELS];
-    float lowest = INFINITY;
-    int best = 0;
-    for (int k = 0; k < NLEVELS; ++k) {
-        float d = levels[k] - g[i];
-        float e = w[i] * d * d;
-        for (int m = 0; m < 4; ++m) e += levels[k] != f[nb[m]] ? kappa * keep[m] : 0.0f;
-        energy[k] = e;
-        if (e < lowest) { lowest = e; best = k; }
-    }
-#if MODE == MODE_SAMPLE
-    float total = 0.0f;
-    for (int k = 0; k < NLEVELS; ++k) {
-        energy[k] = exp(-(energy[k] - lowest) / T);
-        total += energy[k];
-    }
-    float target = u * total;
-    best = NLEVELS - 1;
-    for (int k = 0; k < NLEVELS - 1; ++k) {
-        target -= energy[k];
-        if (target < 0.0f) { best = k; break; }
-    }
-#endif
-    f[i] = levels[best];
-#endif
-}
 
 /* A work-item updates SITES (16) sites of one colour along a row, x = 2 (SITES gx + k) + ((y + colour) & 1),
  * k = 0..15, as float16 lanes in straight-line vector code (no per-site branches: masks and select), and
@@ -267,7 +197,8 @@ inline void store_sites(__global float *p, int start, float16 v, int x0, int lim
 /* f at the pixels of one checkerboard colour. Smooth kind: the Gaussian conditional (heat bath), its
  * mean (ICM, mean field), NCOMP components each from four blocks (counter word 3: 4 c + j) whose 16
  * uniforms give 16 normals by Box-Muller (radii from words 0, 1, angles from words 2, 3); a site with no
- * data and all four bonds broken keeps its value. Constant kind: f_site, four sites per block. */
+ * data and all four bonds broken keeps its value. Constant kind: the discrete conditional over the levels
+ * (heat bath) or its mode (ICM), on the same lanes. */
 __kernel void f_update(__global float *f, __global const float *g, __global const float *w,
                        __global const float *lh, __global const float *lv, __constant float *levels,
                        float kappa, float T, uint sweep, uint2 key, int colour, long W_, long H_)
@@ -308,16 +239,58 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
             if (x0 + 2 * k < W) f[(base + 2 * k) * NCOMP + c] = t[k];
     }
 #else
-    for (int part = 0; part < SITES / 4; ++part) {
-        float u[4] = {0.0f, 0.0f, 0.0f, 0.0f};
-#if MODE == MODE_SAMPLE
-        philox_uniforms((uint4)((uint)(y * groups + group), sweep, PHASE_F + colour, (uint)part), key, u);
-#endif
-        for (int k = 0; k < 4; ++k) {
-            int x = x0 + 2 * (4 * part + k);
-            if (x < W) f_site(f, g, w, lh, lv, levels, kappa, T, x, y, W, H, 0, u[k]);
-        }
+    int16 xs = x0 + 2 * LANES;
+    float16 wi = load_sites(w, base, 2, n), gi = load_sites(g, base, 2, n);
+    /* kappa where a bond is kept (0 past the border, where the neighbour's level, read at a clamped
+     * index, does not count). */
+    float16 keep0 = select(ZERO16, kappa * (1.0f - load_sites(lh, base - 1, 2, n)), xs > 0);
+    float16 keep1 = select(ZERO16, kappa * (1.0f - load_sites(lh, base, 2, n)), xs < W - 1);
+    float16 keep2 = y > 0 ? kappa * (1.0f - load_sites(lv, base - W, 2, n)) : ZERO16;
+    float16 keep3 = y < H - 1 ? kappa * (1.0f - load_sites(lv, base, 2, n)) : ZERO16;
+    float16 f0 = load_sites(f, base - 1, 2, n), f1 = load_sites(f, base + 1, 2, n);
+    float16 f2 = load_sites(f, base - W, 2, n), f3 = load_sites(f, base + W, 2, n);
+    float16 energy[NLEVELS];
+    float16 lowest = (float16)(INFINITY);
+    int16 best = (int16)(0);
+#pragma unroll
+    for (int k = 0; k < NLEVELS; ++k) {
+        float16 d = levels[k] - gi;
+        float16 e = wi * d * d;
+        e += select(ZERO16, keep0, levels[k] != f0);
+        e += select(ZERO16, keep1, levels[k] != f1);
+        e += select(ZERO16, keep2, levels[k] != f2);
+        e += select(ZERO16, keep3, levels[k] != f3);
+        energy[k] = e;
+        int16 lower = e < lowest;
+        lowest = select(lowest, e, lower);
+        best = select(best, (int16)(k), lower);
     }
+#if MODE == MODE_SAMPLE
+    /* Heat bath: the first level whose cumulative weight passes u times the total. Site 4 p + j draws
+     * word j of block p; philox_uniforms16 gives word m of block j in lane 4 m + j. */
+    float16 u = philox_uniforms16((uint)(y * groups + group), sweep, PHASE_F + colour, 0u, key);
+    u = shuffle(u, (uint16)(0, 4, 8, 12, 1, 5, 9, 13, 2, 6, 10, 14, 3, 7, 11, 15));
+    float16 total = ZERO16;
+#pragma unroll
+    for (int k = 0; k < NLEVELS; ++k) {
+        energy[k] = exp(-(energy[k] - lowest) / T);
+        total += energy[k];
+    }
+    float16 target = u * total;
+    int16 found = (int16)(0);
+    best = (int16)(NLEVELS - 1);
+#pragma unroll
+    for (int k = 0; k < NLEVELS - 1; ++k) {
+        target -= energy[k];
+        int16 hit = (target < 0.0f) & ~found;
+        best = select(best, (int16)(k), hit);
+        found |= hit;
+    }
+#endif
+    float16 value = (float16)(levels[0]);
+#pragma unroll
+    for (int k = 1; k < NLEVELS; ++k) value = select(value, (float16)(levels[k]), best == k);
+    store_sites(f, base, value, x0, W);
 #endif
 }
 
