@@ -5,7 +5,7 @@
  *   lab              CIE L*a*b* (D65, sRGB companding) of an RGB or grey image, each divided by 100
  *   bank             the filter-bank responses (first and second directional derivatives and the
  *                    Laplacian of the lightness at two scales), compressed by their norm
- *   nearest          each pixel's texton: the nearest of NT centres to its responses
+ *   nearest          each pixel's texton: the nearest of the centres to its responses
  *   histogram_rows   a row pass of the Gaussian over the textons' indicator planes: NT planes out
  *   planes_rows      a row pass of the Gaussian over a stack of float planes
  *   planes_cols      the column pass over a stack of float planes
@@ -17,9 +17,9 @@
  *   probability      the logistic classifier at each orientation; the largest wins
  *   thin             non-maximum suppression across the winning orientation
  *
- * Defines: IN_T, CHANNELS and LINEAR_TABLE (lab); NBANK (bank), NT (nearest, histogram_rows, components); VEC
- * (planes_*); NSCALES, NORIENT, NFEAT, SURROUND_FLOOR
- * (oriented, probability).
+ * Defines: IN_T, CHANNELS and LINEAR_TABLE (lab); NBANK (bank, nearest); NT (histogram_rows, components);
+ * NSCALES, NORIENT, NFEAT, SURROUND_FLOOR (strongest, oriented, probability, thin); VEC, the pixels of a row
+ * a work-item takes where a kernel takes several (the host builds every kernel with it).
  */
 #include "vmcl.h"
 
@@ -30,7 +30,7 @@
  * contiguously inside the row; a row's last, partial chunk reads its last pixel again in the lanes past
  * the end, and stores only the lanes inside. */
 #define T float
-static VT chunk_at(__global const float *plane, long x0, long y, long W)
+inline VT chunk_at(__global const float *plane, long x0, long y, long W)
 {
     __global const float *row = plane + y * W;
     if (x0 + VEC <= W) return VLOAD(row + x0);
@@ -40,7 +40,7 @@ static VT chunk_at(__global const float *plane, long x0, long y, long W)
 }
 
 /* v's lanes inside the row into plane p of out. */
-static void store_chunk(__global float *out, int p, long x0, long y, long W, long H, VT v)
+inline void store_chunk(__global float *out, int p, long x0, long y, long W, long H, VT v)
 {
     __global float *row = out + ((size_t)p * H + y) * W;
     if (x0 + VEC <= W) {
@@ -53,7 +53,7 @@ static void store_chunk(__global float *out, int p, long x0, long y, long W, lon
 }
 
 /* The lanes of v inside the row, as bytes. */
-static void store_bytes(__global uchar *row, long x0, long W, VIT v)
+inline void store_bytes(__global uchar *row, long x0, long W, VIT v)
 {
     int t[VEC];
 #if VEC == 1
@@ -65,19 +65,19 @@ static void store_bytes(__global uchar *row, long x0, long W, VIT v)
 }
 
 #ifdef IN_T
-static VT srgb_linear(VT c)
+inline VT srgb_linear(VT c)
 {
     return select(exp2(2.4f * log2((c + 0.055f) / 1.055f)), c / 12.92f, c <= 0.04045f);
 }
 
-static VT lab_f(VT t)
+inline VT lab_f(VT t)
 {
     return select(t * 7.787037f + 16.0f / 116.0f, exp2(log2(t) * (1.0f / 3.0f)), t > 0.008856452f);
 }
 
 /* Channel c of the chunk's pixels (the last pixel again past the row's end), linear: 8-bit input through
  * its 256 linear values, tabulated by the host (the power law is the kernel's dearest step). */
-static VT linear_chunk(__global const IN_T *in, __constant float *linear, float scale, int c, long x0, long y,
+inline VT linear_chunk(__global const IN_T *in, __constant float *linear, float scale, int c, long x0, long y,
                        long W)
 {
     float t[VEC];
@@ -159,11 +159,10 @@ __kernel void bank(__global const float *fine, __global const float *coarse, __g
     for (int j = 0; j < NBANK; j++) dst[j] = gain * r[j];
 }
 
-#ifdef NT
-/* The nearest of the NT texton centres (NT x NBANK) in the compressed response space, VEC pixels of a row
+/* The nearest of the nt texton centres (nt x NBANK) in the compressed response space, VEC pixels of a row
  * per work-item: their responses are gathered once (stride NBANK), then every centre is a vector step. */
 __kernel void nearest(__global const float *responses, __global const float *centres, __global uchar *label,
-                      long W, long H)
+                      int nt, long W, long H)
 {
     long x0 = get_global_id(0) * VEC, y = get_global_id(1);
     if (x0 >= W || y >= H) return;
@@ -175,7 +174,7 @@ __kernel void nearest(__global const float *responses, __global const float *cen
     }
     VIT best = (VIT)0;
     VT best_d = (VT)INFINITY;
-    for (int k = 0; k < NT; k++) {
+    for (int k = 0; k < nt; k++) {
         VT d = (VT)0.0f;
         for (int j = 0; j < NBANK; j++) {
             VT e = r[j] - centres[k * NBANK + j];
@@ -187,7 +186,6 @@ __kernel void nearest(__global const float *responses, __global const float *cen
     }
     store_bytes(label + y * W, x0, W, best);
 }
-#endif
 #endif
 
 
@@ -213,7 +211,7 @@ __kernel void histogram_rows(__global const uchar *label, __global float *out, _
  * the row (PoCL then runs the CPU's SIMD lanes over contiguous loads), pixel by pixel at a border. */
 /* row[a .. a + VEC), the row's end pixels repeated past its ends: one load inside the row, one pixel
  * broadcast wholly past an end, a gather only where the chunk straddles an end. */
-static VT clamped_chunk(__global const float *row, long a, long W)
+inline VT clamped_chunk(__global const float *row, long a, long W)
 {
     if (a >= 0 && a + VEC <= W) return VLOAD(row + a);
     if (a + VEC <= 0) return (VT)row[0];
@@ -363,7 +361,7 @@ static void inverse_surround(__global const float *surround, long x0, long y, lo
 
 /* The length of (a, b): the gradients here are small (images in [0, 1]), so no rescaling against
  * overflow is needed, which makes hypot() several times dearer on CPUs. */
-static VT norm2(VT a, VT b)
+inline VT norm2(VT a, VT b)
 {
     return sqrt(a * a + b * b);
 }

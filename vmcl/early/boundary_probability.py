@@ -249,12 +249,18 @@ def _constant(machine: Machine, key: object, make) -> cl_array.Array:
 
 
 
+def _kernel(machine: Machine, name: str, **defines: Any):
+    """A kernel of kernels/boundary_probability.cl, every one built with the Machine's vector width (VEC) so
+    that kernels with the same other defines share one program (one build at first use)."""
+    return vector_kernel(machine, "boundary_probability", name, **defines)
+
+
 def _lab(machine: Machine, data: cl_array.Array) -> cl_array.Array:
     """The (3, H, W) planes L*, a*, b*, each divided by 100."""
     height, width = data.shape[:2]
     planes = machine.empty((3, height, width), np.float32)
     table = data.dtype == np.uint8
-    kernel = vector_kernel(machine, "boundary_probability", "lab", IN_T=IMAGE_TYPES[data.dtype],
+    kernel = _kernel(machine, "lab", IN_T=IMAGE_TYPES[data.dtype],
                            CHANNELS=3 if data.ndim == 3 else 1, LINEAR_TABLE=int(table))
     linear = _constant(machine, ("linear", table), lambda: _LINEAR_8BIT if table else np.zeros(1))
     launch_rows(machine, kernel, width, height, data, planes, linear, np.float32(_FULL_SCALE[data.dtype]),
@@ -269,7 +275,7 @@ def _planes_pass(machine: Machine, name: str, planes: cl_array.Array, out: cl_ar
     height, width = out.shape[1:]
     size = (-(-width // machine.vector_width), height, count)
     taps, radius = device_taps(machine, (sigma,))
-    machine.launch(vector_kernel(machine, "boundary_probability", name), size, planes, out, taps, np.int32(radius),
+    machine.launch(_kernel(machine, name), size, planes, out, taps, np.int32(radius),
                    np.int64(first), np.int64(width), np.int64(height), local_size=machine.row_local_size(size))
 
 
@@ -290,7 +296,7 @@ def _bank(machine: Machine, lab: cl_array.Array) -> cl_array.Array:
     height, width = lab.shape[1:]
     fine, coarse = (_smooth(machine, lab, s, count=1) for s in BANK_SIGMAS)
     out = machine.empty((height, width, BANK_SIZE), np.float32)
-    machine.launch(machine.kernel("boundary_probability", "bank", NBANK=BANK_SIZE), (width, height),
+    machine.launch(_kernel(machine, "bank", NBANK=BANK_SIZE), (width, height),
                    fine, coarse, out, *map(np.float32, BANK_SIGMAS), np.int64(width), np.int64(height))
     return out
 
@@ -304,8 +310,8 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
     responses = _bank(machine, lab)
     count = len(model.centres)
     labels = machine.empty((height, width), np.uint8)
-    launch_rows(machine, vector_kernel(machine, "boundary_probability", "nearest", NBANK=BANK_SIZE, NT=count), width,
-                height, responses, _constant(machine, ("centres", model), lambda: model.centres), labels, *dims)
+    launch_rows(machine, _kernel(machine, "nearest", NBANK=BANK_SIZE), width, height, responses,
+                _constant(machine, ("centres", model), lambda: model.centres), labels, np.int32(count), *dims)
     comp = machine.empty((6 * len(model.scales), height, width), np.float32)
     tensors = machine.empty((3 * len(model.scales), height, width), np.float32)
     histograms = machine.empty((count, height, width), np.float32)
@@ -314,10 +320,10 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
     for k, sigma in enumerate(model.scales):
         texture_sigma = TEXTURE_RATIO * sigma
         taps, radius = device_taps(machine, (texture_sigma,))
-        machine.launch(machine.kernel("boundary_probability", "histogram_rows", NT=count), (width, height),
+        machine.launch(_kernel(machine, "histogram_rows", NT=count), (width, height),
                        labels, rows, taps, np.int32(radius), *dims)
         _planes_pass(machine, "planes_cols", rows, histograms, texture_sigma, count)
-        launch_rows(machine, vector_kernel(machine, "boundary_probability", "components", NT=count), width, height,
+        launch_rows(machine, _kernel(machine, "components", NT=count), width, height,
                     _smooth(machine, lab, sigma), histograms, comp, tensor, np.float32(sigma),
                     np.float32(texture_sigma), np.int32(count), np.int32(k), *dims)
         # The tensor integrated at the texture's scale: a band of textons of its own (a contrast edge's)
@@ -345,7 +351,7 @@ def _inputs(machine: Machine, data: cl_array.Array, model: BoundaryModel) -> tup
     height, width = data.shape[:2]
     comp, tensors = _components(machine, data, model)
     strongest = machine.empty((4 * len(model.scales), height, width), np.float32)
-    launch_rows(machine, vector_kernel(machine, "boundary_probability", "strongest", **_defines(model)), width,
+    launch_rows(machine, _kernel(machine, "strongest", **_defines(model)), width,
                 height, comp, tensors, strongest, np.int64(width), np.int64(height))
     return comp, tensors, _smooth(machine, strongest, SURROUND_SIGMA)
 
@@ -420,11 +426,11 @@ def boundary_probability(image: ArrayLike, *, model: BoundaryModel | None = None
     dense = machine.empty((height, width), np.float32)
     theta = machine.empty((height, width), np.uint8)
     defines = _defines(model)
-    launch_rows(machine, vector_kernel(machine, "boundary_probability", "probability", **defines), width, height,
+    launch_rows(machine, _kernel(machine, "probability", **defines), width, height,
                 *_inputs(machine, data, model), _directions(machine),
                 _constant(machine, ("weights", model), lambda: model.weights), dense, theta, *dims)
     thinned = machine.empty((height, width), np.float32)
-    machine.launch(machine.kernel("boundary_probability", "thin", **defines), (width, height), dense, theta,
+    machine.launch(_kernel(machine, "thin", **defines), (width, height), dense, theta,
                    _directions(machine), thinned, *dims)
     orientation = theta.astype(np.float32) * np.float32(np.pi / ORIENTATIONS)
     return BoundaryProbability(result(thinned, host), result(orientation, host), result(dense, host))
