@@ -226,32 +226,15 @@ inline ushort lowest_lane(ushort16 v)
     return min(c.x, c.y);
 }
 
-/* The messages along direction (dx, dy), one work-item per scanline, added into `total` (written when
- * `first`). L(p, d) = C(p, d) + min(L(p-r, d), L(p-r, d +- 1) + P1, min_k L(p-r, k) + P2(p)) - min_k L(p-r, k);
- * subtracting the previous minimum keeps L below max C + P2, so sums of 8 directions fit 16 bits (the
- * host checks). P2(p) = max(P1, P2 / (1 + edge_gain * |I(p) - I(p-r)| / s)), s the noise's standard
- * deviation (noise[0]): brightness changes are counted in units of the noise, whatever the image's scale.
- *
- * Scanlines: along a row or a column, one per row or column; diagonal, one from each pixel of the entry
- * row and one from each pixel of the entry column but its first (W + H - 1). */
-__kernel void aggregate(__global const uchar *cost, __global const float *grey, __global ushort *total,
-                        long W, long H, int D, int S, int dx, int dy, ushort p1, float p2, float edge_gain,
-                        __global const float *noise, int first)
+/* The messages along direction (dx, dy) on the scanline from (x, y), added into `total` (written when
+ * `first`); returns the scanline's last pixel. L(p, d) = C(p, d) + min(L(p-r, d), L(p-r, d +- 1) + P1,
+ * min_k L(p-r, k) + P2(p)) - min_k L(p-r, k); subtracting the previous minimum keeps L below max C + P2, so
+ * sums of 8 directions fit 16 bits (the host checks). P2(p) = max(P1, P2 / (1 + gain |I(p) - I(p-r)|)),
+ * gain = edge_gain / s, s the noise's standard deviation: brightness changes are counted in units of the
+ * noise, whatever the image's scale. */
+inline long2 walk(__global const uchar *cost, __global const float *grey, __global ushort *total, long x, long y,
+                  long W, long H, int D, int S, int dx, int dy, ushort p1, float p2, float gain, int first)
 {
-    float gain = edge_gain / fmax(noise[0], FLT_MIN);
-    long id = get_global_id(0);
-    long x, y;
-    if (dy == 0) {
-        if (id >= H) return;
-        x = dx > 0 ? 0 : W - 1; y = id;
-    } else if (dx == 0) {
-        if (id >= W) return;
-        x = id; y = dy > 0 ? 0 : H - 1;
-    } else {
-        if (id >= W + H - 1) return;
-        if (id < W) { x = id; y = dy > 0 ? 0 : H - 1; }
-        else { x = dx > 0 ? 0 : W - 1; y = (dy > 0 ? 0 : H - 1) + dy * (id - W + 1); }
-    }
     int chunks = S / LANES;
     const ushort16 lane = (ushort16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     const ushort16 pad = (ushort16)PAD;
@@ -292,6 +275,36 @@ __kernel void aggregate(__global const uchar *cost, __global const float *grey, 
         for (int c = 0; c < chunks; c++) previous[c] = current[c];
         lowest = next_lowest;
     }
+    return (long2)(x - dx, y - dy);
+}
+
+/* The messages along direction (dx, dy) and then along (-dx, -dy) on the same scanline, one work-item per
+ * scanline: the way back finds the line's costs and sums still in the cache (two launches, one per
+ * direction, read them from memory twice). Sums are integers, so the order of the directions does not
+ * change them.
+ *
+ * Scanlines: along a row or a column, one per row or column; diagonal, one from each pixel of the entry
+ * row and one from each pixel of the entry column but its first (W + H - 1). */
+__kernel void aggregate(__global const uchar *cost, __global const float *grey, __global ushort *total,
+                        long W, long H, int D, int S, int dx, int dy, ushort p1, float p2, float edge_gain,
+                        __global const float *noise, int first)
+{
+    float gain = edge_gain / fmax(noise[0], FLT_MIN);
+    long id = get_global_id(0);
+    long x, y;
+    if (dy == 0) {
+        if (id >= H) return;
+        x = dx > 0 ? 0 : W - 1; y = id;
+    } else if (dx == 0) {
+        if (id >= W) return;
+        x = id; y = dy > 0 ? 0 : H - 1;
+    } else {
+        if (id >= W + H - 1) return;
+        if (id < W) { x = id; y = dy > 0 ? 0 : H - 1; }
+        else { x = dx > 0 ? 0 : W - 1; y = (dy > 0 ? 0 : H - 1) + dy * (id - W + 1); }
+    }
+    long2 last = walk(cost, grey, total, x, y, W, H, D, S, dx, dy, p1, p2, gain, first);
+    walk(cost, grey, total, last.x, last.y, W, H, D, S, -dx, -dy, p1, p2, gain, 0);
 }
 
 /* The left view's winner at each pixel (smallest summed cost; ties: the smaller d), moved to the vertex of

@@ -61,7 +61,8 @@ CENSUS_BITS = CENSUS_SIZE[0] * CENSUS_SIZE[1] - 1
 
 DIRECTIONS = {8: ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (-1, -1), (1, -1), (-1, 1)),
               4: ((1, 0), (-1, 0), (0, 1), (0, -1))}
-"""The scanline directions (dx, dy) messages are passed along, for 8 and 4 paths."""
+"""The scanline directions (dx, dy) messages are passed along, for 8 and 4 paths, in opposite pairs (one launch
+of the message kernel passes them along a pair's first direction and back)."""
 
 # The defaults, fitted on the training pairs by the stereo machine's fit (benchmarks/stereo_fit.py, whose
 # results/stereo_fit.md gives every combination tried): never on a pair a benchmark reports.
@@ -332,7 +333,8 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
     del codes, levels
     sums = machine.empty((height, width, stride), np.uint16)
     aggregate = machine.kernel("semiglobal", "aggregate", MAX_D=_PRIVATE_STEP * math.ceil(depth / _PRIVATE_STEP))
-    for index, (dx, dy) in enumerate(DIRECTIONS[paths]):
+    # A launch passes messages along a direction and back (DIRECTIONS lists them in opposite pairs).
+    for index, (dx, dy) in enumerate(DIRECTIONS[paths][::2]):
         lines = height if dy == 0 else width if dx == 0 else width + height - 1
         machine.launch(aggregate, (lines,), costs, views[0], sums, *dims, np.int32(depth), np.int32(stride),
                        np.int32(dx),
