@@ -209,18 +209,6 @@ __kernel void histogram_rows(__global const uchar *label, __global float *out, _
 /* The Gaussian's row and column passes over a (P, H, W) stack into planes first .. first + P - 1 of
  * out, work-item (k, y, p) standing for the VEC pixels [k VEC, (k + 1) VEC) of row y of plane p: one vector step where the window lies inside
  * the row (PoCL then runs the CPU's SIMD lanes over contiguous loads), pixel by pixel at a border. */
-/* row[a .. a + VEC), the row's end pixels repeated past its ends: one load inside the row, one pixel
- * broadcast wholly past an end, a gather only where the chunk straddles an end. */
-inline VT clamped_chunk(__global const float *row, long a, long W)
-{
-    if (a >= 0 && a + VEC <= W) return VLOAD(row + a);
-    if (a + VEC <= 0) return (VT)row[0];
-    if (a >= W) return (VT)row[W - 1];
-    float t[VEC];
-    for (int i = 0; i < VEC; i++) t[i] = row[clamp(a + i, 0L, W - 1)];
-    return VLOAD(t);
-}
-
 __kernel void planes_rows(__global const float *in, __global float *out, __global const float *taps, int r,
                           long first, long W, long H)
 {

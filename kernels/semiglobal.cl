@@ -34,19 +34,33 @@
 __kernel void census(__global const float *image, __global ulong *codes, long W, long H, float threshold,
                      __global const float *noise)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    float centre = image[y * W + x] - threshold * noise[0];
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    /* VEC pixels of the row per work-item: each window pixel is one vector step for all of them. */
+    VFLOAT centre = clamped_chunk(image + y * W, x0, W) - threshold * noise[0];
+#if VEC == 1
     ulong code = 0;
+#else
+    VCAT(ulong, VEC) code = (VCAT(ulong, VEC))(0);
+#endif
     for (int j = -(CENSUS_H / 2); j <= CENSUS_H / 2; j++) {
-        long yy = clamp(y + j, (long)0, H - 1);
+        __global const float *row = image + clamp(y + j, (long)0, H - 1) * W;
         for (int i = -(CENSUS_W / 2); i <= CENSUS_W / 2; i++) {
             if (i == 0 && j == 0) continue;
-            long xx = clamp(x + i, (long)0, W - 1);
-            code = (code << 1) | (ulong)(image[yy * W + xx] < centre);
+#if VEC == 1
+            code = (code << 1) | (ulong)(clamped_chunk(row, x0 + i, W) < centre);
+#else
+            code = (code << 1) | VCAT(convert_ulong, VEC)(-(clamped_chunk(row, x0 + i, W) < centre));
+#endif
         }
     }
-    codes[y * W + x] = code;
+    ulong t[VEC];
+#if VEC == 1
+    t[0] = code;
+#else
+    VCAT(vstore, VEC)(code, 0, t);
+#endif
+    for (int i = 0; i < VEC && x0 + i < W; i++) codes[y * W + x0 + i] = t[i];
 }
 
 /* The two cameras' brightness difference, from the pixels whose census match is sure (the census is

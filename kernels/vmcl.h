@@ -41,6 +41,28 @@
 #define VFLAGS(p) VCAT(convert_int, VEC)(VCAT(vload, VEC)(0, (p)))
 #endif
 
+/* VEC floats of a row of W, row[a .. a + VEC), the row's end values repeated past its ends: one load
+ * inside the row, one value broadcast wholly past an end, a gather only where the chunk straddles an end
+ * (so kernels that take VEC pixels per work-item keep vector steps at a row's borders). */
+#if VEC == 1
+#define VFLOAT float
+#else
+#define VFLOAT VCAT(float, VEC)
+#endif
+inline VFLOAT clamped_chunk(__global const float *row, long a, long W)
+{
+#if VEC == 1
+    return row[clamp(a, 0L, W - 1)];
+#else
+    if (a >= 0 && a + VEC <= W) return VCAT(vload, VEC)(0, row + a);
+    if (a + VEC <= 0) return (VFLOAT)row[0];
+    if (a >= W) return (VFLOAT)row[W - 1];
+    float t[VEC];
+    for (int i = 0; i < VEC; i++) t[i] = row[clamp(a + i, 0L, W - 1)];
+    return VCAT(vload, VEC)(0, t);
+#endif
+}
+
 /* Extremes of T, the identities of max and min. The host passes T_IS_FLOAT with T. */
 #if T_IS_FLOAT
 #define T_LOWEST (-INFINITY)

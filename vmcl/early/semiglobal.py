@@ -38,8 +38,10 @@ from vmcl.cm.core import (
     check_real,
     check_unit_image,
     finite_float32,
+    launch_rows,
     machine_for,
     mask_result,
+    vector_kernel,
 )
 from vmcl.cm.reduce import reduce
 from vmcl.cm.scan import box_sum
@@ -319,9 +321,9 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
     noise, _ = threshold_field(machine, response, (0.5, 0.5, to_sigma, to_sigma), local=False)
     del response
     codes = [machine.empty((height, width), np.uint64) for _ in views]
-    build = machine.kernel("semiglobal", "census", CENSUS_W=CENSUS_SIZE[0], CENSUS_H=CENSUS_SIZE[1])
+    build = vector_kernel(machine, "semiglobal", "census", CENSUS_W=CENSUS_SIZE[0], CENSUS_H=CENSUS_SIZE[1])
     for view, code in zip(views, codes):
-        machine.launch(build, (width, height), view, code, *dims, np.float32(census_threshold), noise)
+        launch_rows(machine, build, width, height, view, code, *dims, np.float32(census_threshold), noise)
     levels = list(views)
     if ad_weight > 0 and match_exposure:
         levels[1] = _exposure_matched(machine, codes, views, d_min, depth)
