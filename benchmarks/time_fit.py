@@ -9,7 +9,9 @@ The machine streams each with stereo and motion (colour and texture off) under e
 the grid and with the temporal terms off. Scored on the frames that have a past and a next frame:
 the restored flow's EPE and the restored disparity's mean absolute error over the visible pixels, each
 divided by the same with time off; the configuration with the lowest mean of the two ratios over the
-sequences is the default. The real sequences are scored by benchmarks/motion.py, which chooses nothing.
+sequences is the default. Then, at that configuration, the previous flow predicting the motion search
+([time] predict_search) is scored on and off the same way: on is the default if it scores lower. The real
+sequences are scored by benchmarks/motion.py, which chooses nothing.
 """
 
 from __future__ import annotations
@@ -93,6 +95,23 @@ def main() -> None:
                      + " | ".join(f"{found[n][0]:.3f} / {found[n][1]:.3f}" for n in PRESETS) + " |")
     gain, memory, jump = best
     lines += ["", f"Chosen (lowest score): gain {gain}, memory {memory}, jump {jump}.", ""]
+    # The search predicted by the previous flow, at the chosen configuration.
+    searched = {}
+    for predict in (False, True):
+        found = stream(TimeConfig(gain=gain, memory=memory, jump=jump, predict_search=predict))
+        ratios = [(found[n][0] / off[n][0] + found[n][1] / off[n][1]) / 2 for n in PRESETS]
+        searched[predict] = (float(np.mean(ratios)), found)
+        print("predict_search", predict, f"{np.mean(ratios):.3f}", flush=True)
+    lines += ["## The motion search predicted by the previous flow", "",
+              ("At the chosen configuration, [time] predict_search off and on (the finest level searched around "
+               "the previous flow, carried to the frame, as well as around the coarse-to-fine prediction; each "
+               "pixel keeps the better match). Same score."), "",
+              f"| predict_search | score | {header} |", "|---|---|" + "---|" * len(PRESETS)]
+    for predict, (score, found) in searched.items():
+        lines.append(f"| {'on' if predict else 'off'} | {score:.3f} | "
+                     + " | ".join(f"{found[n][0]:.3f} / {found[n][1]:.3f}" for n in PRESETS) + " |")
+    chosen = searched[True][0] < searched[False][0]
+    lines += ["", f"Chosen: predict_search {'on' if chosen else 'off'} (on only if it scores lower).", ""]
     args.out.write_text("\n".join(lines), encoding="utf-8")
     print(lines[-2])
 

@@ -405,18 +405,19 @@ __kernel void mean_flow(__global const float *sums, __global float2 *out, long W
         out = (1.0f - ay) * top + ay * bottom;                                                             \
     }
 
-/* The coarse-to-fine step: the prediction at each fine pixel is twice the coarse flow interpolated
- * bilinearly at its position (coarse pixel X sits at fine pixel 2 X; 0 where the coarse level has no
- * estimate), and frame 1's features are warped by it, out(x) = f1(x + pred(x)), bilinearly (binary maps:
- * the nearest pixel), so the finer search is for the residual around a smooth prediction. */
+/* The coarse-to-fine step: the prediction at each fine pixel is `gain` times the coarse flow interpolated
+ * bilinearly at its position (coarse pixel X sits at fine pixel X / to_coarse: to_coarse 0.5 and gain 2
+ * for the level below, 1 and 1 for a prediction of the image's own size; 0 where it has no estimate),
+ * and frame 1's features are warped by it, out(x) = f1(x + pred(x)), bilinearly (binary maps: the
+ * nearest pixel), so the finer search is for the residual around a smooth prediction. */
 __kernel void warp(__global const F_T *f1, __global const float2 *coarse, __global F_T *out, __global float2 *pred,
-                   long W, long H, long Wc, long Hc)
+                   long W, long H, long Wc, long Hc, float to_coarse, float gain)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     float2 f;
-    BILINEAR(float2, coarse, 0.5f * x, 0.5f * y, Wc, Hc, f)
-    float2 p = all(isfinite(f)) ? 2.0f * f : (float2)(0.0f);
+    BILINEAR(float2, coarse, to_coarse * x, to_coarse * y, Wc, Hc, f)
+    float2 p = all(isfinite(f)) ? gain * f : (float2)(0.0f);
     pred[y * W + x] = p;
 #if COMPARE == CMP_XOR
     /* Clamped in float before the conversion: an infinite prediction still reads an edge pixel. */
@@ -427,6 +428,23 @@ __kernel void warp(__global const F_T *f1, __global const float2 *coarse, __glob
     BILINEAR(float, f1, x + p.x, y + p.y, W, H, v)
     out[y * W + x] = v;
 #endif
+}
+
+/* Where a given prediction holds (finite), the search around it replaces the coarse-to-fine one's estimate
+ * when it scores better (or the other has none): two windows, the better match kept. */
+__kernel void keep_better(__global float2 *flow, __global float *score, __global uchar *boundary,
+                          __global const float2 *other_flow, __global const float *other_score,
+                          __global const uchar *other_boundary, __global const float2 *prediction, long n)
+{
+    long i = get_global_id(0);
+    if (i >= n) return;
+    float mine = score[i], theirs = other_score[i];
+    int better = isnan(mine) ? !isnan(theirs) : theirs > mine;
+    if (all(isfinite(prediction[i])) && better) {
+        flow[i] = other_flow[i];
+        score[i] = theirs;
+        boundary[i] = other_boundary[i];
+    }
 }
 
 __kernel void sign_agreement(__global const float *f, __global const float *g, __global int *out, long size)

@@ -217,6 +217,53 @@ def test_pyramid_finds_motion_beyond_delta():
     assert pyramid.mean() < 0.25
 
 
+def _fast_square(shape=(96, 128), speed=9, corner=(40, 30), side=20):
+    """A static textured background and a square of another texture moving ``speed`` px to the right:
+    frames 0 and 1, and the true flow."""
+    background = texture(shape, seed=5)
+    frames = []
+    for shift in (0, speed):
+        frame, moved = background.copy(), texture(shape, shift=(shift, 0.0), seed=6)
+        (y, x) = corner
+        frame[y:y + side, x + shift:x + shift + side] = moved[y:y + side, x + shift:x + shift + side]
+        frames.append(frame)
+    truth = np.zeros(shape + (2,), np.float32)
+    truth[corner[0]:corner[0] + side, corner[1]:corner[1] + side, 0] = speed
+    return frames[0], frames[1], truth
+
+
+def test_a_prediction_finds_a_motion_the_search_cannot_reach():
+    """The previous flow, carried along (here the truth, 0.4 px off on the square), points the search at a
+    fast square beyond delta; the background, predicted at rest, keeps the estimate of the search
+    without a prediction (the same search, through the warp: equal to float rounding)."""
+    frame0, frame1, truth = _fast_square()
+    prediction = truth.copy()
+    prediction[truth[..., 0] > 0, 0] -= 0.4
+    alone = motion.flow(frame0, frame1, delta=3, patch=7)
+    predicted = motion.flow(frame0, frame1, delta=3, patch=7, prediction=prediction)
+    core = np.zeros(truth.shape[:2], bool)
+    core[44:56, 34:46] = True  # the square's pixels whose patch lies inside it
+    assert endpoint_error(alone.flow, truth)[core].mean() > 3
+    assert endpoint_error(predicted.flow, truth)[core].mean() < 0.25
+    far = interior(truth.shape[:2], 8) & ~ndimage.binary_dilation(truth[..., 0] > 0, iterations=12)
+    np.testing.assert_allclose(predicted.flow[far], alone.flow[far], atol=1e-4)
+
+
+def test_a_prediction_that_holds_nowhere_changes_nothing(pair, machine):
+    nowhere = np.full(pair[0].shape + (2,), np.nan, np.float32)
+    alone = motion.flow(*pair, delta=3, patch=5, machine=machine)
+    predicted = motion.flow(*pair, delta=3, patch=5, prediction=nowhere, machine=machine)
+    for a, b in ((alone.flow, predicted.flow), (alone.score, predicted.score), (alone.boundaries, predicted.boundaries)):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_prediction_of_another_size_is_refused(pair, machine):
+    with pytest.raises(ValueError, match="prediction must have 3 dimensions"):
+        motion.flow(*pair, delta=2, patch=5, prediction=np.zeros((40, 52), np.float32), machine=machine)
+    with pytest.raises(ValueError, match=r"prediction must be a flow of the frames' size, \(40, 52, 2\)"):
+        motion.flow(*pair, delta=2, patch=5, prediction=np.zeros((40, 51, 2), np.float32), machine=machine)
+
+
 @pytest.fixture(scope="module")
 def blocks():
     return scenes.render(scenes.preset("blocks", shape=(128, 192)), seed=1)

@@ -141,6 +141,43 @@ def test_without_the_temporal_terms_a_stream_is_run_on_each_frame(machine):
                 np.testing.assert_array_equal(getattr(result, name), expected, err_msg=f"frame {k} {name}")
 
 
+def test_the_previous_flow_predicts_the_motion_search(machine, monkeypatch):
+    """With [time] predict_search, each frame but the first searches around the previous restored flow
+    carried to it (the frame before's flow, moved along itself); without it, no prediction is given."""
+    from vmcl.early import motion
+
+    given = []
+    real = motion.flow
+
+    def recording(*args, **kwargs):
+        prediction = kwargs.get("prediction")
+        given.append(None if prediction is None else prediction.get())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(motion, "flow", recording)
+    frames = scenes.render_sequence(scenes.preset("blocks", shape=(64, 64)), 4, seed=1, noise=0.02)
+    lefts, rights = [f.left for f in frames], [f.right for f in frames]
+    for predict in (True, False):
+        given.clear()
+        vm = VisionMachine(Config(time=TimeConfig(predict_search=predict), **_DEPTH_AND_MOTION), machine=machine)
+        streamed = list(vm.stream(iter(lefts), iter(rights)))
+        assert len(given) == 3  # the last frame has no next one, so no flow
+        assert given[0] is None
+        if not predict:
+            assert all(p is None for p in given)
+            continue
+        for k in (1, 2):
+            prediction = given[k]
+            assert prediction.shape == (64, 64, 2)
+            carried = np.isfinite(prediction).all(axis=-1)
+            assert carried.mean() > 0.5
+            # The previous restored flow, moved along itself: the same motions, so the same median.
+            previous = streamed[k - 1].flow
+            assert np.abs(np.median(previous.reshape(-1, 2), axis=0)).max() > 0.3  # the scene does move
+            np.testing.assert_allclose(np.median(prediction[carried], axis=0),
+                                       np.median(previous.reshape(-1, 2), axis=0), atol=0.1)
+
+
 def test_at_a_scene_cut_time_breaks_and_the_frame_starts_cold(machine):
     first = scenes.render_sequence(scenes.preset("blocks", shape=(80, 80)), 3, seed=1, noise=0.02)
     second = scenes.render_sequence(scenes.preset("corridor", shape=(80, 80)), 2, seed=1, noise=0.02)

@@ -567,6 +567,10 @@ class TimeConfig:
     warm : bool
         Start each MRF from the carried field with :data:`WARM_SCHEDULE` (mean field); off, the full
         schedule from the data.
+    predict_search : bool
+        The previous flow, carried to the frame, predicts where the motion search looks: the finest level
+        is searched around it as well as around the coarse-to-fine prediction, and each pixel keeps the
+        better match (:func:`vmcl.early.motion.flow`'s ``prediction``).
     """
 
     enabled: bool = True
@@ -576,6 +580,7 @@ class TimeConfig:
     jump: float = 0.5
     scene_cut: float = 0.5
     warm: bool = True
+    predict_search: bool = False
 
     def __post_init__(self) -> None:
         _check_field_types("time", self)
@@ -936,7 +941,11 @@ class _Run:
             with self.stage("boundaries"):
                 image_boundaries = on_device(boundary_probability.boundary_probability(left,
                                                                                        machine=self.m).probability)
-        run = RunInputs(self.m, self.c, left, others_d.get("right"), others_d.get("next"), brightness)
+        prediction = None
+        if self.carries and self.c.time.predict_search:
+            carried = memory.carry("motion") if memory is not None else None
+            prediction = carried.prediction if carried is not None else None
+        run = RunInputs(self.m, self.c, left, others_d.get("right"), others_d.get("next"), brightness, prediction)
         measured = {}
         for cue in active:
             with self.stage(cue.name):

@@ -18,8 +18,10 @@ what time contributed). At the next frame it
    line process, starting from the carried field (a warm start, with a schedule that starts cold
    enough to keep it: :data:`vmcl.pipeline.WARM_SCHEDULE`).
 
-When most of the image is broken (a scene cut), the frame starts cold: no temporal term and the full
-schedule.
+The carried flow also predicts where the next motion search looks, where
+:attr:`vmcl.pipeline.TimeConfig.predict_search` asks for it (:func:`vmcl.early.motion.flow`'s
+``prediction``). When most of the image is broken (a scene cut), the frame starts cold: no temporal term
+and the full schedule.
 """
 
 from __future__ import annotations

@@ -37,6 +37,9 @@ class RunInputs:
         The right view at t, and the left view at t + 1.
     brightness : device uint8 (H, W)
         Canny's brightness edges (0/1), the coupling of the piecewise smooth cues.
+    motion_prediction : device float32 (H, W, 2), or None
+        In a stream, the previous frame's flow carried to this one (NaN where time is broken), which
+        predicts where the motion search looks (:attr:`vmcl.pipeline.TimeConfig.predict_search`).
     """
 
     machine: Machine
@@ -45,6 +48,7 @@ class RunInputs:
     right: cl_array.Array | None
     next: cl_array.Array | None
     brightness: cl_array.Array
+    motion_prediction: cl_array.Array | None = None
 
     @property
     def width(self) -> int:

@@ -39,7 +39,7 @@ class MotionCue(CueModule):
         if levels is None:
             levels = motion.pyramid_levels(tuple(run.left.shape), patch=mc.patch, delta=mc.delta)
         found = motion.flow(run.left, run.needed("next"), delta=mc.delta, patch=mc.patch, levels=levels,
-                            features=mc.features, machine=run.machine)
+                            features=mc.features, prediction=run.motion_prediction, machine=run.machine)
         confidence = (on_device(score_confidence(found.score, floor=self.floor(mc.confidence_floor, mc.features),
                                                  machine=run.machine))
                       if mc.weigh_by_score else None)

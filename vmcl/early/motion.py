@@ -359,20 +359,40 @@ def _patch_mean(machine: Machine, coarse: cl_array.Array, radius: int) -> cl_arr
     return mean
 
 
-def _warp(machine: Machine, f1: cl_array.Array, coarse: cl_array.Array, features: str):
-    """Frame 1's features warped by the doubled, interpolated coarse flow, and that prediction."""
+def _warp(machine: Machine, f1: cl_array.Array, coarse: cl_array.Array, features: str, scale: int = 2):
+    """Frame 1's features warped by the flow ``coarse`` interpolated to their size and multiplied by ``scale``
+    (2: the level below's; 1: a flow of their own size), and that prediction."""
     height, width = f1.shape
     warped = machine.empty(f1.shape, f1.dtype)
     pred = machine.empty((height, width, 2), np.float32)
     _launch(machine, machine.kernel("motion", "warp", **_defines(f1, features)), (width, height), f1, coarse,
-            warped, pred, np.int64(width), np.int64(height), np.int64(coarse.shape[1]), np.int64(coarse.shape[0]))
+            warped, pred, np.int64(width), np.int64(height), np.int64(coarse.shape[1]), np.int64(coarse.shape[0]),
+            np.float32(1 / scale), np.float32(scale))
     return warped, pred
+
+
+def _prediction(prediction: ArrayLike, shape: tuple[int, ...], machine: Machine) -> cl_array.Array:
+    """The given prediction on the device, float32 (H, W, 2), checked against the frames' shape."""
+    if isinstance(prediction, np.ndarray) and prediction.dtype.kind == "f":
+        prediction = prediction.astype(np.float32)
+    data, _ = field(prediction, "prediction", machine, ndims=(3,), dtypes=(np.float32,))
+    if data.shape != (*shape[:2], 2):
+        raise InputValueError(f"prediction must be a flow of the frames' size, ({shape[0]}, {shape[1]}, 2), "
+                              f"got shape {data.shape}")
+    return data
+
+
+def _keep_better(machine: Machine, found: tuple, other: tuple, prediction: cl_array.Array) -> None:
+    """Where the prediction holds, ``other``'s estimates replace ``found``'s (flow, score, boundaries) that
+    they outscore."""
+    size = found[1].size
+    machine.launch(machine.kernel("motion", "keep_better"), (size,), *found, *other, prediction, np.int64(size))
 
 
 def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, features: Features = "brightness",
          subpixel: bool = True, levels: int = 1, sigma: float | None = None,
          speed_penalty: float = SPEED_PENALTY, method: Method = "running", boundary_score: float | None = None,
-         machine: Machine | None = None) -> FlowResult:
+         prediction: ArrayLike | None = None, machine: Machine | None = None) -> FlowResult:
     """Optical flow by patchwise comparison over the displacements (-delta..delta)^2.
 
     Parameters
@@ -415,6 +435,12 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     boundary_score : float, optional
         Pixels with an estimate and a normalised score below this are marked in ``boundaries``;
         default :data:`BOUNDARY_SCORE` per feature.
+    prediction : (H, W, 2) float array, optional
+        A flow expected from elsewhere (in a sequence, the previous frame's flow carried along itself;
+        NaN where there is none). The finest level is then searched a second time, over delta around the
+        prediction, and each pixel where the prediction holds keeps whichever of the two estimates scores
+        better: a motion that the coarse levels lost (a small, fast object whose texture they blur away)
+        is found where the past points. NumPy or device array.
     machine : vmcl.Machine, optional
 
     Returns
@@ -474,6 +500,7 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     boundary_score = check_real(BOUNDARY_SCORE[features] if boundary_score is None else boundary_score,
                                 "boundary_score")
     speed_penalty = check_real(speed_penalty, "speed_penalty", minimum=0)
+    predicted = None if prediction is None else _prediction(prediction, d0.shape, machine)
     n = 2 * delta + 1
     # The table and its box sum's two passes; running: three rows of votes kept, one being summed.
     table = method == "table"
@@ -483,7 +510,7 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     coarse = None
     for image0, image1 in zip(reversed(pyramids[0]), reversed(pyramids[1])):
         f0 = _features(machine, image0, features, sigma)
-        f1 = _features(machine, image1, features, sigma)
+        f1 = unwarped = _features(machine, image1, features, sigma)
         pred = None
         if coarse is not None:
             f1, pred = _warp(machine, f1, _patch_mean(machine, coarse, radius), features)
@@ -493,6 +520,11 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
             at_edge = cm_reduce.reduce((abs(flow_out) >= delta - 1e-3).astype(np.float32), "sum", machine=machine)
             coarsest_size = flow_out.size
         coarse = flow_out
+    if predicted is not None:  # the finest level again, around the given prediction
+        f1, pred = _warp(machine, unwarped, predicted, features, scale=1)
+        other = _level(machine, f0, f1, pred, delta, radius, features, speed_penalty, method, subpixel,
+                       boundary_score)
+        _keep_better(machine, (flow_out, score, boundaries), other, predicted)
     # Read back once the finer levels are enqueued, so the queue does not drain between levels.
     limit_share = float(at_edge.get()) / coarsest_size * 2
     if host:
