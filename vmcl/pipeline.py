@@ -575,7 +575,7 @@ class TimeConfig:
 
     enabled: bool = True
     gain: float = 0.25
-    memory: float = 1.0
+    memory: float = 4.0
     tolerance: float = 0.05
     jump: float = 0.5
     scene_cut: float = 0.5
