@@ -105,7 +105,7 @@ def main() -> None:
     lines += ["## The motion search predicted by the previous flow", "",
               ("At the chosen configuration, [time] predict_search off and on (the finest level searched around "
                "the previous flow, carried to the frame, as well as around the coarse-to-fine prediction; each "
-               "pixel keeps the better match). Same score."), "",
+               "pixel keeps the better match), scored as above."), "",
               f"| predict_search | score | {header} |", "|---|---|" + "---|" * len(PRESETS)]
     for predict, (score, found) in searched.items():
         lines.append(f"| {'on' if predict else 'off'} | {score:.3f} | "

@@ -19,7 +19,8 @@
  *
  * Defines: IN_T, CHANNELS and LINEAR_TABLE (lab); NBANK (bank, nearest); NT (histogram_rows, components);
  * NSCALES, NORIENT, NFEAT, SURROUND_FLOOR (strongest, oriented, probability, thin); VEC, the pixels of a row
- * a work-item takes where a kernel takes several (the host builds every kernel with it).
+ * a work-item takes where a kernel takes several (the host builds every kernel with the Machine's vector
+ * width but oriented, which exists for VEC 1 only: it is for fitting).
  */
 #include "vmcl.h"
 
@@ -207,8 +208,9 @@ __kernel void histogram_rows(__global const uchar *label, __global float *out, _
 
 #ifdef VEC
 /* The Gaussian's row and column passes over a (P, H, W) stack into planes first .. first + P - 1 of
- * out, work-item (k, y, p) standing for the VEC pixels [k VEC, (k + 1) VEC) of row y of plane p: one vector step where the window lies inside
- * the row (PoCL then runs the CPU's SIMD lanes over contiguous loads), pixel by pixel at a border. */
+ * out, work-item (k, y, p) standing for the VEC pixels [k VEC, (k + 1) VEC) of row y of plane p: one vector
+ * step per tap (PoCL then runs the CPU's SIMD lanes over contiguous loads), near a row's ends through
+ * clamped_chunk (vmcl.h); the column pass clamps its rows. */
 __kernel void planes_rows(__global const float *in, __global float *out, __global const float *taps, int r,
                           long first, long W, long H)
 {
@@ -258,9 +260,9 @@ __kernel void planes_cols(__global const float *in, __global float *out, __globa
 /* Centred differences, scale-normalised: sigma times the gradient of a field smoothed at sigma gives a
  * step the same peak at every scale. lab: 3 planes smoothed at sigma; hist: NT planes smoothed at
  * texture_sigma. comp: this scale's 6 planes from plane 6 k: gx, gy of L, a and b; tensor: the 3 planes
- * txx, txy, tyy of the texture tensor before its integration (the host smooths them). Work-items as
- * planes_rows: VEC pixels of a row, contiguous loads inside the row, pixel by pixel at its ends (the
- * same arithmetic, so the two agree to the bit). */
+ * txx, txy, tyy of the texture tensor before its integration (the host smooths them). VEC pixels of a
+ * row per work-item: contiguous loads inside the row, pixel by pixel in the chunks at its ends (the same
+ * arithmetic, so the two agree to the bit). */
 __kernel void components(__global const float *lab, __global const float *hist, __global float *comp,
                          __global float *tensor, float sigma, float texture_sigma, int nt, int k, long W, long H)
 {

@@ -314,16 +314,17 @@ __kernel void q_update(__global float *q, __global const float *g, __global cons
     float16 keep1 = select(ZERO16, kappa * (1.0f - load_sites(lh, base, 2, n)), xs < W - 1);
     float16 keep2 = y > 0 ? kappa * (1.0f - load_sites(lv, base - W, 2, n)) : ZERO16;
     float16 keep3 = y < H - 1 ? kappa * (1.0f - load_sites(lv, base, 2, n)) : ZERO16;
-    float16 kept = keep0 + keep1 + keep2 + keep3;
     float16 energy[NLEVELS];
     float16 lowest = (float16)(INFINITY);
 #pragma unroll
     for (int k = 0; k < NLEVELS; ++k) {
         int plane = k * n + base;
         float16 d = levels[k] - gi;
-        float16 e = wi * d * d + kept;
-        e -= keep0 * load_sites(q, plane - 1, 2, all) + keep1 * load_sites(q, plane + 1, 2, all)
-           + keep2 * load_sites(q, plane - W, 2, all) + keep3 * load_sites(q, plane + W, 2, all);
+        float16 e = wi * d * d;
+        e += keep0 * (1.0f - load_sites(q, plane - 1, 2, all));
+        e += keep1 * (1.0f - load_sites(q, plane + 1, 2, all));
+        e += keep2 * (1.0f - load_sites(q, plane - W, 2, all));
+        e += keep3 * (1.0f - load_sites(q, plane + W, 2, all));
         energy[k] = e;
         lowest = fmin(lowest, e);
     }

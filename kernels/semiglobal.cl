@@ -7,8 +7,9 @@
  * program: min-sum messages passed from pixel to pixel (aggregate). Passed along 4 or 8 directions and
  * summed, the messages approximate the 2-D minimum (Hirschmueller's semi-global matching).
  *
- * One work-item per census code, per cost cell row, per scanline, per pixel: the Connection Machine's
- * processors, one per pixel; the scanline kernels give each processor of a line's first pixel the line.
+ * One work-item per cost cell row, per scanline, per pixel, VEC census codes of a row per work-item: the
+ * Connection Machine's processors, one per pixel; the scanline kernels give each processor of a line's
+ * first pixel the line.
  *
  * Layout: the cost and the sum of messages are (H, W, S) with the D = d_max - d_min + 1 disparities of a
  * pixel contiguous (S = D rounded up to whole vectors of LANES), so that a scanline's step reads and

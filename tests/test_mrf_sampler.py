@@ -115,3 +115,75 @@ def test_f_given_lines_matches_gaussian_posterior(components, order, machine):
     if components == 2:  # components are independent given the lines
         cross = np.mean((samples[:, :, 0] - mean[:, 0]) * (samples[:, :, 1] - mean[:, 1]), axis=0)
         assert np.all(np.abs(cross) < 0.05)
+
+
+POTTS = EnergyModel(alpha=2.0, beta=1.0, kappa=1.5, levels=(0.0, 0.5, 1.0))
+LINE_H = np.array([[0, 1], [0, 1], [0, 0]], bool)
+LINE_V = np.array([[1, 0, 0], [0, 0, 1]], bool)
+
+
+def _potts_lattice(machine, data):
+    """A constant-kind lattice of ``data`` with the lines LINE_H, LINE_V set (and kept: only f is swept)."""
+    to = machine.to_device
+    lattice = Lattice(machine, to(data), None, None, "constant", POTTS)
+    for line, padded in ((LINE_H, lattice.lh), (LINE_V, lattice.lv)):
+        full = np.zeros((H, W), np.float32)
+        full[:line.shape[0], :line.shape[1]] = line
+        padded.set(full.ravel())
+    return lattice
+
+
+def _potts_bonds():
+    """(i, j, kept) of every bond of the 3 x 3 lattice under LINE_H, LINE_V."""
+    index = np.arange(H * W).reshape(H, W)
+    bonds = [(index[y, x], index[y, x + 1], not LINE_H[y, x]) for y in range(H) for x in range(W - 1)]
+    return bonds + [(index[y, x], index[y + 1, x], not LINE_V[y, x]) for y in range(H - 1) for x in range(W)]
+
+
+@pytest.mark.parametrize("order", [(0, 1), (1, 0)], ids=str)
+def test_levels_given_lines_match_exact_enumeration(order, machine):
+    """The constant kind's heat bath: each pixel's level marginals against the exact ones of
+    exp(-U), U = sum alpha (f - g)^2 + kappa sum over kept bonds [f_i != f_j], over all 3^9 fields."""
+    data = np.float32([[0.1, 0.6, 0.9], [0.4, 0.5, 1.0], [0.0, 0.3, 0.7]])
+    lattice = _potts_lattice(machine, data)
+    levels = np.float32(POTTS.levels)
+    fields = np.array(list(itertools.product(range(3), repeat=H * W)))
+    values = levels[fields]
+    energy = (POTTS.alpha * (values - data.ravel()) ** 2).sum(axis=1)
+    for i, j, kept in _potts_bonds():
+        energy += POTTS.kappa * kept * (fields[:, i] != fields[:, j])
+    weight = np.exp(-(energy - energy.min()))
+    exact = np.stack([(weight[:, None] * (fields == k)).sum(axis=0) for k in range(3)], axis=1) / weight.sum()
+    sweeps, batches = 20000, 50
+    samples = _chain(machine, lattice, tuple(("f", c) for c in order), sweeps, (lattice.f,), seed=9, thin=1)
+    samples = samples[500:][: (sweeps - 500) // batches * batches]
+    for k, level in enumerate(levels):
+        per_batch = (samples == level).reshape(batches, -1, H * W).mean(axis=1)
+        error = np.abs(per_batch.mean(axis=0) - exact[:, k])
+        standard_error = per_batch.std(axis=0, ddof=1) / np.sqrt(batches)
+        assert np.all(error < 3 * standard_error + 1e-3), (error / np.maximum(standard_error, 1e-9)).max()
+
+
+def test_an_icm_sweep_of_levels_takes_each_conditional_mode(machine):
+    """One ICM sweep of the constant kind, colour 0 then colour 1, against the same on the host."""
+    data = np.float32([[0.12, 0.61, 0.93], [0.38, 0.52, 0.97], [0.04, 0.33, 0.71]])
+    lattice = _potts_lattice(machine, data)
+    levels = np.float32(POTTS.levels)
+    f = levels[np.abs(data.ravel()[:, None] - levels).argmin(axis=1)]  # the start: the nearest level
+    np.testing.assert_array_equal(lattice.f.get().ravel(), f)
+    neighbours = {i: [] for i in range(H * W)}
+    for i, j, kept in _potts_bonds():
+        neighbours[i].append((j, kept))
+        neighbours[j].append((i, kept))
+    for colour in (0, 1):
+        new = f.copy()
+        for i in range(H * W):
+            if (i // W + i % W) % 2 != colour:
+                continue
+            energy = [POTTS.alpha * (level - data.ravel()[i]) ** 2
+                      + sum(POTTS.kappa * kept * (level != f[j]) for j, kept in neighbours[i]) for level in levels]
+            new[i] = levels[int(np.argmin(energy))]
+        f = new
+    lattice.sweep("icm", 1.0, 0, philox_key(0), order=(("f", 0), ("f", 1)))
+    np.testing.assert_array_equal(lattice.f.get().ravel(), f)
+    assert len(set(f.tolist())) > 1  # the modes are not all one level

@@ -942,7 +942,7 @@ class _Run:
                 image_boundaries = on_device(boundary_probability.boundary_probability(left,
                                                                                        machine=self.m).probability)
         prediction = None
-        if self.carries and self.c.time.predict_search:
+        if self.carries and self.c.time.predict_search and "next" in others:
             carried = memory.carry("motion") if memory is not None else None
             prediction = carried.prediction if carried is not None else None
         run = RunInputs(self.m, self.c, left, others_d.get("right"), others_d.get("next"), brightness, prediction)

@@ -250,8 +250,9 @@ def _constant(machine: Machine, key: object, make) -> cl_array.Array:
 
 
 def _kernel(machine: Machine, name: str, **defines: Any):
-    """A kernel of kernels/boundary_probability.cl, every one built with the Machine's vector width (VEC) so
-    that kernels with the same other defines share one program (one build at first use)."""
+    """A kernel of kernels/boundary_probability.cl built with the Machine's vector width (VEC), as all but
+    the fitting's oriented are, so that kernels with the same other defines share one program (one build
+    at first use)."""
     return vector_kernel(machine, "boundary_probability", name, **defines)
 
 

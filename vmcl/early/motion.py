@@ -468,9 +468,9 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     - edges: ``1 - XOR / (n0 + n1)`` = 2 common / (n0 + n1) with n0, n1 the edge pixels of the two
       patches (Dice's coefficient). Estimates only at frame 0's edge pixels (the paper's sparse flow).
 
-    With levels > 1, frame 1's features are warped by the prediction (bilinearly; edges: nearest
-    pixel) before the search, which is then for the residual around it. Averaging the coarse flow over
-    the patch first matters: the winners' pixel-to-pixel jitter would otherwise pass into the warp and
+    With levels > 1, frame 1's features are warped by the coarse level's prediction (bilinearly; edges:
+    nearest pixel) before the search, which is then for the residual around it; a given ``prediction`` is
+    used the same way, as it is (not averaged). Averaging the coarse flow over the patch first matters: the winners' pixel-to-pixel jitter would otherwise pass into the warp and
     the finer flow (on Middlebury it raised the error markedly away from motion boundaries). Device
     frames are not checked for NaN (that would need a read back).
 
