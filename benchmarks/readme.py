@@ -555,6 +555,16 @@ def roofline_figures(f: ResultsFile) -> str:
     return f"copy {copy.group(1)} GB/s; " + "; ".join(parts)
 
 
+def revisions_figures(f: ResultsFile) -> str:
+    base = re.search(r"base (\w+), head (\w+)", f.text)
+    parts = []
+    for size in ("256 x 256", "512 x 512"):
+        table = f.table("stage", "head / base", section=size)
+        parts.append(f"{size} {table.cell({'stage': 'whole frame'}, 'head / base')}x")
+    return (f"the whole machine's time per frame at {base.group(2)} over {base.group(1)}, measured in one run: "
+            + ", ".join(parts))
+
+
 def head_figures(f: ResultsFile) -> str:
     wire = f.table("command", "bytes (both ways)")
     return f"{wire.cell({'command': 'PING'}, 'round trip, ms')} ms PING round trip at 115200 baud"
@@ -584,6 +594,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
      pipeline_figures),
     ("roofline", ("each kernel's device time, the bytes its launches are given and its bandwidth against the "
                   "copy kernel's, for the whole machine at 256^2 and 512^2"), roofline_figures),
+    ("revisions", "the whole machine's time per frame at two revisions of vmcl, alternated in one run",
+     revisions_figures),
     ("distributed", ("`vmcl batch` on a local Dask cluster: items per second for 1 and 2 workers, 1 and 2 "
                      "threads; a model of N nodes"), distributed_figures),
     ("labelling", ("the linear classifier's labels on images it was not fitted to (new noise seed; and each "
