@@ -560,9 +560,9 @@ def revisions_figures(f: ResultsFile) -> str:
     parts = []
     for size in ("256 x 256", "512 x 512"):
         table = f.table("stage", "head / base", section=size)
-        parts.append(f"{size} {table.cell({'stage': 'whole frame'}, 'head / base')}x")
-    return (f"the whole machine's time per frame at {base.group(2)} over {base.group(1)}, measured in one run: "
-            + ", ".join(parts))
+        parts.append(f"{size}: first frame {table.cell({'stage': 'first frame'}, 'head / base')}x, later frames "
+                     f"{table.cell({'stage': 'whole frame'}, 'head / base')}x")
+    return f"time per frame at {base.group(2)} over {base.group(1)}, measured in one run: " + "; ".join(parts)
 
 
 def head_figures(f: ResultsFile) -> str:
@@ -596,6 +596,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
                   "copy kernel's, for the whole machine at 256^2 and 512^2"), roofline_figures),
     ("revisions", "the whole machine's time per frame at two revisions of vmcl, alternated in one run",
      revisions_figures),
+    ("revisions_cold", ("the same with empty kernel caches in every process: the first frame pays every build, "
+                        "as after a fresh install"), revisions_figures),
     ("distributed", ("`vmcl batch` on a local Dask cluster: items per second for 1 and 2 workers, 1 and 2 "
                      "threads; a model of N nodes"), distributed_figures),
     ("labelling", ("the linear classifier's labels on images it was not fitted to (new noise seed; and each "

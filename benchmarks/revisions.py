@@ -1,6 +1,6 @@
 """The whole machine's time per frame at two git revisions, measured in one run: how much a change sped it up.
 
-Run: python benchmarks/revisions.py --base REV [--head REV] [--rounds 3] [--frames 3] [--out FILE]
+Run: python benchmarks/revisions.py --base REV [--head REV] [--rounds 3] [--frames 3] [--cold] [--out FILE]
 
 This machine is shared and its speed drifts by tens of percent within an hour, so times measured in
 different runs cannot be compared; this script measures both revisions in alternation, in the same run.
@@ -8,7 +8,10 @@ Each revision's tree is exported (git archive) into a temporary folder, and ever
 process that imports that tree's vmcl (PYTHONPATH first, checked), renders the 'blocks' scene, runs the
 machine with its default Config once to build and warm up, then ``--frames`` times; the process reports the
 median total and each stage's median. Rounds alternate base and head; the table gives the medians over the
-rounds and head's time over base's. Writes benchmarks/results/revisions.md by default.
+rounds and head's time over base's. The first frame's time is reported as well: with ``--cold`` every process
+starts with empty kernel caches of its own (PoCL's and pyopencl's), so it includes building every kernel the
+frame uses, what a fresh install's first frame pays. Writes benchmarks/results/revisions.md by default
+(revisions_cold.md with ``--cold``).
 """
 
 from __future__ import annotations
@@ -38,11 +41,11 @@ size, frames = int(sys.argv[2]), int(sys.argv[3])
 s = scenes.render(scenes.preset("blocks", shape=(size, size)), seed=0, noise=0.01)
 machine = vmcl.Machine()
 vm = VisionMachine(Config(), machine=machine)
-vm.run(s.left, s.right, s.left_next)
+first = vm.run(s.left, s.right, s.left_next)
 runs = [vm.run(s.left, s.right, s.left_next) for _ in range(frames)]
 stages = {name: statistics.median(r.stages[name] for r in runs) for name in runs[0].stages}
 print(json.dumps({"total": statistics.median(r.total_ms for r in runs), "stages": stages,
-                  "device": machine.device.name.strip()}))
+                  "first": first.total_ms, "device": machine.device.name.strip()}))
 """
 
 
@@ -57,9 +60,13 @@ def export(revision: str, into: Path) -> tuple[Path, str]:
     return target, commit
 
 
-def measure(tree: Path, size: int, frames: int) -> dict:
-    """One new process's median frame time and stage times with the vmcl of ``tree``."""
+def measure(tree: Path, size: int, frames: int, cold: bool) -> dict:
+    """One new process's first frame time, median frame time and stage times with the vmcl of ``tree`` (with
+    empty kernel caches of its own when ``cold``)."""
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tree), os.environ.get("PYTHONPATH", "")])}
+    if cold:
+        caches = Path(tempfile.mkdtemp(prefix="caches-", dir=tree.parent))
+        env.update(POCL_CACHE_DIR=str(caches / "pocl"), XDG_CACHE_HOME=str(caches / "xdg"))
     # Run in the tree: `python -c` puts the working folder first on the path, which must not be a checkout's.
     run = subprocess.run([sys.executable, "-c", _CHILD, str(tree), str(size), str(frames)], env=env, cwd=tree, check=False,
                          capture_output=True, text=True)
@@ -74,40 +81,44 @@ def main() -> None:
     parser.add_argument("--head", default="HEAD", help="the later revision (default HEAD)")
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--frames", type=int, default=3)
-    parser.add_argument("--out", type=Path, default=RESULTS / "revisions.md")
+    parser.add_argument("--cold", action="store_true", help="empty kernel caches for every process")
+    parser.add_argument("--out", type=Path)
     args = parser.parse_args()
+    out = args.out or RESULTS / ("revisions_cold.md" if args.cold else "revisions.md")
     with tempfile.TemporaryDirectory(prefix="vmcl-revisions-") as folder:
         trees = [export(revision, Path(folder)) for revision in (args.base, args.head)]
         found: dict[tuple[str, int], list[dict]] = {}
         for _ in range(args.rounds):
             for size in SIZES:
                 for tree, commit in trees:
-                    found.setdefault((commit, size), []).append(measure(tree, size, args.frames))
+                    found.setdefault((commit, size), []).append(measure(tree, size, args.frames, args.cold))
                     print(commit, size, round(found[(commit, size)][-1]["total"]), flush=True)
     (_, base), (_, head) = trees
     lines = ["# The machine's time per frame at two revisions, in one run", "",
              (f"Measured {datetime.datetime.now():%Y-%m-%d %H:%M} on {found[(head, SIZES[0])][0]['device']}, "
               f"{os.cpu_count()} cores, 1-minute load "
               f"{os.getloadavg()[0]:.1f} at the end. Produced by `python benchmarks/revisions.py --base {args.base} "
-              f"--head {args.head}`: base {base}, head {head}; the 'blocks' scene with every cue and the default "
-              f"Config; {args.rounds} rounds alternating the revisions, each a new process running "
-              f"{args.frames} frames after a warm-up; medians over the rounds of each process's medians (ms)."), ""]
+              f"--head {args.head}{' --cold' if args.cold else ''}`: base {base}, head {head}; the 'blocks' scene "
+              f"with every cue and the default Config; {args.rounds} rounds alternating the revisions, each a new "
+              f"process running a first frame, then {args.frames} frames; medians over the rounds of each process's "
+              "medians (ms). "
+              + ("Every process started with empty kernel caches: its first frame built every kernel it used."
+                 if args.cold else "The kernel caches were those of this machine: built already.")), ""]
     for size in SIZES:
         rows = {commit: found[(commit, size)] for commit in (base, head)}
         names = list(rows[head][0]["stages"])
         lines += [f"## {size} x {size}", "", f"| stage | base {base} | head {head} | head / base |", "|---|---|---|---|"]
-        for name in ["total", *names]:
-            values = []
-            for commit in (base, head):
-                per = [r["total"] if name == "total" else r["stages"].get(name) for r in rows[commit]]
-                values.append(statistics.median(per) if None not in per else None)
-            if None in values:
+        for name in ["first", "total", *names]:
+            per = [[r[name] if name in ("first", "total") else r["stages"].get(name) for r in rows[commit]]
+                   for commit in (base, head)]
+            if any(None in values for values in per):  # a stage one of the revisions does not have
                 continue
-            ratio = f"{values[1] / values[0]:.2f}" if values[0] > 0 else ""
-            label = "whole frame" if name == "total" else name
-            lines.append(f"| {label} | {values[0]:.0f} | {values[1]:.0f} | {ratio} |")
+            before, after = (statistics.median(values) for values in per)
+            ratio = f"{after / before:.2f}" if before > 0 else ""
+            label = {"first": "first frame", "total": "whole frame"}.get(name, name)
+            lines.append(f"| {label} | {before:.0f} | {after:.0f} | {ratio} |")
         lines.append("")
-    args.out.write_text("\n".join(lines), encoding="utf-8")
+    out.write_text("\n".join(lines), encoding="utf-8")
     print("\n".join(lines))
 
 
