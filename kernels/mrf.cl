@@ -194,6 +194,18 @@ inline void store_sites(__global float *p, int start, float16 v, int x0, int lim
 #define ZERO16 ((float16)(0.0f))
 #define MASK16(c) ((c) ? (int16)(-1) : (int16)(0))
 
+/* Each of the 16 sites' four bonds (left, right, up, down) weighted by `scale` times 1 - l, the bond's
+ * (expected) keeping, and 0 past the border, where the neighbour, read at a clamped index, must not count. */
+inline void bond_weights16(__global const float *lh, __global const float *lv, int x0, int y, int base, int W,
+                           int H, int n, float scale, float16 *keep)
+{
+    int16 xs = x0 + 2 * LANES;
+    keep[0] = select(ZERO16, scale * (1.0f - load_sites(lh, base - 1, 2, n)), xs > 0);
+    keep[1] = select(ZERO16, scale * (1.0f - load_sites(lh, base, 2, n)), xs < W - 1);
+    keep[2] = y > 0 ? scale * (1.0f - load_sites(lv, base - W, 2, n)) : ZERO16;
+    keep[3] = y < H - 1 ? scale * (1.0f - load_sites(lv, base, 2, n)) : ZERO16;
+}
+
 /* f at the pixels of one checkerboard colour. Smooth kind: the Gaussian conditional (heat bath), its
  * mean (ICM, mean field), NCOMP components each from four blocks (counter word 3: 4 c + j) whose 16
  * uniforms give 16 normals by Box-Muller (radii from words 0, 1, angles from words 2, 3); a site with no
@@ -207,13 +219,9 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
     if (group >= groups || y >= H) return;
     int n = W * H, x0 = 2 * SITES * group + ((y + colour) & 1), base = y * W + x0;
 #if KIND == 0
-    int16 xs = x0 + 2 * LANES;
-    float16 wi = load_sites(w, base, 2, n);
-    float16 keep0 = select(ZERO16, 1.0f - load_sites(lh, base - 1, 2, n), xs > 0);
-    float16 keep1 = select(ZERO16, 1.0f - load_sites(lh, base, 2, n), xs < W - 1);
-    float16 keep2 = y > 0 ? 1.0f - load_sites(lv, base - W, 2, n) : ZERO16;
-    float16 keep3 = y < H - 1 ? 1.0f - load_sites(lv, base, 2, n) : ZERO16;
-    float16 a = wi + keep0 + keep1 + keep2 + keep3;
+    float16 wi = load_sites(w, base, 2, n), keep[4];
+    bond_weights16(lh, lv, x0, y, base, W, H, n, 1.0f, keep);
+    float16 a = wi + keep[0] + keep[1] + keep[2] + keep[3];
     int16 frozen = a <= 0.0f;
 #if MODE == MODE_SAMPLE
     float16 sd = sqrt(T / (2.0f * a));
@@ -222,10 +230,10 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
         int nf = n * NCOMP, s = 2 * NCOMP;
         float16 old = load_sites(f, base * NCOMP + c, s, nf);
         float16 b = wi * load_sites(g, base * NCOMP + c, s, nf);
-        b += keep0 * load_sites(f, (base - 1) * NCOMP + c, s, nf);
-        b += keep1 * load_sites(f, (base + 1) * NCOMP + c, s, nf);
-        b += keep2 * load_sites(f, (base - W) * NCOMP + c, s, nf);
-        b += keep3 * load_sites(f, (base + W) * NCOMP + c, s, nf);
+        b += keep[0] * load_sites(f, (base - 1) * NCOMP + c, s, nf);
+        b += keep[1] * load_sites(f, (base + 1) * NCOMP + c, s, nf);
+        b += keep[2] * load_sites(f, (base - W) * NCOMP + c, s, nf);
+        b += keep[3] * load_sites(f, (base + W) * NCOMP + c, s, nf);
         float16 value = b / a;
 #if MODE == MODE_SAMPLE
         float16 u = philox_uniforms16((uint)(y * groups + group), sweep, PHASE_F + colour, 4u * c, key);
@@ -239,14 +247,8 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
             if (x0 + 2 * k < W) f[(base + 2 * k) * NCOMP + c] = t[k];
     }
 #else
-    int16 xs = x0 + 2 * LANES;
-    float16 wi = load_sites(w, base, 2, n), gi = load_sites(g, base, 2, n);
-    /* kappa where a bond is kept (0 past the border, where the neighbour's level, read at a clamped
-     * index, does not count). */
-    float16 keep0 = select(ZERO16, kappa * (1.0f - load_sites(lh, base - 1, 2, n)), xs > 0);
-    float16 keep1 = select(ZERO16, kappa * (1.0f - load_sites(lh, base, 2, n)), xs < W - 1);
-    float16 keep2 = y > 0 ? kappa * (1.0f - load_sites(lv, base - W, 2, n)) : ZERO16;
-    float16 keep3 = y < H - 1 ? kappa * (1.0f - load_sites(lv, base, 2, n)) : ZERO16;
+    float16 wi = load_sites(w, base, 2, n), gi = load_sites(g, base, 2, n), keep[4];
+    bond_weights16(lh, lv, x0, y, base, W, H, n, kappa, keep);  /* kappa where a bond is kept */
     float16 f0 = load_sites(f, base - 1, 2, n), f1 = load_sites(f, base + 1, 2, n);
     float16 f2 = load_sites(f, base - W, 2, n), f3 = load_sites(f, base + W, 2, n);
     float16 energy[NLEVELS];
@@ -256,10 +258,10 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
     for (int k = 0; k < NLEVELS; ++k) {
         float16 d = levels[k] - gi;
         float16 e = wi * d * d;
-        e += select(ZERO16, keep0, levels[k] != f0);
-        e += select(ZERO16, keep1, levels[k] != f1);
-        e += select(ZERO16, keep2, levels[k] != f2);
-        e += select(ZERO16, keep3, levels[k] != f3);
+        e += select(ZERO16, keep[0], levels[k] != f0);
+        e += select(ZERO16, keep[1], levels[k] != f1);
+        e += select(ZERO16, keep[2], levels[k] != f2);
+        e += select(ZERO16, keep[3], levels[k] != f3);
         energy[k] = e;
         int16 lower = e < lowest;
         lowest = select(lowest, e, lower);
@@ -298,7 +300,7 @@ __kernel void f_update(__global float *f, __global const float *g, __global cons
  * that pixel i takes level k; the Potts interaction is replaced by its expectation kappa (1 - q_j(k))
  * under the neighbour's distribution. SITES sites of the colour per work-item as float16 lanes, as
  * f_update: with a plane per level a level's 16 sites are two contiguous loads (an interleaved layout
- * made them gathers, and the update ran about 37 ns a site on PoCL's CPU device). */
+ * made every read a gather). */
 __kernel void q_update(__global float *q, __global const float *g, __global const float *w,
                        __global const float *lh, __global const float *lv, __constant float *levels,
                        float kappa, float T, int colour, long W_, long H_)
@@ -306,14 +308,10 @@ __kernel void q_update(__global float *q, __global const float *g, __global cons
     int W = (int)W_, H = (int)H_, y = get_global_id(1), group = get_global_id(0), groups = GROUPS(W);
     if (group >= groups || y >= H) return;
     int n = W * H, all = n * NLEVELS, x0 = 2 * SITES * group + ((y + colour) & 1), base = y * W + x0;
-    int16 xs = x0 + 2 * LANES;
-    float16 wi = load_sites(w, base, 2, n), gi = load_sites(g, base, 2, n);
-    /* kappa times each bond's expectation of being kept (0 past the border); a neighbour's q is then read
-     * at clamped indices, finite whatever it is, and weighted by 0 there. */
-    float16 keep0 = select(ZERO16, kappa * (1.0f - load_sites(lh, base - 1, 2, n)), xs > 0);
-    float16 keep1 = select(ZERO16, kappa * (1.0f - load_sites(lh, base, 2, n)), xs < W - 1);
-    float16 keep2 = y > 0 ? kappa * (1.0f - load_sites(lv, base - W, 2, n)) : ZERO16;
-    float16 keep3 = y < H - 1 ? kappa * (1.0f - load_sites(lv, base, 2, n)) : ZERO16;
+    float16 wi = load_sites(w, base, 2, n), gi = load_sites(g, base, 2, n), keep[4];
+    /* kappa times each bond's expectation of being kept; past the border the neighbour's q, read at a
+     * clamped index, is finite whatever it is, and weighted by 0. */
+    bond_weights16(lh, lv, x0, y, base, W, H, n, kappa, keep);
     float16 energy[NLEVELS];
     float16 lowest = (float16)(INFINITY);
 #pragma unroll
@@ -321,10 +319,10 @@ __kernel void q_update(__global float *q, __global const float *g, __global cons
         int plane = k * n + base;
         float16 d = levels[k] - gi;
         float16 e = wi * d * d;
-        e += keep0 * (1.0f - load_sites(q, plane - 1, 2, all));
-        e += keep1 * (1.0f - load_sites(q, plane + 1, 2, all));
-        e += keep2 * (1.0f - load_sites(q, plane - W, 2, all));
-        e += keep3 * (1.0f - load_sites(q, plane + W, 2, all));
+        e += keep[0] * (1.0f - load_sites(q, plane - 1, 2, all));
+        e += keep[1] * (1.0f - load_sites(q, plane + 1, 2, all));
+        e += keep[2] * (1.0f - load_sites(q, plane - W, 2, all));
+        e += keep[3] * (1.0f - load_sites(q, plane + W, 2, all));
         energy[k] = e;
         lowest = fmin(lowest, e);
     }
