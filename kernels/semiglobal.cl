@@ -253,42 +253,47 @@ inline long2 walk(__global const uchar *cost, __global const float *grey, __glob
     int chunks = S / LANES;
     const ushort16 lane = (ushort16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     const ushort16 pad = (ushort16)PAD;
-    const ushort16 down = (ushort16)(15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30);
-    const ushort16 up = (ushort16)(1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16);
-    ushort16 unused[CHUNKS], previous[CHUNKS], current[CHUNKS];
+    ushort16 unused[CHUNKS];
+    /* The previous and the current pixel's messages, a chunk of PAD on either side of the `chunks` real
+     * ones: a lane's neighbours at d - 1 and d + 1 are then one unaligned load away (a lane shuffle across
+     * two vectors compiles to per-lane moves on some devices). */
+    ushort16 messages[2][CHUNKS + 2];
     for (int c = 0; c < chunks; c++) unused[c] = as_ushort16(lane >= (ushort16)(ushort)max(D - c * LANES, 0));
+    for (int h = 0; h < 2; h++) messages[h][0] = messages[h][chunks + 1] = pad;
     /* The line's first pixel: its messages are its costs. */
     size_t p = y * W + x;
     ushort lowest = 0xffff;
     for (int c = 0; c < chunks; c++) {
         ushort16 l = select(convert_ushort16(vload16(0, cost + p * S + c * LANES)), pad, unused[c]);
-        previous[c] = l;
+        messages[0][c + 1] = l;
         lowest = min(lowest, lowest_lane(l));
         __global ushort *out = total + p * S + c * LANES;
         vstore16(first ? l : vload16(0, out) + l, 0, out);
     }
     float brightness = grey[p];
     const ushort16 slope = (ushort16)p1;
+    int now = 0;
     for (x += dx, y += dy; x >= 0 && x < W && y >= 0 && y < H; x += dx, y += dy) {
         p = y * W + x;
         float here = grey[p];
         ushort jump = (ushort)max((float)p1, p2 / (1.0f + gain * fabs(here - brightness)));
         brightness = here;
         ushort16 ceiling = (ushort16)(ushort)(lowest + jump), floor = (ushort16)lowest;
-        ushort next_lowest = 0xffff;
+        ushort16 lowest_lanes = pad;
+        const __private ushort *previous = (const __private ushort *)messages[now];
         for (int c = 0; c < chunks; c++) {
-            ushort16 below = shuffle2(c > 0 ? previous[c - 1] : pad, previous[c], down);
-            ushort16 above = shuffle2(previous[c], c + 1 < chunks ? previous[c + 1] : pad, up);
-            ushort16 best = min(min(previous[c], ceiling), min(below, above) + slope);
+            const __private ushort *at = previous + (c + 1) * LANES;
+            ushort16 below = vload16(0, at - 1), above = vload16(0, at + 1);
+            ushort16 best = min(min(messages[now][c + 1], ceiling), min(below, above) + slope);
             ushort16 costs = select(convert_ushort16(vload16(0, cost + p * S + c * LANES)), pad, unused[c]);
             ushort16 l = costs + best - floor;
-            current[c] = l;
-            next_lowest = min(next_lowest, lowest_lane(l));
+            messages[1 - now][c + 1] = l;
+            lowest_lanes = min(lowest_lanes, l);
             __global ushort *out = total + p * S + c * LANES;
             vstore16(first ? l : vload16(0, out) + l, 0, out);
         }
-        for (int c = 0; c < chunks; c++) previous[c] = current[c];
-        lowest = next_lowest;
+        now = 1 - now;
+        lowest = lowest_lane(lowest_lanes);
     }
     return (long2)(x - dx, y - dy);
 }

@@ -129,19 +129,23 @@ def test_the_exposure_histogram_s_size_is_the_kernels():
     assert "#define TONE_STEPS (2 * TONE_REACH + 1)" in source
 
 
-def test_subpixel_offset_is_the_equiangular_vertex_of_the_sums(machine):
-    left, right = _textured_pair(seed=1)
-    total, _ = semiglobal_sums(left, right, 0, 5, 7, 40, DIRECTIONS[8], CENSUS_BITS // 2)
-    whole = match_semiglobal(left, right, d_min=0, d_max=5, census_threshold=0, ad_weight=0, p1=7, p2=40,
+@pytest.mark.parametrize(("d_max", "shape", "shift"), [(5, (14, 20), 3), (33, (12, 48), 16)])
+def test_subpixel_offset_is_the_equiangular_vertex_of_the_sums(d_max, shape, shift, machine):
+    """The offsets read the sums at d - 1 and d + 1 exactly; with 34 disparities (three vectors of the
+    message kernel) and the pair 16 apart they read them across the edge of the first two vectors, and so
+    check the messages passed across it."""
+    left, right = _textured_pair(shape, shift, seed=1)
+    total, _ = semiglobal_sums(left, right, 0, d_max, 7, 40, DIRECTIONS[8], CENSUS_BITS // 2)
+    whole = match_semiglobal(left, right, d_min=0, d_max=d_max, census_threshold=0, ad_weight=0, p1=7, p2=40,
                              edge_gain=0, subpixel=False, median=False, machine=machine).disparity
-    refined = match_semiglobal(left, right, d_min=0, d_max=5, census_threshold=0, ad_weight=0, p1=7, p2=40,
+    refined = match_semiglobal(left, right, d_min=0, d_max=d_max, census_threshold=0, ad_weight=0, p1=7, p2=40,
                                edge_gain=0, median=False, machine=machine).disparity
     np.testing.assert_array_equal(np.isfinite(whole), np.isfinite(refined))
     width = left.shape[1]
     checked = 0
     for y, x in zip(*np.nonzero(np.isfinite(whole))):
         k = int(whole[y, x])
-        inside = [k2 for k2 in range(6) if 0 <= x - k2 < width]
+        inside = [k2 for k2 in range(d_max + 1) if 0 <= x - k2 < width]
         if k in (inside[0], inside[-1]):
             assert refined[y, x] == whole[y, x]
             continue
