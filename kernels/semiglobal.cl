@@ -241,65 +241,93 @@ inline ushort lowest_lane(ushort16 v)
     return min(c.x, c.y);
 }
 
-/* The messages along direction (dx, dy) on the scanline from (x, y), added into `total` (written when
- * `first`); returns the scanline's last pixel. L(p, d) = C(p, d) + min(L(p-r, d), L(p-r, d +- 1) + P1,
- * min_k L(p-r, k) + P2(p)) - min_k L(p-r, k); subtracting the previous minimum keeps L below max C + P2, so
- * sums of 8 directions fit 16 bits (the host checks). P2(p) = max(P1, P2 / (1 + gain |I(p) - I(p-r)|)),
- * gain = edge_gain / s, s the noise's standard deviation: brightness changes are counted in units of the
- * noise, whatever the image's scale. */
-inline long2 walk(__global const uchar *cost, __global const float *grey, __global ushort *total, long x, long y,
-                  long W, long H, int D, int S, int dx, int dy, ushort p1, float p2, float gain, int first)
+/* Scanlines per work-item of the message kernel. A step's minimum over the disparities is a chain of
+ * dependent operations the next step waits for; the steps of several lines, taken in turn, give the
+ * processor independent work while it waits. */
+#ifndef LINES
+#define LINES 2
+#endif
+
+/* The messages along direction (dx, dy) on the scanlines from start[k], k < lines, added into `total`
+ * (written when `first`), the lines' steps taken in turn; end[k] receives each line's last pixel.
+ * L(p, d) = C(p, d) + min(L(p-r, d), L(p-r, d +- 1) + P1, min_k L(p-r, k) + P2(p)) - min_k L(p-r, k);
+ * subtracting the previous minimum keeps L below max C + P2, so sums of 8 directions fit 16 bits (the host
+ * checks). P2(p) = max(P1, P2 / (1 + gain |I(p) - I(p-r)|)), gain = edge_gain / s, s the noise's standard
+ * deviation: brightness changes are counted in units of the noise, whatever the image's scale. */
+inline void walk(__global const uchar *cost, __global const float *grey, __global ushort *total,
+                 const long2 *start, long2 *end, int lines, long W, long H, int D, int S, int dx, int dy,
+                 ushort p1, float p2, float gain, int first)
 {
     int chunks = S / LANES;
     const ushort16 lane = (ushort16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
     const ushort16 pad = (ushort16)PAD;
-    ushort16 unused[CHUNKS];
-    /* The previous and the current pixel's messages, a chunk of PAD on either side of the `chunks` real
-     * ones: a lane's neighbours at d - 1 and d + 1 are then one unaligned load away (a lane shuffle across
-     * two vectors compiles to per-lane moves on some devices). */
-    ushort16 messages[2][CHUNKS + 2];
-    for (int c = 0; c < chunks; c++) unused[c] = as_ushort16(lane >= (ushort16)(ushort)max(D - c * LANES, 0));
-    for (int h = 0; h < 2; h++) messages[h][0] = messages[h][chunks + 1] = pad;
-    /* The line's first pixel: its messages are its costs. */
-    size_t p = y * W + x;
-    ushort lowest = 0xffff;
-    for (int c = 0; c < chunks; c++) {
-        ushort16 l = select(convert_ushort16(vload16(0, cost + p * S + c * LANES)), pad, unused[c]);
-        messages[0][c + 1] = l;
-        lowest = min(lowest, lowest_lane(l));
-        __global ushort *out = total + p * S + c * LANES;
-        vstore16(first ? l : vload16(0, out) + l, 0, out);
-    }
-    float brightness = grey[p];
     const ushort16 slope = (ushort16)p1;
-    int now = 0;
-    for (x += dx, y += dy; x >= 0 && x < W && y >= 0 && y < H; x += dx, y += dy) {
-        p = y * W + x;
-        float here = grey[p];
-        ushort jump = (ushort)max((float)p1, p2 / (1.0f + gain * fabs(here - brightness)));
-        brightness = here;
-        ushort16 ceiling = (ushort16)(ushort)(lowest + jump), floor = (ushort16)lowest;
+    ushort16 unused[CHUNKS];
+    for (int c = 0; c < chunks; c++) unused[c] = as_ushort16(lane >= (ushort16)(ushort)max(D - c * LANES, 0));
+    /* Each line's previous and current pixel's messages, a chunk of PAD on either side of the `chunks`
+     * real ones: a lane's neighbours at d - 1 and d + 1 are then one unaligned load away, which PoCL runs
+     * faster than a lane shuffle across two vectors (benchmarks/results/revisions.md). */
+    ushort16 messages[LINES][2][CHUNKS + 2];
+    long2 at[LINES];
+    ushort lowest[LINES];
+    float brightness[LINES];
+    int now[LINES], going[LINES];
+    for (int k = 0; k < lines; k++) {
+        for (int h = 0; h < 2; h++) messages[k][h][0] = messages[k][h][chunks + 1] = pad;
+        /* The line's first pixel: its messages are its costs. */
+        at[k] = start[k];
+        size_t p = at[k].y * W + at[k].x;
         ushort16 lowest_lanes = pad;
-        const __private ushort *previous = (const __private ushort *)messages[now];
         for (int c = 0; c < chunks; c++) {
-            const __private ushort *at = previous + (c + 1) * LANES;
-            ushort16 below = vload16(0, at - 1), above = vload16(0, at + 1);
-            ushort16 best = min(min(messages[now][c + 1], ceiling), min(below, above) + slope);
-            ushort16 costs = select(convert_ushort16(vload16(0, cost + p * S + c * LANES)), pad, unused[c]);
-            ushort16 l = costs + best - floor;
-            messages[1 - now][c + 1] = l;
+            ushort16 l = select(convert_ushort16(vload16(0, cost + p * S + c * LANES)), pad, unused[c]);
+            messages[k][0][c + 1] = l;
             lowest_lanes = min(lowest_lanes, l);
             __global ushort *out = total + p * S + c * LANES;
             vstore16(first ? l : vload16(0, out) + l, 0, out);
         }
-        now = 1 - now;
-        lowest = lowest_lane(lowest_lanes);
+        lowest[k] = lowest_lane(lowest_lanes);
+        brightness[k] = grey[p];
+        now[k] = 0;
+        going[k] = 1;
     }
-    return (long2)(x - dx, y - dy);
+    for (int left = lines; left > 0;) {
+        for (int k = 0; k < lines; k++) {
+            if (!going[k]) continue;
+            long x = at[k].x + dx, y = at[k].y + dy;
+            if (x < 0 || x >= W || y < 0 || y >= H) {
+                going[k] = 0;
+                left--;
+                continue;
+            }
+            at[k] = (long2)(x, y);
+            size_t p = y * W + x;
+            float here = grey[p];
+            ushort jump = (ushort)max((float)p1, p2 / (1.0f + gain * fabs(here - brightness[k])));
+            brightness[k] = here;
+            ushort16 ceiling = (ushort16)(ushort)(lowest[k] + jump), floor = (ushort16)lowest[k];
+            ushort16 lowest_lanes = pad;
+            int was = now[k];
+            const __private ushort *previous = (const __private ushort *)messages[k][was];
+            for (int c = 0; c < chunks; c++) {
+                const __private ushort *here_d = previous + (c + 1) * LANES;
+                ushort16 below = vload16(0, here_d - 1), above = vload16(0, here_d + 1);
+                ushort16 best = min(min(messages[k][was][c + 1], ceiling), min(below, above) + slope);
+                ushort16 costs = select(convert_ushort16(vload16(0, cost + p * S + c * LANES)), pad, unused[c]);
+                ushort16 l = costs + best - floor;
+                messages[k][1 - was][c + 1] = l;
+                lowest_lanes = min(lowest_lanes, l);
+                __global ushort *out = total + p * S + c * LANES;
+                vstore16(first ? l : vload16(0, out) + l, 0, out);
+            }
+            now[k] = 1 - was;
+            lowest[k] = lowest_lane(lowest_lanes);
+        }
+    }
+    for (int k = 0; k < lines; k++) end[k] = at[k];
 }
 
-/* The messages along direction (dx, dy) and then along (-dx, -dy) on the same scanline, one work-item per
- * scanline: the way back finds the line's costs and sums still in the cache (two launches, one per
+/* The messages along direction (dx, dy) and then along (-dx, -dy) on LINES neighbouring scanlines per
+ * work-item: the way back finds the lines' costs and sums still in the cache (two launches, one per
  * direction, read them from memory twice). Sums are integers, so the order of the directions does not
  * change them.
  *
@@ -310,21 +338,25 @@ __kernel void aggregate(__global const uchar *cost, __global const float *grey, 
                         __global const float *noise, int first)
 {
     float gain = edge_gain / fmax(noise[0], FLT_MIN);
-    long id = get_global_id(0);
-    long x, y;
-    if (dy == 0) {
-        if (id >= H) return;
-        x = dx > 0 ? 0 : W - 1; y = id;
-    } else if (dx == 0) {
-        if (id >= W) return;
-        x = id; y = dy > 0 ? 0 : H - 1;
-    } else {
-        if (id >= W + H - 1) return;
-        if (id < W) { x = id; y = dy > 0 ? 0 : H - 1; }
-        else { x = dx > 0 ? 0 : W - 1; y = (dy > 0 ? 0 : H - 1) + dy * (id - W + 1); }
+    long count = dy == 0 ? H : dx == 0 ? W : W + H - 1;
+    long2 start[LINES], end[LINES];
+    int lines = 0;
+    for (long id = get_global_id(0) * LINES; id < count && lines < LINES; id++, lines++) {
+        long x, y;
+        if (dy == 0) {
+            x = dx > 0 ? 0 : W - 1; y = id;
+        } else if (dx == 0) {
+            x = id; y = dy > 0 ? 0 : H - 1;
+        } else if (id < W) {
+            x = id; y = dy > 0 ? 0 : H - 1;
+        } else {
+            x = dx > 0 ? 0 : W - 1; y = (dy > 0 ? 0 : H - 1) + dy * (id - W + 1);
+        }
+        start[lines] = (long2)(x, y);
     }
-    long2 last = walk(cost, grey, total, x, y, W, H, D, S, dx, dy, p1, p2, gain, first);
-    walk(cost, grey, total, last.x, last.y, W, H, D, S, -dx, -dy, p1, p2, gain, 0);
+    if (lines == 0) return;
+    walk(cost, grey, total, start, end, lines, W, H, D, S, dx, dy, p1, p2, gain, first);
+    walk(cost, grey, total, end, start, lines, W, H, D, S, -dx, -dy, p1, p2, gain, 0);
 }
 
 /* The left view's winner at each pixel (smallest summed cost; ties: the smaller d), moved to the vertex of

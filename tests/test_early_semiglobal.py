@@ -9,6 +9,7 @@ import pytest
 from oracles import semiglobal_sums, semiglobal_winners
 
 from vmcl import scenes
+from vmcl.early import semiglobal
 from vmcl.early.semiglobal import (
     CENSUS_BITS,
     CENSUS_SIZE,
@@ -37,9 +38,12 @@ def _textured_pair(shape=(14, 20), shift=3, seed=0):
 
 @pytest.mark.parametrize("paths", [8, 4])
 @pytest.mark.parametrize(("d_min", "d_max"), [(0, 5), (-2, 4)])
-def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, machine):
+@pytest.mark.parametrize("lines_per_item", [1, 3, semiglobal.CPU_SCANLINES_PER_ITEM])
+def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, lines_per_item, machine, monkeypatch):
     """Census costs, the messages along every direction, both views' winners, the left-right check and the
-    occlusion fill, against a plain NumPy (Python int) implementation of the same definitions."""
+    occlusion fill, against a plain NumPy (Python int) implementation of the same definitions; with one
+    scanline per work-item (a GPU's), and with several, 3 leaving a work-item short of its share."""
+    monkeypatch.setattr(semiglobal, "CPU_SCANLINES_PER_ITEM", lines_per_item)
     left, right = _textured_pair()
     p1, p2 = 7, 40
     total, cost = semiglobal_sums(left, right, d_min, d_max, p1, p2, DIRECTIONS[paths], CENSUS_BITS // 2)

@@ -53,7 +53,7 @@ from vmcl.early.weighted_median import weighted_median
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["AD_CAP", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "DIRECTIONS", "EDGE_GAIN", "JUMP",
+__all__ = ["AD_CAP", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "CPU_SCANLINES_PER_ITEM", "DIRECTIONS", "EDGE_GAIN", "JUMP",
            "MATCH_EXPOSURE", "P1", "P2", "POOR_MATCH", "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "TONE_BINS", "TONE_STEPS",
            "SemiGlobalMatch", "match_semiglobal"]
 
@@ -116,8 +116,12 @@ _TONE_LEAST = 64
 _NOISE_MEDIAN = 0.6745 * 6
 """The median magnitude of Immerkaer's mask on Gaussian noise, in units of the noise's standard deviation."""
 _LINES_PER_GROUP = 16
-"""Scanlines per work-group of the message kernel: left to the device, PoCL put a whole direction's lines
-in one work-group, which one CPU thread runs; in groups of 16 every core takes a share."""
+"""Scanlines per work-group of the message kernel (at least one work-item): left to the device, PoCL put a
+whole direction's lines in one work-group, which one CPU thread runs; in groups of 16 every core takes a share."""
+CPU_SCANLINES_PER_ITEM = 4
+"""Scanlines a work-item of the message kernel steps along in turn on a CPU (LINES in kernels/semiglobal.cl):
+a core waits on each step's minimum over the disparities, and other lines' steps fill the wait. A GPU hides
+the wait with other work-items and wants every line in a work-item of its own."""
 _LANES = 16  # disparities per vector in the message kernel (LANES in kernels/semiglobal.cl)
 _PRIVATE_STEP = 64  # the private message arrays are sized in steps of this many disparities
 
@@ -334,14 +338,15 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
                    np.float32(AD_CAP), noise)
     del codes, levels
     sums = machine.empty((height, width, stride), np.uint16)
-    aggregate = machine.kernel("semiglobal", "aggregate", MAX_D=_PRIVATE_STEP * math.ceil(depth / _PRIVATE_STEP))
+    per_item = CPU_SCANLINES_PER_ITEM if machine.is_cpu else 1
+    aggregate = machine.kernel("semiglobal", "aggregate", MAX_D=_PRIVATE_STEP * math.ceil(depth / _PRIVATE_STEP),
+                               LINES=per_item)
     # A launch passes messages along a direction and back (DIRECTIONS lists them in opposite pairs).
     for index, (dx, dy) in enumerate(DIRECTIONS[paths][::2]):
         lines = height if dy == 0 else width if dx == 0 else width + height - 1
-        machine.launch(aggregate, (lines,), costs, views[0], sums, *dims, np.int32(depth), np.int32(stride),
-                       np.int32(dx),
-                       np.int32(dy), np.uint16(p1), np.float32(p2), np.float32(edge_gain), noise,
-                       np.int32(index == 0), local_size=(_LINES_PER_GROUP,))
+        machine.launch(aggregate, (-(-lines // per_item),), costs, views[0], sums, *dims, np.int32(depth),
+                       np.int32(stride), np.int32(dx), np.int32(dy), np.uint16(p1), np.float32(p2), np.float32(edge_gain), noise,
+                       np.int32(index == 0), local_size=(max(1, _LINES_PER_GROUP // per_item),))
     return costs, sums
 
 
