@@ -52,6 +52,7 @@ MOTORCYCLE_DISPARITIES = 68  # calib.txt's ndisp = 270 for the full-size pair, d
 STAGES: dict[str, dict] = {
     "default: semi-global matches alone": {},
     "semi-global matches alone, no weighted median at depth jumps": {"refine": False},
+    "semi-global matches alone, no occlusion geometry": {"occlusion_geometry": False},
     "edge matches + semi-global backfill": {"feature_matches": True},
     "edge matches + semi-global backfill, no feedback": {"feature_matches": True, "feedback": False},
     "edge matches + intensity backfill, shiftable (previous default)": {"feature_matches": True,

@@ -18,8 +18,11 @@ median's (REFINE_GRID: off, or its radius, colour scale and stride; the cheapest
 REFINE_TOLERANCE of the best), which gives StereoConfig's refine and vmcl.early.semiglobal's
 REFINE_RADIUS, REFINE_COLOUR and REFINE_STRIDE; then the MRF's (MRF_GRID): the weight of the matches in
 the MRF's data (StereoConfig.backfill_weight) and the stereo MRF's alpha and beta (vmcl.cues.stereo's
-DENSE_ALPHA and DENSE_BETA), the best depth lines within MRF_TOLERANCE of the best score. Writes
-benchmarks/results/stereo_fit.md, every combination of each stage, best first.
+DENSE_ALPHA and DENSE_BETA), the best depth lines within MRF_TOLERANCE of the best score; then, with all
+of those, the matcher's occlusion geometry on or off (GEOMETRY_GRID; vmcl.early.semiglobal's
+occlusion_geometry, StereoConfig's), chosen by the MRF stage's rule. The stages before it run with the
+geometry on (the default). Writes benchmarks/results/stereo_fit.md, every combination of each stage, best
+first.
 """
 
 from __future__ import annotations
@@ -49,6 +52,7 @@ REFINE_TOLERANCE = 0.0005
 of the best: the scores of neighbouring settings differ by about this much from run to run of the grid
 (the matcher's rows alternated within 0.0003), so a closer score does not pay for more work."""
 MRF_GRID = {"backfill_weight": (0.2, 1.0), "alpha": (0.25, 1.0, 4.0, 16.0), "beta": (0.25, 0.5, 2.0, 8.0)}
+GEOMETRY_GRID = {"occlusion_geometry": (True, False)}
 MRF_TOLERANCE = 0.001
 """The MRF's setting is, among those whose score is within this of the best (about twice the grid's
 run-to-run noise; the MRF's rows all lay within 0.003 of each other), the one whose lines find the rendered
@@ -131,12 +135,17 @@ def main() -> int:
         "stereo": {**chosen, "backfill_weight": values["backfill_weight"]},
         "mrf": {"stereo": {"alpha": values["alpha"], "beta": values["beta"]}}})
     mrf_choice = best_lines(weights)
+    fitted = {"stereo": {**chosen, "backfill_weight": mrf_choice["backfill_weight"]},
+              "mrf": {"stereo": {"alpha": mrf_choice["alpha"], "beta": mrf_choice["beta"]}}}
+    geometry = stage(machine, rendered, real, GEOMETRY_GRID, lambda values: {
+        **fitted, "stereo": {**fitted["stereo"], **values}})
+    geometry_choice = best_lines(geometry)
     lines = ["# The stereo cue's defaults, fitted on the training pairs", "",
              (f"Measured {datetime.datetime.now():%Y-%m-%d %H:%M}. The Vision Machine, stereo only, each pair's "
               "range found from the images. Score: the mean of the rendered pairs' mean and the real pairs' "
               "mean of the restored disparity's bad-1. Depth lines F: the stereo MRF's lines against the "
               f"rendered pairs' depth discontinuities (within 1 px; {LINES_LEFT_OUT} left out), their mean. "
-              "Best score first; the first row of stages 1 and 2 gives the defaults, stages 3 and 4 say "
+              "Best score first; the first row of stages 1 and 2 gives the defaults, stages 3, 4 and 5 say "
               "their choice."),
              "", "## Stage 1: the matcher (the census alone, the weighted median at depth jumps off)", "", *table(matcher, names), "",
              f"## Stage 2: the brightness difference beside the census, with {census}", "", *table(data_term, names),
@@ -145,7 +154,10 @@ def main() -> int:
               f"score: {cheapest_refinement(refinement)}."), "", *table(refinement, names),
              "", f"## Stage 4: the MRF's weights, with {chosen}", "",
              (f"Chosen: the best depth lines among the settings within {MRF_TOLERANCE} of the best score: "
-              f"{mrf_choice}."), "", *table(weights, names)]
+              f"{mrf_choice}."), "", *table(weights, names),
+             "", f"## Stage 5: the matcher's occlusion geometry, with {fitted}", "",
+             (f"Chosen: as in stage 4, the best depth lines among the settings within {MRF_TOLERANCE} of the best "
+              f"score: {geometry_choice}."), "", *table(geometry, names)]
     out = Path(__file__).resolve().parent / "results" / "stereo_fit.md"
     out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines[:10]))

@@ -478,13 +478,17 @@ __kernel void median_kept(__global const float *disparity, __global float *out, 
 
 /* Half-occluded pixels take the background's disparity: of the nearest kept disparities to their left
  * and right on the row, the smaller (the farther surface, which the nearer one hides from one view).
- * An unconfirmed pixel (half-occluded or mismatched) where the surface on its right, carried on to it,
+ * With `geometry`: the right camera cannot see a pixel of the left view only where a nearer surface on
+ * its right hides it, so a pixel no right pixel points back to, between kept pixels whose disparity does
+ * not grow by a pixel or more from its left to its right, is mismatched, not half-occluded (a patch the
+ * matcher could not match, within one surface or left of a farther one), and stays without a value. An
+ * unconfirmed pixel (half-occluded or mismatched) where the surface on its right, carried on to it,
  * would be seen left of the right image's first column (x < that surface's disparity) is hidden by the
  * frame, not by a nearer surface: it is half-occluded, and takes that surface's disparity whatever lies
  * to its left. One work-item per row; `filled` is the disparity with them filled (NaN where a row has no
  * kept pixel); other pixels are copied. */
 __kernel void fill_occluded(__global const float *disparity, __global uchar *occluded, __global uchar *mismatched,
-                            __global float *filled, long W, long H)
+                            __global float *filled, long W, long H, int geometry)
 {
     long y = get_global_id(0);
     if (y >= H) return;
@@ -506,6 +510,11 @@ __kernel void fill_occluded(__global const float *disparity, __global uchar *occ
             out[x] = last;
             hidden[x] = 1;
             wrong[x] = 0;
+        } else if (geometry && hidden[x] && last - out[x] < 1.0f) {
+            /* out[x] holds the nearest kept value on the left; a NaN on either side compares false. */
+            out[x] = NAN;
+            hidden[x] = 0;
+            wrong[x] = 1;
         } else if (hidden[x]) {
             out[x] = fmin(out[x], last);
         }

@@ -39,12 +39,16 @@ def _textured_pair(shape=(14, 20), shift=3, seed=0):
 @pytest.mark.parametrize("paths", [8, 4])
 @pytest.mark.parametrize(("d_min", "d_max"), [(0, 5), (-2, 4)])
 @pytest.mark.parametrize("lines_per_item", [1, 3, semiglobal.CPU_SCANLINES_PER_ITEM])
-def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, lines_per_item, machine, monkeypatch):
+@pytest.mark.parametrize("inverted", [False, True])
+def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, lines_per_item, inverted, machine, monkeypatch):
     """Census costs, the messages along every direction, both views' winners, the left-right check and the
     occlusion fill, against a plain NumPy (Python int) implementation of the same definitions; with one
-    scanline per work-item (a GPU's), and with several, 3 leaving a work-item short of its share."""
+    scanline per work-item (a GPU's), and with several, 3 leaving a work-item short of its share; and with
+    a patch of the right view's brightness inverted, which no disparity matches."""
     monkeypatch.setattr(semiglobal, "CPU_SCANLINES_PER_ITEM", lines_per_item)
     left, right = _textured_pair()
+    if inverted:
+        right[:, 8:14] = 1 - right[:, 8:14]
     p1, p2 = 7, 40
     total, cost = semiglobal_sums(left, right, d_min, d_max, p1, p2, DIRECTIONS[paths], CENSUS_BITS // 2)
     want_left, want_right, want_out = semiglobal_winners(total, d_min, cost, int(POOR_MATCH * CENSUS_BITS))
@@ -67,10 +71,12 @@ def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, lines_per_it
     np.testing.assert_array_equal(found.disparity[kept], want_left[kept])
     np.testing.assert_array_equal(found.out_of_range, want_out)
     # Filled: an unconfirmed pixel left of where the kept surface on its right would leave the right image
-    # is hidden by the frame and takes that surface's disparity; another half-occluded pixel takes the
-    # smaller of the nearest kept disparities on the row; mismatched pixels stay without.
+    # is hidden by the frame and takes that surface's disparity. Another half-occluded pixel with kept
+    # pixels on both sides of the row is half-occluded only where the surface on its right is nearer, by a
+    # pixel or more (the nearer surface hides the farther one's pixels on its left); it then takes the
+    # smaller of the two, and is mismatched otherwise. Mismatched pixels stay without.
     mismatched = ~kept & ~occluded & ~want_out
-    framed = 0
+    framed = regrouped = 0
     for y in range(height):
         for x in np.flatnonzero(occluded[y] | mismatched[y]):
             right_side = [found.disparity[y, x2] for x2 in range(x + 1, width) if kept[y, x2]][:1]
@@ -81,12 +87,34 @@ def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, lines_per_it
                 continue
             if not occluded[y, x]:
                 continue
-            sides = [found.disparity[y, x2] for x2 in range(x - 1, -1, -1) if kept[y, x2]][:1] + right_side
+            left_side = [found.disparity[y, x2] for x2 in range(x - 1, -1, -1) if kept[y, x2]][:1]
+            if left_side and right_side and right_side[0] - left_side[0] < 1:
+                occluded[y, x], mismatched[y, x] = False, True
+                regrouped += 1
+                continue
+            sides = left_side + right_side
             np.testing.assert_equal(found.filled[y, x], min(sides) if sides else np.nan)
     assert framed > 0
+    assert regrouped > 0 or not inverted  # the inverted patch leaves unconfirmed runs within one surface
     np.testing.assert_array_equal(found.occluded, occluded)
     np.testing.assert_array_equal(found.mismatched, mismatched)
     np.testing.assert_array_equal(found.filled[~occluded], found.disparity[~occluded])
+
+
+def test_without_the_occlusion_geometry_every_pixel_no_right_pixel_points_back_to_is_half_occluded(machine):
+    """The same unconfirmed pixels either way; without the geometry, those the rule calls mismatched (a patch
+    of the right view inverted, within one surface) are half-occluded again and take the row's background."""
+    left, right = _textured_pair()
+    right[:, 8:14] = 1 - right[:, 8:14]
+    options = dict(d_min=0, d_max=5, census_threshold=0, p1=7, p2=40, edge_gain=0, ad_weight=0.0, subpixel=False,
+                   median=False, refine=False, machine=machine)
+    on = match_semiglobal(left, right, **options)
+    off = match_semiglobal(left, right, occlusion_geometry=False, **options)
+    np.testing.assert_array_equal(on.disparity, off.disparity)
+    np.testing.assert_array_equal(on.occluded | on.mismatched, off.occluded | off.mismatched)
+    regrouped = off.occluded & on.mismatched
+    assert regrouped.any() and not (on.occluded & ~off.occluded).any()
+    assert np.isnan(on.filled[regrouped]).all() and np.isfinite(off.filled[regrouped]).all()
 
 
 def test_the_absolute_difference_alone_finds_the_shift(machine):

@@ -258,6 +258,9 @@ class StereoConfig:
         census, whether that difference is taken after the cameras' exposure difference, measured on the
         surest census matches, is taken out, and the smoothness prices, as
         :func:`vmcl.early.semiglobal.match_semiglobal` takes them.
+    occlusion_geometry : bool
+        The semi-global matcher counts an unconfirmed pixel as half-occluded only where a nearer surface on
+        its right can hide it (:func:`vmcl.early.semiglobal.match_semiglobal`'s ``occlusion_geometry``).
     refine, refine_radius, refine_colour, refine_stride
         The semi-global matcher's weighted median at depth jumps (pixels near a jump take the median of
         the confirmed disparities of their own colour around them), as
@@ -294,6 +297,7 @@ class StereoConfig:
     p1: int = semiglobal.P1
     p2: float = semiglobal.P2
     edge_gain: float = semiglobal.EDGE_GAIN
+    occlusion_geometry: bool = True
     refine: bool = True
     refine_radius: int = semiglobal.REFINE_RADIUS
     refine_colour: float = semiglobal.REFINE_COLOUR

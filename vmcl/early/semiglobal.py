@@ -13,7 +13,8 @@ one work-item per scanline.
 
 Both views' winners come from the one sum of messages. A left winner the right view does not confirm
 (left-right consistency) has no value, and is told apart as half-occluded (no right pixel on its row
-points back to it: the right camera does not see it) or mismatched (one does). Kept winners are moved to
+points back to it, and a nearer surface on its right can hide it: the right camera does not see it) or
+mismatched (one does, or no nearer surface lies on its right). Kept winners are moved to
 a fraction of a pixel by the equiangular (V) fit through their neighbours' sums.
 
 References
@@ -137,9 +138,10 @@ class SemiGlobalMatch:
         them, the value of the surface on their right; with ``refine``, the pixels near depth jumps and
         the mismatched ones given the weighted median of the kept disparities around them (mismatched
         pixels without kept ones around stay NaN; without ``refine`` all do); out-of-range pixels NaN.
-    occluded : bool (H, W), half-occluded pixels: no disparity of the range is confirmed by the right view,
-        or the pixel is unconfirmed and the kept surface on its right, carried on to it, would be seen left
-        of the right image (x < its disparity: the frame hides it).
+    occluded : bool (H, W), half-occluded pixels: no disparity of the range is confirmed by the right view
+        (and, with ``occlusion_geometry``, the nearest kept pixel on the row's right is nearer, by a pixel
+        of disparity or more, than the nearest on its left, or one side has none); or the pixel is unconfirmed and the kept surface on its right, carried on to it, would be
+        seen left of the right image (x < its disparity: the frame hides it).
     mismatched : bool (H, W), unconfirmed pixels that are not half-occluded (the winner was wrong).
     out_of_range : bool (H, W), pixels whose winner was an end of the range (d_min or d_max, where the
         image lets the range go on) with a poor cost there (above :data:`POOR_MATCH` of the largest
@@ -161,7 +163,8 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
                      census_threshold: float = CENSUS_THRESHOLD, ad_weight: float = AD_WEIGHT,
                      match_exposure: bool = MATCH_EXPOSURE, p1: int = P1, p2: float = P2,
                      edge_gain: float = EDGE_GAIN, paths: int = 8,
-                     subpixel: bool = True, tolerance: int = 1, median: bool = True, refine: bool = True,
+                     subpixel: bool = True, tolerance: int = 1, median: bool = True,
+                     occlusion_geometry: bool = True, refine: bool = True,
                      refine_radius: int = REFINE_RADIUS, refine_colour: float = REFINE_COLOUR,
                      refine_stride: int = REFINE_STRIDE,
                      machine: Machine | None = None
@@ -214,6 +217,12 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         Replace each kept disparity by the median of the kept ones in its 3 x 3 neighbourhood (after the
         check, before the fill), which removes isolated wrong winners (Hirschmueller's filter);
         benchmarks/results/stereo.md gives the matcher with and without it.
+    occlusion_geometry : bool
+        Count an unconfirmed pixel as half-occluded only where the occlusion's geometry allows it: the kept
+        surface on its right on the row is nearer, by a pixel of disparity or more, than the one on its left
+        (only a nearer surface on its right hides a pixel of the left view from the right camera); other
+        unconfirmed pixels are mismatched. False: every pixel no right pixel points back to is
+        half-occluded (and takes its background's value). benchmarks/results/stereo_fit.md, stage 5.
     refine : bool
         Give every pixel within half a census window of a depth jump (neighbours of ``filled`` differing
         by more than :data:`JUMP`), and every mismatched pixel, the weighted median of the kept disparities
@@ -261,6 +270,7 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     subpixel = check_bool(subpixel, "subpixel")
     tolerance = check_int(tolerance, "tolerance", minimum=0, maximum=2**31 - 1)
     median = check_bool(median, "median")
+    occlusion_geometry = check_bool(occlusion_geometry, "occlusion_geometry")
     refine = check_bool(refine, "refine")
     if refine and isinstance(left, np.ndarray) and left.dtype == np.float32:
         # The weighted median's colour scale is in [0, 1] levels (the census is in units of the noise).
@@ -280,7 +290,7 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     dims = (np.int64(width), np.int64(height))
     costs, sums = _aggregate(machine, views, d_min, depth, census_threshold, ad_weight, match_exposure, p1, p2,
                              edge_gain, paths)
-    found = _select(machine, sums, costs, dims, d_min, depth, subpixel, tolerance, median,
+    found = _select(machine, sums, costs, dims, d_min, depth, subpixel, tolerance, median, occlusion_geometry,
                     int(POOR_MATCH * (CENSUS_BITS + ad_weight * AD_CAP)))
     disparity, filled, occluded, mismatched, out_of_range = found
     if refine:
@@ -387,7 +397,8 @@ def _refine(machine: Machine, filled: cl_array.Array, occluded: cl_array.Array, 
 
 
 def _select(machine: Machine, sums: cl_array.Array, costs: cl_array.Array, dims, d_min: int, depth: int,
-            subpixel: bool, tolerance: int, median: bool, poor: int) -> tuple[cl_array.Array, ...]:
+            subpixel: bool, tolerance: int, median: bool, geometry: bool, poor: int
+            ) -> tuple[cl_array.Array, ...]:
     """Both views' winners, the check, and the filled disparity: (disparity, filled, occluded, mismatched,
     out_of_range)."""
     width, height = int(dims[0]), int(dims[1])
@@ -409,5 +420,5 @@ def _select(machine: Machine, sums: cl_array.Array, costs: cl_array.Array, dims,
         disparity = smoothed
     filled = machine.empty((height, width), np.float32)
     machine.launch(machine.kernel("semiglobal", "fill_occluded"), (height,), disparity, occluded, mismatched, filled,
-                   *dims)
+                   *dims, np.int32(geometry))
     return disparity, filled, occluded, mismatched, out_of_range
