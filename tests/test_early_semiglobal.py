@@ -106,8 +106,8 @@ def test_without_the_occlusion_geometry_every_pixel_no_right_pixel_points_back_t
     of the right view inverted, within one surface) are half-occluded again and take the row's background."""
     left, right = _textured_pair()
     right[:, 8:14] = 1 - right[:, 8:14]
-    options = dict(d_min=0, d_max=5, census_threshold=0, p1=7, p2=40, edge_gain=0, ad_weight=0.0, subpixel=False,
-                   median=False, refine=False, machine=machine)
+    options = {"d_min": 0, "d_max": 5, "census_threshold": 0, "p1": 7, "p2": 40, "edge_gain": 0, "ad_weight": 0.0,
+               "subpixel": False, "median": False, "refine": False, "machine": machine}
     on = match_semiglobal(left, right, **options)
     off = match_semiglobal(left, right, occlusion_geometry=False, **options)
     np.testing.assert_array_equal(on.disparity, off.disparity)
