@@ -20,8 +20,9 @@ REFINE_RADIUS, REFINE_COLOUR and REFINE_STRIDE; then the MRF's (MRF_GRID): the w
 the MRF's data (StereoConfig.backfill_weight) and the stereo MRF's alpha and beta (vmcl.cues.stereo's
 DENSE_ALPHA and DENSE_BETA), the best depth lines within MRF_TOLERANCE of the best score; then, with all
 of those, the matcher's occlusion geometry on or off (GEOMETRY_GRID; vmcl.early.semiglobal's
-occlusion_geometry, StereoConfig's), chosen by the MRF stage's rule. The stages before it run with the
-geometry on (the default). Writes benchmarks/results/stereo_fit.md, every combination of each stage, best
+occlusion_geometry, StereoConfig's), chosen by the MRF stage's rule. Stages 1 and 2 run with it off, as
+with the weighted median off the pixels it calls mismatched would keep no value; stages 3 and 4 with it on
+(the default). Writes benchmarks/results/stereo_fit.md, every combination of each stage, best
 first.
 """
 
@@ -123,11 +124,13 @@ def main() -> int:
     machine = vmcl.Machine()
     rendered, real = rendered_pairs(), middlebury_pairs()
     names = [p.name for p in rendered + real]
+    # The weighted median is what gives the pixels the occlusion geometry calls mismatched a value: off with it.
+    unrefined = {"refine": False, "occlusion_geometry": False}
     matcher = stage(machine, rendered, real, GRID, lambda values: {"stereo": {**values, "ad_weight": 0.0,
-                                                                             "refine": False}})
+                                                                             **unrefined}})
     census = matcher[0][1]
     data_term = stage(machine, rendered, real, AD_GRID, lambda values: {"stereo": {**census, **values,
-                                                                                  "refine": False}})
+                                                                                  **unrefined}})
     chosen = {**census, **data_term[0][1]}
     refinement = stage(machine, rendered, real, REFINE_GRID, lambda values: {"stereo": {**chosen, **values}})
     chosen = {**chosen, **cheapest_refinement(refinement)}
@@ -147,7 +150,8 @@ def main() -> int:
               f"rendered pairs' depth discontinuities (within 1 px; {LINES_LEFT_OUT} left out), their mean. "
               "Best score first; the first row of stages 1 and 2 gives the defaults, stages 3, 4 and 5 say "
               "their choice."),
-             "", "## Stage 1: the matcher (the census alone, the weighted median at depth jumps off)", "", *table(matcher, names), "",
+             "", ("## Stage 1: the matcher (the census alone, the weighted median at depth jumps and the occlusion "
+                  "geometry off)"), "", *table(matcher, names), "",
              f"## Stage 2: the brightness difference beside the census, with {census}", "", *table(data_term, names),
              "", f"## Stage 3: the weighted median at depth jumps, with {chosen}", "",
              (f"Chosen: the fewest voters per refined pixel among the settings within {REFINE_TOLERANCE} of the best "
