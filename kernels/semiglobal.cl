@@ -9,7 +9,7 @@
  *
  * One work-item per cost cell row, per scanline, per pixel, VEC census codes of a row per work-item: the
  * Connection Machine's processors, one per pixel; the scanline kernels give each processor of a line's
- * first pixel the line.
+ * first pixel the line (on a CPU, a work-item takes LINES neighbouring lines).
  *
  * Layout: the cost and the sum of messages are (H, W, S) with the D = d_max - d_min + 1 disparities of a
  * pixel contiguous (S = D rounded up to whole vectors of LANES), so that a scanline's step reads and
@@ -245,7 +245,7 @@ inline ushort lowest_lane(ushort16 v)
  * dependent operations the next step waits for; the steps of several lines, taken in turn, give the
  * processor independent work while it waits. */
 #ifndef LINES
-#define LINES 2
+#define LINES 1
 #endif
 
 /* The messages along direction (dx, dy) on the scanlines from start[k], k < lines, added into `total`
@@ -266,7 +266,7 @@ inline void walk(__global const uchar *cost, __global const float *grey, __globa
     for (int c = 0; c < chunks; c++) unused[c] = as_ushort16(lane >= (ushort16)(ushort)max(D - c * LANES, 0));
     /* Each line's previous and current pixel's messages, a chunk of PAD on either side of the `chunks`
      * real ones: a lane's neighbours at d - 1 and d + 1 are then one unaligned load away, which PoCL runs
-     * faster than a lane shuffle across two vectors (benchmarks/results/revisions.md). */
+     * faster than a lane shuffle across two vectors. */
     ushort16 messages[LINES][2][CHUNKS + 2];
     long2 at[LINES];
     ushort lowest[LINES];
@@ -428,7 +428,8 @@ __kernel void select_right(__global const ushort *total, __global int *winner, l
  * `tolerance` of it. Otherwise the pixel loses its disparity and is half-occluded when no disparity of the
  * range would be confirmed by the right view (no right pixel on its row points back to it: what it sees,
  * the right camera does not), mismatched when one would (the right camera sees it; the left winner was
- * wrong). Hirschmueller 2008, section 3.4. */
+ * wrong). Hirschmueller 2008, section 3.4. fill_occluded then calls mismatched the half-occluded pixels no
+ * nearer surface on their right can hide (its `geometry`). */
 __kernel void check_views(__global float *disparity, __global const int *left_winner,
                           __global const int *right_winner, __global const uchar *out_of_range,
                           __global uchar *occluded, __global uchar *mismatched, long W, long H, int D, int d_min,

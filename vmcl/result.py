@@ -46,7 +46,8 @@ class Result:
     stereo_discontinuity : bool (H, W)
         Features whose votes were bimodal over d (None without feature matches).
     half_occluded : bool (H, W)
-        Pixels the right camera does not see (the semi-global matcher's left-right check; None with
+        Pixels the right camera does not see (the semi-global matcher's left-right check and occlusion
+        geometry; None with
         another dense matcher): their disparity in ``disparity`` is the restoration's, from the
         background beside them.
     out_of_range : bool (H, W)

@@ -9,7 +9,7 @@ charges ``p1`` for a change of one disparity and ``p2`` for a jump, ``p2`` lower
 changes between the two pixels. The energy is minimised exactly along each scanline by min-sum
 messages (a 1-D dynamic program), along 8 (or 4) directions, and the messages summed
 (Hirschmueller's semi-global matching): the MRF's minimum approximated in a fixed number of sweeps,
-one work-item per scanline.
+one work-item per scanline (a few neighbouring ones on a CPU).
 
 Both views' winners come from the one sum of messages. A left winner the right view does not confirm
 (left-right consistency) has no value, and is told apart as half-occluded (no right pixel on its row
@@ -54,9 +54,9 @@ from vmcl.early.weighted_median import weighted_median
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["AD_CAP", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "CPU_SCANLINES_PER_ITEM", "DIRECTIONS", "EDGE_GAIN", "JUMP",
-           "MATCH_EXPOSURE", "P1", "P2", "POOR_MATCH", "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "TONE_BINS", "TONE_STEPS",
-           "SemiGlobalMatch", "match_semiglobal"]
+__all__ = ["AD_CAP", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "CPU_SCANLINES_PER_ITEM", "DIRECTIONS",
+           "EDGE_GAIN", "JUMP", "MATCH_EXPOSURE", "P1", "P2", "POOR_MATCH", "REFINE_COLOUR", "REFINE_RADIUS",
+           "REFINE_STRIDE", "TONE_BINS", "TONE_STEPS", "SemiGlobalMatch", "match_semiglobal"]
 
 CENSUS_SIZE = (9, 7)  # width, height of the census window: 62 neighbours in a 64-bit code
 CENSUS_BITS = CENSUS_SIZE[0] * CENSUS_SIZE[1] - 1
@@ -117,8 +117,9 @@ _TONE_LEAST = 64
 _NOISE_MEDIAN = 0.6745 * 6
 """The median magnitude of Immerkaer's mask on Gaussian noise, in units of the noise's standard deviation."""
 _LINES_PER_GROUP = 16
-"""Scanlines per work-group of the message kernel (at least one work-item): left to the device, PoCL put a
-whole direction's lines in one work-group, which one CPU thread runs; in groups of 16 every core takes a share."""
+"""Scanlines per work-group of the message kernel, about (16 // lines per work-item work-items, at least
+one): left to the device, PoCL put a whole direction's lines in one work-group, which one CPU thread runs;
+in groups of 16 every core takes a share."""
 CPU_SCANLINES_PER_ITEM = 4
 """Scanlines a work-item of the message kernel steps along in turn on a CPU (LINES in kernels/semiglobal.cl):
 a core waits on each step's minimum over the disparities, and other lines' steps fill the wait. A GPU hides
@@ -140,8 +141,9 @@ class SemiGlobalMatch:
         pixels without kept ones around stay NaN; without ``refine`` all do); out-of-range pixels NaN.
     occluded : bool (H, W), half-occluded pixels: no disparity of the range is confirmed by the right view
         (and, with ``occlusion_geometry``, the nearest kept pixel on the row's right is nearer, by a pixel
-        of disparity or more, than the nearest on its left, or one side has none); or the pixel is unconfirmed and the kept surface on its right, carried on to it, would be
-        seen left of the right image (x < its disparity: the frame hides it).
+        of disparity or more, than the nearest on its left, or one side has none); or the pixel is
+        unconfirmed and the kept surface on its right, carried on to it, would be seen left of the right
+        image (x < its disparity: the frame hides it).
     mismatched : bool (H, W), unconfirmed pixels that are not half-occluded (the winner was wrong).
     out_of_range : bool (H, W), pixels whose winner was an end of the range (d_min or d_max, where the
         image lets the range go on) with a poor cost there (above :data:`POOR_MATCH` of the largest
@@ -349,13 +351,14 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
     del codes, levels
     sums = machine.empty((height, width, stride), np.uint16)
     per_item = CPU_SCANLINES_PER_ITEM if machine.is_cpu else 1
-    aggregate = machine.kernel("semiglobal", "aggregate", MAX_D=_PRIVATE_STEP * math.ceil(depth / _PRIVATE_STEP),
-                               LINES=per_item)
+    aggregate = machine.kernel("semiglobal", "aggregate",
+                               MAX_D=_PRIVATE_STEP * math.ceil(depth / _PRIVATE_STEP), LINES=per_item)
     # A launch passes messages along a direction and back (DIRECTIONS lists them in opposite pairs).
     for index, (dx, dy) in enumerate(DIRECTIONS[paths][::2]):
         lines = height if dy == 0 else width if dx == 0 else width + height - 1
         machine.launch(aggregate, (-(-lines // per_item),), costs, views[0], sums, *dims, np.int32(depth),
-                       np.int32(stride), np.int32(dx), np.int32(dy), np.uint16(p1), np.float32(p2), np.float32(edge_gain), noise,
+                       np.int32(stride), np.int32(dx), np.int32(dy), np.uint16(p1), np.float32(p2),
+                       np.float32(edge_gain), noise,
                        np.int32(index == 0), local_size=(max(1, _LINES_PER_GROUP // per_item),))
     return costs, sums
 
