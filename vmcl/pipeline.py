@@ -297,7 +297,7 @@ class StereoConfig:
     p1: int = semiglobal.P1
     p2: float = semiglobal.P2
     edge_gain: float = semiglobal.EDGE_GAIN
-    occlusion_geometry: bool = True
+    occlusion_geometry: bool = semiglobal.OCCLUSION_GEOMETRY
     refine: bool = True
     refine_radius: int = semiglobal.REFINE_RADIUS
     refine_colour: float = semiglobal.REFINE_COLOUR

@@ -47,9 +47,8 @@ class Result:
         Features whose votes were bimodal over d (None without feature matches).
     half_occluded : bool (H, W)
         Pixels the right camera does not see (the semi-global matcher's left-right check and occlusion
-        geometry; None with
-        another dense matcher): their disparity in ``disparity`` is the restoration's, from the
-        background beside them.
+        geometry; None with another dense matcher): their disparity in ``disparity`` is the
+        restoration's, from the background beside them.
     out_of_range : bool (H, W)
         Pixels whose best semi-global match was an end of the searched range: their disparity may lie
         outside it (the seed's areas outside the matcher's disparity range); restored from their

@@ -55,8 +55,9 @@ from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 __all__ = ["AD_CAP", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "CPU_SCANLINES_PER_ITEM", "DIRECTIONS",
-           "EDGE_GAIN", "JUMP", "MATCH_EXPOSURE", "P1", "P2", "POOR_MATCH", "REFINE_COLOUR", "REFINE_RADIUS",
-           "REFINE_STRIDE", "TONE_BINS", "TONE_STEPS", "SemiGlobalMatch", "match_semiglobal"]
+           "EDGE_GAIN", "JUMP", "MATCH_EXPOSURE", "OCCLUSION_GEOMETRY", "P1", "P2", "POOR_MATCH",
+           "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "TONE_BINS", "TONE_STEPS", "SemiGlobalMatch",
+           "match_semiglobal"]
 
 CENSUS_SIZE = (9, 7)  # width, height of the census window: 62 neighbours in a 64-bit code
 CENSUS_BITS = CENSUS_SIZE[0] * CENSUS_SIZE[1] - 1
@@ -100,6 +101,9 @@ the match is poor; a good match at the end is kept, since a range may end right 
 MATCH_EXPOSURE = True
 """Default: the cameras' exposure difference is measured and taken out before the brightness difference
 (benchmarks/results/stereo_fit.md, stage 2)."""
+OCCLUSION_GEOMETRY = True
+"""Default: an unconfirmed pixel is half-occluded only where a nearer surface on its right can hide it
+(benchmarks/results/stereo_fit.md, stage 5)."""
 TONE_BINS = 32
 """Bins of the pair's mean brightness, over the two views' joint span, in which the cameras' difference is
 measured (TONE_BINS in kernels/semiglobal.cl)."""
@@ -117,9 +121,9 @@ _TONE_LEAST = 64
 _NOISE_MEDIAN = 0.6745 * 6
 """The median magnitude of Immerkaer's mask on Gaussian noise, in units of the noise's standard deviation."""
 _LINES_PER_GROUP = 16
-"""Scanlines per work-group of the message kernel, about (16 // lines per work-item work-items, at least
-one): left to the device, PoCL put a whole direction's lines in one work-group, which one CPU thread runs;
-in groups of 16 every core takes a share."""
+"""Scanlines per work-group of the message kernel (its work-items: this over the lines a work-item takes,
+at least one): left to the device, PoCL put a whole direction's lines in one work-group, which one CPU
+thread runs; in groups of 16 lines every core takes a share."""
 CPU_SCANLINES_PER_ITEM = 4
 """Scanlines a work-item of the message kernel steps along in turn on a CPU (LINES in kernels/semiglobal.cl):
 a core waits on each step's minimum over the disparities, and other lines' steps fill the wait. A GPU hides
@@ -166,7 +170,7 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
                      match_exposure: bool = MATCH_EXPOSURE, p1: int = P1, p2: float = P2,
                      edge_gain: float = EDGE_GAIN, paths: int = 8,
                      subpixel: bool = True, tolerance: int = 1, median: bool = True,
-                     occlusion_geometry: bool = True, refine: bool = True,
+                     occlusion_geometry: bool = OCCLUSION_GEOMETRY, refine: bool = True,
                      refine_radius: int = REFINE_RADIUS, refine_colour: float = REFINE_COLOUR,
                      refine_stride: int = REFINE_STRIDE,
                      machine: Machine | None = None
