@@ -425,7 +425,7 @@ static float bilinear(__global const float *f, float fx, float fy, long W, long 
 
 /* A pixel keeps its probability when no point one pixel away along the normal has more. */
 __kernel void thin(__global const float *p, __global const uchar *theta, __constant float *directions,
-                   __global float *out, long W, long H)
+                   __global float *out, __global float *angle, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -434,5 +434,7 @@ __kernel void thin(__global const float *p, __global const uchar *theta, __const
     float v = AT(p, x, y);
     float a = bilinear(p, x + c, y + s, W, H), b = bilinear(p, x - c, y - s, W, H);
     AT(out, x, y) = (v >= a && v >= b) ? v : 0.0f;
+    // The winning normal's angle in radians, written here so that no separate conversion is built.
+    AT(angle, x, y) = (float)o * (M_PI_F / NORIENT);
 }
 #endif

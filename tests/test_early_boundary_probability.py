@@ -84,6 +84,20 @@ def test_probability_is_bounded_thin_and_monotone_in_contrast():
     assert peaks[-1] > 0.7 and peaks[0] < 0.5
 
 
+def test_orientation_is_the_winning_normal_angle():
+    # A step across rows has its normal along y: pi / 2. Every pixel's angle is one of the eight o pi / 8.
+    step = np.full((48, 48), 0.3, np.float32)
+    step[24:] += 0.4
+    found = bp.boundary_probability(step)
+    assert found.orientation.dtype == np.float32
+    column = found.probability[:, 24]
+    assert np.argmax(column) in (23, 24)
+    assert found.orientation[np.argmax(column), 24] == pytest.approx(np.pi / 2, abs=1e-6)
+    steps = found.orientation / np.float32(np.pi / bp.ORIENTATIONS)
+    np.testing.assert_allclose(steps, np.round(steps), atol=1e-5)
+    assert steps.min() >= 0 and steps.max() <= bp.ORIENTATIONS - 1
+
+
 def test_device_in_device_out(machine):
     rgb = _smooth_rgb(2)
     host = bp.boundary_probability(rgb, machine=machine)

@@ -383,3 +383,15 @@ def test_constant_tables_are_made_and_uploaded_once_per_key(monkeypatch, machine
     machine.constant(("tests", "c"), lambda: make(4.0))  # a third table: the first two are dropped
     np.testing.assert_array_equal(machine.constant(("tests", "a"), lambda: make(3.0)).get(), [3.0, 3.0, 3.0])
     assert made == [1.0, 2.0, 4.0, 3.0]
+
+
+@pytest.mark.parametrize("global_size", [(0,), (0, 5), (5, 0)])
+def test_a_launch_over_an_empty_range_runs_nothing_and_keeps_the_process(machine, global_size):
+    # PoCL 3.1 aborts the process on an NDRange with a zero dimension; the Machine never hands it one.
+    # A launch over 8 work-items after it still runs, in order, on the same kernel object.
+    kernel = machine.kernel("mrf", "set_value", NCOMP=1, KIND=0, NLEVELS=1, MODE=0)
+    out = machine.full(8, np.float32, 3.0)
+    machine.launch(kernel, global_size, out, np.float32(-1.0), np.int64(8))
+    np.testing.assert_array_equal(out.get(), np.full(8, 3.0, np.float32))
+    machine.launch(kernel, (8,), out, np.float32(-1.0), np.int64(8))
+    np.testing.assert_array_equal(out.get(), np.full(8, -1.0, np.float32))

@@ -359,6 +359,10 @@ class Machine:
             local_size = (CPU_GROUP,) + (1,) * (len(global_size) - 1)
         if local_size is not None:
             global_size = tuple(-(-g // size) * size for g, size in zip(global_size, local_size))
+        if 0 in global_size:
+            # An empty range has no work-item to run; PoCL 3.1 aborts the whole process on one (OpenCL 3.0
+            # allows it), so it never reaches the driver. The marker orders like the launch would have.
+            return cl.enqueue_marker(self.queue)
         with self._launch_lock:
             scalars = self._scalar_args.get(kernel)
             if scalars is None:  # a kernel of the caller's own making

@@ -431,7 +431,7 @@ def boundary_probability(image: ArrayLike, *, model: BoundaryModel | None = None
                 *_inputs(machine, data, model), _directions(machine),
                 _constant(machine, ("weights", model), lambda: model.weights), dense, theta, *dims)
     thinned = machine.empty((height, width), np.float32)
+    orientation = machine.empty((height, width), np.float32)
     machine.launch(_kernel(machine, "thin", **defines), (width, height), dense, theta,
-                   _directions(machine), thinned, *dims)
-    orientation = theta.astype(np.float32) * np.float32(np.pi / ORIENTATIONS)
+                   _directions(machine), thinned, orientation, *dims)
     return BoundaryProbability(result(thinned, host), result(orientation, host), result(dense, host))

@@ -19,6 +19,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm.core import ArrayLike, check_int, check_real, finite_float32, machine_for
@@ -213,11 +214,14 @@ class _Search:
         # The right view's disparities, without mirroring the images: matched against the left one over
         # the negated range, they come out negated.
         backward = self._match(right, left, -d_max, -d_min)
-        # The level's three fields come back in one transfer: the statistics are the host's, and the
-        # range they give is the one scalar pair the matcher's launches need.
+        # The level's three fields come back in one wait: the statistics are the host's, and the range
+        # they give is the one scalar pair the matcher's launches need. (pyopencl's concatenate would
+        # build a copy program of its own, on a first run's clock.)
         fields = [on_device(a) for a in (forward.disparity, forward.score, backward.disparity)]
-        disparity, score, back = cl_array.concatenate([f.reshape(1, *f.shape) for f in fields],
-                                                      queue=self.machine.queue).get()
+        host = np.empty((len(fields), *fields[0].shape), fields[0].dtype)
+        reads = [self.machine.read_into(host[k], field) for k, field in enumerate(fields)]
+        cl.wait_for_events([event for event in reads if event is not None])
+        disparity, score, back = host
         values = disparity[_consistent(disparity, score, -back, self.min_score)]
         share = values.size / disparity.size
         if values.size < self.patch * self.patch:

@@ -31,7 +31,6 @@ from typing import Literal
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm import reduce as cm_reduce
 from vmcl.cm import scan
 from vmcl.cm.core import ArrayLike, check_bool, check_choice, check_int, check_real, field, machine_for
 from vmcl.early import edges as _edges
@@ -517,8 +516,10 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
         flow_out, score, boundaries = _level(machine, f0, f1, pred, delta, radius, features, speed_penalty,
                                              method, subpixel, boundary_score)
         if coarse is None:  # the coarsest level: its range bounds the whole search's
-            at_edge = cm_reduce.reduce((abs(flow_out) >= delta - 1e-3).astype(np.float32), "sum", machine=machine)
-            coarsest_size = flow_out.size
+            # Counted on the host: the coarsest level is small, and a device count would build
+            # pyopencl's own elementwise programs on a first run's clock.
+            coarsest = np.empty(flow_out.shape, flow_out.dtype)
+            coarsest_read = machine.read_into(coarsest, flow_out)
         coarse = flow_out
     if predicted is not None:  # the finest level again, around the given prediction
         f1, pred = _warp(machine, unwarped, predicted, features, scale=1)
@@ -526,7 +527,9 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
                        boundary_score)
         _keep_better(machine, (flow_out, score, boundaries), other, predicted)
     # Read back once the finer levels are enqueued, so the queue does not drain between levels.
-    limit_share = float(at_edge.get()) / coarsest_size * 2
+    if coarsest_read is not None:
+        coarsest_read.wait()
+    limit_share = np.count_nonzero(np.abs(coarsest) >= delta - 1e-3) / coarsest.size * 2
     if host:
         return FlowResult(flow_out.get(), score.get(), boundaries.get().view(np.bool_), limit_share)
     return FlowResult(flow_out, score, boundaries, limit_share)
