@@ -27,7 +27,7 @@
  *
  * Defines: F_T (float|uchar), the feature type; V_T (float|int), the vote type; COMPARE: 0 squared
  * difference (brightness, LoG), 1 disagreement of signs (sign of the LoG), 2 XOR of binary maps (edges);
- * PREDICT (0|1): frame 1 was warped by a prediction that finish adds back (pyramid levels); VEC.
+ * VEC, as above.
  */
 #include "vmcl.h"
 
@@ -39,9 +39,6 @@
 #endif
 #ifndef COMPARE
 #define COMPARE 0
-#endif
-#ifndef PREDICT
-#define PREDICT 0
 #endif
 
 #define CMP_SQUARED 0
@@ -315,12 +312,15 @@ inline float parabola(float a, float b, float c)
 /* Relative contrast (sum (f - mean)^2 over sum f^2) below which a patch of frame 0 is flat: no estimate. */
 #define FLAT 1e-5f
 
-/* One work-item per pixel; built with VEC = 1 only (its helpers are the scalar builds of the ones above). */
+/* One work-item per pixel; built with VEC = 1 only (its helpers are the scalar builds of the ones above).
+ * predicted: frame 1 was warped by the prediction `pred`, which is added back (pyramid levels). An argument,
+ * not a define: both cases then share one build with warp and moments. */
 #if VEC == 1
 __kernel void finish(__global const V_T *best, __global const int *index, __global const float *neigh,
                      __global const float2 *pred, __global const float *moments, __global const F_T *f0,
                      __global float2 *flow, __global float *score, __global uchar *boundary,
-                     long W, long H, int delta, int r, float penalty, int subpixel, float threshold)
+                     long W, long H, int delta, int r, float penalty, int subpixel, float threshold,
+                     int predicted)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -351,9 +351,8 @@ __kernel void finish(__global const V_T *best, __global const int *index, __glob
 #endif
 #endif
     float2 w = convert_float2(v);
-#if PREDICT
-    w += pred[i];
-#endif
+    if (predicted)
+        w += pred[i];
     if (subpixel)
         w += (float2)(parabola(neigh[i], fitted, neigh[plane + i]),
                       parabola(neigh[2 * plane + i], fitted, neigh[3 * plane + i]));

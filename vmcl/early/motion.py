@@ -324,10 +324,10 @@ def _level(machine: Machine, f0, f1, pred, delta: int, radius: int, features: st
     flow_out = machine.empty((height, width, 2), np.float32)
     score = machine.empty((height, width), np.float32)
     boundaries = machine.empty((height, width), np.uint8)
-    _launch(machine, machine.kernel("motion", "finish", VEC=1, PREDICT=int(pred is not None), **defines),
+    _launch(machine, machine.kernel("motion", "finish", **defines),
             (width, height), best, index, neigh, pred if pred is not None else neigh, moments, f0, flow_out, score,
             boundaries, np.int64(width), np.int64(height), np.int32(delta), np.int32(radius), np.float32(penalty),
-            np.int32(bool(subpixel)), np.float32(threshold))
+            np.int32(bool(subpixel)), np.float32(threshold), np.int32(pred is not None))
     return flow_out, score, boundaries
 
 
