@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from skimage import color
 
+import vmcl
 from tests import oracles
 from vmcl.early import boundary_probability as bp
 
@@ -144,3 +145,19 @@ def test_the_fit_refuses_the_test_split():
     spec.loader.exec_module(module)
     with pytest.raises(SystemExit, match="train split only"):
         module.training_images(Path("/nonexistent"), "test")
+
+
+def test_a_map_builds_two_programs_of_its_file(monkeypatch):
+    # Every kernel but lab takes the model's one define set (its groups read only their own defines), so a
+    # first run builds the file twice, not once per kernel group; the map is the same either way (above).
+    built = set()
+    real = vmcl.Machine.program
+
+    def program(self, family, **defines):
+        if family == "boundary_probability":
+            built.add(tuple(sorted(defines.items())))
+        return real(self, family, **defines)
+
+    monkeypatch.setattr(vmcl.Machine, "program", program)
+    bp.boundary_probability(_smooth_rgb(3), machine=vmcl.Machine())
+    assert len(built) == 2, built

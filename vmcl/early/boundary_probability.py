@@ -270,34 +270,36 @@ def _lab(machine: Machine, data: cl_array.Array) -> cl_array.Array:
 
 
 def _planes_pass(machine: Machine, name: str, planes: cl_array.Array, out: cl_array.Array, sigma: float,
-                 count: int, first: int = 0) -> None:
+                 count: int, defines: dict, first: int = 0) -> None:
     """One pass of the Gaussian of ``sigma`` over the first ``count`` planes of ``planes``, written to planes
-    ``first`` .. ``first + count - 1`` of ``out``."""
+    ``first`` .. ``first + count - 1`` of ``out``; ``defines``: those of the program it is taken from."""
     height, width = out.shape[1:]
     size = (-(-width // machine.vector_width), height, count)
     taps, radius = device_taps(machine, (sigma,))
-    machine.launch(_kernel(machine, name), size, planes, out, taps, np.int32(radius),
+    machine.launch(_kernel(machine, name, **defines), size, planes, out, taps, np.int32(radius),
                    np.int64(first), np.int64(width), np.int64(height), local_size=machine.row_local_size(size))
 
 
-def _smooth(machine: Machine, planes: cl_array.Array, sigma: float, count: int | None = None) -> cl_array.Array:
+def _smooth(machine: Machine, planes: cl_array.Array, sigma: float, defines: dict,
+            count: int | None = None) -> cl_array.Array:
     """The first ``count`` (default all) planes of a (P, H, W) stack smoothed by the exact Gaussian of
     ``sigma``, (count, H, W)."""
     height, width = planes.shape[1:]
     count = planes.shape[0] if count is None else count
     rows = machine.empty((count, height, width), np.float32)
     out = machine.empty((count, height, width), np.float32)
-    _planes_pass(machine, "planes_rows", planes, rows, sigma, count)
-    _planes_pass(machine, "planes_cols", rows, out, sigma, count)
+    _planes_pass(machine, "planes_rows", planes, rows, sigma, count, defines)
+    _planes_pass(machine, "planes_cols", rows, out, sigma, count, defines)
     return out
 
 
-def _bank(machine: Machine, lab: cl_array.Array) -> cl_array.Array:
-    """The compressed filter-bank responses of the lightness (plane 0 of ``lab``), (H, W, BANK_SIZE)."""
+def _bank(machine: Machine, lab: cl_array.Array, defines: dict) -> cl_array.Array:
+    """The compressed filter-bank responses of the lightness (plane 0 of ``lab``), (H, W, BANK_SIZE);
+    ``defines`` hold NBANK."""
     height, width = lab.shape[1:]
-    fine, coarse = (_smooth(machine, lab, s, count=1) for s in BANK_SIGMAS)
+    fine, coarse = (_smooth(machine, lab, s, defines, count=1) for s in BANK_SIGMAS)
     out = machine.empty((height, width, BANK_SIZE), np.float32)
-    machine.launch(_kernel(machine, "bank", NBANK=BANK_SIZE), (width, height),
+    machine.launch(_kernel(machine, "bank", **defines), (width, height),
                    fine, coarse, out, *map(np.float32, BANK_SIGMAS), np.int64(width), np.int64(height))
     return out
 
@@ -308,10 +310,11 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
     height, width = data.shape[:2]
     dims = (np.int64(width), np.int64(height))
     lab = _lab(machine, data)
-    responses = _bank(machine, lab)
+    defines = _program_defines(model)
+    responses = _bank(machine, lab, defines)
     count = len(model.centres)
     labels = machine.empty((height, width), np.uint8)
-    launch_rows(machine, _kernel(machine, "nearest", NBANK=BANK_SIZE), width, height, responses,
+    launch_rows(machine, _kernel(machine, "nearest", **defines), width, height, responses,
                 _constant(machine, ("centres", model), lambda: model.centres), labels, np.int32(count), *dims)
     comp = machine.empty((6 * len(model.scales), height, width), np.float32)
     tensors = machine.empty((3 * len(model.scales), height, width), np.float32)
@@ -321,16 +324,16 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
     for k, sigma in enumerate(model.scales):
         texture_sigma = TEXTURE_RATIO * sigma
         taps, radius = device_taps(machine, (texture_sigma,))
-        machine.launch(_kernel(machine, "histogram_rows", NT=count), (width, height),
+        machine.launch(_kernel(machine, "histogram_rows", **defines), (width, height),
                        labels, rows, taps, np.int32(radius), *dims)
-        _planes_pass(machine, "planes_cols", rows, histograms, texture_sigma, count)
-        launch_rows(machine, _kernel(machine, "components", NT=count), width, height,
-                    _smooth(machine, lab, sigma), histograms, comp, tensor, np.float32(sigma),
+        _planes_pass(machine, "planes_cols", rows, histograms, texture_sigma, count, defines)
+        launch_rows(machine, _kernel(machine, "components", **defines), width, height,
+                    _smooth(machine, lab, sigma, defines), histograms, comp, tensor, np.float32(sigma),
                     np.float32(texture_sigma), np.int32(count), np.int32(k), *dims)
         # The tensor integrated at the texture's scale: a band of textons of its own (a contrast edge's)
         # gives the histograms' derivative a peak either side of the band, which integration merges.
-        _planes_pass(machine, "planes_rows", tensor, rows, texture_sigma, 3)
-        _planes_pass(machine, "planes_cols", rows, tensors, texture_sigma, 3, first=3 * k)
+        _planes_pass(machine, "planes_rows", tensor, rows, texture_sigma, 3, defines)
+        _planes_pass(machine, "planes_cols", rows, tensors, texture_sigma, 3, defines, first=3 * k)
     return comp, tensors
 
 
@@ -347,14 +350,22 @@ def _defines(model: BoundaryModel) -> dict:
             "SURROUND_FLOOR": f"{SURROUND_FLOOR!r}f"}
 
 
+def _program_defines(model: BoundaryModel) -> dict:
+    """The defines of every kernel a model's map takes but lab (whose depend on the image's type): each of
+    the file's kernel groups reads only its own, so one program serves them all, one build on a first run
+    where there were four."""
+    return {"NBANK": BANK_SIZE, "NT": len(model.centres), **_defines(model)}
+
+
 def _inputs(machine: Machine, data: cl_array.Array, model: BoundaryModel) -> tuple[cl_array.Array, ...]:
     """What the features are read from: the gradients' components, the texture tensors and the surround."""
     height, width = data.shape[:2]
     comp, tensors = _components(machine, data, model)
     strongest = machine.empty((4 * len(model.scales), height, width), np.float32)
-    launch_rows(machine, _kernel(machine, "strongest", **_defines(model)), width,
+    defines = _program_defines(model)
+    launch_rows(machine, _kernel(machine, "strongest", **defines), width,
                 height, comp, tensors, strongest, np.int64(width), np.int64(height))
-    return comp, tensors, _smooth(machine, strongest, SURROUND_SIGMA)
+    return comp, tensors, _smooth(machine, strongest, SURROUND_SIGMA, defines)
 
 
 def bank_responses(image: ArrayLike, *, machine: Machine | None = None) -> ArrayLike:
@@ -362,7 +373,7 @@ def bank_responses(image: ArrayLike, *, machine: Machine | None = None) -> Array
     texton centres cluster (benchmarks/boundary_fit.py fits them by k-means)."""
     machine = machine_for(machine)
     data, host = _image(image, machine, BANK_SIGMAS, BANK_SIZE + 4)
-    return result(_bank(machine, _lab(machine, data)), host)
+    return result(_bank(machine, _lab(machine, data), {"NBANK": BANK_SIZE}), host)
 
 
 def oriented_gradients(image: ArrayLike, *, model: BoundaryModel | None = None,
@@ -426,7 +437,7 @@ def boundary_probability(image: ArrayLike, *, model: BoundaryModel | None = None
     dims = (np.int64(width), np.int64(height))
     dense = machine.empty((height, width), np.float32)
     theta = machine.empty((height, width), np.uint8)
-    defines = _defines(model)
+    defines = _program_defines(model)
     launch_rows(machine, _kernel(machine, "probability", **defines), width, height,
                 *_inputs(machine, data, model), _directions(machine),
                 _constant(machine, ("weights", model), lambda: model.weights), dense, theta, *dims)
