@@ -526,7 +526,6 @@ __kernel void feature_codes(__global const uchar *left, __global const uchar *ri
     code_side(right, right_attr, right_features, right_codes, counts + n, min_angle, i0, n);
 }
 
-/* The planes whose patch sums the intensity score needs: L, L^2, R and R^2 (plane k at stack + k n). */
 /* x -= mean, the mean being sum[0] / n (a device scalar, so the host never waits for it). */
 __kernel void subtract_mean(__global float *x, __global const float *sum, long n)
 {
@@ -535,6 +534,7 @@ __kernel void subtract_mean(__global float *x, __global const float *sum, long n
     x[i] -= sum[0] / (float)n;
 }
 
+/* The planes whose patch sums the intensity score needs: L, L^2, R and R^2 (plane k at stack + k n). */
 __kernel void intensity_moments(__global const float *left, __global const float *right, __global float *stack,
                                 long n)
 {

@@ -30,6 +30,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm.core import (
@@ -307,6 +308,13 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
                            d_min=d_min, d_max=d_max)
 
 
+def _kernel(machine: Machine, name: str) -> cl.Kernel:
+    """A kernel of kernels/semiglobal.cl but aggregate, all from one build: census's defines (the window,
+    the vector width) are read by census alone, so the others take them too, one program on a first run
+    where there were two. aggregate's message arrays are sized by the range, a build of its own."""
+    return vector_kernel(machine, "semiglobal", name, CENSUS_W=CENSUS_SIZE[0], CENSUS_H=CENSUS_SIZE[1])
+
+
 def _range(left, right, d_min, d_max, machine: Machine) -> tuple[int, int]:
     """The range to search: the given ends, the others from :func:`estimate_range`, checked."""
     for name, value in (("d_min", d_min), ("d_max", d_max)):
@@ -333,7 +341,7 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
     stride = _LANES * math.ceil(depth / _LANES)
     dims = (np.int64(width), np.int64(height))
     response = machine.empty((height, width), np.float32)
-    machine.launch(machine.kernel("semiglobal", "noise_response"), (width, height), views[0], response, *dims)
+    machine.launch(_kernel(machine, "noise_response"), (width, height), views[0], response, *dims)
     # The noise's standard deviation from the median response of Immerkaer's mask (most pixels of most
     # images are smooth at its 3 x 3 scale; texture raises the median, which makes the census margin more
     # conservative, never less), kept on the device.
@@ -341,7 +349,7 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
     noise, _ = threshold_field(machine, response, (0.5, 0.5, to_sigma, to_sigma), local=False)
     del response
     codes = [machine.empty((height, width), np.uint64) for _ in views]
-    build = vector_kernel(machine, "semiglobal", "census", CENSUS_W=CENSUS_SIZE[0], CENSUS_H=CENSUS_SIZE[1])
+    build = _kernel(machine, "census")
     for view, code in zip(views, codes):
         launch_rows(machine, build, width, height, view, code, *dims, np.float32(census_threshold), noise)
     levels = list(views)
@@ -349,7 +357,7 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
         levels[1] = _exposure_matched(machine, codes, views, d_min, depth)
     costs = machine.empty((height, width, stride), np.uint8)
     outside = CENSUS_BITS // 2 + round(ad_weight * AD_CAP / 2)
-    machine.launch(machine.kernel("semiglobal", "census_costs"), (width, height), *codes, *levels, costs, *dims,
+    machine.launch(_kernel(machine, "census_costs"), (width, height), *codes, *levels, costs, *dims,
                    np.int32(depth), np.int32(stride), np.int32(d_min), np.uint8(outside), np.float32(ad_weight),
                    np.float32(AD_CAP), noise)
     del codes, levels
@@ -375,12 +383,12 @@ def _exposure_matched(machine: Machine, codes: list[cl_array.Array], views: list
     dims = (np.int64(width), np.int64(height))
     span = [reduce(view, op, machine=machine) for op in ("min", "max") for view in views]
     votes = machine.full((TONE_BINS, TONE_STEPS), np.int32, 0)
-    machine.launch(machine.kernel("semiglobal", "tone_votes"), (width, height), *codes, *views, votes, *dims,
+    machine.launch(_kernel(machine, "tone_votes"), (width, height), *codes, *views, votes, *dims,
                    np.int32(depth), np.int32(d_min), np.int32(_TONE_SURE), np.int32(_TONE_MARGIN), *span)
     offset = machine.empty((TONE_BINS,), np.float32)
-    machine.launch(machine.kernel("semiglobal", "tone_offsets"), (1,), votes, offset, np.int32(_TONE_LEAST), *span)
+    machine.launch(_kernel(machine, "tone_offsets"), (1,), votes, offset, np.int32(_TONE_LEAST), *span)
     moved = machine.empty((height, width), np.float32)
-    machine.launch(machine.kernel("semiglobal", "apply_tone"), (height * width,), views[1], moved, offset,
+    machine.launch(_kernel(machine, "apply_tone"), (height * width,), views[1], moved, offset,
                    np.int64(height * width), *span)
     return moved
 
@@ -392,10 +400,10 @@ def _refine(machine: Machine, filled: cl_array.Array, occluded: cl_array.Array, 
     height, width = filled.shape
     dims = (np.int64(width), np.int64(height))
     flags = machine.empty((height, width), np.int32)
-    machine.launch(machine.kernel("semiglobal", "jump_flags"), (width, height), filled, flags, *dims, np.float32(JUMP))
+    machine.launch(_kernel(machine, "jump_flags"), (width, height), filled, flags, *dims, np.float32(JUMP))
     near = box_sum(flags, CENSUS_SIZE[0] // 2, machine=machine)
     where, voters = (machine.empty((height, width), np.uint8) for _ in range(2))
-    machine.launch(machine.kernel("semiglobal", "refine_targets"), (width, height), filled, occluded, out_of_range,
+    machine.launch(_kernel(machine, "refine_targets"), (width, height), filled, occluded, out_of_range,
                    near, where, voters, *dims)
     refined = weighted_median(filled, left, low=d_min, high=d_max, where=where, voters=voters, radius=radius,
                               sigma_colour=colour, sigma_space=float(radius), stride=stride, machine=machine)
@@ -413,19 +421,19 @@ def _select(machine: Machine, sums: cl_array.Array, costs: cl_array.Array, dims,
     disparity = machine.empty((height, width), np.float32)
     winners = [machine.empty((height, width), np.int32) for _ in range(2)]
     out_of_range = machine.empty((height, width), np.uint8)
-    machine.launch(machine.kernel("semiglobal", "select_left"), (width, height), sums, costs, disparity, winners[0],
+    machine.launch(_kernel(machine, "select_left"), (width, height), sums, costs, disparity, winners[0],
                    out_of_range, *dims, np.int32(depth), stride, np.int32(d_min), np.int32(subpixel),
                    np.int32(poor))
-    machine.launch(machine.kernel("semiglobal", "select_right"), (width, height), sums, winners[1], *dims,
+    machine.launch(_kernel(machine, "select_right"), (width, height), sums, winners[1], *dims,
                    np.int32(depth), stride, np.int32(d_min))
     occluded, mismatched = (machine.empty((height, width), np.uint8) for _ in range(2))
-    machine.launch(machine.kernel("semiglobal", "check_views"), (width, height), disparity, *winners, out_of_range,
+    machine.launch(_kernel(machine, "check_views"), (width, height), disparity, *winners, out_of_range,
                    occluded, mismatched, *dims, np.int32(depth), np.int32(d_min), np.int32(tolerance))
     if median:
         smoothed = machine.empty((height, width), np.float32)
-        machine.launch(machine.kernel("semiglobal", "median_kept"), (width, height), disparity, smoothed, *dims)
+        machine.launch(_kernel(machine, "median_kept"), (width, height), disparity, smoothed, *dims)
         disparity = smoothed
     filled = machine.empty((height, width), np.float32)
-    machine.launch(machine.kernel("semiglobal", "fill_occluded"), (height,), disparity, occluded, mismatched, filled,
+    machine.launch(_kernel(machine, "fill_occluded"), (height,), disparity, occluded, mismatched, filled,
                    *dims, np.int32(geometry))
     return disparity, filled, occluded, mismatched, out_of_range

@@ -56,6 +56,9 @@ Features = Literal["canny", "dog", "intensity"]
 Method = Literal["running", "table"]
 _METHODS: tuple[Method, ...] = ("running", "table")
 _FEATURES: dict[Features, int] = {"canny": 0, "dog": 1, "intensity": 2}
+# The intensity matcher's build of kernels/stereo.cl. Its helpers (moments, mean, sub-pixel fit) read no
+# define, and are taken from this build too: one program for the whole intensity path on a first run.
+_INTENSITY = {"FEATURES": _FEATURES["intensity"], "ATTR_T": "float"}
 _TABLE_BYTES = 256 << 20  # the largest table of match planes the default variant builds
 _BAND = 32  # rows per work-item of match_edges (at least)
 _MAX_RUNNING_PATCH = 181  # (2r + 1)^2 votes fit the running variant's int16 lanes
@@ -390,7 +393,7 @@ def _match_maps(machine: Machine, maps: dict, features: Features, *, min_angle, 
     # The winners' neighbouring scores (kernels/stereo.cl, Around); the edge table's selection takes a
     # placeholder it never writes.
     around = machine.empty((height, width, 3) if features == "intensity" else (1,), np.float32)
-    defines = {"FEATURES": _FEATURES[features], "ATTR_T": "float" if features == "intensity" else "ushort"}
+    defines = _INTENSITY if features == "intensity" else {"FEATURES": _FEATURES[features], "ATTR_T": "ushort"}
     area = np.float32(patch * patch)
     dims = (np.int64(width), np.int64(height))
     build = machine.kernel("stereo", "match_planes", **defines)
@@ -438,7 +441,7 @@ def _match_maps(machine: Machine, maps: dict, features: Features, *, min_angle, 
                    np.float32(min_votes))
     disparity, score, out_of_range, discontinuity = outputs
     if features == "intensity" and subpixel:
-        machine.launch(machine.kernel("stereo", "refine_subpixel"), (height * width,), disparity, selection[0],
+        machine.launch(machine.kernel("stereo", "refine_subpixel", **_INTENSITY), (height * width,), disparity, selection[0],
                        around, np.int64(height * width))
     return [disparity, score, common[0], out_of_range, discontinuity]
 
@@ -501,7 +504,7 @@ def _moments(machine: Machine, maps: dict) -> cl_array.Array:
     height, width = maps["left"].shape
     n = height * width
     stack = machine.empty((4, height, width), np.float32)
-    machine.launch(machine.kernel("stereo", "intensity_moments"), (n,), maps["left_attr"], maps["right_attr"],
+    machine.launch(machine.kernel("stereo", "intensity_moments", **_INTENSITY), (n,), maps["left_attr"], maps["right_attr"],
                    stack, np.int64(n))
     return stack
 
@@ -526,7 +529,7 @@ def _feature_maps(machine: Machine, left, right, features: Features, sigma: floa
             # into: with uint8 brightness around 200, float32 rounding of the raw sums swamped a patch's
             # variance and the correlation left [-1, 1] (its value then depended on the mean level).
             total = cm_reduce.reduce(brightness, "sum", machine=machine)
-            machine.launch(machine.kernel("stereo", "subtract_mean"), (brightness.size,), brightness, total,
+            machine.launch(machine.kernel("stereo", "subtract_mean", **_INTENSITY), (brightness.size,), brightness, total,
                            np.int64(brightness.size))
             maps[side] = machine.full(brightness.shape, np.uint8, 1)
             maps[side + "_attr"] = brightness
