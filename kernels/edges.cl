@@ -19,7 +19,7 @@
  * Defines: VEC (1|16); INTERPOLATE (1: the gradient magnitude is interpolated between the two
  * neighbours on each side, 0: the nearest of the 8 directions); LOCAL (1: thresholds per tile,
  * interpolated between tile centres; 0: one pair); CLEAR_MARKS (1: nms_classify also zeroes the marks of
- * the labelling path); WITH_DIRECTION (1: gradient also writes the direction).
+ * the labelling path).
  */
 #define T float
 #include "vmcl.h"
@@ -33,9 +33,6 @@
 #endif
 #ifndef CLEAR_MARKS
 #define CLEAR_MARKS 0
-#endif
-#ifndef WITH_DIRECTION
-#define WITH_DIRECTION 0
 #endif
 
 #if VEC == 1
@@ -89,13 +86,13 @@
 DEFINE_MAGNITUDE(magnitude_v, VT, VIT)
 DEFINE_MAGNITUDE(magnitude_s, float, int)
 
-#if WITH_DIRECTION
 DEFINE_ATAN2(direction_v, VT, VIT)
 DEFINE_ATAN2(direction_s, float, int)
-#endif
 
+/* with_direction: also write the gradient's direction. An argument, not a define, so that gradient
+ * shares the build of the file's other define-free kernels (one program fewer on a first run). */
 __kernel void gradient(__global const float *s, __global float *magnitude, __global float *direction,
-                       long W, long H)
+                       long W, long H, int with_direction)
 {
     long x0 = get_global_id(0) * VEC, y = get_global_id(1);
     if (x0 >= W || y >= H) return;
@@ -103,17 +100,15 @@ __kernel void gradient(__global const float *s, __global float *magnitude, __glo
     if (INTERIOR) {
         VT gx = SOBEL_X(SV), gy = SOBEL_Y(SV);
         VSTORE(magnitude_v(gx, gy), magnitude + y * W + x0);
-#if WITH_DIRECTION
-        VSTORE(direction_v(gy, gx), direction + y * W + x0);
-#endif
+        if (with_direction)
+            VSTORE(direction_v(gy, gx), direction + y * W + x0);
         return;
     }
     for (long x = x0; x < min(x0 + VEC, W); x++) {
         float gx = SOBEL_X(SS), gy = SOBEL_Y(SS);
         magnitude[y * W + x] = magnitude_s(gx, gy);
-#if WITH_DIRECTION
-        direction[y * W + x] = direction_s(gy, gx);
-#endif
+        if (with_direction)
+            direction[y * W + x] = direction_s(gy, gx);
     }
 }
 

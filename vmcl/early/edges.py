@@ -419,8 +419,8 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     dims = tuple(map(np.int64, size))
     magnitude = machine.empty(smoothed.shape, np.float32)
     direction = machine.empty(smoothed.shape, np.float32) if return_gradient else magnitude
-    gradient = vector_kernel(machine, "edges", "gradient", WITH_DIRECTION=int(return_gradient))
-    launch_rows(machine, gradient, *size, smoothed, magnitude, direction, *dims)
+    launch_rows(machine, vector_kernel(machine, "edges", "gradient"), *size, smoothed, magnitude, direction, *dims,
+                np.int32(return_gradient))
     pairs, tiles, local = _thresholds(machine, magnitude, low, high, use_quantiles, noise)
     state = machine.empty(smoothed.shape, np.uint8)
     doubling = method == "doubling"
