@@ -22,6 +22,7 @@ import math
 from typing import Literal, overload
 
 import numpy as np
+import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as _reduce
@@ -50,11 +51,18 @@ def _pointers(next: ArrayLike, machine: Machine, *, lowest: int, name: str = "ne
     return data, host
 
 
+def _kernel(machine: Machine, name: str, *, op: int = 0, connectivity: int = 8, instance: int = 0) -> cl.Kernel:
+    """A kernel of kernels/doubling.cl, always built with both of its defines (OP: 0 plus, 1 max;
+    CONNECTIVITY), though each kernel reads at most one: kernels taken at the same values then share one
+    build, as the list kernels and 8-connected labelling do (one program on a first run, not two)."""
+    return machine.kernel_instance(instance, "doubling", name, OP=op, CONNECTIVITY=connectivity)
+
+
 def _jump(machine: Machine, value: cl_array.Array, pointer: cl_array.Array, op: int) -> tuple:
     """ceil(log2 n) doubling steps; returns (value, pointer). The inputs are never written: the steps
     ping-pong between two pairs of pooled buffers."""
     n = value.size
-    kernel = machine.kernel("doubling", "jump_step", OP=op)
+    kernel = _kernel(machine, "jump_step", op=op)
     pairs = [(machine.empty(n, np.int32), machine.empty(n, np.int32)) for _ in range(2)]
     for step in range(_steps(n)):
         target = pairs[step % 2]
@@ -82,7 +90,7 @@ def rank(next: ArrayLike, *, machine: Machine | None = None) -> tuple[ArrayLike,
     data, host = _pointers(next, machine, lowest=-1)
     n = data.size
     pointer, distance = machine.empty(n, np.int32), machine.empty(n, np.int32)
-    machine.launch(machine.kernel("doubling", "list_init"), (n,), data, pointer, distance, np.int64(n))
+    machine.launch(_kernel(machine, "list_init"), (n,), data, pointer, distance, np.int64(n))
     distance, tail = _jump(machine, distance, pointer, 0)
     return result(distance, host), result(tail, host)
 
@@ -114,7 +122,7 @@ def principal(next: ArrayLike, *, keys: ArrayLike | None = None, check: bool = T
     machine = machine_for(machine)
     data, key, host = _rings(next, "next", keys, check, machine)
     prev = machine.empty(data.size, np.int32)
-    machine.launch(machine.kernel("doubling", "ring_init"), (data.size,), data, prev, np.int64(data.size))
+    machine.launch(_kernel(machine, "ring_init"), (data.size,), data, prev, np.int64(data.size))
     top, distance = _principal_steps(machine, prev, key)
     return result(top, host), result(distance, host)
 
@@ -177,7 +185,7 @@ def _principal_steps(machine: Machine, prev: cl_array.Array, key: cl_array.Array
         now = min(_STEPS_PER_LAUNCH, steps - k)
         target = buffers[launches % 2]
         # A kernel object per first step keeps its scalars set from one call to the next.
-        kernel = machine.kernel_instance(k, "doubling", "principal_steps")
+        kernel = _kernel(machine, "principal_steps", instance=k)
         machine.launch(kernel, (n,), top, distance, prev, *target, np.int32(1 << k), np.int32(now), np.int32(k == 0),
                        np.int64(n))
         top, distance, prev = target
@@ -234,7 +242,7 @@ def label(mask: ArrayLike, *, connectivity: int = 8, relabel: bool = False, meth
     if method == "doubling":
         _union_runs(machine, data, labels, connectivity)
     else:
-        machine.launch(machine.kernel("doubling", "label_init", CONNECTIVITY=connectivity), (n,), data, labels,
+        machine.launch(_kernel(machine, "label_init", connectivity=connectivity), (n,), data, labels,
                        np.int64(n))
         labels = _propagate(machine, labels, connectivity)
     if relabel:
@@ -259,18 +267,18 @@ def _union_runs(machine: Machine, mask: cl_array.Array, labels: cl_array.Array, 
     rows = max(1, math.ceil(height / (machine.compute_units * 8))) if machine.is_cpu else 1
     strips = math.ceil(height / rows)
     sizes = np.int64(width), np.int64(height)
-    machine.launch(machine.kernel("doubling", "label_strips", CONNECTIVITY=connectivity), (strips,),
+    machine.launch(_kernel(machine, "label_strips", connectivity=connectivity), (strips,),
                    mask, bounds, counts, parent, *sizes, np.int64(rows), np.int64(slots), local_size=(1,))
     if strips > 1:
-        machine.launch(machine.kernel("doubling", "label_merge_strips", CONNECTIVITY=connectivity),
+        machine.launch(_kernel(machine, "label_merge_strips", connectivity=connectivity),
                        (strips - 1,), bounds, counts, parent, *sizes, np.int64(rows), np.int64(slots))
-    machine.launch(machine.kernel("doubling", "label_flatten", CONNECTIVITY=connectivity), (height,),
+    machine.launch(_kernel(machine, "label_flatten", connectivity=connectivity), (height,),
                    mask, bounds, counts, parent, run_label, labels, *sizes, np.int64(slots))
 
 
 def _propagate(machine: Machine, labels: cl_array.Array, connectivity: int) -> cl_array.Array:
     height, width = labels.shape
-    kernel = machine.kernel("doubling", "propagate_step", CONNECTIVITY=connectivity)
+    kernel = _kernel(machine, "propagate_step", connectivity=connectivity)
     spare = machine.empty(labels.shape, np.int32)
     changed = machine.empty(1, np.int32)
     zero = np.zeros(1, np.int32)
@@ -286,7 +294,7 @@ def _propagate(machine: Machine, labels: cl_array.Array, connectivity: int) -> c
 def _relabel(machine: Machine, labels: cl_array.Array) -> cl_array.Array:
     n = labels.size
     roots, ids, out = (machine.empty(labels.shape, np.int32) for _ in range(3))
-    machine.launch(machine.kernel("doubling", "mark_roots"), (n,), labels, roots, np.int64(n))
+    machine.launch(_kernel(machine, "mark_roots"), (n,), labels, roots, np.int64(n))
     exclusive_sum_into(machine, roots.reshape(n), ids.reshape(n))
-    machine.launch(machine.kernel("doubling", "relabel"), (n,), labels, ids, out, np.int64(n))
+    machine.launch(_kernel(machine, "relabel"), (n,), labels, ids, out, np.int64(n))
     return out
