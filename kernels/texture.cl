@@ -7,15 +7,8 @@
  *   density_gradient  difference of the densities of the two adjacent windows across each pixel's right
  *                     and lower sites, its magnitude and dominant axis
  *   texture_edges     non-maximum suppression along the dominant axis, then the threshold
- *
- * Defines: FIXED (1: texture_edges compares with a threshold from the host only; 0: also with the
- * noise estimate computed on the device).
  */
 #include "vmcl.h"
-
-#ifndef FIXED
-#define FIXED 0
-#endif
 
 #define AT(f, xx, yy) ((f)[(yy) * W + (xx)])
 
@@ -65,10 +58,12 @@ __kernel void density_gradient(__global const float *density, __global float *ma
 }
 
 /* A candidate is a maximum along its dominant axis (strictly above the neighbour before it, at least
- * the one after, so a two-pixel tie keeps one) whose magnitude exceeds max(thr[0], floor). */
+ * the one after, so a two-pixel tie keeps one) whose magnitude exceeds max(thr[0], floor), or floor alone
+ * when `fixed` (a threshold from the host only; thr is then not read). An argument, not a define: the
+ * file is one build on a first run. */
 __kernel void texture_edges(__global const float *magnitude, __global const uchar *axis,
                             __global const float *thr, __global uchar *edges, float floor_threshold,
-                            long W, long H)
+                            long W, long H, int fixed)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -81,10 +76,6 @@ __kernel void texture_edges(__global const float *magnitude, __global const ucha
         before = AT(magnitude, x, max(y - 1, 0L));
         after = AT(magnitude, x, min(y + 1, H - 1));
     }
-#if FIXED
-    float t = floor_threshold;
-#else
-    float t = fmax(thr[0], floor_threshold);
-#endif
+    float t = fixed ? floor_threshold : fmax(thr[0], floor_threshold);
     AT(edges, x, y) = m > before && m >= after && m > t;
 }

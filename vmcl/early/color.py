@@ -237,7 +237,10 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
     shape = (height, width)
     hue_field, valid, z = (machine.empty(shape, np.float32), machine.empty(shape, np.uint8),
                            machine.empty(shape, np.float32))
-    gradient = vector_kernel(machine, "color", "hue_gradient", IN_T=IMAGE_TYPES[data.dtype])
+    # The four kernels below take one define set, though each reads only part of it: one program on a
+    # first run, not three.
+    defines = {"IN_T": IMAGE_TYPES[data.dtype], "FIXED": int(threshold is not None)}
+    gradient = vector_kernel(machine, "color", "hue_gradient", **defines)
     launch_rows(machine, gradient, width, height, data, hue_field, valid, z, np.float32(least),
                 np.int64(width), np.int64(height))
     if threshold is None:
@@ -246,10 +249,10 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
         rows = -(-height // bands)
         bands = -(-height // rows)
         counts = machine.empty((bands, HISTOGRAM_BINS), np.int32)
-        machine.launch(vector_kernel(machine, "color", "hue_histogram"), (bands,), z, counts, np.int64(rows),
+        machine.launch(vector_kernel(machine, "color", "hue_histogram", **defines), (bands,), z, counts, np.int64(rows),
                        np.int64(width), np.int64(height))
         estimated = machine.empty((1,), np.float32)
-        machine.launch(vector_kernel(machine, "color", "hue_threshold"), (1,), counts, estimated,
+        machine.launch(vector_kernel(machine, "color", "hue_threshold", **defines), (1,), counts, estimated,
                        np.int64(bands), np.float32(_noise.NOISE_HIGH / _MEDIAN_OF_RAYLEIGH),
                        np.float32(_noise.NOISE_HIGH * NOISE_FLOOR * _FULL_SCALE[data.dtype]))
         fixed = 0.0
@@ -257,6 +260,6 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
         estimated, fixed = z, float(threshold)
     edges = machine.empty(shape, np.uint8)
     n = height * width
-    launch_flat(machine, vector_kernel(machine, "color", "hue_edges", FIXED=int(threshold is not None)), n, z,
+    launch_flat(machine, vector_kernel(machine, "color", "hue_edges", **defines), n, z,
                 estimated, edges, np.float32(fixed), np.int64(n))
     return AlbedoEdges(mask_result(edges, host), result(hue_field, host), mask_result(valid, host))

@@ -215,6 +215,6 @@ def texture_edges(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, t
     else:
         pairs, floor = magnitude, float(edge_threshold)
     edges = machine.empty(dens.shape, np.uint8)
-    machine.launch(machine.kernel("texture", "texture_edges", FIXED=int(edge_threshold is not None)), size,
-                   magnitude, axis, pairs, edges, np.float32(floor), *dims)
+    machine.launch(machine.kernel("texture", "texture_edges"), size,
+                   magnitude, axis, pairs, edges, np.float32(floor), *dims, np.int32(edge_threshold is not None))
     return TextureEdges(edges.get().view(np.bool_) if host else edges, result(dens, host))

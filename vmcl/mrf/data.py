@@ -72,7 +72,8 @@ def score_confidence(score: ArrayLike, *, floor: float, weight: float = 1.0,
     floor = check_unit_interval(floor, "floor", closed_above=False)
     weight = check_unit_interval(weight, "weight", closed_above=True)
     gamma = machine.empty(scores.shape, np.float32)
-    machine.launch(machine.kernel("mrf_data", "score_confidence"), (scores.size,), scores, gamma,
+    # score_confidence reads no NCOMP: taken at 1, it shares the build of the scalar fields' kernels.
+    machine.launch(machine.kernel("mrf_data", "score_confidence", NCOMP=1), (scores.size,), scores, gamma,
                    np.float32(floor), np.float32(weight), np.int64(scores.size))
     return gamma.get() if host else gamma
 
