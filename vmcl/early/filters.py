@@ -127,10 +127,11 @@ def separable_gaussian(machine: Machine, data: cl_array.Array, sigmas: tuple[flo
     rows = machine.empty((planes, height, width), np.float32)
     out = machine.empty((height, width), np.float32)
     dims = (np.int64(width), np.int64(height))
-    along_rows = vector_kernel(machine, "early_filters", "gauss_rows", PLANES=planes,
-                               IN_T=IMAGE_TYPES[data.dtype])
+    # Both passes from one build (the column pass reads no IN_T): one program on a first run, not two.
+    defines = {"PLANES": planes, "IN_T": IMAGE_TYPES[data.dtype]}
+    along_rows = vector_kernel(machine, "early_filters", "gauss_rows", **defines)
     launch_rows(machine, along_rows, width, height, data, rows, taps_device, np.int32(radius), *dims)
-    along_columns = vector_kernel(machine, "early_filters", "gauss_cols", PLANES=planes)
+    along_columns = vector_kernel(machine, "early_filters", "gauss_cols", **defines)
     launch_rows(machine, along_columns, width, height, rows, out, taps_device, np.int32(radius), *dims)
     return out
 
@@ -160,7 +161,9 @@ def discrete_laplacian(machine: Machine, smoothed: cl_array.Array) -> cl_array.A
     """The 5-point discrete Laplacian of a float32 (H, W) device field, borders repeating the edge pixel."""
     height, width = smoothed.shape
     out = machine.empty((height, width), np.float32)
-    launch_rows(machine, vector_kernel(machine, "early_filters", "laplacian"), width, height, smoothed, out,
+    # laplacian reads no define: taken with a float field's single smoothing's, it shares that build.
+    laplacian = vector_kernel(machine, "early_filters", "laplacian", PLANES=1, IN_T="float")
+    launch_rows(machine, laplacian, width, height, smoothed, out,
                 np.int64(width), np.int64(height))
     return out
 
