@@ -25,6 +25,11 @@ MODES = {"sample": 0, "icm": 1, "mean": 2}
 # (phase, colour): the line sites' four colours, then f at the checkerboard's two colours. Lines go first
 # so that the first sweep sees the data's jumps before the smoothing of f has flattened them.
 SWEEP_ORDER = (("lines", 0), ("lines", 1), ("lines", 2), ("lines", 3), ("f", 0), ("f", 1))
+# Kernels of kernels/mrf.cl that read no KIND, NLEVELS or MODE (at most NCOMP): every lattice of a
+# component count takes them from one build, the smooth kind's for ICM, so that on a first run they are
+# compiled once and the constant kind's preparation is no program of its own.
+_NCOMP_ONLY = frozenset({"prepare", "fill_step", "start_from", "line_costs", "set_value", "scale_and_threshold",
+                         "unpad"})
 
 
 def philox_key(seed: int) -> np.ndarray:
@@ -91,6 +96,8 @@ class Lattice:
         self.reset()
 
     def kernel(self, name: str, mode: str = "icm") -> Any:
+        if name in _NCOMP_ONLY:
+            return self.machine.kernel("mrf", name, NCOMP=self.ncomp, KIND=0, NLEVELS=1, MODE=MODES["icm"])
         return self.machine.kernel("mrf", name, NCOMP=self.ncomp, KIND=int(self.kind == "constant"),
                                    NLEVELS=self.nlevels, MODE=MODES[mode])
 
