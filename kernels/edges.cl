@@ -16,24 +16,15 @@
  * border paths compute the same operations in the same order; the ?: and comparison operators act per
  * lane on vectors.
  *
- * Defines: VEC (1|16); INTERPOLATE (1: the gradient magnitude is interpolated between the two
- * neighbours on each side, 0: the nearest of the 8 directions); LOCAL (1: thresholds per tile,
- * interpolated between tile centres; 0: one pair); CLEAR_MARKS (1: nms_classify also zeroes the marks of
- * the labelling path).
+ * Defines: VEC (1|16). nms_classify's switches are arguments, not defines (the file is then one build
+ * on a first run): interpolate (1: the gradient magnitude is interpolated between the two neighbours on
+ * each side, 0: the nearest of the 8 directions); per_tile (1: thresholds per tile, interpolated between
+ * tile centres; 0: one pair); clear_marks (1: also zero the marks of the labelling path).
  */
 #define T float
 #include "vmcl.h"
 #include "angles.h"
 
-#ifndef INTERPOLATE
-#define INTERPOLATE 1
-#endif
-#ifndef LOCAL
-#define LOCAL 0
-#endif
-#ifndef CLEAR_MARKS
-#define CLEAR_MARKS 0
-#endif
 
 #if VEC == 1
 #define VUCHAR uchar
@@ -114,9 +105,11 @@ __kernel void gradient(__global const float *s, __global float *magnitude, __glo
 
 /* The (low, high) pair that applies at (x, y): one pair, or bilinear between the centres of tile x tile
  * tiles (clamped beyond the outer centres), so thresholds change smoothly from tile to tile. */
-inline float2 thresholds_at(__global const float *thr, long x, long y, long tile, long tiles_x, long tiles_y)
+inline float2 thresholds_at(__global const float *thr, int per_tile, long x, long y, long tile, long tiles_x,
+                            long tiles_y)
 {
-#if LOCAL
+    if (!per_tile)
+        return (float2)(thr[0], thr[1]);
     float centre = 0.5f * (float)(tile - 1);
     float fx = clamp(((float)x - centre) / (float)tile, 0.0f, (float)(tiles_x - 1));
     float fy = clamp(((float)y - centre) / (float)tile, 0.0f, (float)(tiles_y - 1));
@@ -127,9 +120,6 @@ inline float2 thresholds_at(__global const float *thr, long x, long y, long tile
     float2 top = (1.0f - ax) * t[y0 * tiles_x + x0] + ax * t[y0 * tiles_x + x1];
     float2 bottom = (1.0f - ax) * t[y1 * tiles_x + x0] + ax * t[y1 * tiles_x + x1];
     return (1.0f - ay) * top + ay * bottom;
-#else
-    return (float2)(thr[0], thr[1]);
-#endif
 }
 
 /* Non-maximum suppression: is m at least the magnitude on both sides along the gradient (ties kept)?
@@ -139,8 +129,7 @@ inline float2 thresholds_at(__global const float *thr, long x, long y, long tile
  * degrees) are compared directly: "it may not be crucial to use interpolation". n_<dx><dy> is the
  * magnitude at neighbour (dx, dy), m standing for -1 and p for +1. Defined for the float vector (F, I)
  * = (VT, VIT) and for float (float, int). */
-#if INTERPOLATE
-#define DEFINE_IS_MAXIMUM(NAME, F, I)                                                      \
+#define DEFINE_IS_MAXIMUM_INTERPOLATED(NAME, F, I)                                         \
     __attribute__((always_inline)) inline I NAME(F m, F gx, F gy, F n_mm, F n_0m, F n_pm, F n_m0, F n_p0, F n_mp, F n_0p, F n_pp) \
     {                                                                                      \
         F ax = fabs(gx), ay = fabs(gy);                                                    \
@@ -152,8 +141,7 @@ inline float2 thresholds_at(__global const float *thr, long x, long y, long tile
         F axis_minus = ymajor ? (same ? n_0m : n_0p) : n_m0;                               \
         return (diag_plus * w + axis_plus * (1.0f - w) <= m) && (diag_minus * w + axis_minus * (1.0f - w) <= m); \
     }
-#else
-#define DEFINE_IS_MAXIMUM(NAME, F, I)                                                      \
+#define DEFINE_IS_MAXIMUM_NEAREST(NAME, F, I)                                              \
     __attribute__((always_inline)) inline I NAME(F m, F gx, F gy, F n_mm, F n_0m, F n_pm, F n_m0, F n_p0, F n_mp, F n_0p, F n_pp) \
     {                                                                                      \
         const float tan22 = 0.41421356f;                                                   \
@@ -165,9 +153,10 @@ inline float2 thresholds_at(__global const float *thr, long x, long y, long tile
         F minus = horizontal ? n_m0 : vertical ? n_0m : same ? n_mm : n_mp;                \
         return plus <= m && minus <= m;                                                    \
     }
-#endif
-DEFINE_IS_MAXIMUM(is_maximum_v, VT, VIT)
-DEFINE_IS_MAXIMUM(is_maximum_s, float, int)
+DEFINE_IS_MAXIMUM_INTERPOLATED(interpolated_maximum_v, VT, VIT)
+DEFINE_IS_MAXIMUM_INTERPOLATED(interpolated_maximum_s, float, int)
+DEFINE_IS_MAXIMUM_NEAREST(nearest_maximum_v, VT, VIT)
+DEFINE_IS_MAXIMUM_NEAREST(nearest_maximum_s, float, int)
 #define NEIGHBOURS(M) M(-1, -1), M(0, -1), M(1, -1), M(-1, 0), M(1, 0), M(-1, 1), M(0, 1), M(1, 1)
 
 /* State: 3 strong (a maximum at or above high), 1 weak (a maximum at or above low and above 0), 0
@@ -182,31 +171,31 @@ DEFINE_IS_MAXIMUM(is_maximum_s, float, int)
 /* The outermost ring of pixels is 0: their neighbours lie outside the image. */
 __kernel void nms_classify(__global const float *s, __global const float *mag, __global const float *thr,
                            __global uchar *state, __global uchar *marks, long tile, long tiles_x, long tiles_y,
-                           long W, long H)
+                           long W, long H, int interpolate, int per_tile, int clear_marks)
 {
     long x0 = get_global_id(0) * VEC, y = get_global_id(1);
     if (x0 >= W || y >= H) return;
     long i0 = y * W + x0;
-#if CLEAR_MARKS
-    for (long x = x0; x < min(x0 + VEC, W); x++) marks[y * W + x] = 0;
-#endif
+    if (clear_marks)
+        for (long x = x0; x < min(x0 + VEC, W); x++) marks[y * W + x] = 0;
     ROWS(s, float)
     ROWS(mag, float)
     int inner_row = y > 0 && y + 1 < H;
     if (INTERIOR && inner_row) {
         VT m = VLOAD(mag + i0), gx = SOBEL_X(SV), gy = SOBEL_Y(SV);
-#if LOCAL
-        float lows[VEC], highs[VEC];
-        for (int j = 0; j < VEC; j++) {
-            float2 t = thresholds_at(thr, x0 + j, y, tile, tiles_x, tiles_y);
-            lows[j] = t.x;
-            highs[j] = t.y;
-        }
-        VT low = VLOAD(lows), high = VLOAD(highs);
-#else
         VT low = (VT)thr[0], high = (VT)thr[1];
-#endif
-        VIT keep = is_maximum_v(m, gx, gy, NEIGHBOURS(MV));
+        if (per_tile) {
+            float lows[VEC], highs[VEC];
+            for (int j = 0; j < VEC; j++) {
+                float2 t = thresholds_at(thr, per_tile, x0 + j, y, tile, tiles_x, tiles_y);
+                lows[j] = t.x;
+                highs[j] = t.y;
+            }
+            low = VLOAD(lows);
+            high = VLOAD(highs);
+        }
+        VIT keep = interpolate ? interpolated_maximum_v(m, gx, gy, NEIGHBOURS(MV))
+                               : nearest_maximum_v(m, gx, gy, NEIGHBOURS(MV));
         VSTORE(TO_VUCHAR(CLASSIFY(VIT, keep, m, low, high)), state + i0);
         return;
     }
@@ -214,8 +203,10 @@ __kernel void nms_classify(__global const float *s, __global const float *mag, _
         uchar c = 0;
         if (inner_row && x > 0 && x + 1 < W) {
             float m = mag[y * W + x], gx = SOBEL_X(SS), gy = SOBEL_Y(SS);
-            float2 t = thresholds_at(thr, x, y, tile, tiles_x, tiles_y);
-            c = CLASSIFY(int, is_maximum_s(m, gx, gy, NEIGHBOURS(MS)), m, t.x, t.y);
+            float2 t = thresholds_at(thr, per_tile, x, y, tile, tiles_x, tiles_y);
+            int keep = interpolate ? interpolated_maximum_s(m, gx, gy, NEIGHBOURS(MS))
+                                   : nearest_maximum_s(m, gx, gy, NEIGHBOURS(MS));
+            c = CLASSIFY(int, keep, m, t.x, t.y);
         }
         state[y * W + x] = c;
     }

@@ -424,12 +424,11 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
     pairs, tiles, local = _thresholds(machine, magnitude, low, high, use_quantiles, noise)
     state = machine.empty(smoothed.shape, np.uint8)
     doubling = method == "doubling"
-    # Spreading activation needs no marks; without CLEAR_MARKS the kernel never touches its marks argument.
+    # Spreading activation needs no marks; without clear_marks the kernel never touches its marks argument.
     marks = machine.empty(smoothed.shape, np.uint8) if doubling else state
-    classify = vector_kernel(machine, "edges", "nms_classify", INTERPOLATE=int(bool(interpolate)),
-                             LOCAL=int(local), CLEAR_MARKS=int(doubling))
-    launch_rows(machine, classify, *size, smoothed, magnitude, pairs, state, marks, np.int64(_noise.TILE),
-                np.int64(tiles[1]), np.int64(tiles[0]), *dims)
+    launch_rows(machine, vector_kernel(machine, "edges", "nms_classify"), *size, smoothed, magnitude, pairs, state,
+                marks, np.int64(_noise.TILE), np.int64(tiles[1]), np.int64(tiles[0]), *dims,
+                np.int32(bool(interpolate)), np.int32(local), np.int32(doubling))
     edges = mask_result(_hysteresis(machine, state, marks if doubling else None, method), host)
     if not return_gradient:
         return edges
