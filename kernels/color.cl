@@ -16,8 +16,7 @@
  * pair) is at least min_intensity; elsewhere H is NaN, never a quotient of near-zero numbers.
  *
  * Defines: VEC (1|16); IN_T (uchar|ushort|float), the input's channel type; CHROMA (1: the chromaticity pair,
- * 0: H); FIXED (1: hue_edges compares with a threshold from the host, 0: with the noise estimate
- * computed on the device).
+ * 0: H).
  */
 #include "vmcl.h"
 
@@ -26,9 +25,6 @@
 #endif
 #ifndef CHROMA
 #define CHROMA 0
-#endif
-#ifndef FIXED
-#define FIXED 0
 #endif
 
 inline float3 rgb_at(__global const IN_T *rgb, size_t i)
@@ -188,19 +184,16 @@ __kernel void hue_threshold(__global const int *counts, __global float *threshol
     threshold[0] = fmax(factor * median, floor_threshold);
 }
 
-/* Candidates where z exceeds the threshold: threshold[0] from hue_threshold (FIXED == 0) or the host's
- * fixed_threshold (FIXED == 1). NaN never passes. Work-item i stands for elements [i * VEC,
+/* Candidates where z exceeds the threshold: threshold[0] from hue_threshold, or with `fixed` the host's
+ * fixed_threshold (threshold is then not read; an argument, not a define: one build on a first run).
+ * NaN never passes. Work-item i stands for elements [i * VEC,
  * (i + 1) * VEC). */
 __kernel void hue_edges(__global const float *z, __global const float *threshold, __global uchar *edges,
-                        float fixed_threshold, long n)
+                        float fixed_threshold, long n, int fixed)
 {
     long i0 = get_global_id(0) * VEC;
     if (i0 >= n) return;
-#if FIXED
-    float t = fixed_threshold;
-#else
-    float t = threshold[0];
-#endif
+    float t = fixed ? fixed_threshold : threshold[0];
 #if VEC == 16
     if (i0 + 16 <= n) {
         vstore16(convert_uchar16(-(vload16(0, z + i0) > t)), 0, edges + i0);

@@ -338,6 +338,8 @@ class Machine:
 
         With a local size (the call's, else the Machine's), the global size is rounded up to a multiple
         of it; every vmcl kernel checks its ids against the field's bounds, so the extra work-items idle.
+        A global size with a zero dimension launches nothing (its arguments are not set either): the
+        returned event is a marker in the queue's order.
         """
         values = []
         buffer_bytes = 0

@@ -336,8 +336,8 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     if -1 in wanted:
         lines = data.size // width
         rows = final if -2 not in wanted else machine.empty(data.shape, data.dtype)
-        # box_rows reads no VEC: built with the column pass's vector width it shares that program, one
-        # build fewer on a first run.
+        # box_rows reads no VEC: built with the column pass's vector width it shares that pass's program
+        # where both run (a window sum over rows and columns), one build fewer on a first run.
         machine.launch(machine.kernel("scan_box", "box_rows", VEC=COLUMN_VEC, **defines), (math.ceil(lines / 4),),
                        source, rows, np.int64(width), np.int64(lines), r)
         source = rows

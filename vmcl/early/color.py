@@ -237,9 +237,9 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
     shape = (height, width)
     hue_field, valid, z = (machine.empty(shape, np.float32), machine.empty(shape, np.uint8),
                            machine.empty(shape, np.float32))
-    # The four kernels below take one define set, though each reads only part of it: one program on a
+    # The four kernels below take one define set, though only hue_gradient reads it: one program on a
     # first run, not three.
-    defines = {"IN_T": IMAGE_TYPES[data.dtype], "FIXED": int(threshold is not None)}
+    defines = {"IN_T": IMAGE_TYPES[data.dtype]}
     gradient = vector_kernel(machine, "color", "hue_gradient", **defines)
     launch_rows(machine, gradient, width, height, data, hue_field, valid, z, np.float32(least),
                 np.int64(width), np.int64(height))
@@ -261,5 +261,5 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
     edges = machine.empty(shape, np.uint8)
     n = height * width
     launch_flat(machine, vector_kernel(machine, "color", "hue_edges", **defines), n, z,
-                estimated, edges, np.float32(fixed), np.int64(n))
+                estimated, edges, np.float32(fixed), np.int64(n), np.int32(threshold is not None))
     return AlbedoEdges(mask_result(edges, host), result(hue_field, host), mask_result(valid, host))

@@ -220,7 +220,9 @@ class _Search:
         fields = [on_device(a) for a in (forward.disparity, forward.score, backward.disparity)]
         host = np.empty((len(fields), *fields[0].shape), fields[0].dtype)
         reads = [self.machine.read_into(host[k], field) for k, field in enumerate(fields)]
-        cl.wait_for_events([event for event in reads if event is not None])
+        events = [event for event in reads if event is not None]  # None: an empty field, nothing to read
+        if events:  # OpenCL refuses an empty wait list
+            cl.wait_for_events(events)
         disparity, score, back = host
         values = disparity[_consistent(disparity, score, -back, self.min_score)]
         share = values.size / disparity.size

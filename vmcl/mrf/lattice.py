@@ -26,8 +26,9 @@ MODES = {"sample": 0, "icm": 1, "mean": 2}
 # so that the first sweep sees the data's jumps before the smoothing of f has flattened them.
 SWEEP_ORDER = (("lines", 0), ("lines", 1), ("lines", 2), ("lines", 3), ("f", 0), ("f", 1))
 # Kernels of kernels/mrf.cl that read no KIND, NLEVELS or MODE (at most NCOMP): every lattice of a
-# component count takes them from one build, the smooth kind's for ICM, so that on a first run they are
-# compiled once and the constant kind's preparation is no program of its own.
+# component count takes them from one build, the smooth kind's for ICM. A pipeline frame restores both
+# kinds, so on its first run they are compiled once per NCOMP, and the constant kind's preparation
+# (built before its levels are known) is no program of its own.
 _NCOMP_ONLY = frozenset({"prepare", "fill_step", "start_from", "line_costs", "set_value", "scale_and_threshold",
                          "unpad"})
 
