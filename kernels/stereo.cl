@@ -228,13 +228,15 @@ inline void finish_around(Around a, long i, __global float *around)
 }
 
 /* Table variant: one work-item per pixel walks the summed planes of the whole table. `around` receives
- * the winner's neighbouring scores for intensity; edges leave it untouched (a one-element placeholder). */
+ * the winner's neighbouring scores for intensity; edges leave it untouched (a one-element placeholder).
+ * Work-item i takes pixel first_x + i of its row (the rows' tails after select_table_lanes). */
 __kernel void select_table(__global const float *votes, __global const float *planes, __global const uchar *left,
                            __global const float *stats, __global float *best_score, __global int *best_d,
                            __global float *peaks, __global float *around,
-                           long W, long H, long D, int d_min, float area, float negative, float dip, long r)
+                           long W, long H, long D, int d_min, float area, float negative, float dip, long r,
+                           long first_x)
 {
-    long x = get_global_id(0), y = get_global_id(1);
+    long x = first_x + get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     long i = y * W + x;
     Selection s = fresh();
@@ -252,6 +254,103 @@ __kernel void select_table(__global const float *votes, __global const float *pl
     finish_around(a, i, around);
 #endif
 }
+
+#if FEATURES == FEATURES_INTENSITY
+/* select_table for intensity, sixteen pixels of a row per work-item as float16 lanes (a CPU's SIMD lanes):
+ * the same arithmetic in the same order per pixel, with selects for the scalar code's branches, so the
+ * fields are bit for bit select_table's. A row's last W % 16 pixels are left to select_table (the host
+ * launches it over them, from first_x). */
+#define PIXELS 16
+__kernel void select_table_lanes(__global const float *votes, __global const float *planes,
+                                 __global const uchar *left, __global const float *stats,
+                                 __global float *best_score, __global int *best_d, __global float *peaks,
+                                 __global float *around, long W, long H, long D, int d_min, float area,
+                                 float negative, float dip, long r)
+{
+    long x0 = get_global_id(0) * PIXELS, y = get_global_id(1);
+    if (x0 + PIXELS > W || y >= H) return;
+    long n = W * H, i0 = y * W + x0;
+    int16 xs = (int)x0 + (int16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+    float16 sl = vload16(0, stats + i0), sll = vload16(0, stats + n + i0);
+    __global const float *sr_row = stats + 2 * n + y * W, *srr_row = stats + 3 * n + y * W;
+    int rows_inside = y >= r && y + r < H;
+    float16 best = (float16)(-INFINITY), peak = (float16)(0.0f), valley = (float16)(INFINITY);
+    float16 second = (float16)(0.0f), below = (float16)(NAN), above = (float16)(NAN), last = (float16)(NAN);
+    int16 winner = (int16)(INT_MIN);
+    for (long k = 0; k < D; k++) {
+        int d = d_min + (int)k;
+        long xr = x0 - d;
+        float16 sr, srr;
+        if (xr >= 0 && xr + PIXELS <= W) {
+            sr = vload16(0, sr_row + xr);
+            srr = vload16(0, srr_row + xr);
+        } else {  /* RIGHT_AT: 0 outside the image */
+            float a[PIXELS], b[PIXELS];
+            for (int j = 0; j < PIXELS; j++) {
+                a[j] = RIGHT_AT(stats + 2 * n, xr + j);
+                b[j] = RIGHT_AT(stats + 3 * n, xr + j);
+            }
+            sr = vload16(0, a);
+            srr = vload16(0, b);
+        }
+        float16 v = vload16(0, votes + (k * H + y) * W + x0);
+        /* cell_score */
+        float16 var_l = sll - sl * sl / area, var_r = srr - sr * sr / area;
+        int16 flat = ~((var_l > 1e-5f * sll) & (var_r > 1e-5f * srr));
+        float16 score = select(clamp((v - sl * sr / area) / sqrt(var_l * var_r), -1.0f, 1.0f),
+                               (float16)(-INFINITY), flat);
+        /* windows_inside */
+        int16 inside = (int16)(-rows_inside) & (xs - (int)r >= 0) & (xs + (int)r < (int)W)
+                       & (xs - d - (int)r >= 0) & (xs - d + (int)r < (int)W);
+        int16 finite = isfinite(score);
+        /* consider: choose, then follow_peaks with the finite score as the votes */
+        int16 take = inside & (score > best);
+        best = select(best, score, take);
+        winner = select(winner, (int16)d, take);
+        float16 counted = select((float16)(0.0f), score, finite);
+        float16 lower = min(peak, counted);
+        second = select(second, max(second, lower), valley <= dip * lower);
+        int16 rises = counted > peak;
+        valley = select(min(valley, counted), (float16)(INFINITY), rises);
+        peak = select(peak, counted, rises);
+        /* follow_neighbours, with fold_cell's return value */
+        float16 folded = select((float16)(NAN), score, inside & finite);
+        int16 new_winner = winner == d, after_winner = winner == d - 1;
+        below = select(below, last, new_winner);
+        above = select(select(above, folded, after_winner), (float16)(NAN), new_winner);
+        last = folded;
+    }
+    /* A pixel that is not a left feature keeps a fresh selection (select_table never folds it). */
+    int16 feature = convert_int16(vload16(0, left + i0)) != 0;
+    best = select((float16)(-INFINITY), best, feature);
+    winner = select((int16)(INT_MIN), winner, feature);
+    peak = select((float16)(0.0f), peak, feature);
+    valley = select((float16)(INFINITY), valley, feature);
+    second = select((float16)(0.0f), second, feature);
+    below = select((float16)(NAN), below, feature);
+    above = select((float16)(NAN), above, feature);
+    last = select((float16)(NAN), last, feature);
+    vstore16(best, 0, best_score + i0);
+    vstore16(winner, 0, best_d + i0);
+    float p[PIXELS], q[PIXELS], t[PIXELS];
+    vstore16(peak, 0, p);
+    vstore16(valley, 0, q);
+    vstore16(second, 0, t);
+    for (int j = 0; j < PIXELS; j++) {
+        peaks[3 * (i0 + j)] = p[j];
+        peaks[3 * (i0 + j) + 1] = q[j];
+        peaks[3 * (i0 + j) + 2] = t[j];
+    }
+    vstore16(below, 0, p);
+    vstore16(above, 0, q);
+    vstore16(last, 0, t);
+    for (int j = 0; j < PIXELS; j++) {
+        around[3 * (i0 + j)] = p[j];
+        around[3 * (i0 + j) + 1] = q[j];
+        around[3 * (i0 + j) + 2] = t[j];
+    }
+}
+#endif
 
 /* Running variant for intensity: plane k (already summed) is folded into every pixel's selection;
  * no table. */

@@ -574,3 +574,25 @@ def test_direction_code_refuses_what_is_not_an_angle(angle, error):
 
     with pytest.raises(error, match="angle"):
         direction_code(angle)
+
+
+@pytest.mark.parametrize("width", [61, 64])
+def test_the_intensity_table_in_sixteen_lanes_is_the_scalar_selection_bit_for_bit(monkeypatch, machine, width):
+    # On a CPU the table's selection runs sixteen pixels per work-item, the row's tail (61 = 3 * 16 + 13)
+    # through the scalar kernel; with the lanes off, the scalar kernel takes every pixel. Every field
+    # (winner, score, sub-pixel offset from the neighbours, range and bimodality flags) must agree.
+    from vmcl.early import stereo as stereo_module
+
+    if machine.vector_width == 1:
+        pytest.skip("the lanes run on CPU devices only")
+    rng = np.random.default_rng(7)
+    left = ndimage.gaussian_filter(rng.random((40, width)), 1.0).astype(np.float32)
+    right = np.roll(left, -5, axis=1) + 0.01 * rng.standard_normal(left.shape).astype(np.float32)
+    found = {}
+    for lanes in (True, False):
+        monkeypatch.setattr(stereo_module, "_LANES_ON_CPU", lanes)
+        found[lanes] = match(left, right, d_min=-3, d_max=12, features="intensity", method="table",
+                             subpixel=True, machine=machine)
+    for name in ("disparity", "score", "features", "out_of_range", "discontinuity"):
+        np.testing.assert_array_equal(getattr(found[True], name), getattr(found[False], name), err_msg=name)
+    assert np.isfinite(found[True].disparity).mean() > 0.5

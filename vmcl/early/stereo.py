@@ -59,6 +59,9 @@ _FEATURES: dict[Features, int] = {"canny": 0, "dog": 1, "intensity": 2}
 # The intensity matcher's build of kernels/stereo.cl. Its helpers (moments, mean, sub-pixel fit) read no
 # define, and are taken from this build too: one program for the whole intensity path on a first run.
 _INTENSITY = {"FEATURES": _FEATURES["intensity"], "ATTR_T": "float"}
+# On CPUs the intensity table's selection runs sixteen pixels per work-item (kernels/stereo.cl,
+# select_table_lanes), bit for bit the scalar kernel's; a switch so that a test can hold the two equal.
+_LANES_ON_CPU = True
 _TABLE_BYTES = 256 << 20  # the largest table of match planes the default variant builds
 _BAND = 32  # rows per work-item of match_edges (at least)
 _MAX_RUNNING_PATCH = 181  # (2r + 1)^2 votes fit the running variant's int16 lanes
@@ -420,9 +423,16 @@ def _match_maps(machine: Machine, maps: dict, features: Features, *, min_angle, 
         planes = machine.empty((depth, height, width), np.float32)
         machine.launch(build, (width, height, depth), *common, planes, *dims, np.int64(depth), np.int32(d_min),
                        tolerance)
-        machine.launch(machine.kernel("stereo", "select_table", **defines), (width, height), support.sum(planes),
-                       planes, common[0], stats, *selection, around, *dims, np.int64(depth), np.int32(d_min), area,
-                       np.float32(negative_evidence), np.float32(dip), np.int64(radius))
+        arguments = (support.sum(planes), planes, common[0], stats, *selection, around, *dims, np.int64(depth),
+                     np.int32(d_min), area, np.float32(negative_evidence), np.float32(dip), np.int64(radius))
+        first_x = 0
+        if features == "intensity" and machine.vector_width > 1 and _LANES_ON_CPU:
+            # Sixteen pixels per work-item as SIMD lanes; select_table takes each row's tail.
+            first_x = width // 16 * 16
+            machine.launch(machine.kernel("stereo", "select_table_lanes", **defines), (width // 16, height),
+                           *arguments, local_size=machine.row_local_size((width // 16, height)))
+        machine.launch(machine.kernel("stereo", "select_table", **defines), (width - first_x, height), *arguments,
+                       np.int64(first_x))
     else:
         plane = machine.empty((1, height, width), np.float32)
         fold = machine.kernel("stereo", "select_running", **defines)
