@@ -261,6 +261,23 @@ __kernel void select_table(__global const float *votes, __global const float *pl
  * fields are bit for bit select_table's. A row's last W % 16 pixels are left to select_table (the host
  * launches it over them, from first_x). */
 #define PIXELS 16
+
+/* out[3 i + c] for the sixteen pixels i0 .. i0 + 15, c = 0, 1, 2 taking a, b, c: the interleaved triples
+ * (peaks, around) that select_table stores one pixel at a time. */
+inline void store_triples(float16 a, float16 b, float16 c, __global float *out, long i0)
+{
+    float pa[PIXELS], pb[PIXELS], pc[PIXELS];
+    vstore16(a, 0, pa);
+    vstore16(b, 0, pb);
+    vstore16(c, 0, pc);
+    for (int j = 0; j < PIXELS; j++) {
+        out[3 * (i0 + j)] = pa[j];
+        out[3 * (i0 + j) + 1] = pb[j];
+        out[3 * (i0 + j) + 2] = pc[j];
+    }
+}
+
+/* planes and negative are not read (edges only): the kernel takes select_table's arguments as they are. */
 __kernel void select_table_lanes(__global const float *votes, __global const float *planes,
                                  __global const uchar *left, __global const float *stats,
                                  __global float *best_score, __global int *best_d, __global float *peaks,
@@ -332,23 +349,8 @@ __kernel void select_table_lanes(__global const float *votes, __global const flo
     last = select((float16)(NAN), last, feature);
     vstore16(best, 0, best_score + i0);
     vstore16(winner, 0, best_d + i0);
-    float p[PIXELS], q[PIXELS], t[PIXELS];
-    vstore16(peak, 0, p);
-    vstore16(valley, 0, q);
-    vstore16(second, 0, t);
-    for (int j = 0; j < PIXELS; j++) {
-        peaks[3 * (i0 + j)] = p[j];
-        peaks[3 * (i0 + j) + 1] = q[j];
-        peaks[3 * (i0 + j) + 2] = t[j];
-    }
-    vstore16(below, 0, p);
-    vstore16(above, 0, q);
-    vstore16(last, 0, t);
-    for (int j = 0; j < PIXELS; j++) {
-        around[3 * (i0 + j)] = p[j];
-        around[3 * (i0 + j) + 1] = q[j];
-        around[3 * (i0 + j) + 2] = t[j];
-    }
+    store_triples(peak, valley, second, peaks, i0);
+    store_triples(below, above, last, around, i0);
 }
 #endif
 
