@@ -53,6 +53,7 @@ STAGES: dict[str, dict] = {
     "default: semi-global matches alone": {},
     "semi-global matches alone, no weighted median at depth jumps": {"refine": False},
     "semi-global matches alone, no occlusion geometry": {"occlusion_geometry": False},
+    "semi-global matches alone, the colour channels' brightness difference": {"ad_colour": True},
     "edge matches + semi-global backfill": {"feature_matches": True},
     "edge matches + semi-global backfill, no feedback": {"feature_matches": True, "feedback": False},
     "edge matches + intensity backfill, shiftable (previous default)": {"feature_matches": True,

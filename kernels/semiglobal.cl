@@ -188,21 +188,27 @@ __kernel void apply_tone(__global const float *grey, __global float *out, __glob
  * `ad_weight` times the two pixels' absolute brightness difference in units of the noise's standard
  * deviation (noise[0]), capped at `ad_cap` (the pixel's own evidence, which a window straddling a depth
  * edge does not blur; capped so that an outlier, e.g. a specular spot, costs no more than a poor census
- * match). Where x - d falls outside the right image, `outside` (what unrelated pixels cost on average: no
- * evidence for or against d). The host keeps the sum within a uchar. */
-__kernel void census_costs(__global const ulong *left, __global const ulong *right, __global const float *left_grey,
-                           __global const float *right_grey, __global uchar *cost, long W, long H, int D, int S,
-                           int d_min, uchar outside, float ad_weight, float ad_cap, __global const float *noise)
+ * match). The difference is the mean over the `planes` planes of the levels (grey: one; colour: R, G and
+ * B, each W * H, which tell apart surfaces of one grey but different hues). Where x - d falls outside the
+ * right image, `outside` (what unrelated pixels cost on average: no evidence for or against d). The host
+ * keeps the sum within a uchar. */
+__kernel void census_costs(__global const ulong *left, __global const ulong *right, __global const float *left_levels,
+                           __global const float *right_levels, int planes, __global uchar *cost, long W, long H,
+                           int D, int S, int d_min, uchar outside, float ad_weight, float ad_cap,
+                           __global const float *noise)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
-    ulong code = left[y * W + x];
-    float here = left_grey[y * W + x], unit = 1.0f / fmax(noise[0], FLT_MIN);
-    __global uchar *out = cost + (y * W + x) * S;
+    size_t i = y * W + x, n = W * H;
+    ulong code = left[i];
+    float unit = 1.0f / (fmax(noise[0], FLT_MIN) * (float)planes);
+    __global uchar *out = cost + i * S;
     for (int k = 0; k < D; k++) {
         long xr = x - (d_min + k);
         if (xr < 0 || xr >= W) { out[k] = outside; continue; }
-        float difference = fmin(fabs(here - right_grey[y * W + xr]) * unit, ad_cap);
+        float sum = 0.0f;
+        for (int c = 0; c < planes; c++) sum += fabs(left_levels[c * n + i] - right_levels[c * n + y * W + xr]);
+        float difference = fmin(sum * unit, ad_cap);
         out[k] = (uchar)min(255u, (uint)popcount(code ^ right[y * W + xr]) + (uint)rint(ad_weight * difference));
     }
 }

@@ -62,6 +62,18 @@ def test_rgb_becomes_bt709_grey(machine):
     _close(gaussian(rgb, sigma=1.0, machine=machine), _binomial_oracle(rgb, 2), 255)
 
 
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.float32])
+def test_channel_planes_are_the_image_s_channels_in_its_levels(dtype, machine):
+    rng = np.random.default_rng(4)
+    top = 1.0 if dtype == np.float32 else np.iinfo(dtype).max
+    rgb = (rng.uniform(0, 1, (9, 23, 3)) * top).astype(dtype)
+    planes = filters.channel_planes(machine, machine.to_device(rgb)).get()
+    np.testing.assert_array_equal(planes, np.moveaxis(rgb, -1, 0).astype(np.float32))
+    grey = rgb[..., 1]
+    np.testing.assert_array_equal(filters.channel_planes(machine, machine.to_device(grey)).get(),
+                                  grey[None].astype(np.float32))
+
+
 @settings(max_examples=25, deadline=None)
 @given(height=st.integers(1, 40), width=st.integers(1, 70), sigma=st.floats(0.3, 4.0))
 def test_exact_gaussian_any_shape(height, width, sigma, machine):

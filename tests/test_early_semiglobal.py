@@ -10,6 +10,7 @@ from oracles import semiglobal_sums, semiglobal_winners
 
 from vmcl import scenes
 from vmcl.early import semiglobal
+from vmcl.early.filters import GREY_WEIGHTS
 from vmcl.early.semiglobal import (
     CENSUS_BITS,
     CENSUS_SIZE,
@@ -130,6 +131,25 @@ def test_the_absolute_difference_alone_finds_the_shift(machine):
              for weight in (0.0, 4.0)}
     assert np.mean(np.abs(found[4.0] - 3) <= 0.5) > 0.9
     assert np.mean(np.abs(found[0.0] - 3) <= 0.5) < 0.2
+
+
+def test_a_colour_pair_s_channels_tell_apart_hues_of_one_grey(machine):
+    """Random hues of one grey (0.5 by GREY_WEIGHTS), the right view moved by 3, each view with grey noise of
+    its own (s = 0.01) that does not move with it: the grey levels and the census carry no evidence of the
+    shift, the channels' mean difference (ad_colour) does."""
+    rng = np.random.default_rng(5)
+    height, width, shift = 24, 40, 3
+    red, blue = rng.uniform(0, 1, (2, height, width + shift))
+    green = (0.5 - GREY_WEIGHTS[0] * red - GREY_WEIGHTS[2] * blue) / GREY_WEIGHTS[1]
+    hues = np.stack([red, green, blue], axis=-1)
+    left = hues[:, :width] + rng.normal(0, 0.01, (height, width, 1))
+    right = hues[:, shift:] + rng.normal(0, 0.01, (height, width, 1))
+    inner = (slice(None), slice(8, 36))
+    found = {colour: match_semiglobal(left.astype(np.float32), right.astype(np.float32), d_min=0, d_max=6,
+                                      ad_colour=colour, refine=False, machine=machine).filled[inner]
+             for colour in (False, True)}
+    assert np.mean(np.abs(found[True] - shift) <= 0.5) > 0.9
+    assert np.mean(np.abs(found[False] - shift) <= 0.5) < 0.3
 
 
 def test_a_different_exposure_of_the_right_view_costs_little_with_the_exposure_matched(machine):

@@ -184,10 +184,10 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.early.stereo:direction_code", angle=0.5, kinds={"angle": _N}),
     _e("vmcl.early.stereo:check_range", d_min=0, d_max=4, width=16, kinds={"d_min": _I, "d_max": _I, "width": _I}),
     _e("vmcl.early.semiglobal:match_semiglobal", left=IMG, right=IMG, d_min=0, d_max=4, census_threshold=3.0,
-       ad_weight=1.0, match_exposure=True, p1=48, p2=64.0, edge_gain=0.0, paths=8, subpixel=True, tolerance=1,
+       ad_weight=1.0, ad_colour=False, match_exposure=True, p1=48, p2=64.0, edge_gain=0.0, paths=8, subpixel=True, tolerance=1,
        occlusion_geometry=True, refine=True, refine_radius=2, refine_colour=0.1, refine_stride=1,
        kinds={"left": _A, "right": _A, "d_min": _I, "d_max": _I, "census_threshold": _N, "ad_weight": _N,
-              "match_exposure": _B, "p1": _I,
+              "ad_colour": _B, "match_exposure": _B, "p1": _I,
               "p2": _N, "edge_gain": _N, "paths": _I, "subpixel": _B, "tolerance": _I,
               "occlusion_geometry": _B, "refine": _B, "refine_radius": _I,
               "refine_colour": _N, "refine_stride": _I, "machine": _M}),
@@ -625,7 +625,7 @@ EXEMPT = {
     # Device-level building blocks of the early layer: they take images already checked by
     # vmcl.cm.core.image_field, and the sweeps of gaussian, canny and zero_crossings reach them.
     "vmcl.early.filters:separable_gaussian", "vmcl.early.filters:discrete_laplacian", "vmcl.early.filters:grey_field",
-    "vmcl.early.filters:device_taps",
+    "vmcl.early.filters:channel_planes", "vmcl.early.filters:device_taps",
     # Needs a head that has run a calibration pattern in front of it; table_for_fixation covers the glue.
     "vmcl.eyehead:calibrate_vergences",
     # Need a running Dask cluster: tests/test_distributed.py starts one and checks their refusals.

@@ -253,9 +253,10 @@ class StereoConfig:
         matches beside edge matches were fitted at 0.2, the earlier default.
     occluded_weight : float
         In [0, 1]: the weight of the semi-global matcher's half-occluded pixels.
-    census_threshold, ad_weight, match_exposure, p1, p2, edge_gain
+    census_threshold, ad_weight, ad_colour, match_exposure, p1, p2, edge_gain
         The semi-global matcher's census margin, the weight of the pixels' brightness difference beside the
-        census, whether that difference is taken after the cameras' exposure difference, measured on the
+        census, whether a colour pair's difference is its channels' mean (else its grey's), whether that
+        difference is taken after the cameras' exposure difference, measured on the
         surest census matches, is taken out, and the smoothness prices, as
         :func:`vmcl.early.semiglobal.match_semiglobal` takes them.
     occlusion_geometry : bool
@@ -293,6 +294,7 @@ class StereoConfig:
     occluded_weight: float = 0.1
     census_threshold: float = semiglobal.CENSUS_THRESHOLD
     ad_weight: float = semiglobal.AD_WEIGHT
+    ad_colour: bool = semiglobal.AD_COLOUR
     match_exposure: bool = semiglobal.MATCH_EXPOSURE
     p1: int = semiglobal.P1
     p2: float = semiglobal.P2

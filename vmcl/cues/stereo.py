@@ -177,7 +177,7 @@ def _dense_match(run: RunInputs, span: tuple[int, int]) -> _Dense | None:
     if s.dense == "semiglobal":
         found = match_semiglobal(run.left, run.needed("right"), d_min=span[0], d_max=span[1],
                                  census_threshold=s.census_threshold, ad_weight=s.ad_weight,
-                                 match_exposure=s.match_exposure, p1=s.p1, p2=s.p2,
+                                 ad_colour=s.ad_colour, match_exposure=s.match_exposure, p1=s.p1, p2=s.p2,
                                  edge_gain=s.edge_gain, occlusion_geometry=s.occlusion_geometry,
                                  refine=s.refine, refine_radius=s.refine_radius,
                                  refine_colour=s.refine_colour, refine_stride=s.refine_stride, machine=run.machine)

@@ -24,6 +24,7 @@ from __future__ import annotations
 from typing import Literal, overload
 
 import numpy as np
+import pyopencl as cl
 import pyopencl.array as cl_array
 from pyopencl import cltypes
 
@@ -39,7 +40,7 @@ from vmcl.cm.core import (
     vector_kernel,
 )
 from vmcl.errors import InputValueError
-from vmcl.machine import Machine
+from vmcl.machine import Machine, device_memory
 
 __all__ = [
     "DOG_RATIO",
@@ -48,6 +49,7 @@ __all__ = [
     "TRUNCATE",
     "Method",
     "binomial_passes",
+    "channel_planes",
     "device_taps",
     "difference_of_gaussians",
     "discrete_laplacian",
@@ -147,6 +149,29 @@ def grey_field(machine: Machine, data: cl_array.Array) -> cl_array.Array:
                             CHANNELS=3 if data.ndim == 3 else 1)
     launch_rows(machine, to_grey, width, height, data, out, _grey_weights(), *map(np.int64, (width, height)))
     return out
+
+
+def channel_planes(machine: Machine, data: cl_array.Array) -> cl_array.Array:
+    """The float32 (C, H, W) planes of a device image's channels (C = 3 for RGB, 1 for grey), in levels of its
+    own type, as :func:`grey_field` gives the grey image: each plane is to_grey's sum with one channel
+    weighing 1, so no program is built beyond the grey conversion's."""
+    if data.ndim == 2:
+        return grey_field(machine, data).reshape((1, *data.shape))
+    height, width = data.shape[:2]
+    planes = machine.empty((3, height, width), np.float32)
+    plane = machine.empty((height, width), np.float32)
+    to_grey = vector_kernel(machine, "early_filters", "to_grey", IN_T=IMAGE_TYPES[data.dtype], CHANNELS=3)
+    for channel in range(3):
+        weights = [0.0] * 4
+        weights[channel] = 1.0
+        launch_rows(machine, to_grey, width, height, data, plane,
+                    cltypes.make_float4(*weights),  # type: ignore[attr-defined]
+                    *map(np.int64, (width, height)))
+        # pyopencl's overloads type a device copy's ends as Buffer, but enqueue_copy dispatches on
+        # memory objects.
+        cl.enqueue_copy(machine.queue, device_memory(planes), device_memory(plane),  # type: ignore[call-overload]
+                        byte_count=plane.nbytes, dst_offset=channel * plane.nbytes)
+    return planes
 
 
 def _smooth(machine: Machine, data: cl_array.Array, sigma: float, method: str) -> cl_array.Array:

@@ -48,14 +48,14 @@ from vmcl.cm.core import (
 from vmcl.cm.reduce import reduce
 from vmcl.cm.scan import box_sum
 from vmcl.early.disparity_range import estimate_range
-from vmcl.early.filters import grey_field
+from vmcl.early.filters import channel_planes, grey_field
 from vmcl.early.noise import threshold_field
 from vmcl.early.stereo import check_pair, check_range
 from vmcl.early.weighted_median import weighted_median
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["AD_CAP", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "CPU_SCANLINES_PER_ITEM", "DIRECTIONS",
+__all__ = ["AD_CAP", "AD_COLOUR", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "CPU_SCANLINES_PER_ITEM", "DIRECTIONS",
            "EDGE_GAIN", "JUMP", "MATCH_EXPOSURE", "OCCLUSION_GEOMETRY", "P1", "P2", "POOR_MATCH",
            "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "TONE_BINS", "TONE_STEPS", "SemiGlobalMatch",
            "match_semiglobal"]
@@ -76,6 +76,8 @@ CENSUS_THRESHOLD = 3.0
 AD_WEIGHT = 4.0
 """Default weight of the pixels' absolute brightness difference in the data term, in census bits per noise
 standard deviation (0: the census alone; benchmarks/results/stereo_fit.md, stage 2)."""
+AD_COLOUR = False
+"""Default: the brightness difference of a colour pair is the grey levels' (True: the mean of its channels')."""
 AD_CAP = 8.0
 """The absolute difference counts up to this many noise standard deviations."""
 P1 = 48
@@ -168,7 +170,7 @@ class SemiGlobalMatch:
 
 def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max: int | None = None,
                      census_threshold: float = CENSUS_THRESHOLD, ad_weight: float = AD_WEIGHT,
-                     match_exposure: bool = MATCH_EXPOSURE, p1: int = P1, p2: float = P2,
+                     ad_colour: bool = AD_COLOUR, match_exposure: bool = MATCH_EXPOSURE, p1: int = P1, p2: float = P2,
                      edge_gain: float = EDGE_GAIN, paths: int = 8,
                      subpixel: bool = True, tolerance: int = 1, median: bool = True,
                      occlusion_geometry: bool = OCCLUSION_GEOMETRY, refine: bool = True,
@@ -194,6 +196,10 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         brightness difference (capped at :data:`AD_CAP` standard deviations) added to the census cost: a
         pixel's own evidence, which the census window's straddling of a depth edge does not blur (the
         AD-census cost of Mei et al., 2011, in the census's units). 0: the census alone.
+    ad_colour : bool
+        For a colour pair, take that difference as the mean of the R, G and B channels' absolute differences
+        (as Mei et al. do), which tells apart surfaces of one grey but different hues; still in units of the
+        grey's noise. False, or a grey pair: the grey levels' difference.
     match_exposure : bool
         Take that difference after moving the right view's brightness by the two cameras' difference,
         measured where the census match is sure (the median difference of such matches in each of
@@ -267,6 +273,7 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     census_threshold = check_real(census_threshold, "census_threshold", minimum=0)
     # A cost must fit a byte: CENSUS_BITS + 24 * AD_CAP = 254.
     ad_weight = check_real(ad_weight, "ad_weight", minimum=0, maximum=24)
+    ad_colour = check_bool(ad_colour, "ad_colour")
     match_exposure = check_bool(match_exposure, "match_exposure")
     p1 = check_int(p1, "p1", minimum=0, maximum=255)
     p2 = check_real(p2, "p2", minimum=p1, maximum=8000)
@@ -294,9 +301,13 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     host = isinstance(left, np.ndarray)
     images = [machine.to_device(image) if isinstance(image, np.ndarray) else image for image in (left, right)]
     views = [grey_field(machine, image) for image in images]
+    if ad_colour and ad_weight > 0:
+        levels = [channel_planes(machine, image) for image in images]
+    else:
+        levels = [view.reshape((1, height, width)) for view in views]
     dims = (np.int64(width), np.int64(height))
-    costs, sums = _aggregate(machine, views, d_min, depth, census_threshold, ad_weight, match_exposure, p1, p2,
-                             edge_gain, paths)
+    costs, sums = _aggregate(machine, views, levels, d_min, depth, census_threshold, ad_weight, match_exposure, p1,
+                             p2, edge_gain, paths)
     found = _select(machine, sums, costs, dims, d_min, depth, subpixel, tolerance, median, occlusion_geometry,
                     int(POOR_MATCH * (CENSUS_BITS + ad_weight * AD_CAP)))
     disparity, filled, occluded, mismatched, out_of_range = found
@@ -332,11 +343,12 @@ def _range(left, right, d_min, d_max, machine: Machine) -> tuple[int, int]:
     return d_min, d_max
 
 
-def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth: int, census_threshold: float,
-               ad_weight: float, match_exposure: bool, p1: int, p2: float, edge_gain: float, paths: int
-               ) -> tuple[cl_array.Array, cl_array.Array]:
+def _aggregate(machine: Machine, views: list[cl_array.Array], levels: list[cl_array.Array], d_min: int, depth: int,
+               census_threshold: float, ad_weight: float, match_exposure: bool, p1: int, p2: float, edge_gain: float,
+               paths: int) -> tuple[cl_array.Array, cl_array.Array]:
     """The (H, W, S) uint8 census costs and uint16 sum of the messages along every direction, S = D rounded
-    up to whole vectors."""
+    up to whole vectors; ``views`` are the grey views (the census's), ``levels`` the (C, H, W) planes whose
+    difference the costs add."""
     height, width = views[0].shape
     stride = _LANES * math.ceil(depth / _LANES)
     dims = (np.int64(width), np.int64(height))
@@ -352,12 +364,13 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
     build = _kernel(machine, "census")
     for view, code in zip(views, codes):
         launch_rows(machine, build, width, height, view, code, *dims, np.float32(census_threshold), noise)
-    levels = list(views)
+    levels = list(levels)
     if ad_weight > 0 and match_exposure:
-        levels[1] = _exposure_matched(machine, codes, views, d_min, depth)
+        levels[1] = _exposure_matched(machine, codes, views, levels[1], d_min, depth)
     costs = machine.empty((height, width, stride), np.uint8)
     outside = CENSUS_BITS // 2 + round(ad_weight * AD_CAP / 2)
-    machine.launch(_kernel(machine, "census_costs"), (width, height), *codes, *levels, costs, *dims,
+    machine.launch(_kernel(machine, "census_costs"), (width, height), *codes, *levels, np.int32(levels[0].shape[0]),
+                   costs, *dims,
                    np.int32(depth), np.int32(stride), np.int32(d_min), np.uint8(outside), np.float32(ad_weight),
                    np.float32(AD_CAP), noise)
     del codes, levels
@@ -375,10 +388,12 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], d_min: int, depth:
     return costs, sums
 
 
-def _exposure_matched(machine: Machine, codes: list[cl_array.Array], views: list[cl_array.Array], d_min: int,
-                      depth: int) -> cl_array.Array:
-    """The right view's grey levels moved by the cameras' difference, per brightness bin, measured on the
-    sure census matches (kernels/semiglobal.cl tone_votes); all on the device."""
+def _exposure_matched(machine: Machine, codes: list[cl_array.Array], views: list[cl_array.Array],
+                      levels: cl_array.Array, d_min: int, depth: int) -> cl_array.Array:
+    """The right view's ``levels`` (its grey, or its colour planes) moved by the cameras' difference, per
+    brightness bin, measured on the grey views' sure census matches (kernels/semiglobal.cl tone_votes); all
+    on the device. Each colour channel takes the grey's move at its own level: one response curve for the
+    three, which the grey's bins measure with three times the votes a channel's would have."""
     height, width = views[1].shape
     dims = (np.int64(width), np.int64(height))
     span = [reduce(view, op, machine=machine) for op in ("min", "max") for view in views]
@@ -387,9 +402,9 @@ def _exposure_matched(machine: Machine, codes: list[cl_array.Array], views: list
                    np.int32(depth), np.int32(d_min), np.int32(_TONE_SURE), np.int32(_TONE_MARGIN), *span)
     offset = machine.empty((TONE_BINS,), np.float32)
     machine.launch(_kernel(machine, "tone_offsets"), (1,), votes, offset, np.int32(_TONE_LEAST), *span)
-    moved = machine.empty((height, width), np.float32)
-    machine.launch(_kernel(machine, "apply_tone"), (height * width,), views[1], moved, offset,
-                   np.int64(height * width), *span)
+    moved = machine.empty(levels.shape, np.float32)
+    machine.launch(_kernel(machine, "apply_tone"), (levels.size,), levels, moved, offset, np.int64(levels.size),
+                   *span)
     return moved
 
 
