@@ -8,13 +8,18 @@ from vmcl.early.weighted_median import MAX_BINS, weighted_median
 from vmcl.errors import InputTypeError, InputValueError
 
 
-def _oracle(values, image, where, voters, low, high, radius, sigma_colour, sigma_space, stride=1):
+def _oracle(values, image, where, voters, low, high, radius, sigma_colour, sigma_space, stride=1, bin_width=1.0):
     """The definition, pixel by pixel in float64."""
+    if values.ndim == 3:
+        return np.stack([_oracle(values[..., c], image, where, voters, low, high, radius, sigma_colour, sigma_space,
+                                 stride, bin_width) for c in range(values.shape[2])], axis=-1)
     height, width = values.shape
     levels = image.astype(np.float64) / {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}.get(image.dtype, 1.0)
     levels = levels.reshape(height, width, -1)
-    step = max(1.0, float(np.ceil((high - low + 1) / MAX_BINS)))
-    bins = min(MAX_BINS, int(np.ceil((high - low + 1) / step)) + 1)
+    span = (high - low) / bin_width + 1
+    widening = max(1, int(np.ceil(span / MAX_BINS)))
+    step = bin_width * widening
+    bins = min(MAX_BINS, int(np.ceil(span / widening)) + 1)
     want = values.astype(np.float64).copy()
     for y, x in zip(*np.nonzero(where)):
         ws, vs = [], []
@@ -35,21 +40,24 @@ def _oracle(values, image, where, voters, low, high, radius, sigma_colour, sigma
     return want
 
 
-@pytest.mark.parametrize(("channels", "low", "high", "stride", "dtype"), [
-    (3, 0.0, 10.0, 1, np.uint8), (1, -3.0, 40.0, 1, np.uint8), (3, 0.0, 10.0, 2, np.uint16), (1, -3.0, 40.0, 3, np.uint8),
-    (3, 0.0, 10.0, 1, np.float32)])
-def test_matches_numpy_oracle(channels, low, high, stride, dtype, machine):
+@pytest.mark.parametrize(("channels", "low", "high", "stride", "dtype", "bin_width", "components"), [
+    (3, 0.0, 10.0, 1, np.uint8, 1.0, 0), (1, -3.0, 40.0, 1, np.uint8, 1.0, 0), (3, 0.0, 10.0, 2, np.uint16, 1.0, 0),
+    (1, -3.0, 40.0, 3, np.uint8, 1.0, 0), (3, 0.0, 10.0, 1, np.float32, 1.0, 0),
+    (3, -2.5, 3.0, 2, np.uint8, 0.125, 2), (1, -3.0, 40.0, 1, np.uint8, 0.01, 1), (1, -3.0, 4.0, 1, np.float32, 0.5, 2)])
+def test_matches_numpy_oracle(channels, low, high, stride, dtype, bin_width, components, machine):
+    """Grey and RGB weights, strides, sub-unit bins (0.01 over 43 units: widened to fit MAX_BINS), and
+    fields of several components (0: an (H, W) field)."""
     rng = np.random.default_rng(channels)
-    values = rng.uniform(low, high, (30, 41)).astype(np.float32)
+    values = rng.uniform(low, high, (30, 41, components) if components else (30, 41)).astype(np.float32)
     values[rng.uniform(size=values.shape) < 0.05] = np.nan
     shape = (30, 41, 3) if channels == 3 else (30, 41)
     image = (rng.uniform(0, 1, shape).astype(np.float32) if dtype == np.float32
              else rng.integers(0, np.iinfo(dtype).max + 1, shape).astype(dtype))
-    where = rng.uniform(size=values.shape) < 0.4
-    voters = rng.uniform(size=values.shape) < 0.8
+    where = rng.uniform(size=values.shape[:2]) < 0.4
+    voters = rng.uniform(size=values.shape[:2]) < 0.8
     found = weighted_median(values, image, low=low, high=high, where=where, voters=voters, radius=3,
-                            sigma_colour=0.2, sigma_space=3.0, stride=stride, machine=machine)
-    want = _oracle(values, image, where, voters, low, high, 3, 0.2, 3.0, stride)
+                            sigma_colour=0.2, sigma_space=3.0, stride=stride, bin_width=bin_width, machine=machine)
+    want = _oracle(values, image, where, voters, low, high, 3, 0.2, 3.0, stride, bin_width)
     np.testing.assert_array_equal(np.isnan(found), np.isnan(want))
     np.testing.assert_allclose(found[~np.isnan(want)], want[~np.isnan(want)], atol=2e-5)
     np.testing.assert_array_equal(found[~where], values[~where])
@@ -92,6 +100,9 @@ def test_a_pixel_without_voters_keeps_its_value(machine):
     ({"sigma_colour": 0.0}, InputValueError, "sigma_colour"),
     ({"sigma_space": -1.0}, InputValueError, "sigma_space"),
     ({"stride": 0}, InputValueError, "stride"),
+    ({"bin_width": 0.0}, InputValueError, "bin_width"),
+    ({"values": np.zeros((6, 6, 3), np.float32)}, InputValueError, "one or two components"),
+    ({"bin_width": 1e-300, "low": -1e37, "high": 1e37}, InputValueError, "bin_width .* is too narrow"),
     ({"sigma_colour": 1e-40}, InputValueError, "sigma_colour must be at least"),
     ({"image": np.full((6, 6), 255.0, np.float32)}, InputValueError, "image: float images hold brightness in"),
     ({"where": np.zeros((3, 3), bool)}, InputValueError, "where"),

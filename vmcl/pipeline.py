@@ -44,7 +44,7 @@ from vmcl import fitted, labelling, learn, temporal
 from vmcl import integrate as _integrate
 from vmcl.cm.core import UNIT_MARGIN, check_choice, check_int, check_real, check_unit_image
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
-from vmcl.early import boundary_probability, disparity_range, edges, motion, semiglobal, stereo
+from vmcl.early import boundary_probability, disparity_range, edges, motion, motion_refine, semiglobal, stereo
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.group import Grouping, group, saliency_strength, structural_saliency
 from vmcl.labels import CUES
@@ -357,6 +357,14 @@ class MotionConfig:
         In [0, 1): that weighting's floor (:func:`vmcl.mrf.score_confidence`) as a correlation of the
         brightness, the squared-difference features' score; for "sign_log" it is carried to the sign
         correlation's units by the arcsine law.
+    refine, refine_radius, refine_colour, refine_stride
+        Each flow component is replaced by its weighted median over the pixels of the window of like colour
+        (:func:`vmcl.early.weighted_median.weighted_median`: the window's radius and spatial scale in
+        pixels, its colour scale in [0, 1] levels, the step between voters) before the motion MRF restores
+        it: the matcher's windows straddle motion boundaries and its estimates scatter, which a median
+        whose support stops at brightness edges mends (Sun, Roth and Black's weighted median of flow).
+        ``Result.fields["raw_flow"]`` stays the matcher's own. Defaults fitted on rendered scenes
+        (benchmarks/motion_refine_fit.py).
     """
 
     enabled: bool = True
@@ -366,6 +374,10 @@ class MotionConfig:
     features: str = "sign_log"
     weigh_by_score: bool = True
     confidence_floor: float = 0.7
+    refine: bool = motion_refine.REFINE
+    refine_radius: int = motion_refine.REFINE_RADIUS
+    refine_colour: float = motion_refine.REFINE_COLOUR
+    refine_stride: int = motion_refine.REFINE_STRIDE
 
     def __post_init__(self) -> None:
         _check_field_types("motion", self)
@@ -377,6 +389,9 @@ class MotionConfig:
             check_int(self.levels, "motion.levels", minimum=1)
         check_choice(self.features, "motion.features", motion.FEATURES)
         check_unit_interval(self.confidence_floor, "motion.confidence_floor", closed_above=False)
+        check_int(self.refine_radius, "motion.refine_radius", minimum=1, maximum=2**31 - 1)
+        check_real(self.refine_colour, "motion.refine_colour", above=0)
+        check_int(self.refine_stride, "motion.refine_stride", minimum=1, maximum=2**31 - 1)
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,8 @@
 """The motion cue: optical flow from the next frame, restored piecewise smooth.
 
-Seed section "Motion": patchwise correlation over a displacement range (:func:`vmcl.early.motion.flow`);
-the motion MRF restores the flow coupled to the brightness edges, each estimate weighed by its match
+Seed section "Motion": patchwise correlation over a displacement range (:func:`vmcl.early.motion.flow`),
+its weighted median at brightness edges (:func:`vmcl.early.motion_refine.refine_flow`); the motion MRF
+restores the flow coupled to the brightness edges, each estimate weighed by its match
 score (:func:`vmcl.mrf.score_confidence`).
 """
 
@@ -11,6 +12,7 @@ import numpy as np
 
 from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import motion
+from vmcl.early.motion_refine import refine_flow
 from vmcl.early.sign_correlation import arcsine_law
 from vmcl.labels import Label
 from vmcl.machine import on_device
@@ -44,7 +46,10 @@ class MotionCue(CueModule):
                                                  machine=run.machine))
                       if mc.weigh_by_score else None)
         flow = on_device(found.flow)  # device input, device output
-        return Measurement(flow, confidence, run.brightness, fields={"raw_flow": flow},
+        measured = (on_device(refine_flow(flow, run.left, radius=mc.refine_radius, sigma_colour=mc.refine_colour,
+                                          stride=mc.refine_stride, machine=run.machine))
+                    if mc.refine else flow)
+        return Measurement(measured, confidence, run.brightness, fields={"raw_flow": flow},
                            notes=self.limit_note(found.limit_share, motion.reach(mc.delta, levels), levels))
 
     @staticmethod

@@ -49,13 +49,15 @@ _LEVELS = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0, np.dtype(np.
 
 def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: float, where: ArrayLike | None = None,
                     voters: ArrayLike | None = None, radius: int = 9, sigma_colour: float = 0.1,
-                    sigma_space: float = 9.0, stride: int = 1, machine: Machine | None = None) -> ArrayLike:
+                    sigma_space: float = 9.0, stride: int = 1, bin_width: float = 1.0,
+                    machine: Machine | None = None) -> ArrayLike:
     """Replace each chosen pixel's value by the weighted median of its voters' values around it.
 
     Parameters
     ----------
-    values : float32 (H, W) array or device array
-        The field (e.g. a disparity map), NaN where it has no value.
+    values : float32 (H, W) or (H, W, 2) array or device array
+        The field (e.g. a disparity map, or a flow's two components), NaN where it has no value; each
+        component takes its own median, with the same weights (found once for both).
     image : (H, W) or (H, W, 3) array or device array; uint8, uint16 or float
         The brightness the weights follow, grey or RGB, its levels scaled to [0, 1] by its type's range
         (uint8 by 255, uint16 by 65535; a float image must be in [0, 1] already: a NumPy one outside it is
@@ -76,31 +78,37 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
     stride : int
         >= 1: only the window's rows and columns at multiples of ``stride`` from the pixel's own vote
         (1, the default: every pixel of the window; 2 visits a quarter of them, over the same reach).
+    bin_width : float
+        > 0: the width of the median's bins in the values' units (1, the default, for whole disparities;
+        a fraction for a flow's sub-pixel values), widened where the span would need more than MAX_BINS.
     machine : vmcl.Machine, optional
 
     Returns
     -------
-    float32 (H, W), as the input came (NumPy for NumPy ``values``, else a device array): the field with the
+    float32 of the values' shape, as the input came (NumPy for NumPy ``values``, else a device array): the field with the
     chosen pixels replaced; a chosen pixel without any voter in its window keeps its own value.
 
     Notes
     -----
-    The median is taken over bins ``step = max(1, ceil((high - low + 1) / MAX_BINS))`` units wide, starting
-    half a bin below ``low`` (whole values sit mid-bin when ``step`` is 1); the result is the weighted mean
-    of the voters in the median's bin. Each chosen pixel visits up to ``(2 (radius // stride) + 1)^2``
+    The median is taken over bins ``step = bin_width * max(1, ceil(((high - low) / bin_width + 1) / MAX_BINS))``
+    units wide, starting half a bin below ``low`` (multiples of ``bin_width`` from ``low`` sit mid-bin when
+    ``step`` is ``bin_width``); the result is the weighted mean of the voters in the median's bin. Each chosen pixel visits up to ``(2 (radius // stride) + 1)^2``
     neighbours (fewer at the image's border).
 
     Raises
     ------
     InputTypeError, InputValueError
-        Naming the argument: a field that is not float32 (H, W), an image or mask of another shape,
+        Naming the argument: a field that is not float32 (H, W) or (H, W, 2), an image or mask of another shape,
         ``low > high``, a parameter outside its range.
     """
     machine = machine_for(machine)
     if isinstance(values, np.ndarray) and values.dtype.kind == "f":
         values = values.astype(np.float32, copy=False)
-    data, host = field(values, "values", machine, ndims=(2,), dtypes=(np.float32,))
-    height, width = data.shape
+    data, host = field(values, "values", machine, ndims=(2, 3), dtypes=(np.float32,))
+    height, width = data.shape[:2]
+    components = data.shape[2] if data.ndim == 3 else 1
+    if components > 2:
+        raise InputValueError(f"values must have one or two components ((H, W) or (H, W, 2)), got shape {data.shape}")
     picture, image_host = image_field(image, machine, what="a weighted median", footprint=6)
     if image_host != host:
         raise InputTypeError("values and image must both be NumPy arrays or both device arrays")
@@ -120,9 +128,13 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
                               f"inverse must fit float32), got {sigma_colour}")
     sigma_space = check_real(sigma_space, "sigma_space", above=0)
     stride = check_int(stride, "stride", minimum=1, maximum=2**31 - 1)
-    span = high - low + 1
-    step = max(1.0, float(math.ceil(span / MAX_BINS)))
-    bins = min(MAX_BINS, math.ceil(span / step) + 1)
+    bin_width = check_real(bin_width, "bin_width", above=0, maximum=_HALF_RANGE)
+    span = (high - low) / bin_width + 1  # in bins of bin_width
+    if not math.isfinite(span):
+        raise InputValueError(f"bin_width {bin_width} is too narrow for the span from low {low} to high {high}")
+    widening = max(1, math.ceil(span / MAX_BINS))
+    step = bin_width * widening
+    bins = min(MAX_BINS, math.ceil(span / widening) + 1)
     chosen = flags_field(np.ones((height, width), np.uint8) if where is None else where, (height, width), "where",
                          machine)
     voting = flags_field(np.ones((height, width), np.uint8) if voters is None else voters, (height, width), "voters",
@@ -130,9 +142,10 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
     reach = min(radius, max(height, width) - 1)  # no window reaches further than the image
     side = 2 * reach + 1
     spatial = _spatial_weights(machine, reach, sigma_space)
-    out = machine.empty((height, width), np.float32)
+    out = machine.empty(data.shape, np.float32)
     kernel = machine.kernel("weighted_median", "weighted_median", IN_T=IMAGE_TYPES[picture.dtype],
-                            CHANNELS=3 if picture.ndim == 3 else 1, NBINS=_BIN_STEP * math.ceil(bins / _BIN_STEP))
+                            CHANNELS=3 if picture.ndim == 3 else 1, COMPS=components,
+                            NBINS=_BIN_STEP * math.ceil(bins / _BIN_STEP))
     machine.launch(kernel, (width, height), data, voting, chosen, picture, out, np.int64(width), np.int64(height),
                    np.int32(reach), np.float32(1 / sigma_colour), spatial,
                    np.float32(1 / _LEVELS[picture.dtype]), np.float32(low - 0.5 * step), np.float32(step),
