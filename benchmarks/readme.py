@@ -12,6 +12,7 @@ Each row also quotes the date and machine that its result file states.
 from __future__ import annotations
 
 import argparse
+import ast
 import difflib
 import re
 import sys
@@ -267,6 +268,16 @@ def motion_figures(f: ResultsFile) -> str:
 def motion_fit_figures(f: ResultsFile) -> str:
     chosen = re.search(r"Chosen \(lowest mean EPE[^)]*\): (.*)\.", f.text)
     return f"chosen on rendered scenes: {chosen.group(1) if chosen else 'not stated'}"
+
+
+def motion_refine_fit_figures(f: ResultsFile) -> str:
+    chosen = re.search(r"Chosen: the fewest voters .*?: (\{.*\})\.", f.text)
+    if not chosen:
+        return "chosen on rendered scenes: not stated"
+    table = f.table("mean EPE", "refine")
+    settings = {key: str(value) for key, value in ast.literal_eval(chosen.group(1)).items()}
+    return (f"chosen on rendered scenes: {chosen.group(1)}, mean EPE {table.cell(settings, 'mean EPE')} px against "
+            f"{table.cell({'refine': 'False'}, 'mean EPE')} px without the weighted median")
 
 
 def time_fit_figures(f: ResultsFile) -> str:
@@ -586,6 +597,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
                 "sequence (two frames and streamed) beside DIS, Farneback and TV-L1; streaming's cost"),
      motion_figures),
     ("motion_fit", "the motion defaults (features, patch, pyramid) chosen on rendered scenes", motion_fit_figures),
+    ("motion_refine_fit", "the motion cue's weighted median of the flow, its window chosen on rendered scenes",
+     motion_refine_fit_figures),
     ("time_fit", "the temporal terms' defaults chosen on rendered sequences", time_fit_figures),
     ("early", "colour and texture against NumPy/SciPy", early_figures),
     ("mrf", "sweeps per second of each solver; Gibbs against NumPy; dense disparity on Middlebury",

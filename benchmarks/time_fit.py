@@ -32,9 +32,9 @@ from vmcl.pipeline import ColourConfig, Config, TextureConfig, TimeConfig, Visio
 RESULTS = Path(__file__).resolve().parent / "results"
 PRESETS = ("blocks", "corridor", "cues")
 SIZE, FRAMES, NOISE, WOBBLE = 192, 6, 0.02, 0.3
-GAINS = (0.25, 0.5, 1.0, 2.0)
+GAINS = (0.0625, 0.125, 0.25, 0.5, 1.0, 2.0)
 MEMORIES = (1.0, 2.0, 4.0)
-JUMPS = (0.5, 1.0, 2.0)
+JUMPS = (0.125, 0.25, 0.5, 1.0, 2.0)
 
 
 def errors(results, frames) -> tuple[float, float]:

@@ -595,10 +595,10 @@ class TimeConfig:
     """
 
     enabled: bool = True
-    gain: float = 0.25
+    gain: float = 0.5
     memory: float = 4.0
     tolerance: float = 0.05
-    jump: float = 0.5
+    jump: float = 0.25
     scene_cut: float = 0.5
     warm: bool = True
     predict_search: bool = False
