@@ -27,9 +27,10 @@ import vmcl
 from vmcl.pipeline import MotionConfig, VisionMachine
 
 GRID = [{"refine": False}] + [{"refine": True, "refine_radius": radius, "refine_colour": colour, "refine_stride": stride}
-                              for radius, stride in ((5, 1), (9, 2), (9, 3), (13, 2), (13, 3), (17, 3), (17, 4),
-                                                     (17, 6), (25, 4), (25, 6), (25, 8), (33, 4), (33, 8))
-                              for colour in (0.05, 0.1, 0.2)]
+                              for radius, stride in ((5, 1), (9, 2), (9, 3), (13, 2), (13, 3), (13, 6), (17, 3),
+                                                     (17, 4), (17, 6), (17, 8), (25, 4), (25, 6), (25, 8), (25, 12),
+                                                     (33, 4), (33, 8))
+                              for colour in (0.05, 0.1, 0.2, 0.4)]
 TOLERANCE = 0.01
 """The chosen setting's mean EPE is within this share of the best one's (stated before the first run)."""
 

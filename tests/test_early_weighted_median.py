@@ -101,6 +101,7 @@ def test_a_pixel_without_voters_keeps_its_value(machine):
     ({"sigma_space": -1.0}, InputValueError, "sigma_space"),
     ({"stride": 0}, InputValueError, "stride"),
     ({"bin_width": 0.0}, InputValueError, "bin_width"),
+    ({"bin_width": 1e-300, "low": 2.0, "high": 2.0}, InputValueError, "bin_width must be at least"),
     ({"values": np.zeros((6, 6, 3), np.float32)}, InputValueError, "one or two components"),
     ({"bin_width": 1e-300, "low": -1e37, "high": 1e37}, InputValueError, "bin_width .* is too narrow"),
     ({"sigma_colour": 1e-40}, InputValueError, "sigma_colour must be at least"),

@@ -173,8 +173,11 @@ def test_the_previous_flow_predicts_the_motion_search(machine, monkeypatch):
             assert carried.mean() > 0.5
             # The previous restored flow, moved along itself: the same motions, so the same median.
             previous = streamed[k - 1].flow
-            truth = frames[k - 1].flow
-            assert np.abs(np.median(truth[np.isfinite(truth).all(axis=-1)], axis=0)).max() > 0.3  # the scene moves
+            truth = np.median(frames[k - 1].flow[np.isfinite(frames[k - 1].flow).all(axis=-1)], axis=0)
+            assert np.abs(truth).max() > 0.3  # the scene moves (by 0.32 px)
+            # and so does the restored flow (0.26 to 0.52 px on these tiny frames), or the comparison below
+            # would compare two medians of a flow near 0
+            assert np.abs(np.median(previous.reshape(-1, 2), axis=0)).max() > 0.15
             np.testing.assert_allclose(np.median(prediction[carried], axis=0),
                                        np.median(previous.reshape(-1, 2), axis=0), atol=0.1)
 

@@ -363,7 +363,8 @@ class MotionConfig:
         pixels, its colour scale in [0, 1] levels, the step between voters) before the motion MRF restores
         it: the matcher's windows straddle motion boundaries and its estimates scatter, which a median
         whose support stops at brightness edges mends (Sun, Roth and Black's weighted median of flow).
-        ``Result.fields["raw_flow"]`` stays the matcher's own. Defaults fitted on rendered scenes
+        Pixels the matcher left without flow take their neighbours' median (weighed 0 by the score when
+        ``weigh_by_score``). ``Result.fields["raw_flow"]`` stays the matcher's own. Defaults fitted on rendered scenes
         (benchmarks/motion_refine_fit.py).
     """
 
@@ -563,7 +564,7 @@ class TimeConfig:
 
     The defaults of gain, memory and jump were chosen by benchmarks/time_fit.py on rendered sequences
     whose speeds change from frame to frame: there the carried fields are worth little against each new
-    measurement, and the weight put on them is small. Sequences of steadier motion gain more from a
+    measurement, so time breaks at a small change (jump) and the carried information stays modest. Sequences of steadier motion gain more from a
     larger gain and memory (benchmarks/results/time_fit.md).
 
     Parameters

@@ -41,6 +41,9 @@ FLOW_BIN = 0.125
 _SPAN_BINS = 62
 """The bins the flow's span may take: the weighted median's private histogram then has its smallest size
 (64 bins; the stereo cue's refinement builds the same program), so a wide span widens the bins instead."""
+_ROUNDING = 1 + 1e-6
+"""A wide span's bins are this much wider than span / _SPAN_BINS, so that the weighted median's count of
+them, span / width rounded up, does not come out one over through rounding (and need the next size)."""
 
 
 def refine_flow(flow: ArrayLike, image: ArrayLike, *, radius: int = REFINE_RADIUS,
@@ -51,7 +54,8 @@ def refine_flow(flow: ArrayLike, image: ArrayLike, *, radius: int = REFINE_RADIU
     Parameters
     ----------
     flow : float32 (H, W, 2) array or device array
-        (u, v) per pixel, NaN where there is none (such pixels neither vote nor get a value).
+        (u, v) per pixel, NaN where there is none: such a pixel does not vote, and takes the median of the
+        voters around it (NaN if it has none).
     image : (H, W) or (H, W, 3) array or device array; uint8, uint16 or float in [0, 1]
         The frame the flow belongs to, whose colours weigh the voters; a NumPy array with a NumPy flow, a
         device array with a device flow.
@@ -97,4 +101,4 @@ def refine_flow(flow: ArrayLike, image: ArrayLike, *, radius: int = REFINE_RADIU
         raise InputValueError("flow must not contain infinite values (NaN marks a pixel without flow)")
     return weighted_median(data.get() if host else data, image, low=low, high=high, radius=radius,
                            sigma_colour=sigma_colour, sigma_space=float(radius), stride=stride,
-                           bin_width=max(FLOW_BIN, (high - low) / _SPAN_BINS), machine=machine)
+                           bin_width=max(FLOW_BIN, (high - low) / _SPAN_BINS * _ROUNDING), machine=machine)

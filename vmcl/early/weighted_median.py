@@ -135,6 +135,9 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
     widening = max(1, math.ceil(span / MAX_BINS))
     step = bin_width * widening
     bins = min(MAX_BINS, math.ceil(span / widening) + 1)
+    if not np.float32(step) >= np.finfo(np.float32).tiny:  # the kernel divides by the bins' width in float32
+        raise InputValueError(f"bin_width must be at least {float(np.finfo(np.float32).tiny):.1e} (a float32), "
+                              f"got {bin_width}")
     chosen = flags_field(np.ones((height, width), np.uint8) if where is None else where, (height, width), "where",
                          machine)
     voting = flags_field(np.ones((height, width), np.uint8) if voters is None else voters, (height, width), "voters",
