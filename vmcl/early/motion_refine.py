@@ -31,9 +31,9 @@ REFINE = True
 """Default: the motion cue refines its flow (:class:`vmcl.pipeline.MotionConfig`'s ``refine``)."""
 REFINE_RADIUS = 17
 """Default radius of the window, in pixels (its spatial scale too)."""
-REFINE_COLOUR = 0.4
+REFINE_COLOUR = 0.2
 """Default colour distance (in [0, 1] levels) at which a voter weighs 1/e."""
-REFINE_STRIDE = 8
+REFINE_STRIDE = 6
 """Default step between voters, in pixels."""
 
 FLOW_BIN = 0.125
