@@ -1,8 +1,8 @@
 /* weighted_median.cl: a field's weighted median over windows whose support stops at brightness edges
  * (vmcl/early/weighted_median.py).
  *
- * One work-item per pixel, every component (COMPS) of it. A pixel to be replaced gathers the voters of its (2R + 1)^2 window into a
- * histogram of bins STEP units wide (private, NBINS long), each weighted by
+ * One work-item per pixel, every component (COMPS) of it. A pixel to be replaced gathers the voters of its
+ * (2R + 1)^2 window into a histogram of bins STEP units wide (private, NBINS long), each weighted by
  * exp(-|I(q) - I(p)| / sigma_colour - |q - p| / sigma_space), I the image's grey level or RGB
  * colour scaled to [0, 1] by `scale` (IN_T: uchar, ushort or float; CHANNELS: 1 or 3): neighbours of
  * another colour, across a brightness edge, hardly count, so a surface's value is not carried over its outline. The median is the

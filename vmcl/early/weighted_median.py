@@ -85,15 +85,15 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
 
     Returns
     -------
-    float32 of the values' shape, as the input came (NumPy for NumPy ``values``, else a device array): the field with the
-    chosen pixels replaced; a chosen pixel without any voter in its window keeps its own value.
+    float32 of the values' shape, as the input came (NumPy for NumPy ``values``, else a device array): the
+    field with the chosen pixels replaced; a chosen pixel without any voter in its window keeps its own value.
 
     Notes
     -----
     The median is taken over bins ``step = bin_width * max(1, ceil(((high - low) / bin_width + 1) / MAX_BINS))``
     units wide, starting half a bin below ``low`` (multiples of ``bin_width`` from ``low`` sit mid-bin when
-    ``step`` is ``bin_width``); the result is the weighted mean of the voters in the median's bin. Each chosen pixel visits up to ``(2 (radius // stride) + 1)^2``
-    neighbours (fewer at the image's border).
+    ``step`` is ``bin_width``); the result is the weighted mean of the voters in the median's bin. Each
+    chosen pixel visits up to ``(2 (radius // stride) + 1)^2`` neighbours (fewer at the image's border).
 
     Raises
     ------
