@@ -247,6 +247,21 @@ def test_an_object_is_recognised_at_its_pose_among_others():
     assert len(found) == len(scene.placements)
 
 
+def test_a_tolerance_wider_than_the_refinements_first_step_still_finds_the_objects():
+    # The refinement narrows from 8 px (then 4, 3) to the tolerance: a wider tolerance is held, not refused.
+    names = ["ell", "arrow", "star", "house"]
+    views = {n: object_view(n, shape=(160, 160)) for n in names}
+    library = Library([learn(n, [views[n][0]]) for n in names])
+    scene = recognition_scene(seed=3, library=tuple(names), objects=2, occlusion=(0.0, 0.1))
+    found = recognize(scene.image, library, tolerance=10.0, min_significance=0)
+    for placement in scene.placements:
+        hits = [d for d in found if d.name == placement.name]
+        assert hits, f"{placement.name} not found"
+        found_corners = hits[0].locate(views[placement.name][1].corners)
+        error = np.hypot(*(placement.corners[:, None] - found_corners[None]).transpose(2, 0, 1)).min(axis=1)
+        assert error.mean() < 0.25 * placement.scale
+
+
 def test_nothing_is_recognised_in_an_empty_image(ell_model):
     model, _, _ = ell_model
     assert recognize(np.full((64, 64), 0.5, np.float32), Library([model])) == []

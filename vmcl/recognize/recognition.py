@@ -246,8 +246,9 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
     solid = np.array([len(library.models[view_ids[row][0]].views) > 1 for row in found.views])
 
     def refined(rows: np.ndarray, starts: np.ndarray, kind: Transform, first: float = 8.0, steps: int = 6):
+        # Each refinement narrows from ``first`` to the tolerance; a tolerance wider than ``first`` is held.
         return refine(nearest, tangent_map, all_points, all_tangents, ranges_array[rows], starts, transform=kind,
-                      tolerance=tolerance, start=first, iterations=steps, machine=machine)
+                      tolerance=tolerance, start=max(first, tolerance), iterations=steps, machine=machine)
 
     # Coarse to fine: every pose is fitted as a similarity first, then, where it may be more, as an affine map
     # and a homography from there (a similarity's few parameters reach a distant pose; the others refine it).
