@@ -125,10 +125,10 @@ def _features(data: Any, sigma: float, machine: Machine) -> Features:
 
 
 def recognize(image: Any, library: Library, *, transform: Transform = "similarity", sigma: float = 1.5,
-              scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float = 32.5,
+              scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float = 20.0,
               min_support: int = 40,
               candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 12, regions: int = 8,
-              tolerance: float = 2.0, depth: np.ndarray | None = None,
+              tolerance: float = 3.0, depth: np.ndarray | None = None,
               machine: Machine | None = None) -> list[Detection]:
     """Find a library's objects in an image.
 
@@ -151,7 +151,8 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     min_significance : float
         The least significance (-log10 of the number of false alarms, :attr:`Detection.significance`) a
         detection needs. The default is the least that kept false detections to at most 0.1 per image on
-        rendered training scenes (benchmarks/recognition_fit.py, results/recognition_fit.md); 0 is the
+        rendered training scenes at the default ``tolerance`` (benchmarks/recognition_fit.py,
+        results/recognition_fit.md); it depends on the tolerance, so fit the two together; 0 is the
         a contrario criterion's own (one false alarm expected), which in clutter admits look-alikes.
     min_support : int
         The fewest distinct image edge pixels a detection explains, >= 1.
@@ -167,7 +168,10 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     regions : int
         The most salient regions whose corners are also paired among themselves (selection), >= 0.
     tolerance : float
-        The distance (pixels) within which an edge supports a model point, > 0.
+        The distance (pixels) within which an edge supports a model point, > 0. The default is the one of
+        those tried whose recognition rate at its own false-detection threshold was highest on rendered
+        training scenes (benchmarks/recognition_fit.py): wide enough for a solid seen between its learned
+        views.
     depth : (H, W) float array, optional
         A disparity map (larger nearer, NaN unknown; a Result's ``disparity`` by default): a model's points
         that find no edge where a surface nearer than the object lies are explained as occluded and left
