@@ -63,6 +63,9 @@ def test_a_glob_and_a_video_are_sequences_too(tmp_path, sequence):
     ("missing_video", "no such video file"),
     ("next", "--next is for one image"),
     ("empty_folder", "holds no images"),
+    # OpenCV's writer hangs on an infinite rate and refuses 65536 only at the first frame, after the work.
+    ("fps_infinite", "--fps must be a frame rate from 0.01 to 1000, got inf"),
+    ("fps_huge", "--fps must be a frame rate from 0.01 to 1000, got 65536.0"),
 ])
 def test_bad_sequences_are_one_line_and_exit_2(tmp_path, sequence, capsys, case, message):
     (tmp_path / "empty").mkdir()
@@ -73,7 +76,9 @@ def test_bad_sequences_are_one_line_and_exit_2(tmp_path, sequence, capsys, case,
             "no_match": [str(tmp_path / "*.png")],
             "missing_video": [str(tmp_path / "none.mp4")],
             "next": [str(sequence / "left"), "--next", str(sequence / "left" / "frame_01.png")],
-            "empty_folder": [str(tmp_path / "empty")]}[case]
+            "empty_folder": [str(tmp_path / "empty")],
+            "fps_infinite": [str(sequence / "left"), "--fps", "inf"],
+            "fps_huge": [str(sequence / "left"), "--fps", "65536"]}[case]
     out = tmp_path / "out"
     assert main(["run", *argv, "--out", str(out), "-q"]) == 2
     err = capsys.readouterr().err

@@ -187,3 +187,14 @@ def test_an_icm_sweep_of_levels_takes_each_conditional_mode(machine):
     lattice.sweep("icm", 1.0, 0, philox_key(0), order=(("f", 0), ("f", 1)))
     np.testing.assert_array_equal(lattice.f.get().ravel(), f)
     assert len(set(f.tolist())) > 1  # the modes are not all one level
+
+
+def test_a_schedule_of_the_largest_count_allowed_starts_without_listing_its_temperatures():
+    # Counts up to MAX_COUNT pass the schedules' checks; a list of 2**31 temperatures would take 16 GiB
+    # before the first sweep, so the schedule is a generator.
+    from vmcl.mrf.checks import MAX_COUNT
+    from vmcl.mrf.sampler import temperatures
+
+    huge = temperatures(2.0, 0.5, MAX_COUNT, 3)
+    assert list(itertools.islice(huge, 4)) == [2.0, 2.0, 2.0, 1.0]
+    np.testing.assert_allclose(list(temperatures(4.0, 0.8, 5)), 4.0 * 0.8 ** np.arange(5), rtol=0, atol=0)

@@ -618,6 +618,7 @@ EXEMPT = {
     # and tests/test_temporal.py check them; the readers they call (read_flow_folder, open_frames) are swept.
     "vmcl.datasets:FlowSequence", "vmcl.flow_evaluation:FlowRow", "vmcl.flow_evaluation:evaluate_sequence",
     "vmcl.flow_evaluation:baselines", "vmcl.frame_sources:FrameSource", "vmcl.sequence_output:SequenceWriter",
+    "vmcl.sequence_output:check_fps",
     # Any folder of images is a valid sequence whose length sets the result's shape; tests/test_cli_sequences.py
     # checks their refusals.
     "vmcl.frame_sources:open_frames", "vmcl.frame_sources:is_sequence",

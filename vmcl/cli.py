@@ -69,7 +69,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vmcl.errors import InputError
+from vmcl.errors import InputError, InputValueError
 from vmcl.machine import NoOpenCLPlatformError
 from vmcl.output_folder import output_folder
 
@@ -319,7 +319,7 @@ def _frames(spec: str, what: str):
 
 def _run_sequence(args) -> int:
     from vmcl.pipeline import VisionMachine
-    from vmcl.sequence_output import SequenceWriter
+    from vmcl.sequence_output import SequenceWriter, check_fps
 
     if args.next:
         raise BadInput("--next is for one image; a sequence's next frames are its own")
@@ -329,8 +329,10 @@ def _run_sequence(args) -> int:
     if rights is not None and None not in (lefts.count, rights.count) and lefts.count != rights.count:
         raise BadInput(f"left has {lefts.count} frames ({lefts.description}), right {rights.count} "
                        f"({rights.description}): a stereo sequence needs a right view per frame")
-    if not args.fps > 0:
-        raise BadInput(f"--fps must be > 0, got {args.fps}")
+    try:
+        check_fps(args.fps, "--fps")
+    except InputValueError as error:
+        raise BadInput(str(error)) from None
     vm = VisionMachine(config)
     frames = 0
     with output_folder(Path(args.out)) as work:
@@ -689,7 +691,7 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("right", nargs="?", help="right image of a rectified pair (adds stereo), or the right "
                                               "view's sequence")
     run.add_argument("--next", help="the left view's next frame: adds motion (one image only)")
-    run.add_argument("--fps", type=float, default=10.0, help="a sequence's videos' frame rate (default 10)")
+    run.add_argument("--fps", type=float, default=10.0, help="a sequence's videos' frame rate, 0.01 to 1000 (default 10)")
     run.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config)")
     run.add_argument("--out", required=True, help="output folder: new, empty or a previous vmcl output")
     run.add_argument("--models", help="a library folder of models (vmcl learn): recognise them in the left image")

@@ -23,7 +23,19 @@ import numpy as np
 from vmcl.errors import InputValueError
 from vmcl.result import Result
 
-__all__ = ["FOURCC", "SequenceWriter"]
+__all__ = ["FOURCC", "FPS_RANGE", "SequenceWriter", "check_fps"]
+
+FPS_RANGE = (0.01, 1000.0)
+"""The frame rates the videos may be written at: OpenCV's mp4v writer refuses some beyond them (0.001 and
+65536 fps fail only at the first frame, after the work) and hangs on an infinite one."""
+
+
+def check_fps(fps: object, name: str) -> float:
+    """``fps`` as a float within FPS_RANGE, else an InputValueError naming ``name``."""
+    low, high = FPS_RANGE
+    if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not low <= fps <= high:
+        raise InputValueError(f"{name} must be a frame rate from {low:g} to {high:g}, got {fps!r}")
+    return float(fps)
 
 FOURCC = "mp4v"
 """The videos' codec, as OpenCV's VideoWriter names it."""
@@ -43,8 +55,7 @@ class SequenceWriter:
     """
 
     def __init__(self, folder: Path, *, fps: float, title: str) -> None:
-        if not fps > 0:
-            raise InputValueError(f"fps must be > 0, got {fps!r}")
+        check_fps(fps, "fps")
         self.folder, self.fps, self.title = Path(folder), float(fps), title
         self.writers: dict[str, object] = {}
         self.scales: dict[str, tuple[float, float]] = {}

@@ -23,7 +23,7 @@ from vmcl.early.weighted_median import weighted_median
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["FLOW_BIN", "REFINE", "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "refine_flow"]
+__all__ = ["FLOW_BIN", "FLOW_LIMIT", "REFINE", "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "refine_flow"]
 
 # The defaults, fitted on rendered scenes by benchmarks/motion_refine_fit.py (its results file gives every
 # setting tried), never on a sequence a benchmark reports.
@@ -38,6 +38,9 @@ REFINE_STRIDE = 6
 
 FLOW_BIN = 0.125
 """The median's bins are at most this wide, in pixels of flow: finer than the matcher's sub-pixel error."""
+FLOW_LIMIT = 1e30
+"""The largest flow component (pixels, either sign) refine_flow takes: far beyond any image, and within the
+quarter of float32's range the weighted median's bins need."""
 _SPAN_BINS = 62
 """The bins the flow's span may take: the weighted median's private histogram then has its smallest size
 (64 bins; the stereo cue's refinement builds the same program), so a wide span widens the bins instead."""
@@ -99,6 +102,9 @@ def refine_flow(flow: ArrayLike, image: ArrayLike, *, radius: int = REFINE_RADIU
         return result(data, host)
     if np.isinf(low) or np.isinf(high):
         raise InputValueError("flow must not contain infinite values (NaN marks a pixel without flow)")
+    if max(-low, high) > FLOW_LIMIT:
+        raise InputValueError(f"flow must lie within +-{FLOW_LIMIT:.1e} pixels (its bins' edges must stay finite in "
+                              f"float32), got values from {low:.3g} to {high:.3g}")
     return weighted_median(data.get() if host else data, image, low=low, high=high, radius=radius,
                            sigma_colour=sigma_colour, sigma_space=float(radius), stride=stride,
                            bin_width=max(FLOW_BIN, (high - low) / _SPAN_BINS * _ROUNDING), machine=machine)

@@ -74,11 +74,11 @@ def meanfield(lattice: Lattice, schedule: MeanFieldSchedule, seed: int) -> int:
         q = machine.empty(lattice.n * lattice.nlevels, np.float32)
         machine.launch(lattice.kernel("q_init"), size, q, lattice.f, lattice.levels, np.int64(lattice.n))
     key = philox_key(0)
-    steps = temperatures(schedule.mf_t0, schedule.mf_factor, schedule.mf_steps)
-    for k, temperature in enumerate(np.repeat(steps, schedule.mf_iterations)):
+    steps = temperatures(schedule.mf_t0, schedule.mf_factor, schedule.mf_steps, schedule.mf_iterations)
+    for k, temperature in enumerate(steps):
         lattice.sweep("mean", temperature, k, key, q=q)
     if q is not None:
         machine.launch(lattice.kernel("levels_mode"), size, q, lattice.f, lattice.levels, np.int64(lattice.n))
     machine.launch(lattice.kernel("scale_and_threshold"), size, lattice.f, lattice.lh, lattice.lv,
                    np.float32(1.0), np.int32(0), np.int64(lattice.n))
-    return len(steps) * schedule.mf_iterations + quench(lattice, schedule.quench)
+    return schedule.mf_steps * schedule.mf_iterations + quench(lattice, schedule.quench)

@@ -18,6 +18,7 @@ vision", J. Amer. Statist. Assoc. 82(397):76-89, 1987.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -30,9 +31,19 @@ from vmcl.mrf.lattice import Lattice, philox_key
 __all__ = ["AnnealSchedule", "MpmSchedule", "anneal", "mpm", "temperatures"]
 
 
-def temperatures(t0: float, factor: float, count: int) -> np.ndarray:
-    """The geometric schedule t0 * factor**k, k = 0 .. count - 1."""
-    return t0 * factor ** np.arange(count, dtype=np.float64)
+_BLOCK = 4096  # temperatures found at once
+
+
+def temperatures(t0: float, factor: float, count: int, repeat: int = 1) -> Iterator[float]:
+    """The geometric schedule t0 * factor**k, k = 0 .. count - 1, each temperature ``repeat`` times.
+
+    A generator: a schedule's counts may be as large as its checks allow (MAX_COUNT), and a list of them
+    would take gigabytes before the first sweep. Blocks of them are found as NumPy finds a whole schedule,
+    so a temperature is the same to the bit whatever the count."""
+    for first in range(0, count, _BLOCK):
+        for temperature in t0 * factor ** np.arange(first, min(first + _BLOCK, count), dtype=np.float64):
+            for _ in range(repeat):
+                yield float(temperature)
 
 
 @dataclass(frozen=True)
