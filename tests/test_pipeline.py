@@ -72,6 +72,7 @@ def test_a_config_made_in_python_is_checked_when_made():
                                            ("[motion]\nlevels = 0\n", "motion.levels"),
                                            ("[colour]\nthreshold = -1\n", "colour.threshold"),
                                            ("[texture]\nradius = 0\n", "texture.radius"),
+                                           ("[texture]\nthreshold = 0\n", "texture.threshold"),
                                            ("[texture]\nfine_sigma = 5\ncoarse_sigma = 4\n", "texture.fine_sigma")])
 def test_bad_config_is_refused_naming_the_key(tmp_path, text, message):
     path = tmp_path / "bad.toml"

@@ -435,7 +435,7 @@ class TextureConfig:
         if self.fine_sigma >= self.coarse_sigma:
             raise InputValueError(f"texture.fine_sigma ({self.fine_sigma}) must be below texture.coarse_sigma "
                                   f"({self.coarse_sigma})")
-        check_real(self.threshold, "texture.threshold", minimum=0)
+        check_real(self.threshold, "texture.threshold", above=0)  # texture.density refuses 0 at run time
         check_int(self.radius, "texture.radius", minimum=1)
 
 

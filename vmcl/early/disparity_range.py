@@ -163,8 +163,8 @@ def estimate_range(left: ArrayLike, right: ArrayLike, *, max_disparity: float = 
     min_share = check_real(min_share, "min_share", above=0, maximum=1)
     height, width = images[0].shape[:2]
     if min(height, width) < patch:
-        raise InputValueError(f"left and right must be at least the patch ({patch} pixels) on each side, got "
-                              f"{height} x {width}")
+        raise InputValueError(f"left and right must be at least the patch ({patch} pixels) on each side to find "
+                              f"their disparity range, got {height} x {width} (or give the range: d_min and d_max)")
     level = _level(height, width, max(coarse_side, patch))
     pyramid = [_reduce(image, level, machine) for image in images]
     coarse_width = pyramid[0][-1].shape[1]
