@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 from scipy import ndimage
 
 from vmcl.cm.doubling import label, principal, principal_from_predecessors, rank
+from vmcl.errors import InputValueError
 from vmcl.patterns import spiral
 
 STRUCTURE = {4: ndimage.generate_binary_structure(2, 1), 8: ndimage.generate_binary_structure(2, 2)}
@@ -54,6 +55,13 @@ def test_list_ranking(n, count, machine):
     got_rank, got_tail = rank(nxt, machine=machine)
     np.testing.assert_array_equal(got_rank, ranks)
     np.testing.assert_array_equal(got_tail, tails)
+
+
+@pytest.mark.parametrize("nxt", [[1, 2, 2], [1, 2, 0], [-1, 2, 1]])
+def test_list_ranking_refuses_a_cycle_naming_next(nxt, machine):
+    # A self-loop at the end, a whole cycle, and a list beside a cycle: the jumps would give wrong ranks.
+    with pytest.raises(InputValueError, match="next must form lists that end"):
+        rank(np.array(nxt, np.int32), machine=machine)
 
 
 @pytest.mark.parametrize("n, count", [(1, 1), (2, 1), (8, 1), (999, 1), (5000, 37)])

@@ -77,7 +77,8 @@ def rank(next: ArrayLike, *, machine: Machine | None = None) -> tuple[ArrayLike,
     Parameters
     ----------
     next : int32 array (n,)
-        next[i] is the node after i, or -1 where i is a tail. Lists must not contain cycles.
+        next[i] is the node after i, or -1 where i is a tail. Lists must not contain cycles: a host
+        array with one is refused (a device array's result is not read back for that check).
 
     Returns
     -------
@@ -92,7 +93,15 @@ def rank(next: ArrayLike, *, machine: Machine | None = None) -> tuple[ArrayLike,
     pointer, distance = machine.empty(n, np.int32), machine.empty(n, np.int32)
     machine.launch(_kernel(machine, "list_init"), (n,), data, pointer, distance, np.int64(n))
     distance, tail = _jump(machine, distance, pointer, 0)
-    return result(distance, host), result(tail, host)
+    if host:
+        # On a cycle the jumps end on a node that is not a tail: its ranks would be wrong, not an error.
+        ends, following = tail.get(), np.asarray(next)
+        caught = np.flatnonzero(following[ends] != -1) if n else np.zeros(0, np.int64)
+        if len(caught):
+            raise InputValueError(f"next must form lists that end (next = -1), not cycles: node {int(caught[0])} "
+                                  "never reaches a tail")
+        return distance.get(), ends
+    return distance, tail
 
 
 def principal(next: ArrayLike, *, keys: ArrayLike | None = None, check: bool = True,
