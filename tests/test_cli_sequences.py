@@ -64,8 +64,8 @@ def test_a_glob_and_a_video_are_sequences_too(tmp_path, sequence):
     ("next", "--next is for one image"),
     ("empty_folder", "holds no images"),
     # OpenCV's writer hangs on an infinite rate and refuses 65536 only at the first frame, after the work.
-    ("fps_infinite", "--fps must be a frame rate from 0.01 to 1000, got inf"),
-    ("fps_huge", "--fps must be a frame rate from 0.01 to 1000, got 65536.0"),
+    ("fps_infinite", "--fps must be a finite number >= 0.01 and <= 1000.0, got inf"),
+    ("fps_huge", "--fps must be a finite number >= 0.01 and <= 1000.0, got 65536.0"),
 ])
 def test_bad_sequences_are_one_line_and_exit_2(tmp_path, sequence, capsys, case, message):
     (tmp_path / "empty").mkdir()

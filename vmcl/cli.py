@@ -69,7 +69,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vmcl.errors import InputError, InputValueError
+from vmcl.errors import InputError
 from vmcl.machine import NoOpenCLPlatformError
 from vmcl.output_folder import output_folder
 
@@ -329,10 +329,7 @@ def _run_sequence(args) -> int:
     if rights is not None and None not in (lefts.count, rights.count) and lefts.count != rights.count:
         raise BadInput(f"left has {lefts.count} frames ({lefts.description}), right {rights.count} "
                        f"({rights.description}): a stereo sequence needs a right view per frame")
-    try:
-        check_fps(args.fps, "--fps")
-    except InputValueError as error:
-        raise BadInput(str(error)) from None
+    check_fps(args.fps, "--fps")  # before the output folder is made: OpenCV's writer would fail after the work
     vm = VisionMachine(config)
     frames = 0
     with output_folder(Path(args.out)) as work:

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vmcl.errors import InputValueError
+from vmcl.cm.core import check_real
 from vmcl.result import Result
 
 __all__ = ["FOURCC", "FPS_RANGE", "SequenceWriter", "check_fps"]
@@ -31,11 +31,9 @@ FPS_RANGE = (0.01, 1000.0)
 
 
 def check_fps(fps: object, name: str) -> float:
-    """``fps`` as a float within FPS_RANGE, else an InputValueError naming ``name``."""
-    low, high = FPS_RANGE
-    if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not low <= fps <= high:
-        raise InputValueError(f"{name} must be a frame rate from {low:g} to {high:g}, got {fps!r}")
-    return float(fps)
+    """``fps`` as a float within FPS_RANGE, else an InputError naming ``name``."""
+    return check_real(fps, name, minimum=FPS_RANGE[0], maximum=FPS_RANGE[1])
+
 
 FOURCC = "mp4v"
 """The videos' codec, as OpenCV's VideoWriter names it."""
@@ -49,7 +47,7 @@ class SequenceWriter:
     folder : Path
         An existing folder vmcl may write into.
     fps : float
-        The videos' frame rate, > 0.
+        The videos' frame rate, within FPS_RANGE (0.01 to 1000).
     title : str
         The summary's heading.
     """

@@ -95,8 +95,8 @@ def rank(next: ArrayLike, *, machine: Machine | None = None) -> tuple[ArrayLike,
     distance, tail = _jump(machine, distance, pointer, 0)
     if host:
         # On a cycle the jumps end on a node that is not a tail: its ranks would be wrong, not an error.
-        ends, following = tail.get(), np.asarray(next)
-        caught = np.flatnonzero(following[ends] != -1) if n else np.zeros(0, np.int64)
+        ends = tail.get()
+        caught = np.flatnonzero(np.asarray(next)[ends] != -1)
         if len(caught):
             raise InputValueError(f"next must form lists that end (next = -1), not cycles: node {int(caught[0])} "
                                   "never reaches a tail")
