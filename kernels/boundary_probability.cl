@@ -23,6 +23,7 @@
  * width but oriented, which exists for VEC 1 only: it is for fitting).
  */
 #include "vmcl.h"
+#include "sampling.h"
 
 #define AT(f, xx, yy) ((f)[(yy) * W + (xx)])
 #define PLANE(f, p, xx, yy) ((f)[IDX3((xx), (yy), (p), W, H)])
@@ -413,16 +414,6 @@ __kernel void probability(__global const float *comp, __global const float *tens
     store_bytes(theta + y * W, x0, W, best_o);
 }
 
-static float bilinear(__global const float *f, float fx, float fy, long W, long H)
-{
-    fx = clamp(fx, 0.0f, (float)(W - 1));
-    fy = clamp(fy, 0.0f, (float)(H - 1));
-    long x0 = (long)fx, y0 = (long)fy;
-    long x1 = min(x0 + 1, W - 1), y1 = min(y0 + 1, H - 1);
-    float ax = fx - x0, ay = fy - y0;
-    return (1 - ay) * ((1 - ax) * AT(f, x0, y0) + ax * AT(f, x1, y0)) + ay * ((1 - ax) * AT(f, x0, y1) + ax * AT(f, x1, y1));
-}
-
 /* A pixel keeps its probability when no point one pixel away along the normal has more. */
 __kernel void thin(__global const float *p, __global const uchar *theta, __constant float *directions,
                    __global float *out, __global float *angle, long W, long H)
@@ -432,7 +423,7 @@ __kernel void thin(__global const float *p, __global const uchar *theta, __const
     int o = AT(theta, x, y);
     float c = directions[2 * o], s = directions[2 * o + 1];
     float v = AT(p, x, y);
-    float a = bilinear(p, x + c, y + s, W, H), b = bilinear(p, x - c, y - s, W, H);
+    float a = bilinear_clamped(p, x + c, y + s, W, H), b = bilinear_clamped(p, x - c, y - s, W, H);
     AT(out, x, y) = (v >= a && v >= b) ? v : 0.0f;
     // The winning normal's angle in radians, written here so that no separate conversion is built.
     AT(angle, x, y) = (float)o * (M_PI_F / NORIENT);

@@ -44,7 +44,16 @@ from vmcl import fitted, labelling, learn, temporal
 from vmcl import integrate as _integrate
 from vmcl.cm.core import UNIT_MARGIN, check_choice, check_int, check_real, check_unit_image
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
-from vmcl.early import boundary_probability, disparity_range, edges, motion, motion_refine, semiglobal, stereo
+from vmcl.early import (
+    boundary_probability,
+    disparity_range,
+    edges,
+    lucas_kanade,
+    motion,
+    motion_refine,
+    semiglobal,
+    stereo,
+)
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.group import Grouping, group, saliency_strength, structural_saliency
 from vmcl.labels import CUES
@@ -366,6 +375,11 @@ class MotionConfig:
         Pixels the matcher left without flow take their neighbours' median (weighed 0 by the score when
         ``weigh_by_score``). ``Result.fields["raw_flow"]`` stays the matcher's own. Defaults fitted on rendered scenes
         (benchmarks/motion_refine_fit.py).
+    lucas_kanade_iterations, lucas_kanade_window
+        Lucas-Kanade steps (:func:`vmcl.early.lucas_kanade.lucas_kanade`: their number, >= 0, and their
+        Gaussian window's scale in pixels, > 0) refine the motion MRF's restored flow on the two frames,
+        below the discrete search's precision; 0 steps: the MRF's flow is the result. Defaults fitted on
+        rendered scenes (benchmarks/motion_lucas_kanade_fit.py).
     """
 
     enabled: bool = True
@@ -379,6 +393,8 @@ class MotionConfig:
     refine_radius: int = motion_refine.REFINE_RADIUS
     refine_colour: float = motion_refine.REFINE_COLOUR
     refine_stride: int = motion_refine.REFINE_STRIDE
+    lucas_kanade_iterations: int = lucas_kanade.ITERATIONS
+    lucas_kanade_window: float = lucas_kanade.WINDOW
 
     def __post_init__(self) -> None:
         _check_field_types("motion", self)
@@ -393,6 +409,8 @@ class MotionConfig:
         check_int(self.refine_radius, "motion.refine_radius", minimum=1, maximum=2**31 - 1)
         check_real(self.refine_colour, "motion.refine_colour", above=0)
         check_int(self.refine_stride, "motion.refine_stride", minimum=1, maximum=2**31 - 1)
+        check_int(self.lucas_kanade_iterations, "motion.lucas_kanade_iterations", minimum=0, maximum=1000)
+        check_real(self.lucas_kanade_window, "motion.lucas_kanade_window", above=0)
 
 
 @dataclass(frozen=True)
@@ -994,6 +1012,10 @@ class _Run:
                     found = self.restore(cue, again) or found
             if found is not None:
                 lines[cue.name], restored[cue.name] = _device_lines(found), on_device(found.field)
+                last = cue.refine_restored_stage(self.c)
+                if last:
+                    with self.stage(last):
+                        restored[cue.name] = cue.refine_restored(run, restored[cue.name])
         if memory is not None:
             memory.end(restored.get("motion"))
         with self.stage("integrate"):

@@ -1,0 +1,134 @@
+"""Lucas-Kanade steps that refine a dense flow to sub-pixel accuracy.
+
+Seed section "Motion": the matcher assumes "the optical flow is locally constant in a small region
+surrounding a point" and finds the best discrete displacement there. The same assumption in its
+differential form (Lucas and Kanade) refines a flow that is already close: at each pixel, brightness
+constancy linearised about the current flow, f1(x + u + du) = f0(x), gives one equation in the step du;
+its least-squares solution over a Gaussian window is the step. A few such steps, each reading frame 1
+where the current flow points, carry the matcher's and the MRF's flow below the precision of a discrete
+search and its parabola fit. Each step is a fixed number of local operations per pixel (a Gaussian is
+two passes), as on the Connection Machine.
+
+The window straddles motion boundaries as the matcher's does, so the steps belong after what restores
+them (the weighted median and the motion MRF); a pixel whose window holds no texture (the normal
+equations' ridge dominates) barely moves.
+
+Reference: B. D. Lucas and T. Kanade, "An iterative image registration technique with an application to
+stereo vision", IJCAI 1981.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyopencl.array as cl_array
+
+from vmcl.cm.core import (
+    IMAGE_TYPES,
+    ArrayLike,
+    check_int,
+    check_real,
+    check_widths,
+    field,
+    finite_float32,
+    machine_for,
+    result,
+)
+from vmcl.early.filters import separable_gaussian
+from vmcl.errors import InputTypeError, InputValueError
+from vmcl.machine import Machine
+
+__all__ = ["ITERATIONS", "LIMIT", "PRESMOOTH", "RIDGE", "WINDOW", "lucas_kanade"]
+
+# WINDOW and ITERATIONS are the motion cue's defaults, fitted on rendered scenes by
+# benchmarks/motion_lucas_kanade_fit.py (its results file gives every setting tried), never on a sequence a
+# benchmark reports.
+WINDOW = 6.0
+"""Default scale (pixels) of the Gaussian window over which each step's equations are summed."""
+ITERATIONS = 2
+"""Default number of steps."""
+PRESMOOTH = 1.0
+"""The frames' Gaussian smoothing (pixels) before the gradients are taken: differentiation is ill-posed
+(the seed's "Edge detection"), and a step's linearisation holds over the smoothed image's scale."""
+RIDGE = 1e-4
+"""Added to the normal equations' diagonal, in squared brightness per pixel (brightness in [0, 1]): about
+the squared gradient of a 1% step over 1 px summed over a window, so that windows with less texture than
+that (flat, or an edge's one direction along it) move little."""
+LIMIT = 1.0
+"""The most a step moves either flow component, in pixels: the linearisation holds near the current flow."""
+
+_GAIN = {np.dtype(np.uint8): 1 / 255, np.dtype(np.uint16): 1 / 65535, np.dtype(np.float32): 1.0}
+"""Brightness of each image type to [0, 1] (the units of RIDGE)."""
+_FOOTPRINT = 4 * (2 + 2 + 5 + 5 + 1 + 2)
+"""Device bytes per pixel at most: the flow, two smoothed frames, five products and their five sums, a
+Gaussian's plane between its passes, frames uploaded as float32 grey."""
+
+
+def lucas_kanade(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, window: float = WINDOW,
+                 iterations: int = ITERATIONS, machine: Machine | None = None) -> ArrayLike:
+    """Refine a dense flow by Lucas-Kanade steps.
+
+    Parameters
+    ----------
+    flow : float32 (H, W, 2) array or device array
+        (u, v) per pixel: frame0's pixel x is seen at x + (u, v) in frame1. A pixel whose flow is NaN (or
+        infinite) keeps it and adds nothing to its neighbours' steps, as does one whose flow leaves frame1.
+    frame0, frame1 : (H, W) or (H, W, 3) arrays or device arrays; uint8, uint16 or float in [0, 1]
+        The two frames (RGB is taken as its grey), of one shape and type; NumPy arrays with a NumPy flow,
+        device arrays with a device flow.
+    window : float
+        > 0: the scale (pixels) of the Gaussian window each step's equations are summed over.
+    iterations : int
+        >= 0: the number of steps (0 returns the flow as it came).
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    float32 (H, W, 2), as the flow came (NumPy or device array): a new array.
+
+    Raises
+    ------
+    InputTypeError, InputValueError
+        Naming the argument.
+    """
+    machine = machine_for(machine)
+    data, host = field(flow, "flow", machine, ndims=(3,), dtypes=(np.float32,))
+    if data.shape[2] != 2:
+        raise InputValueError(f"flow must have two components (H, W, 2), got shape {data.shape}")
+    window = check_real(window, "window", above=0)
+    iterations = check_int(iterations, "iterations", minimum=0, maximum=1000)
+    frames = []
+    for name, frame in (("frame0", frame0), ("frame1", frame1)):
+        if not isinstance(frame, (np.ndarray, cl_array.Array)):
+            raise InputTypeError(f"{name} must be a NumPy array or a device array, got {type(frame).__name__}")
+        if isinstance(frame, cl_array.Array) == host:
+            raise InputTypeError(f"flow and {name} must both be NumPy arrays or both device arrays")
+        if frame.shape[:2] != data.shape[:2]:
+            raise InputValueError(f"flow and {name} must have the same height and width, got flow {data.shape} "
+                                  f"and {name} {frame.shape}")
+        frames.append(frame)
+    height, width = data.shape[:2]
+    check_widths({"window": window}, height, width)
+    pixels = height * width
+    machine.require_memory(f"Lucas-Kanade steps of a {height} x {width} flow", _FOOTPRINT * pixels, 8 * pixels)
+    frames = [_frame(frame, name, machine) for name, frame in zip(("frame0", "frame1"), frames)]
+    (f0, type0), (f1, type1) = frames
+    if type0 != type1:
+        raise InputValueError(f"frame0 and frame1 must have the same type, got {type0} and {type1}")
+    out = data if host else data.copy()  # the steps work in place on a flow of their own
+    dims = (np.int64(width), np.int64(height))
+    products = [machine.empty((height, width), np.float32) for _ in range(5)]
+    terms = machine.kernel("lucas_kanade", "lk_terms")
+    step = machine.kernel("lucas_kanade", "lk_step")
+    for _ in range(iterations):
+        machine.launch(terms, (width, height), f0, f1, out, np.float32(_GAIN[type0]), *products, *dims)
+        summed = [separable_gaussian(machine, plane, (window,)) for plane in products]
+        machine.launch(step, (width, height), *summed, np.float32(RIDGE), np.float32(LIMIT), out, *dims)
+    return result(out, host)
+
+
+def _frame(frame: ArrayLike, name: str, machine: Machine) -> tuple[cl_array.Array, np.dtype]:
+    """A frame's grey image smoothed by PRESMOOTH on the device, and its type."""
+    data, _ = field(finite_float32(frame, name), name, machine, ndims=(2, 3), dtypes=tuple(IMAGE_TYPES))
+    if data.ndim == 3 and data.shape[2] != 3:
+        raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {data.shape}")
+    return separable_gaussian(machine, data, (PRESMOOTH,)), data.dtype
