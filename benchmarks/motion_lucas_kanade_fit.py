@@ -4,19 +4,19 @@ sequences.
 Run: python benchmarks/motion_lucas_kanade_fit.py [--out benchmarks/results/motion_lucas_kanade_fit.md]
 
 The training scenes are benchmarks/motion_fit.py's (every moving preset of vmcl.scenes at 256 x 256 and
-384 x 384, motions scaled by 1, 2 and 4). The pipeline runs with motion only, every other setting its
-default and no steps; each setting of GRID (the number of steps and the window's scale) then refines its
-restored flow on the scene's two frames, which is what the pipeline's "motion lucas-kanade" stage does
-(tests/test_lucas_kanade.py checks the two agree). Each setting is scored by the geometric mean of the
-flow's EPE over the scenes. The rule: the default is the setting with the fewest steps, then the smallest
-window, among those within TOLERANCE of the best score (each step costs a pass over the frames and five
-Gaussians); no steps is one of the settings, so the steps ship only if they pay.
+384 x 384, motions scaled by 1, 2 and 4), the pipeline with motion only and every other setting its
+default. Each setting of GRID (the number of steps, none included, and the window's scale) is scored by
+the geometric mean of the restored flow's EPE over the scenes. The rule: the default is the setting with
+the fewest steps, then the smallest window, among those within TOLERANCE of the best score (each step
+costs a pass over the frames and five Gaussians), so the steps ship only if they pay.
+benchmarks/motion.py scores the real sequences with the defaults and chooses nothing.
 
 Why the geometric mean: the scenes' EPE spans 0.04 px to 12 px, and the arithmetic mean (the first run's
-score) is decided by the three scenes whose motion lies beyond the matcher's search, where a few more
-steps over a wider window drag a wrong flow a little nearer; it chose 8 steps over a 6-px window, which
-worsen the piecewise-constant blocks scenes by a third. Steps are for sub-pixel precision, so every
-scene's relative change weighs the same. The arithmetic mean is reported beside it.
+score, when the steps refined the MRF's restored flow) is decided by the three scenes whose motion lies
+beyond the matcher's search, where a few more steps over a wider window drag a wrong flow a little
+nearer; it chose 8 steps over a 6-px window, which worsened the piecewise-constant blocks scenes by a
+third. Steps are for sub-pixel precision, so every scene's relative change weighs the same. The
+arithmetic mean is reported beside it.
 benchmarks/motion.py scores the real sequences with the defaults and chooses nothing.
 """
 
@@ -29,18 +29,16 @@ import platform
 from pathlib import Path
 
 import numpy as np
-from motion_fit import RESULTS, motion_only, training_scenes
+from motion_fit import RESULTS, epe, motion_only, training_scenes
 
 import vmcl
-from vmcl.early.lucas_kanade import lucas_kanade
-from vmcl.metrics import evaluate_flow
 from vmcl.pipeline import MotionConfig, VisionMachine
 
 GRID = [(0, 3.0)] + [(iterations, window) for iterations in (1, 2, 3, 5, 8)
                      for window in (1.5, 2.0, 3.0, 4.5, 6.0, 9.0, 12.0)]
 """(steps, window scale in px)."""
 TOLERANCE = 0.01
-"""The chosen setting's mean EPE is within this share of the best one's (stated before the first run)."""
+"""The chosen setting's score is within this share of the best one's."""
 
 
 def main() -> None:
@@ -49,16 +47,13 @@ def main() -> None:
     args = parser.parse_args()
     machine = vmcl.Machine()
     data = training_scenes()
-    vm = VisionMachine(motion_only(dataclasses.replace(MotionConfig(), lucas_kanade_iterations=0)), machine=machine)
     scores = np.zeros((len(GRID), len(data)))
-    for column, (name, scene) in enumerate(data):
-        restored = vm.run(scene.left, next=scene.left_next).flow
-        known = ~scene.occluded_motion & np.isfinite(scene.flow).all(axis=-1)
-        for row, (iterations, window) in enumerate(GRID):
-            flow = lucas_kanade(restored, scene.left, scene.left_next, window=window, iterations=iterations,
-                                machine=machine)
-            scores[row, column] = evaluate_flow(flow, scene.flow, mask=known).epe
-        print(name, " ".join(f"{s:.3f}" for s in scores[:, column]), flush=True)
+    for row, (iterations, window) in enumerate(GRID):
+        section = dataclasses.replace(MotionConfig(), lucas_kanade_iterations=iterations, lucas_kanade_window=window)
+        vm = VisionMachine(motion_only(section), machine=machine)
+        for column, (_, scene) in enumerate(data):
+            scores[row, column] = epe(vm.run(scene.left, next=scene.left_next), scene)
+        print(iterations, window, " ".join(f"{s:.3f}" for s in scores[row]), flush=True)
     means = np.exp(np.log(scores).mean(axis=1))
     best = float(means.min())
     chosen = min((k for k in range(len(GRID)) if means[k] <= best * (1 + TOLERANCE)), key=lambda k: GRID[k])
@@ -70,8 +65,8 @@ def main() -> None:
          f"{platform.python_version()}. Produced by `python benchmarks/motion_lucas_kanade_fit.py`."),
         "",
         ("Training scenes: benchmarks/motion_fit.py's (vmcl.scenes presets at 256 x 256 and 384 x 384, noise "
-         "0.01, motions scaled by 1, 2, 4); the pipeline with motion only, every other setting its default, its "
-         "restored flow refined by each setting's steps. EPE (px) over the visible pixels; the score is its geometric "
+         "0.01, motions scaled by 1, 2, 4); the pipeline with motion only, every other setting its default. EPE (px) "
+         "of the restored flow over the visible pixels; the score is its geometric "
          "mean over the scenes (see the script's docstring). Best score first."),
         "",
         (f"Chosen: the fewest steps, then the smallest window, among the settings within {TOLERANCE:.0%} of the "

@@ -194,6 +194,8 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.early.motion_refine:refine_flow", flow=arr((16, 16, 2)), image=IMG, radius=2,
        sigma_colour=0.1, stride=1, kinds={"flow": _A, "image": _A, "radius": _I, "sigma_colour": _N, "stride": _I,
                                           "machine": _M}),
+    _e("vmcl.early.lucas_kanade:lucas_kanade", flow=arr((16, 16, 2)), frame0=IMG, frame1=IMG, window=2.0,
+       iterations=2, kinds={"flow": _A, "frame0": _A, "frame1": _A, "window": _N, "iterations": _I, "machine": _M}),
     _e("vmcl.early.weighted_median:weighted_median", values=IMG, image=IMG, low=0.0, high=4.0, where=None,
        voters=None, radius=2, sigma_colour=0.1, sigma_space=2.0, stride=1, bin_width=1.0,
        kinds={"values": _A, "image": _A, "low": _N, "high": _N, "where": _OA, "voters": _OA, "radius": _I,

@@ -377,9 +377,10 @@ class MotionConfig:
         (benchmarks/motion_refine_fit.py).
     lucas_kanade_iterations, lucas_kanade_window
         Lucas-Kanade steps (:func:`vmcl.early.lucas_kanade.lucas_kanade`: their number, >= 0, and their
-        Gaussian window's scale in pixels, > 0) refine the motion MRF's restored flow on the two frames,
-        below the discrete search's precision; 0 steps: the MRF's flow is the result. Defaults fitted on
-        rendered scenes (benchmarks/motion_lucas_kanade_fit.py).
+        Gaussian window's scale in pixels, > 0) refine the flow on the two frames, below the discrete
+        search's precision, after the weighted median and before the motion MRF restores it (which keeps
+        a stream's temporal terms on the refined flow); 0 steps: none. Defaults fitted on rendered scenes
+        (benchmarks/motion_lucas_kanade_fit.py).
     """
 
     enabled: bool = True
@@ -1012,10 +1013,6 @@ class _Run:
                     found = self.restore(cue, again) or found
             if found is not None:
                 lines[cue.name], restored[cue.name] = _device_lines(found), on_device(found.field)
-                last = cue.refine_restored_stage(self.c)
-                if last:
-                    with self.stage(last):
-                        restored[cue.name] = cue.refine_restored(run, restored[cue.name])
         if memory is not None:
             memory.end(restored.get("motion"))
         with self.stage("integrate"):

@@ -150,15 +150,6 @@ class CueModule:
         """Measure again knowing the first restoration's lines (the seed's feedback from integration)."""
         raise NotImplementedError
 
-    def refine_restored_stage(self, config: Any) -> str | None:
-        """The name of the stage in which :meth:`refine_restored` runs, or None when the cue's restored
-        field is final as its MRF leaves it."""
-        return None
-
-    def refine_restored(self, run: RunInputs, restored: cl_array.Array) -> cl_array.Array:
-        """The restored field refined once more on the images (after the MRF, which keeps its lines)."""
-        raise NotImplementedError
-
     def pictures(self, result: Any) -> dict[str, tuple[np.ndarray, str]]:
         """The report's pictures of this cue in a Result: stem -> (uint8 RGB image, caption)."""
         return {}

@@ -1,16 +1,15 @@
 """The motion cue: optical flow from the next frame, restored piecewise smooth.
 
 Seed section "Motion": patchwise correlation over a displacement range (:func:`vmcl.early.motion.flow`),
-its weighted median at brightness edges (:func:`vmcl.early.motion_refine.refine_flow`); the motion MRF
+its weighted median at brightness edges (:func:`vmcl.early.motion_refine.refine_flow`), and the motion MRF
 restores the flow coupled to the brightness edges, each estimate weighed by its match
-score (:func:`vmcl.mrf.score_confidence`); Lucas-Kanade steps (:func:`vmcl.early.lucas_kanade.lucas_kanade`)
-carry the restored flow below the discrete search's precision.
+score (:func:`vmcl.mrf.score_confidence`). Between the two, Lucas-Kanade steps
+(:func:`vmcl.early.lucas_kanade.lucas_kanade`) carry the flow below the discrete search's precision.
 """
 
 from __future__ import annotations
 
 import numpy as np
-import pyopencl.array as cl_array
 
 from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import motion
@@ -52,6 +51,9 @@ class MotionCue(CueModule):
         measured = (on_device(refine_flow(flow, run.left, radius=mc.refine_radius, sigma_colour=mc.refine_colour,
                                           stride=mc.refine_stride, machine=run.machine))
                     if mc.refine else flow)
+        if mc.lucas_kanade_iterations:
+            measured = on_device(lucas_kanade(measured, run.left, run.needed("next"), window=mc.lucas_kanade_window,
+                                              iterations=mc.lucas_kanade_iterations, machine=run.machine))
         return Measurement(measured, confidence, run.brightness, fields={"raw_flow": flow},
                            notes=self.limit_note(found.limit_share, motion.reach(mc.delta, levels), levels))
 
@@ -71,14 +73,6 @@ class MotionCue(CueModule):
         return ((f"motion: {share:.1%} of the coarsest level's flow lies at the edge of its range, so motion "
                 f"may exceed the search's limit of {limit} px ({levels} pyramid levels); raise [motion] levels "
                 "or delta"),)
-
-    def refine_restored_stage(self, config) -> str | None:
-        return "motion lucas-kanade" if config.motion.lucas_kanade_iterations else None
-
-    def refine_restored(self, run: RunInputs, restored: cl_array.Array) -> cl_array.Array:
-        mc = run.config.motion
-        return on_device(lucas_kanade(restored, run.left, run.needed("next"), window=mc.lucas_kanade_window,
-                                      iterations=mc.lucas_kanade_iterations, machine=run.machine))
 
     def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
         if result.flow is None:

@@ -9,9 +9,12 @@ where the current flow points, carry the matcher's and the MRF's flow below the 
 search and its parabola fit. Each step is a fixed number of local operations per pixel (a Gaussian is
 two passes), as on the Connection Machine.
 
-The window straddles motion boundaries as the matcher's does, so the steps belong after what restores
-them (the weighted median and the motion MRF); a pixel whose window holds no texture (the normal
-equations' ridge dominates) barely moves.
+Each pixel's products are taken at its own flow and summed over the window, so a step corrects the
+window's mean error: the steps refine a flow that is smooth over the window (as the weighted median
+leaves it), not one that scatters from pixel to pixel. The window straddles motion boundaries as the
+matcher's does; the motion cue takes the steps after the weighted median and before the motion MRF,
+whose line process keeps the boundaries. A pixel whose window holds no texture (the normal equations'
+ridge dominates) barely moves.
 
 Reference: B. D. Lucas and T. Kanade, "An iterative image registration technique with an application to
 stereo vision", IJCAI 1981.
@@ -42,7 +45,7 @@ __all__ = ["ITERATIONS", "LIMIT", "PRESMOOTH", "RIDGE", "WINDOW", "lucas_kanade"
 # WINDOW and ITERATIONS are the motion cue's defaults, fitted on rendered scenes by
 # benchmarks/motion_lucas_kanade_fit.py (its results file gives every setting tried), never on a sequence a
 # benchmark reports.
-WINDOW = 6.0
+WINDOW = 4.5
 """Default scale (pixels) of the Gaussian window over which each step's equations are summed."""
 ITERATIONS = 2
 """Default number of steps."""
