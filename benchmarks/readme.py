@@ -280,6 +280,16 @@ def motion_refine_fit_figures(f: ResultsFile) -> str:
             f"{table.cell({'refine': 'False'}, 'mean EPE')} px without the weighted median")
 
 
+def motion_lucas_kanade_fit_figures(f: ResultsFile) -> str:
+    chosen = re.search(r"Chosen: the fewest steps.*?: (\d+ steps, window [\d.]+ px) \(score ([\d.]+), mean EPE "
+                       r"([\d.]+); without steps ([\d.]+) and ([\d.]+)\)", f.text)
+    if not chosen:
+        return "chosen on rendered scenes: not stated"
+    steps, score, mean, score_without, mean_without = chosen.groups()
+    return (f"chosen on rendered scenes: {steps}; geometric mean EPE {score} px against {score_without} px without "
+            f"the steps (mean EPE {mean} against {mean_without})")
+
+
 def time_fit_figures(f: ResultsFile) -> str:
     chosen = re.search(r"Chosen \(lowest score\): (.*)\.", f.text)
     table = f.table("gain", "score")
@@ -599,6 +609,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("motion_fit", "the motion defaults (features, patch, pyramid) chosen on rendered scenes", motion_fit_figures),
     ("motion_refine_fit", "the motion cue's weighted median of the flow, its window chosen on rendered scenes",
      motion_refine_fit_figures),
+    ("motion_lucas_kanade_fit", ("the motion cue's Lucas-Kanade steps (how many, their window) chosen on "
+                                 "rendered scenes"), motion_lucas_kanade_fit_figures),
     ("time_fit", "the temporal terms' defaults chosen on rendered sequences", time_fit_figures),
     ("early", "colour and texture against NumPy/SciPy", early_figures),
     ("mrf", "sweeps per second of each solver; Gibbs against NumPy; dense disparity on Middlebury",
