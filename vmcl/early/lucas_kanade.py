@@ -99,7 +99,6 @@ def lucas_kanade(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, windo
         raise InputValueError(f"flow must have two components (H, W, 2), got shape {data.shape}")
     window = check_real(window, "window", above=0)
     iterations = check_int(iterations, "iterations", minimum=0, maximum=1000)
-    frames = []
     for name, frame in (("frame0", frame0), ("frame1", frame1)):
         if not isinstance(frame, (np.ndarray, cl_array.Array)):
             raise InputTypeError(f"{name} must be a NumPy array or a device array, got {type(frame).__name__}")
@@ -108,13 +107,11 @@ def lucas_kanade(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, windo
         if frame.shape[:2] != data.shape[:2]:
             raise InputValueError(f"flow and {name} must have the same height and width, got flow {data.shape} "
                                   f"and {name} {frame.shape}")
-        frames.append(frame)
     height, width = data.shape[:2]
     check_widths({"window": window}, height, width)
     pixels = height * width
     machine.require_memory(f"Lucas-Kanade steps of a {height} x {width} flow", _FOOTPRINT * pixels, 8 * pixels)
-    frames = [_frame(frame, name, machine) for name, frame in zip(("frame0", "frame1"), frames)]
-    (f0, type0), (f1, type1) = frames
+    (f0, type0), (f1, type1) = _frame(frame0, "frame0", machine), _frame(frame1, "frame1", machine)
     if type0 != type1:
         raise InputValueError(f"frame0 and frame1 must have the same type, got {type0} and {type1}")
     out = data if host else data.copy()  # the steps work in place on a flow of their own
