@@ -4,12 +4,15 @@ sequences.
 Run: python benchmarks/motion_lucas_kanade_fit.py [--out benchmarks/results/motion_lucas_kanade_fit.md]
 
 The training scenes are benchmarks/motion_fit.py's (every moving preset of vmcl.scenes at 256 x 256 and
-384 x 384, motions scaled by 1, 2 and 4), the pipeline with motion only and every other setting its
-default. Each setting of GRID (the number of steps, none included, and the window's scale) is scored by
-the geometric mean of the restored flow's EPE over the scenes. The rule: the default is the setting with
-the fewest steps, then the smallest window, among those within TOLERANCE of the best score (each step
-costs a pass over the frames and five Gaussians), so the steps ship only if they pay.
-benchmarks/motion.py scores the real sequences with the defaults and chooses nothing.
+384 x 384, motions scaled by 1, 2 and 4), each also with its next frame's response changed as
+benchmarks/stereo_training.py changes a right view's (levels raised to EXPOSURE_GAMMA): a video camera's
+automatic exposure, or the light, changes between frames, and the rendered frames alone would never show
+the steps' brightness constancy failing. The pipeline runs with motion only and every other setting its
+default. Each setting of GRID (the number of steps, none included, the window's scale, and the scale of
+the Gaussian taken from the frames first, none included) is scored by the geometric mean of the restored
+flow's EPE over the scenes. The rule: the default is the setting with the fewest steps, then the smallest
+window, then no high-pass before one, among those within TOLERANCE of the best score (each step costs a
+pass over the frames and five Gaussians), so the steps ship only if they pay.
 
 Why the geometric mean: the scenes' EPE spans 0.04 px to 12 px, and the arithmetic mean (the first run's
 score, when the steps refined the MRF's restored flow) is decided by the three scenes whose motion lies
@@ -17,6 +20,7 @@ beyond the matcher's search, where a few more steps over a wider window drag a w
 nearer; it chose 8 steps over a 6-px window, which worsened the piecewise-constant blocks scenes by a
 third. Steps are for sub-pixel precision, so every scene's relative change weighs the same. The
 arithmetic mean is reported beside it.
+
 benchmarks/motion.py scores the real sequences with the defaults and chooses nothing.
 """
 
@@ -25,20 +29,26 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import datetime
+import itertools
 import platform
 from pathlib import Path
 
 import numpy as np
 from motion_fit import RESULTS, epe, motion_only, training_scenes
+from stereo_training import EXPOSURE_GAMMA
 
 import vmcl
 from vmcl.pipeline import MotionConfig, VisionMachine
 
-GRID = [(0, 3.0)] + [(iterations, window) for iterations in (1, 2, 3, 5, 8)
-                     for window in (1.5, 2.0, 3.0, 4.5, 6.0, 9.0, 12.0)]
-"""(steps, window scale in px)."""
+GRID = [(0, 3.0, 0.0)] + list(itertools.product((1, 2, 3, 5), (3.0, 4.5, 6.0, 9.0), (0.0, 2.0, 4.0, 8.0)))
+"""(steps, window scale in px, high-pass scale in px: 0 none)."""
 TOLERANCE = 0.01
 """The chosen setting's score is within this share of the best one's."""
+
+
+def exposure_variant(frame: np.ndarray) -> np.ndarray:
+    """A rendered frame (float in [0, 1]) with its response changed by EXPOSURE_GAMMA."""
+    return np.clip(frame, 0, 1) ** EXPOSURE_GAMMA
 
 
 def main() -> None:
@@ -46,18 +56,23 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=RESULTS / "motion_lucas_kanade_fit.md")
     args = parser.parse_args()
     machine = vmcl.Machine()
-    data = training_scenes()
+    scenes = training_scenes()
+    data = ([(name, scene, scene.left_next) for name, scene in scenes]
+            + [(f"{name} (exposure)", scene, exposure_variant(scene.left_next)) for name, scene in scenes])
     scores = np.zeros((len(GRID), len(data)))
-    for row, (iterations, window) in enumerate(GRID):
-        section = dataclasses.replace(MotionConfig(), lucas_kanade_iterations=iterations, lucas_kanade_window=window)
+    for row, (iterations, window, highpass) in enumerate(GRID):
+        section = dataclasses.replace(MotionConfig(), lucas_kanade_iterations=iterations, lucas_kanade_window=window,
+                                      lucas_kanade_highpass=highpass)
         vm = VisionMachine(motion_only(section), machine=machine)
-        for column, (_, scene) in enumerate(data):
-            scores[row, column] = epe(vm.run(scene.left, next=scene.left_next), scene)
-        print(iterations, window, " ".join(f"{s:.3f}" for s in scores[row]), flush=True)
+        for column, (_, scene, following) in enumerate(data):
+            scores[row, column] = epe(vm.run(scene.left, next=following), scene)
+        print(iterations, window, highpass, " ".join(f"{s:.3f}" for s in scores[row]), flush=True)
     means = np.exp(np.log(scores).mean(axis=1))
+    plain = len(scenes)
     best = float(means.min())
     chosen = min((k for k in range(len(GRID)) if means[k] <= best * (1 + TOLERANCE)), key=lambda k: GRID[k])
-    names = [name for name, _ in data]
+    steps, window, highpass = GRID[chosen]
+    names = [name for name, _, _ in data]
     lines = [
         "# The motion cue's Lucas-Kanade steps, fitted on rendered scenes",
         "",
@@ -65,22 +80,27 @@ def main() -> None:
          f"{platform.python_version()}. Produced by `python benchmarks/motion_lucas_kanade_fit.py`."),
         "",
         ("Training scenes: benchmarks/motion_fit.py's (vmcl.scenes presets at 256 x 256 and 384 x 384, noise "
-         "0.01, motions scaled by 1, 2, 4); the pipeline with motion only, every other setting its default. EPE (px) "
-         "of the restored flow over the visible pixels; the score is its geometric "
-         "mean over the scenes (see the script's docstring). Best score first."),
+         "0.01, motions scaled by 1, 2, 4), each also with its next frame's levels raised to "
+         f"{EXPOSURE_GAMMA:g} (exposure); the pipeline with motion only, every other setting its default. EPE "
+         "(px) of the restored flow over the visible pixels; the score is its geometric mean over the scenes "
+         "(see the script's docstring), also given over the plain and the exposure scenes apart. Best score "
+         "first."),
         "",
-        (f"Chosen: the fewest steps, then the smallest window, among the settings within {TOLERANCE:.0%} of the "
-         f"best score ({best:.4f}): {GRID[chosen][0]} steps, window {GRID[chosen][1]:g} px (score "
-         f"{means[chosen]:.4f}, mean EPE {scores[chosen].mean():.4f}; without steps {means[0]:.4f} and "
-         f"{scores[0].mean():.4f})."),
+        (f"Chosen: the fewest steps, then the smallest window, then no high-pass, among the settings within "
+         f"{TOLERANCE:.0%} of the best score ({best:.4f}): {steps} steps, window {window:g} px, high-pass "
+         f"{highpass:g} px (score {means[chosen]:.4f}, mean EPE {scores[chosen].mean():.4f}; without steps "
+         f"{means[0]:.4f} and {scores[0].mean():.4f})."),
         "",
-        "| score (geometric mean EPE) | mean EPE | steps | window px | " + " | ".join(names) + " |",
-        "|---|---|---|---|" + "---|" * len(names),
+        ("| score (geometric mean EPE) | plain scenes | exposure scenes | mean EPE | steps | window px | high-pass px | "
+         + " | ".join(names) + " |"),
+        "|---|---|---|---|---|---|---|" + "---|" * len(names),
     ]
     for k in np.argsort(means, kind="stable"):
-        iterations, window = GRID[k]
-        lines.append(f"| {means[k]:.4f} | {scores[k].mean():.4f} | {iterations} | {window:g} | "
-                     + " | ".join(f"{s:.3f}" for s in scores[k]) + " |")
+        iterations, size, cut = GRID[k]
+        plain_score, exposure_score = (float(np.exp(np.log(part).mean())) for part in (scores[k, :plain],
+                                                                                       scores[k, plain:]))
+        lines.append(f"| {means[k]:.4f} | {plain_score:.4f} | {exposure_score:.4f} | {scores[k].mean():.4f} | "
+                     f"{iterations} | {size:g} | {cut:g} | " + " | ".join(f"{s:.3f}" for s in scores[k]) + " |")
     args.out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines[:8]))
 

@@ -281,7 +281,7 @@ def motion_refine_fit_figures(f: ResultsFile) -> str:
 
 
 def motion_lucas_kanade_fit_figures(f: ResultsFile) -> str:
-    chosen = re.search(r"Chosen: the fewest steps.*?: (\d+ steps, window [\d.]+ px) \(score ([\d.]+), mean EPE "
+    chosen = re.search(r"Chosen: the fewest steps.*?: (\d+ steps, window [\d.]+ px, high-pass [\d.]+ px) \(score ([\d.]+), mean EPE "
                        r"([\d.]+); without steps ([\d.]+) and ([\d.]+)\)", f.text)
     if not chosen:
         return "chosen on rendered scenes: not stated"
@@ -376,6 +376,10 @@ def boundaries_figures(f: ResultsFile) -> str:
     return (f"ODS F: the cartoon's soft map {ods(soft)} (OIS {table.cell({'map': soft}, 'OIS F')}, AP "
             f"{table.cell({'map': soft}, 'AP')}), the binary cartoon {ods('vmcl cartoon, labels != 0 (binary)')}, "
             f"vmcl Canny {ods('vmcl Canny, threshold sweep')}, OpenCV Canny {ods('OpenCV Canny, threshold sweep')}")
+
+
+def boundaries_train_figures(f: ResultsFile) -> str:
+    return "fit quality, " + boundaries_figures(f)
 
 
 def boundary_fit_figures(f: ResultsFile) -> str:
@@ -597,6 +601,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
                "hysteresis variants"), edges_figures),
     ("boundaries", ("BSDS500 test images: the cartoon's soft map swept beside the binary cartoon, vmcl's and "
                     "OpenCV's Canny sweeps (ODS, OIS, AP)"), boundaries_figures),
+    ("boundaries_train", ("the same maps on BSDS500's 200 training images, which the soft map's model was "
+                          "fitted to"), boundaries_train_figures),
     ("boundary_fit", "the probability of boundary's fit to BSDS500's training images, checked on held-out ones",
      boundary_fit_figures),
     ("stereo", ("the depth machine against StereoBM/SGBM on every Middlebury pair and Motorcycle; each stage on "

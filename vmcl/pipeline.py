@@ -375,9 +375,10 @@ class MotionConfig:
         Pixels the matcher left without flow take their neighbours' median (weighed 0 by the score when
         ``weigh_by_score``). ``Result.fields["raw_flow"]`` stays the matcher's own. Defaults fitted on rendered scenes
         (benchmarks/motion_refine_fit.py).
-    lucas_kanade_iterations, lucas_kanade_window
-        Lucas-Kanade steps (:func:`vmcl.early.lucas_kanade.lucas_kanade`: their number, >= 0, and their
-        Gaussian window's scale in pixels, > 0) refine the flow on the two frames, below the discrete
+    lucas_kanade_iterations, lucas_kanade_window, lucas_kanade_highpass
+        Lucas-Kanade steps (:func:`vmcl.early.lucas_kanade.lucas_kanade`: their number, >= 0, their
+        Gaussian window's scale in pixels, > 0, and the scale of the Gaussian taken from the frames first,
+        0 for none or > 1) refine the flow on the two frames, below the discrete
         search's precision, after the weighted median and before the motion MRF restores it (which keeps
         a stream's temporal terms on the refined flow); 0 steps: none. Defaults fitted on rendered scenes
         (benchmarks/motion_lucas_kanade_fit.py).
@@ -396,6 +397,7 @@ class MotionConfig:
     refine_stride: int = motion_refine.REFINE_STRIDE
     lucas_kanade_iterations: int = lucas_kanade.ITERATIONS
     lucas_kanade_window: float = lucas_kanade.WINDOW
+    lucas_kanade_highpass: float = lucas_kanade.HIGHPASS
 
     def __post_init__(self) -> None:
         _check_field_types("motion", self)
@@ -412,6 +414,10 @@ class MotionConfig:
         check_int(self.refine_stride, "motion.refine_stride", minimum=1, maximum=2**31 - 1)
         check_int(self.lucas_kanade_iterations, "motion.lucas_kanade_iterations", minimum=0, maximum=1000)
         check_real(self.lucas_kanade_window, "motion.lucas_kanade_window", above=0)
+        check_real(self.lucas_kanade_highpass, "motion.lucas_kanade_highpass", minimum=0)
+        if 0 < self.lucas_kanade_highpass <= lucas_kanade.PRESMOOTH:
+            raise InputValueError(f"motion.lucas_kanade_highpass must be 0 or exceed {lucas_kanade.PRESMOOTH:g}, got "
+                                  f"{self.lucas_kanade_highpass}")
 
 
 @dataclass(frozen=True)

@@ -53,7 +53,8 @@ class MotionCue(CueModule):
                     if mc.refine else flow)
         if mc.lucas_kanade_iterations:
             measured = on_device(lucas_kanade(measured, run.left, run.needed("next"), window=mc.lucas_kanade_window,
-                                              iterations=mc.lucas_kanade_iterations, machine=run.machine))
+                                              iterations=mc.lucas_kanade_iterations,
+                                              highpass=mc.lucas_kanade_highpass, machine=run.machine))
         return Measurement(measured, confidence, run.brightness, fields={"raw_flow": flow},
                            notes=self.limit_note(found.limit_share, motion.reach(mc.delta, levels), levels))
 

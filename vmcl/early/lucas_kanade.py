@@ -40,15 +40,18 @@ from vmcl.early.filters import separable_gaussian
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["ITERATIONS", "LIMIT", "PRESMOOTH", "RIDGE", "WINDOW", "lucas_kanade"]
+__all__ = ["HIGHPASS", "ITERATIONS", "LIMIT", "PRESMOOTH", "RIDGE", "WINDOW", "lucas_kanade"]
 
-# WINDOW and ITERATIONS are the motion cue's defaults, fitted on rendered scenes by
+# WINDOW, ITERATIONS and HIGHPASS are the motion cue's defaults, fitted on rendered scenes by
 # benchmarks/motion_lucas_kanade_fit.py (its results file gives every setting tried), never on a sequence a
 # benchmark reports.
 WINDOW = 4.5
 """Default scale (pixels) of the Gaussian window over which each step's equations are summed."""
 ITERATIONS = 2
 """Default number of steps."""
+HIGHPASS = 0.0
+"""Default scale (pixels) of the Gaussian whose smoothing is taken from the frames before the steps (0: none,
+the brightness itself)."""
 PRESMOOTH = 1.0
 """The frames' Gaussian smoothing (pixels) before the gradients are taken: differentiation is ill-posed
 (the seed's "Edge detection"), and a step's linearisation holds over the smoothed image's scale."""
@@ -67,7 +70,7 @@ Gaussian's plane between its passes, frames uploaded as float32 grey."""
 
 
 def lucas_kanade(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, window: float = WINDOW,
-                 iterations: int = ITERATIONS, machine: Machine | None = None) -> ArrayLike:
+                 iterations: int = ITERATIONS, highpass: float = HIGHPASS, machine: Machine | None = None) -> ArrayLike:
     """Refine a dense flow by Lucas-Kanade steps.
 
     Parameters
@@ -82,6 +85,12 @@ def lucas_kanade(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, windo
         > 0: the scale (pixels) of the Gaussian window each step's equations are summed over.
     iterations : int
         >= 0: the number of steps (0 returns the flow as it came).
+    highpass : float
+        0, or the scale (pixels, > 1, the frames' own smoothing) of a Gaussian whose smoothing is taken from
+        each frame before the steps, leaving a difference of Gaussians (the seed's approximation of the
+        Laplacian of a Gaussian): brightness changes slower than it, such as a camera's exposure or the
+        light changing between the frames, then break brightness constancy less. 0: the smoothed
+        brightness itself.
     machine : vmcl.Machine, optional
 
     Returns
@@ -99,6 +108,9 @@ def lucas_kanade(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, windo
         raise InputValueError(f"flow must have two components (H, W, 2), got shape {data.shape}")
     window = check_real(window, "window", above=0)
     iterations = check_int(iterations, "iterations", minimum=0, maximum=1000)
+    highpass = check_real(highpass, "highpass", minimum=0)
+    if 0 < highpass <= PRESMOOTH:
+        raise InputValueError(f"highpass must be 0 or exceed the frames' smoothing ({PRESMOOTH:g} px), got {highpass}")
     for name, frame in (("frame0", frame0), ("frame1", frame1)):
         if not isinstance(frame, (np.ndarray, cl_array.Array)):
             raise InputTypeError(f"{name} must be a NumPy array or a device array, got {type(frame).__name__}")
@@ -108,10 +120,11 @@ def lucas_kanade(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, windo
             raise InputValueError(f"flow and {name} must have the same height and width, got flow {data.shape} "
                                   f"and {name} {frame.shape}")
     height, width = data.shape[:2]
-    check_widths({"window": window}, height, width)
+    check_widths({"window": window, "highpass": highpass}, height, width)
     pixels = height * width
     machine.require_memory(f"Lucas-Kanade steps of a {height} x {width} flow", _FOOTPRINT * pixels, 8 * pixels)
-    (f0, type0), (f1, type1) = _frame(frame0, "frame0", machine), _frame(frame1, "frame1", machine)
+    (f0, type0), (f1, type1) = (_frame(frame, name, highpass, machine) for name, frame in (("frame0", frame0),
+                                                                                         ("frame1", frame1)))
     if type0 != type1:
         raise InputValueError(f"frame0 and frame1 must have the same type, got {type0} and {type1}")
     out = data if host else data.copy()  # the steps work in place on a flow of their own
@@ -126,9 +139,11 @@ def lucas_kanade(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, windo
     return result(out, host)
 
 
-def _frame(frame: ArrayLike, name: str, machine: Machine) -> tuple[cl_array.Array, np.dtype]:
-    """A frame's grey image smoothed by PRESMOOTH on the device, and its type."""
+def _frame(frame: ArrayLike, name: str, highpass: float, machine: Machine) -> tuple[cl_array.Array, np.dtype]:
+    """A frame's grey image smoothed by PRESMOOTH (less its smoothing by ``highpass`` when that is not 0) on
+    the device, and its type."""
     data, _ = field(finite_float32(frame, name), name, machine, ndims=(2, 3), dtypes=tuple(IMAGE_TYPES))
     if data.ndim == 3 and data.shape[2] != 3:
         raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {data.shape}")
-    return separable_gaussian(machine, data, (PRESMOOTH,)), data.dtype
+    sigmas = (PRESMOOTH, highpass) if highpass else (PRESMOOTH,)
+    return separable_gaussian(machine, data, sigmas), data.dtype
