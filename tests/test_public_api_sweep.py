@@ -852,6 +852,22 @@ def test_bad_inputs_are_refused_by_name(entry, worker):
     _run_sweep(entry, 12, worker)
 
 
+def _masked_cases(entry: Entry) -> list[dict]:
+    """One case per host array argument of ``entry``: that array masked at its first value."""
+    return [{"target": entry.target, "call": {**entry.call, name: {**value, "masked": True}}, "argument": name,
+             "label": "masked"}
+            for name, value in entry.call.items()
+            if entry.kinds.get(name) in ("array", "optional_array") and isinstance(value, dict) and "array" in value
+            and not value.get("device") and all(value["array"])]
+
+
+@pytest.mark.parametrize("entry", [e for e in TABLE if _masked_cases(e)], ids=lambda e: e.target)
+def test_masked_arrays_are_refused_by_name(entry, worker):
+    """vmcl reads every value of an array, so a masked array's mask would be lost without a word: refused."""
+    for case in _masked_cases(entry):
+        _check(worker, case)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("entry", TABLE, ids=lambda e: e.target)
 def test_bad_inputs_are_refused_by_name_long(entry, worker):
@@ -944,6 +960,10 @@ def _array(spec, ctx):
     elif order == "strided":
         big = np.repeat(out, 2, axis=-1) if out.ndim else out
         out = big[..., ::2]
+    if spec.get("masked"):
+        mask = np.zeros(out.shape, bool)
+        mask.flat[:1] = True
+        return np.ma.masked_array(out, mask=mask)
     if spec.get("device"):
         if out.dtype.kind in "OU":
             return out
@@ -1361,6 +1381,8 @@ def _run_case(case: dict, ctx: dict) -> dict:
 
         where = traceback.extract_tb(error.__traceback__)[-1]
         return {"ok": False, "why": f"{type(error).__name__}: {str(error)[:300]} (at {where.filename}:{where.lineno})"}
+    if case["label"] == "masked":
+        return {"ok": False, "why": "a masked array with a masked value was accepted: its mask was lost"}
     got = _signature(value)
     if argument is None:
         ctx["reference"][case["target"]] = got

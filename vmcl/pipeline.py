@@ -42,7 +42,7 @@ import pyopencl.array as cl_array
 
 from vmcl import fitted, labelling, learn, temporal
 from vmcl import integrate as _integrate
-from vmcl.cm.core import UNIT_MARGIN, check_choice, check_int, check_real, check_unit_image
+from vmcl.cm.core import UNIT_MARGIN, check_choice, check_int, check_real, check_unit_image, check_unmasked
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
 from vmcl.early import (
     boundary_probability,
@@ -750,6 +750,7 @@ def as_image(array: Any, name: str) -> np.ndarray:
     """
     if not isinstance(array, np.ndarray):
         raise InputTypeError(f"{name} must be a NumPy array, got {type(array).__name__}")
+    check_unmasked(array, name)
     if array.ndim not in (2, 3) or (array.ndim == 3 and array.shape[2] != 3):
         raise InputValueError(f"{name} must be (H, W) grey or (H, W, 3) RGB, got shape {array.shape}")
     if min(array.shape[:2]) < 16:

@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from vmcl.cm.core import check_bool, check_choice, check_int
+from vmcl.cm.core import check_bool, check_choice, check_int, check_unmasked
 from vmcl.datasets import StereoPair
 from vmcl.early.disparity_range import estimate_range
 from vmcl.errors import InputTypeError, InputValueError
@@ -133,6 +133,7 @@ def _grey(image, name: str) -> np.ndarray:
     """:func:`grey`, refusals naming the argument ``name``."""
     if not isinstance(image, np.ndarray):
         raise InputTypeError(f"{name} must be a NumPy array, got {type(image).__name__}")
+    check_unmasked(image, name)
     if image.dtype != np.uint8:
         # OpenCV's block matchers take 8-bit images only; a 16-bit file is not silently rescaled.
         raise InputValueError(f"{name} must be uint8 for OpenCV's stereo matchers, got {image.dtype}")

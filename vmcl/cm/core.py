@@ -35,6 +35,7 @@ __all__ = [
     "check_real_dtype",
     "check_sigma",
     "check_unit_image",
+    "check_unmasked",
     "check_widths",
     "device_memory",
     "field",
@@ -120,6 +121,7 @@ def field(x: Any, name: str, machine: Machine, *, ndims: tuple[int, ...],
         host = False
         device = x
     elif isinstance(x, np.ndarray):
+        check_unmasked(x, name)
         host = True
         dtype = x.dtype
         if dtype not in accepted:
@@ -274,18 +276,31 @@ def check_context(x: cl_array.Array, name: str, machine: Machine) -> None:
                               f"copy it through the host")
 
 
+def check_unmasked(x: Any, name: str) -> None:
+    """Refuse a NumPy masked array with masked values: vmcl reads every value of an array, so its mask
+    would be silently lost (one with nothing masked is read as its data)."""
+    if isinstance(x, np.ma.MaskedArray) and np.ma.getmaskarray(x).any():
+        raise InputValueError(f"{name} is a masked array with masked values, and vmcl reads every value: fill "
+                              f"them ({name}.filled(...), NaN where the function takes NaN for a missing value) "
+                              "or pass its data")
+
+
 def check_real_dtype(x: Any, name: str) -> np.ndarray:
     """``x`` checked as a NumPy array of real numbers (bool, integer or float); complex, object, string
     and other dtypes are refused, never converted."""
     if not isinstance(x, np.ndarray):
         raise InputTypeError(f"{name} must be a NumPy array, got {type(x).__name__}")
+    check_unmasked(x, name)
     if x.dtype.kind not in "biuf":
         raise InputTypeError(f"{name} must hold real numbers (bool, integer or float), got dtype {x.dtype}")
     return x
 
 
-def to_host(x: Any) -> Any:
-    """``x`` as it is, or a device array (pyopencl) copied to a NumPy array, for host-side arithmetic."""
+def to_host(x: Any, name: str | None = None) -> Any:
+    """``x`` as it is, or a device array (pyopencl) copied to a NumPy array, for host-side arithmetic; given
+    the argument's ``name``, a masked array with masked values is refused (:func:`check_unmasked`)."""
+    if name is not None:
+        check_unmasked(x, name)
     return x.get() if isinstance(x, cl_array.Array) else x
 
 
@@ -344,6 +359,7 @@ def finite_float32(x: Any, name: str) -> Any:
     InputValueError
         Naming ``name``, for NaN or infinity, and for values beyond float32's range.
     """
+    check_unmasked(x, name)
     if isinstance(x, np.ndarray) and x.dtype.kind == "f":
         if not np.isfinite(x).all():
             raise InputValueError(f"{name} must not contain NaN or infinite values")

@@ -41,6 +41,7 @@ from vmcl.cm.core import (
     check_context,
     check_int,
     check_real,
+    check_unmasked,
     machine_for,
 )
 from vmcl.cm.core import field as device_field
@@ -100,6 +101,7 @@ def check_pair(left: Any, right: Any, machine: Machine) -> None:
             raise InputTypeError(f"{name} must be a NumPy array or a pyopencl.array.Array, got {type(image).__name__}")
         if isinstance(image, cl_array.Array):
             check_context(image, name, machine)
+        check_unmasked(image, name)
         host_float = isinstance(image, np.ndarray) and image.dtype.kind == "f"
         if image.dtype not in IMAGE_TYPES and not host_float:
             raise InputTypeError(f"{name} must have dtype uint8, uint16 or float32 (or another float on the "

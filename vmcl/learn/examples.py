@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vmcl.cm.core import check_real
+from vmcl.cm.core import check_real, check_unmasked
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.learn.pseudolikelihood import Example
 from vmcl.mrf.energy import EnergyModel, host_field, resolve_levels
@@ -101,6 +101,7 @@ def segmentation_example(data: np.ndarray, confidence: np.ndarray | None, edges:
     if not isinstance(model, EnergyModel):
         raise InputTypeError(f"model must be a vmcl.mrf.EnergyModel, got {type(model).__name__}")
     g = host_field(data, "data", ndims=(2,)).astype(np.float64)
+    check_unmasked(segmentation, "segmentation")
     labels = np.asarray(segmentation)
     if labels.shape != g.shape or labels.dtype.kind not in "iu":
         raise InputValueError(f"segmentation must be integer labels of the data's shape {g.shape}, got "

@@ -263,7 +263,7 @@ def fit_restoration(examples: Sequence[Example], start: Settings, *, kind: str =
 
 def _sites(value: Any, name: str, shape: tuple[int, int]) -> np.ndarray:
     """A map of sites (pixels or line sites) as bool, if it is a real or boolean array of ``shape``."""
-    host = np.asarray(to_host(value)) if isinstance(value, np.ndarray) or hasattr(value, "get") else None
+    host = np.asarray(to_host(value, name)) if isinstance(value, np.ndarray) or hasattr(value, "get") else None
     if host is None or host.shape != shape or host.dtype.kind not in "biuf":
         raise InputValueError(f"{name} must be a real or boolean array of shape {shape}, got {type(value).__name__} "
                               f"{getattr(host, 'dtype', '')} {getattr(host, 'shape', '')}")

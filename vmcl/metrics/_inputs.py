@@ -19,7 +19,7 @@ __all__ = ["as_float_field", "as_mask", "check_sequence", "evaluated_pixels"]
 
 def as_float_field(array, name: str, *, ndim: int) -> np.ndarray:
     """``array`` as a non-empty float64 field of ``ndim`` dimensions; NaN allowed (no value), infinity not."""
-    array = np.asarray(to_host(array))
+    array = np.asarray(to_host(array, name))
     if array.dtype.kind not in "iuf":
         raise InputTypeError(f"{name} must be a numeric array of real numbers, got dtype {array.dtype}")
     if array.ndim != ndim:
@@ -34,7 +34,7 @@ def as_float_field(array, name: str, *, ndim: int) -> np.ndarray:
 
 def as_mask(mask, name: str, shape: tuple[int, ...], against: str) -> np.ndarray:
     """``mask`` as a boolean array of ``against``'s shape."""
-    mask = np.asarray(to_host(mask))
+    mask = np.asarray(to_host(mask, name))
     if mask.dtype != bool:
         raise InputTypeError(f"{name} must be a boolean array, got dtype {mask.dtype}")
     if mask.shape != shape:

@@ -77,7 +77,7 @@ def _thresholds(thresholds) -> np.ndarray:
 
 
 def _edge_map(edge_map) -> np.ndarray:
-    edge_map = np.asarray(to_host(edge_map))
+    edge_map = np.asarray(to_host(edge_map, "edge_map"))
     if edge_map.dtype == bool:
         return edge_map.astype(np.float64)
     edge_map = as_float_field(edge_map, "edge_map", ndim=2)
@@ -87,7 +87,7 @@ def _edge_map(edge_map) -> np.ndarray:
 
 
 def _truth_boundaries(ground_truths, shape: tuple[int, int]) -> list[np.ndarray]:
-    truths = [np.asarray(to_host(g)) for g in check_sequence(ground_truths, "ground_truths")]
+    truths = [np.asarray(to_host(g, "ground_truths")) for g in check_sequence(ground_truths, "ground_truths")]
     if not truths:
         raise InputValueError("ground_truths must hold at least one annotator's boundary map")
     for k, g in enumerate(truths):
@@ -309,7 +309,7 @@ def evaluate_boundaries(
     workers = min(check_int(workers, "workers", minimum=1), len(edge_maps))
     kwargs = {"thresholds": thresholds, "max_dist": max_dist, "thin": thin}
     # Host copies: a worker process cannot receive device arrays.
-    jobs = [(np.asarray(to_host(e)), [np.asarray(to_host(t)) for t in g], kwargs)
+    jobs = [(np.asarray(to_host(e, "edge_maps")), [np.asarray(to_host(t, "ground_truths")) for t in g], kwargs)
             for e, g in zip(edge_maps, ground_truths)]
     if workers == 1:
         per_image = [_counts_of(job) for job in jobs]

@@ -84,7 +84,7 @@ def within_tolerance(truth, tolerance) -> np.ndarray:
     One Euclidean distance transform per distinct tolerance among the true pixels: a map of a few values
     (a scene's: 1 px and its textures' half spacings, in half-pixel steps) costs a few.
     """
-    truth = np.asarray(to_host(truth))
+    truth = np.asarray(to_host(truth, "truth"))
     if truth.dtype != bool or truth.ndim != 2:
         raise InputTypeError(f"truth must be a 2-D boolean array, got {truth.dtype} of shape {truth.shape}")
     tolerance = _tolerance(tolerance, truth.shape)
@@ -118,7 +118,7 @@ def detection_scores(predicted, truth, *, tolerance: float | np.ndarray = 1.0) -
     pixel. It is the usual measure for labelled discontinuities on synthetic scenes, where the truth is
     one pixel thick and the question is whether each kind of discontinuity was found at all.
     """
-    predicted = np.asarray(to_host(predicted))
+    predicted = np.asarray(to_host(predicted, "predicted"))
     if predicted.dtype != bool:
         raise InputTypeError(f"predicted must be a 2-D boolean array, got dtype {predicted.dtype}")
     if predicted.ndim != 2:
@@ -160,8 +160,8 @@ def label_scores(
     dict of int to DetectionScores
         For each label l, :func:`detection_scores` of ``predicted == l`` against ``truth == l``.
     """
-    predicted = np.asarray(to_host(predicted))
-    truth = np.asarray(to_host(truth))
+    predicted = np.asarray(to_host(predicted, "predicted"))
+    truth = np.asarray(to_host(truth, "truth"))
     for name, array in (("predicted", predicted), ("truth", truth)):
         if not np.issubdtype(array.dtype, np.integer):
             raise InputTypeError(f"{name} must be a 2-D integer label map, got dtype {array.dtype}")

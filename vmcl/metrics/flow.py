@@ -123,7 +123,7 @@ def evaluate_flow(flow, ground_truth, *, mask=None) -> FlowScores:
     """
     epe = endpoint_error(flow, ground_truth)
     aae = angular_error(flow, ground_truth)
-    truth = np.asarray(to_host(ground_truth)).astype(np.float64)
+    truth = np.asarray(to_host(ground_truth, "ground_truth")).astype(np.float64)
     # endpoint_error has checked that the truth is (H, W, 2), so reducing its last axis leaves an (H, W)
     # array; NumPy's stubs cannot tell that from a scalar.
     truth_known = cast(np.ndarray, np.isfinite(truth).all(axis=-1))

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from vmcl.cm.core import check_unmasked
 from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = ["angles", "edge_map", "index_pairs", "points", "real_map"]
@@ -17,6 +18,7 @@ __all__ = ["angles", "edge_map", "index_pairs", "points", "real_map"]
 def _host(x: Any, name: str) -> np.ndarray:
     if not isinstance(x, np.ndarray):
         raise InputTypeError(f"{name} must be a NumPy array, got {type(x).__name__}")
+    check_unmasked(x, name)
     if x.dtype.kind not in "iuf":
         raise InputTypeError(f"{name} must hold real numbers (integer or float), got dtype {x.dtype}")
     return x
@@ -54,6 +56,7 @@ def index_pairs(x: Any, name: str, count: int) -> np.ndarray:
     if not isinstance(x, np.ndarray) or x.dtype.kind not in "iu":
         raise InputTypeError(f"{name} must be an integer NumPy array, got "
                              f"{type(x).__name__ if not isinstance(x, np.ndarray) else x.dtype}")
+    check_unmasked(x, name)
     if x.ndim != 2 or x.shape[1] != 2:
         raise InputValueError(f"{name} must be a (P, 2) array, got shape {x.shape}")
     if x.size and (x.min() < 0 or x.max() >= count):
@@ -65,6 +68,7 @@ def edge_map(x: Any, name: str) -> np.ndarray:
     """``x``: a bool, or uint8 0/1, (H, W) host array of at least 2 x 2 pixels; bool."""
     if not isinstance(x, np.ndarray):
         raise InputTypeError(f"{name} must be a NumPy array, got {type(x).__name__}")
+    check_unmasked(x, name)
     if x.dtype not in (np.bool_, np.uint8):
         raise InputTypeError(f"{name} must be bool or uint8 0/1, got dtype {x.dtype}")
     if x.ndim != 2 or min(x.shape) < 2:

@@ -22,7 +22,7 @@ from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
-from vmcl.cm.core import check_choice, check_int, check_real, machine_for
+from vmcl.cm.core import check_choice, check_int, check_real, check_unmasked, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.recognize.arguments import angles, edge_map, real_map
@@ -105,6 +105,7 @@ class Support(NamedTuple):
 def _homographies(transforms: Any) -> np.ndarray:
     if not isinstance(transforms, np.ndarray) or transforms.dtype.kind not in "iuf":
         raise InputTypeError("transforms must be a real NumPy array")
+    check_unmasked(transforms, "transforms")
     t = transforms.astype(np.float64)
     if t.ndim != 3 or t.shape[1:] not in ((2, 3), (3, 3)):
         raise InputValueError(f"transforms must be (C, 2, 3) affine or (C, 3, 3) homography arrays, got {t.shape}")
@@ -126,6 +127,8 @@ def _check_support(nearest: Any, tangent_map: Any, points_: Any, tangents: Any, 
                    transforms: Any) -> tuple[np.ndarray, ...]:
     if not isinstance(nearest, np.ndarray) or nearest.dtype != np.int32 or nearest.ndim != 2 or nearest.size == 0:
         raise InputValueError("nearest must be an int32 (H, W) array (distance_transform's nearest)")
+    for name, value in (("nearest", nearest), ("point_ranges", point_ranges), ("transforms", transforms)):
+        check_unmasked(value, name)
     if nearest.min() < -1 or nearest.max() >= nearest.size:
         raise InputValueError(f"nearest must hold flat addresses of its pixels (0 to {nearest.size - 1}) or -1")
     tangent_map = real_map(tangent_map, "tangent_map", nearest.shape, "nearest", unknown=True).astype(np.float32)
@@ -358,6 +361,7 @@ def refine(nearest: Any, tangent_map: Any, points: Any, tangents: Any, point_ran
 
 def carry(transform: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Points (x, y), (N, 2), carried by a 2 x 3 affine map or a 3 x 3 homography; float64 (N, 2)."""
+    check_unmasked(transform, "transform")
     if isinstance(transform, np.ndarray) and transform.ndim == 2:
         transform = _homographies(transform[None])[0]
     else:
