@@ -40,7 +40,7 @@ from stereo_training import EXPOSURE_GAMMA
 import vmcl
 from vmcl.pipeline import MotionConfig, VisionMachine
 
-GRID = [(0, 3.0, 0.0)] + list(itertools.product((1, 2, 3, 5), (3.0, 4.5, 6.0, 9.0), (0.0, 2.0, 4.0, 8.0)))
+GRID = [(0, 3.0, 0.0)] + list(itertools.product((1, 2, 3), (3.0, 4.5, 6.0), (0.0, 2.0, 4.0, 8.0)))
 """(steps, window scale in px, high-pass scale in px: 0 none)."""
 TOLERANCE = 0.01
 """The chosen setting's score is within this share of the best one's."""

@@ -227,6 +227,13 @@ def test_model_names_that_are_not_plain_file_names_are_refused(name):
         learn(name, [image])
 
 
+def test_an_example_without_boundary_is_named_among_several():
+    image, _ = object_view("ell", shape=(64, 64))
+    blank = np.full(image.shape, 0.5, np.float32)
+    with pytest.raises(InputError, match=r"images\[1\] \(blank\.png\): the example shows too little boundary"):
+        learn("ell", [image, blank], sources=["ell.png", "blank.png"])
+
+
 # ------------------------------------------------------------------------------------------- recognition
 
 

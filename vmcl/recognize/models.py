@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from vmcl.cm.core import check_bool, check_int, machine_for
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.recognize.arguments import edge_map
 from vmcl.recognize.features import Features, image_features
@@ -189,8 +189,13 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
         raise InputValueError(f"sources must be a list of one str per image ({len(images)})")
     views = []
     for i, image in enumerate(images):
-        features = image_features(image, sigma=sigma, corner=corner, machine=machine)
-        views.append(view_of(features, mask=None if masks is None else masks[i]))
+        which = f"images[{i}]" + (f" ({sources[i]})" if sources is not None else "")
+        try:
+            features = image_features(image, sigma=sigma, corner=corner, machine=machine)
+            views.append(view_of(features, mask=None if masks is None else masks[i]))
+        except InputError as error:
+            # Which of several examples failed is what the user needs to mend it.
+            raise type(error)(f"{which}: {error}") from None
     return Model(name, tuple(views), tuple(sources) if sources is not None else ("array",) * len(views))
 
 
