@@ -280,3 +280,15 @@ def test_motion_finds_a_large_motion_with_no_range_given(machine):
     short = Config(stereo=StereoConfig(enabled=False), motion=MotionConfig(levels=2), **_DEPTH_AND_MOTION)
     notes = VisionMachine(short, machine=machine).run(scene.left, next=scene.left_next).notes
     assert any("search's limit of 12 px" in note for note in notes), notes
+
+
+def test_a_matcher_that_finds_little_is_noted(machine):
+    """One-pixel brightness patches match almost nowhere: the MRF still gives a dense flow, and the run
+    says it rests on little data; the default matcher finds flow nearly everywhere and says nothing."""
+    scene = _panning("cues", 0.1)
+    off = {"stereo": StereoConfig(enabled=False), **_DEPTH_AND_MOTION}
+    for section, sparse in ((MotionConfig(patch=1, features="brightness"), True), (MotionConfig(), False)):
+        result = VisionMachine(Config(motion=section, **off), machine=machine).run(scene.left, next=scene.left_next)
+        noted = [note for note in result.notes if "rests on little data" in note]
+        assert bool(noted) == sparse, result.notes
+        assert np.isfinite(result.flow).all()

@@ -21,10 +21,13 @@ from vmcl.machine import on_device
 from vmcl.mrf import score_confidence
 from vmcl.pictures import flow_image
 
-__all__ = ["LIMIT_SHARE", "MotionCue"]
+__all__ = ["FOUND_SHARE", "LIMIT_SHARE", "MotionCue"]
 
 LIMIT_SHARE = 0.005
 """The share of the coarsest level's estimates at the edge of its range from which the run notes it."""
+FOUND_SHARE = 0.2
+"""The share of the coarsest level's pixels with an estimate below which the run notes that the motion MRF
+restores the flow from little data."""
 
 
 class MotionCue(CueModule):
@@ -56,7 +59,8 @@ class MotionCue(CueModule):
                                               iterations=mc.lucas_kanade_iterations,
                                               highpass=mc.lucas_kanade_highpass, machine=run.machine))
         return Measurement(measured, confidence, run.brightness, fields={"raw_flow": flow},
-                           notes=self.limit_note(found.limit_share, motion.reach(mc.delta, levels), levels))
+                           notes=(self.limit_note(found.limit_share, motion.reach(mc.delta, levels), levels)
+                                  + self.sparse_note(found.found_share, mc.features, mc.patch)))
 
     @staticmethod
     def floor(correlation: float, features: str) -> float:
@@ -74,6 +78,15 @@ class MotionCue(CueModule):
         return ((f"motion: {share:.1%} of the coarsest level's flow lies at the edge of its range, so motion "
                 f"may exceed the search's limit of {limit} px ({levels} pyramid levels); raise [motion] levels "
                 "or delta"),)
+
+    @staticmethod
+    def sparse_note(share: float, features: str, patch: int) -> tuple[str, ...]:
+        """A note when the matcher found an estimate at few pixels: the restored flow then rests on little."""
+        if share >= FOUND_SHARE:
+            return ()
+        return ((f"motion: the matcher found flow at only {share:.1%} of the coarsest level's pixels (features "
+                 f"{features!r}, patch {patch}), so the restored flow rests on little data; a wider [motion] patch "
+                 "or other features may find more"),)
 
     def pictures(self, result) -> dict[str, tuple[np.ndarray, str]]:
         if result.flow is None:

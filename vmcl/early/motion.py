@@ -104,12 +104,16 @@ class FlowResult:
     limit_share : float
         The share of the coarsest level's estimates that lie at the edge of its range (a component
         equal to +-delta): motion there may exceed what the search reaches (:func:`reach`).
+    found_share : float
+        The share of the coarsest level's pixels with an estimate: the features and patch found little
+        to match where it is small.
     """
 
     flow: ArrayLike
     score: ArrayLike
     boundaries: ArrayLike
     limit_share: float = 0.0
+    found_share: float = 1.0
 
 
 def _frames(frame0, frame1, machine: Machine) -> tuple[cl_array.Array, cl_array.Array, bool]:
@@ -530,9 +534,10 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     if coarsest_read is not None:
         coarsest_read.wait()
     limit_share = np.count_nonzero(np.abs(coarsest) >= delta - 1e-3) / coarsest.size * 2
+    found_share = float(np.isfinite(coarsest).all(axis=-1).mean())
     if host:
-        return FlowResult(flow_out.get(), score.get(), boundaries.get().view(np.bool_), limit_share)
-    return FlowResult(flow_out, score, boundaries, limit_share)
+        return FlowResult(flow_out.get(), score.get(), boundaries.get().view(np.bool_), limit_share, found_share)
+    return FlowResult(flow_out, score, boundaries, limit_share, found_share)
 
 
 def votes(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, features: Features = "brightness",
