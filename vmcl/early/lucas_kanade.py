@@ -49,7 +49,7 @@ WINDOW = 4.5
 """Default scale (pixels) of the Gaussian window over which each step's equations are summed."""
 ITERATIONS = 2
 """Default number of steps."""
-HIGHPASS = 0.0
+HIGHPASS = 4.0
 """Default scale (pixels) of the Gaussian whose smoothing is taken from the frames before the steps (0: none,
 the brightness itself)."""
 PRESMOOTH = 1.0
