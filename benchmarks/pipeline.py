@@ -5,11 +5,13 @@ Seed section "The Vision Machine System"; the bar of issue 9: a 256 x 256 frame 
 REPEATS timed runs; the table gives the median wall time per frame and each stage's median, for the
 default solver (mean field) and for ICM. Every run takes the pipeline's defaults: no disparity range is
 given, so the machine searches the range it finds from the images. The quality of the dense disparity, and
-of each stereo stage on and off, is benchmarks/stereo.py's. Writes benchmarks/results/pipeline.md.
+of each stereo stage on and off, is benchmarks/stereo.py's. Writes benchmarks/results/pipeline.md (or --out;
+the device: VMCL_DEVICE, as for every vmcl run).
 """
 
 from __future__ import annotations
 
+import argparse
 import datetime
 import os
 import statistics
@@ -54,6 +56,9 @@ def measure_photograph(machine: vmcl.Machine) -> tuple[str, float, dict[str, flo
 
 
 def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "results" / "pipeline.md")
+    out = parser.parse_args().out
     machine = vmcl.Machine()
     lines = ["# The whole Vision Machine per frame", "",
              (f"Measured {datetime.datetime.now():%Y-%m-%d %H:%M}. Device: {machine.device.platform.name} / {machine.device.name}; load average before: "
@@ -83,7 +88,6 @@ def main() -> int:
                   f"most {PHOTO_BAR_MS:.0f} ms: {'met' if total <= PHOTO_BAR_MS else 'not met'})."), "",
                   "| stage | ms |", "|---|---|"]
         lines += [f"| {stage} | {ms:.0f} |" for stage, ms in stages.items()] + [f"| total (median) | {total:.0f} |"]
-    out = Path(__file__).resolve().parent / "results" / "pipeline.md"
     out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0

@@ -14,11 +14,13 @@ it faster; one far below it is bound by something else (arithmetic, a serial loo
 too little parallel work for the device, launch overhead), and rethinking its work is what makes it
 faster. A kernel that reads a buffer several times from beyond the caches can show more than 100%: its
 real traffic is larger than the count. Operations are not counted (PoCL's CPU device has no hardware
-counters to read them from), so the arithmetic roof is not drawn. Writes benchmarks/results/roofline.md.
+counters to read them from), so the arithmetic roof is not drawn. Writes benchmarks/results/roofline.md (or
+--out; the device: VMCL_DEVICE, as for every vmcl run).
 """
 
 from __future__ import annotations
 
+import argparse
 import datetime
 import os
 import statistics
@@ -92,6 +94,9 @@ def families_table(per_frame: dict[str, dict[str, float]], families: dict[str, s
 
 
 def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "results" / "roofline.md")
+    out = parser.parse_args().out
     machine = vmcl.Machine(profile=True)
     bench = Bench(machine, repeat=5)
     copy_bandwidth(bench, "64 MiB", COPY_FLOATS)
@@ -119,7 +124,6 @@ def main() -> int:
                    f"{100 * moved / device / 1e6 / copy_gbs:.0f}% of the copy."), "",
                   "By family (kernels/<family>.cl):", "", *families_table(per_frame, families, copy_gbs), "",
                   f"The {TOP} kernels with the most device time:", "", *table(per_frame, families, copy_gbs)]
-    out = Path(__file__).resolve().parent / "results" / "roofline.md"
     out.write_text("\n".join(lines) + "\n", encoding="utf-8")
     print("\n".join(lines))
     return 0
