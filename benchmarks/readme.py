@@ -35,6 +35,7 @@ DATE = re.compile(r"\b\d{4}-\d{2}-\d{2}(?: \d{2}:\d{2})?")
 # The result files name their machine in three ways; tried in order, the first match wins.
 MACHINE_PATTERNS = (
     re.compile(r"pthread-[\w-]+(?: [A-Za-z]\w*)*"),  # PoCL's CPU device name
+    re.compile(r"Device: [^/\n]*/ ([^;\n]+)"),  # another OpenCL device: its name after its platform's
     re.compile(r"Machine: ([^,\n]+)"),  # ground_truth.md: the CPU
     re.compile(r"\bon (\w+) \("),  # head.md: the host name
 )
@@ -625,6 +626,9 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
      pipeline_figures),
     ("roofline", ("each kernel's device time, the bytes its launches are given and its bandwidth against the "
                   "copy kernel's, for the whole machine at 256^2 and 512^2"), roofline_figures),
+    ("pipeline_gpu", "the same on a lent NVIDIA H200 (NVIDIA's OpenCL), before its colour threshold was parallel",
+     pipeline_figures),
+    ("roofline_gpu", "the same on the lent NVIDIA H200, in the same session", roofline_figures),
     ("revisions", "the whole machine's time per frame at two revisions of vmcl, alternated in one run",
      revisions_figures),
     ("revisions_cold", ("the same with empty kernel caches in every process: the first frame pays every build, "

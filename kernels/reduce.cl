@@ -11,6 +11,12 @@
 #if OP == OP_PLUS
 #define IDENTITY ((ACC)0)
 #define COMBINE(a, b) ((a) + (b))
+#elif T_IS_FLOAT && (OP == OP_MAX || OP == OP_MIN)
+/* fmax and fmin return the other argument when one is NaN (and NaN for two), so NaN elements are skipped
+ * and a field of NaN alone reduces to NaN on every device. (max and min leave NaN undefined: PoCL gave NaN
+ * for an all-NaN field, NVIDIA's OpenCL the identity, infinity.) */
+#define IDENTITY ((ACC)NAN)
+#define COMBINE(a, b) (OP == OP_MAX ? fmax((a), (b)) : fmin((a), (b)))
 #elif OP == OP_MAX
 #define IDENTITY ((ACC)T_LOWEST)
 #define COMBINE(a, b) max((a), (b))

@@ -40,6 +40,18 @@ def test_logical_results_and_empty_field(machine):
         reduce(np.zeros(3, np.float32), "mean", machine=machine)
 
 
+@pytest.mark.parametrize("shape", [(7,), (300, 301)])
+def test_max_and_min_skip_nan_and_give_nan_only_for_nan_alone(shape, machine):
+    """The same on every device: NaN elements are skipped (np.nanmax's rule), and a field of NaN alone gives
+    NaN (NVIDIA's OpenCL gave infinity for it before max and min became fmax and fmin)."""
+    x = np.full(shape, np.nan, np.float32)
+    for op in ("max", "min"):
+        assert np.isnan(float(reduce(x, op, machine=machine)))
+    x.flat[::5] = np.arange(x.size)[::5] - 3.5
+    assert float(reduce(x, "max", machine=machine)) == np.nanmax(x)
+    assert float(reduce(x, "min", machine=machine)) == np.nanmin(x)
+
+
 def test_device_result_stays_on_device(machine):
     out = reduce(machine.to_device(np.arange(10, dtype=np.int32)), "sum", machine=machine)
     assert not isinstance(out, np.ndarray) and out.get()[()] == 45

@@ -58,7 +58,7 @@ def reduce(x: ArrayLike, op: ReduceOp = "sum", *, machine: Machine | None = None
     Deterministic on a given device: each chunk is reduced in sixteen lanes folded in lane order, then the
     chunk results in order (the chunk size follows the device's compute units, so a float sum may differ
     in the last bits between devices). Float sums use Kahan compensation throughout. NaN propagates through "sum" but is
-    ignored by "max" and "min" (OpenCL's fmax/fmin rule).
+    ignored by "max" and "min" (OpenCL's fmax/fmin rule): their result is NaN only where every element is.
     """
     machine = machine_for(machine)
     check_choice(op, "op", sorted(_OPS))

@@ -84,6 +84,8 @@ MIN_INTENSITY = 0.05
 NOISE_FLOOR = 1.0 / (255.0 * math.sqrt(12.0))
 """Smallest noise deviation the edge rule assumes, as a share of the full scale: 8-bit quantisation."""
 
+_THRESHOLD_ITEMS = 256
+"""The work-group that totals the bands' histograms and finds the median (color.cl's THRESHOLD_ITEMS)."""
 HISTOGRAM_BINS = (0x7F800000 >> 19) + 1
 """Bins of the noise estimate's histogram of z: 1/16 of an octave each, from 0 to infinity (color.cl)."""
 _MEDIAN_OF_RAYLEIGH = math.sqrt(2.0 * math.log(2.0))
@@ -252,9 +254,10 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
         machine.launch(vector_kernel(machine, "color", "hue_histogram", **defines), (bands,), z, counts, np.int64(rows),
                        np.int64(width), np.int64(height))
         estimated = machine.empty((1,), np.float32)
-        machine.launch(vector_kernel(machine, "color", "hue_threshold", **defines), (1,), counts, estimated,
-                       np.int64(bands), np.float32(_noise.NOISE_HIGH / _MEDIAN_OF_RAYLEIGH),
-                       np.float32(_noise.NOISE_HIGH * NOISE_FLOOR * _FULL_SCALE[data.dtype]))
+        machine.launch(vector_kernel(machine, "color", "hue_threshold", **defines), (_THRESHOLD_ITEMS,), counts,
+                       estimated, np.int64(bands), np.float32(_noise.NOISE_HIGH / _MEDIAN_OF_RAYLEIGH),
+                       np.float32(_noise.NOISE_HIGH * NOISE_FLOOR * _FULL_SCALE[data.dtype]),
+                       local_size=(_THRESHOLD_ITEMS,))
         fixed = 0.0
     else:
         estimated, fixed = z, float(threshold)
