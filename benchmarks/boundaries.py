@@ -5,7 +5,7 @@ Run: python benchmarks/boundaries.py [--data ../shared/datasets] [--split test] 
 
 On the BSDS500 test images in the data folder (10 in ../shared; any BSDS-layout folder with --folder;
 ``--split train --out benchmarks/results/boundaries_train.md``: the 200 training images the soft map's
-model was fitted to, its fit quality, not a test),
+model was fitted to, its fit quality, not a test; over an hour of scoring on a 2-core machine),
 every map comes from vmcl.boundary_evaluation, the harness ``vmcl eval edges`` uses: the monocular
 machine's defaults, and the two Canny detectors swept over the same number of
 thresholds. The figures are the BSDS benchmark's (match distance 0.0075 of the diagonal, thinning,

@@ -379,10 +379,6 @@ def boundaries_figures(f: ResultsFile) -> str:
             f"vmcl Canny {ods('vmcl Canny, threshold sweep')}, OpenCV Canny {ods('OpenCV Canny, threshold sweep')}")
 
 
-def boundaries_train_figures(f: ResultsFile) -> str:
-    return "fit quality, " + boundaries_figures(f)
-
-
 def boundary_fit_figures(f: ResultsFile) -> str:
     table = f.table("map", "ODS F", "OIS F", "AP")
     return (f"held-out training images, ODS F: probability of boundary "
@@ -602,8 +598,6 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
                "hysteresis variants"), edges_figures),
     ("boundaries", ("BSDS500 test images: the cartoon's soft map swept beside the binary cartoon, vmcl's and "
                     "OpenCV's Canny sweeps (ODS, OIS, AP)"), boundaries_figures),
-    ("boundaries_train", ("the same maps on BSDS500's 200 training images, which the soft map's model was "
-                          "fitted to"), boundaries_train_figures),
     ("boundary_fit", "the probability of boundary's fit to BSDS500's training images, checked on held-out ones",
      boundary_fit_figures),
     ("stereo", ("the depth machine against StereoBM/SGBM on every Middlebury pair and Motorcycle; each stage on "
