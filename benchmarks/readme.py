@@ -610,8 +610,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("motion_fit", "the motion defaults (features, patch, pyramid) chosen on rendered scenes", motion_fit_figures),
     ("motion_refine_fit", "the motion cue's weighted median of the flow, its window chosen on rendered scenes",
      motion_refine_fit_figures),
-    ("motion_lucas_kanade_fit", ("the motion cue's Lucas-Kanade steps (how many, their window) chosen on "
-                                 "rendered scenes"), motion_lucas_kanade_fit_figures),
+    ("motion_lucas_kanade_fit", ("the motion cue's Lucas-Kanade steps (how many, their window, the "
+                                 "frames' high-pass) chosen on rendered scenes"), motion_lucas_kanade_fit_figures),
     ("time_fit", "the temporal terms' defaults chosen on rendered sequences", time_fit_figures),
     ("early", "colour and texture against NumPy/SciPy", early_figures),
     ("mrf", "sweeps per second of each solver; Gibbs against NumPy; dense disparity on Middlebury",

@@ -172,9 +172,9 @@ __kernel __attribute__((reqd_work_group_size(THRESHOLD_ITEMS, 1, 1)))
 void hue_threshold(__global const int *counts, __global float *threshold, long bands, float factor,
                    float floor_threshold)
 {
-    __local int merged[KEY_BINS];
+    __local long merged[KEY_BINS];  /* 32,648 bytes: within OpenCL's least local memory, 32 KiB */
     for (uint k = get_local_id(0); k < KEY_BINS; k += THRESHOLD_ITEMS) {
-        int c = 0;
+        long c = 0;
         for (long b = 0; b < bands; b++) c += counts[b * KEY_BINS + k];
         merged[k] = c;
     }

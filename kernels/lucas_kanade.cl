@@ -19,8 +19,8 @@
 #include "sampling.h"
 
 __kernel void lk_terms(__global const float *f0, __global const float *f1, __global const float *flow,
-                    float gain, __global float *xx, __global float *xy, __global float *yy,
-                    __global float *xt, __global float *yt, long W, long H)
+                       float gain, __global float *xx, __global float *xy, __global float *yy,
+                       __global float *xt, __global float *yt, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -46,8 +46,8 @@ __kernel void lk_terms(__global const float *f0, __global const float *f1, __glo
 }
 
 __kernel void lk_step(__global const float *xx, __global const float *xy, __global const float *yy,
-                   __global const float *xt, __global const float *yt, float ridge, float limit,
-                   __global float *flow, long W, long H)
+                      __global const float *xt, __global const float *yt, float ridge, float limit,
+                      __global float *flow, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;

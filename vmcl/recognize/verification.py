@@ -127,7 +127,7 @@ def _check_support(nearest: Any, tangent_map: Any, points_: Any, tangents: Any, 
                    transforms: Any) -> tuple[np.ndarray, ...]:
     if not isinstance(nearest, np.ndarray) or nearest.dtype != np.int32 or nearest.ndim != 2 or nearest.size == 0:
         raise InputValueError("nearest must be an int32 (H, W) array (distance_transform's nearest)")
-    for name, value in (("nearest", nearest), ("point_ranges", point_ranges), ("transforms", transforms)):
+    for name, value in (("nearest", nearest), ("point_ranges", point_ranges)):
         check_unmasked(value, name)
     if nearest.min() < -1 or nearest.max() >= nearest.size:
         raise InputValueError(f"nearest must hold flat addresses of its pixels (0 to {nearest.size - 1}) or -1")
