@@ -617,7 +617,8 @@ class TimeConfig:
     predict_search : bool
         The previous flow, carried to the frame, predicts where the motion search looks: the finest level
         is searched around it as well as around the coarse-to-fine prediction, and each pixel keeps the
-        better match (:func:`vmcl.early.motion.flow`'s ``prediction``).
+        better match (:func:`vmcl.early.motion.flow`'s ``prediction``). On by default: it scored lower
+        on the training sequences (benchmarks/time_fit.py).
     """
 
     enabled: bool = True
@@ -627,7 +628,7 @@ class TimeConfig:
     jump: float = 0.25
     scene_cut: float = 0.5
     warm: bool = True
-    predict_search: bool = False
+    predict_search: bool = True
 
     def __post_init__(self) -> None:
         _check_field_types("time", self)
