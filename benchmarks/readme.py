@@ -299,6 +299,20 @@ def time_fit_figures(f: ResultsFile) -> str:
             f"(flow and disparity errors {best}x those with time off)")
 
 
+def texture_fit_figures(f: ResultsFile) -> str:
+    chosen = re.search(r"Chosen: noise_factor = ([\d.]+)", f.text)
+    if not chosen:
+        return "chosen on rendered scenes: not stated"
+    table = f.table("noise_factor", "mean F")
+    held = re.search(r"texture-line F textures ([\d.]+), cues ([\d.]+)", f.text)
+    mosaic = f.table("field", "smallest")
+    return (f"chosen on rendered scenes: noise factor {chosen.group(1)}, training texture-line F "
+            f"{table.cell({'noise_factor': chosen.group(1)}, 'mean F')} against {table.cell({'noise_factor': '2.0'}, 'mean F')} "
+            f"at the former 2.0; seed 2 (not fitted): textures {held.group(1) if held else '?'}, cues "
+            f"{held.group(2) if held else '?'}; scikit-image's brick / grass / gravel mosaic, smallest separation of the "
+            f"restored density {mosaic.cell({'field': 'restored by the texture MRF'}, 'smallest')} (bar 5)")
+
+
 def first_run_figures(f: ResultsFile) -> str:
     table = f.table("run", "wall s")
     column = "spent building (s, against the same run with caches filled)"
@@ -613,6 +627,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("motion_lucas_kanade_fit", ("the motion cue's Lucas-Kanade steps (how many, their window, the "
                                  "frames' high-pass) chosen on rendered scenes"), motion_lucas_kanade_fit_figures),
     ("time_fit", "the temporal terms' defaults chosen on rendered sequences", time_fit_figures),
+    ("texture_fit", "the texture-edge candidates' noise factor chosen on rendered scenes; the photo mosaic",
+     texture_fit_figures),
     ("early", "colour and texture against NumPy/SciPy", early_figures),
     ("mrf", "sweeps per second of each solver; Gibbs against NumPy; dense disparity on Middlebury",
      mrf_figures),

@@ -53,6 +53,7 @@ from vmcl.early import (
     motion_refine,
     semiglobal,
     stereo,
+    texture,
 )
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.group import Grouping, group, saliency_strength, structural_saliency
@@ -452,6 +453,7 @@ class TextureConfig:
     coarse_sigma: float = 4.0
     threshold: float = 0.08
     radius: int = 24
+    noise_factor: float = texture.NOISE_FACTOR
 
     def __post_init__(self) -> None:
         _check_field_types("texture", self)
@@ -462,6 +464,7 @@ class TextureConfig:
                                   f"({self.coarse_sigma})")
         check_real(self.threshold, "texture.threshold", above=0)  # texture.density refuses 0 at run time
         check_int(self.radius, "texture.radius", minimum=1)
+        check_real(self.noise_factor, "texture.noise_factor", above=0)
 
 
 @dataclass(frozen=True)

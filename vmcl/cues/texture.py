@@ -30,7 +30,8 @@ class TextureCue(CueModule):
     def measure(self, run: RunInputs) -> Measurement:
         t = run.config.texture
         found = texture.texture_edges(run.left, fine_sigma=t.fine_sigma, coarse_sigma=t.coarse_sigma,
-                                      threshold=t.threshold, radius=t.radius, machine=run.machine)
+                                      threshold=t.threshold, radius=t.radius, noise_factor=t.noise_factor,
+                                      machine=run.machine)
         density, edges = on_device(found.density), on_device(found.edges)  # device input, device output
         return Measurement(density, None, edges, fields={"density": density, "texture_edges": edges})
 

@@ -23,10 +23,12 @@ The edge rule
 At each pixel, the densities of the two adjacent (2r+1)-wide windows on either side of its right site
 are differenced (and likewise below), giving a gradient whose magnitude peaks on a boundary between
 two textures. Candidates are the maxima of the magnitude along its dominant axis that exceed
-``max(NOISE_LOW * s, MIN_DENSITY_STEP)``, s estimated from the median magnitude as
-:mod:`vmcl.early.noise` does (``s = median / sqrt(2 ln 2)``), NOISE_LOW = 2.0. The lower of the noise
-module's two factors is used because the candidates feed the MRF stage, which removes the isolated
-ones; the floor keeps untextured images (density 0 everywhere) free of candidates.
+``max(noise_factor * s, MIN_DENSITY_STEP)``, s estimated from the median magnitude as
+:mod:`vmcl.early.noise` does (``s = median / sqrt(2 ln 2)``). The default factor,
+:data:`NOISE_FACTOR`, was fitted on rendered scenes (benchmarks/texture_fit.py): the texture MRF, whose
+lines are allowed only near these candidates, draws a line at nearly every one it is given, so the
+candidates' own threshold decides how many false texture lines the cartoon gets. The floor keeps
+untextured images (density 0 everywhere) free of candidates.
 
 Images are grey or RGB, uint8, uint16 or float, NumPy or device arrays, converted to grey as
 :mod:`vmcl.early.filters` describes; ``threshold`` is in the input's units. NumPy in gives NumPy out, a
@@ -54,10 +56,14 @@ from vmcl.early.filters import laplacian_of_gaussian
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["MIN_DENSITY_STEP", "TextureEdges", "density", "texture_edges"]
+__all__ = ["MIN_DENSITY_STEP", "NOISE_FACTOR", "TextureEdges", "density", "texture_edges"]
 
 MIN_DENSITY_STEP = 0.01
 """Smallest density difference (share of a window covered by blobs) that can be a texture edge."""
+
+NOISE_FACTOR = 3.5
+"""Default of :func:`texture_edges`'s ``noise_factor``: candidates exceed this many noise deviations of the
+density's gradient (fitted by benchmarks/texture_fit.py on rendered scenes)."""
 
 
 class TextureEdges(NamedTuple):
@@ -171,7 +177,8 @@ def density(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, thresho
 
 
 def texture_edges(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, threshold: float, radius: int,
-                  edge_threshold: float | None = None, machine: Machine | None = None) -> TextureEdges:
+                  edge_threshold: float | None = None, noise_factor: float = NOISE_FACTOR,
+                  machine: Machine | None = None) -> TextureEdges:
     """Texture-edge candidates: maxima of the texton density's gradient across the boundary.
 
     Parameters
@@ -180,7 +187,10 @@ def texture_edges(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, t
         As for :func:`density`.
     edge_threshold : float, optional
         Smallest density difference between the two adjacent windows of a candidate, >= 0. Default:
-        ``max(NOISE_LOW * s, MIN_DENSITY_STEP)`` (the module's edge rule).
+        ``max(noise_factor * s, MIN_DENSITY_STEP)`` (the module's edge rule).
+    noise_factor : float
+        > 0: the edge rule's multiple of the gradient's noise deviation s (ignored with
+        ``edge_threshold``).
     machine : vmcl.Machine, optional
 
     Returns
@@ -202,6 +212,7 @@ def texture_edges(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, t
     fine, coarse, threshold, radius = _check(fine_sigma, coarse_sigma, threshold, radius)
     if edge_threshold is not None:
         edge_threshold = check_real(edge_threshold, "edge_threshold", minimum=0)
+    noise_factor = check_real(noise_factor, "noise_factor", above=0)
     data, host, radius = _image_and_radius(image, radius, fine, coarse, machine)
     dens = _density(machine, data, fine, coarse, threshold, radius)
     height, width = dens.shape
@@ -210,7 +221,9 @@ def texture_edges(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, t
     machine.launch(machine.kernel("texture", "density_gradient"), size, dens, magnitude, axis,
                    np.int64(radius), *dims)
     if edge_threshold is None:
-        pairs, _ = _noise.threshold_field(machine, magnitude, _noise.noise_rule(), local=False)
+        # The kernel reads the rule's low threshold only.
+        rule = _noise.noise_rule(noise_factor, noise_factor)
+        pairs, _ = _noise.threshold_field(machine, magnitude, rule, local=False)
         floor = MIN_DENSITY_STEP
     else:
         pairs, floor = magnitude, float(edge_threshold)
