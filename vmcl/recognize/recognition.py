@@ -127,7 +127,7 @@ def _features(data: Any, sigma: float, machine: Machine) -> Features:
 def recognize(image: Any, library: Library, *, transform: Transform = "similarity", sigma: float = 1.5,
               scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float = 20.0,
               min_support: int = 40,
-              candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 12, regions: int = 8,
+              candidates: int = 4096, verify: int = 128, min_votes: int = 2, neighbours: int = 12, regions: int = 8,
               tolerance: float = 3.0, depth: np.ndarray | None = None,
               machine: Machine | None = None) -> list[Detection]:
     """Find a library's objects in an image.
@@ -157,7 +157,9 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     min_support : int
         The fewest distinct image edge pixels a detection explains, >= 1.
     candidates : int
-        Pose bins kept from the vote, >= 1 (their hypotheses are pooled into candidate poses).
+        Pose bins kept from the vote, >= 1 (their hypotheses are pooled into candidate poses). The default
+        was chosen on rendered training scenes (benchmarks/recognition_fit.py): an object seen by one corner
+        correspondence gets two votes, which a cutoff of 1024 bins left out.
     verify : int
         Candidate poses refined and verified, >= 1: those a coarse test of each unrefined pose supports
         best.
