@@ -86,13 +86,17 @@ def photo_mosaic() -> tuple[np.ndarray, np.ndarray]:
     return mosaic, tiles
 
 
-def separations(field: np.ndarray, tiles: np.ndarray, radius: int) -> list[float]:
-    """|mean_A - mean_B| / max(std_A, std_B) for each pair of tiles, over pixels whose window lies in one tile."""
+MOSAIC_PAIRS = ((0, 1), (0, 2), (1, 2))
+"""The photo mosaic's pairs of tiles: brick / grass, brick / gravel, grass / gravel."""
+
+
+def separations(field: np.ndarray, regions: np.ndarray, pairs, radius: int) -> list[float]:
+    """|mean_A - mean_B| / max(std_A, std_B) for each pair of regions, over the pixels whose (2 radius + 1)-wide
+    window lies in one region."""
     stats = {}
-    for tile in np.unique(tiles):
-        inside = ndimage.binary_erosion(tiles == tile, iterations=radius + 1, border_value=1)
-        stats[tile] = field[inside].mean(), field[inside].std()
-    pairs = [(0, 1), (0, 2), (1, 2)]
+    for region in np.unique(regions):
+        inside = ndimage.binary_erosion(regions == region, iterations=radius + 1, border_value=1)
+        stats[region] = field[inside].mean(), field[inside].std()
     return [abs(stats[a][0] - stats[b][0]) / max(stats[a][1], stats[b][1], 1e-12) for a, b in pairs]
 
 
@@ -148,7 +152,7 @@ def main() -> int:
               f"whose {2 * default.radius + 1}-px window lies in one tile; bar: at least 5):"), "",
               "| field | " + " | ".join(pairs) + " | smallest |", "|---" * 5 + "|"]
     for label, field in (("texton density", density), ("restored by the texture MRF", restored)):
-        found = separations(field, tiles, default.radius)
+        found = separations(field, tiles, MOSAIC_PAIRS, default.radius)
         lines.append(f"| {label} | " + " | ".join(f"{v:.2f}" for v in found) + f" | {min(found):.2f} |")
     lines.append("")
     args.out.write_text("\n".join(lines))

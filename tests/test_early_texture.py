@@ -1,6 +1,9 @@
 """Texture: texton density and texture-edge candidates against NumPy oracles, on the blob mosaic of
 vmcl.scenes and on a mosaic of scikit-image's brick, grass and gravel."""
 
+import importlib.util
+from pathlib import Path
+
 import numpy as np
 import pyopencl.array as cl_array
 import pytest
@@ -10,6 +13,13 @@ from vmcl import metrics, scenes
 from vmcl.early import texture
 from vmcl.early.filters import gaussian_taps
 from vmcl.labels import Label
+
+# benchmarks/ is a folder of scripts, not a package: its texture fit (which builds the photo mosaic and
+# measures separations for its report) is loaded by its path.
+_SPEC = importlib.util.spec_from_file_location(
+    "texture_fit", Path(__file__).resolve().parents[1] / "benchmarks" / "texture_fit.py")
+TEXTURE_FIT = importlib.util.module_from_spec(_SPEC)
+_SPEC.loader.exec_module(TEXTURE_FIT)
 
 PARAMS = {"fine_sigma": 1.0, "coarse_sigma": 4.0, "radius": 24}
 PRESET_THRESHOLD = 0.08  # float images of the preset: blobs of depth about 0.3
@@ -104,15 +114,6 @@ def _boundaries(regions):
     return b
 
 
-def _separations(d, regions, pairs, radius):
-    """|mean_A - mean_B| / max(std_A, std_B) over pixels whose whole window lies in one region."""
-    stats = {}
-    for reg in np.unique(regions):
-        inside = ndimage.binary_erosion(regions == reg, iterations=radius + 1, border_value=1)
-        stats[reg] = d[inside].mean(), d[inside].std()
-    return [abs(stats[a][0] - stats[b][0]) / max(stats[a][1], stats[b][1]) for a, b in pairs]
-
-
 @pytest.fixture(scope="module")
 def blob_mosaic():
     return scenes.render(scenes.preset("textures", shape=(512, 512)), seed=0)
@@ -126,26 +127,15 @@ def test_blob_mosaic_densities_separate_and_edges_are_found(blob_mosaic, machine
     # The disc (spacing 10, fill 0.3) and the sparse quadrant (spacing 16, fill 0.9) have nearly equal
     # expected densities by construction (0.3 / 10**2 against 0.9 / 16**2): that pair is not compared.
     pairs = [(dense, wall), (sparse, wall), (disc, wall), (disc, dense), (dense, sparse)]
-    assert min(_separations(got.density, regions, pairs, PARAMS["radius"])) > 5
+    assert min(TEXTURE_FIT.separations(got.density, regions, pairs, PARAMS["radius"])) > 5
     truth = s.labels == Label.TEXTURE
     # Within the scene's tolerance, half the coarser texel spacing (the texture-only rule of Scene.tolerance):
     # measured 0.83 with the default noise factor (0.74 within 3 px).
     assert metrics.detection_scores(got.edges, truth, tolerance=s.tolerance).recall >= 0.80
 
 
-def _photo_mosaic():
-    from skimage import data
-
-    n, h = 512, 256
-    mosaic, regions = np.empty((n, n), np.uint8), np.empty((n, n), np.int32)
-    mosaic[:h], regions[:h] = data.brick()[:h], 0
-    mosaic[h:, :h], regions[h:, :h] = data.grass()[h:, :h], 1
-    mosaic[h:, h:], regions[h:, h:] = data.gravel()[h:, h:], 2
-    return mosaic, regions
-
-
 def test_photo_mosaic_edges_are_found(machine):
-    mosaic, regions = _photo_mosaic()
+    mosaic, regions = TEXTURE_FIT.photo_mosaic()
     got = texture.texture_edges(mosaic, threshold=MOSAIC_THRESHOLD, machine=machine, **PARAMS)
     assert metrics.detection_scores(got.edges, _boundaries(regions), tolerance=3).recall >= 0.80
 
@@ -161,9 +151,9 @@ PHOTO_PARAMS = {"fine_sigma": 1.0, "coarse_sigma": 2.0, "threshold": 10.0, "radi
 
 
 def test_photo_mosaic_densities_separate(machine):
-    mosaic, regions = _photo_mosaic()
+    mosaic, regions = TEXTURE_FIT.photo_mosaic()
     d = texture.density(mosaic, machine=machine, **PHOTO_PARAMS)
-    separations = _separations(d, regions, [(0, 1), (0, 2), (1, 2)], PHOTO_PARAMS["radius"])
+    separations = TEXTURE_FIT.separations(d, regions, TEXTURE_FIT.MOSAIC_PAIRS, PHOTO_PARAMS["radius"])
     assert min(separations) > 5
 
 
