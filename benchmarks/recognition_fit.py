@@ -5,10 +5,10 @@ object of vmcl.scenes.OBJECTS, 30 to 50 % of each hidden, clutter), the library 
 vmcl.scenes.example_views (one view of each flat object, five of each solid one). For each tolerance (the
 distance within which an image edge supports a model point), the threshold is the least significance whose
 false detections per image stay at most 0.1 (the bar of the recognition issue); the tolerance chosen is the
-one whose recognition rate at its threshold is highest (a tie goes to the smaller tolerance). Then, at that
-tolerance, the vote's cutoff (``candidates``: how many of the best (model, pose) bins go on to alignment) is
-chosen the same way, its threshold refitted for each value (a tie goes to the fewest candidates): an
-object seen by one corner correspondence gets two votes, which a cutoff set by busier bins leaves out.
+one whose recognition rate at its threshold is highest (a tie goes to the smaller tolerance). The vote's
+cutoff (``candidates``: how many of the best (model, pose) bins go on to alignment) is chosen with it, over
+the same grid (a further tie goes to the fewer candidates): an object seen by one corner correspondence
+gets two votes, which a cutoff set by busier bins leaves out.
 benchmarks/recognition.py reports the test scenes (seeds 1000 on) at the chosen pair, the defaults of
 vmcl.recognize.recognize. Writes benchmarks/results/recognition_fit.md.
 
@@ -17,7 +17,6 @@ Run: python benchmarks/recognition_fit.py
 
 from __future__ import annotations
 
-import inspect
 import platform
 import sys
 import time
@@ -33,7 +32,6 @@ RESULTS = Path(__file__).parent / "results" / "recognition_fit.md"
 SEEDS = range(120)
 TOLERANCES = (2.0, 2.5, 3.0, 3.5, 4.0)
 CANDIDATES = (1024, 4096, 16384)
-_DEFAULT_CANDIDATES = inspect.signature(recognize).parameters["candidates"].default
 THRESHOLDS = tuple(np.arange(0.0, 60.5, 0.5))
 SHOWN = (0.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 50.0)  # the thresholds the chosen tolerance's table lists
 MAX_FALSE = 0.1
@@ -73,54 +71,38 @@ def main() -> int:
     start = time.perf_counter()
     fits = {}
     for tolerance in TOLERANCES:
-        rows = _tally(library, learned, scenes, solid, tolerance=tolerance)
-        fits[tolerance] = (rows, _chosen_threshold(rows, len(scenes)))
-    best = max(TOLERANCES, key=lambda tol: (round(_rate(fits[tol][0][fits[tol][1]]), 6), -tol))
-    cutoffs = {}
-    for count in CANDIDATES:
-        counted = _tally(library, learned, scenes, solid, tolerance=best, candidates=count)
-        cutoffs[count] = (counted, _chosen_threshold(counted, len(scenes)))
-    candidates = max(CANDIDATES, key=lambda c: (round(_rate(cutoffs[c][0][cutoffs[c][1]]), 6), -c))
-    rows, at = cutoffs[candidates]
+        for count in CANDIDATES:
+            counted = _tally(library, learned, scenes, solid, tolerance=tolerance, candidates=count)
+            fits[tolerance, count] = (counted, _chosen_threshold(counted, len(scenes)))
+    best, candidates = max(fits, key=lambda pair: (round(_rate(fits[pair][0][fits[pair][1]]), 6), -pair[0], -pair[1]))
+    rows, at = fits[best, candidates]
     threshold = THRESHOLDS[at]
     # Selection's share: the same scenes with no region's corners paired among themselves.
     alone = _tally(library, learned, scenes, solid, tolerance=best, candidates=candidates, regions=0)[at]
     seconds = time.perf_counter() - start
     n = len(scenes)
-    lines = ["# Recognition: the support tolerance and the significance threshold, fitted on training scenes", "",
+    lines = ["# Recognition: the support tolerance, the vote's cutoff and the significance threshold, fitted on training scenes", "",
              (f"`python benchmarks/recognition_fit.py` on {platform.node() or 'this machine'} "
               f"({time.strftime('%Y-%m-%d')}), {n} training scenes (seeds {SEEDS.start}..{SEEDS.stop - 1}), "
               f"{len(library)} models, {seconds:.0f} s."), "",
-             (f"Per tolerance (with recognize's default vote cutoff, {_DEFAULT_CANDIDATES} candidates), the least "
-              f"threshold (steps of {THRESHOLDS[1] - THRESHOLDS[0]:g}) whose false "
-              f"detections per image are at most {MAX_FALSE:g}, and the recognition rate there:"), "",
-             "| tolerance px | min_significance | recognition rate | flat | solid | false detections per image |",
-             "|---|---|---|---|---|---|"]
-    for tolerance in TOLERANCES:
-        r, t = fits[tolerance]
+             (f"Per tolerance and vote cutoff (the best bins kept for alignment), the least threshold (steps of "
+              f"{THRESHOLDS[1] - THRESHOLDS[0]:g}) whose false detections per image are at most {MAX_FALSE:g}, and "
+              "the recognition rate there:"), "",
+             "| tolerance px | candidates | min_significance | recognition rate | flat | solid | false detections per image |",
+             "|---|---|---|---|---|---|---|"]
+    for (tolerance, count), (r, t) in fits.items():
         row = r[t]
-        mark = " (chosen)" if tolerance == best else ""
-        lines.append(f"| {tolerance:g}{mark} | {THRESHOLDS[t]:g} | {_rate(row):.3f} | {row[0] / row[2]:.3f} | "
-                     f"{row[1] / row[3]:.3f} | {row[4] / n:.3f} |")
-    lines += ["", (f"Chosen: tolerance = {best:g} px (the highest rate; a tie goes to the smaller tolerance)."), "",
-              (f"At {best:g} px, per vote cutoff (the best bins kept for alignment), the least threshold whose false "
-               f"detections per image are at most {MAX_FALSE:g}:"), "",
-              "| candidates | min_significance | recognition rate | flat | solid | false detections per image |",
-              "|---|---|---|---|---|---|"]
-    for count in CANDIDATES:
-        r, t = cutoffs[count]
-        row = r[t]
-        mark = " (chosen)" if count == candidates else ""
-        lines.append(f"| {count}{mark} | {THRESHOLDS[t]:g} | {_rate(row):.3f} | {row[0] / row[2]:.3f} | "
+        mark = " (chosen)" if (tolerance, count) == (best, candidates) else ""
+        lines.append(f"| {tolerance:g}{mark} | {count} | {THRESHOLDS[t]:g} | {_rate(row):.3f} | {row[0] / row[2]:.3f} | "
                      f"{row[1] / row[3]:.3f} | {row[4] / n:.3f} |")
     lines += ["", (f"Chosen: tolerance = {best:g} px, candidates = {candidates}, min_significance = {threshold:g} (the "
-                   "highest rate; a tie goes to the fewest candidates)."), "",
+                   "highest rate; a tie goes to the smaller tolerance, then to the fewer candidates)."), "",
               f"The threshold at tolerance {best:g} px and {candidates} candidates:", "",
               "| min_significance | recognition rate | false detections per image |", "|---|---|---|"]
     for shown in SHOWN:
         row = rows[THRESHOLDS.index(shown)]
         lines.append(f"| {shown:g} | {_rate(row):.3f} | {row[4] / n:.3f} |")
-    lines += ["", ("Selection at the chosen pair (the corners of the 8 most salient regions paired among themselves, "
+    lines += ["", ("Selection at the chosen setting (the corners of the 8 most salient regions paired among themselves, "
                    "beside each corner's 12 nearest):"), "",
               "| selection | recognition rate | false detections per image |", "|---|---|---|",
               f"| on (regions = 8) | {_rate(rows[at]):.3f} | {rows[at][4] / n:.3f} |",

@@ -69,7 +69,9 @@ def main() -> None:
     print("off", off, flush=True)
     rows = {}
     for gain, memory, jump in itertools.product(GAINS, MEMORIES, JUMPS):
-        found = stream(TimeConfig(gain=gain, memory=memory, jump=jump))
+        # The grid is scored with the search unpredicted, as it was before that switch was fitted (below):
+        # its default must not decide the grid it is then fitted on.
+        found = stream(TimeConfig(gain=gain, memory=memory, jump=jump, predict_search=False))
         ratios = [(found[n][0] / off[n][0] + found[n][1] / off[n][1]) / 2 for n in PRESETS]
         rows[(gain, memory, jump)] = (float(np.mean(ratios)), found)
         print(gain, memory, jump, f"{np.mean(ratios):.3f}", flush=True)

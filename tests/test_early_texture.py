@@ -130,8 +130,9 @@ def test_blob_mosaic_densities_separate_and_edges_are_found(blob_mosaic, machine
     assert min(TEXTURE_FIT.separations(got.density, regions, pairs, PARAMS["radius"])) > 5
     truth = s.labels == Label.TEXTURE
     # Within the scene's tolerance, half the coarser texel spacing (the texture-only rule of Scene.tolerance):
-    # measured 0.83 with the default noise factor (0.74 within 3 px).
+    # measured 0.83 with the default noise factor; within 3 px, where the edges' placement shows, 0.74.
     assert metrics.detection_scores(got.edges, truth, tolerance=s.tolerance).recall >= 0.80
+    assert metrics.detection_scores(got.edges, truth, tolerance=3).recall >= 0.70
 
 
 def test_photo_mosaic_edges_are_found(machine):

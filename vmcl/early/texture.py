@@ -212,7 +212,8 @@ def texture_edges(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, t
     fine, coarse, threshold, radius = _check(fine_sigma, coarse_sigma, threshold, radius)
     if edge_threshold is not None:
         edge_threshold = check_real(edge_threshold, "edge_threshold", minimum=0)
-    noise_factor = check_real(noise_factor, "noise_factor", above=0)
+    # Bounded by float32's range: the device multiplies the noise deviation by it.
+    noise_factor = check_real(noise_factor, "noise_factor", above=0, maximum=float(np.finfo(np.float32).max))
     data, host, radius = _image_and_radius(image, radius, fine, coarse, machine)
     dens = _density(machine, data, fine, coarse, threshold, radius)
     height, width = dens.shape

@@ -298,7 +298,8 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     scales : (float, float)
         The range of scales (image size over view size) a pose may have.
     candidates : int
-        The pose bins kept: those with at least the votes of the ``candidates``-th best, >= 1.
+        The pose bins kept: those with at least the votes of the ``candidates``-th best, >= 1. The
+        default is :func:`vmcl.recognize.recognize`'s, fitted on rendered training scenes.
     min_votes : int
         The fewest votes a kept bin has, >= 1 (each corner correspondence votes twice, once per order).
     machine : vmcl.Machine, optional
