@@ -6,9 +6,9 @@
  *   boundary    a line process as a 0/1 pixel map: (x, y) is on when the site to its right (line_h) or
  *               below it (line_v) is on (the convention of vmcl.scenes' non-depth labels); the stereo
  *               matcher takes it as the barriers of its second pass
- *   start_support, mark_cue
+ *   start_support, mark_cue, mark_cue_owned
  *               the cue-support bitmask of every pixel: whether a brightness edge lies on it, and which
- *               cues put a line next to it (one launch per cue)
+ *               cues put a line next to it (one launch per cue; owned: on the side an owner field picks)
  *   rule_labels each supported pixel's label by the cues' rules: the "cartoon"
  *
  * Line fields: line_h is (H, W - 1), line_v is (H - 1, W), uint8 0/1, as vmcl.mrf.restore returns them.
@@ -45,6 +45,23 @@ __kernel void mark_cue(__global const uchar *line_h, __global const uchar *line_
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
     if (on_boundary(line_h, line_v, x, y, W, H)) support[(size_t)y * W + x] |= (uchar)bit;
+}
+
+/* The same, with each line site's mark on its owner's side: the pixel of the two whose owner field is
+ * larger (the nearer surface's, for a disparity: an occluding contour belongs to the occluder). Equal or
+ * NaN owners keep the left or upper pixel, as mark_cue does. */
+__kernel void mark_cue_owned(__global const uchar *line_h, __global const uchar *line_v, int bit,
+                             __global const float *owner, __global uchar *support, long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    size_t i = (size_t)y * W + x;
+    float o = owner[i];
+    int marked = (x < W - 1 && line_h[y * (W - 1) + x] && !(owner[i + 1] > o))
+              || (x > 0 && line_h[y * (W - 1) + x - 1] && o > owner[i - 1])
+              || (y < H - 1 && line_v[y * W + x] && !(owner[i + W] > o))
+              || (y > 0 && line_v[(y - 1) * W + x] && o > owner[i - W]);
+    if (marked) support[i] |= (uchar)bit;
 }
 
 /* The rule labels: the physical reading of the support, most specific first (vmcl.labels.RULE_PRECEDENCE):

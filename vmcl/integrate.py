@@ -176,7 +176,8 @@ def boundary(line_h: ArrayLike, line_v: ArrayLike, *, machine: Machine | None = 
 
 
 def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayLike | None = None,
-              shape: tuple[int, int] | None = None, machine: Machine | None = None) -> Integration:
+              owners: Mapping[str, ArrayLike] | None = None, shape: tuple[int, int] | None = None,
+              machine: Machine | None = None) -> Integration:
     """Combine the cues' line processes and the brightness edges into the labelled discontinuity map.
 
     Parameters
@@ -186,6 +187,11 @@ def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayL
         :func:`boundary` takes it. Cues left out support nothing.
     edges : (H, W) array, optional
         Brightness edges, non-zero on edge pixels (device arrays: uint8); they set the BRIGHTNESS bit.
+    owners : mapping of cue name to (H, W) array, optional
+        For a cue of ``lines``, a field that says which of a line site's two pixels the line marks: the
+        one whose value is larger (a disparity: the nearer surface, which owns an occluding contour, as
+        :mod:`vmcl.scenes` labels it). Equal or NaN values keep the left or upper pixel, the mark of a
+        cue without an owner. Device arrays: float32.
     shape : (int, int), optional
         The image's (H, W); required when neither lines nor edges are given.
     machine : vmcl.Machine, optional
@@ -212,15 +218,30 @@ def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayL
     for name, pair in lines.items():
         if not isinstance(pair, (tuple, list)) or len(pair) != 2:
             raise InputTypeError(f"lines[{name!r}] must be a (line_h, line_v) pair, got {type(pair).__name__}")
+    owners = {} if owners is None else owners
+    if not isinstance(owners, Mapping):
+        raise InputTypeError(f"owners must be a mapping of cue name to a field, got {type(owners).__name__}")
+    unowned = set(owners) - set(lines)
+    if unowned:
+        raise InputValueError(f"owners has cues without lines: {sorted(unowned, key=str)}")
     if shape is not None:
         shape = _shape(shape)
-    inputs = [a for pair in lines.values() for a in pair] + ([edges] if edges is not None else [])
+    inputs = ([a for pair in lines.values() for a in pair] + list(owners.values())
+              + ([edges] if edges is not None else []))
     host = all(isinstance(a, np.ndarray) for a in inputs)
     marks = []
     for name in cue_names():
         if name in lines:
             h, v, shape = _lines(*lines[name], f"lines[{name!r}] ", machine, shape)
-            marks.append((h, v, cue_bit(name)))
+            owner = None
+            if name in owners:
+                given = owners[name]
+                if isinstance(given, np.ndarray):  # any real host dtype, compared as float32 on the device
+                    given = check_real_dtype(given, f"owners[{name!r}]").astype(np.float32, copy=False)
+                owner = field(given, f"owners[{name!r}]", machine, ndims=(2,), dtypes=(np.float32,))[0]
+                if owner.shape != shape:
+                    raise InputValueError(f"owners[{name!r}] must have the lines' shape {shape}, got {owner.shape}")
+            marks.append((h, v, cue_bit(name), owner))
     if edges is not None:
         if isinstance(edges, np.ndarray):
             edges = (check_real_dtype(edges, "edges") != 0).view(np.uint8)
@@ -236,8 +257,13 @@ def integrate(lines: Mapping[str, tuple[ArrayLike, ArrayLike]], *, edges: ArrayL
     size, extent = (width, height), (np.int64(width), np.int64(height))
     machine.launch(machine.kernel("integrate", "start_support", **defines), size,
                    support if edges is None else edges, np.int32(edges is not None), support, *extent)
-    for h, v, bit in marks:
-        machine.launch(machine.kernel("integrate", "mark_cue", **defines), size, h, v, np.int32(bit), support, *extent)
+    for h, v, bit, owner in marks:
+        if owner is None:
+            machine.launch(machine.kernel("integrate", "mark_cue", **defines), size, h, v, np.int32(bit), support,
+                           *extent)
+        else:
+            machine.launch(machine.kernel("integrate", "mark_cue_owned", **defines), size, h, v, np.int32(bit),
+                           owner, support, *extent)
     machine.launch(machine.kernel("integrate", "rule_labels", **defines), size, support, labels, *extent)
     if host:
         return Integration(support.get(), labels.get())

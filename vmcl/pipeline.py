@@ -1027,7 +1027,9 @@ class _Run:
         if memory is not None:
             memory.end(restored.get("motion"))
         with self.stage("integrate"):
-            integration = _integrate.integrate(lines, edges=brightness, machine=self.m)
+            # A depth line marks its nearer pixel: the occluding contour belongs to the occluder.
+            owners = {"stereo": restored["stereo"]} if "stereo" in lines else None
+            integration = _integrate.integrate(lines, edges=brightness, owners=owners, machine=self.m)
             support, labels = on_device(integration.support), on_device(integration.labels)
             strength = image_boundaries
             if vm.labeller is not None:
