@@ -63,7 +63,9 @@ class Result:
     lines : dict of str to (line_h, line_v)
         Each cue's line process (bool).
     support : uint8 (H, W)
-        :class:`vmcl.labels.Cue` bits: which cues put a discontinuity at each pixel.
+        :class:`vmcl.labels.Cue` bits: which cues put a discontinuity at each pixel (a line site's pixel
+        is its left or upper one; a stereo line's is its nearer one, :func:`vmcl.integrate.integrate`'s
+        ``owners``).
     labels : uint8 (H, W)
         The cartoon: :class:`vmcl.labels.Label` codes of the discontinuity pixels (``labels.method``
         says how they are chosen; :mod:`vmcl.labelling` by default).
