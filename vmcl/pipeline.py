@@ -464,7 +464,7 @@ class TextureConfig:
                                   f"({self.coarse_sigma})")
         check_real(self.threshold, "texture.threshold", above=0)  # texture.density refuses 0 at run time
         check_int(self.radius, "texture.radius", minimum=1)
-        check_real(self.noise_factor, "texture.noise_factor", above=0)
+        check_real(self.noise_factor, "texture.noise_factor", above=0, maximum=float(np.finfo(np.float32).max))
 
 
 @dataclass(frozen=True)
