@@ -293,25 +293,24 @@ def motion_lucas_kanade_fit_figures(f: ResultsFile) -> str:
 
 def time_fit_figures(f: ResultsFile) -> str:
     chosen = re.search(r"Chosen \(lowest score\): (.*)\.", f.text)
-    predicted = re.search(r"Chosen: predict_search (on|off)", f.text)
-    if not chosen or not predicted:
-        raise LookupError("time_fit.md states no choice")
-    searched = f.table("predict_search", "score")
-    shipped = searched.cell({"predict_search": predicted.group(1)}, "score")
-    return (f"chosen on rendered sequences with changing speeds: {chosen.group(1)}, predict_search "
-            f"{predicted.group(1)} (flow and disparity errors {shipped}x those with time off)")
+    if not chosen:
+        raise LookupError("time_fit.md states no choice of the temporal terms")
+    predicted = stated_choice(f)  # "predict_search on" or "... off"
+    shipped = f.table("predict_search", "score").cell({"predict_search": predicted.split()[-1]}, "score")
+    return (f"chosen on rendered sequences with changing speeds: {chosen.group(1)}, {predicted} (flow and "
+            f"disparity errors {shipped}x those with time off)")
 
 
 def texture_fit_figures(f: ResultsFile) -> str:
-    chosen = re.search(r"Chosen: noise_factor = ([\d.]+)", f.text)
+    factor = stated_choice(f).removeprefix("noise_factor = ")
     held = re.search(r"texture-line F textures ([\d.]+), cues ([\d.]+)", f.text)
-    if not chosen or not held:
-        raise LookupError("texture_fit.md states no choice or no held-out figures")
+    if not held:
+        raise LookupError("texture_fit.md states no held-out figures")
     table = f.table("noise_factor", "mean F")
     mosaic = f.table("field", "smallest")
     former = "2.0"  # the edge rule's factor before it was fitted (the noise module's low one)
-    return (f"chosen on rendered scenes: noise factor {chosen.group(1)}, training texture-line F "
-            f"{table.cell({'noise_factor': chosen.group(1)}, 'mean F')} against "
+    return (f"chosen on rendered scenes: noise factor {factor}, training texture-line F "
+            f"{table.cell({'noise_factor': factor}, 'mean F')} against "
             f"{table.cell({'noise_factor': former}, 'mean F')} at the former {former}; seed 2 (not fitted): textures "
             f"{held.group(1)}, cues {held.group(2)}; scikit-image's brick / grass / gravel mosaic, smallest separation "
             f"of the restored density {mosaic.cell({'field': 'restored by the texture MRF'}, 'smallest')} (bar 5)")

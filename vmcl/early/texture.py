@@ -26,8 +26,9 @@ two textures. Candidates are the maxima of the magnitude along its dominant axis
 ``max(noise_factor * s, MIN_DENSITY_STEP)``, s estimated from the median magnitude as
 :mod:`vmcl.early.noise` does (``s = median / sqrt(2 ln 2)``). The default factor,
 :data:`NOISE_FACTOR`, was fitted on rendered scenes (benchmarks/texture_fit.py): the texture MRF, whose
-lines are allowed only near these candidates, draws a line at nearly every one it is given, so the
-candidates' own threshold decides how many false texture lines the cartoon gets. The floor keeps
+lines are allowed only near these candidates, draws about as many lines whatever its data weight (the
+same results file), so the candidates' own threshold decides how many false texture lines the cartoon
+gets. The floor keeps
 untextured images (density 0 everywhere) free of candidates.
 
 Images are grey or RGB, uint8, uint16 or float, NumPy or device arrays, converted to grey as
