@@ -8,7 +8,9 @@ false detections per image stay at most 0.1 (the bar of the recognition issue); 
 one whose recognition rate at its threshold is highest (a tie goes to the smaller tolerance). The vote's
 cutoff (``candidates``: how many of the best (model, pose) bins go on to alignment) is chosen with it, over
 the same grid (a further tie goes to the fewer candidates): an object seen by one corner correspondence
-gets two votes, which a cutoff set by busier bins leaves out.
+gets two votes, which a cutoff set by busier bins leaves out. How many nearest features each corner or arc
+is paired with for indexing (``neighbours``) is chosen with them too (a further tie goes to the fewer):
+two corners of one object can be farther apart than many of the clutter's corners.
 benchmarks/recognition.py reports the test scenes (seeds 1000 on) at the chosen pair, the defaults of
 vmcl.recognize.recognize. Writes benchmarks/results/recognition_fit.md.
 
@@ -32,6 +34,7 @@ RESULTS = Path(__file__).parent / "results" / "recognition_fit.md"
 SEEDS = range(120)
 TOLERANCES = (2.0, 2.5, 3.0, 3.5, 4.0)
 CANDIDATES = (1024, 4096, 16384)
+NEIGHBOURS = (12, 24)
 THRESHOLDS = tuple(np.arange(0.0, 60.5, 0.5))
 SHOWN = (0.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 50.0)  # the thresholds the chosen tolerance's table lists
 MAX_FALSE = 0.1
@@ -72,38 +75,45 @@ def main() -> int:
     fits = {}
     for tolerance in TOLERANCES:
         for count in CANDIDATES:
-            counted = _tally(library, learned, scenes, solid, tolerance=tolerance, candidates=count)
-            fits[tolerance, count] = (counted, _chosen_threshold(counted, len(scenes)))
-    best, candidates = max(fits, key=lambda pair: (round(_rate(fits[pair][0][fits[pair][1]]), 6), -pair[0], -pair[1]))
-    rows, at = fits[best, candidates]
+            for neighbours in NEIGHBOURS:
+                counted = _tally(library, learned, scenes, solid, tolerance=tolerance, candidates=count,
+                                 neighbours=neighbours)
+                fits[tolerance, count, neighbours] = (counted, _chosen_threshold(counted, len(scenes)))
+    best, candidates, neighbours = max(fits, key=lambda key: (round(_rate(fits[key][0][fits[key][1]]), 6), -key[0],
+                                                              -key[1], -key[2]))
+    rows, at = fits[best, candidates, neighbours]
     threshold = THRESHOLDS[at]
     # Selection's share: the same scenes with no region's corners paired among themselves.
-    alone = _tally(library, learned, scenes, solid, tolerance=best, candidates=candidates, regions=0)[at]
+    alone = _tally(library, learned, scenes, solid, tolerance=best, candidates=candidates, neighbours=neighbours,
+                   regions=0)[at]
     seconds = time.perf_counter() - start
     n = len(scenes)
-    lines = ["# Recognition: the support tolerance, the vote's cutoff and the significance threshold, fitted on training scenes", "",
+    lines = [("# Recognition: the support tolerance, the vote's cutoff, the pairing and the significance threshold, "
+              "fitted on training scenes"), "",
              (f"`python benchmarks/recognition_fit.py` on {platform.node() or 'this machine'} "
               f"({time.strftime('%Y-%m-%d')}), {n} training scenes (seeds {SEEDS.start}..{SEEDS.stop - 1}), "
               f"{len(library)} models, {seconds:.0f} s."), "",
-             (f"Per tolerance and vote cutoff (the best bins kept for alignment), the least threshold (steps of "
-              f"{THRESHOLDS[1] - THRESHOLDS[0]:g}) whose false detections per image are at most {MAX_FALSE:g}, and "
-              "the recognition rate there:"), "",
-             "| tolerance px | candidates | min_significance | recognition rate | flat | solid | false detections per image |",
-             "|---|---|---|---|---|---|---|"]
-    for (tolerance, count), (r, t) in fits.items():
+             (f"Per tolerance, vote cutoff (the best bins kept for alignment) and neighbours (the nearest features each "
+              f"corner or arc is paired with), the least threshold (steps of {THRESHOLDS[1] - THRESHOLDS[0]:g}) whose "
+              f"false detections per image are at most {MAX_FALSE:g}, and the recognition rate there:"), "",
+             ("| tolerance px | candidates | neighbours | min_significance | recognition rate | flat | solid | "
+              "false detections per image |"),
+             "|---|---|---|---|---|---|---|---|"]
+    for (tolerance, count, pairing), (r, t) in fits.items():
         row = r[t]
-        mark = " (chosen)" if (tolerance, count) == (best, candidates) else ""
-        lines.append(f"| {tolerance:g}{mark} | {count} | {THRESHOLDS[t]:g} | {_rate(row):.3f} | {row[0] / row[2]:.3f} | "
-                     f"{row[1] / row[3]:.3f} | {row[4] / n:.3f} |")
-    lines += ["", (f"Chosen: tolerance = {best:g} px, candidates = {candidates}, min_significance = {threshold:g} (the "
-                   "highest rate; a tie goes to the smaller tolerance, then to the fewer candidates)."), "",
-              f"The threshold at tolerance {best:g} px and {candidates} candidates:", "",
+        mark = " (chosen)" if (tolerance, count, pairing) == (best, candidates, neighbours) else ""
+        lines.append(f"| {tolerance:g}{mark} | {count} | {pairing} | {THRESHOLDS[t]:g} | {_rate(row):.3f} | "
+                     f"{row[0] / row[2]:.3f} | {row[1] / row[3]:.3f} | {row[4] / n:.3f} |")
+    lines += ["", (f"Chosen: tolerance = {best:g} px, candidates = {candidates}, neighbours = {neighbours}, "
+                   f"min_significance = {threshold:g} (the highest rate; a tie goes to the smaller tolerance, then to "
+                   "the fewer candidates, then to the fewer neighbours)."), "",
+              f"The threshold at tolerance {best:g} px, {candidates} candidates and {neighbours} neighbours:", "",
               "| min_significance | recognition rate | false detections per image |", "|---|---|---|"]
     for shown in SHOWN:
         row = rows[THRESHOLDS.index(shown)]
         lines.append(f"| {shown:g} | {_rate(row):.3f} | {row[4] / n:.3f} |")
     lines += ["", ("Selection at the chosen setting (the corners of the 8 most salient regions paired among themselves, "
-                   "beside each corner's 12 nearest):"), "",
+                   f"beside each feature's {neighbours} nearest):"), "",
               "| selection | recognition rate | false detections per image |", "|---|---|---|",
               f"| on (regions = 8) | {_rate(rows[at]):.3f} | {rows[at][4] / n:.3f} |",
               f"| off (regions = 0) | {_rate(alone):.3f} | {alone[4] / n:.3f} |", ""]

@@ -15,6 +15,8 @@ from vmcl.errors import InputError
 from vmcl.recognize import (
     Index,
     Library,
+    anchors_of,
+    arcs_of,
     corner_pairs,
     corner_regions,
     distance_transform,
@@ -59,6 +61,31 @@ def test_an_objects_corners_are_found_where_they_are_with_their_angles(ell_model
     assert np.allclose(view.opening[near], math.pi / 2, atol=math.radians(12))
 
 
+def test_arcs_are_found_on_circles_with_their_centres_and_radii_and_none_on_polygons():
+    from vmcl.early.edges import canny
+    from vmcl.group.curves import link_edges
+
+    image = np.full((200, 320), 0.2, np.float32)
+    cv2.circle(image, (80, 100), 45, 0.8, -1, lineType=cv2.LINE_AA)
+    # A disc with a bite taken by a square occluder: its arc, broken, still gives the circle.
+    cv2.circle(image, (220, 100), 50, 0.7, -1, lineType=cv2.LINE_AA)
+    image[40:95, 240:300] = 0.45
+    found = canny(image, sigma=1.5, return_gradient=True)
+    centres, radii, middles = arcs_of(link_edges(found.edges, magnitude=found.magnitude))
+    assert len(centres) >= 2
+    for centre, radius in (((80, 100), 45), ((220, 100), 50)):
+        mine = np.hypot(*(centres - centre).T) < 3
+        assert mine.any()
+        assert np.allclose(centres[mine], centre, atol=1.5) and np.allclose(radii[mine], radius, rtol=0.04)
+        # Each arc's middle lies on its circle.
+        assert np.allclose(np.hypot(*(middles[mine] - centre).T), radius, atol=1.5)
+    # Straight sides and the corners between them are no arcs.
+    polygon = np.full((200, 200), 0.2, np.float32)
+    cv2.fillPoly(polygon, [np.array([[30, 40], [170, 30], [150, 170], [60, 150]], np.int32)], 0.8)
+    found = canny(polygon, sigma=1.5, return_gradient=True)
+    assert len(arcs_of(link_edges(found.edges, magnitude=found.magnitude))[0]) == 0
+
+
 # ------------------------------------------------------------------------------------------- indexing
 
 
@@ -90,6 +117,57 @@ def test_keys_do_not_change_under_a_similarity():
     soft = pair_keys(corners, bisector, opening, pairs, soft=True)
     # The image's key is one of the 16 the table enters each pair under.
     assert all(k in row for k, row in zip(hard, soft))
+
+
+def test_keys_with_arcs_do_not_change_under_a_similarity_and_differ_from_corners():
+    rng = np.random.default_rng(3)
+    corners = rng.uniform(0, 100, (8, 2))
+    bisector = rng.uniform(-math.pi, math.pi, 8)
+    opening = rng.uniform(0.3, 2.8, 8)
+    radius = np.where(np.arange(8) % 3 == 0, rng.uniform(15, 80, 8), np.nan)  # rows 0, 3, 6 are arcs
+    pairs = corner_pairs(corners, neighbours=7)
+    m = _similarity(0.6, -70.0, 30.0, 8.0)
+    moved = corners @ m[:, :2].T + m[:, 2]
+    turned = np.angle(np.exp(1j * (bisector - math.radians(70.0))))
+    hard = pair_keys(moved, turned, opening, pairs, radius=radius * 0.6)
+    soft = pair_keys(corners, bisector, opening, pairs, radius=radius, soft=True)
+    assert all(k in row for k, row in zip(hard, soft))
+    # An arc's bisector and opening play no part (a pair of two arcs keeps its key whatever they are); a
+    # pair with an arc never shares a key with two corners.
+    both = np.isfinite(radius[pairs]).all(axis=1)
+    assert both.any()
+    blank = pair_keys(moved, np.zeros(8), np.ones(8), pairs, radius=radius * 0.6)
+    assert np.array_equal(blank[both], hard[both])
+    with_arcs = np.isfinite(radius[pairs]).any(axis=1)
+    corner_keys = pair_keys(corners, bisector, opening, pairs, soft=True)
+    assert not set(soft[with_arcs].ravel()) & set(corner_keys[~with_arcs].ravel())
+    with pytest.raises(InputError, match="radius"):
+        pair_keys(corners, bisector, opening, pairs, radius=np.zeros(8))
+
+
+def test_a_curved_object_with_a_single_corner_in_view_is_recognised_by_its_arc():
+    import dataclasses
+
+    names = ["tab", "half disc", "quarter", "pac"]
+    views = {n: object_view(n, shape=(160, 160)) for n in names}
+    library = Library([learn(n, [views[n][0]]) for n in names])
+    image, placement = object_view("tab", shape=(240, 240), scale=60.0)
+    # An occluder hides one of the tab's two corners: the other pairs only with the occluder's.
+    hidden = placement.corners[np.argmax(placement.corners[:, 1] - placement.corners[:, 0])]
+    x, y = np.round(hidden).astype(int)
+    image[y - 25:y + 25, x - 25:x + 25] = 0.5
+    features = image_features(image)
+    assert len(features.arcs) >= 1
+    found = recognize(features, library)
+    assert [d.name for d in found] == ["tab"]
+    view_placement = views["tab"][1]
+    error = np.hypot(*(found[0].locate(view_placement.corners) - placement.corners).T)
+    assert error.max() < 2.0
+    # Without its arc the same image yields no candidate at all.
+    corners_only = dataclasses.replace(features, arcs=np.zeros((0, 2)), arc_radius=np.zeros(0),
+                                       arc_middle=np.zeros((0, 2)))
+    assert recognize(corners_only, library) == []
+    assert len(anchors_of(features)[0]) == len(features.corners) + len(features.arcs)
 
 
 def test_the_vote_finds_the_pose_and_agrees_with_numpy(ell_model):
@@ -208,6 +286,19 @@ def test_models_round_trip_through_a_library_folder(ell_model, tmp_path):
     again = load_model(path)
     assert again.name == "ell" and np.array_equal(again.views[0].points, model.views[0].points)
     assert np.array_equal(again.views[0].corners, model.views[0].corners)
+    curved = learn("tab", [object_view("tab", shape=(160, 160))[0]])
+    assert len(curved.views[0].arcs) == 1
+    tab = load_model(save_model(curved, tmp_path / "lib"))
+    assert np.array_equal(tab.views[0].arcs, curved.views[0].arcs)
+    assert np.array_equal(tab.views[0].arc_radius, curved.views[0].arc_radius)
+    # A file of the first format (corners only) is still read, with no arcs.
+    with np.load(tmp_path / "lib" / "tab.vmodel.npz") as data:
+        arrays = {k: data[k] for k in data.files if not k.endswith("_arcs")}
+    arrays["meta"] = np.array(str(arrays["meta"]).replace('"version": 2', '"version": 1'))
+    np.savez_compressed(tmp_path / "old.vmodel.npz", **arrays)
+    old = load_model(tmp_path / "old.vmodel.npz")
+    assert len(old.views[0].arcs) == 0 and np.array_equal(old.views[0].corners, curved.views[0].corners)
+    (tmp_path / "lib" / "tab.vmodel.npz").unlink()
     assert Library.load(tmp_path / "lib").names == ("ell",)
     with pytest.raises(InputError, match="replace"):
         save_model(model, tmp_path / "lib")

@@ -3,12 +3,21 @@
 Seed sections "Recognition" and "Learning in a three-stage recognition scheme". Models are learned from
 example images (:func:`learn`, a :class:`Library` folder); :func:`recognize` finds them in an image, an
 edge map or a Result's cartoon: regions ranked by saliency (:mod:`vmcl.recognize.selection`), candidate
-poses from invariant keys of corner pairs by geometric hashing (:mod:`vmcl.recognize.indexing`), each
+poses from invariant keys of corner and arc pairs by geometric hashing (:mod:`vmcl.recognize.indexing`), each
 candidate aligned and verified against the image's edges (:mod:`vmcl.recognize.verification`).
 """
 
-from vmcl.recognize.features import Features, edge_features, image_features
-from vmcl.recognize.indexing import Candidates, Index, corner_pairs, index_for, pair_keys, vote, vote_numpy
+from vmcl.recognize.features import Features, arcs_of, edge_features, image_features
+from vmcl.recognize.indexing import (
+                                         Candidates,
+                                         Index,
+                                         anchors_of,
+                                         corner_pairs,
+                                         index_for,
+                                         pair_keys,
+                                         vote,
+                                         vote_numpy,
+)
 from vmcl.recognize.models import MODEL_SUFFIX, Library, Model, View, learn, load_model, save_model, view_of
 from vmcl.recognize.recognition import Detection, recognize
 from vmcl.recognize.selection import Regions, corner_regions, select_regions
@@ -26,7 +35,8 @@ from vmcl.recognize.verification import (
 )
 
 __all__ = ["MODEL_SUFFIX", "TRANSFORMS", "Candidates", "Detection", "Features", "Index", "Library", "Model",
-           "NearestEdge", "Regions", "Support", "Verified", "View", "carry", "corner_pairs", "corner_regions",
+           "NearestEdge", "Regions", "Support", "Verified", "View", "anchors_of", "arcs_of", "carry", "corner_pairs",
+           "corner_regions",
            "distance_transform", "distance_transform_numpy", "edge_features", "image_features", "index_for", "learn",
            "load_model", "pair_keys", "recognize", "refine", "save_model", "select_regions", "support",
            "support_numpy", "view_of", "vote", "vote_numpy"]

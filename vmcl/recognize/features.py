@@ -5,14 +5,18 @@ forming a corner, ...)". A corner is where two edges meet: an L-junction on one 
 arms of a T, Y, arrow or X junction (:func:`vmcl.group.junctions.find_junctions`). Each corner is kept
 as its position, the direction of the bisector of the angle its two edges make (into the angle) and the
 angle's opening; under a similarity the opening is unchanged and the bisector turns with the image, so
-pairs of corners give the invariant keys of :mod:`vmcl.recognize.indexing`. The boundary, every curve
+pairs of corners give the invariant keys of :mod:`vmcl.recognize.indexing`. A curved outline may show
+too few corners for that (a half disc has two; with one hidden, none pair), so its curve pieces are
+features too: an arc is a stretch of a curve that a circle fits, kept as the circle's centre and radius
+(a similarity moves the centre with the image and scales the radius with it). The boundary, every curve
 pixel with its tangent, is what :mod:`vmcl.recognize.verification` tests a pose against.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -24,14 +28,25 @@ from vmcl.group.junctions import Junctions, find_junctions
 from vmcl.group.local_saliency import local_saliency, saliency_map
 from vmcl.machine import Machine
 
-__all__ = ["MIN_OPENING", "Features", "edge_features", "image_features"]
+__all__ = ["ARC_LENGTH", "MIN_OPENING", "Features", "arcs_of", "edge_features", "image_features"]
 
 MIN_OPENING = math.radians(15)
 """Corners sharper than this (degrees: 15) are not kept: their two edges' directions are not separable."""
 
 _MAX_OPENING = math.radians(165)  # wider than this, the two edges are one straight edge
 
+ARC_LENGTH = 20
+"""The fewest curve pixels an arc spans."""
 
+_ARC_RESIDUAL = 0.6  # px: the most a circle's rms distance from a stretch's pixels may be for it to be an arc
+_ARC_TURN = math.radians(30)  # the least an arc turns (its length over its radius): straighter is a line
+_ARC_REACH = 10  # pixels either side over which the tangent's turning gives a pixel's bending (the pixel grid's
+# staircase makes the turning over fewer noisy by more than half of a 100 px radius's)
+_ARC_STRAIGHT = 1 / 300  # bending (1/px) below which a pixel is on a line, not an arc
+_CORNER_REACH = 3  # pixels either side over which the tangent's turning finds a corner,
+_CORNER_TURN = math.radians(30)  # at least this much of it
+_ARC_MIN_RADIUS = 12.0  # px: a tighter bend is a corner rounded by the edges' smoothing (its radius is the blur's)
+_ARC_SAME = 0.2  # neighbouring arcs of a curve are one where centres and radii agree within this share of the radius
 @dataclass(frozen=True, eq=False)
 class Features:
     """An image's (or a model view's) features.
@@ -58,6 +73,12 @@ class Features:
     saliency_map : float32 (H, W)
         The local saliency of the curve each edge pixel lies on (:mod:`vmcl.group.local_saliency`; 0
         elsewhere and at branch pixels).
+    arcs : float64 (A, 2)
+        The centres (x, y) of the circles the curves' arcs lie on (:func:`arcs_of`).
+    arc_radius : float64 (A,)
+        Their radii in pixels.
+    arc_middle : float64 (A, 2)
+        The middle pixel (x, y) of each arc.
     """
 
     shape: tuple[int, int]
@@ -69,6 +90,9 @@ class Features:
     edges: np.ndarray
     tangent_map: np.ndarray
     saliency_map: np.ndarray
+    arcs: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    arc_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    arc_middle: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
     def __len__(self) -> int:
         return len(self.corners)
@@ -93,6 +117,109 @@ def corners_of(junctions: Junctions) -> tuple[np.ndarray, np.ndarray, np.ndarray
             np.array(openings, np.float64))
 
 
+def _circle(points: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """The circle fitted to points (algebraic least squares: x^2 + y^2 + D x + E y + F = 0): its centre,
+    radius and rms distance from the points (inf where they are collinear)."""
+    x, y = points[:, 0], points[:, 1]
+    system = np.stack([x, y, np.ones_like(x)], axis=1)
+    solution, *_ = np.linalg.lstsq(system, -(x * x + y * y), rcond=None)
+    centre = -0.5 * solution[:2]
+    squared = centre @ centre - solution[2]
+    if not np.isfinite(squared) or squared <= 0:
+        return centre, math.inf, math.inf
+    radius = math.sqrt(squared)
+    residual = float(np.sqrt(np.mean((np.hypot(x - centre[0], y - centre[1]) - radius) ** 2)))
+    return centre, radius, residual
+
+
+def _same_circle(a: np.ndarray, ra: float, b: np.ndarray, rb: float) -> bool:
+    scale = max(ra, rb)
+    return bool(np.hypot(*(a - b)) <= _ARC_SAME * scale and abs(ra - rb) <= _ARC_SAME * scale)
+
+
+def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    """The (start, stop) of each run of equal non-zero values."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], flags, [0]])) != 0)
+    return [(int(a), int(b)) for a, b in itertools.pairwise(edges) if flags[a] != 0]
+
+
+def arcs_of(curves: Curves) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The arcs of curves: stretches that bend one way, evenly, and that a circle fits.
+
+    Along each curve, a pixel's bending is its tangent's turning over the 10 pixels either side (per
+    pixel of arc), and a corner is where the tangent turns 30 degrees over 3 pixels either side. Pixels
+    bending less than 1/300 per pixel lie on lines; each run of others, bending one way and more than 10
+    pixels from a corner, is fitted where it spans :data:`ARC_LENGTH` pixels with a circle, and is an
+    arc where its pixels lie within 0.6 px (rms) of the circle, it turns at least 30 degrees and its
+    radius is at least 12 px (a tighter bend is a corner the edges' smoothing rounded). Neighbouring arcs
+    of one curve on one circle (a dip in the measured bending split them) are joined.
+
+    Parameters
+    ----------
+    curves : vmcl.group.curves.Curves
+
+    Returns
+    -------
+    centres : float64 (A, 2)
+        Each arc's circle's centre (x, y).
+    radii : float64 (A,)
+    middles : float64 (A, 2)
+        Each arc's middle pixel (x, y).
+    """
+    if not isinstance(curves, Curves):
+        raise InputTypeError(f"curves must be vmcl.group.curves.Curves, got {type(curves).__name__}")
+    tangent_map = np.asarray(to_host(curves.tangent))
+    centres: list[np.ndarray] = []
+    radii: list[float] = []
+    middles: list[np.ndarray] = []
+    k, j = _ARC_REACH, _CORNER_REACH
+    # An open curve's first and last reach have no bending measured: it needs an arc's length beside them.
+    for c in np.flatnonzero(np.diff(curves.offsets) >= ARC_LENGTH + 2 * k):
+        points = curves.points[curves.offsets[c]:curves.offsets[c + 1]]
+        theta = tangent_map[points[:, 1], points[:, 0]].astype(np.float64)
+        known = np.isfinite(theta)
+        if known.sum() < ARC_LENGTH:
+            continue
+        theta = np.unwrap(np.interp(np.arange(len(theta)), np.flatnonzero(known), theta[known]))
+        if curves.closed[c]:
+            # A loop is read from its sharpest turn (or anywhere on a smooth one), with a reach's overlap at
+            # each end so the turning is measured across the seam.
+            sharp = np.abs(np.roll(theta, -j) - np.roll(theta, j) + 2 * np.pi * np.round(
+                (np.roll(theta, j) - np.roll(theta, -j)) / (2 * np.pi)))
+            first = int(np.argmax(sharp))
+            order = np.arange(first - k, first + len(points) + k) % len(points)
+            points = points[order]
+            theta = np.unwrap(theta[order])
+        steps = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(points, axis=0).T))])
+        bending = np.zeros(len(points))
+        bending[k:-k] = (theta[2 * k:] - theta[:-2 * k]) / np.maximum(steps[2 * k:] - steps[:-2 * k], 1e-9)
+        corner = np.zeros(len(points), bool)
+        corner[j:-j] = np.abs(theta[2 * j:] - theta[:-2 * j]) >= _CORNER_TURN
+        corner[:k] = corner[-k:] = True  # no bending measured there
+        # A corner's turn leaks into the bending up to a reach away: those pixels are no arc's.
+        near_corner = np.convolve(corner, np.ones(2 * k + 1), mode="same") > 0
+        bend = np.where(~near_corner & (np.abs(bending) >= _ARC_STRAIGHT), np.sign(bending), 0).astype(np.int64)
+        found: list[tuple[int, int, np.ndarray, float]] = []
+        for start, stop in _runs(bend):
+            if stop - start < ARC_LENGTH:
+                continue
+            centre, radius, residual = _circle(points[start:stop].astype(np.float64))
+            if residual > _ARC_RESIDUAL or radius < _ARC_MIN_RADIUS or steps[stop - 1] - steps[start] < _ARC_TURN * radius:
+                continue
+            if found and _same_circle(found[-1][2], found[-1][3], centre, radius):
+                # A dip in the measured bending split one arc: fitted again as a whole.
+                joined = _circle(points[found[-1][0]:stop].astype(np.float64))
+                if joined[2] <= _ARC_RESIDUAL:
+                    found[-1] = (found[-1][0], stop, joined[0], joined[1])
+                    continue
+            found.append((start, stop, centre, radius))
+        centres.extend(f[2] for f in found)
+        radii.extend(f[3] for f in found)
+        middles.extend(points[(f[0] + f[1] - 1) // 2] for f in found)
+    return (np.array(centres, np.float64).reshape(-1, 2), np.array(radii, np.float64),
+            np.array(middles, np.float64).reshape(-1, 2))
+
+
 def _from_curves(curves: Curves, corner: float, gap: float) -> Features:
     labels = np.asarray(to_host(curves.labels))
     tangent_map = np.asarray(to_host(curves.tangent), np.float32)
@@ -102,7 +229,7 @@ def _from_curves(curves: Curves, corner: float, gap: float) -> Features:
     ys, xs = np.nonzero(edges)
     return Features(labels.shape, positions, bisectors, openings, np.stack([xs, ys], axis=1).astype(np.float64),
                     tangent_map[ys, xs].astype(np.float64), edges, tangent_map,
-                    saliency_map(curves, local_saliency(curves)))
+                    saliency_map(curves, local_saliency(curves)), *arcs_of(curves))
 
 
 def edge_features(edges: ArrayLike, *, magnitude: ArrayLike | None = None, corner: float = 45.0, gap: float = 6.0,

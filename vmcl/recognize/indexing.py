@@ -1,9 +1,13 @@
-"""Indexing: candidate (model, pose) pairs from invariant keys of corner pairs, by geometric hashing.
+"""Indexing: candidate (model, pose) pairs from invariant keys of feature pairs, by geometric hashing.
 
 Seed section "Recognition": indexing finds "a small set of candidate models" from "simple
 viewpoint-invariant combinations of features". Two corners A and B (each a position, the bisector of its
 angle and the angle's opening) give a key that a similarity does not change: the openings of A and B,
-and the directions of their bisectors measured from the line A -> B. The library's table maps every key
+and the directions of their bisectors measured from the line A -> B. An arc (a curve piece on a circle,
+:func:`vmcl.recognize.features.arcs_of`) takes part by its circle's centre: in a pair, its coordinates
+are its radius over the pair's length (in place of a bisector's direction) and a mark saying it is an arc
+(in place of an opening), so a curved outline with a single corner in view still has keys. The
+library's table maps every key
 to the model views' corner pairs that have it (built once per library, with each pair entered in the two
 nearest bins of every coordinate so a key near a bin's edge still meets it). For an image, every
 ordered pair of nearby corners looks its key up; each entry it meets fixes the similarity taking the
@@ -30,16 +34,20 @@ from vmcl.cm.reduce import histogram
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.recognize.arguments import angles, index_pairs, points
-from vmcl.recognize.models import Library
+from vmcl.recognize.features import Features
+from vmcl.recognize.models import Library, View
 
-__all__ = ["ANGLE_BINS", "KEYS", "OPENING_BINS", "Candidates", "Index", "corner_pairs", "index_for", "pair_keys", "vote",
-           "vote_numpy"]
+__all__ = ["ANGLE_BINS", "KEYS", "OPENING_BINS", "Candidates", "Index", "anchors_of", "corner_pairs", "index_for",
+           "pair_keys", "vote", "vote_numpy"]
 
 ANGLE_BINS = 16
 """Bins of a bisector's direction from the line between the two corners (22.5 degrees each)."""
 OPENING_BINS = 9
 """Bins of a corner's opening over (0, 180) degrees (20 degrees each)."""
-KEYS = ANGLE_BINS * ANGLE_BINS * OPENING_BINS * OPENING_BINS
+_ARC_MARK = OPENING_BINS  # the opening coordinate's value for an arc: one bin past the corners' openings
+_KINDS = OPENING_BINS + 1
+_RATIO_LOW, _RATIO_HIGH = -3.0, 3.0  # the log of an arc's radius over the pair's length, over the angle bins
+KEYS = ANGLE_BINS * ANGLE_BINS * _KINDS * _KINDS
 """The number of distinct keys."""
 
 _ROTATION_BINS = 24  # the pose bins: 15 degrees of rotation,
@@ -84,33 +92,57 @@ def corner_pairs(corners: np.ndarray, *, neighbours: int = 8, groups: np.ndarray
     return np.stack([i, j], axis=1).astype(np.int64)
 
 
-def _angle_coordinates(corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray,
-                       pairs: np.ndarray) -> np.ndarray:
-    """The four key coordinates of each pair, in bins (continuous): the two bisectors' directions from
-    the line A -> B, and the two openings."""
+def _coordinates(corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, radius: np.ndarray,
+                 pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The four key coordinates of each pair, in bins (continuous), and which are cyclic: for a corner, its
+    bisector's direction from the line A -> B and its opening; for an arc, the log of its radius over the
+    pair's length and the arc mark."""
     a, b = pairs[:, 0], pairs[:, 1]
     step = corners[b] - corners[a]
     line = np.arctan2(step[:, 1], step[:, 0])
+    length = np.hypot(step[:, 0], step[:, 1])
     turn = 2 * math.pi / ANGLE_BINS
-    first = np.mod(bisector[a] - line, 2 * math.pi) / turn
-    second = np.mod(bisector[b] - line, 2 * math.pi) / turn
     width = math.pi / OPENING_BINS
-    return np.stack([first, second, opening[a] / width, opening[b] / width], axis=1)
+    ratio_bin = (_RATIO_HIGH - _RATIO_LOW) / ANGLE_BINS
+    coords, cyclic = [], []
+    for member in (a, b):
+        arc = np.isfinite(radius[member])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = (np.log(radius[member] / length) - _RATIO_LOW) / ratio_bin
+        coords.append(np.where(arc, ratio, np.mod(bisector[member] - line, 2 * math.pi) / turn))
+        cyclic.append(~arc)
+    for member in (a, b):
+        arc = np.isfinite(radius[member])
+        # An arc's mark sits mid-bin, so its second-nearest bin is its own (clipped) too.
+        coords.append(np.where(arc, _ARC_MARK + 0.5, np.minimum(opening[member] / width, OPENING_BINS - 1e-9)))
+    return np.stack(coords, axis=1), np.stack(cyclic, axis=1)
 
 
 def _flatten(bins: np.ndarray) -> np.ndarray:
-    return ((bins[..., 0] * ANGLE_BINS + bins[..., 1]) * OPENING_BINS + bins[..., 2]) * OPENING_BINS + bins[..., 3]
+    return ((bins[..., 0] * ANGLE_BINS + bins[..., 1]) * _KINDS + bins[..., 2]) * _KINDS + bins[..., 3]
+
+
+def _bins(bins: np.ndarray, cyclic: np.ndarray, marks: np.ndarray) -> np.ndarray:
+    """Bins in range: the angle coordinates wrapped where cyclic (a corner's) or clipped (an arc's ratio),
+    the openings clipped to the corners' bins, an arc's mark kept."""
+    angle = np.where(cyclic, np.mod(bins[..., :2], ANGLE_BINS), np.clip(bins[..., :2], 0, ANGLE_BINS - 1))
+    kind = np.where(marks, _ARC_MARK, np.clip(bins[..., 2:], 0, OPENING_BINS - 1))
+    return np.concatenate([angle, kind], axis=-1)
 
 
 def pair_keys(corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pairs: np.ndarray, *,
-              soft: bool = False) -> np.ndarray:
-    """The invariant key of each ordered corner pair.
+              radius: np.ndarray | None = None, soft: bool = False) -> np.ndarray:
+    """The invariant key of each ordered feature pair.
 
     Parameters
     ----------
     corners, bisector, opening : arrays
-        As :class:`vmcl.recognize.features.Features` holds them.
+        As :class:`vmcl.recognize.features.Features` holds them (or :func:`anchors_of` gives them, arcs
+        among them).
     pairs : int (P, 2)
+    radius : float (F,) array, optional
+        NaN for a corner; for an arc (its row of ``corners`` the circle's centre, its bisector and opening
+        unused), its radius in pixels (> 0). Default: every row a corner.
     soft : bool
         Each pair's keys in the two nearest bins of every coordinate (16 keys, (P, 16)), as the library's
         table enters them; otherwise the one bin it falls in, (P,).
@@ -122,25 +154,54 @@ def pair_keys(corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pa
     corners = points(corners, "corners")
     bisector = angles(bisector, "bisector", len(corners), "corners")
     opening = angles(opening, "opening", len(corners), "corners", low=0.0, high=math.pi)
+    radius = _radii(radius, len(corners))
     pairs = index_pairs(pairs, "pairs", len(corners))
     soft = check_bool(soft, "soft")
-    coords = _angle_coordinates(corners, bisector, opening, pairs)
-    sizes = np.array([ANGLE_BINS, ANGLE_BINS, OPENING_BINS, OPENING_BINS])
-    cyclic = np.array([True, True, False, False])
+    coords, cyclic = _coordinates(corners, bisector, opening, radius, pairs)
+    marks = np.isfinite(radius[pairs])
     home = np.floor(coords).astype(np.int64)
     if not soft:
-        home = np.where(cyclic, np.mod(home, sizes), np.clip(home, 0, sizes - 1))
-        return _flatten(home).astype(np.int32)
+        return _flatten(_bins(home, cyclic, marks)).astype(np.int32)
     other = np.where(coords - home >= 0.5, home + 1, home - 1)
     combos = np.array([[(c >> d) & 1 for d in range(4)] for c in range(16)], bool)  # (16, 4)
     bins = np.where(combos[None], other[:, None, :], home[:, None, :])
-    bins = np.where(cyclic, np.mod(bins, sizes), np.clip(bins, 0, sizes - 1))
-    return _flatten(bins).astype(np.int32)
+    return _flatten(_bins(bins, cyclic[:, None, :], marks[:, None, :])).astype(np.int32)
+
+
+def _radii(radius: Any, count: int) -> np.ndarray:
+    if radius is None:
+        return np.full(count, np.nan)
+    radius = angles(radius, "radius", count, "corners", low=0.0, unknown=True)
+    if (radius == 0).any():
+        raise InputValueError("radius must be NaN (a corner) or an arc's radius > 0")
+    return radius
+
+
+def anchors_of(features: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The features indexing pairs: a :class:`vmcl.recognize.features.Features`' or a model
+    :class:`vmcl.recognize.models.View`'s corners, then its arcs' centres.
+
+    Returns
+    -------
+    points : float64 (F + A, 2)
+    bisector, opening : float64 (F + A,)
+        The corners'; 0 for the arcs (unused).
+    radius : float64 (F + A,)
+        NaN for the corners, the arcs' radii.
+    """
+    if not isinstance(features, (Features, View)):
+        raise InputTypeError("features must be vmcl.recognize.Features or a vmcl.recognize.View, got "
+                             f"{type(features).__name__}")
+    arcs = np.asarray(features.arcs, np.float64).reshape(-1, 2)
+    zeros = np.zeros(len(arcs))
+    return (np.concatenate([features.corners.reshape(-1, 2), arcs]), np.concatenate([features.bisector, zeros]),
+            np.concatenate([features.opening, zeros]),
+            np.concatenate([np.full(len(features.corners), np.nan), np.asarray(features.arc_radius, np.float64)]))
 
 
 @dataclass(frozen=True, eq=False)
 class Index:
-    """A library's table: for every key, the model views' corner pairs that have it.
+    """A library's table: for every key, the model views' feature pairs (corners and arcs) that have it.
 
     Attributes
     ----------
@@ -149,7 +210,7 @@ class Index:
     entry_view : int32 (E,)
         The view (a row of ``views``) of each entry.
     entry_points : float32 (E, 4)
-        The entry's corners A and B (Ax, Ay, Bx, By) in the view's frame.
+        The entry's features A and B (Ax, Ay, Bx, By: a corner, or an arc's centre) in the view's frame.
     frames : float32 (V, 4)
         Each view's centre (x, y) and radius.
     views : int32 (V, 2)
@@ -164,7 +225,8 @@ class Index:
 
     @classmethod
     def build(cls, library: Library, *, neighbours: int = 8) -> Index:
-        """The table of every view of ``library``, each corner paired with its ``neighbours`` nearest."""
+        """The table of every view of ``library``, each feature (corner or arc) paired with its ``neighbours``
+        nearest."""
         if not isinstance(library, Library):
             raise InputTypeError(f"library must be a vmcl.recognize.Library, got {type(library).__name__}")
         neighbours = check_int(neighbours, "neighbours", minimum=1, maximum=1000)
@@ -173,13 +235,14 @@ class Index:
         for row, (m, v, view) in enumerate(library.views()):
             frames.append([*view.centre, view.radius, 0.0])
             ids.append((m, v))
-            pairs = corner_pairs(view.corners, neighbours=neighbours)
+            at, bisector, opening, radius = anchors_of(view)
+            pairs = corner_pairs(at, neighbours=neighbours)
             if not len(pairs):
                 continue
-            k = pair_keys(view.corners, view.bisector, view.opening, pairs, soft=True)
+            k = pair_keys(at, bisector, opening, pairs, radius=radius, soft=True)
             keys.append(k.ravel())
             views.append(np.full(k.size, row, np.int32))
-            p = np.concatenate([view.corners[pairs[:, 0]], view.corners[pairs[:, 1]]], axis=1)
+            p = np.concatenate([at[pairs[:, 0]], at[pairs[:, 1]]], axis=1)
             pair_points.append(np.repeat(p, k.shape[1], axis=0))
         key = np.concatenate(keys) if keys else np.zeros(0, np.int32)
         # A pair entered twice under one key (its soft bins clipped to the same edge bin) votes once.
@@ -224,19 +287,22 @@ class Candidates:
 
 
 def _check_inputs(index: Any, corners: Any, bisector: Any, opening: Any, pairs: Any, scales: Any, candidates: Any,
-                  min_votes: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, tuple[float, float], int, int]:
+                  min_votes: Any, radius: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                                        tuple[float, float], int, int]:
     if not isinstance(index, Index):
         raise InputTypeError(f"index must be a vmcl.recognize.Index, got {type(index).__name__}")
     corners = points(corners, "corners")
     bisector = angles(bisector, "bisector", len(corners), "corners")
     opening = angles(opening, "opening", len(corners), "corners", low=0.0, high=math.pi)
+    radius = _radii(radius, len(corners))
     pairs = index_pairs(pairs, "pairs", len(corners))
     if not isinstance(scales, (tuple, list)) or len(scales) != 2:
         raise InputTypeError(f"scales must be a pair (low, high), got {scales!r}")
     low, high = (check_real(v, "scales", above=0, maximum=1e6) for v in scales)
     if low > high:
         raise InputValueError(f"scales must be (low, high) with low <= high, got {scales!r}")
-    return (corners, bisector, opening, pairs, (low, high), check_int(candidates, "candidates", minimum=1, maximum=1 << 20),
+    return (corners, bisector, opening, radius, pairs, (low, high),
+            check_int(candidates, "candidates", minimum=1, maximum=1 << 20),
             check_int(min_votes, "min_votes", minimum=1, maximum=2**31 - 1))
 
 
@@ -284,17 +350,20 @@ def _pool(found: np.ndarray, info: np.ndarray) -> Candidates:
 
 
 def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pairs: np.ndarray, *,
-         scales: tuple[float, float] = (0.25, 4.0), candidates: int = 4096, min_votes: int = 2,
-         machine: Machine | None = None) -> Candidates:
+         radius: np.ndarray | None = None, scales: tuple[float, float] = (0.25, 4.0), candidates: int = 4096,
+         min_votes: int = 2, machine: Machine | None = None) -> Candidates:
     """Candidate poses of the library's views in an image, by geometric hashing on the device.
 
     Parameters
     ----------
     index : Index
     corners, bisector, opening : arrays
-        The image's corners (:class:`vmcl.recognize.features.Features`).
+        The image's corners (:class:`vmcl.recognize.features.Features`), or its corners and arcs
+        (:func:`anchors_of`).
     pairs : int (P, 2)
-        The ordered corner pairs to look up (:func:`corner_pairs`).
+        The ordered feature pairs to look up (:func:`corner_pairs`).
+    radius : float (F,) array, optional
+        NaN for a corner, an arc's radius (:func:`pair_keys`). Default: every row a corner.
     scales : (float, float)
         The range of scales (image size over view size) a pose may have.
     candidates : int
@@ -309,12 +378,12 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     Candidates
     """
     machine = machine_for(machine)
-    corners, bisector, opening, pairs, (low, high), candidates, min_votes = _check_inputs(
-        index, corners, bisector, opening, pairs, scales, candidates, min_votes)
+    corners, bisector, opening, radius, pairs, (low, high), candidates, min_votes = _check_inputs(
+        index, corners, bisector, opening, pairs, scales, candidates, min_votes, radius)
     if not len(pairs) or not len(index):
         return _pool(np.zeros((0, 4)), np.zeros((0, 2), np.int32))
     table = _device_table(index, machine)
-    keys = machine.to_device(pair_keys(corners, bisector, opening, pairs))
+    keys = machine.to_device(pair_keys(corners, bisector, opening, pairs, radius=radius))
     points = machine.to_device(_pair_points(corners, pairs))
     size = 1 << _VOTE_TABLE_BITS
     votes = machine.empty(size, np.int32)
@@ -386,13 +455,14 @@ def _combo_bins(coords: np.ndarray, views: np.ndarray, mask: int) -> np.ndarray:
 
 
 def vote_numpy(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pairs: np.ndarray, *,
-               scales: tuple[float, float] = (0.25, 4.0), candidates: int = 128, min_votes: int = 2) -> Candidates:
+               radius: np.ndarray | None = None, scales: tuple[float, float] = (0.25, 4.0), candidates: int = 128,
+               min_votes: int = 2) -> Candidates:
     """:func:`vote` in NumPy on the host: the reference the kernel is tested and timed against."""
-    corners, bisector, opening, pairs, (low, high), candidates, min_votes = _check_inputs(
-        index, corners, bisector, opening, pairs, scales, candidates, min_votes)
+    corners, bisector, opening, radius, pairs, (low, high), candidates, min_votes = _check_inputs(
+        index, corners, bisector, opening, pairs, scales, candidates, min_votes, radius)
     if not len(pairs) or not len(index):
         return _pool(np.zeros((0, 4)), np.zeros((0, 2), np.int32))
-    keys = pair_keys(corners, bisector, opening, pairs)
+    keys = pair_keys(corners, bisector, opening, pairs, radius=radius)
     points = _pair_points(corners, pairs)
     starts, stops = index.offsets[keys], index.offsets[keys + 1]
     lengths = stops - starts

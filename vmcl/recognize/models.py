@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import re
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -31,7 +31,7 @@ MODEL_SUFFIX = ".vmodel.npz"
 """The suffix of a model file in a library folder."""
 
 _FORMAT = "vmcl-model"
-_VERSION = 1
+_VERSION = 2  # 2: views keep their arcs; a version 1 file (corners only) is read with none
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9 _.+-]{0,63}$")
 _MAX_POINTS = 1500  # boundary points kept per view: enough to verify a pose, few enough to test many
 
@@ -57,6 +57,9 @@ class View:
         The example image's (H, W).
     length : float
         The boundary's length in pixels (its edge pixels, before thinning).
+    arcs : float64 (A, 2)
+    arc_radius : float64 (A,)
+        Its arcs' circles (:func:`vmcl.recognize.features.arcs_of`): centres and radii.
     """
 
     corners: np.ndarray
@@ -68,6 +71,8 @@ class View:
     radius: float
     shape: tuple[int, int]
     length: float
+    arcs: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    arc_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,6 +122,7 @@ def view_of(features: Features, *, mask: np.ndarray | None = None, spacing: int 
     spacing = check_int(spacing, "spacing", minimum=1)
     corners, bisector, opening = features.corners, features.bisector, features.opening
     points, tangent = features.points, features.tangent
+    arcs, arc_radius = features.arcs, features.arc_radius
     if mask is not None:
         mask = edge_map(mask, "mask")
         if mask.shape != features.shape:
@@ -127,6 +133,9 @@ def view_of(features: Features, *, mask: np.ndarray | None = None, spacing: int 
         corners, bisector, opening = corners[keep_c], bisector[keep_c], opening[keep_c]
         keep_p = grown[points[:, 1].astype(int), points[:, 0].astype(int)]
         points, tangent = points[keep_p], tangent[keep_p]
+        middle = features.arc_middle.round().astype(int)
+        keep_a = grown[middle[:, 1], middle[:, 0]] if len(arcs) else np.zeros(0, bool)
+        arcs, arc_radius = arcs[keep_a], arc_radius[keep_a]
     length = float(len(points))
     if len(points) < 8:
         raise InputValueError(f"the example shows too little boundary to learn from ({len(points)} edge pixels)")
@@ -140,7 +149,7 @@ def view_of(features: Features, *, mask: np.ndarray | None = None, spacing: int 
     centre = points.mean(axis=0)
     radius = float(np.sqrt(((points - centre) ** 2).sum(axis=1).mean()))
     return View(corners.copy(), bisector.copy(), opening.copy(), points.copy(), tangent.copy(), centre,
-                max(radius, 1.0), features.shape, length)
+                max(radius, 1.0), features.shape, length, arcs.copy(), arc_radius.copy())
 
 
 def _dilate(mask: np.ndarray, r: int) -> np.ndarray:
@@ -238,6 +247,7 @@ def save_model(model: Model, folder: str | Path, *, replace: bool = False) -> Pa
         arrays.update({f"v{i}_corners": view.corners, f"v{i}_bisector": view.bisector, f"v{i}_opening": view.opening,
                        f"v{i}_points": view.points, f"v{i}_tangent": view.tangent,
                        f"v{i}_centre": view.centre,
+                       f"v{i}_arcs": np.column_stack([view.arcs.reshape(-1, 2), view.arc_radius]),
                        f"v{i}_frame": np.array([view.radius, *view.shape, view.length], np.float64)})
     meta = {"format": _FORMAT, "version": _VERSION, "name": model.name, "views": len(model.views),
             "sources": list(model.sources)}
@@ -266,16 +276,18 @@ def load_model(path: str | Path) -> Model:
             meta = json.loads(str(data["meta"]))
             if meta.get("format") != _FORMAT:
                 raise ValueError("not a model")
-            if meta.get("version") != _VERSION:
+            if meta.get("version") not in (1, _VERSION):
                 raise InputValueError(f"{path} is a vmcl model of format version {meta.get('version')}; this vmcl "
-                                      f"reads version {_VERSION}")
+                                      f"reads versions 1 to {_VERSION}")
             views = []
             for i in range(int(meta["views"])):
                 frame = data[f"v{i}_frame"]
+                arcs = data[f"v{i}_arcs"] if meta["version"] >= 2 else np.zeros((0, 3))
                 views.append(View(data[f"v{i}_corners"], data[f"v{i}_bisector"], data[f"v{i}_opening"],
                                   data[f"v{i}_points"], data[f"v{i}_tangent"],
                                   data[f"v{i}_centre"], float(frame[0]),
-                                  (int(frame[1]), int(frame[2])), float(frame[3])))
+                                  (int(frame[1]), int(frame[2])), float(frame[3]), arcs[:, :2].copy(),
+                                  arcs[:, 2].copy()))
             return Model(_check_name(meta["name"]), tuple(views), tuple(str(s) for s in meta["sources"]))
     except InputValueError:
         raise

@@ -33,7 +33,7 @@ from vmcl.errors import InputTypeError
 from vmcl.machine import Machine
 from vmcl.recognize.arguments import real_map
 from vmcl.recognize.features import Features, edge_features, image_features
-from vmcl.recognize.indexing import Candidates, corner_pairs, index_for, vote
+from vmcl.recognize.indexing import Candidates, anchors_of, corner_pairs, index_for, vote
 from vmcl.recognize.models import Library, View
 from vmcl.recognize.selection import corner_regions, select_regions
 from vmcl.recognize.verification import TRANSFORMS, Transform, carry, distance_transform, refine, support
@@ -166,7 +166,7 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     min_votes : int
         The fewest indexing votes a candidate needs, >= 1.
     neighbours : int
-        Each corner is paired with this many nearest corners for indexing, >= 1.
+        Each feature (a corner, or an arc's centre) is paired with this many nearest ones for indexing, >= 1.
     regions : int
         The most salient regions whose corners are also paired among themselves (selection), >= 0.
     tolerance : float
@@ -199,16 +199,19 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     regions = check_int(regions, "regions", minimum=0)
     tolerance = check_real(tolerance, "tolerance", above=0)
     features = _features(image, sigma, machine)
-    if not len(library) or len(features) < 2:
+    if not len(library) or len(features) + len(features.arcs) < 2:
         return []
+    at, bisector, opening, radius = anchors_of(features)
     groups = None
     if regions:
         selected = select_regions(features.edges, features.saliency_map, machine=machine)
-        groups = corner_regions(selected, features.corners, features.bisector, top=regions)
-    pairs = corner_pairs(features.corners, neighbours=neighbours, groups=groups)
+        # Arcs join no region's pairs: their centres need not lie in the region their curve bounds.
+        groups = np.concatenate([corner_regions(selected, features.corners, features.bisector, top=regions),
+                                 np.full(len(features.arcs), -1, np.int64)])
+    pairs = corner_pairs(at, neighbours=neighbours, groups=groups)
     index = index_for(library)
-    found = vote(index, features.corners, features.bisector, features.opening, pairs, scales=scales,
-                 candidates=candidates, min_votes=min_votes, machine=machine)
+    found = vote(index, at, bisector, opening, pairs, radius=radius, scales=scales, candidates=candidates,
+                 min_votes=min_votes, machine=machine)
     return _verify(found, index.views, library, features, transform, min_score, min_significance, min_support,
                    tolerance, verify, _depth(image, depth, features.shape), machine)
 
