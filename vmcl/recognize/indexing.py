@@ -350,7 +350,7 @@ def _pool(found: np.ndarray, info: np.ndarray) -> Candidates:
 
 
 def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pairs: np.ndarray, *,
-         radius: np.ndarray | None = None, scales: tuple[float, float] = (0.25, 4.0), candidates: int = 4096,
+         radius: np.ndarray | None = None, scales: tuple[float, float] = (0.25, 4.0), candidates: int = 1024,
          min_votes: int = 2, machine: Machine | None = None) -> Candidates:
     """Candidate poses of the library's views in an image, by geometric hashing on the device.
 

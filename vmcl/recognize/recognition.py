@@ -127,7 +127,7 @@ def _features(data: Any, sigma: float, machine: Machine) -> Features:
 def recognize(image: Any, library: Library, *, transform: Transform = "similarity", sigma: float = 1.5,
               scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float = 20.0,
               min_support: int = 40,
-              candidates: int = 4096, verify: int = 128, min_votes: int = 2, neighbours: int = 12, regions: int = 8,
+              candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 24, regions: int = 8,
               tolerance: float = 3.0, depth: np.ndarray | None = None,
               machine: Machine | None = None) -> list[Detection]:
     """Find a library's objects in an image.
@@ -158,8 +158,8 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
         The fewest distinct image edge pixels a detection explains, >= 1.
     candidates : int
         Pose bins kept from the vote, >= 1 (their hypotheses are pooled into candidate poses). The default
-        was chosen on rendered training scenes (benchmarks/recognition_fit.py): an object seen by one corner
-        correspondence gets two votes, which a cutoff of 1024 bins left out.
+        was chosen on rendered training scenes with ``tolerance`` and ``neighbours``
+        (benchmarks/recognition_fit.py).
     verify : int
         Candidate poses refined and verified, >= 1: those a coarse test of each unrefined pose supports
         best.
@@ -167,6 +167,8 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
         The fewest indexing votes a candidate needs, >= 1.
     neighbours : int
         Each feature (a corner, or an arc's centre) is paired with this many nearest ones for indexing, >= 1.
+        The default was chosen on rendered training scenes (benchmarks/recognition_fit.py): two corners of
+        one object may lie farther apart than a dozen of the clutter's.
     regions : int
         The most salient regions whose corners are also paired among themselves (selection), >= 0.
     tolerance : float
