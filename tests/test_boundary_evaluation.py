@@ -45,8 +45,12 @@ def test_canny_sweep_nests_the_detectors_edges(machine):
 def test_scores_of_known_maps():
     item = _disc_image()
     perfect = MapSet("perfect", [item.boundaries[0].astype(np.float32)], 1, 0.0)
-    # Not exactly 1: the benchmark thins the outline's corners, and its matching draws random outlier edges.
-    assert score_maps(perfect, [item]).ods_f > 0.98
+    # Not exactly 1: the benchmark thins the outline's corners, and its matching draws random outlier edges
+    # (unseeded, as in the official code): 0.977 to 1 over repeated runs, so the bound leaves that room.
+    assert score_maps(perfect, [item]).ods_f > 0.95
+    # The same outline 2 px off (beyond the match distance on this small image) scores far lower.
+    shifted = MapSet("shifted", [np.roll(item.boundaries[0], 2, axis=1).astype(np.float32)], 1, 0.0)
+    assert score_maps(shifted, [item]).ods_f < 0.6
     empty = MapSet("empty", [np.zeros(item.boundaries[0].shape, np.float32)], 5, 0.0)
     assert score_maps(empty, [item]).ods_f == 0.0
     with pytest.raises(ValueError, match="1 maps for 2 images"):
