@@ -534,6 +534,7 @@ def recognition_figures(f: ResultsFile) -> str:
     box = f.table("method", from_sift)
     speed = f.table("step", "ms")
     grown = f.table("models", "vote ms", "ratio to 10 models")
+    arcs = f.table("indexing", "flat, curved outlines")
     false = re.search(r"^False detections per image: ([0-9.]+)", f.text, re.MULTILINE)
     if false is None:
         raise LookupError("recognition.md states no false detections")
@@ -545,7 +546,9 @@ def recognition_figures(f: ResultsFile) -> str:
     return (f"test scenes (30-50 % hidden, clutter): recognition rate {rate('all')} (flat {rate(flat)}, solid "
             f"{rate('solid (3-D, views between the learned ones)')}; bar 0.9), {false.group(1)} false detections "
             f"per image (bar 0.1), flat objects' corners {scenes.cell({'objects': flat}, 'median px')} px "
-            f"(median) off; graf1 -> graf3 corner error "
+            f"(median) off; curved outlines {arcs.cell({'indexing': 'corners and arcs'}, 'flat, curved outlines')} "
+            f"indexed with arcs against {arcs.cell({'indexing': 'corners only'}, 'flat, curved outlines')} by "
+            f"corners alone; graf1 -> graf3 corner error "
             f"{graf.cell({'method': 'vmcl (learn graf1, recognize in graf3, homography)'}, 'mean corner error px')} "
             f"against ORB {graf.cell({'method': 'ORB + RANSAC'}, 'mean corner error px')} and SIFT "
             f"{graf.cell({'method': 'SIFT + RANSAC'}, 'mean corner error px')}; box found "

@@ -7,7 +7,8 @@ Run: python benchmarks/recognition.py [--data ../shared/datasets] [--out benchma
   vmcl.scenes.example_library (27 objects: one view of each flat one, five views 20 degrees apart of each
   solid one, seen in the scenes at any view between). Recognition rate, false detections per image and the
   pose's mean error at the model's corners (vmcl.metrics.recognition_scores), at the decision threshold
-  benchmarks/recognition_fit.py chose on training scenes (the default of vmcl.recognize.recognize).
+  benchmarks/recognition_fit.py chose on training scenes (the default of vmcl.recognize.recognize); and the
+  same scenes indexed by corners alone (arcs=False), what the arcs add.
 - OpenCV's samples: graf1 learned as a model and found in graf3 (a homography), its corners against the
   true homography H1to3p beside ORB + RANSAC and SIFT + RANSAC, configured as OpenCV's feature-homography
   tutorial does (ratio test 0.75, RANSAC reprojection threshold 5 px); box learned from box.png and found in
@@ -68,37 +69,53 @@ def _timed(call, repeats: int = REPEATS) -> float:
     return statistics.median(times)
 
 
-def scenes_section() -> list[str]:
-    library, learned = example_library()
-    solid = {o.name: o.solid for o in OBJECTS}
-    counts = {False: [0, 0], True: [0, 0]}
-    errors: dict[bool, list[float]] = {False: [], True: []}
-    false = 0
+def _scene_tally(library, learned, **kwargs) -> tuple[list[tuple[str, bool, float]], int]:
+    """Over the test scenes: every placed object's (name, found, pose error), and the false detections."""
+    placed, false = [], 0
     for seed in TEST_SEEDS:
         scene = recognition_scene(seed=seed)
-        scores = recognition_scores(recognize(scene.image, library), scene.placements, learned)
+        scores = recognition_scores(recognize(scene.image, library, **kwargs), scene.placements, learned)
         false += scores.false
-        for placement, found, error in zip(scene.placements, scores.found, scores.pose_error):
-            counts[solid[placement.name]][0] += found
-            counts[solid[placement.name]][1] += 1
-            if found:
-                errors[solid[placement.name]].append(error)
-    total_found = counts[False][0] + counts[True][0]
-    total = counts[False][1] + counts[True][1]
+        placed += [(p.name, bool(found), error) for p, found, error in
+                   zip(scene.placements, scores.found, scores.pose_error)]
+    return placed, false
+
+
+def _rate(placed: list[tuple[str, bool, float]], names: set[str]) -> float:
+    hits = [found for name, found, _ in placed if name in names]
+    return sum(hits) / max(len(hits), 1)
+
+
+def scenes_section() -> list[str]:
+    library, learned = example_library()
+    kinds = {"flat": {o.name for o in OBJECTS if not o.solid}, "solid": {o.name for o in OBJECTS if o.solid}}
+    placed, false = _scene_tally(library, learned)
+    flat, solid = (sum(name in kinds[k] for name, _, _ in placed) for k in ("flat", "solid"))
     lines = ["## Rendered scenes (test seeds 1000..1099)", "",
-             (f"{len(TEST_SEEDS)} scenes, {total} objects ({counts[False][1]} flat, {counts[True][1]} solid), each "
-              "30-50 % hidden, among clutter; 27 models learned from at most 5 views."), "",
+             (f"{len(TEST_SEEDS)} scenes, {len(placed)} objects ({flat} flat, {solid} solid), each 30-50 % hidden, "
+              "among clutter; 27 models learned from at most 5 views."), "",
              "| objects | recognition rate | pose error at the corners: mean px | median px | within 2 px |",
              "|---|---|---|---|---|"]
-    for kind, label in ((False, "flat (2-D)"), (True, "solid (3-D, views between the learned ones)")):
-        e = np.array(errors[kind])
-        lines.append(f"| {label} | {counts[kind][0] / max(counts[kind][1], 1):.3f} | "
+    for kind, label in (("flat", "flat (2-D)"), ("solid", "solid (3-D, views between the learned ones)")):
+        e = np.array([error for name, found, error in placed if found and name in kinds[kind]])
+        lines.append(f"| {label} | {_rate(placed, kinds[kind]):.3f} | "
                      f"{e.mean() if len(e) else float('nan'):.2f} | {np.median(e) if len(e) else float('nan'):.2f} | "
                      f"{(e <= 2).mean() if len(e) else float('nan'):.3f} |")
-    lines += [f"| all | {total_found / total:.3f} | | | |", "",
+    every = kinds["flat"] | kinds["solid"]
+    lines += [f"| all | {_rate(placed, every):.3f} | | | |", "",
               (f"False detections per image: {false / len(TEST_SEEDS):.3f} (bar: at most 0.1). Recognition rate bar: "
                "at least 0.9; pose error bar: at most 2 px."), ""]
-    return lines
+    # The arcs' share: the same scenes indexed by corners alone.
+    curved = {o.name for o in OBJECTS if o.curved}
+    alone, alone_false = _scene_tally(library, learned, arcs=False)
+    lines += [("What the arcs add: the same scenes with corners alone indexed (`recognize(..., arcs=False)`), at the "
+               "same threshold:"), "",
+              "| indexing | flat, curved outlines | flat, polygons | solid | all | false detections per image |",
+              "|---|---|---|---|---|---|"]
+    for label, tally, wrong in (("corners and arcs", placed, false), ("corners only", alone, alone_false)):
+        lines.append(f"| {label} | {_rate(tally, curved):.3f} | {_rate(tally, kinds['flat'] - curved):.3f} | "
+                     f"{_rate(tally, kinds['solid']):.3f} | {_rate(tally, every):.3f} | {wrong / len(TEST_SEEDS):.3f} |")
+    return lines + [""]
 
 
 def _corners_error(h: np.ndarray, truth: np.ndarray, shape: tuple[int, int]) -> float:

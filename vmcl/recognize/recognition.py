@@ -20,7 +20,7 @@ foreshortening in orthographic projection, Ullman and Basri's observation); a 2-
 from __future__ import annotations
 
 import heapq
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import cv2
@@ -28,7 +28,7 @@ import numpy as np
 from scipy import special
 from scipy.spatial import cKDTree
 
-from vmcl.cm.core import check_choice, check_int, check_real, machine_for
+from vmcl.cm.core import check_bool, check_choice, check_int, check_real, machine_for
 from vmcl.errors import InputTypeError
 from vmcl.machine import Machine
 from vmcl.recognize.arguments import real_map
@@ -128,7 +128,7 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
               scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float = 20.0,
               min_support: int = 40,
               candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 24, regions: int = 8,
-              tolerance: float = 3.0, depth: np.ndarray | None = None,
+              tolerance: float = 3.0, arcs: bool = True, depth: np.ndarray | None = None,
               machine: Machine | None = None) -> list[Detection]:
     """Find a library's objects in an image.
 
@@ -176,6 +176,9 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
         those tried whose recognition rate at its own false-detection threshold was highest on rendered
         training scenes (benchmarks/recognition_fit.py): wide enough for a solid seen between its learned
         views.
+    arcs : bool
+        Index arcs (curve pieces on a circle) beside corners; without them a curved outline with fewer than
+        two corners in view finds no candidate (benchmarks/results/recognition.md measures both).
     depth : (H, W) float array, optional
         A disparity map (larger nearer, NaN unknown; a Result's ``disparity`` by default): a model's points
         that find no edge where a surface nearer than the object lies are explained as occluded and left
@@ -200,7 +203,11 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     neighbours = check_int(neighbours, "neighbours", minimum=1)
     regions = check_int(regions, "regions", minimum=0)
     tolerance = check_real(tolerance, "tolerance", above=0)
+    arcs = check_bool(arcs, "arcs")
     features = _features(image, sigma, machine)
+    if not arcs:
+        features = replace(features, arcs=np.zeros((0, 2)), arc_radius=np.zeros(0),
+                                       arc_middle=np.zeros((0, 2)))
     if not len(library) or len(features) + len(features.arcs) < 2:
         return []
     at, bisector, opening, radius = anchors_of(features)
