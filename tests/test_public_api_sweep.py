@@ -366,8 +366,9 @@ TABLE: tuple[Entry, ...] = (
               "machine": _M}),
     # The image's content decides how many objects are found (the result's length): valid changes of the
     # thresholds change it, so they are checked for their refusals only in tests/test_recognize.py.
-    _e("vmcl.recognize:recognize", image=make("object_image"), library=make("library"), arcs=True, depth=None,
-       kinds={"image": _A, "library": _O, "transform": _C, "arcs": _B, "depth": _OA, "machine": _M}),
+    _e("vmcl.recognize:recognize", image=make("object_image"), library=make("library"), stretch=1.3, arcs=True,
+       depth=None, kinds={"image": _A, "library": _O, "transform": _C, "stretch": _N, "arcs": _B, "depth": _OA,
+                          "machine": _M}),
     _e("vmcl.scenes:object_view", name="ell", yaw=0.0, shape=tup(48, 48), scale=None, background=0.2, albedo=0.8,
        noise=0.0, seed=0, kinds={"name": _C, "yaw": _N, "shape": _T, "scale": _ON, "background": _N,
                                  "albedo": _N, "noise": _N, "seed": _I}),

@@ -79,6 +79,21 @@ def test_arcs_are_found_on_circles_with_their_centres_and_radii_and_none_on_poly
         assert np.allclose(centres[mine], centre, atol=1.5) and np.allclose(radii[mine], radius, rtol=0.04)
         # Each arc's middle lies on its circle.
         assert np.allclose(np.hypot(*(middles[mine] - centre).T), radius, atol=1.5)
+    # A wide circle (its measured bending dips below a line's here and there) is one arc; a stadium's two
+    # half circles, which run on into its sides without a corner, are two.
+    wide = np.full((460, 460), 0.2, np.float32)
+    cv2.circle(wide, (230, 230), 190, 0.8, -1, lineType=cv2.LINE_AA)
+    found = canny(wide, sigma=1.5, return_gradient=True)
+    centres, radii, _ = arcs_of(link_edges(found.edges, magnitude=found.magnitude))
+    assert len(centres) == 1 and np.allclose(centres[0], 230, atol=1.0) and abs(radii[0] - 190) < 2
+    stadium = np.full((200, 300), 0.2, np.float32)
+    for x in (100, 200):
+        cv2.circle(stadium, (x, 100), 50, 0.8, -1, lineType=cv2.LINE_AA)
+    stadium[50:151, 100:201] = 0.8
+    found = canny(stadium, sigma=1.5, return_gradient=True)
+    centres, radii, _ = arcs_of(link_edges(found.edges, magnitude=found.magnitude))
+    assert len(centres) == 2
+    assert np.allclose(np.sort(centres[:, 0]), [100, 200], atol=1.5) and np.allclose(radii, 50, atol=1.5)
     # Straight sides and the corners between them are no arcs.
     polygon = np.full((200, 200), 0.2, np.float32)
     cv2.fillPoly(polygon, [np.array([[30, 40], [170, 30], [150, 170], [60, 150]], np.int32)], 0.8)
@@ -143,6 +158,9 @@ def test_keys_with_arcs_do_not_change_under_a_similarity_and_differ_from_corners
     assert not set(soft[with_arcs].ravel()) & set(corner_keys[~with_arcs].ravel())
     with pytest.raises(InputError, match="radius"):
         pair_keys(corners, bisector, opening, pairs, radius=np.zeros(8))
+    # An arc's ratio needs the pair's length: a pair of one point is refused, not put in a bin.
+    with pytest.raises(InputError, match="pairs"):
+        pair_keys(corners, bisector, opening, np.array([[0, 0]]), radius=radius)
 
 
 def test_a_curved_object_with_a_single_corner_in_view_is_recognised_by_its_arc():
@@ -294,6 +312,14 @@ def test_models_round_trip_through_a_library_folder(ell_model, tmp_path):
     np.savez_compressed(tmp_path / "old.vmodel.npz", **arrays)
     old = load_model(tmp_path / "old.vmodel.npz")
     assert len(old.views[0].arcs) == 0 and np.array_equal(old.views[0].corners, curved.views[0].corners)
+    # A later format, and arcs that are not centres with radii, are refused naming the file.
+    for version, arcs in ((3, None), (2, np.array([1.0, 2.0])), (2, np.array([[50.0, 60.0, -4.0]]))):
+        broken = dict(arrays, meta=np.array(str(arrays["meta"]).replace('"version": 1', f'"version": {version}')))
+        if arcs is not None:
+            broken["v0_arcs"] = arcs
+        np.savez_compressed(tmp_path / "broken.vmodel.npz", **broken)
+        with pytest.raises(InputError, match="broken.vmodel.npz"):
+            load_model(tmp_path / "broken.vmodel.npz")
     (tmp_path / "lib" / "tab.vmodel.npz").unlink()
     assert Library.load(tmp_path / "lib").names == ("ell",)
     with pytest.raises(InputError, match="replace"):

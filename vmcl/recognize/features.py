@@ -47,6 +47,8 @@ _CORNER_REACH = 3  # pixels either side over which the tangent's turning finds a
 _CORNER_TURN = math.radians(30)  # at least this much of it
 _ARC_MIN_RADIUS = 12.0  # px: a tighter bend is a corner rounded by the edges' smoothing (its radius is the blur's)
 _ARC_SAME = 0.2  # neighbouring arcs of a curve are one where centres and radii agree within this share of the radius
+
+
 @dataclass(frozen=True, eq=False)
 class Features:
     """An image's (or a model view's) features.
@@ -137,6 +139,16 @@ def _same_circle(a: np.ndarray, ra: float, b: np.ndarray, rb: float) -> bool:
     return bool(np.hypot(*(a - b)) <= _ARC_SAME * scale and abs(ra - rb) <= _ARC_SAME * scale)
 
 
+def _bridged(bend: np.ndarray) -> np.ndarray:
+    """Bending signs with each gap of straight pixels (0) shorter than an arc between two runs of one sign
+    given that sign: on a wide circle the measured bending dips below the straight level here and there."""
+    out = bend.copy()
+    for start, stop in _runs((bend == 0).astype(np.int64)):
+        if 0 < start and stop < len(bend) and stop - start < ARC_LENGTH and bend[start - 1] == bend[stop]:
+            out[start:stop] = bend[stop]
+    return out
+
+
 def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
     """The (start, stop) of each run of equal non-zero values."""
     edges = np.flatnonzero(np.diff(np.concatenate([[0], flags, [0]])) != 0)
@@ -148,11 +160,14 @@ def arcs_of(curves: Curves) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
     Along each curve, a pixel's bending is its tangent's turning over the 10 pixels either side (per
     pixel of arc), and a corner is where the tangent turns 30 degrees over 3 pixels either side. Pixels
-    bending less than 1/300 per pixel lie on lines; each run of others, bending one way and more than 10
-    pixels from a corner, is fitted where it spans :data:`ARC_LENGTH` pixels with a circle, and is an
+    bending less than 1/300 per pixel lie on lines, unless fewer than :data:`ARC_LENGTH` of them lie
+    between pixels bending one way (a wide circle's measured bending dips); each run of the others,
+    bending one way and more than 10 pixels from a corner, less 5 pixels at either end (where an arc runs
+    on into a line, its bending leaks into the line's first pixels), is fitted where it spans
+    :data:`ARC_LENGTH` pixels with a circle, and is an
     arc where its pixels lie within 0.6 px (rms) of the circle, it turns at least 30 degrees and its
-    radius is at least 12 px (a tighter bend is a corner the edges' smoothing rounded). Neighbouring arcs
-    of one curve on one circle (a dip in the measured bending split them) are joined.
+    radius is at least 12 px (a tighter bend is a corner the edges' smoothing rounded) and within a
+    factor of 2 of the run's median bending. Neighbouring arcs of one curve on one circle are joined.
 
     Parameters
     ----------
@@ -182,11 +197,15 @@ def arcs_of(curves: Curves) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             continue
         theta = np.unwrap(np.interp(np.arange(len(theta)), np.flatnonzero(known), theta[known]))
         if curves.closed[c]:
-            # A loop is read from its sharpest turn (or anywhere on a smooth one), with a reach's overlap at
-            # each end so the turning is measured across the seam.
-            sharp = np.abs(np.roll(theta, -j) - np.roll(theta, j) + 2 * np.pi * np.round(
-                (np.roll(theta, j) - np.roll(theta, -j)) / (2 * np.pi)))
-            first = int(np.argmax(sharp))
+            # A loop is read from its sharpest turn, or where it bends least if it has no corner (so that no
+            # arc is cut at the seam), with a reach's overlap at each end so the turning is measured across it.
+            turned = np.angle(np.exp(1j * (np.roll(theta, -j) - np.roll(theta, j))))
+            if np.abs(turned).max() >= _CORNER_TURN:
+                first = int(np.argmax(np.abs(turned)))
+            else:
+                # (the turning over three reaches either side: over one, a circle's measured bending dips)
+                wide = 3 * k
+                first = int(np.argmin(np.abs(np.angle(np.exp(1j * (np.roll(theta, -wide) - np.roll(theta, wide)))))))
             order = np.arange(first - k, first + len(points) + k) % len(points)
             points = points[order]
             theta = np.unwrap(theta[order])
@@ -198,13 +217,21 @@ def arcs_of(curves: Curves) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         corner[:k] = corner[-k:] = True  # no bending measured there
         # A corner's turn leaks into the bending up to a reach away: those pixels are no arc's.
         near_corner = np.convolve(corner, np.ones(2 * k + 1), mode="same") > 0
-        bend = np.where(~near_corner & (np.abs(bending) >= _ARC_STRAIGHT), np.sign(bending), 0).astype(np.int64)
+        bend = np.where(np.abs(bending) >= _ARC_STRAIGHT, np.sign(bending), 0).astype(np.int64)
+        bend = np.where(near_corner, 0, _bridged(bend))
         found: list[tuple[int, int, np.ndarray, float]] = []
         for start, stop in _runs(bend):
+            # Where an arc runs on into a line without a corner, the bending measured over a reach leaks half
+            # a reach into the line: the run's ends are left out.
+            start, stop = start + k // 2, stop - k // 2
             if stop - start < ARC_LENGTH:
                 continue
             centre, radius, residual = _circle(points[start:stop].astype(np.float64))
             if residual > _ARC_RESIDUAL or radius < _ARC_MIN_RADIUS or steps[stop - 1] - steps[start] < _ARC_TURN * radius:
+                continue
+            # A short piece can fit a circle of another radius within the residual: its radius must agree with
+            # how much the piece bends.
+            if not 0.5 <= np.median(np.abs(bending[start:stop])) * radius <= 2.0:
                 continue
             if found and _same_circle(found[-1][2], found[-1][3], centre, radius):
                 # A dip in the measured bending split one arc: fitted again as a whole.

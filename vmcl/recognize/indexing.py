@@ -7,10 +7,9 @@ and the directions of their bisectors measured from the line A -> B. An arc (a c
 :func:`vmcl.recognize.features.arcs_of`) takes part by its circle's centre: in a pair, its coordinates
 are its radius over the pair's length (in place of a bisector's direction) and a mark saying it is an arc
 (in place of an opening), so a curved outline with a single corner in view still has keys. The
-library's table maps every key
-to the model views' corner pairs that have it (built once per library, with each pair entered in the two
-nearest bins of every coordinate so a key near a bin's edge still meets it). For an image, every
-ordered pair of nearby corners looks its key up; each entry it meets fixes the similarity taking the
+library's table maps every key to the model views' feature pairs that have it (built once per library,
+with each pair entered in the two nearest bins of every coordinate so a key near a bin's edge still meets
+it). For an image, every ordered pair of nearby features looks its key up; each entry it meets fixes the similarity taking the
 model pair onto the image pair, and votes for (view, rotation, scale, where the view's centre lands),
 binned, on the device (kernels/indexing.cl, one work-item per image pair, votes counted in a hashed
 accumulator). The bins with the most votes are the candidates; their votes' similarities are pooled
@@ -113,7 +112,7 @@ def _coordinates(corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray,
         cyclic.append(~arc)
     for member in (a, b):
         arc = np.isfinite(radius[member])
-        # An arc's mark sits mid-bin, so its second-nearest bin is its own (clipped) too.
+        # An arc's mark sits mid-bin; _bins puts its second-nearest bin back on the mark.
         coords.append(np.where(arc, _ARC_MARK + 0.5, np.minimum(opening[member] / width, OPENING_BINS - 1e-9)))
     return np.stack(coords, axis=1), np.stack(cyclic, axis=1)
 
@@ -157,6 +156,10 @@ def pair_keys(corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pa
     radius = _radii(radius, len(corners))
     pairs = index_pairs(pairs, "pairs", len(corners))
     soft = check_bool(soft, "soft")
+    if len(pairs) and (np.isfinite(radius[pairs]).any(axis=1)
+                       & np.all(corners[pairs[:, 0]] == corners[pairs[:, 1]], axis=1)).any():
+        raise InputValueError("pairs must join features at distinct points where an arc takes part (its "
+                              "radius is measured against the pair's length)")
     coords, cyclic = _coordinates(corners, bisector, opening, radius, pairs)
     marks = np.isfinite(radius[pairs])
     home = np.floor(coords).astype(np.int64)
@@ -171,9 +174,9 @@ def pair_keys(corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pa
 def _radii(radius: Any, count: int) -> np.ndarray:
     if radius is None:
         return np.full(count, np.nan)
-    radius = angles(radius, "radius", count, "corners", low=0.0, unknown=True)
-    if (radius == 0).any():
-        raise InputValueError("radius must be NaN (a corner) or an arc's radius > 0")
+    radius = angles(radius, "radius", count, "corners", unknown=True)
+    if (radius <= 0).any():
+        raise InputValueError("radius must hold NaN (a corner) or an arc's radius > 0")
     return radius
 
 

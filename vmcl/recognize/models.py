@@ -276,13 +276,16 @@ def load_model(path: str | Path) -> Model:
             meta = json.loads(str(data["meta"]))
             if meta.get("format") != _FORMAT:
                 raise ValueError("not a model")
-            if meta.get("version") not in (1, _VERSION):
+            if type(meta.get("version")) is not int or meta["version"] not in (1, _VERSION):
                 raise InputValueError(f"{path} is a vmcl model of format version {meta.get('version')}; this vmcl "
                                       f"reads versions 1 to {_VERSION}")
             views = []
             for i in range(int(meta["views"])):
                 frame = data[f"v{i}_frame"]
                 arcs = data[f"v{i}_arcs"] if meta["version"] >= 2 else np.zeros((0, 3))
+                if (arcs.dtype.kind != "f" or arcs.ndim != 2 or arcs.shape[1] != 3 or not np.isfinite(arcs).all()
+                        or (arcs[:, 2] <= 0).any()):
+                    raise ValueError(f"view {i}'s arcs are not (A, 3) rows of a centre and a radius > 0")
                 views.append(View(data[f"v{i}_corners"], data[f"v{i}_bisector"], data[f"v{i}_opening"],
                                   data[f"v{i}_points"], data[f"v{i}_tangent"],
                                   data[f"v{i}_centre"], float(frame[0]),
@@ -291,7 +294,7 @@ def load_model(path: str | Path) -> Model:
             return Model(_check_name(meta["name"]), tuple(views), tuple(str(s) for s in meta["sources"]))
     except InputValueError:
         raise
-    except (ValueError, KeyError, OSError, EOFError) as error:
+    except (ValueError, KeyError, IndexError, TypeError, OSError, EOFError) as error:
         raise InputValueError(f"{path} is not a vmcl model file ({error})") from None
 
 

@@ -49,7 +49,6 @@ _SCREEN_POINTS = 96  # boundary points per candidate in the coarse test
 _SCREEN_TOLERANCE = 4.0  # pixels
 _NEARER = 1.0  # disparity: a surface this much nearer than an object hides it
 _OVERLAP = 0.5  # a pose whose silhouette lies this much inside those kept already is dropped
-_MAX_STRETCH = 1.3  # the most an affine view alignment may stretch one direction over the other
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,7 +127,7 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
               scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float = 20.0,
               min_support: int = 40,
               candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 24, regions: int = 8,
-              tolerance: float = 3.0, arcs: bool = True, depth: np.ndarray | None = None,
+              tolerance: float = 3.0, stretch: float = 1.3, arcs: bool = True, depth: np.ndarray | None = None,
               machine: Machine | None = None) -> list[Detection]:
     """Find a library's objects in an image.
 
@@ -176,6 +175,11 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
         those tried whose recognition rate at its own false-detection threshold was highest on rendered
         training scenes (benchmarks/recognition_fit.py): wide enough for a solid seen between its learned
         views.
+    stretch : float
+        The most a 3-D object's view alignment (an affine map near a similarity) may stretch one direction
+        over the other, >= 1: a view near the one seen differs from it by a little foreshortening; more
+        freedom fits clutter too. The default was chosen on rendered training scenes
+        (benchmarks/recognition_fit.py).
     arcs : bool
         Index arcs (curve pieces on a circle) beside corners; without them a curved outline with fewer than
         two corners in view finds no candidate (benchmarks/results/recognition.md measures both).
@@ -203,6 +207,7 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     neighbours = check_int(neighbours, "neighbours", minimum=1)
     regions = check_int(regions, "regions", minimum=0)
     tolerance = check_real(tolerance, "tolerance", above=0)
+    stretch = check_real(stretch, "stretch", minimum=1, maximum=1e6)
     arcs = check_bool(arcs, "arcs")
     features = _features(image, sigma, machine)
     if not arcs:
@@ -222,7 +227,7 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     found = vote(index, at, bisector, opening, pairs, radius=radius, scales=scales, candidates=candidates,
                  min_votes=min_votes, machine=machine)
     return _verify(found, index.views, library, features, transform, min_score, min_significance, min_support,
-                   tolerance, verify, _depth(image, depth, features.shape), machine)
+                   tolerance, verify, stretch, _depth(image, depth, features.shape), machine)
 
 
 def _gathered(found: Candidates, views: list[tuple[int, int, View]],
@@ -253,7 +258,7 @@ def _screen(found: Candidates, views: list[tuple[int, int, View]], nearest: np.n
 
 def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features: Features, transform: Transform,
             min_score: float, min_significance: float, min_support: int, tolerance: float, verify: int,
-            depth: np.ndarray | None, machine: Machine) -> list[Detection]:
+            stretch: float, depth: np.ndarray | None, machine: Machine) -> list[Detection]:
     if not len(found):
         return []
     views = library.views()
@@ -277,10 +282,10 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
     if len(affine):
         second = refined(affine, poses[affine], "affine", 4.0, 4)
         for k, row in enumerate(affine):
-            stretch = np.linalg.svd(second.transforms[k][:2, :2], compute_uv=False)
+            stretched = np.linalg.svd(second.transforms[k][:2, :2], compute_uv=False)
             # A 3-D object's view is aligned by an affine map only where it stays near a similarity (a view
             # near the one seen differs from it by a little foreshortening, not by any affine map).
-            if not solid[row] or stretch[0] <= _MAX_STRETCH * stretch[1]:
+            if not solid[row] or stretched[0] <= stretch * stretched[1]:
                 score[row], inside[row], poses[row] = second.score[k], second.inside[k], second.transforms[k]
     homography = np.flatnonzero(~solid) if transform == "homography" else np.zeros(0, int)
     if len(homography):
