@@ -666,8 +666,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("recognition", ("recognition: rendered test scenes of 27 objects learned from at most 5 views, hidden and "
                      "cluttered; OpenCV's graf and box samples beside ORB and SIFT; speed, kernels against NumPy, "
                      "the vote as the library grows"), recognition_figures),
-    ("recognition_fit", ("recognition's support tolerance, vote cutoff, pairing and decision threshold chosen together on rendered "
-                         "training scenes"), recognition_fit_figures),
+    ("recognition_fit", ("recognition's support tolerance, vote cutoff, pairing, alignment stretch and decision "
+                         "threshold chosen on rendered training scenes"), recognition_fit_figures),
     ("ground_truth", "scene rendering; BSDS evaluation", ground_truth_figures),
     ("first_run", "a fresh install's first runs: time spent building kernels, at a first and a second size",
      first_run_figures),

@@ -164,10 +164,10 @@ def arcs_of(curves: Curves) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     between pixels bending one way (a wide circle's measured bending dips); each run of the others,
     bending one way and more than 10 pixels from a corner, less 5 pixels at either end (where an arc runs
     on into a line, its bending leaks into the line's first pixels), is fitted where it spans
-    :data:`ARC_LENGTH` pixels with a circle, and is an
-    arc where its pixels lie within 0.6 px (rms) of the circle, it turns at least 30 degrees and its
-    radius is at least 12 px (a tighter bend is a corner the edges' smoothing rounded) and within a
-    factor of 2 of the run's median bending. Neighbouring arcs of one curve on one circle are joined.
+    :data:`ARC_LENGTH` pixels with a circle, and is an arc where its pixels lie within 0.6 px (rms) of the
+    circle, it turns at least 30 degrees, and its radius is at least 12 px (a tighter bend is a corner the
+    edges' smoothing rounded) and within a factor of 2 of the run's median bending. Neighbouring arcs of
+    one curve on one circle are joined.
 
     Parameters
     ----------

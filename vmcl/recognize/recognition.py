@@ -211,8 +211,7 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     arcs = check_bool(arcs, "arcs")
     features = _features(image, sigma, machine)
     if not arcs:
-        features = replace(features, arcs=np.zeros((0, 2)), arc_radius=np.zeros(0),
-                                       arc_middle=np.zeros((0, 2)))
+        features = replace(features, arcs=np.zeros((0, 2)), arc_radius=np.zeros(0), arc_middle=np.zeros((0, 2)))
     if not len(library) or len(features) + len(features.arcs) < 2:
         return []
     at, bisector, opening, radius = anchors_of(features)
