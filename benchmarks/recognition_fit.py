@@ -99,8 +99,8 @@ def main() -> int:
     alone = _tally(library, learned, scenes, solid, stretch=stretch, regions=0, **chosen)[at]
     seconds = time.perf_counter() - start
     n = len(scenes)
-    lines = [("# Recognition: the support tolerance, the vote's cutoff, the pairing and the significance threshold, "
-              "fitted on training scenes"), "",
+    lines = [("# Recognition: the support tolerance, the vote's cutoff, the pairing, the alignment stretch and the "
+              "significance threshold, fitted on training scenes"), "",
              (f"`python benchmarks/recognition_fit.py` on {platform.node() or 'this machine'} "
               f"({time.strftime('%Y-%m-%d')}), {n} training scenes (seeds {SEEDS.start}..{SEEDS.stop - 1}), "
               f"{len(library)} models, {seconds:.0f} s."), "",

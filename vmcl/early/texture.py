@@ -28,8 +28,7 @@ two textures. Candidates are the maxima of the magnitude along its dominant axis
 :data:`NOISE_FACTOR`, was fitted on rendered scenes (benchmarks/texture_fit.py): the texture MRF, whose
 lines are allowed only near these candidates, draws about as many lines whatever its data weight (the
 same results file), so the candidates' own threshold decides how many false texture lines the cartoon
-gets. The floor keeps
-untextured images (density 0 everywhere) free of candidates.
+gets. The floor keeps untextured images (density 0 everywhere) free of candidates.
 
 Images are grey or RGB, uint8, uint16 or float, NumPy or device arrays, converted to grey as
 :mod:`vmcl.early.filters` describes; ``threshold`` is in the input's units. NumPy in gives NumPy out, a

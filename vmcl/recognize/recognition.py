@@ -165,7 +165,8 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     min_votes : int
         The fewest indexing votes a candidate needs, >= 1.
     neighbours : int
-        Each feature (a corner, or an arc's centre) is paired with this many nearest ones for indexing, >= 1.
+        Each of the image's features (a corner, or an arc's centre) is paired with this many nearest ones
+        for indexing, >= 1 (a model view's with its 8 nearest, :func:`vmcl.recognize.index_for`).
         The default was chosen on rendered training scenes (benchmarks/recognition_fit.py): two corners of
         one object may lie farther apart than a dozen of the clutter's.
     regions : int
