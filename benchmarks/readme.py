@@ -642,7 +642,7 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
      pipeline_figures),
     ("roofline", ("each kernel's device time, the bytes its launches are given and its bandwidth against the "
                   "copy kernel's, for the whole machine at 256^2 and 512^2"), roofline_figures),
-    ("pipeline_gpu", "the same on a lent NVIDIA H200 (NVIDIA's OpenCL), before its colour threshold was parallel",
+    ("pipeline_gpu", "the same on a lent NVIDIA H200 (NVIDIA's OpenCL)",
      pipeline_figures),
     ("roofline_gpu", "the same on the lent NVIDIA H200, in the same session", roofline_figures),
     ("revisions", "the whole machine's time per frame at two revisions of vmcl, alternated in one run",

@@ -292,6 +292,30 @@ def test_compiler_warnings_reach_the_vmcl_machine_logger(monkeypatch, caplog, ca
     assert any("1 warning generated." in r.getMessage() for r in caplog.records if r.levelno == logging.DEBUG)
 
 
+def test_driver_notices_are_logged_at_debug_and_vmcl_warnings_at_warning(caplog):
+    # NVIDIA's drivers from 550 on print this for every kernel of some programs (seen on an H200 building
+    # pseudolikelihood.cl, whose kernels nothing calls); it says nothing about vmcl's source.
+    nvidia = "(): Warning: Function softmax_terms is a kernel, so overriding noinline attribute. The function may be inlined when called."
+    own = "<source>:3:1: warning: non-void function does not return a value"
+    with caplog.at_level(logging.DEBUG, logger="vmcl.machine"):
+        machine_module._log_build("pseudolikelihood", (("K", 2),), f"{nvidia}\n\n{own}\n")
+    by_level = {r.levelno: r.getMessage() for r in caplog.records if r.name == "vmcl.machine"}
+    assert set(by_level) == {logging.DEBUG, logging.WARNING}
+    assert nvidia in by_level[logging.DEBUG] and own not in by_level[logging.DEBUG]
+    assert own in by_level[logging.WARNING] and "noinline" not in by_level[logging.WARNING]
+
+
+def test_programs_are_built_with_correctly_rounded_division_where_the_device_offers_it():
+    # Without it NVIDIA's division is within 2 ulp, and the edge matcher's ties (3 / 7.5 against 2 / 5)
+    # broke differently from its NumPy oracle on an H200 (tests/test_early_stereo.py).
+    machine = vmcl.Machine()
+    offered = bool(machine.device.single_fp_config & cl.device_fp_config.CORRECTLY_ROUNDED_DIVIDE_SQRT)
+    assert machine.build_options == (("-cl-fp32-correctly-rounded-divide-sqrt",) if offered else ())
+    program = machine.program("news", T="float", BORDER=0)
+    assert program.get_build_info(machine.device, cl.program_build_info.OPTIONS).split()[:1] == list(
+        machine.build_options)
+
+
 def test_kernel_sources_are_the_same_wherever_vmcl_is_installed():
     from vmcl.machine import kernel_source, kernels_dir
 

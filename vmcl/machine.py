@@ -61,9 +61,10 @@ _log = logging.getLogger(__name__)
 # print WARNING records to the terminal of a user who never configured logging.
 _log.addHandler(logging.NullHandler())
 
-_DRIVER_NOTE = re.compile(r"changes the ABI|vector ABI", re.IGNORECASE)
+_DRIVER_NOTE = re.compile(r"changes the ABI|vector ABI|is a kernel, so overriding noinline attribute", re.IGNORECASE)
 """Build-log lines that are about the driver, not vmcl's source: PoCL's notes on AVX vector ABIs, which
-depend on how the CPU and PoCL's own kernel library were built. Logged at DEBUG."""
+depend on how the CPU and PoCL's own kernel library were built, and NVIDIA's notice (drivers from 550 on)
+that a kernel may be inlined where it is called, printed for kernels that nothing calls. Logged at DEBUG."""
 
 _CLANG_SUMMARY = re.compile(rb"^\d+ (warnings?|errors?)( and \d+ errors?)? generated\.$")
 """The line clang inside PoCL prints straight to the process's stderr after a build with diagnostics."""
@@ -243,6 +244,10 @@ class Machine:
     vector_width : int
         Elements each work-item of a vectorised kernel handles (its ``VEC`` define): 16 on CPUs, whose
         SIMD lanes then see contiguous loads, 1 on GPUs, whose work-items are the lanes.
+    build_options : tuple of str
+        Options every program is built with, before its defines: ``-cl-fp32-correctly-rounded-divide-sqrt``
+        where the device offers it, so that a float division or square root gives the same bits on every
+        device (NVIDIA's default division is within 2 ulp: score ties broke differently from PoCL's).
 
     Notes
     -----
@@ -253,6 +258,10 @@ class Machine:
     allocations from the buffer pool; each call's scratch buffers are its own. Work from several
     threads is serialised on the one in-order queue, so threads add no speed on one device: for that,
     use one Machine per thread (each with its own queue) or one process per device.
+
+    On NVIDIA's OpenCL (driver 580, an H200) six threads sharing one Machine crashed the process inside a
+    worker thread of the driver, while another thread released an event (tests/test_threads.py): there,
+    give each thread its own Machine.
     """
 
     def __init__(self, device: cl.Device | str | None = None, *, profile: bool = False,
@@ -283,6 +292,8 @@ class Machine:
         self.is_cpu = bool(self.device.type & cl.device_type.CPU)
         self.compute_units = self.device.max_compute_units
         self.vector_width = 16 if self.is_cpu else 1
+        exact = bool(self.device.single_fp_config & cl.device_fp_config.CORRECTLY_ROUNDED_DIVIDE_SQRT)
+        self.build_options: tuple[str, ...] = ("-cl-fp32-correctly-rounded-divide-sqrt",) if exact else ()
 
     def __repr__(self) -> str:
         return f"Machine({self.device.platform.name} / {self.device.name})"
@@ -296,7 +307,7 @@ class Machine:
             program = self._programs.get(key)
             if program is None:
                 source = kernel_source(family)
-                options = [f"-D{name}={value}" for name, value in key[1]]
+                options = [*self.build_options, *(f"-D{name}={value}" for name, value in key[1])]
                 with warnings.catch_warnings(record=True) as caught, _clang_stderr_to_log():
                     # pyopencl only says "non-empty compiler output" here; the log itself is read below.
                     warnings.simplefilter("always")
