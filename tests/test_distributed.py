@@ -17,9 +17,12 @@ import time
 from pathlib import Path
 
 import cv2
-import distributed
 import numpy as np
 import pytest
+
+# The dask extra (pip install 'vmcl[dask]'; the test extra brings it): without it these tests are skipped.
+distributed = pytest.importorskip("distributed",
+                                  reason="vmcl.distributed needs the dask extra: pip install 'vmcl[dask]'")
 
 from vmcl import scenes
 from vmcl.cli import main, write_output

@@ -18,8 +18,14 @@ from hardware.head import Head
 _ROOT = str(Path(hardware.__file__).resolve().parent.parent)
 
 
+def _server_env() -> dict[str, str]:
+    """This environment with the checkout first on the path, the paths it had kept after it (packages
+    installed through PYTHONPATH, pyserial say, must stay importable in the server)."""
+    return dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [_ROOT, os.environ.get("PYTHONPATH")])))
+
+
 def start_server(url: str, rate: float) -> tuple[subprocess.Popen, str]:
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [_ROOT, os.environ.get("PYTHONPATH")])))
+    env = _server_env()
     proc = subprocess.Popen(
         [sys.executable, "-m", "hardware.ptyserver", url, "--rate", str(rate)],
         stdout=subprocess.PIPE,
@@ -90,7 +96,7 @@ def test_server_exits_when_its_parent_dies():
         "import subprocess, sys; p = subprocess.Popen([sys.executable, '-m', 'hardware.ptyserver'], "
         "stdout=subprocess.PIPE, text=True); print(p.pid, p.stdout.readline().strip(), flush=True)"
     )
-    env = dict(os.environ, PYTHONPATH=_ROOT)
+    env = _server_env()
     out = subprocess.run(
         [sys.executable, "-c", script], check=True, capture_output=True, text=True, env=env, timeout=30
     )
@@ -118,7 +124,7 @@ def test_server_exits_when_its_parent_dies():
     ],
 )
 def test_bad_server_options_exit_2_with_one_line_naming_them(args, message):
-    env = dict(os.environ, PYTHONPATH=_ROOT)
+    env = _server_env()
     done = subprocess.run(
         [sys.executable, "-m", "hardware.ptyserver", *args],
         check=False,
