@@ -13,6 +13,7 @@ import cv2
 import numpy as np
 import pytest
 
+import vmcl
 from vmcl import scenes
 from vmcl.cli import main
 from vmcl.datasets import read_image
@@ -108,6 +109,8 @@ def test_info_names_the_chosen_device(capsys):
     assert main(["info"]) == 0
     printed = capsys.readouterr().out
     assert " * " in printed and "kernel binary cache" in printed
+    options = " ".join(vmcl.default_machine().build_options) or "none"
+    assert f"build options: {options} (and each kernel's -D defines)" in printed
 
 
 def test_info_counts_what_the_kernel_cache_holds(tmp_path, capsys, monkeypatch):

@@ -607,6 +607,7 @@ def _info(args) -> int:
         print(f" {mark} {device.platform.name} / {device.name} ({kind}, {device.max_compute_units} "
                    f"compute units, {device.global_mem_size // 2**20} MiB)")
     print(f"chosen (*): VMCL_DEVICE={os.environ.get('VMCL_DEVICE', '')!r}, else the first (GPUs first)")
+    print(f"build options: {' '.join(vmcl.default_machine().build_options) or 'none'} (and each kernel's -D defines)")
     print(f"kernel sources: {kernels_dir()}")
     cache = os.environ.get("POCL_CACHE_DIR") or Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "pocl" / "kcache"
     print(f"kernel binary cache: {cache} (PoCL's; other drivers keep their own){_cache_contents(Path(cache))}")
