@@ -76,3 +76,43 @@ __kernel void box_cols(__global const T *x, __global T *out, long W, long H, lon
     for (long i = 0; i < min(r, H); i++) w += VLOAD(x + base + (size_t)i * W);  /* warm-up, as in box_rows */
     WINDOW_WALK(COLS_STEP, H)
 }
+
+/* The same sums for a GPU (vmcl/cm/scan.py takes these where the device is not a CPU): a walk per line
+ * gives a 512 x 512 field 512 work-items, far too few for a GPU (box_rows was a quarter of an H200's
+ * device time per frame, at 1% of its copy bandwidth). Here work-item (s, line) walks outputs
+ * [s segment, (s + 1) segment) of its line, its first window summed whole; `segment` is at least the
+ * window's width, so the warm-up at most doubles the loads. A walk this short rounds no worse than the
+ * whole line's. */
+__kernel void box_rows_segments(__global const T *x, __global T *out, long n, long lines, long r, long segment)
+{
+    long s = get_global_id(0), line = get_global_id(1), j0 = s * segment;
+    if (j0 >= n || line >= lines) return;
+    __global const T *row = x + line * n;
+    __global T *dst = out + line * n;
+    T w = 0;
+    for (long t = max(j0 - r, 0L); t <= min(j0 + r, n - 1); t++) w += row[t];
+    dst[j0] = w;
+    for (long j = j0 + 1; j < min(j0 + segment, n); j++) {
+        if (j + r < n) w += row[j + r];
+        if (j - r - 1 >= 0) w -= row[j - r - 1];
+        dst[j] = w;
+    }
+}
+
+/* Work-item (column, s, plane) walks rows [s segment, (s + 1) segment) of its column: neighbouring
+ * work-items read neighbouring columns, one contiguous access per step across them. */
+__kernel void box_cols_segments(__global const T *x, __global T *out, long W, long H, long r, long segment)
+{
+    long column = get_global_id(0), s = get_global_id(1), p = get_global_id(2), j0 = s * segment;
+    if (column >= W || j0 >= H) return;
+    __global const T *col = x + (size_t)p * H * W + column;
+    __global T *dst = out + (size_t)p * H * W + column;
+    T w = 0;
+    for (long t = max(j0 - r, 0L); t <= min(j0 + r, H - 1); t++) w += col[(size_t)t * W];
+    dst[(size_t)j0 * W] = w;
+    for (long j = j0 + 1; j < min(j0 + segment, H); j++) {
+        if (j + r < H) w += col[(size_t)(j + r) * W];
+        if (j - r - 1 >= 0) w -= col[(size_t)(j - r - 1) * W];
+        dst[(size_t)j * W] = w;
+    }
+}

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from oracles import box_sum as box_oracle
 
+import vmcl
 from vmcl.cm.scan import box_sum
 
 SHAPES = [(1,), (23,), (1, 1), (1, 19), (19, 1), (31, 17), (40, 37), (3, 40, 37), (2, 1, 50)]
@@ -21,6 +22,32 @@ def test_matches_prefix_sum_oracle(shape, radius, machine):
         f = rng.random(shape).astype(np.float32)
         np.testing.assert_allclose(box_sum(f, radius, axes=axes, machine=machine), box_oracle(f, radius, axes),
                                    rtol=2e-6, atol=2e-5)
+
+
+@pytest.fixture(scope="module")
+def gpu_walks():
+    """A Machine on this device that takes the GPU's path (short segments of each line, one work-item
+    each): on PoCL it checks that path's sums, which a GPU runs."""
+    machine = vmcl.Machine()
+    machine.is_cpu = False
+    return machine
+
+
+@pytest.mark.parametrize("shape", SHAPES + [(3, 70, 53)], ids=str)
+@pytest.mark.parametrize("radius", [0, 1, 4, 7, 25])
+def test_segmented_walks_match_the_oracle(shape, radius, gpu_walks):
+    """Lines shorter and longer than a segment, windows narrower and wider than one (it then grows), and
+    stacks of planes: int32 exactly, float32 as closely as the one walk per line."""
+    rng = np.random.default_rng(len(shape) * 100 + radius + 7)
+    full = (-1,) if len(shape) == 1 else (-2, -1)
+    for axes in ([full] if len(shape) == 1 else [full, (-1,), (-2,)]):
+        x = rng.integers(-1000, 1000, shape).astype(np.int32)
+        np.testing.assert_array_equal(box_sum(x, radius, axes=axes, machine=gpu_walks),
+                                      box_oracle(x, radius, axes).astype(np.int32))
+        f = rng.random(shape).astype(np.float32)
+        np.testing.assert_allclose(box_sum(f, radius, axes=axes, machine=gpu_walks), box_oracle(f, radius, axes),
+                                   rtol=2e-6, atol=2e-5)
+    assert any(name.endswith("_segments") for name in gpu_walks.kernel_families())
 
 
 def test_large_field_and_any_local_size(machine, machine_with_local_size):

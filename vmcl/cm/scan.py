@@ -38,6 +38,7 @@ from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 __all__ = [
+    "BOX_SEGMENT",
     "COLUMN_VEC",
     "METHODS",
     "OPS",
@@ -57,6 +58,8 @@ Method = Literal["work_efficient", "hillis_steele"]
 OPS: dict[Op, int] = {"plus": 0, "max": 1, "min": 2, "copy": 3}
 METHODS: tuple[Method, ...] = ("work_efficient", "hillis_steele")
 COLUMN_VEC = 16
+BOX_SEGMENT = 16
+"""On a GPU, box_sum's work-items each walk this many outputs of a line (at least the window's width)."""
 ROW_ILP = 4  # chunks per work-item in the row kernels (ILP in kernels/scan.cl)
 _MIN_CHUNK = 4096
 # On a CPU one work-item sums a short line faster than two more launches let two share it. Measured on
@@ -311,6 +314,10 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     does not leave the window with its element: it spoils every later output of its row (and, in the
     column pass, of the columns below it). Replace non-finite values first; they are not checked here,
     since that would cost a pass of its own.
+
+    On a CPU each work-item walks whole lines. On any other device each walks :data:`BOX_SEGMENT` outputs
+    of a line (or the window's width, if wider), starting from its first window summed whole: a walk per
+    line leaves most of a GPU idle. Its NaN then spoils the rest of that segment only.
     """
     machine = machine_for(machine)
     data, host = field(x, "x", machine, ndims=(1, 2, 3))
@@ -333,20 +340,33 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     width = data.shape[-1]
     r = np.int64(radius)
     source = data
+    # A CPU walks each line whole (its cores are few, and a walk keeps its SIMD lanes busy); a GPU walks
+    # short segments of the lines, many thousands at once (kernels/scan_box.cl, box_rows_segments).
+    segment = np.int64(max(BOX_SEGMENT, 2 * radius + 1))
     if -1 in wanted:
         lines = data.size // width
         rows = final if -2 not in wanted else machine.empty(data.shape, data.dtype)
-        # box_rows reads no VEC: built with the column pass's vector width it shares that pass's program
-        # where both run (a window sum over rows and columns), one build fewer on a first run.
-        machine.launch(machine.kernel("scan_box", "box_rows", VEC=COLUMN_VEC, **defines), (math.ceil(lines / 4),),
-                       source, rows, np.int64(width), np.int64(lines), r)
+        if machine.is_cpu:
+            # box_rows reads no VEC: built with the column pass's vector width it shares that pass's program
+            # where both run (a window sum over rows and columns), one build fewer on a first run.
+            machine.launch(machine.kernel("scan_box", "box_rows", VEC=COLUMN_VEC, **defines),
+                           (math.ceil(lines / 4),), source, rows, np.int64(width), np.int64(lines), r)
+        else:
+            machine.launch(machine.kernel("scan_box", "box_rows_segments", VEC=1, **defines),
+                           (math.ceil(width / segment), lines), source, rows, np.int64(width), np.int64(lines), r,
+                           segment)
         source = rows
     if -2 in wanted:
         height = data.shape[-2]
         planes = data.size // (height * width)
         cols = final
-        for vec, col0, count in column_groups(width):
-            machine.launch(machine.kernel("scan_box", "box_cols", VEC=vec, **defines), (count, planes),
-                           source, cols, np.int64(width), np.int64(height), np.int64(col0), np.int64(count), r)
+        if machine.is_cpu:
+            for vec, col0, count in column_groups(width):
+                machine.launch(machine.kernel("scan_box", "box_cols", VEC=vec, **defines), (count, planes),
+                               source, cols, np.int64(width), np.int64(height), np.int64(col0), np.int64(count), r)
+        else:
+            machine.launch(machine.kernel("scan_box", "box_cols_segments", VEC=1, **defines),
+                           (width, math.ceil(height / segment), planes), source, cols, np.int64(width),
+                           np.int64(height), r, segment)
         source = cols
     return result(source, host)
