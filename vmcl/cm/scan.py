@@ -317,7 +317,8 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
 
     On a CPU each work-item walks whole lines. On any other device each walks :data:`BOX_SEGMENT` outputs
     of a line (or the window's width, if wider), starting from its first window summed whole: a walk per
-    line leaves most of a GPU idle. Its NaN then spoils the rest of that segment only.
+    line leaves most of a GPU idle. A NaN or infinity then spoils the later outputs of its segment, not
+    of the whole line.
     """
     machine = machine_for(machine)
     data, host = field(x, "x", machine, ndims=(1, 2, 3))
