@@ -67,10 +67,12 @@ HAMMER = textwrap.dedent("""
 def test_threads_sharing_the_default_machine_get_their_own_results():
     run = subprocess.run([sys.executable, "-c", HAMMER, "6", "20"], capture_output=True, text=True, timeout=600,
                          check=False)
-    if run.returncode != 0 and "NVIDIA" in vmcl.default_machine().device.platform.name:
-        # Seen on an H200 (driver 580): the segmentation fault is in a worker thread of the driver while
-        # another thread releases an event; no lock of the Machine's covers pyopencl's event releases.
-        pytest.xfail("NVIDIA's OpenCL crashes with threads sharing one Machine (documented: one per thread)")
+    if run.returncode < 0 and "NVIDIA" in vmcl.default_machine().device.platform.name:
+        # Seen on an H200 (driver 580): a segmentation fault in a worker thread of the driver's library
+        # while another thread released an event (no lock of the Machine's covers pyopencl's releases);
+        # the cause is not isolated. A Python error (status 1) still fails.
+        pytest.xfail(f"killed by signal {-run.returncode} on NVIDIA's OpenCL with threads sharing one Machine "
+                     f"(documented: one Machine per thread there): {run.stderr[-500:]}")
     assert run.returncode == 0, f"the hammering process died (status {run.returncode}): {run.stderr[-2000:]}"
     wrong = json.loads(run.stdout.strip().splitlines()[-1])["wrong"]
     assert wrong == [], f"{len(wrong)} results differ from the thread's sequential ones: {wrong[:5]}"

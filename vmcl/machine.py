@@ -28,6 +28,11 @@ import pyopencl as cl
 import pyopencl.array as cl_array
 import pyopencl.tools as cl_tools
 
+# pyopencl's unbuilt program, which pyopencl.Program wraps (its one-argument form): built with exactly the
+# options given, where Program.build adds its own include folder to them.
+from pyopencl._cl import _Program as RawProgram
+from pyopencl.characterize import has_src_build_cache
+
 from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = [
@@ -64,7 +69,8 @@ _log.addHandler(logging.NullHandler())
 _DRIVER_NOTE = re.compile(r"changes the ABI|vector ABI|is a kernel, so overriding noinline attribute", re.IGNORECASE)
 """Build-log lines that are about the driver, not vmcl's source: PoCL's notes on AVX vector ABIs, which
 depend on how the CPU and PoCL's own kernel library were built, and NVIDIA's notice (drivers from 550 on)
-that a kernel may be inlined where it is called, printed for kernels that nothing calls. Logged at DEBUG."""
+that a kernel may be inlined where it is called, printed for kernels that no other kernel calls. Logged at
+DEBUG."""
 
 _CLANG_SUMMARY = re.compile(rb"^\d+ (warnings?|errors?)( and \d+ errors?)? generated\.$")
 """The line clang inside PoCL prints straight to the process's stderr after a build with diagnostics."""
@@ -245,23 +251,26 @@ class Machine:
         Elements each work-item of a vectorised kernel handles (its ``VEC`` define): 16 on CPUs, whose
         SIMD lanes then see contiguous loads, 1 on GPUs, whose work-items are the lanes.
     build_options : tuple of str
-        Options every program is built with, before its defines: ``-cl-fp32-correctly-rounded-divide-sqrt``
-        where the device offers it, so that a float division or square root gives the same bits on every
-        device (NVIDIA's default division is within 2 ulp: score ties broke differently from PoCL's).
+        Options every program is built with, before its defines (read-only):
+        ``-cl-fp32-correctly-rounded-divide-sqrt`` where the device offers it, so that ``/`` and ``sqrt``
+        are correctly rounded, as NumPy's float32 ones are (NVIDIA's default division is within 2 ulp, and
+        the edge matcher's score ties then broke otherwise than its NumPy oracle's). ``native_*``
+        functions, other built-ins and contracted multiply-adds may still differ between devices.
 
     Notes
     -----
     Programs are compiled on first use, never at construction, and cached per (file, defines).
 
-    A Machine is safe to share between threads. A pyopencl kernel object holds its arguments until
+    On PoCL a Machine is safe to share between threads. A pyopencl kernel object holds its arguments until
     the next launch sets them, so setting them and enqueueing happen under one lock, as do the
     allocations from the buffer pool; each call's scratch buffers are its own. Work from several
     threads is serialised on the one in-order queue, so threads add no speed on one device: for that,
     use one Machine per thread (each with its own queue) or one process per device.
 
-    On NVIDIA's OpenCL (driver 580, an H200) six threads sharing one Machine crashed the process inside a
-    worker thread of the driver, while another thread released an event (tests/test_threads.py): there,
-    give each thread its own Machine.
+    On NVIDIA's OpenCL (driver 580, an H200), six threads sharing one Machine ended the process with a
+    segmentation fault in a worker thread of the driver's library, while another thread released an event
+    (tests/test_threads.py); the cause is not isolated. There, give each thread its own Machine, passed as
+    ``machine=`` to every call (module functions otherwise share :func:`default_machine`).
     """
 
     def __init__(self, device: cl.Device | str | None = None, *, profile: bool = False,
@@ -293,10 +302,15 @@ class Machine:
         self.compute_units = self.device.max_compute_units
         self.vector_width = 16 if self.is_cpu else 1
         exact = bool(self.device.single_fp_config & cl.device_fp_config.CORRECTLY_ROUNDED_DIVIDE_SQRT)
-        self.build_options: tuple[str, ...] = ("-cl-fp32-correctly-rounded-divide-sqrt",) if exact else ()
+        self._build_options: tuple[str, ...] = ("-cl-fp32-correctly-rounded-divide-sqrt",) if exact else ()
 
     def __repr__(self) -> str:
         return f"Machine({self.device.platform.name} / {self.device.name})"
+
+    @property
+    def build_options(self) -> tuple[str, ...]:
+        # Read-only: the programs cached by defines alone were all built with these.
+        return self._build_options
 
     # -- programs and kernels -------------------------------------------------------------------
 
@@ -311,7 +325,7 @@ class Machine:
                 with warnings.catch_warnings(record=True) as caught, _clang_stderr_to_log():
                     # pyopencl only says "non-empty compiler output" here; the log itself is read below.
                     warnings.simplefilter("always")
-                    program = cl.Program(self.context, source).build(options=options)
+                    program = self._build(source, options)
                 for warning in caught:
                     if not issubclass(warning.category, cl.CompilerWarning):
                         # Another thread's warning, caught only because catch_warnings is process-wide.
@@ -319,6 +333,17 @@ class Machine:
                 _log_build(family, key[1], program.get_build_info(self.device, cl.program_build_info.LOG))
                 self._programs[key] = program
         return program
+
+    def _build(self, source: str, options: list[str]) -> cl.Program:
+        """The program of ``source`` built for this device with exactly ``options`` where the driver keeps
+        its own cache of builds (PoCL, NVIDIA): pyopencl's Program.build adds "-I <its install folder>",
+        which the driver's cache key then holds, and a second install (another virtual environment, a
+        checkout) would build every kernel again. Elsewhere pyopencl's build, with its own binary cache."""
+        if not has_src_build_cache(self.device):
+            return cl.Program(self.context, source).build(options=options)
+        raw = RawProgram(self.context, source)
+        raw.build(" ".join(options).encode(), [self.device])  # a failure's error holds the build log
+        return cl.Program(raw)
 
     def kernel(self, family: str, name: str, **defines: Any) -> cl.Kernel:
         """A cached kernel object: fetched from its program once per (family, name, defines). Launch it
