@@ -6,9 +6,11 @@
  *   bank             the filter-bank responses (first and second directional derivatives and the
  *                    Laplacian of the lightness at two scales), compressed by their norm
  *   nearest          each pixel's texton: the nearest of the centres to its responses
- *   histogram_rows   a row pass of the Gaussian over the textons' indicator planes: NT planes out
+ *   histogram_rows   a row pass of the Gaussian over the textons' indicator planes: NT planes out, at every
+ *                    STEP-th column (a wide Gaussian's output is smooth enough to be sampled sparsely)
  *   planes_rows      a row pass of the Gaussian over a stack of float planes
- *   planes_cols      the column pass over a stack of float planes
+ *   planes_cols      the column pass over a stack of float planes, at every step-th row
+ *   planes_upsample  a stack sampled at every step-th row and column, interpolated bilinearly to every pixel
  *   components       one scale's gradient components: (gx, gy) of L, a and b, and the texture tensor
  *                    (sum over textons of gx^2, gx gy, gy^2 of the smoothed indicator planes), which
  *                    the host then integrates (smooths) at the texture's scale
@@ -192,20 +194,32 @@ __kernel void nearest(__global const float *responses, __global const float *cen
 
 
 #ifdef NT
-/* Each pixel's share of each texton in the Gaussian row window: one pass over the taps, the weight
- * added to the texton met (a histogram), not NT passes. */
+/* Each sample's share of each texton in the Gaussian row window: one pass over the taps, the weight
+ * added to the texton met (a histogram), not NT passes. Work-item (xc, y) is pixel (xc step, y), written
+ * at (xc, y) of Wc-wide planes; columns past the image read its last one. */
 __kernel void histogram_rows(__global const uchar *label, __global float *out, __global const float *taps, int radius,
-                             long W, long H)
+                             int step, long Wc, long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
+    long xc = get_global_id(0), y = get_global_id(1);
+    if (xc >= Wc || y >= H) return;
+    long x = xc * step;
     float acc[NT];
     for (int k = 0; k < NT; k++) acc[k] = 0.0f;
     for (int t = -radius; t <= radius; t++)
         acc[AT(label, clamp(x + t, 0L, W - 1), y)] += taps[t + radius];
-    for (int k = 0; k < NT; k++) PLANE(out, k, x, y) = acc[k];
+    for (int k = 0; k < NT; k++) out[IDX3(xc, y, k, Wc, H)] = acc[k];
 }
 #endif
+
+/* Plane p of a (P, Hc, Wc) stack sampled at every step-th pixel, bilinearly at each pixel of (P, H, W). */
+__kernel void planes_upsample(__global const float *in, __global float *out, int step, long Wc, long Hc,
+                              long W, long H)
+{
+    long x = get_global_id(0), y = get_global_id(1), p = get_global_id(2);
+    if (x >= W || y >= H) return;
+    float inv = 1.0f / (float)step;
+    out[IDX3(x, y, p, W, H)] = bilinear_clamped(in + (size_t)p * Hc * Wc, (float)x * inv, (float)y * inv, Wc, Hc);
+}
 
 #ifdef VEC
 /* The Gaussian's row and column passes over a (P, H, W) stack into planes first .. first + P - 1 of
@@ -229,23 +243,25 @@ __kernel void planes_rows(__global const float *in, __global float *out, __globa
     store_chunk(out, first + p, x0, y, W, H, acc);
 }
 
+/* planes_cols: output row yc of (P, Hout, W) is input row yc step (rows past the image read its last). */
 __kernel void planes_cols(__global const float *in, __global float *out, __global const float *taps, int r,
-                          long first, long W, long H)
+                          long first, int step, long Hout, long W, long H)
 {
-    long x0 = get_global_id(0) * VEC, y = get_global_id(1), p = get_global_id(2);
-    if (x0 >= W || y >= H) return;
+    long x0 = get_global_id(0) * VEC, yc = get_global_id(1), p = get_global_id(2);
+    if (x0 >= W || yc >= Hout) return;
+    long y = yc * step;
     __global const float *plane = in + p * H * W;
-    out += first * H * W;
+    out += first * Hout * W;
     if (x0 + VEC <= W) {
         VT acc = (VT)0.0f;
         for (int k = -r; k <= r; k++) acc += taps[k + r] * VLOAD(plane + clamp(y + k, 0L, H - 1) * W + x0);
-        VSTORE(acc, out + (p * H + y) * W + x0);
+        VSTORE(acc, out + (p * Hout + yc) * W + x0);
         return;
     }
     for (long x = x0; x < W; x++) {
         float acc = 0.0f;
         for (int k = -r; k <= r; k++) acc += taps[k + r] * plane[clamp(y + k, 0L, H - 1) * W + x];
-        out[(p * H + y) * W + x] = acc;
+        out[(p * Hout + yc) * W + x] = acc;
     }
 }
 #endif

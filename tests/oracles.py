@@ -136,6 +136,21 @@ def _smoothed(plane, sigma):
                                taps, axis=0, mode="nearest")
 
 
+def _sampled_smoothing(plane, sigma, step):
+    """The exact Gaussian of ``plane`` at every ``step``-th row and column (from 0 to the first sample at or
+    past the last pixel, the borders clamped), interpolated bilinearly at every pixel."""
+    from scipy import ndimage
+
+    if step == 1:
+        return _smoothed(plane, sigma)
+    height, width = plane.shape
+    padded = np.pad(plane, ((0, -(-(height - 1) // step) * step + 1 - height),
+                            (0, -(-(width - 1) // step) * step + 1 - width)), mode="edge")
+    coarse = _smoothed(padded, sigma)[::step, ::step]
+    ys, xs = np.mgrid[0:height, 0:width] / step
+    return ndimage.map_coordinates(coarse, [ys, xs], order=1, mode="nearest")
+
+
 def _centred(plane):
     """Centred differences (gx, gy) with clamped borders."""
     p = np.pad(plane, 1, mode="edge")
@@ -161,14 +176,20 @@ def texton_bank(lightness, sigmas=(1.0, 2.0)):
 
 
 def oriented_gradients(lab, labels, ntextons, scales, orientations=8, ratio=2.0, surround_sigma=10.0,
-                       floor=0.02):
+                       floor=0.02, sampled=True):
     """The boundary classifier's features (orientations, H, W, 12 len(scales)) from the (3, H, W) L*a*b*
-    planes (each / 100) and the texton labels; the texture tensor integrated at the texture's scale; the
+    planes (each / 100) and the texton labels; the textons' histograms sampled as the map samples them
+    (vmcl.early.boundary_probability.texture_step; with ``sampled`` False, at every pixel, the exact
+    Gaussian); the texture tensor integrated at the texture's scale; the
     surround is the Gaussian mean of each gradient's largest value over all orientations."""
+    from vmcl.early.boundary_probability import texture_step
+
     plain, strongest = [], []
     for sigma in scales:
         grads = [_centred(_smoothed(p, sigma)) for p in lab]
-        tex = [_centred(_smoothed((labels == k).astype(np.float64), ratio * sigma)) for k in range(ntextons)]
+        step = texture_step(ratio * sigma) if sampled else 1
+        tex = [_centred(_sampled_smoothing((labels == k).astype(np.float64), ratio * sigma, step))
+               for k in range(ntextons)]
         tx, txy, ty = (_smoothed(sum((ratio * sigma) ** 2 * a * b for a, b in pairs), ratio * sigma)
                        for pairs in ([(gx, gx) for gx, _ in tex], [(gx, gy) for gx, gy in tex],
                                      [(gy, gy) for _, gy in tex]))

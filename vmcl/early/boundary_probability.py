@@ -16,7 +16,8 @@ The cues
 - Texture: every pixel is labelled with its nearest texton, a cluster of the responses of a small
   filter bank (first and second directional derivatives at four orientations and the Laplacian, at two
   scales) compressed by their norm (Malik et al. 2001); the textons' indicator planes are smoothed at
-  twice the scale, and the texture gradient across a normal is the norm of the histograms' derivative,
+  twice the scale (at the wider scales computed at every :func:`texture_step`-th row and column and
+  interpolated bilinearly between: a Gaussian that wide leaves nothing finer), and the texture gradient across a normal is the norm of the histograms' derivative,
   read from a 2 x 2 tensor (the sum over textons of the gradient's outer product) so that any
   orientation costs three products. The tensor is integrated (smoothed) at the texture's scale, as a
   structure tensor is: a contrast edge is a band of textons of its own, and the histograms' derivative
@@ -56,7 +57,16 @@ from typing import Any, NamedTuple
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import IMAGE_TYPES, ArrayLike, image_field, launch_rows, machine_for, result, vector_kernel
+from vmcl.cm.core import (
+    IMAGE_TYPES,
+    ArrayLike,
+    check_real,
+    image_field,
+    launch_rows,
+    machine_for,
+    result,
+    vector_kernel,
+)
 from vmcl.early.filters import device_taps
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.fitted import check_fitted_json, with_data, write_fitted_json
@@ -67,11 +77,13 @@ __all__ = [
     "FEATURES",
     "MODEL_FILE",
     "ORIENTATIONS",
+    "TEXTURE_SPACING",
     "BoundaryModel",
     "BoundaryProbability",
     "bank_responses",
     "boundary_probability",
     "oriented_gradients",
+    "texture_step",
 ]
 
 MODEL_FILE = Path(__file__).with_name("boundary_probability.json")
@@ -87,6 +99,13 @@ BANK_SIZE = 18
 
 TEXTURE_RATIO = 2.0
 """The texture gradient's scale over the brightness's: a histogram needs more pixels than a mean."""
+
+TEXTURE_SPACING = 3.0
+"""Texture-scale widths per sample of the textons' histograms: at each scale they are smoothed, and so
+computed, at every ``step = max(1, floor(texture_sigma / TEXTURE_SPACING))``-th row and column and
+interpolated bilinearly between (:func:`texture_step`). A Gaussian that wide leaves little a third of its
+width can carry (a wave whose period is its width keeps e^-2pi^2 of its amplitude); the widest scale's
+histograms, a row and a column pass over 32 planes at 97 taps, were the map's largest cost."""
 
 SURROUND_SIGMA = 10.0
 """Width of the Gaussian surround whose mean gradient each gradient is compared with, in pixels."""
@@ -269,15 +288,25 @@ def _lab(machine: Machine, data: cl_array.Array) -> cl_array.Array:
     return planes
 
 
+def texture_step(texture_sigma: float) -> int:
+    """The spacing (pixels) of the samples the textons' histograms are computed at for a texture scale
+    ``texture_sigma`` (> 0, pixels)."""
+    return max(1, int(check_real(texture_sigma, "texture_sigma", above=0) // TEXTURE_SPACING))
+
+
 def _planes_pass(machine: Machine, name: str, planes: cl_array.Array, out: cl_array.Array, sigma: float,
-                 count: int, defines: dict, first: int = 0) -> None:
+                 count: int, defines: dict, first: int = 0, step: int = 1) -> None:
     """One pass of the Gaussian of ``sigma`` over the first ``count`` planes of ``planes``, written to planes
-    ``first`` .. ``first + count - 1`` of ``out``; ``defines``: those of the program it is taken from."""
-    height, width = out.shape[1:]
-    size = (-(-width // machine.vector_width), height, count)
+    ``first`` .. ``first + count - 1`` of ``out``; ``defines``: those of the program it is taken from. The
+    column pass writes every ``step``-th row of ``planes`` (``out`` then has that many rows)."""
+    height, width = planes.shape[1:]
+    rows = out.shape[1]
+    size = (-(-width // machine.vector_width), rows, count)
     taps, radius = device_taps(machine, (sigma,))
+    sampling = (np.int32(step), np.int64(rows)) if name == "planes_cols" else ()
     machine.launch(_kernel(machine, name, **defines), size, planes, out, taps, np.int32(radius),
-                   np.int64(first), np.int64(width), np.int64(height), local_size=machine.row_local_size(size))
+                   np.int64(first), *sampling, np.int64(width), np.int64(height),
+                   local_size=machine.row_local_size(size))
 
 
 def _smooth(machine: Machine, planes: cl_array.Array, sigma: float, defines: dict,
@@ -323,10 +352,7 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
     tensor = machine.empty((3, height, width), np.float32)
     for k, sigma in enumerate(model.scales):
         texture_sigma = TEXTURE_RATIO * sigma
-        taps, radius = device_taps(machine, (texture_sigma,))
-        machine.launch(_kernel(machine, "histogram_rows", **defines), (width, height),
-                       labels, rows, taps, np.int32(radius), *dims)
-        _planes_pass(machine, "planes_cols", rows, histograms, texture_sigma, count, defines)
+        _histograms(machine, labels, rows, histograms, texture_sigma, defines)
         launch_rows(machine, _kernel(machine, "components", **defines), width, height,
                     _smooth(machine, lab, sigma, defines), histograms, comp, tensor, np.float32(sigma),
                     np.float32(texture_sigma), np.int32(count), np.int32(k), *dims)
@@ -335,6 +361,28 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
         _planes_pass(machine, "planes_rows", tensor, rows, texture_sigma, 3, defines)
         _planes_pass(machine, "planes_cols", rows, tensors, texture_sigma, 3, defines, first=3 * k)
     return comp, tensors
+
+
+def _histograms(machine: Machine, labels: cl_array.Array, rows: cl_array.Array, out: cl_array.Array,
+                texture_sigma: float, defines: dict) -> None:
+    """The textons' indicator planes smoothed at ``texture_sigma`` into ``out`` (count, H, W): computed at
+    every :func:`texture_step`-th row and column and interpolated between; ``rows``: scratch of out's size."""
+    count, height, width = out.shape
+    step = texture_step(texture_sigma)
+    # Samples at 0, step, ..., up to the first at or past the last pixel (the passes clamp there).
+    coarse_width, coarse_height = -(-(width - 1) // step) + 1, -(-(height - 1) // step) + 1
+    taps, radius = device_taps(machine, (texture_sigma,))
+    sampled_rows = rows if step == 1 else rows.reshape(-1)[:count * height * coarse_width].reshape(
+        count, height, coarse_width)
+    machine.launch(_kernel(machine, "histogram_rows", **defines), (coarse_width, height), labels, sampled_rows,
+                   taps, np.int32(radius), np.int32(step), np.int64(coarse_width), np.int64(width), np.int64(height))
+    if step == 1:
+        _planes_pass(machine, "planes_cols", sampled_rows, out, texture_sigma, count, defines)
+        return
+    sampled = machine.empty((count, coarse_height, coarse_width), np.float32)
+    _planes_pass(machine, "planes_cols", sampled_rows, sampled, texture_sigma, count, defines, step=step)
+    machine.launch(_kernel(machine, "planes_upsample", **defines), (width, height, count), sampled, out,
+                   np.int32(step), np.int64(coarse_width), np.int64(coarse_height), np.int64(width), np.int64(height))
 
 
 def _directions(machine: Machine) -> cl_array.Array:
