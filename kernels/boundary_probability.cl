@@ -10,10 +10,12 @@
  *                    STEP-th column (a wide Gaussian's output is smooth enough to be sampled sparsely)
  *   planes_rows      a row pass of the Gaussian over a stack of float planes
  *   planes_cols      the column pass over a stack of float planes, at every step-th row
- *   planes_upsample  a stack sampled at every step-th row and column, interpolated bilinearly to every pixel
+ *   planes_upsample  a stack sampled at every step_x-th column and step_y-th row, interpolated bilinearly to
+ *                    every pixel
  *   components       one scale's gradient components: (gx, gy) of L, a and b, and the texture tensor
  *                    (sum over textons of gx^2, gx gy, gy^2 of the smoothed indicator planes), which
- *                    the host then integrates (smooths) at the texture's scale
+ *                    the host then integrates (smooths) at the texture's scale; nt 0: no texture
+ *   sampled_tensor   the texture tensor on the grid of histograms sampled at every step-th pixel
  *   strongest        each gradient's largest value over all orientations (the surround's source)
  *   oriented         the features at each of NORIENT orientations (for fitting)
  *   probability      the logistic classifier at each orientation; the largest wins
@@ -211,14 +213,15 @@ __kernel void histogram_rows(__global const uchar *label, __global float *out, _
 }
 #endif
 
-/* Plane p of a (P, Hc, Wc) stack sampled at every step-th pixel, bilinearly at each pixel of (P, H, W). */
-__kernel void planes_upsample(__global const float *in, __global float *out, int step, long Wc, long Hc,
-                              long W, long H)
+/* Plane p of a (P, Hc, Wc) stack sampled at every step_x-th column and step_y-th row, bilinearly at each
+ * pixel of plane first + p of (., H, W). */
+__kernel void planes_upsample(__global const float *in, __global float *out, int step_x, int step_y, long first,
+                              long Wc, long Hc, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1), p = get_global_id(2);
     if (x >= W || y >= H) return;
-    float inv = 1.0f / (float)step;
-    out[IDX3(x, y, p, W, H)] = bilinear_clamped(in + (size_t)p * Hc * Wc, (float)x * inv, (float)y * inv, Wc, Hc);
+    out[IDX3(x, y, first + p, W, H)] = bilinear_clamped(in + (size_t)p * Hc * Wc, (float)x / (float)step_x,
+                                                        (float)y / (float)step_y, Wc, Hc);
 }
 
 #ifdef VEC
@@ -313,6 +316,30 @@ __kernel void components(__global const float *lab, __global const float *hist, 
         PLANE(tensor, 1, x, y) = txy;
         PLANE(tensor, 2, x, y) = tyy;
     }
+}
+
+/* The texture tensor of histograms sampled at every step-th pixel ((NT, H, W) in, (3, H, W) out, W x H that
+ * grid's size), on that grid: scale is the texture's sigma over the step (the derivative per pixel of the image). The derivatives
+ * are the five-point stencil's (fourth order: a sample spacing of a third of the histograms' width would
+ * leave centred differences some 4% short on the waves they carry). */
+__kernel void sampled_tensor(__global const float *hist, __global float *tensor, float scale, int nt, long W,
+                             long H)
+{
+    long x = get_global_id(0), y = get_global_id(1);
+    if (x >= W || y >= H) return;
+    long x1 = max(x - 1, 0L), x2 = max(x - 2, 0L), x3 = min(x + 1, W - 1), x4 = min(x + 2, W - 1);
+    long y1 = max(y - 1, 0L), y2 = max(y - 2, 0L), y3 = min(y + 1, H - 1), y4 = min(y + 2, H - 1);
+    float txx = 0.0f, txy = 0.0f, tyy = 0.0f, c = scale / 12.0f;
+    for (int j = 0; j < nt; j++) {
+        float gx = c * (8.0f * (PLANE(hist, j, x3, y) - PLANE(hist, j, x1, y)) - PLANE(hist, j, x4, y)
+                        + PLANE(hist, j, x2, y));
+        float gy = c * (8.0f * (PLANE(hist, j, x, y3) - PLANE(hist, j, x, y1)) - PLANE(hist, j, x, y4)
+                        + PLANE(hist, j, x, y2));
+        txx += gx * gx; txy += gx * gy; tyy += gy * gy;
+    }
+    PLANE(tensor, 0, x, y) = txx;
+    PLANE(tensor, 1, x, y) = txy;
+    PLANE(tensor, 2, x, y) = tyy;
 }
 #endif
 

@@ -136,19 +136,31 @@ def _smoothed(plane, sigma):
                                taps, axis=0, mode="nearest")
 
 
-def _sampled_smoothing(plane, sigma, step):
-    """The exact Gaussian of ``plane`` at every ``step``-th row and column (from 0 to the first sample at or
-    past the last pixel, the borders clamped), interpolated bilinearly at every pixel."""
+def _sampled(plane, sigma, step_y, step_x=None):
+    """The exact Gaussian of ``plane`` at every ``step_y``-th row and ``step_x``-th column (default: step_y),
+    from 0 to the first sample at or past the last pixel, the borders clamped."""
+    step_x = step_y if step_x is None else step_x
+    height, width = plane.shape
+    padded = np.pad(plane, ((0, -(-(height - 1) // step_y) * step_y + 1 - height),
+                            (0, -(-(width - 1) // step_x) * step_x + 1 - width)), mode="edge")
+    return _smoothed(padded, sigma)[::step_y, ::step_x]
+
+
+def _interpolated(coarse, shape, step_y, step_x=None):
+    """A plane sampled at every step_y-th row and step_x-th column (default: step_y), bilinearly at every
+    pixel of ``shape``."""
     from scipy import ndimage
 
-    if step == 1:
-        return _smoothed(plane, sigma)
-    height, width = plane.shape
-    padded = np.pad(plane, ((0, -(-(height - 1) // step) * step + 1 - height),
-                            (0, -(-(width - 1) // step) * step + 1 - width)), mode="edge")
-    coarse = _smoothed(padded, sigma)[::step, ::step]
-    ys, xs = np.mgrid[0:height, 0:width] / step
-    return ndimage.map_coordinates(coarse, [ys, xs], order=1, mode="nearest")
+    step_x = step_y if step_x is None else step_x
+    ys, xs = np.mgrid[0:shape[0], 0:shape[1]].astype(np.float64)
+    return ndimage.map_coordinates(coarse, [ys / step_y, xs / step_x], order=1, mode="nearest")
+
+
+def _five_point(plane):
+    """The five-point stencil's derivatives (gx, gy) with clamped borders."""
+    p = np.pad(plane, 2, mode="edge")
+    return ((8 * (p[2:-2, 3:-1] - p[2:-2, 1:-3]) - p[2:-2, 4:] + p[2:-2, :-4]) / 12,
+            (8 * (p[3:-1, 2:-2] - p[1:-3, 2:-2]) - p[4:, 2:-2] + p[:-4, 2:-2]) / 12)
 
 
 def _centred(plane):
@@ -179,18 +191,20 @@ def oriented_gradients(lab, labels, ntextons, scales, orientations=8, ratio=2.0,
                        floor=0.02, sampled=True):
     """The boundary classifier's features (orientations, H, W, 12 len(scales)) from the (3, H, W) L*a*b*
     planes (each / 100) and the texton labels; the textons' histograms sampled as the map samples them
-    (vmcl.early.boundary_probability.texture_step; with ``sampled`` False, at every pixel, the exact
-    Gaussian); the texture tensor integrated at the texture's scale; the
+    (vmcl.early.boundary_probability.sample_step; with ``sampled`` False, every smoothing exact at every
+    pixel); the texture tensor integrated at the texture's scale; the
     surround is the Gaussian mean of each gradient's largest value over all orientations."""
-    from vmcl.early.boundary_probability import texture_step
+    from vmcl.early.boundary_probability import sample_step
 
     plain, strongest = [], []
     for sigma in scales:
         grads = [_centred(_smoothed(p, sigma)) for p in lab]
-        step = texture_step(ratio * sigma) if sampled else 1
-        tex = [_centred(_sampled_smoothing((labels == k).astype(np.float64), ratio * sigma, step))
+        step = sample_step(ratio * sigma) if sampled else 1
+        # The histograms, their tensor and its integration on the grid of every step-th pixel, interpolated.
+        tex = [(_centred if step == 1 else _five_point)(_sampled((labels == k).astype(np.float64), ratio * sigma, step))
                for k in range(ntextons)]
-        tx, txy, ty = (_smoothed(sum((ratio * sigma) ** 2 * a * b for a, b in pairs), ratio * sigma)
+        scale = ratio * sigma / step
+        tx, txy, ty = (_interpolated(_smoothed(sum(scale**2 * a * b for a, b in pairs), scale), labels.shape, step)
                        for pairs in ([(gx, gx) for gx, _ in tex], [(gx, gy) for gx, gy in tex],
                                      [(gy, gy) for _, gy in tex]))
         per_orientation = []
@@ -204,7 +218,9 @@ def oriented_gradients(lab, labels, ntextons, scales, orientations=8, ratio=2.0,
         strongest += [sigma * np.hypot(gx, gy) for gx, gy in grads] + [np.sqrt(np.maximum(largest, 0))]
     plain = np.concatenate(plain, axis=-1)
     strongest = np.stack(strongest, axis=-1)
-    surround = np.stack([_smoothed(strongest[..., j], surround_sigma) for j in range(plain.shape[-1])], axis=-1)
+    step = sample_step(surround_sigma) if sampled else 1
+    surround = np.stack([_interpolated(_sampled(strongest[..., j], surround_sigma, step, 1), strongest.shape[:2],
+                                       step, 1) for j in range(plain.shape[-1])], axis=-1)
     return np.concatenate([plain, np.sqrt(plain), np.sqrt(plain / (floor + surround))], axis=-1)
 
 

@@ -55,10 +55,12 @@ def test_oriented_gradients_match_the_oracle():
     assert close.mean() > 0.995, f"{(~close).sum()} of {close.size} features differ"
 
 
-def test_sampled_texture_histograms_stay_near_the_exact_gaussian():
-    """The textons' histograms at the wider texture scales are computed at every texture_step-th pixel and
-    interpolated: each texture gradient stays within 2% of its range of the exact Gaussian's."""
-    assert [bp.texture_step(bp.TEXTURE_RATIO * s) for s in (1.5, 3.0, 6.0)] == [1, 2, 4]
+def test_sampled_smoothings_stay_near_the_exact_gaussian():
+    """The wide smoothings (textons' histograms and their tensors on a grid of every sample_step-th pixel,
+    the surround at every sample_step-th row) stay near the exact Gaussians' features: within 5% of each
+    feature's range 8 px (two samples of the widest step) or more inside the image, 12% at its borders."""
+    assert [bp.sample_step(bp.TEXTURE_RATIO * s) for s in (1.5, 3.0, 6.0)] == [1, 2, 4]
+    assert bp.sample_step(bp.SURROUND_SIGMA) == 3
     rgb = _smooth_rgb(2, shape=(96, 128))
     model = bp.BoundaryModel.load()
     found = bp.oriented_gradients(rgb, model=model)
@@ -66,10 +68,11 @@ def test_sampled_texture_histograms_stay_near_the_exact_gaussian():
     responses = oracles.texton_bank(lab[0])
     labels = ((responses[..., None, :] - model.centres[None, None].astype(np.float64)) ** 2).sum(-1).argmin(-1)
     exact = oracles.oriented_gradients(lab, labels, len(model.centres), model.scales, sampled=False)
-    texture = [j for j, name in enumerate(model.features) if name.startswith("texture")]
-    for j in texture:
-        error = np.abs(found[..., j] - exact[..., j]).max()
-        assert error <= 0.02 * np.abs(exact[..., j]).max()  # measured 0 (no sampling), 1.1%, 0.7%
+    for j, name in enumerate(model.features):
+        error = np.abs(found[..., j] - exact[..., j])
+        scale = np.abs(exact[..., j]).max()
+        assert error[:, 8:-8, 8:-8].max() <= 0.05 * scale, name  # measured at most 3.1%
+        assert error.max() <= 0.12 * scale, name  # measured at most 8.9%, in a corner
 
 
 def test_a_grey_image_has_no_colour_gradient():

@@ -213,7 +213,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.early.boundary_probability:oriented_gradients", image=IMG, model=None,
        kinds={"image": _A, "model": _O, "machine": _M}),
     _e("vmcl.early.boundary_probability:bank_responses", image=RGB, kinds={"image": _A, "machine": _M}),
-    _e("vmcl.early.boundary_probability:texture_step", texture_sigma=6.0, kinds={"texture_sigma": _N}),
+    _e("vmcl.early.boundary_probability:sample_step", sigma=6.0, kinds={"sigma": _N}),
     _e("vmcl.boundary_evaluation:canny_sweep", image=RGB, count=3, kinds={"image": _A, "count": _I, "machine": _M}),
     _e("vmcl.boundary_evaluation:opencv_canny_sweep", image=arr((16, 16, 3), "uint8", "randint:255"), count=3,
        kinds={"image": _A, "count": _I}),

@@ -16,8 +16,8 @@ The cues
 - Texture: every pixel is labelled with its nearest texton, a cluster of the responses of a small
   filter bank (first and second directional derivatives at four orientations and the Laplacian, at two
   scales) compressed by their norm (Malik et al. 2001); the textons' indicator planes are smoothed at
-  twice the scale (at the wider scales computed at every :func:`texture_step`-th row and column and
-  interpolated bilinearly between: a Gaussian that wide leaves nothing finer), and the texture gradient across a normal is the norm of the histograms' derivative,
+  twice the scale (at the wider scales on a grid of every :func:`sample_step`-th row and column:
+  a Gaussian that wide leaves nothing finer), and the texture gradient across a normal is the norm of the histograms' derivative,
   read from a 2 x 2 tensor (the sum over textons of the gradient's outer product) so that any
   orientation costs three products. The tensor is integrated (smoothed) at the texture's scale, as a
   structure tensor is: a contrast edge is a band of textons of its own, and the histograms' derivative
@@ -77,13 +77,13 @@ __all__ = [
     "FEATURES",
     "MODEL_FILE",
     "ORIENTATIONS",
-    "TEXTURE_SPACING",
+    "SAMPLE_SPACING",
     "BoundaryModel",
     "BoundaryProbability",
     "bank_responses",
     "boundary_probability",
     "oriented_gradients",
-    "texture_step",
+    "sample_step",
 ]
 
 MODEL_FILE = Path(__file__).with_name("boundary_probability.json")
@@ -100,12 +100,15 @@ BANK_SIZE = 18
 TEXTURE_RATIO = 2.0
 """The texture gradient's scale over the brightness's: a histogram needs more pixels than a mean."""
 
-TEXTURE_SPACING = 3.0
-"""Texture-scale widths per sample of the textons' histograms: at each scale they are smoothed, and so
-computed, at every ``step = max(1, floor(texture_sigma / TEXTURE_SPACING))``-th row and column and
-interpolated bilinearly between (:func:`texture_step`). A Gaussian that wide leaves little a third of its
-width can carry (a wave whose period is its width keeps e^-2pi^2 of its amplitude); the widest scale's
-histograms, a row and a column pass over 32 planes at 97 taps, were the map's largest cost."""
+SAMPLE_SPACING = 3.0
+"""Gaussian widths per sample of the map's wide smoothings (:func:`sample_step`: every ``max(1, floor(sigma /
+SAMPLE_SPACING))``-th pixel). At a texture scale that wide, the textons' histograms are computed at every
+step-th row and column, their tensor is formed and integrated on that grid, and the integrated tensor is
+interpolated bilinearly to every pixel; the surround is smoothed at every step-th row and interpolated
+linearly between. A Gaussian that wide leaves little that a third of its width can carry (a wave whose
+period is its width keeps e^-2pi^2 of its amplitude); the widest texture scale's histograms alone, a row and a
+column pass over 32 planes at 97 taps, were the map's largest cost. The brightness and colour gradients,
+which place the boundary, are smoothed at every pixel."""
 
 SURROUND_SIGMA = 10.0
 """Width of the Gaussian surround whose mean gradient each gradient is compared with, in pixels."""
@@ -288,10 +291,16 @@ def _lab(machine: Machine, data: cl_array.Array) -> cl_array.Array:
     return planes
 
 
-def texture_step(texture_sigma: float) -> int:
-    """The spacing (pixels) of the samples the textons' histograms are computed at for a texture scale
-    ``texture_sigma`` (> 0, pixels)."""
-    return max(1, int(check_real(texture_sigma, "texture_sigma", above=0) // TEXTURE_SPACING))
+def sample_step(sigma: float) -> int:
+    """The spacing (pixels) of the samples a smoothing of width ``sigma`` (> 0, pixels) is computed at in the
+    map's wide smoothings (:data:`SAMPLE_SPACING`)."""
+    return max(1, int(check_real(sigma, "sigma", above=0) // SAMPLE_SPACING))
+
+
+def _samples(length: int, step: int) -> int:
+    """The samples at 0, step, ... up to the first at or past the last of ``length`` pixels (the passes
+    clamp there)."""
+    return -(-(length - 1) // step) + 1
 
 
 def _planes_pass(machine: Machine, name: str, planes: cl_array.Array, out: cl_array.Array, sigma: float,
@@ -309,17 +318,39 @@ def _planes_pass(machine: Machine, name: str, planes: cl_array.Array, out: cl_ar
                    local_size=machine.row_local_size(size))
 
 
-def _smooth(machine: Machine, planes: cl_array.Array, sigma: float, defines: dict,
-            count: int | None = None) -> cl_array.Array:
+def _smooth(machine: Machine, planes: cl_array.Array, sigma: float, defines: dict, count: int | None = None,
+            step: int = 1, out: cl_array.Array | None = None, first: int = 0) -> cl_array.Array:
     """The first ``count`` (default all) planes of a (P, H, W) stack smoothed by the exact Gaussian of
-    ``sigma``, (count, H, W)."""
+    ``sigma``, into planes ``first`` ... of ``out`` (default a new (count, H, W) stack), which is returned.
+    With ``step`` > 1 the column pass writes every step-th row, the row pass smooths those, and the rows
+    between are interpolated linearly."""
     height, width = planes.shape[1:]
     count = planes.shape[0] if count is None else count
-    rows = machine.empty((count, height, width), np.float32)
-    out = machine.empty((count, height, width), np.float32)
-    _planes_pass(machine, "planes_rows", planes, rows, sigma, count, defines)
-    _planes_pass(machine, "planes_cols", rows, out, sigma, count, defines)
+    if out is None:
+        out = machine.empty((count, height, width), np.float32)
+    if step == 1:
+        rows = machine.empty((count, height, width), np.float32)
+        _planes_pass(machine, "planes_rows", planes, rows, sigma, count, defines)
+        _planes_pass(machine, "planes_cols", rows, out, sigma, count, defines, first=first)
+        return out
+    sampled = _samples(height, step)
+    columns = machine.empty((count, sampled, width), np.float32)
+    _planes_pass(machine, "planes_cols", planes, columns, sigma, count, defines, step=step)
+    rows = machine.empty((count, sampled, width), np.float32)
+    _planes_pass(machine, "planes_rows", columns, rows, sigma, count, defines)
+    _upsample(machine, rows, out, 1, step, first, defines)
     return out
+
+
+def _upsample(machine: Machine, sampled: cl_array.Array, out: cl_array.Array, step_x: int, step_y: int, first: int,
+              defines: dict) -> None:
+    """A (P, Hc, Wc) stack sampled at every step_x-th column and step_y-th row, interpolated bilinearly into
+    planes ``first`` ... of ``out``."""
+    count, coarse_height, coarse_width = sampled.shape
+    height, width = out.shape[1:]
+    machine.launch(_kernel(machine, "planes_upsample", **defines), (width, height, count), sampled, out,
+                   np.int32(step_x), np.int32(step_y), np.int64(first), np.int64(coarse_width),
+                   np.int64(coarse_height), np.int64(width), np.int64(height))
 
 
 def _bank(machine: Machine, lab: cl_array.Array, defines: dict) -> cl_array.Array:
@@ -347,42 +378,44 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
                 _constant(machine, ("centres", model), lambda: model.centres), labels, np.int32(count), *dims)
     comp = machine.empty((6 * len(model.scales), height, width), np.float32)
     tensors = machine.empty((3 * len(model.scales), height, width), np.float32)
-    histograms = machine.empty((count, height, width), np.float32)
     rows = machine.empty((count, height, width), np.float32)
     tensor = machine.empty((3, height, width), np.float32)
     for k, sigma in enumerate(model.scales):
         texture_sigma = TEXTURE_RATIO * sigma
-        _histograms(machine, labels, rows, histograms, texture_sigma, defines)
+        step = sample_step(texture_sigma)
+        histograms = _histograms(machine, labels, rows, texture_sigma, count, step, defines)
+        # Where the histograms are sampled, their tensor is formed on their grid (below), not here (nt 0).
         launch_rows(machine, _kernel(machine, "components", **defines), width, height,
                     _smooth(machine, lab, sigma, defines), histograms, comp, tensor, np.float32(sigma),
-                    np.float32(texture_sigma), np.int32(count), np.int32(k), *dims)
+                    np.float32(texture_sigma), np.int32(count if step == 1 else 0), np.int32(k), *dims)
         # The tensor integrated at the texture's scale: a band of textons of its own (a contrast edge's)
         # gives the histograms' derivative a peak either side of the band, which integration merges.
-        _planes_pass(machine, "planes_rows", tensor, rows, texture_sigma, 3, defines)
-        _planes_pass(machine, "planes_cols", rows, tensors, texture_sigma, 3, defines, first=3 * k)
+        if step == 1:
+            _smooth(machine, tensor, texture_sigma, defines, out=tensors, first=3 * k)
+            continue
+        coarse_height, coarse_width = histograms.shape[1:]
+        sampled = machine.empty((3, coarse_height, coarse_width), np.float32)
+        machine.launch(_kernel(machine, "sampled_tensor", **defines), (coarse_width, coarse_height), histograms,
+                       sampled, np.float32(texture_sigma / step), np.int32(count), np.int64(coarse_width),
+                       np.int64(coarse_height))
+        _upsample(machine, _smooth(machine, sampled, texture_sigma / step, defines), tensors, step, step, 3 * k,
+                  defines)
     return comp, tensors
 
 
-def _histograms(machine: Machine, labels: cl_array.Array, rows: cl_array.Array, out: cl_array.Array,
-                texture_sigma: float, defines: dict) -> None:
-    """The textons' indicator planes smoothed at ``texture_sigma`` into ``out`` (count, H, W): computed at
-    every :func:`texture_step`-th row and column and interpolated between; ``rows``: scratch of out's size."""
-    count, height, width = out.shape
-    step = texture_step(texture_sigma)
-    # Samples at 0, step, ..., up to the first at or past the last pixel (the passes clamp there).
-    coarse_width, coarse_height = -(-(width - 1) // step) + 1, -(-(height - 1) // step) + 1
+def _histograms(machine: Machine, labels: cl_array.Array, rows: cl_array.Array, texture_sigma: float, count: int,
+                step: int, defines: dict) -> cl_array.Array:
+    """The textons' indicator planes smoothed at ``texture_sigma``, at every ``step``-th row and column of the
+    image: (count, Hc, Wc); ``rows``: scratch of (count, H, W)."""
+    height, width = labels.shape
+    coarse_width, coarse_height = _samples(width, step), _samples(height, step)
     taps, radius = device_taps(machine, (texture_sigma,))
-    sampled_rows = rows if step == 1 else rows.reshape(-1)[:count * height * coarse_width].reshape(
-        count, height, coarse_width)
+    sampled_rows = rows.reshape(-1)[:count * height * coarse_width].reshape(count, height, coarse_width)
     machine.launch(_kernel(machine, "histogram_rows", **defines), (coarse_width, height), labels, sampled_rows,
                    taps, np.int32(radius), np.int32(step), np.int64(coarse_width), np.int64(width), np.int64(height))
-    if step == 1:
-        _planes_pass(machine, "planes_cols", sampled_rows, out, texture_sigma, count, defines)
-        return
-    sampled = machine.empty((count, coarse_height, coarse_width), np.float32)
-    _planes_pass(machine, "planes_cols", sampled_rows, sampled, texture_sigma, count, defines, step=step)
-    machine.launch(_kernel(machine, "planes_upsample", **defines), (width, height, count), sampled, out,
-                   np.int32(step), np.int64(coarse_width), np.int64(coarse_height), np.int64(width), np.int64(height))
+    out = machine.empty((count, coarse_height, coarse_width), np.float32)
+    _planes_pass(machine, "planes_cols", sampled_rows, out, texture_sigma, count, defines, step=step)
+    return out
 
 
 def _directions(machine: Machine) -> cl_array.Array:
@@ -413,7 +446,7 @@ def _inputs(machine: Machine, data: cl_array.Array, model: BoundaryModel) -> tup
     defines = _program_defines(model)
     launch_rows(machine, _kernel(machine, "strongest", **defines), width,
                 height, comp, tensors, strongest, np.int64(width), np.int64(height))
-    return comp, tensors, _smooth(machine, strongest, SURROUND_SIGMA, defines)
+    return comp, tensors, _smooth(machine, strongest, SURROUND_SIGMA, defines, step=sample_step(SURROUND_SIGMA))
 
 
 def bank_responses(image: ArrayLike, *, machine: Machine | None = None) -> ArrayLike:
