@@ -4,13 +4,13 @@ Run: python benchmarks/boundary_sampling_fit.py [--data ../shared/datasets] [--h
      [--out benchmarks/results/boundary_sampling_fit.md]
 
 The map's wide smoothings (the textons' histograms and tensors at the wider texture scales, the surround) are
-computed at every ``floor(sigma / SAMPLE_SPACING)``-th pixel (vmcl.early.boundary_probability.sample_step).
+computed at every ``floor(sigma / SAMPLES_PER_SIGMA)``-th pixel (vmcl.early.boundary_probability.sample_step).
 This script sets that constant to each candidate in turn (inf: every smoothing exact at every pixel, as the
 shipped model was fitted) and scores the map on the training images boundary_fit.py holds out of its fit
 (the last ``--held-out`` in sorted order), with the BSDS matching at 0.0075 of the diagonal. Beside each: the
 map's median wall time per image and its device time in kernels (profiled, one pass over the images), both
-measured in this run. The default is the largest spacing whose ODS and OIS F are within TOLERANCE of the
-exact map's. Only the training split is read.
+measured in this run. The default is the fewest samples per sigma whose ODS and OIS F are within TOLERANCE
+of the exact map's. Only the training split is read.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from vmcl.metrics import evaluate_boundaries
 
 RESULTS = Path(__file__).resolve().parent / "results"
 DEFAULT_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "datasets"
-SPACINGS = (math.inf, 4.0, 3.0, 2.0)
+SAMPLINGS = (math.inf, 3.0, 2.0, 1.5, 1.0)
 TOLERANCE = 0.002
 
 
@@ -47,11 +47,11 @@ def main() -> None:
     held_out = load_bsds(args.data, split="train").images[-args.held_out:]
     truths = [item.boundaries for item in held_out]
     machine, profiled = vmcl.Machine(), vmcl.Machine(profile=True)
-    shipped = bp.SAMPLE_SPACING
+    shipped = bp.SAMPLES_PER_SIGMA
     rows = {}
     try:
-        for spacing in SPACINGS:
-            bp.SAMPLE_SPACING = spacing
+        for sampling in SAMPLINGS:
+            bp.SAMPLES_PER_SIGMA = sampling
             bp.boundary_probability(held_out[0].image, machine=machine)  # build and warm up
             maps, seconds = [], []
             for item in held_out:
@@ -64,13 +64,13 @@ def main() -> None:
                 bp.boundary_probability(item.image, machine=profiled)
             device = sum(entry["total_ms"] for entry in profiled.timings(reset=True).values()) / len(held_out)
             s = evaluate_boundaries(maps, truths, thresholds=sweep_thresholds(args.thresholds), workers=2)
-            rows[spacing] = (s.ods_f, s.ois_f, s.average_precision, 1e3 * statistics.median(seconds), device)
-            print(spacing, rows[spacing], flush=True)
+            rows[sampling] = (s.ods_f, s.ois_f, s.average_precision, 1e3 * statistics.median(seconds), device)
+            print(sampling, rows[sampling], flush=True)
     finally:
-        bp.SAMPLE_SPACING = shipped
+        bp.SAMPLES_PER_SIGMA = shipped
     exact = rows[math.inf]
-    near = [spacing for spacing, row in rows.items()
-            if row[0] >= exact[0] - TOLERANCE and row[1] >= exact[1] - TOLERANCE and math.isfinite(spacing)]
+    near = [sampling for sampling, row in rows.items()
+            if row[0] >= exact[0] - TOLERANCE and row[1] >= exact[1] - TOLERANCE and math.isfinite(sampling)]
     chosen = min(near) if near else math.inf
     lines = [
         "# The probability of boundary's wide smoothings: how sparsely to compute them",
@@ -81,18 +81,18 @@ def main() -> None:
         "",
         (f"The {len(held_out)} BSDS500 training images boundary_fit.py holds out of its fit "
          f"({', '.join(item.name for item in held_out)}), BSDS matching at 0.0075 of the diagonal, "
-         f"{args.thresholds} thresholds; the shipped model (fitted with every smoothing exact). SAMPLE_SPACING: "
-         "the wide smoothings are computed at every floor(sigma / spacing)-th pixel (inf: exact at every pixel). "
+         f"{args.thresholds} thresholds; the shipped model (fitted with every smoothing exact). SAMPLES_PER_SIGMA "
+         "s: the wide smoothings are computed at every floor(sigma / s)-th pixel (inf: exact at every pixel). "
          "Times from this run only: the map's median wall ms per image, and its device time in kernels per image "
          "(profiled)."),
         "",
-        "| SAMPLE_SPACING | ODS F | OIS F | AP | wall ms per image | device ms per image |",
+        "| SAMPLES_PER_SIGMA | ODS F | OIS F | AP | wall ms per image | device ms per image |",
         "|---|---|---|---|---|---|",
     ]
-    for spacing, (ods, ois, ap, wall, device) in rows.items():
-        lines.append(f"| {spacing:g} | {ods:.4f} | {ois:.4f} | {ap:.4f} | {wall:.0f} | {device:.1f} |")
-    lines += ["", (f"Chosen: SAMPLE_SPACING = {chosen:g} (the largest spacing whose ODS and OIS F are within "
-                   f"{TOLERANCE} of the exact map's)."), ""]
+    for sampling, (ods, ois, ap, wall, device) in rows.items():
+        lines.append(f"| {sampling:g} | {ods:.4f} | {ois:.4f} | {ap:.4f} | {wall:.0f} | {device:.1f} |")
+    lines += ["", (f"Chosen: SAMPLES_PER_SIGMA = {chosen:g} (the fewest samples per sigma whose ODS and OIS F are "
+                   f"within {TOLERANCE} of the exact map's)."), ""]
     args.out.write_text("\n".join(lines), encoding="utf-8")
     print("\n".join(lines))
 

@@ -403,6 +403,17 @@ def boundary_fit_figures(f: ResultsFile) -> str:
             f"{table.cell({'map': 'vmcl Canny, threshold sweep'}, 'ODS F')}")
 
 
+def boundary_sampling_fit_figures(f: ResultsFile) -> str:
+    table = f.table("SAMPLES_PER_SIGMA", "ODS F", "device ms per image")
+    chosen = re.search(r"Chosen: SAMPLES_PER_SIGMA = ([\w.]+)", f.text).group(1)
+
+    def row(sampling: str) -> str:
+        return (f"ODS F {table.cell({'SAMPLES_PER_SIGMA': sampling}, 'ODS F')}, "
+                f"{table.cell({'SAMPLES_PER_SIGMA': sampling}, 'device ms per image')} device ms per image")
+
+    return f"held-out training images: exact smoothings {row('inf')}; {chosen} samples per sigma (chosen) {row(chosen)}"
+
+
 def distributed_figures(f: ResultsFile) -> str:
     rates = f.table("setup", "workers", "items per second")
 
@@ -620,6 +631,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
                     "OpenCV's Canny sweeps (ODS, OIS, AP)"), boundaries_figures),
     ("boundary_fit", "the probability of boundary's fit to BSDS500's training images, checked on held-out ones",
      boundary_fit_figures),
+    ("boundary_sampling_fit", ("how sparsely the probability of boundary computes its wide smoothings, chosen on "
+                               "held-out training images"), boundary_sampling_fit_figures),
     ("stereo", ("the depth machine against StereoBM/SGBM on every Middlebury pair and Motorcycle; each stage on "
                 "and off; speed"), stereo_figures),
     ("disparity_range", "the disparity range found from the images, on rendered (training) and real (test) pairs",

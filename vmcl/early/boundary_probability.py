@@ -16,12 +16,13 @@ The cues
 - Texture: every pixel is labelled with its nearest texton, a cluster of the responses of a small
   filter bank (first and second directional derivatives at four orientations and the Laplacian, at two
   scales) compressed by their norm (Malik et al. 2001); the textons' indicator planes are smoothed at
-  twice the scale (at the wider scales on a grid of every :func:`sample_step`-th row and column:
-  a Gaussian that wide leaves nothing finer), and the texture gradient across a normal is the norm of the histograms' derivative,
-  read from a 2 x 2 tensor (the sum over textons of the gradient's outer product) so that any
-  orientation costs three products. The tensor is integrated (smoothed) at the texture's scale, as a
-  structure tensor is: a contrast edge is a band of textons of its own, and the histograms' derivative
-  peaks on either side of such a band; integration merges the two peaks into one on the band.
+  twice the scale (at the wider scales on a grid of every :func:`sample_step`-th row and column: a
+  Gaussian that wide leaves nothing finer), and the texture gradient across a normal is the norm of the
+  histograms' derivative, read from a 2 x 2 tensor (the sum over textons of the gradient's outer
+  product) so that any orientation costs three products. The tensor is integrated (smoothed) at the
+  texture's scale, as a structure tensor is: a contrast edge is a band of textons of its own, and the
+  histograms' derivative peaks on either side of such a band; integration merges the two peaks into one
+  on the band.
 
 At each of eight orientations the classifier's linear score of the gradients is computed (of the
 gradients, their square roots, which let it bend its response to contrast, and the square roots of each
@@ -77,7 +78,7 @@ __all__ = [
     "FEATURES",
     "MODEL_FILE",
     "ORIENTATIONS",
-    "SAMPLE_SPACING",
+    "SAMPLES_PER_SIGMA",
     "BoundaryModel",
     "BoundaryProbability",
     "bank_responses",
@@ -100,15 +101,18 @@ BANK_SIZE = 18
 TEXTURE_RATIO = 2.0
 """The texture gradient's scale over the brightness's: a histogram needs more pixels than a mean."""
 
-SAMPLE_SPACING = 3.0
-"""Gaussian widths per sample of the map's wide smoothings (:func:`sample_step`: every ``max(1, floor(sigma /
-SAMPLE_SPACING))``-th pixel). At a texture scale that wide, the textons' histograms are computed at every
-step-th row and column, their tensor is formed and integrated on that grid, and the integrated tensor is
-interpolated bilinearly to every pixel; the surround is smoothed at every step-th row and interpolated
-linearly between. A Gaussian that wide leaves little that a third of its width can carry (a wave whose
-period is its width keeps e^-2pi^2 of its amplitude); the widest texture scale's histograms alone, a row and a
-column pass over 32 planes at 97 taps, were the map's largest cost. The brightness and colour gradients,
-which place the boundary, are smoothed at every pixel."""
+SAMPLES_PER_SIGMA = 1.0
+"""Samples per Gaussian width of the map's wide smoothings (:func:`sample_step`: every ``max(1, floor(sigma /
+SAMPLES_PER_SIGMA))``-th pixel), chosen on held-out training images by benchmarks/boundary_sampling_fit.py
+(the fewest samples whose boundary scores stay those of the exact smoothings). At a texture scale of two
+pixels or more, the textons' histograms are computed at every step-th row and column, their tensor is formed
+(five-point derivatives) and integrated on that grid, and the integrated tensor is interpolated bilinearly
+to every pixel; the surround is smoothed at every step-th row and interpolated linearly between. A Gaussian
+of width sigma keeps e^(-pi^2 / 2), under 1%, of a wave at the highest frequency a grid spaced sigma apart
+carries, so the sampling hardly aliases; the interpolation moves the texture features by a few percent of
+their range (tests/test_early_boundary_probability.py bounds it). The widest texture scale's histograms, a
+row and a column pass over 32 planes at 97 taps, were the map's largest cost. The brightness and colour
+gradients, which place the boundary, are smoothed at every pixel."""
 
 SURROUND_SIGMA = 10.0
 """Width of the Gaussian surround whose mean gradient each gradient is compared with, in pixels."""
@@ -293,8 +297,8 @@ def _lab(machine: Machine, data: cl_array.Array) -> cl_array.Array:
 
 def sample_step(sigma: float) -> int:
     """The spacing (pixels) of the samples a smoothing of width ``sigma`` (> 0, pixels) is computed at in the
-    map's wide smoothings (:data:`SAMPLE_SPACING`)."""
-    return max(1, int(check_real(sigma, "sigma", above=0) // SAMPLE_SPACING))
+    map's wide smoothings (:data:`SAMPLES_PER_SIGMA`)."""
+    return max(1, int(check_real(sigma, "sigma", above=0) // SAMPLES_PER_SIGMA))
 
 
 def _samples(length: int, step: int) -> int:
