@@ -404,14 +404,14 @@ def boundary_fit_figures(f: ResultsFile) -> str:
 
 
 def boundary_sampling_fit_figures(f: ResultsFile) -> str:
-    table = f.table("SAMPLES_PER_SIGMA", "ODS F", "device ms per image")
+    table = f.table("SAMPLES_PER_SIGMA", "ODS F", "OIS F")
     chosen = re.search(r"Chosen: SAMPLES_PER_SIGMA = ([\w.]+)", f.text).group(1)
 
     def row(sampling: str) -> str:
         return (f"ODS F {table.cell({'SAMPLES_PER_SIGMA': sampling}, 'ODS F')}, "
-                f"{table.cell({'SAMPLES_PER_SIGMA': sampling}, 'device ms per image')} device ms per image")
+                f"OIS F {table.cell({'SAMPLES_PER_SIGMA': sampling}, 'OIS F')}")
 
-    return f"held-out training images: exact smoothings {row('inf')}; {chosen} samples per sigma (chosen) {row(chosen)}"
+    return f"held-out training images: exact smoothings {row('inf')}; chosen, {chosen} per sigma: {row(chosen)}"
 
 
 def distributed_figures(f: ResultsFile) -> str:

@@ -7,21 +7,23 @@
  *                    Laplacian of the lightness at two scales), compressed by their norm
  *   nearest          each pixel's texton: the nearest of the centres to its responses
  *   histogram_rows   a row pass of the Gaussian over the textons' indicator planes: NT planes out, at every
- *                    STEP-th column (a wide Gaussian's output is smooth enough to be sampled sparsely)
+ *                    step-th column (a wide Gaussian's output is smooth enough to be sampled sparsely)
  *   planes_rows      a row pass of the Gaussian over a stack of float planes
  *   planes_cols      the column pass over a stack of float planes, at every step-th row
  *   planes_upsample  a stack sampled at every step_x-th column and step_y-th row, interpolated bilinearly to
  *                    every pixel
  *   components       one scale's gradient components: (gx, gy) of L, a and b, and the texture tensor
  *                    (sum over textons of gx^2, gx gy, gy^2 of the smoothed indicator planes), which
- *                    the host then integrates (smooths) at the texture's scale; nt 0: no texture
+ *                    the host then integrates (smooths) at the texture's scale; nt 0: no tensor (the
+ *                    scale's histograms are sampled, and sampled_tensor forms it)
  *   sampled_tensor   the texture tensor on the grid of histograms sampled at every step-th pixel
  *   strongest        each gradient's largest value over all orientations (the surround's source)
  *   oriented         the features at each of NORIENT orientations (for fitting)
  *   probability      the logistic classifier at each orientation; the largest wins
  *   thin             non-maximum suppression across the winning orientation
  *
- * Defines: IN_T, CHANNELS and LINEAR_TABLE (lab); NBANK (bank, nearest); NT (histogram_rows, components);
+ * Defines: IN_T, CHANNELS and LINEAR_TABLE (lab); NBANK (bank, nearest); NT (histogram_rows, components,
+ * sampled_tensor);
  * NSCALES, NORIENT, NFEAT, SURROUND_FLOOR (strongest, oriented, probability, thin); VEC, the pixels of a row
  * a work-item takes where a kernel takes several (the host builds every kernel with the Machine's vector
  * width but oriented, which exists for VEC 1 only: it is for fitting).
@@ -295,9 +297,11 @@ __kernel void components(__global const float *lab, __global const float *hist, 
             VT gy = 0.5f * texture_sigma * (VLOAD(&PLANE(hist, j, x0, yp)) - VLOAD(&PLANE(hist, j, x0, ym)));
             txx += gx * gx; txy += gx * gy; tyy += gy * gy;
         }
-        VSTORE(txx, &PLANE(tensor, 0, x0, y));
-        VSTORE(txy, &PLANE(tensor, 1, x0, y));
-        VSTORE(tyy, &PLANE(tensor, 2, x0, y));
+        if (nt) {
+            VSTORE(txx, &PLANE(tensor, 0, x0, y));
+            VSTORE(txy, &PLANE(tensor, 1, x0, y));
+            VSTORE(tyy, &PLANE(tensor, 2, x0, y));
+        }
         return;
     }
     for (long x = x0; x < min(x0 + VEC, W); x++) {
@@ -312,16 +316,18 @@ __kernel void components(__global const float *lab, __global const float *hist, 
             float gy = 0.5f * texture_sigma * (PLANE(hist, j, x, yp) - PLANE(hist, j, x, ym));
             txx += gx * gx; txy += gx * gy; tyy += gy * gy;
         }
-        PLANE(tensor, 0, x, y) = txx;
-        PLANE(tensor, 1, x, y) = txy;
-        PLANE(tensor, 2, x, y) = tyy;
+        if (nt) {
+            PLANE(tensor, 0, x, y) = txx;
+            PLANE(tensor, 1, x, y) = txy;
+            PLANE(tensor, 2, x, y) = tyy;
+        }
     }
 }
 
 /* The texture tensor of histograms sampled at every step-th pixel ((NT, H, W) in, (3, H, W) out, W x H that
  * grid's size), on that grid: scale is the texture's sigma over the step (the derivative per pixel of the
  * image). The derivatives are the five-point stencil's: on a grid spaced one sigma apart, centred differences
- * fall some 16% short on a wave of frequency 1 / sigma, the five-point stencil 3%. */
+ * fall some 16% short on a wave of angular frequency 1 / sigma, the five-point stencil 3%. */
 __kernel void sampled_tensor(__global const float *hist, __global float *tensor, float scale, int nt, long W,
                              long H)
 {

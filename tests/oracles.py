@@ -190,9 +190,9 @@ def texton_bank(lightness, sigmas=(1.0, 2.0)):
 def oriented_gradients(lab, labels, ntextons, scales, orientations=8, ratio=2.0, surround_sigma=10.0,
                        floor=0.02, sampled=True):
     """The boundary classifier's features (orientations, H, W, 12 len(scales)) from the (3, H, W) L*a*b*
-    planes (each / 100) and the texton labels; the textons' histograms sampled as the map samples them
-    (vmcl.early.boundary_probability.sample_step; with ``sampled`` False, every smoothing exact at every
-    pixel); the texture tensor integrated at the texture's scale; the
+    planes (each / 100) and the texton labels; the textons' histograms, their tensors and the surround sampled
+    as the map samples them (vmcl.early.boundary_probability.sample_step; with ``sampled`` False, every
+    smoothing exact at every pixel); the texture tensor integrated at the texture's scale; the
     surround is the Gaussian mean of each gradient's largest value over all orientations."""
     from vmcl.early.boundary_probability import sample_step
 

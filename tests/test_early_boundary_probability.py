@@ -39,9 +39,18 @@ def test_filter_bank_on_the_lightness_matches_the_oracle():
     np.testing.assert_allclose(responses, expected, atol=2e-4)
 
 
-def test_oriented_gradients_match_the_oracle():
+def _small_scales_model():
+    """The shipped textons at scales whose texture smoothing is partly exact (step 1) and partly sampled."""
+    shipped = bp.BoundaryModel.load()
+    scales = (0.75, 3.0)
+    assert [bp.sample_step(bp.TEXTURE_RATIO * s) for s in scales] == [1, 6]
+    return bp.BoundaryModel(scales, shipped.centres, np.zeros(1 + len(bp.feature_names(scales)), np.float32))
+
+
+@pytest.mark.parametrize("small_scales", [False, True])
+def test_oriented_gradients_match_the_oracle(small_scales):
     rgb = _smooth_rgb(1)
-    model = bp.BoundaryModel.load()
+    model = _small_scales_model() if small_scales else bp.BoundaryModel.load()
     found = bp.oriented_gradients(rgb, model=model)
     lab = _lab_oracle(rgb)
     responses = oracles.texton_bank(lab[0])
@@ -60,8 +69,9 @@ def test_sampled_smoothings_stay_near_the_exact_gaussian():
     the surround at every sample_step-th row) stay near the exact Gaussians' features: on average within 4%
     of each feature's range, and within 8% two samples of the widest step or more inside the image."""
     model = bp.BoundaryModel.load()
+    # One sample per sigma: the step is the width's whole pixels (the oracle reads sample_step too).
+    assert [bp.sample_step(sigma) for sigma in (0.5, 1.9, 3.0, 10.0, 12.0)] == [1, 1, 3, 10, 12]
     steps = [bp.sample_step(bp.TEXTURE_RATIO * s) for s in model.scales] + [bp.sample_step(bp.SURROUND_SIGMA)]
-    assert max(steps) > 1  # the shipped model's map samples
     margin = 2 * max(steps)
     rgb = _smooth_rgb(2, shape=(96, 128))
     found = bp.oriented_gradients(rgb, model=model)

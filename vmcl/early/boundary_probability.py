@@ -16,8 +16,8 @@ The cues
 - Texture: every pixel is labelled with its nearest texton, a cluster of the responses of a small
   filter bank (first and second directional derivatives at four orientations and the Laplacian, at two
   scales) compressed by their norm (Malik et al. 2001); the textons' indicator planes are smoothed at
-  twice the scale (at the wider scales on a grid of every :func:`sample_step`-th row and column: a
-  Gaussian that wide leaves nothing finer), and the texture gradient across a normal is the norm of the
+  twice the scale (on a grid of every :func:`sample_step`-th row and column, a sigma apart: a Gaussian
+  leaves little finer than its width), and the texture gradient across a normal is the norm of the
   histograms' derivative, read from a 2 x 2 tensor (the sum over textons of the gradient's outer
   product) so that any orientation costs three products. The tensor is integrated (smoothed) at the
   texture's scale, as a structure tensor is: a contrast edge is a band of textons of its own, and the
@@ -104,15 +104,17 @@ TEXTURE_RATIO = 2.0
 SAMPLES_PER_SIGMA = 1.0
 """Samples per Gaussian width of the map's wide smoothings (:func:`sample_step`: every ``max(1, floor(sigma /
 SAMPLES_PER_SIGMA))``-th pixel), chosen on held-out training images by benchmarks/boundary_sampling_fit.py
-(the fewest samples whose boundary scores stay those of the exact smoothings). At a texture scale of two
-pixels or more, the textons' histograms are computed at every step-th row and column, their tensor is formed
-(five-point derivatives) and integrated on that grid, and the integrated tensor is interpolated bilinearly
-to every pixel; the surround is smoothed at every step-th row and interpolated linearly between. A Gaussian
-of width sigma keeps e^(-pi^2 / 2), under 1%, of a wave at the highest frequency a grid spaced sigma apart
-carries, so the sampling hardly aliases; the interpolation moves the texture features by a few percent of
-their range (tests/test_early_boundary_probability.py bounds it). The widest texture scale's histograms, a
-row and a column pass over 32 planes at 97 taps, were the map's largest cost. The brightness and colour
-gradients, which place the boundary, are smoothed at every pixel."""
+(among 3, 2, 1.5 and 1 per sigma, the fewest whose boundary scores stay within 0.002 of the exact
+smoothings'). At every texture scale of two pixels or more (all three of the shipped model's), the
+textons' histograms are computed at every step-th row and column, their tensor is formed (five-point
+derivatives) and integrated on that grid, and the integrated tensor is interpolated bilinearly to every
+pixel; the surround is smoothed at every step-th row and interpolated linearly between. A Gaussian of width
+sigma keeps under 1% (e^(-pi^2 / 2)) of a wave at the highest frequency a grid a sigma apart carries, so the
+histograms hardly alias; their tensor, a sum of products, reaches twice as high and aliases more, and the
+interpolation moves the texture features by a few percent of their range (tests/test_early_boundary_probability.py
+bounds both). The widest texture scale's histograms, a row and a column pass over 32 planes at 97 taps, were
+the map's largest cost. The brightness and colour gradients, which place the boundary, are smoothed at
+every pixel."""
 
 SURROUND_SIGMA = 10.0
 """Width of the Gaussian surround whose mean gradient each gradient is compared with, in pixels."""
@@ -311,7 +313,10 @@ def _planes_pass(machine: Machine, name: str, planes: cl_array.Array, out: cl_ar
                  count: int, defines: dict, first: int = 0, step: int = 1) -> None:
     """One pass of the Gaussian of ``sigma`` over the first ``count`` planes of ``planes``, written to planes
     ``first`` .. ``first + count - 1`` of ``out``; ``defines``: those of the program it is taken from. The
-    column pass writes every ``step``-th row of ``planes`` (``out`` then has that many rows)."""
+    column pass writes every ``step``-th row of ``planes`` (``out`` then has that many rows); the row pass
+    has no step."""
+    if step != 1 and name != "planes_cols":
+        raise ValueError(f"{name} has no step: only the column pass samples rows")
     height, width = planes.shape[1:]
     rows = out.shape[1]
     size = (-(-width // machine.vector_width), rows, count)
@@ -382,11 +387,12 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
                 _constant(machine, ("centres", model), lambda: model.centres), labels, np.int32(count), *dims)
     comp = machine.empty((6 * len(model.scales), height, width), np.float32)
     tensors = machine.empty((3 * len(model.scales), height, width), np.float32)
-    rows = machine.empty((count, height, width), np.float32)
+    steps = [sample_step(TEXTURE_RATIO * sigma) for sigma in model.scales]
+    # The histograms' row pass, at the sampled columns of the scale that samples least.
+    rows = machine.empty(count * height * max(_samples(width, step) for step in steps), np.float32)
     tensor = machine.empty((3, height, width), np.float32)
-    for k, sigma in enumerate(model.scales):
+    for k, (sigma, step) in enumerate(zip(model.scales, steps)):
         texture_sigma = TEXTURE_RATIO * sigma
-        step = sample_step(texture_sigma)
         histograms = _histograms(machine, labels, rows, texture_sigma, count, step, defines)
         # Where the histograms are sampled, their tensor is formed on their grid (below), not here (nt 0).
         launch_rows(machine, _kernel(machine, "components", **defines), width, height,
@@ -410,11 +416,11 @@ def _components(machine: Machine, data: cl_array.Array, model: BoundaryModel) ->
 def _histograms(machine: Machine, labels: cl_array.Array, rows: cl_array.Array, texture_sigma: float, count: int,
                 step: int, defines: dict) -> cl_array.Array:
     """The textons' indicator planes smoothed at ``texture_sigma``, at every ``step``-th row and column of the
-    image: (count, Hc, Wc); ``rows``: scratch of (count, H, W)."""
+    image: (count, Hc, Wc); ``rows``: flat scratch of at least count H Wc floats."""
     height, width = labels.shape
     coarse_width, coarse_height = _samples(width, step), _samples(height, step)
     taps, radius = device_taps(machine, (texture_sigma,))
-    sampled_rows = rows.reshape(-1)[:count * height * coarse_width].reshape(count, height, coarse_width)
+    sampled_rows = rows[:count * height * coarse_width].reshape(count, height, coarse_width)
     machine.launch(_kernel(machine, "histogram_rows", **defines), (coarse_width, height), labels, sampled_rows,
                    taps, np.int32(radius), np.int32(step), np.int64(coarse_width), np.int64(width), np.int64(height))
     out = machine.empty((count, coarse_height, coarse_width), np.float32)
