@@ -11,8 +11,8 @@ library's table maps every key to the model views' feature pairs that have it (b
 with each pair entered in the two nearest bins of every coordinate so a key near a bin's edge still meets
 it). For an image, every ordered pair of nearby features looks its key up; each entry it meets fixes
 the similarity taking the model pair onto the image pair, and votes for (view, rotation, scale, where
-the view's centre lands), binned, on the device (kernels/indexing.cl, one work-item per image pair, votes counted in a hashed
-accumulator). The bins with the most votes are the candidates; their votes' similarities are pooled
+the view's centre lands), binned, on the device (kernels/indexing.cl, one work-item per image pair,
+votes counted in a hashed accumulator). The bins with the most votes are the candidates; their votes' similarities are pooled
 into each candidate's pose. Candidate generation looks at the entries that share a key with the image's
 pairs only: with keys this discriminative, a larger library adds few entries per key.
 
