@@ -4,8 +4,9 @@ given back its edge, the voters and chosen pixels honoured, bad input refused na
 import numpy as np
 import pytest
 
-from vmcl.early.weighted_median import MAX_BINS, weighted_median
+from vmcl.early.weighted_median import MAX_BINS, MAX_KEPT_VOTERS, weighted_median
 from vmcl.errors import InputTypeError, InputValueError
+from vmcl.machine import Machine
 
 
 def _oracle(values, image, where, voters, low, high, radius, sigma_colour, sigma_space, stride=1, bin_width=1.0):
@@ -40,27 +41,51 @@ def _oracle(values, image, where, voters, low, high, radius, sigma_colour, sigma
     return want
 
 
-@pytest.mark.parametrize(("channels", "low", "high", "stride", "dtype", "bin_width", "components"), [
-    (3, 0.0, 10.0, 1, np.uint8, 1.0, 0), (1, -3.0, 40.0, 1, np.uint8, 1.0, 0), (3, 0.0, 10.0, 2, np.uint16, 1.0, 0),
-    (1, -3.0, 40.0, 3, np.uint8, 1.0, 0), (3, 0.0, 10.0, 1, np.float32, 1.0, 0),
-    (3, -2.5, 3.0, 2, np.uint8, 0.125, 2), (1, -3.0, 40.0, 1, np.uint8, 0.01, 1), (1, -3.0, 4.0, 1, np.float32, 0.5, 2)])
-def test_matches_numpy_oracle(channels, low, high, stride, dtype, bin_width, components, machine):
-    """Grey and RGB weights, strides, sub-unit bins (0.01 over 43 units: widened to fit MAX_BINS), and
-    fields of several components (0: an (H, W) field)."""
+def _random_case(channels, low, high, dtype, components, shape=(30, 41)):
     rng = np.random.default_rng(channels)
-    values = rng.uniform(low, high, (30, 41, components) if components else (30, 41)).astype(np.float32)
+    values = rng.uniform(low, high, (*shape, components) if components else shape).astype(np.float32)
     values[rng.uniform(size=values.shape) < 0.05] = np.nan
-    shape = (30, 41, 3) if channels == 3 else (30, 41)
-    image = (rng.uniform(0, 1, shape).astype(np.float32) if dtype == np.float32
-             else rng.integers(0, np.iinfo(dtype).max + 1, shape).astype(dtype))
-    where = rng.uniform(size=values.shape[:2]) < 0.4
-    voters = rng.uniform(size=values.shape[:2]) < 0.8
-    found = weighted_median(values, image, low=low, high=high, where=where, voters=voters, radius=3,
+    image_shape = (*shape, 3) if channels == 3 else shape
+    image = (rng.uniform(0, 1, image_shape).astype(np.float32) if dtype == np.float32
+             else rng.integers(0, np.iinfo(dtype).max + 1, image_shape).astype(dtype))
+    where = rng.uniform(size=shape) < 0.4
+    voters = rng.uniform(size=shape) < 0.8
+    return values, image, where, voters
+
+
+# Radius 3 at strides 1, 2 and 3 keeps at most 49 voters (the kept voters' bisection); radius 5 at stride 1,
+# 121 (the histogram).
+@pytest.mark.parametrize(("channels", "low", "high", "radius", "stride", "dtype", "bin_width", "components"), [
+    (3, 0.0, 10.0, 3, 1, np.uint8, 1.0, 0), (1, -3.0, 40.0, 3, 1, np.uint8, 1.0, 0),
+    (3, 0.0, 10.0, 3, 2, np.uint16, 1.0, 0), (1, -3.0, 40.0, 3, 3, np.uint8, 1.0, 0),
+    (3, 0.0, 10.0, 3, 1, np.float32, 1.0, 0), (3, -2.5, 3.0, 3, 2, np.uint8, 0.125, 2),
+    (1, -3.0, 40.0, 3, 1, np.uint8, 0.01, 1), (1, -3.0, 4.0, 3, 1, np.float32, 0.5, 2),
+    (3, 0.0, 10.0, 5, 1, np.uint8, 1.0, 0), (1, -2.5, 3.0, 5, 1, np.float32, 0.125, 2)])
+def test_matches_numpy_oracle(channels, low, high, radius, stride, dtype, bin_width, components, machine):
+    """Grey and RGB weights, strides, sub-unit bins (0.01 over 43 units: widened to fit MAX_BINS), fields
+    of several components (0: an (H, W) field), and windows of both forms: voters kept, or a histogram."""
+    values, image, where, voters = _random_case(channels, low, high, dtype, components)
+    found = weighted_median(values, image, low=low, high=high, where=where, voters=voters, radius=radius,
                             sigma_colour=0.2, sigma_space=3.0, stride=stride, bin_width=bin_width, machine=machine)
-    want = _oracle(values, image, where, voters, low, high, 3, 0.2, 3.0, stride, bin_width)
+    want = _oracle(values, image, where, voters, low, high, radius, 0.2, 3.0, stride, bin_width)
     np.testing.assert_array_equal(np.isnan(found), np.isnan(want))
     np.testing.assert_allclose(found[~np.isnan(want)], want[~np.isnan(want)], atol=2e-5)
     np.testing.assert_array_equal(found[~where], values[~where])
+
+
+def test_the_two_forms_meet_at_the_kept_voters_limit():
+    """The largest window whose voters are kept (radius 4: 81 voters) and the smallest histogrammed one
+    (radius 5: 121) both match the oracle, in the one-pixel-per-work-item form a GPU runs (VEC = 1)."""
+    assert (2 * 4 + 1) ** 2 == MAX_KEPT_VOTERS
+    scalar = Machine()
+    scalar.vector_width = 1
+    values, image, where, voters = _random_case(3, -2.5, 3.0, np.uint8, 2, shape=(19, 23))
+    for radius in (4, 5):
+        found = weighted_median(values, image, low=-2.5, high=3.0, where=where, voters=voters, radius=radius,
+                                sigma_colour=0.2, sigma_space=3.0, bin_width=0.125, machine=scalar)
+        want = _oracle(values, image, where, voters, -2.5, 3.0, radius, 0.2, 3.0, 1, 0.125)
+        np.testing.assert_array_equal(np.isnan(found), np.isnan(want))
+        np.testing.assert_allclose(found[~np.isnan(want)], want[~np.isnan(want)], atol=2e-5)
 
 
 def test_a_fattened_step_goes_back_to_the_brightness_edge(machine):

@@ -31,16 +31,23 @@ from vmcl.cm.core import (
     field,
     flags_field,
     image_field,
+    launch_rows,
     machine_for,
     result,
+    vector_kernel,
 )
+from vmcl.early.filters import channel_planes
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["MAX_BINS", "weighted_median"]
+__all__ = ["MAX_BINS", "MAX_KEPT_VOTERS", "weighted_median"]
 
 MAX_BINS = 1024
 """The most bins a pixel's histogram holds; a wider span of values gets bins of several units."""
+MAX_KEPT_VOTERS = 81
+"""Windows of at most this many voters (a reach of 4 steps of ``stride`` each way) are computed with every
+voter kept and the median's bin found by bisection, several pixels per work-item (the pipeline's stereo
+and flow refinements); wider ones with a histogram per pixel. Both give the same bins."""
 
 _BIN_STEP = 64  # the private histograms are sized in steps of this many bins (one program per size)
 _HALF_RANGE = float(np.finfo(np.float32).max) / 4
@@ -94,6 +101,9 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
     units wide, starting half a bin below ``low`` (multiples of ``bin_width`` from ``low`` sit mid-bin when
     ``step`` is ``bin_width``); the result is the weighted mean of the voters in the median's bin. Each
     chosen pixel visits up to ``(2 (radius // stride) + 1)^2`` neighbours (fewer at the image's border).
+    Where that is at most :data:`MAX_KEPT_VOTERS`, the voters are kept and the median's bin found by
+    bisection over them, for several adjacent pixels at once on a CPU's vector lanes; the weights'
+    exponential may then differ from the one-pixel form's in its last bit.
 
     Raises
     ------
@@ -109,7 +119,8 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
     components = data.shape[2] if data.ndim == 3 else 1
     if components > 2:
         raise InputValueError(f"values must have one or two components ((H, W) or (H, W, 2)), got shape {data.shape}")
-    picture, image_host = image_field(image, machine, what="a weighted median", footprint=6)
+    # 6 bytes a pixel for the flags and the field's copy, 12 for the image's float planes (RGB).
+    picture, image_host = image_field(image, machine, what="a weighted median", footprint=18)
     if image_host != host:
         raise InputTypeError("values and image must both be NumPy arrays or both device arrays")
     if isinstance(image, np.ndarray) and picture.dtype == np.float32:
@@ -144,15 +155,23 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
                          machine)
     reach = min(radius, max(height, width) - 1)  # no window reaches further than the image
     side = 2 * reach + 1
+    stride = min(stride, side)
     spatial = _spatial_weights(machine, reach, sigma_space)
     out = machine.empty(data.shape, np.float32)
-    kernel = machine.kernel("weighted_median", "weighted_median", IN_T=IMAGE_TYPES[picture.dtype],
-                            CHANNELS=3 if picture.ndim == 3 else 1, COMPS=components,
-                            NBINS=_BIN_STEP * math.ceil(bins / _BIN_STEP))
-    machine.launch(kernel, (width, height), data, voting, chosen, picture, out, np.int64(width), np.int64(height),
-                   np.int32(reach), np.float32(1 / sigma_colour), spatial,
-                   np.float32(1 / _LEVELS[picture.dtype]), np.float32(low - 0.5 * step), np.float32(step),
-                   np.int32(bins), np.int32(min(stride, side)))
+    channels = 3 if picture.ndim == 3 else 1
+    common = (np.int64(width), np.int64(height), np.int32(reach), np.float32(1 / sigma_colour), spatial,
+              np.float32(1 / _LEVELS[picture.dtype]), np.float32(low - 0.5 * step), np.float32(step), np.int32(bins),
+              np.int32(stride))
+    steps = reach // stride
+    if (2 * steps + 1) ** 2 <= MAX_KEPT_VOTERS:
+        kernel = vector_kernel(machine, "weighted_median", "weighted_median_bisect", CHANNELS=channels,
+                               COMPS=components, MAX_VOTERS=MAX_KEPT_VOTERS)
+        launch_rows(machine, kernel, width, height, data, voting, chosen, channel_planes(machine, picture), out,
+                    *common, np.int32(steps), np.int32(max(1, math.ceil(math.log2(bins)))))
+    else:
+        kernel = machine.kernel("weighted_median", "weighted_median", IN_T=IMAGE_TYPES[picture.dtype],
+                                CHANNELS=channels, COMPS=components, NBINS=_BIN_STEP * math.ceil(bins / _BIN_STEP))
+        machine.launch(kernel, (width, height), data, voting, chosen, picture, out, *common)
     return result(out, host)
 
 
