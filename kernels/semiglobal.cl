@@ -460,27 +460,58 @@ __kernel void check_views(__global float *disparity, __global const int *left_wi
     disparity[i] = NAN;
 }
 
+/* VEC values row[a .. a + VEC), NaN past the row's ends. */
+inline VFLOAT chunk_or_nan(__global const float *row, long a, long W)
+{
+#if VEC == 1
+    return (a >= 0 && a < W) ? row[a] : NAN;
+#else
+    if (a >= 0 && a + VEC <= W) return VCAT(vload, VEC)(0, row + a);
+    float t[VEC];
+    for (int i = 0; i < VEC; i++) t[i] = (a + i >= 0 && a + i < W) ? row[a + i] : NAN;
+    return VCAT(vload, VEC)(0, t);
+#endif
+}
+
 /* The median of the kept disparities of each kept pixel's 3 x 3 neighbourhood (itself included; pixels
  * without one stay without): isolated wrong winners, a pixel or two wide, give way to their neighbours'
- * value, while a surface's edge, held by the pixels on its own side, stays where it is. */
+ * value, while a surface's edge, held by the pixels on its own side, stays where it is. VEC pixels of a
+ * row per work-item: the 9 values sorted by a network of min/max steps (odd-even transposition, 9 rounds),
+ * missing ones as +infinity at the end, so every step is a vector step. */
 __kernel void median_kept(__global const float *disparity, __global float *out, long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    size_t i = y * W + x;
-    if (isnan(disparity[i])) { out[i] = NAN; return; }
-    float v[9];
-    int n = 0;
-    for (long yy = max(y - 1, (long)0); yy <= min(y + 1, H - 1); yy++)
-        for (long xx = max(x - 1, (long)0); xx <= min(x + 1, W - 1); xx++) {
-            float d = disparity[yy * W + xx];
-            if (isnan(d)) continue;
-            /* Insertion sort: at most 9 values. */
-            int j = n++;
-            while (j > 0 && v[j - 1] > d) { v[j] = v[j - 1]; j--; }
-            v[j] = d;
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    VFLOAT v[9];
+    VIT kept = 0;
+    for (int k = 0; k < 9; k++) {
+        long yy = y + k / 3 - 1;
+        VFLOAT d = (yy >= 0 && yy < H) ? chunk_or_nan(disparity + yy * W, x0 + k % 3 - 1, W) : (VFLOAT)NAN;
+        kept += select((VIT)1, (VIT)0, isnan(d));
+        v[k] = select(d, (VFLOAT)INFINITY, isnan(d));
+    }
+    for (int round = 0; round < 9; round++)
+        for (int k = round & 1; k + 1 < 9; k += 2) {
+            VFLOAT low = fmin(v[k], v[k + 1]);
+            v[k + 1] = fmax(v[k], v[k + 1]);
+            v[k] = low;
         }
-    out[i] = (n % 2) ? v[n / 2] : 0.5f * (v[n / 2 - 1] + v[n / 2]);
+    VIT middle = kept >> 1;
+    VFLOAT upper = v[0], lower = v[0];
+    for (int k = 1; k < 9; k++) {
+        upper = select(upper, v[k], middle == k);
+        lower = select(lower, v[k], middle - 1 == k);
+    }
+    VFLOAT centre = chunk_or_nan(disparity + y * W, x0, W);
+    VFLOAT found = select(0.5f * (lower + upper), upper, (kept & 1) != 0);
+    found = select(found, (VFLOAT)NAN, isnan(centre));
+#if VEC == 1
+    out[y * W + x0] = found;
+#else
+    float t[VEC];
+    VCAT(vstore, VEC)(found, 0, t);
+    for (int i = 0; i < VEC && x0 + i < W; i++) out[y * W + x0 + i] = t[i];
+#endif
 }
 
 /* Half-occluded pixels take the background's disparity: of the nearest kept disparities to their left

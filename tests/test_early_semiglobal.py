@@ -23,6 +23,7 @@ from vmcl.early.semiglobal import (
 )
 from vmcl.early.weighted_median import weighted_median
 from vmcl.errors import InputTypeError, InputValueError
+from vmcl.machine import Machine
 from vmcl.scenes import Body, Camera, Face, Light, Texture, World
 
 
@@ -212,9 +213,14 @@ def test_subpixel_offset_is_the_equiangular_vertex_of_the_sums(d_max, shape, shi
     assert checked > 50
 
 
-def test_median_is_that_of_the_kept_neighbours(machine):
+@pytest.mark.parametrize("lanes", ["device", 1])
+def test_median_is_that_of_the_kept_neighbours(lanes, machine):
     """Each kept disparity becomes the median of the kept ones in its 3 x 3 neighbourhood (the mean of the
-    middle two for an even count); unkept pixels stay unkept, and the fill follows the filtered values."""
+    middle two for an even count); unkept pixels stay unkept, and the fill follows the filtered values. Also
+    one pixel per work-item (VEC = 1, as on a GPU), forced here."""
+    if lanes != "device":
+        machine = Machine()
+        machine.vector_width = lanes
     left, right = _textured_pair(shape=(24, 40), seed=4)
     raw = match_semiglobal(left, right, d_min=0, d_max=6, median=False, machine=machine)
     found = match_semiglobal(left, right, d_min=0, d_max=6, machine=machine)

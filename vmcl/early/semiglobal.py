@@ -446,7 +446,7 @@ def _select(machine: Machine, sums: cl_array.Array, costs: cl_array.Array, dims,
                    occluded, mismatched, *dims, np.int32(depth), np.int32(d_min), np.int32(tolerance))
     if median:
         smoothed = machine.empty((height, width), np.float32)
-        machine.launch(_kernel(machine, "median_kept"), (width, height), disparity, smoothed, *dims)
+        launch_rows(machine, _kernel(machine, "median_kept"), width, height, disparity, smoothed, *dims)
         disparity = smoothed
     filled = machine.empty((height, width), np.float32)
     machine.launch(_kernel(machine, "fill_occluded"), (height,), disparity, occluded, mismatched, filled,
