@@ -30,9 +30,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from stream_timing import blocks_sequence, steady_state
 
 import vmcl
-from vmcl import scenes
 from vmcl.datasets import find_flow_folders, load_flow, read_flow_folder
 from vmcl.early import motion
 from vmcl.flow_evaluation import FlowRow, evaluate_sequence
@@ -150,22 +150,20 @@ def streaming(machine: vmcl.Machine, frames: int) -> list[str]:
               "(stream) | DIS medium ms | flow stages / DIS |")
     lines = [header, "|---|---|---|---|---|---|---|"]
     for size in (256, 512):
-        sequence = scenes.render_sequence(scenes.preset("blocks", shape=(size, size)), frames, seed=1, noise=0.01)
-        lefts = [s.left for s in sequence] + [sequence[-1].left_next]
-        rights = [s.right for s in sequence]
+        lefts, rights = blocks_sequence(size, frames)
         vm = VisionMachine(machine=machine)
         vm.run(lefts[0], rights[0], lefts[1])  # kernels built before anything is timed
-        streamed = list(vm.stream(lefts[:frames], rights))[1:-1]  # steady state: not the first or the flowless last
-        alone = [vm.run(lefts[k], rights[k], lefts[k + 1]) for k in range(1, frames - 1)]
+        streamed = steady_state(vm, lefts[:frames], rights)
+        alone = [vm.run(lefts[k], rights[k], lefts[k + 1]).total_ms for k in range(1, frames - 1)]
         grey = [np.clip(cv2.cvtColor(im, cv2.COLOR_RGB2GRAY) * 255, 0, 255).astype(np.uint8) for im in lefts]
         dis_ms = []
         for k in range(1, frames - 1):
             start = time.perf_counter()
             dis(grey[k], grey[k + 1])
             dis_ms.append((time.perf_counter() - start) * 1e3)
-        stream_ms = statistics.median(r.total_ms for r in streamed)
-        alone_ms = statistics.median(r.total_ms for r in alone)
-        flow_ms = statistics.median(r.stages["motion"] + r.stages["mrf motion"] for r in streamed)
+        stream_ms = streamed.median
+        alone_ms = statistics.median(alone)
+        flow_ms = statistics.median(s["motion"] + s["mrf motion"] for s in streamed.stages)
         dis_median = statistics.median(dis_ms)
         lines.append(f"| {size} x {size} | {stream_ms:.0f} | {alone_ms:.0f} | {stream_ms / alone_ms:.2f} | "
                      f"{flow_ms:.0f} | {dis_median:.1f} | {flow_ms / dis_median:.1f} |")
