@@ -4,7 +4,8 @@
  *             information it carries (a Kalman prediction: the information w becomes w m / (m + w), m
  *             the memory, so old evidence fades), and the temporal line process: time is broken where
  *             the brightness at the carried position disagrees with this frame's by more than the
- *             tolerance, or where the position left the image
+ *             tolerance, or where the position left the image. The frame's first launch tests the
+ *             brightness and writes `broken`; the cues' launches (`tested`) read it, the same for all
  *   fuse      the cue's new measurement and the prediction as one data term: the information-weighted
  *             mean, with the information summed (the Kalman update, which the MRF's data term then holds),
  *             except where the two differ by more than the cue's jump (time broken for that cue), and the
@@ -50,8 +51,8 @@ inline float carried(__global const float *field, float x, float y, int c, long 
 __kernel void predict(__global const float *field, __global const float *information,
                       __global const float *flow, int has_flow,
                       __global const float *grey_before, __global const float *grey_now,
-                      float tolerance, float memory,
-                      __global float *prediction, __global float *weight, __global uchar *broken, long W, long H)
+                      float tolerance, float memory, __global float *prediction, __global float *weight,
+                      __global uchar *broken, int tested, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -65,7 +66,8 @@ __kernel void predict(__global const float *field, __global const float *informa
         }
     }
     int inside = sx >= 0.0f && sy >= 0.0f && sx <= (float)(W - 1) && sy <= (float)(H - 1);
-    int agrees = inside && fabs(bilinear(grey_before, sx, sy, W, H) - grey_now[i]) <= tolerance;
+    int agrees = tested ? !broken[i]
+                        : inside && fabs(bilinear(grey_before, sx, sy, W, H) - grey_now[i]) <= tolerance;
     float w = 0.0f;
     for (int c = 0; c < NCOMP; ++c) prediction[i * NCOMP + c] = NAN;
     if (agrees) {
@@ -81,7 +83,7 @@ __kernel void predict(__global const float *field, __global const float *informa
             for (int c = 0; c < NCOMP; ++c) prediction[i * NCOMP + c] = NAN;
     }
     weight[i] = w;
-    broken[i] = (uchar)!agrees;
+    if (!tested) broken[i] = (uchar)!agrees;
 }
 
 __kernel void fuse(__global const float *data, __global const float *confidence, int has_confidence,

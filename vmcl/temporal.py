@@ -109,7 +109,8 @@ class Memory:
         ones = m.empty((height, width), np.float32)
         ones.fill(1.0, queue=m.queue)
         scratch = m.empty((height, width), np.float32)
-        self._predict(ones, ones, previous, grey, 1, False, scratch, m.empty((height, width), np.float32))
+        self._predict(ones, ones, previous, grey, 1, False, scratch, m.empty((height, width), np.float32),
+                      tested=False)
         share = float(cm_reduce.reduce(self.broken, "sum", machine=m).get()) / (height * width)
         self.broken_share = share
         self.previous_grey = previous
@@ -120,14 +121,16 @@ class Memory:
 
     def _predict(self, field: cl_array.Array, information: cl_array.Array, before: cl_array.Array,
                  now: cl_array.Array, ncomp: int, nearest: bool, prediction: cl_array.Array,
-                 weight: cl_array.Array) -> None:
+                 weight: cl_array.Array, *, tested: bool = True) -> None:
+        """Carry ``field`` along the flow; ``tested``: :attr:`broken` holds this frame's brightness test
+        (:meth:`begin` made it), else the test is made and written there."""
         m = self.machine
         height, width = now.shape
         flow = self.flow
         kernel = m.kernel("temporal", "predict", NCOMP=ncomp, NEAREST=int(nearest))
         m.launch(kernel, (width, height), field, information, flow if flow is not None else information,
                  np.int32(flow is not None), before, now, np.float32(self.tolerance), np.float32(self.memory),
-                 prediction, weight, self.broken, np.int64(width), np.int64(height))
+                 prediction, weight, self.broken, np.int32(tested), np.int64(width), np.int64(height))
 
     def carry(self, cue: str) -> Carried | None:
         """The cue's previous restoration carried to this frame (None when there is none to carry)."""
