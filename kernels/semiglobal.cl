@@ -203,7 +203,21 @@ __kernel void census_costs(__global const ulong *left, __global const ulong *rig
     ulong code = left[i];
     float unit = 1.0f / (fmax(noise[0], FLT_MIN) * (float)planes);
     __global uchar *out = cost + i * S;
-    for (int k = 0; k < D; k++) {
+    /* 16 disparities at a time where their right pixels, x - d_min - k .. - 15, all lie inside: one
+     * (reversed) vector load of the right codes and levels, the same operations lane by lane. */
+    int k = 0;
+    for (; k + 16 <= D; k += 16) {
+        long first = x - (d_min + k) - 15;
+        if (first < 0 || first + 15 >= W) break;
+        ulong16 codes = vload16(0, right + y * W + first).sFEDCBA9876543210;
+        float16 sum = 0.0f;
+        for (int c = 0; c < planes; c++)
+            sum += fabs(left_levels[c * n + i] - vload16(0, right_levels + c * n + y * W + first).sFEDCBA9876543210);
+        float16 difference = fmin(sum * unit, ad_cap);
+        uint16 total = convert_uint16(popcount(code ^ codes)) + convert_uint16(rint(ad_weight * difference));
+        vstore16(convert_uchar16(min(total, (uint16)255u)), 0, out + k);
+    }
+    for (; k < D; k++) {
         long xr = x - (d_min + k);
         if (xr < 0 || xr >= W) { out[k] = outside; continue; }
         float sum = 0.0f;

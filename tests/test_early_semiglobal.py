@@ -213,6 +213,40 @@ def test_subpixel_offset_is_the_equiangular_vertex_of_the_sums(d_max, shape, shi
     assert checked > 50
 
 
+def test_census_costs_match_their_definition(machine):
+    """The cost volume, kernel by kernel: Hamming distance of the codes plus ad_weight times the capped mean
+    brightness difference in units of the noise, ``outside`` where x - d leaves the image; 37 disparities,
+    so that pixels take two chunks of 16 disparities at once where their right pixels all lie inside, and
+    one by one elsewhere (float32 arithmetic in the kernel's order)."""
+    rng = np.random.default_rng(11)
+    height, width, depth, d_min, planes = 3, 64, 37, -3, 3
+    left_codes, right_codes = (rng.integers(0, 2**63, (height, width), dtype=np.uint64) for _ in range(2))
+    left_levels, right_levels = (rng.uniform(0, 1, (planes, height, width)).astype(np.float32) for _ in range(2))
+    noise, weight, cap, outside = np.float32(0.05), np.float32(4.0), np.float32(8.0), 77
+    stride = 16 * -(-depth // 16)
+    costs = machine.empty((height, width, stride), np.uint8)
+    machine.launch(semiglobal._kernel(machine, "census_costs"), (width, height), machine.to_device(left_codes),
+                   machine.to_device(right_codes), machine.to_device(left_levels), machine.to_device(right_levels),
+                   np.int32(planes), costs, np.int64(width), np.int64(height), np.int32(depth), np.int32(stride),
+                   np.int32(d_min), np.uint8(outside), weight, cap, machine.to_device(np.array([noise])))
+    found = costs.get()[:, :, :depth]
+    unit = np.float32(1) / (noise * np.float32(planes))
+    for y in range(height):
+        for x in range(width):
+            for k in range(depth):
+                xr = x - (d_min + k)
+                if not 0 <= xr < width:
+                    assert found[y, x, k] == outside
+                    continue
+                total = np.float32(0)
+                for c in range(planes):
+                    total = np.float32(total + abs(left_levels[c, y, x] - right_levels[c, y, xr]))
+                difference = min(np.float32(total * unit), cap)
+                want = min(255, int(left_codes[y, x] ^ right_codes[y, xr]).bit_count()
+                           + int(np.rint(np.float32(weight * difference))))
+                assert found[y, x, k] == want, (y, x, k)
+
+
 @pytest.mark.parametrize("lanes", ["device", 1])
 def test_median_is_that_of_the_kept_neighbours(lanes, machine):
     """Each kept disparity becomes the median of the kept ones in its 3 x 3 neighbourhood (the mean of the
