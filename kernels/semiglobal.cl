@@ -64,6 +64,30 @@ __kernel void census(__global const float *image, __global ulong *codes, long W,
     for (int i = 0; i < VEC && x0 + i < W; i++) codes[y * W + x0 + i] = t[i];
 }
 
+/* The census distances at (x, y) of the 16 disparities d_min + k0 .. + 15, whose right pixels
+ * x - d_min - k0 - 15 (= first) .. x - d_min - k0 lie on the row: one reversed vector load. */
+inline ushort16 hamming16(ulong code, __global const ulong *right_row, long first)
+{
+    return convert_ushort16(popcount(code ^ vload16(0, right_row + first).sFEDCBA9876543210));
+}
+
+/* Whether the 16 disparities from k0 have their right pixels on the row (then `first` is the leftmost). */
+inline int chunk_inside(long x, int d_min, int k0, long W, long *first)
+{
+    *first = x - (d_min + k0) - 15;
+    return *first >= 0 && *first + 15 < W;
+}
+
+inline ushort lowest_lane(ushort16 v)
+{
+    ushort8 a = min(v.lo, v.hi);
+    ushort4 b = min(a.lo, a.hi);
+    ushort2 c = min(b.lo, b.hi);
+    return min(c.x, c.y);
+}
+
+#define LANE_INDEX ((ushort16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
+
 /* The two cameras' brightness difference, from the pixels whose census match is sure (the census is
  * blind to it): each pixel whose best census cost is at most `sure` bits, and whose best cost away from
  * that disparity and its neighbours is at least `margin` bits worse (at least one such disparity must
@@ -89,20 +113,44 @@ __kernel void tone_votes(__global const ulong *left, __global const ulong *right
     float low = TONE_LOW, span = TONE_HIGH - low;
     if (!(span > 0.0f)) return;
     ulong code = left[y * W + x];
+    __global const ulong *right_row = right + y * W;
+    /* The best (the first of the smallest) and then its competitors, 16 disparities at a time where their
+     * right pixels all lie on the row, one by one elsewhere. */
     int best = 255, at = -1;
-    for (int k = 0; k < D; k++) {
-        long xr = x - (d_min + k);
-        if (xr < 0 || xr >= W) continue;
-        int c = popcount(code ^ right[y * W + xr]);
-        if (c < best) { best = c; at = k; }
+    long first;
+    for (int k0 = 0; k0 < D; k0 += 16) {
+        if (k0 + 16 <= D && chunk_inside(x, d_min, k0, W, &first)) {
+            ushort16 c = hamming16(code, right_row, first);
+            int lowest = lowest_lane(c);
+            if (lowest < best) {
+                best = lowest;
+                at = k0 + lowest_lane(select((ushort16)16, LANE_INDEX, c == (ushort16)lowest));
+            }
+            continue;
+        }
+        for (int k = k0; k < min(k0 + 16, D); k++) {
+            long xr = x - (d_min + k);
+            if (xr < 0 || xr >= W) continue;
+            int c = popcount(code ^ right_row[xr]);
+            if (c < best) { best = c; at = k; }
+        }
     }
     if (at < 0 || best > sure) return;
     int competitors = 0;
-    for (int k = 0; k < D; k++) {
-        long xr = x - (d_min + k);
-        if (abs(k - at) <= 1 || xr < 0 || xr >= W) continue;
-        if (popcount(code ^ right[y * W + xr]) < best + margin) return;
-        competitors++;
+    for (int k0 = 0; k0 < D; k0 += 16) {
+        if (k0 + 16 <= D && chunk_inside(x, d_min, k0, W, &first)) {
+            short16 k = convert_short16(LANE_INDEX) + (short16)(short)(k0 - at);
+            short16 competes = abs(k) > (ushort16)1;
+            if (any(competes & (hamming16(code, right_row, first) < (ushort16)(best + margin)))) return;
+            for (int j = 0; j < 16; j++) competitors += abs(k0 + j - at) > 1;
+            continue;
+        }
+        for (int k = k0; k < min(k0 + 16, D); k++) {
+            long xr = x - (d_min + k);
+            if (abs(k - at) <= 1 || xr < 0 || xr >= W) continue;
+            if (popcount(code ^ right_row[xr]) < best + margin) return;
+            competitors++;
+        }
     }
     if (competitors == 0) return;
     /* The match to a fraction of a pixel (the equiangular vertex of the census costs at the best disparity
@@ -203,27 +251,29 @@ __kernel void census_costs(__global const ulong *left, __global const ulong *rig
     ulong code = left[i];
     float unit = 1.0f / (fmax(noise[0], FLT_MIN) * (float)planes);
     __global uchar *out = cost + i * S;
-    /* 16 disparities at a time where their right pixels, x - d_min - k .. - 15, all lie inside: one
-     * (reversed) vector load of the right codes and levels, the same operations lane by lane. */
-    int k = 0;
-    for (; k + 16 <= D; k += 16) {
-        long first = x - (d_min + k) - 15;
-        if (first < 0 || first + 15 >= W) break;
-        ulong16 codes = vload16(0, right + y * W + first).sFEDCBA9876543210;
-        float16 sum = 0.0f;
-        for (int c = 0; c < planes; c++)
-            sum += fabs(left_levels[c * n + i] - vload16(0, right_levels + c * n + y * W + first).sFEDCBA9876543210);
-        float16 difference = fmin(sum * unit, ad_cap);
-        uint16 total = convert_uint16(popcount(code ^ codes)) + convert_uint16(rint(ad_weight * difference));
-        vstore16(convert_uchar16(min(total, (uint16)255u)), 0, out + k);
-    }
-    for (; k < D; k++) {
-        long xr = x - (d_min + k);
-        if (xr < 0 || xr >= W) { out[k] = outside; continue; }
-        float sum = 0.0f;
-        for (int c = 0; c < planes; c++) sum += fabs(left_levels[c * n + i] - right_levels[c * n + y * W + xr]);
-        float difference = fmin(sum * unit, ad_cap);
-        out[k] = (uchar)min(255u, (uint)popcount(code ^ right[y * W + xr]) + (uint)rint(ad_weight * difference));
+    /* 16 disparities at a time where their right pixels all lie on the row: one (reversed) vector load of
+     * the right codes and levels, the same operations lane by lane; one by one elsewhere. */
+    long first;
+    for (int k0 = 0; k0 < D; k0 += 16) {
+        if (k0 + 16 <= D && chunk_inside(x, d_min, k0, W, &first)) {
+            float16 sum = 0.0f;
+            for (int c = 0; c < planes; c++)
+                sum += fabs(left_levels[c * n + i]
+                            - vload16(0, right_levels + c * n + y * W + first).sFEDCBA9876543210);
+            float16 difference = fmin(sum * unit, ad_cap);
+            uint16 total = convert_uint16(hamming16(code, right + y * W, first))
+                           + convert_uint16(rint(ad_weight * difference));
+            vstore16(convert_uchar16(min(total, (uint16)255u)), 0, out + k0);
+            continue;
+        }
+        for (int k = k0; k < min(k0 + 16, D); k++) {
+            long xr = x - (d_min + k);
+            if (xr < 0 || xr >= W) { out[k] = outside; continue; }
+            float sum = 0.0f;
+            for (int c = 0; c < planes; c++) sum += fabs(left_levels[c * n + i] - right_levels[c * n + y * W + xr]);
+            float difference = fmin(sum * unit, ad_cap);
+            out[k] = (uchar)min(255u, (uint)popcount(code ^ right[y * W + xr]) + (uint)rint(ad_weight * difference));
+        }
     }
 }
 
@@ -253,13 +303,6 @@ __kernel void noise_response(__global const float *grey, __global float *respons
 #define PAD ((ushort)0x3fff)
 #define CHUNKS (MAX_D / LANES)
 
-inline ushort lowest_lane(ushort16 v)
-{
-    ushort8 a = min(v.lo, v.hi);
-    ushort4 b = min(a.lo, a.hi);
-    ushort2 c = min(b.lo, b.hi);
-    return min(c.x, c.y);
-}
 
 /* Scanlines per work-item of the message kernel. A step's minimum over the disparities is a chain of
  * dependent operations the next step waits for; the steps of several lines, taken in turn, give the

@@ -247,6 +247,64 @@ def test_census_costs_match_their_definition(machine):
                 assert found[y, x, k] == want, (y, x, k)
 
 
+def test_exposure_votes_match_their_definition(machine):
+    """The exposure histogram's votes, kernel by kernel: a pixel votes when its best census distance (the
+    first of the smallest) is sure and every other disparity but its neighbours is at least the margin
+    worse, for its left - right difference (the right view read at the match's fraction of a pixel) in its
+    pair's mean brightness bin. 37 disparities: chunks of 16 where their right pixels all lie on the row,
+    one by one elsewhere (float32 arithmetic in the kernel's order)."""
+    rng = np.random.default_rng(12)
+    height, width, depth, d_min, sure, margin = 4, 64, 37, -3, 16, 6
+    right_codes = rng.integers(0, 2**63, (height, width), dtype=np.uint64)
+    left_codes = rng.integers(0, 2**63, (height, width), dtype=np.uint64)
+    for y, x in zip(*np.nonzero(rng.uniform(size=(height, width)) < 0.7)):
+        xr = x - (d_min + int(rng.integers(0, depth)))
+        if 0 <= xr < width:  # a sure match there, a few bits off, and its neighbours close behind
+            left_codes[y, x] = right_codes[y, xr] ^ np.uint64(int(rng.integers(0, 2**8)))
+            for neighbour in (xr - 1, xr + 1):
+                if 0 <= neighbour < width and rng.uniform() < 0.5:
+                    right_codes[y, neighbour] = right_codes[y, xr] ^ np.uint64(int(rng.integers(0, 2**12)))
+    left_grey, right_grey = (rng.uniform(0.1, 0.9, (height, width)).astype(np.float32) for _ in range(2))
+    span = [np.array([v], np.float32) for v in (left_grey.min(), right_grey.min(), left_grey.max(), right_grey.max())]
+    votes = machine.full((TONE_BINS, TONE_STEPS), np.int32, 0)
+    machine.launch(semiglobal._kernel(machine, "tone_votes"), (width, height), machine.to_device(left_codes),
+                   machine.to_device(right_codes), machine.to_device(left_grey), machine.to_device(right_grey), votes,
+                   np.int64(width), np.int64(height), np.int32(depth), np.int32(d_min), np.int32(sure),
+                   np.int32(margin), *(machine.to_device(v) for v in span))
+    want = np.zeros((TONE_BINS, TONE_STEPS), np.int64)
+    low = min(span[0][0], span[1][0])
+    extent = np.float32(max(span[2][0], span[3][0]) - low)
+    reach = (TONE_STEPS - 1) // 2
+    for y in range(height):
+        for x in range(width):
+            distance = {k: int(left_codes[y, x] ^ right_codes[y, x - d_min - k]).bit_count()
+                        for k in range(depth) if 0 <= x - d_min - k < width}
+            if not distance:
+                continue
+            best = min(distance.values())
+            at = min(k for k, c in distance.items() if c == best)
+            rivals = [c for k, c in distance.items() if abs(k - at) > 1]
+            if best > sure or not rivals or min(rivals) < best + margin:
+                continue
+            xr = x - d_min - at
+            shift = np.float32(0)
+            if 0 < at < depth - 1 and 0 < xr < width - 1:
+                below, above = distance[at - 1], distance[at + 1]
+                rise = max(below, above) - best
+                shift = np.float32(below - above) / np.float32(2 * rise) if rise > 0 else np.float32(0)
+            r = right_grey[y, xr]
+            if shift != 0:
+                other = right_grey[y, xr - 1 if shift > 0 else xr + 1]
+                r = np.float32(r + (other - r) * np.float32(abs(shift)))
+            left_level = left_grey[y, x]
+            mean = np.float32(np.float32(0.5) * np.float32(left_level + r))
+            bin_ = min(max(int(np.float32(np.float32(mean - low) / extent) * np.float32(TONE_BINS)), 0), TONE_BINS - 1)
+            step = np.float32(left_level - r) / np.float32(extent * np.float32(1 / 512))
+            want[bin_, int(np.clip(np.rint(step), -reach, reach)) + reach] += 1
+    assert want.sum() > 50
+    np.testing.assert_array_equal(votes.get(), want)
+
+
 @pytest.mark.parametrize("lanes", ["device", 1])
 def test_median_is_that_of_the_kept_neighbours(lanes, machine):
     """Each kept disparity becomes the median of the kept ones in its 3 x 3 neighbourhood (the mean of the
