@@ -376,7 +376,19 @@ def pipeline_figures(f: ResultsFile) -> str:
 
     photo = f.table("stage", "ms", section="One photograph")
     photo_ms = number(photo.cell({"stage": "total (median)"}, "ms"))
-    return (f"256²: {seconds('256', 'meanfield')} per frame with every cue "
+    # The stream's steady state (the video rate bars' measure), where the file has it (a lent GPU's run may
+    # predate it).
+    try:
+        stream = f.table("stream ms per frame", "bar ms", section="A stream")
+    except LookupError:
+        streamed = ""
+    else:
+        def steady(size: str) -> str:
+            row = {"size": f"{size} x {size}"}
+            return (f"{stream.cell(row, 'stream ms per frame')} ms (bar {stream.cell(row, 'bar ms')}: "
+                    f"{'met' if stream.cell(row, 'bar met') == 'yes' else 'not met'})")
+        streamed = f"a stream's steady frame: 256² {steady('256')}, 512² {steady('512')}; single frames: "
+    return (f"{streamed}256²: {seconds('256', 'meanfield')} per frame with every cue "
             f"({frame('256', 'meanfield', 'frames per second')} fps; stereo {stage('stereo')} of it, the "
             f"integrate stage, labelling included, {stage('integrate')}), 512²: "
             f"{seconds('512', 'meanfield')} with mean field, {seconds('512', 'icm')} with ICM; one 481 x 321 "
@@ -662,6 +674,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
      revisions_figures),
     ("revisions_cold", ("the same with empty kernel caches in every process: the first frame pays every build, "
                         "as after a fresh install"), revisions_figures),
+    ("revisions_stream", ("the same for a stream's steady frames (the video rate bars' measure): the 'blocks' "
+                          "sequence streamed with the temporal terms on"), revisions_figures),
     ("distributed", ("`vmcl batch` on a local Dask cluster: items per second for 1 and 2 workers, 1 and 2 "
                      "threads; a model of N nodes"), distributed_figures),
     ("labelling", ("the linear classifier's labels on images it was not fitted to (new noise seed; and each "
