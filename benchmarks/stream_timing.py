@@ -41,9 +41,16 @@ def blocks_sequence(size: int, frames: int) -> tuple[list[np.ndarray], list[np.n
     return [s.left for s in sequence] + [sequence[-1].left_next], [s.right for s in sequence]
 
 
+WARM_UP = 3
+"""Frames of a first, untimed stream: every kernel a stream runs is built, and the buffers its frames use
+are allocated and touched, before anything is timed."""
+
+
 def steady_state(vm: VisionMachine, lefts: Sequence[np.ndarray], rights: Sequence[np.ndarray]) -> SteadyState:
-    """``vm.stream`` over the frames (as many lefts as rights), each Result read and dropped as it comes;
-    the frames but the first and the last."""
+    """``vm.stream`` over the frames (as many lefts as rights, more than WARM_UP), each Result read and dropped
+    as it comes, after a stream of their first WARM_UP frames; the frames but the first and the last."""
+    for _ in vm.stream(lefts[:WARM_UP], rights[:WARM_UP]):
+        pass
     totals, stages = [], []
     for k, result in enumerate(vm.stream(lefts, rights)):
         if 0 < k < len(rights) - 1:
