@@ -438,9 +438,19 @@ __kernel void select_left(__global const ushort *total, __global const uchar *co
     int k_lo = max(0, (int)(x - (W - 1)) - d_min), k_hi = min(D - 1, (int)x - d_min);
     out_of_range[y * W + x] = 0;
     if (k_lo > k_hi) { disparity[y * W + x] = NAN; winner[y * W + x] = d_min - 1; return; }
+    /* 16 disparities a step, those outside [k_lo, k_hi] masked by a sum no real one reaches (8 paths of at
+     * most 8064 each); the first of the smallest, as a scan from k_lo would find it. */
     int best = k_lo;
-    for (int k = k_lo + 1; k <= k_hi; k++)
-        if (s[k] < s[best]) best = k;
+    ushort lowest = 0xffff;
+    for (int k0 = k_lo & ~15; k0 <= k_hi; k0 += 16) {
+        short16 k = convert_short16(LANE_INDEX) + (short16)(short)k0;
+        ushort16 v = select((ushort16)0xffff, vload16(0, s + k0), (k >= (short16)(short)k_lo) & (k <= (short16)(short)k_hi));
+        ushort m = lowest_lane(v);
+        if (m < lowest) {
+            lowest = m;
+            best = k0 + lowest_lane(select((ushort16)16, LANE_INDEX, v == (ushort16)m));
+        }
+    }
     /* A winner pressed against the image's edge (the last disparity whose right pixel is inside, where
      * the range goes on) is where the cost was cut off, not a minimum: the match lies outside the right
      * image, and the pixel is treated as unmatched (half-occluded by the frame). */

@@ -105,6 +105,21 @@ def test_winners_and_checks_match_numpy_oracle(paths, d_min, d_max, lines_per_it
     np.testing.assert_array_equal(found.filled[~occluded], found.disparity[~occluded])
 
 
+def test_winners_over_several_vectors_of_disparities_match_numpy_oracle(machine):
+    """41 disparities (three vectors of 16): the messages and both views' winners, the first of the smallest
+    sum among those whose right pixel is inside, against the oracle."""
+    left, right = _textured_pair(shape=(8, 64), shift=17, seed=6)
+    d_min, d_max, p1, p2 = -3, 37, 7, 40
+    total, cost = semiglobal_sums(left, right, d_min, d_max, p1, p2, DIRECTIONS[4], CENSUS_BITS // 2)
+    want_left, _, want_out = semiglobal_winners(total, d_min, cost, int(POOR_MATCH * CENSUS_BITS))
+    found = match_semiglobal(left, right, d_min=d_min, d_max=d_max, census_threshold=0, p1=p1, p2=p2, edge_gain=0,
+                             ad_weight=0.0, paths=4, subpixel=False, median=False, refine=False, machine=machine)
+    kept = np.isfinite(found.disparity)
+    assert kept.mean() > 0.5
+    np.testing.assert_array_equal(found.disparity[kept], want_left[kept])
+    np.testing.assert_array_equal(found.out_of_range, want_out)
+
+
 def test_without_the_occlusion_geometry_every_pixel_no_right_pixel_points_back_to_is_half_occluded(machine):
     """The same unconfirmed pixels either way; without the geometry, those the rule calls mismatched (a patch
     of the right view inverted, within one surface) are half-occluded again and take the row's background."""
