@@ -130,15 +130,18 @@ __kernel void lab(__global const IN_T *in, __global float *out, __constant float
 #endif
 
 #ifdef NBANK
-/* The bank at one scale: the first and second derivatives along 0, 45, 90 and 135 degrees, then the
- * Laplacian, each scale-normalised (sigma for first, sigma^2 for second derivatives). */
-static void bank_at(__global const float *s, float sigma, long x, long y, long W, long H, float *out)
+/* The bank at one scale for VEC pixels of a row: the first and second derivatives along 0, 45, 90 and 135
+ * degrees, then the Laplacian, each scale-normalised (sigma for first, sigma^2 for second derivatives).
+ * Neighbours past the field's borders are the border's own (clamped). */
+static void bank_chunk(__global const float *s, float sigma, long x0, long y, long W, long H, VT *out)
 {
-    long xm = max(x - 1, 0L), xp = min(x + 1, W - 1), ym = max(y - 1, 0L), yp = min(y + 1, H - 1);
-    float c = AT(s, x, y);
-    float gx = 0.5f * (AT(s, xp, y) - AT(s, xm, y)), gy = 0.5f * (AT(s, x, yp) - AT(s, x, ym));
-    float gxx = AT(s, xp, y) - 2.0f * c + AT(s, xm, y), gyy = AT(s, x, yp) - 2.0f * c + AT(s, x, ym);
-    float gxy = 0.25f * (AT(s, xp, yp) - AT(s, xm, yp) - AT(s, xp, ym) + AT(s, xm, ym));
+    __global const float *row = s + y * W, *up = s + max(y - 1, 0L) * W, *down = s + min(y + 1, H - 1) * W;
+    VT c = clamped_chunk(row, x0, W), left = clamped_chunk(row, x0 - 1, W), right = clamped_chunk(row, x0 + 1, W);
+    VT above = clamped_chunk(up, x0, W), below = clamped_chunk(down, x0, W);
+    VT gx = 0.5f * (right - left), gy = 0.5f * (below - above);
+    VT gxx = right - 2.0f * c + left, gyy = below - 2.0f * c + above;
+    VT gxy = 0.25f * (clamped_chunk(down, x0 + 1, W) - clamped_chunk(down, x0 - 1, W) - clamped_chunk(up, x0 + 1, W)
+                      + clamped_chunk(up, x0 - 1, W));
     const float cosines[4] = {1.0f, M_SQRT1_2_F, 0.0f, -M_SQRT1_2_F}, sines[4] = {0.0f, M_SQRT1_2_F, 1.0f, M_SQRT1_2_F};
     float s2 = sigma * sigma;
     for (int k = 0; k < 4; k++) {
@@ -150,21 +153,27 @@ static void bank_at(__global const float *s, float sigma, long x, long y, long W
 }
 
 /* Responses are compressed by their norm n to log(1 + n / 0.03) (Malik et al. 2001), so the textons
- * describe the shape of the local pattern more than its contrast. out: (H, W, NBANK). */
+ * describe the shape of the local pattern more than its contrast. out: (H, W, NBANK), VEC pixels of a row
+ * per work-item. */
 __kernel void bank(__global const float *fine, __global const float *coarse, __global float *out,
                    float fine_sigma, float coarse_sigma, long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    float r[NBANK];
-    bank_at(fine, fine_sigma, x, y, W, H, r);
-    bank_at(coarse, coarse_sigma, x, y, W, H, r + NBANK / 2);
-    float n = 0.0f;
+    long x0 = get_global_id(0) * VEC, y = get_global_id(1);
+    if (x0 >= W || y >= H) return;
+    VT r[NBANK];
+    bank_chunk(fine, fine_sigma, x0, y, W, H, r);
+    bank_chunk(coarse, coarse_sigma, x0, y, W, H, r + NBANK / 2);
+    VT n = (VT)0.0f;
     for (int j = 0; j < NBANK; j++) n += r[j] * r[j];
     n = sqrt(n);
-    float gain = n > 0.0f ? log1p(n / 0.03f) / n : 0.0f;
-    __global float *dst = out + ((size_t)y * W + x) * NBANK;
-    for (int j = 0; j < NBANK; j++) dst[j] = gain * r[j];
+    VT gain = select((VT)0.0f, log1p(n / 0.03f) / n, n > 0.0f);
+    __global float *dst = out + ((size_t)y * W + x0) * NBANK;
+    long lanes = min((long)VEC, W - x0);
+    for (int j = 0; j < NBANK; j++) {
+        float t[VEC];
+        VSTORE(gain * r[j], t);
+        for (long i = 0; i < lanes; i++) dst[i * NBANK + j] = t[i];
+    }
 }
 
 /* The nearest of the nt texton centres (nt x NBANK) in the compressed response space, VEC pixels of a row

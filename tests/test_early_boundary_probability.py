@@ -37,6 +37,11 @@ def test_filter_bank_on_the_lightness_matches_the_oracle():
     responses = bp.bank_responses(rgb)
     expected = oracles.texton_bank(_lab_oracle(rgb)[0])
     np.testing.assert_allclose(responses, expected, atol=2e-4)
+    # One pixel per work-item (VEC = 1, as on a GPU), forced here (on a CPU the 56 columns are three chunks
+    # of 16 and a partial one).
+    scalar = vmcl.Machine()
+    scalar.vector_width = 1
+    np.testing.assert_allclose(bp.bank_responses(rgb, machine=scalar), expected, atol=2e-4)
 
 
 def _small_scales_model():

@@ -368,8 +368,8 @@ def _bank(machine: Machine, lab: cl_array.Array, defines: dict) -> cl_array.Arra
     height, width = lab.shape[1:]
     fine, coarse = (_smooth(machine, lab, s, defines, count=1) for s in BANK_SIGMAS)
     out = machine.empty((height, width, BANK_SIZE), np.float32)
-    machine.launch(_kernel(machine, "bank", **defines), (width, height),
-                   fine, coarse, out, *map(np.float32, BANK_SIGMAS), np.int64(width), np.int64(height))
+    launch_rows(machine, _kernel(machine, "bank", **defines), width, height,
+                fine, coarse, out, *map(np.float32, BANK_SIGMAS), np.int64(width), np.int64(height))
     return out
 
 
