@@ -97,7 +97,9 @@ def refine_flow(flow: ArrayLike, image: ArrayLike, *, radius: int = REFINE_RADIU
     stride = check_int(stride, "stride", minimum=1, maximum=2**31 - 1)
     # The span is read back (one wait): the bins must cover the flow actually found, which is far narrower
     # than the search's reach.
-    low, high = (float(reduce(data, op, machine=machine).get()) for op in ("min", "max"))
+    # Both reductions are enqueued before either is read: one wait, not two.
+    extremes = [reduce(data, op, machine=machine) for op in ("min", "max")]
+    low, high = (float(extreme.get()) for extreme in extremes)
     if np.isnan(low):  # no pixel has a flow: nothing to refine
         return result(data, host)
     if np.isinf(low) or np.isinf(high):
