@@ -19,21 +19,16 @@
  *                           (several times faster on a CPU's SIMD lanes). The image comes as float planes.
  *
  * Both sum the weights in the same order, voter by voter, so they give the same bins; the weights' exp
- * may differ in its last bit between the scalar and the vector forms.
+ * may differ in its last bit between the scalar and the vector forms. A program holds one of them, the one
+ * its defines name (NBINS or MAX_VOTERS), so a first run compiles only what it uses.
  */
 #include "vmcl.h"
 
-#ifndef NBINS
-#define NBINS 64
-#endif
 #ifndef CHANNELS
 #define CHANNELS 1
 #endif
 #ifndef IN_T
 #define IN_T float
-#endif
-#ifndef MAX_VOTERS
-#define MAX_VOTERS 81
 #endif
 
 /* The field's components, interleaved per pixel (1, or 2 for a flow): each takes its own median, and the
@@ -42,6 +37,7 @@
 #define COMPS 1
 #endif
 
+#ifdef NBINS  /* each program holds the one kernel the host asks for: its defines say which */
 __kernel void weighted_median(__global const float *values, __global const uchar *voters,
                               __global const uchar *where, __global const IN_T *image, __global float *out,
                               long W, long H, int radius, float inv_colour, __global const float *spatial,
@@ -103,7 +99,10 @@ __kernel void weighted_median(__global const float *values, __global const uchar
     }
 }
 
+#endif
+
 /* ------------------------------------------------------------------ VEC pixels per work-item */
+#ifdef MAX_VOTERS
 
 #if VEC == 1
 #define LANE_IDS 0
@@ -226,3 +225,4 @@ __kernel void weighted_median_bisect(__global const float *values, __global cons
 #endif
     }
 }
+#endif
