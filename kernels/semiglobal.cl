@@ -139,8 +139,8 @@ __kernel void tone_votes(__global const ulong *left, __global const ulong *right
     int competitors = 0;
     for (int k0 = 0; k0 < D; k0 += 16) {
         if (k0 + 16 <= D && chunk_inside(x, d_min, k0, W, &first)) {
-            short16 k = convert_short16(LANE_INDEX) + (short16)(short)(k0 - at);
-            short16 competes = abs(k) > (ushort16)1;
+            int16 k = convert_int16(LANE_INDEX) + (k0 - at);
+            short16 competes = convert_short16(abs(k) > (uint16)1);
             if (any(competes & (hamming16(code, right_row, first) < (ushort16)(best + margin)))) return;
             for (int j = 0; j < 16; j++) competitors += abs(k0 + j - at) > 1;
             continue;
@@ -443,8 +443,8 @@ __kernel void select_left(__global const ushort *total, __global const uchar *co
     int best = k_lo;
     ushort lowest = 0xffff;
     for (int k0 = k_lo & ~15; k0 <= k_hi; k0 += 16) {
-        short16 k = convert_short16(LANE_INDEX) + (short16)(short)k0;
-        ushort16 v = select((ushort16)0xffff, vload16(0, s + k0), (k >= (short16)(short)k_lo) & (k <= (short16)(short)k_hi));
+        int16 k = convert_int16(LANE_INDEX) + k0;
+        ushort16 v = select((ushort16)0xffff, vload16(0, s + k0), convert_short16((k >= k_lo) & (k <= k_hi)));
         ushort m = lowest_lane(v);
         if (m < lowest) {
             lowest = m;

@@ -66,8 +66,8 @@ __kernel void predict(__global const float *field, __global const float *informa
         }
     }
     int inside = sx >= 0.0f && sy >= 0.0f && sx <= (float)(W - 1) && sy <= (float)(H - 1);
-    int agrees = tested ? !broken[i]
-                        : inside && fabs(bilinear(grey_before, sx, sy, W, H) - grey_now[i]) <= tolerance;
+    int agrees = inside && (tested ? !broken[i]
+                                   : fabs(bilinear(grey_before, sx, sy, W, H) - grey_now[i]) <= tolerance);
     float w = 0.0f;
     for (int c = 0; c < NCOMP; ++c) prediction[i * NCOMP + c] = NAN;
     if (agrees) {

@@ -18,9 +18,11 @@
  *                           `rounds` halvings), so every step is a vector step over the VEC pixels
  *                           (several times faster on a CPU's SIMD lanes). The image comes as float planes.
  *
- * Both sum the weights in the same order, voter by voter, so they give the same bins; the weights' exp
- * may differ in its last bit between the scalar and the vector forms. A program holds one of them, the one
- * its defines name (NBINS or MAX_VOTERS), so a first run compiles only what it uses.
+ * Both give the median's bin by the same rule; the histogram adds a bin's weights and then the bins in
+ * order, the bisection the weights at or below a bin voter by voter, so a total within rounding of half
+ * can fall on the next bin in one and not the other, and the weights' exp may differ in its last bit
+ * between the scalar and the vector forms. A program holds one of them, the one its defines name (NBINS
+ * or MAX_VOTERS), so a first run compiles only what it uses.
  */
 #include "vmcl.h"
 
@@ -170,8 +172,8 @@ __kernel void weighted_median_bisect(__global const float *values, __global cons
     for (int c = 0; c < CHANNELS; c++) centre[c] = scale * clamped_chunk(planes + (c * H + y) * W, x0, W);
     VIT xs = (VIT)(int)x0 + LANE_IDS;
     int side = 2 * radius + 1, across = 2 * reach + 1;
-    /* Each voter's weight (0 where it does not vote: outside the image, not a voter) and its bin per
-     * component (`bins` where its value is NaN: it never votes). */
+    /* Each position's weight and its bin per component: `bins`, which no sum counts, where it does not vote
+     * (outside the image, not a voter, or its value NaN), as the one-pixel kernel skips it. */
     VFLOAT weight[MAX_VOTERS], value[COMPS][MAX_VOTERS];
     VIT bin[COMPS][MAX_VOTERS];
     int n = 0;
@@ -186,11 +188,13 @@ __kernel void weighted_median_bisect(__global const float *values, __global cons
             }
             VFLOAT w = spatial[(sy * stride + radius) * side + dx + radius] * exp(-sqrt(colour) * inv_colour);
             VIT votes = (xs + dx >= 0) & (xs + dx < (int)W) & (flags_chunk(voters + row * W, x0 + dx, W) != 0.0f);
-            weight[n] = (yy >= 0 && yy < H) ? select((VFLOAT)0.0f, w, votes) : (VFLOAT)0.0f;
+            if (yy < 0 || yy >= H) votes = (VIT)0;
+            weight[n] = select((VFLOAT)0.0f, w, votes);
             for (int k = 0; k < COMPS; k++) {
                 VFLOAT v = component_chunk(values + row * W * COMPS, x0 + dx, W, k);
                 value[k][n] = v;
-                bin[k][n] = select(clamp(TO_VIT(floor((v - low) / step)), 0, bins - 1), (VIT)bins, isnan(v));
+                bin[k][n] = select(clamp(TO_VIT(floor((v - low) / step)), 0, bins - 1), (VIT)bins,
+                                   isnan(v) | (votes == 0));
             }
         }
     }

@@ -140,3 +140,20 @@ def test_bad_input_is_refused_naming_it(kwargs, error, pattern, machine):
     call = {"values": np.zeros((6, 6), np.float32), "image": np.zeros((6, 6), np.float32), "low": 0.0, "high": 4.0}
     with pytest.raises(error, match=pattern):
         weighted_median(**{**call, **kwargs}, machine=machine)
+
+
+@pytest.mark.parametrize("lanes", ["device", 1])
+def test_a_value_that_does_not_vote_does_not_reach_the_result(lanes, machine):
+    """An infinite value at a pixel that is not a voter (and the border's values, which the vector form reads
+    for positions outside the image) weighs nothing: the chosen pixels take their voters' median, never NaN.
+    Also in the one-pixel-per-work-item form a GPU runs (VEC = 1), forced here."""
+    if lanes != "device":
+        machine = Machine()
+        machine.vector_width = lanes
+    values = np.zeros((3, 21), np.float32)
+    values[1, 3] = np.inf
+    voters = np.ones((3, 21), bool)
+    voters[1, 3] = False
+    found = weighted_median(values, np.zeros((3, 21), np.float32), low=0, high=4, voters=voters, radius=1,
+                            machine=machine)
+    np.testing.assert_array_equal(found, 0)  # the infinite pixel itself too: its voters are its neighbours

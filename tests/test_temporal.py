@@ -292,3 +292,28 @@ def test_a_matcher_that_finds_little_is_noted(machine):
         noted = [note for note in result.notes if "rests on little data" in note]
         assert bool(noted) == sparse, result.notes
         assert np.isfinite(result.flow).all()
+
+
+def test_a_field_is_carried_only_between_a_frames_begin_and_end(machine):
+    """vmcl.temporal.Memory: a restoration carried along the flow to the next frame, NaN and weightless where
+    its source lies outside the image (a 6-px shift right: the first 6 columns), the rest the source pixel's
+    value; nothing carried once the frame has ended and before the next begins (its brightness test is gone)."""
+    from vmcl.temporal import Memory
+
+    memory = Memory(machine, tolerance=0.05, memory=4.0, gain=0.5, scene_cut=0.5)
+    height, width, shift = 8, 24, 6
+    frame = machine.to_device(np.full((height, width), 0.5, np.float32))
+    field = np.tile(np.arange(width, dtype=np.float32), (height, 1))
+    memory.begin(frame)
+    memory.remember("stereo", machine.to_device(field), machine.to_device(np.ones((height, width), np.float32)),
+                    True)
+    flow = np.zeros((height, width, 2), np.float32)
+    flow[..., 0] = shift
+    memory.end(machine.to_device(flow))
+    assert memory.carry("stereo") is None  # the frame ended, the next has not begun
+    assert memory.begin(frame)
+    carried = memory.carry("stereo")
+    prediction, weight = carried.prediction.get(), carried.weight.get()
+    assert np.isnan(prediction[:, :shift]).all() and (weight[:, :shift] == 0).all()
+    np.testing.assert_array_equal(prediction[:, shift:], field[:, :-shift])
+    assert (weight[:, shift:] > 0).all()

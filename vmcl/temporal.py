@@ -133,8 +133,9 @@ class Memory:
                  prediction, weight, self.broken, np.int32(tested), np.int64(width), np.int64(height))
 
     def carry(self, cue: str) -> Carried | None:
-        """The cue's previous restoration carried to this frame (None when there is none to carry)."""
-        if cue not in self.fields or self.grey is None or self.previous_grey is None:
+        """The cue's previous restoration carried to this frame (None when there is none to carry, or no frame
+        has begun since the last one ended: the carry rests on the frame's brightness test)."""
+        if cue not in self.fields or self.broken is None or self.grey is None or self.previous_grey is None:
             return None
         if cue not in self.carried:
             field, information, nearest = self.fields[cue]
@@ -175,7 +176,9 @@ class Memory:
         self.next_fields[cue] = (field, information, nearest)
 
     def end(self, flow: cl_array.Array | None) -> None:
-        """Finish the frame: its restorations and restored flow become the past."""
+        """Finish the frame: its restorations and restored flow become the past, and its brightness test
+        ends with it."""
         self.fields, self.next_fields = self.next_fields, {}
         self.flow = flow
+        self.broken = None
 

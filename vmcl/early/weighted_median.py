@@ -47,7 +47,8 @@ MAX_BINS = 1024
 MAX_KEPT_VOTERS = 81
 """Windows of at most this many voters (a reach of 4 steps of ``stride`` each way) are computed with every
 voter kept and the median's bin found by bisection, several pixels per work-item (the pipeline's stereo
-and flow refinements); wider ones with a histogram per pixel. Both give the same bins."""
+and flow refinements); wider ones with a histogram per pixel. Both take the same rule; they can differ only
+where a bin's cumulative weight lies within rounding of half the total."""
 
 _BIN_STEP = 64  # the private histograms are sized in steps of this many bins (one program per size)
 _HALF_RANGE = float(np.finfo(np.float32).max) / 4
