@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from vmcl.cm.reduce import histogram, histogram_to_top, reduce
+from vmcl.cm.reduce import extremes, histogram, histogram_to_top, reduce
 
 
 @pytest.mark.parametrize("shape", [(1,), (7,), (1, 1), (31, 17), (3, 5, 7), (2048, 2048)], ids=str)
@@ -50,6 +50,17 @@ def test_max_and_min_skip_nan_and_give_nan_only_for_nan_alone(shape, machine):
     x.flat[::5] = np.arange(x.size)[::5] - 3.5
     assert float(reduce(x, "max", machine=machine)) == np.nanmax(x)
     assert float(reduce(x, "min", machine=machine)) == np.nanmin(x)
+
+
+@pytest.mark.parametrize("device", [False, True])
+def test_extremes_are_the_minimum_and_maximum(device, machine):
+    """As floats, from a host or a device field (NaN skipped; NaN both for NaN alone)."""
+    x = np.random.default_rng(3).standard_normal((37, 41)).astype(np.float32)
+    x[5, 6] = np.nan
+    field = machine.to_device(x) if device else x
+    assert extremes(field, machine=machine) == (float(np.nanmin(x)), float(np.nanmax(x)))
+    low, high = extremes(np.full(5, np.nan, np.float32), machine=machine)
+    assert np.isnan(low) and np.isnan(high)
 
 
 def test_device_result_stays_on_device(machine):

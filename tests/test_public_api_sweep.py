@@ -102,6 +102,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.cm.news:shift", x=IMG, dx=1, dy=-1, border="zero",
        kinds={"x": _A, "dx": _I, "dy": _I, "border": _C, "machine": _M}),
     _e("vmcl.cm.reduce:reduce", x=IMG, op="sum", kinds={"x": _A, "op": _C, "machine": _M}),
+    _e("vmcl.cm.reduce:extremes", x=IMG, kinds={"x": _A, "machine": _M}),
     _e("vmcl.cm.reduce:histogram", x=IMG, bins=8, range=tup(0.0, 1.0), tile=None,
        kinds={"x": _A, "bins": _I, "range": _T, "tile": _OT, "machine": _M}),
     _e("vmcl.cm.reduce:histogram_to_top", x=arr((16, 16), device=True), bins=8, top=make("device_one"), lo=0.0,

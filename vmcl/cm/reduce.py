@@ -27,7 +27,7 @@ from vmcl.cm.core import (
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["ReduceOp", "histogram", "histogram_to_top", "reduce"]
+__all__ = ["ReduceOp", "extremes", "histogram", "histogram_to_top", "reduce"]
 
 ReduceOp = Literal["sum", "max", "min", "and", "or"]
 _OPS = {"sum": 0, "max": 1, "min": 2, "and": 4, "or": 5}
@@ -89,6 +89,28 @@ def reduce(x: ArrayLike, op: ReduceOp = "sum", *, machine: Machine | None = None
         return out
     value = out.get()[()]
     return np.bool_(value) if op in ("and", "or") else value
+
+
+def extremes(x: ArrayLike, *, machine: Machine | None = None) -> tuple[float, float]:
+    """A field's minimum and maximum, as :func:`reduce` finds them ("min", "max"), read together.
+
+    Both reductions are enqueued before either is read, so a device field costs one wait for the queue, not
+    two (each wait leaves the device idle while the host goes on).
+
+    Parameters
+    ----------
+    x : ndarray or pyopencl.array.Array, as :func:`reduce` takes it
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    (float, float)
+        The minimum and the maximum (NaN both where every element is NaN).
+    """
+    machine = machine_for(machine)
+    found = [reduce(x, op, machine=machine) for op in ("min", "max")]
+    low, high = (float(value.get() if isinstance(value, cl_array.Array) else value) for value in found)
+    return low, high
 
 
 def histogram(x: ArrayLike, bins: int, range: tuple[float, float], *, tile: tuple[int, int] | None = None,

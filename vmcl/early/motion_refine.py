@@ -18,7 +18,7 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm.core import ArrayLike, check_int, check_real, field, machine_for, result
-from vmcl.cm.reduce import reduce
+from vmcl.cm.reduce import extremes
 from vmcl.early.weighted_median import weighted_median
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
@@ -97,9 +97,7 @@ def refine_flow(flow: ArrayLike, image: ArrayLike, *, radius: int = REFINE_RADIU
     stride = check_int(stride, "stride", minimum=1, maximum=2**31 - 1)
     # The span is read back (one wait): the bins must cover the flow actually found, which is far narrower
     # than the search's reach.
-    # Both reductions are enqueued before either is read: one wait, not two.
-    extremes = [reduce(data, op, machine=machine) for op in ("min", "max")]
-    low, high = (float(extreme.get()) for extreme in extremes)
+    low, high = extremes(data, machine=machine)
     if np.isnan(low):  # no pixel has a flow: nothing to refine
         return result(data, host)
     if np.isinf(low) or np.isinf(high):

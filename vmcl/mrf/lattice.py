@@ -83,8 +83,7 @@ class Lattice:
         if start is not None:
             machine.launch(self.kernel("start_from"), self.grid, start, self.f, *self.dims)
         if kind == "constant":
-            low = float(cm_reduce.reduce(self.f, "min", machine=machine).get())
-            high = float(cm_reduce.reduce(self.f, "max", machine=machine).get())
+            low, high = cm_reduce.extremes(self.f, machine=machine)
             levels = resolve_levels(model, low, high)
             self.nlevels = int(levels.size)
             self.levels = machine.to_device(levels)
