@@ -109,6 +109,21 @@ def test_local_saliency_is_its_formula():
     assert kept[10, 5:45].all() and not kept[25:30, 20].any()
 
 
+def test_a_junction_pixel_stays_where_a_kept_curve_touches_it():
+    """A T: the bar is split at the junction into two curves, the junction pixel is a branch pixel of none.
+    Kept with the one curve that passes the threshold, dropped when none does."""
+    drawing = np.zeros((40, 60), bool)
+    drawing[10, 5:45] = True
+    drawing[11:30, 20] = True
+    curves = link_edges(drawing, magnitude=np.where(drawing, 2.0, 0).astype(np.float32))
+    values = local_saliency(curves, length_exponent=0.5, curvature_scale=0.25)
+    longest = float(values.max())  # the bar's right part, 24 px
+    kept = salient_edges(curves, values, longest - 1e-3)
+    assert kept[10, 20] and kept[10, 21:45].all()
+    assert not kept[10, 5:20].any() and not kept[11:30, 20].any()
+    assert not salient_edges(curves, values, longest + 1e-3).any()
+
+
 def test_saliency_strength_is_relative_to_the_median():
     edges = np.zeros((10, 10), bool)
     edges[2, 2:8] = True

@@ -13,6 +13,8 @@ pixel), all from :func:`vmcl.group.curves.link_edges`. A curve linked without a 
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 from vmcl.cm.core import check_real, real_host_array, to_host
@@ -78,9 +80,16 @@ def salient_edges(curves: Curves, saliency: np.ndarray, threshold: float) -> np.
         raise type(error)(str(error).replace("values", "saliency", 1)) from None
     labels = np.asarray(to_host(curves.labels))
     keep = (painted >= threshold) & (labels >= 0)
-    branch = labels == BRANCH
-    if branch.any():
-        from scipy import ndimage
-
-        keep |= branch & ndimage.binary_dilation(keep, structure=np.ones((3, 3), bool))
+    # A branch pixel stays where one of its 8 neighbours is kept: looked up at the branch pixels alone (a
+    # dilation of the whole map costs milliseconds at 512^2 for the few pixels it decides).
+    ys, xs = np.nonzero(labels == BRANCH)
+    if len(ys):
+        height, width = keep.shape
+        touched = np.zeros(len(ys), bool)
+        for dy, dx in itertools.product((-1, 0, 1), repeat=2):
+            if dy or dx:
+                y, x = ys + dy, xs + dx
+                inside = (y >= 0) & (y < height) & (x >= 0) & (x < width)
+                touched[inside] |= keep[y[inside], x[inside]]
+        keep[ys[touched], xs[touched]] = True
     return keep
