@@ -29,6 +29,7 @@
 #define PLANES 1
 #endif
 #define TO_VT(v) VCAT(convert_, VT)(v)
+#define ROW_SEGMENT_REACH 64  /* the widest radius whose border chunks gauss_rows steps as vectors */
 
 /* RGB (or any input type) to float grey, with the host's weights. */
 __kernel void to_grey(__global const IN_T *in, __global float *out, float4 weights, long W, long H)
@@ -69,6 +70,33 @@ __kernel void gauss_rows(__global const IN_T *in, __global float *out, __global 
 #endif
         return;
     }
+#if VEC > 1
+    /* A chunk whose window meets a border: its row segment, the border pixel repeated past the ends, in
+     * private memory, then the same vector steps (a pixel-by-pixel pass here cost more than the inner
+     * chunks of a small image). Radii past ROW_SEGMENT_REACH go pixel by pixel below. */
+    if (r <= ROW_SEGMENT_REACH) {
+        float segment[VEC + 2 * ROW_SEGMENT_REACH];
+        for (int j = 0; j < VEC + 2 * r; j++) segment[j] = (float)row[clamp(x0 + j - r, 0L, W - 1)];
+        VT s0 = (VT)0.0f, s1 = (VT)0.0f;
+        for (int k = 0; k < n; k++) {
+            VT v = VLOAD(segment + k);
+            s0 += taps[k] * v;
+#if PLANES == 2
+            s1 += taps[n + k] * v;
+#endif
+        }
+        float t0[VEC], t1[VEC];
+        VSTORE(s0, t0);
+        VSTORE(s1, t1);
+        for (long x = x0; x < min(x0 + VEC, W); x++) {
+            target[x] = t0[x - x0];
+#if PLANES == 2
+            target[W * H + x] = t1[x - x0];
+#endif
+        }
+        return;
+    }
+#endif
     for (long x = x0; x < min(x0 + VEC, W); x++) {
         float s0 = 0.0f, s1 = 0.0f;
         for (int k = 0; k < n; k++) {
