@@ -78,6 +78,7 @@ inline int chunk_inside(long x, int d_min, int k0, long W, long *first)
     return *first >= 0 && *first + 15 < W;
 }
 
+/* The smallest of 16 lanes. */
 inline ushort lowest_lane(ushort16 v)
 {
     ushort8 a = min(v.lo, v.hi);
@@ -302,7 +303,6 @@ __kernel void noise_response(__global const float *grey, __global float *respons
 #define LANES 16
 #define PAD ((ushort)0x3fff)
 #define CHUNKS (MAX_D / LANES)
-
 
 /* Scanlines per work-item of the message kernel. A step's minimum over the disparities is a chain of
  * dependent operations the next step waits for; the steps of several lines, taken in turn, give the

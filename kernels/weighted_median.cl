@@ -16,7 +16,7 @@
  *                           the voters' weights and bins are kept, and the median's bin is found by
  *                           bisection (the first bin whose weight at or below it reaches half the total,
  *                           `rounds` halvings), so every step is a vector step over the VEC pixels
- *                           (several times faster on a CPU's SIMD lanes). The image comes as float planes.
+ *                           (a CPU's SIMD lanes take them together). The image comes as float planes.
  *
  * Both give the median's bin by the same rule; the histogram adds a bin's weights and then the bins in
  * order, the bisection the weights at or below a bin voter by voter, so a total within rounding of half
