@@ -72,8 +72,8 @@ __kernel void gauss_rows(__global const IN_T *in, __global float *out, __global 
     }
 #if VEC > 1
     /* A chunk whose window meets a border: its row segment, the border pixel repeated past the ends, in
-     * private memory, then the same vector steps (a pixel-by-pixel pass here cost more than the inner
-     * chunks of a small image). Radii past ROW_SEGMENT_REACH go pixel by pixel below. */
+     * private memory, then the same vector steps as the inner chunks (on a small image, such as a coarse
+     * pyramid level, most chunks meet a border). Radii past ROW_SEGMENT_REACH go pixel by pixel below. */
     if (r <= ROW_SEGMENT_REACH) {
         float segment[VEC + 2 * ROW_SEGMENT_REACH];
         for (int j = 0; j < VEC + 2 * r; j++) segment[j] = (float)row[clamp(x0 + j - r, 0L, W - 1)];

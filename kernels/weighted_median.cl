@@ -117,19 +117,17 @@ __kernel void weighted_median(__global const float *values, __global const uchar
 #endif
 
 /* Component k of the pixels row[a .. a + VEC) of a field of COMPS interleaved components, the nearest
- * pixel's value past the row's ends (such voters weigh nothing). */
+ * pixel's value past the row's ends (such voters weigh nothing): vmcl.h's clamped_chunk for one component. */
 inline VFLOAT component_chunk(__global const float *row, long a, long W, int k)
 {
-#if VEC == 1
+#if COMPS == 1
+    return clamped_chunk(row, a, W);
+#elif VEC == 1
     return row[clamp(a, 0L, W - 1) * COMPS + k];
 #else
     if (a >= 0 && a + VEC <= W) {
-#if COMPS == 1
-        return vload16(0, row + a);
-#else
         float16 p = vload16(0, row + 2 * a), q = vload16(0, row + 2 * a + 16);
         return k == 0 ? (float16)(p.even, q.even) : (float16)(p.odd, q.odd);
-#endif
     }
     float t[VEC];
     for (int i = 0; i < VEC; i++) t[i] = row[clamp(a + i, 0L, W - 1) * COMPS + k];

@@ -129,9 +129,9 @@ at least one): left to the device, PoCL put a whole direction's lines in one wor
 thread runs; in groups of 16 lines every core takes a share."""
 CPU_SCANLINES_PER_ITEM = 8
 """Scanlines a work-item of the message kernel steps along in turn on a CPU (LINES in kernels/semiglobal.cl):
-a core waits on each step's minimum over the disparities, and other lines' steps fill the wait (8 filled it
-better than 4 on this project's 2-core PoCL device; 16 hardly more, with twice the private messages). A GPU
-hides the wait with other work-items and wants every line in a work-item of its own."""
+a core waits on each step's minimum over the disparities, and other lines' steps fill the wait (each line
+more holds its own private messages). A GPU hides the wait with other work-items and wants every line in a
+work-item of its own."""
 _LANES = 16  # disparities per vector in the message kernel (LANES in kernels/semiglobal.cl)
 _PRIVATE_STEP = 64  # the private message arrays are sized in steps of this many disparities
 
