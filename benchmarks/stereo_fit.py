@@ -11,7 +11,8 @@ sawtooth and map, never a pair a benchmark reports. A combination's score is the
 the restored disparity's bad-1 rate (on the evaluated pixels), over the rendered pairs and over the real
 ones, which weigh equally so that the many rendered pairs do not decide alone. Four stages, each a grid:
 the matcher's (GRID: the census alone, the weighted median at jumps off), whose best combination gives
-vmcl.early.semiglobal's CENSUS_THRESHOLD, P1, P2, EDGE_GAIN and StereoConfig's feature_matches; then
+vmcl.early.semiglobal's CENSUS_THRESHOLD, P1, P2, EDGE_GAIN, PATHS (the scanline directions, 8 or 4) and
+StereoConfig's feature_matches; then
 the brightness difference's weight, taken with or without the cameras' difference matched, of the grey
 levels or of a colour pair's channels (AD_GRID; the best gives AD_WEIGHT, AD_COLOUR and StereoConfig's
 match_exposure); then, with those, the weighted
@@ -44,7 +45,7 @@ from vmcl.pipeline import Config, VisionMachine
 from vmcl.stereo_evaluation import DEPTH_ONLY
 
 GRID = {"feature_matches": (True, False), "census_threshold": (2.0, 3.0, 4.0), "p1": (32, 48, 64),
-        "p2": (64.0, 96.0, 128.0), "edge_gain": (0.0, 0.1)}
+        "p2": (64.0, 96.0, 128.0), "edge_gain": (0.0, 0.1), "paths": (8, 4)}
 AD_GRID = {"match_exposure": (True, False), "ad_colour": (False, True), "ad_weight": (0.0, 1.0, 2.0, 4.0, 8.0, 16.0)}
 REFINE_GRID = [{"refine": False}] + [{"refine": True, "refine_radius": radius, "refine_colour": colour,
                                       "refine_stride": stride}

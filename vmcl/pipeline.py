@@ -263,12 +263,12 @@ class StereoConfig:
         matches beside edge matches were fitted at 0.2, the earlier default.
     occluded_weight : float
         In [0, 1]: the weight of the semi-global matcher's half-occluded pixels.
-    census_threshold, ad_weight, ad_colour, match_exposure, p1, p2, edge_gain
+    census_threshold, ad_weight, ad_colour, match_exposure, p1, p2, edge_gain, paths
         The semi-global matcher's census margin, the weight of the pixels' brightness difference beside the
         census, whether a colour pair's difference is its channels' mean (else its grey's), whether that
         difference is taken after the cameras' exposure difference, measured on the
-        surest census matches, is taken out, and the smoothness prices, as
-        :func:`vmcl.early.semiglobal.match_semiglobal` takes them.
+        surest census matches, is taken out, the smoothness prices, and the number of scanline directions
+        (8 or 4), as :func:`vmcl.early.semiglobal.match_semiglobal` takes them.
     occlusion_geometry : bool
         The semi-global matcher counts an unconfirmed pixel as half-occluded only where a nearer surface on
         its right can hide it (:func:`vmcl.early.semiglobal.match_semiglobal`'s ``occlusion_geometry``).
@@ -309,6 +309,7 @@ class StereoConfig:
     p1: int = semiglobal.P1
     p2: float = semiglobal.P2
     edge_gain: float = semiglobal.EDGE_GAIN
+    paths: int = semiglobal.PATHS
     occlusion_geometry: bool = semiglobal.OCCLUSION_GEOMETRY
     refine: bool = True
     refine_radius: int = semiglobal.REFINE_RADIUS
@@ -338,6 +339,9 @@ class StereoConfig:
         check_int(self.p1, "stereo.p1", minimum=0, maximum=255)
         check_real(self.p2, "stereo.p2", minimum=self.p1, maximum=8000)
         check_real(self.edge_gain, "stereo.edge_gain", minimum=0)
+        check_int(self.paths, "stereo.paths")
+        if self.paths not in semiglobal.DIRECTIONS:
+            raise InputValueError(f"stereo.paths must be 8 or 4, got {self.paths}")
         check_int(self.refine_radius, "stereo.refine_radius", minimum=1, maximum=2**31 - 1)
         check_real(self.refine_colour, "stereo.refine_colour", above=0)
         check_int(self.refine_stride, "stereo.refine_stride", minimum=1, maximum=2**31 - 1)

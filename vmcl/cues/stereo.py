@@ -178,7 +178,8 @@ def _dense_match(run: RunInputs, span: tuple[int, int]) -> _Dense | None:
         found = match_semiglobal(run.left, run.needed("right"), d_min=span[0], d_max=span[1],
                                  census_threshold=s.census_threshold, ad_weight=s.ad_weight,
                                  ad_colour=s.ad_colour, match_exposure=s.match_exposure, p1=s.p1, p2=s.p2,
-                                 edge_gain=s.edge_gain, occlusion_geometry=s.occlusion_geometry,
+                                 edge_gain=s.edge_gain, paths=s.paths,
+                                 occlusion_geometry=s.occlusion_geometry,
                                  refine=s.refine, refine_radius=s.refine_radius,
                                  refine_colour=s.refine_colour, refine_stride=s.refine_stride, machine=run.machine)
         filled, occluded = on_device(found.filled), on_device(found.occluded)

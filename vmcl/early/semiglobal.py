@@ -56,7 +56,7 @@ from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 __all__ = ["AD_CAP", "AD_COLOUR", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "CPU_SCANLINES_PER_ITEM", "DIRECTIONS",
-           "EDGE_GAIN", "JUMP", "MATCH_EXPOSURE", "OCCLUSION_GEOMETRY", "P1", "P2", "POOR_MATCH",
+           "EDGE_GAIN", "JUMP", "MATCH_EXPOSURE", "OCCLUSION_GEOMETRY", "P1", "P2", "PATHS", "POOR_MATCH",
            "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "TONE_BINS", "TONE_STEPS", "SemiGlobalMatch",
            "match_semiglobal"]
 
@@ -86,6 +86,8 @@ P2 = 64.0
 """Default price of a jump where the brightness does not change, in census bits."""
 EDGE_GAIN = 0.0
 """Default lowering of the jump's price per unit of noise in the brightness change."""
+PATHS = 8
+"""Default number of scanline directions the messages are passed along (:data:`DIRECTIONS`)."""
 
 REFINE_RADIUS = 9
 """Default radius of the weighted median's window at depth jumps, in pixels (its spatial scale too)."""
@@ -172,7 +174,7 @@ class SemiGlobalMatch:
 def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max: int | None = None,
                      census_threshold: float = CENSUS_THRESHOLD, ad_weight: float = AD_WEIGHT,
                      ad_colour: bool = AD_COLOUR, match_exposure: bool = MATCH_EXPOSURE, p1: int = P1, p2: float = P2,
-                     edge_gain: float = EDGE_GAIN, paths: int = 8,
+                     edge_gain: float = EDGE_GAIN, paths: int = PATHS,
                      subpixel: bool = True, tolerance: int = 1, median: bool = True,
                      occlusion_geometry: bool = OCCLUSION_GEOMETRY, refine: bool = True,
                      refine_radius: int = REFINE_RADIUS, refine_colour: float = REFINE_COLOUR,
