@@ -11,7 +11,7 @@ sawtooth and map, never a pair a benchmark reports. A combination's score is the
 the restored disparity's bad-1 rate (on the evaluated pixels), over the rendered pairs and over the real
 ones, which weigh equally so that the many rendered pairs do not decide alone. Four stages, each a grid:
 the matcher's (GRID: the census alone, the weighted median at jumps off), whose best combination gives
-vmcl.early.semiglobal's CENSUS_THRESHOLD, P1, P2, EDGE_GAIN, PATHS (the scanline directions, 8 or 4) and
+vmcl.early.semiglobal's CENSUS_THRESHOLD and EDGE_GAIN (and the P1 and P2 the later stages run with) and
 StereoConfig's feature_matches; then
 the brightness difference's weight, taken with or without the cameras' difference matched, of the grey
 levels or of a colour pair's channels (AD_GRID; the best gives AD_WEIGHT, AD_COLOUR and StereoConfig's
@@ -24,8 +24,12 @@ DENSE_ALPHA and DENSE_BETA), the best depth lines within MRF_TOLERANCE of the be
 of those, the matcher's occlusion geometry on or off (GEOMETRY_GRID; vmcl.early.semiglobal's
 occlusion_geometry, StereoConfig's), chosen by the MRF stage's rule. Stages 1 and 2 run with it off, as
 with the weighted median off the pixels it calls mismatched would keep no value; stages 3 and 4 with it on
-(the default). Writes benchmarks/results/stereo_fit.md, every combination of each stage, best
-first.
+(the default); then, with all of those, the number of scanline directions the messages are passed along
+and the smoothness prices together (PATHS_GRID; vmcl.early.semiglobal's PATHS, P1 and P2): stage 1 runs
+the census alone, whose untextured pixels have no data but what the messages carry in, and the
+brightness difference and the weighted median change what the messages must carry; the fewest
+directions within REFINE_TOLERANCE of the best score, then the best score among them. Writes
+benchmarks/results/stereo_fit.md, every combination of each stage, best first.
 """
 
 from __future__ import annotations
@@ -45,7 +49,7 @@ from vmcl.pipeline import Config, VisionMachine
 from vmcl.stereo_evaluation import DEPTH_ONLY
 
 GRID = {"feature_matches": (True, False), "census_threshold": (2.0, 3.0, 4.0), "p1": (32, 48, 64),
-        "p2": (64.0, 96.0, 128.0), "edge_gain": (0.0, 0.1), "paths": (8, 4)}
+        "p2": (64.0, 96.0, 128.0), "edge_gain": (0.0, 0.1)}
 AD_GRID = {"match_exposure": (True, False), "ad_colour": (False, True), "ad_weight": (0.0, 1.0, 2.0, 4.0, 8.0, 16.0)}
 REFINE_GRID = [{"refine": False}] + [{"refine": True, "refine_radius": radius, "refine_colour": colour,
                                       "refine_stride": stride}
@@ -56,6 +60,9 @@ of the best: the scores of neighbouring settings differ by about this much from 
 (the matcher's rows alternated within 0.0003), so a closer score does not pay for more work."""
 MRF_GRID = {"backfill_weight": (0.2, 1.0), "alpha": (0.25, 1.0, 4.0, 16.0), "beta": (0.25, 0.5, 2.0, 8.0)}
 GEOMETRY_GRID = {"occlusion_geometry": (True, False)}
+PATHS_GRID = {"paths": (8, 4), "p1": (32, 48, 64), "p2": (64.0, 96.0, 128.0)}
+EARLY_PATHS = 8
+"""The scanline directions of stages 1 to 5 (whatever the shipped default, which stage 6 chooses)."""
 MRF_TOLERANCE = 0.001
 """The MRF's setting is, among those whose score is within this of the best (about twice the grid's
 run-to-run noise; the MRF's rows all lay within 0.003 of each other), the one whose lines find the rendered
@@ -114,6 +121,15 @@ def cheapest_refinement(rows: list[tuple]) -> dict:
     return min((values for found, values, _, _ in rows if found <= best + REFINE_TOLERANCE), key=voters_visited)
 
 
+def fewest_paths(rows: list[tuple]) -> dict:
+    """The directions stage's choice: the fewest directions within REFINE_TOLERANCE of the best score (each
+    direction is a pass over the costs), then the best score among those."""
+    best = rows[0][0]
+    near = [row for row in rows if row[0] <= best + REFINE_TOLERANCE]
+    fewest = min(values["paths"] for _, values, _, _ in near)
+    return next(values for _, values, _, _ in near if values["paths"] == fewest)
+
+
 def table(rows: list[tuple], names: list[str]) -> list[str]:
     keys = list(dict.fromkeys(key for _, values, _, _ in rows for key in values))
     lines = ["| score | depth lines F | " + " | ".join(keys) + " | " + " | ".join(names) + " |",
@@ -129,8 +145,8 @@ def main() -> int:
     # The weighted median is what gives the pixels the occlusion geometry calls mismatched a value: off with it.
     unrefined = {"refine": False, "occlusion_geometry": False}
     matcher = stage(machine, rendered, real, GRID, lambda values: {"stereo": {**values, "ad_weight": 0.0,
-                                                                             **unrefined}})
-    census = matcher[0][1]
+                                                                             "paths": EARLY_PATHS, **unrefined}})
+    census = {**matcher[0][1], "paths": EARLY_PATHS}
     data_term = stage(machine, rendered, real, AD_GRID, lambda values: {"stereo": {**census, **values,
                                                                                   **unrefined}})
     chosen = {**census, **data_term[0][1]}
@@ -145,13 +161,16 @@ def main() -> int:
     geometry = stage(machine, rendered, real, GEOMETRY_GRID, lambda values: {
         **fitted, "stereo": {**fitted["stereo"], **values}})
     geometry_choice = best_lines(geometry)
+    settled = {**fitted, "stereo": {**fitted["stereo"], **geometry_choice}}
+    directions = stage(machine, rendered, real, PATHS_GRID, lambda values: {
+        **settled, "stereo": {**settled["stereo"], **values}})
     lines = ["# The stereo cue's defaults, fitted on the training pairs", "",
              (f"Measured {datetime.datetime.now():%Y-%m-%d %H:%M}. The Vision Machine, stereo only, each pair's "
               "range found from the images. Score: the mean of the rendered pairs' mean and the real pairs' "
               "mean of the restored disparity's bad-1. Depth lines F: the stereo MRF's lines against the "
               f"rendered pairs' depth discontinuities (within 1 px; {LINES_LEFT_OUT} left out), their mean. "
-              "Best score first; the first row of stages 1 and 2 gives the defaults, stages 3, 4 and 5 say "
-              "their choice."),
+              "Best score first; the first row of stages 1 and 2 gives the defaults (but P1 and P2, which stage 6 "
+              "chooses again), stages 3 to 6 say their choice."),
              "", ("## Stage 1: the matcher (the census alone, the weighted median at depth jumps and the occlusion "
                   "geometry off)"), "", *table(matcher, names), "",
              f"## Stage 2: the brightness difference beside the census, with {census}", "", *table(data_term, names),
@@ -163,7 +182,10 @@ def main() -> int:
               f"{mrf_choice}."), "", *table(weights, names),
              "", f"## Stage 5: the matcher's occlusion geometry, with {fitted}", "",
              (f"Chosen: as in stage 4, the best depth lines among the settings within {MRF_TOLERANCE} of the best "
-              f"score: {geometry_choice}."), "", *table(geometry, names)]
+              f"score: {geometry_choice}."), "", *table(geometry, names),
+             "", f"## Stage 6: the scanline directions and the smoothness prices, with {settled}", "",
+             (f"Chosen: the fewest directions among the settings within {REFINE_TOLERANCE} of the best score, then "
+              f"the best score among them: {fewest_paths(directions)}."), "", *table(directions, names)]
     out = Path(__file__).resolve().parent / "results" / "stereo_fit.md"
     out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines[:10]))

@@ -307,6 +307,24 @@ def test_backfilled_stereo_data_keeps_sub_pixel_disparities(dense, cues_scene, m
         assert np.mean(data[filled] != np.rint(data[filled])) > 0.8
 
 
+@pytest.mark.parametrize("paths", [8, 4])
+def test_the_number_of_scanline_directions_reaches_the_matcher(paths, cues_scene, machine, monkeypatch):
+    import vmcl.cues.stereo as stereo_cue
+    from vmcl.stereo_evaluation import DEPTH_ONLY
+
+    seen = []
+    matcher = stereo_cue.match_semiglobal
+
+    def spy(*args, **kwargs):
+        seen.append(kwargs["paths"])
+        return matcher(*args, **kwargs)
+
+    monkeypatch.setattr(stereo_cue, "match_semiglobal", spy)
+    config = Config.from_dict({**DEPTH_ONLY, "stereo": {"paths": paths}})
+    VisionMachine(config, machine=machine).run(cues_scene.left, cues_scene.right)
+    assert seen == [paths]
+
+
 def test_flow_epe_below_half_a_pixel(cues_scene, cues_run):
     known = ~cues_scene.occluded_motion & np.isfinite(cues_scene.flow).all(axis=-1)
     scores = metrics.evaluate_flow(cues_run.flow, cues_scene.flow, mask=known)

@@ -561,7 +561,7 @@ TABLE: tuple[Entry, ...] = (
        kinds={"enabled": _B, "threshold": _N, "length_exponent": _N, "curvature_scale": _N, "gap": _N,
               "alignment": _N, "structural_threshold": _N, "iterations": _I, "gap_attenuation": _N}),
     _e("vmcl.pipeline:StereoConfig", d_min=None, d_max=None, max_disparity=0.05, patch=11, backfill_floor=0.9,
-       kinds={"d_min": _I, "d_max": _I, "max_disparity": _N, "patch": _I, "backfill_floor": _N}),
+       paths=8, kinds={"d_min": _I, "d_max": _I, "max_disparity": _N, "patch": _I, "backfill_floor": _N, "paths": _I}),
     _e("vmcl.pipeline:MotionConfig", delta=4, patch=11, levels=None, features="brightness", confidence_floor=0.7,
        kinds={"delta": _I, "patch": _I, "levels": _I, "features": _C, "confidence_floor": _N}),
     _e("vmcl.pipeline:TextureConfig", fine_sigma=1.0, coarse_sigma=4.0, threshold=0.08, radius=24, noise_factor=3.5,

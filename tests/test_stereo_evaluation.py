@@ -301,12 +301,27 @@ def test_depth_machine_beats_sgbm_3way_on_middlebury(name, v2_evaluations):
         assert _bad1(evaluation, "vmcl", region) < _bad1(evaluation, "OpenCV StereoSGBM 3WAY", region), region
 
 
-@pytest.mark.xfail(strict=True, reason="measured nonocc bad-1 3.0 / 1.9 / 10.2% (tsukuba / venus / teddy) against "
-                   "bars of 5 / 2.5 / 10%: tsukuba and venus meet theirs, teddy does not (benchmarks/results/"
-                   "stereo.md; the stereo MRF's weights now chosen for their depth lines among those within 0.001 "
-                   "of the best training score moved teddy from 10.3 to 10.2%)")
 def test_depth_machine_meets_the_issue_s_bars(v2_evaluations):
+    """Measured nonocc bad-1 2.2 / 1.7 / 9.7% (tsukuba / venus / teddy) against bars of 5 / 2.5 / 10%
+    (benchmarks/results/stereo.md; 3.0 / 1.9 / 10.2% before the matcher's 4 directions and its prices
+    were fitted together with the data term, benchmarks/results/stereo_fit.md, stage 6)."""
     assert all(_bad1(v2_evaluations[name], "vmcl", "nonocc") <= bar for name, bar in BARS.items())
+
+
+def _matched_ratio(evaluation, region="nonocc"):
+    """vmcl's bad-1 over SGBM 3WAY's on the pixels SGBM 3WAY gives a value."""
+    row = next(c for c in evaluation.matched if c.region == region and "3WAY" in c.baseline)
+    return row.method_bad / row.baseline_bad
+
+
+@pytest.mark.parametrize("name", [
+    "tsukuba", "teddy",
+    pytest.param("venus", marks=pytest.mark.xfail(strict=True, reason=(
+        "measured 1.21% against SGBM 3WAY's 0.79% on its 139957 matched pixels: 1.53 times, the bar 1.5 "
+        "(benchmarks/results/stereo.md)")))])
+def test_depth_machine_within_1_5_times_sgbm_on_the_pixels_sgbm_matched(name, v2_evaluations):
+    """The issue's bar on the pixels SGBM 3WAY matched (measured nonocc: tsukuba 0.58, teddy 1.23 times)."""
+    assert _matched_ratio(v2_evaluations[name]) <= 1.5
 
 
 def test_a_written_stereo_folder_reads_back(tmp_path):

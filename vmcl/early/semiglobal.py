@@ -80,14 +80,16 @@ AD_COLOUR = False
 """Default: the brightness difference of a colour pair is the grey levels' (True: the mean of its channels')."""
 AD_CAP = 8.0
 """The absolute difference counts up to this many noise standard deviations."""
-P1 = 48
+P1 = 64
 """Default price of a change of one disparity between neighbours, in census bits."""
-P2 = 64.0
+P2 = 96.0
 """Default price of a jump where the brightness does not change, in census bits."""
 EDGE_GAIN = 0.0
 """Default lowering of the jump's price per unit of noise in the brightness change."""
-PATHS = 8
-"""Default number of scanline directions the messages are passed along (:data:`DIRECTIONS`)."""
+PATHS = 4
+"""Default number of scanline directions the messages are passed along (:data:`DIRECTIONS`): with the
+brightness difference in the data, 4 scored better on the training pairs than 8, at half the passes
+(benchmarks/results/stereo_fit.md, stage 6)."""
 
 REFINE_RADIUS = 9
 """Default radius of the weighted median's window at depth jumps, in pixels (its spatial scale too)."""
