@@ -90,8 +90,7 @@ inline ushort lowest_lane(ushort16 v)
 #define LANE_INDEX ((ushort16)(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15))
 
 /* The two cameras' brightness difference, from the pixels whose census match is sure (the census is
- * blind to it), read from the census distances (`cost`, census_costs' volume without the brightness
- * term, S bytes a pixel): each pixel whose best census cost is at most `sure` bits, and whose best cost away from
+ * blind to it): each pixel whose best census cost is at most `sure` bits, and whose best cost away from
  * that disparity and its neighbours is at least `margin` bits worse (at least one such disparity must
  * compete), votes for its match's difference (left - right) in the histogram of the pair's mean
  * brightness bin (TONE_BINS equal bins over the two views' joint span). The mean, not the right
@@ -106,7 +105,7 @@ inline ushort lowest_lane(ushort16 v)
 #define TONE_HIGH fmax(high_left[0], high_right[0])
 #define TONE_STEPS (2 * TONE_REACH + 1)
 #define TONE_STEP (1.0f / 512.0f)
-__kernel void tone_votes(__global const uchar *cost, int S, __global const float *left_grey,
+__kernel void tone_votes(__global const ulong *left, __global const ulong *right, __global const float *left_grey,
                          __global const float *right_grey, __global int *votes, long W, long H, int D, int d_min,
                          int sure, int margin, TONE_SPAN_ARGS)
 {
@@ -114,14 +113,15 @@ __kernel void tone_votes(__global const uchar *cost, int S, __global const float
     if (x >= W || y >= H) return;
     float low = TONE_LOW, span = TONE_HIGH - low;
     if (!(span > 0.0f)) return;
-    __global const uchar *distance = cost + (y * W + x) * S;
+    ulong code = left[y * W + x];
+    __global const ulong *right_row = right + y * W;
     /* The best (the first of the smallest) and then its competitors, 16 disparities at a time where their
      * right pixels all lie on the row, one by one elsewhere. */
     int best = 255, at = -1;
     long first;
     for (int k0 = 0; k0 < D; k0 += 16) {
         if (k0 + 16 <= D && chunk_inside(x, d_min, k0, W, &first)) {
-            ushort16 c = convert_ushort16(vload16(0, distance + k0));
+            ushort16 c = hamming16(code, right_row, first);
             int lowest = lowest_lane(c);
             if (lowest < best) {
                 best = lowest;
@@ -132,7 +132,7 @@ __kernel void tone_votes(__global const uchar *cost, int S, __global const float
         for (int k = k0; k < min(k0 + 16, D); k++) {
             long xr = x - (d_min + k);
             if (xr < 0 || xr >= W) continue;
-            int c = distance[k];
+            int c = popcount(code ^ right_row[xr]);
             if (c < best) { best = c; at = k; }
         }
     }
@@ -142,14 +142,14 @@ __kernel void tone_votes(__global const uchar *cost, int S, __global const float
         if (k0 + 16 <= D && chunk_inside(x, d_min, k0, W, &first)) {
             int16 k = convert_int16(LANE_INDEX) + (k0 - at);
             short16 competes = convert_short16(abs(k) > (uint16)1);
-            if (any(competes & (convert_ushort16(vload16(0, distance + k0)) < (ushort16)(best + margin)))) return;
+            if (any(competes & (hamming16(code, right_row, first) < (ushort16)(best + margin)))) return;
             for (int j = 0; j < 16; j++) competitors += abs(k0 + j - at) > 1;
             continue;
         }
         for (int k = k0; k < min(k0 + 16, D); k++) {
             long xr = x - (d_min + k);
             if (abs(k - at) <= 1 || xr < 0 || xr >= W) continue;
-            if (distance[k] < best + margin) return;
+            if (popcount(code ^ right_row[xr]) < best + margin) return;
             competitors++;
         }
     }
@@ -161,7 +161,7 @@ __kernel void tone_votes(__global const uchar *cost, int S, __global const float
     long xr = x - (d_min + at);
     float shift = 0.0f;
     if (at > 0 && at + 1 < D && xr + 1 < W && xr > 0) {
-        int below = distance[at - 1], above = distance[at + 1];
+        int below = popcount(code ^ right[y * W + xr + 1]), above = popcount(code ^ right[y * W + xr - 1]);
         int rise = max(below, above) - best;
         shift = rise > 0 ? (float)(below - above) / (2.0f * (float)rise) : 0.0f;
     }
@@ -233,35 +233,14 @@ __kernel void apply_tone(__global const float *grey, __global float *out, __glob
     out[i] = v + tone_offset(offset, v + 0.5f * tone_offset(offset, v, low, span), low, span);
 }
 
-/* The brightness term of the 16 disparities k0 .. k0 + 15 at pixel i of row `row` (= y * W), whose right
- * pixels are first + 15 .. first on the row (one reversed vector load): `ad_weight` times the two pixels'
- * absolute brightness difference in units of the noise's standard deviation, capped at `ad_cap` (the
- * pixel's own evidence, which a window straddling a depth edge does not blur; capped so that an outlier,
- * e.g. a specular spot, costs no more than a poor census match). The difference is the mean over the
- * `planes` planes of the levels (grey: one; colour: R, G and B, each n = W * H, which tell apart surfaces
- * of one grey but different hues); unit = 1 / (s planes), s the noise's deviation. */
-inline uint16 brightness16(__global const float *left_levels, __global const float *right_levels, int planes,
-                           size_t i, size_t n, size_t row, long first, float unit, float ad_weight, float ad_cap)
-{
-    float16 sum = 0.0f;
-    for (int c = 0; c < planes; c++)
-        sum += fabs(left_levels[c * n + i] - vload16(0, right_levels + c * n + row + first).sFEDCBA9876543210);
-    return convert_uint16(rint(ad_weight * fmin(sum * unit, ad_cap)));
-}
-
-/* The same for one disparity, whose right pixel is xr on the row. */
-inline uint brightness1(__global const float *left_levels, __global const float *right_levels, int planes,
-                        size_t i, size_t n, size_t row, long xr, float unit, float ad_weight, float ad_cap)
-{
-    float sum = 0.0f;
-    for (int c = 0; c < planes; c++) sum += fabs(left_levels[c * n + i] - right_levels[c * n + row + xr]);
-    return (uint)rint(ad_weight * fmin(sum * unit, ad_cap));
-}
-
-/* C(x, y, d) = Hamming distance between the left code at x and the right code at x - d, plus the
- * brightness term (brightness16; none when `ad_weight` is 0, as tone_votes reads it). Where x - d falls
- * outside the right image, `outside` (what unrelated pixels cost on average: no evidence for or against
- * d). The host keeps the sum within a uchar. */
+/* C(x, y, d) = Hamming distance between the left code at x and the right code at x - d, plus
+ * `ad_weight` times the two pixels' absolute brightness difference in units of the noise's standard
+ * deviation (noise[0]), capped at `ad_cap` (the pixel's own evidence, which a window straddling a depth
+ * edge does not blur; capped so that an outlier, e.g. a specular spot, costs no more than a poor census
+ * match). The difference is the mean over the `planes` planes of the levels (grey: one; colour: R, G and
+ * B, each W * H, which tell apart surfaces of one grey but different hues). Where x - d falls outside the
+ * right image, `outside` (what unrelated pixels cost on average: no evidence for or against d). The host
+ * keeps the sum within a uchar. */
 __kernel void census_costs(__global const ulong *left, __global const ulong *right, __global const float *left_levels,
                            __global const float *right_levels, int planes, __global uchar *cost, long W, long H,
                            int D, int S, int d_min, uchar outside, float ad_weight, float ad_cap,
@@ -269,59 +248,32 @@ __kernel void census_costs(__global const ulong *left, __global const ulong *rig
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
-    size_t i = y * W + x, n = W * H, row = y * W;
+    size_t i = y * W + x, n = W * H;
     ulong code = left[i];
     float unit = 1.0f / (fmax(noise[0], FLT_MIN) * (float)planes);
-    int weighed = ad_weight != 0.0f;
     __global uchar *out = cost + i * S;
     /* 16 disparities at a time where their right pixels all lie on the row: one (reversed) vector load of
      * the right codes and levels, the same operations lane by lane; one by one elsewhere. */
     long first;
     for (int k0 = 0; k0 < D; k0 += 16) {
         if (k0 + 16 <= D && chunk_inside(x, d_min, k0, W, &first)) {
-            uint16 total = convert_uint16(hamming16(code, right + row, first));
-            if (weighed)
-                total += brightness16(left_levels, right_levels, planes, i, n, row, first, unit, ad_weight, ad_cap);
+            float16 sum = 0.0f;
+            for (int c = 0; c < planes; c++)
+                sum += fabs(left_levels[c * n + i]
+                            - vload16(0, right_levels + c * n + y * W + first).sFEDCBA9876543210);
+            float16 difference = fmin(sum * unit, ad_cap);
+            uint16 total = convert_uint16(hamming16(code, right + y * W, first))
+                           + convert_uint16(rint(ad_weight * difference));
             vstore16(convert_uchar16(min(total, (uint16)255u)), 0, out + k0);
             continue;
         }
         for (int k = k0; k < min(k0 + 16, D); k++) {
             long xr = x - (d_min + k);
             if (xr < 0 || xr >= W) { out[k] = outside; continue; }
-            uint total = (uint)popcount(code ^ right[row + xr]);
-            if (weighed)
-                total += brightness1(left_levels, right_levels, planes, i, n, row, xr, unit, ad_weight, ad_cap);
-            out[k] = (uchar)min(255u, total);
-        }
-    }
-}
-
-/* The brightness term added to census_costs' census distances (`cost`, made with `ad_weight` 0), in place,
- * once the levels are known (the right view's moved by the cameras' difference, which tone_votes measures
- * on those distances): the costs census_costs would have made with the term. Pixels whose right pixel is
- * outside the image keep census_costs' `outside`. */
-__kernel void add_brightness(__global uchar *cost, __global const float *left_levels,
-                             __global const float *right_levels, int planes, long W, long H, int D, int S,
-                             int d_min, float ad_weight, float ad_cap, __global const float *noise)
-{
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H) return;
-    size_t i = y * W + x, n = W * H, row = y * W;
-    float unit = 1.0f / (fmax(noise[0], FLT_MIN) * (float)planes);
-    __global uchar *out = cost + i * S;
-    long first;
-    for (int k0 = 0; k0 < D; k0 += 16) {
-        if (k0 + 16 <= D && chunk_inside(x, d_min, k0, W, &first)) {
-            uint16 total = convert_uint16(vload16(0, out + k0))
-                           + brightness16(left_levels, right_levels, planes, i, n, row, first, unit, ad_weight, ad_cap);
-            vstore16(convert_uchar16(min(total, (uint16)255u)), 0, out + k0);
-            continue;
-        }
-        for (int k = k0; k < min(k0 + 16, D); k++) {
-            long xr = x - (d_min + k);
-            if (xr < 0 || xr >= W) continue;
-            out[k] = (uchar)min(255u, (uint)out[k] + brightness1(left_levels, right_levels, planes, i, n, row, xr,
-                                                                 unit, ad_weight, ad_cap));
+            float sum = 0.0f;
+            for (int c = 0; c < planes; c++) sum += fabs(left_levels[c * n + i] - right_levels[c * n + y * W + xr]);
+            float difference = fmin(sum * unit, ad_cap);
+            out[k] = (uchar)min(255u, (uint)popcount(code ^ right[y * W + xr]) + (uint)rint(ad_weight * difference));
         }
     }
 }

@@ -264,44 +264,6 @@ def test_census_costs_match_their_definition(machine):
                 assert found[y, x, k] == want, (y, x, k)
 
 
-def _census_distances(machine, left_codes, right_codes, depth, d_min, outside=31):
-    """census_costs' volume without the brightness term (the census distances), on the device."""
-    height, width = left_codes.shape
-    stride = 16 * -(-depth // 16)
-    costs = machine.empty((height, width, stride), np.uint8)
-    unused = machine.to_device(np.zeros((1, height, width), np.float32))
-    machine.launch(semiglobal._kernel(machine, "census_costs"), (width, height), machine.to_device(left_codes),
-                   machine.to_device(right_codes), unused, unused, np.int32(1), costs, np.int64(width),
-                   np.int64(height), np.int32(depth), np.int32(stride), np.int32(d_min), np.uint8(outside),
-                   np.float32(0), np.float32(8), machine.to_device(np.array([0.05], np.float32)))
-    return costs
-
-
-def test_the_brightness_term_added_later_gives_the_same_costs(machine):
-    """census_costs without the brightness term, then add_brightness (the order that measures the cameras'
-    difference on the census distances between the two), makes census_costs' volume with the term bit for
-    bit; 37 disparities (both forms of each kernel), three planes and a weight that passes 255 somewhere."""
-    rng = np.random.default_rng(13)
-    height, width, depth, d_min, planes = 3, 64, 37, -3, 3
-    left_codes, right_codes = (rng.integers(0, 2**63, (height, width), dtype=np.uint64) for _ in range(2))
-    left_codes[:, ::5] = ~right_codes[:, ::5]  # every bit differs at d = 0 there: the sum passes 255
-    codes = [machine.to_device(c) for c in (left_codes, right_codes)]
-    levels = [machine.to_device(rng.uniform(0, 1, (planes, height, width)).astype(np.float32)) for _ in range(2)]
-    noise, weight, cap, outside = machine.to_device(np.array([0.05], np.float32)), 24.0, 8.0, 77
-    stride = 16 * -(-depth // 16)
-    volume = (np.int64(width), np.int64(height), np.int32(depth), np.int32(stride), np.int32(d_min))
-    kernel = semiglobal._kernel(machine, "census_costs")
-    whole, split = (machine.empty((height, width, stride), np.uint8) for _ in range(2))
-    for out, w in ((whole, weight), (split, 0.0)):
-        machine.launch(kernel, (width, height), *codes, *levels, np.int32(planes), out, *volume, np.uint8(outside),
-                       np.float32(w), np.float32(cap), noise)
-    machine.launch(semiglobal._kernel(machine, "add_brightness"), (width, height), split, *levels, np.int32(planes),
-                   *volume, np.float32(weight), np.float32(cap), noise)
-    want = whole.get()[:, :, :depth]
-    assert (want == 255).any() and (want == outside).any()
-    np.testing.assert_array_equal(split.get()[:, :, :depth], want)
-
-
 def test_exposure_votes_match_their_definition(machine):
     """The exposure histogram's votes, kernel by kernel: a pixel votes when its best census distance (the
     first of the smallest) is sure and every other disparity but its neighbours is at least the margin
@@ -322,9 +284,8 @@ def test_exposure_votes_match_their_definition(machine):
     left_grey, right_grey = (rng.uniform(0.1, 0.9, (height, width)).astype(np.float32) for _ in range(2))
     span = [np.array([v], np.float32) for v in (left_grey.min(), right_grey.min(), left_grey.max(), right_grey.max())]
     votes = machine.full((TONE_BINS, TONE_STEPS), np.int32, 0)
-    census = _census_distances(machine, left_codes, right_codes, depth, d_min)
-    machine.launch(semiglobal._kernel(machine, "tone_votes"), (width, height), census, np.int32(census.shape[2]),
-                   machine.to_device(left_grey), machine.to_device(right_grey), votes,
+    machine.launch(semiglobal._kernel(machine, "tone_votes"), (width, height), machine.to_device(left_codes),
+                   machine.to_device(right_codes), machine.to_device(left_grey), machine.to_device(right_grey), votes,
                    np.int64(width), np.int64(height), np.int32(depth), np.int32(d_min), np.int32(sure),
                    np.int32(margin), *(machine.to_device(v) for v in span))
     want = np.zeros((TONE_BINS, TONE_STEPS), np.int64)

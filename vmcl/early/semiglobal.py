@@ -370,21 +370,15 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], levels: list[cl_ar
     for view, code in zip(views, codes):
         launch_rows(machine, build, width, height, view, code, *dims, np.float32(census_threshold), noise)
     levels = list(levels)
+    if ad_weight > 0 and match_exposure:
+        levels[1] = _exposure_matched(machine, codes, views, levels[1], d_min, depth)
     costs = machine.empty((height, width, stride), np.uint8)
     outside = CENSUS_BITS // 2 + round(ad_weight * AD_CAP / 2)
-    planes = np.int32(levels[0].shape[0])
-    volume = (*dims, np.int32(depth), np.int32(stride), np.int32(d_min))
-    matched = ad_weight > 0 and match_exposure
-    # With the cameras' difference to take out, the census distances come alone first: the difference is
-    # measured on them (their sure matches), and the brightness term is added once the right view is moved.
-    machine.launch(_kernel(machine, "census_costs"), (width, height), *codes, *levels, planes, costs, *volume,
-                   np.uint8(outside), np.float32(0 if matched else ad_weight), np.float32(AD_CAP), noise)
-    del codes
-    if matched:
-        levels[1] = _exposure_matched(machine, costs, views, levels[1], d_min, depth)
-        machine.launch(_kernel(machine, "add_brightness"), (width, height), costs, *levels, planes, *volume,
-                       np.float32(ad_weight), np.float32(AD_CAP), noise)
-    del levels
+    machine.launch(_kernel(machine, "census_costs"), (width, height), *codes, *levels, np.int32(levels[0].shape[0]),
+                   costs, *dims,
+                   np.int32(depth), np.int32(stride), np.int32(d_min), np.uint8(outside), np.float32(ad_weight),
+                   np.float32(AD_CAP), noise)
+    del codes, levels
     sums = machine.empty((height, width, stride), np.uint16)
     per_item = CPU_SCANLINES_PER_ITEM if machine.is_cpu else 1
     aggregate = machine.kernel("semiglobal", "aggregate",
@@ -399,18 +393,18 @@ def _aggregate(machine: Machine, views: list[cl_array.Array], levels: list[cl_ar
     return costs, sums
 
 
-def _exposure_matched(machine: Machine, census: cl_array.Array, views: list[cl_array.Array],
+def _exposure_matched(machine: Machine, codes: list[cl_array.Array], views: list[cl_array.Array],
                       levels: cl_array.Array, d_min: int, depth: int) -> cl_array.Array:
     """The right view's ``levels`` (its grey, or its colour planes) moved by the cameras' difference, per
-    brightness bin, measured on the grey views' sure census matches (kernels/semiglobal.cl tone_votes, which
-    reads the (H, W, S) census distances ``census``); all on the device. Each colour channel takes the grey's move at its own level: one response curve for the
+    brightness bin, measured on the grey views' sure census matches (kernels/semiglobal.cl tone_votes); all
+    on the device. Each colour channel takes the grey's move at its own level: one response curve for the
     three, which the grey's bins measure with three times the votes a channel's would have."""
     height, width = views[1].shape
     dims = (np.int64(width), np.int64(height))
     span = [reduce(view, op, machine=machine) for op in ("min", "max") for view in views]
     votes = machine.full((TONE_BINS, TONE_STEPS), np.int32, 0)
-    machine.launch(_kernel(machine, "tone_votes"), (width, height), census, np.int32(census.shape[2]), *views, votes,
-                   *dims, np.int32(depth), np.int32(d_min), np.int32(_TONE_SURE), np.int32(_TONE_MARGIN), *span)
+    machine.launch(_kernel(machine, "tone_votes"), (width, height), *codes, *views, votes, *dims,
+                   np.int32(depth), np.int32(d_min), np.int32(_TONE_SURE), np.int32(_TONE_MARGIN), *span)
     offset = machine.empty((TONE_BINS,), np.float32)
     machine.launch(_kernel(machine, "tone_offsets"), (1,), votes, offset, np.int32(_TONE_LEAST), *span)
     moved = machine.empty(levels.shape, np.float32)
