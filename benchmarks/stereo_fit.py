@@ -9,7 +9,7 @@ Every combination of the grid below runs the Vision Machine (stereo only, every 
 default) on every training pair of benchmarks/stereo_training.py: the rendered scenes and Middlebury
 sawtooth and map, never a pair a benchmark reports. A combination's score is the mean of two means of
 the restored disparity's bad-1 rate (on the evaluated pixels), over the rendered pairs and over the real
-ones, which weigh equally so that the many rendered pairs do not decide alone. Four stages, each a grid:
+ones, which weigh equally so that the many rendered pairs do not decide alone. Six stages, each a grid:
 the matcher's (GRID: the census alone, the weighted median at jumps off), whose best combination gives
 vmcl.early.semiglobal's CENSUS_THRESHOLD and EDGE_GAIN (and the P1 and P2 the later stages run with) and
 StereoConfig's feature_matches; then

@@ -7,7 +7,7 @@ Hamming distance (Zabih and Woodfill: each pixel described by which neighbours a
 two cameras' different gains and to the outliers a depth edge brings into a window); the smoothness term
 charges ``p1`` for a change of one disparity and ``p2`` for a jump, ``p2`` lowered where the brightness
 changes between the two pixels. The energy is minimised exactly along each scanline by min-sum
-messages (a 1-D dynamic program), along 8 (or 4) directions, and the messages summed
+messages (a 1-D dynamic program), along 4 (or 8) directions, and the messages summed
 (Hirschmueller's semi-global matching): the MRF's minimum approximated in a fixed number of sweeps,
 one work-item per scanline (a few neighbouring ones on a CPU).
 
