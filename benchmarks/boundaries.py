@@ -6,8 +6,8 @@ Run: python benchmarks/boundaries.py [--data ../shared/datasets] [--split test] 
 On the BSDS500 test images in the data folder (10 in ../shared; any BSDS-layout folder with --folder;
 ``--split train --cartoon-only --out benchmarks/results/boundaries_train.md``: the 200 training images the
 soft map's model was fitted to, its fit quality, not a test; about an hour of scoring on a 2-core machine
-with ``--cartoon-only``, which scores the cartoon's two maps and leaves out the Canny sweeps, two thirds of
-the scoring),
+with ``--cartoon-only``, which scores the cartoon's two maps only: the Canny sweeps, made all the same, would
+take two thirds of the scoring),
 every map comes from vmcl.boundary_evaluation, the harness ``vmcl eval edges`` uses: the monocular
 machine's defaults, and the two Canny detectors swept over the same number of
 thresholds. The figures are the BSDS benchmark's (match distance 0.0075 of the diagonal, thinning,
@@ -52,6 +52,7 @@ def main() -> None:
     sets = boundary_maps(images, thresholds=args.thresholds, machine=machine)
     if args.cartoon_only:
         sets = [maps for maps in sets if maps.name.startswith("vmcl cartoon")]
+        assert len(sets) == 2, "boundary_maps' cartoon maps are named 'vmcl cartoon, ...'"
     scores = {maps.name: score_maps(maps, images, workers=args.workers) for maps in sets}
     rows = []
     for maps in sets:

@@ -1,7 +1,7 @@
 """Fit the stereo cue's defaults on the training pairs: the semi-global matcher's census margin and
 smoothness prices, whether the feature matcher still earns its place beside it, the weight of the pixels'
-brightness difference beside the census, the weighted median at depth jumps, then the stereo MRF's
-weights on those matches.
+brightness difference beside the census, the weighted median at depth jumps, the stereo MRF's weights on
+those matches, the matcher's occlusion geometry, then the messages' directions and prices again.
 
 Run: python benchmarks/stereo_fit.py
 
@@ -10,9 +10,10 @@ default) on every training pair of benchmarks/stereo_training.py: the rendered s
 sawtooth and map, never a pair a benchmark reports. A combination's score is the mean of two means of
 the restored disparity's bad-1 rate (on the evaluated pixels), over the rendered pairs and over the real
 ones, which weigh equally so that the many rendered pairs do not decide alone. Six stages, each a grid:
-the matcher's (GRID: the census alone, the weighted median at jumps off), whose best combination gives
-vmcl.early.semiglobal's CENSUS_THRESHOLD and EDGE_GAIN (and the P1 and P2 the later stages run with) and
-StereoConfig's feature_matches; then
+the matcher's (GRID: the census alone, the weighted median at jumps off, messages along EARLY_PATHS = 8
+directions, as stages 2 to 5 pass them), whose best combination gives vmcl.early.semiglobal's
+CENSUS_THRESHOLD and StereoConfig's feature_matches (and the P1, P2 and EDGE_GAIN the later stages run
+with); then
 the brightness difference's weight, taken with or without the cameras' difference matched, of the grey
 levels or of a colour pair's channels (AD_GRID; the best gives AD_WEIGHT, AD_COLOUR and StereoConfig's
 match_exposure); then, with those, the weighted
@@ -25,11 +26,11 @@ of those, the matcher's occlusion geometry on or off (GEOMETRY_GRID; vmcl.early.
 occlusion_geometry, StereoConfig's), chosen by the MRF stage's rule. Stages 1 and 2 run with it off, as
 with the weighted median off the pixels it calls mismatched would keep no value; stages 3 and 4 with it on
 (the default); then, with all of those, the number of scanline directions the messages are passed along
-and the smoothness prices together (PATHS_GRID; vmcl.early.semiglobal's PATHS, P1 and P2): stage 1 runs
-the census alone, whose untextured pixels have no data but what the messages carry in, and the
-brightness difference and the weighted median change what the messages must carry; the fewest
-directions within REFINE_TOLERANCE of the best score, then the best score among them. Writes
-benchmarks/results/stereo_fit.md, every combination of each stage, best first.
+and their prices together (PATHS_GRID, combinations with P2 below P1 left out; vmcl.early.semiglobal's
+PATHS, P1, P2 and EDGE_GAIN): stage 1 runs the census alone, whose untextured pixels have no data but
+what the messages carry in, and the brightness difference and the weighted median change what the
+messages must carry; the fewest directions within REFINE_TOLERANCE of the best score, then the best
+score among them. Writes benchmarks/results/stereo_fit.md, every combination of each stage, best first.
 """
 
 from __future__ import annotations
@@ -56,11 +57,16 @@ REFINE_GRID = [{"refine": False}] + [{"refine": True, "refine_radius": radius, "
                                      for radius in (5, 9, 13) for colour in (0.05, 0.1, 0.2) for stride in (1, 2)]
 REFINE_TOLERANCE = 0.0005
 """The weighted median's setting is the cheapest (fewest voters visited) of those whose score is within this
-of the best: the scores of neighbouring settings differ by about this much from run to run of the grid
-(the matcher's rows alternated within 0.0003), so a closer score does not pay for more work."""
+of the best, and stage 6's the fewest directions: the scores of neighbouring settings differ by about this
+much from run to run of the grid (the matcher's rows alternated within 0.0003), so a closer score does not
+pay for more work."""
 MRF_GRID = {"backfill_weight": (0.2, 1.0), "alpha": (0.25, 1.0, 4.0, 16.0), "beta": (0.25, 0.5, 2.0, 8.0)}
 GEOMETRY_GRID = {"occlusion_geometry": (True, False)}
-PATHS_GRID = {"paths": (8, 4), "p1": (32, 48, 64), "p2": (64.0, 96.0, 128.0)}
+PATHS_GRID = [{"paths": paths, "p1": p1, "p2": p2, "edge_gain": gain}
+              for paths in (8, 4) for p1 in (48, 64, 96, 128, 192) for p2 in (64.0, 96.0, 128.0, 192.0, 256.0)
+              for gain in (0.0, 0.1) if p2 >= p1]
+"""Stage 6's grid. The prices reach well beyond stage 1's (whose P1 of 64 and then 96 were the grid's largest
+on the first two runs of this stage) so that the choice lies inside it."""
 EARLY_PATHS = 8
 """The scanline directions of stages 1 to 5 (whatever the shipped default, which stage 6 chooses)."""
 MRF_TOLERANCE = 0.001
@@ -169,10 +175,10 @@ def main() -> int:
               "range found from the images. Score: the mean of the rendered pairs' mean and the real pairs' "
               "mean of the restored disparity's bad-1. Depth lines F: the stereo MRF's lines against the "
               f"rendered pairs' depth discontinuities (within 1 px; {LINES_LEFT_OUT} left out), their mean. "
-              "Best score first; the first row of stages 1 and 2 gives the defaults (but P1 and P2, which stage 6 "
-              "chooses again), stages 3 to 6 say their choice."),
+              "Best score first; the first row of stages 1 and 2 gives the defaults (but P1, P2 and EDGE_GAIN, "
+              "which stage 6 chooses again), stages 3 to 6 say their choice."),
              "", ("## Stage 1: the matcher (the census alone, the weighted median at depth jumps and the occlusion "
-                  "geometry off)"), "", *table(matcher, names), "",
+                  f"geometry off, {EARLY_PATHS} directions)"), "", *table(matcher, names), "",
              f"## Stage 2: the brightness difference beside the census, with {census}", "", *table(data_term, names),
              "", f"## Stage 3: the weighted median at depth jumps, with {chosen}", "",
              (f"Chosen: the fewest voters per refined pixel among the settings within {REFINE_TOLERANCE} of the best "
@@ -183,7 +189,7 @@ def main() -> int:
              "", f"## Stage 5: the matcher's occlusion geometry, with {fitted}", "",
              (f"Chosen: as in stage 4, the best depth lines among the settings within {MRF_TOLERANCE} of the best "
               f"score: {geometry_choice}."), "", *table(geometry, names),
-             "", f"## Stage 6: the scanline directions and the smoothness prices, with {settled}", "",
+             "", f"## Stage 6: the scanline directions and the messages' prices, with {settled}", "",
              (f"Chosen: the fewest directions among the settings within {REFINE_TOLERANCE} of the best score, then "
               f"the best score among them: {fewest_paths(directions)}."), "", *table(directions, names)]
     out = Path(__file__).resolve().parent / "results" / "stereo_fit.md"

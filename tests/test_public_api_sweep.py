@@ -185,6 +185,7 @@ TABLE: tuple[Entry, ...] = (
        kinds={"left": _A, "right": _A, "machine": _M}),
     _e("vmcl.early.stereo:direction_code", angle=0.5, kinds={"angle": _N}),
     _e("vmcl.early.stereo:check_range", d_min=0, d_max=4, width=16, kinds={"d_min": _I, "d_max": _I, "width": _I}),
+    _e("vmcl.early.semiglobal:check_paths", paths=4, name="paths", kinds={"paths": _I}),
     _e("vmcl.early.semiglobal:match_semiglobal", left=IMG, right=IMG, d_min=0, d_max=4, census_threshold=3.0,
        ad_weight=1.0, ad_colour=False, match_exposure=True, p1=48, p2=64.0, edge_gain=0.0, paths=8, subpixel=True, tolerance=1,
        occlusion_geometry=True, refine=True, refine_radius=2, refine_colour=0.1, refine_stride=1,

@@ -339,9 +339,7 @@ class StereoConfig:
         check_int(self.p1, "stereo.p1", minimum=0, maximum=255)
         check_real(self.p2, "stereo.p2", minimum=self.p1, maximum=8000)
         check_real(self.edge_gain, "stereo.edge_gain", minimum=0)
-        check_int(self.paths, "stereo.paths")
-        if self.paths not in semiglobal.DIRECTIONS:
-            raise InputValueError(f"stereo.paths must be 8 or 4, got {self.paths}")
+        semiglobal.check_paths(self.paths, "stereo.paths")
         check_int(self.refine_radius, "stereo.refine_radius", minimum=1, maximum=2**31 - 1)
         check_real(self.refine_colour, "stereo.refine_colour", above=0)
         check_int(self.refine_stride, "stereo.refine_stride", minimum=1, maximum=2**31 - 1)

@@ -523,9 +523,12 @@ def markdown_tables(evaluations: Sequence[PairEvaluation]) -> list[str]:
         for e in evaluations for s in e.scores])
     comparisons = [(e.scene, c) for e in evaluations for c in e.matched]
     if comparisons:
-        lines += ["", "Bad 1 (%) on the pixels each baseline matched, the baseline's beside the method's:", ""]
-        lines += _table(("scene", "region", "baseline", "matched", "baseline bad 1", "method", "method bad 1"), [
-            (scene, c.region, c.baseline, str(c.matched), _percent(c.baseline_bad), c.method, _percent(c.method_bad))
+        lines += ["", ("Bad 1 (%) on the pixels each baseline matched, the baseline's beside the method's, and the "
+                       "method's over the baseline's:"), ""]
+        lines += _table(("scene", "region", "baseline", "matched", "baseline bad 1", "method", "method bad 1",
+                         "method / baseline"), [
+            (scene, c.region, c.baseline, str(c.matched), _percent(c.baseline_bad), c.method, _percent(c.method_bad),
+             f"{c.method_bad / c.baseline_bad:.2f}" if c.baseline_bad > 0 else "-")
             for scene, c in comparisons])
     notes = [f"- {e.scene}: {note}" for e in evaluations for note in e.notes]
     if notes:

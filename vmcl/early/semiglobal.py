@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pyopencl as cl
@@ -58,7 +59,7 @@ from vmcl.machine import Machine
 __all__ = ["AD_CAP", "AD_COLOUR", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "CPU_SCANLINES_PER_ITEM", "DIRECTIONS",
            "EDGE_GAIN", "JUMP", "MATCH_EXPOSURE", "OCCLUSION_GEOMETRY", "P1", "P2", "PATHS", "POOR_MATCH",
            "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "TONE_BINS", "TONE_STEPS", "SemiGlobalMatch",
-           "match_semiglobal"]
+           "check_paths", "match_semiglobal"]
 
 CENSUS_SIZE = (9, 7)  # width, height of the census window: 62 neighbours in a 64-bit code
 CENSUS_BITS = CENSUS_SIZE[0] * CENSUS_SIZE[1] - 1
@@ -80,15 +81,16 @@ AD_COLOUR = False
 """Default: the brightness difference of a colour pair is the grey levels' (True: the mean of its channels')."""
 AD_CAP = 8.0
 """The absolute difference counts up to this many noise standard deviations."""
-P1 = 64
-"""Default price of a change of one disparity between neighbours, in census bits."""
+P1 = 96
+"""Default price of a change of one disparity between neighbours, in census bits (stage 6 of the fit)."""
 P2 = 96.0
-"""Default price of a jump where the brightness does not change, in census bits."""
+"""Default price of a jump where the brightness does not change, in census bits (stage 6 of the fit: on the
+training pairs a larger jump price than P1 did not pay)."""
 EDGE_GAIN = 0.0
-"""Default lowering of the jump's price per unit of noise in the brightness change."""
+"""Default lowering of the jump's price per unit of noise in the brightness change (stage 6 of the fit)."""
 PATHS = 4
-"""Default number of scanline directions the messages are passed along (:data:`DIRECTIONS`): with the
-brightness difference in the data, 4 scored better on the training pairs than 8, at half the passes
+"""Default number of scanline directions the messages are passed along (:data:`DIRECTIONS`): with every other
+setting fitted, 4 scored better on the training pairs than 8, at half the passes
 (benchmarks/results/stereo_fit.md, stage 6)."""
 
 REFINE_RADIUS = 9
@@ -283,9 +285,7 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     p1 = check_int(p1, "p1", minimum=0, maximum=255)
     p2 = check_real(p2, "p2", minimum=p1, maximum=8000)
     edge_gain = check_real(edge_gain, "edge_gain", minimum=0)
-    paths = check_int(paths, "paths")
-    if paths not in DIRECTIONS:
-        raise InputValueError(f"paths must be 8 or 4, got {paths}")
+    paths = check_paths(paths)
     subpixel = check_bool(subpixel, "subpixel")
     tolerance = check_int(tolerance, "tolerance", minimum=0, maximum=2**31 - 1)
     median = check_bool(median, "median")
@@ -322,6 +322,14 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     return SemiGlobalMatch(disparity.get() if host else disparity, filled.get() if host else filled,
                            mask_result(occluded, host), mask_result(mismatched, host), mask_result(out_of_range, host),
                            d_min=d_min, d_max=d_max)
+
+
+def check_paths(paths: Any, name: str = "paths") -> int:
+    """``paths``, a number of scanline directions :data:`DIRECTIONS` has (8 or 4); the errors name ``name``."""
+    paths = check_int(paths, name)
+    if paths not in DIRECTIONS:
+        raise InputValueError(f"{name} must be 8 or 4, got {paths}")
+    return paths
 
 
 def _kernel(machine: Machine, name: str) -> cl.Kernel:
