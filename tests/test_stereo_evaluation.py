@@ -318,11 +318,11 @@ def _matched_ratio(evaluation, region="nonocc"):
 @pytest.mark.parametrize("name", [
     "tsukuba", "teddy",
     pytest.param("venus", marks=pytest.mark.xfail(strict=True, reason=(
-        "measured 1.62 times SGBM 3WAY's bad-1 on the pixels it matched, the bar 1.5 "
+        "measured 1.66 times SGBM 3WAY's bad-1 on the pixels it matched, the bar 1.5 "
         "(benchmarks/results/stereo.md, the matched-pixels table's last column)")))])
 def test_depth_machine_within_1_5_times_sgbm_on_the_pixels_sgbm_matched(name, v2_evaluations):
     """The issue's bar on the pixels SGBM 3WAY matched (measured nonocc, benchmarks/results/stereo.md:
-    tsukuba 0.66, teddy 1.33 times)."""
+    tsukuba 0.67, teddy 1.33 times)."""
     assert _matched_ratio(v2_evaluations[name]) <= 1.5
 
 
