@@ -13,8 +13,7 @@ ones, which weigh equally so that the many rendered pairs do not decide alone. S
 the matcher's (GRID: the census alone, the weighted median at jumps off, messages along EARLY_PATHS = 8
 directions, as stages 2 to 5 pass them), whose best combination gives vmcl.early.semiglobal's
 CENSUS_THRESHOLD and StereoConfig's feature_matches (and the P1, P2 and EDGE_GAIN the later stages run
-with); then
-the brightness difference's weight, taken with or without the cameras' difference matched, of the grey
+with); then the brightness difference's weight, taken with or without the cameras' difference matched, of the grey
 levels or of a colour pair's channels (AD_GRID; the best gives AD_WEIGHT, AD_COLOUR and StereoConfig's
 match_exposure); then, with those, the weighted
 median's (REFINE_GRID: off, or its radius, colour scale and stride; the cheapest within
@@ -65,8 +64,8 @@ GEOMETRY_GRID = {"occlusion_geometry": (True, False)}
 PATHS_GRID = [{"paths": paths, "p1": p1, "p2": p2, "edge_gain": gain}
               for paths in (8, 4) for p1 in (48, 64, 96, 128, 192) for p2 in (64.0, 96.0, 128.0, 192.0, 256.0)
               for gain in (0.0, 0.1) if p2 >= p1]
-"""Stage 6's grid. The prices reach well beyond stage 1's (whose P1 of 64 and then 96 were the grid's largest
-on the first two runs of this stage) so that the choice lies inside it."""
+"""Stage 6's grid, wider than stage 1's: on this stage's first two runs the chosen P1 (64, then 96) was its
+grid's largest, so the grid was widened until the choice lay inside it."""
 EARLY_PATHS = 8
 """The scanline directions of stages 1 to 5 (whatever the shipped default, which stage 6 chooses)."""
 MRF_TOLERANCE = 0.001
