@@ -13,7 +13,11 @@ gets two votes, which a cutoff set by busier bins leaves out. How many nearest f
 is paired with for indexing (``neighbours``) is chosen with them too (a further tie goes to the fewer):
 two corners of one object can be farther apart than many of the clutter's corners. Then, at the grid's
 choice, the most a solid's view alignment may stretch (``stretch``; the grid runs at 1.3) is chosen the same
-way (a tie goes to the smaller stretch, the less freedom), each with its own threshold.
+way (a tie goes to the smaller stretch, the less freedom), each with its own threshold. Then, at that choice,
+the least share of a view's inner markings (a solid's edges between its faces) that must be supported
+(``min_inner``; the stages before run without it, GRID_MIN_INNER) the same way: a tie goes to the fewer false
+detections per image at its threshold, then to the smaller share. A solid's outline alone is what clutter
+polygons match; its inner edges are what tells it from them.
 benchmarks/recognition.py reports the test scenes (seeds 1000 on) at the chosen setting, the defaults of
 vmcl.recognize.recognize. Writes benchmarks/results/recognition_fit.md.
 
@@ -40,6 +44,8 @@ CANDIDATES = (1024, 4096)  # 16384 was never chosen (the file's earlier runs)
 NEIGHBOURS = (12, 24, 36)
 GRID_STRETCH = 1.3  # the solids' alignment stretch the grid runs at (recognize's default before it was fitted)
 STRETCHES = (1.05, 1.1, 1.15, 1.3, 1.5)
+GRID_MIN_INNER = 0.0  # the stages before the inner markings' run without their test, whatever recognize's default
+MIN_INNERS = (0.0, 0.1, 0.2, 0.3, 0.4)
 THRESHOLDS = tuple(np.arange(0.0, 60.5, 0.5))
 SHOWN = (0.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 50.0)  # the thresholds the chosen tolerance's table lists
 MAX_FALSE = 0.1
@@ -72,6 +78,17 @@ def _rate(row: np.ndarray) -> float:
     return float((row[0] + row[1]) / (row[2] + row[3]))
 
 
+def _choice_rows(fits: dict, chosen: float, scenes: int) -> list[str]:
+    """Table rows of a one-setting stage: each value, its threshold, its rates there and its false detections."""
+    lines = []
+    for value, (r, t) in fits.items():
+        row = r[t]
+        mark = " (chosen)" if value == chosen else ""
+        lines.append(f"| {value:g}{mark} | {THRESHOLDS[t]:g} | {_rate(row):.3f} | {row[0] / row[2]:.3f} | "
+                     f"{row[1] / row[3]:.3f} | {row[4] / scenes:.3f} |")
+    return lines
+
+
 def main() -> int:
     library, learned = example_library()
     solid = {o.name: o.solid for o in OBJECTS}
@@ -82,7 +99,7 @@ def main() -> int:
         for count in CANDIDATES:
             for neighbours in NEIGHBOURS:
                 counted = _tally(library, learned, scenes, solid, tolerance=tolerance, candidates=count,
-                                 neighbours=neighbours, stretch=GRID_STRETCH)
+                                 neighbours=neighbours, stretch=GRID_STRETCH, min_inner=GRID_MIN_INNER)
                 fits[tolerance, count, neighbours] = (counted, _chosen_threshold(counted, len(scenes)))
     best, candidates, neighbours = max(fits, key=lambda key: (round(_rate(fits[key][0][fits[key][1]]), 6), -key[0],
                                                               -key[1], -key[2]))
@@ -90,17 +107,24 @@ def main() -> int:
     stretches = {}
     for stretch in STRETCHES:
         counted = fits[best, candidates, neighbours][0] if stretch == GRID_STRETCH else _tally(
-            library, learned, scenes, solid, stretch=stretch, **chosen)
+            library, learned, scenes, solid, stretch=stretch, min_inner=GRID_MIN_INNER, **chosen)
         stretches[stretch] = (counted, _chosen_threshold(counted, len(scenes)))
     stretch = max(stretches, key=lambda s: (round(_rate(stretches[s][0][stretches[s][1]]), 6), -s))
-    rows, at = stretches[stretch]
+    inners = {}
+    for share in MIN_INNERS:
+        counted = stretches[stretch][0] if share == GRID_MIN_INNER else _tally(
+            library, learned, scenes, solid, stretch=stretch, min_inner=share, **chosen)
+        inners[share] = (counted, _chosen_threshold(counted, len(scenes)))
+    min_inner = max(inners, key=lambda q: (round(_rate(inners[q][0][inners[q][1]]), 6),
+                                           -inners[q][0][inners[q][1]][4], -q))
+    rows, at = inners[min_inner]
     threshold = THRESHOLDS[at]
     # Selection's share: the same scenes with no region's corners paired among themselves.
-    alone = _tally(library, learned, scenes, solid, stretch=stretch, regions=0, **chosen)[at]
+    alone = _tally(library, learned, scenes, solid, stretch=stretch, min_inner=min_inner, regions=0, **chosen)[at]
     seconds = time.perf_counter() - start
     n = len(scenes)
-    lines = [("# Recognition: the support tolerance, the vote's cutoff, the pairing, the alignment stretch and the "
-              "significance threshold, fitted on training scenes"), "",
+    lines = [("# Recognition: the support tolerance, the vote's cutoff, the pairing, the alignment stretch, the inner "
+              "markings' support and the significance threshold, fitted on training scenes"), "",
              (f"`python benchmarks/recognition_fit.py` on {platform.node() or 'this machine'} "
               f"({time.strftime('%Y-%m-%d')}), {n} training scenes (seeds {SEEDS.start}..{SEEDS.stop - 1}), "
               f"{len(library)} models, {seconds:.0f} s."), "",
@@ -120,17 +144,18 @@ def main() -> int:
                    f"neighbours), the solids' alignment stretch (the grid ran at {GRID_STRETCH:g}):"), "",
               "| stretch | min_significance | recognition rate | flat | solid | false detections per image |",
               "|---|---|---|---|---|---|"]
-    for value, (r, t) in stretches.items():
-        row = r[t]
-        mark = " (chosen)" if value == stretch else ""
-        lines.append(f"| {value:g}{mark} | {THRESHOLDS[t]:g} | {_rate(row):.3f} | {row[0] / row[2]:.3f} | "
-                     f"{row[1] / row[3]:.3f} | {row[4] / n:.3f} |")
+    lines += _choice_rows(stretches, stretch, n)
+    lines += ["", (f"At stretch {stretch:g}, the least share of a view's inner markings that must be supported (the "
+                   f"stages above ran at {GRID_MIN_INNER:g}, no test):"), "",
+              "| min_inner | min_significance | recognition rate | flat | solid | false detections per image |",
+              "|---|---|---|---|---|---|"]
+    lines += _choice_rows(inners, min_inner, n)
     lines += ["", (f"Chosen: tolerance = {best:g} px, candidates = {candidates}, neighbours = {neighbours}, "
-                   f"stretch = {stretch:g}, min_significance = {threshold:g} (the highest rate; a tie goes to the "
-                   "smaller tolerance, then to the fewer candidates, then to the fewer neighbours; then the smaller "
-                   "stretch)."), "",
-              (f"The threshold at tolerance {best:g} px, {candidates} candidates, {neighbours} neighbours and "
-               f"stretch {stretch:g}:"), "",
+                   f"stretch = {stretch:g}, min_inner = {min_inner:g}, min_significance = {threshold:g} (the highest "
+                   "rate; a tie goes to the smaller tolerance, then to the fewer candidates, then to the fewer "
+                   "neighbours; then the smaller stretch; then the fewer false detections and the smaller share)."), "",
+              (f"The threshold at tolerance {best:g} px, {candidates} candidates, {neighbours} neighbours, "
+               f"stretch {stretch:g} and min_inner {min_inner:g}:"), "",
               "| min_significance | recognition rate | false detections per image |", "|---|---|---|"]
     for shown in SHOWN:
         row = rows[THRESHOLDS.index(shown)]

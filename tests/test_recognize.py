@@ -4,6 +4,7 @@ identity and pose."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import cv2
@@ -305,15 +306,24 @@ def test_models_round_trip_through_a_library_folder(ell_model, tmp_path):
     tab = load_model(save_model(curved, tmp_path / "lib"))
     assert np.array_equal(tab.views[0].arcs, curved.views[0].arcs)
     assert np.array_equal(tab.views[0].arc_radius, curved.views[0].arc_radius)
+    block = learn("block", [object_view("block", yaw=20.0, shape=(200, 200))[0]])
+    again = load_model(save_model(block, tmp_path / "solids"))
+    assert np.array_equal(again.views[0].outline, block.views[0].outline) and not block.views[0].outline.all()
+    # A file of the second format (no outline) is read with every point the outline's.
+    with np.load(tmp_path / "solids" / "block.vmodel.npz") as data:
+        arrays = {k: data[k] for k in data.files if not k.endswith("_outline")}
+    arrays["meta"] = np.array(str(arrays["meta"]).replace('"version": 3', '"version": 2'))
+    np.savez_compressed(tmp_path / "second.vmodel.npz", **arrays)
+    assert load_model(tmp_path / "second.vmodel.npz").views[0].outline.all()
     # A file of the first format (corners only) is still read, with no arcs.
     with np.load(tmp_path / "lib" / "tab.vmodel.npz") as data:
-        arrays = {k: data[k] for k in data.files if not k.endswith("_arcs")}
-    arrays["meta"] = np.array(str(arrays["meta"]).replace('"version": 2', '"version": 1'))
+        arrays = {k: data[k] for k in data.files if not k.endswith(("_arcs", "_outline"))}
+    arrays["meta"] = np.array(str(arrays["meta"]).replace('"version": 3', '"version": 1'))
     np.savez_compressed(tmp_path / "old.vmodel.npz", **arrays)
     old = load_model(tmp_path / "old.vmodel.npz")
     assert len(old.views[0].arcs) == 0 and np.array_equal(old.views[0].corners, curved.views[0].corners)
     # A later format, and arcs that are not centres with radii, are refused naming the file.
-    for version, arcs in ((3, None), (2, np.array([1.0, 2.0])), (2, np.array([[50.0, 60.0, -4.0]]))):
+    for version, arcs in ((4, None), (2, np.array([1.0, 2.0])), (2, np.array([[50.0, 60.0, -4.0]]))):
         broken = dict(arrays, meta=np.array(str(arrays["meta"]).replace('"version": 1', f'"version": {version}')))
         if arcs is not None:
             broken["v0_arcs"] = arcs
@@ -462,3 +472,36 @@ def test_solids_are_recognised_at_views_between_the_learned_ones():
     # (benchmarks/results/recognition.md measures them on occluded scenes).
     assert np.median(errors) < 3.0 and max(errors) < 6.0
 
+
+
+@pytest.mark.parametrize("name, yaw", [("block", 20.0), ("prism", -20.0), ("frustum", 0.0)])
+def test_a_solid_views_inner_edges_are_told_from_its_outline(name, yaw):
+    """The oracle: a convex solid's outline is the convex hull of its visible corners (the scene's own). On a
+    black background, which every face's shade (at least 0.3 of the albedo) stands out from."""
+    image, placement = object_view(name, yaw=yaw, shape=(200, 200), background=0.0)
+    view = learn(name, [image]).views[0]
+    hull = cv2.convexHull(placement.corners.astype(np.float32))
+    inside = np.array([cv2.pointPolygonTest(hull, (float(x), float(y)), True) for x, y in view.points])
+    assert view.outline[inside < 2].all()  # on the outline (Canny's edge lies within a pixel of it)
+    assert not view.outline[inside > 4].any()  # the edges between faces
+    assert (inside > 4).mean() > 0.05
+    with pytest.raises(InputError, match="outline must hold one bool per boundary point"):
+        dataclasses.replace(view, outline=np.ones(3, bool))
+    assert learn("ell", [object_view("ell", shape=(160, 160))[0]]).views[0].outline.all()
+
+
+def test_a_flat_shape_of_a_solids_outline_is_not_taken_for_the_solid():
+    image, placement = object_view("prism", yaw=0.0, shape=(200, 200))
+    library = Library([learn("prism", [image])])
+    # The prism's outline filled with one grey: a flat polygon, such as clutter holds.
+    flat = np.full(image.shape, 0.2, np.float32)
+    cv2.fillConvexPoly(flat, np.round(cv2.convexHull(placement.corners.astype(np.float32))).astype(np.int32), 0.7)
+    outline_only = recognize(flat, library, min_inner=0.0)
+    assert outline_only and outline_only[0].inner_found < 0.1
+    assert recognize(flat, library, min_inner=0.2) == []
+    solid = recognize(image, library, min_inner=0.2)
+    assert len(solid) == 1 and solid[0].inner_found > 0.8
+    ell = learn("ell", [object_view("ell", shape=(160, 160))[0]])
+    assert np.isnan(recognize(object_view("ell", shape=(160, 160))[0], Library([ell]))[0].inner_found)
+    with pytest.raises(InputError, match="min_inner"):
+        recognize(image, library, min_inner=1.5)

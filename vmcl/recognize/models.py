@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
 
 from vmcl.cm.core import check_bool, check_int, machine_for
@@ -31,7 +32,8 @@ MODEL_SUFFIX = ".vmodel.npz"
 """The suffix of a model file in a library folder."""
 
 _FORMAT = "vmcl-model"
-_VERSION = 2  # 2: views keep their arcs; a version 1 file (corners only) is read with none
+_VERSION = 3  # 2: views keep their arcs; 3: which points are the outline's. Older files: no arcs (1), all outline
+_OUTLINE_REACH = 3.0  # px: a boundary point this near the object's outer border is the outline's
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9 _.+-]{0,63}$")
 _MAX_POINTS = 1500  # boundary points kept per view: enough to verify a pose, few enough to test many
 
@@ -60,6 +62,10 @@ class View:
     arcs : float64 (A, 2)
     arc_radius : float64 (A,)
         Its arcs' circles (:func:`vmcl.recognize.features.arcs_of`): centres and radii.
+    outline : bool (N,)
+        Which boundary points lie on the object's outline (its outer border in the example); the others
+        are its inner markings: a solid's edges between its faces, a flat object's print. A view learned
+        without a closed outline holds every point as the outline's.
     """
 
     corners: np.ndarray
@@ -73,6 +79,14 @@ class View:
     length: float
     arcs: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
     arc_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    outline: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+
+    def __post_init__(self) -> None:
+        if not len(self.outline):  # not given (a file of an older format): every point the outline's
+            object.__setattr__(self, "outline", np.ones(len(self.points), bool))
+        elif np.shape(self.outline) != (len(self.points),):
+            raise InputValueError(f"outline must hold one bool per boundary point ({len(self.points)}), "
+                                  f"got shape {np.shape(self.outline)}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,7 +122,9 @@ def view_of(features: Features, *, mask: np.ndarray | None = None, spacing: int 
     ----------
     features : Features
     mask : bool (H, W) array, optional
-        The object's pixels; features outside it (dilated by 2 px) are left out. Default: every feature.
+        The object's pixels; features outside it (dilated by 2 px) are left out, and its outer border is
+        the object's outline. Default: every feature, and the outline is the outer border of the region
+        the edges enclose (with no closed outline, every point is the outline's).
     spacing : int
         The boundary is thinned to one point per ``spacing`` x ``spacing`` cell (>= 1), and further (a
         coarser grid) where that leaves more than 1500 points.
@@ -148,8 +164,31 @@ def view_of(features: Features, *, mask: np.ndarray | None = None, spacing: int 
     points, tangent = points[kept], tangent[kept]
     centre = points.mean(axis=0)
     radius = float(np.sqrt(((points - centre) ** 2).sum(axis=1).mean()))
+    outline = _on_outline(points, mask if mask is not None else _enclosed(features.edges))
     return View(corners.copy(), bisector.copy(), opening.copy(), points.copy(), tangent.copy(), centre,
-                max(radius, 1.0), features.shape, length, arcs.copy(), arc_radius.copy())
+                max(radius, 1.0), features.shape, length, arcs.copy(), arc_radius.copy(), outline)
+
+
+def _enclosed(edges: np.ndarray) -> np.ndarray:
+    """The region the edges' outermost closed curves enclose (the edges themselves where none closes)."""
+    grown = cv2.dilate(edges.astype(np.uint8), np.ones((3, 3), np.uint8))  # closes one-pixel gaps
+    contours, _ = cv2.findContours(grown, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    region = np.zeros_like(grown)
+    cv2.drawContours(region, contours, -1, 1, thickness=cv2.FILLED)
+    return region.astype(bool)
+
+
+def _on_outline(points: np.ndarray, region: np.ndarray) -> np.ndarray:
+    """Which points lie within _OUTLINE_REACH px of the region's outer border (its holes' borders are inner)."""
+    region = region.astype(np.uint8)
+    contours, _ = cv2.findContours(region, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    border = np.ones_like(region)
+    cv2.drawContours(border, contours, -1, 0, thickness=1)
+    reach = cv2.distanceTransform(border, cv2.DIST_L2, 5)
+    h, w = region.shape
+    x = np.clip(np.round(points[:, 0]).astype(np.int64), 0, w - 1)
+    y = np.clip(np.round(points[:, 1]).astype(np.int64), 0, h - 1)
+    return reach[y, x] <= _OUTLINE_REACH
 
 
 def _dilate(mask: np.ndarray, r: int) -> np.ndarray:
@@ -248,6 +287,7 @@ def save_model(model: Model, folder: str | Path, *, replace: bool = False) -> Pa
                        f"v{i}_points": view.points, f"v{i}_tangent": view.tangent,
                        f"v{i}_centre": view.centre,
                        f"v{i}_arcs": np.column_stack([view.arcs.reshape(-1, 2), view.arc_radius]),
+                       f"v{i}_outline": view.outline,
                        f"v{i}_frame": np.array([view.radius, *view.shape, view.length], np.float64)})
     meta = {"format": _FORMAT, "version": _VERSION, "name": model.name, "views": len(model.views),
             "sources": list(model.sources)}
@@ -276,7 +316,7 @@ def load_model(path: str | Path) -> Model:
             meta = json.loads(str(data["meta"]))
             if meta.get("format") != _FORMAT:
                 raise ValueError("not a model")
-            if type(meta.get("version")) is not int or meta["version"] not in (1, _VERSION):
+            if type(meta.get("version")) is not int or meta["version"] not in range(1, _VERSION + 1):
                 raise InputValueError(f"{path} is a vmcl model of format version {meta.get('version')}; this vmcl "
                                       f"reads versions 1 to {_VERSION}")
             views = []
@@ -286,11 +326,14 @@ def load_model(path: str | Path) -> Model:
                 if (arcs.dtype.kind != "f" or arcs.ndim != 2 or arcs.shape[1] != 3 or not np.isfinite(arcs).all()
                         or (arcs[:, 2] <= 0).any()):
                     raise ValueError(f"view {i}'s arcs are not (A, 3) rows of a centre and a radius > 0")
+                outline = data[f"v{i}_outline"] if meta["version"] >= 3 else np.zeros(0, bool)
+                if outline.dtype != np.bool_:
+                    raise ValueError(f"view {i}'s outline is not a bool array")
                 views.append(View(data[f"v{i}_corners"], data[f"v{i}_bisector"], data[f"v{i}_opening"],
                                   data[f"v{i}_points"], data[f"v{i}_tangent"],
                                   data[f"v{i}_centre"], float(frame[0]),
                                   (int(frame[1]), int(frame[2])), float(frame[3]), arcs[:, :2].copy(),
-                                  arcs[:, 2].copy()))
+                                  arcs[:, 2].copy(), outline))
             return Model(_check_name(meta["name"]), tuple(views), tuple(str(s) for s in meta["sources"]))
     except InputValueError:
         raise
