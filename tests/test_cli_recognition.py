@@ -20,7 +20,8 @@ def _png(path, image):
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     folder = tmp_path_factory.mktemp("recognition")
-    paths = {name: _png(folder / f"{name}.png", object_view(name, shape=(160, 160))[0]) for name in ("ell", "arrow")}
+    paths = {name: _png(folder / f"{name}.png", object_view(name, shape=(160, 160))[0])
+             for name in ("ell", "arrow", "block")}
     scene = recognition_scene((300, 400), seed=6, library=("ell", "arrow"), objects=2, occlusion=(0.0, 0.1), clutter=2)
     paths["scene"] = _png(folder / "scene.png", scene.image)
     paths["fast"] = folder / "fast.toml"
@@ -42,6 +43,14 @@ def test_learn_writes_models_and_run_recognises_them(tmp_path, files, capsys):
     assert "recognised:" in printed and "ell" in printed and "arrow" in printed
     assert (out / "recognition.png").exists()
     assert "Recognition" in (out / "report.html").read_text()
+
+
+def test_learn_says_how_much_of_a_models_boundary_is_inner_markings(tmp_path, files, capsys):
+    assert main(["learn", "ell", str(files["ell"]), "--library", str(tmp_path)]) == 0
+    assert "0% of its boundary inner markings" in capsys.readouterr().out
+    assert main(["learn", "block", str(files["block"]), "--library", str(tmp_path)]) == 0
+    share = 1 - load_model(tmp_path / "block.vmodel.npz").views[0].outline.mean()
+    assert share > 0.05 and f"{share:.0%} of its boundary inner markings" in capsys.readouterr().out
 
 
 def test_learn_refuses_to_replace_a_model_unless_asked(tmp_path, files, capsys):

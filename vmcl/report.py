@@ -353,9 +353,11 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
         sections.append("<h2>Grouping</h2>" + _grouping_table(result.grouping))
     if result.recognition is not None:
         rows = [(d.name, d.view, f"{d.score:.2f}", f"{d.significance:.1f}",
+                 "-" if np.isnan(d.inner_found) else f"{d.inner_found:.2f}",
                  ", ".join(f"({x:.1f}, {y:.1f})" for x, y in d.corners)) for d in result.recognition]
         sections.append("<h2>Recognition</h2>" + (_table(("object", "view", "score", "significance",
-                                                          "corners (x, y)"), rows) if rows else "<p>No object found.</p>"))
+                                                          "inner markings found", "corners (x, y)"), rows)
+                                                  if rows else "<p>No object found.</p>"))
     sections.append("<h2>Fields</h2>" + "".join(figures))
     stage_rows = [(name, f"{ms:.1f}") for name, ms in result.stages.items()] + [("total", f"{result.total_ms:.1f}")]
     sections.append("<h2>Time per stage</h2>" + _table(("stage", "wall ms"), stage_rows))
