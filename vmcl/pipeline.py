@@ -54,6 +54,7 @@ from vmcl.early import (
     semiglobal,
     stereo,
     texture,
+    variational,
 )
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.group import Grouping, group, saliency_strength, structural_saliency
@@ -385,6 +386,11 @@ class MotionConfig:
         search's precision, after the weighted median and before the motion MRF restores it (which keeps
         a stream's temporal terms on the refined flow); 0 steps: none. Defaults fitted on rendered scenes
         (benchmarks/motion_lucas_kanade_fit.py).
+    variational_iterations, variational_alpha
+        The variational refinement (:func:`vmcl.early.variational.variational_refine`: its fixed-point
+        iterations, >= 0, 0 for none, and its smoothness weight, >= 0) after the Lucas-Kanade steps and
+        before the motion MRF: every pixel's flow answers to its own brightness and gradient and to its
+        neighbours' flow at once. Defaults fitted on rendered scenes (benchmarks/motion_variational_fit.py).
     """
 
     enabled: bool = True
@@ -401,6 +407,8 @@ class MotionConfig:
     lucas_kanade_iterations: int = lucas_kanade.ITERATIONS
     lucas_kanade_window: float = lucas_kanade.WINDOW
     lucas_kanade_highpass: float = lucas_kanade.HIGHPASS
+    variational_iterations: int = variational.ITERATIONS
+    variational_alpha: float = variational.ALPHA
 
     def __post_init__(self) -> None:
         _check_field_types("motion", self)
@@ -421,6 +429,8 @@ class MotionConfig:
         if 0 < self.lucas_kanade_highpass <= lucas_kanade.PRESMOOTH:
             raise InputValueError(f"motion.lucas_kanade_highpass must be 0 or exceed {lucas_kanade.PRESMOOTH:g}, got "
                                   f"{self.lucas_kanade_highpass}")
+        check_int(self.variational_iterations, "motion.variational_iterations", minimum=0, maximum=1000)
+        check_real(self.variational_alpha, "motion.variational_alpha", minimum=0, maximum=1e6)
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,9 @@ Seed section "Motion": patchwise correlation over a displacement range (:func:`v
 its weighted median at brightness edges (:func:`vmcl.early.motion_refine.refine_flow`), and the motion MRF
 restores the flow coupled to the brightness edges, each estimate weighed by its match
 score (:func:`vmcl.mrf.score_confidence`). Between the two, Lucas-Kanade steps
-(:func:`vmcl.early.lucas_kanade.lucas_kanade`) carry the flow below the discrete search's precision.
+(:func:`vmcl.early.lucas_kanade.lucas_kanade`) carry the flow below the discrete search's precision, and a
+variational refinement (:func:`vmcl.early.variational.variational_refine`) lets each pixel's flow answer to
+its own brightness and its neighbours' flow at once.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from vmcl.early import motion
 from vmcl.early.lucas_kanade import lucas_kanade
 from vmcl.early.motion_refine import refine_flow
 from vmcl.early.sign_correlation import arcsine_law
+from vmcl.early.variational import variational_refine
 from vmcl.labels import Label
 from vmcl.machine import on_device
 from vmcl.mrf import score_confidence
@@ -58,6 +61,10 @@ class MotionCue(CueModule):
             measured = on_device(lucas_kanade(measured, run.left, run.needed("next"), window=mc.lucas_kanade_window,
                                               iterations=mc.lucas_kanade_iterations,
                                               highpass=mc.lucas_kanade_highpass, machine=run.machine))
+        if mc.variational_iterations:
+            measured = on_device(variational_refine(measured, run.left, run.needed("next"),
+                                                    alpha=mc.variational_alpha,
+                                                    iterations=mc.variational_iterations, machine=run.machine))
         return Measurement(measured, confidence, run.brightness, fields={"raw_flow": flow},
                            notes=(self.limit_note(found.limit_share, motion.reach(mc.delta, levels), levels)
                                   + self.sparse_note(found.found_share, mc.features, mc.patch)))

@@ -23,21 +23,18 @@ stereo vision", IJCAI 1981.
 from __future__ import annotations
 
 import numpy as np
-import pyopencl.array as cl_array
 
 from vmcl.cm.core import (
-    IMAGE_TYPES,
     ArrayLike,
     check_int,
     check_real,
     check_widths,
-    field,
-    finite_float32,
     machine_for,
     result,
 )
 from vmcl.early.filters import separable_gaussian
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.early.flow_frames import check_flow_frames, smoothed_frames
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 __all__ = ["HIGHPASS", "ITERATIONS", "LIMIT", "PRESMOOTH", "RIDGE", "WINDOW", "lucas_kanade"]
@@ -62,8 +59,6 @@ that (flat, or an edge's one direction along it) move little."""
 LIMIT = 1.0
 """The most a step moves either flow component, in pixels: the linearisation holds near the current flow."""
 
-_GAIN = {np.dtype(np.uint8): 1 / 255, np.dtype(np.uint16): 1 / 65535, np.dtype(np.float32): 1.0}
-"""Brightness of each image type to [0, 1] (the units of RIDGE)."""
 _FOOTPRINT = 4 * (2 + 2 + 5 + 5 + 1 + 2)
 """Device bytes per pixel at most: the flow, two smoothed frames, five products and their five sums, a
 Gaussian's plane between its passes, frames uploaded as float32 grey."""
@@ -103,47 +98,25 @@ def lucas_kanade(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, windo
         Naming the argument.
     """
     machine = machine_for(machine)
-    data, host = field(flow, "flow", machine, ndims=(3,), dtypes=(np.float32,))
-    if data.shape[2] != 2:
-        raise InputValueError(f"flow must have two components (H, W, 2), got shape {data.shape}")
+    data, host = check_flow_frames(flow, frame0, frame1, machine)
     window = check_real(window, "window", above=0)
     iterations = check_int(iterations, "iterations", minimum=0, maximum=1000)
     highpass = check_real(highpass, "highpass", minimum=0)
     if 0 < highpass <= PRESMOOTH:
         raise InputValueError(f"highpass must be 0 or exceed the frames' smoothing ({PRESMOOTH:g} px), got {highpass}")
-    for name, frame in (("frame0", frame0), ("frame1", frame1)):
-        if not isinstance(frame, (np.ndarray, cl_array.Array)):
-            raise InputTypeError(f"{name} must be a NumPy array or a device array, got {type(frame).__name__}")
-        if isinstance(frame, cl_array.Array) == host:
-            raise InputTypeError(f"flow and {name} must both be NumPy arrays or both device arrays")
-        if frame.shape[:2] != data.shape[:2]:
-            raise InputValueError(f"flow and {name} must have the same height and width, got flow {data.shape} "
-                                  f"and {name} {frame.shape}")
     height, width = data.shape[:2]
     check_widths({"window": window, "highpass": highpass}, height, width)
     pixels = height * width
     machine.require_memory(f"Lucas-Kanade steps of a {height} x {width} flow", _FOOTPRINT * pixels, 8 * pixels)
-    (f0, type0), (f1, type1) = (_frame(frame, name, highpass, machine) for name, frame in (("frame0", frame0),
-                                                                                         ("frame1", frame1)))
-    if type0 != type1:
-        raise InputValueError(f"frame0 and frame1 must have the same type, got {type0} and {type1}")
+    f0, f1, gain = smoothed_frames(frame0, frame1, (PRESMOOTH, highpass) if highpass else (PRESMOOTH,), machine)
     out = data if host else data.copy()  # the steps work in place on a flow of their own
     dims = (np.int64(width), np.int64(height))
     products = [machine.empty((height, width), np.float32) for _ in range(5)]
     terms = machine.kernel("lucas_kanade", "lk_terms")
     step = machine.kernel("lucas_kanade", "lk_step")
     for _ in range(iterations):
-        machine.launch(terms, (width, height), f0, f1, out, np.float32(_GAIN[type0]), *products, *dims)
+        machine.launch(terms, (width, height), f0, f1, out, np.float32(gain), *products, *dims)
         summed = [separable_gaussian(machine, plane, (window,)) for plane in products]
         machine.launch(step, (width, height), *summed, np.float32(RIDGE), np.float32(LIMIT), out, *dims)
     return result(out, host)
 
-
-def _frame(frame: ArrayLike, name: str, highpass: float, machine: Machine) -> tuple[cl_array.Array, np.dtype]:
-    """A frame's grey image smoothed by PRESMOOTH (less its smoothing by ``highpass`` when that is not 0) on
-    the device, and its type."""
-    data, _ = field(finite_float32(frame, name), name, machine, ndims=(2, 3), dtypes=tuple(IMAGE_TYPES))
-    if data.ndim == 3 and data.shape[2] != 3:
-        raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {data.shape}")
-    sigmas = (PRESMOOTH, highpass) if highpass else (PRESMOOTH,)
-    return separable_gaussian(machine, data, sigmas), data.dtype

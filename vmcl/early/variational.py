@@ -1,0 +1,134 @@
+"""The variational refinement of a dense flow: brightness and gradient constancy against a robust smoothness.
+
+Seed section "Motion" measures the flow by patchwise correlation, assuming it "locally constant in a small
+region surrounding a point"; the Lucas-Kanade steps (:mod:`vmcl.early.lucas_kanade`) refine it window by
+window. This refinement instead lets every pixel's flow answer to its own brightness and to its
+neighbours' flow at once: it minimises
+
+    E(w) = sum_p psi(delta |f1(p + w) - f0(p)|^2) + psi(gamma |grad f1(p + w) - grad f0(p)|^2)
+           + psi(alpha (|grad u|^2 + |grad v|^2)),        psi(s) = sqrt(s + eps^2),
+
+brightness constancy, gradient constancy (which an exposure change between the frames does not break)
+and a smoothness that, being robust, lets the flow jump at motion boundaries (Brox, Bruhn, Papenberg and
+Weickert, ECCV 2004; the refinement DIS ends each level with, Kroeger et al., ECCV 2016). The constancy
+terms are linearised about the incoming flow (frame 1 read once where it points); each fixed-point
+iteration lags the robust weights, which leaves a linear system, relaxed by red-black successive
+over-relaxation: an MRF over continuous values, each pixel a processor updating from its four neighbours,
+as the seed's MRFs are on the Connection Machine. Brightness is counted in grey levels of 255 (the units
+alpha, delta and gamma are given in), the flow in pixels.
+
+The motion cue runs it after the Lucas-Kanade steps and before the motion MRF, whose line process keeps
+the boundaries.
+
+Reference: T. Brox, A. Bruhn, N. Papenberg and J. Weickert, "High accuracy optical flow estimation based on
+a theory for warping", ECCV 2004.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vmcl.cm.core import ArrayLike, check_int, check_real, machine_for, result
+from vmcl.early.flow_frames import check_flow_frames, smoothed_frames
+from vmcl.errors import InputValueError
+from vmcl.machine import Machine
+
+__all__ = ["ALPHA", "DELTA", "EPSILON", "GAMMA", "ITERATIONS", "PRESMOOTH", "RELAXATION", "SWEEPS",
+           "variational_refine"]
+
+# ALPHA is the motion cue's default, fitted on rendered scenes by benchmarks/motion_variational_fit.py (its
+# results file gives every setting tried), never on a sequence a benchmark reports.
+ALPHA = 20.0
+"""Default weight of the smoothness term (grey levels of 255 squared per pixel of flow squared)."""
+DELTA = 5.0
+"""Default weight of brightness constancy."""
+GAMMA = 10.0
+"""Default weight of gradient constancy."""
+ITERATIONS = 0
+"""Default number of fixed-point iterations (each re-weighs the robust terms)."""
+SWEEPS = 5
+"""Default number of over-relaxation sweeps per fixed-point iteration (each a red and a black half-sweep)."""
+# Not fitted: the values DIS's refinement documents (OpenCV's VariationalRefinement), which a relaxation
+# of these few sweeps converges with.
+RELAXATION = 1.6
+"""The over-relaxation factor (1: Gauss-Seidel)."""
+EPSILON = 0.001
+"""psi's smoothing (its square is added under the root): keeps the weights finite where a term vanishes."""
+PRESMOOTH = 1.0
+"""The frames' Gaussian smoothing (pixels) before the derivatives are taken."""
+
+_GREY_LEVELS = 255.0
+_FOOTPRINT = 4 * (2 + 2 + 2 + 8 + 5 + 1 + 1)
+"""Device bytes per pixel at most: the flow, its step, two smoothed frames, eight derivative planes, the
+five of the linear system, the smoothness weights, frames uploaded as float32 grey."""
+
+
+def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, alpha: float = ALPHA,
+                       delta: float = DELTA, gamma: float = GAMMA, iterations: int = ITERATIONS,
+                       sweeps: int = SWEEPS, machine: Machine | None = None) -> ArrayLike:
+    """Refine a dense flow by minimising brightness and gradient constancy against a robust smoothness.
+
+    Parameters
+    ----------
+    flow : float32 (H, W, 2) array or device array
+        (u, v) per pixel: frame0's pixel x is seen at x + (u, v) in frame1. A pixel whose flow is NaN (or
+        infinite) keeps it and links to no neighbour; one whose flow leaves frame1 has no data term and
+        takes its neighbours' flow.
+    frame0, frame1 : (H, W) or (H, W, 3) arrays or device arrays; uint8, uint16 or float in [0, 1]
+        The two frames (RGB is taken as its grey), of one shape and type; NumPy arrays with a NumPy flow,
+        device arrays with a device flow.
+    alpha : float
+        >= 0: the smoothness term's weight (0: each pixel alone, as far as its data allows).
+    delta, gamma : float
+        >= 0, not both 0: the weights of brightness constancy and of gradient constancy.
+    iterations : int
+        >= 0: fixed-point iterations (0 returns the flow as it came).
+    sweeps : int
+        >= 1: red-black over-relaxation sweeps per iteration.
+    machine : vmcl.Machine, optional
+
+    Returns
+    -------
+    float32 (H, W, 2), as the flow came (NumPy or device array): a new array.
+
+    Raises
+    ------
+    InputTypeError, InputValueError
+        Naming the argument.
+    """
+    machine = machine_for(machine)
+    data, host = check_flow_frames(flow, frame0, frame1, machine)
+    alpha = check_real(alpha, "alpha", minimum=0, maximum=1e6)
+    delta = check_real(delta, "delta", minimum=0, maximum=1e6)
+    gamma = check_real(gamma, "gamma", minimum=0, maximum=1e6)
+    if delta == 0 and gamma == 0:
+        raise InputValueError("delta and gamma must not both be 0: the refinement needs a data term")
+    iterations = check_int(iterations, "iterations", minimum=0, maximum=1000)
+    sweeps = check_int(sweeps, "sweeps", minimum=1, maximum=1000)
+    height, width = data.shape[:2]
+    pixels = height * width
+    machine.require_memory(f"the variational refinement of a {height} x {width} flow", _FOOTPRINT * pixels,
+                           8 * pixels)
+    f0, f1, gain = smoothed_frames(frame0, frame1, (PRESMOOTH,), machine)
+    out = data if host else data.copy()  # refined in place on a flow of its own
+    if not iterations:
+        return result(out, host)
+    dims = (np.int64(width), np.int64(height))
+    terms = machine.empty((8, height, width), np.float32)
+    system = machine.empty((5, height, width), np.float32)
+    smooth = machine.empty((height, width), np.float32)
+    step = machine.empty((height, width, 2), np.float32)
+    step.fill(0)
+    machine.launch(machine.kernel("variational", "vr_terms"), (width, height), f0, f1, out,
+                   np.float32(gain * _GREY_LEVELS), terms, *dims)
+    weights = machine.kernel("variational", "vr_weights")
+    relax = machine.kernel("variational", "vr_relax")
+    for _ in range(iterations):
+        machine.launch(weights, (width, height), terms, out, step, np.float32(delta), np.float32(gamma),
+                       np.float32(alpha), np.float32(EPSILON ** 2), system, smooth, *dims)
+        for _ in range(sweeps):
+            for parity in (0, 1):
+                machine.launch(relax, (width, height), out, step, system, smooth, np.float32(RELAXATION),
+                               np.int32(parity), *dims)
+    machine.launch(machine.kernel("variational", "vr_apply"), (width, height), out, step, *dims)
+    return result(out, host)
