@@ -5,6 +5,7 @@ refused naming it."""
 
 import dataclasses
 
+import cv2
 import numpy as np
 import pytest
 from test_early_lucas_kanade import TRUE, rough_start, translated, translation_error
@@ -14,21 +15,22 @@ from vmcl.errors import InputTypeError, InputValueError
 from vmcl.pipeline import ColourConfig, Config, MotionConfig, StereoConfig, TextureConfig, VisionMachine
 
 
+def _psi(s):
+    return np.sqrt(s + EPSILON ** 2)
+
+
 def _energy(flow, frame0, frame1, alpha=ALPHA, delta=DELTA, gamma=GAMMA, margin=4):
     """The functional the refinement lowers, in NumPy (cv2's bilinear warp; central differences; the frames
     in grey levels of 255, as the refinement counts them), over the pixels ``margin`` from the border."""
-    import cv2
-
     f0, f1 = (cv2.GaussianBlur(frame * np.float32(255), (0, 0), 1.0) for frame in (frame0, frame1))
     ys, xs = np.mgrid[0:f0.shape[0], 0:f0.shape[1]].astype(np.float32)
     warped = cv2.remap(f1, xs + flow[..., 0], ys + flow[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     gy0, gx0 = np.gradient(f0)
     gy1, gx1 = np.gradient(warped)
-    psi = lambda s: np.sqrt(s + EPSILON ** 2)  # noqa: E731
-    data = psi(delta * (warped - f0) ** 2) + psi(gamma * ((gx1 - gx0) ** 2 + (gy1 - gy0) ** 2))
+    data = _psi(delta * (warped - f0) ** 2) + _psi(gamma * ((gx1 - gx0) ** 2 + (gy1 - gy0) ** 2))
     du = np.diff(flow, axis=1, append=flow[:, -1:])
     dv = np.diff(flow, axis=0, append=flow[-1:])
-    smooth = psi(alpha * ((du ** 2).sum(-1) + (dv ** 2).sum(-1)))
+    smooth = _psi(alpha * ((du ** 2).sum(-1) + (dv ** 2).sum(-1)))
     inner = (slice(margin, -margin), slice(margin, -margin))
     return float((data + smooth)[inner].sum())
 
