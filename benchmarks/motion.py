@@ -20,6 +20,7 @@ independent runs, all cues, at 256^2 and 512^2, and its flow stages against DIS 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import datetime
 import os
 import platform
@@ -34,8 +35,9 @@ from stream_timing import blocks_sequence, steady_state
 
 import vmcl
 from vmcl.datasets import find_flow_folders, load_flow, read_flow_folder
-from vmcl.early import motion
-from vmcl.flow_evaluation import FlowRow, evaluate_sequence
+from vmcl.early import motion, variational
+from vmcl.flow_evaluation import FlowRow, evaluate_sequence, motion_only
+from vmcl.pipeline import Config, MotionConfig, VisionMachine
 
 RESULTS = Path(__file__).resolve().parent / "results"
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets"
@@ -43,6 +45,9 @@ DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets"
 SPEED = {"delta": 4, "patch": 7}
 FLAT = {"delta": 6, "patch": 15}
 SIGNS = {"delta": 4, "patch": 21, "levels": 2, "features": "sign_log"}
+REFINED = Config(motion=dataclasses.replace(MotionConfig(), variational_iterations=variational.ITERATIONS))
+"""The machine with the variational refinement on, at its fitted setting (off by default: its cost)."""
+WITH_REFINEMENT = ", variational refinement"
 
 
 def farneback(frame0: np.ndarray, frame1: np.ndarray) -> np.ndarray:
@@ -70,6 +75,7 @@ def interleaved(runs: dict, repeat: int, finish) -> dict:
 
 def speed(machine: vmcl.Machine, pair, repeat: int) -> tuple[list[str], dict]:
     f0, f1 = machine.to_device(pair.frame0), machine.to_device(pair.frame1)
+    default, refined = (VisionMachine(motion_only(config), machine=machine) for config in (Config(), REFINED))
     runs = {
         "vmcl running maximum, delta 4, patch 7": lambda: motion.flow(f0, f1, **SPEED, machine=machine),
         "vmcl full table, delta 4, patch 7": lambda: motion.flow(f0, f1, **SPEED, method="table",
@@ -83,6 +89,10 @@ def speed(machine: vmcl.Machine, pair, repeat: int) -> tuple[list[str], dict]:
         "vmcl sign_log, delta 4, patch 21, 2 levels": lambda: motion.flow(f0, f1, **SIGNS, machine=machine),
         "cv2 Farneback": lambda: farneback(pair.frame0, pair.frame1),
         "cv2 DIS MEDIUM": lambda: dis(pair.frame0, pair.frame1),
+        "vmcl machine, motion only (NumPy in, Result out), defaults": lambda: default.run(pair.frame0,
+                                                                                         next=pair.frame1),
+        f"vmcl machine, motion only (NumPy in, Result out){WITH_REFINEMENT}": lambda: refined.run(
+            pair.frame0, next=pair.frame1),
     }
     medians = interleaved(runs, repeat, machine.finish)
     reference = medians["cv2 Farneback"]
@@ -111,8 +121,8 @@ def kernel_breakdown(pair, repeat: int) -> list[str]:
 
 
 MIDDLEBURY = ("Dimetrodon", "Grove2", "Hydrangea", "RubberWhale", "Venus")
-METHODS = ("vmcl two frames", "vmcl sequence", "OpenCV DIS medium", "OpenCV DIS fast", "OpenCV Farneback",
-           "scikit-image TV-L1")
+METHODS = ("vmcl two frames", "vmcl sequence", f"vmcl two frames{WITH_REFINEMENT}", f"vmcl sequence{WITH_REFINEMENT}",
+           "OpenCV DIS medium", "OpenCV DIS fast", "OpenCV Farneback", "scikit-image TV-L1")
 
 
 def quality(root: Path, machine: vmcl.Machine) -> tuple[list[str], dict]:
@@ -121,6 +131,8 @@ def quality(root: Path, machine: vmcl.Machine) -> tuple[list[str], dict]:
     for folder in find_flow_folders(root):
         sequence = read_flow_folder(folder)
         scores[sequence.name] = {row.method: row for row in evaluate_sequence(sequence, machine=machine)}
+        scores[sequence.name].update({row.method + WITH_REFINEMENT: row for row in evaluate_sequence(
+            sequence, config=REFINED, machine=machine, others=False)})
         print(sequence.name, {m: round(r.epe, 3) for m, r in scores[sequence.name].items()}, flush=True)
     methods = [m for m in METHODS if any(m in rows for rows in scores.values())]
     lines = ["| sequence | " + " | ".join(f"{m} EPE" for m in methods) + " |", "|---|" + "---|" * len(methods)]
@@ -135,7 +147,8 @@ def quality(root: Path, machine: vmcl.Machine) -> tuple[list[str], dict]:
                      if row.epe_matched is not None and row.epe_unmatched is not None else "")
             cells.append(f"{row.epe:.3f}{split}")
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
-    means = {m: float(np.mean([scores[n][m].epe for n in MIDDLEBURY])) for m in methods if m != "vmcl sequence"}
+    means = {m: float(np.mean([scores[n][m].epe for n in MIDDLEBURY])) for m in methods
+             if not m.startswith("vmcl sequence")}
     lines.append("| mean of the 5 Middlebury pairs | "
                  + " | ".join(f"{means[m]:.3f}" if m in means else "-" for m in methods) + " |")
     return lines, scores
@@ -228,6 +241,11 @@ def main() -> None:
          "(vmcl.flow_evaluation)."),
         "",
         *quality_lines,
+        "",
+        (f"The columns '{WITH_REFINEMENT[2:]}' run the machine with its variational refinement on "
+         f"(`[motion] variational_iterations = {variational.ITERATIONS}`, alpha {variational.ALPHA:g}: the "
+         "setting benchmarks/motion_variational_fit.py chose on rendered scenes); it is off by default for its "
+         "cost (the speed table's last two rows). The bars below are the defaults'."),
         "",
         (f"Bar (two frames, mean EPE of the 5 Middlebury pairs at most DIS medium's): {two:.3f} against "
          f"{dis_mean:.3f}, {'met' if two <= dis_mean else 'NOT met'}. Bar (no Middlebury pair worse than "

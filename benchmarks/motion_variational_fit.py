@@ -13,7 +13,10 @@ geometric mean of the restored flow's EPE over the scenes, as the Lucas-Kanade s
 docstring says why: a refinement is for sub-pixel precision, and the arithmetic mean is decided by the
 few scenes whose motion lies beyond the matcher's search). The rule: the fewest iterations among the
 settings within TOLERANCE of the best score (each iteration costs eleven passes over the flow), then the
-best score among them; so the refinement ships only if it pays. The arithmetic mean is reported beside it.
+best score among them. The choice is vmcl.early.variational's ALPHA and ITERATIONS (the refinement's own
+defaults); the machine leaves the refinement off by default for its cost (``[motion]
+variational_iterations`` turns it on), which benchmarks/results/motion.md measures. The arithmetic mean is
+reported beside it.
 
 benchmarks/motion.py scores the real sequences with the defaults and chooses nothing.
 """

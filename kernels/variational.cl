@@ -14,8 +14,10 @@
  *               Ixx, Ixy, Iyy, Ixz, Iyz, eight planes, the brightness in the units `gain` carries it to;
  *               zero where the flow is not finite or leaves frame 1 (no data: the smoothness fills in)
  *   vr_weights  the robust weights at the current step: each pixel's 2 x 2 data matrix and right-hand side
- *               (a11, a12, a22, b1, b2) and its smoothness weight (alpha psi' of the flow's gradient)
- *   vr_relax    one half-sweep of the over-relaxation over the pixels of one colour ((x + y) % 2 == parity)
+ *               and its smoothness weight (alpha psi' of the flow's gradient), one float8 per pixel
+ *               (a11, a12, a22, b1, b2, smoothness, unused, unused): one read gives a pixel its system
+ *   vr_relax    one half-sweep of the over-relaxation over the pixels of one colour ((x + y) % 2 == parity),
+ *               one work-item per pixel of that colour
  *   vr_apply    the step added to the flow
  *
  * Layout: frames and planes row-major W x H float; the flow and the step H x W x 2 interleaved (u, v).
@@ -59,8 +61,7 @@ __kernel void vr_terms(__global const float *f0, __global const float *f1, __glo
 }
 
 __kernel void vr_weights(__global const float *terms, __global const float *flow, __global const float *step,
-                         float delta, float gamma, float alpha, float eps2, __global float *system,
-                         __global float *smooth, long W, long H)
+                         float delta, float gamma, float alpha, float eps2, __global float8 *system, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -74,12 +75,7 @@ __kernel void vr_weights(__global const float *terms, __global const float *flow
     /* psi'(s) = 1 / (2 sqrt(s + eps^2)), each term's weight folded in */
     float wd = delta * 0.5f * rsqrt(delta * r * r + eps2);
     float wg = gamma * 0.5f * rsqrt(gamma * (gx * gx + gy * gy) + eps2);
-    system[i] = wd * ix * ix + wg * (ixx * ixx + ixy * ixy);
-    system[n + i] = wd * ix * iy + wg * (ixx * ixy + ixy * iyy);
-    system[2 * n + i] = wd * iy * iy + wg * (ixy * ixy + iyy * iyy);
-    system[3 * n + i] = wd * ix * iz + wg * (ixx * ixz + ixy * iyz);
-    system[4 * n + i] = wd * iy * iz + wg * (ixy * ixz + iyy * iyz);
-    /* the whole flow's gradient (forward differences; none past the border) */
+    /* the whole flow's gradient (forward differences; none past the border, none to a pixel without flow) */
     float u = flow[2 * i] + du, v = flow[2 * i + 1] + dv;
     float s = 0.0f;
     long next[2] = {x + 1 < W ? i + 1 : -1, y + 1 < H ? i + W : -1};
@@ -90,36 +86,39 @@ __kernel void vr_weights(__global const float *terms, __global const float *flow
         if (isfinite(a) && isfinite(b)) s += a * a + b * b;
     }
     /* a pixel without a flow links to none */
-    smooth[i] = isfinite(u) && isfinite(v) ? alpha * 0.5f * rsqrt(alpha * s + eps2) : 0.0f;
+    float smooth = isfinite(u) && isfinite(v) ? alpha * 0.5f * rsqrt(alpha * s + eps2) : 0.0f;
+    system[i] = (float8)(wd * ix * ix + wg * (ixx * ixx + ixy * ixy), wd * ix * iy + wg * (ixx * ixy + ixy * iyy),
+                         wd * iy * iy + wg * (ixy * ixy + iyy * iyy), wd * ix * iz + wg * (ixx * ixz + ixy * iyz),
+                         wd * iy * iz + wg * (ixy * ixz + iyy * iyz), smooth, 0.0f, 0.0f);
 }
 
-__kernel void vr_relax(__global const float *flow, __global float *step, __global const float *system,
-                       __global const float *smooth, float omega, int parity, long W, long H)
+/* Work-item (gx, y) updates the pixel x = 2 gx + ((y + parity) & 1) of its colour on row y. */
+__kernel void vr_relax(__global const float *flow, __global float *step, __global const float8 *system,
+                       float omega, int parity, long W, long H)
 {
-    long x = get_global_id(0), y = get_global_id(1);
-    if (x >= W || y >= H || (int)((x + y) & 1) != parity) return;
-    long i = y * W + x, n = W * H;
+    long y = get_global_id(1), x = 2 * (long)get_global_id(0) + ((y + parity) & 1);
+    if (x >= W || y >= H) return;
+    long i = y * W + x;
     float u = flow[2 * i], v = flow[2 * i + 1];
     if (!(isfinite(u) && isfinite(v))) return;  /* keeps its flow, as it came */
-    float wi = smooth[i];
+    float8 own = system[i];
     float total = 0.0f, su = 0.0f, sv = 0.0f;
-    /* a link's weight is the mean of its two ends' */
+    /* a link's weight is the mean of its two ends' smoothness weights */
     long nb[4] = {x > 0 ? i - 1 : -1, x + 1 < W ? i + 1 : -1, y > 0 ? i - W : -1, y + 1 < H ? i + W : -1};
     for (int k = 0; k < 4; k++) {
         long j = nb[k];
-        if (j < 0 || !(isfinite(flow[2 * j]) && isfinite(flow[2 * j + 1]))) continue;
-        float w = 0.5f * (wi + smooth[j]);
-        if (!(w > 0.0f)) continue;
+        if (j < 0) continue;
+        float fu = flow[2 * j], fv = flow[2 * j + 1];
+        float w = 0.5f * (own.s5 + system[j].s5);
+        if (!(isfinite(fu) && isfinite(fv) && w > 0.0f)) continue;
         total += w;
-        su += w * (flow[2 * j] + step[2 * j] - u);
-        sv += w * (flow[2 * j + 1] + step[2 * j + 1] - v);
+        su += w * (fu + step[2 * j] - u);
+        sv += w * (fv + step[2 * j + 1] - v);
     }
-    float a11 = system[i], a12 = system[n + i], a22 = system[2 * n + i];
-    float b1 = system[3 * n + i], b2 = system[4 * n + i];
     float du = step[2 * i], dv = step[2 * i + 1];
-    float d1 = a11 + total, d2 = a22 + total;
-    if (d1 > 0.0f) du = (1.0f - omega) * du + omega * (su - b1 - a12 * dv) / d1;
-    if (d2 > 0.0f) dv = (1.0f - omega) * dv + omega * (sv - b2 - a12 * du) / d2;
+    float d1 = own.s0 + total, d2 = own.s2 + total;
+    if (d1 > 0.0f) du = (1.0f - omega) * du + omega * (su - own.s3 - own.s1 * dv) / d1;
+    if (d2 > 0.0f) dv = (1.0f - omega) * dv + omega * (sv - own.s4 - own.s1 * du) / d2;
     step[2 * i] = du;
     step[2 * i + 1] = dv;
 }

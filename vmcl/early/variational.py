@@ -17,8 +17,10 @@ over-relaxation: an MRF over continuous values, each pixel a processor updating 
 as the seed's MRFs are on the Connection Machine. Brightness is counted in grey levels of 255 (the units
 alpha, delta and gamma are given in), the flow in pixels.
 
-The motion cue runs it after the Lucas-Kanade steps and before the motion MRF, whose line process keeps
-the boundaries.
+The motion cue can run it after the Lucas-Kanade steps and before the motion MRF, whose line process keeps
+the boundaries (``[motion] variational_iterations``). It is off there by default: at its fitted setting
+(20 iterations, 220 passes over the flow) it takes several times the rest of the motion stage on a CPU
+(benchmarks/results/motion.md gives both, with its gain on the real sequences).
 
 Reference: T. Brox, A. Bruhn, N. Papenberg and J. Weickert, "High accuracy optical flow estimation based on
 a theory for warping", ECCV 2004.
@@ -36,15 +38,15 @@ from vmcl.machine import Machine
 __all__ = ["ALPHA", "DELTA", "EPSILON", "GAMMA", "ITERATIONS", "PRESMOOTH", "RELAXATION", "SWEEPS",
            "variational_refine"]
 
-# ALPHA is the motion cue's default, fitted on rendered scenes by benchmarks/motion_variational_fit.py (its
-# results file gives every setting tried), never on a sequence a benchmark reports.
-ALPHA = 20.0
+# ALPHA and ITERATIONS were fitted on rendered scenes by benchmarks/motion_variational_fit.py (its results
+# file gives every setting tried), never on a sequence a benchmark reports.
+ALPHA = 5120.0
 """Default weight of the smoothness term (grey levels of 255 squared per pixel of flow squared)."""
 DELTA = 5.0
 """Default weight of brightness constancy."""
 GAMMA = 10.0
 """Default weight of gradient constancy."""
-ITERATIONS = 0
+ITERATIONS = 20
 """Default number of fixed-point iterations (each re-weighs the robust terms)."""
 SWEEPS = 5
 """Default number of over-relaxation sweeps per fixed-point iteration (each a red and a black half-sweep)."""
@@ -58,9 +60,9 @@ PRESMOOTH = 1.0
 """The frames' Gaussian smoothing (pixels) before the derivatives are taken."""
 
 _GREY_LEVELS = 255.0
-_FOOTPRINT = 4 * (2 + 2 + 2 + 8 + 5 + 1 + 1)
+_FOOTPRINT = 4 * (2 + 2 + 2 + 8 + 8 + 1)
 """Device bytes per pixel at most: the flow, its step, two smoothed frames, eight derivative planes, the
-five of the linear system, the smoothness weights, frames uploaded as float32 grey."""
+linear system and smoothness weight (eight), frames uploaded as float32 grey."""
 
 
 def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, alpha: float = ALPHA,
@@ -115,8 +117,7 @@ def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *,
         return result(out, host)
     dims = (np.int64(width), np.int64(height))
     terms = machine.empty((8, height, width), np.float32)
-    system = machine.empty((5, height, width), np.float32)
-    smooth = machine.empty((height, width), np.float32)
+    system = machine.empty((height, width, 8), np.float32)
     step = machine.empty((height, width, 2), np.float32)
     step.fill(0)
     machine.launch(machine.kernel("variational", "vr_terms"), (width, height), f0, f1, out,
@@ -125,10 +126,10 @@ def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *,
     relax = machine.kernel("variational", "vr_relax")
     for _ in range(iterations):
         machine.launch(weights, (width, height), terms, out, step, np.float32(delta), np.float32(gamma),
-                       np.float32(alpha), np.float32(EPSILON ** 2), system, smooth, *dims)
+                       np.float32(alpha), np.float32(EPSILON ** 2), system, *dims)
         for _ in range(sweeps):
             for parity in (0, 1):
-                machine.launch(relax, (width, height), out, step, system, smooth, np.float32(RELAXATION),
+                machine.launch(relax, ((width + 1) // 2, height), out, step, system, np.float32(RELAXATION),
                                np.int32(parity), *dims)
     machine.launch(machine.kernel("variational", "vr_apply"), (width, height), out, step, *dims)
     return result(out, host)
