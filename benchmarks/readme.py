@@ -260,7 +260,8 @@ def motion_figures(f: ResultsFile) -> str:
                           f"{epe({'sequence': name}, 'vmcl two frames')}" for name in pairs)
     streaming = f.table("size", "stream / independent")
     return (f"{running}x Farneback's time (module); the defaults' mean EPE on the 5 Middlebury pairs "
-            f"{epe(mean, 'vmcl two frames')} against DIS medium {epe(mean, 'OpenCV DIS medium')}, TV-L1 "
+            f"{epe(mean, 'vmcl two frames')} ({epe(mean, 'vmcl two frames, variational refinement')} with the "
+            f"variational refinement on) against DIS medium {epe(mean, 'OpenCV DIS medium')}, TV-L1 "
             f"{epe(mean, 'scikit-image TV-L1')}, Farneback {epe(mean, 'OpenCV Farneback')}; sequence mode "
             f"against two frames: {sequences}; streaming at 512^2, all cues: "
             f"{streaming.cell({'size': '512 x 512'}, 'stream / independent')}x the time of independent frames")
@@ -289,6 +290,16 @@ def motion_lucas_kanade_fit_figures(f: ResultsFile) -> str:
     steps, score, mean, score_without, mean_without = chosen.groups()
     return (f"chosen on rendered scenes: {steps}; geometric mean EPE {score} px against {score_without} px without "
             f"the steps (mean EPE {mean} against {mean_without})")
+
+
+def motion_variational_fit_figures(f: ResultsFile) -> str:
+    chosen = re.search(r"Chosen: the fewest iterations.*?: (\d+ iterations, alpha [\d.]+) \(score ([\d.]+), mean EPE "
+                       r"([\d.]+); without the refinement ([\d.]+) and ([\d.]+)\)", f.text)
+    if not chosen:
+        return "chosen on rendered scenes: not stated"
+    setting, score, mean, score_without, mean_without = chosen.groups()
+    return (f"chosen on rendered scenes: {setting}; geometric mean EPE {score} px against {score_without} px "
+            f"without the refinement (mean EPE {mean} against {mean_without}); off in the machine by default")
 
 
 def time_fit_figures(f: ResultsFile) -> str:
@@ -406,6 +417,15 @@ def boundaries_figures(f: ResultsFile) -> str:
     return (f"ODS F: the cartoon's soft map {ods(soft)} (OIS {table.cell({'map': soft}, 'OIS F')}, AP "
             f"{table.cell({'map': soft}, 'AP')}), the binary cartoon {ods('vmcl cartoon, labels != 0 (binary)')}, "
             f"vmcl Canny {ods('vmcl Canny, threshold sweep')}, OpenCV Canny {ods('OpenCV Canny, threshold sweep')}")
+
+
+def boundaries_train_figures(f: ResultsFile) -> str:
+    table = f.table("map", "ODS F", "OIS F", "AP")
+    soft = "vmcl cartoon, soft map (boundary_strength), swept"
+    return (f"the 200 training images (fit quality, not a test), ODS F: the cartoon's soft map "
+            f"{table.cell({'map': soft}, 'ODS F')} (OIS {table.cell({'map': soft}, 'OIS F')}, AP "
+            f"{table.cell({'map': soft}, 'AP')}), the binary cartoon "
+            f"{table.cell({'map': 'vmcl cartoon, labels != 0 (binary)'}, 'ODS F')}")
 
 
 def boundary_fit_figures(f: ResultsFile) -> str:
@@ -657,6 +677,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
      motion_refine_fit_figures),
     ("motion_lucas_kanade_fit", ("the motion cue's Lucas-Kanade steps (how many, their window, the "
                                  "frames' high-pass) chosen on rendered scenes"), motion_lucas_kanade_fit_figures),
+    ("motion_variational_fit", ("the motion cue's variational refinement (its iterations and smoothness weight) "
+                                "chosen on rendered scenes"), motion_variational_fit_figures),
     ("time_fit", "the temporal terms' defaults chosen on rendered sequences", time_fit_figures),
     ("texture_fit", "the texture-edge candidates' noise factor chosen on rendered scenes; the photo mosaic",
      texture_fit_figures),
@@ -693,8 +715,9 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("recognition", ("recognition: rendered test scenes of 27 objects learned from at most 5 views, hidden and "
                      "cluttered; OpenCV's graf and box samples beside ORB and SIFT; speed, kernels against NumPy, "
                      "the vote as the library grows"), recognition_figures),
-    ("recognition_fit", ("recognition's support tolerance, vote cutoff, pairing, alignment stretch and decision "
-                         "threshold chosen on rendered training scenes"), recognition_fit_figures),
+    ("recognition_fit", ("recognition's support tolerance, vote cutoff, pairing, alignment stretch, inner "
+                         "markings' support and decision threshold chosen on rendered training scenes"),
+     recognition_fit_figures),
     ("ground_truth", "scene rendering; BSDS evaluation", ground_truth_figures),
     ("first_run", "a fresh install's first runs: time spent building kernels, at a first and a second size",
      first_run_figures),
