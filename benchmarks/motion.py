@@ -6,14 +6,16 @@ Speed: at RubberWhale's size (584 x 388, its two grey frames), the motion module
 patch 7: the running-maximum variant with and without sub-pixel refinement and with a 2-level pyramid,
 the full-table variant; delta 6, patch 15; the sign of the LoG at delta 4, patch 21, 2 levels) against
 cv2.calcOpticalFlowFarneback (pyr 0.5, levels 3, win 15, iters 3, poly 5 / 1.2) and cv2.DISOpticalFlow
-(MEDIUM). vmcl figures are device arrays in and out, the Python call and a final queue.finish()
-included; OpenCV's are NumPy in and out. All are taken in alternation, one of each per round, and the
+(MEDIUM), and the whole machine with motion only (NumPy in, Result out), with its defaults and with the
+variational refinement on. The module's figures are device arrays in and out, the Python call and a final
+queue.finish() included; OpenCV's are NumPy in and out. All are taken in alternation, one of each per round, and the
 medians of --repeat rounds are compared: the machine is shared and its load drifts, so only ratios
 within one run mean anything. A profiled run gives the device time per kernel.
 
 Quality: the machine's defaults (nothing chosen here; benchmarks/motion_fit.py chose them on rendered
-scenes) on every flow folder of the data sets, in two-frame and sequence modes, beside DIS, Farneback
-and TV-L1 (vmcl.flow_evaluation). Streaming: the per-frame time of VisionMachine.stream against
+scenes) on every flow folder of the data sets, in two-frame and sequence modes, and the same with the
+variational refinement on at the setting benchmarks/motion_variational_fit.py chose (off by default for
+its cost), beside DIS, Farneback and TV-L1 (vmcl.flow_evaluation). Streaming: the per-frame time of VisionMachine.stream against
 independent runs, all cues, at 256^2 and 512^2, and its flow stages against DIS medium.
 """
 

@@ -1,21 +1,24 @@
 /* variational.cl: the variational refinement of a dense flow (vmcl/early/variational.py).
  *
  * The energy of a step w = (du, dv) about the current flow (u, v):
- *   sum_p psi(delta (Ix du + Iy dv + Iz)^2)
- *       + psi(gamma ((Ixx du + Ixy dv + Ixz)^2 + (Ixy du + Iyy dv + Iyz)^2))
- *       + psi(alpha (|grad(u + du)|^2 + |grad(v + dv)|^2)),   psi(s) = sqrt(s + eps^2),
+ *   sum_p delta psi((Ix du + Iy dv + Iz)^2)
+ *       + gamma psi((Ixx du + Ixy dv + Ixz)^2 + (Ixy du + Iyy dv + Iyz)^2)
+ *       + alpha psi(|grad(u + du)|^2 + |grad(v + dv)|^2),   psi(s) = sqrt(s + eps^2),
  * brightness constancy and gradient constancy linearised about the flow, and a robust smoothness of the
  * whole flow (Brox, Bruhn, Papenberg and Weickert, ECCV 2004). Lagged robust weights make each fixed-point
  * iteration a linear system, relaxed by red-black successive over-relaxation: a continuous MRF whose sites
  * each update from their four neighbours, one processor per pixel.
  *
  *   vr_terms    frame 1 read where the flow points (bilinearly) and the derivatives the energy needs, each
- *               the mean of frame 0's at x and frame 1's at x + (u, v) (the symmetric form): Ix, Iy, Iz,
+ *               the mean of frame 0's at x and frame 1's at x + (u, v) (the symmetric form; central
+ *               differences, the border pixel repeated outwards): Ix, Iy, Iz,
  *               Ixx, Ixy, Iyy, Ixz, Iyz, eight planes, the brightness in the units `gain` carries it to;
  *               zero where the flow is not finite or leaves frame 1 (no data: the smoothness fills in)
  *   vr_weights  the robust weights at the current step: each pixel's 2 x 2 data matrix and right-hand side
  *               and its smoothness weight (alpha psi' of the flow's gradient), one float8 per pixel
  *               (a11, a12, a22, b1, b2, smoothness, unused, unused): one read gives a pixel its system
+ *               A link's weight in the relaxation is the mean of its two ends' smoothness weights (each
+ *               taken from its own forward differences), which keeps the system symmetric.
  *   vr_relax    one half-sweep of the over-relaxation over the pixels of one colour ((x + y) % 2 == parity),
  *               one work-item per pixel of that colour
  *   vr_apply    the step added to the flow
@@ -72,9 +75,9 @@ __kernel void vr_weights(__global const float *terms, __global const float *flow
     float du = step[2 * i], dv = step[2 * i + 1];
     float r = ix * du + iy * dv + iz;
     float gx = ixx * du + ixy * dv + ixz, gy = ixy * du + iyy * dv + iyz;
-    /* psi'(s) = 1 / (2 sqrt(s + eps^2)), each term's weight folded in */
-    float wd = delta * 0.5f * rsqrt(delta * r * r + eps2);
-    float wg = gamma * 0.5f * rsqrt(gamma * (gx * gx + gy * gy) + eps2);
+    /* psi'(s) = 1 / (2 sqrt(s + eps^2)), times each term's weight */
+    float wd = delta * 0.5f * rsqrt(r * r + eps2);
+    float wg = gamma * 0.5f * rsqrt(gx * gx + gy * gy + eps2);
     /* the whole flow's gradient (forward differences; none past the border, none to a pixel without flow) */
     float u = flow[2 * i] + du, v = flow[2 * i + 1] + dv;
     float s = 0.0f;
@@ -86,7 +89,7 @@ __kernel void vr_weights(__global const float *terms, __global const float *flow
         if (isfinite(a) && isfinite(b)) s += a * a + b * b;
     }
     /* a pixel without a flow links to none */
-    float smooth = isfinite(u) && isfinite(v) ? alpha * 0.5f * rsqrt(alpha * s + eps2) : 0.0f;
+    float smooth = isfinite(u) && isfinite(v) ? alpha * 0.5f * rsqrt(s + eps2) : 0.0f;
     system[i] = (float8)(wd * ix * ix + wg * (ixx * ixx + ixy * ixy), wd * ix * iy + wg * (ixx * ixy + ixy * iyy),
                          wd * iy * iy + wg * (ixy * ixy + iyy * iyy), wd * ix * iz + wg * (ixx * ixz + ixy * iyz),
                          wd * iy * iz + wg * (ixy * ixz + iyy * iyz), smooth, 0.0f, 0.0f);

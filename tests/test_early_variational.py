@@ -27,10 +27,10 @@ def _energy(flow, frame0, frame1, alpha=ALPHA, delta=DELTA, gamma=GAMMA, margin=
     warped = cv2.remap(f1, xs + flow[..., 0], ys + flow[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
     gy0, gx0 = np.gradient(f0)
     gy1, gx1 = np.gradient(warped)
-    data = _psi(delta * (warped - f0) ** 2) + _psi(gamma * ((gx1 - gx0) ** 2 + (gy1 - gy0) ** 2))
+    data = delta * _psi((warped - f0) ** 2) + gamma * _psi((gx1 - gx0) ** 2 + (gy1 - gy0) ** 2)
     du = np.diff(flow, axis=1, append=flow[:, -1:])
     dv = np.diff(flow, axis=0, append=flow[-1:])
-    smooth = _psi(alpha * ((du ** 2).sum(-1) + (dv ** 2).sum(-1)))
+    smooth = alpha * _psi((du ** 2).sum(-1) + (dv ** 2).sum(-1))
     inner = (slice(margin, -margin), slice(margin, -margin))
     return float((data + smooth)[inner].sum())
 
@@ -71,7 +71,8 @@ def test_pixels_without_flow_keep_it_and_pass_nothing_on(machine):
     found = variational_refine(start, frame0, frame1, iterations=10, machine=machine)
     assert np.isnan(found[60, 70]).all()
     assert np.isfinite(np.delete(found.reshape(-1, 2), 60 * 140 + 70, axis=0)).all()
-    assert abs(found[10, 100, 0]) < 100  # pulled towards its neighbours by the smoothness alone
+    # No data where it points, so the smoothness alone gives it its neighbours' flow.
+    assert np.abs(found[10, 100] - np.array(TRUE, np.float32)).max() < 0.2
 
 
 def test_device_flow_gives_device_output_equal_to_host_and_leaves_the_input(machine):
@@ -98,7 +99,7 @@ def test_the_motion_cue_takes_the_refinement(machine):
     flows = [VisionMachine(Config(motion=m, **off), machine=machine).run(frame0, next=frame1).flow for m in motions]
     inner = (slice(16, -16), slice(16, -16))
     refined, plain = (np.linalg.norm(f[inner] - np.array(TRUE, np.float32), axis=-1).mean() for f in flows)
-    assert refined != plain and refined < 0.1
+    assert refined < 0.97 * plain
 
 
 @pytest.mark.parametrize(("kwargs", "error", "pattern"), [
@@ -106,6 +107,7 @@ def test_the_motion_cue_takes_the_refinement(machine):
     ({"frame0": np.zeros((5, 6), np.float32)}, InputValueError, "frame0"),
     ({"frame1": np.zeros((6, 6), np.uint8)}, InputValueError, "same type"),
     ({"frame1": "frame"}, InputTypeError, "frame1"),
+    ({"frame1": np.full((6, 6), 255.0, np.float32)}, InputValueError, "frame1: float images hold brightness in"),
     ({"alpha": -1.0}, InputValueError, "alpha"),
     ({"delta": -1.0}, InputValueError, "delta"),
     ({"gamma": float("nan")}, InputValueError, "gamma"),
@@ -118,3 +120,14 @@ def test_bad_input_is_refused_naming_it(kwargs, error, pattern, machine):
             "frame1": np.zeros((6, 6), np.float32)}
     with pytest.raises(error, match=pattern):
         variational_refine(**{**call, **kwargs}, machine=machine)
+
+
+def test_an_odd_width_and_any_work_group_size_give_the_same_refinement(machine, machine_with_local_size):
+    """Red-black relaxation over an odd width (the last column's colour alternates by row), and the kernels'
+    results whatever the work-group size."""
+    frame0, frame1 = translated(shape=(121, 141), seed=5)
+    start = rough_start(frame0.shape)
+    found = variational_refine(start, frame0, frame1, iterations=10, machine=machine)
+    assert (translation_error(found) < 0.06).all()
+    np.testing.assert_array_equal(variational_refine(start, frame0, frame1, iterations=10,
+                                                     machine=machine_with_local_size), found)

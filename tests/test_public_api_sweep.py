@@ -645,6 +645,9 @@ EXEMPT = {
     # vmcl.cm.core.image_field, and the sweeps of gaussian, canny and zero_crossings reach them.
     "vmcl.early.filters:separable_gaussian", "vmcl.early.filters:discrete_laplacian", "vmcl.early.filters:grey_field",
     "vmcl.early.filters:channel_planes", "vmcl.early.filters:device_taps",
+    # The flow refinements' shared checks: the sweeps of lucas_kanade and variational_refine reach them with
+    # every bad flow and frame.
+    "vmcl.early.flow_frames:check_flow_frames", "vmcl.early.flow_frames:smoothed_frames",
     # Needs a head that has run a calibration pattern in front of it; table_for_fixation covers the glue.
     "vmcl.eyehead:calibrate_vergences",
     # Need a running Dask cluster: tests/test_distributed.py starts one and checks their refusals.
@@ -684,7 +687,8 @@ PUBLIC_MODULES = (
     "vmcl.early.color", "vmcl.early.edges", "vmcl.early.filters", "vmcl.early.motion", "vmcl.early.noise",
     "vmcl.early.registration", "vmcl.early.sign_correlation", "vmcl.early.stereo", "vmcl.early.texture",
     "vmcl.early.semiglobal", "vmcl.early.disparity_range", "vmcl.early.boundary_probability",
-    "vmcl.early.weighted_median", "vmcl.mrf", "vmcl.integrate", "vmcl.labels", "vmcl.cues", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
+    "vmcl.early.weighted_median", "vmcl.early.lucas_kanade", "vmcl.early.variational", "vmcl.early.flow_frames",
+    "vmcl.mrf", "vmcl.integrate", "vmcl.labels", "vmcl.cues", "vmcl.labelling", "vmcl.metrics", "vmcl.scenes", "vmcl.datasets",
     "vmcl.patterns", "vmcl.eyehead", "vmcl.report", "vmcl.pictures", "vmcl.pipeline", "vmcl.result", "vmcl.machine",
     "vmcl.stereo_evaluation", "vmcl.distributed", "vmcl.boundary_evaluation", "vmcl.flow_evaluation",
     "vmcl.frame_sources", "vmcl.sequence_output", "vmcl.temporal", "vmcl.learn", "vmcl.learn.examples",

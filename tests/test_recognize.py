@@ -315,6 +315,13 @@ def test_models_round_trip_through_a_library_folder(ell_model, tmp_path):
     arrays["meta"] = np.array(str(arrays["meta"]).replace('"version": 3', '"version": 2'))
     np.savez_compressed(tmp_path / "second.vmodel.npz", **arrays)
     assert load_model(tmp_path / "second.vmodel.npz").views[0].outline.all()
+    # A third-format file whose outline does not fit its points is refused naming the file.
+    with np.load(tmp_path / "solids" / "block.vmodel.npz") as data:
+        arrays = {k: data[k] for k in data.files}
+    arrays["v0_outline"] = arrays["v0_outline"][:-1]
+    np.savez_compressed(tmp_path / "cut.vmodel.npz", **arrays)
+    with pytest.raises(InputError, match="cut.vmodel.npz"):
+        load_model(tmp_path / "cut.vmodel.npz")
     # A file of the first format (corners only) is still read, with no arcs.
     with np.load(tmp_path / "lib" / "tab.vmodel.npz") as data:
         arrays = {k: data[k] for k in data.files if not k.endswith(("_arcs", "_outline"))}
@@ -487,6 +494,8 @@ def test_a_solid_views_inner_edges_are_told_from_its_outline(name, yaw):
     assert (inside > 4).mean() > 0.05
     with pytest.raises(InputError, match="outline must hold one bool per boundary point"):
         dataclasses.replace(view, outline=np.ones(3, bool))
+    with pytest.raises(InputError, match="outline must be a bool array"):
+        dataclasses.replace(view, outline=np.ones(len(view.points)))
     assert learn("ell", [object_view("ell", shape=(160, 160))[0]]).views[0].outline.all()
 
 
@@ -503,5 +512,6 @@ def test_a_flat_shape_of_a_solids_outline_is_not_taken_for_the_solid():
     assert len(solid) == 1 and solid[0].inner_found > 0.8
     ell = learn("ell", [object_view("ell", shape=(160, 160))[0]])
     assert np.isnan(recognize(object_view("ell", shape=(160, 160))[0], Library([ell]))[0].inner_found)
-    with pytest.raises(InputError, match="min_inner"):
-        recognize(image, library, min_inner=1.5)
+    for bad in (1.5, -0.1, float("nan")):
+        with pytest.raises(InputError, match="min_inner"):
+            recognize(image, library, min_inner=bad)

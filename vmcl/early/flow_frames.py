@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import IMAGE_TYPES, ArrayLike, field, finite_float32
+from vmcl.cm.core import IMAGE_TYPES, ArrayLike, check_unit_image, field, finite_float32
 from vmcl.early.filters import separable_gaussian
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
@@ -47,10 +47,14 @@ def smoothed_frames(frame0: ArrayLike, frame1: ArrayLike, sigmas: tuple[float, .
                     machine: Machine) -> tuple[cl_array.Array, cl_array.Array, float]:
     """The two frames' grey images on the device, smoothed by the Gaussian of ``sigmas[0]`` (less that of
     ``sigmas[1]`` when given), and what carries their brightness to [0, 1] (1/255 for uint8, 1 for float).
-    The frames are grey or RGB, of one type; errors name ``frame0`` and ``frame1``."""
+    The frames are grey or RGB, of one type (NumPy floats in [0, 1]); errors name ``frame0`` and
+    ``frame1``."""
     smoothed, types = [], []
     for name, frame in (("frame0", frame0), ("frame1", frame1)):
-        grey, _ = field(finite_float32(frame, name), name, machine, ndims=(2, 3), dtypes=tuple(IMAGE_TYPES))
+        checked = finite_float32(frame, name)
+        if isinstance(checked, np.ndarray) and checked.dtype.kind == "f":
+            check_unit_image(checked, name)  # the refinements' weights are set for brightness in [0, 1]
+        grey, _ = field(checked, name, machine, ndims=(2, 3), dtypes=tuple(IMAGE_TYPES))
         if grey.ndim == 3 and grey.shape[2] != 3:
             raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {grey.shape}")
         smoothed.append(separable_gaussian(machine, grey, sigmas))

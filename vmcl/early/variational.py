@@ -5,8 +5,8 @@ region surrounding a point"; the Lucas-Kanade steps (:mod:`vmcl.early.lucas_kana
 window. This refinement instead lets every pixel's flow answer to its own brightness and to its
 neighbours' flow at once: it minimises
 
-    E(w) = sum_p psi(delta |f1(p + w) - f0(p)|^2) + psi(gamma |grad f1(p + w) - grad f0(p)|^2)
-           + psi(alpha (|grad u|^2 + |grad v|^2)),        psi(s) = sqrt(s + eps^2),
+    E(w) = sum_p delta psi(|f1(p + w) - f0(p)|^2) + gamma psi(|grad f1(p + w) - grad f0(p)|^2)
+           + alpha psi(|grad u|^2 + |grad v|^2),        psi(s) = sqrt(s + eps^2),
 
 brightness constancy, gradient constancy (which an exposure change between the frames does not break)
 and a smoothness that, being robust, lets the flow jump at motion boundaries (Brox, Bruhn, Papenberg and
@@ -18,9 +18,10 @@ as the seed's MRFs are on the Connection Machine. Brightness is counted in grey 
 alpha, delta and gamma are given in), the flow in pixels.
 
 The motion cue can run it after the Lucas-Kanade steps and before the motion MRF, whose line process keeps
-the boundaries (``[motion] variational_iterations``). It is off there by default: at its fitted setting
-(20 iterations, 220 passes over the flow) it takes several times the rest of the motion stage on a CPU
-(benchmarks/results/motion.md gives both, with its gain on the real sequences).
+the boundaries (``[motion] variational_iterations``). It is off there by default for its cost: at its
+fitted setting it makes many passes over the flow (eleven per iteration), which on a CPU adds about as
+much again as the rest of the motion-only machine takes (benchmarks/results/motion.md gives both times,
+and its gain on the real sequences).
 
 Reference: T. Brox, A. Bruhn, N. Papenberg and J. Weickert, "High accuracy optical flow estimation based on
 a theory for warping", ECCV 2004.
@@ -40,8 +41,10 @@ __all__ = ["ALPHA", "DELTA", "EPSILON", "GAMMA", "ITERATIONS", "PRESMOOTH", "REL
 
 # ALPHA and ITERATIONS were fitted on rendered scenes by benchmarks/motion_variational_fit.py (its results
 # file gives every setting tried), never on a sequence a benchmark reports.
-ALPHA = 5120.0
+ALPHA = 160.0
 """Default weight of the smoothness term (grey levels of 255 squared per pixel of flow squared)."""
+# DELTA and GAMMA are not fitted: the numbers OpenCV's VariationalRefinement (DIS's refinement) documents for
+# the same functional, brightness in grey levels of 255; only their ratio to ALPHA and to each other matters.
 DELTA = 5.0
 """Default weight of brightness constancy."""
 GAMMA = 10.0
@@ -50,19 +53,19 @@ ITERATIONS = 20
 """Default number of fixed-point iterations (each re-weighs the robust terms)."""
 SWEEPS = 5
 """Default number of over-relaxation sweeps per fixed-point iteration (each a red and a black half-sweep)."""
-# Not fitted: the values DIS's refinement documents (OpenCV's VariationalRefinement), which a relaxation
-# of these few sweeps converges with.
+# Not fitted: the values OpenCV's VariationalRefinement documents.
 RELAXATION = 1.6
 """The over-relaxation factor (1: Gauss-Seidel)."""
 EPSILON = 0.001
 """psi's smoothing (its square is added under the root): keeps the weights finite where a term vanishes."""
 PRESMOOTH = 1.0
-"""The frames' Gaussian smoothing (pixels) before the derivatives are taken."""
+"""The frames' Gaussian smoothing (pixels) before the derivatives are taken (the Lucas-Kanade steps' own)."""
 
 _GREY_LEVELS = 255.0
-_FOOTPRINT = 4 * (2 + 2 + 2 + 8 + 8 + 1)
+_FOOTPRINT = 4 * (2 + 2 + 2 + 8 + 8 + 2 + 1)
 """Device bytes per pixel at most: the flow, its step, two smoothed frames, eight derivative planes, the
-linear system and smoothness weight (eight), frames uploaded as float32 grey."""
+linear system and smoothness weight (eight), the two frames uploaded as float32 grey, a Gaussian's plane
+between its passes."""
 
 
 def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, alpha: float = ALPHA,
@@ -111,6 +114,7 @@ def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *,
     pixels = height * width
     machine.require_memory(f"the variational refinement of a {height} x {width} flow", _FOOTPRINT * pixels,
                            8 * pixels)
+    # The frames are checked (and smoothed) even for no iterations: bad frames are refused whatever the count.
     f0, f1, gain = smoothed_frames(frame0, frame1, (PRESMOOTH,), machine)
     out = data if host else data.copy()  # refined in place on a flow of its own
     if not iterations:

@@ -84,6 +84,8 @@ class View:
     def __post_init__(self) -> None:
         if not len(self.outline):  # not given (a file of an older format): every point the outline's
             object.__setattr__(self, "outline", np.ones(len(self.points), bool))
+        elif np.asarray(self.outline).dtype != np.bool_:
+            raise InputValueError(f"outline must be a bool array, got {np.asarray(self.outline).dtype}")
         elif np.shape(self.outline) != (len(self.points),):
             raise InputValueError(f"outline must hold one bool per boundary point ({len(self.points)}), "
                                   f"got shape {np.shape(self.outline)}")
@@ -326,9 +328,11 @@ def load_model(path: str | Path) -> Model:
                 if (arcs.dtype.kind != "f" or arcs.ndim != 2 or arcs.shape[1] != 3 or not np.isfinite(arcs).all()
                         or (arcs[:, 2] <= 0).any()):
                     raise ValueError(f"view {i}'s arcs are not (A, 3) rows of a centre and a radius > 0")
+                # An older format holds no outline: the View takes every point as the outline's.
                 outline = data[f"v{i}_outline"] if meta["version"] >= 3 else np.zeros(0, bool)
-                if outline.dtype != np.bool_:
-                    raise ValueError(f"view {i}'s outline is not a bool array")
+                if meta["version"] >= 3 and (outline.dtype != np.bool_
+                                             or outline.shape != (len(data[f"v{i}_points"]),)):
+                    raise ValueError(f"view {i}'s outline is not one bool per boundary point")
                 views.append(View(data[f"v{i}_corners"], data[f"v{i}_bisector"], data[f"v{i}_opening"],
                                   data[f"v{i}_points"], data[f"v{i}_tangent"],
                                   data[f"v{i}_centre"], float(frame[0]),
