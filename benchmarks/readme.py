@@ -661,6 +661,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
                "hysteresis variants"), edges_figures),
     ("boundaries", ("BSDS500 test images: the cartoon's soft map swept beside the binary cartoon, vmcl's and "
                     "OpenCV's Canny sweeps (ODS, OIS, AP)"), boundaries_figures),
+    ("boundaries_train", ("BSDS500 training images (the soft map's model was fitted to them): the cartoon's soft "
+                          "map swept and the binary cartoon, fit quality"), boundaries_train_figures),
     ("boundary_fit", "the probability of boundary's fit to BSDS500's training images, checked on held-out ones",
      boundary_fit_figures),
     ("boundary_sampling_fit", ("how sparsely the probability of boundary computes its wide smoothings, chosen on "
