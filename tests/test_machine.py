@@ -250,6 +250,8 @@ for dtype in (np.float32, np.int32, np.uint8):
         router.send(field.ravel(), where % 7, size=7, combine=combine)
 image = np.zeros((8, 8), np.float32)
 registration.warp(image, np.zeros((8, 8, 2), np.float32))
+from vmcl.early.variational import variational_refine  # off in the machine by default
+variational_refine(np.zeros((8, 8, 2), np.float32), image, image, iterations=1)
 from vmcl.learn import Example, fit_pseudolikelihood
 step = np.zeros((8, 8), np.float32)
 step[:, 4:] = 1.0
