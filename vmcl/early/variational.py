@@ -44,7 +44,8 @@ __all__ = ["ALPHA", "DELTA", "EPSILON", "GAMMA", "ITERATIONS", "PRESMOOTH", "REL
 ALPHA = 160.0
 """Default weight of the smoothness term (grey levels of 255 squared per pixel of flow squared)."""
 # DELTA and GAMMA are not fitted: the numbers OpenCV's VariationalRefinement (DIS's refinement) documents for
-# the same functional, brightness in grey levels of 255; only their ratio to ALPHA and to each other matters.
+# a functional of this form (which also normalises its data terms; this one does not), brightness in grey
+# levels of 255; only their ratios to ALPHA and to each other matter, and ALPHA was fitted with them.
 DELTA = 5.0
 """Default weight of brightness constancy."""
 GAMMA = 10.0
