@@ -19,9 +19,9 @@ alpha, delta and gamma are given in), the flow in pixels.
 
 The motion cue can run it after the Lucas-Kanade steps and before the motion MRF, whose line process keeps
 the boundaries (``[motion] variational_iterations``). It is off there by default for its cost: at its
-fitted setting it makes many passes over the flow (eleven per iteration), which on a CPU adds about as
-much again as the rest of the motion-only machine takes (benchmarks/results/motion.md gives both times,
-and its gain on the real sequences).
+fitted setting it makes many passes over the flow (eleven per iteration), which on a CPU take about twice
+as long as the rest of the motion-only machine (benchmarks/results/motion.md gives both times, and its
+gain on the real sequences).
 
 Reference: T. Brox, A. Bruhn, N. Papenberg and J. Weickert, "High accuracy optical flow estimation based on
 a theory for warping", ECCV 2004.
