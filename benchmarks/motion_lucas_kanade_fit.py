@@ -32,6 +32,7 @@ import datetime
 import itertools
 import platform
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from motion_fit import RESULTS, epe, motion_only, training_scenes
@@ -51,23 +52,55 @@ def exposure_variant(frame: np.ndarray) -> np.ndarray:
     return np.clip(frame, 0, 1) ** EXPOSURE_GAMMA
 
 
+def exposure_data(scenes: list) -> list[tuple[str, Any, np.ndarray]]:
+    """(name, scene, next frame) of every training scene with its own next frame, then of every one with its
+    next frame's exposure changed (exposure_variant)."""
+    return ([(name, scene, scene.left_next) for name, scene in scenes]
+            + [(f"{name} (exposure)", scene, exposure_variant(scene.left_next)) for name, scene in scenes])
+
+
+def score_sections(machine: vmcl.Machine, data: list, sections: list[tuple[tuple, MotionConfig]]) -> np.ndarray:
+    """The restored flow's EPE of the motion-only machine with each (setting, section), on each of ``data``
+    (exposure_data), a row per section; each row printed after its setting as it comes."""
+    scores = np.zeros((len(sections), len(data)))
+    for row, (setting, section) in enumerate(sections):
+        vm = VisionMachine(motion_only(section), machine=machine)
+        for column, (_, scene, following) in enumerate(data):
+            scores[row, column] = epe(vm.run(scene.left, next=following), scene)
+        print(*setting, " ".join(f"{s:.3f}" for s in scores[row]), flush=True)
+    return scores
+
+
+def geometric_means(scores: np.ndarray) -> np.ndarray:
+    """Each row's geometric mean over the scenes (the fits' score; the fit's docstring says why)."""
+    return np.exp(np.log(scores).mean(axis=1))
+
+
+def ranked_rows(scores: np.ndarray, plain: int, cells: list[str]) -> list[str]:
+    """Table rows, best score first: the score, its parts over the first ``plain`` scenes and the rest (the
+    exposure scenes), the mean EPE, each setting's ``cells`` (already joined) and every scene's EPE."""
+    means = geometric_means(scores)
+    rows = []
+    for k in np.argsort(means, kind="stable"):
+        plain_score, exposure_score = (float(np.exp(np.log(part).mean())) for part in (scores[k, :plain],
+                                                                                       scores[k, plain:]))
+        rows.append(f"| {means[k]:.4f} | {plain_score:.4f} | {exposure_score:.4f} | {scores[k].mean():.4f} | "
+                    f"{cells[k]} | " + " | ".join(f"{s:.3f}" for s in scores[k]) + " |")
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=RESULTS / "motion_lucas_kanade_fit.md")
     args = parser.parse_args()
     machine = vmcl.Machine()
     scenes = training_scenes()
-    data = ([(name, scene, scene.left_next) for name, scene in scenes]
-            + [(f"{name} (exposure)", scene, exposure_variant(scene.left_next)) for name, scene in scenes])
-    scores = np.zeros((len(GRID), len(data)))
-    for row, (iterations, window, highpass) in enumerate(GRID):
-        section = dataclasses.replace(MotionConfig(), lucas_kanade_iterations=iterations, lucas_kanade_window=window,
-                                      lucas_kanade_highpass=highpass)
-        vm = VisionMachine(motion_only(section), machine=machine)
-        for column, (_, scene, following) in enumerate(data):
-            scores[row, column] = epe(vm.run(scene.left, next=following), scene)
-        print(iterations, window, highpass, " ".join(f"{s:.3f}" for s in scores[row]), flush=True)
-    means = np.exp(np.log(scores).mean(axis=1))
+    data = exposure_data(scenes)
+    scores = score_sections(machine, data, [
+        (setting, dataclasses.replace(MotionConfig(), lucas_kanade_iterations=setting[0],
+                                      lucas_kanade_window=setting[1], lucas_kanade_highpass=setting[2]))
+        for setting in GRID])
+    means = geometric_means(scores)
     plain = len(scenes)
     best = float(means.min())
     chosen = min((k for k in range(len(GRID)) if means[k] <= best * (1 + TOLERANCE)), key=lambda k: GRID[k])
@@ -95,12 +128,7 @@ def main() -> None:
          + " | ".join(names) + " |"),
         "|---|---|---|---|---|---|---|" + "---|" * len(names),
     ]
-    for k in np.argsort(means, kind="stable"):
-        iterations, size, cut = GRID[k]
-        plain_score, exposure_score = (float(np.exp(np.log(part).mean())) for part in (scores[k, :plain],
-                                                                                       scores[k, plain:]))
-        lines.append(f"| {means[k]:.4f} | {plain_score:.4f} | {exposure_score:.4f} | {scores[k].mean():.4f} | "
-                     f"{iterations} | {size:g} | {cut:g} | " + " | ".join(f"{s:.3f}" for s in scores[k]) + " |")
+    lines += ranked_rows(scores, plain, [f"{iterations} | {size:g} | {cut:g}" for iterations, size, cut in GRID])
     args.out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines[:8]))
 

@@ -30,13 +30,12 @@ import itertools
 import platform
 from pathlib import Path
 
-import numpy as np
-from motion_fit import RESULTS, epe, motion_only, training_scenes
-from motion_lucas_kanade_fit import exposure_variant
+from motion_fit import RESULTS, training_scenes
+from motion_lucas_kanade_fit import exposure_data, geometric_means, ranked_rows, score_sections
 
 import vmcl
 from vmcl.early import variational
-from vmcl.pipeline import MotionConfig, VisionMachine
+from vmcl.pipeline import MotionConfig
 
 GRID = [(0, 10.0)] + list(itertools.product((2, 5, 10, 20, 40), (10.0, 40.0, 160.0, 640.0, 2560.0)))
 """(fixed-point iterations, 0 for none; alpha). Wide on both axes: the first two runs of this fit (with each
@@ -53,16 +52,12 @@ def main() -> None:
     args = parser.parse_args()
     machine = vmcl.Machine()
     scenes = training_scenes()
-    data = ([(name, scene, scene.left_next) for name, scene in scenes]
-            + [(f"{name} (exposure)", scene, exposure_variant(scene.left_next)) for name, scene in scenes])
-    scores = np.zeros((len(GRID), len(data)))
-    for row, (iterations, alpha) in enumerate(GRID):
-        section = dataclasses.replace(MotionConfig(), variational_iterations=iterations, variational_alpha=alpha)
-        vm = VisionMachine(motion_only(section), machine=machine)
-        for column, (_, scene, following) in enumerate(data):
-            scores[row, column] = epe(vm.run(scene.left, next=following), scene)
-        print(iterations, alpha, " ".join(f"{s:.3f}" for s in scores[row]), flush=True)
-    means = np.exp(np.log(scores).mean(axis=1))
+    data = exposure_data(scenes)
+    scores = score_sections(machine, data, [
+        (setting, dataclasses.replace(MotionConfig(), variational_iterations=setting[0],
+                                      variational_alpha=setting[1]))
+        for setting in GRID])
+    means = geometric_means(scores)
     plain = len(scenes)
     best = float(means.min())
     near = [k for k in range(len(GRID)) if means[k] <= best * (1 + TOLERANCE)]
@@ -93,12 +88,7 @@ def main() -> None:
          + " | ".join(names) + " |"),
         "|---|---|---|---|---|---|" + "---|" * len(names),
     ]
-    for k in np.argsort(means, kind="stable"):
-        steps, weight = GRID[k]
-        plain_score, exposure_score = (float(np.exp(np.log(part).mean())) for part in (scores[k, :plain],
-                                                                                       scores[k, plain:]))
-        lines.append(f"| {means[k]:.4f} | {plain_score:.4f} | {exposure_score:.4f} | {scores[k].mean():.4f} | "
-                     f"{steps} | {weight:g} | " + " | ".join(f"{s:.3f}" for s in scores[k]) + " |")
+    lines += ranked_rows(scores, plain, [f"{steps} | {weight:g}" for steps, weight in GRID])
     args.out.write_text("\n".join(lines) + "\n")
     print("\n".join(lines[:8]))
 
