@@ -14,17 +14,20 @@ Weickert, ECCV 2004; the refinement DIS ends each level with, Kroeger et al., EC
 terms are linearised about the incoming flow (frame 1 read once where it points); each fixed-point
 iteration lags the robust weights, which leaves a linear system, relaxed by red-black successive
 over-relaxation: an MRF over continuous values, each pixel a processor updating from its four neighbours,
-as the seed's MRFs are on the Connection Machine. Brightness is counted in grey levels of 255 (the units
+as the seed's MRFs are on the Connection Machine. Relaxation alone carries a correction about a pixel per
+sweep, so a flow that must spread across a wide region of weak texture needs hundreds of sweeps; a
+multigrid V-cycle relaxes the same system on a pyramid of 2 x 2 blocks (each level's correction solved on
+the next coarser one), which carries it twice as far per sweep at each coarser level (the solver Bruhn,
+Weickert et al. use to compute this functional in real time, IEEE TIP 2005). Brightness is counted in grey levels of 255 (the units
 alpha, delta and gamma are given in), the flow in pixels.
 
-The motion cue can run it after the Lucas-Kanade steps and before the motion MRF, whose line process keeps
-the boundaries (``[motion] variational_iterations``). It is off there by default for its cost: at its
-fitted setting it makes many passes over the flow (eleven per iteration), which on a CPU take about twice
-as long as the rest of the motion-only machine (benchmarks/results/motion.md gives both times, and its
+The motion cue runs it after the Lucas-Kanade steps and before the motion MRF, whose line process keeps
+the boundaries (``[motion] variational_iterations``; benchmarks/results/motion.md gives its cost and its
 gain on the real sequences).
 
-Reference: T. Brox, A. Bruhn, N. Papenberg and J. Weickert, "High accuracy optical flow estimation based on
-a theory for warping", ECCV 2004.
+References: T. Brox, A. Bruhn, N. Papenberg and J. Weickert, "High accuracy optical flow estimation based on
+a theory for warping", ECCV 2004. A. Bruhn, J. Weickert, C. Feddern, T. Kohlberger and C. Schnoerr,
+"Variational optical flow computation in real time", IEEE Trans. Image Processing 14(5), 2005.
 """
 
 from __future__ import annotations
@@ -36,8 +39,8 @@ from vmcl.early.flow_frames import check_flow_frames, smoothed_frames
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["ALPHA", "DELTA", "EPSILON", "GAMMA", "ITERATIONS", "PRESMOOTH", "RELAXATION", "SWEEPS",
-           "variational_refine"]
+__all__ = ["ALPHA", "COARSEST", "COARSEST_SWEEPS", "DELTA", "EPSILON", "GAMMA", "ITERATIONS", "LINK_SCALE",
+           "PRESMOOTH", "RELAXATION", "SWEEPS", "variational_refine"]
 
 # ALPHA and ITERATIONS were fitted on rendered scenes by benchmarks/motion_variational_fit.py (its results
 # file gives every setting tried), never on a sequence a benchmark reports.
@@ -50,29 +53,39 @@ DELTA = 5.0
 """Default weight of brightness constancy."""
 GAMMA = 10.0
 """Default weight of gradient constancy."""
-ITERATIONS = 40
-"""Default number of fixed-point iterations (each re-weighs the robust terms). The fit's largest: the
-relaxation has not converged by then, and more would score better on training at more cost."""
-SWEEPS = 5
-"""Default number of over-relaxation sweeps per fixed-point iteration (each a red and a black half-sweep)."""
-# Not fitted: the values OpenCV's VariationalRefinement documents.
+ITERATIONS = 10
+"""Default number of fixed-point iterations (each re-weighs the robust terms and runs one V-cycle)."""
+# Not fitted: two sweeps before a level's coarse correction and two after it, a common multigrid cycle.
+SWEEPS = 2
+"""Default number of over-relaxation sweeps (each a red and a black half-sweep) on each level of the
+V-cycle before its coarser level's correction and again after it; on a single level, the sweeps per
+iteration."""
+# Not fitted: the value OpenCV's VariationalRefinement documents.
 RELAXATION = 1.6
 """The over-relaxation factor (1: Gauss-Seidel)."""
+COARSEST = 8
+"""The multigrid coarsens until the smaller side would fall below this many pixels."""
+COARSEST_SWEEPS = 10
+"""Over-relaxation sweeps on the coarsest level, whose few pixels take them cheaply."""
+LINK_SCALE = 0.5
+"""A coarse link's weight per fine link crossing between its blocks (see vr_restrict)."""
 EPSILON = 0.001
 """psi's smoothing (its square is added under the root): keeps the weights finite where a term vanishes."""
 PRESMOOTH = 1.0
 """The frames' Gaussian smoothing (pixels) before the derivatives are taken (the Lucas-Kanade steps' own)."""
 
 _GREY_LEVELS = 255.0
-_FOOTPRINT = 4 * (2 + 2 + 2 + 8 + 8 + 2 + 1)
+_FOOTPRINT = 4 * (2 + 2 + 2 + 8 + 8 + 1 + 2 + 4 + 2 + 1)
 """Device bytes per pixel at most: the flow, its step, two smoothed frames, eight derivative planes, the
-linear system and smoothness weight (eight), the two frames uploaded as float32 grey, a Gaussian's plane
+linear system (eight), the smoothness weight, the residual, the coarser levels' systems, unknowns and
+residuals (a third of twelve), the two frames uploaded as float32 grey, a Gaussian's plane
 between its passes."""
 
 
 def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, alpha: float = ALPHA,
                        delta: float = DELTA, gamma: float = GAMMA, iterations: int = ITERATIONS,
-                       sweeps: int = SWEEPS, machine: Machine | None = None) -> ArrayLike:
+                       sweeps: int = SWEEPS, levels: int | None = None,
+                       machine: Machine | None = None) -> ArrayLike:
     """Refine a dense flow by minimising brightness and gradient constancy against a robust smoothness.
 
     Parameters
@@ -91,7 +104,11 @@ def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *,
     iterations : int
         >= 0: fixed-point iterations (0 returns the flow as it came).
     sweeps : int
-        >= 1: red-black over-relaxation sweeps per iteration.
+        >= 1: red-black over-relaxation sweeps on each level before its coarser level's correction and
+        after it.
+    levels : int, optional
+        >= 1: the multigrid's levels, the pixel grid included (1: plain over-relaxation, ``sweeps`` per
+        iteration). By default as many as halve the smaller side down to COARSEST pixels.
     machine : vmcl.Machine, optional
 
     Returns
@@ -112,6 +129,8 @@ def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *,
         raise InputValueError("delta and gamma must not both be 0: the refinement needs a data term")
     iterations = check_int(iterations, "iterations", minimum=0, maximum=1000)
     sweeps = check_int(sweeps, "sweeps", minimum=1, maximum=1000)
+    if levels is not None:
+        levels = check_int(levels, "levels", minimum=1, maximum=64)
     height, width = data.shape[:2]
     pixels = height * width
     machine.require_memory(f"the variational refinement of a {height} x {width} flow", _FOOTPRINT * pixels,
@@ -123,19 +142,72 @@ def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *,
         return result(out, host)
     dims = (np.int64(width), np.int64(height))
     terms = machine.empty((8, height, width), np.float32)
-    system = machine.empty((height, width, 8), np.float32)
+    smooth = machine.empty((height, width), np.float32)
     step = machine.empty((height, width, 2), np.float32)
     step.fill(0)
+    grid = _Multigrid(machine, step, _level_shapes(height, width, levels), sweeps)
     machine.launch(machine.kernel("variational", "vr_terms"), (width, height), f0, f1, out,
                    np.float32(gain * _GREY_LEVELS), terms, *dims)
     weights = machine.kernel("variational", "vr_weights")
-    relax = machine.kernel("variational", "vr_relax")
+    links = machine.kernel("variational", "vr_links")
     for _ in range(iterations):
         machine.launch(weights, (width, height), terms, out, step, np.float32(delta), np.float32(gamma),
-                       np.float32(alpha), np.float32(EPSILON ** 2), system, *dims)
-        for _ in range(sweeps):
-            for parity in (0, 1):
-                machine.launch(relax, ((width + 1) // 2, height), out, step, system, np.float32(RELAXATION),
-                               np.int32(parity), *dims)
+                       np.float32(alpha), np.float32(EPSILON ** 2), grid.systems[0], smooth, *dims)
+        machine.launch(links, (width, height), smooth, out, grid.systems[0], *dims)
+        grid.cycle()
     machine.launch(machine.kernel("variational", "vr_apply"), (width, height), out, step, *dims)
     return result(out, host)
+
+
+def _level_shapes(height: int, width: int, levels: int | None) -> list[tuple[int, int]]:
+    """The multigrid's (height, width) per level, the pixel grid first, each the last's 2 x 2 blocks: as many
+    as ``levels`` asks, or (None) until the smaller side would fall below COARSEST."""
+    shapes = [(height, width)]
+    while len(shapes) < (levels or 1000):
+        h, w = shapes[-1]
+        if levels is None and min(h, w) < 2 * COARSEST or h == w == 1:
+            break
+        shapes.append(((h + 1) // 2, (w + 1) // 2))
+    return shapes
+
+
+class _Multigrid:
+    """The linear system of each fixed-point iteration, solved by one multigrid V-cycle: ``sweeps``
+    red-black over-relaxation sweeps on each level before its coarser level's correction and after it, and
+    COARSEST_SWEEPS on the coarsest (a single level is plain over-relaxation)."""
+
+    def __init__(self, machine: Machine, unknown, shapes: list[tuple[int, int]], sweeps: int):
+        self.machine = machine
+        self.shapes = shapes
+        self.sweeps = sweeps
+        self.unknowns = [unknown] + [machine.empty((h, w, 2), np.float32) for h, w in shapes[1:]]
+        self.systems = [machine.empty((h, w, 8), np.float32) for h, w in shapes]
+        self.residuals = [machine.empty((h, w, 2), np.float32) for h, w in shapes[:-1]]
+        self.relax = machine.kernel("variational", "vr_relax")
+        self.residual = machine.kernel("variational", "vr_residual")
+        self.restrict = machine.kernel("variational", "vr_restrict")
+        self.prolong = machine.kernel("variational", "vr_prolong")
+
+    def cycle(self, level: int = 0) -> None:
+        coarsest = level == len(self.shapes) - 1
+        self._relax(level, COARSEST_SWEEPS if coarsest and level else self.sweeps)
+        if coarsest:
+            return
+        (h, w), (ch, cw) = self.shapes[level], self.shapes[level + 1]
+        dims = (np.int64(w), np.int64(h))
+        self.machine.launch(self.residual, (w, h), self.unknowns[level], self.systems[level],
+                            self.residuals[level], *dims)
+        self.machine.launch(self.restrict, (cw, ch), self.systems[level], self.residuals[level],
+                            self.systems[level + 1], self.unknowns[level + 1], np.float32(LINK_SCALE), *dims,
+                            np.int64(cw), np.int64(ch))
+        self.cycle(level + 1)
+        self.machine.launch(self.prolong, (w, h), self.unknowns[level], self.unknowns[level + 1], *dims,
+                            np.int64(cw))
+        self._relax(level, self.sweeps)
+
+    def _relax(self, level: int, sweeps: int) -> None:
+        h, w = self.shapes[level]
+        for _ in range(sweeps):
+            for parity in (0, 1):
+                self.machine.launch(self.relax, ((w + 1) // 2, h), self.unknowns[level], self.systems[level],
+                                    np.float32(RELAXATION), np.int32(parity), np.int64(w), np.int64(h))
