@@ -7,14 +7,15 @@ patch 7: the running-maximum variant with and without sub-pixel refinement and w
 the full-table variant; delta 6, patch 15; the sign of the LoG at delta 4, patch 21, 2 levels) against
 cv2.calcOpticalFlowFarneback (pyr 0.5, levels 3, win 15, iters 3, poly 5 / 1.2) and cv2.DISOpticalFlow
 (MEDIUM), and the whole machine with motion only (NumPy in, Result out), with its defaults and with the
-variational refinement off. The module's figures are device arrays in and out, the Python call and a final
+variational refinement on. The module's figures are device arrays in and out, the Python call and a final
 queue.finish() included; OpenCV's are NumPy in and out. All are taken in alternation, one of each per round, and the
 medians of --repeat rounds are compared: the machine is shared and its load drifts, so only ratios
 within one run mean anything. A profiled run gives the device time per kernel.
 
 Quality: the machine's defaults (nothing chosen here; benchmarks/motion_fit.py chose them on rendered
 scenes) on every flow folder of the data sets, in two-frame and sequence modes, and the same with the
-variational refinement off (what it adds), beside DIS, Farneback and TV-L1 (vmcl.flow_evaluation). Streaming: the per-frame time of VisionMachine.stream against
+variational refinement on at the setting benchmarks/motion_variational_fit.py chose (off by default for
+its cost), beside DIS, Farneback and TV-L1 (vmcl.flow_evaluation). Streaming: the per-frame time of VisionMachine.stream against
 independent runs, all cues, at 256^2 and 512^2, and its flow stages against DIS medium.
 """
 
@@ -46,9 +47,9 @@ DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets"
 SPEED = {"delta": 4, "patch": 7}
 FLAT = {"delta": 6, "patch": 15}
 SIGNS = {"delta": 4, "patch": 21, "levels": 2, "features": "sign_log"}
-UNREFINED = Config(motion=dataclasses.replace(MotionConfig(), variational_iterations=0))
-"""The machine with its variational refinement off: what the refinement adds, in time and in quality."""
-WITHOUT_REFINEMENT = ", no variational refinement"
+REFINED = Config(motion=dataclasses.replace(MotionConfig(), variational_iterations=variational.ITERATIONS))
+"""The machine with the variational refinement on, at its fitted setting (off by default: its cost)."""
+WITH_REFINEMENT = ", variational refinement"
 
 
 def farneback(frame0: np.ndarray, frame1: np.ndarray) -> np.ndarray:
@@ -76,7 +77,7 @@ def interleaved(runs: dict, repeat: int, finish) -> dict:
 
 def speed(machine: vmcl.Machine, pair, repeat: int) -> tuple[list[str], dict]:
     f0, f1 = machine.to_device(pair.frame0), machine.to_device(pair.frame1)
-    default, unrefined = (VisionMachine(motion_only(config), machine=machine) for config in (Config(), UNREFINED))
+    default, refined = (VisionMachine(motion_only(config), machine=machine) for config in (Config(), REFINED))
     runs = {
         "vmcl running maximum, delta 4, patch 7": lambda: motion.flow(f0, f1, **SPEED, machine=machine),
         "vmcl full table, delta 4, patch 7": lambda: motion.flow(f0, f1, **SPEED, method="table",
@@ -92,7 +93,7 @@ def speed(machine: vmcl.Machine, pair, repeat: int) -> tuple[list[str], dict]:
         "cv2 DIS MEDIUM": lambda: dis(pair.frame0, pair.frame1),
         "vmcl machine, motion only (NumPy in, Result out), defaults": lambda: default.run(pair.frame0,
                                                                                          next=pair.frame1),
-        f"vmcl machine, motion only (NumPy in, Result out){WITHOUT_REFINEMENT}": lambda: unrefined.run(
+        f"vmcl machine, motion only (NumPy in, Result out){WITH_REFINEMENT}": lambda: refined.run(
             pair.frame0, next=pair.frame1),
     }
     medians = interleaved(runs, repeat, machine.finish)
@@ -122,7 +123,7 @@ def kernel_breakdown(pair, repeat: int) -> list[str]:
 
 
 MIDDLEBURY = ("Dimetrodon", "Grove2", "Hydrangea", "RubberWhale", "Venus")
-METHODS = ("vmcl two frames", "vmcl sequence", f"vmcl two frames{WITHOUT_REFINEMENT}", f"vmcl sequence{WITHOUT_REFINEMENT}",
+METHODS = ("vmcl two frames", "vmcl sequence", f"vmcl two frames{WITH_REFINEMENT}", f"vmcl sequence{WITH_REFINEMENT}",
            "OpenCV DIS medium", "OpenCV DIS fast", "OpenCV Farneback", "scikit-image TV-L1")
 
 
@@ -132,8 +133,8 @@ def quality(root: Path, machine: vmcl.Machine) -> tuple[list[str], dict]:
     for folder in find_flow_folders(root):
         sequence = read_flow_folder(folder)
         scores[sequence.name] = {row.method: row for row in evaluate_sequence(sequence, machine=machine)}
-        scores[sequence.name].update({row.method + WITHOUT_REFINEMENT: row for row in evaluate_sequence(
-            sequence, config=UNREFINED, machine=machine, others=False)})
+        scores[sequence.name].update({row.method + WITH_REFINEMENT: row for row in evaluate_sequence(
+            sequence, config=REFINED, machine=machine, others=False)})
         print(sequence.name, {m: round(r.epe, 3) for m, r in scores[sequence.name].items()}, flush=True)
     methods = [m for m in METHODS if any(m in rows for rows in scores.values())]
     lines = ["| sequence | " + " | ".join(f"{m} EPE" for m in methods) + " |", "|---|" + "---|" * len(methods)]
@@ -243,10 +244,10 @@ def main() -> None:
         "",
         *quality_lines,
         "",
-        (f"The defaults include the variational refinement (`[motion] variational_iterations = "
-         f"{variational.ITERATIONS}`, alpha {variational.ALPHA:g}: the setting benchmarks/motion_variational_fit.py "
-         f"chose on rendered scenes); the columns '{WITHOUT_REFINEMENT[2:]}' turn it off, and the speed table's "
-         "last two rows give its cost. The bars below are the defaults'."),
+        (f"The columns '{WITH_REFINEMENT[2:]}' run the machine with its variational refinement on "
+         f"(`[motion] variational_iterations = {variational.ITERATIONS}`, alpha {variational.ALPHA:g}: the "
+         "setting benchmarks/motion_variational_fit.py chose on rendered scenes); it is off by default for its "
+         "cost (the speed table's last two rows). The bars below are the defaults'."),
         "",
         (f"Bar (two frames, mean EPE of the 5 Middlebury pairs at most DIS medium's): {two:.3f} against "
          f"{dis_mean:.3f}, {'met' if two <= dis_mean else 'NOT met'}. Bar (no Middlebury pair worse than "

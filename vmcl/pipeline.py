@@ -390,9 +390,10 @@ class MotionConfig:
         The variational refinement (:func:`vmcl.early.variational.variational_refine`: its fixed-point
         iterations, >= 0, 0 for none, and its smoothness weight, >= 0) after the Lucas-Kanade steps and
         before the motion MRF: every pixel's flow answers to its own brightness and gradient and to its
-        neighbours' flow at once. The defaults are the refinement's own, fitted on rendered scenes
-        (benchmarks/motion_variational_fit.py); benchmarks/results/motion.md gives its time and its gain
-        on the real sequences.
+        neighbours' flow at once. Off by default (0 iterations). Set it to
+        :data:`vmcl.early.variational.ITERATIONS` for the setting fitted on rendered scenes
+        (benchmarks/motion_variational_fit.py; the alpha default is that fit's);
+        benchmarks/results/motion.md gives its time and its gain on the real sequences.
     """
 
     enabled: bool = True
@@ -409,7 +410,7 @@ class MotionConfig:
     lucas_kanade_iterations: int = lucas_kanade.ITERATIONS
     lucas_kanade_window: float = lucas_kanade.WINDOW
     lucas_kanade_highpass: float = lucas_kanade.HIGHPASS
-    variational_iterations: int = variational.ITERATIONS
+    variational_iterations: int = 0
     variational_alpha: float = variational.ALPHA
 
     def __post_init__(self) -> None:
@@ -634,19 +635,18 @@ class TimeConfig:
     predict_search : bool
         The previous flow, carried to the frame, predicts where the motion search looks: the finest level
         is searched around it as well as around the coarse-to-fine prediction, and each pixel keeps the
-        better match (:func:`vmcl.early.motion.flow`'s ``prediction``). On only if its error ratio to
-        time off on the training sequences is the lower (benchmarks/time_fit.py): off since the motion
-        cue's variational refinement is on.
+        better match (:func:`vmcl.early.motion.flow`'s ``prediction``). On by default: its error ratio
+        to time off on the training sequences was the lower (benchmarks/time_fit.py).
     """
 
     enabled: bool = True
-    gain: float = 0.0625
-    memory: float = 1.0
+    gain: float = 0.5
+    memory: float = 4.0
     tolerance: float = 0.05
-    jump: float = 0.125
+    jump: float = 0.25
     scene_cut: float = 0.5
     warm: bool = True
-    predict_search: bool = False
+    predict_search: bool = True
 
     def __post_init__(self) -> None:
         _check_field_types("time", self)
