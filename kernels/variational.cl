@@ -6,8 +6,8 @@
  *       + alpha psi(|grad(u + du)|^2 + |grad(v + dv)|^2),   psi(s) = sqrt(s + eps^2),
  * brightness constancy and gradient constancy linearised about the flow, and a robust smoothness of the
  * whole flow (Brox, Bruhn, Papenberg and Weickert, ECCV 2004). Lagged robust weights make each fixed-point
- * iteration a linear system, relaxed by red-black successive over-relaxation: a continuous MRF whose sites
- * each update from their four neighbours, one processor per pixel.
+ * iteration a linear system, relaxed by red-black successive over-relaxation on a multigrid: a continuous
+ * MRF whose sites each update from their four neighbours, one processor per pixel.
  *
  *   vr_terms    frame 1 read where the flow points (bilinearly) and the derivatives the energy needs, each
  *               the mean of frame 0's at x and frame 1's at x + (u, v) (the symmetric form; central

@@ -18,8 +18,8 @@ as the seed's MRFs are on the Connection Machine. Relaxation alone carries a cor
 sweep, so a flow that must spread across a wide region of weak texture needs hundreds of sweeps; a
 multigrid V-cycle relaxes the same system on a pyramid of 2 x 2 blocks (each level's correction solved on
 the next coarser one), which carries it twice as far per sweep at each coarser level (the solver Bruhn,
-Weickert et al. use to compute this functional in real time, IEEE TIP 2005). Brightness is counted in grey levels of 255 (the units
-alpha, delta and gamma are given in), the flow in pixels.
+Weickert et al. use to compute this functional in real time, IEEE TIP 2005). Brightness is counted in
+grey levels of 255 (the units alpha, delta and gamma are given in), the flow in pixels.
 
 The motion cue can run it after the Lucas-Kanade steps and before the motion MRF, whose line process keeps
 the boundaries (``[motion] variational_iterations``). It is off there by default for its cost (about half
