@@ -15,8 +15,9 @@ within one run mean anything. A profiled run gives the device time per kernel.
 Quality: the machine's defaults (nothing chosen here; benchmarks/motion_fit.py chose them on rendered
 scenes) on every flow folder of the data sets, in two-frame and sequence modes, and the same with the
 variational refinement on at the setting benchmarks/motion_variational_fit.py chose (off by default for
-its cost), beside DIS, Farneback and TV-L1 (vmcl.flow_evaluation). Streaming: the per-frame time of VisionMachine.stream against
-independent runs, all cues, at 256^2 and 512^2, and its flow stages against DIS medium.
+its cost), beside DIS, Farneback and TV-L1 (vmcl.flow_evaluation). Streaming: the per-frame time of
+VisionMachine.stream against independent runs, all cues, at 256^2 and 512^2, and its flow stages against DIS
+medium; with the defaults and with the variational refinement on.
 """
 
 from __future__ import annotations
@@ -158,30 +159,33 @@ def quality(root: Path, machine: vmcl.Machine) -> tuple[list[str], dict]:
 
 def streaming(machine: vmcl.Machine, frames: int) -> list[str]:
     """Per-frame time of the stream (temporal terms on) and of independent runs, all cues, and the flow
-    stages against DIS medium on the same frames."""
+    stages against DIS medium on the same frames: the machine's defaults, and the same with the variational
+    refinement on (REFINED's motion section, every other section the default)."""
     from vmcl.pipeline import VisionMachine
 
-    header = ("| size | stream ms per frame | independent runs ms per frame | stream / independent | flow stages ms "
-              "(stream) | DIS medium ms | flow stages / DIS |")
-    lines = [header, "|---|---|---|---|---|---|---|"]
+    header = ("| size | machine | stream ms per frame | independent runs ms per frame | stream / independent | "
+              "flow stages ms (stream) | DIS medium ms | flow stages / DIS |")
+    lines = [header, "|---|---|---|---|---|---|---|---|"]
     for size in (256, 512):
         lefts, rights = blocks_sequence(size, frames)
-        vm = VisionMachine(machine=machine)
-        streamed = steady_state(vm, lefts[:frames], rights)  # its warm-up builds every kernel the runs use too
-        alone = [vm.run(lefts[k], rights[k], lefts[k + 1]).total_ms for k in range(1, frames - 1)]
         grey = [np.clip(cv2.cvtColor(im, cv2.COLOR_RGB2GRAY) * 255, 0, 255).astype(np.uint8) for im in lefts]
-        dis_ms = []
-        for k in range(1, frames - 1):
-            start = time.perf_counter()
-            dis(grey[k], grey[k + 1])
-            dis_ms.append((time.perf_counter() - start) * 1e3)
-        stream_ms = streamed.median
-        alone_ms = statistics.median(alone)
-        flow_ms = statistics.median(s["motion"] + s["mrf motion"] for s in streamed.stages)
-        dis_median = statistics.median(dis_ms)
-        lines.append(f"| {size} x {size} | {stream_ms:.0f} | {alone_ms:.0f} | {stream_ms / alone_ms:.2f} | "
-                     f"{flow_ms:.0f} | {dis_median:.1f} | {flow_ms / dis_median:.1f} |")
-        print(lines[-1], flush=True)
+        for label, config in (("defaults", Config()), (WITH_REFINEMENT[2:], REFINED)):
+            vm = VisionMachine(config, machine=machine)
+            streamed = steady_state(vm, lefts[:frames], rights)  # its warm-up builds every kernel the runs use
+            alone = [vm.run(lefts[k], rights[k], lefts[k + 1]).total_ms for k in range(1, frames - 1)]
+            dis_ms = []
+            for k in range(1, frames - 1):
+                start = time.perf_counter()
+                dis(grey[k], grey[k + 1])
+                dis_ms.append((time.perf_counter() - start) * 1e3)
+            stream_ms = streamed.median
+            alone_ms = statistics.median(alone)
+            flow_ms = statistics.median(s["motion"] + s["mrf motion"] for s in streamed.stages)
+            dis_median = statistics.median(dis_ms)
+            lines.append(f"| {size} x {size} | {label} | {stream_ms:.0f} | {alone_ms:.0f} | "
+                         f"{stream_ms / alone_ms:.2f} | {flow_ms:.0f} | {dis_median:.1f} | "
+                         f"{flow_ms / dis_median:.1f} |")
+            print(lines[-1], flush=True)
     return lines
 
 
@@ -261,7 +265,8 @@ def main() -> None:
         ("Per-frame wall time of VisionMachine.stream (temporal terms on; after an untimed stream of its first "
          "frames, as benchmarks/pipeline.py times it) and of independent runs of the same frames, medians over the "
          "frames but the first and the last (no next frame); the flow stages are the motion module and its MRF "
-         "in the stream; DIS medium on the same grey frame pairs. Measured in one run on a shared machine: "
+         "in the stream; DIS medium on the same grey frame pairs. 'machine': the defaults, or the same with "
+         f"the{WITH_REFINEMENT[1:]} on (its cost to a stream). Measured in one run on a shared machine: "
          "compare within this table only."),
         "",
         *stream_lines,
