@@ -8,13 +8,14 @@ preset of vmcl.scenes at 256 x 256 and 384 x 384, motions scaled by 1, 2 and 4),
 frame's response changed (a camera's exposure changing between frames, which breaks brightness constancy
 and not gradient constancy). The pipeline runs with motion only and every other setting its default (the
 Lucas-Kanade steps included). Each setting of GRID (the fixed-point iterations, none included, and the
-smoothness weight alpha; vmcl.early.variational's DELTA, GAMMA, SWEEPS and multigrid as they are) is scored by the
-geometric mean of the restored flow's EPE over the scenes, as the Lucas-Kanade steps' fit scores (its
+smoothness weight alpha; vmcl.early.variational's DELTA, GAMMA, SWEEPS and multigrid as they are) is
+scored by the geometric mean of the restored flow's EPE over the scenes, as the Lucas-Kanade steps' fit scores (its
 docstring says why: a refinement is for sub-pixel precision, and the arithmetic mean is decided by the
 few scenes whose motion lies beyond the matcher's search). The rule: the fewest iterations among the
 settings within TOLERANCE of the best score (each iteration costs a multigrid V-cycle), then the best
 score among them. The choice is vmcl.early.variational's ALPHA and ITERATIONS (the refinement's own
-defaults, which ``[motion] variational_iterations`` and ``variational_alpha`` take). The arithmetic mean is
+defaults); the machine leaves the refinement off by default for its cost (``[motion]
+variational_iterations`` turns it on), which benchmarks/results/motion.md measures. The arithmetic mean is
 reported beside it.
 
 benchmarks/motion.py scores the real sequences with the defaults and chooses nothing.

@@ -14,9 +14,10 @@
  *               differences, the border pixel repeated outwards): Ix, Iy, Iz,
  *               Ixx, Ixy, Iyy, Ixz, Iyz, eight planes, the brightness in the units `gain` carries it to;
  *               zero where the flow is not finite or leaves frame 1 (no data: the smoothness fills in)
- *   vr_weights  the robust weights at the current step: each pixel's 2 x 2 data matrix and right-hand side
- *               and its smoothness weight (alpha psi' of the flow's gradient, from its forward
- *               differences), one float8 per pixel (a11, a12, a22, b1, b2, smoothness, unused, unused)
+ *   vr_weights  the robust weights at the current step: each pixel's 2 x 2 data matrix and right-hand side,
+ *               written into the pixel grid's system (a11, a12, a22, b1, b2, then zeros that vr_links
+ *               fills), and its smoothness weight (alpha psi' of the flow's gradient, from its forward
+ *               differences) into a plane of its own
  *   vr_links    the iteration's linear system on the pixel grid: each link's weight the mean of its two
  *               ends' smoothness weights (which keeps the system symmetric)
  *   vr_relax    one half-sweep of the over-relaxation over the pixels of one colour ((x + y) % 2 == parity),
@@ -31,7 +32,8 @@
  *
  * Layout: frames and planes row-major W x H float; the flow, the step, the unknowns and the residuals
  * H x W x 2 interleaved (u, v); the systems H x W float8.
- * One work-item per pixel.
+ * One work-item per pixel of the level it works on (per pixel of one colour for vr_relax, per coarse pixel
+ * for vr_restrict).
  */
 #include "vmcl.h"
 #include "sampling.h"

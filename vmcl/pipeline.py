@@ -390,7 +390,7 @@ class MotionConfig:
         The variational refinement (:func:`vmcl.early.variational.variational_refine`: its fixed-point
         iterations, >= 0, 0 for none, and its smoothness weight, >= 0) after the Lucas-Kanade steps and
         before the motion MRF: every pixel's flow answers to its own brightness and gradient and to its
-        neighbours' flow at once. Off by default (0 iterations). Set it to
+        neighbours' flow at once. Off by default (0 iterations) for its cost. Set it to
         :data:`vmcl.early.variational.ITERATIONS` for the setting fitted on rendered scenes
         (benchmarks/motion_variational_fit.py; the alpha default is that fit's);
         benchmarks/results/motion.md gives its time and its gain on the real sequences.

@@ -64,23 +64,29 @@ iteration."""
 # Not fitted: the value OpenCV's VariationalRefinement documents.
 RELAXATION = 1.6
 """The over-relaxation factor (1: Gauss-Seidel)."""
+# COARSEST and COARSEST_SWEEPS are not fitted: a level of a few dozen pixels costs its launches more than its
+# work, and each iteration's V-cycle goes on from where the last one's coarsest sweeps stopped.
 COARSEST = 8
 """The multigrid coarsens until the smaller side would fall below this many pixels."""
 COARSEST_SWEEPS = 10
 """Over-relaxation sweeps on the coarsest level, whose few pixels take them cheaply."""
+# Not fitted: derived (kernels/variational.cl's vr_restrict says how).
 LINK_SCALE = 0.5
-"""A coarse link's weight per fine link crossing between its blocks (see vr_restrict)."""
+"""A coarse link's weight per fine link crossing between its blocks: a piecewise-constant correction over
+2 x 2 blocks doubles a smoothness term's stiffness, which this halves."""
 EPSILON = 0.001
 """psi's smoothing (its square is added under the root): keeps the weights finite where a term vanishes."""
 PRESMOOTH = 1.0
 """The frames' Gaussian smoothing (pixels) before the derivatives are taken (the Lucas-Kanade steps' own)."""
 
 _GREY_LEVELS = 255.0
-_FOOTPRINT = 4 * (2 + 2 + 2 + 8 + 8 + 1 + 2 + 4 + 2 + 1)
-"""Device bytes per pixel at most: the flow, its step, two smoothed frames, eight derivative planes, the
-linear system (eight), the smoothness weight, the residual, the coarser levels' systems, unknowns and
-residuals (a third of twelve), the two frames uploaded as float32 grey, a Gaussian's plane
-between its passes."""
+_FOOTPRINT = 4 * (2 + 2 + 2 + 8 + 1 + 2 + 1)
+"""Device bytes per pixel of the pixel grid besides the multigrid's levels: the flow, its step, two smoothed
+frames, eight derivative planes, the smoothness weight, the two frames uploaded as float32 grey, a
+Gaussian's plane between its passes."""
+_LEVEL_FOOTPRINT = 4 * (8 + 2 + 2)
+"""Device bytes per pixel of each multigrid level: its system, its unknown (the pixel grid's is the step) and
+its residual (none on the coarsest)."""
 
 
 def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, alpha: float = ALPHA,
@@ -134,8 +140,10 @@ def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *,
         levels = check_int(levels, "levels", minimum=1, maximum=64)
     height, width = data.shape[:2]
     pixels = height * width
-    machine.require_memory(f"the variational refinement of a {height} x {width} flow", _FOOTPRINT * pixels,
-                           8 * pixels)
+    shapes = _level_shapes(height, width, levels)
+    machine.require_memory(f"the variational refinement of a {height} x {width} flow",
+                           _FOOTPRINT * pixels + sum(_LEVEL_FOOTPRINT * h * w for h, w in shapes),
+                           32 * pixels)  # the largest buffers: the derivative planes, the pixel grid's system
     # The frames are checked (and smoothed) even for no iterations: bad frames are refused whatever the count.
     f0, f1, gain = smoothed_frames(frame0, frame1, (PRESMOOTH,), machine)
     out = data if host else data.copy()  # refined in place on a flow of its own
@@ -146,7 +154,7 @@ def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *,
     smooth = machine.empty((height, width), np.float32)
     step = machine.empty((height, width, 2), np.float32)
     step.fill(0)
-    grid = _Multigrid(machine, step, _level_shapes(height, width, levels), sweeps)
+    grid = _Multigrid(machine, step, shapes, sweeps)
     machine.launch(machine.kernel("variational", "vr_terms"), (width, height), f0, f1, out,
                    np.float32(gain * _GREY_LEVELS), terms, *dims)
     weights = machine.kernel("variational", "vr_weights")
@@ -166,7 +174,7 @@ def _level_shapes(height: int, width: int, levels: int | None) -> list[tuple[int
     shapes = [(height, width)]
     while len(shapes) < (levels or 1000):
         h, w = shapes[-1]
-        if levels is None and min(h, w) < 2 * COARSEST or h == w == 1:
+        if (levels is None and (min(h, w) + 1) // 2 < COARSEST) or h == w == 1:
             break
         shapes.append(((h + 1) // 2, (w + 1) // 2))
     return shapes
