@@ -313,6 +313,16 @@ def time_fit_figures(f: ResultsFile) -> str:
             f"disparity errors {shipped}x those with time off)")
 
 
+def time_variational_fit_figures(f: ResultsFile) -> str:
+    chosen = re.search(r"Chosen \(lowest score, then the smaller weight\): (flow_prior [\d.]+) \(score ([\d.]+); "
+                       r"the MRF's temporal terms alone ([\d.]+)\)", f.text)
+    if not chosen:
+        raise LookupError("time_variational_fit.md states no choice of the flow prior")
+    setting, found, alone = chosen.groups()
+    return (f"chosen on rendered sequences with the variational refinement on: {setting} (flow and disparity "
+            f"errors {found}x those with time off; the MRF's temporal terms alone {alone}x)")
+
+
 def texture_fit_figures(f: ResultsFile) -> str:
     factor = stated_choice(f).removeprefix("noise_factor = ")
     held = re.search(r"texture-line F textures ([\d.]+), cues ([\d.]+)", f.text)
@@ -683,6 +693,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("motion_variational_fit", ("the motion cue's variational refinement (its iterations and smoothness weight) "
                                 "chosen on rendered scenes"), motion_variational_fit_figures),
     ("time_fit", "the temporal terms' defaults chosen on rendered sequences", time_fit_figures),
+    ("time_variational_fit", ("the variational refinement's pull towards the previous flow chosen on rendered "
+                              "sequences"), time_variational_fit_figures),
     ("texture_fit", "the texture-edge candidates' noise factor chosen on rendered scenes; the photo mosaic",
      texture_fit_figures),
     ("early", "colour and texture against NumPy/SciPy", early_figures),

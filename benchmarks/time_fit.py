@@ -17,6 +17,7 @@ sequences are scored by benchmarks/motion.py, which chooses nothing.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import datetime
 import itertools
 import platform
@@ -48,22 +49,37 @@ def errors(results, frames) -> tuple[float, float]:
     return float(np.mean(flow)), float(np.mean(disparity))
 
 
+def training_sequences() -> dict[str, list]:
+    """The rendered training sequences, by preset."""
+    return {name: scenes.render_sequence(scenes.preset(name, shape=(SIZE, SIZE)), FRAMES, seed=1, noise=NOISE,
+                                         wobble=WOBBLE) for name in PRESETS}
+
+
+def stream_errors(machine: vmcl.Machine, sequences: dict[str, list], config: Config) -> dict[str, tuple[float, float]]:
+    """errors() of each sequence streamed by the machine with ``config`` (colour and texture off)."""
+    vm = VisionMachine(dataclasses.replace(config, colour=ColourConfig(enabled=False),
+                                           texture=TextureConfig(enabled=False)), machine=machine)
+    out = {}
+    for name, frames in sequences.items():
+        lefts, rights = [f.left for f in frames], [f.right for f in frames]
+        out[name] = errors(list(vm.stream(lefts, rights)), frames)
+    return out
+
+
+def score(found: dict[str, tuple[float, float]], off: dict[str, tuple[float, float]]) -> float:
+    """The mean over the sequences of the mean of the flow's and the disparity's error ratios to ``off``'s."""
+    return float(np.mean([(found[n][0] / off[n][0] + found[n][1] / off[n][1]) / 2 for n in PRESETS]))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=RESULTS / "time_fit.md")
     args = parser.parse_args()
     machine = vmcl.Machine()
-    sequences = {name: scenes.render_sequence(scenes.preset(name, shape=(SIZE, SIZE)), FRAMES, seed=1, noise=NOISE,
-                                              wobble=WOBBLE) for name in PRESETS}
+    sequences = training_sequences()
 
     def stream(time: TimeConfig) -> dict[str, tuple[float, float]]:
-        vm = VisionMachine(Config(time=time, colour=ColourConfig(enabled=False), texture=TextureConfig(enabled=False)),
-                           machine=machine)
-        out = {}
-        for name, frames in sequences.items():
-            lefts, rights = [f.left for f in frames], [f.right for f in frames]
-            out[name] = errors(list(vm.stream(lefts, rights)), frames)
-        return out
+        return stream_errors(machine, sequences, Config(time=time))
 
     off = stream(TimeConfig(enabled=False))
     print("off", off, flush=True)
@@ -72,9 +88,8 @@ def main() -> None:
         # The grid is scored with the search unpredicted, as it was before that switch was fitted (below):
         # its default must not decide the grid it is then fitted on.
         found = stream(TimeConfig(gain=gain, memory=memory, jump=jump, predict_search=False))
-        ratios = [(found[n][0] / off[n][0] + found[n][1] / off[n][1]) / 2 for n in PRESETS]
-        rows[(gain, memory, jump)] = (float(np.mean(ratios)), found)
-        print(gain, memory, jump, f"{np.mean(ratios):.3f}", flush=True)
+        rows[(gain, memory, jump)] = (score(found, off), found)
+        print(gain, memory, jump, f"{rows[(gain, memory, jump)][0]:.3f}", flush=True)
     best = min(rows, key=lambda key: rows[key][0])
     header = " | ".join(f"{n} flow EPE / disparity error" for n in PRESETS)
     lines = [
@@ -92,8 +107,8 @@ def main() -> None:
         "|---|---|---|---|" + "---|" * len(PRESETS),
         "| time off | | | 1.000 | " + " | ".join(f"{off[n][0]:.3f} / {off[n][1]:.3f}" for n in PRESETS) + " |",
     ]
-    for (gain, memory, jump), (score, found) in sorted(rows.items(), key=lambda item: item[1][0]):
-        lines.append(f"| {gain} | {memory} | {jump} | {score:.3f} | "
+    for (gain, memory, jump), (found_score, found) in sorted(rows.items(), key=lambda item: item[1][0]):
+        lines.append(f"| {gain} | {memory} | {jump} | {found_score:.3f} | "
                      + " | ".join(f"{found[n][0]:.3f} / {found[n][1]:.3f}" for n in PRESETS) + " |")
     gain, memory, jump = best
     lines += ["", f"Chosen (lowest score): gain {gain}, memory {memory}, jump {jump}.", ""]
@@ -101,16 +116,15 @@ def main() -> None:
     searched = {}
     for predict in (False, True):
         found = stream(TimeConfig(gain=gain, memory=memory, jump=jump, predict_search=predict))
-        ratios = [(found[n][0] / off[n][0] + found[n][1] / off[n][1]) / 2 for n in PRESETS]
-        searched[predict] = (float(np.mean(ratios)), found)
-        print("predict_search", predict, f"{np.mean(ratios):.3f}", flush=True)
+        searched[predict] = (score(found, off), found)
+        print("predict_search", predict, f"{searched[predict][0]:.3f}", flush=True)
     lines += ["## The motion search predicted by the previous flow", "",
               ("At the chosen configuration, [time] predict_search off and on (the finest level searched around "
                "the previous flow, carried to the frame, as well as around the coarse-to-fine prediction; each "
                "pixel keeps the better match), scored as above."), "",
               f"| predict_search | score | {header} |", "|---|---|" + "---|" * len(PRESETS)]
-    for predict, (score, found) in searched.items():
-        lines.append(f"| {'on' if predict else 'off'} | {score:.3f} | "
+    for predict, (found_score, found) in searched.items():
+        lines.append(f"| {'on' if predict else 'off'} | {found_score:.3f} | "
                      + " | ".join(f"{found[n][0]:.3f} / {found[n][1]:.3f}" for n in PRESETS) + " |")
     chosen = searched[True][0] < searched[False][0]
     lines += ["", f"Chosen: predict_search {'on' if chosen else 'off'} (on only if it scores lower).", ""]

@@ -14,7 +14,8 @@
  *               differences, the border pixel repeated outwards): Ix, Iy, Iz,
  *               Ixx, Ixy, Iyy, Ixz, Iyz, eight planes, the brightness in the units `gain` carries it to;
  *               zero where the flow is not finite or leaves frame 1 (no data: the smoothness fills in)
- *   vr_weights  the robust weights at the current step: each pixel's 2 x 2 data matrix and right-hand side,
+ *   vr_weights  the robust weights at the current step: each pixel's 2 x 2 data matrix and right-hand side
+ *               (with the pull towards a prior flow, beta psi(|(u, v) + w - prior|^2), where one is given),
  *               written into the pixel grid's system (a11, a12, a22, b1, b2, then zeros that vr_links
  *               fills), and its smoothness weight (alpha psi' of the flow's gradient, from its forward
  *               differences) into a plane of its own
@@ -73,8 +74,8 @@ __kernel void vr_terms(__global const float *f0, __global const float *f1, __glo
 }
 
 __kernel void vr_weights(__global const float *terms, __global const float *flow, __global const float *step,
-                         float delta, float gamma, float alpha, float eps2, __global float8 *system,
-                         __global float *smooth, long W, long H)
+                         __global const float *prior, float beta, float delta, float gamma, float alpha,
+                         float eps2, __global float8 *system, __global float *smooth, long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -101,9 +102,22 @@ __kernel void vr_weights(__global const float *terms, __global const float *flow
     }
     /* a pixel without a flow links to none */
     smooth[i] = isfinite(w.x) && isfinite(w.y) ? alpha * 0.5f * rsqrt(s + eps2) : 0.0f;
-    system[i] = (float8)(wd * ix * ix + wg * (ixx * ixx + ixy * ixy), wd * ix * iy + wg * (ixx * ixy + ixy * iyy),
-                         wd * iy * iy + wg * (ixy * ixy + iyy * iyy), wd * ix * iz + wg * (ixx * ixz + ixy * iyz),
-                         wd * iy * iz + wg * (ixy * ixz + iyy * iyz), 0.0f, 0.0f, 0.0f);
+    /* the pull towards the prior flow (none where it has no value): beta psi(|w - prior|^2) */
+    float wp = 0.0f;
+    float2 gap = (float2)(0.0f);
+    if (beta > 0.0f) {
+        float2 p = vload2(i, prior);
+        if (isfinite(p.x) && isfinite(p.y)) {
+            gap = vload2(i, flow) - p;
+            float2 g = gap + d;
+            wp = beta * 0.5f * rsqrt(dot(g, g) + eps2);
+        }
+    }
+    system[i] = (float8)(wd * ix * ix + wg * (ixx * ixx + ixy * ixy) + wp,
+                         wd * ix * iy + wg * (ixx * ixy + ixy * iyy),
+                         wd * iy * iy + wg * (ixy * ixy + iyy * iyy) + wp,
+                         wd * ix * iz + wg * (ixx * ixz + ixy * iyz) + wp * gap.x,
+                         wd * iy * iz + wg * (ixy * ixz + iyy * iyz) + wp * gap.y, 0.0f, 0.0f, 0.0f);
 }
 
 /* The linear system of a fixed-point iteration, on any level of the multigrid: per pixel one float8

@@ -104,6 +104,21 @@ def test_the_multigrid_and_relaxation_on_the_pixel_grid_reach_the_same_solution(
                   - oracle[known]).max() > 1e-3
 
 
+def test_a_prior_pulls_the_flow_where_it_has_a_value(machine):
+    """A prior 0.3 px off the truth over the right half of the frame, NaN (no pull) over the left: a heavy pull
+    holds the right half at the prior; the left half's flow answers to its frames."""
+    frame0, frame1 = translated()
+    start = rough_start(frame0.shape)
+    prior = np.broadcast_to(np.array(TRUE, np.float32) + np.float32(0.3), start.shape).copy()
+    prior[:, :70] = np.nan
+    found = variational_refine(start, frame0, frame1, prior=prior, beta=1e4, machine=machine)
+    truth = np.array(TRUE, np.float32)
+    assert np.abs(found[20:100, 85:125] - truth).mean() == pytest.approx(0.3, abs=0.01)  # the prior's offset
+    assert np.abs(found[20:100, 15:55] - truth).mean() < 0.06  # measured 0.038
+    np.testing.assert_array_equal(variational_refine(start, frame0, frame1, prior=prior, beta=0.0, machine=machine),
+                                  variational_refine(start, frame0, frame1, machine=machine))
+
+
 def test_pixels_without_flow_keep_it_and_pass_nothing_on(machine):
     frame0, frame1 = translated()
     start = rough_start(frame0.shape)
@@ -157,6 +172,9 @@ def test_the_motion_cue_takes_the_refinement(machine):
     ({"sweeps": 0}, InputValueError, "sweeps"),
     ({"levels": 0}, InputValueError, "levels"),
     ({"levels": 2.5}, InputTypeError, "levels"),
+    ({"prior": np.zeros((6, 5, 2), np.float32)}, InputValueError, "prior must have the flow's shape"),
+    ({"prior": np.zeros((6, 6, 2), np.float64)}, InputTypeError, "prior must have dtype float32"),
+    ({"beta": -1.0}, InputValueError, "beta"),
 ])
 def test_bad_input_is_refused_naming_it(kwargs, error, pattern, machine):
     call = {"flow": np.zeros((6, 6, 2), np.float32), "frame0": np.zeros((6, 6), np.float32),

@@ -78,6 +78,7 @@ def test_a_config_made_in_python_is_checked_when_made():
                                            ("[motion]\nvariational_iterations = -1\n",
                                             "motion.variational_iterations"),
                                            ("[motion]\nvariational_alpha = -1\n", "motion.variational_alpha"),
+                                           ("[time]\nflow_prior = -1\n", "time.flow_prior"),
                                            ("[colour]\nthreshold = -1\n", "colour.threshold"),
                                            ("[texture]\nradius = 0\n", "texture.radius"),
                                            ("[texture]\nthreshold = 0\n", "texture.threshold"),

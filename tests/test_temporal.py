@@ -182,6 +182,47 @@ def test_the_previous_flow_predicts_the_motion_search(machine, monkeypatch):
                                        np.median(previous.reshape(-1, 2), axis=0), atol=0.1)
 
 
+def test_the_previous_flow_pulls_the_variational_refinement_only_when_asked(machine, monkeypatch):
+    """[time] flow_prior gives the refinement the carried flow as its prior (frames but the first), with the
+    refinement on; the motion search is then not predicted unless predict_search says so; with the
+    refinement off, nothing is carried for it."""
+    import vmcl.cues.motion as motion_cue
+    from vmcl.early import motion
+
+    searched, pulled = [], []
+    real_flow, real_refine = motion.flow, motion_cue.variational_refine
+
+    def recording_flow(*args, **kwargs):
+        searched.append(kwargs.get("prediction") is not None)
+        return real_flow(*args, **kwargs)
+
+    def recording_refine(*args, **kwargs):
+        prior = kwargs.get("prior")
+        pulled.append((None if prior is None else prior.get(), kwargs.get("beta")))
+        return real_refine(*args, **kwargs)
+
+    monkeypatch.setattr(motion, "flow", recording_flow)
+    monkeypatch.setattr(motion_cue, "variational_refine", recording_refine)
+    frames = scenes.render_sequence(scenes.preset("blocks", shape=(64, 64)), 4, seed=1, noise=0.02)
+    lefts, rights = [f.left for f in frames], [f.right for f in frames]
+    refined = MotionConfig(variational_iterations=3)
+    time = TimeConfig(predict_search=False, flow_prior=2.0)
+    streamed = list(VisionMachine(Config(motion=refined, time=time, **_DEPTH_AND_MOTION),
+                                  machine=machine).stream(iter(lefts), iter(rights)))
+    assert searched == [False, False, False]
+    assert pulled[0] == (None, 0.0)
+    for k in (1, 2):
+        prior, beta = pulled[k]
+        assert beta == 2.0 and prior.shape == (64, 64, 2)
+        carried = np.isfinite(prior).all(axis=-1)
+        assert carried.mean() > 0.5
+        np.testing.assert_allclose(np.median(prior[carried], axis=0),
+                                   np.median(streamed[k - 1].flow.reshape(-1, 2), axis=0), atol=0.1)
+    searched.clear()
+    list(VisionMachine(Config(time=time, **_DEPTH_AND_MOTION), machine=machine).stream(iter(lefts), iter(rights)))
+    assert searched == [False, False, False]  # the refinement off: no flow carried, none searched around
+
+
 def test_at_a_scene_cut_time_breaks_and_the_frame_starts_cold(machine):
     first = scenes.render_sequence(scenes.preset("blocks", shape=(80, 80)), 3, seed=1, noise=0.02)
     second = scenes.render_sequence(scenes.preset("corridor", shape=(80, 80)), 2, seed=1, noise=0.02)

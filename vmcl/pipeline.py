@@ -637,6 +637,12 @@ class TimeConfig:
         is searched around it as well as around the coarse-to-fine prediction, and each pixel keeps the
         better match (:func:`vmcl.early.motion.flow`'s ``prediction``). On by default: its error ratio
         to time off on the training sequences was the lower (benchmarks/time_fit.py).
+    flow_prior : float
+        >= 0: the weight of the motion cue's variational refinement's pull towards the previous frame's
+        flow carried to this one (``beta`` of :func:`vmcl.early.variational.variational_refine`; none where
+        time is broken); 0, none. It acts only when ``[motion] variational_iterations`` > 0. Default 0:
+        fitted on rendered sequences with the refinement on (benchmarks/time_variational_fit.py), every
+        weight scored worse than none, the sequences' speeds changing from frame to frame.
     """
 
     enabled: bool = True
@@ -647,6 +653,7 @@ class TimeConfig:
     scene_cut: float = 0.5
     warm: bool = True
     predict_search: bool = True
+    flow_prior: float = 0.0
 
     def __post_init__(self) -> None:
         _check_field_types("time", self)
@@ -655,6 +662,7 @@ class TimeConfig:
         check_real(self.tolerance, "time.tolerance", above=0)
         check_real(self.jump, "time.jump", above=0)
         check_real(self.scene_cut, "time.scene_cut", above=0, maximum=1)
+        check_real(self.flow_prior, "time.flow_prior", minimum=0, maximum=1e6)
 
     def memory_of(self, machine: Machine) -> temporal.Memory:
         """A new stream's :class:`vmcl.temporal.Memory` with these settings."""
@@ -1009,7 +1017,9 @@ class _Run:
                 image_boundaries = on_device(boundary_probability.boundary_probability(left,
                                                                                        machine=self.m).probability)
         prediction = None
-        if self.carries and self.c.time.predict_search and "next" in others:
+        # The previous flow carried to this frame: for the motion search, and for the refinement's prior.
+        wants_prior = self.c.time.flow_prior > 0 and self.c.motion.variational_iterations > 0
+        if self.carries and (self.c.time.predict_search or wants_prior) and "next" in others:
             carried = memory.carry("motion") if memory is not None else None
             prediction = carried.prediction if carried is not None else None
         run = RunInputs(self.m, self.c, left, others_d.get("right"), others_d.get("next"), brightness, prediction)

@@ -39,7 +39,8 @@ class RunInputs:
         Canny's brightness edges (0/1), the coupling of the piecewise smooth cues.
     motion_prediction : device float32 (H, W, 2), or None
         In a stream, the previous frame's flow carried to this one (NaN where time is broken), which
-        predicts where the motion search looks (:attr:`vmcl.pipeline.TimeConfig.predict_search`).
+        predicts where the motion search looks (:attr:`vmcl.pipeline.TimeConfig.predict_search`) and
+        pulls the variational refinement (:attr:`vmcl.pipeline.TimeConfig.flow_prior`).
     """
 
     machine: Machine

@@ -49,7 +49,9 @@ class MotionCue(CueModule):
         if levels is None:
             levels = motion.pyramid_levels(tuple(run.left.shape), patch=mc.patch, delta=mc.delta)
         found = motion.flow(run.left, run.needed("next"), delta=mc.delta, patch=mc.patch, levels=levels,
-                            features=mc.features, prediction=run.motion_prediction, machine=run.machine)
+                            features=mc.features,
+                            prediction=run.motion_prediction if run.config.time.predict_search else None,
+                            machine=run.machine)
         confidence = (on_device(score_confidence(found.score, floor=self.floor(mc.confidence_floor, mc.features),
                                                  machine=run.machine))
                       if mc.weigh_by_score else None)
@@ -62,9 +64,12 @@ class MotionCue(CueModule):
                                               iterations=mc.lucas_kanade_iterations,
                                               highpass=mc.lucas_kanade_highpass, machine=run.machine))
         if mc.variational_iterations:
+            pull = run.config.time.flow_prior if run.motion_prediction is not None else 0.0
             measured = on_device(variational_refine(measured, run.left, run.needed("next"),
                                                     alpha=mc.variational_alpha,
-                                                    iterations=mc.variational_iterations, machine=run.machine))
+                                                    iterations=mc.variational_iterations,
+                                                    prior=run.motion_prediction if pull else None, beta=pull,
+                                                    machine=run.machine))
         return Measurement(measured, confidence, run.brightness, fields={"raw_flow": flow},
                            notes=(self.limit_note(found.limit_share, motion.reach(mc.delta, levels), levels)
                                   + self.sparse_note(found.found_share, mc.features, mc.patch)))

@@ -34,10 +34,11 @@ a theory for warping", ECCV 2004. A. Bruhn, J. Weickert, C. Feddern, T. Kohlberg
 from __future__ import annotations
 
 import numpy as np
+import pyopencl.array as cl_array
 
-from vmcl.cm.core import ArrayLike, check_int, check_real, machine_for, result
+from vmcl.cm.core import ArrayLike, check_int, check_real, field, machine_for, result
 from vmcl.early.flow_frames import check_flow_frames, smoothed_frames
-from vmcl.errors import InputValueError
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 __all__ = ["ALPHA", "COARSEST", "COARSEST_SWEEPS", "DELTA", "EPSILON", "GAMMA", "ITERATIONS", "LINK_SCALE",
@@ -91,8 +92,8 @@ its residual (none on the coarsest)."""
 
 def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *, alpha: float = ALPHA,
                        delta: float = DELTA, gamma: float = GAMMA, iterations: int = ITERATIONS,
-                       sweeps: int = SWEEPS, levels: int | None = None,
-                       machine: Machine | None = None) -> ArrayLike:
+                       sweeps: int = SWEEPS, levels: int | None = None, prior: ArrayLike | None = None,
+                       beta: float = 0.0, machine: Machine | None = None) -> ArrayLike:
     """Refine a dense flow by minimising brightness and gradient constancy against a robust smoothness.
 
     Parameters
@@ -116,6 +117,12 @@ def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *,
     levels : int, optional
         >= 1: the multigrid's levels, the pixel grid included (1: plain over-relaxation, ``sweeps`` per
         iteration). By default as many as halve the smaller side down to COARSEST pixels.
+    prior : float32 (H, W, 2) array or device array, optional
+        A flow the result is pulled towards, with weight ``beta`` (the energy gains beta psi(|w - prior|^2)):
+        in a stream, the previous frame's flow carried to this one. NaN where it has no value (no pull
+        there). NumPy or device array as the flow is.
+    beta : float
+        >= 0: the prior's weight (0: none; ignored without a prior).
     machine : vmcl.Machine, optional
 
     Returns
@@ -138,6 +145,15 @@ def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *,
     sweeps = check_int(sweeps, "sweeps", minimum=1, maximum=1000)
     if levels is not None:
         levels = check_int(levels, "levels", minimum=1, maximum=64)
+    beta = check_real(beta, "beta", minimum=0, maximum=1e6)
+    pulled_to, pull = data, 0.0  # no prior: the kernel reads no buffer of it (beta 0); the flow stands in
+    if prior is not None:
+        if isinstance(prior, cl_array.Array) == host:
+            raise InputTypeError("flow and prior must both be NumPy arrays or both device arrays")
+        pulled_to, _ = field(prior, "prior", machine, ndims=(3,), dtypes=(np.float32,))
+        if pulled_to.shape != data.shape:
+            raise InputValueError(f"prior must have the flow's shape {data.shape}, got {pulled_to.shape}")
+        pull = beta
     height, width = data.shape[:2]
     pixels = height * width
     shapes = _level_shapes(height, width, levels)
@@ -160,8 +176,9 @@ def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *,
     weights = machine.kernel("variational", "vr_weights")
     links = machine.kernel("variational", "vr_links")
     for _ in range(iterations):
-        machine.launch(weights, (width, height), terms, out, step, np.float32(delta), np.float32(gamma),
-                       np.float32(alpha), np.float32(EPSILON ** 2), grid.systems[0], smooth, *dims)
+        machine.launch(weights, (width, height), terms, out, step, pulled_to, np.float32(pull),
+                       np.float32(delta), np.float32(gamma), np.float32(alpha), np.float32(EPSILON ** 2),
+                       grid.systems[0], smooth, *dims)
         machine.launch(links, (width, height), smooth, out, grid.systems[0], *dims)
         grid.cycle()
     machine.launch(machine.kernel("variational", "vr_apply"), (width, height), out, step, *dims)
