@@ -31,9 +31,9 @@ from vmcl.early import variational
 from vmcl.pipeline import Config, MotionConfig, TimeConfig
 
 BETAS = (0.0, 0.25, 1.0, 4.0, 16.0, 64.0)
-"""The pull's weight (grey levels of 255 squared per pixel of flow, as the refinement's alpha): a pull of
-100 already holds a textured pixel's flow at the prior's (tests/test_early_variational.py), so the grid
-spans the weak end in steps of 4."""
+"""The pull's weight (grey levels of 255 squared per pixel of flow, as the refinement's alpha): none, then
+from far below the smoothness weight (vmcl.early.variational.ALPHA, 160) to below it, in steps of 4. A pull
+of 10^4 holds a textured pixel's flow at the prior's (tests/test_early_variational.py)."""
 
 
 def main() -> None:

@@ -22,9 +22,9 @@ Weickert et al. use to compute this functional in real time, IEEE TIP 2005). Bri
 grey levels of 255 (the units alpha, delta and gamma are given in), the flow in pixels.
 
 The motion cue can run it after the Lucas-Kanade steps and before the motion MRF, whose line process keeps
-the boundaries (``[motion] variational_iterations``). It is off there by default for its cost (about half
-again the motion-only machine's time on a CPU, and more on small frames, whose coarse levels cost launches
-more than work); benchmarks/results/motion.md gives its cost and its gain on the real sequences.
+the boundaries (``[motion] variational_iterations``). It is off there by default for its cost:
+benchmarks/results/motion.md gives the motion-only machine's time and a stream's with and without it, and
+its gain on the real sequences.
 
 References: T. Brox, A. Bruhn, N. Papenberg and J. Weickert, "High accuracy optical flow estimation based on
 a theory for warping", ECCV 2004. A. Bruhn, J. Weickert, C. Feddern, T. Kohlberger and C. Schnoerr,
