@@ -33,6 +33,7 @@ __all__ = [
     "check_int",
     "check_real",
     "check_real_dtype",
+    "check_same_kind",
     "check_sigma",
     "check_unit_image",
     "check_unmasked",
@@ -274,6 +275,13 @@ def check_context(x: cl_array.Array, name: str, machine: Machine) -> None:
     if x.context != machine.context:
         raise InputValueError(f"{name} lives on another OpenCL context than the machine's ({machine!r}); "
                               f"copy it through the host")
+
+
+def check_same_kind(first: str, first_host: bool, second: str, second_host: bool) -> None:
+    """Refuse two arrays of one call that are not both NumPy arrays or both device arrays (``*_host``: whether
+    each is a NumPy array): a call returns what it was given, and mixed kinds leave that undecided."""
+    if first_host != second_host:
+        raise InputTypeError(f"{first} and {second} must both be NumPy arrays or both device arrays")
 
 
 def check_unmasked(x: Any, name: str) -> None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import IMAGE_TYPES, ArrayLike, check_unit_image, field, finite_float32
+from vmcl.cm.core import IMAGE_TYPES, ArrayLike, check_same_kind, check_unit_image, field, finite_float32
 from vmcl.early.filters import separable_gaussian
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
@@ -35,8 +35,7 @@ def check_flow_frames(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike,
     for name, frame in (("frame0", frame0), ("frame1", frame1)):
         if not isinstance(frame, (np.ndarray, cl_array.Array)):
             raise InputTypeError(f"{name} must be a NumPy array or a device array, got {type(frame).__name__}")
-        if isinstance(frame, cl_array.Array) == host:
-            raise InputTypeError(f"flow and {name} must both be NumPy arrays or both device arrays")
+        check_same_kind("flow", host, name, not isinstance(frame, cl_array.Array))
         if frame.shape[:2] != data.shape[:2]:
             raise InputValueError(f"flow and {name} must have the same height and width, got flow {data.shape} "
                                   f"and {name} {frame.shape}")

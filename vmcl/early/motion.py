@@ -32,7 +32,16 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import scan
-from vmcl.cm.core import ArrayLike, check_bool, check_choice, check_int, check_real, field, machine_for
+from vmcl.cm.core import (
+    ArrayLike,
+    check_bool,
+    check_choice,
+    check_int,
+    check_real,
+    check_same_kind,
+    field,
+    machine_for,
+)
 from vmcl.early import edges as _edges
 from vmcl.early import filters as _filters
 from vmcl.early.sign_correlation import arcsine_law
@@ -130,8 +139,7 @@ def _frames(frame0, frame1, machine: Machine) -> tuple[cl_array.Array, cl_array.
             raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {data.shape}")
         devices.append((data, host))
     (d0, host0), (d1, host1) = devices
-    if host0 != host1:
-        raise InputTypeError("frame0 and frame1 must both be NumPy arrays or both device arrays")
+    check_same_kind("frame0", host0, "frame1", host1)
     if d0.shape != d1.shape:
         raise InputValueError(f"frame0 and frame1 must have the same shape, got {d0.shape} and {d1.shape}")
     return d0, d1, host0

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import ArrayLike, check_int, check_real, field, machine_for, result
+from vmcl.cm.core import ArrayLike, check_int, check_real, check_same_kind, field, machine_for, result
 from vmcl.cm.reduce import extremes
 from vmcl.early.weighted_median import weighted_median
 from vmcl.errors import InputTypeError, InputValueError
@@ -87,8 +87,7 @@ def refine_flow(flow: ArrayLike, image: ArrayLike, *, radius: int = REFINE_RADIU
         raise InputValueError(f"flow must have two components (H, W, 2), got shape {data.shape}")
     if not isinstance(image, (np.ndarray, cl_array.Array)):
         raise InputTypeError(f"image must be a NumPy array or a device array, got {type(image).__name__}")
-    if isinstance(image, cl_array.Array) == host:
-        raise InputTypeError("flow and image must both be NumPy arrays or both device arrays")
+    check_same_kind("flow", host, "image", not isinstance(image, cl_array.Array))
     if image.shape[:2] != data.shape[:2]:
         raise InputValueError(f"flow and image must have the same height and width, got flow {data.shape} and "
                               f"image {image.shape}")

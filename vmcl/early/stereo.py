@@ -41,6 +41,7 @@ from vmcl.cm.core import (
     check_context,
     check_int,
     check_real,
+    check_same_kind,
     check_unmasked,
     machine_for,
 )
@@ -108,8 +109,7 @@ def check_pair(left: Any, right: Any, machine: Machine) -> None:
                                  f"host), got {image.dtype}")
         if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] != 3):
             raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {image.shape}")
-    if isinstance(left, np.ndarray) != isinstance(right, np.ndarray):
-        raise InputTypeError("left and right must both be NumPy arrays or both device arrays")
+    check_same_kind("left", isinstance(left, np.ndarray), "right", isinstance(right, np.ndarray))
     if left.shape != right.shape:
         raise InputValueError(f"left and right must have the same shape, got {left.shape} and {right.shape}")
     if 0 in left.shape[:2]:
@@ -275,7 +275,7 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
     machine = machine_for(machine)
     compatible = check_choice(compatible, "compatible", ("direction", "sign"))
     selection = _selection(min_score, bimodal, dip, min_votes, negative_evidence, direction_tolerance)
-    hosts = set()
+    hosts = {}
     features: Features = "canny" if compatible == "direction" else "dog"
     attr_type = np.float32 if compatible == "direction" else np.int8
     maps = {}
@@ -283,13 +283,12 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
         if isinstance(mask, np.ndarray) and mask.dtype == np.bool_:
             mask = mask.view(np.uint8)
         maps[name], host = device_field(mask, name, machine, ndims=(2,), dtypes=(np.uint8,))
-        hosts.add(host)
+        hosts[name] = host
         maps[name + "_attr"], _ = device_field(attribute, f"{name}_attribute", machine, ndims=(2,),
                                                dtypes=(attr_type,))
         if maps[name + "_attr"].shape != maps[name].shape:
             raise InputValueError(f"{name}_attribute must have the shape of {name}")
-    if len(hosts) > 1:
-        raise InputTypeError("left and right must both be NumPy arrays or both device arrays")
+    check_same_kind("left", hosts["left"], "right", hosts["right"])
     check_pair(maps["left"], maps["right"], machine)
     shape = maps["left"].shape
     _check_range(d_min, d_max, patch, shape[1])

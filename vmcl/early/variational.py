@@ -36,9 +36,9 @@ from __future__ import annotations
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import ArrayLike, check_int, check_real, field, machine_for, result
+from vmcl.cm.core import ArrayLike, check_int, check_real, check_same_kind, field, machine_for, result
 from vmcl.early.flow_frames import check_flow_frames, smoothed_frames
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 __all__ = ["ALPHA", "COARSEST", "COARSEST_SWEEPS", "DELTA", "EPSILON", "GAMMA", "ITERATIONS", "LINK_SCALE",
@@ -148,8 +148,7 @@ def variational_refine(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike, *,
     beta = check_real(beta, "beta", minimum=0, maximum=1e6)
     pulled_to, pull = data, 0.0  # no prior: the kernel reads no buffer of it (beta 0); the flow stands in
     if prior is not None:
-        if isinstance(prior, cl_array.Array) == host:
-            raise InputTypeError("flow and prior must both be NumPy arrays or both device arrays")
+        check_same_kind("flow", host, "prior", not isinstance(prior, cl_array.Array))
         pulled_to, _ = field(prior, "prior", machine, ndims=(3,), dtypes=(np.float32,))
         if pulled_to.shape != data.shape:
             raise InputValueError(f"prior must have the flow's shape {data.shape}, got {pulled_to.shape}")

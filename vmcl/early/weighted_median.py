@@ -27,6 +27,7 @@ from vmcl.cm.core import (
     ArrayLike,
     check_int,
     check_real,
+    check_same_kind,
     check_unit_image,
     field,
     flags_field,
@@ -37,7 +38,7 @@ from vmcl.cm.core import (
     vector_kernel,
 )
 from vmcl.early.filters import channel_planes
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 __all__ = ["MAX_BINS", "MAX_KEPT_VOTERS", "weighted_median"]
@@ -122,8 +123,7 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
         raise InputValueError(f"values must have one or two components ((H, W) or (H, W, 2)), got shape {data.shape}")
     # 6 bytes a pixel for the flags and the field's copy, 12 for the image's float planes (RGB).
     picture, image_host = image_field(image, machine, what="a weighted median", footprint=18)
-    if image_host != host:
-        raise InputTypeError("values and image must both be NumPy arrays or both device arrays")
+    check_same_kind("values", host, "image", image_host)
     if isinstance(image, np.ndarray) and picture.dtype == np.float32:
         check_unit_image(image, "image")
     if picture.shape[:2] != (height, width):

@@ -1,0 +1,59 @@
+"""A call returns the kind of arrays it was given (NumPy in, NumPy out; device in, device out), so one that
+mixes a NumPy array with a device array is refused with a TypeError naming both arguments
+(vmcl.cm.core.check_same_kind), whichever of the two is on the device."""
+
+import numpy as np
+import pytest
+
+from vmcl.early.lucas_kanade import lucas_kanade
+from vmcl.early.motion import flow
+from vmcl.early.motion_refine import refine_flow
+from vmcl.early.stereo import match, match_features
+from vmcl.early.variational import variational_refine
+from vmcl.early.weighted_median import weighted_median
+from vmcl.errors import InputTypeError
+
+SHAPE = (24, 32)
+
+
+def _image():
+    return np.random.default_rng(0).random(SHAPE, np.float32)
+
+
+def _flow():
+    return np.zeros((*SHAPE, 2), np.float32)
+
+
+def _frames_like(flow_array, machine):
+    """Two frames of the flow's kind, so that the prior is the one argument of the other kind."""
+    frames = (_image(), _image())
+    return frames if isinstance(flow_array, np.ndarray) else tuple(machine.to_device(f) for f in frames)
+
+
+CALLS = {
+    "motion.flow": (("frame0", "frame1"), lambda a, b, m: flow(a, b, delta=2, patch=5, machine=m),
+                    (_image, _image)),
+    "refine_flow": (("flow", "image"), lambda a, b, m: refine_flow(a, b, machine=m), (_flow, _image)),
+    "lucas_kanade": (("flow", "frame0"), lambda a, b, m: lucas_kanade(a, b, _image(), machine=m), (_flow, _image)),
+    "variational_refine": (("flow", "prior"),
+                           lambda a, b, m: variational_refine(a, *_frames_like(a, m), prior=b, beta=1.0, machine=m),
+                           (_flow, _flow)),
+    "weighted_median": (("values", "image"), lambda a, b, m: weighted_median(a, b, low=0.0, high=1.0, machine=m),
+                        (_image, _image)),
+    "stereo.match": (("left", "right"), lambda a, b, m: match(a, b, d_min=0, d_max=4, machine=m), (_image, _image)),
+    "match_features": (("left", "right"),
+                       lambda a, b, m: match_features(a, b, _image(), _image(), d_min=0, d_max=4, machine=m),
+                       (lambda: np.zeros(SHAPE, np.uint8), lambda: np.zeros(SHAPE, np.uint8))),
+}
+
+
+@pytest.mark.parametrize("device_side", [0, 1], ids=["first on the device", "second on the device"])
+@pytest.mark.parametrize("call", sorted(CALLS))
+def test_a_numpy_and_a_device_array_together_are_refused_by_name(call, device_side, machine):
+    names, run, makers = CALLS[call]
+    arrays = [make() for make in makers]
+    arrays[device_side] = machine.to_device(arrays[device_side])
+    with pytest.raises(InputTypeError) as raised:
+        run(*arrays, machine)
+    message = str(raised.value)
+    assert f"{names[0]} and {names[1]} must both be NumPy arrays or both device arrays" in message
