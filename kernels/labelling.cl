@@ -91,17 +91,18 @@ __kernel void label_features(__global const uchar *support, __global const float
     for (int k = 0; k < NF; k++) in[k] = 0.0f;
 
     int near = 0;  /* the support bits within one pixel */
-    float log_lo3 = INFINITY, log_hi3 = -INFINITY, log_lo5 = INFINITY, log_hi5 = -INFINITY;
-    float white = 0.0f, bright = 0.0f, crease = 0.0f;
+    /* The log brightness steps are the logs of the grey's extremes over each window (the log rises with the
+     * grey): four logs a pixel where one a window pixel took most of the kernel's time. */
+    float lo3 = INFINITY, hi3 = -INFINITY, lo5 = INFINITY, hi5 = -INFINITY;
+    float white = 0.0f, crease = 0.0f;
     for (long dy = -2; dy <= 2; dy++) {
         long yy = clamp(y + dy, 0L, H - 1);
         for (long dx = -2; dx <= 2; dx++) {
             long xx = clamp(x + dx, 0L, W - 1), j = yy * W + xx;
             int inner = dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1;
-            float g = grey_at(image, j), lg = log(fmax(g, 1e-3f));
-            log_lo5 = fmin(log_lo5, lg);
-            log_hi5 = fmax(log_hi5, lg);
-            bright = fmax(bright, g);
+            float g = grey_at(image, j);
+            lo5 = fmin(lo5, g);
+            hi5 = fmax(hi5, g);
 #if RGB && HAS_COLOUR
             float top = fmax(image[3 * j], fmax(image[3 * j + 1], image[3 * j + 2]));
             float bottom = fmin(image[3 * j], fmin(image[3 * j + 1], image[3 * j + 2]));
@@ -109,8 +110,8 @@ __kernel void label_features(__global const uchar *support, __global const float
 #endif
             if (inner) {
                 near |= support[j];
-                log_lo3 = fmin(log_lo3, lg);
-                log_hi3 = fmax(log_hi3, lg);
+                lo3 = fmin(lo3, g);
+                hi3 = fmax(hi3, g);
 #if HAS_STEREO
                 crease = fmax(crease, crease_at(disparity, xx, yy, W, H));
 #endif
@@ -131,13 +132,13 @@ __kernel void label_features(__global const uchar *support, __global const float
     in[F_FLOW_JUMP_3] = CLIPPED(fmax(window_range(flow, 2, 0, x, y, 1, W, H), window_range(flow, 2, 1, x, y, 1, W, H)), 4.0f);
     in[F_FLOW_JUMP_7] = CLIPPED(fmax(window_range(flow, 2, 0, x, y, 3, W, H), window_range(flow, 2, 1, x, y, 3, W, H)), 4.0f);
 #endif
-    in[F_LOG_BRIGHTNESS_STEP_3] = CLIPPED(log_hi3 - log_lo3, 1.5f);
-    in[F_LOG_BRIGHTNESS_STEP_5] = CLIPPED(log_hi5 - log_lo5, 1.5f);
+    in[F_LOG_BRIGHTNESS_STEP_3] = CLIPPED(log(fmax(hi3, 1e-3f)) - log(fmax(lo3, 1e-3f)), 1.5f);
+    in[F_LOG_BRIGHTNESS_STEP_5] = CLIPPED(log(fmax(hi5, 1e-3f)) - log(fmax(lo5, 1e-3f)), 1.5f);
 #if HAS_COLOUR
     in[F_HUE_STEP_3] = CLIPPED(window_range(hue, 1, 0, x, y, 1, W, H), 0.3f);
 #endif
     in[F_WHITENESS_5] = white;
-    in[F_BRIGHTNESS_5] = bright;
+    in[F_BRIGHTNESS_5] = hi5;
 
 #if CLASSIFY
     uchar label = 0;
