@@ -1,5 +1,6 @@
 """The vmcl command: exit codes, the files it promises, and one clear line for bad input."""
 
+import json
 import os
 import re
 import signal
@@ -60,6 +61,9 @@ def test_run_on_files_writes_report_and_fields(tmp_path, images):
     fields = np.load(out / "fields.npz")
     assert fields["disparity"].shape == (64, 64) and fields["flow"].shape == (64, 64, 2)
     assert (out / "report.html").stat().st_size > 1000
+    # The settings it ran with: the config file's over the defaults.
+    settings = json.loads((out / "settings.json").read_text())
+    assert settings == Config.from_toml(images["fast"]).to_dict() and settings != Config().to_dict()
     # Running again replaces the folder whole.
     assert main(["run", str(images["left"]), "--config", str(images["fast"]), "--out", str(out), "-q"]) == 0
     assert "disparity" not in np.load(out / "fields.npz")

@@ -9,6 +9,7 @@ restarts.
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import signal
@@ -25,7 +26,7 @@ distributed = pytest.importorskip("distributed",
                                   reason="vmcl.distributed needs the dask extra: pip install 'vmcl[dask]'")
 
 from vmcl import scenes
-from vmcl.cli import main, write_output
+from vmcl.cli import SETTINGS_FILE, main, write_output
 from vmcl.datasets import read_image, read_stereo_folder, write_stereo_folder
 from vmcl.distributed import (
     MachinePlugin,
@@ -275,6 +276,24 @@ def test_an_interrupted_batch_resumes_with_only_the_missing_items(client, serial
     _serial_outputs(folders, serial, tmp_path / "serial")
     for folder in folders:
         _assert_same_output(out / folder.name, tmp_path / "serial" / folder.name)
+
+
+def test_a_batch_with_other_settings_runs_the_items_again_and_one_with_the_same_skips_them(client, tmp_path):
+    """A resumed batch never mixes settings: each output records its own (settings.json), and an item whose
+    folder was made with others runs again, its output replaced."""
+    _scene_folders(tmp_path / "data", 2, 64)
+    items = batch_items([tmp_path / "data"])
+    out = tmp_path / "batch"
+    other = {"mrf": {"method": "icm"}, "edges": {"sigma": 2.5}}
+    assert [s.state for s in run_batch(client, items, out, FAST)] == ["done", "done"]
+    recorded = {item.name: json.loads((out / item.name / SETTINGS_FILE).read_text()) for item in items}
+    assert all(values == Config.from_dict(FAST).to_dict() for values in recorded.values())
+    again = run_batch(client, items, out, other)
+    assert [(s.state, s.detail) for s in again] == [
+        ("done", "run again: the output there was made with other settings")] * 2
+    for item in items:
+        assert json.loads((out / item.name / SETTINGS_FILE).read_text())["edges"]["sigma"] == 2.5
+    assert [s.state for s in run_batch(client, items, out, other)] == ["skipped", "skipped"]
 
 
 def test_a_failing_item_is_reported_by_name_and_the_others_complete(client, serial, tmp_path, capsys):

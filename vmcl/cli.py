@@ -35,7 +35,8 @@ the frames' size unless ``[motion] levels`` sets them.
 ``vmcl batch`` (the ``dask`` extra) runs every item, an image, a Middlebury-layout scene folder's pair or
 with ``--frames`` a frame and the next, as one task on a Dask cluster (:mod:`vmcl.distributed`), and writes
 what ``vmcl run`` writes into ``--out``/<item>/ as each finishes, each folder whole or absent. Items
-already there are skipped (a rerun resumes); an item that fails is listed with its error in the table at
+already there with the same settings are skipped (a rerun resumes; each output records its settings in
+settings.json), those made with other settings run again; an item that fails is listed with its error in the table at
 the end while the others complete, and the exit status is then 2 if every failure was bad input, else 1.
 ``--zarr FIELD`` also stacks that field of every item into the Zarr array ``--out``/FIELD.zarr, rewritten
 from the items' fields.npz after each run (:func:`vmcl.distributed.write_zarr`); items of different sizes
@@ -364,15 +365,30 @@ def _reading(source, what: str):
 
 
 def write_output(result, folder: Path, title: str) -> None:
-    """Write what ``vmcl run`` writes for a run into ``folder``: the report (HTML and PNGs) and fields.npz.
+    """Write what ``vmcl run`` writes for a run into ``folder``: the report (HTML and PNGs), fields.npz and
+    the settings it ran with (:data:`SETTINGS_FILE`).
 
-    ``vmcl batch`` writes the same files for every item (on the worker that ran it).
+    ``vmcl batch`` writes the same files for every item (on the worker that ran it), and runs an item again
+    when the settings recorded in its folder are not the batch's.
     """
     from vmcl.report import write_report
 
     write_report(result, folder, title=title)
     # allow_pickle is NumPy's default; naming it tells the type checker that no field of the ** binds it.
     np.savez_compressed(folder / "fields.npz", allow_pickle=True, **result_fields(result))
+    (folder / SETTINGS_FILE).write_text(settings_text(result.config.to_dict()), encoding="utf-8")
+
+
+SETTINGS_FILE = "settings.json"
+"""The file of an output folder that records the run's whole configuration (:meth:`Config.to_dict`, as JSON)."""
+
+
+def settings_text(values: dict) -> str:
+    """A configuration's values (:meth:`vmcl.pipeline.Config.to_dict`) as the JSON text of :data:`SETTINGS_FILE`:
+    keys sorted, so that two runs with the same settings write the same text."""
+    import json
+
+    return json.dumps(values, indent=1, sort_keys=True) + "\n"
 
 
 FIELD_NAMES = ("edges", "support", "labels", "boundary_strength", "hue", "colour_edges", "density", "texture_edges",
@@ -648,7 +664,7 @@ def _batch(args) -> int:
         print(f"{len(items)} item(s) on the {where}", file=sys.stderr)
         with _progress(args, len(items), "batch", unit="item") as step:
             statuses = distributed.run_batch(client, items, Path(args.out), config, progress=step)
-    rows: list[tuple[object, ...]] = [("item", "status", "ms", "error")]
+    rows: list[tuple[object, ...]] = [("item", "status", "ms", "error or note")]
     rows += [(s.name, s.state, _fmt(s.total_ms, 0), s.detail) for s in statuses]
     counts = {state: sum(s.state == state for s in statuses) for state in ("done", "skipped", "failed")}
     _print_table(f"Batch into {args.out}: {counts['done']} done, {counts['skipped']} skipped (already there), "
@@ -756,7 +772,8 @@ def parser() -> argparse.ArgumentParser:
                             "each) or folders of images (one item each)")
     batch.add_argument("--out", required=True,
                        help="the batch's folder: each item's output goes to OUT/<item>/; items already there "
-                            "are skipped (a rerun resumes)")
+                            "with the same settings are skipped (a rerun resumes), those made with other settings "
+                            "run again")
     batch.add_argument("--frames", action="store_true",
                        help="the images are the frames of one sequence, in order: each item is a frame and the "
                             "next (motion)")

@@ -560,7 +560,7 @@ class ItemStatus:
     state : str
         "done", "skipped" (a complete output was already there) or "failed".
     detail : str
-        The error of a failed item (its type and message), else "".
+        The error of a failed item (its type and message); for an item run again, why; else "".
     total_ms : float
         The machine's wall time (NaN unless done).
     error : BaseException or None
@@ -579,12 +579,25 @@ def _finished(folder: Path) -> bool:
     return (folder / MARKER).is_file()
 
 
+def _made_with(folder: Path, values: dict[str, Any]) -> bool:
+    """Whether the whole output in ``folder`` records these settings (one written before outputs recorded
+    them, or whose record is unreadable, does not)."""
+    from vmcl.cli import SETTINGS_FILE, settings_text
+
+    try:
+        return (folder / SETTINGS_FILE).read_text(encoding="utf-8") == settings_text(values)
+    except (OSError, UnicodeDecodeError):
+        return False
+
+
 def run_batch(client: Client, items: Sequence[BatchItem], out: str | os.PathLike[str],
               config: Config | Mapping[str, Any] | None = None, *, retries: int = 1,
               progress: Callable[[str], None] | None = None) -> list[ItemStatus]:
     """Run every item on the client's cluster and write each one's output into ``out``/<name>/.
 
-    Items whose folder already holds a whole vmcl output are skipped (a rerun resumes). The images are
+    Items whose folder already holds a whole vmcl output made with the same settings are skipped (a rerun
+    resumes); one made with other settings (the file vmcl.cli.SETTINGS_FILE in it records them) is run again
+    and its output replaced, so that a batch's folders never mix settings. The images are
     read here, a few tasks ahead of the workers (twice the cluster's threads), so that a batch of any
     length holds only those in memory; each output is written, whole or not at all, as its task ends.
 
@@ -620,11 +633,15 @@ def run_batch(client: Client, items: Sequence[BatchItem], out: str | os.PathLike
     step = progress or (lambda name: None)
     statuses: dict[str, ItemStatus] = {}
     todo: list[BatchItem] = []
+    again: set[str] = set()
     for item in items:
         folder = out / item.name
-        if _finished(folder):
+        if _finished(folder) and _made_with(folder, values):
             statuses[item.name] = ItemStatus(item.name, "skipped", "already there")
             step(item.name)
+        elif _finished(folder):
+            again.add(item.name)
+            todo.append(item)
         elif folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
             raise InputValueError(f"--out {out}: {folder} is there and is not a vmcl output; vmcl writes only its "
                                   "own files: move it away or name another folder")
@@ -665,7 +682,8 @@ def run_batch(client: Client, items: Sequence[BatchItem], out: str | os.PathLike
                 with output_folder(out / item.name) as work:
                     for name, data in output.files.items():
                         (work / name).write_bytes(data)
-                statuses[item.name] = ItemStatus(item.name, "done", total_ms=output.total_ms)
+                detail = "run again: the output there was made with other settings" if item.name in again else ""
+                statuses[item.name] = ItemStatus(item.name, "done", detail, total_ms=output.total_ms)
                 step(item.name)
             else:
                 fail(item, future.exception())
