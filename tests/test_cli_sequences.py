@@ -8,7 +8,7 @@ import pytest
 
 from vmcl import scenes
 from vmcl.cli import main
-from vmcl.frame_sources import open_frames
+from vmcl.frame_sources import is_sequence, open_frames
 
 FRAMES = 3
 
@@ -95,3 +95,41 @@ def test_open_frames_refuses_what_is_not_a_sequence(tmp_path, sequence):
     with pytest.raises(ValueError, match="OpenCV cannot read this video"):
         open_frames(tmp_path / "broken.mp4")
     assert open_frames(sequence / "left").count == FRAMES  # notes.txt is not a frame
+
+
+def test_numbered_frames_are_taken_in_numeric_order_and_the_summary_names_each(tmp_path, sequence):
+    """frame8 ... frame11: by value, not by letter (frame10 would come first), in a folder and from a glob."""
+    folder = tmp_path / "numbered"
+    folder.mkdir()
+    for k, number in enumerate((8, 9, 10)):
+        (folder / f"f{number}.png").write_bytes((sequence / "left" / f"frame_{k:02d}.png").read_bytes())
+    expected = ["f8.png", "f9.png", "f10.png"]
+    assert [p.name for p in open_frames(folder).paths] == expected
+    assert [p.name for p in open_frames(str(folder / "f*.png")).paths] == expected
+    out = tmp_path / "out"
+    assert main(["run", str(folder), "--out", str(out), "-q"]) == 0
+    summary = (out / "sequence.md").read_text()
+    assert [line.split("|")[2].strip() for line in summary.splitlines() if line.startswith("| ") and
+            line.split("|")[1].strip().isdigit()] == expected
+
+
+def test_an_image_file_whose_name_holds_glob_characters_is_one_image(tmp_path, sequence):
+    for name in ("img[1].png", "a*b.png"):
+        image = tmp_path / name
+        image.write_bytes((sequence / "left" / "frame_00.png").read_bytes())
+        assert not is_sequence(image)
+        out = tmp_path / f"out{len(name)}"
+        assert main(["run", str(image), "--out", str(out), "-q"]) == 0, name
+        assert (out / "report.html").is_file() and not list(out.glob("fields_*.npz")), name
+
+
+def test_a_frame_of_another_size_is_named_by_its_file(tmp_path, sequence, capsys):
+    folder = tmp_path / "mixed"
+    folder.mkdir()
+    for k in range(2):
+        (folder / f"frame{k}.png").write_bytes((sequence / "left" / f"frame_{k:02d}.png").read_bytes())
+    cv2.imwrite(str(folder / "frame2.png"), np.zeros((48, 64, 3), np.uint8))
+    assert main(["run", str(folder), "--out", str(tmp_path / "out"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "frame 1: next has shape (48, 64, 3)" in err, err
+    assert f"frame 1 is left {folder / 'frame1.png'}; the next frame is left {folder / 'frame2.png'}" in err, err

@@ -637,6 +637,9 @@ EXEMPT = {
     # Any folder of images is a valid sequence whose length sets the result's shape; tests/test_cli_sequences.py
     # checks their refusals.
     "vmcl.frame_sources:open_frames", "vmcl.frame_sources:is_sequence",
+    # Text helpers of the sequence output, called with the paths and counts the lines above made: the order of
+    # frame files (a sort key of any path's text) and "1 frame" / "n frames"; tests/test_cli_sequences.py.
+    "vmcl.frame_sources:frame_order", "vmcl.sequence_output:frame_count",
     # A stream's device state, made and fed only by VisionMachine.stream from checked images and Configs.
     "vmcl.temporal:Memory", "vmcl.temporal:Carried",
     # Change the machine's cues for the whole process: tests/test_cues.py checks their refusals.

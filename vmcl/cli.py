@@ -62,6 +62,7 @@ import argparse
 import contextlib
 import math
 import os
+import re
 import sys
 import time
 import traceback
@@ -324,7 +325,7 @@ def _frames(spec: str, what: str):
 
 def _run_sequence(args) -> int:
     from vmcl.pipeline import VisionMachine
-    from vmcl.sequence_output import SequenceWriter, check_fps
+    from vmcl.sequence_output import SequenceWriter, check_fps, frame_count
 
     if args.next:
         raise BadInput("--next is for one image; a sequence's next frames are its own")
@@ -343,15 +344,30 @@ def _run_sequence(args) -> int:
             results = vm.stream(_reading(lefts, "left"), _reading(rights, "right") if rights else None)
             try:
                 for result in results:
-                    writer.add(result)
+                    writer.add(result, lefts.paths[frames].name if lefts.paths else f"video frame {frames}")
                     frames += 1
                     step(f"frame {frames}")
             except InputError as error:
-                raise BadInput(str(error)) from None
+                raise BadInput(_naming_files(str(error), lefts, rights)) from None
             finally:
                 writer.close()
-    print(f"{frames} frames; videos and fields in {args.out}")
+    print(f"{frame_count(frames)}; videos and fields in {args.out}")
     return 0
+
+
+def _naming_files(message: str, lefts, rights) -> str:
+    """A stream's error about frame k ("frame k: ...", :meth:`VisionMachine.stream`) with the files of
+    frame k and of the next frame, which its "next" is."""
+    found = re.match(r"frame (\d+): ", message)
+    if found is None or not lefts.paths:
+        return message
+    index = int(found.group(1))
+    here = [f"left {path}" for path in lefts.paths[index:index + 1]]
+    if rights is not None:
+        here += [f"right {path}" for path in rights.paths[index:index + 1]]
+    named = [f"frame {index} is {', '.join(here)}"] if here else []
+    named += [f"the next frame is left {path}" for path in lefts.paths[index + 1:index + 2]]
+    return f"{message} ({'; '.join(named)})" if named else message
 
 
 def _reading(source, what: str):

@@ -8,6 +8,7 @@ VideoCapture, whose BGR frames are returned as RGB.
 from __future__ import annotations
 
 import glob
+import re
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,7 +18,7 @@ import numpy as np
 from vmcl.datasets import read_image
 from vmcl.errors import InputTypeError, InputValueError
 
-__all__ = ["IMAGE_SUFFIXES", "VIDEO_SUFFIXES", "FrameSource", "is_sequence", "open_frames"]
+__all__ = ["IMAGE_SUFFIXES", "VIDEO_SUFFIXES", "FrameSource", "frame_order", "is_sequence", "open_frames"]
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".ppm", ".pgm", ".pbm", ".bmp", ".tif", ".tiff", ".webp")
 """The file suffixes (any case) a folder's frames are taken from."""
@@ -26,6 +27,14 @@ VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".mpg", ".mpe
 """The file suffixes (any case) read as videos."""
 
 _GLOB_CHARACTERS = set("*?[")
+_DIGITS = re.compile(r"(\d+)")
+
+
+def frame_order(path: Path) -> tuple:
+    """The sort key of a frame's file: its path with each run of digits compared by value, so that frame9
+    comes before frame10 (as numbered frames are meant), then the path's own text (which settles 01 and 1)."""
+    parts = _DIGITS.split(str(path))
+    return tuple((1, int(part), "") if index % 2 else (0, 0, part) for index, part in enumerate(parts)), str(path)
 
 
 @dataclass(frozen=True)
@@ -68,9 +77,12 @@ class FrameSource:
 
 
 def is_sequence(spec: str | Path) -> bool:
-    """Whether ``spec`` names a sequence (a folder, a glob pattern or a video file), not one image."""
+    """Whether ``spec`` names a sequence (a folder, a glob pattern or a video file), not one image. An image
+    file that exists is one image, whatever characters its name holds (``img[1].png``)."""
     text = str(spec)
     path = Path(text)
+    if path.is_file() and path.suffix.lower() not in VIDEO_SUFFIXES:
+        return False
     return path.is_dir() or bool(_GLOB_CHARACTERS & set(text)) or path.suffix.lower() in VIDEO_SUFFIXES
 
 
@@ -80,8 +92,9 @@ def open_frames(spec: str | Path) -> FrameSource:
     Parameters
     ----------
     spec : str or Path
-        A folder (its files with :data:`IMAGE_SUFFIXES`, sorted by name), a glob pattern
-        (``frames/*.png``: the matches, sorted) or a video file (:data:`VIDEO_SUFFIXES`).
+        A folder (its files with :data:`IMAGE_SUFFIXES`), a glob pattern (``frames/*.png``: the files it
+        matches) or a video file (:data:`VIDEO_SUFFIXES`). Files are taken in the order of their names,
+        numbers in them by value (:func:`frame_order`: frame9 before frame10).
 
     Returns
     -------
@@ -99,11 +112,12 @@ def open_frames(spec: str | Path) -> FrameSource:
     text = str(spec)
     path = Path(text)
     if path.is_dir():
-        paths = tuple(sorted(p for p in path.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES))
+        paths = tuple(sorted((p for p in path.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES),
+                             key=frame_order))
         if not paths:
             raise InputValueError(f"{path}: the folder holds no images ({', '.join(IMAGE_SUFFIXES)})")
         return FrameSource(f"{len(paths)} images in {path}", len(paths), paths)
-    if path.suffix.lower() in VIDEO_SUFFIXES and not _GLOB_CHARACTERS & set(text):
+    if path.suffix.lower() in VIDEO_SUFFIXES and (path.is_file() or not _GLOB_CHARACTERS & set(text)):
         if not path.is_file():
             raise FileNotFoundError(f"{path}: no such video file")
         import cv2
@@ -117,7 +131,7 @@ def open_frames(spec: str | Path) -> FrameSource:
             capture.release()
         return FrameSource(f"video {path}", count if count > 0 else None, video=path)
     if _GLOB_CHARACTERS & set(text):
-        paths = tuple(sorted(Path(p) for p in glob.glob(text) if Path(p).is_file()))
+        paths = tuple(sorted((Path(p) for p in glob.glob(text) if Path(p).is_file()), key=frame_order))
         if not paths:
             raise FileNotFoundError(f"{text}: the pattern matches no file")
         return FrameSource(f"{len(paths)} files matching {text}", len(paths), paths)

@@ -8,7 +8,7 @@ The folder (one that :func:`vmcl.output_folder.output_folder` prepared) receives
   the restored flow in the Middlebury colour wheel and the restored disparity (turbo), one video frame per
   frame, for the fields the run made. Colour scales are fixed by the first frame that has the field
   (its largest speed, its disparity range), so that colours mean the same speed or depth throughout;
-- ``sequence.md``: per frame, the time taken and the notes.
+- ``sequence.md``: per frame, the file it came from, the time taken and the notes.
 
 Videos are MPEG-4 (OpenCV's VideoWriter, fourcc mp4v). Files lie flat in the folder, as
 :mod:`vmcl.output_folder` lists and replaces them.
@@ -23,11 +23,16 @@ import numpy as np
 from vmcl.cm.core import check_real
 from vmcl.result import Result
 
-__all__ = ["FOURCC", "FPS_RANGE", "SequenceWriter", "check_fps"]
+__all__ = ["FOURCC", "FPS_RANGE", "SequenceWriter", "check_fps", "frame_count"]
 
 FPS_RANGE = (0.01, 1000.0)
 """The frame rates the videos may be written at: OpenCV's mp4v writer refuses some beyond them (0.001 and
 65536 fps fail only at the first frame, after the work) and hangs on an infinite one."""
+
+
+def frame_count(frames: int) -> str:
+    """"1 frame", "12 frames"."""
+    return f"{frames} frame{'' if frames == 1 else 's'}"
 
 
 def check_fps(fps: object, name: str) -> float:
@@ -60,8 +65,8 @@ class SequenceWriter:
         self.rows: list[str] = []
         self.frames = 0
 
-    def add(self, result: Result) -> None:
-        """Write the next frame's Result."""
+    def add(self, result: Result, source: str = "") -> None:
+        """Write the next frame's Result; ``source`` names where its frame came from (a file) in the summary."""
         from vmcl.cli import result_fields
 
         index = self.frames
@@ -70,7 +75,7 @@ class SequenceWriter:
         for stem, picture in self.pictures(result).items():
             self.write(stem, picture)
         notes = "; ".join(result.notes) if result.notes else ""
-        self.rows.append(f"| {index} | {result.total_ms:.0f} | {notes} |")
+        self.rows.append(f"| {index} | {source} | {result.total_ms:.0f} | {notes} |")
         self.frames += 1
 
     def pictures(self, result: Result) -> dict[str, np.ndarray]:
@@ -112,7 +117,7 @@ class SequenceWriter:
         for writer in self.writers.values():
             writer.release()  # type: ignore[attr-defined]
         self.writers = {}
-        lines = [f"# {self.title}", "", f"{self.frames} frames; videos: "
+        lines = [f"# {self.title}", "", f"{frame_count(self.frames)}; videos: "
                  + (", ".join(f"{stem}.mp4" for stem in sorted(self.scales.keys() | {"cartoon"})) if self.frames else "none"),
-                 "", "| frame | ms | notes |", "|---|---|---|", *self.rows, ""]
+                 "", "| frame | source | ms | notes |", "|---|---|---|---|", *self.rows, ""]
         (self.folder / "sequence.md").write_text("\n".join(lines), encoding="utf-8")
