@@ -195,3 +195,14 @@ def test_a_range_too_narrow_is_reported(near_scene, machine):
     assert any("at an end of the range 0..12 px" in n for n in narrow.notes), narrow.notes
     assert not any("end of the range" in n for n in found.notes), found.notes
     assert found.out_of_range.mean() < 0.01
+
+
+def test_a_pair_given_in_the_other_order_gets_a_note(near_scene, machine):
+    """Left and right swapped: every disparity is negative, and the range's note asks whether the views are
+    in order; the pair in order gets no such note."""
+    notes = {}
+    for label, (left, right) in (("swapped", (near_scene.right, near_scene.left)),
+                                 ("in order", (near_scene.left, near_scene.right))):
+        result = VisionMachine(machine=machine).run(left, right)
+        notes[label] = [n for n in result.notes if "given in the other order" in n]
+    assert len(notes["swapped"]) == 1 and not notes["in order"], notes

@@ -382,3 +382,18 @@ def test_dense_disparity_on_middlebury(name, bar, datasets_root, machine):
     # measured tsukuba 0.097, venus 0.051 (benchmarks/results/disparity_range.md; given the true range,
     # 0.075 and 0.051)
     assert scores.bad[1.0] < bar
+
+
+@pytest.mark.parametrize("scale, dtype, noted", [(16, np.uint16, True), (257, np.uint16, False), (1, np.uint8, False),
+                                                 (0.1, np.uint8, True)])
+def test_an_integer_image_using_little_of_its_range_gets_a_note(scale, dtype, noted, machine):
+    """12-bit data in uint16 (x 16) is read on uint16's full scale, so the machine sees a very dark image:
+    the run says so, naming the image and the factor that would fill the range; full-range data gets no
+    note, nor does an 8-bit image of ordinary brightness; a very dark 8-bit one does."""
+    grey = np.clip(np.round(scenes.render(scenes.preset("blocks", shape=(64, 64)), seed=0).left.mean(axis=2) * 255),
+                   1, 255)
+    image = np.round(grey * scale).astype(dtype)
+    notes = [n for n in VisionMachine(machine=machine).run(image).notes if n.startswith("left: its brightest pixel")]
+    assert len(notes) == noted, notes
+    if noted and dtype == np.uint16:
+        assert "of uint16's 65535" in notes[0] and "if the data has 12 bits" in notes[0] and "(x 16)" in notes[0]

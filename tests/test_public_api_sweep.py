@@ -640,6 +640,8 @@ EXEMPT = {
     # Text helpers of the sequence output, called with the paths and counts the lines above made: the order of
     # frame files (a sort key of any path's text) and "1 frame" / "n frames"; tests/test_cli_sequences.py.
     "vmcl.frame_sources:frame_order", "vmcl.sequence_output:frame_count",
+    # Reads the images as_image (swept) has accepted, for a note: tests/test_pipeline.py checks its notes.
+    "vmcl.pipeline:range_note",
     # A stream's device state, made and fed only by VisionMachine.stream from checked images and Configs.
     "vmcl.temporal:Memory", "vmcl.temporal:Carried",
     # Change the machine's cues for the whole process: tests/test_cues.py checks their refusals.

@@ -264,10 +264,15 @@ def test_where_an_object_appears_time_breaks_and_nothing_ghosts(machine):
 def test_stream_refuses_frames_that_do_not_fit(machine):
     frames = scenes.render_sequence(scenes.preset("cues", shape=(64, 64)), 2, seed=1)
     vm = VisionMachine(Config(time=TimeConfig(enabled=False), **_DEPTH_AND_MOTION), machine=machine)
-    with pytest.raises(ValueError, match="rights ended at frame 1"):
+    # Lists: their lengths are compared before any work; iterators: when one ends before the other.
+    with pytest.raises(ValueError, match=r"frames and rights must be as long .*, got 2 and 1"):
         list(vm.stream([f.left for f in frames], [frames[0].right]))
-    with pytest.raises(ValueError, match="rights holds more frames"):
+    with pytest.raises(ValueError, match=r"frames and rights must be as long .*, got 1 and 2"):
         list(vm.stream([frames[0].left], [frames[0].right, frames[1].right]))
+    with pytest.raises(ValueError, match="rights ended at frame 1"):
+        list(vm.stream(iter([f.left for f in frames]), iter([frames[0].right])))
+    with pytest.raises(ValueError, match="rights holds more frames"):
+        list(vm.stream(iter([frames[0].left]), iter([frames[0].right, frames[1].right])))
     with pytest.raises(ValueError, match="frame 0: next has shape"):
         list(vm.stream([frames[0].left, frames[1].left[:32]]))
     assert list(vm.stream([])) == []

@@ -31,7 +31,7 @@ import math
 import sys
 import time
 import typing
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence, Sized
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -68,6 +68,7 @@ from vmcl.result import Result
 __all__ = [
     "FLOAT_MARGIN",
     "SALIENCY",
+    "SMALL_RANGE",
     "WARM_SCHEDULE",
     "ColourConfig",
     "Config",
@@ -83,6 +84,7 @@ __all__ = [
     "TimeConfig",
     "VisionMachine",
     "as_image",
+    "range_note",
 ]
 
 if sys.version_info >= (3, 11):
@@ -882,8 +884,8 @@ class VisionMachine:
         ValueError, TypeError
             Bad images (shape, dtype, NaN, sizes that differ) or a configuration the modules refuse.
         """
-        image, others = _inputs(left, right, next)
-        return _Run(self, image, others, progress, None).result
+        image, others, notes = _inputs(left, right, next)
+        return _Run(self, image, others, progress, None, notes=notes).result
 
     def measure(self, left: np.ndarray, right: np.ndarray | None = None,
                 next: np.ndarray | None = None) -> dict[str, CueData]:
@@ -901,8 +903,8 @@ class VisionMachine:
             none), its confidence and the edges its lines are coupled to, on the host. Stereo's are
             those of its first pass (before the feedback pass re-matches along the restored lines).
         """
-        image, others = _inputs(left, right, next)
-        return _Run(self, image, others, None, None, measure_only=True).measured
+        image, others, notes = _inputs(left, right, next)
+        return _Run(self, image, others, None, None, notes=notes, measure_only=True).measured
 
     def stream(self, frames: Iterable[np.ndarray], rights: Iterable[np.ndarray] | None = None, *,
                progress: Callable[[str], None] | None = None) -> Iterator[Result]:
@@ -932,6 +934,9 @@ class VisionMachine:
         ValueError, TypeError
             As :meth:`run`, naming the frame; also when ``rights`` ends before or after ``frames``.
         """
+        if rights is not None and isinstance(frames, Sized) and isinstance(rights, Sized) and len(frames) != len(rights):
+            raise InputValueError(f"frames and rights must be as long (a stereo sequence needs a right view per "
+                                  f"frame), got {len(frames)} and {len(rights)}")  # before any work, counts known
         memory = self.config.time.memory_of(self.machine) if self.config.time.enabled else None
         lefts = iter(frames)
         seconds = iter(rights) if rights is not None else None
@@ -942,14 +947,14 @@ class VisionMachine:
         while current is not None:
             following = next(lefts, None)
             try:
-                image, others = _inputs(current, right, following)
+                image, others, notes = _inputs(current, right, following)
             except InputError as error:
                 raise type(error)(f"frame {index}: {error}") from None
-            yield _Run(self, image, others, progress, memory).result
+            yield _Run(self, image, others, progress, memory, notes=notes).result
             index, current = index + 1, following
             right = self._stream_right(seconds, index) if current is not None else None
         if seconds is not None and next(seconds, None) is not None:
-            raise InputValueError(f"rights holds more frames than frames ({index})")
+            raise InputValueError(f"rights holds more frames than frames, which ended after {index}")
 
     @staticmethod
     def _stream_right(rights: Iterator[np.ndarray] | None, index: int) -> np.ndarray | None:
@@ -961,8 +966,9 @@ class VisionMachine:
         return right
 
 
-def _inputs(left: Any, right: Any, next: Any) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """The images of one run, checked: left and the others present, each of left's shape."""
+def _inputs(left: Any, right: Any, next: Any) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
+    """The images of one run, checked: left and the others present, each of left's shape; and the notes on
+    them (:func:`range_note`)."""
     image = as_image(left, "left")
     others = {}
     for name, array in (("right", right), ("next", next)):
@@ -971,7 +977,32 @@ def _inputs(left: Any, right: Any, next: Any) -> tuple[np.ndarray, dict[str, np.
             if others[name].shape != image.shape:
                 raise InputValueError(f"{name} has shape {others[name].shape}, left has {image.shape}: "
                                       "the images must have the same size and channels")
-    return image, others
+    notes = [note for name, array in (("left", left), ("right", right), ("next", next))
+             if array is not None and (note := range_note(array, name))]
+    return image, others, notes
+
+
+SMALL_RANGE = 1 / 8
+"""An integer image whose brightest pixel is below this share of its type's full scale gets a note
+(:func:`range_note`): 13-bit data or less stored in uint16, or an 8-bit image darker than 32."""
+
+
+def range_note(array: np.ndarray, name: str) -> str | None:
+    """A note when an integer image (uint8, uint16) uses only the bottom of its type's range: the machine
+    reads integers on their full scale (:func:`as_image`), so such an image is very dark to it, and the
+    stages that read contrast in absolute terms (the probability of boundary, the texture's blobs, the colour
+    and MRF thresholds) see little; nothing is rescaled without being asked. None otherwise."""
+    scale = _FULL_SCALE.get(array.dtype)
+    if scale is None or array.size == 0:
+        return None
+    top = int(array.max())
+    if top >= SMALL_RANGE * scale:
+        return None
+    bits = max(top, 1).bit_length()
+    return (f"{name}: its brightest pixel is {top} of {array.dtype}'s {scale:.0f} ({100 * top / scale:.1f}% of "
+            f"the range), and the machine reads images on their type's full scale, so it sees a very dark image "
+            f"and its contrast-based stages find little; if the data has {bits} bits, scale it to the full "
+            f"range first (x {2 ** (8 * array.dtype.itemsize - bits)})")
 
 
 def _device_lines(found: Restoration) -> tuple[cl_array.Array, cl_array.Array]:
@@ -984,12 +1015,12 @@ class _Run:
 
     def __init__(self, vm: VisionMachine, image: np.ndarray, others: dict[str, np.ndarray],
                  progress: Callable[[str], None] | None, memory: temporal.Memory | None, *,
-                 measure_only: bool = False) -> None:
+                 notes: Sequence[str] = (), measure_only: bool = False) -> None:
         self.m, self.c = vm.machine, vm.config
         self.progress = progress
         self.memory, self.carries = memory, False
         self.stages: dict[str, float] = {}
-        self.notes: list[str] = []
+        self.notes: list[str] = list(notes)
         if self.m.profile:
             self.m.timings(reset=True)  # only this run's kernels
         active = vm.cues(right="right" in others, next="next" in others, rgb=image.ndim == 3)

@@ -147,8 +147,14 @@ def _disparity_range(run: RunInputs) -> tuple[tuple[int, int], str | None]:
         source = (f"a wide fallback, since too few confident matches ({100 * found.confident:.0f}% of the pixels "
                   f"at {scale}) were found to decide it from the images")
     given = [f"{name} = {value}" for name, value in (("d_min", s.d_min), ("d_max", s.d_max)) if value is not None]
+    # Every confident match points the wrong way (each pixel lies further right in the right view than in the
+    # left): what a pair given in the other order shows. Verging cameras give some negative disparities,
+    # not all of them.
+    swapped = found.found is not None and found.found[1] < 0
     return span, (f"stereo: disparity range {span[0]}..{span[1]} px, {source}"
-                  + (f"; the Config gives {given[0]}" if given else ""))
+                  + (f"; the Config gives {given[0]}" if given else "")
+                  + ("; every confident match has a negative disparity (the nearer, the more negative), as when "
+                     "the views are given in the other order: is the left image the left camera's?" if swapped else ""))
 
 
 def _match(run: RunInputs, barriers, span: tuple[int, int], *, features: stereo.Features | None = None
