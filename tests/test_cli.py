@@ -76,8 +76,10 @@ def test_run_on_files_writes_report_and_fields(tmp_path, images):
     ("sizes", "same size"),
     ("config", "unknown config key stereo.nope"),
     ("weights", "labels.weights"),
+    ("tiny", "left must be at least 16 x 16 pixels, got shape (5, 7) (left is "),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, images, capsys, case, message):
+    cv2.imwrite(str(tmp_path / "tiny.png"), np.zeros((5, 7), np.uint8))
     bad_config = tmp_path / "bad.toml"
     bad_config.write_text("[stereo]\nnope = 1\n")
     bad_weights = tmp_path / "weights.toml"
@@ -88,6 +90,7 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, images, capsys, case, messag
         "sizes": [str(images["left"]), str(images["small"])],
         "config": [str(images["left"]), "--config", str(bad_config)],
         "weights": [str(images["left"]), "--config", str(bad_weights)],
+        "tiny": [str(tmp_path / "tiny.png")],
     }[case]
     out = tmp_path / "out"
     assert main(["run", *arguments, "--out", str(out), "--quiet"]) == 2

@@ -278,7 +278,12 @@ def _run(args) -> int:
                            "the images must have the same size and channels")
     with output_folder(Path(args.out)) as work:
         vm = VisionMachine(config)
-        result = _run_machine(vm, args, left, right, next_)
+        try:
+            result = _run_machine(vm, args, left, right, next_)
+        except InputError as error:  # the machine names its images left, right, next: say which files they are
+            files = "; ".join(f"{name} is {path}" for name, path in (("left", args.left), ("right", args.right),
+                                                                      ("next", args.next)) if path)
+            raise BadInput(f"{error} ({files})") from None
         write_output(result, work, f"Vision Machine: {Path(args.left).name}")
     if result.recognition is not None:
         found = ", ".join(f"{d.name} ({d.score:.2f})" for d in result.recognition) or "nothing"

@@ -783,7 +783,7 @@ def as_image(array: Any, name: str) -> np.ndarray:
     if array.ndim not in (2, 3) or (array.ndim == 3 and array.shape[2] != 3):
         raise InputValueError(f"{name} must be (H, W) grey or (H, W, 3) RGB, got shape {array.shape}")
     if min(array.shape[:2]) < 16:
-        raise InputValueError(f"{name} must be at least 16 x 16 pixels, got {array.shape[:2]}")
+        raise InputValueError(f"{name} must be at least 16 x 16 pixels, got shape {array.shape}")
     if array.dtype in _FULL_SCALE:
         return (array.astype(np.float32) / np.float32(_FULL_SCALE[array.dtype]))
     if array.dtype.kind != "f":
