@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import cv2
 import numpy as np
 import pytest
@@ -42,7 +44,14 @@ def test_learn_writes_models_and_run_recognises_them(tmp_path, files, capsys):
     printed = capsys.readouterr().out
     assert "recognised:" in printed and "ell" in printed and "arrow" in printed
     assert (out / "recognition.png").exists()
-    assert "Recognition" in (out / "report.html").read_text()
+    report = (out / "report.html").read_text()
+    assert "Recognition" in report and "box (x, y) to (x, y)" in report
+    # each object's place as the box of its boundary (which may reach past the 400 x 300 scene's border), one
+    # per object found
+    boxes = [tuple(map(int, b)) for b in re.findall(r"\((-?\d+), (-?\d+)\) to \((-?\d+), (-?\d+)\)", report)]
+    assert len(boxes) == printed.split("recognised:")[1].count("("), (boxes, printed)
+    assert all(x0 < 400 and y0 < 300 and x1 > 0 and y1 > 0 and min(x1 - x0, y1 - y0) > 20
+               for x0, y0, x1, y1 in boxes), boxes
 
 
 def test_learn_says_how_much_of_a_models_boundary_is_inner_markings(tmp_path, files, capsys):

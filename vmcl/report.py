@@ -285,6 +285,14 @@ def encode_png(rgb: np.ndarray) -> bytes:
     return data.tobytes()
 
 
+def _box(points: np.ndarray) -> str:
+    """The box of a detection's boundary points in the image, as text; "-" for none."""
+    if not len(points):
+        return "-"
+    (x0, y0), (x1, y1) = points.min(axis=0), points.max(axis=0)
+    return f"({x0:.0f}, {y0:.0f}) to ({x1:.0f}, {y1:.0f})"
+
+
 def _table(header: Sequence[object], rows: Sequence[Sequence[object]]) -> str:
     head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>" for row in rows)
@@ -352,11 +360,14 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
     if result.grouping is not None:
         sections.append("<h2>Grouping</h2>" + _grouping_table(result.grouping))
     if result.recognition is not None:
+        # Where each object lies: the box of its boundary in the image (its view's corner features, which
+        # the picture draws, are many and repeat one another: a list of them says little).
         rows = [(d.name, d.view, f"{d.score:.2f}", f"{d.significance:.1f}",
-                 "-" if np.isnan(d.inner_found) else f"{d.inner_found:.2f}",
-                 ", ".join(f"({x:.1f}, {y:.1f})" for x, y in d.corners)) for d in result.recognition]
+                 "-" if np.isnan(d.inner_found) else f"{d.inner_found:.2f}", f"{d.corners_found:.2f}",
+                 _box(d.boundary)) for d in result.recognition]
         sections.append("<h2>Recognition</h2>" + (_table(("object", "view", "score", "significance",
-                                                          "inner markings found", "corners (x, y)"), rows)
+                                                          "inner markings found", "corners found",
+                                                          "boundary's box (x, y) to (x, y)"), rows)
                                                   if rows else "<p>No object found.</p>"))
     sections.append("<h2>Fields</h2>" + "".join(figures))
     stage_rows = [(name, f"{ms:.1f}") for name, ms in result.stages.items()] + [("total", f"{result.total_ms:.1f}")]
