@@ -363,3 +363,13 @@ def test_a_field_is_carried_only_between_a_frames_begin_and_end(machine):
     assert np.isnan(prediction[:, :shift]).all() and (weight[:, :shift] == 0).all()
     np.testing.assert_array_equal(prediction[:, shift:], field[:, :-shift])
     assert (weight[:, shift:] > 0).all()
+
+
+def test_a_path_where_images_belong_is_refused_with_the_way_to_read_it(machine, tmp_path):
+    vm = VisionMachine(machine=machine)
+    with pytest.raises(TypeError, match=r"frames must be an iterable of images, got the path .*open_frames"):
+        list(vm.stream(str(tmp_path)))
+    with pytest.raises(TypeError, match=r"rights must be an iterable of images, got the path"):
+        list(vm.stream([np.zeros((32, 32), np.float32)], tmp_path))
+    with pytest.raises(TypeError, match=r"left must be a NumPy array, got the path .*read_image"):
+        vm.run(str(tmp_path / "left.png"))

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 import sys
 import time
 import typing
@@ -777,6 +778,9 @@ def as_image(array: Any, name: str) -> np.ndarray:
     float32. Raises ValueError or TypeError naming ``name`` for anything else (wrong shape, NaN or
     infinite pixels, values off the [0, 1] scale, too small).
     """
+    if isinstance(array, (str, os.PathLike)):
+        raise InputTypeError(f"{name} must be a NumPy array, got the path {str(array)!r}: read it first "
+                             "(vmcl.datasets.read_image)")
     if not isinstance(array, np.ndarray):
         raise InputTypeError(f"{name} must be a NumPy array, got {type(array).__name__}")
     check_unmasked(array, name)
@@ -934,6 +938,10 @@ class VisionMachine:
         ValueError, TypeError
             As :meth:`run`, naming the frame; also when ``rights`` ends before or after ``frames``.
         """
+        for name, given in (("frames", frames), ("rights", rights)):
+            if isinstance(given, (str, os.PathLike)):
+                raise InputTypeError(f"{name} must be an iterable of images, got the path {str(given)!r}: read a "
+                                     "folder, glob or video with vmcl.frame_sources.open_frames(path).frames()")
         if rights is not None and isinstance(frames, Sized) and isinstance(rights, Sized) and len(frames) != len(rights):
             raise InputValueError(f"frames and rights must be as long (a stereo sequence needs a right view per "
                                   f"frame), got {len(frames)} and {len(rights)}")  # before any work, counts known
