@@ -43,11 +43,16 @@ from .protocol import BROADCAST, MAX_ADDRESS, Frame, Parser, encode_request
 if TYPE_CHECKING:
     from typing_extensions import Self
 
-__all__ = ["Bus", "BusStats", "Clock", "WallClock", "open_port", "register_sim_handler"]
+__all__ = ["POLL_FAILURES", "Bus", "BusStats", "Clock", "WallClock", "open_port", "register_sim_handler"]
 
 # The longest sleep or wait the Bus accepts, seconds: a day. Longer ones (inf, 1e308) are mistakes that
 # would hang the host, or overflow the simulator's clock.
 _LONGEST_WAIT = 86_400.0
+
+POLL_FAILURES = 3
+"""Polls in a row whose every retry failed (Timeout, CorruptFrame) before :meth:`Bus.wait_for` gives up: on a
+noisy line one such poll is bad luck that a long wait meets (a homing polls thousands of times); several in a
+row, a micro or line that is gone."""
 
 
 class Clock(Protocol):
@@ -308,7 +313,19 @@ class Bus:
         check_number("timeout", timeout, 0.0, _LONGEST_WAIT, "seconds")
         check_number("interval", interval, 1e-6, _LONGEST_WAIT, "seconds")
         deadline = self.clock.monotonic() + timeout
-        while not done():
+        failed = 0
+        while True:
+            # A poll only reads state, so one whose every retry was lost on a noisy line is asked again: a
+            # long wait (homing sends thousands of polls) would otherwise end at the first unlucky one.
+            # Several in a row mean the line or the micro is gone; a failed port is never retried.
+            try:
+                if done():
+                    return
+                failed = 0
+            except (Timeout, CorruptFrame):
+                failed += 1
+                if failed >= POLL_FAILURES:
+                    raise
             if self.clock.monotonic() >= deadline:
                 raise MotionTimeout(f"{what} did not finish within {timeout:g} s; it may be obstructed")
             self.clock.sleep(interval)

@@ -248,3 +248,41 @@ def test_a_simulated_session_repeats_to_the_bit():
             return sent, bus.port.world.now, bus.stats
 
     assert session() == session()
+
+
+def test_a_wait_asks_again_after_a_poll_lost_on_the_line_but_not_after_several(bus):
+    """A poll only reads state: one whose every retry was lost is asked again (a long wait meets such bad luck
+    on a noisy line); POLL_FAILURES in a row end the wait with the line's error; a failed port is not retried."""
+    from hardware.bus import POLL_FAILURES
+
+    def polls(outcomes):
+        answers = iter(outcomes)
+
+        def done():
+            outcome = next(answers)
+            if isinstance(outcome, Exception):
+                raise outcome
+            return outcome
+        return done
+
+    lost = [Timeout("lost"), CorruptFrame("garbled")]
+    bus.wait_for(polls([False, *lost[:1], False, *lost, True]), timeout=10, what="a part")
+    with pytest.raises(CorruptFrame):
+        bus.wait_for(polls([False] + [CorruptFrame("garbled")] * POLL_FAILURES), timeout=10, what="a part")
+    with pytest.raises(PortError):
+        bus.wait_for(polls([PortError("gone")]), timeout=10, what="a part")
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_head_on_a_very_noisy_line_homes_and_moves_with_more_retries(seed):
+    """1% of the bytes dropped and 1% flipped each way (the simulator's example URL): every exchange is at
+    risk, and a homing polls thousands of times. With retries raised, as the docs advise at such rates, a
+    session homes, moves and reads its state, and every command still runs once."""
+    from hardware import Head
+
+    with Head(f"sim://?seed={seed}&drop=0.01&corrupt=0.01", retries=8) as head:
+        head.home()
+        head.move(pan=30, tilt=-10)
+        for _ in range(10):
+            head.status()
+        assert abs(head.pan.position - 30) < 0.01 and abs(head.tilt.position + 10) < 0.01
