@@ -237,6 +237,18 @@ class _MotorAxis(_Axis):
     def moving(self) -> bool:
         return self.vel != 0.0 or self.pos != self.target
 
+    def _braking_target(self, accel: float) -> float:
+        """Where a stop brings the axis to rest: its stopping distance at `accel` from the current speed,
+        on to a whole count (where every move ends), but never past the target it was already braking
+        onto: a stop cannot carry the axis further than the move would have (past a soft limit)."""
+        reach = self.pos + math.copysign(self.vel * self.vel / (2.0 * accel), self.vel)
+        whole = float(math.ceil(reach) if self.vel > 0.0 else math.floor(reach))
+        if self.vel > 0.0 and self.target >= self.pos:
+            return min(whole, self.target)
+        if self.vel < 0.0 and self.target <= self.pos:
+            return max(whole, self.target)
+        return whole
+
     @property
     def flags(self) -> Flag:
         flags = self.latched
@@ -327,8 +339,7 @@ class StepperAxis(_MotorAxis):
     def stop(self) -> None:
         self.phase = None
         if self.moving:
-            _, accel = self._profile()
-            self.target = self.pos + math.copysign(self.vel * self.vel / (2.0 * accel), self.vel)
+            self.target = self._braking_target(self._profile()[1])
 
     def halt(self) -> None:
         self.phase = None
@@ -452,7 +463,7 @@ class LensAxis(_MotorAxis):
         self.phase = None
         self._final = None
         if self.moving:
-            self.target = self.pos + math.copysign(self.vel * self.vel / (2.0 * self._ACCEL), self.vel)
+            self.target = self._braking_target(self._ACCEL)
 
     def halt(self) -> None:
         self.phase = None

@@ -401,3 +401,22 @@ def test_profile_changes_the_speed(homed):
     start = world.now
     homed.move(pan=0.0)
     assert slow > 2.0 > world.now - start
+
+
+def test_a_stop_during_the_final_braking_never_carries_a_joint_past_its_target():
+    """Stopped while braking onto the pan's soft limit (+90 degrees), the joint comes to rest on the limit or
+    short of it, never past (a stop cannot take it further than the move would have), and on a whole count:
+    its encoder reads its target. Stopped while cruising, it ends short of the limit, on a whole count too."""
+    head = open_head()
+    world = world_of(head)
+    head.home()
+    for dt in [3.0 + 0.05 * k for k in range(34)]:  # cruising, then the last deceleration onto +90
+        head.move(pan=-90, wait=True)
+        head.move(pan=90, wait=False)
+        world.sleep(dt)
+        head.stop()
+        head.wait()
+        status = head.pan.status()
+        assert status.encoder <= 90 * COUNTS_PER_DEGREE + 1e-6, (dt, status)
+        assert status.encoder == round(status.target * COUNTS_PER_DEGREE), (dt, status)
+    head.close()
