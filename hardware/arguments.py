@@ -16,7 +16,7 @@ from typing import NoReturn
 
 from .errors import OutOfRange
 
-__all__ = ["OneLineParser", "check_int", "check_number"]
+__all__ = ["OneLineParser", "check_int", "check_number", "real_value"]
 
 
 def check_int(name: str, value: object, low: int, high: int) -> int:
@@ -37,6 +37,15 @@ def check_int(name: str, value: object, low: int, high: int) -> int:
     return number
 
 
+def real_value(value: numbers.Real) -> float:
+    """A real number as a float, an int too large for one as the infinity of its sign (beyond every range
+    here), so that a check compares it instead of failing with OverflowError."""
+    try:
+        return float(value)
+    except OverflowError:  # copysign would convert it too
+        return math.inf if value > 0 else -math.inf
+
+
 def check_number(name: str, value: object, low: float, high: float, unit: str) -> float:
     """`value` as a float, if it is a real number (not a bool) in ``[low, high]``.
 
@@ -49,10 +58,7 @@ def check_number(name: str, value: object, low: float, high: float, unit: str) -
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a number of {unit}, got {value!r}")
-    try:
-        number = float(value)
-    except OverflowError:  # an int too large for a float is beyond every range here
-        number = math.copysign(math.inf, value)
+    number = real_value(value)
     if not low <= number <= high:  # NaN fails this too
         raise OutOfRange(f"{name} must be in [{low:g}, {high:g}] {unit}, got {number:g}")
     return number

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from .arguments import check_number
+from .arguments import check_number, real_value
 from .commands import FAULT_FLAGS, Flag, describe
 from .errors import Fault, NotHomed, OutOfRange, naming
 from .micros import GalvoMicro, LensMicro
@@ -75,8 +75,10 @@ def mirror_angles(azimuth: float, elevation: float, *, tol: float = 1e-9) -> tup
         No mirror angles within the galvanometers' range look that way.
     """
     for name, value in (("azimuth", azimuth), ("elevation", elevation)):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise ValueError(f"{name} must be a finite number of degrees, got {value!r}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise TypeError(f"{name} must be a finite number of degrees, got {value!r}")
+        if not math.isfinite(real_value(value)):
+            raise ValueError(f"{name} must be a finite number of degrees, got {real_value(value):g}")
     beyond = OutOfRange(
         f"gaze (azimuth {azimuth:g}, elevation {elevation:g}) deg needs mirror angles beyond "
         f"+-{MIRROR_RANGE:g} deg"

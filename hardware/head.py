@@ -23,7 +23,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from .arguments import check_number
+from .arguments import check_number, real_value
 from .bus import Bus
 from .commands import GALVO_ADDR, LENS_ADDR, STEPPER_ADDR, Cmd, Flag
 from .errors import HardwareError
@@ -227,8 +227,9 @@ class Head:
         eyes `baseline` metres apart."""
         for name, value in (("distance", distance), ("baseline", baseline)):
             number = isinstance(value, (int, float)) and not isinstance(value, bool)
-            if not number or not math.isfinite(value) or value <= 0:
-                raise ValueError(f"{name} must be a positive number of metres, got {value!r}")
+            if not number or not math.isfinite(real_value(value)) or value <= 0:
+                shown = f"{real_value(value):g}" if number else repr(value)
+                raise ValueError(f"{name} must be a positive number of metres, got {shown}")
         half = math.degrees(math.atan2(baseline / 2.0, distance))
         self.left.point(half, 0.0)
         self.right.point(-half, 0.0)

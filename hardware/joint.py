@@ -15,7 +15,7 @@ import math
 import numbers
 from typing import NamedTuple
 
-from .arguments import check_number
+from .arguments import check_number, real_value
 from .commands import ACCEL_LIMIT, FAULT_FLAGS, VMAX_LIMIT, Flag, describe
 from .errors import Fault, OutOfRange, naming
 from .micros import StepperMicro
@@ -70,15 +70,16 @@ class Joint:
         """The encoder count of `degrees`, refused (OutOfRange) beyond the soft limits."""
         if not isinstance(degrees, numbers.Real) or isinstance(degrees, bool):
             raise TypeError(f"{self.name} must be a number of degrees, got {type(degrees).__name__}")
-        if not math.isfinite(degrees):
+        value = real_value(degrees)  # an int too large for a float: infinite, beyond the travel
+        if math.isnan(value) or (math.isinf(value) and isinstance(degrees, float)):
             raise ValueError(f"{self.name} must be finite, got {degrees!r}")
         low, high = self._count_limits
         # Compared before rounding: a huge angle (1e308) would overflow to inf counts, which round refuses.
-        scaled = float(degrees) * COUNTS_PER_DEGREE
+        scaled = value * COUNTS_PER_DEGREE
         counts = round(scaled) if low - 1 <= scaled <= high + 1 else None
         if counts is None or not low <= counts <= high:
             raise OutOfRange(
-                f"{self.name} {degrees:g} deg is outside its travel [{self.limits[0]:g}, {self.limits[1]:g}] deg;"
+                f"{self.name} {value:g} deg is outside its travel [{self.limits[0]:g}, {self.limits[1]:g}] deg;"
                 " nothing moved"
             )
         return counts

@@ -35,3 +35,23 @@ def test_vergence_selects_and_interpolates_tables(machine):
     assert angles[0] < between.vergence < angles[1]
     _, inside = inner_pixels(left)
     assert np.abs(between.source - direct.tables[0].source)[inside].max() < 0.25
+
+
+def test_a_bad_distance_anywhere_in_the_list_leaves_the_store_and_the_eyes_untouched():
+    """Every distance (and the baseline) is checked before the first table goes into the store."""
+    import math
+
+    import pytest
+
+    def capture():
+        raise AssertionError("nothing may be captured before every distance is checked")
+
+    with Head("sim://") as head:
+        head.home()
+        store = TableStore()
+        before = head.vergence()
+        for distances, baseline, name in (([0.7, math.nan], 0.3, r"distances\[1\]"), ([0.7, -1.0], 0.3, r"distances\[1\]"),
+                                          ([0.7], 0.0, "baseline")):
+            with pytest.raises(ValueError, match=name):
+                calibrate_vergences(head, store, capture, distances=distances, baseline=baseline, max_shift=10)
+        assert not store.tables and head.vergence() == before

@@ -13,6 +13,7 @@ from collections.abc import Callable
 import numpy as np
 
 from hardware.head import Head
+from vmcl.cm.core import check_real
 from vmcl.early.registration import TableStore, WarpTable
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
@@ -63,6 +64,11 @@ def calibrate_vergences(head: Head, store: TableStore, capture: Capture, *, dist
         raise InputTypeError(f"capture must be a callable returning (left, right) images, got {type(capture).__name__}")
     if not isinstance(distances, (list, tuple)) or not distances:
         raise InputValueError("distances must name at least one fixation distance")
+    # Every distance and the baseline checked before the first table goes into the store: a bad one found
+    # midway would leave the store holding part of a calibration.
+    for k, distance in enumerate(distances):
+        check_real(distance, f"distances[{k}]", above=0)
+    check_real(baseline, "baseline", above=0)
     angles = []
     for distance in distances:
         head.fixate(distance, baseline=baseline)
