@@ -7,7 +7,9 @@ session, so that a freshly powered head (or simulator) can be homed and moved in
     vmcl-head --port /dev/ttyUSB0 estop
 
 Exit status: 0 done; 1 the head or the line failed (a fault, a timeout, a port that would not open);
-2 a usage or input error (unknown command, bad number, target beyond the travel: nothing moved).
+2 a usage or input error. Every number, gaze and lens setting is checked before the head is opened
+(nothing moved); a joint target beyond the travel the head reports is refused when that command comes
+(the commands before it have run).
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from typing import TextIO
 
 from .arguments import OneLineParser
 from .errors import HardwareError
+from .eye import focus_counts, iris_counts, mirror_angles, zoom_counts
 from .head import Head
 
 __all__ = ["UsageError", "main", "parse_commands"]
@@ -39,14 +42,24 @@ class UsageError(ValueError):
     """A command line that cannot be run as written."""
 
 
-def _number(word: str, what: str) -> float:
+def _number(word: str, what: str, *, infinite: bool = False) -> float:
+    """The number `word` (finite, unless `infinite` allows inf: a focus at infinity)."""
     try:
         value = float(word)
     except ValueError:
         raise UsageError(f"{what} must be a number, got {word!r}") from None
-    if math.isnan(value):
-        raise UsageError(f"{what} must be a number, got {word!r}")
+    if math.isnan(value) or (math.isinf(value) and not (infinite and value > 0)):
+        raise UsageError(f"{what} must be a finite number{' or inf' if infinite else ''}, got {word!r}")
     return value
+
+
+def _checked(check: Callable[..., object], *values: float) -> None:
+    """Run a host-side conversion of the driver (gaze to mirror angles, lens settings to counts) on the
+    command's values, so that one the head would refuse stops the command line before anything runs."""
+    try:
+        check(*values)
+    except (ValueError, TypeError) as error:
+        raise UsageError(str(error)) from None
 
 
 def _eye(head: Head, name: str):
@@ -97,6 +110,7 @@ def parse_commands(words: list[str]) -> list[Step]:
             if eye not in ("left", "right"):
                 raise UsageError(f"EYE must be left or right, got {eye!r}")
             azimuth, elevation = _number(az, "AZIMUTH"), _number(el, "ELEVATION")
+            _checked(mirror_angles, azimuth, elevation)
 
             def point(head: Head, out: TextIO, e=eye, a=azimuth, b=elevation) -> None:
                 _eye(head, e).point(a, b)
@@ -112,7 +126,8 @@ def parse_commands(words: list[str]) -> list[Step]:
                 key, _, value = words.pop(0).partition("=")
                 if key not in ("zoom", "focus", "iris") or key in settings:
                     raise UsageError(f"lens takes zoom=MM, focus=M and iris=F once each, got {key!r}")
-                settings[key] = _number(value, key)
+                settings[key] = _number(value, key, infinite=key == "focus")
+                _checked({"zoom": zoom_counts, "focus": focus_counts, "iris": iris_counts}[key], settings[key])
             if not settings:
                 raise UsageError("lens needs at least one of zoom=MM focus=M iris=F")
 

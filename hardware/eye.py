@@ -145,10 +145,10 @@ class EyeStatus(NamedTuple):
         lens = "lens not homed"
         if not math.isnan(self.zoom_mm):
             lens = f"zoom {self.zoom_mm:.1f} mm, focus {self.focus_m:.2f} m, F{self.f_number:.1f}"
-        return (
-            f"gaze ({self.azimuth:+.3f}, {self.elevation:+.3f}) deg, mirrors ({self.mirror_x:+.3f}, "
-            f"{self.mirror_y:+.3f}) deg, {lens}, {describe(self.flags)}"
-        )
+        # Rounded first, and -0.0 made 0.0: a mirror a hair below zero would print as -0.000.
+        azimuth, elevation, x, y = (round(v, 3) + 0.0 for v in (self.azimuth, self.elevation, self.mirror_x,
+                                                                self.mirror_y))
+        return f"gaze ({azimuth:+.3f}, {elevation:+.3f}) deg, mirrors ({x:+.3f}, {y:+.3f}) deg, {lens}, {describe(self.flags)}"
 
 
 class Eye:

@@ -55,10 +55,11 @@ def test_status_of_a_fresh_head_says_not_homed():
         (["frob"], "unknown command 'frob'"),
         (["move", "30"], "move needs PAN TILT"),
         (["move", "x", "1"], "PAN must be a number, got 'x'"),
-        (["move", "nan", "1"], "PAN must be a number"),
+        (["move", "nan", "1"], "PAN must be a finite number, got 'nan'"),
+        (["lens", "left", "focus=-inf"], "focus must be a finite number or inf, got '-inf'"),
         (["point", "middle", "1", "2"], "EYE must be left or right"),
         (["lens", "left"], "lens needs at least one of"),
-        (["lens", "left", "zoom=1", "zoom=2"], "once each"),
+        (["lens", "left", "zoom=20", "zoom=30"], "once each"),
         (["lens", "left", "aperture=2"], "got 'aperture'"),
         (["home", "move", "100", "0"], "pan 100 deg is outside its travel"),
         (["home", "lens", "left", "zoom=5"], r"zoom must be in \[12.5, 75\] mm"),
@@ -110,3 +111,18 @@ def test_estop_latches_a_fault_everywhere_and_home_clears_it():
 def test_help_exits_0(capsys):
     assert main(["--help"]) == 0
     assert "move PAN TILT" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["home", "move", "inf", "0"], "PAN must be a finite number, got 'inf'"),
+    (["home", "move", "0", "1e400"], "TILT must be a finite number, got '1e400'"),
+    (["home", "point", "left", "30", "0"], "needs mirror angles beyond"),
+    (["home", "lens", "left", "zoom=5"], r"zoom must be in \[12.5, 75\] mm"),
+    (["home", "lens", "right", "iris=0.5"], "iris"),
+])
+def test_what_can_be_checked_without_the_head_stops_the_line_before_anything_runs(capsys, argv, message):
+    """A bad number, gaze or lens setting anywhere in the line: exit 2 and nothing ran (no homing first)."""
+    status, out = run(argv)
+    err = capsys.readouterr().err
+    assert status == 2 and re.search(message, err), err
+    assert "homed" not in out
