@@ -37,7 +37,7 @@ def check_int(name: str, value: object, low: int, high: int) -> int:
     return number
 
 
-def real_value(value: numbers.Real) -> float:
+def real_value(value: float) -> float:
     """A real number as a float, an int too large for one as the infinity of its sign (beyond every range
     here), so that a check compares it instead of failing with OverflowError."""
     try:
@@ -58,7 +58,7 @@ def check_number(name: str, value: object, low: float, high: float, unit: str) -
     """
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"{name} must be a number of {unit}, got {value!r}")
-    number = real_value(value)
+    number = real_value(value)  # type: ignore[arg-type]  # a numbers.Real, which the checker cannot convert
     if not low <= number <= high:  # NaN fails this too
         raise OutOfRange(f"{name} must be in [{low:g}, {high:g}] {unit}, got {number:g}")
     return number

@@ -38,7 +38,7 @@ from .errors import (
     Timeout,
     UnknownCommand,
 )
-from .protocol import BROADCAST, MAX_ADDRESS, Frame, Parser, encode_request
+from .protocol import BROADCAST, LONGEST_FRAME, MAX_ADDRESS, Frame, Parser, encode_request
 
 if TYPE_CHECKING:
     from typing_extensions import Self
@@ -123,7 +123,7 @@ _DEVICE_ERRORS: dict[int, tuple[type[DeviceError], str]] = {
     Error.BAD_LENGTH: (BadLength, "bad payload length; host and firmware disagree on the protocol version"),
     Error.OUT_OF_RANGE: (OutOfRange, "argument out of range (beyond the soft limits?); nothing moved"),
     Error.NOT_HOMED: (NotHomed, "the axis is not homed; home it first"),
-    Error.FAULT: (Fault, "a fault is latched; clear it (clear_fault) or home the axis"),
+    Error.FAULT: (Fault, "a fault is latched; clear it (Head.clear_faults) or home the axis"),
 }
 
 
@@ -174,7 +174,10 @@ class Bus:
             raise ValueError(f"timeout must be a number of seconds in (0, 60), got {timeout!r}")
         if not isinstance(retries, int) or isinstance(retries, bool) or not 0 <= retries <= 100:
             raise ValueError(f"retries must be an int in 0..100, got {retries!r}")
+        if not isinstance(port, str) and not (hasattr(port, "read") and hasattr(port, "write")):
+            raise TypeError(f"port must be a serial device or URL (str) or an open pyserial port, got {port!r}")
         self._owns_port = isinstance(port, str)
+        self._closed = False
         self.port = open_port(port, baudrate=baudrate) if isinstance(port, str) else port
         self.clock: Clock = clock or getattr(self.port, "clock", None) or WallClock()
         self.timeout = float(timeout)
@@ -195,10 +198,23 @@ class Bus:
         self.close()
 
     def close(self) -> None:
-        """Close the port, if the Bus opened it."""
+        """Close the port, if the Bus opened it; the Bus (and a Head on it) then refuses every request."""
+        self._closed = True
         if self._owns_port:
             with _port_failures(self.port):
                 self.port.close()
+
+    def _silence_advice(self) -> str:
+        """Why a micro may not have answered: where the longest reply takes much of the reply timeout on the
+        wire at the port's baud rate (10 bits a byte, every byte stuffed), the timeout is the likely cause;
+        else the micro itself."""
+        baudrate = getattr(self.port, "baudrate", None)
+        if isinstance(baudrate, (int, float)) and baudrate > 0:
+            longest = 10 * 2 * LONGEST_FRAME / baudrate
+            if longest > self.timeout / 2:
+                return (f"at {baudrate:g} baud the longest reply takes up to {longest * 1000:.0f} ms on the wire: "
+                        "raise the reply timeout (timeout; vmcl-head --timeout)")
+        return "is it powered, wired, at that address?"
 
     def sleep(self, seconds: float) -> None:
         """Sleep on the bus's clock (virtual time on the simulator), 0 to a day."""
@@ -237,6 +253,8 @@ class Bus:
         if not isinstance(addr, int) or isinstance(addr, bool) or not 1 <= addr <= MAX_ADDRESS:
             raise ValueError(f"addr must be an int in 1..{MAX_ADDRESS} (0 is broadcast), got {addr!r}")
         who = who or f"micro {addr}"
+        if self._closed:
+            raise PortError(f"this Bus (or the Head on it) was closed; open a new one to reach {who}")
         with self._lock, _port_failures(self.port):
             seq = self._seq[addr] = (self._seq[addr] + 1) & 0xFF
             frame = encode_request(addr, seq, cmd, payload)
@@ -256,9 +274,7 @@ class Bus:
                 )
                 if self._parser.crc_errors + self._parser.dropped > corrupt_before:
                     raise CorruptFrame(f"{what}: replies came back corrupted; check wiring, baud rate, noise")
-                raise Timeout(
-                    f"{what} ({self.timeout * 1000:.0f} ms each); is it powered, wired, at that address?"
-                )
+                raise Timeout(f"{what} ({self.timeout * 1000:.0f} ms each); {self._silence_advice()}")
         status = reply.status
         assert status is not None  # _await returns only replies, and every reply carries a status
         code = status & ~FAULT_BIT

@@ -224,5 +224,5 @@ class Eye:
         """True once mirrors and lens are at rest; raises Fault if a fault has latched."""
         flags = self.galvo.get(self.index).flags | self.lens.get(self.index).flags
         if flags & FAULT_FLAGS:
-            raise Fault(f"{self.name} eye: {describe(flags)}; clear_fault()", flags=int(flags))
+            raise Fault(f"{self.name} eye: {describe(flags)}; clear_faults()", flags=int(flags))
         return not flags & (Flag.MOVING | Flag.HOMING)

@@ -28,6 +28,7 @@ __all__ = [
     "BROADCAST",
     "ESCAPE",
     "FLAG",
+    "LONGEST_FRAME",
     "MAX_ADDRESS",
     "MAX_PAYLOAD",
     "REPLY_BIT",
@@ -52,6 +53,8 @@ _HEADER = 3  # ADDR, SEQ, LEN
 _CRC = 2
 _MIN_CONTENT = _HEADER + 1 + _CRC  # the shortest request: no payload
 _MAX_CONTENT = _HEADER + MAX_PAYLOAD + 2 + _CRC  # the longest reply
+LONGEST_FRAME = _MAX_CONTENT + 2
+"""The longest frame's bytes between and with its two flags, before stuffing (which at most doubles them)."""
 # The fewest wire bytes that can complete a frame when none is under way: its content and a closing
 # flag (the opening one may be the flag that closed the previous frame).
 _SHORTEST_ON_WIRE = 1 + _MIN_CONTENT + 1

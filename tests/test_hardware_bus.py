@@ -286,3 +286,25 @@ def test_a_head_on_a_very_noisy_line_homes_and_moves_with_more_retries(seed):
         for _ in range(10):
             head.status()
         assert abs(head.pan.position - 30) < 0.01 and abs(head.tilt.position + 10) < 0.01
+
+
+def test_what_is_not_a_port_is_refused_by_name_and_a_closed_bus_says_it_was_closed():
+    from hardware import Head
+
+    for port in (None, 5):
+        with pytest.raises(TypeError, match="port must be a serial device or URL"):
+            Head(port)
+    head = Head("sim://?seed=1")
+    head.close()
+    with pytest.raises(PortError, match="was closed; open a new one"):
+        head.status()
+    head.close()  # a second close is harmless
+
+
+def test_a_timeout_at_a_slow_baud_rate_advises_a_longer_reply_timeout():
+    """At 300 baud the longest reply needs seconds on the wire, far beyond the default 50 ms: the Timeout
+    says so, instead of asking whether the micro is powered; at the usual 115200 baud it asks that."""
+    with pytest.raises(Timeout, match=r"at 300 baud the longest reply takes up to \d+ ms .*raise the reply timeout"):
+        Bus("sim://?seed=1", baudrate=300).request(GALVO, Cmd.PING)
+    with pytest.raises(Timeout, match="is it powered, wired, at that address"):
+        Bus("sim://?seed=1&absent=2").request(GALVO, Cmd.PING)
