@@ -88,10 +88,13 @@ def open_port(url: str, *, baudrate: int = 115200) -> serial.SerialBase:
     baudrate : int
         Bits per second; the eye-head runs at 115200 by default.
 
+    The port is opened for this process alone (pyserial's ``exclusive``: a lock on POSIX, the system's own
+    rule on Windows): two hosts on one line would interleave their frames.
+
     Raises
     ------
     PortError
-        The port would not open (no such device, no permission, busy).
+        The port would not open (no such device, no permission, busy or held by another program).
     """
     if not isinstance(url, str) or not url:
         raise TypeError(f"url must be a non-empty str, got {url!r}")
@@ -99,7 +102,7 @@ def open_port(url: str, *, baudrate: int = 115200) -> serial.SerialBase:
         raise ValueError(f"baudrate must be a positive int, got {baudrate!r}")
     register_sim_handler()
     try:
-        return serial.serial_for_url(url, baudrate=baudrate, timeout=0)
+        return serial.serial_for_url(url, baudrate=baudrate, timeout=0, exclusive=True)
     except (serial.SerialException, OSError) as exc:
         raise PortError(f"cannot use port {url!r}: {exc}") from exc
 

@@ -143,6 +143,8 @@ def parse_commands(words: list[str]) -> list[Step]:
                 print("emergency stop sent to every micro", file=out)
 
             steps.append(estop)
+        elif command.startswith("-"):
+            raise UsageError(f"options go before the commands (vmcl-head --port URL home ...), got {command!r} after them")
         else:
             raise UsageError(f"unknown command {command!r}")
     return steps
@@ -182,4 +184,6 @@ def main(argv: list[str] | None = None, *, out: TextIO | None = None) -> int:
         return fail(str(exc), 2)
     except HardwareError as exc:
         return fail(str(exc), 1)
+    except KeyboardInterrupt:  # leaving the Head's block has stopped every motor
+        return fail("interrupted; the head was told to stop", 130)
     return 0

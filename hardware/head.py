@@ -121,15 +121,24 @@ class Head:
         return self
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: object) -> None:
+        # Leaving the block stops every motor. When the block itself failed, its error is the one the caller
+        # sees: a stop, emergency stop or close that fails after it (on the port the first error lost)
+        # would otherwise take its place.
+        failure: HardwareError | None = None
         try:
             self.stop()
-        except HardwareError:
-            # The micros did not confirm the stop; an emergency stop needs no reply.
-            self.estop()
-            if exc_type is None:
-                raise
-        finally:
+        except HardwareError as error:
+            failure = error
+            try:
+                self.estop()  # the micros did not confirm the stop; an emergency stop needs no reply
+            except HardwareError as also:
+                failure = also  # its context is the stop's error
+        try:
             self.close()
+        except HardwareError as error:
+            failure = failure or error
+        if failure is not None and exc_type is None:
+            raise failure
 
     def close(self) -> None:
         """Close the bus, if Head opened it."""

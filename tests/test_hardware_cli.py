@@ -56,6 +56,7 @@ def test_status_of_a_fresh_head_says_not_homed():
         (["move", "30"], "move needs PAN TILT"),
         (["move", "x", "1"], "PAN must be a number, got 'x'"),
         (["move", "nan", "1"], "PAN must be a finite number, got 'nan'"),
+        (["home", "--port", "sim://", "status"], r"options go before the commands .*got '--port' after them"),
         (["lens", "left", "focus=-inf"], "focus must be a finite number or inf, got '-inf'"),
         (["point", "middle", "1", "2"], "EYE must be left or right"),
         (["lens", "left"], "lens needs at least one of"),
@@ -126,3 +127,18 @@ def test_what_can_be_checked_without_the_head_stops_the_line_before_anything_run
     err = capsys.readouterr().err
     assert status == 2 and re.search(message, err), err
     assert "homed" not in out
+
+
+def test_an_interrupt_stops_the_head_and_exits_130_with_one_line(capsys, monkeypatch):
+    """Ctrl-C during a command: leaving the session stops the motors, and the command line says so in one
+    line with the shell's status for an interrupt, not a traceback."""
+    from hardware.head import Head
+
+    stopped = []
+    monkeypatch.setattr(Head, "home", lambda self, **kwargs: (_ for _ in ()).throw(KeyboardInterrupt()))
+    real_stop = Head.stop
+    monkeypatch.setattr(Head, "stop", lambda self: (stopped.append(True), real_stop(self))[1])
+    status, _ = run(["home"])
+    err = capsys.readouterr().err
+    assert status == 130 and err == "vmcl-head: error: interrupted; the head was told to stop\n", err
+    assert stopped

@@ -396,6 +396,18 @@ def test_a_dead_port_raises_port_error_and_not_serial_exception():
     assert not head.bus.port.is_open
 
 
+def test_the_blocks_own_error_is_the_one_seen_when_the_stop_on_leaving_fails_too():
+    """The port lost inside a `with`: stopping, the emergency stop and closing on the way out fail as well,
+    and the caller sees the block's own error, not theirs; without an error in the block, theirs."""
+    head = open_head("sim://?seed=2")
+    with pytest.raises(RuntimeError, match="the caller's own"), head:
+        head.bus.port.unplug()
+        raise RuntimeError("the caller's own")
+    head = open_head("sim://?seed=2")
+    with pytest.raises(PortError), head:
+        head.bus.port.unplug()
+
+
 def test_profile_changes_the_speed(homed):
     world = world_of(homed)
     homed.pan.set_profile(10.0, 100.0)

@@ -90,6 +90,17 @@ def test_head_over_a_pty_homes_moves_points_and_refuses(served):
     assert proc.poll() is None
 
 
+def test_a_port_held_by_one_host_is_refused_to_a_second(served):
+    """Two hosts on one line would interleave their frames: the port opens for one at a time."""
+    _, path = served
+    with Head(path, timeout=0.1) as head:
+        with pytest.raises(PortError, match=f"cannot use port '{path}'"):
+            Head(path, timeout=0.1)
+        assert head.pan.position is not None  # the first host still has it
+    with Head(path, timeout=0.1) as head:  # free again once closed
+        head.status()
+
+
 def test_server_exits_when_its_parent_dies():
     # A parent shell starts the server and exits at once; the orphaned server must not linger.
     script = (
