@@ -35,6 +35,7 @@ from vmcl.distributed import (
     map_sequence,
     run_batch,
     stitch,
+    vmcl_stores,
     worker_machine,
     write_zarr,
 )
@@ -392,6 +393,27 @@ def test_batch_zarr_stacks_each_items_field_in_order_and_fills_the_failed(client
         assert _no_partial_folders(out)
         # Spoil a row: the resumed run rewrites the store from the folders, not from what it held.
         __import__("zarr").open_array(str(out / "disparity.zarr"), mode="r+")[0] = -1.0
+
+
+def test_a_store_an_earlier_batch_built_is_named_when_a_later_one_adds_items_without_it(client, tmp_path, capsys):
+    """A store built by one run lacks the items a later run without --zarr writes: that run says so."""
+    pytest.importorskip("zarr")
+    data = tmp_path / "data"
+    data.mkdir()
+    _png(data / "a.png", _scene(0, 64).left)
+    out = tmp_path / "batch"
+    common = ["--out", str(out), "--config", str(_fast_toml(tmp_path)), "--scheduler",
+              client.scheduler_info()["address"], "--quiet"]
+    assert main(["batch", str(data), "--zarr", "labels", *common]) == 0
+    assert vmcl_stores(out) == ["labels"] and vmcl_stores(tmp_path / "absent") == []
+    capsys.readouterr()
+    assert main(["batch", str(data), *common]) == 0  # nothing new: nothing to say
+    assert "was built by an earlier run" not in capsys.readouterr().err
+    _png(data / "b.png", _scene(1, 64).left)
+    assert main(["batch", str(data), *common]) == 0
+    err = capsys.readouterr().err
+    assert f"{out / 'labels.zarr'} was built by an earlier run and holds none of the 1 item(s) this one wrote: " \
+           "rerun with --zarr labels to rebuild it" in err, err
 
 
 def test_batch_zarr_refuses_items_of_different_sizes_before_any_work(tmp_path, capsys):

@@ -690,6 +690,10 @@ def _batch(args) -> int:
     counts = {state: sum(s.state == state for s in statuses) for state in ("done", "skipped", "failed")}
     _print_table(f"Batch into {args.out}: {counts['done']} done, {counts['skipped']} skipped (already there), "
                  f"{counts['failed']} failed", rows)
+    if counts["done"]:  # the stores an earlier run built and this one did not: they lack what it wrote
+        for field in (f for f in distributed.vmcl_stores(Path(args.out)) if f not in fields):
+            print(f"{Path(args.out) / (field + '.zarr')} was built by an earlier run and holds none of the "
+                  f"{counts['done']} item(s) this one wrote: rerun with --zarr {field} to rebuild it", file=sys.stderr)
     for field in fields:  # from the folders on disk: a resumed batch's store holds every finished item
         store = distributed.write_zarr(Path(args.out), items, field)
         line = f"{field}: {store.path} ({' x '.join(map(str, store.shape))} {store.dtype})"

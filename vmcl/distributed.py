@@ -84,6 +84,7 @@ __all__ = [
     "run_chunk",
     "run_frame",
     "stitch",
+    "vmcl_stores",
     "worker_machine",
     "write_zarr",
 ]
@@ -774,19 +775,34 @@ def _check_out(out: Any) -> Path:
     return path
 
 
+def _written_by_vmcl(path: Path, zarr: Any) -> bool:
+    """Whether ``path`` is a Zarr store vmcl wrote (its attribute written_by)."""
+    if not path.is_dir() or path.is_symlink():
+        return False
+    try:
+        return zarr.open_array(store=str(path), mode="r").attrs.get("written_by") == ZARR_WRITER
+    except Exception:  # noqa: BLE001 - anything zarr cannot open as an array is not vmcl's store
+        return False
+
+
+def vmcl_stores(out: str | os.PathLike[str]) -> list[str]:
+    """The fields of the Zarr stores vmcl wrote in ``out`` (``out``/<field>.zarr), sorted; none when the zarr
+    package is missing (then vmcl wrote none)."""
+    try:
+        zarr = _zarr()
+    except ImportError:
+        return []
+    folder = Path(out)
+    return sorted(p.name[:-len(".zarr")] for p in folder.glob("*.zarr") if _written_by_vmcl(p, zarr)) \
+        if folder.is_dir() else []
+
+
 def _zarr_target(out: Path, field: str) -> Path:
     """``out``/<field>.zarr, refused unless it is absent or a store vmcl wrote."""
     target = out / f"{field}.zarr"
     if not target.exists() and not target.is_symlink():
         return target
-    zarr = _zarr()
-    ours = False
-    if target.is_dir() and not target.is_symlink():
-        try:
-            ours = zarr.open_array(store=str(target), mode="r").attrs.get("written_by") == ZARR_WRITER
-        except Exception:  # noqa: BLE001 - anything zarr cannot open as an array is not vmcl's store
-            ours = False
-    if not ours:
+    if not _written_by_vmcl(target, _zarr()):
         raise InputValueError(f"--zarr {field}: {target} is there and vmcl did not write it (a vmcl store has the "
                               f"attribute written_by: {ZARR_WRITER}); vmcl writes only its own files: move it away "
                               "or name another --out")

@@ -518,8 +518,11 @@ class Machine:
                 f"{self.device.name} has {limit_total / mib:,.0f} MiB, at most {limit_one / mib:,.0f} MiB per buffer")
 
     def to_device(self, array: np.ndarray) -> cl_array.Array:
-        """Copy a host array to a pooled device array (C order)."""
+        """Copy a host array to a pooled device array (C order, the machine's own byte order: the kernels
+        read native numbers, and a big-endian array's values are kept, not its bytes)."""
         array = np.ascontiguousarray(array)
+        if not array.dtype.isnative:
+            array = array.astype(array.dtype.newbyteorder("="))
         device_array = self.empty(array.shape, array.dtype)
         device_array.set(array, queue=self.queue)
         return device_array

@@ -34,6 +34,7 @@ __all__ = [
     "check_real",
     "check_real_dtype",
     "check_same_kind",
+    "check_same_scale",
     "check_sigma",
     "check_unit_image",
     "check_unmasked",
@@ -124,7 +125,7 @@ def field(x: Any, name: str, machine: Machine, *, ndims: tuple[int, ...],
     elif isinstance(x, np.ndarray):
         check_unmasked(x, name)
         host = True
-        dtype = x.dtype
+        dtype = x.dtype.newbyteorder("=")  # a big-endian uint16 is a uint16: its values are uploaded natively
         if dtype not in accepted:
             if np.dtype(np.int32) in accepted and dtype in _EXACT_TO_INT32:
                 dtype = np.dtype(np.int32)
@@ -282,6 +283,18 @@ def check_same_kind(first: str, first_host: bool, second: str, second_host: bool
     each is a NumPy array): a call returns what it was given, and mixed kinds leave that undecided."""
     if first_host != second_host:
         raise InputTypeError(f"{first} and {second} must both be NumPy arrays or both device arrays")
+
+
+def check_same_scale(first: str, first_dtype: DTypeLike, second: str, second_dtype: DTypeLike) -> None:
+    """Refuse two images of one call whose values are on different scales: vmcl compares their values as they
+    are, in their type's units (uint8 0..255, uint16 0..65535, floats 0..1), so a uint8 frame beside a float
+    one, or beside a uint16 one, would be matched against numbers of another meaning. Floats of any width
+    go together; the byte order does not matter."""
+    a, b = np.dtype(first_dtype).newbyteorder("="), np.dtype(second_dtype).newbyteorder("=")
+    if a == b or (a.kind == "f" and b.kind == "f"):
+        return
+    raise InputValueError(f"{first} and {second} must have the same type (their values are compared in their "
+                          f"type's units: 0..255, 0..65535, or 0..1 for floats), got {first_dtype} and {second_dtype}")
 
 
 def check_unmasked(x: Any, name: str) -> None:

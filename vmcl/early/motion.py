@@ -39,6 +39,7 @@ from vmcl.cm.core import (
     check_int,
     check_real,
     check_same_kind,
+    check_same_scale,
     field,
     machine_for,
 )
@@ -140,6 +141,7 @@ def _frames(frame0, frame1, machine: Machine) -> tuple[cl_array.Array, cl_array.
         devices.append((data, host))
     (d0, host0), (d1, host1) = devices
     check_same_kind("frame0", host0, "frame1", host1)
+    check_same_scale("frame0", frame0.dtype, "frame1", frame1.dtype)
     if d0.shape != d1.shape:
         raise InputValueError(f"frame0 and frame1 must have the same shape, got {d0.shape} and {d1.shape}")
     return d0, d1, host0

@@ -42,6 +42,7 @@ from vmcl.cm.core import (
     check_int,
     check_real,
     check_same_kind,
+    check_same_scale,
     check_unmasked,
     machine_for,
 )
@@ -104,12 +105,14 @@ def check_pair(left: Any, right: Any, machine: Machine) -> None:
             check_context(image, name, machine)
         check_unmasked(image, name)
         host_float = isinstance(image, np.ndarray) and image.dtype.kind == "f"
-        if image.dtype not in IMAGE_TYPES and not host_float:
+        # A big-endian uint16 is a uint16 (uploads convert it to the machine's byte order).
+        if image.dtype.newbyteorder("=") not in IMAGE_TYPES and not host_float:
             raise InputTypeError(f"{name} must have dtype uint8, uint16 or float32 (or another float on the "
                                  f"host), got {image.dtype}")
         if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] != 3):
             raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {image.shape}")
     check_same_kind("left", isinstance(left, np.ndarray), "right", isinstance(right, np.ndarray))
+    check_same_scale("left", left.dtype, "right", right.dtype)
     if left.shape != right.shape:
         raise InputValueError(f"left and right must have the same shape, got {left.shape} and {right.shape}")
     if 0 in left.shape[:2]:
