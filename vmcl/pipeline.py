@@ -871,7 +871,8 @@ class VisionMachine:
         Parameters
         ----------
         left : (H, W) or (H, W, 3) array, uint8, uint16 or float
-            The left view at t (floats are taken as they are, in [0, 1] for the default thresholds).
+            The left view at t: integers on their type's full scale, floats in [0, 1] (floats on another
+            scale, such as 0..255, are refused: divide them by their full scale first).
         right : array of left's shape and type, optional
             The right view at t, rectified (rows are epipolar lines): adds stereo.
         next : array of left's shape and type, optional

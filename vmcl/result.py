@@ -40,9 +40,10 @@ class Result:
     density, texture_edges : float32 (H, W), bool (H, W)
         Texton density and its edge candidates.
     sparse_disparity : float32 (H, W)
-        The matcher's disparities (of the feedback pass when there is one), NaN where none.
+        The feature (edge) matcher's disparities (of the feedback pass when there is one), NaN where none;
+        None when ``[stereo] feature_matches`` is off (the default: the dense matcher alone, ``disparity``).
     first_pass_disparity : float32 (H, W)
-        The matcher's disparities before feedback (None without feedback).
+        The feature matcher's disparities before feedback (None without feedback or feature matches).
     stereo_discontinuity : bool (H, W)
         Features whose votes were bimodal over d (None without feature matches).
     half_occluded : bool (H, W)

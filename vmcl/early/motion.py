@@ -459,7 +459,9 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     Returns
     -------
     FlowResult
-        (flow, score, boundaries): NumPy arrays for NumPy input, device arrays for device input.
+        Its ``flow``, ``score`` and ``boundaries``: NumPy arrays for NumPy input, device arrays for device
+        input; and the coarsest level's ``limit_share`` and ``found_share``. Read them by name (a dataclass,
+        not a tuple).
 
     Notes
     -----

@@ -153,13 +153,13 @@ class SemiGlobalMatch:
         them, the value of the surface on their right; with ``refine``, the pixels near depth jumps and
         the mismatched ones given the weighted median of the kept disparities around them (mismatched
         pixels without kept ones around stay NaN; without ``refine`` all do); out-of-range pixels NaN.
-    occluded : bool (H, W), half-occluded pixels: no disparity of the range is confirmed by the right view
+    occluded : bool (H, W) (uint8 0/1 on the device), half-occluded pixels: no disparity of the range is confirmed by the right view
         (and, with ``occlusion_geometry``, the nearest kept pixel on the row's right is nearer, by a pixel
         of disparity or more, than the nearest on its left, or one side has none); or the pixel is
         unconfirmed and the kept surface on its right, carried on to it, would be seen left of the right
         image (x < its disparity: the frame hides it).
-    mismatched : bool (H, W), unconfirmed pixels that are not half-occluded (the winner was wrong).
-    out_of_range : bool (H, W), pixels whose winner was an end of the range (d_min or d_max, where the
+    mismatched : bool (H, W) (uint8 0/1 on the device), unconfirmed pixels that are not half-occluded (the winner was wrong).
+    out_of_range : bool (H, W) (uint8 0/1 on the device), pixels whose winner was an end of the range (d_min or d_max, where the
         image lets the range go on) with a poor cost there (above :data:`POOR_MATCH` of the largest
         cost): the search stopped there, so the match may lie beyond it (the seed's areas outside
         the matcher's disparity range). Unmatched, neither occluded nor mismatched.
