@@ -208,6 +208,8 @@ TABLE: tuple[Entry, ...] = (
        voters=None, radius=2, sigma_colour=0.1, sigma_space=2.0, stride=1, bin_width=1.0,
        kinds={"values": _A, "image": _A, "low": _N, "high": _N, "where": _OA, "voters": _OA, "radius": _I,
               "sigma_colour": _N, "sigma_space": _N, "stride": _I, "bin_width": _N, "machine": _M}),
+    _e("vmcl.early.disparity_range:range_to_search", left=IMG, right=IMG, d_min=0, d_max=4,
+       kinds={"left": _A, "right": _A, "d_min": _I, "d_max": _I, "machine": _M}),
     _e("vmcl.early.disparity_range:estimate_range", left=IMG, right=IMG, max_disparity=1 / 3, coarse_side=48,
        patch=11, min_score=0.8, quantile=0.005, margin=1, widen=0.25, min_share=0.05,
        kinds={"left": _A, "right": _A, "max_disparity": _N, "coarse_side": _I, "patch": _I, "min_score": _N,

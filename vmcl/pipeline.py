@@ -149,7 +149,7 @@ class EdgesConfig:
         ``grouping.structural_threshold`` (:mod:`vmcl.group`).
     """
 
-    sigma: float = 2.0
+    sigma: float = edges.DEFAULT_SIGMA
     low_threshold: float | None = None
     high_threshold: float | None = None
     use_quantiles: bool = False
@@ -400,8 +400,8 @@ class MotionConfig:
     """
 
     enabled: bool = True
-    delta: int = 4
-    patch: int = 21
+    delta: int = motion.DELTA
+    patch: int = motion.PATCH
     levels: int | None = None
     features: str = "sign_log"
     weigh_by_score: bool = True
@@ -467,10 +467,10 @@ class TextureConfig:
     """
 
     enabled: bool = True
-    fine_sigma: float = 1.0
-    coarse_sigma: float = 4.0
-    threshold: float = 0.08
-    radius: int = 24
+    fine_sigma: float = texture.FINE_SIGMA
+    coarse_sigma: float = texture.COARSE_SIGMA
+    threshold: float = texture.THRESHOLD
+    radius: int = texture.RADIUS
     noise_factor: float = texture.NOISE_FACTOR
 
     def __post_init__(self) -> None:

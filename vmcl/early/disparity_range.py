@@ -25,11 +25,11 @@ import pyopencl.array as cl_array
 from vmcl.cm.core import ArrayLike, check_int, check_real, finite_float32, machine_for
 from vmcl.cm.filters import binomial
 from vmcl.early.filters import gaussian
-from vmcl.early.stereo import StereoMatch, check_pair, match
+from vmcl.early.stereo import StereoMatch, check_pair, check_range, match
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine, on_device
 
-__all__ = ["MAX_DISPARITY", "DisparityRange", "estimate_range", "fallback_range"]
+__all__ = ["MAX_DISPARITY", "DisparityRange", "estimate_range", "fallback_range", "range_to_search"]
 
 MAX_DISPARITY = 0.5
 """The widest disparity searched by default, either sign, as a share of the image width: near objects of
@@ -280,3 +280,36 @@ def _consistent(disparity: np.ndarray, score: np.ndarray, back: np.ndarray, min_
     kept = np.zeros_like(known)
     kept[ys[agree], xs[agree]] = True
     return kept
+
+
+def range_to_search(left: ArrayLike, right: ArrayLike, d_min: int | None = None, d_max: int | None = None, *,
+                    machine: Machine | None = None) -> tuple[int, int]:
+    """The disparity range a matcher searches: the given ends, the others found from the images by
+    :func:`estimate_range` (an end given overrides that end, and the found one moves to it if it would
+    cross it), checked against the image's width.
+
+    Parameters
+    ----------
+    left, right : arrays
+        The pair, as :func:`estimate_range` takes it (matched only when an end is missing).
+    d_min, d_max : int, optional
+
+    Returns
+    -------
+    (d_min, d_max) : tuple of int
+    """
+    machine = machine_for(machine)
+    check_pair(left, right, machine)  # checked even when both ends are given: one call, one contract
+    low = None if d_min is None else check_int(d_min, "d_min")
+    high = None if d_max is None else check_int(d_max, "d_max")
+    if low is None or high is None:
+        found = estimate_range(left, right, machine=machine)
+        if low is None and high is None:
+            low, high = found.d_min, found.d_max
+        elif low is None:
+            assert high is not None
+            low = min(found.d_min, high)
+        else:
+            high = max(found.d_max, low)
+    check_range(low, high, left.shape[1])
+    return low, high

@@ -49,6 +49,7 @@ from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 __all__ = [
+    "DEFAULT_SIGMA",
     "PLAIN_SCALE",
     "CannyResult",
     "Hysteresis",
@@ -59,6 +60,10 @@ __all__ = [
 ]
 
 Hysteresis = Literal["doubling", "iterative"]
+
+DEFAULT_SIGMA = 2.0
+"""Default smoothing width (pixels) of :func:`canny` and :func:`zero_crossings`: the machine's own
+(vmcl.pipeline.EdgesConfig.sigma)."""
 _CHECK_EVERY = 16  # spreading-activation steps between reads of the "changed" flag
 PLAIN_SCALE = 2.0**100
 """Host float images whose largest |value| lies within [1 / PLAIN_SCALE, PLAIN_SCALE] go to Canny as
@@ -112,7 +117,7 @@ def _xy(array: cl_array.Array) -> tuple[int, int]:
     return width, height
 
 
-def zero_crossings(image: ArrayLike, *, sigma: float, method: Literal["log", "dog"] = "log",
+def zero_crossings(image: ArrayLike, *, sigma: float = DEFAULT_SIGMA, method: Literal["log", "dog"] = "log",
                    min_slope: float = 0.0, machine: Machine | None = None) -> ZeroCrossings:
     """Zero crossings of the Laplacian of a Gaussian (or its difference-of-Gaussians approximation).
 
@@ -120,7 +125,7 @@ def zero_crossings(image: ArrayLike, *, sigma: float, method: Literal["log", "do
     ----------
     image : ndarray or pyopencl.array.Array, (H, W) or (H, W, 3); uint8, uint16 or float
     sigma : float
-        Width of the Gaussian in pixels, > 0.
+        Width of the Gaussian in pixels, > 0; default :data:`DEFAULT_SIGMA`.
     method : {"log", "dog"}
         "log": the exact Gaussian, then the 5-point Laplacian. "dog": G(sigma * sqrt(1.6)) minus
         G(sigma / sqrt(1.6)), Marr and Hildreth's approximation, computed in one fused pair of passes.
@@ -298,26 +303,26 @@ def _scale_exponent(image) -> int:
 
 
 @overload
-def canny(image: np.ndarray, *, sigma: float, low_threshold: float | None = None,
+def canny(image: np.ndarray, *, sigma: float = DEFAULT_SIGMA, low_threshold: float | None = None,
           high_threshold: float | None = None, use_quantiles: bool = False, interpolate: bool = True,
           method: Hysteresis = "doubling", noise: _noise.Noise = "global",
           return_gradient: Literal[False] = False, machine: Machine | None = None) -> np.ndarray: ...
 @overload
-def canny(image: cl_array.Array, *, sigma: float, low_threshold: float | None = None,
+def canny(image: cl_array.Array, *, sigma: float = DEFAULT_SIGMA, low_threshold: float | None = None,
           high_threshold: float | None = None, use_quantiles: bool = False, interpolate: bool = True,
           method: Hysteresis = "doubling", noise: _noise.Noise = "global",
           return_gradient: Literal[False] = False, machine: Machine | None = None) -> cl_array.Array: ...
 @overload
-def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
+def canny(image: ArrayLike, *, sigma: float = DEFAULT_SIGMA, low_threshold: float | None = None,
           high_threshold: float | None = None, use_quantiles: bool = False, interpolate: bool = True,
           method: Hysteresis = "doubling", noise: _noise.Noise = "global",
           return_gradient: Literal[True], machine: Machine | None = None) -> CannyResult: ...
 @overload
-def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
+def canny(image: ArrayLike, *, sigma: float = DEFAULT_SIGMA, low_threshold: float | None = None,
           high_threshold: float | None = None, use_quantiles: bool = False, interpolate: bool = True,
           method: Hysteresis = "doubling", noise: _noise.Noise = "global",
           return_gradient: bool = False, machine: Machine | None = None) -> ArrayLike | CannyResult: ...
-def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
+def canny(image: ArrayLike, *, sigma: float = DEFAULT_SIGMA, low_threshold: float | None = None,
           high_threshold: float | None = None, use_quantiles: bool = False, interpolate: bool = True,
           method: Hysteresis = "doubling", noise: _noise.Noise = "global", return_gradient: bool = False,
           machine: Machine | None = None) -> ArrayLike | CannyResult:
@@ -329,7 +334,8 @@ def canny(image: ArrayLike, *, sigma: float, low_threshold: float | None = None,
         uint8, uint16 or float (float64 is converted to float32; device arrays must be uint8, uint16 or
         float32); RGB is converted to grey with :data:`vmcl.early.filters.GREY_WEIGHTS`.
     sigma : float
-        Standard deviation of the Gaussian smoothing in pixels, > 0 (the exact separable Gaussian).
+        Standard deviation of the Gaussian smoothing in pixels, > 0 (the exact separable Gaussian); default
+        :data:`DEFAULT_SIGMA`.
     low_threshold, high_threshold : float, optional
         Hysteresis thresholds on the gradient magnitude, in the input's units (see Notes), with
         low <= high. Both None: from the noise estimate (:mod:`vmcl.early.noise`): with s the noise

@@ -43,8 +43,10 @@ from vmcl.errors import InputValueError
 from vmcl.machine import Machine, device_memory
 
 __all__ = [
+    "DEFAULT_SIGMA",
     "DOG_RATIO",
     "GREY_WEIGHTS",
+    "LOG_SIGMA",
     "MAX_TAPS_SIGMA",
     "TRUNCATE",
     "Method",
@@ -68,6 +70,14 @@ TRUNCATE = 4.0
 
 DOG_RATIO = 1.6
 """Marr and Hildreth's ratio of the two widths of a difference of Gaussians that best fits a LoG."""
+
+DEFAULT_SIGMA = 1.0
+"""Default width (pixels) of :func:`gaussian` and of :func:`difference_of_gaussians`' narrower Gaussian,
+scikit-image's for its Gaussian filter."""
+
+LOG_SIGMA = 2.0
+"""Default width (pixels) of :func:`laplacian_of_gaussian`: the machine's for the Laplacian features it
+matches (vmcl.early.motion's "log")."""
 
 Method = Literal["binomial", "exact"]
 
@@ -194,12 +204,12 @@ def discrete_laplacian(machine: Machine, smoothed: cl_array.Array) -> cl_array.A
 
 
 @overload
-def gaussian(image: np.ndarray, *, sigma: float, method: Method = "binomial",
+def gaussian(image: np.ndarray, *, sigma: float = DEFAULT_SIGMA, method: Method = "binomial",
              machine: Machine | None = None) -> np.ndarray: ...
 @overload
-def gaussian(image: cl_array.Array, *, sigma: float, method: Method = "binomial",
+def gaussian(image: cl_array.Array, *, sigma: float = DEFAULT_SIGMA, method: Method = "binomial",
              machine: Machine | None = None) -> cl_array.Array: ...
-def gaussian(image: ArrayLike, *, sigma: float, method: Method = "binomial",
+def gaussian(image: ArrayLike, *, sigma: float = DEFAULT_SIGMA, method: Method = "binomial",
              machine: Machine | None = None) -> ArrayLike:
     """Smooth the grey image with a Gaussian of standard deviation ``sigma`` pixels.
 
@@ -210,7 +220,7 @@ def gaussian(image: ArrayLike, *, sigma: float, method: Method = "binomial",
         float32). RGB is converted to grey with :data:`GREY_WEIGHTS`.
     sigma : float
         Standard deviation in pixels, > 0 and at most the image's larger side (or
-        :data:`vmcl.cm.core.WIDEST` for smaller images).
+        :data:`vmcl.cm.core.WIDEST` for smaller images); default :data:`DEFAULT_SIGMA`.
     method : {"binomial", "exact"}
         "binomial" (the paper's): n = max(1, round(2 sigma**2)) passes of the 3 x 3 mask
         [1 2 1]^T [1 2 1] / 16 (:func:`vmcl.cm.filters.binomial`), a Gaussian of standard deviation
@@ -250,12 +260,12 @@ def gaussian(image: ArrayLike, *, sigma: float, method: Method = "binomial",
 
 
 @overload
-def laplacian_of_gaussian(image: np.ndarray, *, sigma: float,
+def laplacian_of_gaussian(image: np.ndarray, *, sigma: float = LOG_SIGMA,
                           machine: Machine | None = None) -> np.ndarray: ...
 @overload
-def laplacian_of_gaussian(image: cl_array.Array, *, sigma: float,
+def laplacian_of_gaussian(image: cl_array.Array, *, sigma: float = LOG_SIGMA,
                           machine: Machine | None = None) -> cl_array.Array: ...
-def laplacian_of_gaussian(image: ArrayLike, *, sigma: float, machine: Machine | None = None) -> ArrayLike:
+def laplacian_of_gaussian(image: ArrayLike, *, sigma: float = LOG_SIGMA, machine: Machine | None = None) -> ArrayLike:
     """The exact Gaussian of ``sigma`` followed by the 5-point discrete Laplacian.
 
     Parameters
@@ -263,7 +273,7 @@ def laplacian_of_gaussian(image: ArrayLike, *, sigma: float, machine: Machine | 
     image : ndarray or pyopencl.array.Array, (H, W) or (H, W, 3); uint8, uint16 or float
     sigma : float
         Standard deviation of the Gaussian in pixels, > 0 and at most the image's larger side (or
-        :data:`vmcl.cm.core.WIDEST` for smaller images).
+        :data:`vmcl.cm.core.WIDEST` for smaller images); default :data:`LOG_SIGMA`.
     machine : vmcl.Machine, optional
 
     Returns
@@ -283,12 +293,12 @@ def laplacian_of_gaussian(image: ArrayLike, *, sigma: float, machine: Machine | 
 
 
 @overload
-def difference_of_gaussians(image: np.ndarray, *, low_sigma: float, high_sigma: float | None = None,
+def difference_of_gaussians(image: np.ndarray, *, low_sigma: float = DEFAULT_SIGMA, high_sigma: float | None = None,
                             machine: Machine | None = None) -> np.ndarray: ...
 @overload
-def difference_of_gaussians(image: cl_array.Array, *, low_sigma: float, high_sigma: float | None = None,
+def difference_of_gaussians(image: cl_array.Array, *, low_sigma: float = DEFAULT_SIGMA, high_sigma: float | None = None,
                             machine: Machine | None = None) -> cl_array.Array: ...
-def difference_of_gaussians(image: ArrayLike, *, low_sigma: float, high_sigma: float | None = None,
+def difference_of_gaussians(image: ArrayLike, *, low_sigma: float = DEFAULT_SIGMA, high_sigma: float | None = None,
                             machine: Machine | None = None) -> ArrayLike:
     """The narrower Gaussian minus the wider one (scikit-image's convention), in one fused pair of passes.
 
@@ -296,7 +306,7 @@ def difference_of_gaussians(image: ArrayLike, *, low_sigma: float, high_sigma: f
     ----------
     image : ndarray or pyopencl.array.Array, (H, W) or (H, W, 3); uint8, uint16 or float
     low_sigma : float
-        Standard deviation of the narrower Gaussian, > 0.
+        Standard deviation of the narrower Gaussian, > 0; default :data:`DEFAULT_SIGMA`.
     high_sigma : float, optional
         Of the wider one, > low_sigma. Default: 1.6 * low_sigma (Marr and Hildreth's best fit to the
         Laplacian of a Gaussian of width about sqrt(low_sigma * high_sigma)). Both at most the image's

@@ -53,9 +53,11 @@ __all__ = [
     "BOUNDARY_SCORE",
     "COARSEST_SIDE",
     "DEFAULT_SIGMA",
+    "DELTA",
     "EDGE_QUANTILES",
     "FEATURES",
     "METHODS",
+    "PATCH",
     "PYRAMID_SIGMA",
     "SPEED_PENALTY",
     "Features",
@@ -80,6 +82,14 @@ gave the lowest mean EPE on the real sequences of benchmarks/results/motion.md).
 EDGE_QUANTILES = (0.7, 0.9)
 """Canny's hysteresis thresholds for the "edges" features, as quantiles of the gradient magnitude: a
 fixed share of the image is edge whatever its contrast (the noise rule finds none in clean renderings)."""
+
+DELTA = 4
+"""Default displacement range of :func:`flow` (the machine's, vmcl.pipeline.MotionConfig.delta): motions up to
+4 px at one level, about 4 (2**levels - 1) px with a pyramid (:func:`reach`)."""
+
+PATCH = 21
+"""Default patch width of :func:`flow` (the machine's, vmcl.pipeline.MotionConfig.patch, fitted by
+benchmarks/motion_fit.py on rendered scenes)."""
 
 SPEED_PENALTY = 1e-3
 """Default slow-motion prior of the squared-difference features (see :func:`flow`)."""
@@ -156,7 +166,7 @@ def _most_levels(shape: tuple[int, ...], patch: int, delta: int) -> int:
     return levels
 
 
-def pyramid_levels(shape: tuple[int, ...], *, patch: int, delta: int, coarsest: int = COARSEST_SIDE) -> int:
+def pyramid_levels(shape: tuple[int, ...], *, patch: int = PATCH, delta: int = DELTA, coarsest: int = COARSEST_SIDE) -> int:
     """The pyramid levels that let :func:`flow` find its own displacement range on an image this size.
 
     The image is halved (rounding up) while its smaller side stays at least ``coarsest`` pixels and the
@@ -169,7 +179,7 @@ def pyramid_levels(shape: tuple[int, ...], *, patch: int, delta: int, coarsest: 
     shape : tuple of int
         The image's (H, W[, C]).
     patch, delta : int
-        As :func:`flow` takes them.
+        As :func:`flow` takes them (the same defaults).
     coarsest : int
         The smallest side of the coarsest level, >= 1; default :data:`COARSEST_SIDE`.
 
@@ -402,7 +412,7 @@ def _keep_better(machine: Machine, found: tuple, other: tuple, prediction: cl_ar
     machine.launch(machine.kernel("motion", "keep_better"), (size,), *found, *other, prediction, np.int64(size))
 
 
-def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, features: Features = "brightness",
+def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int = DELTA, patch: int = PATCH, features: Features = "brightness",
          subpixel: bool = True, levels: int = 1, sigma: float | None = None,
          speed_penalty: float = SPEED_PENALTY, method: Method = "running", boundary_score: float | None = None,
          prediction: ArrayLike | None = None, machine: Machine | None = None) -> FlowResult:
@@ -415,9 +425,11 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
         device arrays must be uint8, uint16 or float32). RGB becomes grey with
         :data:`vmcl.early.filters.GREY_WEIGHTS` (ITU-R BT.709: 0.2125 R + 0.7154 G + 0.0721 B).
     delta : int
-        The displacement range, >= 1 and smaller than the image: (2 delta + 1)^2 displacements.
+        The displacement range, >= 1 and smaller than the image: (2 delta + 1)^2 displacements; default
+        :data:`DELTA`.
     patch : int
-        Width of the square patch over which comparisons are summed; odd, 1 .. min(H, W).
+        Width of the square patch over which comparisons are summed; odd, 1 .. min(H, W); default
+        :data:`PATCH`.
     features : {"brightness", "log", "sign_log", "edges"}
         What is compared: the Gaussian-smoothed brightness, or its Laplacian (squared differences);
         the sign of the Laplacian of a Gaussian, or Canny's edges (:func:`vmcl.early.edges.canny`, with
@@ -552,7 +564,7 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, featur
     return FlowResult(flow_out, score, boundaries, limit_share, found_share)
 
 
-def votes(frame0: ArrayLike, frame1: ArrayLike, *, delta: int, patch: int, features: Features = "brightness",
+def votes(frame0: ArrayLike, frame1: ArrayLike, *, delta: int = DELTA, patch: int = PATCH, features: Features = "brightness",
           sigma: float | None = None, machine: Machine | None = None) -> ArrayLike:
     """The full table of votes: the patch sum of the comparisons at every displacement.
 

@@ -48,10 +48,10 @@ from vmcl.cm.core import (
 )
 from vmcl.cm.reduce import reduce
 from vmcl.cm.scan import box_sum
-from vmcl.early.disparity_range import estimate_range
+from vmcl.early.disparity_range import range_to_search
 from vmcl.early.filters import channel_planes, grey_field
 from vmcl.early.noise import threshold_field
-from vmcl.early.stereo import check_pair, check_range
+from vmcl.early.stereo import check_pair
 from vmcl.early.weighted_median import weighted_median
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
@@ -298,7 +298,7 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     refine_radius = check_int(refine_radius, "refine_radius", minimum=1, maximum=2**31 - 1)
     refine_colour = check_real(refine_colour, "refine_colour", above=0)
     refine_stride = check_int(refine_stride, "refine_stride", minimum=1, maximum=2**31 - 1)
-    d_min, d_max = _range(left, right, d_min, d_max, machine)
+    d_min, d_max = range_to_search(left, right, d_min, d_max, machine=machine)
     depth = d_max - d_min + 1
     cells = height * width * _LANES * math.ceil(depth / _LANES)
     machine.require_memory(f"semi-global matching of a {height} x {width} pair over {depth} disparities",
@@ -337,23 +337,6 @@ def _kernel(machine: Machine, name: str) -> cl.Kernel:
     the vector width) are read by census alone, so the others take them too, one program on a first run
     where there were two. aggregate's message arrays are sized by the range, a build of its own."""
     return vector_kernel(machine, "semiglobal", name, CENSUS_W=CENSUS_SIZE[0], CENSUS_H=CENSUS_SIZE[1])
-
-
-def _range(left, right, d_min, d_max, machine: Machine) -> tuple[int, int]:
-    """The range to search: the given ends, the others from :func:`estimate_range`, checked."""
-    for name, value in (("d_min", d_min), ("d_max", d_max)):
-        if value is not None:
-            check_int(value, name)
-    if d_min is None or d_max is None:
-        found = estimate_range(left, right, machine=machine)
-        if d_min is None and d_max is None:
-            d_min, d_max = found.d_min, found.d_max
-        elif d_min is None:
-            d_min = min(found.d_min, d_max)
-        else:
-            d_max = max(found.d_max, d_min)
-    check_range(d_min, d_max, left.shape[1])
-    return d_min, d_max
 
 
 def _aggregate(machine: Machine, views: list[cl_array.Array], levels: list[cl_array.Array], d_min: int, depth: int,

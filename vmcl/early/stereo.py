@@ -136,7 +136,7 @@ def _selection(min_score, bimodal, dip, min_votes, negative_evidence, direction_
             "direction_tolerance": check_real(direction_tolerance, "direction_tolerance", minimum=0)}
 
 
-def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features: Features = "canny",
+def match(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max: int | None = None, features: Features = "canny",
           patch: int = 11, sigma: float = 2.0, low_threshold: float | None = None,
           high_threshold: float | None = None, use_quantiles: bool = False,
           direction_tolerance: float = math.radians(20),
@@ -151,8 +151,9 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     ----------
     left, right : (H, W) or (H, W, 3) arrays or device arrays; uint8, uint16 or float
         The pair, registered so that epipolar lines are rows (see :mod:`vmcl.early.registration`).
-    d_min, d_max : int
-        The disparity range, d_min <= d_max, narrower than the image.
+    d_min, d_max : int, optional
+        The disparity range, d_min <= d_max, narrower than the image. Default: found from the images by
+        :func:`vmcl.early.disparity_range.estimate_range` (either end given overrides that end).
     features : {"canny", "dog", "intensity"}
         "canny" (default): Canny edges, compatible when their gradient directions differ by at most
         ``direction_tolerance``. "dog": zero crossings of the difference of Gaussians, compatible when
@@ -237,6 +238,12 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int, d_max: int, features
     """
     machine = machine_for(machine)
     check_pair(left, right, machine)
+    if d_min is None or d_max is None:
+        # Imported here: the range's estimate is itself made by this matcher (at a coarse scale, over a
+        # given range), so its module imports this one.
+        from vmcl.early.disparity_range import range_to_search
+
+        d_min, d_max = range_to_search(left, right, d_min, d_max, machine=machine)
     _check_range(d_min, d_max, patch, left.shape[1])
     features = check_choice(features, "features", _FEATURES)
     shiftable = check_bool(shiftable, "shiftable")

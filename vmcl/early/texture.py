@@ -56,7 +56,22 @@ from vmcl.early.filters import laplacian_of_gaussian
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["MIN_DENSITY_STEP", "NOISE_FACTOR", "TextureEdges", "density", "texture_edges"]
+__all__ = ["COARSE_SIGMA", "FINE_SIGMA", "MIN_DENSITY_STEP", "NOISE_FACTOR", "RADIUS", "THRESHOLD", "TextureEdges",
+           "density", "texture_edges"]
+
+FINE_SIGMA = 1.0
+"""Default ``fine_sigma``: the machine's (vmcl.pipeline.TextureConfig)."""
+
+COARSE_SIGMA = 4.0
+"""Default ``coarse_sigma``: the machine's."""
+
+THRESHOLD = 0.08
+"""Default blob threshold, as a share of the input's full scale: the machine's for images in [0, 1]."""
+
+RADIUS = 24
+"""Default window radius (a 49-pixel window): the machine's."""
+
+_FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
 
 MIN_DENSITY_STEP = 0.01
 """Smallest density difference (share of a window covered by blobs) that can be a texture edge."""
@@ -81,12 +96,14 @@ class TextureEdges(NamedTuple):
     density: ArrayLike
 
 
-def _check(fine_sigma, coarse_sigma, threshold, radius) -> tuple[float, float, float, int]:
+def _check(fine_sigma, coarse_sigma, threshold, radius, image) -> tuple[float, float, float, int]:
     fine = check_sigma(fine_sigma, "fine_sigma")
     coarse = check_sigma(coarse_sigma, "coarse_sigma")
     if coarse <= fine:
         raise InputValueError(f"coarse_sigma must exceed fine_sigma, got coarse_sigma={coarse} <= fine_sigma={fine}")
     # Blobs are thresholded at a non-zero value.
+    if threshold is None:
+        threshold = THRESHOLD * _FULL_SCALE.get(np.dtype(getattr(image, "dtype", np.float32)), 1.0)
     threshold = check_real(threshold, "threshold", above=0)
     return fine, coarse, threshold, check_int(radius, "radius", minimum=1)
 
@@ -119,12 +136,15 @@ def _density(machine: Machine, data: cl_array.Array, fine: float, coarse: float,
 
 
 @overload
-def density(image: np.ndarray, *, fine_sigma: float, coarse_sigma: float, threshold: float, radius: int,
+def density(image: np.ndarray, *, fine_sigma: float = FINE_SIGMA, coarse_sigma: float = COARSE_SIGMA,
+            threshold: float | None = None, radius: int = RADIUS,
             machine: Machine | None = None) -> np.ndarray: ...
 @overload
-def density(image: cl_array.Array, *, fine_sigma: float, coarse_sigma: float, threshold: float, radius: int,
+def density(image: cl_array.Array, *, fine_sigma: float = FINE_SIGMA, coarse_sigma: float = COARSE_SIGMA,
+            threshold: float | None = None, radius: int = RADIUS,
             machine: Machine | None = None) -> cl_array.Array: ...
-def density(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, threshold: float, radius: int,
+def density(image: ArrayLike, *, fine_sigma: float = FINE_SIGMA, coarse_sigma: float = COARSE_SIGMA,
+            threshold: float | None = None, radius: int = RADIUS,
             machine: Machine | None = None) -> ArrayLike:
     """Share of the (2r+1) x (2r+1) window around every pixel covered by fine-scale blobs (textons).
 
@@ -134,16 +154,20 @@ def density(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, thresho
         uint8, uint16 or float (float64 is converted to float32; device arrays must be uint8, uint16 or
         float32); NumPy input must be finite. RGB is converted to grey.
     fine_sigma : float
-        Scale of the textural elements, in pixels, > 0: about the blobs' own standard deviation.
+        Scale of the textural elements, in pixels, > 0: about the blobs' own standard deviation; default
+        :data:`FINE_SIGMA`.
     coarse_sigma : float
         Scale at which the texture's blobs have faded but contrast boundaries remain, > fine_sigma.
         Three to four times fine_sigma separates them (the scale-normalised response of a blob of
-        deviation b falls as ``sigma**2 b**2 / (b**2 + sigma**2)**2``, only 18% from b to 1.6 b).
-    threshold : float
+        deviation b falls as ``sigma**2 b**2 / (b**2 + sigma**2)**2``, only 18% from b to 1.6 b); default
+        :data:`COARSE_SIGMA`.
+    threshold : float, optional
         Blob threshold on the scale-normalised Laplacians, in the input's units, > 0. A step of
-        contrast c responds with 0.24 c.
+        contrast c responds with 0.24 c. Default: :data:`THRESHOLD` of the input's full scale (255 for
+        uint8, 65535 for uint16, 1 for floats).
     radius : int
-        r >= 1: the window is 2r+1 pixels wide; windows are cut at the image's border.
+        r >= 1: the window is 2r+1 pixels wide; windows are cut at the image's border; default
+        :data:`RADIUS`.
     machine : vmcl.Machine, optional
 
     Returns
@@ -171,13 +195,13 @@ def density(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, thresho
     (True, 0.0)
     """
     machine = machine_for(machine)
-    fine, coarse, threshold, radius = _check(fine_sigma, coarse_sigma, threshold, radius)
+    fine, coarse, threshold, radius = _check(fine_sigma, coarse_sigma, threshold, radius, image)
     data, host, radius = _image_and_radius(image, radius, fine, coarse, machine)
     return result(_density(machine, data, fine, coarse, threshold, radius), host)
 
 
-def texture_edges(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, threshold: float, radius: int,
-                  edge_threshold: float | None = None, noise_factor: float = NOISE_FACTOR,
+def texture_edges(image: ArrayLike, *, fine_sigma: float = FINE_SIGMA, coarse_sigma: float = COARSE_SIGMA,
+                  threshold: float | None = None, radius: int = RADIUS, edge_threshold: float | None = None, noise_factor: float = NOISE_FACTOR,
                   machine: Machine | None = None) -> TextureEdges:
     """Texture-edge candidates: maxima of the texton density's gradient across the boundary.
 
@@ -209,7 +233,7 @@ def texture_edges(image: ArrayLike, *, fine_sigma: float, coarse_sigma: float, t
     J. Canny, "A computational approach to edge detection", IEEE TPAMI 8(6):679-698, 1986.
     """
     machine = machine_for(machine)
-    fine, coarse, threshold, radius = _check(fine_sigma, coarse_sigma, threshold, radius)
+    fine, coarse, threshold, radius = _check(fine_sigma, coarse_sigma, threshold, radius, image)
     if edge_threshold is not None:
         edge_threshold = check_real(edge_threshold, "edge_threshold", minimum=0)
     # Bounded by float32's range: the device multiplies the noise deviation by it.
