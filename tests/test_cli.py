@@ -40,6 +40,11 @@ def images(tmp_path_factory):
     return paths
 
 
+def _written(path, text):
+    path.write_text(text)
+    return path
+
+
 def _leftovers(folder):
     return [p.name for p in folder.iterdir() if ".partial-" in p.name or ".old-" in p.name]
 
@@ -61,9 +66,14 @@ def test_run_on_files_writes_report_and_fields(tmp_path, images):
     fields = np.load(out / "fields.npz")
     assert fields["disparity"].shape == (64, 64) and fields["flow"].shape == (64, 64, 2)
     assert (out / "report.html").stat().st_size > 1000
-    # The settings it ran with: the config file's over the defaults.
+    # The settings it ran with: the config file's over the defaults; given back as --config, the same run.
     settings = json.loads((out / "settings.json").read_text())
     assert settings == Config.from_toml(images["fast"]).to_dict() and settings != Config().to_dict()
+    again = tmp_path / "again"
+    assert main(["run", str(images["left"]), str(images["right"]), "--next", str(images["next"]),
+                 "--config", str(out / "settings.json"), "--out", str(again), "--quiet"]) == 0
+    assert json.loads((again / "settings.json").read_text()) == settings
+    np.testing.assert_array_equal(np.load(again / "fields.npz")["disparity"], fields["disparity"])
     # Running again replaces the folder whole.
     assert main(["run", str(images["left"]), "--config", str(images["fast"]), "--out", str(out), "-q"]) == 0
     assert "disparity" not in np.load(out / "fields.npz")
@@ -77,6 +87,9 @@ def test_run_on_files_writes_report_and_fields(tmp_path, images):
     ("config", "unknown config key stereo.nope"),
     ("weights", "labels.weights"),
     ("tiny", "left must be at least 16 x 16 pixels, got shape (5, 7) (left is "),
+    ("json", "not valid JSON"),
+    ("json_list", "a JSON object of sections expected, got list"),
+    ("json_key", "unknown config key stereo.nope"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, images, capsys, case, message):
     cv2.imwrite(str(tmp_path / "tiny.png"), np.zeros((5, 7), np.uint8))
@@ -91,6 +104,9 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, images, capsys, case, messag
         "config": [str(images["left"]), "--config", str(bad_config)],
         "weights": [str(images["left"]), "--config", str(bad_weights)],
         "tiny": [str(tmp_path / "tiny.png")],
+        "json": [str(images["left"]), "--config", str(_written(tmp_path / "bad.json", "{nope"))],
+        "json_list": [str(images["left"]), "--config", str(_written(tmp_path / "list.json", "[1]"))],
+        "json_key": [str(images["left"]), "--config", str(_written(tmp_path / "key.json", '{"stereo": {"nope": 1}}'))],
     }[case]
     out = tmp_path / "out"
     assert main(["run", *arguments, "--out", str(out), "--quiet"]) == 2

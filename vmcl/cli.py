@@ -131,6 +131,16 @@ def _config(path: str | None):
     if path is None:
         return Config()
     try:
+        if path.lower().endswith(".json"):  # an output's settings.json: the run it records, again
+            import json
+
+            try:
+                values = json.loads(Path(path).read_text(encoding="utf-8"))
+            except (json.JSONDecodeError, UnicodeDecodeError) as error:
+                raise BadInput(f"config {path}: not valid JSON ({error})") from None
+            if not isinstance(values, dict):
+                raise BadInput(f"config {path}: a JSON object of sections expected, got {type(values).__name__}")
+            return Config.from_dict(values)
         return Config.from_toml(path)
     except FileNotFoundError:
         raise BadInput(f"config {path}: no such file") from None
@@ -401,7 +411,8 @@ def write_output(result, folder: Path, title: str) -> None:
 
 
 SETTINGS_FILE = "settings.json"
-"""The file of an output folder that records the run's whole configuration (:meth:`Config.to_dict`, as JSON)."""
+"""The file of an output folder that records the run's whole configuration (:meth:`Config.to_dict`, as JSON);
+``--config`` reads it back (a .json file) to run the same settings again."""
 
 
 def settings_text(values: dict) -> str:
@@ -726,7 +737,7 @@ def parser() -> argparse.ArgumentParser:
     demo.add_argument("--data", default="blocks", choices=(*SCENES, "motorcycle"),
                       help="a vmcl.scenes preset (default: blocks) or scikit-image's Middlebury Motorcycle pair")
     demo.add_argument("--size", type=int, default=256, help="scene size in pixels (64..1024, default 256)")
-    demo.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config)")
+    demo.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config), or an output's settings.json")
 
     run = commands.add_parser("run", parents=[quiet], help="run the machine on image files or a sequence")
     run.add_argument("left", help="left image (any file OpenCV reads), or a sequence: a folder of frames, a glob "
@@ -735,7 +746,7 @@ def parser() -> argparse.ArgumentParser:
                                               "view's sequence")
     run.add_argument("--next", help="the left view's next frame: adds motion (one image only)")
     run.add_argument("--fps", type=float, default=10.0, help="a sequence's videos' frame rate, 0.01 to 1000 (default 10)")
-    run.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config)")
+    run.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config), or an output's settings.json")
     run.add_argument("--out", required=True, help="output folder: new, empty or a previous vmcl output")
     run.add_argument("--models", help="a library folder of models (vmcl learn): recognise them in the left image")
 
@@ -802,7 +813,7 @@ def parser() -> argparse.ArgumentParser:
     batch.add_argument("--frames", action="store_true",
                        help="the images are the frames of one sequence, in order: each item is a frame and the "
                             "next (motion)")
-    batch.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config)")
+    batch.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config), or an output's settings.json")
     batch.add_argument("--scheduler", metavar="ADDRESS",
                        help="a Dask scheduler (tcp://host:8786); default: a local cluster on this computer")
     batch.add_argument("--workers", type=int, help="the local cluster's worker processes (default 1)")
