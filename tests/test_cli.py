@@ -40,6 +40,12 @@ def images(tmp_path_factory):
     return paths
 
 
+def _float_image(path):
+    """A float TIFF on the 0..255 scale, as some tools save brightness."""
+    cv2.imwrite(str(path), np.linspace(0, 255, 32 * 32, dtype=np.float32).reshape(32, 32))
+    return path
+
+
 def _written(path, text):
     path.write_text(text)
     return path
@@ -87,6 +93,7 @@ def test_run_on_files_writes_report_and_fields(tmp_path, images):
     ("config", "unknown config key stereo.nope"),
     ("weights", "labels.weights"),
     ("tiny", "left must be at least 16 x 16 pixels, got shape (5, 7) (left is "),
+    ("float255", "it holds floats up to 2"),
     ("json", "not valid JSON"),
     ("json_list", "a JSON object of sections expected, got list"),
     ("json_key", "unknown config key stereo.nope"),
@@ -104,6 +111,7 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, images, capsys, case, messag
         "config": [str(images["left"]), "--config", str(bad_config)],
         "weights": [str(images["left"]), "--config", str(bad_weights)],
         "tiny": [str(tmp_path / "tiny.png")],
+        "float255": [str(_float_image(tmp_path / "float255.tiff"))],
         "json": [str(images["left"]), "--config", str(_written(tmp_path / "bad.json", "{nope"))],
         "json_list": [str(images["left"]), "--config", str(_written(tmp_path / "list.json", "[1]"))],
         "json_key": [str(images["left"]), "--config", str(_written(tmp_path / "key.json", '{"stereo": {"nope": 1}}'))],

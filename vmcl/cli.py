@@ -115,14 +115,22 @@ def _progress(args: argparse.Namespace, total: int, what: str, unit: str = "stag
 
 
 def _read(path: str, what: str) -> np.ndarray:
+    from vmcl.cm.core import UNIT_MARGIN
     from vmcl.datasets import read_image
 
     try:
-        return read_image(path)
+        image = read_image(path)
     except FileNotFoundError:
         raise BadInput(f"{what} image {path}: no such file") from None
     except (InputError, OSError) as error:
         raise BadInput(f"{what} image {path}: cannot be read as an image ({error})") from None
+    if image.dtype.kind == "f" and image.size and np.isfinite(image).all() and float(image.max()) > 1 + UNIT_MARGIN:
+        # The machine reads float brightness in [0, 1]; a file of floats on another scale (0..255) is the
+        # file's to fix: the command line cannot know its full scale.
+        raise BadInput(f"{what} image {path}: it holds floats up to {float(image.max()):.4g}, and vmcl reads float "
+                       "images as brightness in [0, 1]: save it as an 8- or 16-bit image, or with its values "
+                       "divided by its full scale")
+    return image
 
 
 def _config(path: str | None):
