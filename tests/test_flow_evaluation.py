@@ -96,3 +96,34 @@ def test_eval_flow_prints_each_sequence_and_method(rendered, capsys):
     out = capsys.readouterr().out
     assert "Blocks" in out and "vmcl sequence" in out and "OpenCV DIS medium" in out
     assert main(["eval", "flow", "--data", str(root / "mine" / "Blocks" / "flow12.flo"), "-q"]) == 2
+
+
+def test_middleburys_download_layout_is_read_and_a_bad_sequence_is_left_out_by_name(rendered, tmp_path, capsys):
+    """other-data/<scene> beside other-gt-flow/<scene>/flowNN.flo, as Middlebury's download lays them out, is a
+    sequence named other-data/<scene>; a truncated .flo and a flow with one frame are left out, each named on
+    stderr, while the good sequence is scored (status 2)."""
+    root, _ = rendered
+    source = root / "mine" / "Blocks"
+    data, truths = tmp_path / "other-data" / "Blocks", tmp_path / "other-gt-flow" / "Blocks"
+    shutil.copytree(source, data)
+    (data / "flow12.flo").unlink()
+    truths.mkdir(parents=True)
+    shutil.copy(source / "flow12.flo", truths / "flow12.flo")
+    sequence = datasets.read_flow_folder(data)
+    assert sequence.name == "other-data/Blocks" and sequence.index == 2
+    np.testing.assert_array_equal(sequence.flow, datasets.read_flo(source / "flow12.flo"))
+    broken = tmp_path / "broken"
+    shutil.copytree(source, broken)
+    (broken / "flow12.flo").write_bytes((source / "flow12.flo").read_bytes()[:100])
+    one = tmp_path / "one"
+    one.mkdir()
+    shutil.copy(source / "flow12.flo", one / "flow12.flo")
+    shutil.copy(source / "frame12.png", one / "frame12.png")
+    lack = "it holds the flow flow12.flo but one numbered frame (*NN.png), not the two it joins"
+    assert datasets.flow_folders_lacking(tmp_path) == [(one, lack)]
+    assert main(["eval", "flow", "--data", str(tmp_path), "-q"]) == 2
+    captured = capsys.readouterr()
+    assert "other-data/Blocks" in captured.out
+    err = captured.err.splitlines()
+    assert len(err) == 2 and any(line.startswith(f"vmcl: left out {broken}") for line in err), err
+    assert any(line.startswith(f"vmcl: left out {one}: it holds the flow") for line in err), err

@@ -347,3 +347,30 @@ def test_a_written_stereo_folder_reads_back(tmp_path):
     assert sorted(p.name for p in (tmp_path / "busy").iterdir()) == ["mine.txt"]
     with pytest.raises(InputValueError, match="left must be uint8 or floats in"):
         datasets.write_stereo_folder(tmp_path / "other", s.left * 2, s.right, truth)
+
+
+def test_eval_stereo_scores_the_scenes_it_can_and_names_each_it_leaves_out(tmp_path, capsys):
+    """A scene without its ground truth, one whose ground truth has another size and a 16-bit one beside a
+    good one: the good and the 16-bit scenes are scored (OpenCV's matchers given the 16-bit pair at 8 bits,
+    and saying so), each other folder is named on stderr with what is wrong, and the status is 2."""
+    from vmcl import scenes
+
+    s = scenes.render(scenes.preset("blocks", shape=(96, 128)), seed=0, noise=0.01)
+    datasets.write_stereo_folder(tmp_path / "good", s.left, s.right, s.disparity)
+    folder = datasets.write_stereo_folder(tmp_path / "no truth", s.left, s.right, s.disparity)
+    (folder / "disp0.pfm").unlink()
+    folder = datasets.write_stereo_folder(tmp_path / "other size", s.left, s.right, s.disparity)
+    datasets.write_pfm(folder / "disp0.pfm", s.disparity[:-8])
+    deep = datasets.write_stereo_folder(tmp_path / "deep" / "sixteen", s.left, s.right, s.disparity)
+    for name in ("im0.png", "im1.png"):  # the same pair at 16 bits
+        cv2.imwrite(str(deep / name), cv2.imread(str(deep / name)).astype(np.uint16) * 257)
+    assert main(["eval", "stereo", "--data", str(tmp_path), "-q"]) == 2
+    captured = capsys.readouterr()
+    assert "Stereo on 2 Middlebury scene(s)" in captured.out
+    assert "| good | vmcl (dense, MRF) |" in captured.out and "| deep/sixteen | OpenCV StereoSGBM 3WAY |" in captured.out
+    assert "the 16-bit pair is given to them at 8 bits" in captured.out
+    err = captured.err.splitlines()
+    assert any(line.startswith(f"vmcl: left out {tmp_path / 'no truth'}: it holds the two views of the Middlebury "
+                               "2014/2021 layout, but not disp0.pfm or disp0GT.pfm") for line in err), err
+    assert any(line.startswith(f"vmcl: left out {tmp_path / 'other size'}:") and "size" in line for line in err), err
+    assert len(err) == 2, err

@@ -165,12 +165,15 @@ def _run_machine(vm, args, left, right=None, next_=None):
         return vm.run(left, right, next_, progress=step)
 
 
+def _table_lines(rows: Sequence[Sequence[object]]) -> list[str]:
+    """Rows (the header first) as lines of columns aligned by spaces."""
+    widths = [max(len(str(row[i])) for row in rows) for i in range(len(rows[0]))]
+    return ["  " + "  ".join(str(c).ljust(w) for c, w in zip(row, widths)) for row in rows]
+
+
 def _print_table(title: str, rows: Sequence[Sequence[object]]) -> None:
-    header, *body = rows
-    widths = [max(len(str(row[i])) for row in rows) for i in range(len(header))]
     print(title)
-    for row in (header, *body):
-        print("  " + "  ".join(str(c).ljust(w) for c, w in zip(row, widths)))
+    print("\n".join(_table_lines(rows)))
 
 
 def _fmt(value: float, digits: int = 3) -> str:
@@ -571,53 +574,80 @@ def _timed(function, *args, **kwargs):
 def _eval_stereo(args, root: Path) -> int:
     from dataclasses import replace
 
-    from vmcl.datasets import find_stereo_folders, read_stereo_folder
+    from vmcl.datasets import find_stereo_folders, read_stereo_folder, stereo_folders_lacking
     from vmcl.stereo_evaluation import evaluate_pair, markdown_tables, opencv_baselines, vmcl_method
 
     folders = find_stereo_folders(root)
+    left_out = [_left_out(folder, lack) for folder, lack in stereo_folders_lacking(root)]
     if not folders:
         raise BadInput(f"--data {root}: no stereo scene in a Middlebury layout found (a scene's folder, or a "
-                       "folder holding such folders)")
+                       "folder holding such folders)" + "".join(f"; {line}" for line in left_out))
     ours = vmcl_method()  # one machine for every scene: its kernels are built once
     evaluations = []
     with _progress(args, len(folders), "stereo") as step:
         for folder in folders:
             # Named by the path under --data, so that two copies of a scene (2001 and v2) stay apart.
             name = folder.name if folder == root else folder.relative_to(root).as_posix()
-            pair = replace(read_stereo_folder(folder), name=name)
-            evaluations.append(evaluate_pair(pair, [ours, *opencv_baselines(pair)]))
+            try:  # one scene that cannot be read or matched is reported, and the others are still scored
+                pair = replace(read_stereo_folder(folder), name=name)
+                evaluations.append(evaluate_pair(pair, [ours, *opencv_baselines(pair)]))
+            except (InputError, OSError) as error:
+                left_out.append(_left_out(folder, str(error)))
             step(name)
-    print(f"Stereo on {len(folders)} Middlebury scene(s) under {root}")
-    print()
-    print("\n".join(markdown_tables(evaluations)))
-    return 0
+    return _scored_and_left_out(f"Stereo on {len(evaluations)} Middlebury scene(s) under {root}",
+                                ["", *markdown_tables(evaluations)] if evaluations else [], left_out)
+
+
+def _left_out(folder: Path, reason: str) -> str:
+    """One line saying an evaluation left ``folder`` out, and why (a reason that names the folder already
+    is not prefixed with it again)."""
+    prefix = f"{folder}: "
+    return f"left out {folder}: {reason.removeprefix(prefix)}"
+
+
+def _scored_and_left_out(heading: str, lines: Sequence[str], left_out: Sequence[str]) -> int:
+    """Print what an evaluation scored, then each folder it left out and why (on stderr, one line each); the
+    exit status is 2 (bad input) when any was left out or nothing was scored, else 0."""
+    if lines:
+        print(heading)
+        print("\n".join(lines))
+    for line in left_out:
+        print(f"vmcl: {line}", file=sys.stderr)
+    if not lines:
+        raise BadInput(f"{heading}: every folder was left out")
+    return EXIT_BAD_INPUT if left_out else 0
 
 
 def _eval_flow(args, root: Path) -> int:
-    from vmcl.datasets import find_flow_folders, read_flow_folder
+    from vmcl.datasets import find_flow_folders, flow_folders_lacking, read_flow_folder
     from vmcl.flow_evaluation import evaluate_sequence
     from vmcl.machine import default_machine
 
     folders = find_flow_folders(root)
+    left_out = [_left_out(folder, lack) for folder, lack in flow_folders_lacking(root)]
     if not folders:
-        raise BadInput(f"--data {root}: no flow sequence found (numbered frames with flowNN.flo, gt/*.flo or "
-                       "Sintel's flow/)")
+        raise BadInput(f"--data {root}: no flow sequence found (numbered frames with flowNN.flo, gt/*.flo, "
+                       "Sintel's flow/ or Middlebury's other-gt-flow/)" + "".join(f"; {line}" for line in left_out))
     rows: list[tuple[object, ...]] = [("sequence", "method", "EPE px", "matched", "unmatched", "AAE deg", "ms")]
     machine = default_machine()
+    scored = 0
     with _progress(args, len(folders), "flow", unit="sequence") as step:
         for folder in folders:
-            try:
+            try:  # one sequence that cannot be read or run is reported, and the others are still scored
                 sequence = read_flow_folder(folder)
+                found = evaluate_sequence(sequence, machine=machine)
             except (InputError, OSError) as error:
-                raise BadInput(f"{folder}: {error}") from None
-            for row in evaluate_sequence(sequence, machine=machine):
+                left_out.append(_left_out(folder, str(error)))
+                step(folder.name)
+                continue
+            for row in found:
                 rows.append((sequence.name, row.method, _fmt(row.epe), _fmt_optional(row.epe_matched),
                              _fmt_optional(row.epe_unmatched), _fmt(row.aae, 2), f"{row.ms:.0f}"))
+            scored += 1
             step(sequence.name)
-    _print_table("Optical flow (average endpoint error over the valid pixels; matched / unmatched where the data "
-                 "marks occlusions; vmcl sequence: the frames before the scored one streamed with the temporal terms)",
-                 rows)
-    return 0
+    heading = ("Optical flow (average endpoint error over the valid pixels; matched / unmatched where the data "
+               "marks occlusions; vmcl sequence: the frames before the scored one streamed with the temporal terms)")
+    return _scored_and_left_out(heading, _table_lines(rows) if scored else [], left_out)
 
 
 def _fmt_optional(value: float | None) -> str:

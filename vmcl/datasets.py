@@ -44,6 +44,7 @@ __all__ = [
     "StereoPair",
     "find_flow_folders",
     "find_stereo_folders",
+    "flow_folders_lacking",
     "load_bsds",
     "load_flow",
     "load_stereo",
@@ -55,6 +56,7 @@ __all__ = [
     "read_mask",
     "read_pfm",
     "read_stereo_folder",
+    "stereo_folders_lacking",
     "write_flo",
     "write_pfm",
     "write_stereo_folder",
@@ -731,6 +733,39 @@ def find_stereo_folders(root, *, depth: int = 4) -> list[Path]:
     return _find_folders(root, depth, lambda folder: _stereo_layout(folder) is not None)
 
 
+def _stereo_lack(folder: Path) -> str | None:
+    """What a folder holding a layout's two views lacks of that layout's other files (its ground truth,
+    calib.txt, info.txt), said in words; None when it holds no layout's views, or a whole layout."""
+    if _stereo_layout(folder) is not None:
+        return None
+    for layout in _LAYOUTS:
+        views, rest = layout.files[:2], layout.files[2:]
+        if all(any((folder / n).is_file() for n in names) for names in views):
+            missing = [" or ".join(names) for names in rest if not any((folder / n).is_file() for n in names)]
+            return f"it holds the two views of the {layout.description.split(':')[0]} layout, but not {', '.join(missing)}"
+    return None
+
+
+def stereo_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
+    """The folders at or below ``root`` that hold a Middlebury layout's two views but not the rest of it (its
+    ground truth, calib.txt or info.txt), which :func:`find_stereo_folders` therefore leaves out, each with
+    what it lacks: so that an evaluation can say so rather than pass them over in silence.
+
+    Parameters
+    ----------
+    root : str or Path
+    depth : int
+        As :func:`find_stereo_folders`.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``root`` is not a folder.
+    """
+    return [(folder, lack) for folder in _find_folders(root, depth, lambda f: _stereo_lack(f) is not None)
+            if (lack := _stereo_lack(folder)) is not None]
+
+
 def _find_folders(root, depth: int, holds: Callable[[Path], bool]) -> list[Path]:
     """The folders at or below ``root`` (``depth`` levels at most, hidden ones skipped) that ``holds``
     accepts, sorted; ``root`` alone when it does; a folder accepted is not searched further."""
@@ -937,9 +972,10 @@ def _number(path: Path) -> int | None:
 def _flow_truth(folder: Path) -> tuple[Path, Path | None, Path | None] | None:
     """(the .flo, its invalid map, its occlusion map) of a flow folder, or None when it has none.
 
-    Middlebury: flowNN.flo beside frameNN.png; this layout of Sintel's excerpts: gt/frame_NNNN.flo with
-    gt/invalid/ and gt/occlusions/; Sintel's own: <pass>/<scene> beside flow/<scene>, invalid/<scene>,
-    occlusions/<scene>; Yosemite: correct_yos.flo.
+    Middlebury: flowNN.flo beside frameNN.png, or as its download lays them out, other-data/<scene> (or
+    other-data-gray/<scene>) beside other-gt-flow/<scene>/flowNN.flo; this layout of Sintel's excerpts:
+    gt/frame_NNNN.flo with gt/invalid/ and gt/occlusions/; Sintel's own: <pass>/<scene> beside flow/<scene>,
+    invalid/<scene>, occlusions/<scene>; Yosemite: correct_yos.flo.
     """
     here = sorted(folder.glob("*.flo"))
     if len(here) == 1:
@@ -958,6 +994,12 @@ def _flow_truth(folder: Path) -> tuple[Path, Path | None, Path | None] | None:
         invalid = folder.parent.parent / "invalid" / folder.name / name
         occlusions = folder.parent.parent / "occlusions" / folder.name / name
         return flows[-1], invalid if invalid.is_file() else None, occlusions if occlusions.is_file() else None
+    for frames in ("-data", "-data-gray"):  # Middlebury's download: other-data/<scene>, other-gt-flow/<scene>
+        if folder.parent.name.endswith(frames):
+            truths = folder.parent.parent / (folder.parent.name[:-len(frames)] + "-gt-flow") / folder.name
+            flows = sorted(truths.glob("*.flo")) if truths.is_dir() else []
+            if len(flows) == 1:
+                return flows[0], None, None
     return None
 
 
@@ -973,9 +1015,11 @@ def read_flow_folder(folder) -> FlowSequence:
     ----------
     folder : str or Path
         Numbered PNG frames (frame07.png ... frame14.png, frame_0001.png ...) and one flow: flowNN.flo
-        beside them for frame NN (Middlebury), gt/frame_NNNN.flo with gt/invalid/ and gt/occlusions/
+        beside them for frame NN (Middlebury), or in other-gt-flow/<scene>/ beside other-data/<scene>/
+        (Middlebury's download; other-data-gray too), gt/frame_NNNN.flo with gt/invalid/ and gt/occlusions/
         masks, or Sintel's <pass>/<scene> folders with flow/<scene>/ beside the pass (the last flow is
-        scored), or Yosemite's yos9.png, yos10.png and correct_yos.flo.
+        scored), or Yosemite's yos9.png, yos10.png and correct_yos.flo. The sequence is named by its folder,
+        with its parent's name where the flow lies outside it ("clean/alley_1", "other-data/Dimetrodon").
 
     Returns
     -------
@@ -1017,7 +1061,7 @@ def read_flow_folder(folder) -> FlowSequence:
     if flo.name == "correct_yos.flo":  # Yosemite's sky is stored as exactly (1, 0), not measured
         mask &= ~((flow[..., 0] == 1.0) & (flow[..., 1] == 0.0))
     occluded = read_mask(occlusions) if occlusions is not None else None
-    name = folder.name if invalid is None and occlusions is None else f"{folder.parent.name}/{folder.name}"
+    name = folder.name if flo.parent == folder else f"{folder.parent.name}/{folder.name}"
     return FlowSequence(name, tuple(frames), index, flow, mask, occluded)
 
 
@@ -1036,6 +1080,34 @@ def find_flow_folders(root, *, depth: int = 4) -> list[Path]:
         If ``root`` is not a folder.
     """
     return _find_folders(root, depth, lambda folder: _flow_truth(folder) is not None and len(_flow_frames(folder)) >= 2)
+
+
+def flow_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
+    """The folders at or below ``root`` that hold a ground-truth flow and one numbered frame, not the two it
+    joins, which :func:`find_flow_folders` therefore leaves out, each with what it lacks (folders of flows
+    alone, such as Sintel's flow/ and gt/, are not sequences and are not listed).
+
+    Parameters
+    ----------
+    root : str or Path
+    depth : int
+        As :func:`find_flow_folders`.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``root`` is not a folder.
+    """
+    def lacking(folder: Path) -> bool:
+        return _flow_truth(folder) is not None and len(_flow_frames(folder)) == 1
+
+    found = []
+    for folder in _find_folders(root, depth, lacking):
+        truth = _flow_truth(folder)
+        assert truth is not None  # lacking() found it
+        lack = f"it holds the flow {truth[0].name} but one numbered frame (*NN.png), not the two it joins"
+        found.append((folder, lack))
+    return found
 
 
 # --------------------------------------------------------------------------------------------- BSDS
