@@ -14,7 +14,7 @@ from vmcl.boundary_evaluation import (
     sweep_thresholds,
 )
 from vmcl.cli import main
-from vmcl.datasets import BSDSImage, read_bsds_folder
+from vmcl.datasets import BSDSImage, find_bsds_folders, read_bsds_folder
 from vmcl.early.edges import canny
 
 
@@ -101,3 +101,26 @@ def test_soft_map_on_bsds_beats_canny_by_the_bars(datasets_root, machine):
     assert soft.ods_f >= SOFT_MAP_BAR
     assert soft.ods_f >= canny_scores.ods_f + OVER_CANNY_BAR
     assert soft.ois_f > canny_scores.ois_f
+
+
+def test_eval_edges_finds_the_distributions_layout_below_the_folder_it_is_given(tmp_path, capsys):
+    """BSR/BSDS500/data/{images,groundTruth}/test, as the distribution unpacks, found below --data; a layout
+    without a test split is refused naming what it holds."""
+    import cv2
+
+    item = _disc_image(64)
+    data = tmp_path / "unpacked" / "BSR" / "BSDS500" / "data"
+    for kind in ("images", "groundTruth"):
+        (data / kind / "test").mkdir(parents=True)
+    cv2.imwrite(str(data / "images" / "test" / "disc.jpg"), item.image[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, 100])
+    cell = np.empty((1, 1), dtype=object)
+    cell[0, 0] = {"Boundaries": item.boundaries[0].astype(np.uint8), "Segmentation": item.segmentations[0]}
+    scipy.io.savemat(data / "groundTruth" / "test" / "disc.mat", {"groundTruth": cell})
+    assert find_bsds_folders(tmp_path / "unpacked") == [data]
+    assert main(["eval", "edges", "--data", str(tmp_path / "unpacked"), "--thresholds", "3", "-q"]) == 0
+    assert "Boundaries (BSDS500 benchmark, 1 images" in capsys.readouterr().out
+    val = tmp_path / "val_only"
+    for kind in ("images", "groundTruth"):
+        (val / kind / "val").mkdir(parents=True)
+    assert main(["eval", "edges", "--data", str(val), "-q"]) == 2
+    assert "images/ and groundTruth/ hold no test/ split (images/ holds val)" in capsys.readouterr().err

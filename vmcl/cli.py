@@ -656,12 +656,20 @@ def _fmt_optional(value: float | None) -> str:
 
 def _eval_edges(args, root: Path) -> int:
     from vmcl.boundary_evaluation import boundary_maps, score_maps
-    from vmcl.datasets import load_bsds, read_bsds_folder
+    from vmcl.datasets import find_bsds_folders, load_bsds, read_bsds_folder
 
     try:
-        images = load_bsds(root).images if (root / "bsds500" / "test").is_dir() else read_bsds_folder(root)
+        if (root / "bsds500" / "test").is_dir():  # the shared data sets' folder
+            images = load_bsds(root).images
+        else:
+            # The folder itself, else the distribution's images/ and groundTruth/ below it (BSR/BSDS500/data).
+            below = [] if (root / "images").is_dir() else find_bsds_folders(root)
+            if len(below) > 1:
+                raise BadInput(f"--data {root}: BSDS500 layouts in {len(below)} folders below it "
+                               f"({', '.join(map(str, below[:3]))}{' ...' if len(below) > 3 else ''}): give one")
+            images = read_bsds_folder(below[0] if below else root)
     except FileNotFoundError as error:
-        raise BadInput(f"--data {root}: no BSDS500 images ({error})") from None
+        raise BadInput(f"--data {root}: {str(error).removeprefix(f'{root}: ')}") from None
     with _progress(args, len(images), "images") as step:
         sets = boundary_maps(images, thresholds=args.thresholds, progress=step)
     rows = [("method", "ODS F", "OIS F", "AP", "ms per image")]

@@ -42,6 +42,7 @@ __all__ = [
     "FlowPair",
     "FlowSequence",
     "StereoPair",
+    "find_bsds_folders",
     "find_flow_folders",
     "find_stereo_folders",
     "flow_folders_lacking",
@@ -1192,6 +1193,11 @@ def read_bsds_folder(folder, *, split: str = "test") -> list[BSDSImage]:
         images, truths = folder / "images", folder / "groundTruth"
         if (images / split).is_dir() and (truths / split).is_dir():
             images, truths = images / split, truths / split
+        else:
+            splits = sorted(p.name for p in images.iterdir() if p.is_dir() and not p.name.startswith("."))
+            if splits and not any(images.glob("*.jpg")):
+                raise FileNotFoundError(f"{folder}: images/ and groundTruth/ hold no {split}/ split (images/ holds "
+                                        f"{', '.join(splits)})")
         found = sorted(images.glob("*.jpg"))
         pairs = [(p.stem, p, truths / f"{p.stem}.mat") for p in found]
     else:
@@ -1204,6 +1210,24 @@ def read_bsds_folder(folder, *, split: str = "test") -> list[BSDSImage]:
         raise InputValueError(f"{folder}: images without their ground truth: {', '.join(missing[:3])}"
                               + (f" and {len(missing) - 3} more" if len(missing) > 3 else ""))
     return _bsds_items(pairs)
+
+
+def find_bsds_folders(root, *, depth: int = 4) -> list[Path]:
+    """The folders at or below ``root`` that hold the BSDS500 distribution's ``images/`` and ``groundTruth/``
+    folders side by side (``BSR/BSDS500/data`` once unpacked), for :func:`read_bsds_folder`.
+
+    Parameters
+    ----------
+    root : str or Path
+    depth : int
+        Levels below ``root`` searched, >= 1.
+
+    Raises
+    ------
+    FileNotFoundError
+        If ``root`` is not a folder.
+    """
+    return _find_folders(root, depth, lambda folder: (folder / "images").is_dir() and (folder / "groundTruth").is_dir())
 
 
 def load_bsds(root, *, split: str = "test") -> BSDSSet:
