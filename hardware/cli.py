@@ -176,14 +176,17 @@ def main(argv: list[str] | None = None, *, out: TextIO | None = None) -> int:
         steps = parse_commands(args.commands)
     except UsageError as exc:
         return fail(f"{exc} (see vmcl-head --help)", 2)
+    opened = False
     try:
         with Head(args.port, baudrate=args.baud, timeout=args.timeout) as head:
+            opened = True
             for step in steps:
                 step(head, out)
     except (ValueError, TypeError) as exc:
         return fail(str(exc), 2)
     except HardwareError as exc:
         return fail(str(exc), 1)
-    except KeyboardInterrupt:  # leaving the Head's block has stopped every motor
-        return fail("interrupted; the head was told to stop", 130)
+    except KeyboardInterrupt:  # leaving the Head's block has stopped every motor, if the head was open
+        return fail("interrupted; the head was told to stop" if opened else "interrupted before the head was open",
+                    130)
     return 0

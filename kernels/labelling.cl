@@ -138,7 +138,7 @@ __kernel void label_features(__global const uchar *support, __global const float
     in[F_HUE_STEP_3] = CLIPPED(window_range(hue, 1, 0, x, y, 1, W, H), 0.3f);
 #endif
     in[F_WHITENESS_5] = white;
-    in[F_BRIGHTNESS_5] = hi5;
+    in[F_BRIGHTNESS_5] = fmax(hi5, 0.0f);  /* as the running maximum from 0 it was: a dark window's is 0 */
 
 #if CLASSIFY
     uchar label = 0;

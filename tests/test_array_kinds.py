@@ -91,5 +91,21 @@ def test_floats_of_two_widths_go_together_and_a_big_endian_image_is_read_by_valu
     np.testing.assert_array_equal(native, swapped)
     moved = flow(left.astype(">u2"), right.astype(">u2"), delta=4, patch=9, machine=machine).flow
     np.testing.assert_array_equal(moved, flow(left, right, delta=4, patch=9, machine=machine).flow)
-    grey = left / np.float32(65535)
-    flow(grey.astype(np.float32), np.roll(grey, -3, axis=1).astype(np.float64), delta=4, patch=9, machine=machine)
+    grey = (left / np.float32(65535)).astype(np.float32)
+    shifted = np.roll(grey, -3, axis=1)
+    np.testing.assert_array_equal(flow(grey, shifted.astype(np.float64), delta=4, patch=9, machine=machine).flow,
+                                  flow(grey, shifted, delta=4, patch=9, machine=machine).flow)
+
+
+def test_a_big_endian_image_is_read_on_its_types_scale_by_the_machine_and_the_texture(machine):
+    """Beyond the matchers: the machine's own reading of images (on the type's full scale) and the texture's
+    default threshold (a share of it) take a big-endian uint16 as the uint16 it is."""
+    from vmcl.early.texture import density
+    from vmcl.pipeline import VisionMachine, range_note
+
+    image = (np.random.default_rng(3).random((48, 64)) * 65535).astype(np.uint16)
+    swapped = image.astype(">u2")
+    np.testing.assert_array_equal(density(swapped, machine=machine), density(image, machine=machine))
+    vm = VisionMachine(machine=machine)
+    np.testing.assert_array_equal(vm.run(swapped).labels, vm.run(image).labels)
+    assert "of uint16's 65535" in range_note((image // 16).astype(">u2"), "left")

@@ -96,6 +96,7 @@ def test_run_on_files_writes_report_and_fields(tmp_path, images):
     ("float255", "it holds floats up to 2"),
     ("json", "not valid JSON"),
     ("json_list", "a JSON object of sections expected, got list"),
+    ("json_deep", "not valid JSON"),
     ("json_key", "unknown config key stereo.nope"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, images, capsys, case, message):
@@ -114,6 +115,7 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, images, capsys, case, messag
         "float255": [str(_float_image(tmp_path / "float255.tiff"))],
         "json": [str(images["left"]), "--config", str(_written(tmp_path / "bad.json", "{nope"))],
         "json_list": [str(images["left"]), "--config", str(_written(tmp_path / "list.json", "[1]"))],
+        "json_deep": [str(images["left"]), "--config", str(_written(tmp_path / "deep.json", "[" * 100_000))],
         "json_key": [str(images["left"]), "--config", str(_written(tmp_path / "key.json", '{"stereo": {"nope": 1}}'))],
     }[case]
     out = tmp_path / "out"
@@ -455,3 +457,13 @@ def test_ctrl_c_is_one_line_exit_130_and_leaves_the_previous_output(tmp_path):
     assert "Traceback" not in error and len(lines) <= 2, error
     assert _snapshot(out) == before
     assert not _leftovers(tmp_path)
+
+
+def test_settings_recorded_from_numpy_numbers_read_back_as_numbers():
+    """A Config given NumPy scalars (np.float32 for a sigma) records them as plain numbers."""
+    from vmcl.cli import settings_text
+
+    config = Config.from_dict({"edges": {"sigma": np.float32(2.5)}, "motion": {"patch": np.int64(15)}})
+    recorded = json.loads(settings_text(config.to_dict()))
+    assert recorded["edges"]["sigma"] == 2.5 and recorded["motion"]["patch"] == 15
+    assert Config.from_dict(recorded) == Config.from_dict({"edges": {"sigma": 2.5}, "motion": {"patch": 15}})

@@ -412,7 +412,7 @@ def test_a_store_an_earlier_batch_built_is_named_when_a_later_one_adds_items_wit
     _png(data / "b.png", _scene(1, 64).left)
     assert main(["batch", str(data), *common]) == 0
     err = capsys.readouterr().err
-    assert f"{out / 'labels.zarr'} was built by an earlier run and holds none of the 1 item(s) this one wrote: " \
+    assert f"{out / 'labels.zarr'} was built by an earlier run and is out of date for the 1 item(s) this one wrote: " \
            "rerun with --zarr labels to rebuild it" in err, err
 
 

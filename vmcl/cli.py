@@ -144,8 +144,8 @@ def _config(path: str | None):
 
             try:
                 values = json.loads(Path(path).read_text(encoding="utf-8"))
-            except (json.JSONDecodeError, UnicodeDecodeError) as error:
-                raise BadInput(f"config {path}: not valid JSON ({error})") from None
+            except (ValueError, RecursionError) as error:  # JSONDecodeError and UnicodeDecodeError among them
+                raise BadInput(f"config {path}: not valid JSON ({str(error)[:200]})") from None
             if not isinstance(values, dict):
                 raise BadInput(f"config {path}: a JSON object of sections expected, got {type(values).__name__}")
             return Config.from_dict(values)
@@ -431,7 +431,12 @@ def settings_text(values: dict) -> str:
     keys sorted, so that two runs with the same settings write the same text."""
     import json
 
-    return json.dumps(values, indent=1, sort_keys=True) + "\n"
+    def plain(value):  # a Config holds NumPy scalars as it was given them (np.float32(2.0) for a sigma)
+        if isinstance(value, np.generic):
+            return value.item()
+        raise TypeError(f"a setting of type {type(value).__name__} cannot be recorded")
+
+    return json.dumps(values, indent=1, sort_keys=True, default=plain) + "\n"
 
 
 FIELD_NAMES = ("edges", "support", "labels", "boundary_strength", "hue", "colour_edges", "density", "texture_edges",
@@ -578,10 +583,12 @@ def _eval_stereo(args, root: Path) -> int:
     from vmcl.stereo_evaluation import evaluate_pair, markdown_tables, opencv_baselines, vmcl_method
 
     folders = find_stereo_folders(root)
-    left_out = [_left_out(folder, lack) for folder, lack in stereo_folders_lacking(root)]
+    # Folders without ground truth (a benchmark's own test scenes, MiddEval3's testF) are named, not failures.
+    passed_over = [_left_out(folder, lack) for folder, lack in stereo_folders_lacking(root)]
+    left_out: list[str] = []
     if not folders:
         raise BadInput(f"--data {root}: no stereo scene in a Middlebury layout found (a scene's folder, or a "
-                       "folder holding such folders)" + "".join(f"; {line}" for line in left_out))
+                       "folder holding such folders)" + "".join(f"; {line}" for line in passed_over))
     ours = vmcl_method()  # one machine for every scene: its kernels are built once
     evaluations = []
     with _progress(args, len(folders), "stereo") as step:
@@ -595,7 +602,7 @@ def _eval_stereo(args, root: Path) -> int:
                 left_out.append(_left_out(folder, str(error)))
             step(name)
     return _scored_and_left_out(f"Stereo on {len(evaluations)} Middlebury scene(s) under {root}",
-                                ["", *markdown_tables(evaluations)] if evaluations else [], left_out)
+                                ["", *markdown_tables(evaluations)] if evaluations else [], left_out, passed_over)
 
 
 def _left_out(folder: Path, reason: str) -> str:
@@ -605,12 +612,16 @@ def _left_out(folder: Path, reason: str) -> str:
     return f"left out {folder}: {reason.removeprefix(prefix)}"
 
 
-def _scored_and_left_out(heading: str, lines: Sequence[str], left_out: Sequence[str]) -> int:
-    """Print what an evaluation scored, then each folder it left out and why (on stderr, one line each); the
-    exit status is 2 (bad input) when any was left out or nothing was scored, else 0."""
+def _scored_and_left_out(heading: str, lines: Sequence[str], left_out: Sequence[str],
+                         passed_over: Sequence[str] = ()) -> int:
+    """Print what an evaluation scored, then each folder it passed over (holding no ground truth) and each it
+    left out because it failed to read or run, and why (on stderr, one line each); the exit status is 2 (bad
+    input) when any failed or nothing was scored, else 0."""
     if lines:
         print(heading)
         print("\n".join(lines))
+    for line in passed_over:
+        print(f"vmcl: note: {line}", file=sys.stderr)
     for line in left_out:
         print(f"vmcl: {line}", file=sys.stderr)
     if not lines:
@@ -624,10 +635,11 @@ def _eval_flow(args, root: Path) -> int:
     from vmcl.machine import default_machine
 
     folders = find_flow_folders(root)
-    left_out = [_left_out(folder, lack) for folder, lack in flow_folders_lacking(root)]
+    passed_over = [_left_out(folder, lack) for folder, lack in flow_folders_lacking(root)]
+    left_out: list[str] = []
     if not folders:
         raise BadInput(f"--data {root}: no flow sequence found (numbered frames with flowNN.flo, gt/*.flo, "
-                       "Sintel's flow/ or Middlebury's other-gt-flow/)" + "".join(f"; {line}" for line in left_out))
+                       "Sintel's flow/ or Middlebury's other-gt-flow/)" + "".join(f"; {line}" for line in passed_over))
     rows: list[tuple[object, ...]] = [("sequence", "method", "EPE px", "matched", "unmatched", "AAE deg", "ms")]
     machine = default_machine()
     scored = 0
@@ -647,7 +659,7 @@ def _eval_flow(args, root: Path) -> int:
             step(sequence.name)
     heading = ("Optical flow (average endpoint error over the valid pixels; matched / unmatched where the data "
                "marks occlusions; vmcl sequence: the frames before the scored one streamed with the temporal terms)")
-    return _scored_and_left_out(heading, _table_lines(rows) if scored else [], left_out)
+    return _scored_and_left_out(heading, _table_lines(rows) if scored else [], left_out, passed_over)
 
 
 def _fmt_optional(value: float | None) -> str:
@@ -664,6 +676,10 @@ def _eval_edges(args, root: Path) -> int:
         else:
             # The folder itself, else the distribution's images/ and groundTruth/ below it (BSR/BSDS500/data).
             below = [] if (root / "images").is_dir() else find_bsds_folders(root)
+            # BSR/ holds the benchmark's own small example beside the data (bench/data): the folders with a
+            # test split are the data set.
+            split = [folder for folder in below if (folder / "images" / "test").is_dir()]
+            below = split or below
             if len(below) > 1:
                 raise BadInput(f"--data {root}: BSDS500 layouts in {len(below)} folders below it "
                                f"({', '.join(map(str, below[:3]))}{' ...' if len(below) > 3 else ''}): give one")
@@ -749,7 +765,7 @@ def _batch(args) -> int:
                  f"{counts['failed']} failed", rows)
     if counts["done"]:  # the stores an earlier run built and this one did not: they lack what it wrote
         for field in (f for f in distributed.vmcl_stores(Path(args.out)) if f not in fields):
-            print(f"{Path(args.out) / (field + '.zarr')} was built by an earlier run and holds none of the "
+            print(f"{Path(args.out) / (field + '.zarr')} was built by an earlier run and is out of date for the "
                   f"{counts['done']} item(s) this one wrote: rerun with --zarr {field} to rebuild it", file=sys.stderr)
     for field in fields:  # from the folders on disk: a resumed batch's store holds every finished item
         store = distributed.write_zarr(Path(args.out), items, field)

@@ -940,7 +940,8 @@ class FlowSequence:
     Attributes
     ----------
     name : str
-        The folder's name (with its parent's for Sintel's passes: "clean/alley_1").
+        The folder's name, with its parent's where the flow is not beside the frames ("clean/alley_1",
+        "other-data/Dimetrodon").
     frames : tuple of Path
         The frames in the order of their numbers.
     index : int
@@ -1020,7 +1021,8 @@ def read_flow_folder(folder) -> FlowSequence:
         (Middlebury's download; other-data-gray too), gt/frame_NNNN.flo with gt/invalid/ and gt/occlusions/
         masks, or Sintel's <pass>/<scene> folders with flow/<scene>/ beside the pass (the last flow is
         scored), or Yosemite's yos9.png, yos10.png and correct_yos.flo. The sequence is named by its folder,
-        with its parent's name where the flow lies outside it ("clean/alley_1", "other-data/Dimetrodon").
+        with its parent's name where the flow is not beside the frames (in gt/, flow/ or other-gt-flow/:
+        "clean/alley_1", "other-data/Dimetrodon").
 
     Returns
     -------
@@ -1100,7 +1102,9 @@ def flow_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
         If ``root`` is not a folder.
     """
     def lacking(folder: Path) -> bool:
-        return _flow_truth(folder) is not None and len(_flow_frames(folder)) == 1
+        # Middlebury's other-gt-flow/<scene> holds the flow and its colour picture flowNN.png, no frame.
+        truths = folder.parent.name.endswith("-gt-flow")
+        return not truths and _flow_truth(folder) is not None and len(_flow_frames(folder)) == 1
 
     found = []
     for folder in _find_folders(root, depth, lacking):

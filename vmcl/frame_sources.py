@@ -130,7 +130,7 @@ def open_frames(spec: str | Path) -> FrameSource:
         finally:
             capture.release()
         return FrameSource(f"video {path}", count if count > 0 else None, video=path)
-    if _GLOB_CHARACTERS & set(text):
+    if _GLOB_CHARACTERS & set(text) and not path.is_file():  # an image file named img[1].png is one image
         paths = tuple(sorted((Path(p) for p in glob.glob(text) if Path(p).is_file()), key=frame_order))
         if not paths:
             raise FileNotFoundError(f"{text}: the pattern matches no file")

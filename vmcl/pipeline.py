@@ -43,7 +43,15 @@ import pyopencl.array as cl_array
 
 from vmcl import fitted, labelling, learn, temporal
 from vmcl import integrate as _integrate
-from vmcl.cm.core import UNIT_MARGIN, check_choice, check_int, check_real, check_unit_image, check_unmasked
+from vmcl.cm.core import (
+    UNIT_MARGIN,
+    check_choice,
+    check_int,
+    check_real,
+    check_unit_image,
+    check_unmasked,
+    full_scale,
+)
 from vmcl.cues import CueModule, Measurement, RunInputs, registered
 from vmcl.early import (
     boundary_probability,
@@ -94,7 +102,6 @@ else:  # the same parser, before it joined the standard library
     import tomli as tomllib
 
 # Full scale of each accepted integer dtype: images are computed as float32 in [0, 1].
-_FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
 
 # What each annotation of a Config section's fields takes; bool is not taken as an int (TOML's true is
 # not 1), and an int is taken as a float (TOML's 2 is 2.0).
@@ -788,8 +795,8 @@ def as_image(array: Any, name: str) -> np.ndarray:
         raise InputValueError(f"{name} must be (H, W) grey or (H, W, 3) RGB, got shape {array.shape}")
     if min(array.shape[:2]) < 16:
         raise InputValueError(f"{name} must be at least 16 x 16 pixels, got shape {array.shape}")
-    if array.dtype in _FULL_SCALE:
-        return (array.astype(np.float32) / np.float32(_FULL_SCALE[array.dtype]))
+    if array.dtype.kind == "u" and array.dtype.itemsize in (1, 2):  # uint8 and uint16, in either byte order
+        return (array.astype(np.float32) / np.float32(full_scale(array.dtype)))
     if array.dtype.kind != "f":
         raise InputTypeError(f"{name} must be uint8, uint16 or float, got {array.dtype}")
     if not np.isfinite(array).all():
@@ -1001,14 +1008,14 @@ def range_note(array: np.ndarray, name: str) -> str | None:
     reads integers on their full scale (:func:`as_image`), so such an image is very dark to it, and the
     stages that read contrast in absolute terms (the probability of boundary, the texture's blobs, the colour
     and MRF thresholds) see little; nothing is rescaled without being asked. None otherwise."""
-    scale = _FULL_SCALE.get(array.dtype)
-    if scale is None or array.size == 0:
+    if array.dtype.kind != "u" or array.dtype.itemsize not in (1, 2) or array.size == 0:
         return None
+    scale = full_scale(array.dtype)
     top = int(array.max())
     if top >= SMALL_RANGE * scale:
         return None
     bits = max(top, 1).bit_length()
-    return (f"{name}: its brightest pixel is {top} of {array.dtype}'s {scale:.0f} ({100 * top / scale:.1f}% of "
+    return (f"{name}: its brightest pixel is {top} of {array.dtype.newbyteorder('=')}'s {scale:.0f} ({100 * top / scale:.1f}% of "
             f"the range), and the machine reads images on their type's full scale, so it sees a very dark image "
             f"and its contrast-based stages find little; if the data has {bits} bits, scale it to the full "
             f"range first (x {2 ** (8 * array.dtype.itemsize - bits)})")

@@ -43,6 +43,7 @@ __all__ = [
     "field",
     "finite_float32",
     "flags_field",
+    "full_scale",
     "image_field",
     "launch_flat",
     "launch_rows",
@@ -283,6 +284,12 @@ def check_same_kind(first: str, first_host: bool, second: str, second_host: bool
     each is a NumPy array): a call returns what it was given, and mixed kinds leave that undecided."""
     if first_host != second_host:
         raise InputTypeError(f"{first} and {second} must both be NumPy arrays or both device arrays")
+
+
+def full_scale(dtype: DTypeLike) -> float:
+    """The brightness an image type's largest value stands for, in the units of float images (which hold
+    brightness in [0, 1]): 255 for uint8, 65535 for uint16, 1 for floats, whatever the byte order."""
+    return {"u1": 255.0, "u2": 65535.0}.get(np.dtype(dtype).newbyteorder("=").str[1:], 1.0)
 
 
 def check_same_scale(first: str, first_dtype: DTypeLike, second: str, second_dtype: DTypeLike) -> None:

@@ -62,6 +62,7 @@ from vmcl.cm.core import (
     IMAGE_TYPES,
     ArrayLike,
     check_real,
+    full_scale,
     image_field,
     launch_rows,
     machine_for,
@@ -124,7 +125,6 @@ SURROUND_FLOOR = 0.02
 
 _CUES = ("L", "a", "b", "texture")
 
-_FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0, np.dtype(np.float32): 1.0}
 
 
 def feature_names(scales: tuple[float, ...]) -> tuple[str, ...]:
@@ -292,7 +292,7 @@ def _lab(machine: Machine, data: cl_array.Array) -> cl_array.Array:
     kernel = _kernel(machine, "lab", IN_T=IMAGE_TYPES[data.dtype],
                            CHANNELS=3 if data.ndim == 3 else 1, LINEAR_TABLE=int(table))
     linear = _constant(machine, ("linear", table), lambda: _LINEAR_8BIT if table else np.zeros(1))
-    launch_rows(machine, kernel, width, height, data, planes, linear, np.float32(_FULL_SCALE[data.dtype]),
+    launch_rows(machine, kernel, width, height, data, planes, linear, np.float32(full_scale(data.dtype)),
                 np.int64(width), np.int64(height))
     return planes
 

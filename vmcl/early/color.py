@@ -65,6 +65,7 @@ from vmcl.cm.core import (
     check_real,
     field,
     finite_float32,
+    full_scale,
     launch_flat,
     launch_rows,
     machine_for,
@@ -90,7 +91,6 @@ HISTOGRAM_BINS = (0x7F800000 >> 19) + 1
 """Bins of the noise estimate's histogram of z: 1/16 of an octave each, from 0 to infinity (color.cl)."""
 _MEDIAN_OF_RAYLEIGH = math.sqrt(2.0 * math.log(2.0))
 
-_FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0, np.dtype(np.float32): 1.0}
 
 
 class Hue(NamedTuple):
@@ -135,7 +135,7 @@ def _rgb(rgb, machine: Machine) -> tuple[cl_array.Array, bool]:
 
 def _min_intensity(value, dtype: np.dtype) -> float:
     if value is None:
-        return MIN_INTENSITY * _FULL_SCALE[dtype]
+        return MIN_INTENSITY * full_scale(dtype)
     return check_real(value, "min_intensity", above=0)
 
 
@@ -256,7 +256,7 @@ def albedo_edges(rgb: ArrayLike, *, min_intensity: float | None = None, threshol
         estimated = machine.empty((1,), np.float32)
         machine.launch(vector_kernel(machine, "color", "hue_threshold", **defines), (_THRESHOLD_ITEMS,), counts,
                        estimated, np.int64(bands), np.float32(_noise.NOISE_HIGH / _MEDIAN_OF_RAYLEIGH),
-                       np.float32(_noise.NOISE_HIGH * NOISE_FLOOR * _FULL_SCALE[data.dtype]),
+                       np.float32(_noise.NOISE_HIGH * NOISE_FLOOR * full_scale(data.dtype)),
                        local_size=(_THRESHOLD_ITEMS,))
         fixed = 0.0
     else:

@@ -238,6 +238,7 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max:
     """
     machine = machine_for(machine)
     check_pair(left, right, machine)
+    features = check_choice(features, "features", _FEATURES)
     if d_min is None or d_max is None:
         # Imported here: the range's estimate is itself made by this matcher (at a coarse scale, over a
         # given range), so its module imports this one.
@@ -245,7 +246,6 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max:
 
         d_min, d_max = range_to_search(left, right, d_min, d_max, machine=machine)
     _check_range(d_min, d_max, patch, left.shape[1])
-    features = check_choice(features, "features", _FEATURES)
     shiftable = check_bool(shiftable, "shiftable")
     subpixel = check_bool(subpixel, "subpixel")
     use_quantiles = check_bool(use_quantiles, "use_quantiles")

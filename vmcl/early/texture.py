@@ -50,7 +50,16 @@ import numpy as np
 import pyopencl.array as cl_array
 
 from vmcl.cm import scan as _scan
-from vmcl.cm.core import ArrayLike, check_int, check_real, check_sigma, image_field, machine_for, result
+from vmcl.cm.core import (
+    ArrayLike,
+    check_int,
+    check_real,
+    check_sigma,
+    full_scale,
+    image_field,
+    machine_for,
+    result,
+)
 from vmcl.early import noise as _noise
 from vmcl.early.filters import laplacian_of_gaussian
 from vmcl.errors import InputValueError
@@ -70,8 +79,6 @@ THRESHOLD = 0.08
 
 RADIUS = 24
 """Default window radius (a 49-pixel window): the machine's."""
-
-_FULL_SCALE = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0}
 
 MIN_DENSITY_STEP = 0.01
 """Smallest density difference (share of a window covered by blobs) that can be a texture edge."""
@@ -103,7 +110,7 @@ def _check(fine_sigma, coarse_sigma, threshold, radius, image) -> tuple[float, f
         raise InputValueError(f"coarse_sigma must exceed fine_sigma, got coarse_sigma={coarse} <= fine_sigma={fine}")
     # Blobs are thresholded at a non-zero value.
     if threshold is None:
-        threshold = THRESHOLD * _FULL_SCALE.get(np.dtype(getattr(image, "dtype", np.float32)), 1.0)
+        threshold = THRESHOLD * full_scale(getattr(image, "dtype", np.float32))
     threshold = check_real(threshold, "threshold", above=0)
     return fine, coarse, threshold, check_int(radius, "radius", minimum=1)
 
