@@ -206,3 +206,13 @@ def test_a_pair_given_in_the_other_order_gets_a_note(near_scene, machine):
         result = VisionMachine(machine=machine).run(left, right)
         notes[label] = [n for n in result.notes if "given in the other order" in n]
     assert len(notes["swapped"]) == 1 and not notes["in order"], notes
+
+
+def test_given_ends_take_the_place_of_the_found_ones_and_the_other_end_never_crosses():
+    from vmcl.early.disparity_range import with_given_ends
+
+    found = DisparityRange(5, 40, decided=True, level=2, confident=0.5, searched=(-100, 100), found=(8, 36))
+    assert with_given_ends(found, None, None) == (5, 40)
+    assert with_given_ends(found, 10, None) == (10, 40) and with_given_ends(found, 50, None) == (50, 50)
+    assert with_given_ends(found, None, 30) == (5, 30) and with_given_ends(found, None, 2) == (2, 2)
+    assert with_given_ends(found, 0, 60) == (0, 60)

@@ -665,6 +665,9 @@ EXEMPT = {
     "vmcl.distributed:cluster_client",
     # The tasks map_sequence and run_batch submit, with the arguments those calls checked.
     "vmcl.distributed:run_chunk", "vmcl.distributed:render_item",
+    # Combines a DisparityRange (estimate_range's, swept) with ends the Config checked; range_to_search and
+    # the stereo cue call it, and tests/test_disparity_range.py checks it.
+    "vmcl.early.disparity_range:with_given_ends",
     # Lists a batch folder's stores (any folder, or none, is valid); tests/test_distributed.py checks it.
     "vmcl.distributed:vmcl_stores",
     # Records vmcl returns, and the worker's Machine (no arguments).

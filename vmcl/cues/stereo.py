@@ -22,7 +22,7 @@ from vmcl import integrate
 from vmcl.cm import reduce as cm_reduce
 from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import stereo
-from vmcl.early.disparity_range import estimate_range
+from vmcl.early.disparity_range import estimate_range, with_given_ends
 from vmcl.early.semiglobal import SemiGlobalMatch, match_semiglobal
 from vmcl.labels import Label
 from vmcl.machine import on_device
@@ -134,12 +134,7 @@ def _disparity_range(run: RunInputs) -> tuple[tuple[int, int], str | None]:
     if s.d_min is not None and s.d_max is not None:
         return (s.d_min, s.d_max), None
     found = estimate_range(run.left, run.needed("right"), max_disparity=s.max_disparity, machine=run.machine)
-    if s.d_min is not None:
-        span = (s.d_min, max(found.d_max, s.d_min))
-    elif s.d_max is not None:
-        span = (min(found.d_min, s.d_max), s.d_max)
-    else:
-        span = (found.d_min, found.d_max)
+    span = with_given_ends(found, s.d_min, s.d_max)
     scale = f"1/{2**found.level} scale"
     if found.decided:
         source = f"from the images at {scale} ({100 * found.confident:.0f}% of its pixels matched confidently)"

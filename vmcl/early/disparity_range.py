@@ -29,7 +29,7 @@ from vmcl.early.stereo import StereoMatch, check_pair, check_range, match
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine, on_device
 
-__all__ = ["MAX_DISPARITY", "DisparityRange", "estimate_range", "fallback_range", "range_to_search"]
+__all__ = ["MAX_DISPARITY", "DisparityRange", "estimate_range", "fallback_range", "range_to_search", "with_given_ends"]
 
 MAX_DISPARITY = 0.5
 """The widest disparity searched by default, either sign, as a share of the image width: near objects of
@@ -303,13 +303,28 @@ def range_to_search(left: ArrayLike, right: ArrayLike, d_min: int | None = None,
     low = None if d_min is None else check_int(d_min, "d_min")
     high = None if d_max is None else check_int(d_max, "d_max")
     if low is None or high is None:
-        found = estimate_range(left, right, machine=machine)
-        if low is None and high is None:
-            low, high = found.d_min, found.d_max
-        elif low is None:
-            assert high is not None
-            low = min(found.d_min, high)
-        else:
-            high = max(found.d_max, low)
+        low, high = with_given_ends(estimate_range(left, right, machine=machine), low, high)
     check_range(low, high, left.shape[1])
     return low, high
+
+
+def with_given_ends(found: DisparityRange, d_min: int | None, d_max: int | None) -> tuple[int, int]:
+    """The range ``found`` from the images with the ends a user gave in its place: a given end overrides that
+    end, and the found one moves to it if it would cross it.
+
+    Parameters
+    ----------
+    found : DisparityRange
+    d_min, d_max : int or None
+        The given ends (None: the found one's).
+
+    Returns
+    -------
+    (d_min, d_max) : tuple of int
+    """
+    if d_min is None and d_max is None:
+        return found.d_min, found.d_max
+    if d_min is None:
+        assert d_max is not None
+        return min(found.d_min, d_max), d_max
+    return d_min, max(found.d_max, d_min) if d_max is None else d_max
