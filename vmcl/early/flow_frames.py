@@ -13,7 +13,15 @@ from __future__ import annotations
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import IMAGE_TYPES, ArrayLike, check_same_kind, check_unit_image, field, finite_float32
+from vmcl.cm.core import (
+    IMAGE_TYPES,
+    ArrayLike,
+    check_same_kind,
+    check_same_scale,
+    check_unit_image,
+    field,
+    finite_float32,
+)
 from vmcl.early.filters import separable_gaussian
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
@@ -58,6 +66,5 @@ def smoothed_frames(frame0: ArrayLike, frame1: ArrayLike, sigmas: tuple[float, .
             raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {grey.shape}")
         smoothed.append(separable_gaussian(machine, grey, sigmas))
         types.append(grey.dtype)
-    if types[0] != types[1]:
-        raise InputValueError(f"frame0 and frame1 must have the same type, got {types[0]} and {types[1]}")
+    check_same_scale("frame0", types[0], "frame1", types[1])
     return smoothed[0], smoothed[1], _GAIN[types[0]]
