@@ -24,7 +24,9 @@ def test_the_early_functions_run_with_their_defaults_and_share_the_machines(mach
     # No range given: found from the images; the edge matches then land near the truth (measured: 263
     # matches, median error 0.2 px, on this 256 x 256 scene).
     wide = scenes.render(scenes.preset("blocks", shape=(256, 256)), seed=0, noise=0.01)
-    found = stereo.match(wide.left, wide.right, machine=machine).disparity
+    matched = stereo.match(wide.left, wide.right, machine=machine)
+    found = matched.disparity
+    assert matched.d_min <= np.nanmin(wide.disparity) and np.nanmax(wide.disparity) <= matched.d_max  # the range found
     known = np.isfinite(found) & np.isfinite(wide.disparity) & ~wide.occluded_stereo
     assert known.sum() > 150 and np.median(np.abs(found - wide.disparity)[known]) < 0.5
     config = Config()

@@ -83,6 +83,7 @@ class StereoMatch:
         an area outside [d_min, d_max].
     discontinuity : bool (H, W), features whose vote histogram over d has a second peak of at least
         ``bimodal`` times the first, 2 or more planes away: a depth discontinuity in the patch.
+    d_min, d_max : int, the range searched (the one given, or the one found from the images).
     """
 
     disparity: ArrayLike
@@ -90,6 +91,8 @@ class StereoMatch:
     features: ArrayLike
     out_of_range: ArrayLike
     discontinuity: ArrayLike
+    d_min: int = 0
+    d_max: int = 0
 
 
 
@@ -262,7 +265,7 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max:
     min_angle = horizontal_tolerance * 65536 / 360 if features == "canny" else 0.0
     found = _match_maps(machine, maps, features, min_angle=min_angle, d_min=d_min, d_max=d_max, patch=patch,
                         **selection, shiftable=shiftable, subpixel=subpixel, barriers=barriers, method=method)
-    return _deliver(found, isinstance(left, np.ndarray))
+    return _deliver(found, isinstance(left, np.ndarray), d_min, d_max)
 
 
 def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike, right_attribute: ArrayLike, *,
@@ -305,7 +308,7 @@ def match_features(left: ArrayLike, right: ArrayLike, left_attribute: ArrayLike,
     method = _plan(machine, features, shape, d_min, d_max, patch, False, barriers, method)
     found = _match_maps(machine, maps, features, min_angle=0.0, d_min=d_min, d_max=d_max, patch=patch,
                         **selection, barriers=barriers, method=method)
-    return _deliver(found, host)
+    return _deliver(found, host, d_min, d_max)
 
 
 def check_range(d_min: int, d_max: int, width: int) -> None:
@@ -363,15 +366,17 @@ def _plan(machine: Machine, features: Features, shape: tuple[int, ...], d_min: i
     return method
 
 
-def _deliver(found: list, host: bool) -> StereoMatch:
+def _deliver(found: list, host: bool, d_min: int, d_max: int) -> StereoMatch:
     if not host:
-        return StereoMatch(*found)
+        disparity, score, features, out_of_range, discontinuity = found
+        return StereoMatch(disparity, score, features, out_of_range, discontinuity, d_min, d_max)
     # All five copies queued at once, one wait: the first would otherwise wait for the whole match and
     # each further one for its own round trip.
     copies = [f.get_async() for f in found]
     cl.wait_for_events([event for _, event in copies])
     disparity, score, features, out_of_range, discontinuity = (array for array, _ in copies)
-    return StereoMatch(disparity, score, *(f.view(np.bool_) for f in (features, out_of_range, discontinuity)))
+    return StereoMatch(disparity, score, features.view(np.bool_), out_of_range.view(np.bool_),
+                       discontinuity.view(np.bool_), d_min, d_max)
 
 
 def _match_maps(machine: Machine, maps: dict, features: Features, *, min_angle, d_min, d_max, patch,
