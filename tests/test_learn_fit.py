@@ -98,6 +98,32 @@ def test_fit_never_writes_over_a_file_it_did_not_write(stereo_data, tmp_path, ca
     assert mine.read_bytes() == before
 
 
+def test_fit_keeps_an_edited_fit_a_link_and_a_read_only_fit_and_refuses_a_missing_folder_first(stereo_data, tmp_path,
+                                                                                               capsys):
+    """A fitted file edited since (the user's lines would be lost), a link, a read-only fit and a path in a
+    missing folder are refused before any fitting, in one line, and nothing is written; an unedited fit
+    is replaced."""
+    out = tmp_path / "stereo.toml"
+    assert main(["fit", "stereo", "--data", str(stereo_data), "--out", str(out), "-q"]) == 0
+    assert main(["fit", "stereo", "--data", str(stereo_data), "--out", str(out), "-q"]) == 0  # its own, unedited
+    edited = tmp_path / "edited.toml"
+    edited.write_text(out.read_text() + "\n[stereo]\npaths = 8\n")
+    link = tmp_path / "link.toml"
+    link.symlink_to(out)
+    locked = tmp_path / "locked.toml"
+    locked.write_text(out.read_text())
+    locked.chmod(0o444)
+    capsys.readouterr()
+    for target, message in ((edited, "edited since: vmcl would lose the edit"), (link, "is a link"),
+                            (locked, "is read-only"), (tmp_path / "missing" / "f.toml", "does not exist")):
+        before = target.read_bytes() if target.exists() else None
+        assert main(["fit", "stereo", "--data", str(stereo_data), "--out", str(target), "-q"]) == 2, target
+        errors = [line for line in capsys.readouterr().err.splitlines() if line.startswith("vmcl: error:")]
+        assert len(errors) == 1 and message in errors[0], errors
+        assert (target.read_bytes() if target.exists() else None) == before
+    assert link.is_symlink()
+
+
 @pytest.mark.parametrize("args, message", [
     (["--data", "{empty}"], "nothing to fit stereo to"),
     (["--data", "{missing}"], "no such folder"),

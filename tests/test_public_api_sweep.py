@@ -402,7 +402,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.scenes:occlusion_scene", polygons=make("polygons"), greys=[0.2, 0.8], shape=tup(32, 32),
        background=0.5, noise=0.0, seed=0, antialias=True, margin=2,
        kinds={"background": _N, "noise": _N, "antialias": _B}),
-    _e("vmcl.fitted:check_writable", path=path("missing"), kinds={"path": _P}),
+    _e("vmcl.fitted:check_writable", path=path("new"), kinds={"path": _P}),
     _e("vmcl.fitted:check_fitted", values={"edges": {"sigma": 1.0}}, source="x.toml",
        kinds={"values": "mapping"}),
     _e("vmcl.mrf:restore", data=arr((12, 12)), confidence=None, edges=None, kind="smooth", method="icm",

@@ -215,34 +215,59 @@ def _replace(target: Path, text: str) -> None:
 
 
 def check_writable(path: str | os.PathLike) -> Path:
-    """``path`` as a Path, if :func:`write_fitted` or :func:`write_fitted_json` may write it: a new file or
-    one ``vmcl fit`` wrote.
+    """``path`` as a Path, if :func:`write_fitted` or :func:`write_fitted_json` may write it: a new file in an
+    existing folder, or a plain, writable file ``vmcl fit`` wrote and nobody edited since (checked before any
+    fitting, so that a refusal costs no work).
 
     Raises
     ------
     InputValueError
-        The file exists and is someone else's.
+        The file exists and is someone else's, or was edited since vmcl wrote it, or is a link or read-only;
+        or its folder does not exist.
     """
     if not isinstance(path, (str, os.PathLike)):
         raise InputTypeError(f"path must be a str or a path, got {type(path).__name__}")
     target = Path(path)
-    if target.exists() and not _written_by_vmcl(target):
+    if not target.parent.is_dir():
+        raise InputValueError(f"{target}: its folder {target.parent} does not exist")
+    if target.is_symlink():
+        raise InputValueError(f"{target} is a link: vmcl replaces only plain files it wrote; choose a new name")
+    if not target.exists():
+        return target
+    written = _written_by_vmcl(target)
+    if written is None:
         raise InputValueError(f"{target} exists and is not a file `vmcl fit` wrote: choose a new name")
+    if not written:
+        raise InputValueError(f"{target} was written by `vmcl fit` and edited since: vmcl would lose the edit; move "
+                              "it away or choose a new name")
+    # By its mode, not by access(): a user who made the file read-only meant it, even for root.
+    if not target.stat().st_mode & 0o222 or not os.access(target, os.W_OK):
+        raise InputValueError(f"{target} is read-only: vmcl leaves it as it is; choose a new name")
     return target
 
 
-def _written_by_vmcl(path: Path) -> bool:
+def _written_by_vmcl(path: Path) -> bool | None:
+    """True for a file vmcl fit wrote whose record still matches its parameters, False for one edited since,
+    None for anyone else's."""
     from vmcl.pipeline import tomllib
 
     try:
         text = path.read_text(encoding="utf-8")
         values = json.loads(text) if path.suffix == ".json" else tomllib.loads(text)
     except (OSError, UnicodeDecodeError, ValueError):  # JSON's and TOML's decode errors are ValueErrors
-        return False
+        return None
     if not isinstance(values, Mapping):
-        return False
+        return None
     fitted = values.get("fitted")
-    return isinstance(fitted, Mapping) and fitted.get("written_by") == FITTED_BY
+    if not (isinstance(fitted, Mapping) and fitted.get("written_by") == FITTED_BY):
+        return None
+    try:
+        with warnings.catch_warnings():  # another version's fit is still vmcl's own file
+            warnings.simplefilter("ignore")
+            (check_fitted_json if path.suffix == ".json" else check_fitted)(dict(values), str(path))
+    except (InputTypeError, InputValueError):
+        return False
+    return True
 
 
 def _toml_tables(tables: Mapping[str, Any], prefix: tuple[str, ...]) -> list[str]:
