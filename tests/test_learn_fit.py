@@ -202,3 +202,14 @@ def test_fit_colour_from_a_bsds_folder(datasets_root, tmp_path, capsys):
     assert written["fitted"]["data"] == names
     table = Config.from_toml(out).mrf.colour
     assert {"alpha", "beta", "kappa", "edge_gain", "prior"} <= set(table) and table["kappa"] > 0
+    # The data's hash is of the files read (the training split's images and annotations), links followed: the
+    # same data through a linked folder records the same hash, and it is not the hash of nothing.
+    read = [tmp_path / "data" / kind / "train" / f"{name}.{suffix}" for name in names
+            for kind, suffix in (("images", "jpg"), ("groundTruth", "mat"))]
+    assert written["fitted"]["data_sha256"] == fitted.files_sha256(read)
+    (tmp_path / "linked").mkdir()
+    for kind in ("images", "groundTruth"):  # linked folders inside, which a plain walk would not enter
+        (tmp_path / "linked" / kind).symlink_to(tmp_path / "data" / kind, target_is_directory=True)
+    again = tmp_path / "linked.toml"
+    assert main(["fit", "colour", "--data", str(tmp_path / "linked"), "--out", str(again), "-q"]) == 0
+    assert tomllib.loads(again.read_text())["fitted"]["data_sha256"] == written["fitted"]["data_sha256"]

@@ -1133,6 +1133,9 @@ class BSDSImage:
         Each annotator's segment labels (1..n).
     edge_map : (H, W) float64 array or None
         For the golden set: the benchmark's own test edge map (png / 255).
+    files : tuple of Path
+        The files it was read from (the image and its annotations), for a record of what a fit read; empty
+        for an image made in memory.
     """
 
     name: str
@@ -1140,6 +1143,7 @@ class BSDSImage:
     boundaries: np.ndarray
     segmentations: np.ndarray
     edge_map: np.ndarray | None = None
+    files: tuple[Path, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -1177,7 +1181,8 @@ def _bsds_annotations(path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _bsds_items(pairs: list[tuple[str, Path, Path]]) -> list[BSDSImage]:
-    return [BSDSImage(name, read_image(image), *_bsds_annotations(truth)) for name, image, truth in pairs]
+    return [BSDSImage(name, read_image(image), *_bsds_annotations(truth), files=(image, truth))
+            for name, image, truth in pairs]
 
 
 def read_bsds_folder(folder, *, split: str = "test") -> list[BSDSImage]:

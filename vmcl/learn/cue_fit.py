@@ -110,7 +110,8 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
                 examples.append(learn_examples.segmentation_example(found.data, found.confidence, found.coupling,
                                                                     item.segmentations[0], model))
                 names.append(item.name)
-            files += sorted(p for p in Path(root).rglob("*") if p.suffix in (".jpg", ".mat") and p.is_file())
+            # The files the images were read from, links followed as the reading followed them.
+            files += [path for item in images for path in item.files]
         else:
             for folder in datasets.find_flow_folders(root):
                 sequence = datasets.read_flow_folder(folder)
