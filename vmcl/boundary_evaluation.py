@@ -11,8 +11,8 @@ vmcl reports comes from the same reading of the data and the same sweeps:
   its one-to-one matching at 0.0075 of the image diagonal and its thinning
   (:func:`vmcl.metrics.evaluate_boundaries`). The matching (the benchmark's correspondPixels, through
   pyEdgeEval) joins random outlier edges to its assignment graph from a generator seeded by the clock, as
-  the BSDS benchmark's own code does, so the same maps score a little differently from run to run (in the
-  third or fourth decimal of F and AP); the maps themselves are the same bit for bit.
+  the BSDS benchmark's own code does, so the same maps can score a little differently from run to run; the
+  maps themselves are the same bit for bit.
 
 A Canny sweep: Gaussian smoothing of width 2 (the machine's own, :class:`vmcl.pipeline.EdgesConfig`),
 high thresholds spaced geometrically over the range a photograph's contrasts span, the low threshold 0.4
