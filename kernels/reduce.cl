@@ -43,8 +43,11 @@
 #define KAHAN (OP == OP_PLUS && T_IS_FLOAT)
 
 #if KAHAN
+/* A compensation that is not finite (the sum reached an infinity, or overflowed) is dropped: carried on,
+ * inf - inf would turn an infinite sum into NaN. */
 #define KAHAN_ADD(acc, c, v) { __typeof__(acc) y_ = (v) - (c); __typeof__(acc) t_ = (acc) + y_; \
-                               (c) = (t_ - (acc)) - y_; (acc) = t_; }
+                               __typeof__(acc) c_ = (t_ - (acc)) - y_; \
+                               (c) = (c_ - c_ == (__typeof__(acc))0) ? c_ : (__typeof__(acc))0; (acc) = t_; }
 #endif
 
 /* Reduce elements [begin, end) of x, writing the chunk result (and its compensation) to partial[g].
@@ -113,12 +116,23 @@ inline float range_prescale(float lo, float hi)
     return ldexp(1.0f, clamp(-ilogb(extent), -126, 127));
 }
 
+#if T_IS_FLOAT
+#define RELATIVE(v) ((float)(v))
+#define RELATIVE16(v) convert_float16(v)
+#else
+/* An integer is taken relative to `base` (the range's start, floored, on the host) exactly, before float32
+ * rounds it: int32 values past 2^24 would otherwise share bins far apart. lo and hi come relative too. */
+#define RELATIVE(v) ((float)((long)(v) - base))
+#define RELATIVE16(v) convert_float16(convert_long16(v) - base)
+#endif
+
 __kernel void histogram_tiles(__global const T *x, __global int *out, __local int *counts,
                               __global const float *top, long W, long H, long th, long tw, long tiles_x,
-                              float lo, float hi, float scale, int bins, int accumulate)
+                              float lo, float hi, float scale, int bins, int accumulate, long base)
 {
 #if TO_TOP
-    hi = top[0] > lo ? top[0] : lo + 1.0f;
+    float reached = top[0] - (float)base;
+    hi = reached > lo ? reached : lo + 1.0f;
     scale = (float)bins / (hi - lo);
 #endif
     float prescale = 1.0f;
@@ -140,7 +154,7 @@ __kernel void histogram_tiles(__global const T *x, __global int *out, __local in
         /* One work-item: bins of 16 values at once (the same rule in vector form: the positions are
          * clamped to >= 0, where truncation is floor), then plain increments; 2.3x faster on PoCL. */
         for (; c + 16 <= cols; c += 16) {
-            float16 v = convert_float16(vload16(0, row + c));
+            float16 v = RELATIVE16(vload16(0, row + c));
             int16 b = convert_int16(fmin(fmax((v * prescale - lo_scaled) * scale, 0.0f), last));
             int lanes[16];
             vstore16(v >= lo && v <= hi ? b : -1, 0, lanes);
@@ -149,7 +163,7 @@ __kernel void histogram_tiles(__global const T *x, __global int *out, __local in
         }
 #endif
         for (; c < cols; c += size) {
-            float v = (float)row[c];
+            float v = RELATIVE(row[c]);
             if (v >= lo && v <= hi) {
                 int b = (int)fmin(fmax((v * prescale - lo_scaled) * scale, 0.0f), last);
 #if SHARED_COUNTS

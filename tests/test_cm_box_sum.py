@@ -90,10 +90,22 @@ def test_radii_beyond_64_bits_sum_the_whole_line(radius, machine):
 
 
 @pytest.mark.parametrize("axes, error, match", [([-1], TypeError, "axes must be a tuple"),
-                                                (None, TypeError, "axes must be a tuple")])
+                                                ("-1", TypeError, "axes must be a tuple")])
 def test_axes_of_the_wrong_type_are_a_type_error(axes, error, match, machine):
     with pytest.raises(error, match=match):
         box_sum(np.zeros((3, 3), np.int32), 1, axes=axes, machine=machine)
+
+
+def test_the_default_axes_are_the_fields_own(machine):
+    # A 1-D field's default is its only axis (the square window's (-2, -1) does not exist there); a
+    # window longer than the field sums the field, so the overflow check counts no more than that.
+    line = np.arange(6, dtype=np.int32)
+    expected = np.convolve(line, np.ones(3, np.int32), mode="same")
+    assert np.array_equal(box_sum(line, 1, machine=machine), expected)
+    assert np.array_equal(box_sum(np.ones((3, 4), np.int32), 1, machine=machine),
+                          box_sum(np.ones((3, 4), np.int32), 1, axes=(-2, -1), machine=machine))
+    wide = box_sum(np.full((1, 1000), 1e32, np.float32), 1000, machine=machine)
+    assert np.allclose(wide, 1e35, rtol=1e-5)
 
 
 def test_window_sums_beyond_float32_are_refused_not_turned_into_nan(machine):

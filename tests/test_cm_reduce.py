@@ -88,6 +88,26 @@ def test_histogram_matches_numpy_on_integers(machine):
                                   np.histogram(image, 256, (0, 256))[0])
 
 
+
+@pytest.mark.parametrize("values, bins, low, high", [([100000001, 100000002, 100000003], 3, 100000001, 100000004),
+                                                     ([2**31 - 1, 2**31 - 2], 2, 2**31 - 2, 2**31 - 1),
+                                                     ([-2**31, -1500000000, -500000000, 500000000, 2**31 - 1], 4, -2**31, 2**31 - 1)])
+def test_histogram_bins_large_integers_as_numpy_does(values, bins, low, high, machine, machine_with_local_size):
+    # int32 values past 2**24 are not float32's: taken as floats, neighbouring ones shared a bin.
+    x = np.array(values * 40, np.int32)
+    np.testing.assert_array_equal(histogram(x, bins, (low, high), machine=machine_with_local_size),
+                                  np.histogram(x.astype(np.float64), bins, (low, high))[0])
+
+
+def test_a_float_sum_that_reaches_an_infinity_is_that_infinity(machine):
+    # Kahan's compensation of an infinite sum is inf - inf: carried on, it made the sum NaN.
+    for n in (1, 20, 100001):
+        assert reduce(np.array([np.inf, 1.0] * n, np.float32), machine=machine) == np.inf
+        assert reduce(np.array([-np.inf, 2.0] * n, np.float32), machine=machine) == -np.inf
+    assert reduce(np.full(1000, 1e36, np.float32), machine=machine) == np.inf  # past float32's largest
+    assert np.isnan(reduce(np.array([np.inf, -np.inf] * 20, np.float32), machine=machine))
+
+
 def test_histogram_float_rule_nan_and_outside(machine, machine_with_local_size):
     x = np.random.default_rng(3).standard_normal((300, 401)).astype(np.float32)
     x[0, :10] = np.nan

@@ -7,7 +7,8 @@ from hypothesis import strategies as st
 from oracles import scan as scan_oracle
 
 from vmcl.cm.scan import exclusive_sum_into, scan
-from vmcl.errors import InputValueError
+from vmcl.cm.core import check_sigma, check_unit_image
+from vmcl.errors import InputTypeError, InputValueError
 
 OPS = ["plus", "max", "min", "copy"]
 METHODS = ["work_efficient", "hillis_steele"]
@@ -159,3 +160,22 @@ def test_exclusive_sums_of_pairs_scan_each_component(pairs, machine):
 def test_exclusive_sums_of_pairs_refuse_an_odd_length(machine):
     with pytest.raises(InputValueError, match="even number"):
         exclusive_sum_into(machine, machine.to_device(np.ones(3, np.int32)), machine.empty(3, np.int32), pairs=True)
+
+
+def test_exclusive_sums_refuse_what_is_not_an_int32_device_array(machine):
+    # A host array reached the kernel as a pyopencl size error; float32 ones came back as garbage.
+    out = machine.empty(3, np.int32)
+    with pytest.raises(InputTypeError, match="counts must be an int32 pyopencl array, got ndarray"):
+        exclusive_sum_into(machine, np.ones(3, np.int32), out)
+    with pytest.raises(InputTypeError, match="counts must be an int32 pyopencl array, got dtype float32"):
+        exclusive_sum_into(machine, machine.to_device(np.ones(3, np.float32)), out)
+    with pytest.raises(InputValueError, match="out must have counts' 4 elements"):
+        exclusive_sum_into(machine, machine.to_device(np.ones(4, np.int32)), out)
+
+
+def test_the_shared_checks_refuse_huge_numbers_and_pass_empty_images():
+    with pytest.raises(InputValueError, match="sigma must be a finite number > 0"):
+        check_sigma(10**400)
+    check_unit_image(np.zeros((0, 4), np.float32), "image")  # nothing to be on the wrong scale
+    with pytest.raises(InputValueError, match="image: float images hold brightness in"):
+        check_unit_image(np.full((2, 2), 255.0, np.float32), "image")

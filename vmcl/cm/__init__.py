@@ -6,6 +6,6 @@ scans and grid-scans (:mod:`scan`), distance doubling (:mod:`doubling`), global 
 argument checks and kernel launches that these and the early layer (:mod:`vmcl.early`) share.
 """
 
-from vmcl.cm import scan
+from vmcl.cm import core, doubling, filters, news, reduce, router, scan
 
-__all__ = ["scan"]
+__all__ = ["core", "doubling", "filters", "news", "reduce", "router", "scan"]

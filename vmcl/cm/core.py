@@ -361,9 +361,13 @@ def check_sigma(sigma: Any, name: str = "sigma") -> float:
     ValueError for NaN, infinity or a value <= 0."""
     if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.integer, np.floating)):
         raise InputTypeError(f"{name} must be a number, got {type(sigma).__name__}")
-    if not math.isfinite(sigma) or sigma <= 0:
+    try:
+        value = float(sigma)
+    except OverflowError:  # an int past float's range
+        raise InputValueError(f"{name} must be a finite number > 0, got an integer past float's range") from None
+    if not math.isfinite(value) or value <= 0:
         raise InputValueError(f"{name} must be a finite number > 0, got {sigma}")
-    return float(sigma)
+    return value
 
 
 def check_widths(widths: dict[str, float], height: int, width: int) -> None:
@@ -408,6 +412,8 @@ def check_unit_image(image: np.ndarray, name: str) -> None:
     :data:`UNIT_MARGIN`): the thresholds and weights it meets are set for that scale, and an image on
     another (0..255 floats) would be processed as something else. Dividing by the full scale is the
     caller's knowledge, so it is refused, not rescaled."""
+    if not image.size:
+        return  # no brightness to be on the wrong scale (the callers refuse empty images by their shape)
     low, high = float(np.min(image)), float(np.max(image))
     if low < -UNIT_MARGIN or high > 1 + UNIT_MARGIN:
         raise InputValueError(f"{name}: float images hold brightness in [0, 1], got values in [{low:.3g}, "

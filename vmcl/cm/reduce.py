@@ -126,8 +126,9 @@ def histogram(x: ArrayLike, bins: int, range: tuple[float, float], *, tile: tupl
     range : (lo, hi)
         lo < hi, finite. Bin of v: floor((v - lo) * bins / (hi - lo)) in float32, with v == hi in the last
         bin; values outside [lo, hi] and NaN are not counted. This is ``np.histogram``'s rule except that
-        the bin index is computed in float32, so a value within float32 rounding of an inner edge may
-        land in the neighbouring bin. Ranges too narrow or too wide for float32's exponent (bins /
+        the bin index is computed in float32 (an integer field's values taken relative to floor(lo)
+        exactly first), so a value within float32 rounding of an inner edge may land in the
+        neighbouring bin. Ranges too narrow or too wide for float32's exponent (bins /
         (hi - lo) or hi - lo overflowing) are binned by the same rule as if the exponent were unbounded.
     tile : (th, tw), optional
         Per-tile histograms over tiles of th x tw pixels, row-major from the top left; tiles at the right
@@ -219,6 +220,9 @@ def _count(machine: Machine, data: cl_array.Array, bins: int, lo: float, hi: flo
     # A one-work-item group counts without atomics (a CPU runs each group on one thread anyway).
     defines = dict(OP=0, ACC="int", SHARED_COUNTS=int(local > 1), TO_TOP=int(top is not None),
                    **type_defines(data.dtype))
+    # Integers are binned relative to the range's start, taken exactly (kernels/reduce.cl, RELATIVE).
+    base = 0 if data.dtype.kind == "f" else int(np.clip(math.floor(lo), -2**31, 2**31 - 1))
+    lo, hi = lo - base, hi - base
     # A range too narrow or too wide for float32 overflows here; the kernel rescales such ranges.
     with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
         scale = np.float32(bins) / (np.float32(hi) - np.float32(lo))
@@ -226,5 +230,5 @@ def _count(machine: Machine, data: cl_array.Array, bins: int, lo: float, hi: flo
     machine.launch(kernel, (tiles_y * tiles_x * local,), data, out, cl.LocalMemory(4 * bins),
                    top if top is not None else out, np.int64(width), np.int64(height), np.int64(th),
                    np.int64(tw), np.int64(tiles_x), np.float32(lo), np.float32(hi), np.float32(scale),
-                   np.int32(bins), np.int32(accumulate), local_size=(local,))
+                   np.int32(bins), np.int32(accumulate), np.int64(base), local_size=(local,))
     return out

@@ -187,6 +187,13 @@ def exclusive_sum_into(machine: Machine, counts: cl_array.Array, out: cl_array.A
     With ``pairs``, the arrays hold (a, b) pairs in consecutive elements, and the a's and the b's are
     summed each on their own in the same passes: two scans for the launches of one.
     """
+    for name, array in (("counts", counts), ("out", out)):
+        if not isinstance(array, cl_array.Array):
+            raise InputTypeError(f"{name} must be an int32 pyopencl array, got {type(array).__name__}")
+        if array.dtype != np.int32:
+            raise InputTypeError(f"{name} must be an int32 pyopencl array, got dtype {array.dtype}")
+    if out.size != counts.size:
+        raise InputValueError(f"out must have counts' {counts.size} elements, got {out.size}")
     if not pairs:
         scan_rows_into(machine, counts.reshape(counts.size), None, out.reshape(out.size),
                        dict(type_defines(np.dtype(np.int32)), OP=OPS["plus"], SEGMENTED=0, EXCLUSIVE=1))
@@ -276,12 +283,12 @@ def _check_window_sums_fit(x: np.ndarray, window: int) -> None:
 
 
 @overload
-def box_sum(x: np.ndarray, radius: int, *, axes: tuple[int, ...] = (-2, -1), out: None = None,
+def box_sum(x: np.ndarray, radius: int, *, axes: tuple[int, ...] | None = None, out: None = None,
             machine: Machine | None = None) -> np.ndarray: ...
 @overload
-def box_sum(x: cl_array.Array, radius: int, *, axes: tuple[int, ...] = (-2, -1),
+def box_sum(x: cl_array.Array, radius: int, *, axes: tuple[int, ...] | None = None,
             out: cl_array.Array | None = None, machine: Machine | None = None) -> cl_array.Array: ...
-def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
+def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] | None = None,
             out: cl_array.Array | None = None, machine: Machine | None = None) -> ArrayLike:
     """Sum over the (2r+1) x (2r+1) window around every pixel, by grid-scans, in time independent of r.
 
@@ -292,9 +299,9 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
         disparity plane at once).
     radius : int
         r >= 0; the window is 2r+1 wide along each summed axis.
-    axes : tuple of int
-        The axes to sum along: (-2, -1) (the square window, default), (-1,) (rows only) or (-2,)
-        (columns only). A 1-D field takes (-1,).
+    axes : tuple of int, optional
+        The axes to sum along: (-2, -1) (the square window), (-1,) (rows only) or (-2,) (columns only).
+        Default: (-2, -1), or (-1,) for a 1-D field (its only axis).
     out : pyopencl.array.Array, optional
         For device input: the array to write the sums into (:func:`vmcl.cm.core.output_array`).
     machine : vmcl.Machine, optional
@@ -325,6 +332,8 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
     # A window as long as the line already sums all of it, so wider ones are cut to that (the same
     # sums) before the kernels' 64-bit index arithmetic sees them.
     radius = min(check_int(radius, "radius", minimum=0), max(data.shape))
+    if axes is None:
+        axes = (-1,) if data.ndim == 1 else (-2, -1)
     if not isinstance(axes, tuple):
         raise InputTypeError(f"axes must be a tuple such as (-2, -1), got {type(axes).__name__}")
     if not axes:
@@ -335,7 +344,8 @@ def box_sum(x: ArrayLike, radius: int, *, axes: tuple[int, ...] = (-2, -1),
         raise InputValueError(f"axes must not repeat an axis, got {axes!r}")
     if host and data.dtype.kind == "f" and data.size:
         assert isinstance(x, np.ndarray)  # field() reports host for NumPy input only
-        _check_window_sums_fit(x, (2 * radius + 1) ** len(wanted))
+        # A window longer than the field sums the field's length, no more.
+        _check_window_sums_fit(x, int(np.prod([min(2 * radius + 1, data.shape[a]) for a in wanted])))
     final = output_array(out, machine, data, host)
     defines = type_defines(data.dtype)
     width = data.shape[-1]
