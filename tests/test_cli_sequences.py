@@ -2,6 +2,12 @@
 
 from __future__ import annotations
 
+import signal
+import subprocess
+import sys
+import time
+from types import SimpleNamespace
+
 import cv2
 import numpy as np
 import pytest
@@ -9,6 +15,7 @@ import pytest
 from vmcl import scenes
 from vmcl.cli import main
 from vmcl.frame_sources import is_sequence, open_frames
+from vmcl.sequence_output import LEAST_FLOW_SCALE, SequenceWriter
 
 FRAMES = 3
 
@@ -133,3 +140,81 @@ def test_a_frame_of_another_size_is_named_by_its_file(tmp_path, sequence, capsys
     err = capsys.readouterr().err
     assert "frame 1: next has shape (48, 64, 3)" in err, err
     assert f"frame 1 is left {folder / 'frame1.png'}; the next frame is left {folder / 'frame2.png'}" in err, err
+
+
+def _video(path, frames, size=(64, 48)):
+    """An MJPG AVI of `frames` frames (a moving bright square)."""
+    writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"MJPG"), 5, size)
+    for k in range(frames):
+        frame = np.full((size[1], size[0], 3), 40, np.uint8)
+        frame[10:30, 5 + 2 * k:25 + 2 * k] = 220
+        writer.write(frame)
+    writer.release()
+    return path
+
+
+def test_an_empty_or_truncated_video_is_refused_and_the_earlier_output_kept(tmp_path, sequence, capsys):
+    # A video of no frames "succeeded" and replaced a finished output with an empty one; a truncated one
+    # was run on the frames before its damage as if they were the whole video.
+    out = tmp_path / "out"
+    assert main(["run", str(sequence / "clip.avi"), "--out", str(out), "-q"]) == 0
+    before = sorted(p.name for p in out.iterdir())
+    whole = _video(tmp_path / "whole.avi", 12)
+    data = whole.read_bytes()
+    (tmp_path / "truncated.avi").write_bytes(data[:len(data) // 2])
+    for name, message in (("empty.avi", "holds no frames"), ("truncated.avi", "frames its header declares")):
+        if name == "empty.avi":
+            _video(tmp_path / name, 0)
+        capsys.readouterr()
+        assert main(["run", str(tmp_path / name), "--out", str(out), "-q"]) == 2
+        err = capsys.readouterr().err
+        assert message in err and name in err, err
+        assert sorted(p.name for p in out.iterdir()) == before
+    with pytest.raises(ValueError, match=r"ended after \d+ of the 12 frames"):
+        list(open_frames(tmp_path / "truncated.avi").frames())
+    assert len(list(open_frames(whole).frames())) == 12
+
+
+@pytest.mark.parametrize("stop, status", [(signal.SIGTERM, 143), (signal.SIGHUP, 129)])
+def test_a_run_stopped_by_a_signal_cleans_up_and_says_so(tmp_path, stop, status):
+    # SIGTERM (kill, timeout, a CI cancelling) and SIGHUP (a closed terminal) killed the process where it
+    # stood, leaving hidden half-written folders behind.
+    clip = _video(tmp_path / "long.avi", 200)
+    out = tmp_path / "out"
+    code = "import sys; from vmcl.cli import main; sys.exit(main(sys.argv[1:]))"
+    process = subprocess.Popen([sys.executable, "-c", code, "run", str(clip), "--out", str(out), "-q"],
+                               stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not list(tmp_path.glob(".out.partial-*")) and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert process.poll() is None, "the run ended before it could be stopped"
+    time.sleep(0.5)  # well inside the run: frames are being written
+    process.send_signal(stop)
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == status, err
+    assert f"stopped by {stop.name}" in err
+    assert not out.exists() and not list(tmp_path.glob(".out*"))
+
+
+def test_odd_sized_frames_are_whole_in_the_videos_and_a_still_start_is_not_full_colour(tmp_path, sequence):
+    # MPEG-4 frames have even sides: the writer cropped an odd frame's last row and column. The flow video's
+    # scale came from the first frame alone, so a clip starting still drew its noise at full colour.
+    folder = tmp_path / "odd"
+    folder.mkdir()
+    for k, name in enumerate(["frame_00.png", "frame_00.png", "frame_01.png"]):
+        cv2.imwrite(str(folder / f"f{k}.png"), cv2.imread(str(sequence / "left" / name))[:47, :63])
+    out = tmp_path / "out"
+    assert main(["run", str(folder), "--out", str(out), "-q"]) == 0
+    cartoon = cv2.VideoCapture(str(out / "cartoon.mp4"))
+    ok, frame = cartoon.read()
+    cartoon.release()
+    assert ok and frame.shape[:2] == (48, 64)
+    # The frame's last row and column are drawn (a cartoon is mostly light), the padding beyond them black.
+    assert frame[46, :63].mean() > 60 and frame[:47, 62].mean() > 60
+    assert frame[47, :].mean() < 30 and frame[:, 63].mean() < 30
+    still = SimpleNamespace(image=np.zeros((8, 8)), labels=np.zeros((8, 8), np.uint8), disparity=None,
+                            flow=np.full((8, 8, 2), 0.02, np.float32))
+    writer = SequenceWriter(tmp_path, fps=5.0, title="still")
+    picture = writer.pictures(still)["flow"]
+    assert writer.scales["flow"][1] == LEAST_FLOW_SCALE
+    assert picture.min() > 240  # near white: next to no motion, drawn as next to none

@@ -18,8 +18,10 @@ dense fields out (:mod:`vmcl.pipeline`, :mod:`vmcl.report`).
 Exit statuses: 0 done; 2 bad input (a missing, unreadable, truncated or corrupt file, images of
 different sizes, a bad configuration key or type, an ``--out`` vmcl may not write into) or no OpenCL
 platform, reported as one line (the install hint for the latter); 1 a defect in vmcl or a library under
-it, reported with its traceback; 130 interrupted (Ctrl-C), reported as one line. ``--debug`` shows the
-traceback for every error, bad input included.
+it, reported with its traceback; 130 interrupted (Ctrl-C), 143 stopped (SIGTERM: ``kill``, ``timeout``, a CI
+cancelling) and 129 hung up (SIGHUP: the terminal closed), each reported as one line, with what the run
+had begun to write removed as on any failure. ``--debug`` shows the traceback for every error, bad input
+included.
 
 vmcl writes only its own files. ``--out`` must be a new folder, an empty one, or a previous vmcl output,
 which vmcl knows by the file :data:`vmcl.output_folder.MARKER` listing the files it wrote there; anything else is refused
@@ -63,6 +65,7 @@ import contextlib
 import math
 import os
 import re
+import signal
 import sys
 import time
 import traceback
@@ -92,6 +95,36 @@ __all__ = [
 EXIT_DEFECT = 1
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as shells report a command stopped by Ctrl-C
+
+
+class _Stopped(BaseException):
+    """A stop signal (SIGTERM, SIGHUP) raised where the command is, so that what a run has begun to write
+    is cleaned up as for Ctrl-C (the output folder's writer removes it on any BaseException)."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_stopped(signum: int, frame: object) -> None:
+    raise _Stopped(signum)
+
+
+@contextlib.contextmanager
+def _stop_signals_raise() -> Iterator[None]:
+    """SIGTERM and SIGHUP raise :class:`_Stopped` while the command runs (their default kills the process
+    where it stands, leaving a half-written output behind); the handlers before are put back after."""
+    kinds = [getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)]
+    try:
+        before = {kind: signal.signal(kind, _raise_stopped) for kind in kinds}
+    except ValueError:  # not the main thread (vmcl.cli.main called from a worker): signals are not ours
+        yield
+        return
+    try:
+        yield
+    finally:
+        for kind, handler in before.items():
+            signal.signal(kind, handler)
 
 SCENES = ("blocks", "corridor", "shadows", "textures", "cues")
 
@@ -896,11 +929,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     handler = {"demo": _demo, "run": _run, "eval": _eval, "fit": _fit, "info": _info, "batch": _batch,
                "learn": _learn}[args.command]
     try:
-        return handler(args)
+        with _stop_signals_raise():
+            return handler(args)
     except KeyboardInterrupt:
         _traceback_if(args.debug)
         print("vmcl: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except _Stopped as stop:
+        _traceback_if(args.debug)
+        print(f"vmcl: stopped by {signal.Signals(stop.signum).name}", file=sys.stderr)
+        return 128 + stop.signum
     except NoOpenCLPlatformError as error:
         _traceback_if(args.debug)
         print(f"vmcl: {error}", file=sys.stderr)

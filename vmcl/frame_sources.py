@@ -26,6 +26,7 @@ IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".ppm", ".pgm", ".pbm", ".bmp", ".tif
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".mpg", ".mpeg", ".wmv")
 """The file suffixes (any case) read as videos."""
 
+_INDEXED_VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".m4v")  # containers that record their frame count
 _GLOB_CHARACTERS = set("*?[")
 _DIGITS = re.compile(r"(\d+)")
 
@@ -46,7 +47,10 @@ class FrameSource:
     description : str
         What it is, for messages ("12 images in frames/", "video clip.mp4").
     count : int or None
-        The number of frames (a video's own count may be an estimate), None when unknown.
+        The number of frames (a video's own count may be an estimate), None when unknown. Reading a video
+        that holds no frames, or ends before the count its header declares (truncated or damaged; for
+        containers that do not record the count, more than a twentieth short), raises ValueError naming
+        it, after the frames it did read.
     paths : tuple of Path
         The image files in order (empty for a video).
     video : Path or None
@@ -66,14 +70,26 @@ class FrameSource:
         import cv2
 
         capture = cv2.VideoCapture(str(self.video))
+        read = 0
         try:
             while True:
                 ok, frame = capture.read()
                 if not ok:
-                    return
+                    break
+                read += 1
                 yield cv2.cvtColor(frame, cv2.COLOR_BGR2RGB) if frame.ndim == 3 else frame
         finally:
             capture.release()
+        # A video that ends before the count its header declares is truncated or damaged: a run on the
+        # frames before the damage would stand for the whole video. Containers whose count OpenCV only
+        # estimates from the duration are let off a little.
+        indexed = self.video.suffix.lower() in _INDEXED_VIDEO_SUFFIXES
+        slack = 0 if indexed or not self.count else max(1, self.count // 20)
+        if self.count and read < self.count - slack:
+            raise InputValueError(f"{self.video}: the video ended after {read} of the {self.count} frames its header "
+                                  "declares: it is truncated or damaged")
+        if not read:
+            raise InputValueError(f"{self.video}: the video holds no frames OpenCV can read")
 
 
 def is_sequence(spec: str | Path) -> bool:

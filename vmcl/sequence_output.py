@@ -7,7 +7,10 @@ The folder (one that :func:`vmcl.output_folder.output_folder` prepared) receives
 - ``cartoon.mp4``, ``flow.mp4``, ``disparity.mp4``: the labelled cartoon (:func:`vmcl.report.labels_image`),
   the restored flow in the Middlebury colour wheel and the restored disparity (turbo), one video frame per
   frame, for the fields the run made. Colour scales are fixed by the first frame that has the field
-  (its largest speed, its disparity range), so that colours mean the same speed or depth throughout;
+  (its largest speed, at least :data:`LEAST_FLOW_SCALE` px per frame so that a clip that starts still is
+  not drawn at full colour for its noise; its disparity range), so that colours mean the same speed or
+  depth throughout. A frame of odd width or height is padded with a black row or column (MPEG-4 frames
+  have even sides; the writer would crop the last row and column);
 - ``sequence.md``: per frame, the file it came from, the time taken and the notes.
 
 Videos are MPEG-4 (OpenCV's VideoWriter, fourcc mp4v). Files lie flat in the folder, as
@@ -23,7 +26,10 @@ import numpy as np
 from vmcl.cm.core import check_real
 from vmcl.result import Result
 
-__all__ = ["FOURCC", "FPS_RANGE", "SequenceWriter", "check_fps", "frame_count"]
+__all__ = ["FOURCC", "FPS_RANGE", "LEAST_FLOW_SCALE", "SequenceWriter", "check_fps", "frame_count"]
+
+LEAST_FLOW_SCALE = 1.0
+"""The least speed (px per frame) the flow video's full colour stands for."""
 
 FPS_RANGE = (0.01, 1000.0)
 """The frame rates the videos may be written at: OpenCV's mp4v writer refuses some beyond them (0.001 and
@@ -88,7 +94,7 @@ class SequenceWriter:
             if "flow" not in self.scales:
                 speed = np.hypot(result.flow[..., 0], result.flow[..., 1])
                 finite = speed[np.isfinite(speed)]
-                self.scales["flow"] = (0.0, max(float(finite.max()) if finite.size else 1.0, 1e-3))
+                self.scales["flow"] = (0.0, max(float(finite.max()) if finite.size else 0.0, LEAST_FLOW_SCALE))
             out["flow"] = flow_image(result.flow, max_flow=self.scales["flow"][1])
         if result.disparity is not None:
             if "disparity" not in self.scales:
@@ -102,6 +108,8 @@ class SequenceWriter:
     def write(self, stem: str, picture: np.ndarray) -> None:
         import cv2
 
+        height, width = picture.shape[:2]
+        picture = np.pad(picture, ((0, height % 2), (0, width % 2), (0, 0)))  # even sides, nothing cropped
         writer = self.writers.get(stem)
         if writer is None:
             height, width = picture.shape[:2]
