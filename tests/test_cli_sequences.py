@@ -218,3 +218,21 @@ def test_odd_sized_frames_are_whole_in_the_videos_and_a_still_start_is_not_full_
     picture = writer.pictures(still)["flow"]
     assert writer.scales["flow"][1] == LEAST_FLOW_SCALE
     assert picture.min() > 240  # near white: next to no motion, drawn as next to none
+
+
+def test_hidden_and_other_files_are_not_frames(tmp_path, sequence):
+    # macOS leaves ._name resource files beside each frame on other disks; a glob such as frames/* also
+    # meets a folder's Thumbs.db: neither is a frame, where both ended the run as undecodable images.
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    for k in range(2):
+        (folder / f"f{k}.png").write_bytes((sequence / "left" / f"frame_0{k}.png").read_bytes())
+        (folder / f"._f{k}.png").write_bytes(b"\x00\x05\x16\x07 AppleDouble")
+    (folder / "Thumbs.db").write_bytes(b"not an image")
+    for spec in (folder, folder / "*"):
+        source = open_frames(spec)
+        assert [p.name for p in source.paths] == ["f0.png", "f1.png"] and source.count == 2
+    with pytest.raises(ValueError, match="matches no image"):
+        open_frames(folder / "*.db")
+    with pytest.raises(ValueError, match="spec is empty"):
+        open_frames("")

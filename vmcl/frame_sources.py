@@ -92,6 +92,12 @@ class FrameSource:
             raise InputValueError(f"{self.video}: the video holds no frames OpenCV can read")
 
 
+def _is_frame(path: Path) -> bool:
+    """Whether a file found in a folder or by a pattern is a frame: an image file by its suffix, not a
+    hidden one (a macOS ``._frame.png`` resource file, an editor's backup)."""
+    return path.is_file() and path.suffix.lower() in IMAGE_SUFFIXES and not path.name.startswith(".")
+
+
 def is_sequence(spec: str | Path) -> bool:
     """Whether ``spec`` names a sequence (a folder, a glob pattern or a video file), not one image. An image
     file that exists is one image, whatever characters its name holds (``img[1].png``)."""
@@ -108,8 +114,9 @@ def open_frames(spec: str | Path) -> FrameSource:
     Parameters
     ----------
     spec : str or Path
-        A folder (its files with :data:`IMAGE_SUFFIXES`), a glob pattern (``frames/*.png``: the files it
-        matches) or a video file (:data:`VIDEO_SUFFIXES`). Files are taken in the order of their names,
+        A folder (its files with :data:`IMAGE_SUFFIXES`), a glob pattern (``frames/*.png``: the files with
+        those suffixes it matches) or a video file (:data:`VIDEO_SUFFIXES`); hidden files (names starting
+        with a dot, such as macOS's ``._frame.png``) are not frames. Files are taken in the order of their names,
         numbers in them by value (:func:`frame_order`: frame9 before frame10).
 
     Returns
@@ -126,10 +133,11 @@ def open_frames(spec: str | Path) -> FrameSource:
     if not isinstance(spec, (str, Path)):
         raise InputTypeError(f"spec must be a path or pattern, got {type(spec).__name__}")
     text = str(spec)
+    if not text.strip():
+        raise InputValueError("spec is empty: name a folder of frames, a glob pattern or a video file")
     path = Path(text)
     if path.is_dir():
-        paths = tuple(sorted((p for p in path.iterdir() if p.is_file() and p.suffix.lower() in IMAGE_SUFFIXES),
-                             key=frame_order))
+        paths = tuple(sorted((p for p in path.iterdir() if _is_frame(p)), key=frame_order))
         if not paths:
             raise InputValueError(f"{path}: the folder holds no images ({', '.join(IMAGE_SUFFIXES)})")
         return FrameSource(f"{len(paths)} images in {path}", len(paths), paths)
@@ -147,8 +155,11 @@ def open_frames(spec: str | Path) -> FrameSource:
             capture.release()
         return FrameSource(f"video {path}", count if count > 0 else None, video=path)
     if _GLOB_CHARACTERS & set(text) and not path.is_file():  # an image file named img[1].png is one image
-        paths = tuple(sorted((Path(p) for p in glob.glob(text) if Path(p).is_file()), key=frame_order))
+        matches = [Path(p) for p in glob.glob(text)]
+        paths = tuple(sorted((p for p in matches if _is_frame(p)), key=frame_order))
         if not paths:
+            if any(p.is_file() for p in matches):
+                raise InputValueError(f"{text}: the pattern matches no image ({', '.join(IMAGE_SUFFIXES)})")
             raise FileNotFoundError(f"{text}: the pattern matches no file")
-        return FrameSource(f"{len(paths)} files matching {text}", len(paths), paths)
+        return FrameSource(f"{len(paths)} images matching {text}", len(paths), paths)
     raise InputValueError(f"{text}: not a folder, a glob pattern or a video file ({', '.join(VIDEO_SUFFIXES)})")

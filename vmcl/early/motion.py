@@ -217,9 +217,10 @@ def _check(shape: tuple[int, ...], delta, patch, features, sigma, levels=1) -> t
     sigma = check_real(DEFAULT_SIGMA[features] if sigma is None else sigma, "sigma", above=0)
     side = min(shape[:2])
     if patch > side:
-        raise InputValueError(f"patch ({patch}) is larger than the image ({shape[0]} x {shape[1]})")
+        raise InputValueError(f"patch ({patch}) is larger than the image ({shape[1]} x {shape[0]}, width x height)")
     if delta >= side:
-        raise InputValueError(f"delta ({delta}) must be smaller than the image ({shape[0]} x {shape[1]})")
+        raise InputValueError(f"delta ({delta}) must be smaller than the image ({shape[1]} x {shape[0]}, width x "
+                              "height)")
     if _COMPARE[features] and patch**2 * (2 * delta**2 + 1) >= 2**31:
         raise InputValueError(f"patch ({patch}) and delta ({delta}) are too large for the integer keys of binary "
                               f"votes: patch**2 * (2 delta**2 + 1) must stay below 2**31")
