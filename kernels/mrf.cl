@@ -115,19 +115,52 @@ __kernel void quantise(__global float *f, __constant float *levels, long W, long
     f[i] = best;
 }
 
-/* Central line costs (equation (12)): b = beta * (line_cost - edge_gain * e), e = 1 where a brightness
- * edge pixel lies on either side of the site; with require_edge, +inf (the line is forbidden) where no
- * edge pixel lies within `radius` (Chebyshev) of either pixel. Unused padded sites get +inf. */
-inline float edge_near(__global const uchar *edges, long x, long y, long radius, long W, long H)
+/* The neighbourhood of require_edge, in two passes since a Chebyshev square is separable: near_rows gives
+ * each pixel its distance along its row to the nearest edge pixel (W where the row has none), one
+ * work-item per row; near_columns marks the pixels with a row within `radius` whose distance is within
+ * `radius`, one work-item per column. O(H W) for any radius, where scanning each pixel's square would
+ * cost (2 radius + 1)^2 (vmcl/mrf/energy.py's _dilate is the host's twin). */
+__kernel void near_rows(__global const uchar *edges, __global int *distance, long W, long H)
 {
-    for (long yy = max(y - radius, 0L); yy <= min(y + radius, H - 1); ++yy)
-        for (long xx = max(x - radius, 0L); xx <= min(x + radius, W - 1); ++xx)
-            if (edges[yy * W + xx]) return 1.0f;
-    return 0.0f;
+    long y = get_global_id(0);
+    if (y >= H) return;
+    __global const uchar *e = edges + y * W;
+    __global int *d = distance + y * W;
+    long last = -1;
+    for (long x = 0; x < W; ++x) {
+        if (e[x]) last = x;
+        d[x] = last < 0 ? (int)W : (int)(x - last);
+    }
+    last = -1;
+    for (long x = W - 1; x >= 0; --x) {
+        if (e[x]) last = x;
+        if (last >= 0 && last - x < d[x]) d[x] = (int)(last - x);
+    }
 }
 
+__kernel void near_columns(__global const int *distance, long radius, __global uchar *near, long W, long H)
+{
+    long x = get_global_id(0);
+    if (x >= W) return;
+    long last = -1;  /* the latest row so far whose distance is within the radius */
+    for (long y = 0; y < H; ++y) {
+        if (distance[y * W + x] <= radius) last = y;
+        near[y * W + x] = last >= 0 && y - last <= radius;
+    }
+    last = -1;
+    for (long y = H - 1; y >= 0; --y) {
+        if (distance[y * W + x] <= radius) last = y;
+        if (last >= 0 && last - y <= radius) near[y * W + x] = 1;
+    }
+}
+
+/* Central line costs (equation (12)): b = beta * (line_cost - edge_gain * e), e = 1 where a brightness
+ * edge pixel lies on either side of the site; with require_edge, +inf (the line is forbidden) where no
+ * edge pixel lies within the radius of either pixel (`near`, from the passes above; read only with
+ * require_edge and edges). Unused padded sites get +inf. */
 __kernel void line_costs(__global const uchar *edges, int has_edges, float cost, float gain,
-                         int require_edge, long radius, __global float *bh, __global float *bv, long W, long H)
+                         int require_edge, __global const uchar *near, __global float *bh, __global float *bv,
+                         long W, long H)
 {
     long x = get_global_id(0), y = get_global_id(1);
     if (x >= W || y >= H) return;
@@ -140,8 +173,7 @@ __kernel void line_costs(__global const uchar *edges, int has_edges, float cost,
             if (has_edges) {
                 long j = y2 * W + x2;
                 if (edges[i] || edges[j]) b -= gain;
-                else if (require_edge && !edge_near(edges, x, y, radius, W, H)
-                         && !edge_near(edges, x2, y2, radius, W, H))
+                else if (require_edge && !near[i] && !near[j])
                     b = INFINITY;
             }
         }

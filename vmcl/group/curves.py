@@ -36,6 +36,7 @@ from vmcl.cm.core import WIDEST, ArrayLike, check_real, field, machine_for
 from vmcl.cm.scan import exclusive_sum_into
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
+from vmcl.mrf.checks import check_weights
 
 __all__ = ["BRANCH", "Curve", "Curves", "link_edges"]
 
@@ -155,7 +156,8 @@ def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothin
         E.g. :func:`vmcl.early.edges.canny`'s output.
     magnitude : (H, W) float32 array, optional
         The gradient magnitude the edges came from (``canny(..., return_gradient=True)``): each curve's
-        mean is its strength.
+        mean is its strength. Finite and >= 0 (NaN, infinities and negative values are refused, on the
+        host and on the device).
     smoothing : float
         Width (Gaussian sigma, in pixels along the arc) of the smoothing of the positions before the
         tangent and curvature are measured, in [0, 32]; 0 takes the pixels as they are.
@@ -184,6 +186,8 @@ def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothin
         strength, _ = field(magnitude, "magnitude", machine, ndims=(2,), dtypes=(np.float32,))
         if strength.shape != mask.shape:
             raise InputValueError(f"magnitude has shape {strength.shape}, edges {mask.shape}: they must match")
+        # A NaN would make its curve's strength NaN, which local_saliency reads as "no magnitude" (1).
+        check_weights(strength if isinstance(magnitude, cl_array.Array) else magnitude, "magnitude", machine)
     found = _link_on_device(machine, mask, strength, smoothing, draw_maps=not host)
     shape = (int(mask.shape[0]), int(mask.shape[1]))
     curves = _measure(found, shape)

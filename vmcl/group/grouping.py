@@ -13,10 +13,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import pyopencl.array as cl_array
 
 from vmcl.cm.core import ArrayLike, check_real, machine_for, to_host
 from vmcl.group.curves import Curves, link_edges
-from vmcl.group.junctions import Junctions, find_junctions, group_curves, repair_edges
+from vmcl.group.junctions import Junctions, find_junctions, group_curves, pairing_image, repair_edges
 from vmcl.group.local_saliency import local_saliency, salient_edges
 from vmcl.machine import Machine
 
@@ -64,7 +65,9 @@ def group(edges: ArrayLike, *, magnitude: ArrayLike | None = None, image: np.nda
     magnitude : (H, W) float32 array, optional
         The gradient magnitude behind the edges (each curve's strength; 1 without it).
     image : (H, W) or (H, W, 3) array, optional
-        The image, for the pairing test of :func:`vmcl.group.junctions.group_curves`.
+        The image, for the pairing test of :func:`vmcl.group.junctions.group_curves`: of the edge map's
+        (H, W), at least 16 x 16 pixels, as :func:`vmcl.pipeline.as_image` reads it; checked before the
+        edges are linked.
     threshold : float
         The local saliency a curve needs to stay in ``salient``, >= 0 (0 keeps every curve).
     length_exponent, curvature_scale : float
@@ -81,6 +84,10 @@ def group(edges: ArrayLike, *, magnitude: ArrayLike | None = None, image: np.nda
     """
     machine = machine_for(machine)
     threshold = check_real(threshold, "threshold", minimum=0)
+    if image is not None and isinstance(edges, (np.ndarray, cl_array.Array)) and edges.ndim == 2:
+        # Refused now, not after the linking and the junctions, and with the edge map's shape: group_curves
+        # checks it against the junctions' (the same) too. Other edges are link_edges' to refuse.
+        image = pairing_image(image, (int(edges.shape[0]), int(edges.shape[1])))
     linked = link_edges(edges, magnitude=magnitude, machine=machine)
     labels, position, tangent = (np.asarray(to_host(m)) for m in (linked.labels, linked.position, linked.tangent))
     curves = Curves(labels, position, tangent, linked.points, linked.offsets, linked.closed, linked.length, linked.mean_curvature,

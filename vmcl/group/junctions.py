@@ -27,10 +27,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from vmcl.cm.core import ArrayLike, check_int, check_real, real_host_array, to_host
+from vmcl.cm.core import ArrayLike, check_choice, check_int, check_real, real_host_array, to_host
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.group.curves import BRANCH, Curves
 
@@ -73,6 +74,9 @@ class Junctions:
         For a T found across a gap, the gap's length in pixels (0 where the curves touch).
     fills : list of int32 (k, 2) arrays
         Per junction, the pixels (x, y) that close its gap (empty where there is none).
+    shape : (int, int) or None
+        (H, W) of the edge map the junctions were found in (None where unknown), against which
+        :func:`group_curves` checks its ``image``.
     """
 
     points: np.ndarray
@@ -83,15 +87,14 @@ class Junctions:
     occluder: np.ndarray
     gap: np.ndarray
     fills: list[np.ndarray]
+    shape: tuple[int, int] | None = None
 
     def __len__(self) -> int:
         return len(self.points)
 
     def of_kind(self, kind: str) -> np.ndarray:
         """The indices of the junctions of one kind (one of :data:`KINDS`)."""
-        if kind not in KINDS:
-            raise InputTypeError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
-        return np.flatnonzero(self.kinds == kind)
+        return np.flatnonzero(self.kinds == check_choice(kind, "kind", KINDS))
 
     def counts(self) -> dict[str, int]:
         """The number of junctions of each kind."""
@@ -139,7 +142,7 @@ class _Found:
                 merged[k] = (target[0], target[1], target[2], gap, fill)
         return merged
 
-    def junctions(self) -> Junctions:
+    def junctions(self, shape: tuple[int, int]) -> Junctions:
         rows = []
         for point, arms, curves, gap, fill in self._merged():
             order = np.argsort(arms)
@@ -156,7 +159,7 @@ class _Found:
         column = list(zip(*rows)) if rows else [[] for _ in range(8)]
         return Junctions(np.array(column[0], float).reshape(count, 2), np.array(column[1], dtype="<U5"), arms_out,
                          curves_out, np.array(column[4], np.int32), np.array(column[5], float).reshape(count, 2),
-                         np.array(column[6], float), list(column[7]))
+                         np.array(column[6], float), list(column[7]), shape)
 
 
 def _turn(a: float, b: float) -> float:
@@ -235,7 +238,7 @@ def find_junctions(curves: Curves, *, gap: float = 6.0, min_length: int = 5, cor
     corners = _corners(curves, long_enough, corner, found)
     if gap > 0:
         _gap_junctions(curves, labels, long_enough, touching, corners, gap, min_length, found)
-    return found.junctions()
+    return found.junctions((int(labels.shape[0]), int(labels.shape[1])))
 
 
 def _ends(curves: Curves) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -466,10 +469,12 @@ def group_curves(junctions: Junctions, *, image: np.ndarray | None = None, align
     ----------
     junctions : Junctions
     image : (H, W) or (H, W, 3) array, optional
-        The image the junctions came from (brightness in [0, 1] for floats, as :func:`vmcl.pipeline.as_image`
-        reads it). With it, two T-junctions pair only where they look like one edge behind one occluder:
-        the brightness on each side of one stem matches the other stem's (sides swapped, since the stems
-        point at each other), and the brightness in front of both bars matches, each within ``contrast``.
+        The image the junctions came from, of the edge map's (H, W) (``junctions.shape``) and at least
+        16 x 16 pixels; uint8, uint16 or float (brightness in [0, 1]), as :func:`vmcl.pipeline.as_image`
+        reads it, and checked so before anything else, however many T-junctions there are. With it, two
+        T-junctions pair only where they look like one edge behind one occluder: the brightness on each
+        side of one stem matches the other stem's (sides swapped, since the stems point at each other),
+        and the brightness in front of both bars matches, each within ``contrast``.
     alignment : float
         The most each stem's continuation (the direction opposite the stem) may differ from the line to
         the other junction, in degrees; in (0, 90).
@@ -490,6 +495,7 @@ def group_curves(junctions: Junctions, *, image: np.ndarray | None = None, align
     limit = math.radians(check_real(alignment, "alignment", above=0, below=90))
     contrast = check_real(contrast, "contrast", minimum=0, maximum=1)
     max_distance = check_real(max_distance, "max_distance", above=0) if max_distance != math.inf else math.inf
+    grey = None if image is None else pairing_image(image, junctions.shape)
     ts = junctions.of_kind("T")
     if len(ts) < 2:
         return np.zeros((0, 2), np.int32), []
@@ -504,8 +510,8 @@ def group_curves(junctions: Junctions, *, image: np.ndarray | None = None, align
         off_j = np.arccos(np.clip(np.einsum("ijk,jk->ij", -unit, onward), -1, 1))
     cost = np.maximum(off_i, off_j)
     usable = (cost < limit) & (distance <= max_distance) & (distance > 0)
-    if image is not None:
-        usable &= _alike(_appearance(image, junctions, ts), contrast)
+    if grey is not None:
+        usable &= _alike(_appearance(grey, junctions, ts), contrast)
     pairs = []
     taken = np.zeros(len(ts), bool)
     for flat in np.argsort(np.where(usable, cost, np.inf), axis=None):
@@ -521,16 +527,26 @@ def group_curves(junctions: Junctions, *, image: np.ndarray | None = None, align
     return pairs_array, groups
 
 
-def _appearance(image: np.ndarray, junctions: Junctions, ts: np.ndarray) -> np.ndarray:
-    """Per T: the brightness left and right of its stem (seen looking along the stem away from the
-    junction) and in front of its bar, from the image smoothed a little ((T, 3))."""
-    from scipy import ndimage
-
+def pairing_image(image: Any, shape: tuple[int, int] | None) -> np.ndarray:
+    """``image`` checked as :func:`vmcl.pipeline.as_image` checks it (16 x 16 pixels at least, masked
+    values refused), of the edge map's ``shape`` where known, as float32 grey in [0, 1]. Samples off a
+    smaller or larger image would be clamped to its border or read from the wrong place, silently."""
     from vmcl.pipeline import as_image
 
     grey = as_image(image, "image")
+    if shape is not None and grey.shape[:2] != tuple(shape):
+        raise InputValueError(f"image must have the edge map's height and width {tuple(shape)}, got shape "
+                              f"{image.shape}")
     if grey.ndim == 3:
         grey = grey @ np.array([0.299, 0.587, 0.114], np.float32)
+    return grey
+
+
+def _appearance(grey: np.ndarray, junctions: Junctions, ts: np.ndarray) -> np.ndarray:
+    """Per T: the brightness left and right of its stem (seen looking along the stem away from the
+    junction) and in front of its bar, from the grey image (:func:`pairing_image`) smoothed a little ((T, 3))."""
+    from scipy import ndimage
+
     grey = ndimage.gaussian_filter(grey, 1.0)
     stems = junctions.arms[ts, junctions.stem[ts]]
     along = np.stack([np.cos(stems), np.sin(stems)], axis=1)

@@ -42,6 +42,7 @@ from vmcl.cm.core import ArrayLike, check_int, check_real, field, machine_for, r
 from vmcl.errors import InputValueError
 from vmcl.group.curves import RUN, link_edges
 from vmcl.machine import Machine
+from vmcl.mrf.checks import check_weights, within_float32
 
 __all__ = ["MAX_ITERATIONS", "StructuralSaliency", "saliency_strength", "structural_saliency"]
 
@@ -80,7 +81,7 @@ def structural_saliency(edges: ArrayLike, *, tangent: ArrayLike | None = None, s
         Default: the curves' own (:func:`vmcl.group.curves.link_edges`).
     strength : (H, W) float32 array, optional
         Each edge pixel's local strength, the elements' sigma (e.g. the gradient magnitude over its
-        median on the edges); >= 0. Default: 1 on every edge pixel.
+        median on the edges); finite and >= 0, NumPy or device arrays alike. Default: 1 on every edge pixel.
     iterations : int
         Network iterations, in [1, :data:`MAX_ITERATIONS`]: the length (in elements) of the curves the
         measure looks along.
@@ -89,7 +90,7 @@ def structural_saliency(edges: ArrayLike, *, tangent: ArrayLike | None = None, s
         The defaults (30 iterations, 0.85) were chosen on shapes-in-clutter displays of training seeds
         (:func:`vmcl.scenes.clutter_display`, benchmarks/grouping_fit.py).
     curvature_scale : float
-        c in the coupling, >= 0: 0 ignores curvature.
+        c in the coupling, >= 0 and within float32's range: 0 ignores curvature.
     machine : vmcl.Machine, optional
 
     Returns
@@ -111,7 +112,8 @@ def structural_saliency(edges: ArrayLike, *, tangent: ArrayLike | None = None, s
     mask, host = field(edges, "edges", machine, ndims=(2,), dtypes=(np.uint8,))
     iterations = check_int(iterations, "iterations", minimum=1, maximum=MAX_ITERATIONS)
     gap_attenuation = check_real(gap_attenuation, "gap_attenuation", minimum=0, maximum=1)
-    curvature_scale = check_real(curvature_scale, "curvature_scale", minimum=0)
+    # The device holds c as a float32: a larger finite value would become an infinity there.
+    curvature_scale = within_float32(check_real(curvature_scale, "curvature_scale", minimum=0), "curvature_scale")
     height, width = mask.shape
     if tangent is None:
         tangents = link_edges(mask, machine=machine).tangent
@@ -124,8 +126,8 @@ def structural_saliency(edges: ArrayLike, *, tangent: ArrayLike | None = None, s
                        np.int64(mask.size))
     else:
         weights = _matching(strength, "strength", mask, machine)
-        if isinstance(strength, np.ndarray) and (not np.all(np.isfinite(strength)) or np.min(strength) < 0):
-            raise InputValueError("strength must be finite and >= 0")
+        # A device strength is checked on the device, as a host one on the host.
+        check_weights(weights if isinstance(strength, cl_array.Array) else strength, "strength", machine)
     machine.require_memory("structural_saliency", 8 * 6 * 4 * mask.size, 8 * 3 * 4 * mask.size)
     sizes = (np.int32(width), np.int32(height))
     links = machine.empty(mask.shape, np.uint8)
@@ -154,20 +156,33 @@ def saliency_strength(edges: ArrayLike, magnitude: ArrayLike, *, machine: Machin
     ----------
     edges : (H, W) bool or uint8 array, NumPy or device
     magnitude : (H, W) float32 array
+        Finite and >= 0 (a gradient magnitude), with a median above 0 on the edges.
     machine : vmcl.Machine, optional
 
     Returns
     -------
-    float32 (H, W), NumPy or device as ``edges`` came.
+    float32 (H, W), NumPy or device as ``edges`` came; all 0 where there are no edges.
+
+    Raises
+    ------
+    InputValueError
+        ``magnitude`` holds NaN, an infinity or a negative value, or is 0 on at least half of the edge
+        pixels (a median of 0 leaves no contrast to divide by).
     """
     machine = machine_for(machine)
     if isinstance(edges, np.ndarray) and edges.dtype == np.bool_:
         edges = edges.view(np.uint8)
     mask, host = field(edges, "edges", machine, ndims=(2,), dtypes=(np.uint8,))
     strength = _matching(magnitude, "magnitude", mask, machine).get()
+    check_weights(strength, "magnitude", machine)  # read back already: checked on the host
     on = mask.get().astype(bool)
-    median = float(np.median(strength[on])) if on.any() else 0.0
-    scaled = np.where(on, strength / median if median > 0 else on.astype(np.float32), 0).astype(np.float32)
+    if not on.any():
+        return np.zeros(mask.shape, np.float32) if host else machine.to_device(np.zeros(mask.shape, np.float32))
+    median = float(np.median(strength[on]))
+    if not median > 0:
+        raise InputValueError("magnitude is 0 on at least half of the edge pixels (its median there): there is no "
+                              "contrast to scale the strength by")
+    scaled = np.where(on, strength / median, 0).astype(np.float32)
     return scaled if host else machine.to_device(scaled)
 
 

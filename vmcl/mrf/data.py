@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from vmcl.cm import reduce as cm_reduce
 from vmcl.cm.core import ArrayLike, field, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
@@ -88,7 +89,8 @@ def backfill(primary: ArrayLike, secondary: ArrayLike, secondary_confidence: Arr
         Two measurements of one cue, NaN where there is none (a pixel has one when all its components
         are finite).
     secondary_confidence : float32 (H, W)
-        The secondary's weights, e.g. from :func:`score_confidence`.
+        The secondary's weights, e.g. from :func:`score_confidence`: >= 0, or NaN or +inf for none (a
+        weight of 0). Negative values are refused, on the host and on the device.
     machine : vmcl.Machine, optional
 
     Returns
@@ -119,6 +121,12 @@ def backfill(primary: ArrayLike, secondary: ArrayLike, secondary_confidence: Arr
         raise InputValueError(f"secondary has shape {second.shape}, primary has {first.shape}")
     if gamma2.shape != first.shape[:2]:
         raise InputValueError(f"secondary_confidence must have shape {first.shape[:2]}, got {gamma2.shape}")
+    # A negative weight would reach the restoration as one (host or device alike); "min" skips NaN, which
+    # stands for no confidence.
+    lowest = cm_reduce.extremes(gamma2, machine=machine)[0]
+    if lowest < 0:
+        raise InputValueError(f"secondary_confidence must be >= 0 (NaN or +inf: no confidence), got a value of "
+                              f"{lowest:g}")
     ncomp = first.shape[2] if first.ndim == 3 else 1
     if not 1 <= ncomp <= 4:
         raise InputValueError(f"primary must have 1 to 4 components per pixel, got {ncomp}")

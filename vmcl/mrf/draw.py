@@ -9,10 +9,10 @@ two levels and no lines is the Ising model, with more levels the Potts model.
 
 from __future__ import annotations
 
-from vmcl.cm import reduce as cm_reduce
-from vmcl.cm.core import ArrayLike, check_bool, check_choice, check_int, check_real, machine_for
+from vmcl.cm.core import ArrayLike, check_bool, check_choice, check_int, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
+from vmcl.mrf.checks import check_temperature
 from vmcl.mrf.energy import KINDS, EnergyModel
 from vmcl.mrf.inputs import lattice_of
 from vmcl.mrf.lattice import SWEEP_ORDER, philox_key
@@ -42,15 +42,17 @@ def sample(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Array
     model : EnergyModel, optional
         The energy U; default ``EnergyModel()``. Unlike :func:`vmcl.mrf.restore`, alpha may be 0.
     temperature : float
-        T > 0, in U's units.
+        T > 0, in U's units, within float32's range.
     sweeps : int
         Sweeps, 1 .. :data:`MAX_SWEEPS`: every site once per sweep, lines first, then f (with
         ``lines``), f alone otherwise.
     lines : bool
         Sample the line process too; False keeps every line off (a field with no discontinuities).
     start : array of the data's shape, optional
-        Where f starts wherever it is finite (else at the filled data); the constant kind's start is
-        taken to its nearest level.
+        Where f starts wherever it is finite (else at the filled data; where no datum has a positive
+        confidence, as when sampling the prior, the start's own values fill its gaps the same way, by a
+        jump fill of neighbour means); the constant kind's start is taken to its nearest level.
+        Infinities are refused.
     seed : int
         0 <= seed < 2**64: the same seed gives the same draw on any device.
     machine : vmcl.Machine, optional
@@ -63,7 +65,8 @@ def sample(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Array
     Raises
     ------
     InputValueError
-        No datum has a positive confidence and no ``start`` is given (nothing says where f begins).
+        No datum has a positive confidence and no ``start`` is given, or one with no finite value
+        (nothing says where f begins); the lattice does not fit the device's memory.
 
     Examples
     --------
@@ -82,14 +85,15 @@ def sample(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Array
     if not isinstance(model, EnergyModel):
         raise InputTypeError(f"model must be a vmcl.mrf.EnergyModel or None, got {type(model).__name__}")
     check_choice(kind, "kind", KINDS)
-    check_real(temperature, "temperature", above=0)
+    temperature = check_temperature(temperature, "temperature")
     check_int(sweeps, "sweeps", minimum=1, maximum=MAX_SWEEPS)
     check_bool(lines, "lines")
     check_int(seed, "seed", minimum=0, maximum=2**64 - 1)
-    lattice, host = lattice_of(data, confidence, edges, start, kind, model, machine)
-    if start is None and not float(cm_reduce.reduce(lattice.w, "max", machine=machine).get()) > 0:
-        raise InputValueError("data has no value with a positive confidence and no start is given: "
-                              "nothing says where the field begins")
+    lattice, host = lattice_of(data, confidence, edges, start, kind, model, machine, "mrf.sample")
+    if not lattice.begins:
+        given = "no start is given" if start is None else "start holds no finite value"
+        raise InputValueError(f"data has no value with a positive confidence and {given}: nothing says where "
+                              "the field begins")
     order = SWEEP_ORDER if lines else tuple(step for step in SWEEP_ORDER if step[0] == "f")
     key = philox_key(int(seed))
     for k in range(int(sweeps)):

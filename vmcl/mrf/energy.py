@@ -45,15 +45,15 @@ edges", MIT AI Memo 970, 1987.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar
 
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import check_bool, check_choice, real_host_array, to_host
+from vmcl.cm.core import check_bool, check_choice, check_unmasked, real_host_array, to_host
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.mrf.checks import check_count, check_fields, check_number, check_weight
+from vmcl.mrf.checks import FLOAT32_MAX, check_count, check_fields, check_number, check_weight
 
 __all__ = [
     "KINDS",
@@ -139,16 +139,26 @@ def check_prior(value: Any, label: str) -> None:
         raise InputTypeError(f"{label} must be a vmcl.mrf.LinePrior, got {type(value).__name__}")
 
 
-def check_levels(value: Any, label: str) -> None:
-    """The constant kind's levels: a count in 2..64, or 2..64 distinct finite values."""
+def check_levels(value: Any, label: str) -> int | tuple[float, ...]:
+    """The constant kind's levels: a count in 2..64, or 2..64 distinct finite values within float32's range
+    (a tuple, list or 1-D array), returned as an int or a tuple of floats."""
     if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)):
         if not 2 <= value <= 64:
             raise InputValueError(f"{label} must be a count in 2..64 or a tuple of levels, got {value}")
-        return
+        return int(value)
+    check_unmasked(value, label)
     levels = np.asarray(value if isinstance(value, (tuple, list, np.ndarray)) else ())
     if levels.dtype.kind not in "iuf" or levels.ndim != 1 or not 2 <= levels.size <= 64 \
             or not np.all(np.isfinite(levels)) or np.unique(levels).size != levels.size:
         raise InputValueError(f"{label} must be a count in 2..64 or 2..64 distinct finite values, got {value!r}")
+    if np.max(np.abs(levels)) > FLOAT32_MAX:
+        raise InputValueError(f"{label} must lie within float32's range (the device holds the levels as float32), "
+                              f"got {value!r}")
+    # Distinct as float64 but equal as float32 would be one level twice on the device.
+    if np.unique(levels.astype(np.float32)).size != levels.size:
+        raise InputValueError(f"{label} must be distinct as float32 (the device holds the levels as float32), "
+                              f"got {value!r}")
+    return tuple(float(level) for level in levels)
 
 
 @dataclass(frozen=True)
@@ -171,14 +181,24 @@ class EnergyModel:
     kappa : float
         Potts cost of two different neighbouring levels (constant kind), >= 0.
     levels : int or tuple of float
-        The constant kind's levels: a count in 2..64, spread evenly over the range of the data, or 2..64
-        distinct levels.
+        The constant kind's levels: a count in 2..64, spread evenly over the range of the data (of its
+        values with a positive confidence; where none has one, as when :func:`vmcl.mrf.sample` draws
+        from the prior, of all its finite values; only where it holds none at all, of the start's), so a
+        warm start never moves them; or 2..64 distinct levels (a list or 1-D array is taken as a tuple
+        of floats, so the model stays hashable).
     edge_gain : float
         How much a brightness edge lowers a line site's cost, in units of beta (equation (12)).
     require_edge : bool
         Forbid lines with no brightness edge pixel within ``edge_radius`` pixels (only with edges).
     edge_radius : int
-        Chebyshev radius for ``require_edge``.
+        Chebyshev radius for ``require_edge``, 0 .. 2**31 - 1. Its cost does not grow with it (the
+        neighbourhood is found in two passes, along the rows and then the columns); a radius at or beyond
+        the field's larger side reaches every pixel from every other, as that side itself does.
+
+    Notes
+    -----
+    Every real number here reaches the device as a float32, so each must lie within float32's range, and
+    so must ``beta`` times each entry of the prior and ``edge_gain`` (the line costs the device holds).
     """
 
     alpha: float = 1.0
@@ -196,6 +216,13 @@ class EnergyModel:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        # A list or array of levels would leave the frozen model unhashable: kept as a tuple of floats.
+        object.__setattr__(self, "levels", check_levels(self.levels, "EnergyModel.levels"))
+        scaled = {f"prior.{item.name}": getattr(self.prior, item.name) for item in fields(self.prior)}
+        for name, value in {**scaled, "edge_gain": self.edge_gain}.items():
+            if abs(self.beta * value) > FLOAT32_MAX:
+                raise InputValueError(f"EnergyModel.beta * EnergyModel.{name} = {self.beta * value:.3g} is beyond "
+                                      "float32's range, in which the device holds the line costs")
 
     def vertex_table(self) -> np.ndarray:
         """beta times the vertex potentials, float64 (16,)."""
@@ -246,15 +273,23 @@ def line_costs(shape: tuple[int, int], edges: np.ndarray | None, model: EnergyMo
 
 
 def _dilate(mask: np.ndarray, radius: int) -> np.ndarray:
-    """True within Chebyshev distance ``radius`` of a True pixel (the image does not wrap)."""
-    height, width = mask.shape
-    radius = min(radius, max(height, width))  # a wider radius marks no more pixels, and would not fit
-    padded = np.pad(mask, radius)
-    out = np.zeros_like(mask)
-    for dy in range(2 * radius + 1):
-        for dx in range(2 * radius + 1):
-            out |= padded[dy:dy + height, dx:dx + width]
-    return out
+    """True within Chebyshev distance ``radius`` of a True pixel (the image does not wrap).
+
+    The square neighbourhood is separable: within ``radius`` along the row, then along the column, each
+    pass O(H W) whatever the radius (kernels/mrf.cl's near_rows and near_columns do the same)."""
+    return _within(_within(mask, radius, axis=1), radius, axis=0)
+
+
+def _within(mask: np.ndarray, radius: int, axis: int) -> np.ndarray:
+    """True where a True lies within ``radius`` along ``axis``: the nearest one before and after each
+    pixel, found by running maxima of their indices."""
+    size = mask.shape[axis]
+    index = np.arange(size, dtype=np.int64).reshape((-1, 1) if axis == 0 else (1, -1))
+    never = np.int64(-2**62)  # before any pixel by more than any radius, and no overflow below
+    before = np.maximum.accumulate(np.where(mask, index, never), axis=axis)
+    flipped = np.flip(mask, axis=axis)
+    after = size - 1 - np.flip(np.maximum.accumulate(np.where(flipped, index, never), axis=axis), axis=axis)
+    return (index - before <= radius) | (after - index <= radius)
 
 
 def energy(f: np.ndarray, line_h: np.ndarray, line_v: np.ndarray, *, data: np.ndarray,

@@ -29,8 +29,8 @@ SWEEP_ORDER = (("lines", 0), ("lines", 1), ("lines", 2), ("lines", 3), ("f", 0),
 # component count takes them from one build, the smooth kind's for ICM. A pipeline frame restores both
 # kinds, so on its first run they are compiled once per NCOMP, and the constant kind's preparation
 # (built before its levels are known) is no program of its own.
-_NCOMP_ONLY = frozenset({"prepare", "fill_step", "start_from", "line_costs", "set_value", "scale_and_threshold",
-                         "unpad"})
+_NCOMP_ONLY = frozenset({"prepare", "fill_step", "start_from", "line_costs", "near_rows", "near_columns",
+                         "set_value", "scale_and_threshold", "unpad"})
 
 
 def philox_key(seed: int) -> np.ndarray:
@@ -52,7 +52,16 @@ class Lattice:
     kind : {"smooth", "constant"}
     model : EnergyModel
     start : device array of the data's shape, float32, or None
-        A warm start: f begins there wherever it holds a value (else at the filled data).
+        A warm start: f begins there wherever it holds a value (else at the filled data; where no datum
+        has a weight, at the start's own values, filled the same way).
+
+    Attributes
+    ----------
+    strongest : float
+        The largest weight alpha * confidence of a datum: 0 where the data hold no value with a positive
+        confidence (nothing to restore), infinite where the product overflowed float32.
+    begins : bool
+        Whether f holds a value everywhere: the data have a weight somewhere, or the start a finite pixel.
     """
 
     def __init__(self, machine: Machine, data: cl_array.Array, confidence: cl_array.Array | None,
@@ -80,20 +89,53 @@ class Lattice:
         self.nlevels = 1
         self.levels = machine.to_device(np.zeros(1, np.float32))
         self._prepare(data, confidence)
+        self.strongest = float(cm_reduce.reduce(self.w, "max", machine=machine).get())
+        self.begins = self.strongest > 0
+        if kind == "constant":
+            # The levels span the data's values with a weight: the filled data, before any start, whose
+            # fill takes means of them. Where none has a weight, all of the data's finite values.
+            low, high = cm_reduce.extremes(self.f if self.begins else data, machine=machine)
         if start is not None:
             machine.launch(self.kernel("start_from"), self.grid, start, self.f, *self.dims)
+            if not self.begins:
+                # No datum filled f: the start's own values fill its gaps, as the data's would have.
+                scratch = self.f.copy(queue=machine.queue)
+                self._fill(scratch)
+                self.begins = not np.isnan(cm_reduce.extremes(self.f, machine=machine)[0])
         if kind == "constant":
-            low, high = cm_reduce.extremes(self.f, machine=machine)
+            if np.isnan(low):  # the data hold no finite value at all: the start's span, if it has one
+                low, high = cm_reduce.extremes(self.f, machine=machine)
             levels = resolve_levels(model, low, high)
             self.nlevels = int(levels.size)
             self.levels = machine.to_device(levels)
             machine.launch(self.kernel("quantise"), self.grid, self.f, self.levels, *self.dims)
         self.f_start = self.f.copy(queue=machine.queue)
+        near = self.bh  # read only with require_edge and edges; any buffer stands in otherwise
+        if model.require_edge and edges is not None:
+            near = self._near_edges(edges, model.edge_radius)
         machine.launch(self.kernel("line_costs"), self.grid, edges, np.int32(edges is not None),
                        np.float32(model.beta * model.prior.line), np.float32(model.beta * model.edge_gain),
-                       np.int32(model.require_edge), np.int64(model.edge_radius), self.bh, self.bv,
-                       *self.dims)
+                       np.int32(model.require_edge), near, self.bh, self.bv, *self.dims)
         self.reset()
+
+    @staticmethod
+    def memory(shape: tuple[int, ...], kind: str, model: EnergyModel, *, confidence: bool, edges: bool,
+               start: bool, solver_words: tuple[int, ...] = ()) -> tuple[int, int]:
+        """The device bytes a lattice of the data's ``shape`` holds at once, and its largest buffer, for
+        :meth:`vmcl.Machine.require_memory`: the inputs on the device (the data, and the confidence,
+        edges and start where given), the lattice's own buffers, the buffers read back at the end, and a
+        solver's, given as float32 words per site (``solver_words``, one entry per buffer)."""
+        height, width = shape[:2]
+        n = height * width
+        ncomp = 1 if len(shape) == 2 else shape[2]
+        field_bytes = 4 * n * ncomp
+        # data, g, f, f_start and the preparation's scratch; w; lh, lv, bh, bv; the site energies read back
+        total = 5 * field_bytes + 4 * n + 16 * n + 4 * n
+        total += 4 * n * confidence + n * edges + field_bytes * start + 2 * n  # + the public line fields
+        if model.require_edge and edges:
+            total += 5 * n  # the row distances and the near map of _near_edges
+        total += sum(4 * n * words for words in solver_words)
+        return total, max(field_bytes, 4 * n, *(4 * n * words for words in solver_words))
 
     def kernel(self, name: str, mode: str = "icm") -> Any:
         if name in _NCOMP_ONLY:
@@ -106,6 +148,11 @@ class Lattice:
         scratch = self.machine.empty(data.shape, np.float32)
         self.machine.launch(self.kernel("prepare"), self.grid, data, confidence, np.int32(confidence is not None),
                             np.float32(self.model.alpha), self.g, self.w, scratch, *self.dims)
+        self._fill(scratch)
+
+    def _fill(self, scratch: cl_array.Array) -> None:
+        """f from ``scratch`` (NaN where empty, overwritten) by the jump fill: every empty pixel takes
+        the mean of filled ones nearby; all stay empty where none is filled."""
         fill = self.kernel("fill_step")
         source, target = scratch, self.f
         steps = 1 + int(np.ceil(np.log2(max(self.height, self.width))))
@@ -114,6 +161,17 @@ class Lattice:
             source, target = target, source
         if source is not self.f:
             self.copy(self.f, source)
+
+    def _near_edges(self, edges: cl_array.Array, radius: int) -> cl_array.Array:
+        """uint8 (H, W): 1 where an edge pixel lies within Chebyshev distance ``radius``. The square is
+        separable, so two passes (along each row, then each column) find it in O(H W) for any radius,
+        where scanning each pixel's square costs (2 radius + 1)**2."""
+        distance = self.machine.empty((self.height, self.width), np.int32)
+        near = self.machine.empty((self.height, self.width), np.uint8)
+        self.machine.launch(self.kernel("near_rows"), (self.height,), edges, distance, *self.dims)
+        self.machine.launch(self.kernel("near_columns"), (self.width,), distance, np.int64(radius), near,
+                            *self.dims)
+        return near
 
     def copy(self, target: cl_array.Array, source: cl_array.Array) -> None:
         # pyopencl's annotations take only a Buffer here, but enqueue_copy copies between any

@@ -27,7 +27,7 @@ from vmcl.mrf.icm import quench
 from vmcl.mrf.lattice import Lattice, philox_key
 from vmcl.mrf.sampler import temperatures
 
-__all__ = ["MeanFieldSchedule", "meanfield"]
+__all__ = ["MeanFieldSchedule", "meanfield", "meanfield_buffers"]
 
 
 @dataclass(frozen=True)
@@ -60,6 +60,11 @@ class MeanFieldSchedule:
 
     def __post_init__(self) -> None:
         check_fields(self)
+
+
+def meanfield_buffers(kind: str, ncomp: int, nlevels: int) -> tuple[int, ...]:
+    """:func:`meanfield`'s own buffer (float32 words per site): the constant kind's level distributions."""
+    return (nlevels,) if kind == "constant" else ()
 
 
 def meanfield(lattice: Lattice, schedule: MeanFieldSchedule, seed: int) -> int:

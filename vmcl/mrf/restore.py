@@ -21,7 +21,6 @@ from typing import Any
 
 import numpy as np
 
-from vmcl.cm import reduce as cm_reduce
 from vmcl.cm.core import ArrayLike, check_choice, check_int, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
@@ -86,11 +85,13 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
     ----------
     data : ndarray or pyopencl.array.Array, (H, W) or (H, W, C) with C in 1..4
         The cue: depth, disparity, hue, texture density (scalar) or flow (C = 2, one line process for
-        all components). NaN where there is no value. Host arrays of any real dtype are computed in
-        float32; device arrays must be float32. H, W >= 2.
+        all components). NaN where there is no value; infinities are refused. Host arrays of any real
+        dtype are computed in float32 (values beyond its range are refused); device arrays must be
+        float32. H, W >= 2.
     confidence : (H, W) array, optional
-        gamma_i >= 0, the weight of each datum (0 where there is none, e.g. sparse stereo matches).
-        Default 1 wherever the data is finite. Device arrays: float32.
+        gamma_i >= 0 and finite, the weight of each datum (0 where there is none, e.g. sparse stereo
+        matches); ``model.alpha * gamma_i`` must stay within float32's range. Default 1 wherever the
+        data is finite. Device arrays: float32, checked on the device as host arrays are.
     edges : (H, W) array, optional
         Brightness edges (e.g. Canny), non-zero at edge pixels; they lower the cost of a line between
         two pixels when either is an edge pixel (``model.edge_gain``), and with ``model.require_edge``
@@ -114,8 +115,10 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
         methods). The same seed gives the same bits at any local size.
     start : array of the data's shape, optional
         A warm start: the field begins here wherever all its components are finite (NaN elsewhere: there
-        it begins at the filled data), e.g. the previous frame's restoration carried along the flow
-        (:mod:`vmcl.temporal`), with a schedule that starts cold enough to keep it. Device arrays: float32.
+        it begins at the filled data; infinities are refused, as in the data), e.g. the previous frame's
+        restoration carried along the flow (:mod:`vmcl.temporal`), with a schedule that starts cold
+        enough to keep it. It does not move the constant kind's levels, which span the data's values.
+        Device arrays: float32.
     machine : vmcl.Machine, optional
 
     Returns
@@ -127,6 +130,9 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
     ------
     NothingToRestore
         No datum has a positive confidence (an InputValueError, caught by type where a cue may be empty).
+    InputValueError
+        Among others: the lattice and the solver's buffers do not fit the device's memory (checked with
+        :meth:`vmcl.Machine.require_memory` before any is allocated).
 
     Notes
     -----
@@ -165,8 +171,9 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
     check_int(seed, "seed", minimum=0, maximum=2**64 - 1)
     if model.alpha <= 0:
         raise InputValueError("model.alpha must be > 0: without the data term nothing anchors the field")
-    lattice, host = lattice_of(data, confidence, edges, start, kind, model, machine)
-    if not float(cm_reduce.reduce(lattice.w, "max", machine=machine).get()) > 0:
+    lattice, host = lattice_of(data, confidence, edges, start, kind, model, machine,
+                               f"mrf.restore (method {method!r})", solver.buffers)
+    if not lattice.strongest > 0:
         raise NothingToRestore("data has no value with a positive confidence: nothing to restore")
     return Restoration.read(lattice, solver.solve(lattice, schedule, int(seed)), host)
 

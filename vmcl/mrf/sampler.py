@@ -24,11 +24,11 @@ from typing import ClassVar
 
 import numpy as np
 
-from vmcl.mrf.checks import check_cooling, check_count, check_fields, check_temperature
+from vmcl.mrf.checks import check_cooling, check_count, check_fields, check_positive_count, check_temperature
 from vmcl.mrf.icm import quench
 from vmcl.mrf.lattice import Lattice, philox_key
 
-__all__ = ["AnnealSchedule", "MpmSchedule", "anneal", "mpm", "temperatures"]
+__all__ = ["AnnealSchedule", "MpmSchedule", "anneal", "mpm", "mpm_buffers", "temperatures"]
 
 
 _BLOCK = 4096  # temperatures found at once
@@ -90,14 +90,15 @@ class MpmSchedule:
     burn_in : int
         Sweeps before the first sample.
     samples : int
-        Sweeps averaged.
+        Sweeps averaged, >= 1 (the estimate is their mean).
     """
 
     mpm_temperature: float = 1.0
     burn_in: int = 50
     samples: int = 100
 
-    CHECKS: ClassVar = {"mpm_temperature": check_temperature, "burn_in": check_count, "samples": check_count}
+    CHECKS: ClassVar = {"mpm_temperature": check_temperature, "burn_in": check_count,
+                        "samples": check_positive_count}
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -109,6 +110,12 @@ def anneal(lattice: Lattice, schedule: AnnealSchedule, seed: int) -> int:
     for k, temperature in enumerate(temperatures(schedule.t0, schedule.t_factor, schedule.sweeps)):
         lattice.sweep("sample", temperature, k, key)
     return schedule.sweeps + quench(lattice, schedule.quench)
+
+
+def mpm_buffers(kind: str, ncomp: int, nlevels: int) -> tuple[int, ...]:
+    """:func:`mpm`'s sums per site (float32 words): of f (its components, or a count per level for the
+    constant kind) and of each line field."""
+    return (ncomp if kind == "smooth" else nlevels, 1, 1)
 
 
 def mpm(lattice: Lattice, schedule: MpmSchedule, seed: int) -> int:
@@ -132,7 +139,7 @@ def mpm(lattice: Lattice, schedule: MpmSchedule, seed: int) -> int:
         if k >= schedule.burn_in:
             machine.launch(accumulate, size, lattice.f, lattice.lh, lattice.lv, sum_f, sum_h, sum_v,
                            lattice.levels, np.int64(lattice.n))
-    count = np.float32(max(schedule.samples, 1))
+    count = np.float32(schedule.samples)
     smooth = lattice.kind == "smooth"
     machine.launch(lattice.kernel("scale_and_threshold"), size, sum_f, sum_h, sum_v, count, np.int32(smooth),
                    np.int64(lattice.n))
