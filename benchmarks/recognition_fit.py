@@ -7,9 +7,9 @@ vmcl.scenes.example_views (one view of each flat object, five of each solid one)
 distance within which an image edge supports a model point), the threshold is the least significance whose
 false detections per image stay at most 0.1 (the bar of the recognition issue); the setting chosen is the
 one whose recognition rate at its threshold is highest (a tie goes to the smaller tolerance). The vote's
-cutoff (``candidates``: how many of the best (model, pose) bins go on to alignment) is chosen with it, over
-the same grid (a further tie goes to the fewer candidates): an object seen by one corner correspondence
-gets two votes, which a cutoff set by busier bins leaves out. How many nearest features each corner or arc
+cutoff (``candidates``: how many of the best (model view, pose) bins go on to alignment, shared between
+the views) is chosen with it, over the same grid (a further tie goes to the fewer candidates): an
+object seen by one corner correspondence gets two votes, which a cutoff set by busier bins leaves out. How many nearest features each corner or arc
 is paired with for indexing (``neighbours``) is chosen with them too (a further tie goes to the fewer):
 two corners of one object can be farther apart than many of the clutter's corners. Then, at the grid's
 choice, the most a solid's view alignment may stretch (``stretch``; the grid runs at 1.3) is chosen the same
@@ -128,7 +128,7 @@ def main() -> int:
              (f"`python benchmarks/recognition_fit.py` on {platform.node() or 'this machine'} "
               f"({time.strftime('%Y-%m-%d')}), {n} training scenes (seeds {SEEDS.start}..{SEEDS.stop - 1}), "
               f"{len(library)} models, {seconds:.0f} s."), "",
-             (f"Per tolerance, vote cutoff (the best bins kept for alignment) and neighbours (the nearest features each "
+             (f"Per tolerance, vote cutoff (the best bins kept for alignment, shared between the views) and neighbours (the nearest features each "
               f"corner or arc is paired with), the least threshold (steps of {THRESHOLDS[1] - THRESHOLDS[0]:g}) whose "
               f"false detections per image are at most {MAX_FALSE:g}, and the recognition rate there:"), "",
              ("| tolerance px | candidates | neighbours | min_significance | recognition rate | flat | solid | "

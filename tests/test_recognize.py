@@ -13,9 +13,11 @@ import pytest
 from scipy import ndimage
 
 from vmcl.errors import InputError
+from vmcl.metrics import recognition_scores
 from vmcl.recognize import (
     Index,
     Library,
+    Model,
     anchors_of,
     arcs_of,
     corner_pairs,
@@ -35,7 +37,7 @@ from vmcl.recognize import (
     vote,
     vote_numpy,
 )
-from vmcl.scenes import object_view, recognition_scene
+from vmcl.scenes import example_library, object_view, recognition_scene
 
 
 @pytest.fixture(scope="module")
@@ -180,8 +182,9 @@ def test_a_curved_object_with_a_single_corner_in_view_is_recognised_by_its_arc()
     view_placement = views["tab"][1]
     error = np.hypot(*(found[0].locate(view_placement.corners) - placement.corners).T)
     assert error.max() < 2.0
-    # Without its arc the same image yields no candidate at all.
-    assert recognize(features, library, arcs=False) == []
+    # Without its arc the tab is not found (its one corner in view pairs only with the occluder's); the
+    # quarter disc, whose right angle the tab's outline shares, may be found in its place.
+    assert "tab" not in [d.name for d in recognize(features, library, arcs=False)]
     assert len(anchors_of(features)[0]) == len(features.corners) + len(features.arcs)
 
 
@@ -204,6 +207,65 @@ def test_the_vote_finds_the_pose_and_agrees_with_numpy(ell_model):
     assert np.array_equal(device.views[:10], host.views[:10]) and np.array_equal(device.votes[:10], host.votes[:10])
     assert np.allclose(device.similarity[:10], host.similarity[:10], atol=1e-3)
     assert abs(len(device) - len(host)) <= 0.1 * len(host)
+
+
+def test_a_bin_past_the_vote_histogram_is_kept_whole(ell_model):
+    # One pose voted for by thousands of repeated pairs: its bin holds more votes than the histogram the
+    # cutoffs are read from has columns, and with min_votes that high every hypothesis in it must still
+    # come back (a list sized from the histogram alone kept one of them).
+    model, _, _ = ell_model
+    index = Index.build(Library([model]))
+    view = model.views[0]
+    m = _similarity(1.1, 20.0, 30.0, 10.0)
+    corners = view.corners @ m[:, :2].T + m[:, 2]
+    pairs = np.tile(corner_pairs(corners), (1500, 1))
+    args = (index, corners, view.bisector + math.radians(20.0), view.opening, pairs)
+    device, host = vote(*args, min_votes=1200), vote_numpy(*args, min_votes=1200)
+    assert len(device) and (device.votes >= 1200).all()
+    assert np.array_equal(device.votes, host.votes) and np.array_equal(device.views, host.views)
+    assert np.allclose(device.matrices()[0], m, atol=1e-3)
+
+
+def _busy_model() -> Model:
+    """A model learned from a busy picture (1,500 small random triangles, 2,900 corners): a photograph's
+    many features gather many votes by chance wherever they are looked up."""
+    rng = np.random.default_rng(7)
+    picture = np.full((640, 800), 0.5, np.float32)
+    for _ in range(1500):
+        cv2.fillConvexPoly(picture, (rng.random((3, 2)) * 30 + rng.random(2) * [800, 640]).astype(np.int32),
+                           float(rng.random()))
+    return learn("busy", [picture])
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_large_model_in_the_library_does_not_crowd_the_others_out(seed):
+    # A vote table and a cutoff shared by all views let the busy model's chance poses bury an object's true
+    # pose: each of these scenes lost one of its two objects when it joined the library.
+    library, learned = example_library()
+    crowded = Library([*library.models, _busy_model()])
+    scene = recognition_scene(seed=seed)
+    alone = recognition_scores(recognize(scene.image, library), scene.placements, learned)
+    beside = recognition_scores(recognize(scene.image, crowded), scene.placements, learned)
+    assert sum(alone.found) == 2
+    assert list(beside.found) == list(alone.found)
+
+
+@pytest.mark.xfail(strict=True, reason="the vote's budget is shared between the views, and the box's true pose in "
+                   "box_in_scene.png has fewer votes than hundreds of the box's chance poses: alone, the whole "
+                   "budget reaches it (at a tie); half of it, its share beside graf's, does not")
+def test_a_photographs_model_does_not_crowd_out_the_box(datasets_root):
+    # OpenCV's samples: box.png learned, found in box_in_scene.png; then graf1 (800 x 640, a wall of
+    # graffiti) learned into the same library. The box should be found at the same pose beside it.
+    folder = datasets_root / "opencv_samples"
+    box, scene, graf = (cv2.imread(str(folder / name), cv2.IMREAD_GRAYSCALE)
+                        for name in ("box.png", "box_in_scene.png", "graf1.png"))
+    model = learn("box", [box])
+    alone = recognize(scene, Library([model]), transform="homography")
+    beside = recognize(scene, Library([model, learn("graf", [graf])]), transform="homography")
+    assert [d.name for d in alone] == ["box"] and [d.name for d in beside] == ["box"]
+    corners = np.array([[0, 0], [box.shape[1] - 1, 0], [box.shape[1] - 1, box.shape[0] - 1], [0, box.shape[0] - 1]],
+                       np.float64)
+    assert np.abs(beside[0].locate(corners) - alone[0].locate(corners)).max() < 1.0
 
 
 # ----------------------------------------------------------------------------------- distance, support

@@ -12,8 +12,9 @@ with each pair entered in the two nearest bins of every coordinate so a key near
 it). For an image, every ordered pair of nearby features looks its key up; each entry it meets fixes
 the similarity taking the model pair onto the image pair, and votes for (view, rotation, scale, where
 the view's centre lands), binned, on the device (kernels/indexing.cl, one work-item per image pair,
-votes counted in a hashed accumulator). The bins with the most votes are the candidates; their votes' similarities are pooled
-into each candidate's pose. Candidate generation looks at the entries that share a key with the image's
+votes counted in a hashed accumulator with a region per view, sized to the view's hypotheses). The bins
+with the most votes of each view are the candidates, the budget shared between the views; their votes'
+similarities are pooled into each candidate's pose. Candidate generation looks at the entries that share a key with the image's
 pairs only: with keys this discriminative, a larger library adds few entries per key.
 
 :func:`vote_numpy` is the same vote in NumPy, the reference the kernel is tested and timed against.
@@ -28,8 +29,7 @@ from typing import Any
 import numpy as np
 import pyopencl.array as cl_array
 
-from vmcl.cm.core import check_bool, check_int, check_real, machine_for, to_host
-from vmcl.cm.reduce import histogram
+from vmcl.cm.core import check_bool, check_int, check_real, machine_for
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.recognize.arguments import angles, index_pairs, points
@@ -53,8 +53,12 @@ _ROTATION_BINS = 24  # the pose bins: 15 degrees of rotation,
 _ROTATION_BIN = 2 * math.pi / _ROTATION_BINS
 _SCALE_BIN = 0.2  # 0.2 of log scale (22 %),
 _POSITION_BIN = 0.25  # a quarter of the view's radius (at the pose's scale) for where its centre lands
-_VOTE_TABLE_BITS = 18
-_COUNT_BINS = 1024  # the vote counts the cutoff is read from; a bin with more is counted above them
+_SLOTS_PER_HYPOTHESIS = 64  # a view's accumulator region: each hypothesis votes 16 bins, so a slot holds
+# at most a quarter of a vote of other poses' on average, below the caps (one table of fixed size shared by
+# all views let a large model's hypotheses bury a small model's pose under collisions)
+_MIN_REGION_BITS, _MAX_REGION_BITS = 6, 24
+_MAX_SLOTS = 1 << 27  # the whole accumulator's most slots (512 MB): past it the largest regions shrink
+_COUNT_BINS = 1024  # the vote counts the cutoffs are read from; the last holds 1023 votes and more
 _MIN_SEPARATION = 4.0  # pixels: closer corners are one junction's, with no direction between them
 
 
@@ -313,22 +317,84 @@ def _pair_points(corners: np.ndarray, pairs: np.ndarray) -> np.ndarray:
     return np.concatenate([corners[pairs[:, 0]], corners[pairs[:, 1]]], axis=1).astype(np.float32)
 
 
-def _cutoff_from_counts(counts: np.ndarray, size: int, candidates: int, min_votes: int) -> int:
-    """:func:`_cutoff` from the histogram of the bins' votes (``counts[v]``: the bins with v votes, for v below
-    _COUNT_BINS; the rest have more): the device sends the histogram, not the bins."""
-    above = size - int(counts.sum())  # bins with _COUNT_BINS votes or more
-    if above >= candidates:
-        return max(_COUNT_BINS, min_votes)
-    # The bins with at least v votes, for every v: the cutoff is the highest v with `candidates` of them.
-    at_least = above + np.cumsum(counts[::-1])[::-1]
-    reaching = np.flatnonzero(at_least >= min(candidates, size))
-    return max(int(reaching[-1]) if len(reaching) else 0, min_votes)
+def _looked_up(index: Index, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every (image pair, table entry) a lookup meets: the pair's row and the entry's, entry by entry."""
+    starts, stops = index.offsets[keys], index.offsets[keys + 1]
+    lengths = (stops - starts).astype(np.int64)
+    which = np.repeat(np.arange(len(keys)), lengths)
+    entries = np.repeat(starts - np.concatenate([[0], np.cumsum(lengths)[:-1]]), lengths) + np.arange(lengths.sum())
+    return which, entries
 
 
-def _cutoff(votes: np.ndarray, candidates: int, min_votes: int) -> int:
-    """The votes a bin needs to be kept: those of the ``candidates``-th best bin, and at least ``min_votes``."""
-    k = min(candidates, votes.size)
-    return max(int(np.partition(votes, votes.size - k)[votes.size - k]), min_votes)
+def _regions(index: Index, entries: np.ndarray, most_slots: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each view's region of the accumulator, sized to its hypotheses: the regions' first slots (V + 1,
+    the last the accumulator's size), their masks (V,) and each view's hypotheses (V,). A view no lookup
+    met gets no slots (its region starts where the next one does)."""
+    hypotheses = np.bincount(index.entry_view[entries], minlength=len(index.views))
+    live = hypotheses > 0
+    wanted = np.clip(np.ceil(np.log2(np.maximum(hypotheses * float(_SLOTS_PER_HYPOTHESIS), 1.0))), _MIN_REGION_BITS,
+                     _MAX_REGION_BITS).astype(np.int64)
+    # The largest cap on a region's size that keeps the whole within `most_slots`: more collisions in the
+    # largest regions rather than memory the device lacks.
+    for cap in range(_MAX_REGION_BITS, _MIN_REGION_BITS - 1, -1):
+        bits = np.minimum(wanted, cap)
+        if int((np.left_shift(1, bits) * live).sum()) <= most_slots:
+            break
+    sizes = np.where(live, np.left_shift(1, bits), 0)
+    return (np.concatenate([[0], np.cumsum(sizes)]).astype(np.uint32), np.maximum(sizes - 1, 0).astype(np.uint32),
+            hypotheses)
+
+
+def _trimmed(histograms: np.ndarray, live: np.ndarray, views: int, min_votes: int) -> np.ndarray:
+    """Every view's histogram (rows of views no lookup met are zero), cut after the highest vote count any
+    bin has (and past ``min_votes``), so that the cutoffs' arithmetic spans what is there: a column of
+    zeros stays last, and a last column that is not cut holds the bins with that many votes and more."""
+    filled = np.flatnonzero(histograms.any(axis=0))
+    columns = min(histograms.shape[1], max(int(filled[-1]) if len(filled) else 0, min_votes) + 2)
+    counts = np.zeros((views, columns), np.int64)
+    counts[live] = histograms[:, :columns]
+    return counts
+
+
+def _cutoffs(counts: np.ndarray, candidates: int, min_votes: int) -> np.ndarray:
+    """The votes a bin of each view needs to be kept, from the views' histograms of their bins' votes
+    (``counts[view, v]``: the view's bins with v votes, v >= 1; the last column those with more too).
+
+    The ``candidates`` are shared between the views as water fills vessels: each view keeps its best bins
+    (of those with at least ``min_votes``) up to one share, the same for all, and a view with fewer bins
+    leaves the rest to the others; the share is the least that keeps ``candidates`` bins in all (every bin
+    tied with a view's last is kept too). One cutoff for all views let a model with many features, which
+    gathers many votes by chance everywhere, crowd the other models' poses out."""
+    columns = counts.shape[1]
+    at_least = np.cumsum(counts[:, ::-1], axis=1)[:, ::-1]  # [view, v]: the view's bins with >= v votes
+    usable = at_least[:, min(min_votes, columns - 1)]
+    wanted = min(candidates, int(usable.sum()))
+    low, high = 1, max(int(usable.max(initial=0)), 1)
+    while low < high:  # the least share that keeps `wanted` bins in all
+        middle = (low + high) // 2
+        if int(np.minimum(middle, usable).sum()) >= wanted:
+            high = middle
+        else:
+            low = middle + 1
+    share = np.minimum(low, usable)
+    reach = at_least[:, 1:] >= share[:, None]
+    # The highest v (>= 1) at which the view still has its share of bins.
+    own = reach.shape[1] - np.argmax(reach[:, ::-1], axis=1)
+    return np.maximum(own, min_votes).astype(np.int32)
+
+
+def _capacity(counts: np.ndarray, cutoffs: np.ndarray, hypotheses: np.ndarray) -> int:
+    """The most hypotheses the emit pass can write: each writes once, to a kept bin of its own view, so
+    no more than a view's kept bins' votes (all its hypotheses where its bins' counts saturate the
+    histogram, their votes unknown)."""
+    v = np.arange(counts.shape[1])
+    kept_votes = (counts * v * (v[None, :] >= cutoffs[:, None])).sum(axis=1)
+    bound = np.where(counts[:, -1] > 0, hypotheses, np.minimum(kept_votes, hypotheses))
+    return max(int(bound.sum()), 1)
+
+
+def _no_candidates() -> Candidates:
+    return _pool(np.zeros((0, 4)), np.zeros((0, 2), np.int32))
 
 
 def _pool(found: np.ndarray, info: np.ndarray) -> Candidates:
@@ -370,8 +436,12 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     scales : (float, float)
         The range of scales (image size over view size) a pose may have.
     candidates : int
-        The pose bins kept: those with at least the votes of the ``candidates``-th best, >= 1. The
-        default is :func:`vmcl.recognize.recognize`'s, fitted on rendered training scenes.
+        The pose bins kept, >= 1, shared between the model views: each view keeps its own best bins up to
+        an equal share, a view with fewer leaving the rest to the others (bins tied with a view's last
+        are kept too, so a little more may come back). A model with many features, which gathers many
+        votes by chance everywhere, thus cannot crowd another model's poses out; a view of a solid is a
+        view like any other. The default is :func:`vmcl.recognize.recognize`'s, fitted on rendered
+        training scenes.
     min_votes : int
         The fewest votes a kept bin has, >= 1 (each corner correspondence votes twice, once per order).
     machine : vmcl.Machine, optional
@@ -384,29 +454,50 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     corners, bisector, opening, radius, pairs, (low, high), candidates, min_votes = _check_inputs(
         index, corners, bisector, opening, pairs, scales, candidates, min_votes, radius)
     if not len(pairs) or not len(index):
-        return _pool(np.zeros((0, 4)), np.zeros((0, 2), np.int32))
+        return _no_candidates()
     table = _device_table(index, machine)
-    keys = machine.to_device(pair_keys(corners, bisector, opening, pairs, radius=radius))
+    host_keys = pair_keys(corners, bisector, opening, pairs, radius=radius)
+    _, entries = _looked_up(index, host_keys)
+    if not len(entries):  # no pair's key is in the library's table
+        return _no_candidates()
+    most_slots = min(_MAX_SLOTS, machine.device.max_mem_alloc_size // 4)
+    starts, masks, hypotheses = _regions(index, entries, most_slots)
+    live = np.flatnonzero(hypotheses > 0)
+    machine.require_memory("the vote's accumulator", 4 * (int(starts[-1]) + len(live) * _COUNT_BINS),
+                           4 * max(int(starts[-1]), len(live) * _COUNT_BINS))
+    keys = machine.to_device(host_keys)
     points = machine.to_device(_pair_points(corners, pairs))
-    size = 1 << _VOTE_TABLE_BITS
-    votes = machine.empty(size, np.int32)
-    votes.fill(0)
-    count = machine.empty(1, np.int32)
-    count.fill(0)
+    regions = machine.to_device(np.ascontiguousarray(np.stack([starts[:-1], masks], axis=1)))
+    votes = machine.full(int(starts[-1]), np.int32, 0)
+    count = machine.full(1, np.int32, 0)
     kernel = machine.kernel("indexing", "vote")
     common = (np.int32(len(pairs)), np.float32(_ROTATION_BIN), np.int32(_ROTATION_BINS), np.float32(_SCALE_BIN),
-              np.float32(_POSITION_BIN),
-              np.float32(low), np.float32(high), np.uint32(size - 1))
-    capacity = 1 << 16
-    found, info = machine.empty((capacity, 4), np.float32), machine.empty((capacity, 2), np.int32)
-    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, np.int32(0), count, found, info, *common,
-                   np.int32(capacity), np.int32(0))
-    counts = np.asarray(to_host(histogram(votes, _COUNT_BINS, (0, _COUNT_BINS), machine=machine)))
-    cutoff = np.int32(_cutoff_from_counts(counts, size, candidates, min_votes))
-    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, cutoff, count, found, info, *common,
-                   np.int32(capacity), np.int32(1))
-    n = min(int(count.get()[0]), capacity)
-    return _pool(found.get()[:n], info.get()[:n])
+              np.float32(_POSITION_BIN), np.float32(low), np.float32(high))
+    no_list = machine.empty((1, 4), np.float32), machine.empty((1, 2), np.int32)
+    no_cutoffs = machine.to_device(np.zeros(len(hypotheses), np.int32))
+    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, regions, no_cutoffs, count, *no_list, *common,
+                   np.int32(0), np.int32(0))
+    # The histograms of the views the lookups met, one row each (the others have no slots).
+    histograms = machine.full(len(live) * _COUNT_BINS, np.int32, 0)
+    live_starts = np.append(starts[live], starts[-1]).astype(np.uint32)
+    machine.launch(machine.kernel("indexing", "vote_counts"), (int(starts[-1]),), votes,
+                   machine.to_device(live_starts), np.int32(len(live)), histograms, np.int32(_COUNT_BINS))
+    counts = _trimmed(histograms.get().reshape(len(live), _COUNT_BINS), live, len(hypotheses), min_votes)
+    cutoffs = _cutoffs(counts, candidates, min_votes)
+    capacity = _capacity(counts, cutoffs, hypotheses)
+    device_cutoffs = machine.to_device(cutoffs)
+    while True:
+        found, info = machine.empty((capacity, 4), np.float32), machine.empty((capacity, 2), np.int32)
+        machine.fill(count, 0)
+        machine.launch(kernel, (len(pairs),), keys, points, *table, votes, regions, device_cutoffs, count, found, info,
+                       *common, np.int32(capacity), np.int32(1))
+        n = int(count.get()[0])
+        if n <= capacity:
+            break
+        capacity = n  # the bound above holds; were it ever to fail, the list is made long enough, not cut
+    if not n:
+        return _no_candidates()
+    return _pool(found[:n].get(), info[:n].get())
 
 
 def _device_table(index: Index, machine: Machine) -> tuple[cl_array.Array, ...]:
@@ -443,8 +534,8 @@ def _coordinates_numpy(image: np.ndarray, model: np.ndarray, frames: np.ndarray,
     return ok, np.stack([zr, zi, tx, ty], axis=1), coords
 
 
-def _combo_bins(coords: np.ndarray, views: np.ndarray, mask: int) -> np.ndarray:
-    """kernels/indexing.cl's combo_bin for all 16 combos: (n, 16) hashed bins."""
+def _combo_bins(coords: np.ndarray, views: np.ndarray, starts: np.ndarray, masks: np.ndarray) -> np.ndarray:
+    """kernels/indexing.cl's combo_bin for all 16 combos: (n, 16) addresses, each in its view's region."""
     home = np.floor(coords)
     other = np.where(coords - home >= 0.5, home + 1, home - 1)
     combos = np.array([[(c >> d) & 1 for d in range(4)] for c in range(16)], bool)
@@ -454,34 +545,41 @@ def _combo_bins(coords: np.ndarray, views: np.ndarray, mask: int) -> np.ndarray:
     h = np.repeat(views.astype(np.uint32)[:, None] * np.uint32(73856093), 16, axis=1)
     for value, prime in zip(ints, (19349663, 83492791, 2654435761, 40503)):
         h ^= value * np.uint32(prime) + np.uint32(0x9E3779B9) + (h << np.uint32(6)) + (h >> np.uint32(2))
-    return (h & np.uint32(mask)).astype(np.int64)
+    return starts[views].astype(np.int64)[:, None] + (h & masks[views][:, None]).astype(np.int64)
 
 
 def vote_numpy(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pairs: np.ndarray, *,
-               radius: np.ndarray | None = None, scales: tuple[float, float] = (0.25, 4.0), candidates: int = 128,
+               radius: np.ndarray | None = None, scales: tuple[float, float] = (0.25, 4.0), candidates: int = 1024,
                min_votes: int = 2) -> Candidates:
     """:func:`vote` in NumPy on the host: the reference the kernel is tested and timed against."""
     corners, bisector, opening, radius, pairs, (low, high), candidates, min_votes = _check_inputs(
         index, corners, bisector, opening, pairs, scales, candidates, min_votes, radius)
     if not len(pairs) or not len(index):
-        return _pool(np.zeros((0, 4)), np.zeros((0, 2), np.int32))
+        return _no_candidates()
     keys = pair_keys(corners, bisector, opening, pairs, radius=radius)
     points = _pair_points(corners, pairs)
-    starts, stops = index.offsets[keys], index.offsets[keys + 1]
-    lengths = stops - starts
-    which = np.repeat(np.arange(len(pairs)), lengths)
-    entries = np.repeat(starts - np.concatenate([[0], np.cumsum(lengths)[:-1]]), lengths) + np.arange(lengths.sum())
+    which, entries = _looked_up(index, keys)
+    if not len(entries):
+        return _no_candidates()
+    starts, masks, hypotheses = _regions(index, entries, _MAX_SLOTS)
     views = index.entry_view[entries]
-    size = 1 << _VOTE_TABLE_BITS
     ok, similarity, coords = _coordinates_numpy(points[which], index.entry_points[entries], index.frames, views,
                                                 np.float32(low), np.float32(high))
-    bins = _combo_bins(coords[ok], views[ok], size - 1)
-    votes = np.bincount(bins.ravel(), minlength=size)
-    cutoff = _cutoff(votes, candidates, min_votes)
+    bins = _combo_bins(coords[ok], views[ok], starts, masks)
+    addresses, totals = np.unique(bins.ravel(), return_counts=True)
+    votes = np.zeros(int(starts[-1]), np.int64)
+    votes[addresses] = totals
+    # Each filled slot's view: the last region starting at or before it (empty regions share a start).
+    region = np.searchsorted(starts[:-1], addresses, side="right") - 1
+    every = np.zeros((len(hypotheses), _COUNT_BINS), np.int64)
+    np.add.at(every, (region, np.minimum(totals, _COUNT_BINS - 1)), 1)
+    live = np.flatnonzero(hypotheses > 0)
+    counts = _trimmed(every[live], live, len(hypotheses), min_votes)
+    cutoffs = _cutoffs(counts, candidates, min_votes)
     # Each hypothesis's best bin: the most votes, the lowest address among equals.
     order = np.lexsort((bins, -votes[bins]), axis=1) if len(bins) else np.zeros((0, 16), np.int64)
     best = np.take_along_axis(bins, order[:, :1], axis=1)[:, 0]
-    keep = votes[best] >= cutoff
+    keep = votes[best] >= cutoffs[views[ok]]
     return _pool(similarity[ok][keep], np.stack([best[keep], views[ok][keep]], axis=1))
 
 

@@ -129,10 +129,10 @@ def _features(data: Any, sigma: float, machine: Machine) -> Features:
 
 
 def recognize(image: Any, library: Library, *, transform: Transform = "similarity", sigma: float = 1.5,
-              scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float = 20.0,
-              min_support: int = 40, min_inner: float = 0.1,
+              scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float = 19.0,
+              min_support: int = 40, min_inner: float = 0.0,
               candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 24, regions: int = 8,
-              tolerance: float = 3.0, stretch: float = 1.3, arcs: bool = True, depth: np.ndarray | None = None,
+              tolerance: float = 3.0, stretch: float = 1.1, arcs: bool = True, depth: np.ndarray | None = None,
               machine: Machine | None = None) -> list[Detection]:
     """Find a library's objects in an image.
 
@@ -165,13 +165,15 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
         solid's edges between its faces) that image edges must support, where the view has some inside
         the image (and not hidden by a nearer surface, ``depth``). They are what tells a solid from a flat
         shape of its outline, which clutter often matches. 0: not required. The default was chosen on
-        rendered training scenes (benchmarks/recognition_fit.py): the same recognition rate as without
-        the test there, with one false detection fewer in 120 scenes; on the test scenes it cost solids
-        (benchmarks/results/recognition.md compares the two).
+        rendered training scenes (benchmarks/recognition_fit.py): no share required found as many objects
+        there as any share tried, with no more false detections (benchmarks/results/recognition.md
+        compares the test scenes with and without a share).
     candidates : int
-        Pose bins kept from the vote, >= 1 (their hypotheses are pooled into candidate poses). The default
-        was chosen on rendered training scenes with ``tolerance`` and ``neighbours``
-        (benchmarks/recognition_fit.py).
+        Pose bins kept from the vote, >= 1 (their hypotheses are pooled into candidate poses), shared
+        between the model views: each keeps its own best up to an equal share, and a view with fewer
+        leaves the rest to the others (:func:`vmcl.recognize.vote`), so that a large model, which gathers
+        many votes by chance, does not crowd a small one out of the library. The default was chosen on
+        rendered training scenes with ``tolerance`` and ``neighbours`` (benchmarks/recognition_fit.py).
     verify : int
         Candidate poses refined and verified, >= 1: those a coarse test of each unrefined pose supports
         best.
