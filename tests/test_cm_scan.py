@@ -6,8 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from oracles import scan as scan_oracle
 
-from vmcl.cm.scan import exclusive_sum_into, scan
 from vmcl.cm.core import check_sigma, check_unit_image
+from vmcl.cm.scan import exclusive_sum_into, scan
 from vmcl.errors import InputTypeError, InputValueError
 
 OPS = ["plus", "max", "min", "copy"]
