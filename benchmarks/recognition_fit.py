@@ -9,9 +9,10 @@ false detections per image stay at most 0.1 (the bar of the recognition issue); 
 one whose recognition rate at its threshold is highest (a tie goes to the smaller tolerance). The vote's
 cutoff (``candidates``: how many of the best (model view, pose) bins go on to alignment, shared between
 the views) is chosen with it, over the same grid (a further tie goes to the fewer candidates): an
-object seen by one corner correspondence gets two votes, which a cutoff set by busier bins leaves out. How many nearest features each corner or arc
-is paired with for indexing (``neighbours``) is chosen with them too (a further tie goes to the fewer):
-two corners of one object can be farther apart than many of the clutter's corners. Then, at the grid's
+object seen by one corner correspondence gets two votes, which a cutoff set by busier bins leaves out.
+How many nearest features each corner or arc is paired with for indexing (``neighbours``) is chosen with
+them too (a further tie goes to the fewer): two corners of one object can be farther apart than many of
+the clutter's corners. Then, at the grid's
 choice, the most a solid's view alignment may stretch (``stretch``; the grid runs at 1.3) is chosen the same
 way (a tie goes to the smaller stretch, the less freedom), each with its own threshold. Then, at that choice,
 the least share of a view's inner markings (a solid's edges between its faces) that must be supported

@@ -14,8 +14,8 @@ the similarity taking the model pair onto the image pair, and votes for (view, r
 the view's centre lands), binned, on the device (kernels/indexing.cl, one work-item per image pair,
 votes counted in a hashed accumulator with a region per view, sized to the view's hypotheses). The bins
 with the most votes of each view are the candidates, the budget shared between the views; their votes'
-similarities are pooled into each candidate's pose. Candidate generation looks at the entries that share a key with the image's
-pairs only: with keys this discriminative, a larger library adds few entries per key.
+similarities are pooled into each candidate's pose. Candidate generation looks at the entries that share
+a key with the image's pairs only, so its work grows with those entries (about as the table does).
 
 :func:`vote_numpy` is the same vote in NumPy, the reference the kernel is tested and timed against.
 """
@@ -332,8 +332,8 @@ def _regions(index: Index, entries: np.ndarray, most_slots: int) -> tuple[np.nda
     met gets no slots (its region starts where the next one does)."""
     hypotheses = np.bincount(index.entry_view[entries], minlength=len(index.views))
     live = hypotheses > 0
-    wanted = np.clip(np.ceil(np.log2(np.maximum(hypotheses * float(_SLOTS_PER_HYPOTHESIS), 1.0))), _MIN_REGION_BITS,
-                     _MAX_REGION_BITS).astype(np.int64)
+    slots = np.maximum(hypotheses * float(_SLOTS_PER_HYPOTHESIS), 1.0)
+    wanted = np.clip(np.ceil(np.log2(slots)), _MIN_REGION_BITS, _MAX_REGION_BITS).astype(np.int64)
     # The largest cap on a region's size that keeps the whole within `most_slots`: more collisions in the
     # largest regions rather than memory the device lacks.
     for cap in range(_MAX_REGION_BITS, _MIN_REGION_BITS - 1, -1):
@@ -341,8 +341,8 @@ def _regions(index: Index, entries: np.ndarray, most_slots: int) -> tuple[np.nda
         if int((np.left_shift(1, bits) * live).sum()) <= most_slots:
             break
     sizes = np.where(live, np.left_shift(1, bits), 0)
-    return (np.concatenate([[0], np.cumsum(sizes)]).astype(np.uint32), np.maximum(sizes - 1, 0).astype(np.uint32),
-            hypotheses)
+    starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.uint32)
+    return starts, np.maximum(sizes - 1, 0).astype(np.uint32), hypotheses
 
 
 def _trimmed(histograms: np.ndarray, live: np.ndarray, views: int, min_votes: int) -> np.ndarray:
@@ -475,8 +475,8 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
               np.float32(_POSITION_BIN), np.float32(low), np.float32(high))
     no_list = machine.empty((1, 4), np.float32), machine.empty((1, 2), np.int32)
     no_cutoffs = machine.to_device(np.zeros(len(hypotheses), np.int32))
-    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, regions, no_cutoffs, count, *no_list, *common,
-                   np.int32(0), np.int32(0))
+    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, regions, no_cutoffs, count, *no_list,
+                   *common, np.int32(0), np.int32(0))
     # The histograms of the views the lookups met, one row each (the others have no slots).
     histograms = machine.full(len(live) * _COUNT_BINS, np.int32, 0)
     live_starts = np.append(starts[live], starts[-1]).astype(np.uint32)
@@ -489,8 +489,8 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     while True:
         found, info = machine.empty((capacity, 4), np.float32), machine.empty((capacity, 2), np.int32)
         machine.fill(count, 0)
-        machine.launch(kernel, (len(pairs),), keys, points, *table, votes, regions, device_cutoffs, count, found, info,
-                       *common, np.int32(capacity), np.int32(1))
+        machine.launch(kernel, (len(pairs),), keys, points, *table, votes, regions, device_cutoffs, count, found,
+                       info, *common, np.int32(capacity), np.int32(1))
         n = int(count.get()[0])
         if n <= capacity:
             break
