@@ -606,8 +606,9 @@ def recognition_figures(f: ResultsFile) -> str:
             f"{graf.cell({'method': 'vmcl (learn graf1, recognize in graf3, homography)'}, 'mean corner error px')} "
             f"against ORB {graf.cell({'method': 'ORB + RANSAC'}, 'mean corner error px')} and SIFT "
             f"{graf.cell({'method': 'SIFT + RANSAC'}, 'mean corner error px')}; box found "
-            f"{box.cell({'method': 'vmcl (homography)'}, from_sift)} px from SIFT's "
-            f"corners; {speed.cell({'step': 'recognize beyond the features (selection, indexing, verification)'}, 'ms')} "
+            f"{box.cell({'method': 'vmcl (homography)'}, from_sift)} px from SIFT's corners, and with graf1 also "
+            f"in the library {box.cell({'method': 'vmcl (homography, graf1 also in the library)'}, 'corners (x, y)')}"
+            f"; {speed.cell({'step': 'recognize beyond the features (selection, indexing, verification)'}, 'ms')} "
             f"ms beyond the edges at 512 x 384 with 20 models; the vote {grown.rows[-1][grown.index('ratio to 10 models')]}x "
             "slower for 100x the models")
 

@@ -114,3 +114,39 @@ def test_a_stereo_runs_disparity_reaches_recognition(tmp_path, files, monkeypatc
     image = cv2.imread(str(files["scene"]), cv2.IMREAD_GRAYSCALE)
     result = VisionMachine(config).run(image, np.roll(image, -2, axis=1))
     assert result.disparity is not None and seen["depth"] is result.disparity
+
+
+def test_a_damaged_or_renamed_model_file_is_named_and_a_float_mask_read(tmp_path, files, capsys):
+    # A model file cut short ended the run as an internal error (BadZipFile); a file renamed by hand made
+    # two models of one name, refused without naming the files; a float TIFF mask crashed learn.
+    library = tmp_path / "library"
+    for name in ("ell", "arrow"):
+        assert main(["learn", name, str(files[name]), "--library", str(library), "-q"]) == 0
+    data = (library / "arrow.vmodel.npz").read_bytes()
+    (library / "arrow.vmodel.npz").write_bytes(data[:len(data) // 2])
+    capsys.readouterr()
+    assert main(["run", str(files["scene"]), "--models", str(library), "--out", str(tmp_path / "out"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "arrow.vmodel.npz is not a vmcl model file" in err and len(err.strip().splitlines()) == 1, err
+    (library / "arrow.vmodel.npz").unlink()
+    (library / "copy.vmodel.npz").write_bytes((library / "ell.vmodel.npz").read_bytes())
+    with pytest.raises(ValueError, match="copy.vmodel.npz, ell.vmodel.npz all hold the model 'ell'"):
+        Library.load(library)
+    image = cv2.imread(str(files["block"]), cv2.IMREAD_GRAYSCALE)
+    cv2.imwrite(str(tmp_path / "mask.tiff"), np.ones(image.shape, np.float32))
+    assert main(["learn", "block", str(files["block"]), "--library", str(tmp_path / "other"),
+                 "--mask", str(tmp_path / "mask.tiff"), "-q"]) == 0
+
+
+def test_learn_refuses_an_existing_model_before_learning(tmp_path, files, capsys, monkeypatch):
+    library = tmp_path / "library"
+    assert main(["learn", "ell", str(files["ell"]), "--library", str(library), "-q"]) == 0
+    import vmcl.recognize
+
+    def learned(*args, **kwargs):
+        raise AssertionError("learned a model that cannot be written")
+
+    monkeypatch.setattr(vmcl.recognize, "learn", learned)
+    capsys.readouterr()
+    assert main(["learn", "ell", str(files["ell"]), "--library", str(library), "-q"]) == 2
+    assert "give --replace to replace it" in capsys.readouterr().err

@@ -347,7 +347,8 @@ def _run(args) -> int:
 
 
 def _learn(args) -> int:
-    from vmcl.recognize import learn, save_model
+    from vmcl.cm.core import full_scale
+    from vmcl.recognize import MODEL_SUFFIX, learn, save_model
 
     images = [_read(path, "example") for path in args.images]
     masks = None
@@ -359,7 +360,11 @@ def _learn(args) -> int:
             if mask.shape[:2] != image.shape[:2]:
                 raise BadInput(f"mask {path} is {mask.shape[1]} x {mask.shape[0]}, its image "
                                f"{image.shape[1]} x {image.shape[0]}: a mask must have its image's size")
-        masks = [(m if m.ndim == 2 else m.mean(axis=2)) > np.iinfo(m.dtype).max // 2 for m in masks]
+        # On at half the type's full scale: 128 of 255, 0.5 of a float mask's 1 (0 and 255 read the same).
+        masks = [(m if m.ndim == 2 else m.mean(axis=2)) > full_scale(m.dtype) / 2 for m in masks]
+    target = Path(args.library) / f"{args.name}{MODEL_SUFFIX}"
+    if target.exists() and not args.replace:  # said before the learning, not after it
+        raise BadInput(f"{target} exists: give --replace to replace it with the model learned now")
     model = learn(args.name, images, masks=masks, sources=[Path(p).name for p in args.images])
     path = save_model(model, args.library, replace=args.replace)
     corners = sum(len(v.corners) for v in model.views)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import re
+import zipfile
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -341,8 +342,12 @@ def load_model(path: str | Path) -> Model:
             return Model(_check_name(meta["name"]), tuple(views), tuple(str(s) for s in meta["sources"]))
     except InputValueError:
         raise
-    except (ValueError, KeyError, IndexError, TypeError, OSError, EOFError) as error:
-        raise InputValueError(f"{path} is not a vmcl model file ({error})") from None
+    except (zipfile.BadZipFile, OSError, EOFError):  # not a whole .npz archive: damaged, cut short, another file
+        raise InputValueError(f"{path} is not a vmcl model file (it is not a whole NumPy .npz archive: damaged, "
+                              "cut short or another kind of file)") from None
+    except (ValueError, KeyError, IndexError, TypeError) as error:
+        reason = "it holds Python objects" if "allow_pickle" in str(error) else str(error)
+        raise InputValueError(f"{path} is not a vmcl model file ({reason})") from None
 
 
 class Library:
@@ -375,7 +380,16 @@ class Library:
         folder = Path(folder)
         if not folder.is_dir():
             raise InputValueError(f"folder must be a directory of model files, got {folder}")
-        return cls([load_model(p) for p in sorted(folder.glob(f"*{MODEL_SUFFIX}"))])
+        files = sorted(folder.glob(f"*{MODEL_SUFFIX}"))
+        models = [load_model(p) for p in files]
+        owners: dict[str, list[str]] = {}
+        for path, model in zip(files, models):
+            owners.setdefault(model.name, []).append(path.name)
+        shared = {name: paths for name, paths in owners.items() if len(paths) > 1}
+        if shared:  # a file renamed by hand keeps the name it was learned under
+            raise InputValueError(f"{folder}: models must have distinct names, but " + "; ".join(
+                f"{', '.join(paths)} all hold the model {name!r}" for name, paths in shared.items()))
+        return cls(models)
 
     def __len__(self) -> int:
         return len(self.models)
