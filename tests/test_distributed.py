@@ -184,7 +184,9 @@ def _serial_outputs(folders: list[Path], serial: VisionMachine, out: Path) -> No
 def _assert_same_output(batch: Path, reference: Path) -> None:
     """The item's folder is whole and holds the serial run's arrays and pictures, bit for bit."""
     assert (batch / MARKER).is_file() and (batch / "report.html").is_file()
-    assert sorted(p.name for p in batch.iterdir()) == sorted(p.name for p in reference.iterdir())
+    # A batch item's folder also records what it was made from (item.json).
+    assert sorted(p.name for p in batch.iterdir() if p.name != "item.json") == sorted(
+        p.name for p in reference.iterdir())
     with np.load(batch / "fields.npz") as ours, np.load(reference / "fields.npz") as theirs:
         assert sorted(ours.files) == sorted(theirs.files)
         for name in ours.files:
@@ -291,10 +293,32 @@ def test_a_batch_with_other_settings_runs_the_items_again_and_one_with_the_same_
     assert all(values == Config.from_dict(FAST).to_dict() for values in recorded.values())
     again = run_batch(client, items, out, other)
     assert [(s.state, s.detail) for s in again] == [
-        ("done", "run again: the output there was made with other settings")] * 2
+        ("done", "run again: the output there was made with other settings or inputs, or is damaged")] * 2
     for item in items:
         assert json.loads((out / item.name / SETTINGS_FILE).read_text())["edges"]["sigma"] == 2.5
     assert [s.state for s in run_batch(client, items, out, other)] == ["skipped", "skipped"]
+
+
+
+def test_a_batch_runs_again_an_item_whose_inputs_changed_or_whose_output_is_damaged(client, tmp_path):
+    # A rerun knew an item by its folder's name and the settings only: an image replaced under the same
+    # name kept its old results, and a fields.npz cut short was trusted (and broke --zarr with a traceback).
+    _scene_folders(tmp_path / "data", 2, 64)
+    items = batch_items([tmp_path / "data"])
+    out = tmp_path / "batch"
+    assert [s.state for s in run_batch(client, items, out, FAST)] == ["done", "done"]
+    changed, damaged = items
+    left = changed.paths[0] / "im0.png"
+    picture = cv2.imread(str(left))
+    cv2.imwrite(str(left), np.ascontiguousarray(picture[:, ::-1]))  # another picture under the same name
+    fields = out / damaged.name / "fields.npz"
+    fields.write_bytes(fields.read_bytes()[:1000])
+    assert write_zarr(out, items, "disparity").filled == (damaged.name,)  # not stacked, and no traceback
+    again = run_batch(client, items, out, FAST)
+    assert [s.state for s in again] == ["done", "done"], again
+    with np.load(fields) as restored:
+        assert "disparity" in restored.files
+    assert [s.state for s in run_batch(client, items, out, FAST)] == ["skipped", "skipped"]
 
 
 def test_a_failing_item_is_reported_by_name_and_the_others_complete(client, serial, tmp_path, capsys):
@@ -456,3 +480,13 @@ def test_batch_zarr_refuses_a_store_it_did_not_write_and_leaves_it(tmp_path, cap
     monkeypatch.setitem(__import__("sys").modules, "zarr", None)  # as if zarr were not installed
     assert main(["batch", str(data), "--out", str(tmp_path / "other"), "--zarr", "disparity", "--quiet"]) == 2
     assert "pip install 'vmcl[dask]'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("address", ["nonsense", "http://127.0.0.1:9"])
+def test_a_scheduler_address_that_is_none_is_one_line(tmp_path, capsys, address):
+    # Dask's ValueError on the address ended the command with a traceback as an internal error.
+    (tmp_path / "data").mkdir()
+    cv2.imwrite(str(tmp_path / "data" / "a.png"), np.zeros((32, 32), np.uint8))
+    assert main(["batch", str(tmp_path / "data"), "--out", str(tmp_path / "out"), "--scheduler", address, "-q"]) == 2
+    err = capsys.readouterr().err
+    assert f"--scheduler {address} is not a scheduler address" in err and len(err.strip().splitlines()) == 1, err

@@ -46,6 +46,7 @@ import shutil
 import tempfile
 import threading
 import uuid
+import zipfile
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -60,7 +61,7 @@ except ImportError as _missing:  # an optional extra: say which one
 
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.machine import Machine, list_devices
-from vmcl.output_folder import MARKER, output_folder
+from vmcl.output_folder import MARKER, is_whole, output_folder
 from vmcl.pipeline import Config, VisionMachine
 from vmcl.result import Result
 
@@ -576,17 +577,36 @@ class ItemStatus:
 
 
 def _finished(folder: Path) -> bool:
-    """Whether ``folder`` holds a whole vmcl output: output_folder moves the marker in with the last file."""
+    """Whether ``folder`` holds a vmcl output: output_folder moves the marker in with the last file."""
     return (folder / MARKER).is_file()
 
 
-def _made_with(folder: Path, values: dict[str, Any]) -> bool:
-    """Whether the whole output in ``folder`` records these settings (one written before outputs recorded
-    them, or whose record is unreadable, does not)."""
+_ITEM_FILE = "item.json"
+"""The file in each item's output that records what it was made from: the item's kind and its input files
+(path, size and modification time), so that a rerun knows an item whose inputs changed under the same
+name."""
+
+
+def _item_record(item: BatchItem) -> str:
+    """The item's kind and inputs as _ITEM_FILE holds them (a scene folder by its files)."""
+    files = sorted(p for p in item.paths[0].iterdir() if p.is_file()) if item.kind == "scene" else list(item.paths)
+    inputs = []
+    for path in files:
+        stat = path.stat()
+        inputs.append({"path": str(path.resolve()), "size": stat.st_size, "modified_ns": stat.st_mtime_ns})
+    return json.dumps({"kind": item.kind, "inputs": inputs}, indent=1, sort_keys=True) + "\n"
+
+
+def _made_with(folder: Path, values: dict[str, Any], item: BatchItem) -> bool:
+    """Whether the output in ``folder`` is whole and was made from this item's inputs, as they are now,
+    with these settings (one written before outputs recorded them, or whose record is unreadable, was
+    not)."""
     from vmcl.cli import SETTINGS_FILE, settings_text
 
     try:
-        return (folder / SETTINGS_FILE).read_text(encoding="utf-8") == settings_text(values)
+        return (is_whole(folder)
+                and (folder / SETTINGS_FILE).read_text(encoding="utf-8") == settings_text(values)
+                and (folder / _ITEM_FILE).read_text(encoding="utf-8") == _item_record(item))
     except (OSError, UnicodeDecodeError):
         return False
 
@@ -637,7 +657,7 @@ def run_batch(client: Client, items: Sequence[BatchItem], out: str | os.PathLike
     again: set[str] = set()
     for item in items:
         folder = out / item.name
-        if _finished(folder) and _made_with(folder, values):
+        if _finished(folder) and _made_with(folder, values, item):
             statuses[item.name] = ItemStatus(item.name, "skipped", "already there")
             step(item.name)
         elif _finished(folder):
@@ -683,7 +703,9 @@ def run_batch(client: Client, items: Sequence[BatchItem], out: str | os.PathLike
                 with output_folder(out / item.name) as work:
                     for name, data in output.files.items():
                         (work / name).write_bytes(data)
-                detail = "run again: the output there was made with other settings" if item.name in again else ""
+                    (work / _ITEM_FILE).write_text(_item_record(item), encoding="utf-8")
+                detail = ("run again: the output there was made with other settings or inputs, or is damaged"
+                          if item.name in again else "")
                 statuses[item.name] = ItemStatus(item.name, "done", detail, total_ms=output.total_ms)
                 step(item.name)
             else:
@@ -872,13 +894,14 @@ def _fill_value(dtype: np.dtype) -> Any:
 
 
 def _item_field(folder: Path, field: str) -> np.ndarray | None:
-    """The field from the item's fields.npz, if the item's output is whole and holds it."""
-    if not _finished(folder) or not (folder / "fields.npz").is_file():
+    """The field from the item's fields.npz, if the item's output is whole (every file it lists there and
+    readable) and holds it."""
+    if not is_whole(folder) or not (folder / "fields.npz").is_file():
         return None
     try:
         with np.load(folder / "fields.npz", allow_pickle=False) as fields:
             return fields[field] if field in fields.files else None
-    except (OSError, ValueError) as error:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
         raise InputValueError(f"out: {folder / 'fields.npz'} cannot be read ({error}); remove the item's folder "
                               "to run it again") from None
 
@@ -1035,6 +1058,11 @@ def cluster_client(scheduler: str | None = None, *, workers: int | None = None, 
                 client = stack.enter_context(Client(scheduler, timeout="20s"))
             except (OSError, TimeoutError) as error:
                 raise InputValueError(f"--scheduler {scheduler}: cannot connect ({error})") from None
+            except ValueError as error:  # Dask's reading of the address: no port, an unknown scheme
+                raise InputValueError(f"--scheduler {scheduler} is not a scheduler address such as "
+                                      f"tcp://host:8786 ({error})") from None
+            except MemoryError:  # something answered that does not speak Dask's protocol
+                raise InputValueError(f"--scheduler {scheduler}: what answers there is not a Dask scheduler") from None
             threads_there = client.nthreads()
             where = (f"Dask scheduler {scheduler}: {len(threads_there)} worker(s), "
                      f"{sum(threads_there.values())} thread(s)")

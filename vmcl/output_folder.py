@@ -19,7 +19,7 @@ from pathlib import Path
 
 from vmcl.errors import InputValueError
 
-__all__ = ["MARKER", "output_folder"]
+__all__ = ["MARKER", "is_whole", "output_folder"]
 
 MARKER = ".vmcl-output"
 """The file that marks a folder as a vmcl output: the names of the files vmcl wrote there, one a line."""
@@ -80,6 +80,28 @@ def _previous_output(out: Path) -> list[str]:
         raise InputValueError(f"--out {out} holds files vmcl did not write ({shown}); vmcl replaces only its own "
                        "output: move them away or name another folder")
     return sorted(set(listed) & present)
+
+
+def is_whole(out: Path) -> bool:
+    """Whether ``out`` holds a whole vmcl output: its :data:`MARKER`, every file the marker lists, and each
+    listed NumPy archive (``.npz``) readable to its end (a file deleted, emptied or cut short since vmcl
+    wrote it is not to be trusted)."""
+    import zipfile
+
+    if not (out / MARKER).is_file():
+        return False
+    try:
+        names = _listed(out)
+        for name in names:
+            if not (out / name).is_file():
+                return False
+            if name.endswith(".npz"):
+                with zipfile.ZipFile(out / name) as archive:
+                    if archive.testzip() is not None:
+                        return False
+    except (InputValueError, OSError, zipfile.BadZipFile, EOFError, ValueError):
+        return False
+    return True
 
 
 def _listed(out: Path) -> list[str]:
