@@ -490,3 +490,25 @@ def test_a_scheduler_address_that_is_none_is_one_line(tmp_path, capsys, address)
     assert main(["batch", str(tmp_path / "data"), "--out", str(tmp_path / "out"), "--scheduler", address, "-q"]) == 2
     err = capsys.readouterr().err
     assert f"--scheduler {address} is not a scheduler address" in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_ctrl_c_in_a_terminal_ends_a_local_batch_in_one_line(tmp_path):
+    # A terminal's Ctrl-C reaches the whole process group: each local worker process printed its traceback.
+    import subprocess
+    import sys
+
+    _scene_folders(tmp_path / "data", 12, 96)
+    out = tmp_path / "batch"
+    code = "import sys; from vmcl.cli import main; sys.exit(main(sys.argv[1:]))"
+    process = subprocess.Popen([sys.executable, "-c", code, "batch", str(tmp_path / "data"), "--out", str(out),
+                                "--workers", "1", "--threads", "1", "-q"], stderr=subprocess.PIPE, text=True,
+                               start_new_session=True)
+    deadline = time.monotonic() + 180
+    while not (out.is_dir() and any(p.name.startswith("scene") for p in out.iterdir())) \
+            and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert process.poll() is None, "the batch ended before it could be interrupted"
+    os.killpg(process.pid, signal.SIGINT)
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == 130, err
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "vmcl: interrupted", err

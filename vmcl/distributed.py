@@ -1041,6 +1041,22 @@ def local_cluster_size(workers: int | None = None, threads: int | None = None) -
 
 
 @contextlib.contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """SIGINT ignored while the block runs (in the main thread; elsewhere signals are not this code's)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
+@contextlib.contextmanager
 def cluster_client(scheduler: str | None = None, *, workers: int | None = None, threads: int | None = None,
                    device: str | int | None = None, worker_logs: bool = False) -> Iterator[tuple[Client, str]]:
     """A Client of ``scheduler``, else of a new LocalCluster (closed after), with MachinePlugin registered.
@@ -1068,9 +1084,13 @@ def cluster_client(scheduler: str | None = None, *, workers: int | None = None, 
                      f"{sum(threads_there.values())} thread(s)")
         else:
             size = local_cluster_size(workers, threads)
-            cluster = stack.enter_context(LocalCluster(n_workers=size.workers, threads_per_worker=size.threads,
-                                                       processes=True,
-                                                       silence_logs=logging.WARNING if worker_logs else logging.CRITICAL))
+            # The worker processes start with Ctrl-C ignored (the disposition carries over into them): a
+            # terminal's Ctrl-C reaches the whole process group, and each worker printed its traceback.
+            # This process stops on it and closes the cluster, which ends them.
+            with _sigint_ignored():
+                cluster = stack.enter_context(LocalCluster(
+                    n_workers=size.workers, threads_per_worker=size.threads, processes=True,
+                    silence_logs=logging.WARNING if worker_logs else logging.CRITICAL))
             client = stack.enter_context(Client(cluster))
             where = f"local Dask cluster: {size.workers} worker(s) x {size.threads} thread(s) ({size.reason})"
         if "dashboard" in client.scheduler_info().get("services", {}):
