@@ -297,6 +297,11 @@ def test_a_batch_with_other_settings_runs_the_items_again_and_one_with_the_same_
     for item in items:
         assert json.loads((out / item.name / SETTINGS_FILE).read_text())["edges"]["sigma"] == 2.5
     assert [s.state for s in run_batch(client, items, out, other)] == ["skipped", "skipped"]
+    # The same settings written otherwise (an int where the recorded value is a float) are the same settings.
+    threshold = Config().stereo.census_threshold
+    assert threshold == int(threshold)
+    same = {**other, "stereo": {"census_threshold": int(threshold)}}
+    assert [s.state for s in run_batch(client, items, out, same)] == ["skipped", "skipped"]
 
 
 
