@@ -517,3 +517,24 @@ def test_ctrl_c_in_a_terminal_ends_a_local_batch_in_one_line(tmp_path):
     _, err = process.communicate(timeout=120)
     assert process.returncode == 130, err
     assert "Traceback" not in err and err.strip().splitlines()[-1] == "vmcl: interrupted", err
+
+
+def test_zarr_leaves_out_an_item_that_failed_whatever_its_folder_still_holds(client, tmp_path, capsys):
+    # An item that fails in a run keeps its earlier output (vmcl does not delete it), made with other
+    # settings: --zarr stacked that old output beside the new ones.
+    pytest.importorskip("zarr")
+    folders = _scene_folders(tmp_path / "data", 2, 64)
+    out = tmp_path / "batch"
+    base = ["batch", str(tmp_path / "data"), "--out", str(out), "--scheduler", client.scheduler_info()["address"],
+            "--quiet", "--zarr", "disparity"]
+    assert main([*base, "--config", str(_fast_toml(tmp_path))]) == 0
+    (out / folders[1].name / "notes.txt").write_text("mine")  # its folder now refuses to be replaced
+    other = tmp_path / "other.toml"
+    other.write_text('[mrf]\nmethod = "icm"\n[edges]\nsigma = 2.5\n')
+    capsys.readouterr()
+    assert main([*base, "--config", str(other)]) == 2
+    printed = capsys.readouterr().out
+    assert f"1 item(s) filled with NaN (failed, or no disparity): {folders[1].name}" in printed, printed
+    rows, _ = _zarr_rows(out / "disparity.zarr")
+    assert np.isnan(rows[1]).all() and not np.isnan(rows[0]).all()
+    assert (out / folders[1].name / "notes.txt").read_text() == "mine"

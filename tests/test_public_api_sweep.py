@@ -601,7 +601,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.distributed:check_zarr", out=make("batch_out"), items=make("batch_items"), fields=["disparity"],
        kinds={"out": _P, "items": _O, "fields": "names"}),
     _e("vmcl.distributed:write_zarr", out=make("batch_out"), items=make("batch_items"), field="disparity",
-       kinds={"out": _P, "items": _O, "field": _C}),
+       failed=(), kinds={"out": _P, "items": _O, "field": _C, "failed": "names"}),
 )
 
 # Public names that take no input to check: records vmcl returns, enums, plumbing that takes a Machine

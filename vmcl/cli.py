@@ -806,7 +806,8 @@ def _batch(args) -> int:
             print(f"{Path(args.out) / (field + '.zarr')} was built by an earlier run and is out of date for the "
                   f"{counts['done']} item(s) this one wrote: rerun with --zarr {field} to rebuild it", file=sys.stderr)
     for field in fields:  # from the folders on disk: a resumed batch's store holds every finished item
-        store = distributed.write_zarr(Path(args.out), items, field)
+        store = distributed.write_zarr(Path(args.out), items, field,
+                                       failed=[s.name for s in statuses if s.state == "failed"])
         line = f"{field}: {store.path} ({' x '.join(map(str, store.shape))} {store.dtype})"
         if store.filled:
             fill = "NaN" if store.dtype.kind in "fc" else "0"

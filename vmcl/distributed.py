@@ -935,7 +935,8 @@ def _replace(work: Path, target: Path) -> None:
         shutil.rmtree(old, ignore_errors=True)
 
 
-def write_zarr(out: str | os.PathLike[str], items: Sequence[BatchItem], field: str) -> ZarrStore:
+def write_zarr(out: str | os.PathLike[str], items: Sequence[BatchItem], field: str, *,
+               failed: Sequence[str] = ()) -> ZarrStore:
     """Stack one field of every item's output in ``out`` into the Zarr array ``out``/<field>.zarr.
 
     The rows follow the items' order and come from the items' fields.npz on disk, so the store is always
@@ -954,6 +955,10 @@ def write_zarr(out: str | os.PathLike[str], items: Sequence[BatchItem], field: s
     field : str
         A name of fields.npz (:data:`vmcl.cli.FIELD_NAMES`, ``restored_<cue>``, ``<cue>_line_h``,
         ``<cue>_line_v``).
+    failed : sequence of str
+        The names of items that failed in the run that built their folders (:func:`run_batch`'s statuses):
+        their rows are filled, whatever their folders still hold (an earlier output, made with other
+        settings or inputs, which the failed run did not replace).
 
     Returns
     -------
@@ -978,6 +983,9 @@ def write_zarr(out: str | os.PathLike[str], items: Sequence[BatchItem], field: s
     out = _check_out(out)
     items = _check_items(items)
     field = _check_field(field)
+    if isinstance(failed, str) or not isinstance(failed, Sequence) or not all(isinstance(n, str) for n in failed):
+        raise InputTypeError(f"failed must be a sequence of item names, got {failed!r}")
+    left_out = set(failed)
     zarr = _zarr()
     target = _zarr_target(out, field)
     work = out / f".{field}.zarr.partial-{secrets.token_hex(4)}"
@@ -986,7 +994,7 @@ def write_zarr(out: str | os.PathLike[str], items: Sequence[BatchItem], field: s
     filled: list[str] = []
     try:
         for index, item in enumerate(items):
-            values = _item_field(out / item.name, field)
+            values = None if item.name in left_out else _item_field(out / item.name, field)
             if values is None:
                 filled.append(item.name)
                 continue
