@@ -101,6 +101,14 @@ def test_the_report_never_overwrites_a_file_it_did_not_write(run, tmp_path):
         write_report(run, tmp_path)
     assert mine.read_bytes() == b"the user's own picture"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cartoon.png"]
+    # A link to nothing is a name taken too: writing through it made a file wherever it pointed.
+    elsewhere = tmp_path.parent / f"{tmp_path.name}-elsewhere.png"
+    linked = tmp_path / "links"
+    linked.mkdir()
+    (linked / "cartoon.png").symlink_to(elsewhere)
+    with pytest.raises(ValueError, match="already holds cartoon.png"):
+        write_report(run, linked)
+    assert not elsewhere.exists()
 
 
 @pytest.mark.parametrize(("call", "error", "named"), [

@@ -373,3 +373,33 @@ def test_a_path_where_images_belong_is_refused_with_the_way_to_read_it(machine, 
         list(vm.stream([np.zeros((32, 32), np.float32)], tmp_path))
     with pytest.raises(TypeError, match=r"left must be a NumPy array, got the path .*read_image"):
         vm.run(str(tmp_path / "left.png"))
+
+
+def test_a_stream_copies_each_frame_and_names_a_frame_that_is_none(machine, tmp_path):
+    # A None frame was taken for the end of the stream (fewer Results, no error); a source that fills one
+    # buffer per frame (a camera, a video reader) gave no motion, since frames are read one ahead; and a
+    # Result's image was the caller's own float32 array.
+    frames = scenes.render_sequence(scenes.preset("blocks", shape=(64, 64)), 3, seed=1, noise=0.01)
+    lefts = [np.ascontiguousarray(f.left.mean(axis=2), np.float32) for f in frames]
+    vm = VisionMachine(Config(time=TimeConfig(enabled=False), **_DEPTH_AND_MOTION), machine=machine)
+    with pytest.raises(TypeError, match="frame 1: left must be a NumPy array, got NoneType"):
+        list(vm.stream([lefts[0], None, lefts[2]]))
+    with pytest.raises(TypeError, match="frames must be an iterable of images, got int"):
+        list(vm.stream(5))
+
+    def camera():
+        buffer = np.empty_like(lefts[0])
+        for frame in lefts:
+            buffer[:] = frame
+            yield buffer
+
+    from_camera = list(vm.stream(camera()))
+    from_copies = list(vm.stream(lefts))
+    for ours, theirs in zip(from_camera, from_copies):
+        assert ours.flow is None and theirs.flow is None or np.array_equal(ours.flow, theirs.flow)
+        np.testing.assert_array_equal(ours.image, theirs.image)
+    assert np.abs(from_copies[0].flow).mean() > 0.1  # the blocks move: the copies see it (a buffer saw none)
+    image = lefts[0].copy()
+    result = vm.run(image)
+    image[:] = 0
+    assert result.image.max() > 0

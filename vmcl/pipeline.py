@@ -802,7 +802,9 @@ def as_image(array: Any, name: str) -> np.ndarray:
     if not np.isfinite(array).all():
         raise InputValueError(f"{name} has NaN or infinite pixels")
     check_unit_image(array, name)
-    return np.ascontiguousarray(array, np.float32)
+    image = np.ascontiguousarray(array, np.float32)
+    # Never the caller's own array: a Result holds its image, which the caller may change after the run.
+    return image.copy() if np.shares_memory(image, array) else image
 
 
 class CueData(NamedTuple):
@@ -953,33 +955,47 @@ class VisionMachine:
         if rights is not None and isinstance(frames, Sized) and isinstance(rights, Sized) and len(frames) != len(rights):
             raise InputValueError(f"frames and rights must be as long (a stereo sequence needs a right view per "
                                   f"frame), got {len(frames)} and {len(rights)}")  # before any work, counts known
+        for name, given in (("frames", frames), ("rights", rights)):
+            if given is not None and not isinstance(given, Iterable):
+                raise InputTypeError(f"{name} must be an iterable of images, got {type(given).__name__}")
         memory = self.config.time.memory_of(self.machine) if self.config.time.enabled else None
-        lefts = iter(frames)
-        seconds = iter(rights) if rights is not None else None
-        index, current = 0, next(lefts, None)
-        if current is None:
+        # Each frame is copied as it is read: frames are read one ahead, and a camera or video reader that
+        # fills one buffer per frame would otherwise change the frame being run under it (no motion).
+        lefts = (_held(frame) for frame in frames)
+        seconds = (_held(frame) for frame in rights) if rights is not None else None
+        index, current = 0, next(lefts, _ENDED)  # a None among the frames is a bad frame, not the end
+        if current is _ENDED:
             return
         right = self._stream_right(seconds, index)
-        while current is not None:
-            following = next(lefts, None)
+        while current is not _ENDED:
+            following = next(lefts, _ENDED)
             try:
-                image, others, notes = _inputs(current, right, following)
+                image, others, notes = _inputs(current, right, None if following is _ENDED else following)
             except InputError as error:
                 raise type(error)(f"frame {index}: {error}") from None
             yield _Run(self, image, others, progress, memory, notes=notes).result
             index, current = index + 1, following
-            right = self._stream_right(seconds, index) if current is not None else None
-        if seconds is not None and next(seconds, None) is not None:
+            right = self._stream_right(seconds, index) if current is not _ENDED else None
+        if seconds is not None and next(seconds, _ENDED) is not _ENDED:
             raise InputValueError(f"rights holds more frames than frames, which ended after {index}")
 
     @staticmethod
     def _stream_right(rights: Iterator[np.ndarray] | None, index: int) -> np.ndarray | None:
         if rights is None:
             return None
-        right = next(rights, None)
-        if right is None:
+        right = next(rights, _ENDED)
+        if right is _ENDED:
             raise InputValueError(f"rights ended at frame {index}: a stereo sequence needs a right view per frame")
         return right
+
+
+_ENDED = object()  # the end of a stream's frames (None is a frame, a bad one)
+
+
+def _held(frame: Any) -> Any:
+    """A stream's frame as read: a NumPy array copied (its source may fill the same buffer next), the
+    rest as given, for the checks to name."""
+    return frame.copy() if isinstance(frame, np.ndarray) else frame  # a masked array stays one, for the checks
 
 
 def _inputs(left: Any, right: Any, next: Any) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:

@@ -334,8 +334,10 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
         raise InputTypeError(f"folder must be a str or Path, got {type(folder).__name__}")
     pictures = images_with_captions(result)
     folder = Path(folder)
-    # vmcl never overwrites a file it did not write: the report goes into a folder without its names.
-    taken = sorted(name for name in [*(f"{stem}.png" for stem in pictures), "report.html"] if (folder / name).exists())
+    # vmcl never overwrites a file it did not write: the report goes into a folder without its names (a link
+    # of one of them, even one to nothing, would be written through to its target).
+    names = [*(f"{stem}.png" for stem in pictures), "report.html"]
+    taken = sorted(name for name in names if (folder / name).exists() or (folder / name).is_symlink())
     if taken:
         raise InputValueError(f"folder {folder} already holds {', '.join(taken)}; write the report into a new "
                               "or empty folder (the vmcl command replaces its own previous output)")
