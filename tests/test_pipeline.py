@@ -50,6 +50,20 @@ def test_a_config_made_in_python_is_checked_when_made():
         Config(stereo={"d_max": 3})
 
 
+
+def test_a_config_holds_its_own_values_and_refuses_what_a_run_would():
+    # A Config kept the caller's override mapping itself (a later change to it changed the Config, and a
+    # Result's record of it); grouping.iterations past the network's limit was refused only at run time;
+    # progress that is not callable failed after the run had begun.
+    overrides = {"beta": 3.0}
+    config = Config.from_dict({"mrf": {"stereo": overrides}})
+    overrides["beta"] = 99.0
+    assert config.mrf.stereo == {"beta": 3.0}
+    with pytest.raises(ValueError, match="grouping.iterations must be <= 10000"):
+        Config.from_dict({"grouping": {"iterations": 10**9}})
+    with pytest.raises(TypeError, match="progress must be a callable"):
+        VisionMachine().run(np.zeros((32, 32), np.float32), progress=5)
+
 @pytest.mark.parametrize("text, message", [("[stereo]\nd_maxx = 3\n", "stereo.d_maxx"),
                                            ("[stero]\n", "stero"),
                                            ("[mrf.stereo]\nbetta = 1.0\n", "mrf.stereo.betta"),

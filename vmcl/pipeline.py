@@ -26,6 +26,7 @@ discontinuities", IEEE SMC 19(6):1576-1581, 1989.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 import os
@@ -67,6 +68,7 @@ from vmcl.early import (
 )
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.group import Grouping, group, saliency_strength, structural_saliency
+from vmcl.group.structural_saliency import MAX_ITERATIONS as MAX_SALIENCY_ITERATIONS
 from vmcl.labels import CUES
 from vmcl.machine import Machine, on_device
 from vmcl.mrf import SOLVERS, NothingToRestore, Restoration, Settings, preset
@@ -223,7 +225,7 @@ class GroupingConfig:
         check_real(self.gap, "grouping.gap", minimum=0)
         check_real(self.alignment, "grouping.alignment", above=0, below=90)
         check_real(self.structural_threshold, "grouping.structural_threshold", minimum=0)
-        check_int(self.iterations, "grouping.iterations", minimum=1)
+        check_int(self.iterations, "grouping.iterations", minimum=1, maximum=MAX_SALIENCY_ITERATIONS)
         check_real(self.gap_attenuation, "grouping.gap_attenuation", minimum=0, maximum=1)
 
 
@@ -387,7 +389,7 @@ class MotionConfig:
         it: the matcher's windows straddle motion boundaries and its estimates scatter, which a median
         whose support stops at brightness edges mends (Sun, Roth and Black's weighted median of flow).
         Pixels the matcher left without flow take their neighbours' median (weighed 0 by the score when
-        ``weigh_by_score``). ``Result.fields["raw_flow"]`` stays the matcher's own. Defaults fitted on rendered scenes
+        ``weigh_by_score``). ``Result.raw_flow`` stays the matcher's own. Defaults fitted on rendered scenes
         (benchmarks/motion_refine_fit.py).
     lucas_kanade_iterations, lucas_kanade_window, lucas_kanade_highpass
         Lucas-Kanade steps (:func:`vmcl.early.lucas_kanade.lucas_kanade`: their number, >= 0, their
@@ -747,7 +749,8 @@ class Config:
             for key in entries:
                 if key not in known:
                     raise InputValueError(f"unknown config key {name}.{key}; {name} has {', '.join(sorted(known))}")
-            sections[name] = _SECTIONS[name](**entries)
+            # Copied: a Config is frozen, and must not change when the caller's mappings do later.
+            sections[name] = _SECTIONS[name](**copy.deepcopy(dict(entries)))
         return cls(**sections)
 
     @classmethod
@@ -898,6 +901,7 @@ class VisionMachine:
         ValueError, TypeError
             Bad images (shape, dtype, NaN, sizes that differ) or a configuration the modules refuse.
         """
+        _check_progress(progress)
         image, others, notes = _inputs(left, right, next)
         return _Run(self, image, others, progress, None, notes=notes).result
 
@@ -955,6 +959,7 @@ class VisionMachine:
         if rights is not None and isinstance(frames, Sized) and isinstance(rights, Sized) and len(frames) != len(rights):
             raise InputValueError(f"frames and rights must be as long (a stereo sequence needs a right view per "
                                   f"frame), got {len(frames)} and {len(rights)}")  # before any work, counts known
+        _check_progress(progress)
         for name, given in (("frames", frames), ("rights", rights)):
             if given is not None and not isinstance(given, Iterable):
                 raise InputTypeError(f"{name} must be an iterable of images, got {type(given).__name__}")
@@ -990,6 +995,11 @@ class VisionMachine:
 
 
 _ENDED = object()  # the end of a stream's frames (None is a frame, a bad one)
+
+
+def _check_progress(progress: Any) -> None:
+    if progress is not None and not callable(progress):
+        raise InputTypeError(f"progress must be a callable taking a stage's name, or None, got {type(progress).__name__}")
 
 
 def _held(frame: Any) -> Any:
