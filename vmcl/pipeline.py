@@ -985,7 +985,8 @@ class VisionMachine:
             raise InputValueError(f"rights holds more frames than frames, which ended after {index}")
 
     @staticmethod
-    def _stream_right(rights: Iterator[np.ndarray] | None, index: int) -> np.ndarray | None:
+    def _stream_right(rights: Iterator[Any] | None, index: int) -> Any:
+        """The right view of frame ``index`` as read (checked with the frame), None for a monocular stream."""
         if rights is None:
             return None
         right = next(rights, _ENDED)
