@@ -577,3 +577,13 @@ def test_a_flat_shape_of_a_solids_outline_is_not_taken_for_the_solid():
     for bad in (1.5, -0.1, float("nan")):
         with pytest.raises(InputError, match="min_inner"):
             recognize(image, library, min_inner=bad)
+
+
+def test_an_edge_map_in_an_integer_type_is_refused_with_the_way_to_pass_it(ell_model):
+    # A uint8 0/1 edge map was taken for a (black) picture: its Canny edges outline each edge pixel and the
+    # poses came out a pixel or more off, with no word.
+    model, image, _ = ell_model
+    edges = image_features(image).edges
+    with pytest.raises(ValueError, match=r"an edge map must be a bool array \(image.astype\(bool\)\)"):
+        recognize(edges.astype(np.uint8), Library([model]))
+    assert [d.name for d in recognize(edges, Library([model]))] == ["ell"]
