@@ -129,7 +129,7 @@ __kernel void near_rows(__global const uchar *edges, __global int *distance, lon
     long last = -1;
     for (long x = 0; x < W; ++x) {
         if (e[x]) last = x;
-        d[x] = last < 0 ? (int)W : (int)(x - last);
+        d[x] = last < 0 ? INT_MAX : (int)(x - last);  /* no edge in the row: beyond any radius */
     }
     last = -1;
     for (long x = W - 1; x >= 0; --x) {

@@ -132,10 +132,17 @@ def test_a_damaged_or_renamed_model_file_is_named_and_a_float_mask_read(tmp_path
     (library / "copy.vmodel.npz").write_bytes((library / "ell.vmodel.npz").read_bytes())
     with pytest.raises(ValueError, match="copy.vmodel.npz, ell.vmodel.npz all hold the model 'ell'"):
         Library.load(library)
+    # A float mask reads as the same mask in uint8: on above half its full scale.
     image = cv2.imread(str(files["block"]), cv2.IMREAD_GRAYSCALE)
-    cv2.imwrite(str(tmp_path / "mask.tiff"), np.ones(image.shape, np.float32))
-    assert main(["learn", "block", str(files["block"]), "--library", str(tmp_path / "other"),
-                 "--mask", str(tmp_path / "mask.tiff"), "-q"]) == 0
+    half = np.zeros(image.shape, np.float32)
+    half[:, : image.shape[1] // 2] = 1.0
+    cv2.imwrite(str(tmp_path / "mask.tiff"), half)
+    cv2.imwrite(str(tmp_path / "mask.png"), (half * 255).astype(np.uint8))
+    for mask, library in (("mask.tiff", "float"), ("mask.png", "uint8")):
+        assert main(["learn", "block", str(files["block"]), "--library", str(tmp_path / library),
+                     "--mask", str(tmp_path / mask), "-q"]) == 0
+    as_float, as_uint8 = (load_model(tmp_path / library / "block.vmodel.npz") for library in ("float", "uint8"))
+    assert len(as_float.views[0].points) and np.array_equal(as_float.views[0].points, as_uint8.views[0].points)
 
 
 def test_learn_refuses_an_existing_model_before_learning(tmp_path, files, capsys, monkeypatch):

@@ -236,3 +236,25 @@ def test_hidden_and_other_files_are_not_frames(tmp_path, sequence):
         open_frames(folder / "*.db")
     with pytest.raises(ValueError, match="spec is empty"):
         open_frames("")
+
+
+
+def test_a_signal_the_caller_ignores_stays_ignored(tmp_path):
+    # Under nohup SIGHUP is ignored: vmcl took it over, and a closed terminal stopped the run.
+    clip = _video(tmp_path / "long.avi", 200)
+    out = tmp_path / "out"
+    code = ("import signal, sys; signal.signal(signal.SIGHUP, signal.SIG_IGN); "
+            "from vmcl.cli import main; sys.exit(main(sys.argv[1:]))")
+    process = subprocess.Popen([sys.executable, "-c", code, "run", str(clip), "--out", str(out), "-q"],
+                               stderr=subprocess.PIPE, text=True)
+    # Sent once frames are being written: during a kernel's first build, LLVM's own handler in PoCL removes
+    # its temporary files on SIGHUP even when the signal is ignored, and that build fails.
+    deadline = time.monotonic() + 120
+    while (len(list(tmp_path.glob(".out.partial-*/fields_*.npz"))) < 3 and process.poll() is None
+           and time.monotonic() < deadline):
+        time.sleep(0.05)
+    assert process.poll() is None, "the run ended before the signal could be sent"
+    process.send_signal(signal.SIGHUP)
+    _, err = process.communicate(timeout=600)
+    assert process.returncode == 0, err
+    assert len(list(out.glob("fields_*.npz"))) == 200

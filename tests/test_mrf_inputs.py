@@ -291,6 +291,22 @@ def test_the_cost_of_a_wide_radius_does_not_grow_with_it(radius, machine):
     assert np.isfinite(b_h).all()
 
 
+@pytest.mark.parametrize("shape, edge", [((40, 6), (20, 3)), ((6, 40), (3, 20)), ((6, 6), None)])
+@pytest.mark.parametrize("radius", [5, 6, 8, 39, 40, 100])
+def test_the_device_agrees_with_the_host_on_rectangles_and_fields_without_edges(shape, edge, radius, machine):
+    # A row without an edge pixel took the row's width for its distance, which a radius of that width or
+    # more accepted: the device then allowed lines the host forbids.
+    edges = np.zeros(shape, bool)
+    if edge is not None:
+        edges[edge] = True
+    model = EnergyModel(require_edge=True, edge_radius=radius)
+    lattice = Lattice(machine, machine.to_device(np.zeros(shape, np.float32)), None,
+                      machine.to_device(edges.astype(np.uint8)), "smooth", model)
+    b_h, b_v = line_costs(shape, edges, model)
+    np.testing.assert_array_equal(lattice.bh.get().reshape(shape)[:, :-1], b_h.astype(np.float32))
+    np.testing.assert_array_equal(lattice.bv.get().reshape(shape)[:-1, :], b_v.astype(np.float32))
+
+
 def test_a_radius_beyond_the_field_reaches_every_pixel():
     edges = np.zeros((30, 50), bool)
     edges[0, 0] = True

@@ -382,8 +382,11 @@ def test_a_stream_copies_each_frame_and_names_a_frame_that_is_none(machine, tmp_
     frames = scenes.render_sequence(scenes.preset("blocks", shape=(64, 64)), 3, seed=1, noise=0.01)
     lefts = [np.ascontiguousarray(f.left.mean(axis=2), np.float32) for f in frames]
     vm = VisionMachine(Config(time=TimeConfig(enabled=False), **_DEPTH_AND_MOTION), machine=machine)
+    yielded = []
     with pytest.raises(TypeError, match="frame 1: left must be a NumPy array, got NoneType"):
-        list(vm.stream([lefts[0], None, lefts[2]]))
+        for result in vm.stream([lefts[0], None, lefts[2]]):
+            yielded.append(result)
+    assert yielded == []  # frame 0 is not run as a last frame, without motion, before the error
     with pytest.raises(TypeError, match="frames must be an iterable of images, got int"):
         list(vm.stream(5))
 
@@ -395,6 +398,7 @@ def test_a_stream_copies_each_frame_and_names_a_frame_that_is_none(machine, tmp_
 
     from_camera = list(vm.stream(camera()))
     from_copies = list(vm.stream(lefts))
+    assert len(from_camera) == len(from_copies) == 3
     for ours, theirs in zip(from_camera, from_copies):
         assert ours.flow is None and theirs.flow is None or np.array_equal(ours.flow, theirs.flow)
         np.testing.assert_array_equal(ours.image, theirs.image)

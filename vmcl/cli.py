@@ -115,6 +115,8 @@ def _stop_signals_raise() -> Iterator[None]:
     """SIGTERM and SIGHUP raise :class:`_Stopped` while the command runs (their default kills the process
     where it stands, leaving a half-written output behind); the handlers before are put back after."""
     kinds = [getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)]
+    # Only a signal left at its default: one the caller set aside (nohup ignores SIGHUP) stays theirs.
+    kinds = [kind for kind in kinds if signal.getsignal(kind) is signal.SIG_DFL]
     try:
         before = {kind: signal.signal(kind, _raise_stopped) for kind in kinds}
     except ValueError:  # not the main thread (vmcl.cli.main called from a worker): signals are not ours
@@ -360,7 +362,7 @@ def _learn(args) -> int:
             if mask.shape[:2] != image.shape[:2]:
                 raise BadInput(f"mask {path} is {mask.shape[1]} x {mask.shape[0]}, its image "
                                f"{image.shape[1]} x {image.shape[0]}: a mask must have its image's size")
-        # On at half the type's full scale: 128 of 255, 0.5 of a float mask's 1 (0 and 255 read the same).
+        # On above half the type's full scale: 128 of 255, 0.5 of a float mask's 1.
         masks = [(m if m.ndim == 2 else m.mean(axis=2)) > full_scale(m.dtype) / 2 for m in masks]
     target = Path(args.library) / f"{args.name}{MODEL_SUFFIX}"
     if target.exists() and not args.replace:  # said before the learning, not after it
@@ -368,8 +370,8 @@ def _learn(args) -> int:
     model = learn(args.name, images, masks=masks, sources=[Path(p).name for p in args.images])
     path = save_model(model, args.library, replace=args.replace)
     corners = sum(len(v.corners) for v in model.views)
-    # The inner markings (a solid's edges between its faces) are what recognition asks of a solid beyond its
-    # outline (recognize's min_inner); a user learning a solid should see that they were found.
+    # The inner markings (a solid's edges between its faces) are what tells a solid from a flat shape of its
+    # outline (recognize's min_inner can require them); a user learning a solid should see they were found.
     inner = 1 - np.concatenate([v.outline for v in model.views]).mean()
     print(f"{model.name}: {len(model.views)} view{'s' * (len(model.views) != 1)}, {corners} corners, "
           f"{inner:.0%} of its boundary inner markings; wrote {path}")

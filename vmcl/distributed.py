@@ -589,7 +589,9 @@ name."""
 
 def _item_record(item: BatchItem) -> str:
     """The item's kind and inputs as _ITEM_FILE holds them (a scene folder by its files)."""
-    files = sorted(p for p in item.paths[0].iterdir() if p.is_file()) if item.kind == "scene" else list(item.paths)
+    # A scene by its files, hidden ones left out (a file browser rewrites its .DS_Store at will).
+    files = (sorted(p for p in item.paths[0].iterdir() if p.is_file() and not p.name.startswith("."))
+             if item.kind == "scene" else list(item.paths))
     inputs = []
     for path in files:
         stat = path.stat()
@@ -617,9 +619,11 @@ def run_batch(client: Client, items: Sequence[BatchItem], out: str | os.PathLike
               progress: Callable[[str], None] | None = None) -> list[ItemStatus]:
     """Run every item on the client's cluster and write each one's output into ``out``/<name>/.
 
-    Items whose folder already holds a whole vmcl output made with the same settings are skipped (a rerun
-    resumes); one made with other settings (the file vmcl.cli.SETTINGS_FILE in it records them) is run again
-    and its output replaced, so that a batch's folders never mix settings. The images are
+    Items whose folder already holds a whole vmcl output made from the same inputs with the same settings
+    are skipped (a rerun resumes); one made with other settings (the file vmcl.cli.SETTINGS_FILE in it
+    records them) or from inputs that changed since (item.json records their paths, sizes and times), or
+    one that is damaged (a file missing or cut short), is run again and its output replaced, so that a
+    batch's folders never mix settings. The images are
     read here, a few tasks ahead of the workers (twice the cluster's threads), so that a batch of any
     length holds only those in memory; each output is written, whole or not at all, as its task ends.
 
@@ -672,6 +676,7 @@ def run_batch(client: Client, items: Sequence[BatchItem], out: str | os.PathLike
     batch = uuid.uuid4().hex[:8]
     waiting = iter(todo)
     running: dict[Future, BatchItem] = {}
+    records: dict[str, str] = {}
     ended = as_completed()
 
     def fail(item: BatchItem, error: BaseException) -> None:
@@ -686,6 +691,9 @@ def run_batch(client: Client, items: Sequence[BatchItem], out: str | os.PathLike
             if item is None:
                 return
             try:
+                # What the output is made from, taken before the inputs are read: an input changed while
+                # its item runs then fails the next run's comparison, and the item runs again.
+                records[item.name] = _item_record(item)
                 views = item.load()
             except (InputError, OSError) as error:
                 fail(item, error)
@@ -704,7 +712,7 @@ def run_batch(client: Client, items: Sequence[BatchItem], out: str | os.PathLike
                 with output_folder(out / item.name) as work:
                     for name, data in output.files.items():
                         (work / name).write_bytes(data)
-                    (work / _ITEM_FILE).write_text(_item_record(item), encoding="utf-8")
+                    (work / _ITEM_FILE).write_text(records[item.name], encoding="utf-8")
                 detail = ("run again: the output there was made with other settings or inputs, or is damaged"
                           if item.name in again else "")
                 statuses[item.name] = ItemStatus(item.name, "done", detail, total_ms=output.total_ms)

@@ -48,9 +48,9 @@ class FrameSource:
         What it is, for messages ("12 images in frames/", "video clip.mp4").
     count : int or None
         The number of frames (a video's own count may be an estimate), None when unknown. Reading a video
-        that holds no frames, or ends before the count its header declares (truncated or damaged; for
-        containers that do not record the count, more than a twentieth short), raises ValueError naming
-        it, after the frames it did read.
+        that holds no frames, or ends before the count its header declares (truncated or damaged: more
+        than two frames short, or for containers that do not record the count, than a twentieth),
+        raises ValueError naming it, after the frames it did read.
     paths : tuple of Path
         The image files in order (empty for a video).
     video : Path or None
@@ -81,10 +81,11 @@ class FrameSource:
         finally:
             capture.release()
         # A video that ends before the count its header declares is truncated or damaged: a run on the
-        # frames before the damage would stand for the whole video. Containers whose count OpenCV only
-        # estimates from the duration are let off a little.
+        # frames before the damage would stand for the whole video. OpenCV's count can be a frame or two
+        # high for a whole video (edit lists, B-frames), and containers whose count it only estimates
+        # from the duration are let off a twentieth.
         indexed = self.video.suffix.lower() in _INDEXED_VIDEO_SUFFIXES
-        slack = 0 if indexed or not self.count else max(1, self.count // 20)
+        slack = 0 if not self.count else 2 if indexed else max(2, self.count // 20)
         if self.count and read < self.count - slack:
             raise InputValueError(f"{self.video}: the video ended after {read} of the {self.count} frames its header "
                                   "declares: it is truncated or damaged")
@@ -94,7 +95,7 @@ class FrameSource:
 
 def _is_frame(path: Path) -> bool:
     """Whether a file found in a folder or by a pattern is a frame: an image file by its suffix, not a
-    hidden one (a macOS ``._frame.png`` resource file, an editor's backup)."""
+    hidden one (a macOS ``._frame.png`` resource file)."""
     return path.is_file() and path.suffix.lower() in IMAGE_SUFFIXES and not path.name.startswith(".")
 
 

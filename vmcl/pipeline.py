@@ -974,6 +974,8 @@ class VisionMachine:
         right = self._stream_right(seconds, index)
         while current is not _ENDED:
             following = next(lefts, _ENDED)
+            if following is None:  # named now: as "no next frame" it would run this frame without motion first
+                raise InputTypeError(f"frame {index + 1}: left must be a NumPy array, got NoneType")
             try:
                 image, others, notes = _inputs(current, right, None if following is _ENDED else following)
             except InputError as error:

@@ -438,10 +438,11 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     candidates : int
         The pose bins kept, >= 1, shared between the model views: each view keeps its own best bins up to
         an equal share, a view with fewer leaving the rest to the others (bins tied with a view's last
-        are kept too, so a little more may come back). A model with many features, which gathers many
-        votes by chance everywhere, thus cannot crowd another model's poses out; a view of a solid is a
-        view like any other. The default is :func:`vmcl.recognize.recognize`'s, fitted on rendered
-        training scenes.
+        are kept too, so more may come back: most where many views each have a few bins of equal votes). A
+        model with many features, which gathers many votes by chance everywhere, thus cannot take the
+        other views' shares, but each view's share shrinks as the library grows, and an object whose true
+        pose ranks low among its own view's bins can then be lost; a view of a solid is a view like any
+        other. The default is :func:`vmcl.recognize.recognize`'s, fitted on rendered training scenes.
     min_votes : int
         The fewest votes a kept bin has, >= 1 (each corner correspondence votes twice, once per order).
     machine : vmcl.Machine, optional

@@ -177,7 +177,7 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
         Pose bins kept from the vote, >= 1 (their hypotheses are pooled into candidate poses), shared
         between the model views: each keeps its own best up to an equal share, and a view with fewer
         leaves the rest to the others (:func:`vmcl.recognize.vote`), so that a large model, which gathers
-        many votes by chance, does not crowd a small one out of the library. The default was chosen on
+        many votes by chance, cannot take a small one's share (each share shrinks as the library grows). The default was chosen on
         rendered training scenes with ``tolerance`` and ``neighbours`` (benchmarks/recognition_fit.py).
     verify : int
         Candidate poses refined and verified, >= 1: those a coarse test of each unrefined pose supports
