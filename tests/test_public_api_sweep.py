@@ -330,6 +330,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.recognize:save_model", model=make("model"), folder=path("new_dir"), replace=False,
        kinds={"model": _O, "folder": _P, "replace": _B}),
     _e("vmcl.recognize:load_model", path=path("vmodel"), kinds={"path": _P}),
+    _e("vmcl.recognize:model_path", folder=path("dir"), name="box", kinds={"folder": _P, "name": _C}),
     _e("vmcl.recognize:Library", models=[make("model")], kinds={"models": _O}),
     _e("vmcl.recognize:Library.load", folder=path("library"), kinds={"folder": _P}),
     _e("vmcl.recognize:Index.build", library=make("library"), neighbours=8, kinds={"library": _O, "neighbours": _I}),

@@ -350,7 +350,7 @@ def _run(args) -> int:
 
 def _learn(args) -> int:
     from vmcl.cm.core import full_scale
-    from vmcl.recognize import MODEL_SUFFIX, learn, save_model
+    from vmcl.recognize import learn, model_path, save_model
 
     images = [_read(path, "example") for path in args.images]
     masks = None
@@ -364,7 +364,7 @@ def _learn(args) -> int:
                                f"{image.shape[1]} x {image.shape[0]}: a mask must have its image's size")
         # On above half the type's full scale: 128 of 255, 0.5 of a float mask's 1.
         masks = [(m if m.ndim == 2 else m.mean(axis=2)) > full_scale(m.dtype) / 2 for m in masks]
-    target = Path(args.library) / f"{args.name}{MODEL_SUFFIX}"
+    target = model_path(args.library, args.name)
     if target.exists() and not args.replace:  # said before the learning, not after it
         raise BadInput(f"{target} exists: give --replace to replace it with the model learned now")
     model = learn(args.name, images, masks=masks, sources=[Path(p).name for p in args.images])

@@ -607,8 +607,8 @@ def _made_with(folder: Path, values: dict[str, Any], item: BatchItem) -> bool:
 
     try:
         # Compared as values, not text: a setting given as 2 is the same as the default's 2.0.
-        return (is_whole(folder)
-                and json.loads((folder / SETTINGS_FILE).read_text(encoding="utf-8")) == json.loads(settings_text(values))
+        recorded = json.loads((folder / SETTINGS_FILE).read_text(encoding="utf-8"))
+        return (is_whole(folder) and recorded == json.loads(settings_text(values))
                 and (folder / _ITEM_FILE).read_text(encoding="utf-8") == _item_record(item))
     except (OSError, UnicodeDecodeError, ValueError):
         return False

@@ -117,8 +117,8 @@ def open_frames(spec: str | Path) -> FrameSource:
     spec : str or Path
         A folder (its files with :data:`IMAGE_SUFFIXES`), a glob pattern (``frames/*.png``: the files with
         those suffixes it matches) or a video file (:data:`VIDEO_SUFFIXES`); hidden files (names starting
-        with a dot, such as macOS's ``._frame.png``) are not frames. Files are taken in the order of their names,
-        numbers in them by value (:func:`frame_order`: frame9 before frame10).
+        with a dot, such as macOS's ``._frame.png``) are not frames. Files are taken in the order of their
+        names, numbers in them by value (:func:`frame_order`: frame9 before frame10).
 
     Returns
     -------

@@ -956,13 +956,12 @@ class VisionMachine:
             if isinstance(given, (str, os.PathLike)):
                 raise InputTypeError(f"{name} must be an iterable of images, got the path {str(given)!r}: read a "
                                      "folder, glob or video with vmcl.frame_sources.open_frames(path).frames()")
+            if given is not None and not isinstance(given, Iterable):
+                raise InputTypeError(f"{name} must be an iterable of images, got {type(given).__name__}")
         if rights is not None and isinstance(frames, Sized) and isinstance(rights, Sized) and len(frames) != len(rights):
             raise InputValueError(f"frames and rights must be as long (a stereo sequence needs a right view per "
                                   f"frame), got {len(frames)} and {len(rights)}")  # before any work, counts known
         _check_progress(progress)
-        for name, given in (("frames", frames), ("rights", rights)):
-            if given is not None and not isinstance(given, Iterable):
-                raise InputTypeError(f"{name} must be an iterable of images, got {type(given).__name__}")
         memory = self.config.time.memory_of(self.machine) if self.config.time.enabled else None
         # Each frame is copied as it is read: frames are read one ahead, and a camera or video reader that
         # fills one buffer per frame would otherwise change the frame being run under it (no motion).

@@ -18,7 +18,17 @@ from vmcl.recognize.indexing import (
                                          vote,
                                          vote_numpy,
 )
-from vmcl.recognize.models import MODEL_SUFFIX, Library, Model, View, learn, load_model, save_model, view_of
+from vmcl.recognize.models import (
+                                         MODEL_SUFFIX,
+                                         Library,
+                                         Model,
+                                         View,
+                                         learn,
+                                         load_model,
+                                         model_path,
+                                         save_model,
+                                         view_of,
+)
 from vmcl.recognize.recognition import Detection, recognize
 from vmcl.recognize.selection import Regions, corner_regions, select_regions
 from vmcl.recognize.verification import (
@@ -38,5 +48,5 @@ __all__ = ["MODEL_SUFFIX", "TRANSFORMS", "Candidates", "Detection", "Features", 
            "NearestEdge", "Regions", "Support", "Verified", "View", "anchors_of", "arcs_of", "carry", "corner_pairs",
            "corner_regions",
            "distance_transform", "distance_transform_numpy", "edge_features", "image_features", "index_for", "learn",
-           "load_model", "pair_keys", "recognize", "refine", "save_model", "select_regions", "support",
+           "load_model", "model_path", "pair_keys", "recognize", "refine", "save_model", "select_regions", "support",
            "support_numpy", "view_of", "vote", "vote_numpy"]

@@ -474,9 +474,9 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     kernel = machine.kernel("indexing", "vote")
     common = (np.int32(len(pairs)), np.float32(_ROTATION_BIN), np.int32(_ROTATION_BINS), np.float32(_SCALE_BIN),
               np.float32(_POSITION_BIN), np.float32(low), np.float32(high))
+    # The counting pass reads neither the cutoffs nor the list: any buffers of their types stand in.
     no_list = machine.empty((1, 4), np.float32), machine.empty((1, 2), np.int32)
-    no_cutoffs = machine.to_device(np.zeros(len(hypotheses), np.int32))
-    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, regions, no_cutoffs, count, *no_list,
+    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, regions, count, count, *no_list,
                    *common, np.int32(0), np.int32(0))
     # The histograms of the views the lookups met, one row each (the others have no slots).
     histograms = machine.full(len(live) * _COUNT_BINS, np.int32, 0)

@@ -27,7 +27,7 @@ from vmcl.machine import Machine
 from vmcl.recognize.arguments import edge_map
 from vmcl.recognize.features import Features, image_features
 
-__all__ = ["MODEL_SUFFIX", "Library", "Model", "View", "learn", "load_model", "save_model", "view_of"]
+__all__ = ["MODEL_SUFFIX", "Library", "Model", "View", "learn", "load_model", "model_path", "save_model", "view_of"]
 
 MODEL_SUFFIX = ".vmodel.npz"
 """The suffix of a model file in a library folder."""
@@ -250,8 +250,12 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
     return Model(name, tuple(views), tuple(sources) if sources is not None else ("array",) * len(views))
 
 
-def _model_path(folder: Path, name: str) -> Path:
-    return folder / f"{name}{MODEL_SUFFIX}"
+def model_path(folder: str | Path, name: str) -> Path:
+    """The file :func:`save_model` writes a model of this name to in a library folder: ``NAME.vmodel.npz``
+    (the name checked as a model's is)."""
+    if not isinstance(folder, (str, Path)):
+        raise InputTypeError(f"folder must be a str or Path, got {type(folder).__name__}")
+    return Path(folder) / f"{_check_name(name)}{MODEL_SUFFIX}"
 
 
 def save_model(model: Model, folder: str | Path, *, replace: bool = False) -> Path:
@@ -273,12 +277,10 @@ def save_model(model: Model, folder: str | Path, *, replace: bool = False) -> Pa
     if not isinstance(model, Model):
         raise InputTypeError(f"model must be a vmcl.recognize.Model, got {type(model).__name__}")
     replace = check_bool(replace, "replace")
-    if not isinstance(folder, (str, Path)):
-        raise InputTypeError(f"folder must be a str or Path, got {type(folder).__name__}")
-    folder = Path(folder)
+    path = model_path(folder, model.name)
+    folder = path.parent
     if folder.exists() and not folder.is_dir():
         raise InputValueError(f"folder must be a directory, got the file {folder}")
-    path = _model_path(folder, _check_name(model.name))
     if path.exists():
         if not replace:
             raise InputValueError(f"{path} exists; pass replace=True (vmcl learn --replace) to replace it")
