@@ -226,6 +226,28 @@ def test_a_bin_past_the_vote_histogram_is_kept_whole(ell_model):
     assert np.allclose(device.matrices()[0], m, atol=1e-3)
 
 
+@pytest.mark.parametrize("candidates", [1, 7, 40])
+def test_the_views_share_exactly_the_budget(candidates):
+    # Each view keeps every bin tied with its last; many views with a few bins of equal votes kept several
+    # times the budget between them. What comes back is at most `candidates`, device and host alike, and
+    # is each view's best.
+    library, _ = example_library()
+    index = Index.build(library)
+    features = image_features(recognition_scene(seed=4).image)
+    corners, bisector, opening, radius = anchors_of(features)
+    pairs = corner_pairs(corners)
+    args = (index, corners, bisector, opening, pairs)
+    whole = vote_numpy(*args, radius=radius, candidates=100000)
+    device = vote(*args, radius=radius, candidates=candidates)
+    host = vote_numpy(*args, radius=radius, candidates=candidates)
+    assert len(whole) > 3 * candidates and len(set(whole.views)) > 1
+    assert 0 < len(device) <= candidates and 0 < len(host) <= candidates
+    for view in set(host.views):
+        own = np.sort(whole.votes[whole.views == view])[::-1]
+        kept = np.sort(host.votes[host.views == view])[::-1]
+        assert np.array_equal(kept, own[:len(kept)])
+
+
 def _busy_model() -> Model:
     """A model learned from a busy picture (1,500 small random triangles, 2,900 corners): a photograph's
     many features gather many votes by chance wherever they are looked up."""

@@ -356,15 +356,17 @@ def _trimmed(histograms: np.ndarray, live: np.ndarray, views: int, min_votes: in
     return counts
 
 
-def _cutoffs(counts: np.ndarray, candidates: int, min_votes: int) -> np.ndarray:
-    """The votes a bin of each view needs to be kept, from the views' histograms of their bins' votes
-    (``counts[view, v]``: the view's bins with v votes, v >= 1; the last column those with more too).
+def _cutoffs(counts: np.ndarray, candidates: int, min_votes: int) -> tuple[np.ndarray, np.ndarray]:
+    """The votes a bin of each view needs to be kept, and each view's share of the kept bins, from the
+    views' histograms of their bins' votes (``counts[view, v]``: the view's bins with v votes, v >= 1;
+    the last column those with more too).
 
     The ``candidates`` are shared between the views as water fills vessels: each view keeps its best bins
     (of those with at least ``min_votes``) up to one share, the same for all, and a view with fewer bins
-    leaves the rest to the others; the share is the least that keeps ``candidates`` bins in all (every bin
-    tied with a view's last is kept too). One cutoff for all views let a model with many features, which
-    gathers many votes by chance everywhere, crowd the other models' poses out."""
+    leaves the rest to the others; the shares add up to ``candidates`` (or to every usable bin, where
+    there are fewer). One cutoff for all views let a model with many features, which gathers many votes by
+    chance everywhere, crowd the other models' poses out. The cutoff keeps every bin tied with a view's
+    last; :func:`_within_shares` cuts those ties after pooling."""
     columns = counts.shape[1]
     at_least = np.cumsum(counts[:, ::-1], axis=1)[:, ::-1]  # [view, v]: the view's bins with >= v votes
     usable = at_least[:, min(min_votes, columns - 1)]
@@ -377,10 +379,27 @@ def _cutoffs(counts: np.ndarray, candidates: int, min_votes: int) -> np.ndarray:
         else:
             low = middle + 1
     share = np.minimum(low, usable)
-    reach = at_least[:, 1:] >= share[:, None]
+    # The least share can overshoot `wanted` by one bin for each view that takes it whole: those views,
+    # the last first, give one back, so that the shares add up to exactly `wanted`.
+    full = np.flatnonzero(share == low)
+    share[full[::-1][:max(int(share.sum()) - wanted, 0)]] -= 1
+    reach = at_least[:, 1:] >= np.maximum(share, 1)[:, None]
     # The highest v (>= 1) at which the view still has its share of bins.
     own = reach.shape[1] - np.argmax(reach[:, ::-1], axis=1)
-    return np.maximum(own, min_votes).astype(np.int32)
+    return np.maximum(own, min_votes).astype(np.int32), share
+
+
+def _within_shares(found: Candidates, shares: np.ndarray) -> Candidates:
+    """The pooled candidates cut to each view's share: its most voted first, ties in the order of their
+    bins (a view keeps every bin tied with its last, so without the cut many views with a few bins of
+    equal votes kept several times ``candidates`` between them)."""
+    rank = np.lexsort((np.arange(len(found.views)), found.views))  # each view's candidates, in vote order
+    sorted_views = found.views[rank]
+    first = np.searchsorted(sorted_views, sorted_views, side="left")
+    place = np.empty(len(rank), np.int64)
+    place[rank] = np.arange(len(rank)) - first
+    keep = place < shares[found.views]
+    return Candidates(found.views[keep], found.similarity[keep], found.votes[keep])
 
 
 def _capacity(counts: np.ndarray, cutoffs: np.ndarray, hypotheses: np.ndarray) -> int:
@@ -437,8 +456,8 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
         The range of scales (image size over view size) a pose may have.
     candidates : int
         The pose bins kept, >= 1, shared between the model views: each view keeps its own best bins up to
-        an equal share, a view with fewer leaving the rest to the others (bins tied with a view's last
-        are kept too, so more may come back: most where many views each have a few bins of equal votes). A
+        an equal share, a view with fewer leaving the rest to the others (among bins of equal votes, those
+        of the lowest addresses in the view's table; at most ``candidates`` come back in all). A
         model with many features, which gathers many votes by chance everywhere, thus cannot take the
         other views' shares, but each view's share shrinks as the library grows, and an object whose true
         pose ranks low among its own view's bins can then be lost; a view of a solid is a view like any
@@ -484,7 +503,7 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     machine.launch(machine.kernel("indexing", "vote_counts"), (int(starts[-1]),), votes,
                    machine.to_device(live_starts), np.int32(len(live)), histograms, np.int32(_COUNT_BINS))
     counts = _trimmed(histograms.get().reshape(len(live), _COUNT_BINS), live, len(hypotheses), min_votes)
-    cutoffs = _cutoffs(counts, candidates, min_votes)
+    cutoffs, shares = _cutoffs(counts, candidates, min_votes)
     capacity = _capacity(counts, cutoffs, hypotheses)
     device_cutoffs = machine.to_device(cutoffs)
     while True:
@@ -498,7 +517,7 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
         capacity = n  # the bound above holds; were it ever to fail, the list is made long enough, not cut
     if not n:
         return _no_candidates()
-    return _pool(found[:n].get(), info[:n].get())
+    return _within_shares(_pool(found[:n].get(), info[:n].get()), shares)
 
 
 def _device_table(index: Index, machine: Machine) -> tuple[cl_array.Array, ...]:
@@ -576,12 +595,12 @@ def vote_numpy(index: Index, corners: np.ndarray, bisector: np.ndarray, opening:
     np.add.at(every, (region, np.minimum(totals, _COUNT_BINS - 1)), 1)
     live = np.flatnonzero(hypotheses > 0)
     counts = _trimmed(every[live], live, len(hypotheses), min_votes)
-    cutoffs = _cutoffs(counts, candidates, min_votes)
+    cutoffs, shares = _cutoffs(counts, candidates, min_votes)
     # Each hypothesis's best bin: the most votes, the lowest address among equals.
     order = np.lexsort((bins, -votes[bins]), axis=1) if len(bins) else np.zeros((0, 16), np.int64)
     best = np.take_along_axis(bins, order[:, :1], axis=1)[:, 0]
     keep = votes[best] >= cutoffs[views[ok]]
-    return _pool(similarity[ok][keep], np.stack([best[keep], views[ok][keep]], axis=1))
+    return _within_shares(_pool(similarity[ok][keep], np.stack([best[keep], views[ok][keep]], axis=1)), shares)
 
 
 def index_for(library: Library, *, neighbours: int = 8) -> Index:
