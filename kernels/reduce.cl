@@ -101,8 +101,9 @@ __kernel void reduce_partials(__global const ACC *partial, __global const ACC *c
  * bin); values outside [lo, hi] and NaN are not counted. The work-group counts into local memory, then
  * writes its tile's row of `out` (per-tile mode) or adds it into the one histogram (accumulate).
  * SHARED_COUNTS = 0 (work-groups of one work-item) counts with plain increments. TO_TOP = 1 takes hi
- * from top[0], a maximum computed on the device (lo + 1 when it is not above lo), and scale from it as
- * the host would, so the host never waits for the range; otherwise `top` is not read.
+ * from top[0], a maximum computed on the device (lo + 1 when it is not above lo or NaN; an infinite top
+ * makes every bin infinitely wide, so every value from lo on goes to bin 0), and scale from it as the
+ * host would, so the host never waits for the range; otherwise `top` is not read.
  *
  * A range too narrow (bins / (hi - lo) overflows) or too wide (hi - lo overflows) for float32's
  * exponent is binned as if the exponent were unbounded: v and lo are first multiplied by a power of two
@@ -131,7 +132,14 @@ __kernel void histogram_tiles(__global const T *x, __global int *out, __local in
                               float lo, float hi, float scale, int bins, int accumulate, long base)
 {
 #if TO_TOP
-    float reached = top[0] - (float)base;
+#if T_IS_FLOAT
+    float reached = top[0];
+#else
+    /* An integer field's maximum in float32 is rounded, past 2^24 maybe down, below the largest value:
+     * every integer up to the next float32 above it is counted, taken relative to base exactly. */
+    float up = floor(nextafter(top[0], INFINITY));
+    float reached = isfinite(up) ? (float)((long)clamp(up, -4.0e18f, 4.0e18f) - base) : top[0];
+#endif
     hi = reached > lo ? reached : lo + 1.0f;
     scale = (float)bins / (hi - lo);
 #endif

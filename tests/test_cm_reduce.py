@@ -143,6 +143,29 @@ def test_histogram_to_a_top_on_the_device_matches_the_host_range(tile, machine):
         assert got.sum() == field.size
 
 
+@pytest.mark.parametrize("values", [np.arange(5, dtype=np.int64), 2**25 + np.arange(6), -7 - np.arange(4),
+                                    2**30 + np.array([0, 1, 2, 63, 64, 65])])
+def test_histogram_to_an_integer_fields_top_counts_every_value(values, machine):
+    # An int32 field's maximum in float32 rounds, past 2^24 sometimes down (2^25 + 5 to 2^25 + 4): the
+    # largest values lay above the range read on the device and were left out.
+    field = np.tile(values.astype(np.int32), (3, 1))
+    device = machine.to_device(field)
+    top = machine.to_device(np.array([np.float32(values.max())], np.float32))
+    got = histogram_to_top(device, 16, top, lo=float(values.min()), machine=machine).get()
+    assert got.sum() == field.size
+    if values.max() - values.min() < 2**24 and np.float32(values.max()) == values.max():
+        # Where float32 holds the top exactly, the bins are the host range's.
+        np.testing.assert_array_equal(
+            got, histogram(field, 16, (float(values.min()), float(values.max())), machine=machine))
+
+
+def test_histogram_to_a_nan_or_infinite_top(machine):
+    field = machine.to_device(np.array([[0.5, 2.0, 7.0]], np.float32))
+    nan, inf = (machine.to_device(np.array([v], np.float32)) for v in (np.nan, np.inf))
+    assert histogram_to_top(field, 4, nan, machine=machine).get().tolist() == [0, 0, 1, 0]  # [0, 1]
+    assert histogram_to_top(field, 4, inf, machine=machine).get().tolist() == [3, 0, 0, 0]
+
+
 @pytest.mark.parametrize("kwargs, error, match", [
     ({"bins": 0, "range": (0, 1)}, ValueError, "bins must be between"),
     ({"bins": 4, "range": (1, 1)}, ValueError, "lo < hi"),

@@ -59,6 +59,15 @@ def test_a_config_holds_its_own_values_and_refuses_what_a_run_would():
     config = Config.from_dict({"mrf": {"stereo": overrides}})
     overrides["beta"] = 99.0
     assert config.mrf.stereo == {"beta": 3.0}
+    # The same for an MrfConfig built directly; and a Config hashes, equal ones alike (its overrides are
+    # mappings, which made hash() fail).
+    from vmcl.pipeline import MrfConfig
+
+    direct = Config(mrf=MrfConfig(stereo=overrides))
+    overrides["beta"] = 5.0
+    assert direct.mrf.stereo == {"beta": 99.0}
+    assert hash(Config()) == hash(Config()) and {Config(), Config()} == {Config()}
+    assert hash(direct) == hash(Config.from_dict({"mrf": {"stereo": {"beta": 99.0}}}))
     with pytest.raises(ValueError, match="grouping.iterations must be <= 10000"):
         Config.from_dict({"grouping": {"iterations": 10**9}})
     with pytest.raises(TypeError, match="progress must be a callable"):

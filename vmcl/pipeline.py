@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import json
 import math
 import os
 import sys
@@ -539,6 +540,14 @@ class MrfConfig:
         check_choice(self.method, "mrf.method", SOLVERS)
         check_choice(self.schedule, "mrf.schedule", _SCHEDULES)
         check_int(self.seed, "mrf.seed", minimum=0, maximum=2**64 - 1)
+        # Copied: a frozen Config must not change when the caller's mappings do later.
+        for cue in CUES:
+            object.__setattr__(self, cue, copy.deepcopy(dict(getattr(self, cue))))
+
+    def __hash__(self) -> int:
+        # The overrides are mappings, which do not hash; equal ones have equal sorted texts.
+        overrides = json.dumps({cue: getattr(self, cue) for cue in CUES}, sort_keys=True, default=repr)
+        return hash((self.method, self.seed, self.schedule, self.cross_validate, overrides))
 
     def settings(self, cue: str, default: Settings | None = None, *, warm: bool = False) -> Settings:
         """The MRF settings of ``cue``: ``default`` (the cue's own, :attr:`vmcl.cues.CueModule.settings`),
@@ -749,8 +758,7 @@ class Config:
             for key in entries:
                 if key not in known:
                     raise InputValueError(f"unknown config key {name}.{key}; {name} has {', '.join(sorted(known))}")
-            # Copied: a Config is frozen, and must not change when the caller's mappings do later.
-            sections[name] = _SECTIONS[name](**copy.deepcopy(dict(entries)))
+            sections[name] = _SECTIONS[name](**dict(entries))  # MrfConfig copies its own mappings
         return cls(**sections)
 
     @classmethod

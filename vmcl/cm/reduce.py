@@ -161,8 +161,11 @@ def histogram_to_top(x: cl_array.Array, bins: int, top: cl_array.Array, *, lo: f
         As for :func:`histogram`.
     bins : int
     top : 0-d or 1-element float32 pyopencl.array.Array
-        The upper end of the range; when it is not above ``lo`` (a field of zeros), the range is
-        [lo, lo + 1].
+        The upper end of the range; when it is not above ``lo`` (a field of zeros) or is NaN, the range
+        is [lo, lo + 1]. For an integer ``x`` (whose maximum float32 may round down past 2^24), values up
+        to the next float32 above ``top`` are counted. An infinite ``top`` makes the bins infinitely
+        wide: every value from ``lo`` on is counted in bin 0 (the device's value is not read on the
+        host, so it cannot be refused there).
     lo : float
         Finite.
     tile, machine
