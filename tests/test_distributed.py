@@ -497,6 +497,16 @@ def test_a_scheduler_address_that_is_none_is_one_line(tmp_path, capsys, address)
     assert f"--scheduler {address} is not a scheduler address" in err and len(err.strip().splitlines()) == 1, err
 
 
+def test_workers_beside_a_scheduler_are_refused(tmp_path, capsys):
+    # --workers and --threads size a local cluster: beside --scheduler they were dropped without a word.
+    (tmp_path / "data").mkdir()
+    cv2.imwrite(str(tmp_path / "data" / "a.png"), np.zeros((32, 32), np.uint8))
+    assert main(["batch", str(tmp_path / "data"), "--out", str(tmp_path / "out"), "--scheduler", "tcp://127.0.0.1:9",
+                 "--workers", "4", "-q"]) == 2
+    assert "--workers and --threads size a local cluster" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
 def test_ctrl_c_in_a_terminal_ends_a_local_batch_in_one_line(tmp_path):
     # A terminal's Ctrl-C reaches the whole process group: each local worker process printed its traceback.
     import subprocess

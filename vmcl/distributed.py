@@ -1084,6 +1084,9 @@ def cluster_client(scheduler: str | None = None, *, workers: int | None = None, 
     """
     import logging
 
+    if scheduler is not None and (workers is not None or threads is not None):
+        raise InputValueError("--workers and --threads size a local cluster; with --scheduler the scheduler's "
+                              "own workers run the items")
     plugin = MachinePlugin(device)
     with contextlib.ExitStack() as stack:
         if scheduler is not None:
