@@ -194,3 +194,15 @@ def test_histogram_of_a_range_beyond_float32s_exponent_is_numpys(width, value_ra
 def test_histogram_counts_too_many_tiles_are_refused_before_allocating(machine):
     with pytest.raises(ValueError, match="histograms of 4096 bins needs"):
         histogram(np.zeros((2048, 2048), np.uint8), 4096, (0, 1), tile=(1, 1), machine=machine)
+
+
+def test_a_device_bool_array_is_taken_as_a_host_one_is(machine):
+    # A bool field on the device was refused ("must have dtype uint8, int32 or float32") where the same
+    # field on the host was counted.
+    from vmcl.cm.doubling import label
+
+    mask = np.random.default_rng(2).random((19, 23)) < 0.4
+    device = machine.to_device(mask)
+    assert reduce(device, "sum", machine=machine) == reduce(mask, "sum", machine=machine) == mask.sum()
+    np.testing.assert_array_equal(histogram(device, 2, (0, 1), machine=machine).get(), [(~mask).sum(), mask.sum()])
+    np.testing.assert_array_equal(label(device, machine=machine).get(), label(mask, machine=machine))

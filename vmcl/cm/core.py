@@ -27,6 +27,7 @@ __all__ = [
     "UNIT_MARGIN",
     "WIDEST",
     "ArrayLike",
+    "bool_as_bytes",
     "check_bool",
     "check_choice",
     "check_context",
@@ -145,6 +146,14 @@ def field(x: Any, name: str, machine: Machine, *, ndims: tuple[int, ...],
     if device is None:
         device = machine.to_device(np.asarray(x, dtype=dtype))
     return device, host
+
+
+def bool_as_bytes(x: Any) -> Any:
+    """A boolean array, host or device, as the uint8 array of its bytes (0 and 1), which the kernels read;
+    anything else as it is."""
+    if isinstance(x, (np.ndarray, cl_array.Array)) and x.dtype == np.bool_:
+        return x.view(np.uint8)
+    return x
 
 
 def flags_field(segments: Any, shape: tuple[int, ...], name: str, machine: Machine) -> cl_array.Array:

@@ -26,7 +26,7 @@ import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as _reduce
-from vmcl.cm.core import ArrayLike, check_bool, check_choice, check_int, field, machine_for, result
+from vmcl.cm.core import ArrayLike, bool_as_bytes, check_bool, check_choice, check_int, field, machine_for, result
 from vmcl.cm.scan import exclusive_sum_into
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
@@ -236,9 +236,7 @@ def label(mask: ArrayLike, *, connectivity: int = 8, relabel: bool = False, meth
     int32 labels of the mask's shape. Both methods give identical labels.
     """
     machine = machine_for(machine)
-    if isinstance(mask, np.ndarray) and mask.dtype == np.bool_:
-        mask = mask.view(np.uint8)
-    data, host = field(mask, "mask", machine, ndims=(2,), dtypes=(np.uint8,))
+    data, host = field(bool_as_bytes(mask), "mask", machine, ndims=(2,), dtypes=(np.uint8,))
     if check_int(connectivity, "connectivity") not in (4, 8):
         raise InputValueError(f"connectivity must be 4 or 8, got {connectivity!r}")
     connectivity = int(connectivity)

@@ -16,6 +16,7 @@ import pyopencl.array as cl_array
 
 from vmcl.cm.core import (
     ArrayLike,
+    bool_as_bytes,
     check_choice,
     check_int,
     check_real,
@@ -62,8 +63,7 @@ def reduce(x: ArrayLike, op: ReduceOp = "sum", *, machine: Machine | None = None
     """
     machine = machine_for(machine)
     check_choice(op, "op", sorted(_OPS))
-    source = x.astype(np.uint8) if isinstance(x, np.ndarray) and x.dtype == np.bool_ else x
-    data, host = field(source, "x", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
+    data, host = field(bool_as_bytes(x), "x", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
     defines = type_defines(data.dtype)
     if op == "sum":
         accumulator: np.dtype = np.dtype(np.float32) if data.dtype == np.float32 else np.dtype(np.int64)
@@ -187,8 +187,7 @@ def histogram_to_top(x: cl_array.Array, bins: int, top: cl_array.Array, *, lo: f
 
 
 def _histogram_field(x, bins, tile, machine: Machine) -> tuple[cl_array.Array, bool]:
-    source = x.astype(np.uint8) if isinstance(x, np.ndarray) and x.dtype == np.bool_ else x
-    data, host = field(source, "x", machine, ndims=(2,) if tile is not None else _ANY_NDIM,
+    data, host = field(bool_as_bytes(x), "x", machine, ndims=(2,) if tile is not None else _ANY_NDIM,
                        dtypes=_DTYPES)
     check_int(bins, "bins")
     local_bins = machine.device.local_mem_size // 4 - 16
