@@ -27,7 +27,7 @@ distributed = pytest.importorskip("distributed",
 
 from vmcl import scenes
 from vmcl.cli import SETTINGS_FILE, main, write_output
-from vmcl.datasets import read_image, read_stereo_folder, write_stereo_folder
+from vmcl.datasets import read_image, read_stereo_folder, stereo_views, write_stereo_folder
 from vmcl.distributed import (
     MachinePlugin,
     batch_items,
@@ -377,6 +377,21 @@ def test_batch_items_are_named_uniquely_and_safely(tmp_path):
         batch_items([tmp_path / "missing"])
     with pytest.raises(ValueError, match="at least 2 frames"):
         batch_items([tmp_path / "x" / "A.PNG"], frames=True)
+
+
+def test_a_stereo_pair_without_ground_truth_is_one_pair_item(tmp_path):
+    # A folder holding a layout's two views but no ground truth (a benchmark's test pair, a user's own
+    # im0.png and im1.png) was taken for a folder of images: two items, each run alone, without depth.
+    folders = _scene_folders(tmp_path / "data", 2, 64)
+    (folders[1] / "disp0.pfm").unlink()
+    items = batch_items([tmp_path / "data"])
+    assert [(i.name, i.kind) for i in items] == [("scene00", "scene"), ("scene01", "pair")]
+    assert [p.name for p in items[1].paths] == ["im0.png", "im1.png"]
+    left, right, following = items[1].load()
+    assert right is not None and following is None
+    np.testing.assert_array_equal(left, read_image(folders[1] / "im0.png"))
+    assert stereo_views(folders[1]) == (folders[1] / "im0.png", folders[1] / "im1.png")
+    assert stereo_views(tmp_path) is None
 
 
 # ------------------------------------------------------------------------------------------------ vmcl batch --zarr

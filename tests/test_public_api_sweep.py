@@ -524,6 +524,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.datasets:read_flow_folder", folder=path("flow_dir"), kinds={"folder": _P}),
     _e("vmcl.datasets:find_flow_folders", root=path("empty_dir"), depth=4, kinds={"root": _P, "depth": _I}),
     _e("vmcl.datasets:stereo_folders_lacking", root=path("empty_dir"), depth=4, kinds={"root": _P, "depth": _I}),
+    _e("vmcl.datasets:stereo_views", folder=path("empty_dir"), kinds={"folder": _P}),
     _e("vmcl.datasets:find_bsds_folders", root=path("empty_dir"), depth=4, kinds={"root": _P, "depth": _I}),
     _e("vmcl.datasets:flow_folders_lacking", root=path("empty_dir"), depth=4, kinds={"root": _P, "depth": _I}),
     # ------------------------------------------------------------------ sequences

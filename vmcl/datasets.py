@@ -58,6 +58,7 @@ __all__ = [
     "read_pfm",
     "read_stereo_folder",
     "stereo_folders_lacking",
+    "stereo_views",
     "write_flo",
     "write_pfm",
     "write_stereo_folder",
@@ -744,6 +745,18 @@ def _stereo_lack(folder: Path) -> str | None:
         if all(any((folder / n).is_file() for n in names) for names in views):
             missing = [" or ".join(names) for names in rest if not any((folder / n).is_file() for n in names)]
             return f"it holds the two views of the {layout.description.split(':')[0]} layout, but not {', '.join(missing)}"
+    return None
+
+
+def stereo_views(folder) -> tuple[Path, Path] | None:
+    """The left and right view files of the first Middlebury layout whose two views ``folder`` holds,
+    whether or not it holds the layout's ground truth and other files; None if it holds no layout's
+    views (or is not a folder)."""
+    folder = _as_path(folder, "folder")
+    for layout in _LAYOUTS:
+        views = [next((folder / n for n in names if (folder / n).is_file()), None) for names in layout.files[:2]]
+        if views[0] is not None and views[1] is not None:
+            return views[0], views[1]
     return None
 
 

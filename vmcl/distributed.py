@@ -447,10 +447,11 @@ class BatchItem:
     name : str
         Unique in the batch, safe as a folder name.
     kind : str
-        "image" (one image), "scene" (a Middlebury-layout scene folder: a stereo pair) or "motion" (a
-        frame and the next one).
+        "image" (one image), "scene" (a Middlebury-layout scene folder: a stereo pair), "pair" (a
+        stereo pair without the rest of its layout: its left and right views) or "motion" (a frame and
+        the next one).
     paths : tuple of Path
-        The image, the scene folder, or the frame and the next frame.
+        The image, the scene folder, the left and right views, or the frame and the next frame.
     """
 
     name: str
@@ -464,6 +465,8 @@ class BatchItem:
         if self.kind == "scene":
             pair = read_stereo_folder(self.paths[0])
             return pair.left, pair.right, None
+        if self.kind == "pair":
+            return read_image(self.paths[0]), read_image(self.paths[1]), None
         if self.kind == "motion":
             return read_image(self.paths[0]), None, read_image(self.paths[1])
         return read_image(self.paths[0]), None, None
@@ -487,8 +490,9 @@ def batch_items(inputs: Sequence[str | os.PathLike[str]], *, frames: bool = Fals
     ----------
     inputs : sequence of str or Path
         Image files (each an item), folders holding Middlebury-layout scenes (each scene an item, a
-        stereo pair; :func:`vmcl.datasets.find_stereo_folders`), or folders of image files (each image an
-        item).
+        stereo pair; :func:`vmcl.datasets.find_stereo_folders`, and folders holding only a layout's two
+        views, such as a data set's test pairs or a user's own im0.png and im1.png:
+        :func:`vmcl.datasets.stereo_views`), or folders of image files (each image an item).
     frames : bool
         The images, in the order given (a folder's sorted by name), are the frames of one sequence: item t
         is frame t with frame t + 1 (motion), named after frame t.
@@ -504,7 +508,7 @@ def batch_items(inputs: Sequence[str | os.PathLike[str]], *, frames: bool = Fals
     ValueError
         An input that does not exist, a folder with nothing to run, fewer than 2 frames.
     """
-    from vmcl.datasets import find_stereo_folders
+    from vmcl.datasets import find_stereo_folders, stereo_folders_lacking, stereo_views
 
     if isinstance(inputs, (str, os.PathLike)) or not isinstance(inputs, Sequence):
         raise InputTypeError(f"inputs must be a sequence of paths, got {type(inputs).__name__}")
@@ -522,10 +526,14 @@ def batch_items(inputs: Sequence[str | os.PathLike[str]], *, frames: bool = Fals
         if path.is_file():
             images.append(path)
         elif path.is_dir():
-            scenes = [] if frames else find_stereo_folders(path)
+            # Scenes with their ground truth, and pairs without it (which were taken for two images).
+            scenes: list[tuple[Path, str, tuple[Path, ...]]] = [] if frames else sorted(
+                [(scene, "scene", (scene,)) for scene in find_stereo_folders(path)]
+                + [(pair, "pair", views) for pair, _ in stereo_folders_lacking(path)
+                   if (views := stereo_views(pair)) is not None])
             if scenes:
-                raw += [(path.name if scene == path else scene.relative_to(path).as_posix(), "scene", (scene,))
-                        for scene in scenes]
+                raw += [(path.name if scene == path else scene.relative_to(path).as_posix(), kind, paths)
+                        for scene, kind, paths in scenes]
                 continue
             found = _images_in(path)
             if not found:
