@@ -522,6 +522,30 @@ def test_workers_beside_a_scheduler_are_refused(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
+def test_a_port_that_answers_but_not_as_a_scheduler_ends_in_one_line(tmp_path, capsys, monkeypatch):
+    # A port where a server accepts and waits for a request of its own (a web server, the dashboard) hung
+    # vmcl batch for ever: Dask's timeout covers the connection, not the handshake after it.
+    import socket
+    import threading
+
+    import vmcl.distributed as distributed
+
+    monkeypatch.setattr(distributed, "_CONNECT_SECONDS", 1)
+    server = socket.create_server(("127.0.0.1", 0))
+    held = []
+    threading.Thread(target=lambda: held.append(server.accept()), daemon=True).start()
+    (tmp_path / "data").mkdir()
+    cv2.imwrite(str(tmp_path / "data" / "a.png"), np.zeros((32, 32), np.uint8))
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    try:
+        assert main(["batch", str(tmp_path / "data"), "--out", str(tmp_path / "out"), "--scheduler", address,
+                     "-q"]) == 2
+    finally:
+        server.close()
+    err = capsys.readouterr().err
+    assert "nothing answered as a Dask scheduler" in err and len(err.strip().splitlines()) == 1, err
+
+
 def test_ctrl_c_in_a_terminal_ends_a_local_batch_in_one_line(tmp_path):
     # A terminal's Ctrl-C reaches the whole process group: each local worker process printed its traceback.
     import subprocess

@@ -1081,6 +1081,33 @@ def _sigint_ignored() -> Iterator[None]:
         signal.signal(signal.SIGINT, before)
 
 
+_CONNECT_SECONDS = 20
+
+
+def _connected(scheduler: str) -> Client:
+    """A Client of ``scheduler``, or TimeoutError. Dask's own timeout covers the connection but not the
+    handshake after it: a port where something else answers (a web server, the scheduler's dashboard)
+    waited forever. The Client is made in a thread, left behind if it never returns (a daemon, which the
+    process's exit ends)."""
+    made: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            made["client"] = Client(scheduler, timeout=f"{_CONNECT_SECONDS}s")
+        except BaseException as error:  # handed to the caller's thread, whatever it is
+            made["error"] = error
+
+    thread = threading.Thread(target=connect, name="vmcl-scheduler-connect", daemon=True)
+    thread.start()
+    thread.join(1.5 * _CONNECT_SECONDS)  # Dask's own timeout first, where it applies
+    if thread.is_alive():
+        raise TimeoutError(f"nothing answered as a Dask scheduler within {1.5 * _CONNECT_SECONDS:g} s (a scheduler "
+                           "listens on its own port, 8786 by default, not its dashboard's)")
+    if "error" in made:
+        raise made["error"]
+    return made["client"]
+
+
 @contextlib.contextmanager
 def cluster_client(scheduler: str | None = None, *, workers: int | None = None, threads: int | None = None,
                    device: str | int | None = None, worker_logs: bool = False) -> Iterator[tuple[Client, str]]:
@@ -1099,7 +1126,7 @@ def cluster_client(scheduler: str | None = None, *, workers: int | None = None, 
     with contextlib.ExitStack() as stack:
         if scheduler is not None:
             try:
-                client = stack.enter_context(Client(scheduler, timeout="20s"))
+                client = stack.enter_context(_connected(scheduler))
             except (OSError, TimeoutError) as error:
                 raise InputValueError(f"--scheduler {scheduler}: cannot connect ({error})") from None
             except ValueError as error:  # Dask's reading of the address: no port, an unknown scheme
