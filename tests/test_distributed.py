@@ -528,7 +528,7 @@ def test_a_port_that_answers_but_not_as_a_scheduler_ends_in_one_line(tmp_path, c
     import socket
     import threading
 
-    import vmcl.distributed as distributed
+    from vmcl import distributed
 
     monkeypatch.setattr(distributed, "_CONNECT_SECONDS", 1)
     server = socket.create_server(("127.0.0.1", 0))

@@ -1094,7 +1094,7 @@ def _connected(scheduler: str) -> Client:
     def connect() -> None:
         try:
             made["client"] = Client(scheduler, timeout=f"{_CONNECT_SECONDS}s")
-        except BaseException as error:  # handed to the caller's thread, whatever it is
+        except BaseException as error:  # noqa: BLE001 (handed to the caller's thread, whatever it is)
             made["error"] = error
 
     thread = threading.Thread(target=connect, name="vmcl-scheduler-connect", daemon=True)

@@ -26,7 +26,16 @@ import pyopencl as cl
 import pyopencl.array as cl_array
 
 from vmcl.cm import reduce as _reduce
-from vmcl.cm.core import ArrayLike, bool_as_bytes, check_bool, check_choice, check_int, field, machine_for, result
+from vmcl.cm.core import (
+    ArrayLike,
+    bool_as_bytes,
+    check_bool,
+    check_choice,
+    check_int,
+    field,
+    machine_for,
+    result,
+)
 from vmcl.cm.scan import exclusive_sum_into
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
