@@ -493,8 +493,11 @@ def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, 
     library : tuple of str, optional
         The names to draw them from; default every object of :data:`OBJECTS`.
     occlusion : (float, float)
-        The fraction of each object's area hidden (by its occluder, the other objects in front of it and the
-        image border) is drawn within this range, 0 <= low <= high < 1; the occluder is placed again until it is.
+        The fraction of each object's area hidden (by its occluder, the other objects and clutter in front
+        of it and the image border) lies within this range, 0 <= low <= high <= 0.95: the occluder is placed
+        again until it is, and the whole scene drawn again (from the same seed's stream) where clutter or
+        another object's occluder took an object out of it. A range no arrangement meets in
+        _SCENE_ATTEMPTS draws (objects too large for the shape, say) raises ValueError.
     clutter : int
         Shapes and bars not in the library scattered behind and among the objects, >= 0.
     views : (float, float)
@@ -531,6 +534,29 @@ def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, 
     noise = check_real(noise, "noise", minimum=0)
     seed = check_int(seed, "seed", minimum=0)
     rng = np.random.default_rng(seed)
+    for _ in range(_SCENE_ATTEMPTS):  # the first draw is the scene unless an object left the range
+        drawn = _draw_scene(rng, (h, w), count, names, (low, high), clutter, (yaw_low, yaw_high), (small, large))
+        if drawn is None:
+            continue
+        image, placements = drawn
+        if all(low <= p.occluded <= high for p in placements):
+            if noise > 0:
+                image += rng.normal(0, noise, image.shape).astype(np.float32)
+            return RecognitionScene(image, placements)
+    raise InputValueError(f"occlusion: no arrangement of {count} object(s) of size {small:g}..{large:g} px in "
+                          f"{w} x {h} hid each within {low:g}..{high:g} in {_SCENE_ATTEMPTS} draws; widen the range, "
+                          "enlarge the shape or place fewer or smaller objects")
+
+
+_SCENE_ATTEMPTS = 20
+
+
+def _draw_scene(rng: np.random.Generator, shape: tuple[int, int], count: int, names: tuple[str, ...],
+                occlusion: tuple[float, float], clutter: int, views: tuple[float, float],
+                size: tuple[float, float]) -> tuple[np.ndarray, tuple[Placement, ...]] | None:
+    """One draw of :func:`recognition_scene` (its arguments checked), before noise: the image and the
+    placements, each with the share of it hidden in the end; None where an occluder found no place."""
+    (h, w), (low, high), (yaw_low, yaw_high), (small, large) = shape, occlusion, views, size
     background = float(rng.uniform(0.35, 0.65))
     canvas = _Canvas(h, w, background)
     for _ in range(clutter):  # behind everything
@@ -570,6 +596,8 @@ def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, 
             if low <= hidden.sum() / total <= high:
                 canvas.paint(blob, _grey(rng, [background, *obj.shades(yaw, albedo)]), -3)
                 break
+        else:
+            return None  # no place for this occluder: the draw fails
     for _ in range(clutter // 2):  # some clutter in front too, away from the objects' middles
         at = rng.uniform([0, 0], [w, h])
         if all(np.hypot(*(at - c)) > 2.2 * s for c, s in zip(centres, (p[2] for p in placed))):
@@ -581,10 +609,7 @@ def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, 
         hidden = float((own & (canvas.owner != k)).sum() / max(int(own.sum()), 1))
         p = placements[k]
         placements[k] = Placement(p.name, p.yaw, p.scale, p.angle, p.centre, p.corners, p.corner_ids, hidden)
-    image = canvas.image()
-    if noise > 0:
-        image += rng.normal(0, noise, image.shape).astype(np.float32)
-    return RecognitionScene(image, tuple(placements))
+    return canvas.image(), tuple(placements)
 
 
 def _pair(value: object, name: str, lowest: float, highest: float) -> tuple[float, float]:
