@@ -302,6 +302,38 @@ def test_match_points_is_one_to_one_and_takes_the_most_matches():
     assert match_points(truth, np.zeros((0, 2)), tolerance=2.0).shape == (0, 2)
 
 
+def test_match_points_takes_any_tolerance_and_refuses_ragged_points():
+    from vmcl.metrics import match_points, point_scores
+
+    truth, found = np.array([[0.0, 0.0], [3.0, 0.0]]), np.array([[1.6, 0.0], [-1.0, 0.0]])
+    # The cost of a pair beyond the tolerance overflowed to infinity, which SciPy's assignment refused.
+    assert sorted(map(tuple, match_points(truth, found, tolerance=1e308).tolist())) == [(0, 1), (1, 0)]
+    for bad in ([[1, 2], [3]], [["a", "b"]], np.zeros((3, 0))):
+        with pytest.raises(InputError, match="truth"):
+            point_scores(bad, [[1.0, 1.0]], tolerance=1.0)
+
+
+def test_recognition_scores_find_as_many_objects_as_the_detections_can_in_any_order():
+    # Matched object by object, an earlier object took the detection a later one needed.
+    from vmcl.recognize import Detection
+    from vmcl.scenes import Placement
+
+    square = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], float)
+
+    def placement(cx):
+        return Placement("sq", 0.0, 40.0, 0.0, (cx, 100.0), square * 20 + [cx, 100.0], np.arange(4), 0.0)
+
+    def detection(dx):
+        return Detection("sq", 0, np.array([[1, 0, dx], [0, 1, 0], [0, 0, 1.0]]), 1.0, 5, 30.0, 1.0, square, square,
+                         np.ones(4, bool))
+
+    learned = {"sq": [Placement("sq", 0.0, 1.0, 0.0, (0.0, 0.0), square * 20 + 100, np.arange(4), 0.0)]}
+    first = metrics.recognition_scores([detection(4), detection(-6)], [placement(100), placement(108)], learned)
+    second = metrics.recognition_scores([detection(-6), detection(4)], [placement(108), placement(100)], learned)
+    assert first.found == second.found == (True, True) and first.false == second.false == 0
+    assert first.pose_error == pytest.approx(second.pose_error[::-1])
+
+
 def test_point_scores_set_aside_detections_near_ignored_points():
     from vmcl.metrics import point_scores
 
@@ -329,3 +361,10 @@ def test_segmentation_junctions_where_three_segments_meet():
     assert segmentation_junctions(np.zeros((5, 5), np.int32)).shape == (0, 2)
     with pytest.raises(ValueError, match="segmentation"):
         segmentation_junctions(np.zeros((5, 5), np.float32))
+    # Two T-junctions 3 px apart: one junction within a merge of 3 px, two within 1 or 2 px (a dilation by
+    # half the merge merged them at 1 px and 2 px).
+    two = np.zeros((12, 20), np.int32)
+    two[6:] = 1
+    two[:6, 5:8] = 2
+    for merge, count in ((0.0, 2), (1.0, 2), (2.0, 2), (3.0, 1)):
+        assert len(segmentation_junctions(two, merge=merge)) == count, merge

@@ -53,7 +53,8 @@ def _within(target: np.ndarray, tolerance: float) -> np.ndarray:
 
 
 def _tolerance(tolerance, shape: tuple[int, ...]) -> float | np.ndarray:
-    """A number >= 0, or a map of them of ``shape`` (one per true pixel)."""
+    """A number >= 0, or a map of them of ``shape`` (one per true pixel), on the host or the device."""
+    tolerance = to_host(tolerance, "tolerance")
     if isinstance(tolerance, np.ndarray) and tolerance.ndim > 0:
         if not np.issubdtype(tolerance.dtype, np.floating) and not np.issubdtype(tolerance.dtype, np.integer):
             raise InputTypeError(f"tolerance must be a number or an array of real numbers, got dtype {tolerance.dtype}")

@@ -9,10 +9,12 @@ method is not asked for can be set aside (``ignore``), and detections near them 
 from __future__ import annotations
 
 import numpy as np
-from scipy import ndimage
 from scipy.optimize import linear_sum_assignment
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
-from vmcl.cm.core import check_real, real_host_array
+from vmcl.cm.core import check_real, real_host_array, to_host
 from vmcl.errors import InputValueError
 from vmcl.metrics._rates import f_measure
 from vmcl.metrics.detections import DetectionScores
@@ -21,13 +23,29 @@ __all__ = ["match_points", "point_scores", "segmentation_junctions"]
 
 
 def _points(x, name: str) -> np.ndarray:
-    points = real_host_array(np.asarray(x, dtype=float) if isinstance(x, (list, tuple)) else x, name, ndims=(2,),
-                             empty=True).astype(float)
-    if points.shape[1:] != (2,) and points.size:
+    if isinstance(x, (list, tuple)):
+        try:
+            x = np.asarray(x, dtype=float)
+        except (TypeError, ValueError):
+            raise InputValueError(f"{name} must be (N, 2) points (x, y): a list of pairs of numbers") from None
+    points = real_host_array(to_host(x, name), name, ndims=(2,), empty=True).astype(float)
+    if points.shape[1:] != (2,) and points.shape != (0, 0):
         raise InputValueError(f"{name} must be (N, 2) points (x, y), got shape {points.shape}")
     if not np.isfinite(points).all():
         raise InputValueError(f"{name} holds NaN or infinite coordinates")
     return points.reshape(-1, 2)
+
+
+def one_to_one(cost: np.ndarray, feasible: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """As many one-to-one (row, column) pairs among the ``feasible`` as can be made, of least total
+    ``cost`` among those (a greedy pass, row after row, can take the column a later row needed)."""
+    top = float(cost[feasible].max()) if feasible.any() else 1.0
+    scaled = cost / top if np.isfinite(top) and top > 0 else np.where(cost > 0, 1.0, 0.0)
+    # An infeasible pair costs more than any set of feasible ones (each at most 1 once scaled), so the
+    # assignment takes as many feasible pairs as there can be and, among those, the cheapest.
+    rows, cols = linear_sum_assignment(np.where(feasible, scaled, 1.0 + min(cost.shape)))
+    keep = feasible[rows, cols]
+    return rows[keep], cols[keep]
 
 
 def match_points(truth, found, *, tolerance: float) -> np.ndarray:
@@ -45,12 +63,8 @@ def match_points(truth, found, *, tolerance: float) -> np.ndarray:
     if not len(truth) or not len(found):
         return np.zeros((0, 2), int)
     distance = np.linalg.norm(truth[:, None] - found[None], axis=2)
-    # Pairs beyond the tolerance cost more than any set of real matches, so the assignment takes as many
-    # matches as possible and, among those, the nearest.
-    far = 1.0 + distance.shape[0] * (tolerance + 1.0)
-    rows, cols = linear_sum_assignment(np.where(distance <= tolerance, distance, far))
-    keep = distance[rows, cols] <= tolerance
-    return np.stack([rows[keep], cols[keep]], axis=1)
+    rows, cols = one_to_one(distance, distance <= tolerance)
+    return np.stack([rows, cols], axis=1)
 
 
 def point_scores(truth, found, *, tolerance: float, ignore=None, exclude=None) -> DetectionScores:
@@ -98,7 +112,7 @@ def segmentation_junctions(segmentation, *, merge: float = 2.0) -> np.ndarray:
     """Where three or more segments of a label map meet: float (N, 2) points (x, y).
 
     Every 2 x 2 block of pixels holding three or more labels marks its centre (a pixel corner); marks
-    within ``merge`` pixels of each other are one junction, at their mean.
+    chained by steps of at most ``merge`` pixels are one junction, at their mean.
 
     Parameters
     ----------
@@ -107,7 +121,7 @@ def segmentation_junctions(segmentation, *, merge: float = 2.0) -> np.ndarray:
     merge : float
         >= 0.
     """
-    labels = real_host_array(segmentation, "segmentation", ndims=(2,))
+    labels = real_host_array(to_host(segmentation, "segmentation"), "segmentation", ndims=(2,))
     if labels.dtype.kind not in "biu":
         raise InputValueError(f"segmentation must hold integer labels, got dtype {labels.dtype}")
     merge = check_real(merge, "merge", minimum=0)
@@ -118,9 +132,13 @@ def segmentation_junctions(segmentation, *, merge: float = 2.0) -> np.ndarray:
     marks = distinct >= 3
     if not marks.any():
         return np.zeros((0, 2))
-    # Marks farther apart than the map's size merge anyway: a merge distance beyond it changes nothing.
-    steps = int(np.ceil(min(merge, sum(labels.shape)) / 2))
-    grown = ndimage.binary_dilation(marks, iterations=steps) if steps else marks
-    groups, count = ndimage.label(grown, structure=np.ones((3, 3)))
-    centres = np.array(ndimage.center_of_mass(marks, groups, np.arange(1, count + 1)))
-    return centres[:, ::-1] + 0.5
+    # Marks chained by steps of at most `merge` are one junction (single linkage). A dilation by merge / 2
+    # with 8-connected labelling merged marks farther apart, and merged neighbours at merge = 0.
+    rows, cols = np.nonzero(marks)
+    points = np.stack([cols, rows], axis=1).astype(float)
+    pairs = cKDTree(points).query_pairs(merge, output_type="ndarray")
+    links = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)
+    count, group = connected_components(links, directed=False)
+    sizes = np.bincount(group, minlength=count)
+    centres = np.stack([np.bincount(group, points[:, k], minlength=count) / sizes for k in range(2)], axis=1)
+    return centres + 0.5

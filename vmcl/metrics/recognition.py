@@ -18,6 +18,7 @@ import numpy as np
 
 from vmcl.cm.core import check_real
 from vmcl.errors import InputTypeError, InputValueError
+from vmcl.metrics.points import one_to_one
 from vmcl.recognize import Detection
 from vmcl.scenes import Placement
 
@@ -92,14 +93,10 @@ def recognition_scores(detections: Sequence[Detection], placements: Sequence[Pla
                 error = _corner_error(detection, views[detection.view], placement)
                 if error <= tolerance * placement.scale:
                     errors[i, j] = error
-    found, pose_error, used = [], [], set()
-    for i in range(len(placements)):
-        free = [j for j in np.argsort(errors[i]) if np.isfinite(errors[i, j]) and j not in used]
-        if free:
-            used.add(int(free[0]))
-            found.append(True)
-            pose_error.append(float(errors[i, free[0]]))
-        else:
-            found.append(False)
-            pose_error.append(float("nan"))
-    return RecognitionScores(tuple(found), tuple(pose_error), len(detections) - len(used))
+    # As many objects found as the detections can find one to one, of least total error among those: an
+    # object matched greedily took the detection a later one needed.
+    pose_error = np.full(len(placements), np.nan)
+    rows, cols = one_to_one(errors, np.isfinite(errors)) if errors.size else (np.zeros(0, int), np.zeros(0, int))
+    pose_error[rows] = errors[rows, cols]
+    found = tuple(bool(f) for f in np.isfinite(pose_error))
+    return RecognitionScores(found, tuple(float(e) for e in pose_error), len(detections) - len(cols))
