@@ -73,6 +73,28 @@ def test_folders_without_flow_or_frames_are_refused(tmp_path, rendered):
         datasets.read_flow_folder(tmp_path / "none")
 
 
+def test_only_the_frames_run_is_read_and_every_file_has_the_frames_size(tmp_path, rendered):
+    # Any numbered PNG was a frame: Middlebury's colour picture flow10.png sorted before frame10.png and
+    # was scored as frame t. A next frame or a mask of another size was accepted.
+    root, _ = rendered
+    folder = tmp_path / "Blocks"
+    shutil.copytree(root / "mine" / "Blocks", folder)
+    picture = cv2.imread(str(folder / "frame10.png"))
+    cv2.imwrite(str(folder / "flow12.png"), picture)
+    sequence = datasets.read_flow_folder(folder)
+    assert [p.name for p in sequence.frames][sequence.index:sequence.index + 2] == ["frame12.png", "frame13.png"]
+    assert not any(p.name.startswith("flow") for p in sequence.frames)
+    for number in range(10, 15):  # as many as the frames: which run is the sequence cannot be told
+        cv2.imwrite(str(folder / f"img{number}.png"), picture)
+    with pytest.raises(ValueError, match="which are the frames cannot be told"):
+        datasets.read_flow_folder(folder)
+    for path in folder.glob("img*.png"):
+        path.unlink()
+    cv2.imwrite(str(folder / "frame13.png"), cv2.resize(picture, None, fx=2, fy=2))
+    with pytest.raises(ValueError, match="frame13.png is"):
+        datasets.read_flow_folder(folder)
+
+
 def test_the_evaluation_scores_every_method_against_the_truth(rendered, machine):
     root, frames = rendered
     sequence = datasets.read_flow_folder(root / "mine" / "Blocks")

@@ -1018,9 +1018,24 @@ def _flow_truth(folder: Path) -> tuple[Path, Path | None, Path | None] | None:
     return None
 
 
+def _frame_runs(folder: Path) -> dict[str, list[Path]]:
+    """The folder's numbered PNGs by their name without the number ("frame", "frame_", "yos"), each run in
+    number order; Middlebury's colour pictures of the flow (flowNN.png, beside flowNN.flo) left out."""
+    runs: dict[str, list[Path]] = {}
+    for path in folder.iterdir():
+        if path.is_file() and path.suffix.lower() == ".png" and _number(path) is not None:
+            runs.setdefault(_NUMBERED.sub("", path.stem), []).append(path)
+    runs.pop("flow", None)
+    return {name: sorted(paths, key=lambda p: (_number(p), p.name)) for name, paths in sorted(runs.items())}
+
+
 def _flow_frames(folder: Path) -> list[Path]:
-    return sorted((p for p in folder.iterdir() if p.is_file() and p.suffix.lower() == ".png" and _number(p) is not None),
-                  key=lambda p: (_number(p), p.name))
+    """The frames of a flow folder: its longest run of numbered PNGs of one name; none where two runs are
+    equally long (which is the sequence cannot be told)."""
+    runs = sorted(_frame_runs(folder).values(), key=len, reverse=True)
+    if len(runs) > 1 and len(runs[1]) == len(runs[0]):
+        return []
+    return runs[0] if runs else []
 
 
 def read_flow_folder(folder) -> FlowSequence:
@@ -1057,6 +1072,10 @@ def read_flow_folder(folder) -> FlowSequence:
     flo, invalid, occlusions = truth
     frames = _flow_frames(folder)
     if len(frames) < 2:
+        runs = _frame_runs(folder)
+        if len(runs) > 1:
+            raise InputValueError(f"folder {folder} holds numbered PNGs of {len(runs)} names "
+                                  f"({', '.join(repr(n + 'NN.png') for n in runs)}); which are the frames cannot be told")
         raise InputValueError(f"folder {folder} holds fewer than two numbered frames (*NN.png)")
     numbers = [_number(p) for p in frames]
     wanted = _number(flo)
@@ -1069,14 +1088,21 @@ def read_flow_folder(folder) -> FlowSequence:
     index = numbers.index(wanted)
     flow = read_flo(flo)
     size = read_image(frames[index]).shape[:2]
-    if flow.shape[:2] != size:
-        raise InputValueError(f"{flo} is {flow.shape[1]} x {flow.shape[0]}, the frames {size[1]} x {size[0]}")
+    # Every file scored together has the frame's size: the flow, the next frame and the masks.
+    sized = [(flo, flow.shape[:2]), (frames[index + 1], read_image(frames[index + 1]).shape[:2])]
+    invalid_mask = read_mask(invalid) if invalid is not None else None
+    occluded = read_mask(occlusions) if occlusions is not None else None
+    sized += [(path, m.shape) for path, m in ((invalid, invalid_mask), (occlusions, occluded))
+              if path is not None and m is not None]
+    for path, shape in sized:
+        if tuple(shape) != size:
+            raise InputValueError(f"{path} is {shape[1]} x {shape[0]}, the frame {frames[index].name} "
+                                  f"{size[1]} x {size[0]}")
     mask = np.isfinite(flow).all(axis=-1)
-    if invalid is not None:
-        mask &= ~read_mask(invalid)
+    if invalid_mask is not None:
+        mask &= ~invalid_mask
     if flo.name == "correct_yos.flo":  # Yosemite's sky is stored as exactly (1, 0), not measured
         mask &= ~((flow[..., 0] == 1.0) & (flow[..., 1] == 0.0))
-    occluded = read_mask(occlusions) if occlusions is not None else None
     name = folder.name if flo.parent == folder else f"{folder.parent.name}/{folder.name}"
     return FlowSequence(name, tuple(frames), index, flow, mask, occluded)
 
