@@ -78,6 +78,14 @@ def test_pfm_hand_made_file(tmp_path):
     assert copy.read_bytes() == path.read_bytes()
     with pytest.raises(ValueError, match="scale"):
         datasets.read_disparity(path, scale=8)
+    # Malformed files are refused by name (a raw NumPy error, an empty array, or garbage from a NaN scale).
+    for name, content, match in (("odd.pfm", b"Pf\n1 1\n-1.0\n" + bytes(5), "expected 1 floats"),
+                                 ("negative.pfm", b"Pf\n-3 -2\n-1.0\n" + bytes(24), "size -3 x -2"),
+                                 ("empty.pfm", b"Pf\n0 5\n-1.0\n", "size 0 x 5"),
+                                 ("nan.pfm", b"Pf\n1 1\nnan\n" + bytes(4), "scale nan")):
+        (tmp_path / name).write_bytes(content)
+        with pytest.raises(InputError, match=match):
+            datasets.read_pfm(tmp_path / name)
 
 
 def test_pgm_disparity_scale_and_unknown(tmp_path):

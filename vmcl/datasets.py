@@ -17,6 +17,7 @@ nothing is downloaded and nothing is silently resized or rescaled. A stereo scen
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import sys
@@ -267,11 +268,16 @@ def read_pfm(path) -> np.ndarray:
             scale = float(scale_line)
         except (IndexError, ValueError):
             raise InputValueError(f"{path} has a malformed PFM header") from None
+        if width < 1 or height < 1 or len(dims) != 2 or not math.isfinite(scale):
+            raise InputValueError(f"{path} has a malformed PFM header: size {width} x {height}, scale {scale:g} "
+                                  "(a size of at least 1 x 1 and a finite scale, its sign the byte order)")
         channels = 3 if header == b"PF" else 1
         dtype = "<f4" if scale < 0 else ">f4"
-        data = np.frombuffer(f.read(), dtype=dtype)
-    if data.size != width * height * channels:
-        raise InputValueError(f"{path}: expected {width * height * channels} floats, found {data.size}")
+        raw = f.read()
+    expected = width * height * channels
+    if len(raw) != 4 * expected:
+        raise InputValueError(f"{path}: expected {expected} floats ({4 * expected} bytes), found {len(raw)} bytes")
+    data = np.frombuffer(raw, dtype=dtype)
     shape = (height, width, 3) if channels == 3 else (height, width)
     image = np.flipud(data.reshape(shape)).astype(np.float32)
     image[np.isinf(image)] = np.nan
