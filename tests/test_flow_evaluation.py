@@ -149,3 +149,10 @@ def test_middleburys_download_layout_is_read_and_a_bad_sequence_is_left_out_by_n
     err = captured.err.splitlines()
     assert len(err) == 2 and any(line.startswith(f"vmcl: left out {broken}") for line in err), err
     assert any(line.startswith(f"vmcl: note: left out {one}: it holds the flow") for line in err), err
+
+
+def test_the_baselines_take_frames_sliced_from_larger_arrays():
+    # DIS raised cv2.error (I0.isContinuous()) on a crop of a larger frame.
+    frame = np.random.default_rng(0).integers(0, 255, (100, 140)).astype(np.uint8)
+    for name, method in baselines().items():
+        assert method(frame[10:90, 10:130], frame[11:91, 10:130]).shape == (80, 120, 2), name

@@ -103,6 +103,10 @@ def test_boundary_counts_match_distance():
     assert near.total_truth[0] == near.total_predicted[0] == 60
     assert near.matched_truth[0] >= 57 and near.matched_predicted[0] >= 57
     assert far.matched_truth[0] == 0 and far.matched_predicted[0] == 0
+    # A bool map skipped the shape checks other maps get (pyEdgeEval's own error came out of it).
+    for bad in (np.zeros((20, 20, 2), bool), np.zeros((0, 0), bool)):
+        with pytest.raises(InputError, match="edge_map"):
+            metrics.boundary_counts(bad, [np.zeros(bad.shape, bool)], thresholds=2)
 
 
 def test_boundary_counts_thin_and_threshold_levels():

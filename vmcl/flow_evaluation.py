@@ -81,12 +81,15 @@ def baselines() -> dict[str, Callable[[np.ndarray, np.ndarray], np.ndarray]]:
     """The other methods, by name: each takes two grey uint8 frames and returns (H, W, 2) (u, v)."""
     import cv2
 
-    # OpenCV's type stubs take no None for the output flow, which OpenCV itself then allocates.
+    # OpenCV's type stubs take no None for the output flow, which OpenCV itself then allocates. DIS
+    # refuses a frame that is a slice of a larger array (its rows not contiguous): frames are made so.
     def dis(preset: int) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-        return lambda a, b: np.asarray(cv2.DISOpticalFlow.create(preset).calc(a, b, None))  # type: ignore[call-overload]
+        return lambda a, b: np.asarray(cv2.DISOpticalFlow.create(preset).calc(  # type: ignore[call-overload]
+            np.ascontiguousarray(a), np.ascontiguousarray(b), None))
 
     def farneback(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        return np.asarray(cv2.calcOpticalFlowFarneback(a, b, None, 0.5, 3, 15, 3, 5, 1.2, 0))  # type: ignore[call-overload]
+        return np.asarray(cv2.calcOpticalFlowFarneback(  # type: ignore[call-overload]
+            np.ascontiguousarray(a), np.ascontiguousarray(b), None, 0.5, 3, 15, 3, 5, 1.2, 0))
 
     methods: dict[str, Callable[[np.ndarray, np.ndarray], np.ndarray]] = {
         "OpenCV DIS medium": dis(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM),

@@ -78,9 +78,8 @@ def _thresholds(thresholds) -> np.ndarray:
 
 def _edge_map(edge_map) -> np.ndarray:
     edge_map = np.asarray(to_host(edge_map, "edge_map"))
-    if edge_map.dtype == bool:
-        return edge_map.astype(np.float64)
-    edge_map = as_float_field(edge_map, "edge_map", ndim=2)
+    # A bool map is a map of 0s and 1s, checked for its shape like any other.
+    edge_map = as_float_field(edge_map.astype(np.uint8) if edge_map.dtype == bool else edge_map, "edge_map", ndim=2)
     if np.isnan(edge_map).any() or edge_map.min() < 0 or edge_map.max() > 1:
         raise InputValueError("edge_map must hold boundary strengths in [0, 1] (an 8-bit map: divide by 255)")
     return edge_map
