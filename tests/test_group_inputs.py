@@ -1,6 +1,9 @@
 """What the grouping stage makes of its inputs: device strengths checked as host ones, values beyond
-float32's range, the image of the pairing test (its shape, size and mask), junction kinds by name, and the
-magnitudes behind the curves (the user review of the grouping stage)."""
+float32's range, the image of the pairing test (its shape, size and mask), junction kinds by name, the
+magnitudes behind the curves (the user review of the grouping stage), and the edges, tangents, strengths
+and per-curve values of the second review."""
+
+import re
 
 import numpy as np
 import pytest
@@ -11,7 +14,10 @@ from vmcl.group import (
     group,
     group_curves,
     link_edges,
+    repair_edges,
+    saliency_map,
     saliency_strength,
+    salient_edges,
     structural_saliency,
 )
 
@@ -129,3 +135,116 @@ def test_a_junction_kind_is_named_by_a_known_string():
         junctions.of_kind("Z")
     with pytest.raises(InputTypeError, match="kind must be one of"):
         junctions.of_kind(3)
+
+
+# ------------------------------------------------------------------------------------------- repair_edges
+
+def _broken_t():
+    """A T whose stem stops three pixels short of its bar: one junction with a fill."""
+    edges = np.zeros((60, 60), bool)
+    edges[20, 5:55] = True
+    edges[24:51, 30] = True
+    return edges, find_junctions(link_edges(edges))
+
+
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+def test_repair_edges_refuses_an_edge_map_that_is_not_finite(value):
+    edges, junctions = _broken_t()
+    given = edges.astype(np.float64)
+    given[0, 0] = value  # non-zero: cast to bool it would be an edge
+    with pytest.raises(InputValueError, match="edges must not contain NaN or infinite values"):
+        repair_edges(given, junctions)
+
+
+@pytest.mark.parametrize("shape", [(100, 100), (61, 60), (60, 61)])
+def test_repair_edges_refuses_an_edge_map_of_another_shape(shape):
+    edges, junctions = _broken_t()
+    assert junctions.shape == (60, 60) and sum(len(fill) for fill in junctions.fills) > 0
+    with pytest.raises(InputValueError, match=re.escape(f"the junctions were found in (60, 60), got shape {shape}")):
+        repair_edges(np.zeros(shape, bool), junctions)
+    # The edge map itself is repaired: the stem reaches the bar.
+    assert repair_edges(edges, junctions)[20:24, 30].all()
+
+
+# ------------------------------------------------------------------------------ tangents and strengths
+
+@pytest.mark.parametrize("value", [np.inf, -np.inf])
+@pytest.mark.parametrize("on_device", [False, True], ids=["host", "device"])
+def test_an_infinite_tangent_is_refused(value, on_device, machine):
+    tangent = np.zeros(DRAWING.shape, np.float32)
+    tangent[16, 10] = value  # on the line
+    given = machine.to_device(tangent) if on_device else tangent
+    with pytest.raises(InputValueError, match="tangent must be finite where known"):
+        structural_saliency(DRAWING, tangent=given, machine=machine)
+    # NaN is an unknown tangent, and taken.
+    tangent[16, 10] = np.nan
+    given = machine.to_device(tangent) if on_device else tangent
+    assert np.isfinite(structural_saliency(DRAWING, tangent=given, machine=machine).saliency).all()
+
+
+@pytest.mark.parametrize("on_device", [False, True], ids=["host", "device"])
+def test_a_strength_that_would_overflow_the_saliency_is_refused(on_device, machine):
+    iterations = 30
+    limit = float(np.finfo(np.float32).max) / (4 * iterations)
+    largest = np.float32(limit)
+    if largest > limit:  # the float32 nearest the limit may lie just above it
+        largest = np.nextafter(largest, np.float32(0))
+    for value in [3e38, np.nextafter(largest, np.float32(np.inf))]:
+        strength = _strength(value)
+        given = machine.to_device(strength) if on_device else strength
+        with pytest.raises(InputValueError, match=r"strength must be at most .* for iterations=30"):
+            structural_saliency(DRAWING, strength=given, iterations=iterations, machine=machine)
+    # At the limit, even everywhere, the saliency stays finite.
+    strength = np.full(DRAWING.shape, largest, np.float32)
+    given = machine.to_device(strength) if on_device else strength
+    saliency = structural_saliency(DRAWING, strength=given, iterations=iterations, machine=machine).saliency
+    assert np.isfinite(saliency).all()
+
+
+# ---------------------------------------------------------------------------------------- per-curve values
+
+@pytest.mark.parametrize("value, match", [(np.nan, "must not contain NaN or infinite values"),
+                                          (np.inf, "must not contain NaN or infinite values"),
+                                          (1e39, "has values beyond float32's range")])
+def test_per_curve_values_must_be_finite(value, match):
+    curves = link_edges(DRAWING)
+    values = np.full(len(curves), value)
+    with pytest.raises(InputValueError, match=f"values {match}"):
+        saliency_map(curves, values)
+    with pytest.raises(InputValueError, match=f"saliency {match}"):
+        salient_edges(curves, values, 1.0)
+
+
+# ---------------------------------------------------------------------------------- single-pixel curves
+
+def _crossing():
+    """A vertical line across two horizontal ones two rows apart: the pixel between the crossings (the
+    branch pixels) is a curve of its own, one pixel long."""
+    edges = np.zeros((32, 40), bool)
+    edges[10, 4:36] = edges[12, 4:36] = True
+    edges[2:30, 20] = True
+    return edges
+
+
+@pytest.mark.parametrize("on_device", [False, True], ids=["host", "device"])
+def test_a_single_pixel_has_no_tangent(on_device, machine):
+    edges = _crossing()
+    curves = link_edges(machine.to_device(edges.view(np.uint8)) if on_device else edges, machine=machine)
+    labels, tangent = (m.get() if on_device else m for m in (curves.labels, curves.tangent))
+    single = curves.sizes[labels[11, 20]] == 1
+    assert single and np.isnan(curves.tangents[labels[11, 20]]).all()
+    assert np.isnan(tangent[11, 20])
+    # Other curve pixels keep theirs.
+    assert np.isfinite(tangent[labels >= 0][curves.sizes[labels[labels >= 0]] > 1]).all()
+
+
+def test_structural_saliency_takes_a_single_pixel_tangent_as_unknown(machine):
+    edges = _crossing()
+    unknown = np.asarray(link_edges(edges, machine=machine).tangent).copy()
+    unknown[11, 20] = np.nan
+    default = structural_saliency(edges, machine=machine).saliency
+    assert np.array_equal(default, structural_saliency(edges, tangent=unknown, machine=machine).saliency)
+    # As the pixel were horizontal, the vertical line would turn there, and lose saliency.
+    horizontal = unknown.copy()
+    horizontal[11, 20] = 0.0
+    assert structural_saliency(edges, tangent=horizontal, machine=machine).saliency[11, 20] < default[11, 20]

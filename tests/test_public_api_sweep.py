@@ -320,6 +320,8 @@ TABLE: tuple[Entry, ...] = (
     # ------------------------------------------------------------------ recognize
     _e("vmcl.recognize:image_features", image=arr((32, 32)), sigma=1.5, corner=45.0, gap=6.0,
        kinds={"image": _A, "sigma": _N, "corner": _N, "gap": _N, "machine": _M}),
+    _e("vmcl.recognize:features_of", image=arr((32, 32)), sigma=1.5, corner=45.0,
+       kinds={"image": _A, "sigma": _N, "corner": _N, "machine": _M}),
     _e("vmcl.recognize:edge_features", edges=MASK, magnitude=None, corner=45.0, gap=6.0,
        kinds={"edges": _A, "magnitude": _OA, "corner": _N, "gap": _N, "machine": _M}),
     _e("vmcl.recognize:view_of", features=make("object_features"), mask=None, spacing=2,

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
+from vmcl.early.edges import canny
 from vmcl.errors import InputError
 from vmcl.metrics import recognition_scores
 from vmcl.recognize import (
@@ -434,7 +435,76 @@ def test_models_round_trip_through_a_library_folder(ell_model, tmp_path):
     assert (tmp_path / "other" / "ell.vmodel.npz").read_bytes() == b"not a model"
 
 
-@pytest.mark.parametrize("name", ["", "../up", ".hidden", "a/b", "x" * 65])
+def test_saving_a_model_keeps_the_library_loadable_and_the_users_files(tmp_path, ell_model):
+    import shutil
+
+    model, _, _ = ell_model
+    library = tmp_path / "lib"
+    save_model(model, library)
+    # A file renamed by hand keeps the name it was learned under: saving the model again made two files of
+    # one name, and the folder no longer loaded.
+    shutil.move(library / "ell.vmodel.npz", library / "old.vmodel.npz")
+    with pytest.raises(InputError, match="old.vmodel.npz in .* already hold"):
+        save_model(model, library)
+    assert Library.load(library).names == ("ell",)
+    # replace=True replaces a model of the same name only, and a user's .partial file is never touched.
+    shutil.move(library / "old.vmodel.npz", library / "ell.vmodel.npz")
+    arrow = learn("arrow", [object_view("arrow", shape=(96, 96))[0]])
+    shutil.copy(library / "ell.vmodel.npz", library / "arrow.vmodel.npz")
+    with pytest.raises(InputError, match="holds the model 'ell', not 'arrow'"):
+        save_model(arrow, library, replace=True)
+    (library / "arrow.vmodel.npz").unlink()
+    (library / "arrow.vmodel.npz.partial").write_bytes(b"mine")
+    save_model(arrow, library)
+    assert (library / "arrow.vmodel.npz.partial").read_bytes() == b"mine"
+    assert sorted(p.name for p in library.iterdir()) == ["arrow.vmodel.npz", "arrow.vmodel.npz.partial",
+                                                         "ell.vmodel.npz"]
+    (tmp_path / "file").write_bytes(b"")
+    with pytest.raises(InputError, match="is a file"):
+        save_model(model, tmp_path / "file" / "sub")
+
+
+def test_a_model_file_or_view_that_is_not_whole_is_refused(tmp_path, ell_model):
+    import dataclasses
+    import json
+
+    model, _, _ = ell_model
+    view = model.views[0]
+    for changes, match in (({"radius": float("nan")}, "radius"), ({"radius": 0.0}, "radius"),
+                           ({"corners": view.corners * np.nan}, "corners"), ({"tangent": view.tangent[:-1]}, "tangent"),
+                           ({"points": np.zeros((0, 2)), "tangent": np.zeros(0), "outline": np.zeros(0, bool)},
+                            "boundary point")):
+        with pytest.raises(InputError, match=match):
+            dataclasses.replace(view, **changes)
+    with pytest.raises(InputError, match="views"):
+        Model("x", ("notaview",), ("a",))  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="views"):
+        Model("x", (), ())
+    # A file whose header is not a mapping, or whose view holds NaN corners, is named as not a model.
+    path = save_model(model, tmp_path / "lib")
+    with np.load(path) as data:
+        arrays = dict(data)
+    for name, meta, corners in (("list.vmodel.npz", json.dumps([1, 2]), arrays["v0_corners"]),
+                                ("nan.vmodel.npz", str(arrays["meta"]), arrays["v0_corners"] * np.nan)):
+        np.savez(tmp_path / name, **{**arrays, "meta": np.array(meta), "v0_corners": corners})
+        with pytest.raises(InputError, match=name):
+            load_model(tmp_path / name)
+
+
+def test_learn_takes_an_edge_map_as_recognize_does():
+    # learn refused a bool edge map (a line drawing) and learned a junk model from a uint8 0/1 one.
+    image, _ = object_view("ell", shape=(96, 96))
+    edges = canny(image, sigma=1.5)
+    drawn = learn("ell", [edges])
+    assert drawn.views[0].corners.shape[0] >= 4
+    assert [d.name for d in recognize(edges, Library([drawn]))] == ["ell"]
+    with pytest.raises(InputError, match="only the values 0 and 1"):
+        learn("ell", [edges.astype(np.uint8)])
+    with pytest.raises(InputError, match="image must be"):
+        learn("ell", [np.array(1.0)])
+
+
+@pytest.mark.parametrize("name", ["", "../up", ".hidden", "a/b", "x" * 65, "ell\n"])
 def test_model_names_that_are_not_plain_file_names_are_refused(name):
     image, _ = object_view("ell", shape=(64, 64))
     with pytest.raises(InputError, match="name"):

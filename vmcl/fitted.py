@@ -19,13 +19,13 @@ import hashlib
 import json
 import math
 import os
-import tempfile
 import warnings
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 from vmcl.errors import InputTypeError, InputValueError
+from vmcl.output_folder import replace_file
 
 __all__ = ["FITTED_BY", "check_fitted", "check_fitted_json", "check_writable", "code_sha256", "files_sha256",
            "fitted_record", "parameters_sha256", "with_data", "write_fitted", "write_fitted_json"]
@@ -106,7 +106,7 @@ def write_fitted(path: str | Path, tables: Mapping[str, Any], provenance: Mappin
     target = check_writable(path)
     lines = ["# Parameters learned by `vmcl fit`; [fitted] says from what. Load with vmcl run --config.", ""]
     lines += _toml_tables({**tables, "fitted": fitted_record(tables, provenance)}, ())
-    _replace(target, "\n".join(lines) + "\n")
+    replace_file(target, lambda stream: stream.write(("\n".join(lines) + "\n").encode("utf-8")))
     return target
 
 
@@ -163,7 +163,7 @@ def write_fitted_json(path: str | os.PathLike, parameters: Mapping[str, Any], pr
     except (TypeError, ValueError) as error:
         raise InputValueError(f"parameters and provenance must be plain JSON values (numbers, strings, lists, "
                               f"mappings; no NaN): {error}") from None
-    _replace(target, text + "\n")
+    replace_file(target, lambda stream: stream.write((text + "\n").encode("utf-8")))
     return target
 
 
@@ -198,20 +198,6 @@ def _check_hash(rest: Mapping[str, Any], record: Any, source: str, where: str, o
         raise InputValueError(f"{source}: its parameters differ from those fitted (their SHA-256 does not match "
                               f"the parameters_sha256 of {where}): edited or damaged since `vmcl fit` wrote it; "
                               f"remove {where} to use it as your own {own}")
-
-
-def _replace(target: Path, text: str) -> None:
-    # Written to a new file of its own beside the target (created exclusively, so nothing else is
-    # overwritten) and moved into place: a reader never sees half a file, a failed write leaves the old
-    # one and removes only the file it created.
-    handle, name = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8") as stream:
-            stream.write(text)
-        os.replace(name, target)
-    except BaseException:
-        Path(name).unlink(missing_ok=True)
-        raise
 
 
 def check_writable(path: str | os.PathLike) -> Path:

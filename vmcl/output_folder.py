@@ -5,7 +5,8 @@ output, which vmcl knows by the file :data:`MARKER` listing the files it wrote t
 refused before any work starts. The files are written into a hidden folder beside the output and moved
 into place only when all are written; replacing a previous output touches only the files it lists, and
 puts them back if the move fails or is interrupted part way. A new folder gets the mode the umask
-gives; an existing one keeps its own.
+gives; an existing one keeps its own. Single files vmcl owns (a model, a fitted configuration) are
+replaced the same way (:func:`replace_file`).
 """
 
 from __future__ import annotations
@@ -14,12 +15,13 @@ import contextlib
 import os
 import secrets
 import shutil
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
+from typing import BinaryIO
 
 from vmcl.errors import InputValueError
 
-__all__ = ["MARKER", "is_whole", "output_folder"]
+__all__ = ["MARKER", "is_whole", "output_folder", "replace_file"]
 
 MARKER = ".vmcl-output"
 """The file that marks a folder as a vmcl output: the names of the files vmcl wrote there, one a line."""
@@ -115,6 +117,27 @@ def _listed(out: Path) -> list[str]:
         if name in (".", "..") or name.startswith(MARKER) or "/" in name or os.sep in name or (out / name).is_dir():
             raise InputValueError(f"--out {out}: its {MARKER} lists {name!r}, which is not a file vmcl writes")
     return names
+
+
+def replace_file(target: Path, write: Callable[[BinaryIO], object]) -> None:
+    """Write ``target`` whole or not at all: ``write`` fills a new hidden file beside it (created
+    exclusively, with the umask's mode, so no other file is touched), which is then moved over ``target``.
+    A reader never sees half a file; a failed or interrupted write leaves the old one and removes only the
+    file it created."""
+    while True:
+        partial = target.parent / f".{target.name}.{secrets.token_hex(4)}.partial"
+        try:
+            stream = open(partial, "xb")  # noqa: SIM115 - closed below, before the move
+            break
+        except FileExistsError:
+            continue
+    try:
+        with stream:
+            write(stream)
+        os.replace(partial, target)
+    except BaseException:
+        partial.unlink(missing_ok=True)
+        raise
 
 
 def _hidden_folder(out: Path, kind: str) -> Path:

@@ -93,7 +93,8 @@ class Curves:
         Each curve pixel's arc position (0 at its curve's first pixel), -1 elsewhere; like ``labels``.
     tangent : float32 (H, W)
         Each curve pixel's tangent direction in radians (atan2(dy, dx), pointing along increasing arc
-        position), from the positions smoothed along the arc; NaN elsewhere; like ``labels``.
+        position), from the positions smoothed along the arc; NaN at single-pixel curves (no direction)
+        and elsewhere; like ``labels``.
     points : int32 (N, 2)
         Every curve pixel (x, y), curve after curve, each in arc order; curve i holds
         ``points[offsets[i]:offsets[i + 1]]``.
@@ -192,7 +193,22 @@ def link_edges(edges: ArrayLike, *, magnitude: ArrayLike | None = None, smoothin
     shape = (int(mask.shape[0]), int(mask.shape[1]))
     curves = _measure(found, shape)
     maps = _host_maps(found, curves.sizes, shape) if found.maps is None else found.maps
+    _without_direction(maps[2], found.pixel[found.size == 1], machine)
     return dataclasses.replace(curves, labels=maps[0], position=maps[1], tangent=maps[2])
+
+
+def _without_direction(tangent: ArrayLike, pixels: np.ndarray, machine: Machine) -> None:
+    """NaN written into the tangent map (host or device) at ``pixels`` (flat addresses): the pixels of
+    single-pixel curves. Their arc gives the tangent kernel a zero vector, whose angle comes out 0 (east),
+    but a single pixel has no direction, and structural_saliency reads NaN as unknown, 0 as horizontal."""
+    if not len(pixels):
+        return
+    flat = tangent.reshape(-1)
+    if isinstance(flat, cl_array.Array):
+        flat.setitem(machine.to_device(pixels.astype(np.int32)), machine.full(len(pixels), np.float32, np.nan),
+                     queue=machine.queue)
+    else:
+        flat[pixels] = np.nan
 
 
 class _Linked(NamedTuple):

@@ -31,7 +31,15 @@ from typing import Any
 
 import numpy as np
 
-from vmcl.cm.core import ArrayLike, check_choice, check_int, check_real, real_host_array, to_host
+from vmcl.cm.core import (
+    ArrayLike,
+    check_choice,
+    check_int,
+    check_real,
+    finite_float32,
+    real_host_array,
+    to_host,
+)
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.group.curves import BRANCH, Curves
 
@@ -448,10 +456,18 @@ def _corners(curves: Curves, long_enough: np.ndarray, corner: float, found: _Fou
 
 
 def repair_edges(edges: ArrayLike, junctions: Junctions) -> np.ndarray:
-    """``edges`` (a host bool (H, W) map) with every junction's gap filled (:attr:`Junctions.fills`)."""
+    """``edges`` (a host bool (H, W) map, of the junctions' edge map's shape where known:
+    :attr:`Junctions.shape`; finite) with every junction's gap filled (:attr:`Junctions.fills`)."""
     if not isinstance(junctions, Junctions):
         raise InputTypeError(f"junctions must be a vmcl.group.Junctions, got {type(junctions).__name__}")
-    mask = real_host_array(to_host(edges), "edges", ndims=(2,)).astype(bool)
+    # NaN is non-zero, so cast to bool it would become an edge: refused, as the other grouping functions
+    # refuse float edge maps (finite_float32 refuses what overflows its cast, with a message).
+    with np.errstate(over="ignore"):
+        mask = finite_float32(real_host_array(to_host(edges), "edges", ndims=(2,)), "edges").astype(bool)
+    if junctions.shape is not None and mask.shape != tuple(junctions.shape):
+        # Fills inside a larger or differently shaped map would land at pixels of another meaning.
+        raise InputValueError(f"edges must have the shape of the edge map the junctions were found in "
+                              f"{tuple(junctions.shape)}, got shape {mask.shape}")
     for fill in junctions.fills:
         if len(fill) and (fill.max(axis=0) >= mask.shape[::-1]).any():
             raise InputValueError(f"edges ({mask.shape}) is smaller than the map the junctions were found in")

@@ -17,7 +17,7 @@ import itertools
 
 import numpy as np
 
-from vmcl.cm.core import check_real, real_host_array, to_host
+from vmcl.cm.core import check_real, finite_float32, real_host_array, to_host
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.group.curves import BRANCH, Curves
 
@@ -52,14 +52,25 @@ def local_saliency(curves: Curves, *, length_exponent: float = 0.5, curvature_sc
     curvature_scale = check_real(curvature_scale, "curvature_scale", above=0)
     strength = np.where(np.isnan(curves.magnitude), 1.0, curves.magnitude)
     # A single pixel has length 0; it counts as one pixel long.
-    return strength * np.maximum(curves.length, 1.0) ** length_exponent * np.exp(-curves.mean_curvature / curvature_scale)
+    with np.errstate(over="ignore"):
+        saliency = (strength * np.maximum(curves.length, 1.0) ** length_exponent
+                    * np.exp(-curves.mean_curvature / curvature_scale))
+    if saliency.size and not np.all(np.abs(saliency) <= np.finfo(np.float32).max):
+        raise InputValueError(f"length_exponent {length_exponent:g} makes the longest curves' saliency overflow "
+                              f"float32 (curves up to {float(np.max(curves.length)):.0f} px long); use a smaller one")
+    return saliency
 
 
 def saliency_map(curves: Curves, values: np.ndarray) -> np.ndarray:
-    """Per-curve values painted onto the curves' pixels: float32 (H, W), 0 off the curves and on branch
-    pixels (which belong to no one curve)."""
+    """Per-curve values (finite, within float32's range) painted onto the curves' pixels: float32 (H, W), 0
+    off the curves and on branch pixels (which belong to no one curve)."""
     curves = _curves(curves)
-    values = real_host_array(values, "values", ndims=(1,), empty=True).astype(np.float64)
+    # Painted into a float32 map: NaN, infinities and values beyond float32's range would be painted as
+    # they are or become infinities, and compare false (or true) against any threshold (finite_float32
+    # refuses what overflows its cast, with a message).
+    with np.errstate(over="ignore"):
+        values = finite_float32(real_host_array(values, "values", ndims=(1,), empty=True), "values")
+    values = values.astype(np.float64)
     if values.shape != (len(curves),):
         raise InputValueError(f"values must hold one value per curve ({len(curves)}), got shape {values.shape}")
     labels = np.asarray(to_host(curves.labels))

@@ -33,16 +33,18 @@ IJCV 27(1):51-69, 1998.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
 import pyopencl.array as cl_array
 
+from vmcl.cm import reduce as cm_reduce
 from vmcl.cm.core import ArrayLike, check_int, check_real, field, machine_for, result
 from vmcl.errors import InputValueError
 from vmcl.group.curves import RUN, link_edges
 from vmcl.machine import Machine
-from vmcl.mrf.checks import check_weights, within_float32
+from vmcl.mrf.checks import FLOAT32_MAX, check_weights, within_float32
 
 __all__ = ["MAX_ITERATIONS", "StructuralSaliency", "saliency_strength", "structural_saliency"]
 
@@ -77,11 +79,14 @@ def structural_saliency(edges: ArrayLike, *, tangent: ArrayLike | None = None, s
     edges : (H, W) bool or uint8 array, NumPy or device
         The edge map (e.g. Canny's, or a line drawing one pixel thin).
     tangent : (H, W) float32 array, optional
-        Each edge pixel's tangent direction in radians (its sense does not matter); NaN where unknown.
-        Default: the curves' own (:func:`vmcl.group.curves.link_edges`).
+        Each edge pixel's tangent direction in radians (its sense does not matter); NaN where unknown
+        (the pixel's elements then follow their grid steps); infinities are refused. Default: the curves'
+        own (:func:`vmcl.group.curves.link_edges`; NaN at single-pixel curves).
     strength : (H, W) float32 array, optional
         Each edge pixel's local strength, the elements' sigma (e.g. the gradient magnitude over its
-        median on the edges); finite and >= 0, NumPy or device arrays alike. Default: 1 on every edge pixel.
+        median on the edges); finite and >= 0, NumPy or device arrays alike, and at most float32's
+        largest / (4 * ``iterations``), so that the saliency (a sum of up to 2 * ``iterations`` strengths)
+        stays within float32. Default: 1 on every edge pixel.
     iterations : int
         Network iterations, in [1, :data:`MAX_ITERATIONS`]: the length (in elements) of the curves the
         measure looks along.
@@ -120,6 +125,12 @@ def structural_saliency(edges: ArrayLike, *, tangent: ArrayLike | None = None, s
         assert isinstance(tangents, cl_array.Array)  # device edges give device maps
     else:
         tangents = _matching(tangent, "tangent", mask, machine)
+        # NaN means unknown (the elements follow their steps); an infinity is no direction either, but the
+        # device does not read it as unknown: its turns come out NaN, which cuts every curve through the
+        # pixel. cm_reduce.extremes skips NaN, so only infinities show in it.
+        low, high = cm_reduce.extremes(tangents, machine=machine)
+        if math.isinf(low) or math.isinf(high):
+            raise InputValueError("tangent must be finite where known (NaN where unknown): it holds an infinity")
     if strength is None:
         weights = machine.empty(mask.shape, np.float32)
         machine.launch(machine.kernel("structural_saliency", "unit_strength"), (mask.size,), mask, weights,
@@ -128,6 +139,13 @@ def structural_saliency(edges: ArrayLike, *, tangent: ArrayLike | None = None, s
         weights = _matching(strength, "strength", mask, machine)
         # A device strength is checked on the device, as a host one on the host.
         check_weights(weights if isinstance(strength, cl_array.Array) else strength, "strength", machine)
+        # A pixel's saliency sums up to 2 * iterations strengths in float32: the limit keeps it finite, with
+        # a factor of 2 to spare for the sums' rounding.
+        largest = float(cm_reduce.reduce(weights, "max", machine=machine).get())
+        limit = FLOAT32_MAX / (4 * iterations)
+        if largest > limit:
+            raise InputValueError(f"strength must be at most float32's largest / (4 * iterations) = {limit:.4g} "
+                                  f"for iterations={iterations}, lest the saliency overflow float32; got {largest:.4g}")
     machine.require_memory("structural_saliency", 8 * 6 * 4 * mask.size, 8 * 3 * 4 * mask.size)
     sizes = (np.int32(width), np.int32(height))
     links = machine.empty(mask.shape, np.uint8)

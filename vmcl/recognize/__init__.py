@@ -7,7 +7,7 @@ poses from invariant keys of corner and arc pairs by geometric hashing (:mod:`vm
 candidate aligned and verified against the image's edges (:mod:`vmcl.recognize.verification`).
 """
 
-from vmcl.recognize.features import Features, arcs_of, edge_features, image_features
+from vmcl.recognize.features import Features, arcs_of, edge_features, features_of, image_features
 from vmcl.recognize.indexing import (
                                          Candidates,
                                          Index,
@@ -46,7 +46,6 @@ from vmcl.recognize.verification import (
 
 __all__ = ["MODEL_SUFFIX", "TRANSFORMS", "Candidates", "Detection", "Features", "Index", "Library", "Model",
            "NearestEdge", "Regions", "Support", "Verified", "View", "anchors_of", "arcs_of", "carry", "corner_pairs",
-           "corner_regions",
-           "distance_transform", "distance_transform_numpy", "edge_features", "image_features", "index_for", "learn",
-           "load_model", "model_path", "pair_keys", "recognize", "refine", "save_model", "select_regions", "support",
+           "corner_regions", "distance_transform", "distance_transform_numpy", "edge_features", "features_of",
+           "image_features", "index_for", "learn", "load_model", "model_path", "pair_keys", "recognize", "refine", "save_model", "select_regions", "support",
            "support_numpy", "view_of", "vote", "vote_numpy"]

@@ -28,7 +28,7 @@ from vmcl.group.junctions import Junctions, find_junctions
 from vmcl.group.local_saliency import local_saliency, saliency_map
 from vmcl.machine import Machine
 
-__all__ = ["ARC_LENGTH", "MIN_OPENING", "Features", "arcs_of", "edge_features", "image_features"]
+__all__ = ["ARC_LENGTH", "MIN_OPENING", "Features", "arcs_of", "edge_features", "features_of", "image_features"]
 
 MIN_OPENING = math.radians(15)
 """Corners sharper than this (degrees: 15) are not kept: their two edges' directions are not separable."""
@@ -307,8 +307,31 @@ def image_features(image: ArrayLike, *, sigma: float = 1.5, corner: float = 45.0
     machine = machine_for(machine)
     if not hasattr(image, "shape"):
         raise InputTypeError(f"image must be an array, got {type(image).__name__}")
+    if len(image.shape) not in (2, 3):
+        raise InputValueError(f"image must be (H, W) or (H, W, 3), got shape {tuple(image.shape)}")
     if min(image.shape[:2]) < 8:
         raise InputValueError(f"image must be at least 8 x 8 pixels, got {tuple(image.shape)}")
     sigma = check_real(sigma, "sigma", above=0)
     found = canny(image, sigma=sigma, return_gradient=True, machine=machine)
     return edge_features(found.edges, magnitude=found.magnitude, corner=corner, gap=gap, machine=machine)
+
+
+def features_of(image: ArrayLike, *, sigma: float = 1.5, corner: float = 45.0,
+                machine: Machine | None = None) -> Features:
+    """The features of an image or an edge map, as :func:`vmcl.recognize.learn` and
+    :func:`vmcl.recognize.recognize` take them: a 2-D bool array is an edge map (:func:`edge_features`),
+    anything else an image (:func:`image_features`, with ``sigma``).
+
+    Raises
+    ------
+    vmcl.errors.InputValueError
+        An integer array of only 0 and 1: an edge map or mask in an integer type, which as a picture is
+        black, and whose Canny edges would be each edge pixel's outline (poses off by a pixel or more).
+    """
+    if isinstance(image, np.ndarray) and image.ndim == 2 and image.dtype == np.bool_:
+        return edge_features(image, corner=corner, machine=machine)
+    if (isinstance(image, np.ndarray) and image.dtype.kind in "ui" and image.size
+            and int(np.max(image)) <= 1 and int(np.min(image)) >= 0):
+        raise InputValueError(f"image holds only the values 0 and 1 ({image.dtype}): an edge map must be a bool "
+                              "array (image.astype(bool)); an image, its brightness")
+    return image_features(image, sigma=sigma, corner=corner, machine=machine)

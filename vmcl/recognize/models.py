@@ -11,10 +11,12 @@ model files (``NAME.vmodel.npz``) any user can add to with ``vmcl learn``.
 from __future__ import annotations
 
 import json
+import math
 import re
 import zipfile
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
+from numbers import Integral, Real
 from pathlib import Path
 from typing import Any
 
@@ -24,8 +26,9 @@ import numpy as np
 from vmcl.cm.core import check_bool, check_int, machine_for
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.machine import Machine
+from vmcl.output_folder import replace_file
 from vmcl.recognize.arguments import edge_map
-from vmcl.recognize.features import Features, image_features
+from vmcl.recognize.features import Features, features_of
 
 __all__ = ["MODEL_SUFFIX", "Library", "Model", "View", "learn", "load_model", "model_path", "save_model", "view_of"]
 
@@ -35,7 +38,7 @@ MODEL_SUFFIX = ".vmodel.npz"
 _FORMAT = "vmcl-model"
 _VERSION = 3  # 2: views keep their arcs; 3: which points are the outline's. Older files: no arcs (1), all outline
 _OUTLINE_REACH = 3.0  # px: a boundary point this near the object's outer border is the outline's
-_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9 _.+-]{0,63}$")
+_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9 _.+-]{0,63}")
 _MAX_POINTS = 1500  # boundary points kept per view: enough to verify a pose, few enough to test many
 
 
@@ -83,6 +86,33 @@ class View:
     outline: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
 
     def __post_init__(self) -> None:
+        # Checked whole: a view read from a damaged file, or made by hand, failed later in recognise
+        # without naming the model, or (a NaN radius) matched at a wrong pose.
+        features = len(np.asarray(self.bisector)) if np.ndim(self.bisector) == 1 else -1
+        points = len(np.asarray(self.points)) if np.ndim(self.points) == 2 else -1
+        arcs = len(np.asarray(self.arc_radius)) if np.ndim(self.arc_radius) == 1 else -1
+        for label, value, shape, finite in (
+                ("corners", self.corners, (features, 2), True), ("bisector", self.bisector, (features,), True),
+                ("opening", self.opening, (features,), True), ("points", self.points, (points, 2), True),
+                ("tangent", self.tangent, (points,), False), ("centre", self.centre, (2,), True),
+                ("arcs", self.arcs, (arcs, 2), True), ("arc_radius", self.arc_radius, (arcs,), True)):
+            array = np.asarray(value)
+            if array.dtype.kind not in "iuf" or array.shape != shape or -1 in shape:
+                raise InputValueError(f"a view's {label} must be a real array of shape {shape} (one row per "
+                                      f"feature, boundary point or arc), got {array.dtype} {array.shape}")
+            if finite and not np.isfinite(array).all():
+                raise InputValueError(f"a view's {label} must be finite")
+        if points < 1:
+            raise InputValueError("a view must hold at least one boundary point")
+        if (np.asarray(self.arc_radius) <= 0).any():
+            raise InputValueError("a view's arc_radius must be > 0")
+        if not (isinstance(self.radius, Real) and math.isfinite(self.radius) and self.radius > 0):
+            raise InputValueError(f"a view's radius must be a finite number > 0, got {self.radius!r}")
+        if not (isinstance(self.length, Real) and math.isfinite(self.length) and self.length >= 0):
+            raise InputValueError(f"a view's length must be a finite number >= 0, got {self.length!r}")
+        if (not isinstance(self.shape, tuple) or len(self.shape) != 2
+                or not all(isinstance(n, Integral) and n >= 1 for n in self.shape)):
+            raise InputValueError(f"a view's shape must be (H, W), two ints >= 1, got {self.shape!r}")
         if not len(self.outline):  # not given (a file of an older format): every point the outline's
             object.__setattr__(self, "outline", np.ones(len(self.points), bool))
         elif np.asarray(self.outline).dtype != np.bool_:
@@ -108,11 +138,19 @@ class Model:
     views: tuple[View, ...]
     sources: tuple[str, ...]
 
+    def __post_init__(self) -> None:
+        _check_name(self.name)
+        if not isinstance(self.views, tuple) or not self.views or not all(isinstance(v, View) for v in self.views):
+            raise InputTypeError("views must be a non-empty tuple of vmcl.recognize.View")
+        if (not isinstance(self.sources, tuple) or len(self.sources) != len(self.views)
+                or not all(isinstance(x, str) for x in self.sources)):
+            raise InputTypeError(f"sources must be a tuple of one str per view ({len(self.views)})")
+
 
 def _check_name(name: Any) -> str:
     if not isinstance(name, str):
         raise InputTypeError(f"name must be a str, got {type(name).__name__}")
-    if not _NAME.match(name):
+    if not _NAME.fullmatch(name):  # match's $ also matches before a final newline
         raise InputValueError("name must be 1 to 64 letters, digits, spaces or _ . + - (starting with a letter "
                               f"or digit), got {name!r}")
     return name
@@ -215,7 +253,8 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
     images : sequence of (H, W) or (H, W, 3) arrays
         The examples: one image of a 2-D object, or views around a 3-D object (at most a few degrees
         apart for the views between them to be recognised; 20 degrees apart is tested). Each shows the
-        object alone, or with ``masks``.
+        object alone, or with ``masks``. A 2-D bool array is an edge map (a line drawing), as
+        :func:`vmcl.recognize.recognize` takes one (:func:`vmcl.recognize.features_of`).
     masks : sequence of bool (H, W) arrays, optional
         The object's pixels in each image.
     sigma, corner : float
@@ -242,7 +281,7 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
     for i, image in enumerate(images):
         which = f"images[{i}]" + (f" ({sources[i]})" if sources is not None else "")
         try:
-            features = image_features(image, sigma=sigma, corner=corner, machine=machine)
+            features = features_of(image, sigma=sigma, corner=corner, machine=machine)
             views.append(view_of(features, mask=None if masks is None else masks[i]))
         except InputError as error:
             # Which of several examples failed is what the user needs to mend it.
@@ -267,7 +306,9 @@ def save_model(model: Model, folder: str | Path, *, replace: bool = False) -> Pa
     folder : str or Path
     replace : bool
         Replace a model file of the same name. Without it an existing file is an error; a file that is
-        not a vmcl model is never replaced.
+        not a vmcl model, or holds a model of another name, is never replaced. Another file of the
+        folder that holds a model of this name (one renamed by hand) is an error either way, since
+        :meth:`Library.load` would refuse the folder.
 
     Returns
     -------
@@ -279,12 +320,20 @@ def save_model(model: Model, folder: str | Path, *, replace: bool = False) -> Pa
     replace = check_bool(replace, "replace")
     path = model_path(folder, model.name)
     folder = path.parent
-    if folder.exists() and not folder.is_dir():
-        raise InputValueError(f"folder must be a directory, got the file {folder}")
+    for above in (folder, *folder.parents):
+        if above.exists() and not above.is_dir():
+            raise InputValueError(f"folder must be a directory, but {above} is a file")
     if path.exists():
         if not replace:
             raise InputValueError(f"{path} exists; pass replace=True (vmcl learn --replace) to replace it")
-        load_model(path)  # refuses a file that is not a vmcl model
+        held = load_model(path).name  # refuses a file that is not a vmcl model
+        if held != model.name:
+            raise InputValueError(f"{path} holds the model {held!r}, not {model.name!r}: it is not replaced")
+    if folder.is_dir():
+        others = [p.name for p in sorted(folder.glob(f"*{MODEL_SUFFIX}")) if p != path and _name_in(p) == model.name]
+        if others:
+            raise InputValueError(f"{', '.join(others)} in {folder} already hold(s) the model {model.name!r} (a file "
+                                  "renamed by hand keeps the name it was learned under); remove or rename it first")
     folder.mkdir(parents=True, exist_ok=True)
     arrays: dict[str, np.ndarray] = {}
     for i, view in enumerate(model.views):
@@ -296,11 +345,20 @@ def save_model(model: Model, folder: str | Path, *, replace: bool = False) -> Pa
                        f"v{i}_frame": np.array([view.radius, *view.shape, view.length], np.float64)})
     meta = {"format": _FORMAT, "version": _VERSION, "name": model.name, "views": len(model.views),
             "sources": list(model.sources)}
-    partial = path.with_name(path.name + ".partial")
-    with open(partial, "wb") as handle:
-        np.savez_compressed(handle, allow_pickle=False, meta=np.array(json.dumps(meta)), **arrays)
-    partial.replace(path)
+    # Under a new hidden name of its own, then moved over: a user's NAME.vmodel.npz.partial was overwritten.
+    replace_file(path, lambda stream: np.savez_compressed(stream, allow_pickle=False, meta=np.array(json.dumps(meta)),
+                                                          **arrays))
     return path
+
+
+def _name_in(path: Path) -> str | None:
+    """The name of the model a file holds, from its header alone; None for a file that is not one."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+        return meta.get("name") if isinstance(meta, dict) and meta.get("format") == _FORMAT else None
+    except (zipfile.BadZipFile, OSError, EOFError, ValueError, KeyError, TypeError):
+        return None
 
 
 def load_model(path: str | Path) -> Model:
@@ -319,7 +377,7 @@ def load_model(path: str | Path) -> Model:
     try:
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))
-            if meta.get("format") != _FORMAT:
+            if not isinstance(meta, dict) or meta.get("format") != _FORMAT:
                 raise ValueError("not a model")
             if type(meta.get("version")) is not int or meta["version"] not in range(1, _VERSION + 1):
                 raise InputValueError(f"{path} is a vmcl model of format version {meta.get('version')}; this vmcl "
@@ -342,8 +400,8 @@ def load_model(path: str | Path) -> Model:
                                   (int(frame[1]), int(frame[2])), float(frame[3]), arcs[:, :2].copy(),
                                   arcs[:, 2].copy(), outline))
             return Model(_check_name(meta["name"]), tuple(views), tuple(str(s) for s in meta["sources"]))
-    except InputValueError:
-        raise
+    except InputError as error:  # the file's version, or a view or model it holds that is not one
+        raise error if str(path) in str(error) else InputValueError(f"{path}: {error}") from None
     except (zipfile.BadZipFile, OSError, EOFError):  # not a whole .npz archive: damaged, cut short, another file
         raise InputValueError(f"{path} is not a vmcl model file (it is not a whole NumPy .npz archive: damaged, "
                               "cut short or another kind of file)") from None

@@ -29,10 +29,10 @@ from scipy import special
 from scipy.spatial import cKDTree
 
 from vmcl.cm.core import check_bool, check_choice, check_int, check_real, machine_for
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.errors import InputTypeError
 from vmcl.machine import Machine
 from vmcl.recognize.arguments import real_map
-from vmcl.recognize.features import Features, edge_features, image_features
+from vmcl.recognize.features import Features, edge_features, features_of
 from vmcl.recognize.indexing import Candidates, anchors_of, corner_pairs, index_for, vote
 from vmcl.recognize.models import Library, View
 from vmcl.recognize.selection import corner_regions, select_regions
@@ -120,15 +120,8 @@ def _features(data: Any, sigma: float, machine: Machine) -> Features:
         labels = np.asarray(data.labels) if data.labels is not None else None
         edges = labels != 0 if labels is not None and labels.any() else np.asarray(data.edges, bool)
         return edge_features(edges, machine=machine)
-    if isinstance(data, np.ndarray) and data.ndim == 2 and data.dtype == np.bool_:
-        return edge_features(data, machine=machine)
     if isinstance(data, np.ndarray):
-        if data.dtype.kind in "ui" and data.size and int(np.max(data)) <= 1 and int(np.min(data)) >= 0:
-            # Values 0 and 1 only: an edge map or mask in an integer type, which as a picture is black, and
-            # whose Canny edges would be each edge pixel's outline (poses off by a pixel or more).
-            raise InputValueError(f"image holds only the values 0 and 1 ({data.dtype}): an edge map must be "
-                                  "a bool array (image.astype(bool)); an image, its brightness")
-        return image_features(data, sigma=sigma, machine=machine)
+        return features_of(data, sigma=sigma, machine=machine)
     raise InputTypeError("image must be an image or edge map (NumPy array), a vmcl Result or vmcl.recognize.Features, "
                          f"got {type(data).__name__}")
 
