@@ -251,7 +251,7 @@ def test_soft_map_of_one_image_is_its_probability_of_boundary(small_scene, machi
 @pytest.mark.parametrize("method", ["linear", "rule"])
 def test_without_the_image_probability_the_stage_is_left_out_and_the_rest_unchanged(small_scene, machine, method):
     """labels.boundary_probability = false skips the stage "boundaries"; the fields and labels are those of a
-    full run, and the strength is the classifier's (or, for the rule labels, the candidates themselves)."""
+    full run, and the strength is the classifier's (or, for the rule labels, 1 where they label a discontinuity)."""
     full = VisionMachine(Config.from_dict({"labels": {"method": method}}), machine=machine).run(
         small_scene.left, small_scene.right)
     config = Config.from_dict({"labels": {"method": method, "boundary_probability": False}})
@@ -261,8 +261,8 @@ def test_without_the_image_probability_the_stage_is_left_out_and_the_rest_unchan
     assert list(found.stages) == vm.stages(right=True, next=False, rgb=small_scene.left.ndim == 3)
     np.testing.assert_array_equal(found.disparity, full.disparity)
     np.testing.assert_array_equal(found.labels, full.labels)
-    if method == "rule":
-        np.testing.assert_array_equal(found.boundary_strength, (found.support != 0).astype(np.float32))
+    if method == "rule":  # 1 where it labels a discontinuity (a brightness edge it labels none had 1 too)
+        np.testing.assert_array_equal(found.boundary_strength, (found.labels != 0).astype(np.float32))
     else:  # the classifier's support for some discontinuity at the candidates, 0 elsewhere
         candidates = found.support != 0
         assert candidates.sum() > 100
@@ -419,4 +419,31 @@ def test_an_integer_image_using_little_of_its_range_gets_a_note(scale, dtype, no
     notes = [n for n in VisionMachine(machine=machine).run(image).notes if n.startswith("left: its brightest pixel")]
     assert len(notes) == noted, notes
     if noted and dtype == np.uint16:
-        assert "of uint16's 65535" in notes[0] and "if the data has 12 bits" in notes[0] and "(x 16)" in notes[0]
+        assert "of uint16's 65535" in notes[0] and "if the data has 12 bits" in notes[0] and "(x 16.0037)" in notes[0]
+
+
+def test_the_dark_image_note_gives_the_factor_that_fills_the_range():
+    # A black image was told to scale by 128 (nothing scales 0), and 1-bit data by 128 (it needs 255).
+    from vmcl.pipeline import range_note
+
+    assert range_note(np.zeros((20, 20), np.uint8), "left") == "left: every pixel is 0 (a black image): the machine sees nothing in it"
+    assert "if the data has 1 bit, scale it to the full range first (x 255)" in range_note(
+        np.eye(20, dtype=np.uint8), "left")
+
+
+def test_a_float_image_centred_on_zero_is_refused():
+    # Brightness in [-0.5, 0.5] (a mean taken out) was read as a dark image on the [0, 1] scale, in silence.
+    image = np.random.default_rng(0).random((32, 32)).astype(np.float32) - 0.5
+    with pytest.raises(ValueError, match=r"left: float images hold brightness in \[0, 1\]"):
+        VisionMachine().run(image)
+
+
+def test_the_rule_labels_strength_is_zero_on_an_edge_they_label_none():
+    # Without the image's probability the strength was 1 wherever the support map had a bit, the brightness
+    # edges' included: an edge the cartoon labels none (no cue marks it) had full strength.
+    image = np.full((64, 64), 0.3, np.float32)
+    image[:, 32:] = 0.7
+    config = Config.from_dict({"labels": {"method": "rule", "boundary_probability": False}})
+    found = VisionMachine(config).run(image)
+    assert (found.support != 0).sum() > 30 and not found.labels.any()
+    assert not found.boundary_strength.any()

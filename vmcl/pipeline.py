@@ -597,8 +597,8 @@ class LabelsConfig:
         (:func:`vmcl.early.boundary_probability.boundary_probability`), which the soft map
         ``Result.boundary_strength`` follows (True, the default). False leaves it out (a run that wants
         no soft map, e.g. depth alone, saves its time): the strength is then the linear classifier's
-        support at the candidates and 0 elsewhere (the "rule" method's, the candidates themselves). The
-        labels do not depend on it.
+        support at the candidates and 0 elsewhere (the "rule" method's: 1 where it labels a
+        discontinuity). The labels do not depend on it.
     """
 
     method: str = "linear"
@@ -1050,11 +1050,16 @@ def range_note(array: np.ndarray, name: str) -> str | None:
     top = int(array.max())
     if top >= SMALL_RANGE * scale:
         return None
-    bits = max(top, 1).bit_length()
+    if top == 0:
+        return f"{name}: every pixel is 0 (a black image): the machine sees nothing in it"
+    bits = top.bit_length()
+    # b-bit data reaches 2^b - 1; the factor that takes that to the type's full scale (255 for 1-bit data).
+    factor = scale / (2**bits - 1)
     return (f"{name}: its brightest pixel is {top} of {array.dtype.newbyteorder('=')}'s {scale:.0f} ({100 * top / scale:.1f}% of "
             f"the range), and the machine reads images on their type's full scale, so it sees a very dark image "
-            f"and its contrast-based stages find little; if the data has {bits} bits, scale it to the full "
-            f"range first (x {2 ** (8 * array.dtype.itemsize - bits)})")
+            f"and its contrast-based stages find little; if the data has {bits} bit{'s' if bits > 1 else ''}, scale it "
+            f"to the full "
+            f"range first (x {factor:.6g})")
 
 
 def _device_lines(found: Restoration) -> tuple[cl_array.Array, cl_array.Array]:
@@ -1151,9 +1156,10 @@ class _Run:
             host_restored = {cue: array.get() for cue, array in restored.items()}
             host_lines = {cue: (h.get().astype(bool), v.get().astype(bool)) for cue, (h, v) in lines.items()}
             edge_map, host_support, host_labels = brightness.get(), support.get(), labels.get()
-            # Without the image's probability the "rule" labels leave no strength: the candidates are it.
+            # Without the image's probability the "rule" labels leave no strength: the labelled pixels are
+            # it (not every support bit: a brightness edge no cue marks is labelled none).
             host_strength = (strength.get() if strength is not None
-                             else (host_support != 0).astype(np.float32))
+                             else (host_labels != 0).astype(np.float32))
         as_bool = ("colour_edges", "texture_edges", "stereo_discontinuity", "half_occluded", "out_of_range")
         host = {name: (value.astype(bool) if name in as_bool else value) for name, value in host.items()}
         for cue in active:

@@ -411,9 +411,10 @@ def finite_float32(x: Any, name: str) -> Any:
     return x
 
 
-UNIT_MARGIN = 0.5
+UNIT_MARGIN = 0.25
 """How far outside [0, 1] a float image's brightness may reach and still be read on the [0, 1] scale (noisy
-renderings overshoot; an image in 0..255 is far outside)."""
+renderings overshoot; an image in 0..255 is far outside, and one centred on 0, in [-0.5, 0.5], is outside
+too: with a margin of 0.5 it was read as a dark image on the wrong scale)."""
 
 
 def check_unit_image(image: np.ndarray, name: str) -> None:
