@@ -2,6 +2,7 @@
 vmcl.scenes (seed sections "The Vision Machine System" and "Organization of integration")."""
 
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -82,6 +83,11 @@ def test_a_config_holds_its_own_values_and_refuses_what_a_run_would():
                                            ("[motion]\nconfidence_floor = nan\n", "motion.confidence_floor"),
                                            ('[labels]\nmethod = "svm"\n', "labels.method"),
                                            ("[stereo]\nintensity_sigma = 0\n", "stereo.intensity_sigma"),
+                                           # Accepted, then refused mid-run (alpha) or left the disparity to the
+                                           # half-occluded pixels alone (backfill_weight), or overflowed (exponent).
+                                           ("[mrf.motion]\nalpha = 0\n", "mrf.motion.alpha must be > 0"),
+                                           ("[stereo]\nbackfill_weight = 0\n", "stereo.backfill_weight must be > 0"),
+                                           ("[grouping]\nlength_exponent = 200\n", "grouping.length_exponent"),
                                            ('[mrf]\nmethod = "foo"\n', "mrf.method"),
                                            ('[mrf]\nschedule = "slow"\n', "mrf.schedule"),
                                            ("[edges]\nsigma = -1\n", "edges.sigma"),
@@ -447,3 +453,44 @@ def test_the_rule_labels_strength_is_zero_on_an_edge_they_label_none():
     found = VisionMachine(config).run(image)
     assert (found.support != 0).sum() > 30 and not found.labels.any()
     assert not found.boundary_strength.any()
+
+
+def test_settings_a_run_cannot_use_are_named_before_any_stage(tmp_path, small_scene):
+    # A weights file without the run's set of inputs failed after every stage had run, naming no key; a
+    # library folder that does not exist was refused without the key's name; an edge sigma too wide for
+    # the image was refused as "sigma".
+    import json
+
+    shipped = json.loads((Path(__file__).parents[1] / "vmcl" / "labelling.json").read_text())
+    shipped.pop("fitted")
+    shipped["weights"] = {"image": shipped["weights"]["image"]}
+    (tmp_path / "image_only.json").write_text(json.dumps(shipped))
+    vm = VisionMachine(Config.from_dict({"labels": {"weights": str(tmp_path / "image_only.json")}}))
+    stages = []
+    with pytest.raises(ValueError, match=r"labels.weights \(.*image_only.json\): the labeller has no weights"):
+        vm.run(small_scene.left, small_scene.right, progress=stages.append)
+    assert stages == []
+    with pytest.raises(ValueError, match="recognition.models: folder must be a directory"):
+        VisionMachine(Config.from_dict({"recognition": {"models": str(tmp_path / "none")}}))
+    with pytest.raises(ValueError, match=r"edges \(the \[edges\] settings on this image\): sigma must be at most"):
+        VisionMachine(Config.from_dict({"edges": {"sigma": 1000.0}})).run(small_scene.left)
+
+
+def test_an_image_no_enabled_cue_reads_is_named_in_the_notes(small_scene):
+    # With stereo and motion off, a right image and a next frame were dropped without a word.
+    config = Config.from_dict({"stereo": {"enabled": False}, "motion": {"enabled": False}})
+    found = VisionMachine(config).run(small_scene.left, small_scene.right, small_scene.left)
+    assert "right: given but not used: no cue that reads it is enabled" in found.notes
+    assert "next: given but not used: no cue that reads it is enabled" in found.notes
+    assert not any("given but not used" in n for n in VisionMachine().run(small_scene.left, small_scene.right).notes)
+
+
+def test_every_listed_stage_is_reported_when_there_is_nothing_to_restore():
+    # On a featureless pair the feedback pass was skipped: VisionMachine.stages listed it, but progress and
+    # Result.stages never saw it (a progress bar one short).
+    flat = np.full((64, 64), 0.5, np.float32)
+    vm = VisionMachine(Config.from_dict({"stereo": {"feature_matches": True, "backfill": False}}))
+    seen = []
+    found = vm.run(flat, flat, progress=seen.append)
+    listed = vm.stages(right=True, next=False, rgb=False)
+    assert "feedback" in listed and list(found.stages) == listed and seen == listed

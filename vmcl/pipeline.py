@@ -194,7 +194,7 @@ class GroupingConfig:
         The local saliency (gradient magnitude times pixels**length_exponent, image in [0, 1]) a curve
         needs to stay among the salient edges, >= 0.
     length_exponent, curvature_scale : float
-        The local saliency's (:func:`vmcl.group.local_saliency.local_saliency`).
+        The local saliency's (:func:`vmcl.group.local_saliency.local_saliency`); length_exponent at most 4.
     gap : float
         The longest gap, in pixels, a broken T-junction's stem is followed across (>= 0).
     alignment : float
@@ -221,7 +221,8 @@ class GroupingConfig:
     def __post_init__(self) -> None:
         _check_field_types("grouping", self)
         check_real(self.threshold, "grouping.threshold", minimum=0)
-        check_real(self.length_exponent, "grouping.length_exponent", minimum=0)
+        # At most 4: a curve of a million pixels then still has a saliency float32 holds.
+        check_real(self.length_exponent, "grouping.length_exponent", minimum=0, maximum=4)
         check_real(self.curvature_scale, "grouping.curvature_scale", above=0)
         check_real(self.gap, "grouping.gap", minimum=0)
         check_real(self.alignment, "grouping.alignment", above=0, below=90)
@@ -359,6 +360,10 @@ class StereoConfig:
         check_int(self.refine_stride, "stereo.refine_stride", minimum=1, maximum=2**31 - 1)
         if not self.feature_matches and not self.backfill:
             raise InputValueError("stereo: feature_matches and backfill are both off, which leaves no matcher")
+        if not self.feature_matches and self.backfill_weight == 0:
+            # The dense matches are then the only data: weighing them 0 leaves the half-occluded pixels alone.
+            raise InputValueError("stereo.backfill_weight must be > 0 without feature matches (the dense matches "
+                                  "are the stereo MRF's only data)")
         if not 0 < self.intensity_sigma < math.inf:
             raise InputValueError(f"stereo.intensity_sigma must be > 0 and finite, got {self.intensity_sigma!r}")
 
@@ -741,7 +746,8 @@ class Config:
                 raise InputTypeError(f"config section {name} must be a vmcl.pipeline.{kind.__name__}, "
                                      f"got {type(section).__name__}")
         for cue in CUES:
-            self.mrf.settings(cue)
+            if not self.mrf.settings(cue).model.alpha > 0:  # restore refuses it, but only mid-run
+                raise InputValueError(f"mrf.{cue}.alpha must be > 0: without the data term nothing anchors the field")
 
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> Config:
@@ -865,7 +871,10 @@ class VisionMachine:
         # Read once per machine; None with the rule labels.
         self.labeller = self.config.labels.labeller() if self.config.labels.method == "linear" else None
         # The model library, read once (its index is built at the first run); None without recognition.
-        self.library = Library.load(self.config.recognition.models) if self.config.recognition.models else None
+        try:
+            self.library = Library.load(self.config.recognition.models) if self.config.recognition.models else None
+        except InputError as error:
+            raise type(error)(f"recognition.models: {error}") from None
 
     def cues(self, *, right: bool, next: bool, rgb: bool) -> list[CueModule]:
         """The registered cues (:func:`vmcl.cues.registered`) that run for these inputs, in order."""
@@ -1081,6 +1090,14 @@ class _Run:
         if self.m.profile:
             self.m.timings(reset=True)  # only this run's kernels
         active = vm.cues(right="right" in others, next="next" in others, rgb=image.ndim == 3)
+        for given in ("right", "next"):  # an image given and read by nothing: said, not dropped in silence
+            if given in others and not any(given in cue.needs for cue in active):
+                self.notes.append(f"{given}: given but not used: no cue that reads it is enabled")
+        if vm.labeller is not None:  # before any stage runs: a weights file without this run's inputs
+            try:
+                vm.labeller.for_inputs([cue.name for cue in active if cue.name in CUES])
+            except InputError as error:
+                raise type(error)(f"labels.weights ({self.c.labels.weights or 'the shipped ones'}): {error}") from None
         with self.stage("upload"):
             left = self.m.to_device(image)
             others_d = {name: self.m.to_device(array) for name, array in others.items()}
@@ -1092,8 +1109,12 @@ class _Run:
                                   "frame (a scene cut): this frame starts cold")
         with self.stage("edges"):
             e = self.c.edges
-            canny = edges.canny(left, sigma=e.sigma, low_threshold=e.low_threshold, high_threshold=e.high_threshold,
-                                use_quantiles=e.use_quantiles, return_gradient=True, machine=self.m)
+            try:
+                canny = edges.canny(left, sigma=e.sigma, low_threshold=e.low_threshold,
+                                    high_threshold=e.high_threshold, use_quantiles=e.use_quantiles,
+                                    return_gradient=True, machine=self.m)
+            except InputError as error:  # a limit that depends on the image (sigma's, by its size)
+                raise type(error)(f"edges (the [edges] settings on this image): {error}") from None
             brightness = on_device(canny.edges)
         self.grouping = None
         if self.c.grouping.enabled or e.saliency != "none":
@@ -1130,11 +1151,14 @@ class _Run:
             with self.stage(f"mrf {cue.name}"):
                 found = self.restore(cue, measured[cue.name])
             refine = cue.refine_stage(self.c)
-            if found is not None and refine:
+            if refine:
+                # Run through (empty where nothing was restored), so that progress and Result.stages see
+                # every stage VisionMachine.stages lists.
                 with self.stage(refine):
-                    again = cue.refine(run, measured[cue.name], _device_lines(found))
-                    fields.update(again.fields)
-                    found = self.restore(cue, again) or found
+                    if found is not None:
+                        again = cue.refine(run, measured[cue.name], _device_lines(found))
+                        fields.update(again.fields)
+                        found = self.restore(cue, again) or found
             if found is not None:
                 lines[cue.name], restored[cue.name] = _device_lines(found), on_device(found.field)
         if memory is not None:
