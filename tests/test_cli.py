@@ -314,6 +314,16 @@ def _png_with_bad_text_crc(images):
     return data[:33] + (len(chunk) - 4).to_bytes(4, "big") + chunk + crc + data[33:]  # after IHDR
 
 
+def _huge_png():
+    """A whole PNG of a few bytes whose header declares 100000 x 100000 pixels, over OpenCV's limit."""
+    def chunk(kind, body):
+        return len(body).to_bytes(4, "big") + kind + body + zlib.crc32(kind + body).to_bytes(4, "big")
+
+    header = (100_000).to_bytes(4, "big") * 2 + bytes([8, 2, 0, 0, 0])
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(bytes(10)))
+            + chunk(b"IEND", b""))
+
+
 def _corrupt_scan(jpeg):
     data = bytearray(jpeg)
     scan = data.find(b"\xff\xda") + 40
@@ -327,13 +337,15 @@ def _corrupt_scan(jpeg):
     ("png with a bad crc", "tEXt chunk at byte 33 fails its CRC check"),
     ("truncated png", "before its IEND chunk"),
     ("folder", "is a folder, not an image file"),
+    ("png over opencv's limit", "over its limit CV_IO_MAX_IMAGE_PIXELS"),
 ])
 def test_damaged_images_are_refused(tmp_path, images, capsys, case, message):
     jpeg = _jpeg(images)
     data = {"truncated jpeg": jpeg[:len(jpeg) * 2 // 3],
             "corrupt jpeg": _corrupt_scan(jpeg),
             "png with a bad crc": _png_with_bad_text_crc(images),
-            "truncated png": images["left"].read_bytes()[:-200]}.get(case)
+            "truncated png": images["left"].read_bytes()[:-200],
+            "png over opencv's limit": _huge_png()}.get(case)
     path = tmp_path / ("image.jpg" if "jpeg" in case else "image.png")
     if data is None:
         path.mkdir()
@@ -349,6 +361,31 @@ def test_damaged_images_are_refused(tmp_path, images, capsys, case, message):
         message, named = "the folder holds no images", "left: "
     assert len(error.splitlines()) == 1 and message in error and named in error
     assert not out.exists()
+
+
+def test_write_output_never_overwrites_a_file_it_did_not_write(tmp_path):
+    from vmcl.cli import write_output
+    from vmcl.pipeline import VisionMachine
+
+    result = VisionMachine(Config.from_dict({"mrf": {"method": "icm"}})).run(
+        np.random.default_rng(0).random((64, 64)).astype(np.float32))
+    for name in ("fields.npz", "settings.json"):
+        folder = tmp_path / name.split(".")[0]
+        folder.mkdir()
+        (folder / name).write_bytes(b"the user's own")
+        with pytest.raises(InputError, match=f"already holds {re.escape(name)}"):
+            write_output(result, folder, "t")  # refused before anything is written: the report neither
+        assert [p.name for p in folder.iterdir()] == [name] and (folder / name).read_bytes() == b"the user's own"
+    # A link to nothing is a name taken too: writing through it made a file wherever it pointed.
+    linked = tmp_path / "linked"
+    linked.mkdir()
+    elsewhere = tmp_path / "elsewhere.json"
+    (linked / "settings.json").symlink_to(elsewhere)
+    with pytest.raises(InputError, match="already holds settings.json"):
+        write_output(result, linked, "t")
+    assert not elsewhere.exists()
+    write_output(result, tmp_path / "new", "t")  # a new folder takes them all
+    assert {"fields.npz", "settings.json", "report.html"} <= {p.name for p in (tmp_path / "new").iterdir()}
 
 
 def test_a_jpeg_ends_at_its_own_end_marker_not_at_a_thumbnails(tmp_path, images):

@@ -1,7 +1,9 @@
 """vmcl.datasets: format round trips, and the documented values of the shared data sets."""
 
 import struct
+import zlib
 
+import cv2
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -102,6 +104,27 @@ def test_pgm_disparity_scale_and_unknown(tmp_path):
     with pytest.raises(ValueError, match="cannot decode"):
         datasets.read_image(not_image)
 
+
+def test_images_over_opencvs_limits_or_that_opencv_fails_on_are_refused(tmp_path, monkeypatch):
+    # A whole, tiny PNG whose header declares 100000 x 100000 pixels: OpenCV asserts rather than decode it.
+    def chunk(kind, body):
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+    huge = tmp_path / "huge.png"
+    huge.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 100000, 100000, 8, 2, 0, 0, 0))
+                     + chunk(b"IDAT", zlib.compress(bytes(10))) + chunk(b"IEND", b""))
+    with pytest.raises(InputError, match="huge.png is larger than OpenCV decodes.*CV_IO_MAX_IMAGE_PIXELS"):
+        datasets.read_image(huge)
+    # Any other failure of OpenCV's decoders is the file's too.
+    fine = tmp_path / "fine.png"
+    assert cv2.imwrite(str(fine), np.zeros((2, 3), np.uint8))
+
+    def fails(*args):
+        raise cv2.error("OpenCV: error: (-2:Unspecified error)\n> in function 'imdecode_'")
+
+    monkeypatch.setattr(cv2, "imdecode", fails)
+    with pytest.raises(InputError, match=r"cannot decode an image from .*fine.png \(OpenCV: error: .* in function"):
+        datasets.read_image(fine)
 
 # --------------------------------------------------------------------------------------------- stereo
 

@@ -193,6 +193,11 @@ def test_shipped_weights_carry_a_checked_record_and_save_never_overwrites_anothe
     ("[1, 2]", "not labelling weights"),
     ('{"features": []}', "not labelling weights"),
     ('{"weights": {}, "features": [], "classes": []}', "other features"),
+    # damaged files: lists replaced by null or a number, or nested deeper than the JSON decoder recurses
+    ('{"weights": {}, "features": null, "classes": []}', "not labelling weights"),
+    ('{"weights": {}, "features": 3, "classes": []}', "not labelling weights"),
+    ('{"weights": {}, "features": [], "classes": null}', "not labelling weights"),
+    ("[" * 200000 + "]" * 200000, "cannot be read"),
 ])
 def test_bad_weights_files_are_refused_naming_the_file(tmp_path, content, message):
     path = tmp_path / "w.json"
@@ -200,7 +205,7 @@ def test_bad_weights_files_are_refused_naming_the_file(tmp_path, content, messag
         path.write_text(content)
     with pytest.raises(ValueError, match=message) as error:
         LinearLabeller.load(path)
-    assert str(path) in str(error.value)
+    assert isinstance(error.value, InputError) and str(path) in str(error.value)
 
 
 def test_weights_of_unknown_input_sets_or_not_finite_are_refused():

@@ -1,6 +1,7 @@
 """The report opens: its HTML parses, every inline image decodes, and the pictures mean what they say."""
 
 import base64
+import re
 from html.parser import HTMLParser
 
 import cv2
@@ -8,6 +9,7 @@ import numpy as np
 import pytest
 
 from vmcl import scenes
+from vmcl.errors import InputError
 from vmcl.labels import Cue
 from vmcl.pictures import disparity_image, flow_image
 from vmcl.pipeline import Config, VisionMachine
@@ -109,6 +111,11 @@ def test_the_report_never_overwrites_a_file_it_did_not_write(run, tmp_path):
     with pytest.raises(ValueError, match="already holds cartoon.png"):
         write_report(run, linked)
     assert not elsewhere.exists()
+    # A folder that is a file, or lies below one, is refused by name; the file is left as it was.
+    for folder in (mine, mine / "sub"):
+        with pytest.raises(InputError, match=re.escape(f"folder {folder} is not a folder")):
+            write_report(run, folder)
+    assert mine.read_bytes() == b"the user's own picture"
 
 
 @pytest.mark.parametrize(("call", "error", "named"), [

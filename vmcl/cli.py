@@ -74,7 +74,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vmcl.errors import InputError
+from vmcl.errors import InputError, InputValueError
 from vmcl.machine import NoOpenCLPlatformError
 from vmcl.output_folder import output_folder
 
@@ -448,13 +448,20 @@ def _reading(source, what: str):
 
 def write_output(result, folder: Path, title: str) -> None:
     """Write what ``vmcl run`` writes for a run into ``folder``: the report (HTML and PNGs), fields.npz and
-    the settings it ran with (:data:`SETTINGS_FILE`).
+    the settings it ran with (:data:`SETTINGS_FILE`). Files of those names already in ``folder`` are never
+    overwritten: the call is refused (InputValueError) before anything is written.
 
     ``vmcl batch`` writes the same files for every item (on the worker that ran it), and runs an item again
     when the settings recorded in its folder are not the batch's.
     """
     from vmcl.report import write_report
 
+    # vmcl never overwrites a file it did not write: write_report refuses its own names, and these are
+    # refused before it writes anything (a link, even to nothing, would be written through to its target).
+    taken = [name for name in ("fields.npz", SETTINGS_FILE) if (folder / name).exists() or (folder / name).is_symlink()]
+    if taken:
+        raise InputValueError(f"folder {folder} already holds {', '.join(taken)}; write into a new or empty folder "
+                              "(the vmcl command replaces its own previous output)")
     write_report(result, folder, title=title)
     # allow_pickle is NumPy's default; naming it tells the type checker that no field of the ** binds it.
     np.savez_compressed(folder / "fields.npz", allow_pickle=True, **result_fields(result))

@@ -106,8 +106,8 @@ def read_image(path) -> np.ndarray:
     FileNotFoundError
         If the file does not exist.
     ValueError
-        If it is a folder, cannot be decoded as an image, or is a PNG or JPEG cut short or corrupt
-        (OpenCV would decode what it can and fill the rest with grey).
+        If it is a folder, cannot be decoded as an image, is larger than OpenCV's limits, or is a PNG or
+        JPEG cut short or corrupt (OpenCV would decode what it can and fill the rest with grey).
     """
     path = _as_path(path)
     if path.is_dir():
@@ -124,7 +124,16 @@ def read_image(path) -> np.ndarray:
         damage = None
     if damage is not None:
         raise InputValueError(f"{path} is damaged: {damage}")
-    image, printed = _decode(data)
+    try:
+        image, printed = _decode(data)
+    except cv2.error as error:
+        # OpenCV refuses by a failed assertion, not None, an image over its size limits (which its header
+        # declares, however small the file) and some damage the checks above do not see.
+        limit = re.search(r"CV_IO_MAX_IMAGE_\w+", str(error))
+        if limit is not None:
+            raise InputValueError(f"{path} is larger than OpenCV decodes: over its limit {limit.group()} (by "
+                                  "default 2^30 pixels, 2^20 columns or rows)") from None
+        raise InputValueError(f"cannot decode an image from {path} ({' '.join(str(error).split())})") from None
     warnings = [line for line in printed.splitlines() if line.startswith(_LIBJPEG_DAMAGE)]
     if warnings:
         raise InputValueError(f"{path} is damaged: its decoder says {warnings[0]!r}")

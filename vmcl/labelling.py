@@ -181,14 +181,18 @@ class LinearLabeller:
         path = WEIGHTS_FILE if path is None else Path(path)
         try:
             data = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as error:
+            # RecursionError: a file nested deeper than the decoder can follow is damaged, not weights.
             raise InputValueError(f"{path}: cannot be read as labelling weights ({error})") from None
         if not isinstance(data, dict) or not isinstance(data.get("weights"), dict):
             # A bad file is a bad value of the argument, whatever JSON type it holds.
             raise InputValueError(f"{path}: not labelling weights (a JSON object with a 'weights' object)")
         record = check_fitted_json(data, str(path))
-        if tuple(data.get("features", ())) != FEATURES or tuple(data.get("classes", ())) != tuple(
-                c.name for c in CLASSES):
+        features, classes = data.get("features", []), data.get("classes", [])
+        if not isinstance(features, list) or not isinstance(classes, list):
+            # null or a number where the lists belong: a damaged file (tuple() of them would be a TypeError).
+            raise InputValueError(f"{path}: not labelling weights ('features' and 'classes' must be lists)")
+        if tuple(features) != FEATURES or tuple(classes) != tuple(c.name for c in CLASSES):
             raise InputValueError(f"{path} was fitted to other features or labels than this vmcl's")
         try:
             weights = {k: np.asarray(v, np.float32) for k, v in data["weights"].items()}

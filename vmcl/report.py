@@ -341,7 +341,11 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
     if taken:
         raise InputValueError(f"folder {folder} already holds {', '.join(taken)}; write the report into a new "
                               "or empty folder (the vmcl command replaces its own previous output)")
-    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        # The folder named, or one above it, is a file: refused before anything is written, the file untouched.
+        raise InputValueError(f"folder {folder} is not a folder: it or a folder above it is a file") from None
     written = {}
     figures = []
     for stem, (picture, caption) in pictures.items():

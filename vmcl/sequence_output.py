@@ -19,11 +19,13 @@ Videos are MPEG-4 (OpenCV's VideoWriter, fourcc mp4v). Files lie flat in the fol
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
 
 from vmcl.cm.core import check_real
+from vmcl.errors import InputValueError
 from vmcl.result import Result
 
 __all__ = ["FOURCC", "FPS_RANGE", "LEAST_FLOW_SCALE", "SequenceWriter", "check_fps", "frame_count"]
@@ -46,6 +48,9 @@ def check_fps(fps: object, name: str) -> float:
     return check_real(fps, name, minimum=FPS_RANGE[0], maximum=FPS_RANGE[1])
 
 
+_VIDEOS = ("cartoon", "flow", "disparity")  # the stems :meth:`SequenceWriter.pictures` makes
+_FIELDS_FILE = re.compile(r"fields_\d{6,}\.npz")  # fields_{index:06d}.npz: six digits, more past a million
+
 FOURCC = "mp4v"
 """The videos' codec, as OpenCV's VideoWriter names it."""
 
@@ -56,7 +61,8 @@ class SequenceWriter:
     Parameters
     ----------
     folder : Path
-        An existing folder vmcl may write into.
+        An existing folder vmcl may write into, holding no file of the names the writer writes (it is
+        refused, before anything is written, rather than overwritten).
     fps : float
         The videos' frame rate, within FPS_RANGE (0.01 to 1000).
     title : str
@@ -66,6 +72,15 @@ class SequenceWriter:
     def __init__(self, folder: Path, *, fps: float, title: str) -> None:
         check_fps(fps, "fps")
         self.folder, self.fps, self.title = Path(folder), float(fps), title
+        # vmcl never overwrites a file it did not write; how many frames come is not known yet, so any
+        # fields_NNNNNN.npz is taken (a link, even to nothing, would be written through to its target).
+        ours = {"sequence.md", *(f"{stem}.mp4" for stem in _VIDEOS)}
+        taken = sorted(entry.name for entry in self.folder.iterdir()
+                       if entry.name in ours or _FIELDS_FILE.fullmatch(entry.name))
+        if taken:
+            shown = ", ".join(taken[:3]) + (f" and {len(taken) - 3} more" if len(taken) > 3 else "")
+            raise InputValueError(f"folder {self.folder} already holds {shown}; write the sequence into a new or "
+                                  "empty folder (the vmcl command replaces its own previous output)")
         self.writers: dict[str, object] = {}
         self.scales: dict[str, tuple[float, float]] = {}
         self.rows: list[str] = []
