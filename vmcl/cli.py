@@ -74,7 +74,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vmcl.errors import InputError, InputValueError
+from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.machine import NoOpenCLPlatformError
 from vmcl.output_folder import output_folder
 
@@ -446,7 +446,7 @@ def _reading(source, what: str):
         raise BadInput(f"{what}: {error}") from None
 
 
-def write_output(result, folder: Path, title: str) -> None:
+def write_output(result, folder: str | os.PathLike, title: str) -> None:
     """Write what ``vmcl run`` writes for a run into ``folder``: the report (HTML and PNGs), fields.npz and
     the settings it ran with (:data:`SETTINGS_FILE`). Files of those names already in ``folder`` are never
     overwritten: the call is refused (InputValueError) before anything is written.
@@ -456,6 +456,9 @@ def write_output(result, folder: Path, title: str) -> None:
     """
     from vmcl.report import write_report
 
+    if not isinstance(folder, (str, os.PathLike)):
+        raise InputTypeError(f"folder must be a path, got {type(folder).__name__}")
+    folder = Path(folder)
     # vmcl never overwrites a file it did not write: write_report refuses its own names, and these are
     # refused before it writes anything (a link, even to nothing, would be written through to its target).
     taken = [name for name in ("fields.npz", SETTINGS_FILE) if (folder / name).exists() or (folder / name).is_symlink()]
