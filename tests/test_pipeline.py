@@ -494,3 +494,15 @@ def test_every_listed_stage_is_reported_when_there_is_nothing_to_restore():
     found = vm.run(flat, flat, progress=seen.append)
     listed = vm.stages(right=True, next=False, rgb=False)
     assert "feedback" in listed and list(found.stages) == listed and seen == listed
+
+
+def test_a_config_with_a_byte_order_mark_is_read_and_one_nested_too_deeply_refused(tmp_path):
+    # Notepad's UTF-8 starts with a byte-order mark, which was refused as invalid TOML; an array nested
+    # 200,000 deep ended in a RecursionError.
+    bom = tmp_path / "bom.toml"
+    bom.write_bytes(b"\xef\xbb\xbf[stereo]\nd_max = 12\n")
+    assert Config.from_toml(bom).stereo.d_max == 12
+    deep = tmp_path / "deep.toml"
+    deep.write_text("x = " + "[" * 200_000 + "]" * 200_000 + "\n")
+    with pytest.raises(ValueError, match="deep.toml"):
+        Config.from_toml(deep)

@@ -779,9 +779,12 @@ class Config:
         they were fitted; TypeError on mistyped values; OSError if the file cannot be read.
         """
         try:
-            values = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+            # utf-8-sig: a byte-order mark (as Windows' Notepad saves UTF-8) is not part of the TOML.
+            values = tomllib.loads(Path(path).read_text(encoding="utf-8-sig"))
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
             raise InputValueError(f"{path}: not valid TOML ({error})") from None
+        except RecursionError:
+            raise InputValueError(f"{path}: not a configuration (its tables or arrays are nested too deeply)") from None
         return cls.from_dict(fitted.check_fitted(values, str(path)))
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
