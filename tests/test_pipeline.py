@@ -506,3 +506,12 @@ def test_a_config_with_a_byte_order_mark_is_read_and_one_nested_too_deeply_refus
     deep.write_text("x = " + "[" * 200_000 + "]" * 200_000 + "\n")
     with pytest.raises(ValueError, match="deep.toml"):
         Config.from_toml(deep)
+
+
+def test_a_left_image_of_one_brightness_gives_no_depth_or_motion():
+    # Every matcher's winner on a blank image was its scan's first, confirmed by an equally blind check:
+    # a disparity and a flow of 0 everywhere, restored as sure data, with no word.
+    blank = np.full((64, 64), 128, np.uint8)
+    found = VisionMachine().run(blank, blank, blank)
+    assert found.disparity is None and found.flow is None
+    assert "stereo: the left image has one brightness everywhere, so there is nothing to match: no data" in found.notes

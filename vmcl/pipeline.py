@@ -1136,6 +1136,9 @@ class _Run:
             prediction = carried.prediction if carried is not None else None
         run = RunInputs(self.m, self.c, left, others_d.get("right"), others_d.get("next"), brightness, prediction)
         measured = {}
+        # A left image of one brightness holds nothing to match: the matchers' winners there are their scans'
+        # first disparity or motion, confirmed by equally blind checks, which the MRF took as sure data.
+        blank = float(np.ptp(image)) == 0
         for cue in active:
             with self.stage(cue.name):
                 try:
@@ -1143,6 +1146,12 @@ class _Run:
                 except InputError as error:
                     # The module's own argument names (patch, levels) are the cue's Config keys.
                     raise type(error)(f"{cue.name} (the [{cue.name}] settings on this image): {error}") from None
+                if blank and cue.needs & {"right", "next"}:
+                    found = measured[cue.name]
+                    measured[cue.name] = dataclasses.replace(
+                        found, data=self.m.full(found.data.shape, np.float32, np.nan), confidence=None)
+                    self.notes.append(f"{cue.name}: the left image has one brightness everywhere, so there is "
+                                      "nothing to match: no data")
             self.notes.extend(measured[cue.name].notes)
         if measure_only:
             self.measured = {name: CueData(m.data.get(), None if m.confidence is None else m.confidence.get(),
