@@ -1147,9 +1147,9 @@ class _Run:
                     # The module's own argument names (patch, levels) are the cue's Config keys.
                     raise type(error)(f"{cue.name} (the [{cue.name}] settings on this image): {error}") from None
                 if blank and cue.needs & {"right", "next"}:
-                    found = measured[cue.name]
+                    blind = measured[cue.name]
                     measured[cue.name] = dataclasses.replace(
-                        found, data=self.m.full(found.data.shape, np.float32, np.nan), confidence=None)
+                        blind, data=self.m.full(blind.data.shape, np.float32, np.nan), confidence=None)
                     self.notes.append(f"{cue.name}: the left image has one brightness everywhere, so there is "
                                       "nothing to match: no data")
             self.notes.extend(measured[cue.name].notes)
