@@ -120,7 +120,7 @@ def main() -> int:
                                            -inners[q][0][inners[q][1]][4], -q))
     rows, at = inners[min_inner]
     threshold = THRESHOLDS[at]
-    # Selection's share: the same scenes with no region's corners paired among themselves.
+    # Selection's share: the same scenes with no region's corners paired within their regions.
     alone = _tally(library, learned, scenes, solid, stretch=stretch, min_inner=min_inner, regions=0, **chosen)[at]
     seconds = time.perf_counter() - start
     n = len(scenes)
@@ -161,8 +161,8 @@ def main() -> int:
     for shown in SHOWN:
         row = rows[THRESHOLDS.index(shown)]
         lines.append(f"| {shown:g} | {_rate(row):.3f} | {row[4] / n:.3f} |")
-    lines += ["", ("Selection at the chosen setting (the corners of the 8 most salient regions paired among themselves, "
-                   f"beside each feature's {neighbours} nearest):"), "",
+    lines += ["", ("Selection at the chosen setting (each corner of the 8 most salient regions also paired with its "
+                   f"{neighbours} nearest of its region, beside each feature's {neighbours} nearest):"), "",
               "| selection | recognition rate | false detections per image |", "|---|---|---|",
               f"| on (regions = 8) | {_rate(rows[at]):.3f} | {rows[at][4] / n:.3f} |",
               f"| off (regions = 0) | {_rate(alone):.3f} | {alone[4] / n:.3f} |", ""]

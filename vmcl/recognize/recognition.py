@@ -183,7 +183,8 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
         The default was chosen on rendered training scenes (benchmarks/recognition_fit.py): two corners of
         one object may lie farther apart than a dozen of the clutter's.
     regions : int
-        The most salient regions whose corners are also paired among themselves (selection), >= 0.
+        The most salient regions whose corners are also paired with their ``neighbours`` nearest of the
+        same region (selection), >= 0.
     tolerance : float
         The distance (pixels) within which an edge supports a model point, > 0. The default is the one of
         those tried whose recognition rate at its own false-detection threshold was highest on rendered
