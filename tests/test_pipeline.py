@@ -515,3 +515,29 @@ def test_a_left_image_of_one_brightness_gives_no_depth_or_motion():
     found = VisionMachine().run(blank, blank, blank)
     assert found.disparity is None and found.flow is None
     assert "stereo: the left image has one brightness everywhere, so there is nothing to match: no data" in found.notes
+
+
+@pytest.mark.parametrize("returned, match", [("none", "measure\\(\\) must return a vmcl.cues.Measurement, got NoneType"),
+                                             ("host", "its Measurement's data must be a device array")])
+def test_a_registered_cue_that_measures_wrongly_is_named(small_scene, returned, match):
+    # A cue of the user's that returned None, or host arrays, ended the run with a bare AttributeError or
+    # TypeError, and an error of its own was said to come from its "[probe] settings", which do not exist.
+    from vmcl.cues import CueModule, Measurement, register, unregister
+    from vmcl.labels import Label
+
+    class Probe(CueModule):
+        name = "probe"
+        label = Label.ORIENTATION
+
+        def measure(self, run):
+            if returned == "none":
+                return None
+            grey = np.ascontiguousarray(run.left.get().mean(axis=2), np.float32)
+            return Measurement(grey, None, run.brightness)
+
+    register(Probe())
+    try:
+        with pytest.raises(TypeError, match=r"probe \(a registered cue\): " + match):
+            VisionMachine().run(small_scene.left)
+    finally:
+        unregister("probe")

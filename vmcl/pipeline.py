@@ -1074,6 +1074,19 @@ def range_note(array: np.ndarray, name: str) -> str | None:
             f"range first (x {factor:.6g})")
 
 
+def _checked_measurement(cue: CueModule, found: Any) -> Measurement:
+    """What a cue's measure returned, if it is a Measurement of device arrays: a cue of the user's that
+    returns something else is refused by name, not met later as a bare TypeError."""
+    if not isinstance(found, Measurement):
+        raise InputTypeError(f"measure() must return a vmcl.cues.Measurement, got {type(found).__name__}")
+    for name in ("data", "confidence", "coupling"):
+        value = getattr(found, name)
+        if not (isinstance(value, cl_array.Array) or (name == "confidence" and value is None)):
+            raise InputTypeError(f"its Measurement's {name} must be a device array (pyopencl.array.Array, e.g. "
+                                 f"run.machine.to_device(x)), got {type(value).__name__}")
+    return found
+
+
 def _device_lines(found: Restoration) -> tuple[cl_array.Array, cl_array.Array]:
     """A restoration's line fields (line_h, line_v), on the device where the run's restorations are."""
     return on_device(found.line_h), on_device(found.line_v)
@@ -1142,10 +1155,12 @@ class _Run:
         for cue in active:
             with self.stage(cue.name):
                 try:
-                    measured[cue.name] = cue.measure(run)
+                    measured[cue.name] = _checked_measurement(cue, cue.measure(run))
                 except InputError as error:
-                    # The module's own argument names (patch, levels) are the cue's Config keys.
-                    raise type(error)(f"{cue.name} (the [{cue.name}] settings on this image): {error}") from None
+                    # A built-in cue's module's own argument names (patch, levels) are its Config keys; a
+                    # cue of the user's has no section.
+                    where = f"the [{cue.name}] settings on this image" if cue.name in CUES else "a registered cue"
+                    raise type(error)(f"{cue.name} ({where}): {error}") from None
                 if blank and cue.needs & {"right", "next"}:
                     blind = measured[cue.name]
                     measured[cue.name] = dataclasses.replace(
