@@ -43,6 +43,7 @@ __all__ = ["Detection", "recognize"]
 _CORNER_REACH = 3.0  # px: a view's corner and an image corner match this close,
 _CORNER_TURN = np.radians(30)  # their bisectors this close in direction
 _CORNER_OPENING = np.radians(25)  # and their openings this close
+_CORNER_ROUNDS = 3  # fits of a start from matched corners, each with the matches of the one before
 _ANGLE = np.radians(25)  # the most a supporting edge's tangent may differ from the model's
 _MARGIN = 10  # px around a pose over which the chance of support is measured
 _SCREEN_POINTS = 96  # boundary points per candidate in the coarse test
@@ -306,6 +307,21 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
     if len(homography):
         third = refined(homography, poses[homography], "homography", 3.0, 4)
         score[homography], inside[homography], poses[homography] = third.score, third.inside, third.transforms
+    tree = cKDTree(features.corners.reshape(-1, 2))
+    if transform != "similarity" and len(features.corners):
+        # A stretch or a perspective the similarity cannot follow leaves the far ends of the boundary beyond
+        # the refinement's reach (a box stretched by 15% was 23 px off at its corners): the view's corners
+        # matched to the image's near the pose give a start of the asked kind, kept where it scores higher.
+        flat = np.flatnonzero(~solid)
+        starts = [_from_corners(poses[row], views[found.views[row]][2], features, tree, transform, tolerance)
+                  for row in flat]
+        again = np.array([row for row, start in zip(flat, starts) if start is not None], int)
+        if len(again):
+            fourth = refined(again, np.stack([start for start in starts if start is not None]), transform)
+            better = fourth.score > score[again]
+            rows = again[better]
+            score[rows], inside[rows], poses[rows] = (fourth.score[better], fourth.inside[better],
+                                                      fourth.transforms[better])
     h, w = features.shape
     # The final poses tested once more (all candidates in one launch): each candidate's distinct supported
     # image edge pixels are what it explains.
@@ -320,7 +336,6 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
     tests = np.log10(len(found))
     corners_found = np.zeros(len(found))
     inner_found = np.full(len(found), np.nan)
-    tree = cKDTree(features.corners.reshape(-1, 2))
     for c in range(len(found)):
         view = views[found.views[c]][2]
         start, stop = ranges_array[c]
@@ -388,6 +403,44 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
                                     carry(poses[c], view.corners), boundary, ok[start:stop].copy(),
                                     float(inner_found[c])))
     return detections
+
+
+def _from_corners(pose: np.ndarray, view: View, features: Features, tree: cKDTree, transform: Transform,
+                  tolerance: float) -> np.ndarray | None:
+    """An affine map (or, for a homography, one more fit of that kind) from the view's corners to the
+    image's matched near ``pose`` (within a quarter of the view's radius at first, then narrower as the fit
+    follows them; bisectors and openings alike), by RANSAC; None where too few match or no fit is found
+    (the last good fit where a later one fails)."""
+    reach = max(0.25 * view.radius * _scale(pose), 4 * tolerance)
+    current, fitted = pose, None
+    # Affine fits first, whose six parameters the few matches of a rough pose hold; a homography last, from
+    # the matches of the closest affine fit.
+    kinds = ["affine"] * _CORNER_ROUNDS + (["homography"] if transform == "homography" else [])
+    for kind in kinds:
+        source, target = [], []
+        at = carry(current, view.corners)
+        turned = np.stack([np.cos(view.bisector), np.sin(view.bisector)], 1) @ current[:2, :2].T
+        bisector = np.arctan2(turned[:, 1], turned[:, 0])
+        for k, near in enumerate(tree.query_ball_point(at, reach)):
+            near = np.asarray(near, int)
+            alike = near[(np.abs(np.angle(np.exp(1j * (bisector[k] - features.bisector[near])))) <= _CORNER_TURN)
+                         & (np.abs(view.opening[k] - features.opening[near]) <= _CORNER_OPENING)]
+            if len(alike):
+                source.append(view.corners[k])
+                target.append(features.corners[alike[np.argmin(np.hypot(*(features.corners[alike] - at[k]).T))]])
+        if len(source) < (4 if kind == "homography" else 3):
+            break
+        src, dst = np.asarray(source, np.float32), np.asarray(target, np.float32)
+        if kind == "homography":
+            matrix, _ = cv2.findHomography(src, dst, cv2.RANSAC, 2 * tolerance)
+        else:
+            affine, _ = cv2.estimateAffine2D(src, dst, ransacReprojThreshold=2 * tolerance)
+            matrix = None if affine is None else np.vstack([affine, [0.0, 0.0, 1.0]])
+        if matrix is None or not np.all(np.isfinite(matrix)) or abs(matrix[2, 2]) < 1e-12:
+            break
+        current = fitted = matrix / matrix[2, 2]
+        reach = max(reach / 2, 2 * tolerance)
+    return fitted
 
 
 def _corner_matches(pose: np.ndarray, view: View, features: Features, tree: cKDTree) -> tuple[int, int, float]:
