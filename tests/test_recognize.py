@@ -315,12 +315,11 @@ def test_a_stretched_or_slanted_box_is_fitted_by_the_transform_asked(datasets_ro
     assert np.abs(found[0].locate(corners) - truth).max() < 1.5
 
 
-@pytest.mark.xfail(strict=True, reason="the vote's budget is shared between the views, and the box's true pose in "
-                   "box_in_scene.png has fewer votes than hundreds of the box's chance poses: alone, the whole "
-                   "budget reaches it (at a tie); half of it, its share beside graf's, does not")
 def test_a_photographs_model_does_not_crowd_out_the_box(datasets_root):
     # OpenCV's samples: box.png learned, found in box_in_scene.png; then graf1 (800 x 640, a wall of
-    # graffiti) learned into the same library. The box should be found at the same pose beside it.
+    # graffiti) learned into the same library. The box should be found at the same pose beside it. It was
+    # not: with half the vote's budget its best candidate lay farther off, beyond the homography's reach
+    # from the similarity's pose; the corners matched near that pose now start the homography.
     folder = datasets_root / "opencv_samples"
     box, scene, graf = (cv2.imread(str(folder / name), cv2.IMREAD_GRAYSCALE)
                         for name in ("box.png", "box_in_scene.png", "graf1.png"))
