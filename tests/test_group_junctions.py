@@ -182,3 +182,29 @@ def test_pairs_need_alike_brightness_when_the_image_is_given(machine):
 def test_bad_input_is_refused_by_name(call, match):
     with pytest.raises(InputError, match=match):
         call()
+
+
+@pytest.mark.parametrize("extra", [[], [(30, 23)], [(29, 26), (30, 23), (30, 24)]])
+def test_a_t_junction_survives_the_fragments_canny_leaves_in_its_gap(extra):
+    # A one-pixel fragment between a stem and its bar stopped the stem's search (it "joined" a junction
+    # that was not there), and a spur with a stub made the stem's end touch a cluster with no junction.
+    edges = np.zeros((60, 60), bool)
+    edges[20, 5:55] = True
+    edges[26:55, 30] = True
+    for x, y in extra:
+        edges[y, x] = True
+    found = find_junctions(link_edges(edges))
+    assert list(found.kinds) == ["T"]
+    np.testing.assert_allclose(found.points, [[30.0, 20.0]], atol=1.0)
+
+
+def test_a_t_junction_of_cannys_edges_is_found_either_way_up():
+    # Canny broke this T's stem into a stub and a spur below the bar: the image was read with no junction,
+    # its upside-down copy with one.
+    image = np.full((100, 100), 0.2, np.float32)
+    image[40:, :50] = 0.5
+    image[40:, 50:] = 0.8
+    for flipped, row in ((False, 40.0), (True, 59.0)):
+        found = find_junctions(link_edges(canny(image[::-1].copy() if flipped else image, sigma=1.5)))
+        assert list(found.kinds) == ["T"]
+        assert abs(found.points[0, 0] - 50.0) <= 1.0 and abs(found.points[0, 1] - row) <= 1.5

@@ -242,10 +242,10 @@ def find_junctions(curves: Curves, *, gap: float = 6.0, min_length: int = 5, cor
     labels = np.asarray(to_host(curves.labels))
     found = _Found(straight, merge)
     long_enough = curves.sizes >= min_length
-    touching = _branch_junctions(curves, labels, found)
+    touching, passable = _branch_junctions(curves, labels, found)
     corners = _corners(curves, long_enough, corner, found)
     if gap > 0:
-        _gap_junctions(curves, labels, long_enough, touching, corners, gap, min_length, found)
+        _gap_junctions(curves, labels, passable, long_enough, touching, corners, gap, min_length, found)
     return found.junctions((int(labels.shape[0]), int(labels.shape[1])))
 
 
@@ -310,21 +310,24 @@ def _meeting_point(arms: list[tuple[float, np.ndarray]], near: np.ndarray, reach
     return point if np.linalg.norm(point - near) <= reach else near
 
 
-def _branch_junctions(curves: Curves, labels: np.ndarray, found: _Found) -> np.ndarray:
-    """Junctions at clusters of branch pixels; returns which curve ends touch one ((C, 2) bool)."""
+def _branch_junctions(curves: Curves, labels: np.ndarray, found: _Found) -> tuple[np.ndarray, np.ndarray]:
+    """Junctions at clusters of branch pixels; returns which curve ends touch one that makes a junction
+    ((C, 2) bool), and the pixels a free end's search passes over ((H, W) bool): the fragments (curves
+    shorter than an arm) and the clusters that make no junction (a spur and a stub where Canny broke a
+    T's stem): a stem that met them was taken as joined to a junction that was not there."""
     from scipy import ndimage
 
     height, width = labels.shape
     touching = np.zeros((len(curves), 2), bool)
+    passable = np.isin(labels, np.flatnonzero(curves.sizes < _MIN_ARM))
     if not len(curves.branches):
-        return touching
+        return touching, passable
     clusters, count = ndimage.label(labels == BRANCH, structure=np.ones((3, 3)))
     curve, end, pixel = _ends(curves)
     around = pixel[:, None, :] + _NEIGHBOURS[None]
     inside = (around[..., 0] >= 0) & (around[..., 1] >= 0) & (around[..., 0] < width) & (around[..., 1] < height)
     clipped = np.clip(around, 0, [width - 1, height - 1])
     cluster_of = np.where(inside, clusters[clipped[..., 1], clipped[..., 0]], 0).max(axis=1)
-    touching[curve, end] = cluster_of > 0
     # Each cluster's centre: the mean of its branch pixels.
     members = clusters[curves.branches[:, 1], curves.branches[:, 0]]
     weight = np.bincount(members, minlength=count + 1)[1:]
@@ -338,21 +341,40 @@ def _branch_junctions(curves: Curves, labels: np.ndarray, found: _Found) -> np.n
         if len(arms) >= 2:
             point = _meeting_point([arm for arm, _ in arms], centre, _REACH)
             found.add(point, [arm[0] for arm, _ in arms], [k for _, k in arms])
-    return touching
+            touching[curve, end] |= cluster_of == c
+        else:
+            passable |= clusters == c
+    return touching, passable
 
 
-def _gap_junctions(curves: Curves, labels: np.ndarray, long_enough: np.ndarray, touching: np.ndarray,
-                   corners: dict[int, np.ndarray], gap: float, min_length: int, found: _Found) -> None:
-    """T-junctions where a free curve end, followed along its tangent, meets another curve within ``gap``."""
-    _height, _width = labels.shape
+def _gap_junctions(curves: Curves, labels: np.ndarray, passable: np.ndarray, long_enough: np.ndarray,
+                   touching: np.ndarray, corners: dict[int, np.ndarray], gap: float, min_length: int,
+                   found: _Found) -> None:
+    """T-junctions where a free curve end, followed along its tangent, meets another curve within ``gap``
+    (passing over the ``passable`` pixels; the fragments an end touches lengthen its reach by theirs: they
+    continue the stem)."""
+    from scipy import ndimage
+
+    height, width = labels.shape
     position = np.asarray(to_host(curves.position))
     curve, end, pixel = _ends(curves)
     free = long_enough[curve] & ~touching[curve, end]
+    pieces, count = ndimage.label(passable, structure=np.ones((3, 3)))
+    # Each piece's pixels (x, y), by piece: what an end that touches it reaches through it.
+    py, px = np.nonzero(pieces)
+    order = np.argsort(pieces[py, px], kind="stable")
+    bounds = np.searchsorted(pieces[py, px][order], np.arange(1, count + 2))
+    piece_pixels = np.stack([px[order], py[order]], axis=1)
+    searched = np.where(passable, -1, labels)
     for c, e, start in zip(curve[free], end[free], pixel[free]):
         tangent = curves.tangents[c, e]
         if not np.all(np.isfinite(tangent)):
             continue
-        hit = _first_hit(labels, start, tangent, gap, _CONE, c)
+        around = np.clip(start + _NEIGHBOURS, 0, [width - 1, height - 1])
+        touched = np.setdiff1d(pieces[around[:, 1], around[:, 0]], [0])
+        reached = [piece_pixels[bounds[k - 1]:bounds[k]] for k in touched]
+        extent = max((float(np.hypot(*(p - start).T).max()) for p in reached), default=0.0)
+        hit = _first_hit(searched, start, tangent, gap + extent, _CONE, c)
         if hit is None:
             continue
         bar, point, distance = hit
