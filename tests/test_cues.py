@@ -5,6 +5,7 @@ import pytest
 
 from vmcl import cues, scenes
 from vmcl.cues import CueModule, Measurement
+from vmcl.errors import InputError
 from vmcl.labels import CUES, Cue, Label, cue_bit, cue_names
 from vmcl.mrf import EnergyModel, Settings, boundary_map
 from vmcl.pictures import field_image
@@ -92,3 +93,111 @@ def test_a_cue_cannot_take_the_name_of_a_stage_or_a_config_section():
         misnamed = type("Misnamed", (BrightnessCue,), {"name": name})
         with pytest.raises(ValueError, match="cannot be named"):
             cues.register(misnamed())
+
+
+def _cue(name, **declared):
+    """A BrightnessCue of another name, with some declarations changed."""
+    return type("Declared", (BrightnessCue,), {"name": name, **declared})()
+
+
+@pytest.mark.parametrize("declared, match", [
+    ({"restored_as": "labels"}, "'labels', which the machine fills itself"),
+    ({"fields": ("notes",)}, "'notes', which the machine fills itself"),
+    ({"fields": ("stages", "density")}, "'stages', which the machine fills itself"),
+    ({"restored_as": "hue"}, "'hue', which the 'colour' cue fills"),
+    ({"restored_as": "disparity"}, "'disparity', which the 'stereo' cue fills"),
+    ({"fields": ("raw_flow",)}, "'raw_flow', which the 'motion' cue fills"),
+    ({"fields": ("flow",), "restored_as": "flow"}, "'flow', which the 'motion' cue fills"),
+])
+def test_a_cue_cannot_fill_what_the_machine_or_another_cue_fills(declared, match):
+    # The machine's own attributes crashed the run with a bare TypeError (Result given them twice); another
+    # cue's were overwritten in silence.
+    with pytest.raises(ValueError, match=f"cue 'filler' declares the Result attribute {match}"):
+        cues.register(_cue("filler", **declared))
+    assert "filler" not in cue_names()
+
+
+def test_a_cue_cannot_fill_what_a_cue_registered_before_it_fills(toy_cue):
+    class Hue(BrightnessCue):
+        name = "grey_hue"
+        restored_as = None
+        fields = ("first_pass_disparity",)
+
+    with pytest.raises(ValueError, match="'first_pass_disparity', which the 'stereo' cue fills"):
+        cues.register(Hue())
+
+
+def test_every_result_attribute_is_the_machines_or_one_built_in_cues():
+    owners = [name for cue in cues.registered() for name in (*cue.fields, cue.restored_as) if name]
+    assert len(owners) == len(set(owners)) and not set(owners) & cues.MACHINE_FIELDS
+    assert set(owners) | cues.MACHINE_FIELDS == set(Result.__dataclass_fields__)
+
+
+@pytest.mark.parametrize("name", ["time", "grouping", "boundaries", "recognition", "to_dict", "from_dict",
+                                  "from_toml", "edges", "mrf", "labels"])
+def test_a_cue_cannot_take_the_name_of_any_config_attribute_or_stage(name):
+    # "recognition" crashed the run (its section has no enabled), "grouping" followed that section's switch,
+    # "boundaries" shared that stage's timing.
+    with pytest.raises(ValueError, match=f"a cue cannot be named '{name}'"):
+        cues.register(_cue(name))
+
+
+def test_every_stage_name_of_the_run_is_reserved():
+    config = Config.from_dict({"stereo": {"feature_matches": True}, "edges": {"saliency": "local"}})
+    vm = VisionMachine(config)
+    vm.library = object()  # stands for a model library: stages() only asks whether there is one
+    stages = vm.stages(right=True, next=True, rgb=True, streaming=True)
+    own = {stage for stage in stages if stage not in CUES and not stage.startswith("mrf ")}
+    assert {"time", "grouping", "boundaries", "feedback", "recognition"} <= own <= cues.RESERVED
+
+
+def test_a_refinement_stage_cannot_take_another_stages_name():
+    for stage in ("integrate", "colour", "mrf stereo", "refined_cue", "to_dict"):
+        refining = _cue("refined_cue", refine_stage=lambda self, config, stage=stage: stage)
+        with pytest.raises(ValueError, match=f"refine_stage\\(\\) is '{stage}', the name of another stage"):
+            cues.register(refining)
+    with pytest.raises(TypeError, match="refine_stage\\(\\) must return a stage name"):
+        cues.register(_cue("refined_cue", refine_stage=lambda self, config: 1))
+    assert "refined_cue" not in cue_names()
+
+
+def test_a_cue_of_the_users_is_enabled_by_any_config():
+    # A cue of its own name with no Config section (or one without an enabled switch) is on; a built-in
+    # cue follows its section's switch.
+    assert _cue("recognition").enabled(Config()) and _cue("new_cue").enabled(Config())
+    off = Config.from_dict({"texture": {"enabled": False}})
+    assert not next(cue for cue in cues.registered() if cue.name == "texture").enabled(off)
+
+
+@pytest.mark.parametrize("declared, error, match", [
+    ({"settings": "fast"}, TypeError, "cue 'declared': settings must be a vmcl.mrf.Settings or None, got str"),
+    ({"settings": Settings(EnergyModel(alpha=0.0))}, ValueError, "cue 'declared': settings.model.alpha must be > 0"),
+    ({"needs": ["rgb"]}, TypeError, "cue 'declared': needs must be a set or frozenset"),
+    ({"needs": "rgb"}, TypeError, "cue 'declared': needs must be a set or frozenset"),
+    ({"candidates_only": 1}, TypeError, "cue 'declared': candidates_only must be a bool"),
+    ({"fields": "density"}, TypeError, "cue 'declared': fields must be a tuple"),
+    ({"fields": None}, TypeError, "cue 'declared': fields must be a tuple"),
+    ({"restored_as": 3}, TypeError, "cue 'declared': restored_as must be a Result attribute name or None"),
+    ({"label": Label.NONE}, TypeError, "cue 'declared': label must be a Label other than NONE"),
+    ({"name": ["a"]}, TypeError, "a cue's name must be a str"),
+    ({"name": "two words"}, ValueError, "a cue's name must be a Python identifier"),
+])
+def test_every_declaration_is_checked_at_register(declared, error, match):
+    with pytest.raises(error, match=match) as raised:
+        cues.register(_cue(**{"name": "declared", **declared}))
+    assert isinstance(raised.value, InputError)
+    assert "declared" not in cue_names()
+
+
+def test_unregister_takes_the_last_registered_cue_and_says_so_in_cue_terms(toy_cue):
+    second = _cue("second_cue")
+    cues.register(second)
+    try:
+        with pytest.raises(ValueError, match="cue 'brightness_level' cannot be unregistered while 'second_cue', "
+                                             "registered after it, is"):
+            cues.unregister("brightness_level")
+        with pytest.raises(TypeError, match="name must be a cue's name"):
+            cues.unregister(["second_cue"])
+    finally:
+        cues.unregister("second_cue")
+    assert cue_names()[-1] == "brightness_level"

@@ -213,3 +213,23 @@ def test_fit_colour_from_a_bsds_folder(datasets_root, tmp_path, capsys):
     again = tmp_path / "linked.toml"
     assert main(["fit", "colour", "--data", str(tmp_path / "linked"), "--out", str(again), "-q"]) == 0
     assert tomllib.loads(again.read_text())["fitted"]["data_sha256"] == written["fitted"]["data_sha256"]
+
+
+def test_fitting_a_cue_the_machine_does_not_run_is_refused_by_name(stereo_data, tmp_path):
+    # Stereo and motion raised a bare KeyError where colour and texture named the cue.
+    import cv2
+
+    from vmcl.datasets import write_flo
+    from vmcl.learn.cue_fit import fit_cue
+
+    scene = scenes.render(scenes.preset("blocks", shape=(64, 64)), seed=0, noise=0.01)
+    folder = tmp_path / "flow" / "Blocks"
+    folder.mkdir(parents=True)
+    for name, frame in (("frame10.png", scene.left), ("frame11.png", scene.left_next)):
+        cv2.imwrite(str(folder / name), (frame[..., ::-1] * 255).astype(np.uint8))
+    write_flo(folder / "flow10.flo", scene.flow)
+    for cue, root, example in (("stereo", stereo_data, "blocks"), ("motion", tmp_path / "flow", "Blocks")):
+        off = VisionMachine(Config.from_dict({cue: {"enabled": False}}))
+        with pytest.raises(InputValueError, match=f"{example}: the {cue} cue does not run on this image "
+                                                  rf"\(\[{cue}\] enabled = false\)"):
+            fit_cue(cue, [root], vm=off)

@@ -189,3 +189,26 @@ def test_lines_the_model_forbids_are_not_scored(machine):
     # radius 0: an edge pixel at either end; lh sites (y, 2) and (y, 3), lv sites (y, 3)
     assert near == 10 * 2 + 9
     assert Pseudolikelihood([example], edge_radius=1, machine=machine).sites["lines"] == 10 * 4 + 9 * 3
+
+
+def test_a_fit_with_nothing_to_score_is_refused(machine):
+    # It "converged" at its start, and the fitted model then blamed the examples' roughness.
+    data = np.random.default_rng(0).normal(size=(16, 16)).astype(np.float32)
+    with pytest.raises(InputValueError, match="no site to score"):
+        fit_pseudolikelihood([Example(np.full((16, 16), np.nan, np.float32), data=data)], machine=machine)
+    with pytest.raises(InputValueError, match="no site to score"):
+        fit_pseudolikelihood([Example(data, valid=np.zeros((16, 16), bool))], machine=machine)
+
+
+@pytest.mark.parametrize("where", ["field", "data"])
+def test_infinite_values_are_refused_not_taken_as_unknown(machine, where):
+    values = np.random.default_rng(0).normal(size=(16, 16)).astype(np.float32)
+    infinite = values.copy()
+    infinite[3, 4] = np.inf
+    example = Example(infinite, data=values) if where == "field" else Example(values, data=infinite)
+    with pytest.raises(InputValueError, match=f"{where} must not hold infinities"):
+        fit_pseudolikelihood([example], machine=machine)
+    beyond = values.astype(np.float64)
+    beyond[0, 0] = 1e300  # an infinity in float32, where the sums are computed
+    with pytest.raises(InputValueError, match="field must not hold infinities or values beyond float32's range"):
+        fit_pseudolikelihood([Example(beyond)], machine=machine)

@@ -131,3 +131,24 @@ def test_a_solver_is_one_registry_entry(machine, monkeypatch):
                                                           machine=machine).field)
     with pytest.raises(InputValueError, match=r"mrf\.stereo\.rounds must be >= 0"):
         mrf.preset("stereo").override({"rounds": -1}, prefix="mrf.stereo")
+
+
+@dataclasses.dataclass(frozen=True)
+class _UncheckedSchedule:
+    quench: int = 3
+
+
+def test_a_schedule_class_without_checks_is_taken(machine):
+    # Built as vmcl.mrf.solvers describes, with no CHECKS: every Config() failed with an AttributeError once
+    # it shared a field (quench) with the "fast" schedule's overrides.
+    from vmcl.pipeline import Config
+
+    mrf.SOLVERS["mine"] = Solver(lambda lattice, schedule, seed: quench(lattice, schedule.quench), _UncheckedSchedule)
+    try:
+        settings = Config().mrf.settings("stereo")
+        assert settings.schedule("mine") == _UncheckedSchedule(2)  # the "fast" schedule's quench
+        assert mrf.preset("stereo").override({"quench": 5}, prefix="mrf.stereo").schedule("mine").quench == 5
+        noisy = np.random.default_rng(1).normal(0, 1, (8, 8))
+        assert mrf.restore(noisy, method="mine", schedule=settings.schedule("mine"), machine=machine).sweeps == 2
+    finally:
+        del mrf.SOLVERS["mine"]

@@ -101,11 +101,16 @@ class CueModule:
     """One cue of the machine. Subclass it, set the class attributes, implement :meth:`measure`, and
     register an instance with :func:`vmcl.cues.register`.
 
+    A cue added at run time runs whenever it is registered and its needs are given: Config sections (and
+    their ``enabled`` switch) and ``[mrf.<cue>]`` overrides exist for the built-in cues
+    (:data:`vmcl.labels.CUES`) only.
+
     Attributes
     ----------
     name : str
-        The cue's one name: its Config section (if any), MRF preset and ``[mrf.<name>]`` overrides, its
-        key in ``Result.restored`` and ``Result.lines``, its stage names (``name``, ``"mrf <name>"``).
+        The cue's one name: its key in ``Result.restored`` and ``Result.lines``, its stage names (``name``,
+        ``"mrf <name>"``), and for a built-in cue its Config section, MRF preset and ``[mrf.<name>]``
+        overrides. A Python identifier that no stage or Config attribute has (:data:`vmcl.cues.RESERVED`).
     needs : frozenset of {"right", "next", "rgb"}
         The inputs without which the cue does not run.
     kind : {"smooth", "constant"}
@@ -118,10 +123,13 @@ class CueModule:
     fields : tuple of str
         The Result attributes its measurement (and refinement) fill.
     restored_as : str or None
-        The Result attribute that holds its restored field besides ``Result.restored[name]``.
+        The Result attribute that holds its restored field besides ``Result.restored[name]``. Neither it
+        nor ``fields`` may name an attribute the machine fills itself (:data:`vmcl.cues.MACHINE_FIELDS`) or
+        another registered cue declares.
     settings : vmcl.mrf.Settings or None
-        Its MRF's energy model and schedules. None: :func:`vmcl.mrf.preset`'s for a built-in cue, else
-        ``Settings()``. The Config's ``[mrf] schedule`` and ``[mrf.<cue>]`` overrides apply on top.
+        Its MRF's energy model and schedules (``model.alpha`` > 0). None: :func:`vmcl.mrf.preset`'s for a
+        built-in cue, else ``Settings()``. The Config's ``[mrf] schedule`` applies on top, and for a
+        built-in cue its ``[mrf.<cue>]`` overrides.
     """
 
     name: str = ""
@@ -134,16 +142,17 @@ class CueModule:
     settings: Settings | None = None
 
     def enabled(self, config: Any) -> bool:
-        """Whether the Config switches the cue on (its section's ``enabled``; on when it has no section)."""
-        section = getattr(config, self.name, None)
-        return section is None or bool(section.enabled)
+        """Whether the Config switches the cue on: a built-in cue's section's ``enabled``; a cue added at
+        run time has no section (nothing of its name with an ``enabled`` field) and is always on."""
+        return bool(getattr(getattr(config, self.name, None), "enabled", True))
 
     def measure(self, run: RunInputs) -> Measurement:
         """Run the cue's early module on this run's images."""
         raise NotImplementedError
 
     def refine_stage(self, config: Any) -> str | None:
-        """The name of the stage in which :meth:`refine` runs, or None when the cue does not refine."""
+        """The name of the stage in which :meth:`refine` runs, or None when the cue does not refine; no
+        other stage's name (:func:`vmcl.cues.register` checks the default Config's)."""
         return None
 
     def refine(self, run: RunInputs, measurement: Measurement,

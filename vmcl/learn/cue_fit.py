@@ -90,7 +90,7 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
             for folder in datasets.find_stereo_folders(root):
                 pair = datasets.read_stereo_folder(folder)
                 mask = pair.masks.get("nonocc", np.isfinite(pair.disparity))
-                measured = vm.measure(pair.left, pair.right)["stereo"]
+                measured = _measured(vm, cue, pair.name, pair.left, pair.right)
                 examples.append(learn_examples.truth_example(pair.disparity, measured.data, measured.confidence,
                                                              measured.coupling, valid=mask, jump=jump))
                 names.append(pair.name)
@@ -102,11 +102,7 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
             except FileNotFoundError:
                 images = []
             for item in images:
-                measured = vm.measure(item.image)
-                if cue not in measured:
-                    raise InputValueError(f"{item.name}: the {cue} cue does not run on this image (grey, or "
-                                          f"[{cue}] enabled = false)")
-                found = measured[cue]
+                found = _measured(vm, cue, item.name, item.image)
                 examples.append(learn_examples.segmentation_example(found.data, found.confidence, found.coupling,
                                                                     item.segmentations[0], model))
                 names.append(item.name)
@@ -117,7 +113,7 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
                 sequence = datasets.read_flow_folder(folder)
                 first = datasets.read_image(sequence.frames[sequence.index])
                 second = datasets.read_image(sequence.frames[sequence.index + 1])
-                measured = vm.measure(first, next=second)["motion"]
+                measured = _measured(vm, cue, sequence.name, first, next=second)
                 examples.append(learn_examples.truth_example(sequence.flow, measured.data, measured.confidence,
                                                              measured.coupling, valid=sequence.mask, jump=jump))
                 names.append(sequence.name)
@@ -127,6 +123,17 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
             cue, "BSDS-layout images with segmentations")
         raise InputValueError(f"no {reader} at or below {', '.join(map(str, roots))}: nothing to fit {cue} to")
     return examples, names, files
+
+
+def _measured(vm: Any, cue: str, name: str, left: np.ndarray, right: np.ndarray | None = None,
+              next: np.ndarray | None = None) -> Any:
+    """``cue``'s measurement of the example ``name`` (:meth:`vmcl.pipeline.VisionMachine.measure`), refused
+    by name where the machine does not run the cue on it."""
+    measured = vm.measure(left, right, next)
+    if cue not in measured:
+        grey = "grey, or " if cue == "colour" else ""  # of the fittable cues, colour alone needs RGB
+        raise InputValueError(f"{name}: the {cue} cue does not run on this image ({grey}[{cue}] enabled = false)")
+    return measured[cue]
 
 
 def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: float = learn_examples.DEFAULT_JUMP,

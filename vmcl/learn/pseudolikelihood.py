@@ -76,12 +76,13 @@ class Example:
     ----------
     field : (H, W) or (H, W, C) array
         The desired field f (disparity, flow, a level map). NaN where it is unknown (e.g. Middlebury's
-        unknown disparities): those pixels are left out, with every conditional that reads them.
+        unknown disparities): those pixels are left out, with every conditional that reads them. Infinite
+        values are refused (NaN marks an unknown value).
     line_h, line_v : (H, W - 1) and (H - 1, W) arrays, optional
         The desired line process (non-zero: a line), both or neither. Without them there are no lines
         and the line sites are not scored.
     data : array of the field's shape, optional
-        The measurements g the field restores, NaN where there is none.
+        The measurements g the field restores, NaN where there is none (infinite values are refused).
     confidence : (H, W) array, optional
         gamma >= 0 of the data (default 1 wherever the data is finite).
     edges : (H, W) array, optional
@@ -215,7 +216,8 @@ class _Lattice:
     def __init__(self, example: Example, kind: str, levels: np.ndarray | None, edge_radius: int | None,
                  machine: Machine) -> None:
         self.machine = machine
-        f = host_field(example.field, "field", ndims=(2, 3)).astype(np.float32)
+        with np.errstate(over="ignore"):  # a value beyond float32's range is refused below, as the infinity it becomes
+            f = host_field(example.field, "field", ndims=(2, 3)).astype(np.float32)
         if f.ndim == 3 and not 1 <= f.shape[2] <= 4:
             raise InputValueError(f"field must be (H, W) or (H, W, C) with C in 1..4, got shape {f.shape}")
         if f.ndim == 3 and kind == "constant" and f.shape[2] != 1:
@@ -232,6 +234,13 @@ class _Lattice:
         g = np.zeros_like(self.f) if example.data is None else host_field(example.data, "data", ndims=(2, 3))
         if g.shape != f.shape:
             raise InputValueError(f"data must have the field's shape {f.shape}, got {g.shape}")
+        for name, values in (("field", f), ("data", g)):
+            # An infinity is no value, and no unknown one either (NaN is), as vmcl.mrf.restore holds; a value
+            # beyond float32's range becomes one in the float32 sums.
+            with np.errstate(over="ignore"):
+                if np.isinf(values.astype(np.float32)).any():
+                    raise InputValueError(f"{name} must not hold infinities or values beyond float32's range "
+                                          "(NaN marks an unknown value)")
         measured = np.all(np.isfinite(g.reshape(*shape, -1)), axis=2) & self.data
         gamma = np.ones(shape) if example.confidence is None else _pixels(example.confidence, "confidence", shape)
         if not np.all(np.isfinite(gamma)) or np.any(gamma < 0):
@@ -521,7 +530,11 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
     if not free:
         raise InputValueError("every parameter is held: nothing to fit")
     counts = dict(problem.sites)
-    scored = max(counts["pixels"] + counts["lines"], 1)
+    scored = counts["pixels"] + counts["lines"]
+    if not scored:  # else Newton "converges" at once on a zero objective and theta is its start
+        raise InputValueError(f"examples: no site to score (sites={sites!r}): every pixel is unknown (NaN) or not "
+                              "valid, or lacks the valid neighbours and data its conditional reads, and no line "
+                              "site is scored")
     weight = ridge * scored
     theta = np.array([held.get(name, _START[name]) for name in PARAMETERS], np.float64)
 

@@ -131,6 +131,9 @@ class Settings:
         if isinstance(own.get("prior"), Mapping):
             own["prior"] = Settings._prior(own["prior"], "prior" if prefix is None else f"{prefix}.prior")
         if prefix is not None:
+            # A schedule class without CHECKS (vmcl.mrf.solvers) checks its fields itself, if at all.
+            checks = getattr(type(settings), "CHECKS", {})
             for name, value in own.items():
-                type(settings).CHECKS[name](value, f"{prefix}.{name}")
+                if name in checks:
+                    checks[name](value, f"{prefix}.{name}")
         return dataclasses.replace(settings, **own) if own else settings

@@ -2,9 +2,18 @@
 
 Seed section "Algorithms: Deterministic and stochastic". A solver is a function
 ``solve(lattice, schedule, seed) -> sweeps run`` that leaves its estimate in the lattice's field and line
-process, the frozen dataclass of its schedule, and what buffers it allocates (for the memory check), which checks its fields when made and whose defaults
-are a usable schedule. Adding a solver is one module holding both and one entry in :data:`SOLVERS`;
-:class:`vmcl.mrf.Settings` and the presets then give it its default schedule until one is measured.
+process, the class of its schedule, and what buffers it allocates (for the memory check). Adding a solver
+is one module holding both and one entry in :data:`SOLVERS`; :class:`vmcl.mrf.Settings` and the presets
+then give it its default schedule until one is measured.
+
+A schedule class is a dataclass (frozen, as the others) whose every field has a default, the defaults
+together a usable schedule: ``Settings`` makes one with no arguments, and a Config's ``[mrf]`` schedule
+and ``[mrf.<cue>]`` overrides set its fields by name (:meth:`vmcl.mrf.Settings.override`), a name it
+shares with another schedule or the energy model (e.g. ``quench``) in each of them. It should check its
+fields when made, refusing a bad value with a :class:`vmcl.errors.InputError`; with a ``CHECKS`` class
+attribute (field name -> ``check(value, label)``, run by :func:`vmcl.mrf.checks.check_fields` in its
+``__post_init__``, as :class:`vmcl.mrf.IcmSchedule` does) an override is also refused under the key the
+user wrote (``mrf.<cue>.<field>``). A class without ``CHECKS`` is taken, with only its own checks.
 """
 
 from __future__ import annotations
