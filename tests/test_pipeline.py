@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from vmcl import metrics, scenes
+from vmcl.errors import InputError
 from vmcl.integrate import boundary, integrate
 from vmcl.labels import Cue, Label
 from vmcl.mrf import boundary_map
@@ -518,7 +519,8 @@ def test_a_left_image_of_one_brightness_gives_no_depth_or_motion():
 
 
 @pytest.mark.parametrize("returned, match", [("none", "measure\\(\\) must return a vmcl.cues.Measurement, got NoneType"),
-                                             ("host", "its Measurement's data must be a device array")])
+                                             ("host", "its Measurement's data must be a device array"),
+                                             ("undeclared", r"its Measurement holds fields \['labels'\] that the cue")])
 def test_a_registered_cue_that_measures_wrongly_is_named(small_scene, returned, match):
     # A cue of the user's that returned None, or host arrays, ended the run with a bare AttributeError or
     # TypeError, and an error of its own was said to come from its "[probe] settings", which do not exist.
@@ -533,11 +535,14 @@ def test_a_registered_cue_that_measures_wrongly_is_named(small_scene, returned, 
             if returned == "none":
                 return None
             grey = np.ascontiguousarray(run.left.get().mean(axis=2), np.float32)
+            if returned == "undeclared":  # Result's own labels: a TypeError when Result was made
+                device = run.machine.to_device(grey)
+                return Measurement(device, None, run.brightness, fields={"labels": device})
             return Measurement(grey, None, run.brightness)
 
     register(Probe())
     try:
-        with pytest.raises(TypeError, match=r"probe \(a registered cue\): " + match):
+        with pytest.raises(InputError, match=r"probe \(a registered cue\): " + match):
             VisionMachine().run(small_scene.left)
     finally:
         unregister("probe")

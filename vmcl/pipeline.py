@@ -1084,6 +1084,10 @@ def _checked_measurement(cue: CueModule, found: Any) -> Measurement:
         if not (isinstance(value, cl_array.Array) or (name == "confidence" and value is None)):
             raise InputTypeError(f"its Measurement's {name} must be a device array (pyopencl.array.Array, e.g. "
                                  f"run.machine.to_device(x)), got {type(value).__name__}")
+    undeclared = sorted(set(found.fields) - set(cue.fields))
+    if undeclared:  # passed on to Result, they would crash it or overwrite what another fills
+        raise InputValueError(f"its Measurement holds fields {undeclared} that the cue does not declare in its "
+                              f"fields {tuple(cue.fields)}")
     return found
 
 
@@ -1183,7 +1187,7 @@ class _Run:
                 # every stage VisionMachine.stages lists.
                 with self.stage(refine):
                     if found is not None:
-                        again = cue.refine(run, measured[cue.name], _device_lines(found))
+                        again = _checked_measurement(cue, cue.refine(run, measured[cue.name], _device_lines(found)))
                         fields.update(again.fields)
                         found = self.restore(cue, again) or found
             if found is not None:
