@@ -298,8 +298,10 @@ __kernel void noise_response(__global const float *grey, __global float *respons
 /* Message arithmetic runs on LANES disparities at once (one CPU vector register, or a GPU's 16-wide
  * loads); a pixel's D disparities are stored in a run of S = LANES * ceil(D / LANES), the lanes past D
  * unused. In the messages those lanes hold PAD, which no real lane ever takes up: a real message is at
- * most max C + P2 <= 8062 (the host bounds P2 by 8000), and a candidate through a padded lane is at least
- * PAD + P1 > lowest + P2, so every real value is the one the scalar recursion gives. */
+ * most max C + P2 <= 255 + P2, the host bounding P2 so that the paths' sum of such messages fits 16 bits
+ * (paths * (255 + P2) <= 65535: P2 <= 7936 for 8 paths, 16128 for 4), and a candidate through a padded
+ * lane is at least PAD + P1 >= lowest + P2 (lowest <= 255), never below the jump's ceiling, so every real
+ * value is the one the scalar recursion gives. */
 #define LANES 16
 #define PAD ((ushort)0x3fff)
 #define CHUNKS (MAX_D / LANES)
@@ -314,9 +316,10 @@ __kernel void noise_response(__global const float *grey, __global float *respons
 /* The messages along direction (dx, dy) on the scanlines from start[k], k < lines, added into `total`
  * (written when `first`), the lines' steps taken in turn; end[k] receives each line's last pixel.
  * L(p, d) = C(p, d) + min(L(p-r, d), L(p-r, d +- 1) + P1, min_k L(p-r, k) + P2(p)) - min_k L(p-r, k);
- * subtracting the previous minimum keeps L below max C + P2, so sums of 8 directions fit 16 bits (the host
- * checks). P2(p) = max(P1, P2 / (1 + gain |I(p) - I(p-r)|)), gain = edge_gain / s, s the noise's standard
- * deviation: brightness changes are counted in units of the noise, whatever the image's scale. */
+ * subtracting the previous minimum keeps L at most max C + P2 <= 255 + P2, so the sums of the directions
+ * fit 16 bits (the host checks paths * (255 + P2) <= 65535). P2(p) = max(P1, P2 / (1 + gain |I(p) - I(p-r)|)),
+ * gain = edge_gain / s, s the noise's standard deviation: brightness changes are counted in units of the
+ * noise, whatever the image's scale. */
 inline void walk(__global const uchar *cost, __global const float *grey, __global ushort *total,
                  const long2 *start, long2 *end, int lines, long W, long H, int D, int S, int dx, int dy,
                  ushort p1, float p2, float gain, int first)
@@ -438,8 +441,9 @@ __kernel void select_left(__global const ushort *total, __global const uchar *co
     int k_lo = max(0, (int)(x - (W - 1)) - d_min), k_hi = min(D - 1, (int)x - d_min);
     out_of_range[y * W + x] = 0;
     if (k_lo > k_hi) { disparity[y * W + x] = NAN; winner[y * W + x] = d_min - 1; return; }
-    /* 16 disparities a step, those outside [k_lo, k_hi] masked by a sum no real one reaches (8 paths of at
-     * most 8064 each); the first of the smallest, as a scan from k_lo would find it. */
+    /* 16 disparities a step, those outside [k_lo, k_hi] masked by a sum no real one reaches (the host keeps
+     * paths * (255 + P2) <= 65535, and no multiple of 4 is 65535); the first of the smallest, as a scan from
+     * k_lo would find it. */
     int best = k_lo;
     ushort lowest = 0xffff;
     for (int k0 = k_lo & ~15; k0 <= k_hi; k0 += 16) {

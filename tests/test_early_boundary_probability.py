@@ -169,6 +169,13 @@ def test_model_round_trip_and_refusals(tmp_path):
         bp.boundary_probability(np.zeros((8, 8, 4), np.float32))
 
 
+@pytest.mark.parametrize("call", [bp.boundary_probability, bp.oriented_gradients, bp.bank_responses])
+def test_a_float_image_off_the_unit_scale_is_refused(call, machine):
+    """Float images hold brightness in [0, 1] (sRGB): one in 0..255 was taken and read as another image."""
+    with pytest.raises(ValueError, match="image: float images hold brightness in"):
+        call(255 * _smooth_rgb(1), machine=machine)
+
+
 def test_a_flat_image_has_no_gradient_even_at_its_borders():
     found = bp.oriented_gradients(np.full((24, 40), 0.25, np.float32))
     assert np.all(found == 0)

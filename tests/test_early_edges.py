@@ -478,6 +478,20 @@ def test_noise_thresholds_of_subnormal_and_non_finite_magnitudes(machine):
             noise.noise_thresholds(magnitude, machine=machine)
 
 
+def test_noise_thresholds_refuse_negative_magnitudes_and_thresholds_beyond_float32(machine):
+    """Magnitudes are >= 0 (negative ones were taken as they came); a field of 3e38 gave thresholds of
+    infinity, its high threshold about 5 times its median. The largest magnitude taken gives finite ones."""
+    magnitude = np.ones((40, 56), np.float32)
+    magnitude[3, 3] = -1
+    with pytest.raises(ValueError, match="magnitude must be >= 0"):
+        noise.noise_thresholds(magnitude, machine=machine)
+    with pytest.raises(ValueError, match="magnitude must be at most 6.68e\\+37"):
+        noise.noise_thresholds(np.full((40, 56), 3e38, np.float32), machine=machine)
+    largest = np.float32(float(np.finfo(np.float32).max) * math.sqrt(2 * math.log(2)) / noise.CANNY_HIGH)
+    for kind in ("global", "local"):
+        assert np.isfinite(noise.noise_thresholds(np.full((40, 56), largest), noise=kind, machine=machine)).all()
+
+
 def test_canny_refuses_what_float32_or_the_device_cannot_hold(machine):
     with pytest.raises(ValueError, match="gradient magnitudes beyond float32's range"):
         canny(np.kron(np.eye(2, dtype=np.float32), np.full((16, 16), 3e38, np.float32)), sigma=1.0,

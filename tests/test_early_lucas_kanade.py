@@ -126,6 +126,7 @@ def test_the_motion_cue_takes_the_steps_and_its_restored_flow_gains(machine):
     ({"frame0": np.full((6, 6), np.nan, np.float32)}, InputValueError, "frame0"),
     ({"frame1": "frame"}, InputTypeError, "frame1"),
     ({"frame0": np.full((6, 6), 2.0, np.float32)}, InputValueError, "frame0: float images hold brightness in"),
+    ({"frame1": np.zeros((6, 6, 3), np.float32)}, InputValueError, "frame0 and frame1 must have the same shape"),
     ({"window": 0.0}, InputValueError, "window"),
     ({"window": 1e9}, InputValueError, "window"),
     ({"iterations": -1}, InputValueError, "iterations"),

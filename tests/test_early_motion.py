@@ -204,6 +204,34 @@ def test_subpixel_translation(shift):
     assert error.mean() < 0.25
 
 
+def test_limit_share_is_a_share_of_pixels():
+    """A motion of (8, 8) searched over delta 4 (the default) puts both components of most estimates at the
+    limit: each such pixel counts once (counting components gave 1.87), so the share stays in [0, 1]."""
+    smooth = ndimage.gaussian_filter(np.random.default_rng(1).random((140, 180)), 3)
+    image = ((smooth - smooth.min()) / np.ptp(smooth) * 255).astype(np.uint8)
+    frame0, frame1 = image[10:-10, 10:-10], np.roll(image, (8, 8), (0, 1))[10:-10, 10:-10]
+    result = motion.flow(frame0, frame1)
+    at_limit = np.abs(result.flow) >= 4 - 1e-3
+    assert at_limit.all(axis=-1).mean() > 0.5  # both components, at most pixels
+    assert 0.5 < result.limit_share <= 1
+    assert result.limit_share == pytest.approx(at_limit.any(axis=-1).mean())
+
+
+def test_the_speed_penalty_is_bounded_where_float32_holds_it(machine):
+    """The device computes speed_penalty * C0 in float32: at 1e34 it overflowed on uint8 frames, every
+    displacement's key was infinite or NaN, and every pixel got the flow (-5, -4), outside the range, with
+    a NaN score. Above 1 is refused by name; at 1 the flow stays in range, and a NaN score has no flow."""
+    frame0 = (np.random.default_rng(0).random((60, 80)) * 255).astype(np.uint8)
+    frame1 = np.roll(frame0, 2, 1)
+    with pytest.raises(ValueError, match="speed_penalty must be a finite number >= 0 and <= 1"):
+        motion.flow(frame0, frame1, speed_penalty=1e34, machine=machine)
+    result = motion.flow(frame0, frame1, speed_penalty=1.0, machine=machine)
+    known = np.isfinite(result.score)
+    assert known.mean() > 0.9
+    np.testing.assert_array_equal(np.isfinite(result.flow).all(axis=-1), known)
+    assert np.abs(result.flow[known]).max() <= motion.DELTA
+
+
 def test_pyramid_finds_motion_beyond_delta():
     shift = (9.4, -6.7)
     frame0, frame1 = texture((112, 160), seed=3), texture((112, 160), shift=shift, seed=3)

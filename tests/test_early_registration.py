@@ -106,6 +106,49 @@ def test_warp_matches_bilinear_oracle(channels, machine, machine_with_local_size
     np.testing.assert_array_equal(warp(image, source, machine=machine_with_local_size), got)
 
 
+def _table(vergence: float, shape=(6, 8)) -> WarpTable:
+    ys, xs = np.indices(shape, dtype=np.float32)
+    return WarpTable(np.stack([xs + vergence, ys], axis=-1), vergence=vergence, dots=3)
+
+
+@pytest.mark.parametrize("name", ["tables", "tables.npz", "tables.bin"])
+def test_a_saved_store_loads_from_the_path_it_was_saved_to(name, tmp_path):
+    """save wrote tables.npz for "tables" (NumPy's suffix), and load("tables") found no file."""
+    store = TableStore()
+    for vergence in (2.0, 0.0):
+        store.add(_table(vergence))
+    store.save(str(tmp_path / name))
+    assert [path.name for path in tmp_path.iterdir()] == [name]
+    loaded = TableStore.load(str(tmp_path / name))
+    assert [t.vergence for t in loaded.tables] == [0.0, 2.0]
+    np.testing.assert_array_equal(loaded.table_for(1.0).source, store.table_for(1.0).source)
+
+
+def _saved(path, vergence, source) -> None:
+    np.savez_compressed(path, vergence=np.array(vergence, np.float64), dots=np.full(len(vergence), 3),
+                        source=np.asarray(source, np.float32))
+
+
+def test_load_checks_and_orders_the_tables_as_add_does(tmp_path):
+    """load took the file's tables as they came: duplicate vergences, sources that are no (H, W, 2) positions,
+    vergences out of order (which table_for's bisection then misread). Now each goes through add."""
+    path = tmp_path / "store.npz"
+    source = np.stack([_table(v).source for v in (3.0, 1.0, 2.0)])
+    _saved(path, [3.0, 1.0, 2.0], source)
+    loaded = TableStore.load(path)
+    assert [t.vergence for t in loaded.tables] == [1.0, 2.0, 3.0]
+    np.testing.assert_array_equal(loaded.table_for(1.5).source, _table(1.5).source)
+    for vergence, tables, match in (([1.0, 1.0], source[:2], "already stored"),
+                                    ([1.0], np.zeros((1, 3, 3)), r"shape \(H, W, 2\)"),
+                                    ([float("nan")], source[:1], "table.vergence")):
+        _saved(path, vergence, tables)
+        with pytest.raises(ValueError, match=match) as raised:
+            TableStore.load(path)
+        assert "store.npz" in str(raised.value)
+    with pytest.raises(ValueError, match="holds no tables"):
+        TableStore().save(path)
+
+
 def test_match_dots_is_mutual_and_bounded():
     left = np.array([[10.0, 10.0], [50.0, 10.0], [90.0, 10.0]])
     right = np.array([[12.0, 11.0], [52.0, 9.0], [140.0, 10.0]])
@@ -123,6 +166,9 @@ def test_match_dots_is_mutual_and_bounded():
     (lambda: WarpTable.from_dots(np.zeros((2, 2)), np.zeros((2, 2)), (5, 5)), ValueError, "at least 3"),
     (lambda: warp(np.zeros((4, 4), np.float32), np.zeros((4, 5, 2), np.float32)), ValueError, "table must have"),
     (lambda: warp(np.zeros((4, 4), np.complex64), np.zeros((4, 4, 2), np.float32)), TypeError, "real-valued"),
+    # float64 beyond float32's range became infinities (NaN and infinities themselves carry over).
+    (lambda: warp(np.full((4, 4), 1e300), np.zeros((4, 4, 2), np.float32)), ValueError,
+     "image has values beyond float32's range"),
 ])
 def test_bad_input_is_named(call, error, match):
     with pytest.raises(error, match=match):

@@ -459,10 +459,12 @@ def test_refinement_leaves_out_of_range_pixels_without_a_value(machine):
 
 def test_refinement_refuses_float_images_off_the_unit_scale(machine):
     """The weighted median's colour scale is in [0, 1] levels: a float pair in 0..255 is refused by name (the
-    census alone does not care, so refine=False takes it)."""
+    census alone does not care, so refine=False takes it); the right view is held to the scale too."""
     left, right = _textured_pair(shape=(24, 40), seed=2)
     with pytest.raises(InputValueError, match="left: float images hold brightness in"):
         match_semiglobal(255 * left, 255 * right, d_min=0, d_max=6, machine=machine)
+    with pytest.raises(InputValueError, match="right: float images hold brightness in"):
+        match_semiglobal(left, 255 * right, d_min=0, d_max=6, machine=machine)
     plain = match_semiglobal(255 * left, 255 * right, d_min=0, d_max=6, refine=False, machine=machine)
     unit = match_semiglobal(left, right, d_min=0, d_max=6, refine=False, machine=machine)
     np.testing.assert_array_equal(plain.filled, unit.filled)
@@ -514,7 +516,9 @@ def test_device_input_gives_device_output_equal_to_host(machine):
     ({"d_min": 0.5, "d_max": 2}, InputTypeError, "d_min"),
     ({"p1": -1}, InputValueError, "p1"),
     ({"p1": 10, "p2": 5}, InputValueError, "p2"),
-    ({"p2": 9000}, InputValueError, "p2"),
+    ({"p2": 16129}, InputValueError, "p2 must be at most 16128 with 4 paths"),
+    ({"p2": 7937, "paths": 8}, InputValueError, "p2 must be at most 7936 with 8 paths"),
+    ({"refine_colour": 1e-45}, InputValueError, "refine_colour must be at least"),
     ({"census_threshold": -1}, InputValueError, "census_threshold"),
     ({"edge_gain": float("nan")}, InputValueError, "edge_gain"),
     ({"paths": 6}, InputValueError, "paths"),
@@ -525,6 +529,53 @@ def test_bad_options_are_refused_naming_them(kwargs, error, pattern, machine):
     left, right = _textured_pair(shape=(16, 48))
     with pytest.raises(error, match=pattern):
         match_semiglobal(left, right, **{"d_min": 0, "d_max": 4, **kwargs}, machine=machine)
+
+
+def _ramp_pair(size: int, shift: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """A smooth ramp and the ramp moved by ``shift``: every census code alike, so a pixel's cost is its
+    brightness difference alone, at its cap (AD_CAP noise deviations, 192 with ad_weight 24) at every
+    disparity but the true one, where it is 0."""
+    y, x = np.mgrid[:size, :size].astype(np.float64)
+    return (1.5 * x + 0.3 * y + 20).astype(np.uint8), (1.5 * (x + shift) + 0.3 * y + 20).astype(np.uint8)
+
+
+@pytest.mark.parametrize(("paths", "size", "d_max"), [(8, 192, 63), (4, 256, 79)])
+def test_the_largest_p2_keeps_the_summed_messages_within_16_bits(paths, size, d_max, machine, monkeypatch):
+    """Far from the winner, each path's message saturates at cost + p2, and ``paths`` of them are summed in
+    16 bits: at :func:`max_p2` every pixel of the middle finds the ramp's shift; past it (the check lifted)
+    the sums of the capped costs wrap round to 0, tie with the true match and win (with 8 paths and p2 8000,
+    the old maximum, a 40% share was right)."""
+    left, right = _ramp_pair(size)
+    options = {"d_min": 0, "d_max": d_max, "ad_weight": 24, "p1": 255, "paths": paths, "refine": False,
+               "median": False, "subpixel": False, "machine": machine}
+    middle = (slice(size // 3, -(size // 3)), slice(d_max + 4, None))
+    assert semiglobal.max_p2(paths) == 65535 // paths - 255
+    found = match_semiglobal(left, right, p2=semiglobal.max_p2(paths), **options)
+    assert np.all(found.disparity[middle] == 4)
+    monkeypatch.setattr(semiglobal, "max_p2", lambda paths: 65535)
+    wrapped = match_semiglobal(left, right, p2=65536 // paths - 192, **options)  # paths * (192 + p2) = 65536
+    assert np.mean(wrapped.disparity[middle] == 4) < 0.9
+
+
+def test_a_device_view_is_refused_naming_it(machine):
+    """Kernels take a device array's whole buffer: a view is refused by the pair's own names (it was refused
+    as "image", a helper's name, or by the launch naming nothing)."""
+    host = _textured_pair(shape=(16, 48))
+    left, right = (machine.to_device(image) for image in host)
+    with pytest.raises(InputValueError, match="^left must be a C-contiguous device array"):
+        match_semiglobal(left[:, :40], machine.to_device(host[1][:, :40].copy()), d_min=0, d_max=4, machine=machine)
+    with pytest.raises(InputValueError, match="^right must not be a device view with an offset"):
+        match_semiglobal(machine.to_device(host[0][2:].copy()), right[2:], d_min=0, d_max=4, machine=machine)
+
+
+def test_a_pair_too_small_for_the_range_estimate_names_the_range(machine):
+    """The range estimate correlates patches of 11 pixels; a smaller pair without a range is refused naming
+    the images and d_min and d_max, not the estimate's patch, which this call has no argument for."""
+    left, right = _textured_pair(shape=(9, 9))
+    with pytest.raises(InputValueError, match="too small to find their disparity range") as raised:
+        match_semiglobal(left, right, machine=machine)
+    assert "d_min and d_max" in str(raised.value) and "patch" not in str(raised.value)
+    assert match_semiglobal(left, right, d_min=0, d_max=2, machine=machine).disparity.shape == (9, 9)
 
 
 def test_bad_pairs_are_refused_naming_the_argument(machine):

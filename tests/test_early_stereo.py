@@ -278,6 +278,32 @@ def test_intensity_matches_only_with_windows_inside_the_image(machine):
     # there then lose to the true matches in the suppression).
     assert np.all(found.disparity[2:38, 2:5][matched[2:38, 2:5]] <= 2)
 
+def test_intensity_matches_keep_every_score_whatever_min_score(machine):
+    """min_score cuts edge matches only (the docstring): an intensity match's correlation is its weight
+    downstream, so the weak ones stay matched, none flagged out of range, at any min_score."""
+    rng = np.random.default_rng(3)
+    texture = rng.random((40, 68)).astype(np.float32)
+    left, right = texture[:, :64], texture[:, 4:] + 0.5 * rng.random((40, 64)).astype(np.float32)
+    found = {score: match(left, right, d_min=0, d_max=8, patch=5, sigma=0.5, features="intensity",
+                          min_score=score, machine=machine) for score in (-1.0, 0.99)}
+    weak = np.isfinite(found[-1.0].disparity) & (found[-1.0].score < 0.99)
+    assert weak.sum() > 100  # the noise leaves many matches below the higher min_score
+    for name in ("disparity", "score", "out_of_range"):
+        np.testing.assert_array_equal(getattr(found[0.99], name), getattr(found[-1.0], name))
+    assert not (found[0.99].out_of_range & np.isfinite(found[0.99].score)).any()
+
+
+def test_a_device_view_is_refused_naming_it(machine):
+    """A view's buffer starts elsewhere than its first element: refused by the pair's names, where it was
+    refused as "image" (a helper's name) or by the kernel launch, naming nothing."""
+    host = np.random.default_rng(0).random((32, 48)).astype(np.float32)
+    whole = machine.to_device(host)
+    with pytest.raises(ValueError, match="^left must be a C-contiguous device array"):
+        match(whole[:, :40], machine.to_device(host[:, :40].copy()), d_min=0, d_max=4, machine=machine)
+    with pytest.raises(ValueError, match="^right must not be a device view with an offset"):
+        match(machine.to_device(host[4:].copy()), whole[4:], d_min=0, d_max=4, machine=machine)
+
+
 def test_intensity_score_does_not_depend_on_the_brightness_level(machine):
     """A correlation ignores an added constant; float32 patch moments of raw uint8 brightness near 220
     lost the variance of a low-contrast texture (scores up to 4.6, half the matches wrong)."""

@@ -164,6 +164,8 @@ def test_the_motion_cue_takes_the_refinement(machine):
     ({"frame1": np.zeros((6, 6), np.uint8)}, InputValueError, "same type"),
     ({"frame1": "frame"}, InputTypeError, "frame1"),
     ({"frame1": np.full((6, 6), 255.0, np.float32)}, InputValueError, "frame1: float images hold brightness in"),
+    ({"frame0": np.zeros((6, 6, 3), np.uint8), "frame1": np.zeros((6, 6), np.uint8)}, InputValueError,
+     "frame0 and frame1 must have the same shape"),
     ({"alpha": -1.0}, InputValueError, "alpha"),
     ({"delta": -1.0}, InputValueError, "delta"),
     ({"gamma": float("nan")}, InputValueError, "gamma"),

@@ -66,6 +66,7 @@ from vmcl.early import (
     stereo,
     texture,
     variational,
+    weighted_median,
 )
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.group import Grouping, group, saliency_strength, structural_saliency
@@ -352,11 +353,12 @@ class StereoConfig:
         check_real(self.census_threshold, "stereo.census_threshold", minimum=0)
         check_real(self.ad_weight, "stereo.ad_weight", minimum=0, maximum=24)
         check_int(self.p1, "stereo.p1", minimum=0, maximum=255)
-        check_real(self.p2, "stereo.p2", minimum=self.p1, maximum=8000)
+        # The messages' sums are 16-bit: their largest price depends on how many directions add up.
+        paths = semiglobal.check_paths(self.paths, "stereo.paths")
+        check_real(self.p2, "stereo.p2", minimum=self.p1, maximum=semiglobal.max_p2(paths))
         check_real(self.edge_gain, "stereo.edge_gain", minimum=0)
-        semiglobal.check_paths(self.paths, "stereo.paths")
         check_int(self.refine_radius, "stereo.refine_radius", minimum=1, maximum=2**31 - 1)
-        check_real(self.refine_colour, "stereo.refine_colour", above=0)
+        weighted_median.check_sigma_colour(self.refine_colour, "stereo.refine_colour")
         check_int(self.refine_stride, "stereo.refine_stride", minimum=1, maximum=2**31 - 1)
         if not self.feature_matches and not self.backfill:
             raise InputValueError("stereo: feature_matches and backfill are both off, which leaves no matcher")

@@ -62,6 +62,7 @@ from vmcl.cm.core import (
     IMAGE_TYPES,
     ArrayLike,
     check_real,
+    check_unit_image,
     full_scale,
     image_field,
     launch_rows,
@@ -257,8 +258,13 @@ def _model(model: BoundaryModel | None) -> BoundaryModel:
 
 def _image(image, machine: Machine, model_scales: tuple[float, ...], planes: int) -> tuple[cl_array.Array, bool]:
     widest = max(model_scales) * TEXTURE_RATIO
-    return image_field(image, machine, what="the probability of boundary", footprint=4 * planes, largest=4 * planes,
-                       widths={"the texture's widest Gaussian": widest})
+    data, host = image_field(image, machine, what="the probability of boundary", footprint=4 * planes,
+                             largest=4 * planes, widths={"the texture's widest Gaussian": widest})
+    if isinstance(image, np.ndarray) and data.dtype == np.float32:
+        # The sRGB decoding, the Lab conversion and the model fitted on them take brightness in [0, 1]: a
+        # float image in 0..255 would be read as another image altogether.
+        check_unit_image(image, "image")
+    return data, host
 
 
 def _srgb_linear(levels: np.ndarray) -> np.ndarray:

@@ -35,6 +35,9 @@ MAX_DISPARITY = 0.5
 """The widest disparity searched by default, either sign, as a share of the image width: near objects of
 a wide-baseline rig reach 40% of the width."""
 
+_PATCH = 11
+"""The correlation patch of :func:`estimate_range` by default (the matcher's default patch)."""
+
 _PYRAMID_PASSES = 2
 """Binomial passes before each halving: two passes of [1 2 1] / 4 are Burt and Adelson's 5-tap
 [1 4 6 4 1] / 16 reduction filter (a Gaussian of sigma 1), which suppresses what halving would alias."""
@@ -86,7 +89,7 @@ def fallback_range(width: int, max_disparity: float = MAX_DISPARITY) -> tuple[in
 
 
 def estimate_range(left: ArrayLike, right: ArrayLike, *, max_disparity: float = MAX_DISPARITY, coarse_side: int = 48,
-                   patch: int = 11, min_score: float = 0.8, quantile: float = 0.005, margin: int = 1,
+                   patch: int = _PATCH, min_score: float = 0.8, quantile: float = 0.005, margin: int = 1,
                    widen: float = 0.25, min_share: float = 0.05, machine: Machine | None = None) -> DisparityRange:
     """Estimate the disparity range of a rectified pair from the images (coarse to fine).
 
@@ -180,7 +183,8 @@ def estimate_range(left: ArrayLike, right: ArrayLike, *, max_disparity: float = 
     finest = level
     while finest > 1:
         low, high = 2 * found[0] - 2 * margin, 2 * found[1] + 2 * margin
-        finer, _ = search.range(pyramid[0][finest - 1], pyramid[1][finest - 1], low, high)
+        finer, _ = search.range(pyramid[0][finest - 1], pyramid[1][finest - 1], low, high,
+                                keep=(2 * found[0], 2 * found[1]))
         if finer is None:
             break
         found, finest = finer, finest - 1
@@ -203,12 +207,18 @@ class _Search:
     quantile: float
     machine: Machine
 
-    def range(self, left: cl_array.Array, right: cl_array.Array, d_min: int, d_max: int
-              ) -> tuple[tuple[int, int] | None, float]:
+    def range(self, left: cl_array.Array, right: cl_array.Array, d_min: int, d_max: int,
+              keep: tuple[int, int] | None = None) -> tuple[tuple[int, int] | None, float]:
         """The quantiles (floor, ceil) of one level's confident matches over [d_min, d_max] (None when
-        fewer than ``patch**2``), and their share of the level's pixels."""
+        fewer than ``patch**2``), and their share of the level's pixels. A range the matcher cannot search
+        at this level (|d| >= W, or more than W planes) is cut at its ends, the part ``keep`` (the coarser
+        level's range, in this level's pixels) kept whole."""
         width = left.shape[1]
         d_min, d_max = max(d_min, -(width - 1)), min(d_max, width - 1)
+        if keep is not None:
+            # As at full resolution: the margins are cut, never what the images showed (cutting the top
+            # alone lost it: tsukuba with margin 100 searched -191..0 at half size, and found -222..0).
+            d_min = max(d_min, keep[1] - (width - 1))
         d_max = min(d_max, d_min + width - 1)
         forward = self._match(left, right, d_min, d_max)
         # The right view's disparities, without mirroring the images: matched against the left one over
@@ -303,6 +313,11 @@ def range_to_search(left: ArrayLike, right: ArrayLike, d_min: int | None = None,
     low = None if d_min is None else check_int(d_min, "d_min")
     high = None if d_max is None else check_int(d_max, "d_max")
     if low is None or high is None:
+        height, width = left.shape[:2]
+        if min(height, width) < _PATCH:
+            # estimate_range would say so in terms of its own patch, which the caller of a matcher never gave.
+            raise InputValueError(f"left and right ({height} x {width}) are too small to find their disparity range "
+                                  f"from the images (at least {_PATCH} pixels on each side): give d_min and d_max")
         low, high = with_given_ends(estimate_range(left, right, machine=machine), low, high)
     check_range(low, high, left.shape[1])
     return low, high

@@ -36,7 +36,8 @@ def check_flow_frames(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike,
                       machine: Machine) -> tuple[cl_array.Array, bool]:
     """The flow (float32 (H, W, 2)) on the device and whether it came as a NumPy array, checked with its two
     frames: NumPy arrays with a NumPy flow, device arrays with a device flow, of the flow's height and
-    width. Errors name ``flow``, ``frame0`` and ``frame1``."""
+    width, and of one shape (channels too: a grey frame with an RGB one is refused). Errors name
+    ``flow``, ``frame0`` and ``frame1``."""
     data, host = field(flow, "flow", machine, ndims=(3,), dtypes=(np.float32,))
     if data.shape[2] != 2:
         raise InputValueError(f"flow must have two components (H, W, 2), got shape {data.shape}")
@@ -47,6 +48,8 @@ def check_flow_frames(flow: ArrayLike, frame0: ArrayLike, frame1: ArrayLike,
         if frame.shape[:2] != data.shape[:2]:
             raise InputValueError(f"flow and {name} must have the same height and width, got flow {data.shape} "
                                   f"and {name} {frame.shape}")
+    if frame0.shape != frame1.shape:
+        raise InputValueError(f"frame0 and frame1 must have the same shape, got {frame0.shape} and {frame1.shape}")
     return data, host
 
 

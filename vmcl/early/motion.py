@@ -122,8 +122,9 @@ class FlowResult:
         Pixels with an estimate whose score is below ``boundary_score``: the paper's evidence of
         occlusions and motion discontinuities.
     limit_share : float
-        The share of the coarsest level's estimates that lie at the edge of its range (a component
-        equal to +-delta): motion there may exceed what the search reaches (:func:`reach`).
+        In [0, 1]: the share of the coarsest level's pixels whose estimate lies at the edge of its range
+        (either component equal to +-delta, or both): motion there may exceed what the search reaches
+        (:func:`reach`).
     found_share : float
         The share of the coarsest level's pixels with an estimate: the features and patch found little
         to match where it is small.
@@ -448,10 +449,12 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int = DELTA, patch: int
     sigma : float, optional
         Gaussian width of the feature maps in pixels; default :data:`DEFAULT_SIGMA` per feature.
     speed_penalty : float
-        A prior for slow motion, >= 0, for the squared-difference features: every vote gains
+        A prior for slow motion, in [0, 1], for the squared-difference features: every vote gains
         ``speed_penalty * C0 * (vx**2 + vy**2)`` (C0 below). It settles the aperture problem, where a
         patch of one orientation has votes along it that differ only by rounding, on the slowest
-        candidate; 0 is the paper's plain minimum. Binary votes are exact integers and take none.
+        candidate; 0 is the paper's plain minimum. At most 1, so that ``speed_penalty * C0`` stays within
+        float32's range wherever C0 does (at 1 a one-pixel motion already costs the patch's whole
+        contrast, half the vote of an unrelated patch of like contrast). Binary votes are exact integers and take none.
     method : {"running", "table"}
         "running" (default, the paper's simplification): displacements are visited a row (fixed vy) at
         a time, out from vy = 0, and each pixel keeps its best so far, so at most three rows of votes
@@ -527,7 +530,9 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int = DELTA, patch: int
     subpixel = check_bool(subpixel, "subpixel")
     boundary_score = check_real(BOUNDARY_SCORE[features] if boundary_score is None else boundary_score,
                                 "boundary_score")
-    speed_penalty = check_real(speed_penalty, "speed_penalty", minimum=0)
+    # The device computes speed_penalty * C0 in float32: above 1 it overflows where C0 is large (an infinity
+    # times a zero |v|**2 is NaN, so no displacement won and the flow came out at (-delta - 1, -delta)).
+    speed_penalty = check_real(speed_penalty, "speed_penalty", minimum=0, maximum=1)
     predicted = None if prediction is None else _prediction(prediction, d0.shape, machine)
     n = 2 * delta + 1
     # The table and its box sum's two passes; running: three rows of votes kept, one being summed.
@@ -558,7 +563,8 @@ def flow(frame0: ArrayLike, frame1: ArrayLike, *, delta: int = DELTA, patch: int
     # Read back once the finer levels are enqueued, so the queue does not drain between levels.
     if coarsest_read is not None:
         coarsest_read.wait()
-    limit_share = np.count_nonzero(np.abs(coarsest) >= delta - 1e-3) / coarsest.size * 2
+    # Pixels, not components: one with both components at the limit counts once.
+    limit_share = float(np.any(np.abs(coarsest) >= delta - 1e-3, axis=-1).mean())
     found_share = float(np.isfinite(coarsest).all(axis=-1).mean())
     if host:
         return FlowResult(flow_out.get(), score.get(), boundaries.get().view(np.bool_), limit_share, found_share)

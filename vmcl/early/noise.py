@@ -118,8 +118,10 @@ def noise_thresholds(magnitude: ArrayLike, *, noise: Noise = "global", machine: 
     ----------
     magnitude : ndarray or pyopencl.array.Array, float32 (H, W)
         Gradient magnitudes, e.g. the second output of ``canny(..., return_gradient=True)``; >= 0 and
-        finite (NaN or infinity in a host array is refused; in a device array, which is not checked
-        because that would make the host wait, it gives thresholds of infinity or 0).
+        finite, and small enough for the high threshold (about 5 times the median) to be a float32: at most
+        ``float32 max * sqrt(2 ln 2) / CANNY_HIGH`` (6.68e37). A host array outside these is refused; a
+        device array is not checked, because that would make the host wait (NaN or infinity there gives
+        thresholds of infinity or 0).
     noise : {"global", "local"}
         "global": one histogram of the whole field. "local": one per tile of :data:`TILE` x :data:`TILE`
         pixels (tiles at the right and bottom hold what is left); :func:`vmcl.early.edges.canny`
@@ -144,8 +146,17 @@ def noise_thresholds(magnitude: ArrayLike, *, noise: Noise = "global", machine: 
     machine = machine_for(machine)
     if noise not in ("global", "local"):
         raise InputValueError(f"noise must be 'global' or 'local', got {noise!r}")
-    if isinstance(magnitude, np.ndarray) and magnitude.dtype.kind == "f" and not np.isfinite(magnitude).all():
-        raise InputValueError("magnitude must not contain NaN or infinite values")
+    if isinstance(magnitude, np.ndarray) and magnitude.dtype.kind == "f" and magnitude.size:
+        if not np.isfinite(magnitude).all():
+            raise InputValueError("magnitude must not contain NaN or infinite values")
+        # Thresholds are a quantile times up to CANNY_HIGH / sqrt(2 ln 2), in float32: beyond this they overflow.
+        largest = float(np.finfo(np.float32).max) * _MEDIAN_OF_RAYLEIGH / CANNY_HIGH
+        low, high = float(magnitude.min()), float(magnitude.max())
+        if low < 0:
+            raise InputValueError(f"magnitude must be >= 0 (gradient magnitudes), got a minimum of {low:g}")
+        if high > largest:
+            raise InputValueError(f"magnitude must be at most {largest:.3g}, so that Canny's high threshold "
+                                  f"({CANNY_HIGH:g} s) fits float32, got a maximum of {high:g}")
     data, host = field(magnitude, "magnitude", machine, ndims=(2,), dtypes=(np.float32,))
     out, _ = threshold_field(machine, data, noise_rule(CANNY_LOW, CANNY_HIGH), local=noise == "local")
     return result(out.reshape(2) if noise == "global" else out, host)

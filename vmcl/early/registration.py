@@ -38,7 +38,7 @@ from vmcl.cm.core import (
     result,
 )
 from vmcl.cm.core import field as device_field
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.machine import Machine
 
 __all__ = ["TableStore", "WarpTable", "find_dots", "match_dots", "warp"]
@@ -210,8 +210,16 @@ class TableStore:
     tables: list[WarpTable] = field(default_factory=list)
 
     def add(self, table: WarpTable) -> None:
+        """Store ``table``, in order of vergence (which :meth:`table_for` bisects): its source must be an
+        (H, W, 2) array of reals, of the stored tables' shape, and its vergence a finite number not stored
+        yet."""
         if not isinstance(table, WarpTable):
             raise InputTypeError(f"table must be a WarpTable, got {type(table).__name__}")
+        source = check_real_dtype(table.source, "table.source")
+        if source.ndim != 3 or source.shape[2] != 2 or 0 in source.shape:
+            raise InputValueError(f"table.source must be the (x, y) source positions of shape (H, W, 2), got shape "
+                                  f"{source.shape}")
+        check_real(table.vergence, "table.vergence")
         if self.tables and table.source.shape != self.tables[0].source.shape:
             raise InputValueError(f"table shape {table.source.shape} differs from the store's "
                              f"{self.tables[0].source.shape}")
@@ -237,21 +245,37 @@ class TableStore:
         return WarpTable(source=source, vergence=float(vergence), dots=0)
 
     def save(self, path: str | Path) -> None:
-        np.savez_compressed(path, vergence=np.array([t.vergence for t in self.tables]),
-                            dots=np.array([t.dots for t in self.tables]),
-                            source=np.stack([t.source for t in self.tables]))
+        """Write the store to the file ``path`` itself (an .npz archive, whatever the name's suffix: NumPy
+        would add ".npz" to a name without it), which :meth:`load` reads back from the same ``path``."""
+        if not isinstance(path, (str, Path)):
+            raise InputTypeError(f"path must be a str or a pathlib.Path, got {type(path).__name__}")
+        if not self.tables:
+            raise InputValueError("the store holds no tables to save")
+        with open(path, "wb") as file:  # a file object: NumPy writes it under no other name
+            np.savez_compressed(file, vergence=np.array([t.vergence for t in self.tables]),
+                                dots=np.array([t.dots for t in self.tables]),
+                                source=np.stack([t.source for t in self.tables]))
 
     @classmethod
     def load(cls, path: str | Path) -> TableStore:
+        """The store :meth:`save` wrote to the file ``path`` (the same path, no suffix added), its tables
+        checked and ordered as :meth:`add` checks and orders them."""
         if not isinstance(path, (str, Path)):
             raise InputTypeError(f"path must be a str or a pathlib.Path, got {type(path).__name__}")
         try:
             with np.load(path, allow_pickle=False) as data:
-                return cls([WarpTable(source=s, vergence=float(v), dots=int(d))
-                            for s, v, d in zip(data["source"], data["vergence"], data["dots"])])
+                tables = [WarpTable(source=s, vergence=float(v), dots=int(d))
+                          for s, v, d in zip(data["source"], data["vergence"], data["dots"], strict=True)]
         except (ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile) as error:
             raise InputValueError(f"path {str(path)!r} is not a table store saved by TableStore.save: "
                                   f"{error}") from error
+        store = cls()
+        for table in tables:
+            try:
+                store.add(table)
+            except InputError as error:
+                raise InputValueError(f"path {str(path)!r} holds a table the store refuses: {error}") from error
+        return store
 
 
 @overload
@@ -265,7 +289,8 @@ def warp(image: ArrayLike, table: WarpTable | ArrayLike, *, machine: Machine | N
 
     Parameters
     ----------
-    image : (H, W) or (H, W, C) array or device array, float32 (other real dtypes are converted)
+    image : (H, W) or (H, W, C) array or device array, float32 (other real dtypes are converted; values
+        beyond float32's range are refused)
     table : WarpTable, or its (H, W, 2) float32 source positions
         The table's (H, W) must equal the image's.
 
@@ -278,7 +303,13 @@ def warp(image: ArrayLike, table: WarpTable | ArrayLike, *, machine: Machine | N
     if isinstance(image, np.ndarray) and image.dtype != np.float32:
         if not np.issubdtype(image.dtype, np.number) or np.iscomplexobj(image):
             raise InputTypeError(f"image must be real-valued, got {image.dtype}")
-        image = image.astype(np.float32)
+        with np.errstate(over="ignore"):  # refused just below
+            converted = image.astype(np.float32)
+        # NaN and infinities carry over as they are (a float32 image may hold them too); a finite value
+        # beyond float32's range would become an infinity the image never held.
+        if (np.isinf(converted) & np.isfinite(image)).any():
+            raise InputValueError("image has values beyond float32's range, in which the warp computes")
+        image = converted
     data, host = device_field(image, "image", machine, ndims=(2, 3), dtypes=(np.float32,))
     positions, _ = device_field(source, "table", machine, ndims=(3,), dtypes=(np.float32,))
     height, width = data.shape[:2]

@@ -52,14 +52,14 @@ from vmcl.early.disparity_range import range_to_search
 from vmcl.early.filters import channel_planes, grey_field
 from vmcl.early.noise import threshold_field
 from vmcl.early.stereo import check_pair
-from vmcl.early.weighted_median import weighted_median
+from vmcl.early.weighted_median import check_sigma_colour, weighted_median
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
 __all__ = ["AD_CAP", "AD_COLOUR", "AD_WEIGHT", "CENSUS_BITS", "CENSUS_THRESHOLD", "CPU_SCANLINES_PER_ITEM", "DIRECTIONS",
            "EDGE_GAIN", "JUMP", "MATCH_EXPOSURE", "OCCLUSION_GEOMETRY", "P1", "P2", "PATHS", "POOR_MATCH",
            "REFINE_COLOUR", "REFINE_RADIUS", "REFINE_STRIDE", "TONE_BINS", "TONE_STEPS", "SemiGlobalMatch",
-           "check_paths", "match_semiglobal"]
+           "check_paths", "match_semiglobal", "max_p2"]
 
 CENSUS_SIZE = (9, 7)  # width, height of the census window: 62 neighbours in a 64-bit code
 CENSUS_BITS = CENSUS_SIZE[0] * CENSUS_SIZE[1] - 1
@@ -218,7 +218,8 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         In [0, 255]: the price of a change of one disparity between neighbours (slanted surfaces), in
         census bits (a code has :data:`CENSUS_BITS`).
     p2 : float
-        >= p1: the price of a larger jump (a depth discontinuity), where the brightness does not change.
+        >= p1 and at most :func:`max_p2` of ``paths`` (7936 for 8 paths, 16128 for 4): the price of a larger
+        jump (a depth discontinuity), where the brightness does not change.
     edge_gain : float
         >= 0: the jump's price between two pixels is ``max(p1, p2 / (1 + edge_gain * s))``, ``s`` their
         brightness difference in units of the noise's standard deviation (as for ``census_threshold``):
@@ -265,8 +266,9 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
 
     Notes
     -----
-    The summed messages are 16-bit: 8 paths of at most ``CENSUS_BITS + p2`` each, so ``p2`` is at most
-    8000. The costs and sums take 3 bytes per pixel and disparity of device memory.
+    The summed messages are 16-bit: ``paths`` messages of at most ``255 + p2`` each (a cost is a byte), so
+    ``p2`` is at most ``65535 // paths - 255`` (:func:`max_p2`). The costs and sums take 3 bytes per pixel
+    and disparity of device memory.
 
     Raises
     ------
@@ -283,20 +285,26 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     ad_colour = check_bool(ad_colour, "ad_colour")
     match_exposure = check_bool(match_exposure, "match_exposure")
     p1 = check_int(p1, "p1", minimum=0, maximum=255)
-    p2 = check_real(p2, "p2", minimum=p1, maximum=8000)
+    paths = check_paths(paths)  # before p2, whose largest value it sets
+    p2 = check_real(p2, "p2", minimum=p1)
+    if p2 > max_p2(paths):
+        raise InputValueError(f"p2 must be at most {max_p2(paths)} with {paths} paths, got {p2}: the {paths} "
+                              f"messages, up to 255 + p2 each, are summed in 16 bits (65535 at most)")
     edge_gain = check_real(edge_gain, "edge_gain", minimum=0)
-    paths = check_paths(paths)
     subpixel = check_bool(subpixel, "subpixel")
     tolerance = check_int(tolerance, "tolerance", minimum=0, maximum=2**31 - 1)
     median = check_bool(median, "median")
     occlusion_geometry = check_bool(occlusion_geometry, "occlusion_geometry")
     refine = check_bool(refine, "refine")
-    if refine and isinstance(left, np.ndarray) and left.dtype == np.float32:
-        # The weighted median's colour scale is in [0, 1] levels (the census is in units of the noise).
-        check_unit_image(left, "left")
+    for name, image in (("left", left), ("right", right)):
+        if refine and isinstance(image, np.ndarray) and image.dtype == np.float32:
+            # The weighted median's colour scale is in [0, 1] levels (the census is in units of the noise);
+            # the pair shares one scale, so the right view is held to it too.
+            check_unit_image(image, name)
     height, width = left.shape[:2]
     refine_radius = check_int(refine_radius, "refine_radius", minimum=1, maximum=2**31 - 1)
-    refine_colour = check_real(refine_colour, "refine_colour", above=0)
+    # Checked here as the weighted median would, so that the error names this call's argument.
+    refine_colour = check_sigma_colour(refine_colour, "refine_colour")
     refine_stride = check_int(refine_stride, "refine_stride", minimum=1, maximum=2**31 - 1)
     d_min, d_max = range_to_search(left, right, d_min, d_max, machine=machine)
     depth = d_max - d_min + 1
@@ -322,6 +330,13 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
     return SemiGlobalMatch(disparity.get() if host else disparity, filled.get() if host else filled,
                            mask_result(occluded, host), mask_result(mismatched, host), mask_result(out_of_range, host),
                            d_min=d_min, d_max=d_max)
+
+
+def max_p2(paths: int) -> int:
+    """The largest ``p2`` :func:`match_semiglobal` takes with ``paths`` scanline directions: each of the
+    ``paths`` messages summed in 16 bits is at most 255 + p2 (a cost is a byte), so ``paths * (255 + p2)``
+    must not pass 65535 (7936 for 8 paths, 16128 for 4)."""
+    return 65535 // check_paths(paths) - 255
 
 
 def check_paths(paths: Any, name: str = "paths") -> int:

@@ -80,7 +80,8 @@ class StereoMatch:
     score : float32 (H, W), the winner's normalised score (before suppression); NaN off features.
     features : bool (H, W), the left features that took part (edges, zero crossings, or every pixel).
     out_of_range : bool (H, W), features whose best score stays below ``min_score``: the paper's sign of
-        an area outside [d_min, d_max].
+        an area outside [d_min, d_max] (intensity matches, which take no ``min_score``: pixels no disparity
+        could score).
     discontinuity : bool (H, W), features whose vote histogram over d has a second peak of at least
         ``bimodal`` times the first, 2 or more planes away: a depth discontinuity in the patch.
     d_min, d_max : int, the range searched (the one given, or the one found from the images).
@@ -99,8 +100,9 @@ class StereoMatch:
 
 def check_pair(left: Any, right: Any, machine: Machine) -> None:
     """Refuse, naming ``left`` or ``right``, anything but a rectified pair of images the matcher takes: NumPy
-    or device arrays of this machine (not one of each), grey (H, W) or RGB (H, W, 3), of one shape, not
-    empty, uint8, uint16, float32 or (on the host) another float, finite and within float32's range."""
+    or device arrays of this machine (not one of each; device arrays whole and C-contiguous, not views),
+    grey (H, W) or RGB (H, W, 3), of one shape, not empty, uint8, uint16, float32 or (on the host) another
+    float, finite and within float32's range."""
     for name, image in (("left", left), ("right", right)):
         if not isinstance(image, (np.ndarray, cl_array.Array)):
             raise InputTypeError(f"{name} must be a NumPy array or a pyopencl.array.Array, got {type(image).__name__}")
@@ -114,6 +116,10 @@ def check_pair(left: Any, right: Any, machine: Machine) -> None:
                                  f"host), got {image.dtype}")
         if image.ndim not in (2, 3) or (image.ndim == 3 and image.shape[2] != 3):
             raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {image.shape}")
+        if isinstance(image, cl_array.Array):
+            # Kernels take a device array's whole buffer: a view (strided, or with an offset) would be read as
+            # something else, and refused deep inside by a helper's own name for it.
+            device_field(image, name, machine, ndims=(2, 3), dtypes=tuple(IMAGE_TYPES))
     check_same_kind("left", isinstance(left, np.ndarray), "right", isinstance(right, np.ndarray))
     check_same_scale("left", left.dtype, "right", right.dtype)
     if left.shape != right.shape:
@@ -181,7 +187,10 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max:
         vertical) are not features, since along a scanline they cannot say where they match (the
         aperture problem). In [0, 90); 0 keeps every edge.
     min_score : float
-        Features whose best normalised score is below it are flagged out of range and left unmatched.
+        Edges and zero crossings whose best normalised score is below it are flagged out of range and left
+        unmatched. Intensity matches ignore it and keep every score: a dense match's correlation is its
+        weight downstream (:func:`vmcl.mrf.score_confidence`), not a cut-off, and the range estimate
+        (:mod:`vmcl.early.disparity_range`) applies its own.
     bimodal, dip, min_votes : float
         Two peaks of the vote histogram over d count as separate when the votes between them fall to
         ``dip`` times the lower peak or less; when the lower of the strongest such pair reaches
@@ -463,6 +472,8 @@ def _match_maps(machine: Machine, maps: dict, features: Features, *, min_angle, 
     machine.launch(machine.kernel("stereo", "suppress", **defines), (-(-width // _SPAN), height), common[0],
                    selection[0],
                    selection[1], selection[2], *outputs, *dims, np.int32(d_min), np.int32(d_max),
+                   # Intensity matches keep every score (the docstring's min_score): their correlation weighs
+                   # them downstream (vmcl.mrf.score_confidence, above its own floor), so no cut is made here.
                    np.float32(min_score if features != "intensity" else -np.inf), np.float32(bimodal),
                    np.float32(min_votes))
     disparity, score, out_of_range, discontinuity = outputs

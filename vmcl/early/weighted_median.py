@@ -18,6 +18,7 @@ weighted mean of the voters in the median's bin, so that a value keeps its fract
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pyopencl.array as cl_array
@@ -41,7 +42,7 @@ from vmcl.early.filters import channel_planes
 from vmcl.errors import InputValueError
 from vmcl.machine import Machine
 
-__all__ = ["MAX_BINS", "MAX_KEPT_VOTERS", "weighted_median"]
+__all__ = ["MAX_BINS", "MAX_KEPT_VOTERS", "check_sigma_colour", "weighted_median"]
 
 MAX_BINS = 1024
 """The most bins a pixel's histogram holds; a wider span of values gets bins of several units."""
@@ -54,6 +55,16 @@ where a bin's cumulative weight lies within rounding of half the total."""
 _BIN_STEP = 64  # the private histograms are sized in steps of this many bins (one program per size)
 _HALF_RANGE = float(np.finfo(np.float32).max) / 4
 _LEVELS = {np.dtype(np.uint8): 255.0, np.dtype(np.uint16): 65535.0, np.dtype(np.float32): 1.0}
+
+
+def check_sigma_colour(sigma_colour: Any, name: str = "sigma_colour") -> float:
+    """``sigma_colour`` as :func:`weighted_median` takes it, a float > 0 whose inverse fits float32 (the
+    kernels multiply by it); the errors name ``name`` (a caller's own name for the weighted median's scale)."""
+    sigma_colour = check_real(sigma_colour, name, above=0)
+    if 1 / sigma_colour > float(np.finfo(np.float32).max):  # compared in float64: no overflowing cast
+        raise InputValueError(f"{name} must be at least {1 / float(np.finfo(np.float32).max):.1e} (its "
+                              f"inverse must fit float32), got {sigma_colour}")
+    return sigma_colour
 
 
 def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: float, where: ArrayLike | None = None,
@@ -134,10 +145,7 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
     if low > high:
         raise InputValueError(f"low must not exceed high, got low {low} and high {high}")
     radius = check_int(radius, "radius", minimum=1, maximum=2**31 - 1)
-    sigma_colour = check_real(sigma_colour, "sigma_colour", above=0)
-    if 1 / sigma_colour > float(np.finfo(np.float32).max):  # compared in float64: no overflowing cast
-        raise InputValueError(f"sigma_colour must be at least {1 / float(np.finfo(np.float32).max):.1e} (its "
-                              f"inverse must fit float32), got {sigma_colour}")
+    sigma_colour = check_sigma_colour(sigma_colour)
     sigma_space = check_real(sigma_space, "sigma_space", above=0)
     stride = check_int(stride, "stride", minimum=1, maximum=2**31 - 1)
     bin_width = check_real(bin_width, "bin_width", above=0, maximum=_HALF_RANGE)
