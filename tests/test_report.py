@@ -13,7 +13,7 @@ from vmcl.errors import InputError
 from vmcl.labels import Cue
 from vmcl.pictures import disparity_image, flow_image
 from vmcl.pipeline import Config, VisionMachine
-from vmcl.report import CUE_COLOURS, LABEL_COLOURS, labels_image, support_image, write_report
+from vmcl.report import CUE_COLOURS, LABEL_COLOURS, REGISTERED_CUES, labels_image, support_image, write_report
 
 
 class _Images(HTMLParser):
@@ -79,9 +79,13 @@ def test_support_picture_colours_each_cue_over_the_faded_image():
     support[1, 1] = Cue.COLOUR
     support[2, 2] = Cue.STEREO | Cue.COLOUR
     support[3, 3] = Cue.BRIGHTNESS
+    # A cue registered at run time holds a bit above BRIGHTNESS: its lines were drawn as brightness edges.
+    support[4, 4] = Cue.BRIGHTNESS | 32
+    support[5, 5] = Cue.TEXTURE | 64
     picture = support_image(image, support)
     assert tuple(picture[1, 1]) == CUE_COLOURS[Cue.COLOUR]
     assert tuple(picture[2, 2]) == CUE_COLOURS[Cue.STEREO]
+    assert tuple(picture[4, 4]) == REGISTERED_CUES and tuple(picture[5, 5]) == CUE_COLOURS[Cue.TEXTURE]
     assert picture[0, 0, 0] == picture[0, 0, 1] > 100  # faded, grey
 
 

@@ -34,6 +34,7 @@ __all__ = [
     "CUE_COLOURS",
     "JUNCTION_COLOURS",
     "LABEL_COLOURS",
+    "REGISTERED_CUES",
     "encode_png",
     "grouping_image",
     "images",
@@ -64,6 +65,9 @@ _CURVE_DARK, _CURVE_LIGHT = np.array([150, 150, 150]), np.array([20, 20, 20])
 
 BRIGHTNESS_ONLY = (200, 200, 200)
 """RGB of brightness edges no cue supports (drawn under the cues)."""
+
+REGISTERED_CUES = (200, 40, 200)
+"""RGB of the lines of cues registered at run time (:func:`vmcl.cues.register`), where no built-in cue's are."""
 
 def _grey(image: np.ndarray) -> np.ndarray:
     """float (H, W) in [0, 1] from a grey or RGB float image (BT.709 luma, as vmcl.early.filters)."""
@@ -135,6 +139,9 @@ def support_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
         here = ((support & cue) != 0) & ~painted
         picture[here] = colour
         painted |= here
+    # The bits above BRIGHTNESS are the cues registered at run time (vmcl.cues.register): one colour for
+    # them all, rather than drawing their lines as brightness edges or not at all.
+    picture[((support & ~0x1F) != 0) & ~painted] = REGISTERED_CUES
     return picture
 
 
@@ -262,8 +269,8 @@ _CAPTIONS = {
     "cartoon": "The cartoon, the discontinuities by label: depth red, orientation purple, albedo blue, "
                "shadow dark grey, specular yellow, texture green",
     "strength": "The cartoon's soft map: the strength of a boundary, from white (none) to black (certain)",
-    "support": "The cues' support: discontinuities by cue (red stereo, orange motion, blue colour, green texture; "
-               "grey: brightness edges no cue supports) over the faded image",
+    "support": "The cues' support: discontinuities by cue (red stereo, orange motion, blue colour, green texture, "
+               "magenta any cue registered at run time; grey: brightness edges no cue supports) over the faded image",
     "input": "The left image",
     "edges": "Canny's brightness edges (those the MRFs are coupled to)",
     "grouping": "Grouping: the edge curves, darker the more salient; junctions by type (T red, with a tick "
