@@ -141,7 +141,7 @@ def support_image(image: np.ndarray, support: np.ndarray) -> np.ndarray:
         painted |= here
     # The bits above BRIGHTNESS are the cues registered at run time (vmcl.cues.register): one colour for
     # them all, rather than drawing their lines as brightness edges or not at all.
-    picture[((support & ~0x1F) != 0) & ~painted] = REGISTERED_CUES
+    picture[((support.astype(np.int64) & ~0x1F) != 0) & ~painted] = REGISTERED_CUES
     return picture
 
 
