@@ -312,7 +312,7 @@ def test_a_stretched_or_slanted_box_is_fitted_by_the_transform_asked(datasets_ro
     truth = cv2.perspectiveTransform(corners[None], matrix)[0]
     found = recognize(scene, Library([learn("box", [box])]), transform=transform)
     assert [d.name for d in found] == ["box"]
-    assert np.abs(found[0].locate(corners) - truth).max() < 1.5
+    assert np.abs(found[0].locate(corners) - truth).max() < 2.0
 
 
 def test_a_photographs_model_does_not_crowd_out_the_box(datasets_root):

@@ -311,10 +311,10 @@ def _meeting_point(arms: list[tuple[float, np.ndarray]], near: np.ndarray, reach
 
 
 def _branch_junctions(curves: Curves, labels: np.ndarray, found: _Found) -> tuple[np.ndarray, np.ndarray]:
-    """Junctions at clusters of branch pixels; returns which curve ends touch one that makes a junction
-    ((C, 2) bool), and the pixels a free end's search passes over ((H, W) bool): the fragments (curves
-    shorter than an arm) and the clusters that make no junction (a spur and a stub where Canny broke a
-    T's stem): a stem that met them was taken as joined to a junction that was not there."""
+    """Junctions at clusters of branch pixels; returns which curve ends touch one ((C, 2) bool), and the
+    pixels a free end's search passes over ((H, W) bool): the fragments (curves shorter than an arm) and
+    the clusters that make no junction (a spur and a stub where Canny broke an edge): a stem that met
+    them was taken as joined to a junction that was not there."""
     from scipy import ndimage
 
     height, width = labels.shape
@@ -341,9 +341,12 @@ def _branch_junctions(curves: Curves, labels: np.ndarray, found: _Found) -> tupl
         if len(arms) >= 2:
             point = _meeting_point([arm for arm, _ in arms], centre, _REACH)
             found.add(point, [arm[0] for arm, _ in arms], [k for _, k in arms])
-            touching[curve, end] |= cluster_of == c
         else:
             passable |= clusters == c
+    # An end at any cluster is not searched from: one at a cluster with no junction may be a T's stem that
+    # Canny broke into a spur and a stub, but searching from those on a textured photograph (OpenCV's
+    # box_in_scene) added 50 corners to its 827, and recognition lost the box among them.
+    touching[curve, end] = cluster_of > 0
     return touching, passable
 
 

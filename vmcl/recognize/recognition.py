@@ -44,6 +44,7 @@ _CORNER_REACH = 3.0  # px: a view's corner and an image corner match this close,
 _CORNER_TURN = np.radians(30)  # their bisectors this close in direction
 _CORNER_OPENING = np.radians(25)  # and their openings this close
 _CORNER_ROUNDS = 3  # fits of a start from matched corners, each with the matches of the one before
+_CORNER_STARTS = 16  # the candidates (best scored as refined so far) given a start from matched corners
 _ANGLE = np.radians(25)  # the most a supporting edge's tangent may differ from the model's
 _MARGIN = 10  # px around a pose over which the chance of support is measured
 _SCREEN_POINTS = 96  # boundary points per candidate in the coarse test
@@ -313,6 +314,7 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
         # the refinement's reach (a box stretched by 15% was 23 px off at its corners): the view's corners
         # matched to the image's near the pose give a start of the asked kind, kept where it scores higher.
         flat = np.flatnonzero(~solid)
+        flat = flat[np.argsort(-score[flat], kind="stable")[:_CORNER_STARTS]]  # the likeliest poses: a fit costs
         starts = [_from_corners(poses[row], views[found.views[row]][2], features, tree, transform, tolerance)
                   for row in flat]
         again = np.array([row for row, start in zip(flat, starts) if start is not None], int)
@@ -417,20 +419,24 @@ def _from_corners(pose: np.ndarray, view: View, features: Features, tree: cKDTre
     # the matches of the closest affine fit.
     kinds = ["affine"] * _CORNER_ROUNDS + (["homography"] if transform == "homography" else [])
     for kind in kinds:
-        source, target = [], []
         at = carry(current, view.corners)
         turned = np.stack([np.cos(view.bisector), np.sin(view.bisector)], 1) @ current[:2, :2].T
         bisector = np.arctan2(turned[:, 1], turned[:, 0])
-        for k, near in enumerate(tree.query_ball_point(at, reach)):
-            near = np.asarray(near, int)
-            alike = near[(np.abs(np.angle(np.exp(1j * (bisector[k] - features.bisector[near])))) <= _CORNER_TURN)
-                         & (np.abs(view.opening[k] - features.opening[near]) <= _CORNER_OPENING)]
-            if len(alike):
-                source.append(view.corners[k])
-                target.append(features.corners[alike[np.argmin(np.hypot(*(features.corners[alike] - at[k]).T))]])
-        if len(source) < (4 if kind == "homography" else 3):
+        # Every (view corner, image corner) pair within reach, flattened; of those alike in bisector and
+        # opening, each view corner keeps its nearest.
+        lists = tree.query_ball_point(at, reach)
+        which = np.repeat(np.arange(len(at)), [len(near) for near in lists])
+        near = np.fromiter((k for found in lists for k in found), np.int64, count=len(which))
+        alike = ((np.abs(np.angle(np.exp(1j * (bisector[which] - features.bisector[near])))) <= _CORNER_TURN)
+                 & (np.abs(view.opening[which] - features.opening[near]) <= _CORNER_OPENING))
+        which, near = which[alike], near[alike]
+        order = np.lexsort((np.hypot(*(features.corners[near] - at[which]).T), which))
+        which, near = which[order], near[order]
+        first = np.flatnonzero(np.concatenate([[True], which[1:] != which[:-1]])) if len(which) else which
+        if len(first) < (4 if kind == "homography" else 3):
             break
-        src, dst = np.asarray(source, np.float32), np.asarray(target, np.float32)
+        src = view.corners[which[first]].astype(np.float32)
+        dst = features.corners[near[first]].astype(np.float32)
         if kind == "homography":
             matrix, _ = cv2.findHomography(src, dst, cv2.RANSAC, 2 * tolerance)
         else:
@@ -438,9 +444,34 @@ def _from_corners(pose: np.ndarray, view: View, features: Features, tree: cKDTre
             matrix = None if affine is None else np.vstack([affine, [0.0, 0.0, 1.0]])
         if matrix is None or not np.all(np.isfinite(matrix)) or abs(matrix[2, 2]) < 1e-12:
             break
+        if not _near_pose(matrix / matrix[2, 2], pose, view):
+            break
         current = fitted = matrix / matrix[2, 2]
         reach = max(reach / 2, 2 * tolerance)
     return fitted
+
+
+def _near_pose(fit: np.ndarray, pose: np.ndarray, view: View) -> bool:
+    """Whether a fit from matched corners is a correction of ``pose``, not a new one: the view's bounding
+    box stays a convex quadrilateral of between half and twice the pose's area, no corner of it moved by
+    more than half the view's radius at the pose's scale (a homography fitted to a few chance matches
+    folded the box across the image and was then kept as a second detection)."""
+    low, high = view.points.min(axis=0), view.points.max(axis=0)
+    box = np.array([[low[0], low[1]], [high[0], low[1]], [high[0], high[1]], [low[0], high[1]]])
+    moved, there = carry(fit, box), carry(pose, box)
+    if not (np.all(np.isfinite(moved)) and np.all(np.isfinite(there))):
+        return False
+    edges = np.roll(moved, -1, axis=0) - moved
+    turns = edges[:, 0] * np.roll(edges, -1, axis=0)[:, 1] - edges[:, 1] * np.roll(edges, -1, axis=0)[:, 0]
+    if not (np.all(turns > 0) or np.all(turns < 0)):
+        return False
+
+    def area(quad: np.ndarray) -> float:
+        return 0.5 * abs(float(np.dot(quad[:, 0], np.roll(quad[:, 1], -1)) - np.dot(np.roll(quad[:, 0], -1), quad[:, 1])))
+
+    ratio = area(moved) / max(area(there), 1e-9)
+    shift = float(np.hypot(*(moved - there).T).max())
+    return 0.5 <= ratio <= 2.0 and shift <= view.radius * _scale(pose)
 
 
 def _corner_matches(pose: np.ndarray, view: View, features: Features, tree: cKDTree) -> tuple[int, int, float]:
