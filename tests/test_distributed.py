@@ -392,6 +392,20 @@ def test_a_stereo_pair_without_ground_truth_is_one_pair_item(tmp_path):
     np.testing.assert_array_equal(left, read_image(folders[1] / "im0.png"))
     assert stereo_views(folders[1]) == (folders[1] / "im0.png", folders[1] / "im1.png")
     assert stereo_views(tmp_path) is None
+    # A folder of numbered images that happens to hold im0.png and im1.png is images, each an item; and a
+    # folder's own images stay items beside a pair in a subfolder.
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    for name in ("im0.png", "im1.png", "im2.png", "im3.png", "a.png"):
+        cv2.imwrite(str(photos / name), np.zeros((64, 64), np.uint8))
+    assert [(i.name, i.kind) for i in batch_items([photos])] == [
+        ("a", "image"), ("im0", "image"), ("im1", "image"), ("im2", "image"), ("im3", "image")]
+    for name in ("im2.png", "im3.png"):
+        (photos / name).unlink()
+    (photos / "sub").mkdir()
+    for name in ("im0.png", "im1.png"):
+        (photos / name).rename(photos / "sub" / name)
+    assert [(i.name, i.kind) for i in batch_items([photos])] == [("sub", "pair"), ("a", "image")]
 
 
 # ------------------------------------------------------------------------------------------------ vmcl batch --zarr

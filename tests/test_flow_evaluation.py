@@ -90,6 +90,11 @@ def test_only_the_frames_run_is_read_and_every_file_has_the_frames_size(tmp_path
         datasets.read_flow_folder(folder)
     for path in folder.glob("img*.png"):
         path.unlink()
+    # A longer run of other numbered PNGs (masks) beside the frames: the run that holds the flow's frame
+    # and its next is the sequence.
+    for number in range(1, 8):
+        cv2.imwrite(str(folder / f"mask{number:02d}.png"), picture)
+    assert datasets.read_flow_folder(folder).frames[0].name.startswith("frame")
     cv2.imwrite(str(folder / "frame13.png"), cv2.resize(picture, None, fx=2, fy=2))
     with pytest.raises(ValueError, match="frame13.png is"):
         datasets.read_flow_folder(folder)

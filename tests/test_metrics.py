@@ -370,5 +370,5 @@ def test_segmentation_junctions_where_three_segments_meet():
     two = np.zeros((12, 20), np.int32)
     two[6:] = 1
     two[:6, 5:8] = 2
-    for merge, count in ((0.0, 2), (1.0, 2), (2.0, 2), (3.0, 1)):
+    for merge, count in ((0.0, 2), (1.0, 2), (2.0, 2), (3.0, 1), (1e9, 1)):  # 1e9: no pairs listed
         assert len(segmentation_junctions(two, merge=merge)) == count, merge

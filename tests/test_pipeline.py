@@ -70,6 +70,8 @@ def test_a_config_holds_its_own_values_and_refuses_what_a_run_would():
     assert direct.mrf.stereo == {"beta": 99.0}
     assert hash(Config()) == hash(Config()) and {Config(), Config()} == {Config()}
     assert hash(direct) == hash(Config.from_dict({"mrf": {"stereo": {"beta": 99.0}}}))
+    # Equal Configs hash alike whatever their values' types (a text of them told 3 from 3.0).
+    assert hash(Config.from_dict({"mrf": {"stereo": {"beta": 3}}})) == hash(Config.from_dict({"mrf": {"stereo": {"beta": 3.0}}}))
     with pytest.raises(ValueError, match="grouping.iterations must be <= 10000"):
         Config.from_dict({"grouping": {"iterations": 10**9}})
     with pytest.raises(TypeError, match="progress must be a callable"):
@@ -515,6 +517,9 @@ def test_a_left_image_of_one_brightness_gives_no_depth_or_motion():
     blank = np.full((64, 64), 128, np.uint8)
     found = VisionMachine().run(blank, blank, blank)
     assert found.disparity is None and found.flow is None
+    red = np.zeros((64, 64, 3), np.uint8)  # one colour everywhere, though its channels differ
+    red[..., 0] = 255
+    assert VisionMachine().run(red, red).disparity is None
     assert "stereo: the left image has one brightness everywhere, so there is nothing to match: no data" in found.notes
 
 

@@ -1044,10 +1044,13 @@ def _frame_runs(folder: Path) -> dict[str, list[Path]]:
     return {name: sorted(paths, key=lambda p: (_number(p), p.name)) for name, paths in sorted(runs.items())}
 
 
-def _flow_frames(folder: Path) -> list[Path]:
-    """The frames of a flow folder: its longest run of numbered PNGs of one name; none where two runs are
-    equally long (which is the sequence cannot be told)."""
-    runs = sorted(_frame_runs(folder).values(), key=len, reverse=True)
+def _flow_frames(folder: Path, frame: int | None = None) -> list[Path]:
+    """The frames of a flow folder: of its runs of numbered PNGs of one name, those that hold ``frame`` and
+    the one after it (any run when ``frame`` is None), the longest; none where two are equally long (which
+    is the sequence cannot be told)."""
+    runs = [run for run in _frame_runs(folder).values()
+            if frame is None or {frame, frame + 1} <= {_number(p) for p in run}]
+    runs.sort(key=len, reverse=True)
     if len(runs) > 1 and len(runs[1]) == len(runs[0]):
         return []
     return runs[0] if runs else []
@@ -1085,7 +1088,7 @@ def read_flow_folder(folder) -> FlowSequence:
     if truth is None:
         raise InputValueError(f"folder {folder} holds no ground-truth flow (flowNN.flo, gt/*.flo or Sintel's flow/)")
     flo, invalid, occlusions = truth
-    frames = _flow_frames(folder)
+    frames = _flow_frames(folder, _number(flo)) or _flow_frames(folder)
     if len(frames) < 2:
         runs = _frame_runs(folder)
         if len(runs) > 1:

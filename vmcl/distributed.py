@@ -490,9 +490,9 @@ def batch_items(inputs: Sequence[str | os.PathLike[str]], *, frames: bool = Fals
     ----------
     inputs : sequence of str or Path
         Image files (each an item), folders holding Middlebury-layout scenes (each scene an item, a
-        stereo pair; :func:`vmcl.datasets.find_stereo_folders`, and folders holding only a layout's two
-        views, such as a data set's test pairs or a user's own im0.png and im1.png:
-        :func:`vmcl.datasets.stereo_views`), or folders of image files (each image an item).
+        stereo pair; :func:`vmcl.datasets.find_stereo_folders`), folders whose only images are a layout's
+        two views (a pair without ground truth, such as a data set's test pair or a user's own im0.png and
+        im1.png: :func:`vmcl.datasets.stereo_views`), or folders of image files (each image an item).
     frames : bool
         The images, in the order given (a folder's sorted by name), are the frames of one sequence: item t
         is frame t with frame t + 1 (motion), named after frame t.
@@ -526,17 +526,19 @@ def batch_items(inputs: Sequence[str | os.PathLike[str]], *, frames: bool = Fals
         if path.is_file():
             images.append(path)
         elif path.is_dir():
-            # Scenes with their ground truth, and pairs without it (which were taken for two images).
+            # Scenes with their ground truth; and folders whose images are a layout's two views and nothing
+            # else, pairs without it (a data set's test pair, a user's im0.png and im1.png), which were taken
+            # for two images.
             scenes: list[tuple[Path, str, tuple[Path, ...]]] = [] if frames else sorted(
                 [(scene, "scene", (scene,)) for scene in find_stereo_folders(path)]
                 + [(pair, "pair", views) for pair, _ in stereo_folders_lacking(path)
-                   if (views := stereo_views(pair)) is not None])
-            if scenes:
-                raw += [(path.name if scene == path else scene.relative_to(path).as_posix(), kind, paths)
-                        for scene, kind, paths in scenes]
-                continue
+                   if (views := stereo_views(pair)) is not None and set(_images_in(pair)) == set(views)])
+            raw += [(path.name if scene == path else scene.relative_to(path).as_posix(), kind, paths)
+                    for scene, kind, paths in scenes]
+            if any(kind == "scene" or scene == path for scene, kind, _ in scenes):
+                continue  # a data set's folder, or a pair itself: its other images are not items
             found = _images_in(path)
-            if not found:
+            if not found and not scenes:
                 raise InputValueError(f"inputs: the folder {entry} holds no Middlebury-layout scene and no image "
                                       f"file ({', '.join(IMAGE_SUFFIXES)})")
             images += found

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import copy
 import dataclasses
-import json
 import math
 import os
 import sys
@@ -552,9 +551,10 @@ class MrfConfig:
             object.__setattr__(self, cue, copy.deepcopy(dict(getattr(self, cue))))
 
     def __hash__(self) -> int:
-        # The overrides are mappings, which do not hash; equal ones have equal sorted texts.
-        overrides = json.dumps({cue: getattr(self, cue) for cue in CUES}, sort_keys=True, default=repr)
-        return hash((self.method, self.seed, self.schedule, self.cross_validate, overrides))
+        # The overrides are mappings, which do not hash: their keys do, and equal mappings have equal keys
+        # (their values may be equal and of different types, 3 and 3.0, which a text of them tells apart).
+        keys = tuple(tuple(sorted(map(str, getattr(self, cue)))) for cue in CUES)
+        return hash((self.method, self.seed, self.schedule, self.cross_validate, keys))
 
     def settings(self, cue: str, default: Settings | None = None, *, warm: bool = False) -> Settings:
         """The MRF settings of ``cue``: ``default`` (the cue's own, :attr:`vmcl.cues.CueModule.settings`),
@@ -1157,7 +1157,7 @@ class _Run:
         measured = {}
         # A left image of one brightness holds nothing to match: the matchers' winners there are their scans'
         # first disparity or motion, confirmed by equally blind checks, which the MRF took as sure data.
-        blank = float(np.ptp(image)) == 0
+        blank = bool(np.all(np.ptp(image.reshape(-1, image.shape[2] if image.ndim == 3 else 1), axis=0) == 0))
         for cue in active:
             with self.stage(cue.name):
                 try:

@@ -216,7 +216,8 @@ def find_junctions(curves: Curves, *, gap: float = 6.0, min_length: int = 5, cor
     curves : Curves
     gap : float
         The longest gap, in pixels, a curve's end may be followed across to the curve it meets (a broken
-        T-junction); >= 0 (0: only curves that touch).
+        T-junction), beyond the fragments (curves shorter than 3 pixels) the end touches, which continue
+        it; >= 0 (0: only curves that touch).
     min_length : int
         Curves shorter than this (in pixels) are not arms: their ends' tangents are too short to
         measure, and Canny leaves such stubs at many junctions; >= 2.
@@ -332,6 +333,7 @@ def _branch_junctions(curves: Curves, labels: np.ndarray, found: _Found) -> tupl
     members = clusters[curves.branches[:, 1], curves.branches[:, 0]]
     weight = np.bincount(members, minlength=count + 1)[1:]
     centres = np.stack([np.bincount(members, curves.branches[:, k], count + 1)[1:] / weight for k in (0, 1)], axis=1)
+    idle: list[int] = []  # the clusters that make no junction
     for c in range(1, count + 1):
         here = np.flatnonzero((cluster_of == c) & (curves.sizes[curve] >= _MIN_ARM))
         centre = centres[c - 1]
@@ -342,7 +344,8 @@ def _branch_junctions(curves: Curves, labels: np.ndarray, found: _Found) -> tupl
             point = _meeting_point([arm for arm, _ in arms], centre, _REACH)
             found.add(point, [arm[0] for arm, _ in arms], [k for _, k in arms])
         else:
-            passable |= clusters == c
+            idle.append(c)
+    passable |= np.isin(clusters, idle)  # once: a comparison of the whole map per cluster cost O(clusters H W)
     # An end at any cluster is not searched from: one at a cluster with no junction may be a T's stem that
     # Canny broke into a spur and a stub, but searching from those on a textured photograph (OpenCV's
     # box_in_scene) added 50 corners to its 827, and recognition lost the box among them.

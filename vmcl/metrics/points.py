@@ -8,6 +8,8 @@ method is not asked for can be set aside (``ignore``), and detections near them 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.sparse import coo_matrix
@@ -136,6 +138,8 @@ def segmentation_junctions(segmentation, *, merge: float = 2.0) -> np.ndarray:
     # with 8-connected labelling merged marks farther apart, and merged neighbours at merge = 0.
     rows, cols = np.nonzero(marks)
     points = np.stack([cols, rows], axis=1).astype(float)
+    if merge >= math.hypot(*labels.shape):  # every two marks are within it: one junction (no pairs listed)
+        return points.mean(axis=0, keepdims=True) + 0.5
     pairs = cKDTree(points).query_pairs(merge, output_type="ndarray")
     links = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)
     count, group = connected_components(links, directed=False)

@@ -96,7 +96,7 @@ def corner_pairs(corners: np.ndarray, *, neighbours: int = 8, groups: np.ndarray
 
 def _nearest_pairs(corners: np.ndarray, members: np.ndarray, k: int) -> np.ndarray:
     """(i, j) rows: each of ``members`` with its ``k`` nearest other members at least _MIN_SEPARATION away
-    (the nearer first, the lower index among equals)."""
+    (among members equally near at the k-th place, the k-d tree decides which are taken)."""
     k = min(k, len(members) - 1)
     if k < 1:
         return np.zeros((0, 2), np.int64)

@@ -454,7 +454,7 @@ def _from_corners(pose: np.ndarray, view: View, features: Features, tree: cKDTre
 def _near_pose(fit: np.ndarray, pose: np.ndarray, view: View) -> bool:
     """Whether a fit from matched corners is a correction of ``pose``, not a new one: the view's bounding
     box stays a convex quadrilateral of between half and twice the pose's area, no corner of it moved by
-    more than half the view's radius at the pose's scale (a homography fitted to a few chance matches
+    more than the view's radius at the pose's scale (a homography fitted to a few chance matches
     folded the box across the image and was then kept as a second detection)."""
     low, high = view.points.min(axis=0), view.points.max(axis=0)
     box = np.array([[low[0], low[1]], [high[0], low[1]], [high[0], high[1]], [low[0], high[1]]])
