@@ -147,6 +147,11 @@ def test_load_checks_and_orders_the_tables_as_add_does(tmp_path):
         assert "store.npz" in str(raised.value)
     with pytest.raises(ValueError, match="holds no tables"):
         TableStore().save(path)
+    # The constructor's tables go through add too: they were taken unchecked and unordered.
+    made = TableStore([_table(3.0), _table(1.0)])
+    assert [t.vergence for t in made.tables] == [1.0, 3.0]
+    with pytest.raises(ValueError, match="already stored"):
+        TableStore([_table(1.0), _table(1.0)])
 
 
 def test_match_dots_is_mutual_and_bounded():

@@ -517,6 +517,8 @@ def test_a_left_image_of_one_brightness_gives_no_depth_or_motion():
     blank = np.full((64, 64), 128, np.uint8)
     found = VisionMachine().run(blank, blank, blank)
     assert found.disparity is None and found.flow is None
+    # The raw fields hold no blind values either.
+    assert np.isnan(found.raw_flow).all() and not found.half_occluded.any()
     red = np.zeros((64, 64, 3), np.uint8)  # one colour everywhere, though its channels differ
     red[..., 0] = 255
     assert VisionMachine().run(red, red).disparity is None

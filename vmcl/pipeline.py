@@ -1169,8 +1169,12 @@ class _Run:
                     raise type(error)(f"{cue.name} ({where}): {error}") from None
                 if blank and cue.needs & {"right", "next"}:
                     blind = measured[cue.name]
+                    # Its raw fields too: a float field without values, a mask without pixels.
+                    fields = {name: self.m.full(array.shape, array.dtype, np.nan if array.dtype.kind == "f" else 0)
+                              for name, array in blind.fields.items()}
                     measured[cue.name] = dataclasses.replace(
-                        blind, data=self.m.full(blind.data.shape, np.float32, np.nan), confidence=None)
+                        blind, data=self.m.full(blind.data.shape, np.float32, np.nan), confidence=None,
+                        fields=fields)
                     self.notes.append(f"{cue.name}: the left image has one brightness everywhere, so there is "
                                       "nothing to match: no data")
             self.notes.extend(measured[cue.name].notes)

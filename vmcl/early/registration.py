@@ -209,6 +209,14 @@ class TableStore:
 
     tables: list[WarpTable] = field(default_factory=list)
 
+    def __post_init__(self) -> None:
+        # The tables given pass add's checks and order, as load's do: table_for bisects them by vergence.
+        if isinstance(self.tables, (str, bytes)) or not isinstance(self.tables, (list, tuple)):
+            raise InputTypeError(f"tables must be a list of WarpTable, got {type(self.tables).__name__}")
+        given, self.tables = list(self.tables), []
+        for table in given:
+            self.add(table)
+
     def add(self, table: WarpTable) -> None:
         """Store ``table``, in order of vergence (which :meth:`table_for` bisects): its source must be an
         (H, W, 2) array of reals, of the stored tables' shape, and its vergence a finite number not stored
