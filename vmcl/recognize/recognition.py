@@ -419,24 +419,11 @@ def _from_corners(pose: np.ndarray, view: View, features: Features, tree: cKDTre
     # the matches of the closest affine fit.
     kinds = ["affine"] * _CORNER_ROUNDS + (["homography"] if transform == "homography" else [])
     for kind in kinds:
-        at = carry(current, view.corners)
-        turned = np.stack([np.cos(view.bisector), np.sin(view.bisector)], 1) @ current[:2, :2].T
-        bisector = np.arctan2(turned[:, 1], turned[:, 0])
-        # Every (view corner, image corner) pair within reach, flattened; of those alike in bisector and
-        # opening, each view corner keeps its nearest.
-        lists = tree.query_ball_point(at, reach)
-        which = np.repeat(np.arange(len(at)), [len(near) for near in lists])
-        near = np.fromiter((k for found in lists for k in found), np.int64, count=len(which))
-        alike = ((np.abs(np.angle(np.exp(1j * (bisector[which] - features.bisector[near])))) <= _CORNER_TURN)
-                 & (np.abs(view.opening[which] - features.opening[near]) <= _CORNER_OPENING))
-        which, near = which[alike], near[alike]
-        order = np.lexsort((np.hypot(*(features.corners[near] - at[which]).T), which))
-        which, near = which[order], near[order]
-        first = np.flatnonzero(np.concatenate([[True], which[1:] != which[:-1]])) if len(which) else which
-        if len(first) < (4 if kind == "homography" else 3):
+        which, near = _alike_corners(current, view, features, tree, reach)
+        if len(which) < (4 if kind == "homography" else 3):
             break
-        src = view.corners[which[first]].astype(np.float32)
-        dst = features.corners[near[first]].astype(np.float32)
+        src = view.corners[which].astype(np.float32)
+        dst = features.corners[near].astype(np.float32)
         if kind == "homography":
             matrix, _ = cv2.findHomography(src, dst, cv2.RANSAC, 2 * tolerance)
         else:
@@ -474,6 +461,26 @@ def _near_pose(fit: np.ndarray, pose: np.ndarray, view: View) -> bool:
     return 0.5 <= ratio <= 2.0 and shift <= view.radius * _scale(pose)
 
 
+def _alike_corners(pose: np.ndarray, view: View, features: Features, tree: cKDTree,
+                   reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """The view's corners that an image corner matches at ``pose`` (within ``reach`` px, bisectors and
+    openings alike), and for each the nearest such image corner: (view rows, image rows)."""
+    at = carry(pose, view.corners)
+    turned = np.stack([np.cos(view.bisector), np.sin(view.bisector)], 1) @ pose[:2, :2].T
+    bisector = np.arctan2(turned[:, 1], turned[:, 0])
+    # Every (view corner, image corner) pair within reach, flattened; of the alike, each view corner's nearest.
+    lists = tree.query_ball_point(at, reach)
+    which = np.repeat(np.arange(len(at)), [len(near) for near in lists])
+    near = np.fromiter((k for found in lists for k in found), np.int64, count=len(which))
+    alike = ((np.abs(np.angle(np.exp(1j * (bisector[which] - features.bisector[near])))) <= _CORNER_TURN)
+             & (np.abs(view.opening[which] - features.opening[near]) <= _CORNER_OPENING))
+    which, near = which[alike], near[alike]
+    order = np.lexsort((np.hypot(*(features.corners[near] - at[which]).T), which))
+    which, near = which[order], near[order]
+    first = np.flatnonzero(np.concatenate([[True], which[1:] != which[:-1]])) if len(which) else which
+    return which[first], near[first]
+
+
 def _corner_matches(pose: np.ndarray, view: View, features: Features, tree: cKDTree) -> tuple[int, int, float]:
     """How many of the view's corners (of those that land in the image) an image corner matches, how many
     land there, and the chance that one is matched by accident (the image's corners around the pose,
@@ -485,14 +492,8 @@ def _corner_matches(pose: np.ndarray, view: View, features: Features, tree: cKDT
     inside = (at[:, 0] >= 0) & (at[:, 1] >= 0) & (at[:, 0] <= w - 1) & (at[:, 1] <= h - 1)
     if not inside.any() or not len(features.corners):
         return 0, int(inside.sum()), 0.0
-    turned = np.stack([np.cos(view.bisector), np.sin(view.bisector)], 1) @ pose[:2, :2].T
-    bisector = np.arctan2(turned[:, 1], turned[:, 0])
-    matched = 0
-    for k in np.flatnonzero(inside):
-        near = tree.query_ball_point(at[k], _CORNER_REACH)
-        if near and np.any((np.abs(np.angle(np.exp(1j * (bisector[k] - features.bisector[near])))) <= _CORNER_TURN)
-                           & (np.abs(view.opening[k] - features.opening[near]) <= _CORNER_OPENING)):
-            matched += 1
+    which, _ = _alike_corners(pose, view, features, tree, _CORNER_REACH)
+    matched = int(np.count_nonzero(inside[which]))
     low = at[inside].min(axis=0) - _MARGIN
     high = at[inside].max(axis=0) + _MARGIN
     around = np.all((features.corners >= low) & (features.corners <= high), axis=1).sum()
