@@ -1071,9 +1071,8 @@ def range_note(array: np.ndarray, name: str) -> str | None:
     factor = scale / (2**bits - 1)
     return (f"{name}: its brightest pixel is {top} of {array.dtype.newbyteorder('=')}'s {scale:.0f} ({100 * top / scale:.1f}% of "
             f"the range), and the machine reads images on their type's full scale, so it sees a very dark image "
-            f"and its contrast-based stages find little; if the data has {bits} bit{'s' if bits > 1 else ''}, scale it "
-            f"to the full "
-            f"range first (x {factor:.6g})")
+            f"and its contrast-based stages find little; if the data has {bits} bit{'s' if bits > 1 else ''}, "
+            f"scale it to the full range first (x {factor:.6g})")
 
 
 def _checked_measurement(cue: CueModule, found: Any) -> Measurement:

@@ -216,8 +216,8 @@ def find_junctions(curves: Curves, *, gap: float = 6.0, min_length: int = 5, cor
     curves : Curves
     gap : float
         The longest gap, in pixels, a curve's end may be followed across to the curve it meets (a broken
-        T-junction), beyond the fragments (curves shorter than 3 pixels) the end touches, which continue
-        it; >= 0 (0: only curves that touch).
+        T-junction), passing over fragments (curves shorter than 3 pixels); >= 0 (0: only curves that
+        touch).
     min_length : int
         Curves shorter than this (in pixels) are not arms: their ends' tangents are too short to
         measure, and Canny leaves such stubs at many junctions; >= 2.
@@ -357,30 +357,16 @@ def _gap_junctions(curves: Curves, labels: np.ndarray, passable: np.ndarray, lon
                    touching: np.ndarray, corners: dict[int, np.ndarray], gap: float, min_length: int,
                    found: _Found) -> None:
     """T-junctions where a free curve end, followed along its tangent, meets another curve within ``gap``
-    (passing over the ``passable`` pixels; the fragments an end touches lengthen its reach by theirs: they
-    continue the stem)."""
-    from scipy import ndimage
-
-    height, width = labels.shape
+    (passing over the ``passable`` pixels)."""
     position = np.asarray(to_host(curves.position))
     curve, end, pixel = _ends(curves)
     free = long_enough[curve] & ~touching[curve, end]
-    pieces, count = ndimage.label(passable, structure=np.ones((3, 3)))
-    # Each piece's pixels (x, y), by piece: what an end that touches it reaches through it.
-    py, px = np.nonzero(pieces)
-    order = np.argsort(pieces[py, px], kind="stable")
-    bounds = np.searchsorted(pieces[py, px][order], np.arange(1, count + 2))
-    piece_pixels = np.stack([px[order], py[order]], axis=1)
     searched = np.where(passable, -1, labels)
     for c, e, start in zip(curve[free], end[free], pixel[free]):
         tangent = curves.tangents[c, e]
         if not np.all(np.isfinite(tangent)):
             continue
-        around = np.clip(start + _NEIGHBOURS, 0, [width - 1, height - 1])
-        touched = np.setdiff1d(pieces[around[:, 1], around[:, 0]], [0])
-        reached = [piece_pixels[bounds[k - 1]:bounds[k]] for k in touched]
-        extent = max((float(np.hypot(*(p - start).T).max()) for p in reached), default=0.0)
-        hit = _first_hit(searched, start, tangent, gap + extent, _CONE, c)
+        hit = _first_hit(searched, start, tangent, gap, _CONE, c)
         if hit is None:
             continue
         bar, point, distance = hit
