@@ -1,26 +1,18 @@
 /* indexing.cl: geometric hashing's vote (vmcl/recognize/indexing.py).
  *
- * vote: one work-item per ordered pair of image corners (a, b). Its invariant key (computed on the host) names
- * a bucket of the library's table; each entry there is a model view's corner pair (A, B) with the same
- * key. The similarity that takes A to a and B to b is z = (b - a) / (B - A) as a complex number, with
- * x' = z (x - A) + a; the entry votes for (view, rotation, log scale, where the view's centre lands) in
- * the 16 bins nearest its pose, in a hashed accumulator. Each view hashes into its own region of the
- * accumulator (a power of two sized by the host to the view's hypotheses), so a model with many features
- * neither floods another's bins with collisions nor shares its counts. vote_counts histograms each
- * region's counts. In the emit pass each entry whose best bin among its 16 has at least its view's cutoff
- * (the host's choice) writes its hypothesis (the similarity) to a list, once, naming that bin.
+ * vote: one work-item per hit, a pair of an ordered pair of image corners (a, b) and an entry of the library's
+ * table under the pair's invariant key (the host looks the keys up and lists the hits, so that every
+ * work-item does the same work: one per image pair looped over buckets of very different lengths). The
+ * entry is a model view's corner pair (A, B). The similarity that takes A to a and B to b is
+ * z = (b - a) / (B - A) as a complex number, with x' = z (x - A) + a; the entry votes for (view, rotation,
+ * log scale, where the view's centre lands) in the 16 bins nearest its pose, in a hashed accumulator.
+ * Each view hashes into its own region of the accumulator (a power of two sized by the host to the view's
+ * hypotheses), so a model with many features neither floods another's bins with collisions nor shares its
+ * counts. vote_counts histograms each region's counts. In the emit pass each hit whose best bin among its
+ * 16 has at least its view's cutoff (the host's choice) writes its hypothesis (the similarity) to a list,
+ * once, naming that bin.
  */
 #include "vmcl.h"
-
-inline uint bin_hash(int view, int r, int s, int x, int y)
-{
-    uint h = (uint)view * 73856093u;
-    h ^= (uint)r * 19349663u + 0x9e3779b9u + (h << 6) + (h >> 2);
-    h ^= (uint)s * 83492791u + 0x9e3779b9u + (h << 6) + (h >> 2);
-    h ^= (uint)x * 2654435761u + 0x9e3779b9u + (h << 6) + (h >> 2);
-    h ^= (uint)y * 40503u + 0x9e3779b9u + (h << 6) + (h >> 2);
-    return h;
-}
 
 /* The similarity taking the model pair onto the image pair, and its pose coordinates in bins
  * (continuous): rotation, log scale, and where the view's centre lands. Returns 0 where the scale is out
@@ -44,82 +36,102 @@ inline int pose_coordinates(float4 image, float4 model, float4 frame, float rot_
     return 1;
 }
 
-/* Bin `combo` (0..15) of the 16 around a pose: per coordinate the bin it falls in, or (bit set) the
- * neighbouring bin on its nearer side, so that poses near a bin's edge still meet. Rotation wraps. The
- * address lies in the view's region: its start plus the hash under the region's mask. */
-inline uint combo_bin(float4 coords, int combo, int view, int rot_bins, uint start, uint mask)
+/* The 16 bins around a pose, as addresses in the view's region (its start plus the hash under the region's
+ * mask): bin `combo` (0..15, a lane of the vector) takes, per coordinate d, the bin it falls in or (bit d of
+ * combo set) the neighbouring bin on its nearer side, so that poses near a bin's edge still meet. Rotation
+ * wraps. The 16 hashes are mixed side by side, one vector operation for all. */
+inline uint16 combo_bins(float4 coords, int view, int rot_bins, uint start, uint mask)
 {
+    const uint16 combo = (uint16)(0u, 1u, 2u, 3u, 4u, 5u, 6u, 7u, 8u, 9u, 10u, 11u, 12u, 13u, 14u, 15u);
+    const uint primes[4] = {19349663u, 83492791u, 2654435761u, 40503u};
     float c[4] = {coords.x, coords.y, coords.z, coords.w};
-    int b[4];
+    uint16 h = (uint16)((uint)view * 73856093u);
     for (int d = 0; d < 4; d++) {
         float f = floor(c[d]);
-        int home = (int)f;
-        b[d] = ((combo >> d) & 1) ? (c[d] - f >= 0.5f ? home + 1 : home - 1) : home;
+        int home = (int)f, other = c[d] - f >= 0.5f ? home + 1 : home - 1;
+        if (d == 0) {
+            home = ((home % rot_bins) + rot_bins) % rot_bins;
+            other = ((other % rot_bins) + rot_bins) % rot_bins;
+        }
+        uint16 b = select((uint16)((uint)home), (uint16)((uint)other), ((combo >> (uint)d) & 1u) != 0u);
+        h ^= b * primes[d] + 0x9e3779b9u + (h << 6u) + (h >> 2u);
     }
-    b[0] = ((b[0] % rot_bins) + rot_bins) % rot_bins;
-    return start + (bin_hash(view, b[0], b[1], b[2], b[3]) & mask);
+    return (uint16)start + (h & (uint16)mask);
 }
 
-__kernel void vote(__global const int *pair_key, __global const float4 *pair_points, __global const int *offsets,
-                   __global const int *entry_view, __global const float4 *entry_points, __global const float4 *frames,
-                   __global int *votes, __global const uint2 *regions, __global const int *cutoffs,
-                   __global int *count, __global float4 *found, __global int2 *found_info, int pairs,
-                   float rot_bin, int rot_bins, float scale_bin, float pos_bin, float low, float high, int capacity,
-                   int emit)
+/* The first pass: each hit's 16 votes, and its bins and similarity kept for the emit pass (a bin of
+ * NO_BIN where the pose's scale is out of range: the hit does not vote). */
+#define NO_BIN 0xFFFFFFFFu
+
+__kernel void vote(__global const int2 *hits, __global const float4 *pair_points, __global const int *entry_view,
+                   __global const float4 *entry_points, __global const float4 *frames,
+                   __global const uint2 *regions, __global int *votes, __global uint *hit_bins,
+                   __global float4 *hit_similarity, int hit_count, float rot_bin, int rot_bins, float scale_bin,
+                   float pos_bin, float low, float high)
 {
-    int p = get_global_id(0);
-    if (p >= pairs) return;
-    int key = pair_key[p];
-    if (key < 0) return;
-    float4 image = pair_points[p];
-    for (int e = offsets[key]; e < offsets[key + 1]; e++) {
-        int view = entry_view[e];
-        float4 similarity, coords;
-        uint start = regions[view].x, mask = regions[view].y;
-        if (!pose_coordinates(image, entry_points[e], frames[view], rot_bin, scale_bin, pos_bin, low, high,
-                              &similarity, &coords))
-            continue;
-        if (!emit) {
-            for (int combo = 0; combo < 16; combo++)
-                atomic_inc(&votes[combo_bin(coords, combo, view, rot_bins, start, mask)]);
-            continue;
+    int h = get_global_id(0);
+    if (h >= hit_count) return;
+    int2 hit = hits[h];  /* (image pair, table entry) */
+    int view = entry_view[hit.y];
+    float4 similarity, coords;
+    if (!pose_coordinates(pair_points[hit.x], entry_points[hit.y], frames[view], rot_bin, scale_bin, pos_bin, low,
+                          high, &similarity, &coords)) {
+        hit_bins[16 * (size_t)h] = NO_BIN;
+        return;
+    }
+    uint16 bins = combo_bins(coords, view, rot_bins, regions[view].x, regions[view].y);
+    vstore16(bins, h, hit_bins);
+    hit_similarity[h] = similarity;
+    uint address[16];
+    vstore16(bins, 0, address);
+    for (int combo = 0; combo < 16; combo++)
+        atomic_inc(&votes[address[combo]]);
+}
+
+/* The emit pass: each voting hit whose best bin among its 16 (the most votes, the lowest address among
+ * equals) has at least its view's cutoff (the host's choice) writes its similarity to the list, once,
+ * naming that bin. */
+__kernel void vote_emit(__global const int2 *hits, __global const int *entry_view, __global const int *votes,
+                        __global const uint *hit_bins, __global const float4 *hit_similarity,
+                        __global const int *cutoffs, __global int *count, __global float4 *found,
+                        __global int2 *found_info, int hit_count, int capacity)
+{
+    int h = get_global_id(0);
+    if (h >= hit_count || hit_bins[16 * (size_t)h] == NO_BIN) return;
+    int view = entry_view[hits[h].y];
+    uint address[16];
+    vstore16(vload16(h, hit_bins), 0, address);
+    int best = -1, most = cutoffs[view] - 1;
+    for (int combo = 0; combo < 16; combo++) {
+        int b = (int)address[combo];
+        int v = votes[b];
+        if (v > most || (v == most && best >= 0 && b < best)) {
+            most = v;
+            best = b;
         }
-        /* Emitted once, to the bin with the most votes among its 16 (the lowest address among equals), if
-         * that bin has at least its view's cutoff. */
-        int best = -1, most = cutoffs[view] - 1;
-        for (int combo = 0; combo < 16; combo++) {
-            int h = (int)combo_bin(coords, combo, view, rot_bins, start, mask);
-            int v = votes[h];
-            if (v > most || (v == most && best >= 0 && h < best)) {
-                most = v;
-                best = h;
-            }
-        }
-        if (best >= 0) {
-            int at = atomic_inc(count);
-            if (at < capacity) {
-                found[at] = similarity;
-                found_info[at] = (int2)(best, view);
-            }
+    }
+    if (best >= 0) {
+        int at = atomic_inc(count);
+        if (at < capacity) {
+            found[at] = hit_similarity[h];
+            found_info[at] = (int2)(best, view);
         }
     }
 }
 
-/* One work-item per accumulator slot: the histogram of each region's bins by their votes (counts[region *
- * bins + v], v = 1 .. bins - 1; the last holds bins - 1 votes and more). Empty slots are not counted.
- * `starts` holds each region's first slot (the regions of the views the lookups met, in order) and,
- * last, the accumulator's size. */
-__kernel void vote_counts(__global const int *votes, __global const uint *starts, int views,
-                          __global int *counts, int bins)
+/* One work-item per chunk of a region (the host's list: first slot, slots, the start and length of the
+ * region's row of `counts`): the histogram of the region's bins by their votes (row[v], v = 1 .. length - 1;
+ * the last holds length - 1 votes and more). Empty slots are not counted. A chunk reads its slots in
+ * order and knows its row, where one work-item per slot searched the regions for its own. */
+__kernel void vote_counts(__global const int *votes, __global const int4 *chunks, int chunk_count,
+                          __global int *counts)
 {
-    uint slot = get_global_id(0);
-    if (slot >= starts[views]) return;
-    int v = votes[slot];
-    if (v <= 0) return;
-    int low = 0, high = views - 1;  /* the region holding the slot: the last start at or before it */
-    while (low < high) {
-        int middle = (low + high + 1) / 2;
-        if (starts[middle] <= slot) low = middle; else high = middle - 1;
+    int c = get_global_id(0);
+    if (c >= chunk_count) return;
+    int4 chunk = chunks[c];
+    __global int *row = counts + chunk.z;
+    for (int slot = chunk.x; slot < chunk.x + chunk.y; slot++) {
+        int v = votes[slot];
+        if (v > 0) atomic_inc(&row[min(v, chunk.w - 1)]);
     }
-    atomic_inc(&counts[low * bins + min(v, bins - 1)]);
 }

@@ -195,15 +195,18 @@ def test_a_curved_object_with_a_single_corner_in_view_is_recognised_by_its_arc()
     assert len(anchors_of(features)[0]) == len(features.corners) + len(features.arcs)
 
 
-def test_the_vote_finds_the_pose_and_agrees_with_numpy(ell_model):
+@pytest.mark.parametrize("angle, tx, ty", [(50.0, 40.0, 20.0), (160.0, -30.0, 250.0), (-110.0, 260.0, -20.0)])
+def test_the_vote_finds_the_pose_and_agrees_with_numpy(ell_model, angle, tx, ty):
+    # Turned past 90 degrees and moved to negative coordinates, the pooled similarities' medians are taken
+    # over negative values too.
     model, _, _ = ell_model
     other, _ = object_view("arrow", shape=(160, 160))
     library = Library([learn("arrow", [other]), model])
     index = Index.build(library)
     view = model.views[0]
-    m = _similarity(1.3, 50.0, 40.0, 20.0)
+    m = _similarity(1.3, angle, tx, ty)
     corners = view.corners @ m[:, :2].T + m[:, 2]
-    bisector = view.bisector + math.radians(50.0)
+    bisector = view.bisector + math.radians(angle)
     pairs = corner_pairs(corners)
     device = vote(index, corners, bisector, view.opening, pairs)
     host = vote_numpy(index, corners, bisector, view.opening, pairs)
@@ -264,6 +267,21 @@ def _busy_model() -> Model:
         cv2.fillConvexPoly(picture, (rng.random((3, 2)) * 30 + rng.random(2) * [800, 640]).astype(np.int32),
                            float(rng.random()))
     return learn("busy", [picture])
+
+
+def test_the_vote_agrees_with_numpy_where_a_view_fills_many_chunks_of_the_accumulator():
+    # The busy model's region of the accumulator spans many of the runs the counting pass reads one per
+    # work-item; the device's histograms, and so its cutoffs and candidates, are NumPy's.
+    library, _ = example_library()
+    index = Index.build(Library([*library.models, _busy_model()]))
+    features = image_features(recognition_scene(seed=0).image)
+    corners, bisector, opening, radius = anchors_of(features)
+    args = (index, corners, bisector, opening, corner_pairs(corners))
+    device, host = vote(*args, radius=radius), vote_numpy(*args, radius=radius)
+    busy = len(index.views) - 1
+    assert (host.views == busy).sum() >= 10 and len(set(host.views)) > 5
+    assert np.array_equal(device.votes[:50], host.votes[:50]) and np.array_equal(device.views[:50], host.views[:50])
+    assert abs(len(device) - len(host)) <= 0.02 * len(host)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

@@ -11,8 +11,9 @@ library's table maps every key to the model views' feature pairs that have it (b
 with each pair entered in the two nearest bins of every coordinate so a key near a bin's edge still meets
 it). For an image, every ordered pair of nearby features looks its key up; each entry it meets fixes
 the similarity taking the model pair onto the image pair, and votes for (view, rotation, scale, where
-the view's centre lands), binned, on the device (kernels/indexing.cl, one work-item per image pair,
-votes counted in a hashed accumulator with a region per view, sized to the view's hypotheses). The bins
+the view's centre lands), binned, on the device (kernels/indexing.cl, one work-item per hit: an image
+pair and an entry it met; votes counted in a hashed accumulator with a region per view, sized to the
+view's hypotheses, and each hit's bins kept for the pass that lists the kept bins' hypotheses). The bins
 with the most votes of each view are the candidates, the budget shared between the views; their votes'
 similarities are pooled into each candidate's pose. Candidate generation looks at the entries that share
 a key with the image's pairs only, so its work grows with those entries (about as the table does).
@@ -60,6 +61,7 @@ _SLOTS_PER_HYPOTHESIS = 64  # a view's accumulator region: each hypothesis votes
 _MIN_REGION_BITS, _MAX_REGION_BITS = 6, 24
 _MAX_SLOTS = 1 << 27  # the whole accumulator's most slots (512 MB): past it the largest regions shrink
 _COUNT_BINS = 1024  # the vote counts the cutoffs are read from; the last holds 1023 votes and more
+_CHUNK_SLOTS = 4096  # the accumulator slots one work-item of the counting pass reads
 _MIN_SEPARATION = 4.0  # pixels: closer corners are one junction's, with no direction between them
 
 
@@ -366,14 +368,15 @@ def _regions(index: Index, entries: np.ndarray, most_slots: int) -> tuple[np.nda
     return starts, np.maximum(sizes - 1, 0).astype(np.uint32), hypotheses
 
 
-def _trimmed(histograms: np.ndarray, live: np.ndarray, views: int, min_votes: int) -> np.ndarray:
-    """Every view's histogram (rows of views no lookup met are zero), cut after the highest vote count any
-    bin has (and past ``min_votes``), so that the cutoffs' arithmetic spans what is there: a column of
-    zeros stays last, and a last column that is not cut holds the bins with that many votes and more."""
-    filled = np.flatnonzero(histograms.any(axis=0))
-    columns = min(histograms.shape[1], max(int(filled[-1]) if len(filled) else 0, min_votes) + 2)
+def _trimmed(view: np.ndarray, votes: np.ndarray, bins: np.ndarray, views: int, min_votes: int) -> np.ndarray:
+    """Every view's histogram of its bins by their votes, from its filled entries (each a view, a vote count
+    (the last, _COUNT_BINS - 1, holding that many votes and more) and the view's bins with it; a view no
+    lookup met has none), cut after the highest vote count any bin has (and past ``min_votes``), so that
+    the cutoffs' arithmetic spans what is there: a column of zeros stays last, and a last column that is
+    not cut holds the bins with that many votes and more."""
+    columns = min(_COUNT_BINS, max(int(votes.max(initial=0)), min_votes) + 2)
     counts = np.zeros((views, columns), np.int64)
-    counts[live] = histograms[:, :columns]
+    counts[view, votes] = bins
     return counts
 
 
@@ -423,6 +426,27 @@ def _within_shares(found: Candidates, shares: np.ndarray) -> Candidates:
     return Candidates(found.views[keep], found.similarity[keep], found.votes[keep])
 
 
+def _chunks(starts: np.ndarray, live: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """The live regions cut into runs of at most _CHUNK_SLOTS slots, one per work-item of the counting
+    pass: (first slot, slots, the region's histogram row's start and length), int32 (C, 4)."""
+    first, sizes = starts[live].astype(np.int64), (starts[live + 1] - starts[live]).astype(np.int64)
+    pieces = -(-sizes // _CHUNK_SLOTS)
+    row = np.repeat(np.arange(len(live)), pieces)
+    within = np.arange(int(pieces.sum())) - np.repeat(np.cumsum(pieces) - pieces, pieces)
+    begin = first[row] + within * _CHUNK_SLOTS
+    length = np.minimum(_CHUNK_SLOTS, first[row] + sizes[row] - begin)
+    return np.stack([begin, length, rows[row], np.diff(rows)[row]], axis=1).astype(np.int32)
+
+
+def _filled(histograms: np.ndarray, rows: np.ndarray, live: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The filled entries of the device's histogram rows (row i ``histograms[rows[i]:rows[i + 1]]``, the
+    view ``live[i]``'s) as :func:`_trimmed` takes them. A row shorter than _COUNT_BINS reaches past the most
+    votes its view's slots can hold, so its last entry holds exactly that many."""
+    filled = np.flatnonzero(histograms)
+    row = np.searchsorted(rows, filled, side="right") - 1
+    return live[row], filled - rows[row], histograms[filled].astype(np.int64)
+
+
 def _capacity(counts: np.ndarray, cutoffs: np.ndarray, hypotheses: np.ndarray) -> int:
     """The most hypotheses the emit pass can write: each writes once, to a kept bin of its own view, so
     no more than a view's kept bins' votes (all its hypotheses where its bins' counts saturate the
@@ -441,21 +465,35 @@ def _pool(found: np.ndarray, info: np.ndarray) -> Candidates:
     """Each (bin, view)'s hypotheses pooled into one candidate: the median similarity, the count as votes."""
     if not len(info):
         return Candidates(np.zeros(0, np.int32), np.zeros((0, 4)), np.zeros(0, np.int32))
-    order = np.lexsort((info[:, 1], info[:, 0]))
-    info, found = info[order], found[order].astype(np.float64)
+    info = np.asarray(info, np.int64)
+    order = np.argsort((info[:, 0] << 32) | info[:, 1], kind="stable")  # by bin, then view (both >= 0)
+    info, found = info[order], np.asarray(found, np.float32)[order]
     starts = np.flatnonzero(np.concatenate([[True], np.any(info[1:] != info[:-1], axis=1)]))
     stops = np.append(starts[1:], len(info))
     views = info[starts, 1].astype(np.int32)
     votes = (stops - starts).astype(np.int32)
-    # Each group's median, column by column: its values sorted within the group, the middle one (or two).
-    group = np.repeat(np.arange(len(starts)), votes)
+    # Each group's median, column by column: its values sorted within the group (one sort of the group's
+    # number above each value's order-keeping bits), the middle one (or two).
+    group = np.repeat(np.arange(len(starts), dtype=np.uint64), votes)
+    ranked = _float32_of(np.sort((group[:, None] << np.uint64(32)) | _ordered_bits(found), axis=0))
     low, high = starts + (votes - 1) // 2, starts + votes // 2
-    similarity = np.empty((len(starts), 4))
-    for column in range(4):
-        ranked = found[np.lexsort((found[:, column], group)), column]
-        similarity[:, column] = 0.5 * (ranked[low] + ranked[high])
+    similarity = 0.5 * (ranked[low].astype(np.float64) + ranked[high])
     rank = np.lexsort((views, -votes))
     return Candidates(views[rank], similarity[rank], votes[rank])
+
+
+def _ordered_bits(values: np.ndarray) -> np.ndarray:
+    """float32 values as uint64 whose order is the values' (the sign bit flipped for positives, every bit
+    for negatives), in the low 32 bits."""
+    bits = values.view(np.uint32).astype(np.uint64)
+    return np.where(bits >> np.uint64(31), bits ^ np.uint64(0xFFFFFFFF), bits | np.uint64(0x80000000))
+
+
+def _float32_of(ordered: np.ndarray) -> np.ndarray:
+    """The float32 values :func:`_ordered_bits` keeps in the low 32 bits of ``ordered``."""
+    bits = ordered & np.uint64(0xFFFFFFFF)
+    return np.where(bits >> np.uint64(31), bits ^ np.uint64(0x80000000), bits ^ np.uint64(0xFFFFFFFF)).astype(
+        np.uint32).view(np.float32)
 
 
 def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.ndarray, pairs: np.ndarray, *,
@@ -496,42 +534,47 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
         index, corners, bisector, opening, pairs, scales, candidates, min_votes, radius)
     if not len(pairs) or not len(index):
         return _no_candidates()
-    table = _device_table(index, machine)
     host_keys = pair_keys(corners, bisector, opening, pairs, radius=radius)
-    _, entries = _looked_up(index, host_keys)
+    which, entries = _looked_up(index, host_keys)
     if not len(entries):  # no pair's key is in the library's table
         return _no_candidates()
     most_slots = min(_MAX_SLOTS, machine.device.max_mem_alloc_size // 4)
     starts, masks, hypotheses = _regions(index, entries, most_slots)
     live = np.flatnonzero(hypotheses > 0)
-    machine.require_memory("the vote's accumulator", 4 * (int(starts[-1]) + len(live) * _COUNT_BINS),
-                           4 * max(int(starts[-1]), len(live) * _COUNT_BINS))
-    keys = machine.to_device(host_keys)
-    points = machine.to_device(_pair_points(corners, pairs))
-    regions = machine.to_device(np.ascontiguousarray(np.stack([starts[:-1], masks], axis=1)))
+    # Each live view's histogram row: a slot holds at most 16 votes of each of the view's hypotheses.
+    lengths = np.minimum(_COUNT_BINS, 16 * hypotheses[live] + 1)
+    rows = np.concatenate([[0], np.cumsum(lengths)])
+    # The accumulator, the hits' kept bins and similarities (16 + 4 words each), the histograms.
+    words = int(starts[-1]) + 20 * len(entries) + int(rows[-1])
+    machine.require_memory("the vote's accumulator", 4 * words,
+                           4 * max(int(starts[-1]), 16 * len(entries), int(rows[-1])))
+    hits = machine.to_device(np.stack([which, entries], axis=1).astype(np.int32))
     votes = machine.full(int(starts[-1]), np.int32, 0)
-    count = machine.full(1, np.int32, 0)
-    kernel = machine.kernel("indexing", "vote")
-    common = (np.int32(len(pairs)), np.float32(_ROTATION_BIN), np.int32(_ROTATION_BINS), np.float32(_SCALE_BIN),
-              np.float32(_POSITION_BIN), np.float32(low), np.float32(high))
-    # The counting pass reads neither the cutoffs nor the list: any buffers of their types stand in.
-    no_list = machine.empty((1, 4), np.float32), machine.empty((1, 2), np.int32)
-    machine.launch(kernel, (len(pairs),), keys, points, *table, votes, regions, count, count, *no_list,
-                   *common, np.int32(0), np.int32(0))
+    hit_bins = machine.empty(16 * len(entries), np.uint32)
+    hit_similarity = machine.empty((len(entries), 4), np.float32)
+    entry_view, entry_points, frames = _device_table(index, machine)
+    machine.launch(machine.kernel("indexing", "vote"), (len(entries),), hits,
+                   machine.to_device(_pair_points(corners, pairs)), entry_view, entry_points, frames,
+                   machine.to_device(np.ascontiguousarray(np.stack([starts[:-1], masks], axis=1))), votes, hit_bins,
+                   hit_similarity, np.int32(len(entries)), np.float32(_ROTATION_BIN), np.int32(_ROTATION_BINS),
+                   np.float32(_SCALE_BIN), np.float32(_POSITION_BIN), np.float32(low), np.float32(high))
     # The histograms of the views the lookups met, one row each (the others have no slots).
-    histograms = machine.full(len(live) * _COUNT_BINS, np.int32, 0)
-    live_starts = np.append(starts[live], starts[-1]).astype(np.uint32)
-    machine.launch(machine.kernel("indexing", "vote_counts"), (int(starts[-1]),), votes,
-                   machine.to_device(live_starts), np.int32(len(live)), histograms, np.int32(_COUNT_BINS))
-    counts = _trimmed(histograms.get().reshape(len(live), _COUNT_BINS), live, len(hypotheses), min_votes)
+    histograms = machine.full(int(rows[-1]), np.int32, 0)
+    chunks = _chunks(starts, live, rows)
+    machine.launch(machine.kernel("indexing", "vote_counts"), (len(chunks),), votes, machine.to_device(chunks),
+                   np.int32(len(chunks)), histograms)
+    view, filled_votes, bins_with = _filled(histograms.get(), rows, live)
+    counts = _trimmed(view, filled_votes, bins_with, len(hypotheses), min_votes)
     cutoffs, shares = _cutoffs(counts, candidates, min_votes)
     capacity = _capacity(counts, cutoffs, hypotheses)
     device_cutoffs = machine.to_device(cutoffs)
+    count = machine.full(1, np.int32, 0)
     while True:
         found, info = machine.empty((capacity, 4), np.float32), machine.empty((capacity, 2), np.int32)
         machine.fill(count, 0)
-        machine.launch(kernel, (len(pairs),), keys, points, *table, votes, regions, device_cutoffs, count, found,
-                       info, *common, np.int32(capacity), np.int32(1))
+        machine.launch(machine.kernel("indexing", "vote_emit"), (len(entries),), hits, entry_view, votes, hit_bins,
+                       hit_similarity, device_cutoffs, count, found, info, np.int32(len(entries)),
+                       np.int32(capacity))
         n = int(count.get()[0])
         if n <= capacity:
             break
@@ -543,7 +586,7 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
 
 def _device_table(index: Index, machine: Machine) -> tuple[cl_array.Array, ...]:
     def upload() -> tuple[cl_array.Array, ...]:
-        return tuple(machine.to_device(a) for a in (index.offsets, index.entry_view,
+        return tuple(machine.to_device(a) for a in (index.entry_view,
                                                      np.ascontiguousarray(index.entry_points),
                                                      np.ascontiguousarray(index.frames)))
     cache = index.__dict__.setdefault("_device", {})
@@ -612,10 +655,8 @@ def vote_numpy(index: Index, corners: np.ndarray, bisector: np.ndarray, opening:
     votes[addresses] = totals
     # Each filled slot's view: the last region starting at or before it (empty regions share a start).
     region = np.searchsorted(starts[:-1], addresses, side="right") - 1
-    every = np.zeros((len(hypotheses), _COUNT_BINS), np.int64)
-    np.add.at(every, (region, np.minimum(totals, _COUNT_BINS - 1)), 1)
-    live = np.flatnonzero(hypotheses > 0)
-    counts = _trimmed(every[live], live, len(hypotheses), min_votes)
+    filled, bins_with = np.unique(region * _COUNT_BINS + np.minimum(totals, _COUNT_BINS - 1), return_counts=True)
+    counts = _trimmed(filled // _COUNT_BINS, filled % _COUNT_BINS, bins_with, len(hypotheses), min_votes)
     cutoffs, shares = _cutoffs(counts, candidates, min_votes)
     # Each hypothesis's best bin: the most votes, the lowest address among equals.
     order = np.lexsort((bins, -votes[bins]), axis=1) if len(bins) else np.zeros((0, 16), np.int64)
