@@ -59,14 +59,15 @@ inline uint16 combo_bins(float4 coords, int view, int rot_bins, uint start, uint
     return (uint16)start + (h & (uint16)mask);
 }
 
-/* The first pass: each hit's 16 votes, and its bins and similarity kept for the emit pass (a bin of
- * NO_BIN where the pose's scale is out of range: the hit does not vote). */
+/* The first pass: each hit's 16 votes, and its bins and similarity kept for the later passes (a bin of
+ * NO_BIN where the pose's scale is out of range: the hit does not vote), with the combos whose vote was
+ * its slot's first (bit combo of hit_first), so that the counting pass reads each filled slot once. */
 #define NO_BIN 0xFFFFFFFFu
 
 __kernel void vote(__global const int2 *hits, __global const float4 *pair_points, __global const int *entry_view,
                    __global const float4 *entry_points, __global const float4 *frames,
                    __global const uint2 *regions, __global int *votes, __global uint *hit_bins,
-                   __global float4 *hit_similarity, int hit_count, float rot_bin, int rot_bins, float scale_bin,
+                   __global float4 *hit_similarity, __global ushort *hit_first, int hit_count, float rot_bin, int rot_bins, float scale_bin,
                    float pos_bin, float low, float high)
 {
     int h = get_global_id(0);
@@ -77,6 +78,7 @@ __kernel void vote(__global const int2 *hits, __global const float4 *pair_points
     if (!pose_coordinates(pair_points[hit.x], entry_points[hit.y], frames[view], rot_bin, scale_bin, pos_bin, low,
                           high, &similarity, &coords)) {
         hit_bins[16 * (size_t)h] = NO_BIN;
+        hit_first[h] = 0;
         return;
     }
     uint16 bins = combo_bins(coords, view, rot_bins, regions[view].x, regions[view].y);
@@ -84,8 +86,10 @@ __kernel void vote(__global const int2 *hits, __global const float4 *pair_points
     hit_similarity[h] = similarity;
     uint address[16];
     vstore16(bins, 0, address);
+    uint first = 0;
     for (int combo = 0; combo < 16; combo++)
-        atomic_inc(&votes[address[combo]]);
+        if (atomic_inc(&votes[address[combo]]) == 0) first |= 1u << combo;
+    hit_first[h] = (ushort)first;
 }
 
 /* The emit pass: each voting hit whose best bin among its 16 (the most votes, the lowest address among
@@ -119,19 +123,21 @@ __kernel void vote_emit(__global const int2 *hits, __global const int *entry_vie
     }
 }
 
-/* One work-item per chunk of a region (the host's list: first slot, slots, the start and length of the
- * region's row of `counts`): the histogram of the region's bins by their votes (row[v], v = 1 .. length - 1;
- * the last holds length - 1 votes and more). Empty slots are not counted. A chunk reads its slots in
- * order and knows its row, where one work-item per slot searched the regions for its own. */
-__kernel void vote_counts(__global const int *votes, __global const int4 *chunks, int chunk_count,
-                          __global int *counts)
+/* One work-item per hit: the histogram of each region's bins by their votes, each filled slot counted by
+ * the hit whose vote was its first (rows[view]: the start and length of the view's row of `counts`;
+ * row[v], v = 1 .. length - 1, the last holding length - 1 votes and more). Only the filled slots are
+ * read, where a pass over the whole accumulator read its empty slots too. */
+__kernel void vote_counts(__global const int2 *hits, __global const int *entry_view, __global const int *votes,
+                          __global const uint *hit_bins, __global const ushort *hit_first,
+                          __global const int2 *rows, __global int *counts, int hit_count)
 {
-    int c = get_global_id(0);
-    if (c >= chunk_count) return;
-    int4 chunk = chunks[c];
-    __global int *row = counts + chunk.z;
-    for (int slot = chunk.x; slot < chunk.x + chunk.y; slot++) {
-        int v = votes[slot];
-        if (v > 0) atomic_inc(&row[min(v, chunk.w - 1)]);
-    }
+    int h = get_global_id(0);
+    if (h >= hit_count) return;
+    uint first = hit_first[h];
+    if (!first) return;
+    int2 row = rows[entry_view[hits[h].y]];
+    uint address[16];
+    vstore16(vload16(h, hit_bins), 0, address);
+    for (int combo = 0; combo < 16; combo++)
+        if ((first >> combo) & 1u) atomic_inc(&counts[row.x + min(votes[address[combo]], row.y - 1)]);
 }

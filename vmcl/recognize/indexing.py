@@ -61,7 +61,6 @@ _SLOTS_PER_HYPOTHESIS = 64  # a view's accumulator region: each hypothesis votes
 _MIN_REGION_BITS, _MAX_REGION_BITS = 6, 24
 _MAX_SLOTS = 1 << 27  # the whole accumulator's most slots (512 MB): past it the largest regions shrink
 _COUNT_BINS = 1024  # the vote counts the cutoffs are read from; the last holds 1023 votes and more
-_CHUNK_SLOTS = 4096  # the accumulator slots one work-item of the counting pass reads
 _MIN_SEPARATION = 4.0  # pixels: closer corners are one junction's, with no direction between them
 
 
@@ -426,18 +425,6 @@ def _within_shares(found: Candidates, shares: np.ndarray) -> Candidates:
     return Candidates(found.views[keep], found.similarity[keep], found.votes[keep])
 
 
-def _chunks(starts: np.ndarray, live: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """The live regions cut into runs of at most _CHUNK_SLOTS slots, one per work-item of the counting
-    pass: (first slot, slots, the region's histogram row's start and length), int32 (C, 4)."""
-    first, sizes = starts[live].astype(np.int64), (starts[live + 1] - starts[live]).astype(np.int64)
-    pieces = -(-sizes // _CHUNK_SLOTS)
-    row = np.repeat(np.arange(len(live)), pieces)
-    within = np.arange(int(pieces.sum())) - np.repeat(np.cumsum(pieces) - pieces, pieces)
-    begin = first[row] + within * _CHUNK_SLOTS
-    length = np.minimum(_CHUNK_SLOTS, first[row] + sizes[row] - begin)
-    return np.stack([begin, length, rows[row], np.diff(rows)[row]], axis=1).astype(np.int32)
-
-
 def _filled(histograms: np.ndarray, rows: np.ndarray, live: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The filled entries of the device's histogram rows (row i ``histograms[rows[i]:rows[i + 1]]``, the
     view ``live[i]``'s) as :func:`_trimmed` takes them. A row shorter than _COUNT_BINS reaches past the most
@@ -544,25 +531,28 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     # Each live view's histogram row: a slot holds at most 16 votes of each of the view's hypotheses.
     lengths = np.minimum(_COUNT_BINS, 16 * hypotheses[live] + 1)
     rows = np.concatenate([[0], np.cumsum(lengths)])
-    # The accumulator, the hits' kept bins and similarities (16 + 4 words each), the histograms.
-    words = int(starts[-1]) + 20 * len(entries) + int(rows[-1])
+    # The accumulator, the hits' kept bins, similarities and first votes (16 + 4 + 1/2 words each), the
+    # histograms.
+    words = int(starts[-1]) + 21 * len(entries) + int(rows[-1])
     machine.require_memory("the vote's accumulator", 4 * words,
                            4 * max(int(starts[-1]), 16 * len(entries), int(rows[-1])))
     hits = machine.to_device(np.stack([which, entries], axis=1).astype(np.int32))
     votes = machine.full(int(starts[-1]), np.int32, 0)
     hit_bins = machine.empty(16 * len(entries), np.uint32)
     hit_similarity = machine.empty((len(entries), 4), np.float32)
+    hit_first = machine.empty(len(entries), np.uint16)
     entry_view, entry_points, frames = _device_table(index, machine)
     machine.launch(machine.kernel("indexing", "vote"), (len(entries),), hits,
                    machine.to_device(_pair_points(corners, pairs)), entry_view, entry_points, frames,
                    machine.to_device(np.ascontiguousarray(np.stack([starts[:-1], masks], axis=1))), votes, hit_bins,
-                   hit_similarity, np.int32(len(entries)), np.float32(_ROTATION_BIN), np.int32(_ROTATION_BINS),
+                   hit_similarity, hit_first, np.int32(len(entries)), np.float32(_ROTATION_BIN), np.int32(_ROTATION_BINS),
                    np.float32(_SCALE_BIN), np.float32(_POSITION_BIN), np.float32(low), np.float32(high))
     # The histograms of the views the lookups met, one row each (the others have no slots).
     histograms = machine.full(int(rows[-1]), np.int32, 0)
-    chunks = _chunks(starts, live, rows)
-    machine.launch(machine.kernel("indexing", "vote_counts"), (len(chunks),), votes, machine.to_device(chunks),
-                   np.int32(len(chunks)), histograms)
+    view_rows = np.zeros((len(hypotheses), 2), np.int32)
+    view_rows[live] = np.stack([rows[:-1], lengths], axis=1)
+    machine.launch(machine.kernel("indexing", "vote_counts"), (len(entries),), hits, entry_view, votes, hit_bins,
+                   hit_first, machine.to_device(view_rows), histograms, np.int32(len(entries)))
     view, filled_votes, bins_with = _filled(histograms.get(), rows, live)
     counts = _trimmed(view, filled_votes, bins_with, len(hypotheses), min_votes)
     cutoffs, shares = _cutoffs(counts, candidates, min_votes)
