@@ -161,6 +161,21 @@ def test_a_refinement_stage_cannot_take_another_stages_name():
     assert "refined_cue" not in cue_names()
 
 
+def test_a_refinement_stage_named_as_another_under_a_config_is_refused_by_the_machine():
+    # Registration asks the default Config only: under this one the cue's refinement would share the
+    # stereo cue's feedback stage, its timing and its progress.
+    def stage(self, config):
+        return "feedback" if config.stereo.feature_matches else None
+
+    cues.register(_cue("refined_cue", refine_stage=stage))
+    try:
+        VisionMachine(Config())  # no feedback stage: accepted
+        with pytest.raises(ValueError, match="cue 'refined_cue': under this Config refine_stage\\(\\) is 'feedback'"):
+            VisionMachine(Config.from_dict({"stereo": {"feature_matches": True}}))
+    finally:
+        cues.unregister("refined_cue")
+
+
 def test_a_cue_of_the_users_is_enabled_by_any_config():
     # A cue of its own name with no Config section (or one without an enabled switch) is on; a built-in
     # cue follows its section's switch.

@@ -880,6 +880,23 @@ class VisionMachine:
             self.library = Library.load(self.config.recognition.models) if self.config.recognition.models else None
         except InputError as error:
             raise type(error)(f"recognition.models: {error}") from None
+        self._check_refine_stages()
+
+    def _check_refine_stages(self) -> None:
+        """Refuse a Config under which a cue's refinement stage (:meth:`vmcl.cues.CueModule.refine_stage`) is
+        not a name or None, or is the name of another stage of the run, whose timing and progress it would
+        take: :func:`vmcl.cues.register` can ask the default Config only."""
+        everything = {"right": True, "next": True, "rgb": True}
+        refining = [(cue, cue.refine_stage(self.config)) for cue in self.cues(**everything)]
+        for cue, stage in refining:
+            if stage is not None and not isinstance(stage, str):
+                raise InputTypeError(f"cue {cue.name!r}: refine_stage() must return a stage name (str) or None, "
+                                     f"got {type(stage).__name__} under this Config")
+        names = self.stages(**everything, streaming=True)
+        for cue, stage in reversed(refining):  # the later cue of two that share a stage is the one said
+            if stage and names.count(stage) > 1:
+                raise InputValueError(f"cue {cue.name!r}: under this Config refine_stage() is {stage!r}, the name "
+                                      "of another stage of the run")
 
     def cues(self, *, right: bool, next: bool, rgb: bool) -> list[CueModule]:
         """The registered cues (:func:`vmcl.cues.registered`) that run for these inputs, in order."""

@@ -71,8 +71,8 @@ def register(cue: CueModule) -> None:
     (:data:`RESERVED`), needs a set among :data:`INPUTS`, an MRF kind, ``candidates_only`` a bool,
     settings a :class:`vmcl.mrf.Settings` (or None) whose ``model.alpha`` is > 0, Result fields that
     :class:`vmcl.result.Result` has and that neither the machine (:data:`MACHINE_FIELDS`) nor another
-    registered cue fills, a refinement stage (:meth:`CueModule.refine_stage` of the default Config) of a
-    name no stage has, and a rule label.
+    registered cue fills, a refinement stage (:meth:`CueModule.refine_stage` of the default Config; a
+    :class:`vmcl.pipeline.VisionMachine` checks its own Config's) of a name no stage has, and a rule label.
     """
 
     if not isinstance(cue, CueModule):

@@ -152,7 +152,8 @@ class CueModule:
 
     def refine_stage(self, config: Any) -> str | None:
         """The name of the stage in which :meth:`refine` runs, or None when the cue does not refine; no
-        other stage's name (:func:`vmcl.cues.register` checks the default Config's)."""
+        other stage's name (:func:`vmcl.cues.register` checks the default Config's, and
+        :class:`vmcl.pipeline.VisionMachine` the one it is given)."""
         return None
 
     def refine(self, run: RunInputs, measurement: Measurement,
