@@ -6,6 +6,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 from types import SimpleNamespace
 
 import cv2
@@ -14,7 +15,7 @@ import pytest
 
 from vmcl import scenes
 from vmcl.cli import main
-from vmcl.frame_sources import is_sequence, open_frames
+from vmcl.frame_sources import frame_order, is_sequence, open_frames
 from vmcl.sequence_output import LEAST_FLOW_SCALE, SequenceWriter
 
 FRAMES = 3
@@ -118,6 +119,14 @@ def test_numbered_frames_are_taken_in_numeric_order_and_the_summary_names_each(t
     summary = (out / "sequence.md").read_text()
     assert [line.split("|")[2].strip() for line in summary.splitlines() if line.startswith("| ") and
             line.split("|")[1].strip().isdigit()] == expected
+
+
+def test_frames_named_by_their_time_in_seconds_are_taken_in_time_order():
+    # The decimals' digits compared as a whole number put 1.5 before 1.25.
+    names = ["10.png", "1.5.png", "2.png", "1.25.png", "t_0.75_cam.png", "t_0.8_cam.png", "frame9.png", "frame10.png"]
+    ordered = sorted((Path(name) for name in names), key=frame_order)
+    assert [p.name for p in ordered] == ["1.25.png", "1.5.png", "2.png", "10.png", "frame9.png", "frame10.png",
+                                         "t_0.75_cam.png", "t_0.8_cam.png"]
 
 
 def test_an_image_file_whose_name_holds_glob_characters_is_one_image(tmp_path, sequence):

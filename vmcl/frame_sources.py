@@ -11,6 +11,7 @@ import glob
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass
+from decimal import Decimal
 from pathlib import Path
 
 import numpy as np
@@ -28,14 +29,17 @@ VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".mpg", ".mpe
 
 _INDEXED_VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".m4v")  # containers that record their frame count
 _GLOB_CHARACTERS = set("*?[")
-_DIGITS = re.compile(r"(\d+)")
+_NUMBERS = re.compile(r"(\d+(?:\.\d+)?)")  # a run of digits, with its decimals where a point and digits follow
 
 
 def frame_order(path: Path) -> tuple:
-    """The sort key of a frame's file: its path with each run of digits compared by value, so that frame9
-    comes before frame10 (as numbered frames are meant), then the path's own text (which settles 01 and 1)."""
-    parts = _DIGITS.split(str(path))
-    return tuple((1, int(part), "") if index % 2 else (0, 0, part) for index, part in enumerate(parts)), str(path)
+    """The sort key of a frame's file: its path with each number compared by value, so that frame9 comes
+    before frame10 (as numbered frames are meant) and a timestamp 1.25 before 1.5 (a decimal point followed
+    by digits is read as one: frames named by their time in seconds), then the path's own text (which
+    settles 01 and 1)."""
+    parts = _NUMBERS.split(str(path))
+    return (tuple((1, Decimal(part), "") if index % 2 else (0, Decimal(0), part) for index, part in enumerate(parts)),
+            str(path))
 
 
 @dataclass(frozen=True)
