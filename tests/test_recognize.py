@@ -577,6 +577,17 @@ def test_an_example_without_boundary_is_named_among_several():
         learn("ell", [image, blank], sources=["ell.png", "blank.png"])
 
 
+def test_a_picture_whose_noise_rule_leaves_no_edges_says_to_give_its_edge_map():
+    # A fine texture everywhere raises the noise estimate's Canny thresholds over its own edges; its edge map
+    # at thresholds of the user's choosing is learned.
+    rng = np.random.default_rng(3)
+    fur = cv2.GaussianBlur(rng.random((120, 160)).astype(np.float32), (0, 0), 1.0)
+    with pytest.raises(InputError, match="give its edge map instead"):
+        learn("fur", [fur])
+    edges = canny(fur, low_threshold=0.01, high_threshold=0.02)
+    assert learn("fur", [edges]).views[0].points.shape[0] >= 8
+
+
 # ------------------------------------------------------------------------------------------- recognition
 
 

@@ -40,6 +40,7 @@ _VERSION = 3  # 2: views keep their arcs; 3: which points are the outline's. Old
 _OUTLINE_REACH = 3.0  # px: a boundary point this near the object's outer border is the outline's
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9 _.+-]{0,63}")
 _MAX_POINTS = 1500  # boundary points kept per view: enough to verify a pose, few enough to test many
+_LEAST_POINTS = 8  # boundary pixels an example needs to be learned from
 
 
 @dataclass(frozen=True, eq=False)
@@ -194,7 +195,7 @@ def view_of(features: Features, *, mask: np.ndarray | None = None, spacing: int 
         keep_a = grown[middle[:, 1], middle[:, 0]] if len(arcs) else np.zeros(0, bool)
         arcs, arc_radius = arcs[keep_a], arc_radius[keep_a]
     length = float(len(points))
-    if len(points) < 8:
+    if len(points) < _LEAST_POINTS:
         raise InputValueError(f"the example shows too little boundary to learn from ({len(points)} edge pixels)")
     while True:
         cells = np.unique((points // spacing).astype(np.int64) @ np.array([1, 1 << 32]), return_index=True)[1]
@@ -282,6 +283,13 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
         which = f"images[{i}]" + (f" ({sources[i]})" if sources is not None else "")
         try:
             features = features_of(image, sigma=sigma, corner=corner, machine=machine)
+            if len(features.points) < _LEAST_POINTS and not (isinstance(image, np.ndarray) and image.dtype == np.bool_):
+                # A picture's Canny thresholds come from its noise, estimated from its median gradient: a
+                # textured picture raises them over its edges (a 160 x 120 crop of fur kept 11 pixels).
+                raise InputValueError(
+                    f"the example shows too little boundary to learn from ({len(features.points)} edge pixels at "
+                    "the Canny thresholds its noise estimate gives, which texture raises); give its edge map instead "
+                    "(a bool array, e.g. vmcl.early.canny(image, low_threshold=..., high_threshold=...))")
             views.append(view_of(features, mask=None if masks is None else masks[i]))
         except InputError as error:
             # Which of several examples failed is what the user needs to mend it.
