@@ -19,7 +19,7 @@ from vmcl import scenes
 from vmcl.cli import main
 from vmcl.datasets import read_image
 from vmcl.errors import InputError, InputTypeError
-from vmcl.output_folder import output_folder
+from vmcl.output_folder import is_whole, output_folder
 from vmcl.pipeline import Config
 
 
@@ -288,6 +288,26 @@ def test_every_interrupted_replacement_puts_the_previous_output_back(tmp_path, m
         "report.html": "new report.html", "b.png": "new b.png",
         ".vmcl-output": (out / ".vmcl-output").read_text()}
     assert (out / ".vmcl-output").read_text().splitlines()[1:] == ["b.png", "report.html"]
+
+
+@pytest.mark.parametrize("damage", ["none", "cut short", "emptied", "deleted", "a member past the end"])
+def test_an_output_is_whole_only_with_every_listed_archive_entire(tmp_path, damage):
+    out = tmp_path / "out"
+    with output_folder(out) as work:
+        np.savez_compressed(work / "fields.npz", disparity=np.arange(20000.0).reshape(100, 200))
+        (work / "report.html").write_text("report")
+    fields = out / "fields.npz"
+    data = fields.read_bytes()
+    if damage == "cut short":
+        fields.write_bytes(data[:len(data) // 2])
+    elif damage == "emptied":
+        fields.write_bytes(b"")
+    elif damage == "deleted":
+        fields.unlink()
+    elif damage == "a member past the end":
+        # The directory kept, the member's data cut from the middle: the directory points past the end.
+        fields.write_bytes(data[:100] + data[len(data) // 2:])
+    assert is_whole(out) == (damage == "none")
 
 
 def test_a_changed_folder_is_not_replaced(tmp_path):

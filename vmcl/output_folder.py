@@ -15,6 +15,8 @@ import contextlib
 import os
 import secrets
 import shutil
+import struct
+import zipfile
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import BinaryIO
@@ -86,10 +88,10 @@ def _previous_output(out: Path) -> list[str]:
 
 def is_whole(out: Path) -> bool:
     """Whether ``out`` holds a whole vmcl output: its :data:`MARKER`, every file the marker lists, and each
-    listed NumPy archive (``.npz``) readable to its end (a file deleted, emptied or cut short since vmcl
-    wrote it is not to be trusted)."""
-    import zipfile
-
+    listed NumPy archive (``.npz``) with its whole directory of members, each within the file (a file
+    deleted, emptied or cut short since vmcl wrote it is not to be trusted). The members' contents are not
+    read: vmcl writes each file whole or not at all (:func:`replace_file`), and a batch resuming over many
+    items read every byte of every one of them."""
     if not (out / MARKER).is_file():
         return False
     try:
@@ -97,12 +99,26 @@ def is_whole(out: Path) -> bool:
         for name in names:
             if not (out / name).is_file():
                 return False
-            if name.endswith(".npz"):
-                with zipfile.ZipFile(out / name) as archive:
-                    if archive.testzip() is not None:
-                        return False
+            if name.endswith(".npz") and not _members_in_place(out / name):
+                return False
     except (InputValueError, OSError, zipfile.BadZipFile, EOFError, ValueError):
         return False
+    return True
+
+
+def _members_in_place(path: Path) -> bool:
+    """Whether a zip archive (an ``.npz``) has its directory (at its end: a file cut short has none) and each
+    member's own header where the directory places it, with the member's data before the file's end."""
+    size = path.stat().st_size
+    with zipfile.ZipFile(path) as archive, path.open("rb") as raw:
+        for info in archive.infolist():
+            raw.seek(info.header_offset)
+            header = raw.read(30)
+            if len(header) < 30 or header[:4] != b"PK\x03\x04":
+                return False
+            name_length, extra_length = struct.unpack("<HH", header[26:30])
+            if info.header_offset + 30 + name_length + extra_length + info.compress_size > size:
+                return False
     return True
 
 
