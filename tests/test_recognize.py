@@ -608,6 +608,22 @@ def test_an_object_is_recognised_at_its_pose_among_others():
     assert len(found) == len(scene.placements)
 
 
+def test_a_detections_score_is_what_min_score_is_tested_against():
+    # The score reported was the refinement's, min_score tested the share of distinct edge pixels newly
+    # explained: a detection of score 0.63 vanished at min_score 0.5.
+    names = ["ell", "arrow", "star", "house"]
+    library = Library([learn(n, [object_view(n, shape=(160, 160))[0]]) for n in names])
+    scene = recognition_scene(seed=3, library=tuple(names), objects=2, occlusion=(0.0, 0.1))
+    found = recognize(scene.image, library)
+    assert len(found) == 2
+    for detection in found:
+        assert 0.3 <= detection.score <= 1.0
+        kept = recognize(scene.image, library, min_score=detection.score - 1e-6)
+        assert any(d.name == detection.name and np.allclose(d.transform, detection.transform) for d in kept)
+        cut = recognize(scene.image, library, min_score=min(detection.score + 1e-6, 1.0))
+        assert not any(d.name == detection.name and np.allclose(d.transform, detection.transform) for d in cut)
+
+
 def test_a_tolerance_wider_than_the_refinements_first_step_still_finds_the_objects():
     # The refinement narrows from 8 px (then 4, 3) to the tolerance: a wider tolerance is held, not refused.
     names = ["ell", "arrow", "star", "house"]

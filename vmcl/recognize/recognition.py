@@ -67,12 +67,15 @@ class Detection:
         The pose: the homography taking the view's frame to the image (last row (0, 0, 1) for
         similarities and affine maps).
     score : float
-        The fraction of the model's boundary (inside the image) that the image's edges support.
+        The fraction of the model's boundary (inside the image and not hidden by a nearer surface) that
+        the image's edges support, each edge pixel counted once and none that an object kept before it
+        explains: what ``min_score`` is tested against.
     votes : int
         The indexing votes of the candidate it came from.
     significance : float
         -log10 of its number of false alarms: how unlikely its support is by chance, given how many
-        candidates were tested and how crowded with edges the image is around it (kept where >= 0).
+        candidates were tested and how crowded with edges the image is around it (kept where at least
+        :func:`recognize`'s ``min_significance``).
     corners_found : float
         The fraction of the view's corners (those inside the image) that an image corner matches: within
         3 px, its bisector within 30 degrees and its opening within 25 (evidence the significance counts).
@@ -151,7 +154,8 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
         from: by default half to twice (widen it for objects much nearer or farther than when learned; a
         wider range admits more small look-alikes among clutter).
     min_score : float
-        The fraction of a model's boundary that must be supported, in (0, 1].
+        The fraction of a model's boundary that must be supported, in (0, 1] (:attr:`Detection.score`:
+        each edge pixel counted once, none that a detection kept before explains).
     min_significance : float
         The least significance (-log10 of the number of false alarms, :attr:`Detection.significance`) a
         detection needs. The default is the least that kept false detections to at most 0.1 per image on
@@ -400,7 +404,7 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
         model, view_index = (int(v) for v in view_ids[found.views[c]])
         boundary = carry(poses[c], view.points)
         start, stop = ranges_array[c]
-        detections.append(Detection(library.models[model].name, view_index, poses[c], float(score[c]),
+        detections.append(Detection(library.models[model].name, view_index, poses[c], float(coverage[c]),
                                     int(found.votes[c]), float(significance[c]), float(corners_found[c]),
                                     carry(poses[c], view.corners), boundary, ok[start:stop].copy(),
                                     float(inner_found[c])))
