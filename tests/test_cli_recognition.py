@@ -49,9 +49,25 @@ def test_learn_writes_models_and_run_recognises_them(tmp_path, files, capsys):
     # each object's place as the box of its boundary (which may reach past the 400 x 300 scene's border), one
     # per object found
     boxes = [tuple(map(int, b)) for b in re.findall(r"\((-?\d+), (-?\d+)\) to \((-?\d+), (-?\d+)\)", report)]
-    assert len(boxes) == printed.split("recognised:")[1].count("("), (boxes, printed)
+    assert len(boxes) == printed.split("recognised:")[1].count(" at ("), (boxes, printed)
     assert all(x0 < 400 and y0 < 300 and x1 > 0 and y1 > 0 and min(x1 - x0, y1 - y0) > 20
                for x0, y0, x1, y1 in boxes), boxes
+
+
+def test_a_sequence_run_with_models_reports_each_frames_objects(tmp_path, files):
+    # The frames were searched for the library's objects and what was found thrown away.
+    library = tmp_path / "library"
+    assert main(["learn", "ell", str(files["ell"]), "--library", str(library), "-q"]) == 0
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for k in range(2):
+        (frames / f"frame_{k}.png").write_bytes(files["scene"].read_bytes())
+    out = tmp_path / "out"
+    assert main(["run", str(frames), "--models", str(library), "--config", str(files["fast"]), "--out", str(out),
+                 "-q"]) == 0
+    table = [line for line in (out / "sequence.md").read_text().splitlines() if line.startswith("| ")]
+    assert table[0] == "| frame | source | ms | recognised | notes |"
+    assert [row.split("|")[4].strip().split(" (")[0] for row in table[1:]] == ["ell", "ell"]
 
 
 def test_learn_says_how_much_of_a_models_boundary_is_inner_markings(tmp_path, files, capsys):

@@ -342,8 +342,7 @@ def _run(args) -> int:
             raise BadInput(f"{error} ({files})") from None
         write_output(result, work, f"Vision Machine: {Path(args.left).name}")
     if result.recognition is not None:
-        found = ", ".join(f"{d.name} ({d.score:.2f})" for d in result.recognition) or "nothing"
-        print(f"recognised: {found}")
+        print(f"recognised: {recognised_text(result.recognition)}")
     print(f"{result.total_ms:.0f} ms; report: {Path(args.out) / 'report.html'}")
     return 0
 
@@ -469,6 +468,13 @@ def write_output(result, folder: str | os.PathLike, title: str) -> None:
     # allow_pickle is NumPy's default; naming it tells the type checker that no field of the ** binds it.
     np.savez_compressed(folder / "fields.npz", allow_pickle=True, **result_fields(result))
     (folder / SETTINGS_FILE).write_text(settings_text(result.config.to_dict()), encoding="utf-8")
+
+
+def recognised_text(detections) -> str:
+    """A run's recognised objects as the command reports them: each name with its score and where its
+    view's centre lands, or "nothing"."""
+    return ", ".join(f"{d.name} ({d.score:.2f}) at ({d.boundary[:, 0].mean():.0f}, {d.boundary[:, 1].mean():.0f})"
+                     for d in detections) or "nothing"
 
 
 SETTINGS_FILE = "settings.json"

@@ -11,7 +11,8 @@ The folder (one that :func:`vmcl.output_folder.output_folder` prepared) receives
   not drawn at full colour for its noise; its disparity range), so that colours mean the same speed or
   depth throughout. A frame of odd width or height is padded with a black row or column (MPEG-4 frames
   have even sides; the writer would crop the last row and column);
-- ``sequence.md``: per frame, the file it came from, the time taken and the notes.
+- ``sequence.md``: per frame, the file it came from, the time taken, the objects recognised (where the run
+  has a model library) and the notes.
 
 Videos are MPEG-4 (OpenCV's VideoWriter, fourcc mp4v). Files lie flat in the folder, as
 :mod:`vmcl.output_folder` lists and replaces them.
@@ -83,12 +84,13 @@ class SequenceWriter:
                                   "empty folder (the vmcl command replaces its own previous output)")
         self.writers: dict[str, object] = {}
         self.scales: dict[str, tuple[float, float]] = {}
-        self.rows: list[str] = []
+        self.rows: list[tuple[str, str, str]] = []  # a row's cells before, in and after the recognised column
+        self.recognising = False  # whether any frame was searched for the library's objects
         self.frames = 0
 
     def add(self, result: Result, source: str = "") -> None:
         """Write the next frame's Result; ``source`` names where its frame came from (a file) in the summary."""
-        from vmcl.cli import result_fields
+        from vmcl.cli import recognised_text, result_fields
 
         index = self.frames
         np.savez_compressed(self.folder / f"fields_{index:06d}.npz", allow_pickle=True,
@@ -96,7 +98,9 @@ class SequenceWriter:
         for stem, picture in self.pictures(result).items():
             self.write(stem, picture)
         notes = "; ".join(result.notes) if result.notes else ""
-        self.rows.append(f"| {index} | {source} | {result.total_ms:.0f} | {notes} |")
+        found = "" if result.recognition is None else recognised_text(result.recognition)
+        self.recognising = self.recognising or result.recognition is not None
+        self.rows.append((f"| {index} | {source} | {result.total_ms:.0f} | ", found, f"{notes} |"))
         self.frames += 1
 
     def pictures(self, result: Result) -> dict[str, np.ndarray]:
@@ -120,6 +124,13 @@ class SequenceWriter:
             out["disparity"] = disparity_image(result.disparity, vmin=low, vmax=high)
         return out
 
+    def _table(self) -> list[str]:
+        """The summary's table: a column of each frame's recognised objects where the run recognised."""
+        if not self.recognising:
+            return ["| frame | source | ms | notes |", "|---|---|---|---|", *(a + c for a, _, c in self.rows)]
+        return ["| frame | source | ms | recognised | notes |", "|---|---|---|---|---|",
+                *(f"{a}{b} | {c}" for a, b, c in self.rows)]
+
     def write(self, stem: str, picture: np.ndarray) -> None:
         import cv2
 
@@ -142,5 +153,5 @@ class SequenceWriter:
         self.writers = {}
         lines = [f"# {self.title}", "", f"{frame_count(self.frames)}; videos: "
                  + (", ".join(f"{stem}.mp4" for stem in sorted(self.scales.keys() | {"cartoon"})) if self.frames else "none"),
-                 "", "| frame | source | ms | notes |", "|---|---|---|---|", *self.rows, ""]
+                 "", *self._table(), ""]
         (self.folder / "sequence.md").write_text("\n".join(lines), encoding="utf-8")
