@@ -577,6 +577,16 @@ def test_an_example_without_boundary_is_named_among_several():
         learn("ell", [image, blank], sources=["ell.png", "blank.png"])
 
 
+@pytest.mark.parametrize("axes", [(60, 35), (50, 50)])
+def test_an_example_with_fewer_than_two_corners_and_arcs_is_refused(axes):
+    # An ellipse (no corner, no arc) or a disc (one arc) was learned, then never found, not even in its own
+    # example: indexing pairs two features.
+    image = np.full((200, 200), 50, np.uint8)
+    cv2.ellipse(image, (100, 100), axes, 0, 0, 360, 200, -1)
+    with pytest.raises(InputError, match="recognition needs two of them"):
+        learn("e", [image])
+
+
 def test_a_picture_whose_noise_rule_leaves_no_edges_says_to_give_its_edge_map():
     # A fine texture everywhere raises the noise estimate's Canny thresholds over its own edges; its edge map
     # at thresholds of the user's choosing is learned.

@@ -290,7 +290,14 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
                     f"the example shows too little boundary to learn from ({len(features.points)} edge pixels at "
                     "the Canny thresholds its noise estimate gives, which texture raises); give its edge map instead "
                     "(a bool array, e.g. vmcl.early.canny(image, low_threshold=..., high_threshold=...))")
-            views.append(view_of(features, mask=None if masks is None else masks[i]))
+            view = view_of(features, mask=None if masks is None else masks[i])
+            if len(view.corners) + len(view.arcs) < 2:
+                # Indexing looks pairs of them up: with fewer the view is never a candidate, in any image.
+                raise InputValueError(
+                    f"the example shows {len(view.corners)} corners and {len(view.arcs)} arcs, and recognition "
+                    "needs two of them to index a view by (an ellipse or a disc alone has none or one): it "
+                    "would never be found")
+            views.append(view)
         except InputError as error:
             # Which of several examples failed is what the user needs to mend it.
             raise type(error)(f"{which}: {error}") from None
