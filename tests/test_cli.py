@@ -310,6 +310,26 @@ def test_an_output_is_whole_only_with_every_listed_archive_entire(tmp_path, dama
     assert is_whole(out) == (damage == "none")
 
 
+def test_run_says_the_runs_notes_on_stderr(tmp_path, images, capsys):
+    # The notes (here: 12-bit data in a 16-bit file, which the machine reads on the 16-bit scale) were only
+    # in the report.
+    left = cv2.imread(str(images["left"]), cv2.IMREAD_UNCHANGED).astype(np.uint16) * 16
+    cv2.imwrite(str(tmp_path / "dark.png"), left)
+    assert main(["run", str(tmp_path / "dark.png"), "--out", str(tmp_path / "out"), "--config", str(images["fast"]),
+                 "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "vmcl: note:" in err and "very dark image" in err
+
+
+@pytest.mark.parametrize("arguments, message", [(["--out", ""], "--out must name a folder"),
+                                                 (["--out", "{tmp}/out", "--fps", "-5"], "--fps sets a sequence")])
+def test_run_refuses_an_empty_out_and_a_frame_rate_for_one_image(tmp_path, images, capsys, arguments, message):
+    # --out "" wrote into the working folder; --fps was ignored for one image (and checked for a sequence).
+    arguments = [a.format(tmp=tmp_path) for a in arguments]
+    assert main(["run", str(images["left"]), *arguments, "-q"]) == 2
+    assert message in capsys.readouterr().err
+
+
 def test_a_changed_folder_is_not_replaced(tmp_path):
     out = tmp_path / "out"
     with output_folder(out) as work:

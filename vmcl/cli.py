@@ -318,8 +318,12 @@ def _run(args) -> int:
     from vmcl.frame_sources import is_sequence
     from vmcl.pipeline import VisionMachine
 
+    if not str(args.out).strip():
+        raise BadInput("--out must name a folder, got an empty name")
     if is_sequence(args.left):
         return _run_sequence(args)
+    if args.fps is not None:
+        raise BadInput("--fps sets a sequence's video frame rate; left is one image")
     if args.right and is_sequence(args.right):
         raise BadInput(f"right {args.right} is a sequence but left {args.left} is one image")
     config = _with_models(_config(args.config), args.models)
@@ -341,6 +345,8 @@ def _run(args) -> int:
                                                                       ("next", args.next)) if path)
             raise BadInput(f"{error} ({files})") from None
         write_output(result, work, f"Vision Machine: {Path(args.left).name}")
+    for note in result.notes:  # what the run found out about its inputs: not only in the report
+        print(f"vmcl: note: {note}", file=sys.stderr)
     if result.recognition is not None:
         print(f"recognised: {recognised_text(result.recognition)}")
     print(f"{result.total_ms:.0f} ms; report: {Path(args.out) / 'report.html'}")
@@ -400,11 +406,12 @@ def _run_sequence(args) -> int:
     if rights is not None and None not in (lefts.count, rights.count) and lefts.count != rights.count:
         raise BadInput(f"left has {lefts.count} frames ({lefts.description}), right {rights.count} "
                        f"({rights.description}): a stereo sequence needs a right view per frame")
-    check_fps(args.fps, "--fps")  # before the output folder is made: OpenCV's writer would fail after the work
+    fps = check_fps(DEFAULT_FPS if args.fps is None else args.fps, "--fps")  # before the output folder is made:
+    # OpenCV's writer would fail after the work
     vm = VisionMachine(config)
     frames = 0
     with output_folder(Path(args.out)) as work:
-        writer = SequenceWriter(work, fps=args.fps, title=f"Vision Machine: {lefts.description}")
+        writer = SequenceWriter(work, fps=fps, title=f"Vision Machine: {lefts.description}")
         with _progress(args, lefts.count or 0, "frames", unit="frame") as step:
             results = vm.stream(_reading(lefts, "left"), _reading(rights, "right") if rights else None)
             try:
@@ -416,6 +423,9 @@ def _run_sequence(args) -> int:
                 raise BadInput(_naming_files(str(error), lefts, rights)) from None
             finally:
                 writer.close()
+    if writer.noted:
+        print(f"vmcl: note: {writer.noted} of the frames have notes; see {Path(args.out) / 'sequence.md'}",
+              file=sys.stderr)
     print(f"{frame_count(frames)}; videos and fields in {args.out}")
     return 0
 
@@ -476,6 +486,9 @@ def recognised_text(detections) -> str:
     return ", ".join(f"{d.name} ({d.score:.2f}) at ({d.boundary[:, 0].mean():.0f}, {d.boundary[:, 1].mean():.0f})"
                      for d in detections) or "nothing"
 
+
+DEFAULT_FPS = 10.0
+"""The frame rate of a sequence's videos when ``--fps`` is not given."""
 
 SETTINGS_FILE = "settings.json"
 """The file of an output folder that records the run's whole configuration (:meth:`Config.to_dict`, as JSON);
@@ -864,7 +877,7 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("right", nargs="?", help="right image of a rectified pair (adds stereo), or the right "
                                               "view's sequence")
     run.add_argument("--next", help="the left view's next frame: adds motion (one image only)")
-    run.add_argument("--fps", type=float, default=10.0, help="a sequence's videos' frame rate, 0.01 to 1000 (default 10)")
+    run.add_argument("--fps", type=float, help=f"a sequence's videos' frame rate, 0.01 to 1000 (default {DEFAULT_FPS:g})")
     run.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config), or an output's settings.json")
     run.add_argument("--out", required=True, help="output folder: new, empty or a previous vmcl output")
     run.add_argument("--models", help="a library folder of models (vmcl learn): recognise them in the left image")

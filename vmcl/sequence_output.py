@@ -86,6 +86,7 @@ class SequenceWriter:
         self.scales: dict[str, tuple[float, float]] = {}
         self.rows: list[tuple[str, str, str]] = []  # a row's cells before, in and after the recognised column
         self.recognising = False  # whether any frame was searched for the library's objects
+        self.noted = 0  # the frames with notes
         self.frames = 0
 
     def add(self, result: Result, source: str = "") -> None:
@@ -100,6 +101,7 @@ class SequenceWriter:
         notes = "; ".join(result.notes) if result.notes else ""
         found = "" if result.recognition is None else recognised_text(result.recognition)
         self.recognising = self.recognising or result.recognition is not None
+        self.noted += bool(result.notes)
         self.rows.append((f"| {index} | {source} | {result.total_ms:.0f} | ", found, f"{notes} |"))
         self.frames += 1
 
