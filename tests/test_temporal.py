@@ -276,6 +276,20 @@ def test_stream_refuses_frames_that_do_not_fit(machine):
     with pytest.raises(ValueError, match="frame 0: next has shape"):
         list(vm.stream([frames[0].left, frames[1].left[:32]]))
     assert list(vm.stream([])) == []
+    # One image is not a sequence: its rows were read as frames, refused as too small.
+    for image in (frames[0].left, frames[0].left.mean(axis=2)):
+        with pytest.raises(TypeError, match="got one image of shape"):
+            list(vm.stream(image))
+
+
+def test_a_stream_without_motion_gives_no_note_of_an_unused_next_frame(machine):
+    # The stream gives each frame its next; with no cue reading it, every frame said it was not used.
+    frames = scenes.render_sequence(scenes.preset("cues", shape=(64, 64)), 3, seed=1)
+    vm = VisionMachine(Config(time=TimeConfig(enabled=False), motion=MotionConfig(enabled=False), **_DEPTH_AND_MOTION),
+                       machine=machine)
+    results = list(vm.stream([f.left for f in frames], [f.right for f in frames]))
+    assert len(results) == 3 and not any("next" in note for r in results for note in r.notes)
+    assert all(r.flow is None and r.disparity is not None for r in results)
 
 
 @pytest.mark.parametrize("key, value, message", [("gain", -1.0, "time.gain"), ("memory", 0.0, "time.memory"),

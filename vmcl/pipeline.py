@@ -997,6 +997,10 @@ class VisionMachine:
                                      "folder, glob or video with vmcl.frame_sources.open_frames(path).frames()")
             if given is not None and not isinstance(given, Iterable):
                 raise InputTypeError(f"{name} must be an iterable of images, got {type(given).__name__}")
+            if isinstance(given, np.ndarray) and (given.ndim == 2 or (given.ndim == 3 and given.shape[2] == 3)):
+                # Its rows would be read as frames, and refused as too small with no word of why.
+                raise InputTypeError(f"{name} must be an iterable of images, got one image of shape {given.shape}: "
+                                     "give a list of frames (or run() for one image)")
         if rights is not None and isinstance(frames, Sized) and isinstance(rights, Sized) and len(frames) != len(rights):
             raise InputValueError(f"frames and rights must be as long (a stereo sequence needs a right view per "
                                   f"frame), got {len(frames)} and {len(rights)}")  # before any work, counts known
@@ -1006,6 +1010,9 @@ class VisionMachine:
         # fills one buffer per frame would otherwise change the frame being run under it (no motion).
         lefts = (_held(frame) for frame in frames)
         seconds = (_held(frame) for frame in rights) if rights is not None else None
+        # The following frame is each frame's next where a cue reads one (motion); given where none does, it
+        # would earn every frame the note that it was not used, though the user gave none.
+        reads_next = any("next" in cue.needs and cue.enabled(self.config) for cue in registered())
         index, current = 0, next(lefts, _ENDED)  # a None among the frames is a bad frame, not the end
         if current is _ENDED:
             return
@@ -1015,7 +1022,8 @@ class VisionMachine:
             if following is None:  # named now: as "no next frame" it would run this frame without motion first
                 raise InputTypeError(f"frame {index + 1}: left must be a NumPy array, got NoneType")
             try:
-                image, others, notes = _inputs(current, right, None if following is _ENDED else following)
+                image, others, notes = _inputs(current, right, None if following is _ENDED or not reads_next
+                                               else following)
             except InputError as error:
                 raise type(error)(f"frame {index}: {error}") from None
             yield _Run(self, image, others, progress, memory, notes=notes).result
