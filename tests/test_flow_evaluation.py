@@ -56,6 +56,15 @@ def test_a_sintel_layout_folder_is_read_with_its_invalid_pixels_left_out(rendere
     assert not sequence.mask[:, :4].any() and sequence.mask[:, 4:].any()
 
 
+def test_a_folder_given_as_dot_or_dotdot_is_named_by_its_own_name(rendered, monkeypatch):
+    # The name was read from the path as given: "" for ".", "/.." for "..".
+    root, _ = rendered
+    monkeypatch.chdir(root / "mine" / "Blocks")
+    assert datasets.read_flow_folder(".").name == "Blocks"
+    monkeypatch.chdir(root / "clean" / "blocks" / "gt")
+    assert datasets.read_flow_folder("..").name == "clean/blocks"
+
+
 def test_folders_without_flow_or_frames_are_refused(tmp_path, rendered):
     root, _ = rendered
     with pytest.raises(ValueError, match="no ground-truth flow"):

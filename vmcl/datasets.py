@@ -1121,7 +1121,8 @@ def read_flow_folder(folder) -> FlowSequence:
         mask &= ~invalid_mask
     if flo.name == "correct_yos.flo":  # Yosemite's sky is stored as exactly (1, 0), not measured
         mask &= ~((flow[..., 0] == 1.0) & (flow[..., 1] == 0.0))
-    name = folder.name if flo.parent == folder else f"{folder.parent.name}/{folder.name}"
+    named = folder.resolve()  # "." or ".." has no name of its own
+    name = named.name if flo.parent == folder else f"{named.parent.name}/{named.name}"
     return FlowSequence(name, tuple(frames), index, flow, mask, occluded)
 
 
