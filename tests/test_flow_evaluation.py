@@ -76,7 +76,7 @@ def test_folders_without_flow_or_frames_are_refused(tmp_path, rendered):
     with pytest.raises(ValueError, match="fewer than two numbered frames"):
         datasets.read_flow_folder(lonely)
     shutil.copy(root / "mine" / "Blocks" / "frame10.png", lonely / "frame10.png")
-    with pytest.raises(ValueError, match="no next frame"):
+    with pytest.raises(ValueError, match="flow from frame 12 to 13, which the folder lacks"):
         datasets.read_flow_folder(lonely)
     with pytest.raises(FileNotFoundError):
         datasets.read_flow_folder(tmp_path / "none")
@@ -107,6 +107,37 @@ def test_only_the_frames_run_is_read_and_every_file_has_the_frames_size(tmp_path
     cv2.imwrite(str(folder / "frame13.png"), cv2.resize(picture, None, fx=2, fy=2))
     with pytest.raises(ValueError, match="frame13.png is"):
         datasets.read_flow_folder(folder)
+
+
+def test_a_gap_or_a_frame_of_another_size_ends_the_sequence_there(tmp_path, rendered):
+    # frame10 was streamed as the frame before frame12 where frame11 was missing; a past frame of another size
+    # stopped the whole sequence's scoring.
+    root, _ = rendered
+    folder = tmp_path / "Blocks"
+    shutil.copytree(root / "mine" / "Blocks", folder)
+    (folder / "frame11.png").unlink()
+    sequence = datasets.read_flow_folder(folder)
+    assert [p.name for p in sequence.frames] == ["frame12.png", "frame13.png", "frame14.png"] and sequence.index == 0
+    shutil.copy(root / "mine" / "Blocks" / "frame11.png", folder / "frame11.png")
+    cv2.imwrite(str(folder / "frame10.png"), cv2.imread(str(folder / "frame10.png"))[:32])
+    sequence = datasets.read_flow_folder(folder)
+    assert [p.name for p in sequence.frames][:2] == ["frame11.png", "frame12.png"] and sequence.index == 1
+
+
+def test_frames_of_another_image_type_are_read_and_a_second_flow_is_reported(tmp_path, rendered):
+    root, _ = rendered
+    folder = tmp_path / "data" / "Blocks"
+    folder.mkdir(parents=True)
+    for path in (root / "mine" / "Blocks").glob("frame*.png"):
+        cv2.imwrite(str(folder / (path.stem + ".jpg")), cv2.imread(str(path)), [cv2.IMWRITE_JPEG_QUALITY, 100])
+    shutil.copy(root / "mine" / "Blocks" / "flow12.flo", folder / "flow12.flo")
+    sequence = datasets.read_flow_folder(folder)
+    assert sequence.frames[sequence.index].name == "frame12.jpg"
+    # A user's estimate beside the truth: the folder was passed over without a word.
+    shutil.copy(folder / "flow12.flo", folder / "my_estimate.flo")
+    assert datasets.find_flow_folders(tmp_path / "data") == []
+    [(lacking, why)] = datasets.flow_folders_lacking(tmp_path / "data")
+    assert lacking == folder and "2 flows (flow12.flo, my_estimate.flo)" in why
 
 
 def test_the_evaluation_scores_every_method_against_the_truth(rendered, machine):

@@ -37,6 +37,7 @@ from vmcl.errors import InputTypeError, InputValueError
 __all__ = [
     "FLOW_SCENES",
     "FLO_TAG",
+    "IMAGE_SUFFIXES",
     "STEREO_SCENES",
     "BSDSImage",
     "BSDSSet",
@@ -87,6 +88,11 @@ def _existing(path) -> Path:
     if not path.is_file():
         raise FileNotFoundError(f"no such file: {path}")
     return path
+
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".ppm", ".pgm", ".pbm", ".pnm", ".bmp", ".tif", ".tiff", ".webp")
+"""The file suffixes (any case) of images :func:`read_image` reads: what a folder of frames, a batch's input
+folder or a flow folder's numbered frames are taken from."""
 
 
 def read_image(path) -> np.ndarray:
@@ -1034,13 +1040,14 @@ def _flow_truth(folder: Path) -> tuple[Path, Path | None, Path | None] | None:
 
 
 def _frame_runs(folder: Path) -> dict[str, list[Path]]:
-    """The folder's numbered PNGs by their name without the number ("frame", "frame_", "yos"), each run in
-    number order; Middlebury's colour pictures of the flow (flowNN.png, beside flowNN.flo) left out."""
+    """The folder's numbered images (:data:`IMAGE_SUFFIXES`) by their name with NN for the number
+    ("frameNN.png", "frame_NN.png", "yosNN.png", "frameNN.jpg"), each run in number order; Middlebury's colour
+    pictures of the flow (flowNN.png, beside flowNN.flo) left out."""
     runs: dict[str, list[Path]] = {}
     for path in folder.iterdir():
-        if path.is_file() and path.suffix.lower() == ".png" and _number(path) is not None:
-            runs.setdefault(_NUMBERED.sub("", path.stem), []).append(path)
-    runs.pop("flow", None)
+        if path.is_file() and path.suffix.lower() in IMAGE_SUFFIXES and _number(path) is not None:
+            runs.setdefault(f"{_NUMBERED.sub('', path.stem)}NN{path.suffix.lower()}", []).append(path)
+    runs.pop("flowNN.png", None)
     return {name: sorted(paths, key=lambda p: (_number(p), p.name)) for name, paths in sorted(runs.items())}
 
 
@@ -1062,13 +1069,15 @@ def read_flow_folder(folder) -> FlowSequence:
     Parameters
     ----------
     folder : str or Path
-        Numbered PNG frames (frame07.png ... frame14.png, frame_0001.png ...) and one flow: flowNN.flo
+        Numbered frames (frame07.png ... frame14.png, frame_0001.png ...; PNG or another image of
+        :data:`IMAGE_SUFFIXES`) and one flow: flowNN.flo
         beside them for frame NN (Middlebury), or in other-gt-flow/<scene>/ beside other-data/<scene>/
         (Middlebury's download; other-data-gray too), gt/frame_NNNN.flo with gt/invalid/ and gt/occlusions/
         masks, or Sintel's <pass>/<scene> folders with flow/<scene>/ beside the pass (the last flow is
         scored), or Yosemite's yos9.png, yos10.png and correct_yos.flo. The sequence is named by its folder,
         with its parent's name where the flow is not beside the frames (in gt/, flow/ or other-gt-flow/:
-        "clean/alley_1", "other-data/Dimetrodon").
+        "clean/alley_1", "other-data/Dimetrodon"). Its frames are those numbered one after another around the
+        scored pair and of its size: a gap in the numbers, or a frame of another size, ends them there.
 
     Returns
     -------
@@ -1092,20 +1101,28 @@ def read_flow_folder(folder) -> FlowSequence:
     if len(frames) < 2:
         runs = _frame_runs(folder)
         if len(runs) > 1:
-            raise InputValueError(f"folder {folder} holds numbered PNGs of {len(runs)} names "
-                                  f"({', '.join(repr(n + 'NN.png') for n in runs)}); which are the frames cannot be told")
-        raise InputValueError(f"folder {folder} holds fewer than two numbered frames (*NN.png)")
-    numbers = [_number(p) for p in frames]
+            raise InputValueError(f"folder {folder} holds numbered images of {len(runs)} names "
+                                  f"({', '.join(repr(n) for n in runs)}); which are the frames cannot be told")
+        raise InputValueError(f"folder {folder} holds fewer than two numbered frames (*NN.png or another image)")
+    numbers = [n for p in frames if (n := _number(p)) is not None]  # every frame's (its run is of numbered ones)
     wanted = _number(flo)
     if wanted is None:  # Yosemite's correct_yos.flo: the flow between its two frames
         if len(frames) != 2:
             raise InputValueError(f"{flo} has no frame number and the folder holds {len(frames)} frames, not two")
         wanted = numbers[0]
-    if wanted not in numbers or numbers.index(wanted) + 1 >= len(frames):
-        raise InputValueError(f"{flo} is the flow from frame {wanted}, which the folder lacks or which has no next frame")
+    if wanted not in numbers or numbers.index(wanted) + 1 >= len(frames) or wanted + 1 not in numbers:
+        raise InputValueError(f"{flo} is the flow from frame {wanted} to {wanted + 1}, which the folder lacks")
     index = numbers.index(wanted)
     flow = read_flo(flo)
     size = read_image(frames[index]).shape[:2]
+    # One sequence with the scored pair: frames numbered one after another, of its size (a gap, or a frame of
+    # another size, ends its past and its future there rather than join what does not follow).
+    start, stop = index, index + 2
+    while start > 0 and numbers[start - 1] == numbers[start] - 1 and read_image(frames[start - 1]).shape[:2] == size:
+        start -= 1
+    while stop < len(frames) and numbers[stop] == numbers[stop - 1] + 1 and read_image(frames[stop]).shape[:2] == size:
+        stop += 1
+    frames, index = frames[start:stop], index - start
     # Every file scored together has the frame's size: the flow, the next frame and the masks.
     sized = [(flo, flow.shape[:2]), (frames[index + 1], read_image(frames[index + 1]).shape[:2])]
     invalid_mask = read_mask(invalid) if invalid is not None else None
@@ -1144,9 +1161,10 @@ def find_flow_folders(root, *, depth: int = 4) -> list[Path]:
 
 
 def flow_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
-    """The folders at or below ``root`` that hold a ground-truth flow and one numbered frame, not the two it
-    joins, which :func:`find_flow_folders` therefore leaves out, each with what it lacks (folders of flows
-    alone, such as Sintel's flow/ and gt/, are not sequences and are not listed).
+    """The folders at or below ``root`` that :func:`find_flow_folders` leaves out though they look like flow
+    sequences, each with what it lacks: a ground-truth flow and one numbered frame, not the two it joins, or
+    numbered frames beside several flows, of which the truth cannot be told (folders of flows alone, such as
+    Sintel's flow/ and gt/, are not sequences and are not listed).
 
     Parameters
     ----------
@@ -1159,16 +1177,27 @@ def flow_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
     FileNotFoundError
         If ``root`` is not a folder.
     """
+    def flows(folder: Path) -> list[Path]:
+        return sorted(folder.glob("*.flo"))
+
     def lacking(folder: Path) -> bool:
         # Middlebury's other-gt-flow/<scene> holds the flow and its colour picture flowNN.png, no frame.
-        truths = folder.parent.name.endswith("-gt-flow")
-        return not truths and _flow_truth(folder) is not None and len(_flow_frames(folder)) == 1
+        if folder.parent.name.endswith("-gt-flow"):
+            return False
+        if len(flows(folder)) > 1:  # a user's own estimate beside the truth: which is the truth cannot be told
+            return len(_flow_frames(folder)) >= 2
+        return _flow_truth(folder) is not None and len(_flow_frames(folder)) == 1
 
     found = []
     for folder in _find_folders(root, depth, lacking):
-        truth = _flow_truth(folder)
-        assert truth is not None  # lacking() found it
-        lack = f"it holds the flow {truth[0].name} but one numbered frame (*NN.png), not the two it joins"
+        several = flows(folder)
+        if len(several) > 1:
+            lack = (f"it holds {len(several)} flows ({', '.join(p.name for p in several[:3])}"
+                    f"{' ...' if len(several) > 3 else ''}): which is the ground truth cannot be told")
+        else:
+            truth = _flow_truth(folder)
+            assert truth is not None  # lacking() found it
+            lack = f"it holds the flow {truth[0].name} but one numbered frame (*NN.png), not the two it joins"
         found.append((folder, lack))
     return found
 

@@ -59,6 +59,7 @@ try:
 except ImportError as _missing:  # an optional extra: say which one
     raise ImportError("vmcl.distributed needs Dask's distributed scheduler: pip install 'vmcl[dask]'") from _missing
 
+from vmcl.datasets import IMAGE_SUFFIXES
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.machine import Machine, list_devices
 from vmcl.output_folder import MARKER, is_whole, output_folder
@@ -89,9 +90,6 @@ __all__ = [
     "worker_machine",
     "write_zarr",
 ]
-
-IMAGE_SUFFIXES = (".png", ".ppm", ".pgm", ".pnm", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
-"""The files a batch input folder's images are taken from (what :func:`vmcl.datasets.read_image` reads)."""
 
 # ----------------------------------------------------------------------------------- the worker's side
 

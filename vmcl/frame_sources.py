@@ -16,13 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
-from vmcl.datasets import read_image
+from vmcl.datasets import IMAGE_SUFFIXES, read_image
 from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = ["IMAGE_SUFFIXES", "VIDEO_SUFFIXES", "FrameSource", "frame_order", "is_sequence", "open_frames"]
-
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".ppm", ".pgm", ".pbm", ".bmp", ".tif", ".tiff", ".webp")
-"""The file suffixes (any case) a folder's frames are taken from."""
 
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".mpg", ".mpeg", ".wmv")
 """The file suffixes (any case) read as videos."""
