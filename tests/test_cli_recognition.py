@@ -70,6 +70,19 @@ def test_a_sequence_run_with_models_reports_each_frames_objects(tmp_path, files)
     assert [row.split("|")[4].strip().split(" (")[0] for row in table[1:]] == ["ell", "ell"]
 
 
+def test_an_outputs_settings_name_the_models_folder_from_anywhere(tmp_path, files, monkeypatch):
+    # --models was recorded as given: the output's settings.json, run again from another folder, found none.
+    monkeypatch.chdir(tmp_path)
+    assert main(["learn", "ell", str(files["ell"]), "--library", "library", "-q"]) == 0
+    assert main(["run", str(files["ell"]), "--models", "library", "--config", str(files["fast"]), "--out", "first",
+                 "-q"]) == 0
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    assert main(["run", str(files["ell"]), "--config", str(tmp_path / "first" / "settings.json"), "--out", "again",
+                 "-q"]) == 0
+
+
 def test_learn_says_how_much_of_a_models_boundary_is_inner_markings(tmp_path, files, capsys):
     assert main(["learn", "ell", str(files["ell"]), "--library", str(tmp_path)]) == 0
     assert "0% of its boundary inner markings" in capsys.readouterr().out

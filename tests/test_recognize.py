@@ -587,6 +587,49 @@ def test_an_example_with_fewer_than_two_corners_and_arcs_is_refused(axes):
         learn("e", [image])
 
 
+def test_a_file_that_is_not_an_archive_is_refused_as_not_a_model_file(tmp_path):
+    # A text file was said to hold Python objects; a bare array failed on the context manager protocol.
+    (tmp_path / "text.vmodel.npz").write_text("my notes")
+    np.save(tmp_path / "array.npy", np.zeros(3))
+    (tmp_path / "array.npy").rename(tmp_path / "array.vmodel.npz")
+    for name in ("text", "array"):
+        with pytest.raises(InputError, match=f"{name}.vmodel.npz is not a vmcl model file .it is not a NumPy .npz"):
+            load_model(tmp_path / f"{name}.vmodel.npz")
+
+
+def test_masks_are_named_as_masks_and_may_hold_0_and_255(ell_model):
+    model, image, _ = ell_model
+    mask = np.zeros(image.shape[:2], bool)
+    mask[20:140, 20:140] = True
+    by_bool = learn("ell", [image], masks=[mask])
+    by_bytes = learn("ell", [image], masks=[mask.astype(np.uint8) * 255])
+    assert np.array_equal(by_bool.views[0].points, by_bytes.views[0].points)
+    with pytest.raises(InputError, match=r"masks\[0\] must hold 0 and 1 only"):
+        learn("ell", [image], masks=[mask.astype(np.uint8) * 7])
+
+
+def test_a_name_ending_with_a_space_is_refused(ell_model):
+    # "box " was saved as "box .vmodel.npz", listed alike with "box".
+    _, image, _ = ell_model
+    with pytest.raises(InputError, match="not ending with a space"):
+        learn("box ", [image])
+
+
+def test_a_black_integer_image_is_an_image_and_a_device_image_is_recognised(ell_model):
+    # A black uint8 picture was refused as an edge map in an integer type; a device array was refused.
+    model, image, placement = ell_model
+    library = Library([model])
+    assert recognize(np.zeros((100, 100), np.uint8), library) == []
+    assert recognize(np.zeros((100, 100, 3), np.uint16), library) == []
+    with pytest.raises(InputError, match="edge map must be a bool array"):
+        recognize((image > 0.5).astype(np.uint8), library)
+    from vmcl.machine import default_machine
+
+    on_host = recognize(image, library)
+    on_device = recognize(default_machine().to_device(np.ascontiguousarray(image, np.float32)), library)
+    assert len(on_host) == len(on_device) == 1 and np.allclose(on_host[0].transform, on_device[0].transform)
+
+
 def test_a_picture_whose_noise_rule_leaves_no_edges_says_to_give_its_edge_map():
     # A fine texture everywhere raises the noise estimate's Canny thresholds over its own edges; its edge map
     # at thresholds of the user's choosing is learned.

@@ -311,7 +311,8 @@ def _with_models(config, models: str | None):
     if not Path(models).is_dir() or not any(Path(models).glob(f"*{MODEL_SUFFIX}")):
         raise BadInput(f"--models {models}: not a folder of models (make one with vmcl learn NAME IMAGES... "
                        f"--library {models})")
-    return dataclasses.replace(config, recognition=RecognitionConfig(models=str(models)))
+    # Absolute: an output's settings.json is read again from wherever --config is run.
+    return dataclasses.replace(config, recognition=RecognitionConfig(models=str(Path(models).resolve())))
 
 
 def _run(args) -> int:

@@ -320,18 +320,19 @@ def features_of(image: ArrayLike, *, sigma: float = 1.5, corner: float = 45.0,
                 machine: Machine | None = None) -> Features:
     """The features of an image or an edge map, as :func:`vmcl.recognize.learn` and
     :func:`vmcl.recognize.recognize` take them: a 2-D bool array is an edge map (:func:`edge_features`),
-    anything else an image (:func:`image_features`, with ``sigma``).
+    anything else an image (:func:`image_features`, with ``sigma``): a uint8 edge map of 0 and 255 (as
+    ``cv2.Canny`` gives one) too, whose strokes then have edges of their own; give ``edges > 0``.
 
     Raises
     ------
     vmcl.errors.InputValueError
-        An integer array of only 0 and 1: an edge map or mask in an integer type, which as a picture is
+        A 2-D integer array of 0 and 1 (both): an edge map or mask in an integer type, which as a picture is
         black, and whose Canny edges would be each edge pixel's outline (poses off by a pixel or more).
     """
     if isinstance(image, np.ndarray) and image.ndim == 2 and image.dtype == np.bool_:
         return edge_features(image, corner=corner, machine=machine)
-    if (isinstance(image, np.ndarray) and image.dtype.kind in "ui" and image.size
-            and int(np.max(image)) <= 1 and int(np.min(image)) >= 0):
+    if (isinstance(image, np.ndarray) and image.ndim == 2 and image.dtype.kind in "ui" and image.size
+            and int(np.max(image)) == 1 and int(np.min(image)) == 0):  # (a black picture is none)
         raise InputValueError(f"image holds only the values 0 and 1 ({image.dtype}): an edge map must be a bool "
                               "array (image.astype(bool)); an image, its brightness")
     return image_features(image, sigma=sigma, corner=corner, machine=machine)

@@ -38,7 +38,8 @@ MODEL_SUFFIX = ".vmodel.npz"
 _FORMAT = "vmcl-model"
 _VERSION = 3  # 2: views keep their arcs; 3: which points are the outline's. Older files: no arcs (1), all outline
 _OUTLINE_REACH = 3.0  # px: a boundary point this near the object's outer border is the outline's
-_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9 _.+-]{0,63}")
+_NAME = re.compile(r"[A-Za-z0-9](?:[A-Za-z0-9 _.+-]{0,62}[A-Za-z0-9_.+-])?")  # no space at the end: a name
+# "box " would list as "box"
 _MAX_POINTS = 1500  # boundary points kept per view: enough to verify a pose, few enough to test many
 _LEAST_POINTS = 8  # boundary pixels an example needs to be learned from
 
@@ -153,7 +154,7 @@ def _check_name(name: Any) -> str:
         raise InputTypeError(f"name must be a str, got {type(name).__name__}")
     if not _NAME.fullmatch(name):  # match's $ also matches before a final newline
         raise InputValueError("name must be 1 to 64 letters, digits, spaces or _ . + - (starting with a letter "
-                              f"or digit), got {name!r}")
+                              f"or digit, not ending with a space), got {name!r}")
     return name
 
 
@@ -256,8 +257,8 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
         apart for the views between them to be recognised; 20 degrees apart is tested). Each shows the
         object alone, or with ``masks``. A 2-D bool array is an edge map (a line drawing), as
         :func:`vmcl.recognize.recognize` takes one (:func:`vmcl.recognize.features_of`).
-    masks : sequence of bool (H, W) arrays, optional
-        The object's pixels in each image.
+    masks : sequence of (H, W) arrays, optional
+        The object's pixels in each image: bool, or uint8 of 0 and 1 or of 0 and 255.
     sigma, corner : float
         Canny's smoothing and the corner turn, as :func:`vmcl.recognize.image_features` takes them.
     sources : sequence of str, optional
@@ -278,6 +279,9 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
     if sources is not None and (isinstance(sources, str) or not isinstance(sources, Sequence)
                                 or len(sources) != len(images) or not all(isinstance(x, str) for x in sources)):
         raise InputValueError(f"sources must be a list of one str per image ({len(images)})")
+    if masks is not None:
+        # Named as masks, not as their images; a mask of 0 and 255 (as OpenCV writes one) is taken too.
+        masks = [edge_map(_zero_one(mask), f"masks[{i}]") for i, mask in enumerate(masks)]
     views = []
     for i, image in enumerate(images):
         which = f"images[{i}]" + (f" ({sources[i]})" if sources is not None else "")
@@ -302,6 +306,13 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
             # Which of several examples failed is what the user needs to mend it.
             raise type(error)(f"{which}: {error}") from None
     return Model(name, tuple(views), tuple(sources) if sources is not None else ("array",) * len(views))
+
+
+def _zero_one(mask: Any) -> Any:
+    """A uint8 mask of only 0 and 255 as 0 and 1; anything else as given (for :func:`edge_map` to check)."""
+    if isinstance(mask, np.ndarray) and mask.dtype == np.uint8 and mask.size and set(np.unique(mask)) <= {0, 255}:
+        return (mask == 255).astype(np.uint8)
+    return mask
 
 
 def model_path(folder: str | Path, name: str) -> Path:
@@ -389,6 +400,8 @@ def load_model(path: str | Path) -> Model:
     path = Path(path)
     if not path.is_file():
         raise InputValueError(f"path must be a model file, {path} is not a file")
+    if not zipfile.is_zipfile(path):  # np.load would read another file as a pickle or a bare array
+        raise InputValueError(f"{path} is not a vmcl model file (it is not a NumPy .npz archive)")
     try:
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))

@@ -25,6 +25,7 @@ from typing import Any
 
 import cv2
 import numpy as np
+import pyopencl.array as cl_array
 from scipy import special
 from scipy.spatial import cKDTree
 
@@ -125,9 +126,10 @@ def _features(data: Any, sigma: float, machine: Machine) -> Features:
         labels = np.asarray(data.labels) if data.labels is not None else None
         edges = labels != 0 if labels is not None and labels.any() else np.asarray(data.edges, bool)
         return edge_features(edges, machine=machine)
-    if isinstance(data, np.ndarray):
+    if isinstance(data, (np.ndarray, cl_array.Array)):
         return features_of(data, sigma=sigma, machine=machine)
-    raise InputTypeError("image must be an image or edge map (NumPy array), a vmcl Result or vmcl.recognize.Features, "
+    raise InputTypeError("image must be an image or edge map (a NumPy or device array), a vmcl Result or "
+                         "vmcl.recognize.Features, "
                          f"got {type(data).__name__}")
 
 
