@@ -598,7 +598,7 @@ def test_a_file_that_is_not_an_archive_is_refused_as_not_a_model_file(tmp_path):
 
 
 def test_masks_are_named_as_masks_and_may_hold_0_and_255(ell_model):
-    model, image, _ = ell_model
+    _, image, _ = ell_model
     mask = np.zeros(image.shape[:2], bool)
     mask[20:140, 20:140] = True
     by_bool = learn("ell", [image], masks=[mask])
@@ -617,7 +617,7 @@ def test_a_name_ending_with_a_space_is_refused(ell_model):
 
 def test_a_black_integer_image_is_an_image_and_a_device_image_is_recognised(ell_model):
     # A black uint8 picture was refused as an edge map in an integer type; a device array was refused.
-    model, image, placement = ell_model
+    model, image, _ = ell_model
     library = Library([model])
     assert recognize(np.zeros((100, 100), np.uint8), library) == []
     assert recognize(np.zeros((100, 100, 3), np.uint16), library) == []
