@@ -320,3 +320,25 @@ def test_bad_arguments_are_refused_by_name(tmp_path, call, error, match):
     with pytest.raises(error, match=match) as raised:
         call(tmp_path)
     assert isinstance(raised.value, InputError)
+
+
+@pytest.mark.parametrize("orientation", range(1, 9))
+@pytest.mark.parametrize("grey", [False, True])
+def test_a_jpeg_is_read_upright_as_its_exif_orientation_says(tmp_path, orientation, grey):
+    # Read as stored, a portrait photograph (orientation 6) was matched along its columns. OpenCV's own
+    # reader, which turns a picture upright unless told not to, is the oracle.
+    from PIL import Image
+
+    rng = np.random.default_rng(orientation)
+    picture = cv2.GaussianBlur((rng.random((40, 64, 3)) * 255).astype(np.uint8), (0, 0), 2)
+    picture[:8, :16] = 255  # a corner that tells every turn apart
+    stored = Image.fromarray(picture[..., 0] if grey else picture)
+    exif = Image.Exif()
+    exif[0x0112] = orientation
+    path = tmp_path / "photo.jpg"
+    stored.save(path, exif=exif, quality=95)
+    upright = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE if grey else cv2.IMREAD_COLOR)
+    expected = upright if grey else upright[..., ::-1]
+    read = datasets.read_image(path)
+    assert read.shape == expected.shape and np.array_equal(read, expected)
+    assert read.shape[:2] == ((40, 64) if orientation < 5 else (64, 40))

@@ -26,6 +26,7 @@ import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Literal
 
 import cv2
 import numpy as np
@@ -96,7 +97,8 @@ folder or a flow folder's numbered frames are taken from."""
 
 
 def read_image(path) -> np.ndarray:
-    """Read an 8- or 16-bit image (PNG, PPM/PGM, JPEG) as stored: (H, W) grey or (H, W, 3) RGB.
+    """Read an 8- or 16-bit image (PNG, PPM/PGM, JPEG) as stored: (H, W) grey or (H, W, 3) RGB; a JPEG
+    turned upright as its EXIF orientation says (as viewers show it).
 
     Parameters
     ----------
@@ -149,8 +151,46 @@ def read_image(path) -> np.ndarray:
     if image.ndim == 3:
         if image.shape[2] == 4:
             raise InputValueError(f"{path} has an alpha channel; expected grey or RGB")
-        image = np.ascontiguousarray(image[..., ::-1])
-    return image
+        image = image[..., ::-1]
+    if data.startswith(_JPEG_START):
+        # A camera stores its pictures as its sensor lay and records how to turn them upright (EXIF's
+        # orientation): read unchanged, a portrait photograph was matched along its columns.
+        image = _upright(image, _jpeg_orientation(data))
+    return np.ascontiguousarray(image)
+
+
+def _upright(image: np.ndarray, orientation: int) -> np.ndarray:
+    """The image turned as EXIF ``orientation`` (1 to 8) says to show it (as viewers and PIL's exif_transpose
+    do); as it is for 1 or an unknown value."""
+    turns = {2: lambda a: a[:, ::-1], 3: lambda a: a[::-1, ::-1], 4: lambda a: a[::-1],
+             5: lambda a: a.swapaxes(0, 1), 6: lambda a: np.rot90(a, -1), 7: lambda a: a[::-1, ::-1].swapaxes(0, 1),
+             8: lambda a: np.rot90(a, 1)}
+    return turns[orientation](image) if orientation in turns else image
+
+
+def _jpeg_orientation(data: bytes) -> int:
+    """The EXIF orientation a JPEG records (its APP1 Exif segment's tag 0x0112 in IFD0), 1 where none."""
+    at = 2
+    while at + 4 <= len(data) and data[at] == 0xFF:
+        marker, length = data[at + 1], int.from_bytes(data[at + 2:at + 4], "big")
+        if marker == 0xDA or marker == 0xD9:  # the scan: no more headers
+            break
+        segment = data[at + 4:at + 2 + length]
+        if marker == 0xE1 and segment.startswith(b"Exif\x00\x00") and len(segment) >= 14:
+            tiff = segment[6:]
+            if tiff[:2] not in (b"II", b"MM"):
+                return 1
+            order: Literal["little", "big"] = "little" if tiff[:2] == b"II" else "big"
+            ifd = int.from_bytes(tiff[4:8], order)
+            if ifd + 2 > len(tiff):
+                return 1
+            for k in range(int.from_bytes(tiff[ifd:ifd + 2], order)):
+                entry = tiff[ifd + 2 + 12 * k:ifd + 14 + 12 * k]
+                if len(entry) == 12 and int.from_bytes(entry[:2], order) == 0x0112:
+                    return int.from_bytes(entry[8:10], order)
+            return 1
+        at += 2 + length
+    return 1
 
 
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
