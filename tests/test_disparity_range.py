@@ -110,6 +110,14 @@ def test_one_bound_given_overrides_its_end(near_scene, machine, monkeypatch):
     assert set(spans) == {(-3, found.d_max)}
     assert any(n.startswith(f"stereo: disparity range -3..{found.d_max} px") and "d_min = -3" in n
                for n in result.notes), result.notes
+    assert not any("one disparity is searched" in n for n in result.notes)
+    # A bound beyond the other end found leaves one disparity to search, which the note says.
+    beyond = found.d_max + 5
+    config = Config.from_dict({"stereo": {"d_min": beyond}, "mrf": {"method": "icm"}})
+    result = VisionMachine(config, machine=machine).run(near_scene.left, near_scene.right)
+    assert spans[-1] == (beyond, beyond)
+    assert any(f"beyond the range {found.d_min}..{found.d_max} the images gave, so one disparity is searched" in n
+               for n in result.notes), result.notes
 
 
 def test_flat_images_do_not_decide_and_fall_back_with_a_note(machine):

@@ -146,8 +146,12 @@ def _disparity_range(run: RunInputs) -> tuple[tuple[int, int], str | None]:
     # left): what a pair given in the other order shows. Verging cameras give some negative disparities,
     # not all of them.
     swapped = found.found is not None and found.found[1] < 0
+    # A given end beyond the other end found leaves one disparity to search: said, not left to the figures.
+    crossed = ((s.d_min is not None and s.d_min > found.d_max) or (s.d_max is not None and s.d_max < found.d_min))
     return span, (f"stereo: disparity range {span[0]}..{span[1]} px, {source}"
                   + (f"; the Config gives {given[0]}" if given else "")
+                  + (f", beyond the range {found.d_min}..{found.d_max} the images gave, so one disparity is searched: "
+                     "give both d_min and d_max" if crossed else "")
                   + ("; every confident match has a negative disparity (the nearer, the more negative), as when "
                      "the views are given in the other order: is the left image the left camera's?" if swapped else ""))
 
