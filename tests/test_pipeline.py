@@ -438,6 +438,11 @@ def test_the_dark_image_note_gives_the_factor_that_fills_the_range():
     assert range_note(np.zeros((20, 20), np.uint8), "left") == "left: every pixel is 0 (a black image): the machine sees nothing in it"
     assert "if the data has 1 bit, scale it to the full range first (x 255)" in range_note(
         np.eye(20, dtype=np.uint8), "left")
+    # A float image divided by 255 twice got no note while the same data as an integer image did.
+    twice = np.linspace(0, 1, 400, dtype=np.float32).reshape(20, 20) / 255
+    assert "its brightest pixel is 0.003922" in range_note(twice, "left") and "(x 255" in range_note(twice, "left")
+    assert range_note(np.zeros((20, 20), np.float32), "left").startswith("left: no pixel is above 0")
+    assert range_note(np.full((20, 20), 0.2, np.float32), "left") is None
 
 
 def test_a_float_image_centred_on_zero_is_refused():

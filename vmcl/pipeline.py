@@ -1074,16 +1074,28 @@ def _inputs(left: Any, right: Any, next: Any) -> tuple[np.ndarray, dict[str, np.
 
 
 SMALL_RANGE = 1 / 8
-"""An integer image whose brightest pixel is below this share of its type's full scale gets a note
-(:func:`range_note`): 13-bit data or less stored in uint16, or an 8-bit image darker than 32."""
+"""An image whose brightest pixel is below this share of its type's full scale (of 1 for a float image) gets
+a note (:func:`range_note`): 13-bit data or less stored in uint16, or an 8-bit image darker than 32."""
 
 
 def range_note(array: np.ndarray, name: str) -> str | None:
-    """A note when an integer image (uint8, uint16) uses only the bottom of its type's range: the machine
-    reads integers on their full scale (:func:`as_image`), so such an image is very dark to it, and the
-    stages that read contrast in absolute terms (the probability of boundary, the texture's blobs, the colour
-    and MRF thresholds) see little; nothing is rescaled without being asked. None otherwise."""
-    if array.dtype.kind != "u" or array.dtype.itemsize not in (1, 2) or array.size == 0:
+    """A note when an image uses only the bottom of its range: an integer one (uint8, uint16) of its type's,
+    a float one of [0, 1]. The machine reads integers on their full scale and floats as they are
+    (:func:`as_image`), so such an image is very dark to it, and the stages that read contrast in absolute
+    terms (the probability of boundary, the texture's blobs, the colour and MRF thresholds) see little;
+    nothing is rescaled without being asked. None otherwise."""
+    if array.size == 0:
+        return None
+    if array.dtype.kind == "f":
+        top_value = float(np.max(array))  # as_image has refused what is not finite
+        if top_value >= SMALL_RANGE:
+            return None
+        if top_value <= 0:
+            return f"{name}: no pixel is above 0 (a black image): the machine sees nothing in it"
+        return (f"{name}: its brightest pixel is {top_value:.4g}, and the machine reads a float image on [0, 1], "
+                f"so it sees a very dark image and its contrast-based stages find little; scale it to [0, 1] first "
+                f"(x {1 / top_value:.4g} takes its brightest pixel to 1)")
+    if array.dtype.kind != "u" or array.dtype.itemsize not in (1, 2):
         return None
     scale = full_scale(array.dtype)
     top = int(array.max())
