@@ -48,6 +48,19 @@ def test_unknown_device_lists_the_available_ones(monkeypatch, machine):
         vmcl.Machine("bogus")
 
 
+def test_a_device_is_chosen_by_its_index_as_vmcl_info_numbers_them(monkeypatch):
+    # "1" was read as a part of a name and matched "skylake-avx512", whatever device 1 was.
+    from vmcl.machine import list_devices
+
+    devices = list_devices()
+    monkeypatch.setenv("VMCL_DEVICE", "0")
+    assert vmcl.Machine().device.int_ptr == devices[0].int_ptr
+    with pytest.raises(InputValueError, match=f"VMCL_DEVICE environment variable: index {len(devices)} is outside"):
+        monkeypatch.setenv("VMCL_DEVICE", str(len(devices)))
+        vmcl.Machine()
+    assert vmcl.Machine(str(len(devices) - 1)).device.int_ptr == devices[-1].int_ptr
+
+
 def test_missing_platform_says_how_to_install(monkeypatch):
     monkeypatch.setattr(cl, "get_platforms", list)
     with pytest.raises(vmcl.NoOpenCLPlatformError, match="apt-get install -y pocl-opencl-icd"):

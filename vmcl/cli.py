@@ -784,13 +784,14 @@ def _info(args) -> int:
     except NoOpenCLPlatformError as error:
         print(f"vmcl: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    for device in devices:
+    for index, device in enumerate(devices):
         mark = "*" if device == chosen else " "
         # pyopencl's stub declares to_string in the enum's body, so mypy takes it for a member, not a method.
         kind = cl.device_type.to_string(device.type)  # type: ignore[operator]
-        print(f" {mark} {device.platform.name} / {device.name} ({kind}, {device.max_compute_units} "
+        print(f" {mark} {index}: {device.platform.name} / {device.name} ({kind}, {device.max_compute_units} "
                    f"compute units, {device.global_mem_size // 2**20} MiB)")
-    print(f"chosen (*): VMCL_DEVICE={os.environ.get('VMCL_DEVICE', '')!r}, else the first (GPUs first)")
+    print(f"chosen (*): VMCL_DEVICE={os.environ.get('VMCL_DEVICE', '')!r} (a device's index or a part of its name), "
+          "else the first (GPUs first)")
     print(f"build options: {' '.join(vmcl.default_machine().build_options) or 'none'} (and each kernel's -D defines)")
     print(f"kernel sources: {kernels_dir()}")
     cache = os.environ.get("POCL_CACHE_DIR") or Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "pocl" / "kcache"

@@ -61,7 +61,7 @@ except ImportError as _missing:  # an optional extra: say which one
 
 from vmcl.datasets import IMAGE_SUFFIXES
 from vmcl.errors import InputError, InputTypeError, InputValueError
-from vmcl.machine import Machine, list_devices
+from vmcl.machine import Machine
 from vmcl.output_folder import MARKER, is_whole, output_folder
 from vmcl.pipeline import Config, VisionMachine
 from vmcl.result import Result
@@ -101,14 +101,11 @@ _MAX_CONFIGS = 8  # VisionMachines kept per process, one per Config seen (a swee
 
 
 def _make_machine(device: str | int | None) -> Machine:
-    if isinstance(device, int):
-        devices = list_devices()
-        if not 0 <= device < len(devices):
-            raise InputValueError(f"device: index {device} is outside the {len(devices)} OpenCL device(s) of this "
-                                  "worker (vmcl info lists them)")
-        return Machine(devices[device], profile=True)
-    # Profiling, as a VisionMachine's own Machine: the report's kernel table is that of `vmcl run`.
-    return Machine(device, profile=True)
+    if isinstance(device, int) and device < 0:
+        raise InputValueError(f"device: index {device} is negative; vmcl info lists the devices from 0")
+    # Profiling, as a VisionMachine's own Machine: the report's kernel table is that of `vmcl run`. An index
+    # is given as its digits, which Machine takes as one.
+    return Machine(str(device) if isinstance(device, int) else device, profile=True)
 
 
 def worker_machine() -> Machine:

@@ -120,12 +120,18 @@ def _choose_device(device: cl.Device | str | None) -> cl.Device:
         raise NoOpenCLPlatformError(INSTALL_HINT)
     if wanted is None:
         return devices[0]
+    source = "device" if device is not None else "the VMCL_DEVICE environment variable"
+    if wanted.strip().isdigit():  # an index, as `vmcl info` lists the devices, not a part of a name ("1" of "avx512")
+        index = int(wanted)
+        if index >= len(devices):
+            raise InputValueError(f"{source}: index {index} is outside the {len(devices)} OpenCL device(s) here "
+                                  "(vmcl info lists them)")
+        return devices[index]
     needle = wanted.lower()
     for candidate in devices:
         if needle in candidate.name.lower() or needle in candidate.platform.name.lower():
             return candidate
     names = ", ".join(f"{d.platform.name} / {d.name}" for d in devices)
-    source = "device" if device is not None else "the VMCL_DEVICE environment variable"
     raise InputValueError(f"{source}: no OpenCL device matches {wanted!r}; available: {names}")
 
 
@@ -230,8 +236,9 @@ class Machine:
     Parameters
     ----------
     device : pyopencl.Device or str, optional
-        The device, or a case-insensitive substring of its platform or device name. Default: the
-        ``VMCL_DEVICE`` environment variable, else the first device, GPUs before CPUs.
+        The device, a case-insensitive substring of its platform or device name, or its index among
+        :func:`list_devices` as digits ("1": as ``vmcl info`` numbers them). Default: the ``VMCL_DEVICE``
+        environment variable (the same), else the first device, GPUs before CPUs.
     profile : bool
         Record the device time of every kernel launched through :meth:`launch`; see :meth:`timings`.
     local_size : int, optional
