@@ -61,6 +61,33 @@ def test_a_device_is_chosen_by_its_index_as_vmcl_info_numbers_them(monkeypatch):
     assert vmcl.Machine(str(len(devices) - 1)).device.int_ptr == devices[-1].int_ptr
 
 
+@pytest.mark.parametrize("log, built", [("unable to rename temporary '/x/tempfile_1.cl.tmp'", True),
+                                        ("error: use of undeclared identifier 'X'", False)])
+def test_a_build_that_lost_a_race_for_the_cache_is_built_again(monkeypatch, log, built):
+    # Two processes building one program into PoCL's shared cache at once: the loser's build failed, and the
+    # run ended as an internal error. A build that fails on its source still fails at once.
+    from vmcl import machine as machine_module
+
+    machine = vmcl.Machine()
+    calls = []
+
+    class Flaky(machine_module.RawProgram):  # type: ignore[misc, name-defined]
+        def build(self, options, devices):
+            calls.append(1)
+            if len(calls) == 1:
+                raise cl.RuntimeError(f"clBuildProgram failed: BUILD_PROGRAM_FAILURE - {log}")
+            return super().build(options, devices)
+
+    monkeypatch.setattr(machine_module, "RawProgram", Flaky)
+    monkeypatch.setattr(machine_module, "has_src_build_cache", lambda device: True)
+    if built:
+        assert machine.program("indexing", RACE_TEST=1) is not None and len(calls) == 2
+    else:
+        with pytest.raises(cl.RuntimeError, match="undeclared"):
+            machine.program("indexing", RACE_TEST=2)
+        assert len(calls) == 1
+
+
 def test_missing_platform_says_how_to_install(monkeypatch):
     monkeypatch.setattr(cl, "get_platforms", list)
     with pytest.raises(vmcl.NoOpenCLPlatformError, match="apt-get install -y pocl-opencl-icd"):

@@ -135,6 +135,9 @@ def _choose_device(device: cl.Device | str | None) -> cl.Device:
     raise InputValueError(f"{source}: no OpenCL device matches {wanted!r}; available: {names}")
 
 
+_BUILD_ATTEMPTS = 3  # builds of a program that lost a race for PoCL's cache files
+_CACHE_RACE = "unable to rename temporary"  # PoCL's build log when another process took its cache file
+
 _INCLUDE = re.compile(r'^[ \t]*#[ \t]*include[ \t]+"([^"]+)"[ \t]*$')
 
 
@@ -346,11 +349,20 @@ class Machine:
         its own cache of builds (PoCL, NVIDIA): pyopencl's Program.build adds "-I <its install folder>",
         which the driver's cache key then holds, and a second install (another virtual environment, a
         checkout) would build every kernel again. Elsewhere pyopencl's build, with its own binary cache."""
-        if not has_src_build_cache(self.device):
-            return cl.Program(self.context, source).build(options=options)
-        raw = RawProgram(self.context, source)
-        raw.build(" ".join(options).encode(), [self.device])  # a failure's error holds the build log
-        return cl.Program(raw)
+        for attempt in range(_BUILD_ATTEMPTS):
+            try:
+                if not has_src_build_cache(self.device):
+                    return cl.Program(self.context, source).build(options=options)
+                raw = RawProgram(self.context, source)
+                raw.build(" ".join(options).encode(), [self.device])  # a failure's error holds the build log
+                return cl.Program(raw)
+            except cl.Error as error:
+                # Processes that build one program at once into PoCL's shared cache race for its files ("unable
+                # to rename temporary ..."): the loser's build fails, though its source is sound. Built again,
+                # it finds the winner's binary.
+                if _CACHE_RACE not in str(error) or attempt == _BUILD_ATTEMPTS - 1:
+                    raise
+        raise AssertionError("unreachable")
 
     def kernel(self, family: str, name: str, **defines: Any) -> cl.Kernel:
         """A cached kernel object: fetched from its program once per (family, name, defines). Launch it
