@@ -184,6 +184,22 @@ def test_an_empty_or_truncated_video_is_refused_and_the_earlier_output_kept(tmp_
     assert len(list(open_frames(whole).frames())) == 12
 
 
+def test_a_video_that_ends_before_its_declared_count_is_noted(tmp_path, capsys):
+    # Two frames short of its header's count (within what a container's estimate may be off by), a video
+    # was run in silence.
+    data = _video(tmp_path / "whole.avi", 12).read_bytes()
+    (tmp_path / "short.avi").write_bytes(data[:len(data) - 1200])
+    out = tmp_path / "out"
+    assert main(["run", str(tmp_path / "short.avi"), "--out", str(out), "-q"]) == 0
+    note = "its header declares 12 frames; 10 were read"
+    assert note in capsys.readouterr().err and note in (out / "sequence.md").read_text()
+    # As the right view beside a whole left one, the short video's end was said in Python's terms, no file named.
+    assert main(["run", str(tmp_path / "whole.avi"), str(tmp_path / "short.avi"), "--out", str(tmp_path / "o2"),
+                 "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "rights ended at frame 10" in err and f"right: video {tmp_path / 'short.avi'}" in err, err
+
+
 @pytest.mark.parametrize("stop, status", [(signal.SIGTERM, 143), (signal.SIGHUP, 129)])
 def test_a_run_stopped_by_a_signal_cleans_up_and_says_so(tmp_path, stop, status):
     # SIGTERM (kill, timeout, a CI cancelling) and SIGHUP (a closed terminal) killed the process where it

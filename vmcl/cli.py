@@ -420,10 +420,18 @@ def _run_sequence(args) -> int:
                     writer.add(result, lefts.paths[frames].name if lefts.paths else f"video frame {frames}")
                     frames += 1
                     step(f"frame {frames}")
+                for source in (lefts, rights):
+                    # A video may end a frame or two before the count its header declares (an estimate in some
+                    # containers); fewer than declared is said, not left to be noticed.
+                    if source is not None and source.video is not None and source.count and frames < source.count:
+                        writer.notes.append(f"{source.description}: its header declares {source.count} frames; "
+                                            f"{frames} were read")
             except InputError as error:
                 raise BadInput(_naming_files(str(error), lefts, rights)) from None
             finally:
                 writer.close()
+    for note in writer.notes:
+        print(f"vmcl: note: {note}", file=sys.stderr)
     if writer.noted:
         print(f"vmcl: note: {writer.noted} of the frames have notes; see {Path(args.out) / 'sequence.md'}",
               file=sys.stderr)
@@ -433,7 +441,11 @@ def _run_sequence(args) -> int:
 
 def _naming_files(message: str, lefts, rights) -> str:
     """A stream's error about frame k ("frame k: ...", :meth:`VisionMachine.stream`) with the files of
-    frame k and of the next frame, which its "next" is."""
+    frame k and of the next frame, which its "next" is; one about the two views' lengths with the two
+    sources."""
+    if message.startswith(("rights ended", "rights holds more")):  # the views' lengths: say which sources
+        return (f"{message} (left: {lefts.description}; right: {rights.description})" if rights is not None
+                else message)
     found = re.match(r"frame (\d+): ", message)
     if found is None or not lefts.paths:
         return message

@@ -87,6 +87,7 @@ class SequenceWriter:
         self.rows: list[tuple[str, str, str]] = []  # a row's cells before, in and after the recognised column
         self.recognising = False  # whether any frame was searched for the library's objects
         self.noted = 0  # the frames with notes
+        self.notes: list[str] = []  # notes on the whole sequence, written under the summary's first line
         self.frames = 0
 
     def add(self, result: Result, source: str = "") -> None:
@@ -155,5 +156,5 @@ class SequenceWriter:
         self.writers = {}
         lines = [f"# {self.title}", "", f"{frame_count(self.frames)}; videos: "
                  + (", ".join(f"{stem}.mp4" for stem in sorted(self.scales.keys() | {"cartoon"})) if self.frames else "none"),
-                 "", *self._table(), ""]
+                 *(line for note in self.notes for line in ("", f"Note: {note}")), "", *self._table(), ""]
         (self.folder / "sequence.md").write_text("\n".join(lines), encoding="utf-8")
