@@ -184,6 +184,18 @@ def test_an_empty_or_truncated_video_is_refused_and_the_earlier_output_kept(tmp_
     assert len(list(open_frames(whole).frames())) == 12
 
 
+def test_an_unquoted_glob_is_told_to_be_quoted(tmp_path, sequence, capsys):
+    # The shell gives vmcl the glob's files: argparse said only "unrecognized arguments".
+    frames = sorted(str(p) for p in (sequence / "left").glob("frame_*.png"))
+    with pytest.raises(SystemExit) as stop:
+        main(["run", *frames, "--out", str(tmp_path / "out")])
+    assert stop.value.code == 2
+    assert "a glob of frames must be quoted" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["run", frames[0], "--out", str(tmp_path / "out"), "--no-such-option"])
+    assert "a glob" not in capsys.readouterr().err
+
+
 def test_a_video_that_ends_before_its_declared_count_is_noted(tmp_path, capsys):
     # Two frames short of its header's count (within what a container's estimate may be off by), a video
     # was run in silence.

@@ -973,7 +973,14 @@ def parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``vmcl`` console script; returns the exit status."""
-    args = parser().parse_args(argv)
+    top = parser()
+    args, extra = top.parse_known_args(argv)
+    if extra:
+        hint = ""
+        if args.command == "run" and all(Path(word).exists() for word in extra):
+            # The shell expanded an unquoted glob into its files, which argparse meets as surplus arguments.
+            hint = "; a glob of frames must be quoted, or the shell gives vmcl its files one by one ('frames/*.png')"
+        top.error(f"unrecognized arguments: {' '.join(extra)}{hint}")
     if args.command == "demo" and not 64 <= args.size <= 1024:
         print("vmcl: error: --size must be within 64..1024", file=sys.stderr)
         return EXIT_BAD_INPUT
