@@ -330,6 +330,29 @@ def test_run_refuses_an_empty_out_and_a_frame_rate_for_one_image(tmp_path, image
     assert message in capsys.readouterr().err
 
 
+def test_a_killed_runs_partial_folder_is_removed_by_the_next_run_and_nothing_else(tmp_path):
+    # SIGKILL runs no handler: the hidden partial folder stayed beside the output for good.
+    import socket
+    import subprocess
+    import sys
+
+    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    dead = int(finished.stdout)
+    host = "".join(c if c.isalnum() else "_" for c in socket.gethostname())
+    out = tmp_path / "out"
+    stale = tmp_path / f".out.partial-{host}.{dead}-0a1b2c3d"
+    kept = [tmp_path / f".out.partial-{host}.{os.getpid()}-0a1b2c3d",  # a live process's (this one)
+            tmp_path / f".out.partial-otherhost.{dead}-0a1b2c3d",  # another machine's, on a shared disk
+            tmp_path / f".other.partial-{host}.{dead}-0a1b2c3d",  # beside another output
+            tmp_path / ".out.partial-mine"]  # not a name vmcl gives
+    for folder in (stale, *kept):
+        folder.mkdir()
+        (folder / "fields.npz").write_bytes(b"half")
+    with output_folder(out) as work:
+        (work / "report.html").write_text("new")
+    assert not stale.exists() and all((folder / "fields.npz").exists() for folder in kept)
+
+
 def test_a_changed_folder_is_not_replaced(tmp_path):
     out = tmp_path / "out"
     with output_folder(out) as work:

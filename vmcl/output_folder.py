@@ -15,9 +15,11 @@ import contextlib
 import os
 import secrets
 import shutil
+import socket
 import struct
 import zipfile
 from collections.abc import Callable, Iterator, Sequence
+from glob import escape as glob_escape
 from pathlib import Path
 from typing import BinaryIO
 
@@ -37,10 +39,12 @@ def output_folder(out: Path) -> Iterator[Path]:
 
     ``out`` is checked at once (before the run that fills it): it must be new, empty or a previous vmcl
     output (see the module's docstring), and its parent writable. The hidden folder and any parent
-    folders made for ``out`` vanish if the block fails or is interrupted.
+    folders made for ``out`` vanish if the block fails or is interrupted; those of runs into ``out`` on this
+    machine that were killed where they stood (SIGKILL) are removed first.
     """
     out = out.resolve()  # the hidden folders go beside the real folder, on its file system
     _previous_output(out)
+    _remove_stale_partials(out)
     missing = [folder for folder in (out.parent, *out.parent.parents) if not folder.exists()]
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
@@ -157,13 +161,36 @@ def replace_file(target: Path, write: Callable[[BinaryIO], object]) -> None:
 
 
 def _hidden_folder(out: Path, kind: str) -> Path:
-    """A new hidden folder beside ``out``, made with the umask's mode (mkdtemp's would be 0700)."""
+    """A new hidden folder beside ``out``, made with the umask's mode (mkdtemp's would be 0700), named with
+    this machine and process (so that a later run can tell one a killed run left behind)."""
     while True:
-        folder = out.parent / f".{out.name}.{kind}-{secrets.token_hex(4)}"
+        folder = out.parent / f".{out.name}.{kind}-{_owner()}-{secrets.token_hex(4)}"
         try:
             folder.mkdir()
             return folder
         except FileExistsError:
+            continue
+
+
+def _owner() -> str:
+    """This machine's name and this process's id, as hidden folders are named with them."""
+    return f"{''.join(c if c.isalnum() else '_' for c in socket.gethostname())}.{os.getpid()}"
+
+
+def _remove_stale_partials(out: Path) -> None:
+    """Remove the partial folders beside ``out`` that a run on this machine left when it was killed where it
+    stood (SIGKILL: no handler runs): each names its machine and process, and the process is gone. Another
+    machine's (a shared file system) or a live process's are left alone, and so is every other folder."""
+    host = _owner().rsplit(".", 1)[0]
+    for folder in out.parent.glob(f".{glob_escape(out.name)}.partial-{glob_escape(host)}.*-*"):
+        pid = folder.name[len(f".{out.name}.partial-{host}."):].split("-", 1)[0]
+        if not pid.isdigit() or not folder.is_dir() or folder.is_symlink():
+            continue
+        try:
+            os.kill(int(pid), 0)
+        except ProcessLookupError:
+            shutil.rmtree(folder, ignore_errors=True)
+        except (PermissionError, OverflowError):  # alive under another user, or no pid at all
             continue
 
 
