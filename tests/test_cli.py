@@ -336,7 +336,8 @@ def test_a_killed_runs_partial_folder_is_removed_by_the_next_run_and_nothing_els
     import subprocess
     import sys
 
-    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True,
+                              check=True)
     dead = int(finished.stdout)
     host = "".join(c if c.isalnum() else "_" for c in socket.gethostname())
     out = tmp_path / "out"
