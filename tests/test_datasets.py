@@ -342,3 +342,18 @@ def test_a_jpeg_is_read_upright_as_its_exif_orientation_says(tmp_path, orientati
     read = datasets.read_image(path)
     assert read.shape == expected.shape and np.array_equal(read, expected)
     assert read.shape[:2] == ((40, 64) if orientation < 5 else (64, 40))
+
+
+@pytest.mark.parametrize("maxval, dtype", [(1023, ">u2"), (100, "u1"), (255, "u1"), (65535, ">u2")])
+def test_a_pictures_pnm_maximum_is_its_white(tmp_path, maxval, dtype):
+    # A 10-bit PGM (maxval 1023) was read as 1/64 of full brightness, and one of maxval 100 at 39%, in silence;
+    # maps of data (a disparity, a mask) are still read as stored.
+    values = np.linspace(0, maxval, 24 * 32).round().astype(dtype).reshape(24, 32)
+    path = tmp_path / "grey.pgm"
+    path.write_bytes(f"P5\n# a comment\n32 24\n{maxval}\n".encode() + values.tobytes())
+    stored = datasets.read_image(path)
+    assert np.array_equal(stored, values.astype(stored.dtype))
+    shown = datasets.read_image(path, picture=True)
+    full = np.iinfo(stored.dtype).max
+    assert shown.dtype == stored.dtype and int(shown.max()) == full
+    np.testing.assert_allclose(shown.astype(float) / full, values.astype(float) / maxval, atol=0.5 / full)

@@ -508,7 +508,7 @@ TABLE: tuple[Entry, ...] = (
        kinds={"world": _O, "seed": _I, "noise": _N, "frame": _I}),
     _e("vmcl.scenes:advance", world=make("world"), steps=1, speeds=None, kinds={"world": _O, "steps": _I, "speeds": _OA}),
     # ------------------------------------------------------------------ datasets
-    _e("vmcl.datasets:read_image", path=path("png"), kinds={"path": _P}),
+    _e("vmcl.datasets:read_image", path=path("png"), picture=False, kinds={"path": _P, "picture": _B}),
     _e("vmcl.datasets:read_mask", path=path("png"), value=255, kinds={"path": _P, "value": _I}),
     _e("vmcl.datasets:read_pfm", path=path("pfm"), kinds={"path": _P}),
     _e("vmcl.datasets:write_pfm", path=path("new"), image=IMG, kinds={"path": _P, "image": _A}),

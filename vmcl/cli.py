@@ -154,7 +154,7 @@ def _read(path: str, what: str) -> np.ndarray:
     from vmcl.datasets import read_image
 
     try:
-        image = read_image(path)
+        image = read_image(path, picture=True)
     except FileNotFoundError:
         raise BadInput(f"{what} image {path}: no such file") from None
     except (InputError, OSError) as error:

@@ -96,13 +96,17 @@ IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".ppm", ".pgm", ".pbm", ".pnm", ".bmp
 folder or a flow folder's numbered frames are taken from."""
 
 
-def read_image(path) -> np.ndarray:
+def read_image(path, *, picture: bool = False) -> np.ndarray:
     """Read an 8- or 16-bit image (PNG, PPM/PGM, JPEG) as stored: (H, W) grey or (H, W, 3) RGB; a JPEG
     turned upright as its EXIF orientation says (as viewers show it).
 
     Parameters
     ----------
     path : str or Path
+    picture : bool
+        Read a picture's brightness: a PGM or PPM whose declared maximum (its header's maxval) lies below its
+        type's full scale is scaled to that scale, as viewers show it (a 10-bit PGM's 1023 is white, not
+        1/64 of it). False (the default): the values as stored, as maps of data (a disparity, a mask) need.
 
     Returns
     -------
@@ -156,7 +160,25 @@ def read_image(path) -> np.ndarray:
         # A camera stores its pictures as its sensor lay and records how to turn them upright (EXIF's
         # orientation): read unchanged, a portrait photograph was matched along its columns.
         image = _upright(image, _jpeg_orientation(data))
+    if check_bool(picture, "picture") and (maxval := _pnm_maxval(data)) is not None:
+        full = np.iinfo(image.dtype).max
+        if int(image.max(initial=0)) > maxval:
+            raise InputValueError(f"{path} holds values up to {int(image.max())} above its declared maximum {maxval}")
+        if maxval < full:
+            image = np.round(image.astype(np.float64) * (full / maxval)).astype(image.dtype)
     return np.ascontiguousarray(image)
+
+
+def _pnm_maxval(data: bytes) -> int | None:
+    """A grey or colour PNM's (P2, P3, P5, P6) declared maximum value, None for other files."""
+    if data[:2] not in (b"P2", b"P3", b"P5", b"P6"):
+        return None
+    words: list[bytes] = []
+    for line in data[2:2048].splitlines():
+        words += line.split(b"#", 1)[0].split()
+        if len(words) >= 3:
+            return int(words[2]) if words[2].isdigit() and int(words[2]) > 0 else None
+    return None
 
 
 def _upright(image: np.ndarray, orientation: int) -> np.ndarray:

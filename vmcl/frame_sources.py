@@ -66,7 +66,7 @@ class FrameSource:
         """The frames in order, read one at a time: uint8 or uint16, (H, W) grey or (H, W, 3) RGB."""
         if self.video is None:
             for path in self.paths:
-                yield read_image(path)
+                yield read_image(path, picture=True)
             return
         import cv2
 
