@@ -72,6 +72,23 @@ def test_structurally_salient_edges_couple_the_mrfs(scene, machine):
     assert 0 < result.edges.sum() < canny_edges.sum()
 
 
+@pytest.mark.parametrize("saliency", ["structural", "local"])
+def test_a_pruning_that_keeps_no_edge_says_so(machine, saliency):
+    # A clean step: its edges are all alike in contrast, and the structural threshold fitted on photographs
+    # pruned every one of them with no word.
+    image = np.full((64, 64), 0.2, np.float32)
+    image[:, 32:] = 0.8
+    config = Config.from_dict({"edges": {"saliency": saliency},
+                               "grouping": {"structural_threshold": 1e6, "threshold": 1e6}})
+    result = VisionMachine(config, machine=machine).run(image)
+    assert not result.edges.any()
+    assert any(n.startswith(f"edges: the {saliency} saliency pruning kept none of the") for n in result.notes)
+    kept = VisionMachine(Config.from_dict({"edges": {"saliency": saliency}, "grouping": {"structural_threshold": 0.0,
+                                                                                       "threshold": 0.0}}),
+                         machine=machine).run(image)
+    assert kept.edges.any() and not any("pruning kept none" in n for n in kept.notes)
+
+
 def test_report_shows_the_grouping(scene, machine, tmp_path):
     result = VisionMachine(machine=machine).run(scene.image)
     pictures = images(result)

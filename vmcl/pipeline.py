@@ -1282,6 +1282,7 @@ class _Run:
                       alignment=g.alignment, machine=self.m)
         saliency = self.c.edges.saliency
         if saliency == "local":
+            self._note_pruned_away(found.salient, canny_edges, "local")
             return found, self.m.to_device(found.salient.astype(np.uint8))
         if saliency == "structural":
             strength = on_device(saliency_strength(canny_edges, canny.magnitude, machine=self.m))
@@ -1292,8 +1293,19 @@ class _Run:
             # the network's saliency times the edge's own strength.
             measure = on_device(network.saliency).get() * strength.get()
             kept = (measure >= g.structural_threshold) & canny_edges.get().astype(bool)
+            self._note_pruned_away(kept, canny_edges, "structural")
             return found, self.m.to_device(kept.astype(np.uint8))
         return found, canny_edges
+
+    def _note_pruned_away(self, kept: np.ndarray, canny_edges: cl_array.Array, kind: str) -> None:
+        """A note when the saliency pruning kept none of Canny's edges, which leaves the MRFs coupled to none."""
+        if not np.any(kept) and (found := int(np.count_nonzero(canny_edges.get()))):
+            threshold = self.c.grouping.structural_threshold if kind == "structural" else self.c.grouping.threshold
+            self.notes.append(f"edges: the {kind} saliency pruning kept none of the {found} edge pixels (its "
+                              f"threshold {threshold:g} was fitted on photographs, whose edges differ in contrast "
+                              "and length; an image whose edges are all alike can fall below it): the MRFs are "
+                              "coupled to no brightness edge; lower grouping's threshold or set edges.saliency = "
+                              '"none"')
 
     @contextmanager
     def stage(self, name: str) -> Iterator[None]:
