@@ -83,6 +83,39 @@ def test_eval_edges_reads_a_bsds_folder(tmp_path, capsys):
     assert main(["eval", "edges", "--data", str(tmp_path / "missing"), "-q"]) == 2
 
 
+def test_eval_edges_names_each_image_it_cannot_score_and_scores_the_others(tmp_path, capsys):
+    # A .mat cut short, or without groundTruth, ended in a traceback (exit 1); one of another size was
+    # refused after the whole run, naming no file; one image without its .mat stopped every other's scoring.
+    import cv2
+
+    item = _disc_image(64)
+    cell = np.empty((1, 1), dtype=object)
+    cell[0, 0] = {"Boundaries": item.boundaries[0].astype(np.uint8), "Segmentation": item.segmentations[0]}
+    names = ("good", "cut", "other", "wrong", "missing")
+    for name in names:
+        folder = tmp_path / "bsds" / name
+        folder.mkdir(parents=True)
+        cv2.imwrite(str(folder / f"{name}.jpg"), item.image[..., ::-1], [cv2.IMWRITE_JPEG_QUALITY, 100])
+        if name != "missing":
+            scipy.io.savemat(folder / f"{name}.mat", {"groundTruth": cell} if name != "other" else {"notes": cell})
+    whole = (tmp_path / "bsds" / "cut" / "cut.mat").read_bytes()
+    (tmp_path / "bsds" / "cut" / "cut.mat").write_bytes(whole[:len(whole) // 3])
+    cell[0, 0] = {"Boundaries": item.boundaries[0].T.astype(np.uint8)[:, :40], "Segmentation": item.segmentations[0]}
+    scipy.io.savemat(tmp_path / "bsds" / "wrong" / "wrong.mat", {"groundTruth": cell})
+    left_out: list = []
+    assert [i.name for i in read_bsds_folder(tmp_path / "bsds", left_out=left_out)] == ["good"]
+    assert sorted(p.stem for p, _ in left_out) == ["cut", "missing", "other", "wrong"]
+    with pytest.raises(ValueError, match="images without their ground truth"):
+        read_bsds_folder(tmp_path / "bsds")
+    assert main(["eval", "edges", "--data", str(tmp_path / "bsds"), "--thresholds", "3", "-q"]) == 2
+    captured = capsys.readouterr()
+    assert "ODS F" in captured.out and "1 images" in captured.out
+    for name, why in (("cut", "is not a BSDS ground-truth file"), ("other", "is not a BSDS ground-truth file"),
+                      ("wrong", "is 40 x 64, its image wrong.jpg 64 x 64"), ("missing", "no ground truth")):
+        assert any(line.startswith(f"vmcl: left out {tmp_path / 'bsds' / name / name}.jpg") and why in line
+                   for line in captured.err.splitlines()), (name, captured.err)
+
+
 # On the 10 BSDS500 test images in ../shared: the soft map's ODS F at least 0.66 and at least 0.06 above
 # vmcl Canny's sweep (measured 0.665 and +0.109 with 30 thresholds, benchmarks/results/boundaries.md).
 # Here 15 thresholds keep the matching to a few minutes.

@@ -752,6 +752,7 @@ def _eval_edges(args, root: Path) -> int:
     from vmcl.boundary_evaluation import boundary_maps, score_maps
     from vmcl.datasets import find_bsds_folders, load_bsds, read_bsds_folder
 
+    unscorable: list[tuple[Path, str]] = []  # images that cannot be scored, and why: named, the others scored
     try:
         if (root / "bsds500" / "test").is_dir():  # the shared data sets' folder
             images = load_bsds(root).images
@@ -765,9 +766,12 @@ def _eval_edges(args, root: Path) -> int:
             if len(below) > 1:
                 raise BadInput(f"--data {root}: BSDS500 layouts in {len(below)} folders below it "
                                f"({', '.join(map(str, below[:3]))}{' ...' if len(below) > 3 else ''}): give one")
-            images = read_bsds_folder(below[0] if below else root)
+            images = read_bsds_folder(below[0] if below else root, left_out=unscorable)
     except FileNotFoundError as error:
         raise BadInput(f"--data {root}: {str(error).removeprefix(f'{root}: ')}") from None
+    left_out = [_left_out(image, why) for image, why in unscorable]
+    if not images:
+        return _scored_and_left_out(f"Boundaries under {root}", [], left_out)
     with _progress(args, len(images), "images") as step:
         sets = boundary_maps(images, thresholds=args.thresholds, progress=step)
     rows = [("method", "ODS F", "OIS F", "AP", "ms per image")]
@@ -776,9 +780,8 @@ def _eval_edges(args, root: Path) -> int:
         swept = maps.thresholds > 1
         rows.append((maps.name, _fmt(s.ods_f), _fmt(s.ois_f) if swept else "-",
                      _fmt(s.average_precision) if swept else "-", f"{maps.ms_per_image:.0f}"))
-    _print_table(f"Boundaries (BSDS500 benchmark, {len(images)} images, {args.thresholds} thresholds; "
-                 "match distance 0.0075 of the diagonal)", rows)
-    return 0
+    return _scored_and_left_out(f"Boundaries (BSDS500 benchmark, {len(images)} images, {args.thresholds} thresholds; "
+                                "match distance 0.0075 of the diagonal)", _table_lines(rows), left_out)
 
 
 # -- info ----------------------------------------------------------------------------------------------

@@ -1323,25 +1323,41 @@ _EXPECTED_KEYS = (
 
 
 def _bsds_annotations(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    cells = scipy.io.loadmat(_existing(path))["groundTruth"][0]
-    boundaries = np.stack([c["Boundaries"][0, 0].astype(bool) for c in cells])
-    segmentations = np.stack([c["Segmentation"][0, 0].astype(np.uint16) for c in cells])
+    try:
+        cells = scipy.io.loadmat(_existing(path))["groundTruth"][0]
+        boundaries = np.stack([c["Boundaries"][0, 0].astype(bool) for c in cells])
+        segmentations = np.stack([c["Segmentation"][0, 0].astype(np.uint16) for c in cells])
+    except FileNotFoundError:
+        raise
+    except (OSError, ValueError, KeyError, IndexError, TypeError, NotImplementedError) as error:
+        # A .mat cut short, of another kind, or without the benchmark's groundTruth cells.
+        raise InputValueError(f"{path} is not a BSDS ground-truth file ({type(error).__name__}: {error})") from None
     return boundaries, segmentations
 
 
+def _bsds_item(name: str, image_path: Path, truth: Path) -> BSDSImage:
+    image = read_image(image_path)
+    boundaries, segmentations = _bsds_annotations(truth)
+    if boundaries.shape[1:] != image.shape[:2]:
+        raise InputValueError(f"{truth} is {boundaries.shape[2]} x {boundaries.shape[1]}, its image {image_path.name} "
+                              f"{image.shape[1]} x {image.shape[0]}")
+    return BSDSImage(name, image, boundaries, segmentations, files=(image_path, truth))
+
+
 def _bsds_items(pairs: list[tuple[str, Path, Path]]) -> list[BSDSImage]:
-    return [BSDSImage(name, read_image(image), *_bsds_annotations(truth), files=(image, truth))
-            for name, image, truth in pairs]
+    return [_bsds_item(name, image, truth) for name, image, truth in pairs]
 
 
-def read_bsds_folder(folder, *, split: str = "test") -> list[BSDSImage]:
+def read_bsds_folder(folder, *, split: str = "test", left_out: list[tuple[Path, str]] | None = None
+                     ) -> list[BSDSImage]:
     """The images of a BSDS-layout folder with their human boundaries and segmentations.
 
     Two layouts are read: one folder per image holding ``<id>.jpg`` and ``<id>.mat`` (as under
     ``shared/datasets/bsds500/test``), or the BSDS500 distribution's ``images/`` and ``groundTruth/``
     folders side by side (``BSR/BSDS500/data``; its ``split`` where the folders hold splits: "test" to
-    evaluate, "train" to fit). An image without its ``.mat`` is refused by name; the images are in sorted
-    (string) order of their ids.
+    evaluate, "train" to fit). An image without its ``.mat``, with one that is damaged or of another size,
+    or damaged itself, is refused by name; or, where ``left_out`` (a list) is given, appended to it as
+    (its file, why) and passed over. The images are in sorted (string) order of their ids.
     """
     folder = _as_path(folder, "folder")
     check_choice(split, "split", ("test", "train", "val"))
@@ -1364,10 +1380,21 @@ def read_bsds_folder(folder, *, split: str = "test") -> list[BSDSImage]:
     if not pairs:
         raise FileNotFoundError(f"{folder}: no BSDS images (<id>/<id>.jpg, or images/ and groundTruth/ folders)")
     missing = [str(truth) for _, _, truth in pairs if not truth.is_file()]
-    if missing:
-        raise InputValueError(f"{folder}: images without their ground truth: {', '.join(missing[:3])}"
-                              + (f" and {len(missing) - 3} more" if len(missing) > 3 else ""))
-    return _bsds_items(pairs)
+    if left_out is None:
+        if missing:
+            raise InputValueError(f"{folder}: images without their ground truth: {', '.join(missing[:3])}"
+                                  + (f" and {len(missing) - 3} more" if len(missing) > 3 else ""))
+        return _bsds_items(pairs)
+    items = []
+    for name, image, truth in pairs:
+        if not truth.is_file():
+            left_out.append((image, f"no ground truth {truth}"))
+            continue
+        try:
+            items.append(_bsds_item(name, image, truth))
+        except InputValueError as error:
+            left_out.append((image, str(error)))
+    return items
 
 
 def find_bsds_folders(root, *, depth: int = 4) -> list[Path]:
