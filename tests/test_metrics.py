@@ -261,6 +261,9 @@ _M = np.zeros((4, 5), bool)
     (lambda: metrics.boundary_counts(_D / 2, [_M], thresholds=10**30), ValueError, "thresholds must be a count in"),
     (lambda: metrics.boundary_counts(_D / 2, [_M], max_dist=None), TypeError, "max_dist"),
     (lambda: metrics.boundary_counts(_D / 2, [_M], thin=1), TypeError, "thin must be a bool"),
+    # One annotator's map given bare: its rows were taken for maps, refused for their shape.
+    (lambda: metrics.boundary_counts(_D / 2, _M), ValueError, r"got one \(H, W\) map \(4, 5\): give \[it\]"),
+    (lambda: metrics.boundary_counts(np.full((4, 5), np.nan), [_M]), ValueError, "edge_map has NaN pixels"),
     (lambda: metrics.evaluate_boundaries(None, [[_M]]), TypeError, "edge_maps must be a list"),
     (lambda: metrics.evaluate_boundaries([_D / 2], [None]), TypeError, r"ground_truths\[0\] must be a list"),
     (lambda: metrics.evaluate_boundaries([_D / 2], [[_M]], workers=1.5), TypeError, "workers must be an integer"),

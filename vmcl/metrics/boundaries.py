@@ -80,12 +80,18 @@ def _edge_map(edge_map) -> np.ndarray:
     edge_map = np.asarray(to_host(edge_map, "edge_map"))
     # A bool map is a map of 0s and 1s, checked for its shape like any other.
     edge_map = as_float_field(edge_map.astype(np.uint8) if edge_map.dtype == bool else edge_map, "edge_map", ndim=2)
-    if np.isnan(edge_map).any() or edge_map.min() < 0 or edge_map.max() > 1:
+    if np.isnan(edge_map).any():
+        raise InputValueError("edge_map has NaN pixels; it must hold boundary strengths in [0, 1]")
+    if edge_map.min() < 0 or edge_map.max() > 1:
         raise InputValueError("edge_map must hold boundary strengths in [0, 1] (an 8-bit map: divide by 255)")
     return edge_map
 
 
 def _truth_boundaries(ground_truths, shape: tuple[int, int]) -> list[np.ndarray]:
+    if isinstance(ground_truths, np.ndarray) and ground_truths.ndim == 2:
+        # Its rows would be read as annotators' maps and refused for their shape, with no word of why.
+        raise InputValueError(f"ground_truths must be a list of (H, W) boundary maps, one per annotator, or a "
+                              f"(K, H, W) stack; got one (H, W) map {ground_truths.shape}: give [it]")
     truths = [np.asarray(to_host(g, "ground_truths")) for g in check_sequence(ground_truths, "ground_truths")]
     if not truths:
         raise InputValueError("ground_truths must hold at least one annotator's boundary map")
