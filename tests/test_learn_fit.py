@@ -129,6 +129,11 @@ def test_fit_keeps_an_edited_fit_a_link_and_a_read_only_fit_and_refuses_a_missin
     (["--data", "{missing}"], "no such folder"),
     (["--data", "{data}", "--fix", "beta=1"], "the parameters are alpha"),
     (["--data", "{data}", "--fix", "alpha=x"], "is not a number"),
+    # A held value outside the model's domain was blamed on the examples' fields; a second --fix won in silence.
+    (["--data", "{data}", "--fix", "alpha=-5"], "--fix alpha=-5: fixed['alpha'] must be > 0"),
+    (["--data", "{data}", "--fix", "alpha=0"], "--fix alpha=0: fixed['alpha'] must be > 0"),
+    (["--data", "{data}", "--fix", "coupling=-1"], "--fix coupling=-1: fixed['coupling'] must be > 0"),
+    (["--data", "{data}", "--fix", "alpha=1", "--fix", "alpha=2"], "--fix alpha given twice"),
 ])
 def test_fit_refusals_are_one_line(stereo_data, tmp_path, capsys, args, message):
     (tmp_path / "empty").mkdir()
@@ -137,6 +142,14 @@ def test_fit_refusals_are_one_line(stereo_data, tmp_path, capsys, args, message)
     assert main(["fit", "stereo", *filled, "--out", str(out), "-q"]) == 2
     assert message in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_overlapping_data_folders_count_each_example_once(stereo_data, tmp_path, capsys):
+    # The same scene under two --data roots was two examples: the standard errors fell by the square root of 2.
+    out = tmp_path / "x.toml"
+    assert main(["fit", "stereo", "--data", str(stereo_data), "--data", str(stereo_data / "blocks"), "--data",
+                 str(stereo_data), "--out", str(out), "-q"]) == 0
+    assert "2 example(s)" in capsys.readouterr().out
 
 
 def test_hash_survives_the_toml_round_trip(tmp_path):

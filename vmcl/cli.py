@@ -569,10 +569,14 @@ def _fit(args) -> int:
         raise BadInput(f"--out {out}: the fitted parameters are a TOML file; name it *.toml")
     check_writable(out)  # before the long fit, not after it
     fixed = {"coupling": 1.0} if args.cue in ("stereo", "motion") else {}
+    given: set[str] = set()
     for item in args.fix:
         name, _, value = item.partition("=")
         if name not in PARAMETERS:
             raise BadInput(f"--fix {item}: the parameters are {', '.join(PARAMETERS)}")
+        if name in given:  # the last would win in silence
+            raise BadInput(f"--fix {name} given twice: give each parameter once")
+        given.add(name)
         if value == "free":
             fixed.pop(name, None)
             continue
@@ -582,7 +586,13 @@ def _fit(args) -> int:
             raise BadInput(f"--fix {item}: {value!r} is not a number") from None
     vm = VisionMachine(_config(args.config))
     print(f"Fitting the {args.cue} MRF to the examples under {', '.join(args.data)} ...", file=sys.stderr)
-    found = fit_cue(args.cue, args.data, vm=vm, jump=args.jump, fixed=fixed, refine=args.refine)
+    try:
+        found = fit_cue(args.cue, args.data, vm=vm, jump=args.jump, fixed=fixed, refine=args.refine)
+    except InputError as error:
+        held = re.match(r"fixed\['(\w+)'\]", str(error))  # a held value: the command's --fix, not fixed=
+        if held is None:
+            raise
+        raise BadInput(f"--fix {held.group(1)}={fixed[held.group(1)]:g}: {error}") from None
     written = write_fitted(out, found.tables, found.provenance)
     fit = found.fit
     rows: list[tuple[object, ...]] = [("parameter", "natural (per T)", "standard error", "fitted")]

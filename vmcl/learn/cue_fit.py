@@ -67,7 +67,8 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
         Folders :func:`vmcl.datasets.find_stereo_folders` (stereo) or :func:`vmcl.datasets.find_flow_folders`
         (motion) searches, or BSDS-layout folders (colour, texture: :func:`vmcl.datasets.read_bsds_folder`,
         its training split in the distribution's layout), whose first annotator's segmentation is the
-        desired solution (:func:`vmcl.learn.examples.segmentation_example`).
+        desired solution (:func:`vmcl.learn.examples.segmentation_example`). An example found below several
+        of them is taken once.
     vm : vmcl.pipeline.VisionMachine
         The machine whose measurements are the data (its Config decides the early modules' settings).
     jump : float
@@ -85,9 +86,20 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
     """
     check_choice(cue, "cue", FITTABLE_CUES)
     examples, names, files = [], [], []
+    # Roots that overlap (a folder and one below it, or one given twice) would count an example twice, and
+    # the standard errors would claim that much more certainty.
+    seen: set[Path] = set()
+
+    def new(path: str | Path) -> bool:
+        place = Path(path).resolve()
+        if place in seen:
+            return False
+        seen.add(place)
+        return True
+
     for root in roots:
         if cue == "stereo":
-            for folder in datasets.find_stereo_folders(root):
+            for folder in filter(new, datasets.find_stereo_folders(root)):
                 pair = datasets.read_stereo_folder(folder)
                 mask = pair.masks.get("nonocc", np.isfinite(pair.disparity))
                 measured = _measured(vm, cue, pair.name, pair.left, pair.right)
@@ -98,7 +110,7 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
         elif cue in ("colour", "texture"):
             model = vm.config.mrf.settings(cue).model
             try:
-                images = datasets.read_bsds_folder(root, split="train")
+                images = [item for item in datasets.read_bsds_folder(root, split="train") if new(item.files[0])]
             except FileNotFoundError:
                 images = []
             for item in images:
@@ -109,7 +121,7 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
             # The files the images were read from, links followed as the reading followed them.
             files += [path for item in images for path in item.files]
         else:
-            for folder in datasets.find_flow_folders(root):
+            for folder in filter(new, datasets.find_flow_folders(root)):
                 sequence = datasets.read_flow_folder(folder)
                 first = datasets.read_image(sequence.frames[sequence.index])
                 second = datasets.read_image(sequence.frames[sequence.index + 1])

@@ -517,6 +517,14 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
         if name not in PARAMETERS:
             raise InputValueError(f"fixed: unknown parameter {name!r}; the parameters are {', '.join(PARAMETERS)}")
         check_real(value, f"fixed[{name!r}]")
+    # A held value outside the model's domain was met as a pseudolikelihood "not finite at the start" (blamed on
+    # the examples) or as a "fitted" data weight of 0.
+    if "alpha" in fixed and not (fixed["alpha"] > 0 or (fixed["alpha"] == 0 and sites == "lines")):
+        raise InputValueError(f"fixed['alpha'] must be > 0 (the data term's weight: the model's fields answer to "
+                              f"their data), got {fixed['alpha']}")
+    if kind == "smooth" and "coupling" in fixed and not fixed["coupling"] > 0:
+        raise InputValueError(f"fixed['coupling'] must be > 0 for the smooth kind (the pixels' conditionals are not "
+                              f"finite without it), got {fixed['coupling']}")
     problem = Pseudolikelihood(examples, kind=kind, levels=levels, sites=sites, edge_radius=edge_radius,
                                machine=machine)
     held = dict(fixed)
