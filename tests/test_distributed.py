@@ -482,9 +482,26 @@ def test_batch_zarr_refuses_items_of_different_sizes_before_any_work(tmp_path, c
     _png(data / "b.png", _scene(1, 64).left[:48, :40])
     out = tmp_path / "batch"
     # No scheduler is named and none is needed: the refusal comes before the cluster starts.
-    assert main(["batch", str(data), "--out", str(out), "--zarr", "disparity", "--quiet"]) == 2
+    assert main(["batch", str(data), "--out", str(out), "--zarr", "labels", "--quiet"]) == 2
     error = capsys.readouterr().err
-    assert "--zarr disparity" in error and "64 x 64 (a)" in error and "48 x 40 (b)" in error
+    assert "--zarr labels" in error and "64 x 64 (a)" in error and "48 x 40 (b)" in error
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("field, message", [
+    ("flow", "--zarr flow: no item of the batch has a next frame (--frames), which flow needs"),
+    ("disparity", "--zarr disparity: no item of the batch has a right view"),
+    ("bogus", "--zarr: 'bogus' is not a field of fields.npz"),
+])
+def test_batch_zarr_refuses_a_field_no_item_can_make_before_any_work(tmp_path, capsys, field, message):
+    # Flow without --frames was refused after the whole batch ran; an unknown field was named fields[0].
+    pytest.importorskip("zarr")
+    data = tmp_path / "data"
+    data.mkdir()
+    _png(data / "a.png", _scene(0, 64).left)
+    out = tmp_path / "batch"
+    assert main(["batch", str(data), "--out", str(out), "--zarr", "labels", "--zarr", field, "--quiet"]) == 2
+    assert message in capsys.readouterr().err
     assert not out.exists()
 
 

@@ -849,6 +849,8 @@ def _batch(args) -> int:
             distributed.check_zarr(Path(args.out), items, fields)
         except ImportError as error:
             raise BadInput(str(error)) from None
+        except InputError as error:  # said of the option the user typed, not of the function's argument
+            raise BadInput(re.sub(r"^fields\[\d+\]:", "--zarr:", str(error))) from None
     with distributed.cluster_client(args.scheduler, workers=args.workers, threads=args.threads,
                                     worker_logs=args.debug) as (client, where):
         print(f"{len(items)} item(s) on the {where}", file=sys.stderr)

@@ -850,6 +850,13 @@ def _size_text(size: tuple[int, ...], names: list[str]) -> str:
     return f"{' x '.join(map(str, size))} ({shown})"
 
 
+_FIELDS_NEEDING = {
+    "next": {"raw_flow", "flow", "restored_motion", "motion_line_h", "motion_line_v"},
+    "right": {"sparse_disparity", "first_pass_disparity", "stereo_discontinuity", "half_occluded", "out_of_range",
+              "disparity", "restored_stereo", "stereo_line_h", "stereo_line_v"},
+}  # the fields of fields.npz that a run makes only with that input
+
+
 def check_zarr(out: str | os.PathLike[str], items: Sequence[BatchItem], fields: Sequence[str]) -> None:
     """Refuse, before a batch runs, the ``--zarr`` stores :func:`write_zarr` could not write after it.
 
@@ -870,7 +877,8 @@ def check_zarr(out: str | os.PathLike[str], items: Sequence[BatchItem], fields: 
     ImportError
         The zarr package is missing (it comes with ``pip install 'vmcl[dask]'``).
     ValueError
-        A name that is not a field, items whose images differ in size (one array cannot hold them; the
+        A name that is not a field, a field that no item has the input for (flow without a next frame,
+        disparity without a right view), items whose images differ in size (one array cannot hold them; the
         sizes found are named), or a ``out``/<field>.zarr that vmcl did not write.
     """
     out = _check_out(out)
@@ -883,6 +891,12 @@ def check_zarr(out: str | os.PathLike[str], items: Sequence[BatchItem], fields: 
     _zarr()
     for name in dict.fromkeys(names):
         _zarr_target(out, name)
+        # A field only an input no item has can make (flow: a next frame; disparity: a right view) would be
+        # refused after the whole batch ran.
+        for needed, kinds, how in (("next", ("motion",), "a next frame (--frames)"),
+                                   ("right", ("scene", "pair"), "a right view (a stereo scene or pair)")):
+            if name in _FIELDS_NEEDING[needed] and not any(item.kind in kinds for item in items):
+                raise InputValueError(f"--zarr {name}: no item of the batch has {how}, which {name} needs")
     sizes: dict[tuple[int, ...], list[str]] = {}
     for item in items:
         try:
