@@ -26,8 +26,8 @@ from typing import TYPE_CHECKING
 from .arguments import check_number, real_value
 from .bus import Bus
 from .commands import GALVO_ADDR, LENS_ADDR, STEPPER_ADDR, Cmd, Flag
-from .errors import HardwareError
-from .eye import Eye, EyeStatus
+from .errors import HardwareError, OutOfRange
+from .eye import MIRROR_RANGE, Eye, EyeStatus, line_of_sight
 from .joint import Joint, JointStatus
 from .micros import WATCHDOG_RANGE, GalvoMicro, LensMicro, Micro, StepperMicro
 
@@ -233,13 +233,22 @@ class Head:
 
     def fixate(self, distance: float, *, baseline: float = 0.3, wait: bool = True) -> None:
         """Converge both eyes symmetrically on a point straight ahead at `distance` metres, with the
-        eyes `baseline` metres apart."""
+        eyes `baseline` metres apart. Nearer than the mirrors can turn each eye (about 0.41 m at the
+        default baseline) is refused (OutOfRange, naming the nearest distance) before anything moves."""
         for name, value in (("distance", distance), ("baseline", baseline)):
             number = isinstance(value, (int, float)) and not isinstance(value, bool)
             if not number or not math.isfinite(real_value(value)) or value <= 0:
                 shown = f"{real_value(value):g}" if number else repr(value)
                 raise ValueError(f"{name} must be a positive number of metres, got {shown}")
         half = math.degrees(math.atan2(baseline / 2.0, distance))
+        # The widest the mirrors turn a gaze sideways: nearer than that, the refusal would speak of a gaze
+        # the caller never gave.
+        widest = min(abs(line_of_sight(sign * MIRROR_RANGE, 0.0)[0]) for sign in (1.0, -1.0))
+        if half > widest:
+            nearest = baseline / 2.0 / math.tan(math.radians(widest))
+            raise OutOfRange(f"distance {distance:g} m is nearer than the eyes can converge with a baseline of "
+                             f"{baseline:g} m (each would turn {half:.3g} deg; the mirrors reach {widest:.3g}): "
+                             f"the nearest is {nearest:.3g} m; nothing moved")
         self.left.point(half, 0.0)
         self.right.point(-half, 0.0)
         if wait:

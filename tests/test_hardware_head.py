@@ -314,6 +314,13 @@ def test_fixate_sets_the_vergence(homed):
     assert homed.vergence() == pytest.approx(2 * math.degrees(math.atan(0.15)), abs=0.005)
     homed.fixate(1e9)
     assert homed.vergence() == pytest.approx(0.0, abs=0.005)
+    # Nearer than the mirrors turn the eyes: the refusal spoke of a gaze of 26.6 deg the caller never gave.
+    before = homed.vergence()
+    with pytest.raises(OutOfRange, match=r"distance 0.3 m is nearer .*: the nearest is 0.412 m; nothing moved"):
+        homed.fixate(0.3)
+    assert homed.vergence() == before
+    homed.fixate(0.413)
+    assert homed.vergence() == pytest.approx(2 * math.degrees(math.atan(0.15 / 0.413)), abs=0.005)
 
 
 @pytest.mark.parametrize(
