@@ -472,7 +472,9 @@ __kernel void probability(__global const float *comp, __global const float *tens
     store_bytes(theta + y * W, x0, W, best_o);
 }
 
-/* A pixel keeps its probability when no point one pixel away along the normal has more. */
+/* A pixel keeps its probability when no point one pixel away along the normal has more, and the point on the
+ * normal's side has less: of a plateau along the normal (a flat image's floor, a ridge two pixels wide) one
+ * edge survives, not all of it. */
 __kernel void thin(__global const float *p, __global const uchar *theta, __constant float *directions,
                    __global float *out, __global float *angle, long W, long H)
 {
@@ -482,7 +484,7 @@ __kernel void thin(__global const float *p, __global const uchar *theta, __const
     float c = directions[2 * o], s = directions[2 * o + 1];
     float v = AT(p, x, y);
     float a = bilinear_clamped(p, x + c, y + s, W, H), b = bilinear_clamped(p, x - c, y - s, W, H);
-    AT(out, x, y) = (v >= a && v >= b) ? v : 0.0f;
+    AT(out, x, y) = (v > a && v >= b) ? v : 0.0f;
     // The winning normal's angle in radians, written here so that no separate conversion is built.
     AT(angle, x, y) = (float)o * (M_PI_F / NORIENT);
 }

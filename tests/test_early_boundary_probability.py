@@ -181,6 +181,17 @@ def test_a_flat_image_has_no_gradient_even_at_its_borders():
     assert np.all(found == 0)
 
 
+def test_thinning_leaves_a_flat_image_empty_and_a_wide_ridge_one_pixel_wide():
+    # Equal neighbours along the normal both survived: a flat image's floor probability (0.001) stayed at every
+    # pixel, so the soft map called the whole of a blank frame boundary at any threshold below it.
+    flat = bp.boundary_probability(np.full((40, 40), 0.5, np.float32))
+    assert not flat.probability.any()
+    step = np.full((40, 40), 0.3, np.float32)
+    step[:, 20:] = 0.7
+    thin = bp.boundary_probability(step).probability
+    assert all(np.count_nonzero(row > 0.1) == 1 for row in thin[5:35])
+
+
 def test_the_fit_refuses_the_test_split():
     spec = importlib.util.spec_from_file_location("boundary_fit", FIT_SCRIPT)
     module = importlib.util.module_from_spec(spec)
