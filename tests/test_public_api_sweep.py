@@ -605,7 +605,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.distributed:batch_items", inputs=[path("png")], frames=False, kinds={"inputs": "names", "frames": _B}),
     _e("vmcl.distributed:local_cluster_size", workers=None, threads=None, kinds={"workers": _I, "threads": _I}),
     _e("vmcl.distributed:MachinePlugin", device=None, kinds={"device": _C}),
-    _e("vmcl.distributed:check_zarr", out=make("batch_out"), items=make("batch_items"), fields=["disparity"],
+    _e("vmcl.distributed:check_zarr", out=make("batch_out"), items=make("batch_items"), fields=["labels"],
        kinds={"out": _P, "items": _O, "fields": "names"}),
     _e("vmcl.distributed:write_zarr", out=make("batch_out"), items=make("batch_items"), field="disparity",
        failed=(), kinds={"out": _P, "items": _O, "field": _C, "failed": "names"}),
