@@ -122,6 +122,46 @@ def test_the_report_never_overwrites_a_file_it_did_not_write(run, tmp_path):
     assert mine.read_bytes() == b"the user's own picture"
 
 
+@pytest.mark.parametrize(("kwargs", "match"), [({"title": "bad \ud800"}, "title holds characters"),
+                                               ({"evaluation": {"t": []}}, r"evaluation\['t'\] must be a table"),
+                                               ({"evaluation": {"t": None}}, r"evaluation\['t'\] must be a table")])
+def test_a_bad_title_or_evaluation_is_refused_before_anything_is_written(run, tmp_path, kwargs, match):
+    # They failed after the pictures were written, leaving a folder the next call refused.
+    with pytest.raises(InputError, match=match):
+        write_report(run, tmp_path / "out", **kwargs)
+    assert not (tmp_path / "out").exists()
+    write_report(run, tmp_path / "out")
+
+
+@pytest.mark.parametrize("stem, match", [("../escaped", "names a picture '../escaped'"),
+                                         ('a" onerror="x', "names a picture"),
+                                         ("cartoon", "which another picture of the report has")])
+def test_a_cues_picture_names_are_plain_and_its_own(run, tmp_path, stem, match):
+    # A cue's picture names were file stems unchecked: one wrote outside the folder, one put markup into the
+    # page, one replaced the cartoon.
+    from vmcl import cues
+    from vmcl.cues import CueModule
+    from vmcl.labels import Label
+
+    class Drawing(CueModule):
+        name = "drawing_cue"
+        label = Label.SHADOW
+
+        def measure(self, run):
+            raise AssertionError("not run")
+
+        def pictures(self, result):
+            return {stem: (np.zeros((4, 4, 3), np.uint8), "its picture")}
+
+    cues.register(Drawing())
+    try:
+        with pytest.raises(InputError, match=re.escape(match)):
+            write_report(run, tmp_path / "out")
+    finally:
+        cues.unregister("drawing_cue")
+    assert not (tmp_path / "out").exists() and not (tmp_path / "escaped.png").exists()
+
+
 @pytest.mark.parametrize(("call", "error", "named"), [
     (lambda: disparity_image(np.zeros((0, 16), np.float32)), ValueError, "disparity"),
     (lambda: disparity_image(np.zeros((8, 8), complex)), TypeError, "disparity"),

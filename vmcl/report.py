@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import base64
 import html
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -255,7 +256,16 @@ def images_with_captions(result: Result) -> dict[str, tuple[np.ndarray, str]]:
            "input": (to_uint8(255 * np.repeat(grey[..., None], 3, axis=2) if result.image.ndim == 2
                                else 255 * np.clip(result.image, 0, 1)), _CAPTIONS["input"])}
     for cue in registered():
-        out.update(cue.pictures(result))
+        for stem, picture in cue.pictures(result).items():
+            # A picture's name is its file's stem in the report's folder: a plain name of no other picture's,
+            # or it would be written outside the folder or over another's.
+            if not (isinstance(stem, str) and _PICTURE_NAME.fullmatch(stem)):
+                raise InputValueError(f"cue {cue.name!r}: pictures() names a picture {stem!r}; a name is 1 to 64 "
+                                      "letters, digits, _ or - (it is the picture's file name)")
+            if stem in out or stem in _CAPTIONS:
+                raise InputValueError(f"cue {cue.name!r}: pictures() names a picture {stem!r}, which another "
+                                      "picture of the report has")
+            out[stem] = picture
     edges = np.where(result.edges, int(Cue.BRIGHTNESS), 0).astype(np.uint8)
     out["edges"] = (support_image(result.image, edges), _CAPTIONS["edges"])
     if result.grouping is not None:
@@ -264,6 +274,8 @@ def images_with_captions(result: Result) -> dict[str, tuple[np.ndarray, str]]:
         out["recognition"] = (recognition_image(result.image, result.recognition), _CAPTIONS["recognition"])
     return out
 
+
+_PICTURE_NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
 
 _CAPTIONS = {
     "cartoon": "The cartoon, the discontinuities by label: depth red, orientation purple, albedo blue, "
@@ -337,6 +349,15 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
         raise InputTypeError(f"title must be a str, got {type(title).__name__}")
     if evaluation is not None and not isinstance(evaluation, Mapping):
         raise InputTypeError(f"evaluation must be a mapping of table title to rows, got {type(evaluation).__name__}")
+    # Checked before anything is written: a page that fails half way leaves pictures the next call refuses.
+    try:
+        title.encode("utf-8")
+    except UnicodeEncodeError:
+        raise InputValueError("title holds characters UTF-8 cannot write (a lone surrogate)") from None
+    for name, rows in (evaluation or {}).items():
+        if (not isinstance(rows, Sequence) or isinstance(rows, str) or not rows
+                or not all(isinstance(row, Sequence) and not isinstance(row, str) for row in rows)):
+            raise InputValueError(f"evaluation[{name!r}] must be a table: a header row, then rows (sequences)")
     if not isinstance(folder, (str, Path)):
         raise InputTypeError(f"folder must be a str or Path, got {type(folder).__name__}")
     pictures = images_with_captions(result)
@@ -361,7 +382,7 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
         path.write_bytes(data)
         written[stem] = path
         inline = base64.b64encode(data).decode("ascii")
-        figures.append(f'<figure><img alt="{stem}" src="data:image/png;base64,{inline}">'
+        figures.append(f'<figure><img alt="{html.escape(stem)}" src="data:image/png;base64,{inline}">'
                        f"<figcaption>{html.escape(caption)}</figcaption></figure>")
     sections = [f"<h1>{html.escape(title)}</h1>",
                 (f"<p>{result.image.shape[1]} x {result.image.shape[0]} pixels, "
