@@ -64,6 +64,24 @@ def test_flow_wheel_directions_and_speed():
     np.testing.assert_array_equal(picture[62, 10], [255, 255, 255])  # no motion is white
 
 
+def test_an_infinite_disparity_is_drawn_black_and_leaves_the_scale_to_the_finite_ones():
+    # One inf stretched the colour map to it: two colours in all, a scale reading "inf".
+    disparity = np.linspace(0, 10, 64 * 64, dtype=np.float32).reshape(64, 64)
+    spoiled, unknown = disparity.copy(), disparity.copy()
+    spoiled[0, 0], unknown[0, 0] = np.inf, np.nan
+    drawn = disparity_image(spoiled)
+    assert (drawn[0, 0] == 0).all()
+    np.testing.assert_array_equal(drawn, disparity_image(unknown))  # as an unknown pixel is
+
+
+def test_the_flow_pictures_caption_gives_the_speed_of_full_colour(run):
+    from vmcl.report import images_with_captions
+
+    caption = images_with_captions(run)["flow"][1]
+    fastest = float(np.nanmax(np.hypot(run.flow[..., 0], run.flow[..., 1])))
+    assert f"full colour is its largest speed, {fastest:.2f} px per frame" in caption
+
+
 def test_disparity_scale_runs_from_far_to_near():
     disparity = np.tile(np.linspace(2.0, 10.0, 64, dtype=np.float32), (32, 1))
     disparity[0, 0] = np.nan
@@ -166,6 +184,7 @@ def test_a_cues_picture_names_are_plain_and_its_own(run, tmp_path, stem, match):
     (lambda: disparity_image(np.zeros((0, 16), np.float32)), ValueError, "disparity"),
     (lambda: disparity_image(np.zeros((8, 8), complex)), TypeError, "disparity"),
     (lambda: disparity_image(np.zeros((8, 8), np.float32), vmin="0"), TypeError, "vmin"),
+    (lambda: disparity_image(np.zeros((8, 8), np.float32), vmin=8.0, vmax=2.0), ValueError, "vmin must be below vmax"),
     (lambda: flow_image(np.zeros((0, 16, 2), np.float32)), ValueError, "flow"),
     (lambda: flow_image(np.zeros((8, 8, 3), np.float32)), ValueError, "flow"),
     (lambda: flow_image(np.zeros((8, 8, 2), np.float32), max_flow=np.nan), ValueError, "max_flow"),

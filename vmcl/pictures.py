@@ -37,7 +37,7 @@ def disparity_image(disparity: np.ndarray, *, vmin: float | None = None, vmax: f
 
     Parameters
     ----------
-    disparity : (H, W) float array, NaN where unknown (drawn black)
+    disparity : (H, W) float array, NaN where unknown (drawn black, as are infinite values)
     vmin, vmax : float, optional
         The range of the colour map; default the finite values' range.
 
@@ -47,9 +47,13 @@ def disparity_image(disparity: np.ndarray, *, vmin: float | None = None, vmax: f
     """
     real_host_array(disparity, "disparity", ndims=(2,))
     vmin, vmax = _optional_real(vmin, "vmin"), _optional_real(vmax, "vmax")
+    if vmin is not None and vmax is not None and not vmin < vmax:
+        raise InputValueError(f"vmin must be below vmax, got {vmin} and {vmax}")
     finite = np.isfinite(disparity)
-    low = float(np.nanmin(disparity)) if vmin is None and finite.any() else (vmin or 0.0)
-    high = float(np.nanmax(disparity)) if vmax is None and finite.any() else (vmax or 1.0)
+    # The finite values' range (an infinite value, like a NaN, is drawn black: it would stretch the scale to it).
+    shown = disparity[finite]
+    low = vmin if vmin is not None else (float(shown.min()) if shown.size else 0.0)
+    high = vmax if vmax is not None else (float(shown.max()) if shown.size else 1.0)
     span = max(high - low, 1e-6)
     width = disparity.shape[1]
     scaled = np.where(finite, (disparity - low) / span, 0.0)
