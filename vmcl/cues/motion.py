@@ -105,6 +105,6 @@ class MotionCue(CueModule):
             return {}
         finite = np.isfinite(result.flow).all(axis=-1)
         fastest = float(np.hypot(*result.flow[finite].T).max()) if finite.any() else 0.0
-        return {"flow": (flow_image(result.flow),
-                         "Optical flow (the motion MRF's restoration), Middlebury colour wheel; key top left; "
-                         f"full colour is its largest speed, {fastest:.2f} px per frame")}
+        caption = ("Optical flow (the motion MRF's restoration), Middlebury colour wheel; key top left; "
+                   f"full colour is its largest speed, {fastest:.2f} px per frame")
+        return {"flow": (flow_image(result.flow), caption)}
