@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from vmcl.cm.router import get, send
+from vmcl.errors import InputError
 
 UFUNC_AT = {"sum": np.add, "max": np.maximum, "min": np.minimum, "and": np.bitwise_and, "or": np.bitwise_or}
 
@@ -142,3 +143,10 @@ def test_send_refuses_destinations_beyond_the_device_memory(machine):
 def test_send_refuses_a_combine_of_the_wrong_type(machine):
     with pytest.raises(TypeError, match="combine must be one of"):
         send(np.ones(3, np.float32), np.zeros(3, np.int32), size=2, combine=["sum"], machine=machine)
+
+
+def test_a_float_fill_beyond_float32_names_what_may_be_given():
+    # "fill must be a finite number" was said of a fill that may be NaN or an infinity.
+    with pytest.raises(InputError, match="within float32's range .* or be NaN or an infinity, got -1e"):
+        send(np.array([3.0], np.float32), np.array([0], np.int32), size=2, fill=-1e39)
+    assert np.isinf(send(np.array([3.0], np.float32), np.array([0], np.int32), size=2, fill=np.inf)[1])

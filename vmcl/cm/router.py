@@ -67,6 +67,9 @@ def _fill(fill, dtype: np.dtype):
         if isinstance(fill, (float, np.floating)) and not math.isfinite(fill):
             return dtype.type(fill)
         largest = float(np.finfo(dtype).max)
+        if not isinstance(fill, (bool, np.bool_)) and isinstance(fill, (int, float, np.number)) and abs(fill) > largest:
+            raise InputValueError(f"fill must lie within float32's range (+-{largest:.3g}), or be NaN or an infinity, "
+                                  f"got {fill}")
         return dtype.type(check_real(fill, "fill", minimum=-largest, maximum=largest))
     limits = np.iinfo(dtype)
     return dtype.type(check_int(fill, f"fill (for {dtype} values)", minimum=int(limits.min),
@@ -107,7 +110,9 @@ def send(values: ArrayLike, address: ArrayLike, *, size: int | tuple[int, ...], 
         and as many as the device's memory holds.
     combine : {"overwrite", "sum", "max", "min", "and", "or"}
         How messages to one destination combine. "overwrite": the sender with the highest index wins.
-        "and" / "or": bitwise, integer types only (logical on 0/1 fields).
+        "sum": in ``values``' dtype, so integer sums wrap on overflow as the hardware's adds do (give wider
+        values, int32 for uint8 messages, where they may). "and" / "or": bitwise, integer types only
+        (logical on 0/1 fields).
     fill : scalar
         What destinations that receive no message hold: an integer within the range of integer
         ``values``, a real number (or NaN, or an infinity) within float32's range for float32 ones.

@@ -373,7 +373,7 @@ def canny(image: ArrayLike, *, sigma: float = DEFAULT_SIGMA, low_threshold: floa
     The gradient is the Sobel operator's ([-1 0 1] along the derivative, [1 2 1] across) on the
     smoothed image, so magnitudes are 8 times the brightness slope per pixel: a step of contrast c
     smoothed with sigma peaks near 8 c / (sqrt(2 pi) sigma). These are scikit-image's units: given the
-    same sigma and thresholds (absolute thresholds divided by the dtype's maximum there), the edges agree
+    same sigma and the same thresholds (in the input's own units, for integer images too), the edges agree
     with ``skimage.feature.canny(..., mode="nearest")``. Borders repeat the edge pixel; the outermost
     ring of pixels is never an edge. Weak pixels are maxima >= low and > 0, strong ones maxima >= high.
 
