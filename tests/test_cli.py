@@ -321,6 +321,13 @@ def test_run_says_the_runs_notes_on_stderr(tmp_path, images, capsys):
     assert "vmcl: note:" in err and "very dark image" in err
 
 
+def test_demo_refuses_a_size_for_the_photographed_pair(tmp_path, capsys):
+    # The motorcycle pair was run at its own 741 x 500, --size dropped in silence.
+    assert main(["demo", "--data", "motorcycle", "--size", "64", "--out", str(tmp_path / "out"), "-q"]) == 2
+    assert "--size sets a rendered scene's size" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("arguments, message", [(["--out", ""], "--out must name a folder"),
                                                  (["--out", "{tmp}/out", "--fps", "-5"], "--fps sets a sequence")])
 def test_run_refuses_an_empty_out_and_a_frame_rate_for_one_image(tmp_path, images, capsys, arguments, message):

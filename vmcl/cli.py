@@ -220,6 +220,9 @@ def _fmt(value: float, digits: int = 3) -> str:
 def _demo_inputs(args) -> tuple[str, dict, dict]:
     """(title, images, ground truth) for the demo's data."""
     if args.data == "motorcycle":
+        if args.size is not None:  # it would be run at its own size, the option dropped in silence
+            raise BadInput("--size sets a rendered scene's size; --data motorcycle is a photographed pair of its "
+                           "own size (741 x 500)")
         try:
             from skimage import data
         except ImportError:
@@ -231,12 +234,13 @@ def _demo_inputs(args) -> tuple[str, dict, dict]:
 
     # Seed 2: the shipped labelling weights were fitted to seeds 0 and 1 (benchmarks/labelling.py), so the
     # label scores printed are on an image they did not see.
-    scene = scenes.render(scenes.preset(args.data, shape=(args.size, args.size)), seed=2, noise=0.01)
+    size = DEMO_SIZE if args.size is None else args.size
+    scene = scenes.render(scenes.preset(args.data, shape=(size, size)), seed=2, noise=0.01)
     visible = ~scene.occluded_stereo & np.isfinite(scene.disparity)
     moving = ~scene.occluded_motion & np.isfinite(scene.flow).all(axis=-1)
     truth = {"disparity": np.where(visible, scene.disparity, np.nan), "flow": np.where(moving[..., None], scene.flow, np.nan),
              "labels": scene.labels, "tolerance": scene.tolerance}
-    return (f"vmcl.scenes '{args.data}' at {args.size} x {args.size}",
+    return (f"vmcl.scenes '{args.data}' at {size} x {size}",
             {"left": scene.left, "right": scene.right, "next": scene.left_next}, truth)
 
 
@@ -499,6 +503,9 @@ def recognised_text(detections) -> str:
     return ", ".join(f"{d.name} ({d.score:.2f}) at ({d.boundary[:, 0].mean():.0f}, {d.boundary[:, 1].mean():.0f})"
                      for d in detections) or "nothing"
 
+
+DEMO_SIZE = 256
+"""The side of the scene ``vmcl demo`` renders when ``--size`` is not given."""
 
 DEFAULT_FPS = 10.0
 """The frame rate of a sequence's videos when ``--fps`` is not given."""
@@ -897,7 +904,7 @@ def parser() -> argparse.ArgumentParser:
                       help="output folder: new, empty or a previous vmcl output (default: vmcl-demo)")
     demo.add_argument("--data", default="blocks", choices=(*SCENES, "motorcycle"),
                       help="a vmcl.scenes preset (default: blocks) or scikit-image's Middlebury Motorcycle pair")
-    demo.add_argument("--size", type=int, default=256, help="scene size in pixels (64..1024, default 256)")
+    demo.add_argument("--size", type=int, help=f"a rendered scene's size in pixels (64..1024, default {DEMO_SIZE})")
     demo.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config), or an output's settings.json")
 
     run = commands.add_parser("run", parents=[quiet], help="run the machine on image files or a sequence")
@@ -996,7 +1003,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             # The shell expanded an unquoted glob into its files, which argparse meets as surplus arguments.
             hint = "; a glob of frames must be quoted, or the shell gives vmcl its files one by one ('frames/*.png')"
         top.error(f"unrecognized arguments: {' '.join(extra)}{hint}")
-    if args.command == "demo" and not 64 <= args.size <= 1024:
+    if args.command == "demo" and args.size is not None and not 64 <= args.size <= 1024:
         print("vmcl: error: --size must be within 64..1024", file=sys.stderr)
         return EXIT_BAD_INPUT
     handler = {"demo": _demo, "run": _run, "eval": _eval, "fit": _fit, "info": _info, "batch": _batch,
