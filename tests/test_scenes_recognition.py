@@ -78,3 +78,13 @@ def test_every_object_is_hidden_within_the_range_or_the_scene_is_refused():
         assert all(0.3 <= p.occluded <= 0.5 for p in scene.placements), [p.occluded for p in scene.placements]
     with pytest.raises(ValueError, match="occlusion: no arrangement of 6 object"):
         recognition_scene((128, 128), objects=6, occlusion=(0.3, 0.4))
+
+
+@pytest.mark.parametrize("names, match", [((), "names must name at least one object"),
+                                          (("ell", "ell"), "names must name each object once, got 'ell'")])
+def test_an_example_library_of_no_or_repeated_names_is_refused_by_name(names, match):
+    # An empty tuple gave an empty library; a repeat was refused as "models", which the caller never gave.
+    from vmcl.scenes import example_library
+
+    with pytest.raises(InputError, match=match):
+        example_library(names)

@@ -424,6 +424,11 @@ def example_library(names: tuple[str, ...] | None = None, *,
     if names is not None and (isinstance(names, str) or not isinstance(names, (tuple, list))):
         raise InputTypeError(f"names must be a tuple of object names, got {type(names).__name__}")
     chosen = [o.name for o in OBJECTS] if names is None else [_object(n, "names").name for n in names]
+    if not chosen:
+        raise InputValueError("names must name at least one object (None: all of OBJECTS)")
+    repeated = sorted({name for name in chosen if chosen.count(name) > 1})
+    if repeated:  # else refused by the Library, as "models", which the caller never gave
+        raise InputValueError(f"names must name each object once, got {', '.join(map(repr, repeated))} more than once")
     models, learned = [], {}
     for name in chosen:
         views = example_views(name)
