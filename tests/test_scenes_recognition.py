@@ -88,3 +88,15 @@ def test_an_example_library_of_no_or_repeated_names_is_refused_by_name(names, ma
 
     with pytest.raises(InputError, match=match):
         example_library(names)
+
+
+def test_the_part_of_an_object_beyond_the_image_counts_as_hidden():
+    # A cross 41% outside a small image was said to be 0% hidden: the shares were of its part in the image.
+    scene = recognition_scene((64, 64), objects=1, size=(45, 45), occlusion=(0.0, 0.95), clutter=0, seed=2, noise=0)
+    placement = scene.placements[0]
+    outside = ~((placement.corners >= 0) & (placement.corners <= 63)).all(axis=1)
+    assert outside.sum() >= 4 and placement.occluded > 0.35
+    for seed in range(3):  # every object within the range asked, what lies outside included
+        for p in recognition_scene((64, 64), objects=1, size=(45, 45), occlusion=(0.5, 0.9), clutter=0,
+                                   seed=seed, noise=0).placements:
+            assert 0.5 <= p.occluded <= 0.9

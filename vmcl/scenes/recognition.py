@@ -337,6 +337,19 @@ class _Canvas:
         self.grey[on] = grey
         self.owner[on] = owner
 
+    @staticmethod
+    def whole_area(polygons: list[np.ndarray]) -> int:
+        """The samples the polygons cover together, inside the image or beyond it: drawn on a canvas of their
+        own box, moved by whole pixels (so the samples fall as on the image's)."""
+        corners = np.concatenate(polygons)
+        low = np.floor(corners.min(axis=0)) - 1
+        high = np.ceil(corners.max(axis=0)) + 1
+        box = _Canvas(int(high[1] - low[1]) + 1, int(high[0] - low[0]) + 1, 0.0)
+        covered = np.zeros(box.grey.shape, bool)
+        for polygon in polygons:
+            covered |= box.area(polygon - low)
+        return int(covered.sum())
+
     def area(self, polygon: np.ndarray) -> np.ndarray:
         """The samples inside a polygon (whatever is painted there)."""
         mask = np.zeros(self.grey.shape, np.uint8)
@@ -588,17 +601,21 @@ def _draw_scene(rng: np.random.Generator, shape: tuple[int, int], count: int, na
     placements = []
     for k, (obj, yaw, scale, angle, where, albedo) in enumerate(placed):
         placements.append(_draw(canvas, obj, k, yaw, scale, angle, where, albedo))
-    # One occluder per object, placed again until each object is hidden within the range.
+    # One occluder per object, placed again until each object is hidden within the range. What lies beyond the
+    # image is hidden too: the shares are of the whole object (counted on the image alone, an object half
+    # outside it passed as a little hidden).
     for k, (obj, yaw, scale, angle, where, albedo) in enumerate(placed):
+        faces = [_apply(_similarity(scale, angle, where), face) for face in obj.projected(yaw)[1]]
         own = np.zeros(canvas.grey.shape, bool)
-        for face in obj.projected(yaw)[1]:
-            own |= canvas.area(_apply(_similarity(scale, angle, where), face))
-        total = max(int(own.sum()), 1)
+        for face in faces:
+            own |= canvas.area(face)
+        total = max(_Canvas.whole_area(faces), 1)
+        beyond = total - int(own.sum())
         for _ in range(400):
             at = np.array(where) + rng.normal(0, scale, 2)
             blob = _random_blob(rng, at, scale * rng.uniform(0.6, 1.1))
             hidden = own & (canvas.area(blob) | (canvas.owner != k))
-            if low <= hidden.sum() / total <= high:
+            if low <= (hidden.sum() + beyond) / total <= high:
                 canvas.paint(blob, _grey(rng, [background, *obj.shades(yaw, albedo)]), -3)
                 break
         else:
@@ -608,10 +625,12 @@ def _draw_scene(rng: np.random.Generator, shape: tuple[int, int], count: int, na
         if all(np.hypot(*(at - c)) > 2.2 * s for c, s in zip(centres, (p[2] for p in placed))):
             canvas.paint(_bar(rng, at, rng.uniform(15, 50)), _grey(rng, [background]), -2)
     for k, (obj, yaw, scale, angle, where, albedo) in enumerate(placed):
+        faces = [_apply(_similarity(scale, angle, where), face) for face in obj.projected(yaw)[1]]
         own = np.zeros(canvas.grey.shape, bool)
-        for face in obj.projected(yaw)[1]:
-            own |= canvas.area(_apply(_similarity(scale, angle, where), face))
-        hidden = float((own & (canvas.owner != k)).sum() / max(int(own.sum()), 1))
+        for face in faces:
+            own |= canvas.area(face)
+        total = max(_Canvas.whole_area(faces), 1)
+        hidden = float(((own & (canvas.owner != k)).sum() + total - int(own.sum())) / total)
         p = placements[k]
         placements[k] = Placement(p.name, p.yaw, p.scale, p.angle, p.centre, p.corners, p.corner_ids, hidden)
     return canvas.image(), tuple(placements)
