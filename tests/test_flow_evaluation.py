@@ -201,3 +201,14 @@ def test_the_baselines_take_frames_sliced_from_larger_arrays():
     frame = np.random.default_rng(0).integers(0, 255, (100, 140)).astype(np.uint8)
     for name, method in baselines().items():
         assert method(frame[10:90, 10:130], frame[11:91, 10:130]).shape == (80, 120, 2), name
+
+
+def test_evaluate_sequence_refuses_what_is_not_a_sequence_by_name():
+    # A path or None met an AttributeError; a truthy string was taken for others=True.
+    from vmcl.errors import InputError
+
+    with pytest.raises(InputError, match="sequence must be a vmcl.datasets.FlowSequence"):
+        evaluate_sequence("yosemite")
+    with pytest.raises(InputError, match="others"):
+        evaluate_sequence(datasets.FlowSequence("x", (), 0, np.zeros((2, 2, 2)), np.ones((2, 2), bool), None),
+                          others="no")

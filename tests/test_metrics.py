@@ -264,6 +264,11 @@ _M = np.zeros((4, 5), bool)
     # One annotator's map given bare: its rows were taken for maps, refused for their shape.
     (lambda: metrics.boundary_counts(_D / 2, _M), ValueError, r"got one \(H, W\) map \(4, 5\): give \[it\]"),
     (lambda: metrics.boundary_counts(np.full((4, 5), np.nan), [_M]), ValueError, "edge_map has NaN pixels"),
+    # The .flo marker of an unknown vector (OpenCV's reader keeps it) was scored as motion: an EPE of millions.
+    (lambda: metrics.evaluate_flow(np.zeros((4, 5, 2)), np.full((4, 5, 2), 1.67e9)), ValueError,
+     "beyond 1e.09 px, the .flo format's marker of an unknown one"),
+    (lambda: metrics.evaluate_flow(np.zeros((2, 2, 2)), np.zeros((2, 2, 2)), mask=np.ones((2, 2, 2), bool)), ValueError,
+     r"mask has shape \(2, 2, 2\), ground_truth's pixels has shape \(2, 2\)"),
     (lambda: metrics.evaluate_boundaries(None, [[_M]]), TypeError, "edge_maps must be a list"),
     (lambda: metrics.evaluate_boundaries([_D / 2], [None]), TypeError, r"ground_truths\[0\] must be a list"),
     (lambda: metrics.evaluate_boundaries([_D / 2], [[_M]], workers=1.5), TypeError, "workers must be an integer"),
@@ -282,6 +287,14 @@ def test_bad_arguments_are_refused_by_name(call, error, match):
         call()
     assert isinstance(raised.value, InputError)
 
+
+
+def test_edge_maps_may_be_a_stack():
+    # `if not edge_maps` met a NumPy stack: "the truth value of an array ... is ambiguous".
+    truth = np.zeros((40, 40), bool)
+    truth[20, 5:35] = True
+    stack = np.stack([np.where(truth, 0.8, 0.0)])
+    assert metrics.evaluate_boundaries(stack, [[truth]], thresholds=2).ods_f > 0.9
 
 
 def test_more_workers_than_images_is_one_worker_per_image():

@@ -390,3 +390,18 @@ def test_eval_stereo_notes_scenes_without_ground_truth_and_succeeds(tmp_path, ca
     captured = capsys.readouterr()
     assert "Stereo on 1 Middlebury scene(s)" in captured.out
     assert captured.err.startswith(f"vmcl: note: left out {test_scene}: it holds the two views"), captured.err
+
+
+@pytest.mark.parametrize("shape, match", [((40, 70), "StereoBM's numDisparities plus its block less one"),
+                                          ((15, 100), "larger than the matcher's block")])
+def test_stereobm_is_refused_where_opencv_returns_memory_it_never_wrote(shape, match):
+    # Between numDisparities and numDisparities + block - 2 columns StereoBM returned unwritten memory
+    # (disparities near 2000 px, different each call), which the harness scored; a side equal to the block
+    # raised a bare cv2.error.
+    rng = np.random.default_rng(0)
+    left = (rng.random(shape) * 255).astype(np.uint8)
+    with pytest.raises(InputValueError, match=match):
+        se.opencv_disparity(se.stereo_bm(64), left, np.roll(left, -3, axis=1))
+    wide = (rng.random((40, 200)) * 255).astype(np.uint8)
+    found = se.opencv_disparity(se.stereo_bm(64), wide, np.roll(wide, -3, axis=1))
+    assert np.nanmax(found) < 64

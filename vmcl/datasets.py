@@ -38,6 +38,7 @@ from vmcl.errors import InputTypeError, InputValueError
 __all__ = [
     "FLOW_SCENES",
     "FLO_TAG",
+    "FLO_UNKNOWN_ABOVE",
     "IMAGE_SUFFIXES",
     "STEREO_SCENES",
     "BSDSImage",
@@ -70,7 +71,8 @@ __all__ = [
 FLO_TAG = 202021.25
 """The float32 tag ("PIEH" in ASCII) that opens a Middlebury .flo file."""
 
-_FLO_UNKNOWN_ABOVE = 1e9
+FLO_UNKNOWN_ABOVE = 1e9
+"""A .flo vector whose component exceeds this in magnitude is unknown (Middlebury's flowIO convention)."""
 # Middlebury's flowIO writes unknown vectors as 1e10 (UNKNOWN_FLOW in flowIO.h).
 _FLO_UNKNOWN_WRITTEN = np.float32(1e10)
 
@@ -500,7 +502,7 @@ def read_flo(path, *, raw: bool = False) -> np.ndarray:
         raise InputValueError(f"{path}: header says {width}x{height}, i.e. {expected} bytes, file has {len(data)}")
     flow = np.frombuffer(data[12:], "<f4").reshape(height, width, 2).astype(np.float32)
     if not raw:
-        flow[(np.abs(flow) > _FLO_UNKNOWN_ABOVE).any(axis=-1)] = np.nan
+        flow[(np.abs(flow) > FLO_UNKNOWN_ABOVE).any(axis=-1)] = np.nan
     return flow
 
 

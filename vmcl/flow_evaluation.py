@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from vmcl.cm.core import check_bool
 from vmcl.datasets import FlowSequence, read_image
 from vmcl.errors import InputTypeError
 from vmcl.machine import Machine
@@ -140,6 +141,10 @@ def evaluate_sequence(sequence: FlowSequence, *, config=None, machine: Machine |
     """
     from vmcl.pipeline import VisionMachine
 
+    if not isinstance(sequence, FlowSequence):
+        raise InputTypeError(f"sequence must be a vmcl.datasets.FlowSequence (read_flow_folder's), got "
+                             f"{type(sequence).__name__}")
+    others = check_bool(others, "others")
     vm = VisionMachine(motion_only(config), machine=machine)
     index = sequence.index
     frames = [read_image(path) for path in sequence.frames[:index + 2]]

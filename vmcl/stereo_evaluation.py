@@ -203,8 +203,9 @@ def opencv_disparity(matcher, left: np.ndarray, right: np.ndarray) -> np.ndarray
     matcher : cv2.StereoMatcher
         With minDisparity 0 (:func:`stereo_bm`, :func:`stereo_sgbm`).
     left, right : ndarray
-        uint8 grey or RGB images of one shape (:func:`grey` converts them), at least the matcher's block
-        size on each side; for StereoSGBM, wider than numDisparities plus half the block.
+        uint8 grey or RGB images of one shape (:func:`grey` converts them), larger than the matcher's block
+        on each side; for StereoSGBM, wider than numDisparities plus half the block; for StereoBM, narrower
+        than numDisparities (no value anywhere) or at least numDisparities plus the block less one.
 
     Returns
     -------
@@ -220,14 +221,19 @@ def opencv_disparity(matcher, left: np.ndarray, right: np.ndarray) -> np.ndarray
         raise InputValueError(f"left and right must have one size, got {left.shape[:2]} and {right.shape[:2]}")
     height, width = left.shape[:2]
     block, count = matcher.getBlockSize(), matcher.getNumDisparities()
-    # Below these sizes OpenCV raises errors (StereoBM: the block must fit the image; StereoSGBM: a row
-    # must hold the disparities and half a block), and StereoSGBM's 3-way mode can abort the process.
-    if min(height, width) < block:
-        raise InputValueError(f"left and right must be at least the matcher's block ({block} pixels) on each side, "
-                              f"got {height} x {width}")
+    # Below these sizes OpenCV raises errors (the block must be smaller than the image; StereoSGBM: a row must
+    # hold the disparities and half a block), StereoSGBM's 3-way mode can abort the process, and StereoBM
+    # returns memory it never wrote (disparities of 2000 px, different each call) where a row holds the
+    # disparities but not a block more.
+    if min(height, width) <= block:
+        raise InputValueError(f"left and right must be larger than the matcher's block ({block} pixels) on each "
+                              f"side, got {height} x {width}")
     if isinstance(matcher, cv2.StereoSGBM) and width <= count + block // 2:
         raise InputValueError(f"left and right must be wider than StereoSGBM's numDisparities plus half its block "
                               f"({count} + {block // 2} pixels), got {width}")
+    if isinstance(matcher, cv2.StereoBM) and count <= width < count + block - 1:
+        raise InputValueError(f"left and right must be at least StereoBM's numDisparities plus its block less one "
+                              f"({count} + {block - 1} pixels) wide, got {width}")
     raw = matcher.compute(left, right)
     disparity = raw.astype(np.float32) / np.float32(16)
     disparity[raw < 0] = np.nan

@@ -54,7 +54,7 @@ def evaluated_pixels(truth: np.ndarray, mask, truth_known: np.ndarray) -> np.nda
     if mask is None:
         evaluated = truth_known
     else:
-        evaluated = as_mask(mask, "mask", truth_known.shape, "ground_truth")
+        evaluated = as_mask(mask, "mask", truth_known.shape, "ground_truth's pixels")
         unknown = int(np.count_nonzero(evaluated & ~truth_known))
         if unknown:
             raise InputValueError(f"ground_truth has no value (NaN) at {unknown} pixels inside mask")

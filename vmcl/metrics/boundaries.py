@@ -308,7 +308,7 @@ def evaluate_boundaries(
         check_sequence(truths, f"ground_truths[{k}]")
     if len(edge_maps) != len(ground_truths):
         raise InputValueError(f"{len(edge_maps)} edge_maps but {len(ground_truths)} ground_truths")
-    if not edge_maps:
+    if len(edge_maps) == 0:  # (a stack's truth value is ambiguous)
         raise InputValueError("edge_maps is empty")
     # Workers beyond one per image would idle (and a count beyond the system's limits would not start).
     workers = min(check_int(workers, "workers", minimum=1), len(edge_maps))

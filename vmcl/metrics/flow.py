@@ -12,6 +12,7 @@ from typing import cast
 import numpy as np
 
 from vmcl.cm.core import to_host
+from vmcl.datasets import FLO_UNKNOWN_ABOVE
 from vmcl.errors import InputValueError
 from vmcl.metrics._inputs import as_float_field, evaluated_pixels
 
@@ -124,6 +125,11 @@ def evaluate_flow(flow, ground_truth, *, mask=None) -> FlowScores:
     epe = endpoint_error(flow, ground_truth)
     aae = angular_error(flow, ground_truth)
     truth = np.asarray(to_host(ground_truth, "ground_truth")).astype(np.float64)
+    if np.nanmax(np.abs(truth), initial=0.0) > FLO_UNKNOWN_ABOVE:
+        # The .flo format's marker of an unknown vector (what OpenCV's reader leaves in place): scored as a
+        # motion it made the error millions of pixels.
+        raise InputValueError(f"ground_truth holds vectors beyond {FLO_UNKNOWN_ABOVE:g} px, the .flo format's marker of an "
+                              "unknown one: give those pixels NaN (vmcl.datasets.read_flo does)")
     # endpoint_error has checked that the truth is (H, W, 2), so reducing its last axis leaves an (H, W)
     # array; NumPy's stubs cannot tell that from a scalar.
     truth_known = cast(np.ndarray, np.isfinite(truth).all(axis=-1))
