@@ -20,7 +20,7 @@ from vmcl.cli import main
 from vmcl.datasets import read_image
 from vmcl.errors import InputError, InputTypeError
 from vmcl.output_folder import is_whole, output_folder
-from vmcl.pipeline import Config
+from vmcl.pipeline import Config, VisionMachine
 
 
 @pytest.fixture(scope="module")
@@ -319,6 +319,32 @@ def test_run_says_the_runs_notes_on_stderr(tmp_path, images, capsys):
                  "-q"]) == 0
     err = capsys.readouterr().err
     assert "vmcl: note:" in err and "very dark image" in err
+
+
+def test_settings_name_files_absolute_and_record_arrays(tmp_path, images, monkeypatch):
+    # A relative labels.weights was recorded as typed, so --config settings.json failed from elsewhere; an
+    # array of levels (which the Config takes) broke the recording after the report was written.
+    import json
+    import shutil
+
+    from vmcl import labelling
+    from vmcl.cli import write_output
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    shutil.copy(labelling.WEIGHTS_FILE, tmp_path / "sub" / "w.json")
+    (tmp_path / "rel.toml").write_text('[labels]\nweights = "sub/w.json"\n[mrf]\nmethod = "icm"\n')
+    assert main(["run", str(images["left"]), "--config", "rel.toml", "--out", "first", "-q"]) == 0
+    recorded = json.loads((tmp_path / "first" / "settings.json").read_text())
+    assert recorded["labels"]["weights"] == str(tmp_path / "sub" / "w.json")
+    monkeypatch.chdir(tmp_path / "sub")
+    assert main(["run", str(images["left"]), "--config", str(tmp_path / "first" / "settings.json"), "--out",
+                 "again", "-q"]) == 0
+    config = Config.from_dict({"mrf": {"method": "icm", "stereo": {"levels": np.linspace(0, 10, 11)}}})
+    left = cv2.imread(str(images["left"]))[..., ::-1]
+    right = cv2.imread(str(images["right"]))[..., ::-1]
+    write_output(VisionMachine(config).run(left, right), tmp_path / "arrays", "t")
+    assert json.loads((tmp_path / "arrays" / "settings.json").read_text())["mrf"]["stereo"]["levels"][-1] == 10.0
 
 
 def test_demo_refuses_a_size_for_the_photographed_pair(tmp_path, capsys):

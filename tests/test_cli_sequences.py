@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import signal
 import subprocess
 import sys
@@ -16,6 +17,7 @@ import pytest
 from vmcl import scenes
 from vmcl.cli import main
 from vmcl.frame_sources import frame_order, is_sequence, open_frames
+from vmcl.pipeline import Config
 from vmcl.sequence_output import LEAST_FLOW_SCALE, SequenceWriter
 
 FRAMES = 3
@@ -182,6 +184,17 @@ def test_an_empty_or_truncated_video_is_refused_and_the_earlier_output_kept(tmp_
     with pytest.raises(ValueError, match=r"ended after \d+ of the 12 frames"):
         list(open_frames(tmp_path / "truncated.avi").frames())
     assert len(list(open_frames(whole).frames())) == 12
+
+
+def test_a_sequence_records_its_settings_for_config_to_run_again(tmp_path, sequence):
+    # A sequence's output recorded no settings: --config had nothing to read back.
+    (tmp_path / "mine.toml").write_text('[mrf]\nmethod = "icm"\n[time]\ngain = 2.0\n')
+    out = tmp_path / "out"
+    assert main(["run", str(sequence / "left"), "--config", str(tmp_path / "mine.toml"), "--out", str(out), "-q"]) == 0
+    recorded = Config.from_dict(json.loads((out / "settings.json").read_text()))
+    assert recorded.mrf.method == "icm" and recorded.time.gain == 2.0
+    assert main(["run", str(sequence / "left"), "--config", str(out / "settings.json"), "--out", str(tmp_path / "again"),
+                 "-q"]) == 0
 
 
 def test_an_unquoted_glob_is_told_to_be_quoted(tmp_path, sequence, capsys):

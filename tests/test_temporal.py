@@ -293,6 +293,8 @@ def test_a_stream_without_motion_gives_no_note_of_an_unused_next_frame(machine):
 
 
 @pytest.mark.parametrize("key, value, message", [("gain", -1.0, "time.gain"), ("memory", 0.0, "time.memory"),
+                                                  # beyond float32 they failed mid-stream, naming neither
+                                                  ("gain", 1e39, "time.gain"), ("memory", 1e39, "time.memory"),
                                                   ("tolerance", 0.0, "time.tolerance"), ("jump", -1.0, "time.jump"),
                                                   ("scene_cut", 1.5, "time.scene_cut"), ("warm", 1, "time.warm")])
 def test_time_settings_are_checked_naming_the_key(key, value, message):

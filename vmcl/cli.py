@@ -414,8 +414,10 @@ def _run_sequence(args) -> int:
     fps = check_fps(DEFAULT_FPS if args.fps is None else args.fps, "--fps")  # before the output folder is made:
     # OpenCV's writer would fail after the work
     vm = VisionMachine(config)
+    settings = settings_text(config.to_dict())  # recorded, as a single run's are, for --config to run it again
     frames = 0
     with output_folder(Path(args.out)) as work:
+        (work / SETTINGS_FILE).write_text(settings, encoding="utf-8")
         writer = SequenceWriter(work, fps=fps, title=f"Vision Machine: {lefts.description}")
         with _progress(args, lefts.count or 0, "frames", unit="frame") as step:
             results = vm.stream(_reading(lefts, "left"), _reading(rights, "right") if rights else None)
@@ -491,10 +493,11 @@ def write_output(result, folder: str | os.PathLike, title: str) -> None:
     if taken:
         raise InputValueError(f"folder {folder} already holds {', '.join(taken)}; write into a new or empty folder "
                               "(the vmcl command replaces its own previous output)")
+    settings = settings_text(result.config.to_dict())  # before anything is written: a failure leaves nothing
     write_report(result, folder, title=title)
     # allow_pickle is NumPy's default; naming it tells the type checker that no field of the ** binds it.
     np.savez_compressed(folder / "fields.npz", allow_pickle=True, **result_fields(result))
-    (folder / SETTINGS_FILE).write_text(settings_text(result.config.to_dict()), encoding="utf-8")
+    (folder / SETTINGS_FILE).write_text(settings, encoding="utf-8")
 
 
 def recognised_text(detections) -> str:
@@ -517,15 +520,24 @@ SETTINGS_FILE = "settings.json"
 
 def settings_text(values: dict) -> str:
     """A configuration's values (:meth:`vmcl.pipeline.Config.to_dict`) as the JSON text of :data:`SETTINGS_FILE`:
-    keys sorted, so that two runs with the same settings write the same text."""
+    keys sorted, so that two runs with the same settings write the same text; the files it names
+    (``labels.weights``, ``recognition.models``) absolute, so that ``--config`` reads it from anywhere."""
     import json
 
-    def plain(value):  # a Config holds NumPy scalars as it was given them (np.float32(2.0) for a sigma)
-        if isinstance(value, np.generic):
-            return value.item()
-        raise TypeError(f"a setting of type {type(value).__name__} cannot be recorded")
+    def plain(value):  # a Config holds NumPy values as it was given them (np.float32(2.0) for a sigma)
+        if isinstance(value, (np.generic, np.ndarray)):
+            return value.tolist()
+        raise InputTypeError(f"a setting of type {type(value).__name__} cannot be recorded")
 
+    values = {section: dict(entries) for section, entries in values.items()}
+    for section, key in _FILE_SETTINGS:
+        named = values.get(section, {}).get(key)
+        if isinstance(named, str) and named:
+            values[section][key] = str(Path(named).resolve())
     return json.dumps(values, indent=1, sort_keys=True, default=plain) + "\n"
+
+
+_FILE_SETTINGS = (("labels", "weights"), ("recognition", "models"))  # settings that name a file or folder
 
 
 FIELD_NAMES = ("edges", "support", "labels", "boundary_strength", "hue", "colour_edges", "density", "texture_edges",

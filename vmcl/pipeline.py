@@ -685,8 +685,9 @@ class TimeConfig:
 
     def __post_init__(self) -> None:
         _check_field_types("time", self)
-        check_real(self.gain, "time.gain", minimum=0)
-        check_real(self.memory, "time.memory", above=0)
+        # Bounded as flow_prior is: beyond float32 the carried weights overflow mid-stream.
+        check_real(self.gain, "time.gain", minimum=0, maximum=1e6)
+        check_real(self.memory, "time.memory", above=0, maximum=1e6)
         check_real(self.tolerance, "time.tolerance", above=0)
         check_real(self.jump, "time.jump", above=0)
         check_real(self.scene_cut, "time.scene_cut", above=0, maximum=1)

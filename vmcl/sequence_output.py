@@ -12,7 +12,9 @@ The folder (one that :func:`vmcl.output_folder.output_folder` prepared) receives
   depth throughout. A frame of odd width or height is padded with a black row or column (MPEG-4 frames
   have even sides; the writer would crop the last row and column);
 - ``sequence.md``: per frame, the file it came from, the time taken, the objects recognised (where the run
-  has a model library) and the notes.
+  has a model library) and the notes;
+- ``settings.json`` (written by the command, :data:`vmcl.cli.SETTINGS_FILE`): the run's whole
+  configuration, which ``--config`` reads back.
 
 Videos are MPEG-4 (OpenCV's VideoWriter, fourcc mp4v). Files lie flat in the folder, as
 :mod:`vmcl.output_folder` lists and replaces them.
