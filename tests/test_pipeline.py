@@ -558,3 +558,14 @@ def test_a_registered_cue_that_measures_wrongly_is_named(small_scene, returned, 
             VisionMachine().run(small_scene.left)
     finally:
         unregister("probe")
+
+
+def test_a_file_setting_may_be_a_path():
+    # A pathlib.Path, which the loaders the setting feeds take, was refused: "must be a string or None".
+    from pathlib import Path
+
+    from vmcl import labelling
+
+    given = Config.from_dict({"labels": {"weights": Path(labelling.WEIGHTS_FILE)}})
+    assert given.labels.weights == str(labelling.WEIGHTS_FILE)
+    assert given == Config.from_dict({"labels": {"weights": str(labelling.WEIGHTS_FILE)}})

@@ -122,6 +122,10 @@ def _check_field_types(section: str, values: Any) -> None:
         kinds = spec.type.split(" | ")  # the annotation as written (postponed annotations are strings)
         if value is None and "None" in kinds:
             continue
+        if "str" in kinds and isinstance(value, os.PathLike) and isinstance(os.fspath(value), str):
+            # A file setting given as a pathlib.Path, as the loaders it feeds take one: kept as its text.
+            object.__setattr__(values, spec.name, os.fspath(value))
+            continue
         is_bool = isinstance(value, (bool, np.bool_))
         if any(isinstance(value, _FIELD_TYPES[kind][0]) and (kind == "bool" or not is_bool)
                for kind in kinds if kind != "None"):
