@@ -67,6 +67,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("url", nargs="?", default="sim://", help="sim:// URL with fault and start options")
     parser.add_argument("--rate", type=float, default=1.0, help="virtual seconds per wall-clock second")
     parser.add_argument("--baud", type=int, default=115200, help="baud rate of the simulated line")
+    # The parent is read before the port's name is printed: a parent that exits once it has read the name
+    # could otherwise be gone already, and the server would take its adopter for its parent and never stop.
+    parent = os.getppid()
     args = parser.parse_args(argv)
     try:
         check_number("--rate", args.rate, *RATE_RANGE, "virtual seconds per second")
@@ -79,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     tty.setraw(slave)
     print(os.ttyname(slave), flush=True)
     try:
-        serve(world, master, rate=args.rate, parent=os.getppid())
+        serve(world, master, rate=args.rate, parent=parent)
     except KeyboardInterrupt:
         pass
     finally:
