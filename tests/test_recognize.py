@@ -269,9 +269,9 @@ def _busy_model() -> Model:
     return learn("busy", [picture])
 
 
-def test_the_vote_agrees_with_numpy_where_a_view_fills_many_chunks_of_the_accumulator():
-    # The busy model's region of the accumulator spans many of the runs the counting pass reads one per
-    # work-item; the device's histograms, and so its cutoffs and candidates, are NumPy's.
+def test_the_vote_agrees_with_numpy_where_a_view_gathers_thousands_of_hits():
+    # The busy model's view meets thousands of hits, whose first votes to its slots count them and whose kept
+    # bins the emit pass reads back: the device's histograms, cutoffs and candidates are NumPy's.
     library, _ = example_library()
     index = Index.build(Library([*library.models, _busy_model()]))
     features = image_features(recognition_scene(seed=0).image)
