@@ -146,10 +146,10 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     image : array, Result or Features
         A grey or RGB image (its Canny edges at ``sigma``; a NumPy or device array), a bool edge map, a
         :class:`vmcl.result.Result` (its cartoon's discontinuities; the machine's own recognition stage reads
-        the left image's edges instead, as models are learned from pictures, so the two can differ by a
-        pixel or so) or :class:`vmcl.recognize.features.Features`. The image side's corners are found at a
-        turn of 45 degrees, :func:`vmcl.recognize.learn`'s default ``corner``: a model learned at another
-        finds other corners than the image shows.
+        the left image's edges instead, as models are learned from pictures, so the two can differ) or
+        :class:`vmcl.recognize.features.Features`. The image side's corners are found at a turn of 45
+        degrees, :func:`vmcl.recognize.learn`'s default ``corner``: a model learned at another finds other
+        corners than the image shows.
     library : Library
     transform : {"similarity", "affine", "homography"}
         The pose a 2-D model is aligned by (3-D models' views: at least affine).
@@ -192,8 +192,7 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     neighbours : int
         Each of the image's features (a corner, or an arc's centre) is paired with this many nearest ones
         for indexing, >= 1 (a model view's with its 8 nearest, :func:`vmcl.recognize.index_for`). More
-        pairs gather more chance votes, which compete for the same ``candidates``: raise the two together
-        (with 32 or more and 1024 candidates, OpenCV's box was lost in box_in_scene.png).
+        pairs gather more chance votes, which compete for the same ``candidates``: raise the two together.
         The default was chosen on rendered training scenes (benchmarks/recognition_fit.py): two corners of
         one object may lie farther apart than a dozen of the clutter's.
     regions : int
