@@ -1017,7 +1017,7 @@ class VisionMachine:
         seconds = (_held(frame) for frame in rights) if rights is not None else None
         # The following frame is each frame's next where a cue reads one (motion); given where none does, it
         # would earn every frame the note that it was not used, though the user gave none.
-        reads_next = any("next" in cue.needs and cue.enabled(self.config) for cue in registered())
+        reads_next = any("next" in cue.needs for cue in self.cues(right=True, next=True, rgb=True))
         index, current = 0, next(lefts, _ENDED)  # a None among the frames is a bad frame, not the end
         if current is _ENDED:
             return
