@@ -2,8 +2,8 @@
  *
  * vote: one work-item per hit, a pair of an ordered pair of image corners (a, b) and an entry of the library's
  * table under the pair's invariant key (the host looks the keys up and lists the hits, so that every
- * work-item does the same work: one per image pair looped over buckets of very different lengths). The
- * entry is a model view's corner pair (A, B). The similarity that takes A to a and B to b is
+ * work-item does the same work, rather than one per image pair looping over buckets of very different
+ * lengths). The entry is a model view's corner pair (A, B). The similarity that takes A to a and B to b is
  * z = (b - a) / (B - A) as a complex number, with x' = z (x - A) + a; the entry votes for (view, rotation,
  * log scale, where the view's centre lands) in the 16 bins nearest its pose, in a hashed accumulator.
  * Each view hashes into its own region of the accumulator (a power of two sized by the host to the view's

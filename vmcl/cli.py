@@ -315,8 +315,7 @@ def _with_models(config, models: str | None):
     if not Path(models).is_dir() or not any(Path(models).glob(f"*{MODEL_SUFFIX}")):
         raise BadInput(f"--models {models}: not a folder of models (make one with vmcl learn NAME IMAGES... "
                        f"--library {models})")
-    # Absolute: an output's settings.json is read again from wherever --config is run.
-    return dataclasses.replace(config, recognition=RecognitionConfig(models=str(Path(models).resolve())))
+    return dataclasses.replace(config, recognition=RecognitionConfig(models=str(models)))
 
 
 def _run(args) -> int:
@@ -501,8 +500,8 @@ def write_output(result, folder: str | os.PathLike, title: str) -> None:
 
 
 def recognised_text(detections) -> str:
-    """A run's recognised objects as the command reports them: each name with its score and where its
-    view's centre lands, or "nothing"."""
+    """A run's recognised objects as the command reports them: each name with its score and the mean of
+    its boundary points in the image, or "nothing"."""
     return ", ".join(f"{d.name} ({d.score:.2f}) at ({d.boundary[:, 0].mean():.0f}, {d.boundary[:, 1].mean():.0f})"
                      for d in detections) or "nothing"
 

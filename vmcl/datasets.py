@@ -26,7 +26,6 @@ import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Literal
 
 import cv2
 import numpy as np
@@ -158,10 +157,6 @@ def read_image(path, *, picture: bool = False) -> np.ndarray:
         if image.shape[2] == 4:
             raise InputValueError(f"{path} has an alpha channel; expected grey or RGB")
         image = image[..., ::-1]
-    if data.startswith(_JPEG_START):
-        # A camera stores its pictures as its sensor lay and records how to turn them upright (EXIF's
-        # orientation): read unchanged, a portrait photograph was matched along its columns.
-        image = _upright(image, _jpeg_orientation(data))
     if check_bool(picture, "picture") and (maxval := _pnm_maxval(data)) is not None:
         full = np.iinfo(image.dtype).max
         if int(image.max(initial=0)) > maxval:
@@ -181,40 +176,6 @@ def _pnm_maxval(data: bytes) -> int | None:
         if len(words) >= 3:
             return int(words[2]) if words[2].isdigit() and int(words[2]) > 0 else None
     return None
-
-
-def _upright(image: np.ndarray, orientation: int) -> np.ndarray:
-    """The image turned as EXIF ``orientation`` (1 to 8) says to show it (as viewers and PIL's exif_transpose
-    do); as it is for 1 or an unknown value."""
-    turns = {2: lambda a: a[:, ::-1], 3: lambda a: a[::-1, ::-1], 4: lambda a: a[::-1],
-             5: lambda a: a.swapaxes(0, 1), 6: lambda a: np.rot90(a, -1), 7: lambda a: a[::-1, ::-1].swapaxes(0, 1),
-             8: lambda a: np.rot90(a, 1)}
-    return turns[orientation](image) if orientation in turns else image
-
-
-def _jpeg_orientation(data: bytes) -> int:
-    """The EXIF orientation a JPEG records (its APP1 Exif segment's tag 0x0112 in IFD0), 1 where none."""
-    at = 2
-    while at + 4 <= len(data) and data[at] == 0xFF:
-        marker, length = data[at + 1], int.from_bytes(data[at + 2:at + 4], "big")
-        if marker == 0xDA or marker == 0xD9:  # the scan: no more headers
-            break
-        segment = data[at + 4:at + 2 + length]
-        if marker == 0xE1 and segment.startswith(b"Exif\x00\x00") and len(segment) >= 14:
-            tiff = segment[6:]
-            if tiff[:2] not in (b"II", b"MM"):
-                return 1
-            order: Literal["little", "big"] = "little" if tiff[:2] == b"II" else "big"
-            ifd = int.from_bytes(tiff[4:8], order)
-            if ifd + 2 > len(tiff):
-                return 1
-            for k in range(int.from_bytes(tiff[ifd:ifd + 2], order)):
-                entry = tiff[ifd + 2 + 12 * k:ifd + 14 + 12 * k]
-                if len(entry) == 12 and int.from_bytes(entry[:2], order) == 0x0112:
-                    return int.from_bytes(entry[8:10], order)
-            return 1
-        at += 2 + length
-    return 1
 
 
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -272,16 +233,20 @@ def _decode(data: bytes) -> tuple[np.ndarray | None, str]:
     descriptor is caught around the call.
     """
     array = np.frombuffer(data, np.uint8)
+    # IMREAD_UNCHANGED keeps depth and alpha but skips the EXIF orientation; a JPEG (no alpha) is decoded as
+    # OpenCV turns it upright: a camera stores its pictures as its sensor lay, and a portrait photograph read
+    # as stored was matched along its columns.
+    flags = cv2.IMREAD_ANYCOLOR | cv2.IMREAD_ANYDEPTH if data.startswith(_JPEG_START) else cv2.IMREAD_UNCHANGED
     sys.stderr.flush()
     try:
         saved = os.dup(2)
     except OSError:  # no stderr to catch (a daemon): decode without
-        return cv2.imdecode(array, cv2.IMREAD_UNCHANGED), ""
+        return cv2.imdecode(array, flags), ""
     try:
         with tempfile.TemporaryFile() as caught:
             os.dup2(caught.fileno(), 2)
             try:
-                image = cv2.imdecode(array, cv2.IMREAD_UNCHANGED)
+                image = cv2.imdecode(array, flags)
             finally:
                 os.dup2(saved, 2)
             caught.seek(0)

@@ -107,4 +107,5 @@ class MotionCue(CueModule):
         fastest = float(np.hypot(*result.flow[finite].T).max()) if finite.any() else 0.0
         caption = ("Optical flow (the motion MRF's restoration), Middlebury colour wheel; key top left; "
                    f"full colour is its largest speed, {fastest:.2f} px per frame")
-        return {"flow": (flow_image(result.flow), caption)}
+        # The picture's scale is the caption's speed: one maximum for both.
+        return {"flow": (flow_image(result.flow, max_flow=fastest if fastest > 0 else None), caption)}

@@ -531,9 +531,9 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     # Each live view's histogram row: a slot holds at most 16 votes of each of the view's hypotheses.
     lengths = np.minimum(_COUNT_BINS, 16 * hypotheses[live] + 1)
     rows = np.concatenate([[0], np.cumsum(lengths)])
-    # The accumulator, the hits' kept bins, similarities and first votes (16 + 4 + 1/2 words each), the
-    # histograms.
-    words = int(starts[-1]) + 21 * len(entries) + int(rows[-1])
+    # The accumulator, the hits (2 words each) and their kept bins, similarities and first votes (16 + 4 + 1/2
+    # words), the histograms.
+    words = int(starts[-1]) + 23 * len(entries) + int(rows[-1])
     machine.require_memory("the vote's accumulator", 4 * words,
                            4 * max(int(starts[-1]), 16 * len(entries), int(rows[-1])))
     hits = machine.to_device(np.stack([which, entries], axis=1).astype(np.int32))
@@ -558,7 +558,7 @@ def vote(index: Index, corners: np.ndarray, bisector: np.ndarray, opening: np.nd
     cutoffs, shares = _cutoffs(counts, candidates, min_votes)
     capacity = _capacity(counts, cutoffs, hypotheses)
     device_cutoffs = machine.to_device(cutoffs)
-    count = machine.full(1, np.int32, 0)
+    count = machine.empty(1, np.int32)  # zeroed before each emit pass
     while True:
         found, info = machine.empty((capacity, 4), np.float32), machine.empty((capacity, 2), np.int32)
         machine.fill(count, 0)
@@ -609,7 +609,7 @@ def _coordinates_numpy(image: np.ndarray, model: np.ndarray, frames: np.ndarray,
 
 
 def _combo_bins(coords: np.ndarray, views: np.ndarray, starts: np.ndarray, masks: np.ndarray) -> np.ndarray:
-    """kernels/indexing.cl's combo_bin for all 16 combos: (n, 16) addresses, each in its view's region."""
+    """kernels/indexing.cl's combo_bins: (n, 16) addresses, each in its view's region."""
     home = np.floor(coords)
     other = np.where(coords - home >= 0.5, home + 1, home - 1)
     combos = np.array([[(c >> d) & 1 for d in range(4)] for c in range(16)], bool)
