@@ -266,6 +266,8 @@ TABLE: tuple[Entry, ...] = (
        ridge=1e-6, tolerance=1e-9, max_iterations=20,
        kinds={"examples": _O, "kind": _C, "fixed": _O, "ridge": _N, "tolerance": _N, "max_iterations": _I,
               "machine": _M}),
+    _e("vmcl.learn.pseudolikelihood:check_fixed", fixed={"alpha": 1.0}, kind="smooth", sites="all",
+       kinds={"fixed": _O, "kind": _C, "sites": _C}),
     _e("vmcl.learn:Pseudolikelihood", examples=[make("example")], kind="smooth", levels=None,
        kinds={"examples": _O, "kind": _C, "machine": _M}),
     _e("vmcl.learn:Pseudolikelihood.terms", self=make("pseudolikelihood"), theta=make("theta"),

@@ -23,7 +23,13 @@ from vmcl.errors import InputValueError
 from vmcl.fitted import code_sha256, files_sha256
 from vmcl.learn import examples as learn_examples
 from vmcl.learn import pseudolikelihood, restoration_fit
-from vmcl.learn.pseudolikelihood import Example, PseudolikelihoodFit, fit_pseudolikelihood, model_overrides
+from vmcl.learn.pseudolikelihood import (
+    Example,
+    PseudolikelihoodFit,
+    check_fixed,
+    fit_pseudolikelihood,
+    model_overrides,
+)
 from vmcl.learn.restoration_fit import fit_restoration
 from vmcl.machine import Machine
 
@@ -192,6 +198,7 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
         raise InputValueError(f"refine: the {cue} cue's truth is a segmentation, with no scale in pixels to count "
                               "a restoration's wrong values by; refine fits the piecewise smooth cues (stereo, motion)")
     fixed = ({"coupling": 1.0} if module.kind == "smooth" else {}) if fixed is None else fixed
+    check_fixed(fixed, kind=module.kind)  # before the examples are measured, which takes the time
     examples, names, files = cue_examples(cue, roots, vm, jump=jump)
     base = vm.config.mrf.settings(cue, module.settings).model
     fit = fit_pseudolikelihood(examples, kind=module.kind, fixed=fixed, ridge=ridge,

@@ -52,7 +52,7 @@ from vmcl.mrf.checks import MAX_COUNT
 from vmcl.mrf.energy import KINDS, EnergyModel, LinePrior, host_field, line_costs
 
 __all__ = ["LINE_PARAMETERS", "PARAMETERS", "PRIOR_PARAMETERS", "Example", "Pseudolikelihood", "PseudolikelihoodFit",
-           "fit_pseudolikelihood"]
+           "check_fixed", "fit_pseudolikelihood"]
 
 PARAMETERS = ("alpha", "coupling", "line", "edge_gain", "end", "continuation", "turn", "junction", "crossing",
               "parallel")
@@ -510,21 +510,7 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
     check_real(ridge, "ridge", minimum=0)
     check_real(tolerance, "tolerance", above=0)
     check_int(max_iterations, "max_iterations", minimum=1, maximum=1000)
-    if fixed is not None and not isinstance(fixed, Mapping):
-        raise InputTypeError(f"fixed must be a mapping of parameter names to values, got {type(fixed).__name__}")
-    fixed = dict(fixed or {})
-    for name, value in fixed.items():
-        if name not in PARAMETERS:
-            raise InputValueError(f"fixed: unknown parameter {name!r}; the parameters are {', '.join(PARAMETERS)}")
-        check_real(value, f"fixed[{name!r}]")
-    # A held value outside the model's domain was met as a pseudolikelihood "not finite at the start" (blamed on
-    # the examples) or as a "fitted" data weight of 0.
-    if "alpha" in fixed and not (fixed["alpha"] > 0 or (fixed["alpha"] == 0 and sites == "lines")):
-        raise InputValueError(f"fixed['alpha'] must be > 0 (the data term's weight: the model's fields answer to "
-                              f"their data), got {fixed['alpha']}")
-    if kind == "smooth" and "coupling" in fixed and not fixed["coupling"] > 0:
-        raise InputValueError(f"fixed['coupling'] must be > 0 for the smooth kind (the pixels' conditionals are not "
-                              f"finite without it), got {fixed['coupling']}")
+    fixed = check_fixed(fixed, kind=kind, sites=sites)
     problem = Pseudolikelihood(examples, kind=kind, levels=levels, sites=sites, edge_radius=edge_radius,
                                machine=machine)
     held = dict(fixed)
@@ -595,6 +581,29 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
 # Where Newton starts: the hand-set presets' shape at T = 1 (any start converges; the objective is convex).
 _START = {"alpha": 1.0, "coupling": 1.0, "line": 1.0, "edge_gain": 0.5, "end": 0.5, "continuation": 0.0,
           "turn": 0.25, "junction": 0.75, "crossing": 1.5, "parallel": 1.0}
+
+
+def check_fixed(fixed: Mapping[str, float] | None, *, kind: str = "smooth", sites: str = "all") -> dict[str, float]:
+    """:func:`fit_pseudolikelihood`'s ``fixed`` checked: names among :data:`PARAMETERS`, real values, each in
+    the model's domain (``alpha`` > 0, or 0 where only the lines are scored; ``coupling`` > 0 for the smooth
+    kind). A held value outside it was met as a pseudolikelihood "not finite at the start", blamed on the
+    examples, or as a "fitted" data weight of 0. Callers that measure examples first check here before."""
+    check_choice(kind, "kind", KINDS)
+    check_choice(sites, "sites", SITES)
+    if fixed is not None and not isinstance(fixed, Mapping):
+        raise InputTypeError(f"fixed must be a mapping of parameter names to values, got {type(fixed).__name__}")
+    fixed = dict(fixed or {})
+    for name, value in fixed.items():
+        if name not in PARAMETERS:
+            raise InputValueError(f"fixed: unknown parameter {name!r}; the parameters are {', '.join(PARAMETERS)}")
+        check_real(value, f"fixed[{name!r}]")
+    if "alpha" in fixed and not (fixed["alpha"] > 0 or (fixed["alpha"] == 0 and sites == "lines")):
+        raise InputValueError(f"fixed['alpha'] must be > 0 (the data term's weight: the model's fields answer to "
+                              f"their data), got {fixed['alpha']}")
+    if kind == "smooth" and "coupling" in fixed and not fixed["coupling"] > 0:
+        raise InputValueError(f"fixed['coupling'] must be > 0 for the smooth kind (the pixels' conditionals are not "
+                              f"finite without it), got {fixed['coupling']}")
+    return fixed
 
 
 LOWER_BOUNDS = {"alpha": 0.0}
