@@ -601,3 +601,17 @@ def test_settings_recorded_from_numpy_numbers_read_back_as_numbers():
     recorded = json.loads(settings_text(config.to_dict()))
     assert recorded["edges"]["sigma"] == 2.5 and recorded["motion"]["patch"] == 15
     assert Config.from_dict(recorded) == Config.from_dict({"edges": {"sigma": 2.5}, "motion": {"patch": 15}})
+
+
+def test_names_present_are_refused_shown_at_most_three(tmp_path):
+    from vmcl.output_folder import refuse_names_present
+
+    refuse_names_present(tmp_path / "not yet", lambda name: True, "x")  # a folder not made yet holds nothing
+    for k in range(5):
+        (tmp_path / f"fields_{k:06d}.npz").write_bytes(b"")
+    (tmp_path / "mine.txt").write_bytes(b"")
+    refuse_names_present(tmp_path, lambda name: name == "other", "x")
+    with pytest.raises(InputError, match=re.escape(f"folder {tmp_path} already holds fields_000000.npz, "
+                                                   "fields_000001.npz, fields_000002.npz and 2 more; write the "
+                                                   "sequence into a new")):
+        refuse_names_present(tmp_path, lambda name: name.startswith("fields_"), "the sequence")

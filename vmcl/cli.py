@@ -74,9 +74,9 @@ from pathlib import Path
 
 import numpy as np
 
-from vmcl.errors import InputError, InputTypeError, InputValueError
+from vmcl.errors import InputError, InputTypeError
 from vmcl.machine import NoOpenCLPlatformError
-from vmcl.output_folder import output_folder
+from vmcl.output_folder import output_folder, refuse_names_present
 
 __all__ = [
     "EXIT_BAD_INPUT",
@@ -486,12 +486,8 @@ def write_output(result, folder: str | os.PathLike, title: str) -> None:
     if not isinstance(folder, (str, os.PathLike)):
         raise InputTypeError(f"folder must be a path, got {type(folder).__name__}")
     folder = Path(folder)
-    # vmcl never overwrites a file it did not write: write_report refuses its own names, and these are
-    # refused before it writes anything (a link, even to nothing, would be written through to its target).
-    taken = [name for name in ("fields.npz", SETTINGS_FILE) if (folder / name).exists() or (folder / name).is_symlink()]
-    if taken:
-        raise InputValueError(f"folder {folder} already holds {', '.join(taken)}; write into a new or empty folder "
-                              "(the vmcl command replaces its own previous output)")
+    # write_report refuses its own names; these are refused before it writes anything.
+    refuse_names_present(folder, {"fields.npz", SETTINGS_FILE}.__contains__, "the output")
     settings = settings_text(result.config.to_dict())  # before anything is written: a failure leaves nothing
     write_report(result, folder, title=title)
     # allow_pickle is NumPy's default; naming it tells the type checker that no field of the ** binds it.

@@ -25,7 +25,7 @@ from typing import BinaryIO
 
 from vmcl.errors import InputValueError
 
-__all__ = ["MARKER", "is_whole", "output_folder", "replace_file"]
+__all__ = ["MARKER", "is_whole", "output_folder", "refuse_names_present", "replace_file"]
 
 MARKER = ".vmcl-output"
 """The file that marks a folder as a vmcl output: the names of the files vmcl wrote there, one a line."""
@@ -137,6 +137,21 @@ def _listed(out: Path) -> list[str]:
         if name in (".", "..") or name.startswith(MARKER) or "/" in name or os.sep in name or (out / name).is_dir():
             raise InputValueError(f"--out {out}: its {MARKER} lists {name!r}, which is not a file vmcl writes")
     return names
+
+
+def refuse_names_present(folder: Path, ours: Callable[[str], bool], what: str) -> None:
+    """Refuse (InputValueError) to write ``what`` into ``folder`` when it already holds an entry whose name
+    ``ours`` claims: vmcl never overwrites a file it did not write, and a link of such a name, even one to
+    nothing, would be written through to its target. A folder that does not exist yet (or is no folder:
+    the caller's own making of it says so) holds nothing."""
+    try:
+        taken = sorted(entry.name for entry in Path(folder).iterdir() if ours(entry.name))
+    except (FileNotFoundError, NotADirectoryError):
+        return
+    if taken:
+        shown = ", ".join(taken[:3]) + (f" and {len(taken) - 3} more" if len(taken) > 3 else "")
+        raise InputValueError(f"folder {folder} already holds {shown}; write {what} into a new or empty folder "
+                              "(the vmcl command replaces its own previous output)")
 
 
 def replace_file(target: Path, write: Callable[[BinaryIO], object]) -> None:

@@ -26,6 +26,7 @@ from vmcl.early.filters import GREY_WEIGHTS
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.group import Grouping
 from vmcl.labels import Cue, Label
+from vmcl.output_folder import refuse_names_present
 from vmcl.pictures import to_uint8
 from vmcl.recognize import Detection
 from vmcl.result import Result
@@ -362,13 +363,7 @@ def write_report(result: Result, folder: str | Path, *, title: str = "Vision Mac
         raise InputTypeError(f"folder must be a str or Path, got {type(folder).__name__}")
     pictures = images_with_captions(result)
     folder = Path(folder)
-    # vmcl never overwrites a file it did not write: the report goes into a folder without its names (a link
-    # of one of them, even one to nothing, would be written through to its target).
-    names = [*(f"{stem}.png" for stem in pictures), "report.html"]
-    taken = sorted(name for name in names if (folder / name).exists() or (folder / name).is_symlink())
-    if taken:
-        raise InputValueError(f"folder {folder} already holds {', '.join(taken)}; write the report into a new "
-                              "or empty folder (the vmcl command replaces its own previous output)")
+    refuse_names_present(folder, {*(f"{stem}.png" for stem in pictures), "report.html"}.__contains__, "the report")
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except (FileExistsError, NotADirectoryError):

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from vmcl.cm.core import check_real
-from vmcl.errors import InputValueError
+from vmcl.output_folder import refuse_names_present
 from vmcl.result import Result
 
 __all__ = ["FOURCC", "FPS_RANGE", "LEAST_FLOW_SCALE", "SequenceWriter", "check_fps", "frame_count"]
@@ -75,15 +75,10 @@ class SequenceWriter:
     def __init__(self, folder: Path, *, fps: float, title: str) -> None:
         check_fps(fps, "fps")
         self.folder, self.fps, self.title = Path(folder), float(fps), title
-        # vmcl never overwrites a file it did not write; how many frames come is not known yet, so any
-        # fields_NNNNNN.npz is taken (a link, even to nothing, would be written through to its target).
+        # How many frames come is not known yet, so any fields_NNNNNN.npz is taken.
         ours = {"sequence.md", *(f"{stem}.mp4" for stem in _VIDEOS)}
-        taken = sorted(entry.name for entry in self.folder.iterdir()
-                       if entry.name in ours or _FIELDS_FILE.fullmatch(entry.name))
-        if taken:
-            shown = ", ".join(taken[:3]) + (f" and {len(taken) - 3} more" if len(taken) > 3 else "")
-            raise InputValueError(f"folder {self.folder} already holds {shown}; write the sequence into a new or "
-                                  "empty folder (the vmcl command replaces its own previous output)")
+        refuse_names_present(self.folder, lambda name: name in ours or bool(_FIELDS_FILE.fullmatch(name)),
+                             "the sequence")
         self.writers: dict[str, object] = {}
         self.scales: dict[str, tuple[float, float]] = {}
         self.rows: list[tuple[str, str, str]] = []  # a row's cells before, in and after the recognised column
