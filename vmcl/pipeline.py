@@ -753,8 +753,7 @@ class Config:
                 raise InputTypeError(f"config section {name} must be a vmcl.pipeline.{kind.__name__}, "
                                      f"got {type(section).__name__}")
         for cue in CUES:
-            if not self.mrf.settings(cue).model.alpha > 0:  # restore refuses it, but only mid-run
-                raise InputValueError(f"mrf.{cue}.alpha must be > 0: without the data term nothing anchors the field")
+            self.mrf.settings(cue).model.check_anchored(f"mrf.{cue}.alpha")  # restore would, but only mid-run
 
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> Config:

@@ -100,9 +100,7 @@ def register(cue: CueModule) -> None:
         if not isinstance(cue.settings, Settings):
             raise InputTypeError(f"cue {cue.name!r}: settings must be a vmcl.mrf.Settings or None, got "
                                  f"{type(cue.settings).__name__}")
-        if not cue.settings.model.alpha > 0:  # restore refuses it, but only mid-run
-            raise InputValueError(f"cue {cue.name!r}: settings.model.alpha must be > 0, got "
-                                  f"{cue.settings.model.alpha}: without the data term nothing anchors the field")
+        cue.settings.model.check_anchored(f"cue {cue.name!r}: settings.model.alpha")  # restore would, mid-run
     if not isinstance(cue.fields, (tuple, list)) or not all(isinstance(name, str) for name in cue.fields):
         raise InputTypeError(f"cue {cue.name!r}: fields must be a tuple of Result attribute names, got "
                              f"{cue.fields!r}")

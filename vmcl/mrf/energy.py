@@ -224,6 +224,13 @@ class EnergyModel:
                 raise InputValueError(f"EnergyModel.beta * EnergyModel.{name} = {self.beta * value:.3g} is beyond "
                                       "float32's range, in which the device holds the line costs")
 
+    def check_anchored(self, label: str) -> None:
+        """Refuse a model without a data term (alpha not > 0), which restoring needs; ``label`` names its
+        alpha in the error."""
+        if not self.alpha > 0:
+            raise InputValueError(f"{label} must be > 0, got {self.alpha}: without the data term nothing anchors "
+                                  "the field")
+
     def vertex_table(self) -> np.ndarray:
         """beta times the vertex potentials, float64 (16,)."""
         return self.beta * self.prior.table()

@@ -172,8 +172,7 @@ def restore(data: ArrayLike, *, confidence: ArrayLike | None = None, edges: Arra
         raise InputTypeError(f"schedule must be a vmcl.mrf.{solver.schedule.__name__} (method {method!r}) or None, "
                              f"got {type(schedule).__name__}")
     check_int(seed, "seed", minimum=0, maximum=2**64 - 1)
-    if model.alpha <= 0:
-        raise InputValueError("model.alpha must be > 0: without the data term nothing anchors the field")
+    model.check_anchored("model.alpha")
     lattice, host = lattice_of(data, confidence, edges, start, kind, model, machine,
                                f"mrf.restore (method {method!r})", solver.buffers)
     if not lattice.strongest > 0:
