@@ -176,6 +176,19 @@ def test_a_refinement_stage_named_as_another_under_a_config_is_refused_by_the_ma
         cues.unregister("refined_cue")
 
 
+def test_a_refinement_stage_that_is_no_name_under_a_config_is_refused_by_the_machine():
+    def stage(self, config):
+        return 1 if config.stereo.feature_matches else None
+
+    cues.register(_cue("refined_cue", refine_stage=stage))
+    try:
+        with pytest.raises(TypeError, match="cue 'refined_cue': refine_stage\\(\\) must return a stage name \\(str\\) "
+                                            "or None, got int"):
+            VisionMachine(Config.from_dict({"stereo": {"feature_matches": True}}))
+    finally:
+        cues.unregister("refined_cue")
+
+
 def test_a_cue_of_the_users_is_enabled_by_any_config():
     # A cue of its own name with no Config section (or one without an enabled switch) is on; a built-in
     # cue follows its section's switch.

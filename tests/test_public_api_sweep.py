@@ -658,8 +658,10 @@ EXEMPT = {
     "vmcl.pipeline:range_note",
     # A stream's device state, made and fed only by VisionMachine.stream from checked images and Configs.
     "vmcl.temporal:Memory", "vmcl.temporal:Carried",
-    # Change the machine's cues for the whole process: tests/test_cues.py checks their refusals.
+    # Change the machine's cues for the whole process, or check a cue's declaration: tests/test_cues.py checks
+    # their refusals.
     "vmcl.labels:add_cue", "vmcl.labels:remove_cue", "vmcl.cues:register", "vmcl.cues:unregister",
+    "vmcl.cues:refine_stage_of",
     # Device-level building blocks of the early layer: they take images already checked by
     # vmcl.cm.core.image_field, and the sweeps of gaussian, canny and zero_crossings reach them.
     "vmcl.early.filters:separable_gaussian", "vmcl.early.filters:discrete_laplacian", "vmcl.early.filters:grey_field",

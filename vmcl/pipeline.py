@@ -53,7 +53,7 @@ from vmcl.cm.core import (
     check_unmasked,
     full_scale,
 )
-from vmcl.cues import CueModule, Measurement, RunInputs, registered
+from vmcl.cues import CueModule, Measurement, RunInputs, refine_stage_of, registered
 from vmcl.early import (
     boundary_probability,
     disparity_range,
@@ -891,11 +891,7 @@ class VisionMachine:
         not a name or None, or is the name of another stage of the run, whose timing and progress it would
         take: :func:`vmcl.cues.register` can ask the default Config only."""
         everything = {"right": True, "next": True, "rgb": True}
-        refining = [(cue, cue.refine_stage(self.config)) for cue in self.cues(**everything)]
-        for cue, stage in refining:
-            if stage is not None and not isinstance(stage, str):
-                raise InputTypeError(f"cue {cue.name!r}: refine_stage() must return a stage name (str) or None, "
-                                     f"got {type(stage).__name__} under this Config")
+        refining = [(cue, refine_stage_of(cue, self.config)) for cue in self.cues(**everything)]
         names = self.stages(**everything, streaming=True)
         for cue, stage in reversed(refining):  # the later cue of two that share a stage is the one said
             if stage and names.count(stage) > 1:

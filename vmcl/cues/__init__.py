@@ -20,6 +20,7 @@ its own :attr:`CueModule.settings` with the Config's ``[mrf]`` method and schedu
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 from vmcl.cm.core import check_bool
 from vmcl.cues.base import CueModule, Measurement, RunInputs
@@ -139,17 +140,25 @@ def _check_refine_stage(cue: CueModule, reserved: frozenset[str]) -> None:
     from vmcl.pipeline import Config  # here, not at the top: vmcl.pipeline imports this module
 
     config = Config()
-    stage = cue.refine_stage(config)
+    stage = refine_stage_of(cue, config)
     if stage is None:
         return
-    if not isinstance(stage, str):
-        raise InputTypeError(f"cue {cue.name!r}: refine_stage() must return a stage name (str) or None, got "
-                             f"{type(stage).__name__}")
     names = [*_REGISTRY, cue.name]
     taken = reserved | set(names) | {f"mrf {name}" for name in names} | {
         other.refine_stage(config) for other in _REGISTRY.values()}
     if stage in taken:
         raise InputValueError(f"cue {cue.name!r}: refine_stage() is {stage!r}, the name of another stage of the run")
+
+
+def refine_stage_of(cue: CueModule, config: Any) -> str | None:
+    """``cue``'s refinement stage under ``config`` (:meth:`CueModule.refine_stage`), refused unless it is a
+    stage name (a str) or None. Whether the name is free is the caller's to check: :func:`register` knows
+    the registry, a :class:`vmcl.pipeline.VisionMachine` its own run's stages."""
+    stage = cue.refine_stage(config)
+    if stage is not None and not isinstance(stage, str):
+        raise InputTypeError(f"cue {cue.name!r}: refine_stage() must return a stage name (str) or None, got "
+                             f"{type(stage).__name__}")
+    return stage
 
 
 def unregister(name: str) -> None:
@@ -178,5 +187,5 @@ def registered() -> tuple[CueModule, ...]:
 for _builtin in (StereoCue(), MotionCue(), ColourCue(), TextureCue()):
     _REGISTRY[_builtin.name] = _builtin
 
-__all__ = ["INPUTS", "MACHINE_FIELDS", "RESERVED", "CueModule", "Measurement", "RunInputs", "register", "registered",
-           "unregister"]
+__all__ = ["INPUTS", "MACHINE_FIELDS", "RESERVED", "CueModule", "Measurement", "RunInputs", "refine_stage_of", "register",
+           "registered", "unregister"]
