@@ -505,6 +505,33 @@ def test_batch_zarr_refuses_a_field_no_item_can_make_before_any_work(tmp_path, c
     assert not out.exists()
 
 
+def test_batch_zarr_knows_the_fields_of_a_cue_registered_at_run_time(tmp_path, capsys):
+    # The fields that need a right view were a hand-kept list of the built-in cues'; a cue added at run time
+    # that needs one was refused only after the whole batch ran.
+    pytest.importorskip("zarr")
+    from vmcl import cues
+    from vmcl.cues import CueModule
+
+    from vmcl.labels import Label
+
+    class Paired(CueModule):
+        name = "paired_cue"
+        needs = frozenset({"right"})
+        label = Label.DEPTH
+
+    data = tmp_path / "data"
+    data.mkdir()
+    _png(data / "a.png", _scene(0, 64).left)
+    out = tmp_path / "batch"
+    cues.register(Paired())
+    try:
+        assert main(["batch", str(data), "--out", str(out), "--zarr", "paired_cue_line_h", "--quiet"]) == 2
+    finally:
+        cues.unregister("paired_cue")
+    assert "--zarr paired_cue_line_h: no item of the batch has a right view" in capsys.readouterr().err
+    assert not out.exists()
+
+
 def test_batch_zarr_refuses_a_store_it_did_not_write_and_leaves_it(tmp_path, capsys, monkeypatch):
     zarr = pytest.importorskip("zarr")
     data = tmp_path / "data"

@@ -85,6 +85,7 @@ __all__ = [
     "FIELD_NAMES",
     "SCENES",
     "BadInput",
+    "cue_fields",
     "evaluation_tables",
     "main",
     "parser",
@@ -540,6 +541,11 @@ FIELD_NAMES = ("edges", "support", "labels", "boundary_strength", "hue", "colour
                "raw_flow", "flow")
 """The Result fields fields.npz holds when the run made them; with ``restored_<cue>``, ``<cue>_line_h`` and
 ``<cue>_line_v`` for each cue restored (:func:`result_fields`)."""
+
+
+def cue_fields(cue) -> list[str]:
+    """The names of fields.npz that a registered cue's run fills (:func:`result_fields` names them)."""
+    return [*cue.result_attributes(), f"restored_{cue.name}", f"{cue.name}_line_h", f"{cue.name}_line_v"]
 
 
 def result_fields(result) -> dict[str, np.ndarray]:

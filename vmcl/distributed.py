@@ -850,11 +850,13 @@ def _size_text(size: tuple[int, ...], names: list[str]) -> str:
     return f"{' x '.join(map(str, size))} ({shown})"
 
 
-_FIELDS_NEEDING = {
-    "next": {"raw_flow", "flow", "restored_motion", "motion_line_h", "motion_line_v"},
-    "right": {"sparse_disparity", "first_pass_disparity", "stereo_discontinuity", "half_occluded", "out_of_range",
-              "disparity", "restored_stereo", "stereo_line_h", "stereo_line_v"},
-}  # the fields of fields.npz that a run makes only with that input
+def _fields_needing(needed: str) -> set[str]:
+    """The fields of fields.npz that a run makes only with the input ``needed`` ("right" or "next"): those of
+    the registered cues that need it."""
+    from vmcl.cli import cue_fields
+    from vmcl.cues import registered
+
+    return {name for cue in registered() if needed in cue.needs for name in cue_fields(cue)}
 
 
 def check_zarr(out: str | os.PathLike[str], items: Sequence[BatchItem], fields: Sequence[str]) -> None:
@@ -895,7 +897,7 @@ def check_zarr(out: str | os.PathLike[str], items: Sequence[BatchItem], fields: 
         # refused after the whole batch ran.
         for needed, kinds, how in (("next", ("motion",), "a next frame (--frames)"),
                                    ("right", ("scene", "pair"), "a right view (a stereo scene or pair)")):
-            if name in _FIELDS_NEEDING[needed] and not any(item.kind in kinds for item in items):
+            if name in _fields_needing(needed) and not any(item.kind in kinds for item in items):
                 raise InputValueError(f"--zarr {name}: no item of the batch has {how}, which {name} needs")
     sizes: dict[tuple[int, ...], list[str]] = {}
     for item in items:

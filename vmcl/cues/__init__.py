@@ -60,11 +60,6 @@ def _reserved() -> frozenset[str]:
         name for name in dir(Config) if not name.startswith("_")}
 
 
-def _filled(cue: CueModule) -> list[str]:
-    """The Result attributes ``cue`` declares it fills."""
-    return [*cue.fields, *([cue.restored_as] if cue.restored_as is not None else [])]
-
-
 def register(cue: CueModule) -> None:
     """Add a cue to the machine (after the ones registered before it).
 
@@ -108,12 +103,12 @@ def register(cue: CueModule) -> None:
     if cue.restored_as is not None and not isinstance(cue.restored_as, str):
         raise InputTypeError(f"cue {cue.name!r}: restored_as must be a Result attribute name or None, got "
                              f"{type(cue.restored_as).__name__}")
-    filled = _filled(cue)
+    filled = cue.result_attributes()
     known = {f.name for f in dataclasses.fields(Result)}
     unknown = [name for name in filled if name not in known]
     if unknown:
         raise InputValueError(f"cue {cue.name!r} declares Result fields {unknown} that Result does not have")
-    owners = {name: other.name for other in _REGISTRY.values() for name in _filled(other)}
+    owners = {name: other.name for other in _REGISTRY.values() for name in other.result_attributes()}
     for index, name in enumerate(filled):
         # Two fills of one attribute: the pipeline would pass it to Result twice (a TypeError mid-run) or
         # let the later one overwrite the earlier in silence.

@@ -141,6 +141,10 @@ class CueModule:
     restored_as: str | None = None
     settings: Settings | None = None
 
+    def result_attributes(self) -> list[str]:
+        """The Result attributes the cue fills: its ``fields``, then its ``restored_as``."""
+        return [*self.fields, *([self.restored_as] if self.restored_as is not None else [])]
+
     def enabled(self, config: Any) -> bool:
         """Whether the Config switches the cue on: a built-in cue's section's ``enabled``; a cue added at
         run time has no section (nothing of its name with an ``enabled`` field) and is always on."""
