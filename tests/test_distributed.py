@@ -511,7 +511,6 @@ def test_batch_zarr_knows_the_fields_of_a_cue_registered_at_run_time(tmp_path, c
     pytest.importorskip("zarr")
     from vmcl import cues
     from vmcl.cues import CueModule
-
     from vmcl.labels import Label
 
     class Paired(CueModule):

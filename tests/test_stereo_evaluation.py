@@ -369,12 +369,26 @@ def test_eval_stereo_scores_the_scenes_it_can_and_names_each_it_leaves_out(tmp_p
     captured = capsys.readouterr()
     assert "Stereo on 2 Middlebury scene(s)" in captured.out
     assert "| good | vmcl (dense, MRF) |" in captured.out and "| deep/sixteen | OpenCV StereoSGBM 3WAY |" in captured.out
-    assert "the 16-bit pair is given to them at 8 bits" in captured.out
+    assert "the 16-bit left and right views are given to them at 8 bits" in captured.out
     err = captured.err.splitlines()
     assert any(line.startswith(f"vmcl: note: left out {tmp_path / 'no truth'}: it holds the two views of the "
                                "Middlebury 2014/2021 layout, but not disp0.pfm or disp0GT.pfm") for line in err), err
     assert any(line.startswith(f"vmcl: left out {tmp_path / 'other size'}:") and "size" in line for line in err), err
     assert len(err) == 2, err
+
+
+def test_the_baselines_take_each_view_of_a_mixed_pair_at_8_bits_by_its_own_type(tmp_path):
+    # A 16-bit left view beside an 8-bit right one: both were divided by 257, so the right view went black
+    # and OpenCV's figures were wrong without a word.
+    from vmcl import scenes
+
+    s = scenes.render(scenes.preset("blocks", shape=(96, 128)), seed=0, noise=0.01)
+    folder = datasets.write_stereo_folder(tmp_path / "mixed", s.left, s.right, s.disparity)
+    pair = datasets.read_stereo_folder(folder)
+    wide = datasets.StereoPair(**{**vars(pair), "left": pair.left.astype(np.uint16) * 257})
+    for method, same in zip(se.opencv_baselines(wide), se.opencv_baselines(pair)):
+        assert "the 16-bit left view is given to them at 8 bits" in method.note
+        np.testing.assert_array_equal(method.compute(wide.left, wide.right), same.compute(pair.left, pair.right))
 
 
 def test_eval_stereo_notes_scenes_without_ground_truth_and_succeeds(tmp_path, capsys):

@@ -285,21 +285,25 @@ def opencv_baselines(pair: StereoPair) -> list[StereoMethod]:
     """
     count, source = baseline_disparities(pair)
     note = f"OpenCV's matchers: {source}"
-    eight_bits = pair.left.dtype == np.uint16
-    if eight_bits:
-        note += ("; the 16-bit pair is given to them at 8 bits (levels / 257, rounded), as their block matchers "
-                 "take 8-bit images only")
+    wide = [name for name, image in (("left", pair.left), ("right", pair.right)) if image.dtype == np.uint16]
+    if wide:
+        note += (f"; the 16-bit {' and '.join(wide)} view{'s are' if len(wide) == 2 else ' is'} given to them at 8 "
+                 "bits (levels / 257, rounded), as their block matchers take 8-bit images only")
     # Each matcher is made once, so that the time of a call is the matching (and the grey conversion).
     matchers: dict[str, cv2.StereoMatcher] = {"OpenCV StereoBM": stereo_bm(count)}
     matchers.update({f"OpenCV StereoSGBM {mode}": stereo_sgbm(count, mode) for mode in SGBM_MODES})
-    return [_opencv_method(name, matcher, note, eight_bits) for name, matcher in matchers.items()]
+    return [_opencv_method(name, matcher, note) for name, matcher in matchers.items()]
 
 
-def _opencv_method(name: str, matcher: cv2.StereoMatcher, note: str, eight_bits: bool = False) -> StereoMethod:
+def _eight_bits(image: np.ndarray) -> np.ndarray:
+    """A 16-bit view at 8 bits (levels / 257, rounded); any other view as it is. Each view by its own type:
+    a pair may hold a 16-bit and an 8-bit view, both of which the machine takes."""
+    return np.round(image / 257.0).astype(np.uint8) if image.dtype == np.uint16 else image
+
+
+def _opencv_method(name: str, matcher: cv2.StereoMatcher, note: str) -> StereoMethod:
     def compute(left: np.ndarray, right: np.ndarray) -> np.ndarray:
-        if eight_bits:
-            left, right = (np.round(image / 257.0).astype(np.uint8) for image in (left, right))
-        return opencv_disparity(matcher, left, right)
+        return opencv_disparity(matcher, _eight_bits(left), _eight_bits(right))
 
     return StereoMethod(name, compute, baseline=True, note=note)
 
