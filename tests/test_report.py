@@ -82,6 +82,18 @@ def test_the_flow_pictures_caption_gives_the_speed_of_full_colour(run):
     assert f"full colour is its largest speed, {fastest:.2f} px per frame" in caption
 
 
+def test_a_disparity_of_one_value_is_drawn_and_reported(run, tmp_path):
+    # Its own range (vmin == vmax) was refused, so a run whose restored disparity came out constant failed
+    # in its report after the run itself had succeeded.
+    import dataclasses
+
+    picture = disparity_image(np.full((16, 16), 8.0, np.float32), vmin=8.0, vmax=8.0)
+    assert picture.shape == (16 + 28, 16, 3) and (picture[:16] == picture[0, 0]).all() and picture[0, 0].any()
+    flat = dataclasses.replace(run, disparity=np.full_like(run.disparity, 8.0))
+    write_report(flat, tmp_path / "flat")
+    assert (tmp_path / "flat" / "disparity.png").exists()
+
+
 def test_disparity_scale_runs_from_far_to_near():
     disparity = np.tile(np.linspace(2.0, 10.0, 64, dtype=np.float32), (32, 1))
     disparity[0, 0] = np.nan
@@ -184,7 +196,7 @@ def test_a_cues_picture_names_are_plain_and_its_own(run, tmp_path, stem, match):
     (lambda: disparity_image(np.zeros((0, 16), np.float32)), ValueError, "disparity"),
     (lambda: disparity_image(np.zeros((8, 8), complex)), TypeError, "disparity"),
     (lambda: disparity_image(np.zeros((8, 8), np.float32), vmin="0"), TypeError, "vmin"),
-    (lambda: disparity_image(np.zeros((8, 8), np.float32), vmin=8.0, vmax=2.0), ValueError, "vmin must be below vmax"),
+    (lambda: disparity_image(np.zeros((8, 8), np.float32), vmin=8.0, vmax=2.0), ValueError, "vmin must not exceed vmax"),
     (lambda: flow_image(np.zeros((0, 16, 2), np.float32)), ValueError, "flow"),
     (lambda: flow_image(np.zeros((8, 8, 3), np.float32)), ValueError, "flow"),
     (lambda: flow_image(np.zeros((8, 8, 2), np.float32), max_flow=np.nan), ValueError, "max_flow"),

@@ -39,7 +39,8 @@ def disparity_image(disparity: np.ndarray, *, vmin: float | None = None, vmax: f
     ----------
     disparity : (H, W) float array, NaN where unknown (drawn black, as are infinite values)
     vmin, vmax : float, optional
-        The range of the colour map; default the finite values' range.
+        The range of the colour map, vmin <= vmax; default the finite values' range. Equal ends (a field of
+        one value, as its own range gives them) draw that value at the far end of the map.
 
     Returns
     -------
@@ -47,8 +48,8 @@ def disparity_image(disparity: np.ndarray, *, vmin: float | None = None, vmax: f
     """
     real_host_array(disparity, "disparity", ndims=(2,))
     vmin, vmax = _optional_real(vmin, "vmin"), _optional_real(vmax, "vmax")
-    if vmin is not None and vmax is not None and not vmin < vmax:
-        raise InputValueError(f"vmin must be below vmax, got {vmin} and {vmax}")
+    if vmin is not None and vmax is not None and vmin > vmax:
+        raise InputValueError(f"vmin must not exceed vmax, got {vmin} and {vmax}")
     finite = np.isfinite(disparity)
     # The finite values' range (an infinite value, like a NaN, is drawn black: it would stretch the scale to it).
     shown = disparity[finite]
