@@ -193,7 +193,9 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
         The pair, rows being epipolar lines (as :func:`vmcl.early.stereo.match` takes it).
     d_min, d_max : int, optional
         The disparity range. Default: found from the images by
-        :func:`vmcl.early.disparity_range.estimate_range` (either end given overrides that end).
+        :func:`vmcl.early.disparity_range.estimate_range`. An end given overrides that end, and the
+        found other end moves to it if it would cross it (:func:`vmcl.early.disparity_range.range_to_search`):
+        a given end beyond the range the images show leaves that one disparity to search, so give both.
     census_threshold : float
         >= 0: a neighbour sets its census bit when it is darker than the centre by more than this times the
         noise's standard deviation, estimated from the left view (J. Immerkaer's mask, with the median of
@@ -266,6 +268,12 @@ def match_semiglobal(left: ArrayLike, right: ArrayLike, *, d_min: int | None = N
 
     Notes
     -----
+    Where the pair has no texture (a patch, or the whole pair, of one brightness), every disparity costs the
+    same and the messages decide: a patch takes the disparities of the textured surfaces around it, and a
+    pair without any texture takes ``d_min`` (the frame's left edge, where a larger disparity's right pixel
+    lies outside the image, tilts the messages towards it), confirmed by both views. The machine
+    (:class:`vmcl.pipeline.VisionMachine`) notes a pair without texture and restores no disparity from it.
+
     The summed messages are 16-bit: ``paths`` messages of at most ``255 + p2`` each (a cost is a byte), so
     ``p2`` is at most ``65535 // paths - 255`` (:func:`max_p2`). The costs and sums take 3 bytes per pixel
     and disparity of device memory.

@@ -162,7 +162,9 @@ def match(left: ArrayLike, right: ArrayLike, *, d_min: int | None = None, d_max:
         The pair, registered so that epipolar lines are rows (see :mod:`vmcl.early.registration`).
     d_min, d_max : int, optional
         The disparity range, d_min <= d_max, narrower than the image. Default: found from the images by
-        :func:`vmcl.early.disparity_range.estimate_range` (either end given overrides that end).
+        :func:`vmcl.early.disparity_range.estimate_range`. An end given overrides that end, and the
+        found other end moves to it if it would cross it (:func:`vmcl.early.disparity_range.range_to_search`):
+        a given end beyond the range the images show leaves that one disparity to search, so give both.
     features : {"canny", "dog", "intensity"}
         "canny" (default): Canny edges, compatible when their gradient directions differ by at most
         ``direction_tolerance``. "dog": zero crossings of the difference of Gaussians, compatible when
