@@ -23,6 +23,7 @@ from vmcl.cm import reduce as cm_reduce
 from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import stereo
 from vmcl.early.disparity_range import estimate_range, with_given_ends
+from vmcl.early.rectification import ROW_OFFSET_NOTE, row_alignment
 from vmcl.early.semiglobal import SemiGlobalMatch, match_semiglobal
 from vmcl.labels import Label
 from vmcl.machine import on_device
@@ -57,7 +58,7 @@ class StereoCue(CueModule):
     def measure(self, run: RunInputs) -> Measurement:
         span, note = _disparity_range(run)
         dense = _dense_match(run, span)
-        notes = tuple(n for n in (note, dense.note if dense else None) if n)
+        notes = tuple(n for n in (note, dense.note if dense else None, _alignment_note(run, span, dense)) if n)
         fields = {} if dense is None else dense.fields
         if not run.config.stereo.feature_matches:
             assert dense is not None  # the Config refuses a stereo section with neither matcher
@@ -227,6 +228,22 @@ def _matcher_notes(run: RunInputs, found: SemiGlobalMatch) -> str | None:
                     f"range {found.d_min}..{found.d_max} px (Result.out_of_range): their disparity may lie outside it; "
                     "[stereo] d_min and d_max set the range")
     return "; ".join(said) or None
+
+
+def _alignment_note(run: RunInputs, span: tuple[int, int], dense: _Dense | None) -> str | None:
+    """A note when the views' rows are offset or turned against each other (vmcl.early.rectification): the
+    matchers search along rows, and their disparities then fail where the left-right check sees little. Each
+    tracked corner starts at the dense matches' disparity (else the middle of the range)."""
+    start = dense.disparity.get() if dense is not None else (span[0] + span[1]) / 2
+    found = row_alignment(run.left.get(), run.needed("right").get(), disparity=start)
+    if found is None or found.typical < ROW_OFFSET_NOTE:
+        return None
+    turned = (f"; the offset varies by {found.spread:.1f} px across the image (the views are turned or scaled "
+              "against each other)") if found.spread >= ROW_OFFSET_NOTE else ""
+    return (f"stereo: the right view's rows lie {found.offset:+.1f} px from the left's (the median over {found.tracks} "
+            f"corners tracked between the views; half are off by {found.typical:.1f} px or more){turned}: the pair is "
+            "not rectified, its rows are not epipolar lines and the disparity is unreliable; rectify it first "
+            "(e.g. OpenCV's stereoRectify, or vmcl.early.registration's warp tables)")
 
 
 def _disparity_data(run: RunInputs, matched: stereo.StereoMatch, dense: _Dense | None
