@@ -34,7 +34,7 @@ notes that the pair is not rectified: the smallest of the vertical shifts tried 
 machine's mean bad-1 on the training pairs reached 1.5 times the aligned pairs' (benchmarks/results/
 rectification.md; the rule was set before the run). Real pairs come a little off (sawtooth 0.18 px)."""
 
-CORNERS = 300
+CORNERS = 150
 """The most corners tracked."""
 WINDOW = 21
 """Lucas-Kanade's window, in pixels."""
