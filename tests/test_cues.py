@@ -229,3 +229,14 @@ def test_unregister_takes_the_last_registered_cue_and_says_so_in_cue_terms(toy_c
     finally:
         cues.unregister("second_cue")
     assert cue_names()[-1] == "brightness_level"
+
+
+def test_a_next_frame_of_another_scene_is_named_beside_the_range_advice(machine):
+    # Across a cut the winners pile up at the range's edge, and the note advised only more levels or delta.
+    from vmcl.flow_evaluation import motion_only
+
+    rng = np.random.default_rng(7)
+    frame, unrelated = (rng.random((96, 128)).astype(np.float32) for _ in range(2))
+    notes = VisionMachine(motion_only(Config()), machine=machine).run(frame, next=unrelated).notes
+    said = [note for note in notes if "edge of its range" in note]
+    assert said and "or the next frame shows another scene (a cut)" in said[0], notes

@@ -87,9 +87,11 @@ class MotionCue(CueModule):
         motion there may be larger than the search reaches."""
         if share < LIMIT_SHARE:
             return ()
+        # A next frame of another scene (a cut) also drives the winners to the range's edge: said beside the
+        # advice, which would not help there.
         return ((f"motion: {share:.1%} of the coarsest level's flow lies at the edge of its range, so motion "
-                f"may exceed the search's limit of {limit} px ({levels} pyramid levels); raise [motion] levels "
-                "or delta"),)
+                f"may exceed the search's limit of {limit} px ({levels} pyramid levels): raise [motion] levels "
+                "or delta; or the next frame shows another scene (a cut), and this frame's flow means nothing"),)
 
     @staticmethod
     def sparse_note(share: float, features: str, patch: int) -> tuple[str, ...]:
