@@ -357,3 +357,59 @@ def test_a_pictures_pnm_maximum_is_its_white(tmp_path, maxval, dtype):
     full = np.iinfo(stored.dtype).max
     assert shown.dtype == stored.dtype and int(shown.max()) == full
     np.testing.assert_allclose(shown.astype(float) / full, values.astype(float) / maxval, atol=0.5 / full)
+
+
+# --------------------------------------------------------------------------------------------- edge cases
+
+
+def test_write_flo_refuses_what_it_cannot_store_and_read_flo_a_folder(tmp_path):
+    # float64 beyond float32's range was written as infinity (read back as unknown) with only NumPy's
+    # RuntimeWarning; a bool array was written as 0 and 1 pixel flows; a folder was "no such file".
+    path = tmp_path / "x.flo"
+    huge = np.zeros((2, 3, 2))
+    huge[1, 2, 0] = 1e300
+    with pytest.raises(InputError, match=r"flow holds 1e\+300, beyond float32's range"):
+        datasets.write_flo(path, huge)
+    with pytest.raises(InputError, match="flow must hold numbers .* got dtype bool") as raised:
+        datasets.write_flo(path, np.ones((2, 3, 2), bool))
+    assert isinstance(raised.value, TypeError) and not path.exists()
+    # The largest float32 is stored as it is; a vector with one NaN component is unknown as a whole.
+    edge = np.zeros((1, 2, 2))
+    edge[0, 0] = (np.finfo(np.float32).max, 1.0)
+    edge[0, 1] = (np.nan, 2.0)
+    datasets.write_flo(path, edge)
+    stored = datasets.read_flo(path, raw=True)
+    assert stored[0, 0].tolist() == [np.finfo(np.float32).max, 1.0] and stored[0, 1].tolist() == [1e10, 1e10]
+    with pytest.raises(InputError, match=f"{tmp_path} is a folder, not a .flo file") as raised:
+        datasets.read_flo(tmp_path)
+    assert isinstance(raised.value, ValueError)
+    with pytest.raises(InputError, match=f"{tmp_path} is a folder, not a PFM file"):
+        datasets.read_pfm(tmp_path)
+
+
+def test_read_disparity_refuses_maps_that_are_not_8_bit(tmp_path):
+    # A 16-bit PNG was read as grey / scale: levels up to 65535 / 4, disparities far wider than the image.
+    wide = tmp_path / "disp.png"
+    assert cv2.imwrite(str(wide), np.full((4, 5), 40 * 256, np.uint16))
+    with pytest.raises(InputError, match="disp.png is a 16-bit map; expected an 8-bit PGM/PNG"):
+        datasets.read_disparity(wide, scale=4)
+    pgm = tmp_path / "disp.pgm"
+    pgm.write_bytes(b"P5\n2 1\n1000\n" + np.array([0, 400], ">u2").tobytes())
+    with pytest.raises(InputError, match="disp.pgm is a 16-bit map"):
+        datasets.read_disparity(pgm, scale=4)
+    narrow = tmp_path / "narrow.png"
+    assert cv2.imwrite(str(narrow), np.array([[0, 40]], np.uint8))
+    assert np.array_equal(datasets.read_disparity(narrow, scale=4), np.array([[np.nan, 10]], np.float32),
+                          equal_nan=True)
+
+
+def test_write_stereo_folder_refuses_negative_disparities_by_name(tmp_path):
+    # A negative disparity was refused as "ndisp must be >= 1, got -2", ndisp being the default the caller
+    # never gave (the largest disparity plus one).
+    image = np.zeros((4, 6), np.uint8)
+    disparity = -np.arange(24, 48, dtype=np.float32).reshape(4, 6) / 8
+    disparity[0, 0] = np.nan
+    for ndisp in (None, 16):
+        with pytest.raises(InputError, match=r"disparity must be >= 0 where known .* down to -5\.875"):
+            datasets.write_stereo_folder(tmp_path / f"scene{ndisp}", image, image, disparity, ndisp=ndisp)
+        assert not (tmp_path / f"scene{ndisp}").exists()

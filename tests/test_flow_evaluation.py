@@ -212,3 +212,101 @@ def test_evaluate_sequence_refuses_what_is_not_a_sequence_by_name():
     with pytest.raises(InputError, match="others"):
         evaluate_sequence(datasets.FlowSequence("x", (), 0, np.zeros((2, 2, 2)), np.ones((2, 2), bool), None),
                           others="no")
+
+
+def test_two_frames_of_one_number_are_never_paired(tmp_path, rendered):
+    # frame012.png beside frame12.png: both were frame 12, and the pair scored was frame012 -> frame12, a frame
+    # against its copy. In the scored pair it is refused naming both; in the past it ends the past, as a gap does.
+    root, _ = rendered
+    folder = tmp_path / "Blocks"
+    shutil.copytree(root / "mine" / "Blocks", folder)
+    shutil.copy(folder / "frame12.png", folder / "frame012.png")
+    with pytest.raises(ValueError, match=r"holds 2 frames numbered 12 \(frame012.png, frame12.png\)"):
+        datasets.read_flow_folder(folder)
+    (folder / "frame012.png").unlink()
+    shutil.copy(folder / "frame10.png", folder / "frame010.png")
+    sequence = datasets.read_flow_folder(folder)
+    assert [p.name for p in sequence.frames] == ["frame11.png", "frame12.png", "frame13.png", "frame14.png"]
+    assert sequence.index == 1
+
+
+def test_frames_the_evaluation_does_not_use_do_not_spoil_it(tmp_path, rendered):
+    # A cut-short or RGBA frame after the scored pair (12 -> 13) made the whole folder "left out"; a grey past
+    # frame among RGB ones was kept, and the stream then refused "frame 1: next has shape ..." naming no file.
+    root, _ = rendered
+    folder = tmp_path / "Blocks"
+    shutil.copytree(root / "mine" / "Blocks", folder)
+    source = root / "mine" / "Blocks"
+    whole = (source / "frame14.png").read_bytes()
+    (folder / "frame14.png").write_bytes(whole[:len(whole) // 2])
+    names = [p.name for p in datasets.read_flow_folder(folder).frames]
+    assert names == ["frame10.png", "frame11.png", "frame12.png", "frame13.png"]
+    rgba = cv2.cvtColor(cv2.imread(str(source / "frame14.png")), cv2.COLOR_BGR2BGRA)
+    cv2.imwrite(str(folder / "frame14.png"), rgba)
+    assert [p.name for p in datasets.read_flow_folder(folder).frames] == names
+    # A past frame of another colour kind ends the past there, as one of another size does.
+    cv2.imwrite(str(folder / "frame11.png"), cv2.imread(str(source / "frame11.png"), cv2.IMREAD_GRAYSCALE))
+    sequence = datasets.read_flow_folder(folder)
+    assert [p.name for p in sequence.frames] == ["frame12.png", "frame13.png"] and sequence.index == 0
+    # The past is streamed: one that cannot be read is refused by name.
+    (folder / "frame11.png").write_bytes((source / "frame11.png").read_bytes()[:200])
+    with pytest.raises(ValueError, match="frame11.png is damaged"):
+        datasets.read_flow_folder(folder)
+    # The next frame is scored: another colour kind is refused naming it.
+    shutil.copy(source / "frame11.png", folder / "frame11.png")
+    cv2.imwrite(str(folder / "frame13.png"), cv2.imread(str(source / "frame13.png"), cv2.IMREAD_GRAYSCALE))
+    with pytest.raises(ValueError, match="frame13.png is 80 x 64 grey, the frame frame12.png 80 x 64 RGB"):
+        datasets.read_flow_folder(folder)
+
+
+def test_a_hand_made_sequence_with_a_frame_of_another_kind_is_refused_naming_the_file(tmp_path, rendered, machine):
+    root, _ = rendered
+    source = root / "mine" / "Blocks"
+    grey = tmp_path / "frame11.png"
+    cv2.imwrite(str(grey), cv2.imread(str(source / "frame11.png"), cv2.IMREAD_GRAYSCALE))
+    read = datasets.read_flow_folder(source)
+    frames = (source / "frame10.png", grey, source / "frame12.png", source / "frame13.png")
+    sequence = datasets.FlowSequence("mixed", frames, 2, read.flow, read.mask)
+    with pytest.raises(ValueError, match=r"frame11.png has shape \(64, 80\), the scored frame frame12.png"):
+        evaluate_sequence(sequence, machine=machine, others=False)
+
+
+def test_frames_are_read_as_vmcl_run_reads_them(tmp_path, rendered, machine):
+    # A PPM of maxval 1020 holding 4 x the 8-bit frame is that frame at full scale (4 * 65535 / 1020 = 257):
+    # read as stored it was dark, and the baselines' 8-bit frames had 5 grey levels. The same pair stored as
+    # 8-bit PNGs is the oracle: the baselines see the same 8-bit frames, the machine the same brightness.
+    root, _ = rendered
+    source = root / "mine" / "Blocks"
+    png, ppm = tmp_path / "png", tmp_path / "ppm"
+    for folder in (png, ppm):
+        folder.mkdir()
+        shutil.copy(source / "flow12.flo", folder / "flow12.flo")
+    for number in (12, 13):
+        shutil.copy(source / f"frame{number}.png", png / f"frame{number}.png")
+        rgb = (datasets.read_image(source / f"frame{number}.png").astype(np.uint16) * 4).astype(">u2")
+        header = f"P6\n{rgb.shape[1]} {rgb.shape[0]}\n1020\n".encode()
+        (ppm / f"frame{number}.ppm").write_bytes(header + rgb.tobytes())
+    assert np.array_equal(datasets.read_image(ppm / "frame12.ppm", picture=True),
+                          datasets.read_image(source / "frame12.png").astype(np.uint16) * 257)
+    expected = {row.method: row for row in evaluate_sequence(datasets.read_flow_folder(png), machine=machine)}
+    found = {row.method: row for row in evaluate_sequence(datasets.read_flow_folder(ppm), machine=machine)}
+    assert set(found) == set(expected) == {"vmcl two frames", *baselines()}
+    for method in baselines():
+        assert (found[method].epe, found[method].aae) == (expected[method].epe, expected[method].aae), method
+    assert found["vmcl two frames"].epe == pytest.approx(expected["vmcl two frames"].epe, rel=1e-3)
+
+
+def test_sequences_deeper_than_the_search_are_named(tmp_path, rendered, capsys):
+    # A sequence five folders down was passed over in silence by `vmcl eval flow` (find_flow_folders searches 4).
+    root, _ = rendered
+    shallow, deep = tmp_path / "shallow", tmp_path / "a" / "b" / "c" / "d" / "Blocks"
+    shutil.copytree(root / "mine" / "Blocks", shallow)
+    shutil.copytree(root / "mine" / "Blocks", deep)
+    assert datasets.find_flow_folders(tmp_path) == [shallow]
+    assert datasets.find_flow_folders(tmp_path, depth=5) == [deep, shallow]
+    why = (f"it is a flow sequence 5 levels below {tmp_path}, deeper than the 4 levels searched (search from a "
+           "folder nearer to it)")
+    assert datasets.flow_folders_lacking(tmp_path) == [(deep, why)]
+    assert datasets.flow_folders_lacking(tmp_path, depth=5) == []
+    assert main(["eval", "flow", "--data", str(tmp_path), "-q"]) == 0
+    assert f"vmcl: note: left out {deep}: {why}" in capsys.readouterr().err.splitlines()

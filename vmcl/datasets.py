@@ -23,6 +23,7 @@ import re
 import sys
 import tempfile
 import zlib
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -85,8 +86,12 @@ def _as_path(path, name: str = "path") -> Path:
     return Path(path)
 
 
-def _existing(path) -> Path:
+def _existing(path, what: str = "a file") -> Path:
+    """``path`` checked to be a file: a folder is refused as a bad value (it exists, so "no such file" would
+    mislead), anything else missing as FileNotFoundError; ``what`` says which file was wanted."""
     path = _as_path(path)
+    if path.is_dir():
+        raise InputValueError(f"{path} is a folder, not {what}")
     if not path.is_file():
         raise FileNotFoundError(f"no such file: {path}")
     return path
@@ -122,10 +127,7 @@ def read_image(path, *, picture: bool = False) -> np.ndarray:
         If it is a folder, cannot be decoded as an image, is larger than OpenCV's limits, or is a PNG or
         JPEG cut short or corrupt (OpenCV would decode what it can and fill the rest with grey).
     """
-    path = _as_path(path)
-    if path.is_dir():
-        raise InputValueError(f"{path} is a folder, not an image file")
-    path = _existing(path)
+    path = _existing(path, "an image file")
     data = path.read_bytes()
     if not data:
         raise InputValueError(f"{path} is empty, not an image")
@@ -300,7 +302,7 @@ def read_pfm(path) -> np.ndarray:
     PFM stores rows bottom to top; the sign of the scale field gives the byte order (negative: little
     endian). Middlebury marks unknown disparities with infinity, returned here as NaN.
     """
-    path = _existing(path)
+    path = _existing(path, "a PFM file")
     with path.open("rb") as f:
         header = f.readline().strip()
         if header not in (b"PF", b"Pf"):
@@ -358,7 +360,8 @@ def write_stereo_folder(folder, left, right, disparity, *, ndisp: int | None = N
     left, right : (H, W) or (H, W, 3) arrays of one shape
         uint8 as they are, or floats in [0, 1] (as :mod:`vmcl.scenes` renders them), rounded to 8 bits.
     disparity : (H, W) float array
-        The left view's disparity, NaN where unknown (written as infinity, Middlebury's unknown).
+        The left view's disparity, >= 0 (vmcl's convention), NaN where unknown (written as infinity,
+        Middlebury's unknown).
     ndisp : int, optional
         calib.txt's disparity count; default: the largest finite disparity rounded up, plus one.
 
@@ -387,6 +390,11 @@ def write_stereo_folder(folder, left, right, disparity, *, ndisp: int | None = N
     if truth.shape != images[0].shape[:2]:
         raise InputValueError(f"disparity must have the images' shape {images[0].shape[:2]}, got {truth.shape}")
     finite = truth[np.isfinite(truth)]
+    if finite.size and finite.min() < 0:
+        # Checked before ndisp's default (the largest disparity plus one), which would otherwise be refused
+        # as an ndisp the caller never gave.
+        raise InputValueError(f"disparity must be >= 0 where known (the left view's, I_left(x, y) = "
+                              f"I_right(x - d, y)), got values down to {float(finite.min()):g}")
     if ndisp is None:
         ndisp = int(np.ceil(finite.max())) + 1 if finite.size else 1
     ndisp = check_int(ndisp, "ndisp", minimum=1)
@@ -416,6 +424,11 @@ def read_disparity(path, *, scale: float | None = None, unknown: int | None = 0)
     Returns
     -------
     (H, W) float32 array
+
+    Raises
+    ------
+    ValueError
+        If a PGM/PNG is not 8-bit, ``scale`` is missing for one or given for a PFM, or a PFM has 3 channels.
     """
     path = _as_path(path)
     if unknown is not None:
@@ -431,6 +444,11 @@ def read_disparity(path, *, scale: float | None = None, unknown: int | None = 0)
         raise InputValueError(f"scale must be a positive number for an 8-bit map such as {path.name}, got None")
     check_real(scale, "scale (grey levels per pixel of disparity)", above=0)
     grey = _single_channel(path)
+    if grey.dtype != np.uint8:
+        # Middlebury's maps are 8-bit; a 16-bit map's levels divided by an 8-bit scale would give disparities
+        # far wider than the image (and other sets' 16-bit maps, KITTI's, have their own encoding).
+        raise InputValueError(f"{path} is a {8 * grey.dtype.itemsize}-bit map; expected an 8-bit PGM/PNG "
+                              "(disparity = grey / scale) or a PFM (disparities as stored)")
     disparity = grey.astype(np.float32) / np.float32(scale)
     if unknown is not None:
         disparity[grey == unknown] = np.nan
@@ -451,12 +469,19 @@ def read_flo(path, *, raw: bool = False) -> np.ndarray:
     -------
     (H, W, 2) float32 array
 
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    ValueError
+        If ``path`` is a folder, or the file is not a .flo file or is cut short.
+
     Notes
     -----
     Format: float32 tag 202021.25, int32 width, int32 height, then u and v interleaved row by row, all
     little endian. A vector is unknown when ``|u| > 1e9`` or ``|v| > 1e9``.
     """
-    path = _existing(path)
+    path = _existing(path, "a .flo file")
     check_bool(raw, "raw")
     data = path.read_bytes()
     if len(data) < 12 or np.frombuffer(data[:4], "<f4")[0] != FLO_TAG:
@@ -477,12 +502,36 @@ def write_flo(path, flow) -> None:
     Parameters
     ----------
     path : str or Path
-    flow : (H, W, 2) array
+    flow : (H, W, 2) integer or float array
+        Stored as float32.
+
+    Raises
+    ------
+    TypeError
+        If ``flow`` is not a NumPy array of numbers (a bool array is refused: it holds no displacement).
+    ValueError
+        If its shape is not (H, W, 2), or it holds a finite value beyond float32's range (about 3.4e38),
+        which would be stored as infinity and read back as unknown.
+
+    Notes
+    -----
+    The format marks whole vectors unknown, not components: a vector with one NaN component is written
+    as unknown as a whole (both components 1e10) and read back as (NaN, NaN). Any stored component above
+    1e9 in magnitude, infinities included, makes its vector unknown to :func:`read_flo`; such values
+    are written as given (Middlebury's own unknown, 1e10, copies byte for byte).
     """
     flow = check_real_dtype(flow, "flow")
+    if flow.dtype.kind == "b":
+        raise InputTypeError("flow must hold numbers (integer or float), got dtype bool")
     if flow.ndim != 3 or flow.shape[2] != 2 or flow.shape[0] < 1 or flow.shape[1] < 1:
         raise InputValueError(f"flow must have shape (H, W, 2), got {flow.shape}")
-    flow = flow.astype("<f4")
+    with np.errstate(over="ignore"):  # the overflow is refused below, by name, not left to NumPy's warning
+        stored = flow.astype("<f4")
+    overflow = np.isinf(stored) & np.isfinite(flow)
+    if overflow.any():
+        raise InputValueError(f"flow holds {flow[overflow][0]:g}, beyond float32's range (about 3.4e38) that a "
+                              ".flo file stores: it would be written as infinity and read back as unknown")
+    flow = stored
     flow[np.isnan(flow).any(axis=-1)] = _FLO_UNKNOWN_WRITTEN
     header = np.array([FLO_TAG], "<f4").tobytes() + np.array(flow.shape[1::-1], "<i4").tobytes()
     _as_path(path).write_bytes(header + flow.tobytes())
@@ -833,12 +882,18 @@ def stereo_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
 def _find_folders(root, depth: int, holds: Callable[[Path], bool]) -> list[Path]:
     """The folders at or below ``root`` (``depth`` levels at most, hidden ones skipped) that ``holds``
     accepts, sorted; ``root`` alone when it does; a folder accepted is not searched further."""
+    return _search_folders(root, depth, holds)[0]
+
+
+def _search_folders(root, depth: int, holds: Callable[[Path], bool]) -> tuple[list[Path], list[Path]]:
+    """:func:`_find_folders`'s folders, and the folders ``depth`` levels below ``root`` that it did not
+    accept, whose subfolders lie deeper than the search went."""
     root = _as_path(root, "root")
     check_int(depth, "depth", minimum=1)
     if not root.is_dir():
         raise FileNotFoundError(f"no such folder: {root}")
     if holds(root):
-        return [root]
+        return [root], []
     found: list[Path] = []
     level = [root]
     for _ in range(depth):
@@ -848,6 +903,20 @@ def _find_folders(root, depth: int, holds: Callable[[Path], bool]) -> list[Path]
                        if child.is_dir() and not child.name.startswith("."))
         found += [child for child in below if holds(child)]
         level = [child for child in below if not holds(child)]
+    return sorted(found), level
+
+
+def _found_deeper(tops: list[Path], holds: Callable[[Path], bool]) -> list[Path]:
+    """The folders below ``tops`` (at any depth, hidden ones skipped) that ``holds`` accepts; a folder
+    accepted is not searched further. Links to folders are not followed: a link to a folder above would
+    make the walk endless."""
+    found = []
+    for top in tops:
+        for here, subfolders, _ in os.walk(top):
+            subfolders[:] = sorted(name for name in subfolders if not name.startswith("."))
+            if here != str(top) and holds(Path(here)):
+                found.append(Path(here))
+                subfolders.clear()
     return sorted(found)
 
 
@@ -1092,6 +1161,38 @@ def _flow_frames(folder: Path, frame: int | None = None) -> list[Path]:
     return runs[0] if runs else []
 
 
+def _described(shape: tuple[int, ...]) -> str:
+    """An image's size and colour kind, as its shape gives them ("160 x 120 RGB")."""
+    return f"{shape[1]} x {shape[0]} {'grey' if len(shape) == 2 else 'RGB'}"
+
+
+def _frames_around(frames: list[Path], numbers: list[int], index: int, shape: tuple[int, ...]) -> tuple[int, int]:
+    """The span ``start, stop`` of ``frames`` (sorted by their ``numbers``) that is one sequence with the scored
+    pair ``index, index + 1``: frames numbered one after another, each number held by one file, each of the
+    scored frame's ``shape`` (size and colour kind). A gap, a number held by two files (frame08.png and
+    frame008.png: which comes first cannot be told) or another shape ends the past or the future there,
+    rather than join what does not follow. The past is streamed before the pair, so a past frame that cannot
+    be read is refused (by :func:`read_image`, naming it); the future is scored by nothing, so a frame there
+    that cannot be read (cut short, with alpha) only ends it."""
+    count = Counter(numbers)
+
+    def follows(earlier: int, later: int) -> bool:
+        return numbers[later] == numbers[earlier] + 1 and count[numbers[earlier]] == count[numbers[later]] == 1
+
+    def future_shape(path: Path) -> tuple[int, ...] | None:
+        try:
+            return read_image(path).shape
+        except (InputValueError, OSError):
+            return None
+
+    start, stop = index, index + 2
+    while start > 0 and follows(start - 1, start) and read_image(frames[start - 1]).shape == shape:
+        start -= 1
+    while stop < len(frames) and follows(stop - 1, stop) and future_shape(frames[stop]) == shape:
+        stop += 1
+    return start, stop
+
+
 def read_flow_folder(folder) -> FlowSequence:
     """Read a folder of frames with ground-truth flow: Middlebury's layout, Sintel's, or Yosemite's.
 
@@ -1106,7 +1207,11 @@ def read_flow_folder(folder) -> FlowSequence:
         scored), or Yosemite's yos9.png, yos10.png and correct_yos.flo. The sequence is named by its folder,
         with its parent's name where the flow is not beside the frames (in gt/, flow/ or other-gt-flow/:
         "clean/alley_1", "other-data/Dimetrodon"). Its frames are those numbered one after another around the
-        scored pair and of its size: a gap in the numbers, or a frame of another size, ends them there.
+        scored pair and of its size and colour kind: a gap in the numbers, a number held by two files
+        (frame08.png and frame008.png), or a frame of another size or kind (grey among RGB) ends them there,
+        its past before it and its future after it. A past frame that cannot be read is refused by name (the
+        sequence mode streams it); a frame after the scored pair that cannot be read (cut short, with alpha)
+        ends the future there, since nothing scores it.
 
     Returns
     -------
@@ -1117,7 +1222,9 @@ def read_flow_folder(folder) -> FlowSequence:
     FileNotFoundError
         No such folder.
     ValueError
-        No flow, fewer than two numbered frames, no frame after the flow's first, or sizes that differ.
+        No flow, fewer than two numbered frames, no frame after the flow's first, two frames of the scored
+        pair's numbers (frame010.png beside frame10.png), a past frame that cannot be read, a next frame of
+        another size or colour kind, or a flow or mask of another size.
     """
     folder = _as_path(folder, "folder")
     if not folder.is_dir():
@@ -1139,21 +1246,27 @@ def read_flow_folder(folder) -> FlowSequence:
         if len(frames) != 2:
             raise InputValueError(f"{flo} has no frame number and the folder holds {len(frames)} frames, not two")
         wanted = numbers[0]
-    if wanted not in numbers or numbers.index(wanted) + 1 >= len(frames) or wanted + 1 not in numbers:
+    for number in (wanted, wanted + 1):
+        # frame010.png and frame10.png are both frame 10: the pair would be one of them and the other, a frame
+        # scored against itself (or its copy).
+        same = [p.name for p, n in zip(frames, numbers) if n == number]
+        if len(same) > 1:
+            raise InputValueError(f"folder {folder} holds {len(same)} frames numbered {number} ({', '.join(same)}); "
+                                  f"which is frame {number} cannot be told")
+    if wanted not in numbers or wanted + 1 not in numbers:
         raise InputValueError(f"{flo} is the flow from frame {wanted} to {wanted + 1}, which the folder lacks")
-    index = numbers.index(wanted)
+    index = numbers.index(wanted)  # numbers are sorted and these two unique: frames[index + 1] is wanted + 1
     flow = read_flo(flo)
-    size = read_image(frames[index]).shape[:2]
-    # One sequence with the scored pair: frames numbered one after another, of its size (a gap, or a frame of
-    # another size, ends its past and its future there rather than join what does not follow).
-    start, stop = index, index + 2
-    while start > 0 and numbers[start - 1] == numbers[start] - 1 and read_image(frames[start - 1]).shape[:2] == size:
-        start -= 1
-    while stop < len(frames) and numbers[stop] == numbers[stop - 1] + 1 and read_image(frames[stop]).shape[:2] == size:
-        stop += 1
+    scored = read_image(frames[index]).shape
+    start, stop = _frames_around(frames, numbers, index, scored)
     frames, index = frames[start:stop], index - start
-    # Every file scored together has the frame's size: the flow, the next frame and the masks.
-    sized = [(flo, flow.shape[:2]), (frames[index + 1], read_image(frames[index + 1]).shape[:2])]
+    following = read_image(frames[index + 1]).shape
+    if following != scored:  # the pair is matched pixel to pixel: one size and one colour kind
+        raise InputValueError(f"{frames[index + 1]} is {_described(following)}, the frame {frames[index].name} "
+                              f"{_described(scored)}")
+    size = scored[:2]
+    # Every file scored with the pair has the frame's size: the flow and the masks.
+    sized = [(flo, flow.shape[:2])]
     invalid_mask = read_mask(invalid) if invalid is not None else None
     occluded = read_mask(occlusions) if occlusions is not None else None
     sized += [(path, m.shape) for path, m in ((invalid, invalid_mask), (occlusions, occluded))
@@ -1172,6 +1285,10 @@ def read_flow_folder(folder) -> FlowSequence:
     return FlowSequence(name, tuple(frames), index, flow, mask, occluded)
 
 
+def _is_flow_sequence(folder: Path) -> bool:
+    return _flow_truth(folder) is not None and len(_flow_frames(folder)) >= 2
+
+
 def find_flow_folders(root, *, depth: int = 4) -> list[Path]:
     """The folders at or below ``root`` that :func:`read_flow_folder` reads (sorted; hidden ones skipped).
 
@@ -1179,21 +1296,24 @@ def find_flow_folders(root, *, depth: int = 4) -> list[Path]:
     ----------
     root : str or Path
     depth : int
-        Levels below ``root`` searched, >= 1.
+        Levels below ``root`` searched, >= 1. The sequences below them are not returned;
+        :func:`flow_folders_lacking` names them.
 
     Raises
     ------
     FileNotFoundError
         If ``root`` is not a folder.
     """
-    return _find_folders(root, depth, lambda folder: _flow_truth(folder) is not None and len(_flow_frames(folder)) >= 2)
+    return _find_folders(root, depth, _is_flow_sequence)
 
 
 def flow_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
     """The folders at or below ``root`` that :func:`find_flow_folders` leaves out though they look like flow
     sequences, each with what it lacks: a ground-truth flow and one numbered frame, not the two it joins, or
     numbered frames beside several flows, of which the truth cannot be told (folders of flows alone, such as
-    Sintel's flow/ and gt/, are not sequences and are not listed).
+    Sintel's flow/ and gt/, are not sequences and are not listed); and the sequences that lie deeper than
+    the ``depth`` levels it searches, found by searching on below them, so that none is passed over in
+    silence. Sorted by folder.
 
     Parameters
     ----------
@@ -1228,7 +1348,14 @@ def flow_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
             assert truth is not None  # lacking() found it
             lack = f"it holds the flow {truth[0].name} but one numbered frame (*NN.png), not the two it joins"
         found.append((folder, lack))
-    return found
+    _, unsearched = _search_folders(root, depth, _is_flow_sequence)
+    root = _as_path(root, "root")
+    for folder in _found_deeper(unsearched, _is_flow_sequence):
+        levels = len(folder.relative_to(root).parts)
+        why = (f"it is a flow sequence {levels} levels below {root}, deeper than the {depth} levels searched "
+               "(search from a folder nearer to it)")
+        found.append((folder, why))
+    return sorted(found)
 
 
 # --------------------------------------------------------------------------------------------- BSDS

@@ -25,7 +25,7 @@ import numpy as np
 
 from vmcl.cm.core import check_bool
 from vmcl.datasets import FlowSequence, read_image
-from vmcl.errors import InputTypeError
+from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.metrics import evaluate_flow
 
@@ -138,6 +138,11 @@ def evaluate_sequence(sequence: FlowSequence, *, config=None, machine: Machine |
     Returns
     -------
     list of FlowRow
+
+    Notes
+    -----
+    The frames are read as ``vmcl run`` reads them (:func:`vmcl.datasets.read_image` with ``picture=True``):
+    a PGM or PPM whose declared maximum lies below its type's full scale is scaled to it.
     """
     from vmcl.pipeline import VisionMachine
 
@@ -147,7 +152,14 @@ def evaluate_sequence(sequence: FlowSequence, *, config=None, machine: Machine |
     others = check_bool(others, "others")
     vm = VisionMachine(motion_only(config), machine=machine)
     index = sequence.index
-    frames = [read_image(path) for path in sequence.frames[:index + 2]]
+    # As `vmcl run` reads a frame (a picture's brightness: a 10-bit PGM's 1023 is white), so that a file is
+    # measured here as it is run; read as stored, such frames were dark and the baselines' 8 bits few levels.
+    paths = sequence.frames[:index + 2]
+    frames = [read_image(path, picture=True) for path in paths]
+    for path, frame in zip(paths, frames):
+        if frame.shape != frames[index].shape:  # named here: the machine's refusal would name a frame's index
+            raise InputValueError(f"{path} has shape {frame.shape}, the scored frame {paths[index].name} "
+                                  f"{frames[index].shape}: a sequence's frames have one size and colour kind")
     vm.run(frames[index], next=frames[index + 1])  # the kernels are built before anything is timed
     pair = vm.run(frames[index], next=frames[index + 1])
     rows = [_row("vmcl two frames", pair.flow, sequence, pair.total_ms)]
