@@ -419,3 +419,122 @@ def test_stereobm_is_refused_where_opencv_returns_memory_it_never_wrote(shape, m
     wide = (rng.random((40, 200)) * 255).astype(np.uint8)
     found = se.opencv_disparity(se.stereo_bm(64), wide, np.roll(wide, -3, axis=1))
     assert np.nanmax(found) < 64
+
+
+# --------------------------------------------------------------------------------------------- what cannot be scored
+
+
+def _blocks(shape=(96, 128)):
+    from vmcl import scenes
+
+    return scenes.render(scenes.preset("blocks", shape=shape), seed=0, noise=0.01)
+
+
+def _v2_folder(folder, left, right, disparity, *, max_disparity=20, disc=None):
+    """A Middlebury v2 evaluation folder: imL/imR.png, groundtruth.png at scale 8, info.txt, and the masks
+    nonocc.png and all.png (every pixel) and disc.png (``disc``, default every pixel)."""
+    folder.mkdir(parents=True)
+    for name, image in (("imL.png", left), ("imR.png", right)):
+        cv2.imwrite(str(folder / name), np.round(image[..., ::-1] * 255).astype(np.uint8))
+    cv2.imwrite(str(folder / "groundtruth.png"), np.round(disparity * 8).astype(np.uint8))
+    (folder / "info.txt").write_text(f"8\n{max_disparity}\n")
+    every = np.full(disparity.shape, 255, np.uint8)
+    for name, mask in (("nonocc", every), ("all", every), ("disc", every if disc is None else disc)):
+        cv2.imwrite(str(folder / f"{name}.png"), mask)
+    return folder
+
+
+def test_a_region_whose_mask_marks_no_pixel_is_not_scored_and_the_others_are(tmp_path):
+    # An empty disc mask (a scene without depth jumps, or a crop) left the whole pair out, its nonocc and
+    # all regions unscored, with a message naming the metric's internal argument "ground_truth".
+    s = _blocks()
+    truth = s.disparity.astype(np.float32)
+    every, none = np.ones(truth.shape, bool), np.zeros(truth.shape, bool)
+    pair = datasets.StereoPair("flat", s.left, s.right, truth, {"nonocc": every, "all": every, "disc": none},
+                               (float(truth.min()), float(truth.max())), 1.0, tmp_path / "flat")
+    off = truth + np.where(np.arange(truth.size).reshape(truth.shape) % 3 == 0, 1.5, 0.25).astype(np.float32)
+    evaluation = se.evaluate_pair(pair, [se.StereoMethod("off", lambda left, right: off)], warm=False)
+    assert [s.region for s in evaluation.scores] == ["nonocc", "all"]
+    for scores in evaluation.scores:
+        assert scores.bad == {t: pytest.approx(_oracle_bad(off, truth, every, t), abs=1e-12) for t in se.THRESHOLDS}
+    assert evaluation.not_scored == {"disc": f"the disc mask of {tmp_path / 'flat'} marks no pixel"}
+    assert f"- flat: region disc not scored: the disc mask of {tmp_path / 'flat'} marks no pixel" in \
+        se.markdown_tables([evaluation])
+    nothing = datasets.StereoPair(**{**vars(pair), "masks": {"nonocc": none, "disc": none}})
+    with pytest.raises(InputValueError, match=r"pair flat: no pixel to evaluate: every mask of .* \(nonocc, disc\)"):
+        se.evaluate_pair(nothing, [se.StereoMethod("off", lambda left, right: off)], warm=False)
+
+
+def test_eval_stereo_keeps_a_scene_whose_disc_mask_is_empty(tmp_path, capsys):
+    s = _blocks()
+    folder = _v2_folder(tmp_path / "flatdisc", s.left, s.right, s.disparity, disc=np.zeros(s.disparity.shape, np.uint8))
+    assert main(["eval", "stereo", "--data", str(folder), "-q"]) == 0
+    captured = capsys.readouterr()
+    regions = {line.split("|")[3].strip() for line in captured.out.splitlines() if line.startswith("| flatdisc | vmcl")}
+    assert regions == {"nonocc", "all"}
+    assert f"- flatdisc: region disc not scored: the disc mask of {folder} marks no pixel" in captured.out
+    assert captured.err == ""
+
+
+def test_the_evaluation_keeps_what_vmcl_said_about_each_pair(tmp_path, capsys):
+    # Swapped views: vmcl's run says so ("is the left image the left camera's?"), but the evaluation kept
+    # only its disparity, and its notes only the configuration.
+    from vmcl.pipeline import Config, VisionMachine
+
+    s = _blocks()
+    said = VisionMachine(Config.from_dict(se.DEPTH_ONLY)).run(s.right, s.left).notes
+    assert any("is the left image the left camera's?" in note for note in said)
+    truth = s.disparity.astype(np.float32)
+    pair = datasets.StereoPair("swapped", s.right, s.left, truth, {}, (float(truth.min()), float(truth.max())), 1.0,
+                               tmp_path)
+    evaluation = se.evaluate_pair(pair, [se.vmcl_method()], warm=False)
+    assert evaluation.notes == ["vmcl: the disparity range found from the images", *(f"vmcl: {n}" for n in said)]
+    folder = datasets.write_stereo_folder(tmp_path / "swapped", s.right, s.left, s.disparity)
+    assert main(["eval", "stereo", "--data", str(folder), "-q"]) == 0
+    assert f"- swapped: vmcl: {said[0]}" in capsys.readouterr().out.splitlines()
+
+
+def test_vmcl_without_a_disparity_has_no_value_anywhere_and_says_why(tmp_path):
+    # Images of one brightness: the run gives no disparity (None), which the evaluation turned into a 0-d
+    # NaN that the metric refused ("disparity must have 2 dimensions"), leaving the whole pair out.
+    flat = np.full((32, 48), 128, np.uint8)
+    truth = np.full(flat.shape, 2.0, np.float32)
+    pair = datasets.StereoPair("flat", flat, flat, truth, {}, (2.0, 2.0), 1.0, tmp_path)
+    evaluation = se.evaluate_pair(pair, [se.vmcl_method()], warm=False)
+    (scores,) = evaluation.scores
+    assert (scores.region, scores.density, scores.bad[1.0], scores.pixels) == ("known", 0.0, 1.0, flat.size)
+    assert np.isnan(evaluation.disparities["vmcl (dense, MRF)"]).all()
+    assert any("one brightness everywhere" in note for note in evaluation.notes), evaluation.notes
+
+
+def test_a_baseline_that_cannot_run_on_a_small_pair_is_named_and_vmcl_still_scored(tmp_path):
+    # A 20 x 30 crop: too narrow for StereoSGBM's 32 disparities, which left the whole pair out, vmcl too.
+    s = _blocks()
+    left, right, truth = s.left[40:60, 40:70], s.right[40:60, 40:70], s.disparity[40:60, 40:70]
+    pair = datasets.read_stereo_folder(datasets.write_stereo_folder(tmp_path / "crop", left, right, truth, ndisp=20))
+    ours = se.vmcl_method()
+    evaluation = se.evaluate_pair(pair, [ours, *se.opencv_baselines(pair)], warm=False)
+    sgbm = ["OpenCV StereoSGBM MODE_SGBM", "OpenCV StereoSGBM 3WAY"]
+    assert list(evaluation.not_run) == sgbm
+    assert all("wider than StereoSGBM's numDisparities plus half its block (32 + 2 pixels), got 30" in why
+               for why in evaluation.not_run.values())
+    expected = se.evaluate_pair(pair, [ours], warm=False).scores
+    assert [(s.method, s.region, s.bad, s.density) for s in evaluation.scores if s.method == ours.name] == \
+           [(s.method, s.region, s.bad, s.density) for s in expected]
+    assert {s.method for s in evaluation.scores} == {ours.name, "OpenCV StereoBM"}
+    assert {c.baseline for c in evaluation.matched} == {"OpenCV StereoBM"}
+    lines = se.markdown_tables([evaluation])
+    assert f"- crop: {', '.join(sgbm)}: not run on this pair: {evaluation.not_run[sgbm[0]]}" in lines
+    assert f"| crop | {sgbm[1]} | not run (see the notes) | - | - | - | - | - | - |" in lines
+
+
+def test_eval_stereo_scores_vmcl_where_info_txt_publishes_more_disparities_than_opencv_searches(tmp_path, capsys):
+    s = _blocks()
+    folder = _v2_folder(tmp_path / "huge", s.left, s.right, s.disparity, max_disparity=100000)
+    assert main(["eval", "stereo", "--data", str(folder), "-q"]) == 0
+    captured = capsys.readouterr()
+    assert "| huge | vmcl (dense, MRF) | nonocc |" in captured.out
+    assert ("- huge: OpenCV StereoBM, OpenCV StereoSGBM MODE_SGBM, OpenCV StereoSGBM 3WAY: not run on this pair: "
+            f"numDisparities 100016: the data set publishes 100001 disparities (in {folder / 'info.txt'}), more than "
+            "the 2048 OpenCV's matchers can search") in captured.out.splitlines()
+    assert captured.err == ""

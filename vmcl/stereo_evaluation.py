@@ -14,7 +14,11 @@ about its stereo comes from the same reading of the data and the same configurat
   value counted as bad, with the density and the mean absolute error beside them
   (:func:`vmcl.metrics.evaluate_disparity`); the wall time of a call after a warm-up call; and, for each
   baseline, the bad-1 rate on the pixels that baseline matched, its own beside vmcl's, so that a sparse
-  baseline is also compared where it answers.
+  baseline is also compared where it answers. A mask that marks no pixel leaves its region unscored, and a
+  baseline that cannot run on the pair (too small for its block, more disparities published than it can
+  search) is marked as not run: either is named with the reason, and the rest of the pair is still scored;
+- the notes: how each method was configured for the pair, and what vmcl's run said about it
+  (:attr:`vmcl.result.Result.notes`: the disparity range it found, views that look swapped).
 
 OpenCV's configuration, from its documentation: grey 8-bit input (``cv2.cvtColor`` RGB to grey, so
 ``cn = 1``); StereoBM with block 15 (OpenCV's Python stereo tutorial) and numDisparities a multiple of
@@ -43,7 +47,7 @@ import numpy as np
 from vmcl.cm.core import check_bool, check_choice, check_int, check_unmasked
 from vmcl.datasets import StereoPair
 from vmcl.early.disparity_range import estimate_range
-from vmcl.errors import InputTypeError, InputValueError
+from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.metrics import evaluate_disparity
 
@@ -77,6 +81,7 @@ UNIQUENESS_RATIO = 10
 """StereoSGBM's uniquenessRatio: OpenCV's documentation says 5 to 15 is usually good enough."""
 SGBM_MODES = {"MODE_SGBM": cv2.STEREO_SGBM_MODE_SGBM, "3WAY": cv2.STEREO_SGBM_MODE_SGBM_3WAY}
 """StereoSGBM's modes compared: OpenCV's default (5 directions) and its faster 3-way variant."""
+_OPENCV_NAMES = ("OpenCV StereoBM", *(f"OpenCV StereoSGBM {mode}" for mode in SGBM_MODES))
 THRESHOLDS = (0.5, 1.0, 2.0)
 """The bad-pixel thresholds reported, in pixels."""
 
@@ -101,17 +106,24 @@ class StereoMethod:
     name : str
     compute : callable
         ``compute(left, right)`` with the images as read (:class:`vmcl.datasets.StereoPair`), returns the
-        left-view disparity, (H, W) float32, NaN where the method gives no value.
+        left-view disparity, (H, W) float32, NaN where the method gives no value. A baseline that cannot run
+        on the pair raises :class:`vmcl.errors.InputError` saying why.
     baseline : bool
-        A reference method (OpenCV's): the evaluation compares the others with it on the pixels it matched.
+        A reference method (OpenCV's): the evaluation compares the others with it on the pixels it matched,
+        and marks it as not run, with the reason, where it cannot run on the pair.
     note : str
         How the method was configured for the pair, printed under the tables.
+    compute_with_notes : callable, optional
+        ``compute_with_notes(left, right)`` returns ``compute``'s disparity and the notes the method made on
+        the pair (list of str, each ready to print); the evaluation calls it, where given, instead of
+        ``compute``, so that what a method said about a pair is kept beside its scores.
     """
 
     name: str
     compute: Callable[[np.ndarray, np.ndarray], np.ndarray]
     baseline: bool = False
     note: str = ""
+    compute_with_notes: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, list[str]]] | None = None
 
 
 def grey(image: np.ndarray) -> np.ndarray:
@@ -259,7 +271,7 @@ def baseline_disparities(pair: StereoPair) -> tuple[int, str]:
     _check_pair(pair)
     if pair.published_disparities is not None:
         count = pair.published_disparities
-        source = f"the data set publishes {count} disparities"
+        source = f"the data set publishes {count} disparities{_published_by(pair)}"
     else:
         found = estimate_range(pair.left, pair.right)
         count = max(found.d_max, 0) + 1
@@ -268,6 +280,14 @@ def baseline_disparities(pair: StereoPair) -> tuple[int, str]:
                   f"is {found.d_min}..{found.d_max}")
     rounded = -(-max(count, 1) // 16) * 16
     return rounded, f"numDisparities {rounded}: {source}"
+
+
+def _published_by(pair: StereoPair) -> str:
+    """`` (in FILE)`` naming the file of the pair's folder that publishes its disparities (a v2 folder's
+    info.txt, a 2014 folder's calib.txt), so that a number a user must fix names where it is; empty for a
+    pair that was not read from such a folder."""
+    files = [str(pair.folder / name) for name in ("info.txt", "calib.txt") if (pair.folder / name).is_file()]
+    return f" (in {' or '.join(files)})" if files else ""
 
 
 def opencv_baselines(pair: StereoPair) -> list[StereoMethod]:
@@ -282,17 +302,31 @@ def opencv_baselines(pair: StereoPair) -> list[StereoMethod]:
     -------
     list of StereoMethod
         "OpenCV StereoBM", "OpenCV StereoSGBM MODE_SGBM", "OpenCV StereoSGBM 3WAY".
+        Where numDisparities exceeds what OpenCV can search (2048), each one's ``compute`` raises
+        :class:`vmcl.errors.InputValueError` saying so, and :func:`evaluate_pair` marks them as not run.
     """
     count, source = baseline_disparities(pair)
     note = f"OpenCV's matchers: {source}"
+    if count > _MAX_DISPARITIES:
+        # A number published for the pair (info.txt, calib.txt) that OpenCV cannot search is no reason to
+        # leave out the other methods' scores on the pair: the baselines alone cannot run.
+        reason = f"{source}, more than the {_MAX_DISPARITIES} OpenCV's matchers can search"
+        return [StereoMethod(name, _refusing(reason), baseline=True) for name in _OPENCV_NAMES]
     wide = [name for name, image in (("left", pair.left), ("right", pair.right)) if image.dtype == np.uint16]
     if wide:
         note += (f"; the 16-bit {' and '.join(wide)} view{'s are' if len(wide) == 2 else ' is'} given to them at 8 "
                  "bits (levels / 257, rounded), as their block matchers take 8-bit images only")
     # Each matcher is made once, so that the time of a call is the matching (and the grey conversion).
-    matchers: dict[str, cv2.StereoMatcher] = {"OpenCV StereoBM": stereo_bm(count)}
-    matchers.update({f"OpenCV StereoSGBM {mode}": stereo_sgbm(count, mode) for mode in SGBM_MODES})
-    return [_opencv_method(name, matcher, note) for name, matcher in matchers.items()]
+    matchers = [stereo_bm(count), *(stereo_sgbm(count, mode) for mode in SGBM_MODES)]
+    return [_opencv_method(name, matcher, note) for name, matcher in zip(_OPENCV_NAMES, matchers, strict=True)]
+
+
+def _refusing(reason: str) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """A ``compute`` that cannot run on its pair, and says why."""
+    def compute(left: np.ndarray, right: np.ndarray) -> np.ndarray:
+        raise InputValueError(reason)
+
+    return compute
 
 
 def _eight_bits(image: np.ndarray) -> np.ndarray:
@@ -324,7 +358,10 @@ def vmcl_method(config=None, *, machine: Machine | None = None) -> StereoMethod:
     Returns
     -------
     StereoMethod
-        "vmcl (dense, MRF)"; one VisionMachine serves every pair.
+        "vmcl (dense, MRF)"; one VisionMachine serves every pair. Its ``compute_with_notes`` gives the run's
+        :attr:`vmcl.result.Result.notes` (the disparity range found, views that look swapped), each after
+        "vmcl: ". Where the run gives no disparity (images of one brightness: nothing to match), the
+        disparity has no value anywhere (NaN), and the notes say why.
     """
     from vmcl.pipeline import Config, VisionMachine
 
@@ -339,10 +376,18 @@ def vmcl_method(config=None, *, machine: Machine | None = None) -> StereoMethod:
     note = ("vmcl: the disparity range found from the images" if given == (None, None)
             else f"vmcl: the disparity range bounds given by the config, d_min {given[0]}, d_max {given[1]}")
 
-    def compute(left: np.ndarray, right: np.ndarray) -> np.ndarray:
-        return np.asarray(vm.run(left, right).disparity, dtype=np.float32)
+    def compute_with_notes(left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, list[str]]:
+        result = vm.run(left, right)
+        if result.disparity is None:
+            disparity = np.full(np.shape(left)[:2], np.nan, np.float32)
+        else:
+            disparity = np.asarray(result.disparity, dtype=np.float32)
+        return disparity, [f"vmcl: {line}" for line in result.notes]
 
-    return StereoMethod("vmcl (dense, MRF)", compute, note=note)
+    def compute(left: np.ndarray, right: np.ndarray) -> np.ndarray:
+        return compute_with_notes(left, right)[0]
+
+    return StereoMethod("vmcl (dense, MRF)", compute, note=note, compute_with_notes=compute_with_notes)
 
 
 # --------------------------------------------------------------------------------------------- evaluation
@@ -414,9 +459,14 @@ class PairEvaluation:
     matched : list of MatchedComparison
         For each baseline, each method that is not one.
     notes : list of str
-        How the methods were configured for the pair (each note once).
+        How the methods that ran were configured for the pair, and what they said about it (vmcl's run
+        notes), each note once.
     disparities : dict of str to ndarray
         Each method's disparity, by its name.
+    not_run : dict of str to str
+        Each baseline that could not run on the pair, and why: it has no scores and no comparison.
+    not_scored : dict of str to str
+        Each region whose mask marks no pixel, and why: no method has scores there.
     """
 
     scene: str
@@ -424,6 +474,8 @@ class PairEvaluation:
     matched: list[MatchedComparison]
     notes: list[str] = field(default_factory=list)
     disparities: dict[str, np.ndarray] = field(default_factory=dict)
+    not_run: dict[str, str] = field(default_factory=dict)
+    not_scored: dict[str, str] = field(default_factory=dict)
 
 
 def _check_pair(pair) -> None:
@@ -431,17 +483,37 @@ def _check_pair(pair) -> None:
         raise InputTypeError(f"pair must be a vmcl.datasets.StereoPair, got {type(pair).__name__}")
 
 
-def _regions(pair: StereoPair) -> dict[str, np.ndarray]:
-    """The pair's masks, or every pixel of known disparity where it has none."""
-    return dict(pair.masks) if pair.masks else {_KNOWN: np.isfinite(pair.disparity)}
+def _regions(pair: StereoPair) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+    """The pair's masks, or every pixel of known disparity where it has none: those that hold a pixel, and
+    why each other one is not scored. Refuses a pair with no pixel to score anywhere."""
+    if not pair.masks:
+        known = np.isfinite(pair.disparity)
+        if not known.any():
+            raise InputValueError(f"pair {pair.name}: no pixel to evaluate: its ground truth (disparity) has no "
+                                  "known value")
+        return {_KNOWN: known}, {}
+    # A scene without depth jumps (or a crop of one) has an empty disc mask: its other regions still count.
+    regions = {name: mask for name, mask in pair.masks.items() if np.any(mask)}
+    not_scored = {name: f"the {name} mask of {pair.folder} marks no pixel" for name in pair.masks
+                  if name not in regions}
+    if not regions:
+        raise InputValueError(f"pair {pair.name}: no pixel to evaluate: every mask of {pair.folder} "
+                              f"({', '.join(pair.masks)}) marks none")
+    return regions, not_scored
 
 
-def _run(method: StereoMethod, pair: StereoPair, warm: bool) -> tuple[np.ndarray, float]:
+def _run(method: StereoMethod, pair: StereoPair, warm: bool) -> tuple[np.ndarray, list[str], float]:
+    """The method's disparity on the pair, its notes on it, and the wall ms of the (timed) call."""
+    def call() -> tuple[np.ndarray, list[str]]:
+        if method.compute_with_notes is not None:
+            return method.compute_with_notes(pair.left, pair.right)
+        return method.compute(pair.left, pair.right), []
+
     if warm:
-        method.compute(pair.left, pair.right)  # builds kernels and buffers: the timed call is the steady state
+        call()  # builds kernels and buffers: the timed call is the steady state
     start = time.perf_counter()
-    disparity = method.compute(pair.left, pair.right)
-    return disparity, (time.perf_counter() - start) * 1e3
+    disparity, notes = call()
+    return disparity, notes, (time.perf_counter() - start) * 1e3
 
 
 def _bad1(disparity: np.ndarray, pair: StereoPair, mask: np.ndarray) -> float:
@@ -463,12 +535,20 @@ def evaluate_pair(pair: StereoPair, methods: Sequence[StereoMethod], *, warm: bo
     -------
     PairEvaluation
 
+    Raises
+    ------
+    InputValueError
+        If the pair has no pixel to score (every mask empty), or a method that is not a baseline refuses it.
+
     Notes
     -----
     Rates are over each mask the pair has (nonocc, all, disc), else over every pixel of known
     disparity ("known"); a pixel without a value counts as bad (:func:`vmcl.metrics.evaluate_disparity`).
+    A mask that marks no pixel is not scored (``not_scored`` says which), and a baseline that refuses the
+    pair (:class:`vmcl.errors.InputError`: too small for its block, too many disparities) is not run
+    (``not_run`` says why); the other regions and methods are scored.
     For each baseline, the other methods' bad-1 rate is also taken on the pixels of the "nonocc" region
-    (else the first) where the baseline gave a value, beside the baseline's own there.
+    (else the first scored) where the baseline gave a value, beside the baseline's own there.
     """
     _check_pair(pair)
     if isinstance(methods, (str, bytes)) or not isinstance(methods, Sequence):
@@ -479,17 +559,26 @@ def evaluate_pair(pair: StereoPair, methods: Sequence[StereoMethod], *, warm: bo
     if len(set(names)) != len(names):
         raise InputValueError(f"methods must have distinct names, got {names}")
     warm = check_bool(warm, "warm")
-    regions = _regions(pair)
-    scores, disparities = [], {}
+    regions, not_scored = _regions(pair)
+    scores, disparities, not_run = [], {}, {}
+    notes: dict[str, None] = {}  # ordered, each note once
     for method in methods:
-        disparity, ms = _run(method, pair, warm)
+        try:
+            disparity, said, ms = _run(method, pair, warm)
+        except InputError as error:
+            if not method.baseline:  # the methods under evaluation must run: the pair is refused
+                raise
+            not_run[method.name] = str(error)
+            continue
         disparities[method.name] = disparity
+        notes.update(dict.fromkeys([method.note] if method.note else []))
+        notes.update(dict.fromkeys(said))
         for region, mask in regions.items():
             s = evaluate_disparity(disparity, pair.disparity, mask=mask, thresholds=THRESHOLDS)
             scores.append(MethodScores(method.name, region, s.bad, s.density, s.mae, s.n_evaluated, ms))
     region = "nonocc" if "nonocc" in regions else next(iter(regions))
     matched = []
-    for baseline in (m for m in methods if m.baseline):
+    for baseline in (m for m in methods if m.baseline and m.name in disparities):
         at = regions[region] & np.isfinite(disparities[baseline.name])
         count = int(np.count_nonzero(at))
         for other in (m for m in methods if not m.baseline):
@@ -498,8 +587,7 @@ def evaluate_pair(pair: StereoPair, methods: Sequence[StereoMethod], *, warm: bo
             else:
                 rates = float("nan"), float("nan")
             matched.append(MatchedComparison(baseline.name, other.name, region, count, *rates))
-    notes = list(dict.fromkeys(m.note for m in methods if m.note))
-    return PairEvaluation(pair.name, scores, matched, notes, disparities)
+    return PairEvaluation(pair.name, scores, matched, list(notes), disparities, not_run, not_scored)
 
 
 # --------------------------------------------------------------------------------------------- tables
@@ -524,7 +612,8 @@ def markdown_tables(evaluations: Sequence[PairEvaluation]) -> list[str]:
     Returns
     -------
     list of str
-        Lines: each table under a line that says what it holds, then each pair's notes.
+        Lines: each table under a line that says what it holds (a baseline that did not run on a pair has a
+        row saying so), then each pair's notes, the baselines not run and the regions not scored, and why.
     """
     if isinstance(evaluations, PairEvaluation) or not isinstance(evaluations, Sequence):
         raise InputTypeError(f"evaluations must be a sequence of PairEvaluation, got {type(evaluations).__name__}")
@@ -533,10 +622,7 @@ def markdown_tables(evaluations: Sequence[PairEvaluation]) -> list[str]:
     lines = [("Bad pixels (% with |d - d_gt| > t px; a pixel without a value counts as bad), density (% with a "
               "value), MAE (px, over the pixels with a value), wall ms of a call (after a warm-up call):"), ""]
     header = ("scene", "method", "region", *(f"bad {t:g}" for t in THRESHOLDS), "density", "MAE", "ms")
-    lines += _table(header, [
-        (e.scene, s.method, s.region, *(_percent(s.bad[t]) for t in THRESHOLDS), _percent(s.density),
-         "-" if np.isnan(s.mae) else f"{s.mae:.2f}", f"{s.ms:.1f}")
-        for e in evaluations for s in e.scores])
+    lines += _table(header, [row for e in evaluations for row in _score_rows(e)])
     comparisons = [(e.scene, c) for e in evaluations for c in e.matched]
     if comparisons:
         lines += ["", ("Bad 1 (%) on the pixels each baseline matched, the baseline's beside the method's, and the "
@@ -546,7 +632,27 @@ def markdown_tables(evaluations: Sequence[PairEvaluation]) -> list[str]:
             (scene, c.region, c.baseline, str(c.matched), _percent(c.baseline_bad), c.method, _percent(c.method_bad),
              f"{c.method_bad / c.baseline_bad:.2f}" if c.baseline_bad > 0 else "-")
             for scene, c in comparisons])
-    notes = [f"- {e.scene}: {note}" for e in evaluations for note in e.notes]
+    notes = [f"- {e.scene}: {note}" for e in evaluations for note in _notes(e)]
     if notes:
         lines += ["", *notes]
     return lines
+
+
+def _score_rows(evaluation: PairEvaluation) -> list[tuple[str, ...]]:
+    """The scores table's rows of a pair: each method's regions, then a row for each baseline not run."""
+    rows = [(evaluation.scene, s.method, s.region, *(_percent(s.bad[t]) for t in THRESHOLDS), _percent(s.density),
+             "-" if np.isnan(s.mae) else f"{s.mae:.2f}", f"{s.ms:.1f}") for s in evaluation.scores]
+    rows += [(evaluation.scene, name, "not run (see the notes)", *("-" for _ in THRESHOLDS), "-", "-", "-")
+             for name in evaluation.not_run]
+    return rows
+
+
+def _notes(evaluation: PairEvaluation) -> list[str]:
+    """A pair's notes, then its baselines not run (those refused for one reason on one line) and its regions
+    not scored."""
+    by_reason: dict[str, list[str]] = {}
+    for name, reason in evaluation.not_run.items():
+        by_reason.setdefault(reason, []).append(name)
+    return [*evaluation.notes, *(f"{', '.join(names)}: not run on this pair: {reason}"
+                                 for reason, names in by_reason.items()),
+            *(f"region {region} not scored: {reason}" for region, reason in evaluation.not_scored.items())]
