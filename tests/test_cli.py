@@ -541,7 +541,8 @@ def test_a_binary_config_is_bad_input(tmp_path, images, capsys):
     path = tmp_path / "c.toml"
     path.write_bytes(b"\xff\xfe\x00binary")
     assert main(["run", str(images["left"]), "--config", str(path), "--out", str(tmp_path / "out"), "-q"]) == 2
-    assert "not valid TOML" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "not valid TOML" in err and err.count(str(path)) == 1, err  # the path once, not "config P: P: ..."
 
 
 def _vmcl(*argv, env=None, cwd=None):

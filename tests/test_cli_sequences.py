@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import signal
 import subprocess
 import sys
@@ -308,3 +309,161 @@ def test_a_signal_the_caller_ignores_stays_ignored(tmp_path):
     _, err = process.communicate(timeout=600)
     assert process.returncode == 0, err
     assert len(list(out.glob("fields_*.npz"))) == 200
+
+
+def _copies(folder, sequence, names):
+    """``folder`` holding the rendered left frames 0, 1, ... under ``names``."""
+    folder.mkdir()
+    for k, name in enumerate(names):
+        image = cv2.imread(str(sequence / "left" / f"frame_{k % FRAMES:02d}.png"))
+        assert cv2.imwrite(str(folder / name), image)
+    return folder
+
+
+@pytest.mark.parametrize("names, first, second", [
+    (["frame07.png", "frame08.png", "frame8.png"], "frame08.png", "frame8.png"),
+    (["frame09.png", "frame10.jpg", "frame10.png"], "frame10.jpg", "frame10.png"),
+])
+def test_two_files_of_one_frame_are_refused_naming_both(tmp_path, sequence, capsys, names, first, second):
+    # Both copies were run as frames, with no motion between them, and nothing said.
+    folder = _copies(tmp_path / "dup", sequence, names)
+    expected = f"{folder / first} and {folder / second} are two files of one frame"
+    for spec in (folder, folder / "frame*"):
+        with pytest.raises(ValueError, match=re.escape(expected)):
+            open_frames(spec)
+    out = tmp_path / "out"
+    assert main(["run", str(folder), "--out", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert expected in err and len(err.strip().splitlines()) == 1 and not out.exists(), err
+    if first.endswith(".jpg"):  # a glob that takes one kind of the two takes one file a frame
+        assert [p.name for p in open_frames(folder / "*.png").paths] == ["frame09.png", "frame10.png"]
+
+
+def test_a_gap_in_the_numbering_is_said_naming_the_frames_either_side(tmp_path, sequence, capsys):
+    # frame09 followed by frame12 was run as one step, with nothing said.
+    gapped = _copies(tmp_path / "gap", sequence, ["frame08.png", "frame09.png", "frame12.png"])
+    note = ("1 gap in the frames' numbering, where it otherwise steps by 1: frame 1 (frame09.png) to frame12.png, "
+            "3 apart; frames are missing there")
+    out = tmp_path / "out"
+    assert main(["run", str(gapped), "--out", str(out), "-q"]) == 0
+    assert note in capsys.readouterr().err and note in (out / "sequence.md").read_text()
+    (said,) = open_frames(gapped).notes
+    assert said.startswith(f"3 images in {gapped}: ") and note in said
+    # No gap: frames numbered by tens, a time stamp's jitter, times in seconds, two series in one folder.
+    for k, names in enumerate([["f00.png", "f10.png", "f20.png", "f30.png"],
+                               ["t0.png", "t33.png", "t67.png", "t100.png"],
+                               ["1.25.png", "1.5.png", "2.png", "4.png"],
+                               ["a1.png", "a2.png", "b7.png", "b8.png"]]):
+        assert open_frames(_copies(tmp_path / f"even{k}", sequence, names)).notes == (), names
+    # Two gaps of a series that steps by 2: both named.
+    notes = open_frames(_copies(tmp_path / "two", sequence, ["s0.png", "s2.png", "s8.png", "s10.png", "s14.png"])).notes
+    assert "2 gaps" in notes[0] and "steps by 2: frame 1 (s2.png) to s8.png, 6 apart; frame 3 (s10.png) to s14.png, 4 apart" \
+        in notes[0], notes
+
+
+def test_a_multi_page_tiff_and_an_animated_gif_are_sequences_of_their_pages(tmp_path, sequence, capsys):
+    # Only a TIFF's first page was run, with no word of the others; an animated GIF was refused as having
+    # an alpha channel.
+    pages = [cv2.cvtColor(cv2.imread(str(sequence / "left" / f"frame_{k:02d}.png")), cv2.COLOR_BGR2RGB)
+             for k in range(FRAMES)]
+    stack = tmp_path / "stack.tif"
+    assert cv2.imwritemulti(str(stack), [page[..., ::-1] for page in pages])
+    assert is_sequence(stack)
+    source = open_frames(stack)
+    assert source.count == FRAMES and source.description == f"the {FRAMES} pages of {stack}"
+    read = list(source.frames())
+    assert len(read) == FRAMES and all(np.array_equal(a, b) for a, b in zip(read, pages))
+    out = tmp_path / "out"
+    assert main(["run", str(stack), "--out", str(out), "-q"]) == 0
+    assert len(list(out.glob("fields_*.npz"))) == FRAMES
+    assert f"| {FRAMES - 1} | page {FRAMES - 1} of stack.tif |" in (out / "sequence.md").read_text()
+    # GIF frames in colours of OpenCV's GIF palette (3-3-2 bits: red and green by 36, blue by 85), so that the
+    # file holds them exactly; returned as RGB, without the alpha channel OpenCV gives them.
+    flat = [np.full((40, 48, 3), (36 * k, 216 - 36 * k, 85), np.uint8) for k in range(4)]
+    for k, frame in enumerate(flat):
+        frame[10:20, 5 + 4 * k:15 + 4 * k] = (252, 252, 255)
+    animation = cv2.Animation()
+    animation.frames, animation.durations = [f[..., ::-1] for f in flat], [100] * len(flat)
+    gif = tmp_path / "moving.gif"
+    assert cv2.imwriteanimation(str(gif), animation)
+    source = open_frames(gif)
+    assert source.description == f"the 4 frames of the animation {gif}" and source.name(2) == "frame 2 of moving.gif"
+    read = list(source.frames())
+    assert [f.shape for f in read] == [(40, 48, 3)] * 4
+    assert all(np.array_equal(a, b) for a, b in zip(read, flat))
+    # A file of one page is one image, as before; a file of pages among a folder's frames is refused.
+    assert not is_sequence(sequence / "left" / "frame_00.png")
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    (folder / "a0.tif").write_bytes(stack.read_bytes())
+    with pytest.raises(ValueError, match=re.escape(f"{folder / 'a0.tif'} holds {FRAMES} pages")):
+        list(open_frames(folder).frames())
+
+
+def test_the_videos_take_the_input_videos_frame_rate_unless_fps_is_given(tmp_path, capsys):
+    # The videos were written at 10 fps whatever the input video's rate: a 5 fps clip played twice as fast.
+    clip = _video(tmp_path / "clip.avi", 3)  # 5 fps
+    for argv, rate in (([], 5.0), (["--fps", "7"], 7.0)):
+        out = tmp_path / f"out{rate:g}"
+        assert main(["run", str(clip), *argv, "--out", str(out), "-q"]) == 0
+        err = capsys.readouterr().err
+        video = cv2.VideoCapture(str(out / "cartoon.mp4"))
+        assert video.get(cv2.CAP_PROP_FPS) == pytest.approx(rate)
+        video.release()
+        summary = (out / "sequence.md").read_text()
+        assert (f"3 frames; videos at {rate:g} fps: cartoon.mp4 (3 frames), flow.mp4 (2 frames: the last frame "
+                "has no next frame to move to)") in summary, summary
+        said = f"videos written at 5 fps, the frame rate of {clip}"
+        assert (said in err and said in summary) == (not argv), err
+    assert open_frames(clip).fps == 5.0
+
+
+def test_progress_counts_frames_from_0_as_the_summary_and_the_errors_do(tmp_path, sequence, monkeypatch):
+    # The bar said frame 1 ... frame 3 for the summary's frames 0 ... 2.
+    import tqdm
+
+    said = []
+
+    class Bar:
+        def __init__(self, **kwargs):
+            pass
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def set_postfix_str(self, text):
+            said.append(text)
+
+        def update(self):
+            pass
+
+    monkeypatch.setattr(tqdm, "tqdm", Bar)
+    out = tmp_path / "out"
+    assert main(["run", str(sequence / "left"), "--out", str(out)]) == 0
+    rows = [line.split("|")[1].strip() for line in (out / "sequence.md").read_text().splitlines()
+            if line.startswith("| ") and line.split("|")[1].strip().isdigit()]
+    assert said == [f"frame {row}" for row in rows] == ["frame 0", "frame 1", "frame 2"]
+
+
+def test_frames_too_small_for_motion_are_refused_naming_the_frame_and_its_file(tmp_path, capsys):
+    # The machine's refusal had no "frame k:" and no file, unlike the other errors of a frame.
+    folder = tmp_path / "small"
+    folder.mkdir()
+    for k in range(3):
+        cv2.imwrite(str(folder / f"f{k}.png"), np.tile(np.arange(20, dtype=np.uint8) * 10 + k, (20, 1)))
+    assert main(["run", str(folder), "--out", str(tmp_path / "out"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "frame 0: motion" in err and "patch (21) is larger than the image" in err, err
+    assert f"(frame 0 is left {folder / 'f0.png'}; the next frame is left {folder / 'f1.png'})" in err, err
+
+
+def test_a_one_frame_sequence_says_it_has_no_flow(tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["run", str(_video(tmp_path / "one.avi", 1)), "--out", str(out), "-q"]) == 0
+    summary = (out / "sequence.md").read_text()
+    assert "1 frame; videos at 5 fps: cartoon.mp4 (1 frame)\n" in summary, summary
+    assert "| 0 | video frame 0 |" in summary and "motion needs a next frame: no flow |" in summary, summary
+    assert not (out / "flow.mp4").exists()

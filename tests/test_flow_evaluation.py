@@ -165,6 +165,17 @@ def test_eval_flow_prints_each_sequence_and_method(rendered, capsys):
     assert main(["eval", "flow", "--data", str(root / "mine" / "Blocks" / "flow12.flo"), "-q"]) == 2
 
 
+def test_eval_flow_tells_sequences_of_one_name_apart_by_their_path(rendered, tmp_path, capsys):
+    # Two folders named Blocks in different places were both printed as "Blocks".
+    root, _ = rendered
+    for place in ("a", "b"):
+        shutil.copytree(root / "mine" / "Blocks", tmp_path / place / "Blocks")
+    assert main(["eval", "flow", "--data", str(tmp_path), "-q"]) == 0
+    out = capsys.readouterr().out
+    names = {line.split()[0] for line in out.splitlines() if "vmcl two frames" in line}
+    assert names == {"a/Blocks", "b/Blocks"}, out
+
+
 def test_middleburys_download_layout_is_read_and_a_bad_sequence_is_left_out_by_name(rendered, tmp_path, capsys):
     """other-data/<scene> beside other-gt-flow/<scene>/flowNN.flo, as Middlebury's download lays them out, is a
     sequence named other-data/<scene>; a truncated .flo and a flow with one frame are left out, each named on

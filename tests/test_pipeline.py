@@ -516,6 +516,21 @@ def test_a_config_with_a_byte_order_mark_is_read_and_one_nested_too_deeply_refus
         Config.from_toml(deep)
 
 
+def test_a_config_path_that_is_not_a_path_or_is_a_folder_is_refused_as_input(tmp_path):
+    # A number reached pathlib's bare TypeError and a folder a raw IsADirectoryError: neither an InputError,
+    # which the README promises for every refusal.
+    import re
+
+    from vmcl.errors import InputTypeError, InputValueError
+
+    with pytest.raises(InputTypeError, match=r"^path must be a str or an os\.PathLike, got int$"):
+        Config.from_toml(5)
+    with pytest.raises(InputValueError, match=f"^{re.escape(str(tmp_path))}: a folder, not a TOML file$"):
+        Config.from_toml(tmp_path)
+    with pytest.raises(FileNotFoundError):
+        Config.from_toml(tmp_path / "missing.toml")
+
+
 def test_a_left_image_of_one_brightness_gives_no_depth_or_motion():
     # Every matcher's winner on a blank image was its scan's first, confirmed by an equally blind check:
     # a disparity and a flow of 0 everywhere, restored as sure data, with no word.

@@ -421,3 +421,43 @@ def test_a_stream_copies_each_frame_and_names_a_frame_that_is_none(machine, tmp_
     result = vm.run(image)
     image[:] = 0
     assert result.image.max() > 0
+
+
+def test_a_none_among_the_right_frames_is_refused_as_among_the_left(machine):
+    # A None right view ran its frame without stereo, in silence (disparity None, no note), where a None
+    # left frame was refused.
+    frames = scenes.render_sequence(scenes.preset("blocks", shape=(64, 64)), 3, seed=1, noise=0.01)
+    vm = VisionMachine(Config(time=TimeConfig(enabled=False), motion=MotionConfig(enabled=False), **_DEPTH_AND_MOTION),
+                       machine=machine)
+    stream = vm.stream([f.left for f in frames], [frames[0].right, None, frames[2].right])
+    assert next(stream).disparity is not None  # frame 0 has its right view
+    with pytest.raises(TypeError, match="^frame 1: right must be a NumPy array, got NoneType$"):
+        next(stream)
+    with pytest.raises(TypeError, match="^frame 0: right must be a NumPy array, got NoneType$"):
+        list(vm.stream(iter([frames[0].left]), iter([None])))
+
+
+def test_a_sequence_of_one_frame_says_motion_needs_a_next_frame(machine):
+    # One frame gave no flow and no word of why.
+    frame = scenes.render_sequence(scenes.preset("blocks", shape=(64, 64)), 1, seed=1, noise=0.01)[0]
+    note = "motion: the sequence has one frame, and motion needs a next frame: no flow"
+    (alone,) = VisionMachine(Config(time=TimeConfig(enabled=False), **_DEPTH_AND_MOTION), machine=machine).stream(
+        [frame.left])
+    assert alone.flow is None and note in alone.notes
+    # Not where motion is off (nothing reads a next frame), nor on a longer sequence's last frame.
+    (still,) = VisionMachine(Config(motion=MotionConfig(enabled=False), **_DEPTH_AND_MOTION),
+                             machine=machine).stream([frame.left])
+    assert still.flow is None and not any("next frame" in n for n in still.notes)
+    frames = scenes.render_sequence(scenes.preset("blocks", shape=(64, 64)), 2, seed=1, noise=0.01)
+    results = list(VisionMachine(Config(time=TimeConfig(enabled=False), **_DEPTH_AND_MOTION),
+                                 machine=machine).stream([f.left for f in frames]))
+    assert results[0].flow is not None and results[1].flow is None
+    assert not any("next frame" in n for r in results for n in r.notes)
+
+
+def test_a_frame_the_machine_refuses_is_named_as_the_checks_name_it(machine):
+    # Frames smaller than the motion patch were refused without "frame k:", unlike every other frame error.
+    ramp = np.tile(np.arange(20, dtype=np.uint8) * 10, (20, 1))
+    vm = VisionMachine(Config(time=TimeConfig(enabled=False), **_DEPTH_AND_MOTION), machine=machine)
+    with pytest.raises(ValueError, match=r"^frame 0: motion .*patch \(21\) is larger than the image \(20 x 20"):
+        list(vm.stream([ramp, ramp, ramp]))

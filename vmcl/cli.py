@@ -44,10 +44,13 @@ the end while the others complete, and the exit status is then 2 if every failur
 from the items' fields.npz after each run (:func:`vmcl.distributed.write_zarr`); items of different sizes
 are refused before any work.
 
-``vmcl run`` on a sequence (a folder of frames, a quoted glob pattern or a video file, and for a stereo
-sequence the right view's likewise) streams it through the machine with the temporal terms
-(:meth:`vmcl.pipeline.VisionMachine.stream`, the ``[time]`` settings) and writes what
-:mod:`vmcl.sequence_output` describes: each frame's fields and videos of the cartoon, flow and disparity.
+``vmcl run`` on a sequence (a folder of frames, a quoted glob pattern, a video file or one file of several
+images, a multi-page TIFF or an animated GIF; for a stereo sequence the right view's likewise) streams it
+through the machine with the temporal terms (:meth:`vmcl.pipeline.VisionMachine.stream`, the ``[time]``
+settings) and writes what :mod:`vmcl.sequence_output` describes: each frame's fields and videos of the
+cartoon, flow and disparity, at ``--fps`` or else the input video's own rate. Frames are counted from 0 in
+the progress bar, the summary and the errors. Two files of one frame (frame8.png and frame08.png) are
+refused; a gap in the files' numbering is noted (:func:`vmcl.frame_sources.open_frames`).
 
 ``vmcl fit`` learns a cue's MRF parameters from every example with ground truth below ``--data`` (stereo
 pairs with their disparity, frame pairs with their flow): the machine's own measurements beside the truth,
@@ -69,7 +72,9 @@ import signal
 import sys
 import time
 import traceback
+from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -189,7 +194,8 @@ def _config(path: str | None):
     except FileNotFoundError:
         raise BadInput(f"config {path}: no such file") from None
     except (InputError, OSError) as error:
-        raise BadInput(f"config {path}: {error}") from None
+        # The Config's own refusals start with the file's path, which this line has already said.
+        raise BadInput(f"config {path}: {str(error).removeprefix(f'{Path(path)}: ')}") from None
 
 
 def _run_machine(vm, args, left, right=None, next_=None):
@@ -401,7 +407,7 @@ def _frames(spec: str, what: str):
 
 def _run_sequence(args) -> int:
     from vmcl.pipeline import VisionMachine
-    from vmcl.sequence_output import SequenceWriter, check_fps, frame_count
+    from vmcl.sequence_output import SequenceWriter, frame_count
 
     if args.next:
         raise BadInput("--next is for one image; a sequence's next frames are its own")
@@ -411,21 +417,23 @@ def _run_sequence(args) -> int:
     if rights is not None and None not in (lefts.count, rights.count) and lefts.count != rights.count:
         raise BadInput(f"left has {lefts.count} frames ({lefts.description}), right {rights.count} "
                        f"({rights.description}): a stereo sequence needs a right view per frame")
-    fps = check_fps(DEFAULT_FPS if args.fps is None else args.fps, "--fps")  # before the output folder is made:
-    # OpenCV's writer would fail after the work
+    fps, rate_note = _sequence_fps(args.fps, lefts, rights)  # before the output folder is made: OpenCV's writer
+    # would fail after the work
     vm = VisionMachine(config)
     settings = settings_text(config.to_dict())  # recorded, as a single run's are, for --config to run it again
     frames = 0
     with output_folder(Path(args.out)) as work:
         (work / SETTINGS_FILE).write_text(settings, encoding="utf-8")
         writer = SequenceWriter(work, fps=fps, title=f"Vision Machine: {lefts.description}")
+        writer.notes += [note for source in (lefts, rights) if source is not None for note in source.notes]
+        writer.notes += [rate_note] if rate_note else []
         with _progress(args, lefts.count or 0, "frames", unit="frame") as step:
             results = vm.stream(_reading(lefts, "left"), _reading(rights, "right") if rights else None)
             try:
                 for result in results:
-                    writer.add(result, lefts.paths[frames].name if lefts.paths else f"video frame {frames}")
+                    writer.add(result, lefts.name(frames))
+                    step(f"frame {frames}")  # counted from 0, as sequence.md and the errors count them
                     frames += 1
-                    step(f"frame {frames}")
                 for source in (lefts, rights):
                     # A video may end a frame or two before the count its header declares (an estimate in some
                     # containers); fewer than declared is said, not left to be noticed.
@@ -443,6 +451,23 @@ def _run_sequence(args) -> int:
               file=sys.stderr)
     print(f"{frame_count(frames)}; videos and fields in {args.out}")
     return 0
+
+
+def _sequence_fps(given: float | None, lefts, rights) -> tuple[float, str | None]:
+    """The videos' frame rate: ``--fps`` when given, else the rate the input video declares, else
+    :data:`DEFAULT_FPS`; and a note saying where a rate not given came from (None for ``--fps``)."""
+    from vmcl.sequence_output import FPS_RANGE, check_fps
+
+    if given is not None:
+        return check_fps(given, "--fps"), None
+    video = next((source for source in (lefts, rights) if source is not None and source.video is not None), None)
+    if video is None:
+        return DEFAULT_FPS, None
+    if video.fps is not None and FPS_RANGE[0] <= video.fps <= FPS_RANGE[1]:
+        return video.fps, f"videos written at {video.fps:.4g} fps, the frame rate of {video.video} (--fps sets another)"
+    declared = ("no frame rate" if video.fps is None
+                else f"{video.fps:.4g} fps, outside {FPS_RANGE[0]:g} to {FPS_RANGE[1]:g}")
+    return DEFAULT_FPS, f"{video.video} declares {declared}: videos written at {DEFAULT_FPS:g} fps (--fps sets another)"
 
 
 def _naming_files(message: str, lefts, rights) -> str:
@@ -507,7 +532,7 @@ DEMO_SIZE = 256
 """The side of the scene ``vmcl demo`` renders when ``--size`` is not given."""
 
 DEFAULT_FPS = 10.0
-"""The frame rate of a sequence's videos when ``--fps`` is not given."""
+"""The frame rate of a sequence's videos when ``--fps`` is not given and no input video declares its own."""
 
 SETTINGS_FILE = "settings.json"
 """The file of an output folder that records the run's whole configuration (:meth:`Config.to_dict`, as JSON);
@@ -755,10 +780,15 @@ def _eval_flow(args, root: Path) -> int:
     rows: list[tuple[object, ...]] = [("sequence", "method", "EPE px", "matched", "unmatched", "AAE deg", "ms")]
     machine = default_machine()
     scored = 0
+    # Sequences of one name in different places (a/Grove2 and b/Grove2) are told apart by their path below
+    # the data's root; the others keep the name their folder gives them.
+    shared = {name for name, count in Counter(folder.name for folder in folders).items() if count > 1}
     with _progress(args, len(folders), "flow", unit="sequence") as step:
         for folder in folders:
             try:  # one sequence that cannot be read or run is reported, and the others are still scored
                 sequence = read_flow_folder(folder)
+                if folder.name in shared:
+                    sequence = replace(sequence, name=folder.relative_to(root).as_posix())
                 found = evaluate_sequence(sequence, machine=machine)
             except (InputError, OSError) as error:
                 left_out.append(_left_out(folder, str(error)))
@@ -926,7 +956,8 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("right", nargs="?", help="right image of a rectified pair (adds stereo), or the right "
                                               "view's sequence")
     run.add_argument("--next", help="the left view's next frame: adds motion (one image only)")
-    run.add_argument("--fps", type=float, help=f"a sequence's videos' frame rate, 0.01 to 1000 (default {DEFAULT_FPS:g})")
+    run.add_argument("--fps", type=float, help="a sequence's videos' frame rate, 0.01 to 1000 (default: the input "
+                     f"video's, else {DEFAULT_FPS:g})")
     run.add_argument("--config", help="TOML configuration (see vmcl.pipeline.Config), or an output's settings.json")
     run.add_argument("--out", required=True, help="output folder: new, empty or a previous vmcl output")
     run.add_argument("--models", help="a library folder of models (vmcl learn): recognise them in the left image")

@@ -781,12 +781,19 @@ class Config:
         hash recorded there (:func:`vmcl.fitted.check_fitted`), and a warning says when another vmcl
         version fitted them.
 
-        Raises ValueError on bad TOML (or text that is not UTF-8), keys, or fitted parameters edited since
-        they were fitted; TypeError on mistyped values; OSError if the file cannot be read.
+        Raises InputValueError (a ValueError) on a folder, bad TOML (or text that is not UTF-8), keys, or
+        fitted parameters edited since they were fitted; InputTypeError (a TypeError) on a ``path`` that is
+        not a str or an os.PathLike, or mistyped values; FileNotFoundError if the file does not exist, and
+        another OSError if it cannot be read. A refusal about the file starts with its path.
         """
+        if not isinstance(path, (str, os.PathLike)):
+            raise InputTypeError(f"path must be a str or an os.PathLike, got {type(path).__name__}")
+        path = Path(path)
+        if path.is_dir():
+            raise InputValueError(f"{path}: a folder, not a TOML file")
         try:
             # utf-8-sig: a byte-order mark (as Windows' Notepad saves UTF-8) is not part of the TOML.
-            values = tomllib.loads(Path(path).read_text(encoding="utf-8-sig"))
+            values = tomllib.loads(path.read_text(encoding="utf-8-sig"))
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
             raise InputValueError(f"{path}: not valid TOML ({error})") from None
         except RecursionError:
@@ -973,7 +980,8 @@ class VisionMachine:
             The left view's frames in order, each as :meth:`run` takes ``left`` (all of one size and
             channels). Read lazily, one frame ahead: frame t's Result comes once frame t + 1 is read.
         rights : iterable of arrays, optional
-            The right view's frames (a stereo sequence), as many as ``frames``.
+            The right view's frames (a stereo sequence), as many as ``frames``; a None among them is refused,
+            as among ``frames``, not read as a frame without stereo.
         progress : callable, optional
             Called with each stage's name, as :meth:`run` calls it (the stages of :meth:`stages` with
             ``streaming=True``).
@@ -981,7 +989,8 @@ class VisionMachine:
         Yields
         ------
         Result
-            Frame t's, with motion from t to t + 1 (the last frame has none). With ``config.time``
+            Frame t's, with motion from t to t + 1 (the last frame has none; a sequence of one frame has a
+            note that motion needs a next frame). With ``config.time``
             enabled (the default), each cue's MRF also holds the previous frame's restoration carried
             along the flow (:mod:`vmcl.temporal`), and ``notes`` says where time was broken; disabled,
             each Result is ``run(frame t, right t, frame t + 1)``.
@@ -989,7 +998,8 @@ class VisionMachine:
         Raises
         ------
         ValueError, TypeError
-            As :meth:`run`, naming the frame; also when ``rights`` ends before or after ``frames``.
+            As :meth:`run`, each prefixed "frame k: " (k counted from 0); also when ``rights`` ends before or
+            after ``frames``.
         """
         for name, given in (("frames", frames), ("rights", rights)):
             if isinstance(given, (str, os.PathLike)):
@@ -1024,9 +1034,13 @@ class VisionMachine:
             try:
                 image, others, notes = _inputs(current, right, None if following is _ENDED or not reads_next
                                                else following)
+                if index == 0 and following is _ENDED and reads_next:  # said, or no flow looks like no motion
+                    notes.append("motion: the sequence has one frame, and motion needs a next frame: no flow")
+                # The machine's own refusals (a frame smaller than the motion patch) name the frame too.
+                result = _Run(self, image, others, progress, memory, notes=notes).result
             except InputError as error:
                 raise type(error)(f"frame {index}: {error}") from None
-            yield _Run(self, image, others, progress, memory, notes=notes).result
+            yield result
             index, current = index + 1, following
             right = self._stream_right(seconds, index) if current is not _ENDED else None
         if seconds is not None and next(seconds, _ENDED) is not _ENDED:
@@ -1040,6 +1054,8 @@ class VisionMachine:
         right = next(rights, _ENDED)
         if right is _ENDED:
             raise InputValueError(f"rights ended at frame {index}: a stereo sequence needs a right view per frame")
+        if right is None:  # as a missing right it would run the frame without stereo, in silence
+            raise InputTypeError(f"frame {index}: right must be a NumPy array, got NoneType")
         return right
 
 

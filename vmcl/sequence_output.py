@@ -6,13 +6,15 @@ The folder (one that :func:`vmcl.output_folder.output_folder` prepared) receives
   (:func:`vmcl.cli.result_fields`);
 - ``cartoon.mp4``, ``flow.mp4``, ``disparity.mp4``: the labelled cartoon (:func:`vmcl.report.labels_image`),
   the restored flow in the Middlebury colour wheel and the restored disparity (turbo), one video frame per
-  frame, for the fields the run made. Colour scales are fixed by the first frame that has the field
+  frame, for the fields the run made: flow.mp4 has one frame fewer than cartoon.mp4, since the last frame
+  has no next frame to move to (a sequence of one frame has no flow.mp4). Colour scales are fixed by the first frame that has the field
   (its largest speed, at least :data:`LEAST_FLOW_SCALE` px per frame so that a clip that starts still is
   not drawn at full colour for its noise; its disparity range), so that colours mean the same speed or
   depth throughout. A frame of odd width or height is padded with a black row or column (MPEG-4 frames
   have even sides; the writer would crop the last row and column);
-- ``sequence.md``: per frame, the file it came from, the time taken, the objects recognised (where the run
-  has a model library) and the notes;
+- ``sequence.md``: the videos with their frame rate and frame counts, the notes on the whole sequence (gaps
+  in its numbering, the rate's source), then per frame (counted from 0), the file it came from, the time
+  taken, the objects recognised (where the run has a model library) and the notes;
 - ``settings.json`` (written by the command, :data:`vmcl.cli.SETTINGS_FILE`): the run's whole
   configuration, which ``--config`` reads back.
 
@@ -86,6 +88,7 @@ class SequenceWriter:
         self.noted = 0  # the frames with notes
         self.notes: list[str] = []  # notes on the whole sequence, written under the summary's first line
         self.frames = 0
+        self.written: dict[str, int] = {}  # the frames written to each video, by its stem
 
     def add(self, result: Result, source: str = "") -> None:
         """Write the next frame's Result; ``source`` names where its frame came from (a file) in the summary."""
@@ -124,6 +127,14 @@ class SequenceWriter:
             out["disparity"] = disparity_image(result.disparity, vmin=low, vmax=high)
         return out
 
+    def _videos(self) -> str:
+        """The summary's line of videos: their rate and each one's frames (flow's one fewer, said why)."""
+        if not self.written:
+            return "videos: none"
+        why = {"flow": ": the last frame has no next frame to move to"} if self.written.get("flow") == self.frames - 1 else {}
+        return f"videos at {self.fps:.4g} fps: " + ", ".join(
+            f"{stem}.mp4 ({frame_count(count)}{why.get(stem, '')})" for stem, count in sorted(self.written.items()))
+
     def _table(self) -> list[str]:
         """The summary's table: a column of each frame's recognised objects where the run recognised."""
         if not self.recognising:
@@ -145,13 +156,13 @@ class SequenceWriter:
                 raise OSError(f"OpenCV cannot write the video {self.folder / f'{stem}.mp4'} (codec {FOURCC})")
             self.writers[stem] = writer
         writer.write(cv2.cvtColor(picture, cv2.COLOR_RGB2BGR))  # type: ignore[attr-defined]
+        self.written[stem] = self.written.get(stem, 0) + 1
 
     def close(self) -> None:
         """Finish the videos and write the summary."""
         for writer in self.writers.values():
             writer.release()  # type: ignore[attr-defined]
         self.writers = {}
-        lines = [f"# {self.title}", "", f"{frame_count(self.frames)}; videos: "
-                 + (", ".join(f"{stem}.mp4" for stem in sorted(self.scales.keys() | {"cartoon"})) if self.frames else "none"),
+        lines = [f"# {self.title}", "", f"{frame_count(self.frames)}; {self._videos()}",
                  *(line for note in self.notes for line in ("", f"Note: {note}")), "", *self._table(), ""]
         (self.folder / "sequence.md").write_text("\n".join(lines), encoding="utf-8")
