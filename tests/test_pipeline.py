@@ -584,3 +584,12 @@ def test_a_file_setting_may_be_a_path():
     given = Config.from_dict({"labels": {"weights": Path(labelling.WEIGHTS_FILE)}})
     assert given.labels.weights == str(labelling.WEIGHTS_FILE)
     assert given == Config.from_dict({"labels": {"weights": str(labelling.WEIGHTS_FILE)}})
+
+
+@pytest.mark.parametrize("section, key", [("stereo", "census_threshold"), ("stereo", "edge_gain"),
+                                          ("grouping", "threshold"), ("colour", "threshold"),
+                                          ("texture", "noise_factor")])
+def test_a_setting_beyond_float32_is_refused_when_the_config_is_made(section, key):
+    # Each reached the device as an infinity mid-run, with only NumPy's overflow warning.
+    with pytest.raises(InputError, match=f"{section}.{key} must lie within float32's range"):
+        Config.from_dict({section: {key: 1e308}})

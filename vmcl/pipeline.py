@@ -73,6 +73,7 @@ from vmcl.group.structural_saliency import MAX_ITERATIONS as MAX_SALIENCY_ITERAT
 from vmcl.labels import CUES
 from vmcl.machine import Machine, on_device
 from vmcl.mrf import SOLVERS, NothingToRestore, Restoration, Settings, preset
+from vmcl.mrf.checks import FLOAT32_MAX
 from vmcl.mrf.data import check_unit_interval
 from vmcl.recognize import Library, recognize
 from vmcl.result import Result
@@ -129,6 +130,12 @@ def _check_field_types(section: str, values: Any) -> None:
         is_bool = isinstance(value, (bool, np.bool_))
         if any(isinstance(value, _FIELD_TYPES[kind][0]) and (kind == "bool" or not is_bool)
                for kind in kinds if kind != "None"):
+            if "float" in kinds and not is_bool and isinstance(value, _FIELD_TYPES["float"][0]) \
+                    and math.isfinite(value) and abs(value) > FLOAT32_MAX:
+                # Every real setting reaches the device as a float32 (or meets one there): beyond its range it
+                # would become an infinity mid-run, with only NumPy's overflow warning.
+                raise InputValueError(f"{section}.{spec.name} must lie within float32's range (magnitude at most "
+                                      f"{FLOAT32_MAX:.4g}), in which the device computes, got {value:g}")
             continue
         expected = " or ".join("None" if kind == "None" else _FIELD_TYPES[kind][1] for kind in kinds)
         raise InputTypeError(f"{section}.{spec.name} must be {expected}, got {value!r} ({type(value).__name__})")
@@ -502,7 +509,7 @@ class TextureConfig:
                                   f"({self.coarse_sigma})")
         check_real(self.threshold, "texture.threshold", above=0)  # texture.density refuses 0 at run time
         check_int(self.radius, "texture.radius", minimum=1)
-        check_real(self.noise_factor, "texture.noise_factor", above=0, maximum=float(np.finfo(np.float32).max))
+        check_real(self.noise_factor, "texture.noise_factor", above=0)
 
 
 @dataclass(frozen=True)
