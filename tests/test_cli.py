@@ -146,6 +146,21 @@ def test_info_names_the_chosen_device(capsys):
     assert f"build options: {options} (and each kernel's -D defines)" in printed
 
 
+def test_info_lists_the_devices_when_vmcl_device_names_none(capsys, monkeypatch):
+    # The error points the user to `vmcl info`, which stopped at the same error before listing anything.
+    from vmcl.errors import InputValueError
+    from vmcl.machine import list_devices
+
+    def refused():
+        raise InputValueError("the VMCL_DEVICE environment variable: index 99 is outside the OpenCL devices here")
+
+    monkeypatch.setattr(vmcl, "default_machine", refused)
+    assert main(["info"]) == 2
+    captured = capsys.readouterr()
+    assert all(f" {index}: " in captured.out for index in range(len(list_devices())))
+    assert " * " not in captured.out and "index 99 is outside" in captured.err
+
+
 def test_info_counts_what_the_kernel_cache_holds(tmp_path, capsys, monkeypatch):
     cache = tmp_path / "kcache"
     for group, program, size in (("AB", "ONE", 2**20), ("AB", "TWO", 2**20), ("CD", "THREE", 2 * 2**20)):

@@ -855,10 +855,16 @@ def _info(args) -> int:
     print(f"vmcl {vmcl.__version__}; pyopencl {cl.VERSION_TEXT}")
     try:
         devices = list_devices()
-        chosen = vmcl.default_machine().device
     except NoOpenCLPlatformError as error:
         print(f"vmcl: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    try:
+        machine = vmcl.default_machine()
+    except InputError as error:
+        # A VMCL_DEVICE that names no device here: the list it points the user to is printed all the same.
+        machine = None
+        print(f"vmcl: {error}", file=sys.stderr)
+    chosen = machine.device if machine is not None else None
     for index, device in enumerate(devices):
         mark = "*" if device == chosen else " "
         # pyopencl's stub declares to_string in the enum's body, so mypy takes it for a member, not a method.
@@ -867,11 +873,12 @@ def _info(args) -> int:
                    f"compute units, {device.global_mem_size // 2**20} MiB)")
     print(f"chosen (*): VMCL_DEVICE={os.environ.get('VMCL_DEVICE', '')!r} (a device's index or a part of its name), "
           "else the first (GPUs first)")
-    print(f"build options: {' '.join(vmcl.default_machine().build_options) or 'none'} (and each kernel's -D defines)")
+    if machine is not None:
+        print(f"build options: {' '.join(machine.build_options) or 'none'} (and each kernel's -D defines)")
     print(f"kernel sources: {kernels_dir()}")
     cache = os.environ.get("POCL_CACHE_DIR") or Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "pocl" / "kcache"
     print(f"kernel binary cache: {cache} (PoCL's; other drivers keep their own){_cache_contents(Path(cache))}")
-    return 0
+    return 0 if machine is not None else EXIT_BAD_INPUT
 
 
 def _cache_contents(cache: Path) -> str:
