@@ -96,7 +96,21 @@ def test_missing_platform_says_how_to_install(monkeypatch):
 
 def test_device_argument_type_is_checked():
     with pytest.raises(TypeError, match="device"):
-        vmcl.Machine(3)
+        vmcl.Machine(3.0)
+    with pytest.raises(TypeError, match="device"):
+        vmcl.Machine(True)
+
+
+def test_a_device_index_is_taken_as_a_number_or_as_digits():
+    # MachinePlugin and VMCL_DEVICE took an index; Machine refused one given as an int.
+    from vmcl.machine import list_devices
+
+    count = len(list_devices())
+    assert vmcl.Machine(0).device == vmcl.Machine("0").device == list_devices()[0]
+    with pytest.raises(ValueError, match=f"index {count} is outside the {count} OpenCL device"):
+        vmcl.Machine(count)
+    with pytest.raises(ValueError, match="device: an index must be >= 0, got -1"):
+        vmcl.Machine(-1)
 
 
 def test_kernels_are_cached_per_defines(machine):

@@ -109,11 +109,17 @@ def list_devices() -> list[cl.Device]:
     return sorted(devices, key=lambda d: 0 if d.type & cl.device_type.GPU else 1)
 
 
-def _choose_device(device: cl.Device | str | None) -> cl.Device:
+def _choose_device(device: cl.Device | str | int | None) -> cl.Device:
     if isinstance(device, cl.Device):
         return device
+    if isinstance(device, (int, np.integer)) and not isinstance(device, (bool, np.bool_)):
+        # An index as `vmcl info` numbers the devices, as the digits "1" give it (and MachinePlugin takes).
+        if device < 0:
+            raise InputValueError(f"device: an index must be >= 0, got {device}")
+        device = str(int(device))
     if device is not None and not isinstance(device, str):
-        raise InputTypeError(f"device must be a pyopencl.Device, a name substring or None, got {type(device).__name__}")
+        raise InputTypeError(f"device must be a pyopencl.Device, a name substring, an index (as vmcl info lists the "
+                             f"devices) or None, got {type(device).__name__}")
     wanted = device if device is not None else os.environ.get("VMCL_DEVICE") or None
     devices = list_devices()
     if not devices:
@@ -238,9 +244,9 @@ class Machine:
 
     Parameters
     ----------
-    device : pyopencl.Device or str, optional
+    device : pyopencl.Device, str or int, optional
         The device, a case-insensitive substring of its platform or device name, or its index among
-        :func:`list_devices` as digits ("1": as ``vmcl info`` numbers them). Default: the ``VMCL_DEVICE``
+        :func:`list_devices` (``1`` or the digits ``"1"``: as ``vmcl info`` numbers them). Default: the ``VMCL_DEVICE``
         environment variable (the same), else the first device, GPUs before CPUs.
     profile : bool
         Record the device time of every kernel launched through :meth:`launch`; see :meth:`timings`.
@@ -283,7 +289,7 @@ class Machine:
     ``machine=`` to every call (module functions otherwise share :func:`default_machine`).
     """
 
-    def __init__(self, device: cl.Device | str | None = None, *, profile: bool = False,
+    def __init__(self, device: cl.Device | str | int | None = None, *, profile: bool = False,
                  local_size: int | None = None) -> None:
         if local_size is not None and (not isinstance(local_size, int) or local_size < 1):
             raise InputValueError(f"local_size must be a positive integer or None, got {local_size!r}")
