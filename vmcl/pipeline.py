@@ -130,8 +130,8 @@ def _check_field_types(section: str, values: Any) -> None:
         is_bool = isinstance(value, (bool, np.bool_))
         if any(isinstance(value, _FIELD_TYPES[kind][0]) and (kind == "bool" or not is_bool)
                for kind in kinds if kind != "None"):
-            if "float" in kinds and not is_bool and isinstance(value, _FIELD_TYPES["float"][0]) \
-                    and math.isfinite(value) and abs(value) > FLOAT32_MAX:
+            if ("float" in kinds and not is_bool and isinstance(value, (int, float, np.integer, np.floating))
+                    and math.isfinite(value) and abs(value) > FLOAT32_MAX):
                 # Every real setting reaches the device as a float32 (or meets one there): beyond its range it
                 # would become an infinity mid-run, with only NumPy's overflow warning.
                 raise InputValueError(f"{section}.{spec.name} must lie within float32's range (magnitude at most "
