@@ -755,6 +755,22 @@ def test_depth_explains_occlusion(ell_model):
         recognize(scene, library, depth=depth[:10])
 
 
+def test_a_slanted_surface_is_no_occluder_of_itself(ell_model):
+    # The object's own disparity was its median: on a slanted surface the nearer half of its missing
+    # boundary counted as hidden by a nearer surface, raising its score and significance (and admitting
+    # false detections). Here nothing is in front of it.
+    model, image, _ = ell_model
+    scene = image.copy()
+    scene[:, 85:] = 0.5  # the right part of the ell is missing, not hidden
+    ramp = np.broadcast_to(10.0 + 0.25 * np.arange(scene.shape[1], dtype=np.float32), scene.shape).copy()
+    library = Library([model])
+    plain = recognize(scene, library, min_significance=0)
+    slanted = recognize(scene, library, min_significance=0, depth=ramp)
+    assert plain and slanted and plain[0].name == slanted[0].name == "ell"
+    assert slanted[0].score == pytest.approx(plain[0].score) and slanted[0].significance == pytest.approx(
+        plain[0].significance)
+
+
 def test_solids_are_recognised_at_views_between_the_learned_ones():
     from vmcl.metrics import recognition_scores
     from vmcl.scenes import example_library

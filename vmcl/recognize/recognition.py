@@ -515,16 +515,23 @@ def _corner_matches(pose: np.ndarray, view: View, features: Features, tree: cKDT
 
 def _hidden(posed: np.ndarray, supported: np.ndarray, inside: np.ndarray, depth: np.ndarray) -> np.ndarray:
     """Which of a candidate's unsupported points (those in the image) a nearer surface explains: the
-    depth map (disparity, larger nearer) where they land exceeds the object's own (its median at the
-    supported points) by more than _NEARER."""
+    depth map (disparity, larger nearer) where they land exceeds the object's own there by more than
+    _NEARER. The object's own disparity is the plane through its supported points (least squares), so
+    that the far side of a slanted object is not taken for a surface in front of it; its median where
+    the supported points cannot fix a plane (fewer than three, or along one line)."""
     h, w = depth.shape
     x = np.clip(np.round(posed[:, 0]).astype(np.int64), 0, w - 1)
     y = np.clip(np.round(posed[:, 1]).astype(np.int64), 0, h - 1)
     here = depth[y, x]
-    own = here[supported & np.isfinite(here)]
-    if not len(own):
+    known = supported & np.isfinite(here)
+    if not known.any():
         return np.zeros(len(posed), bool)
-    return inside & ~supported & (here > np.median(own) + _NEARER)
+    own = np.full(len(posed), np.median(here[known]))
+    design = np.column_stack([x, y, np.ones(len(posed))]).astype(np.float64)
+    if known.sum() >= 3 and np.linalg.matrix_rank(design[known] - design[known].mean(axis=0)) == 2:
+        plane, *_ = np.linalg.lstsq(design[known], here[known].astype(np.float64), rcond=None)
+        own = design @ plane
+    return inside & ~supported & (here > own + _NEARER)
 
 
 def _silhouette(points: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
