@@ -593,3 +593,23 @@ def test_a_setting_beyond_float32_is_refused_when_the_config_is_made(section, ke
     # Each reached the device as an infinity mid-run, with only NumPy's overflow warning.
     with pytest.raises(InputError, match=f"{section}.{key} must lie within float32's range"):
         Config.from_dict({section: {key: 1e308}})
+
+
+def test_the_recognition_section_sets_the_pose_and_the_candidate_budget(tmp_path, small_scene, monkeypatch):
+    # `vmcl run --models` had no way to raise the budget, which a larger library shares more thinly.
+    import vmcl.pipeline as pipeline
+    from vmcl.recognize import learn, save_model
+    from vmcl.scenes import object_view
+
+    with pytest.raises(ValueError, match="recognition.candidates must be"):
+        Config.from_dict({"recognition": {"candidates": 0}})
+    with pytest.raises(ValueError, match="recognition.transform"):
+        Config.from_dict({"recognition": {"transform": "projective"}})
+    folder = tmp_path / "library"
+    folder.mkdir()
+    save_model(learn("ell", [object_view("ell")[0]]), folder)
+    seen = []
+    monkeypatch.setattr(pipeline, "recognize", lambda *args, **kwargs: seen.append(kwargs) or [])
+    config = Config.from_dict({"recognition": {"models": str(folder), "transform": "affine", "candidates": 4096}})
+    VisionMachine(config).run(small_scene.left)
+    assert seen and seen[0]["transform"] == "affine" and seen[0]["candidates"] == 4096

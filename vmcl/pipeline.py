@@ -75,7 +75,8 @@ from vmcl.machine import Machine, on_device
 from vmcl.mrf import SOLVERS, NothingToRestore, Restoration, Settings, preset
 from vmcl.mrf.checks import FLOAT32_MAX
 from vmcl.mrf.data import check_unit_interval
-from vmcl.recognize import Library, recognize
+from vmcl.recognize import TRANSFORMS, Library, recognize
+from vmcl.recognize.indexing import MAX_CANDIDATES
 from vmcl.result import Result
 
 __all__ = [
@@ -586,12 +587,22 @@ class RecognitionConfig:
     ----------
     models : str
         A library folder of model files (``vmcl learn``); "" (the default) runs no recognition.
+    transform : {"similarity", "affine", "homography"}
+        The pose a 2-D model is aligned by, as :func:`vmcl.recognize.recognize` takes it.
+    candidates : int
+        The pose bins kept by the indexing, shared between the library's views (``recognize``'s
+        ``candidates``): each view's share shrinks as the library grows, so an object in a cluttered
+        photograph that a small library finds may need more beside a large one.
     """
 
     models: str = ""
+    transform: str = "similarity"
+    candidates: int = 1024
 
     def __post_init__(self) -> None:
         _check_field_types("recognition", self)
+        check_choice(self.transform, "recognition.transform", TRANSFORMS)
+        check_int(self.candidates, "recognition.candidates", minimum=1, maximum=MAX_CANDIDATES)
 
 
 @dataclass(frozen=True)
@@ -1294,7 +1305,12 @@ class _Run:
             with self.stage("recognition"):
                 # On the left image's own edges, at the scale the models were learned at; a stereo run's
                 # disparity explains the boundary its nearer surfaces hide.
-                self.result.recognition = recognize(image, vm.library, depth=self.result.disparity, machine=self.m)
+                settings = self.c.recognition
+                # transform: a str the Config checked against TRANSFORMS (a Config field cannot be a Literal).
+                self.result.recognition = recognize(image, vm.library,
+                                                    transform=settings.transform,  # type: ignore[arg-type]
+                                                    candidates=settings.candidates, depth=self.result.disparity,
+                                                    machine=self.m)
 
     def group(self, image: np.ndarray, canny: edges.CannyResult) -> tuple[Grouping, cl_array.Array]:
         """The grouping of Canny's edges, and the edges the MRFs are coupled to (``edges.saliency``)."""

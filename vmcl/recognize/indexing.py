@@ -38,8 +38,11 @@ from vmcl.recognize.arguments import angles, index_pairs, points
 from vmcl.recognize.features import Features
 from vmcl.recognize.models import Library, View
 
-__all__ = ["ANGLE_BINS", "KEYS", "OPENING_BINS", "Candidates", "Index", "anchors_of", "corner_pairs", "index_for",
-           "pair_keys", "vote", "vote_numpy"]
+__all__ = ["ANGLE_BINS", "KEYS", "MAX_CANDIDATES", "OPENING_BINS", "Candidates", "Index", "anchors_of", "corner_pairs",
+           "index_for", "pair_keys", "vote", "vote_numpy"]
+
+MAX_CANDIDATES = 1 << 20
+"""The most pose bins :func:`vote` keeps (its ``candidates``)."""
 
 ANGLE_BINS = 16
 """Bins of a bisector's direction from the line between the two corners (22.5 degrees each)."""
@@ -331,7 +334,7 @@ def _check_inputs(index: Any, corners: Any, bisector: Any, opening: Any, pairs: 
     if low > high:
         raise InputValueError(f"scales must be (low, high) with low <= high, got {scales!r}")
     return (corners, bisector, opening, radius, pairs, (low, high),
-            check_int(candidates, "candidates", minimum=1, maximum=1 << 20),
+            check_int(candidates, "candidates", minimum=1, maximum=MAX_CANDIDATES),
             check_int(min_votes, "min_votes", minimum=1, maximum=2**31 - 1))
 
 

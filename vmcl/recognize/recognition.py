@@ -34,7 +34,7 @@ from vmcl.errors import InputTypeError
 from vmcl.machine import Machine
 from vmcl.recognize.arguments import real_map
 from vmcl.recognize.features import Features, edge_features, features_of
-from vmcl.recognize.indexing import Candidates, anchors_of, corner_pairs, index_for, vote
+from vmcl.recognize.indexing import MAX_CANDIDATES, Candidates, anchors_of, corner_pairs, index_for, vote
 from vmcl.recognize.models import Library, View
 from vmcl.recognize.selection import corner_regions, select_regions
 from vmcl.recognize.verification import TRANSFORMS, Transform, carry, distance_transform, refine, support
@@ -231,7 +231,7 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     min_significance = check_real(min_significance, "min_significance")
     min_support = check_int(min_support, "min_support", minimum=1)
     min_inner = check_real(min_inner, "min_inner", minimum=0, maximum=1)
-    candidates = check_int(candidates, "candidates", minimum=1)
+    candidates = check_int(candidates, "candidates", minimum=1, maximum=MAX_CANDIDATES)
     verify = check_int(verify, "verify", minimum=1)
     neighbours = check_int(neighbours, "neighbours", minimum=1)
     regions = check_int(regions, "regions", minimum=0)
