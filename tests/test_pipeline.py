@@ -597,7 +597,7 @@ def test_a_setting_beyond_float32_is_refused_when_the_config_is_made(section, ke
 
 def test_the_recognition_section_sets_the_pose_and_the_candidate_budget(tmp_path, small_scene, monkeypatch):
     # `vmcl run --models` had no way to raise the budget, which a larger library shares more thinly.
-    import vmcl.pipeline as pipeline
+    from vmcl import pipeline
     from vmcl.recognize import learn, save_model
     from vmcl.scenes import object_view
 
