@@ -613,3 +613,16 @@ def test_the_recognition_section_sets_the_pose_and_the_candidate_budget(tmp_path
     config = Config.from_dict({"recognition": {"models": str(folder), "transform": "affine", "candidates": 4096}})
     VisionMachine(config).run(small_scene.left)
     assert seen and seen[0]["transform"] == "affine" and seen[0]["candidates"] == 4096
+
+
+def test_a_noise_rule_that_leaves_no_edge_is_said():
+    # The README's own scene ("cues", textured everywhere) gave no brightness edge, and nothing said so.
+    from vmcl import scenes
+
+    textured = scenes.render(scenes.preset("cues", shape=(128, 128)), seed=0, noise=0.01)
+    found = VisionMachine(Config()).run(textured.left)
+    assert not found.edges.any() and any("Canny found no brightness edge" in note for note in found.notes)
+    given = VisionMachine(Config.from_dict({"edges": {"low_threshold": 0.02, "high_threshold": 0.05}})).run(textured.left)
+    assert given.edges.any() and not any("Canny found no brightness edge" in note for note in given.notes)
+    blocks = scenes.render(scenes.preset("blocks", shape=(128, 128)), seed=0, noise=0.01)
+    assert not any("Canny found no" in note for note in VisionMachine(Config()).run(blocks.left).notes)

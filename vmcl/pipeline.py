@@ -44,6 +44,7 @@ import pyopencl.array as cl_array
 
 from vmcl import fitted, labelling, learn, temporal
 from vmcl import integrate as _integrate
+from vmcl.cm import reduce as cm_reduce
 from vmcl.cm.core import (
     UNIT_MARGIN,
     check_choice,
@@ -1208,6 +1209,8 @@ class _Run:
             except InputError as error:  # a limit that depends on the image (sigma's, by its size)
                 raise type(error)(f"edges (the [edges] settings on this image): {error}") from None
             brightness = on_device(canny.edges)
+            if e.low_threshold is None and e.high_threshold is None and not e.use_quantiles:
+                self._note_no_edges(image, brightness)
         self.grouping = None
         if self.c.grouping.enabled or e.saliency != "none":
             with self.stage("grouping"):
@@ -1335,6 +1338,18 @@ class _Run:
             self._note_pruned_away(kept, canny_edges, "structural")
             return found, self.m.to_device(kept.astype(np.uint8))
         return found, canny_edges
+
+    def _note_no_edges(self, image: np.ndarray, found: cl_array.Array) -> None:
+        """A note when the noise rule's thresholds left no edge in an image that is not of one brightness:
+        they come from the median gradient, which a texture filling the image raises above every edge, and
+        every MRF is then coupled to no brightness edge."""
+        if np.ptp(image) == 0 or int(cm_reduce.reduce(found, "sum", machine=self.m).get()):
+            return
+        self.notes.append("edges: Canny found no brightness edge: the noise rule's thresholds (from the median "
+                          "gradient, which a texture filling the image raises) lie above every gradient, so the "
+                          "cues' MRFs are coupled to no brightness edge; set [edges] low_threshold and "
+                          "high_threshold (gradient magnitudes, the image in [0, 1]), or use_quantiles = true "
+                          "with quantiles")
 
     def _note_pruned_away(self, kept: np.ndarray, canny_edges: cl_array.Array, kind: str) -> None:
         """A note when the saliency pruning kept none of Canny's edges, which leaves the MRFs coupled to none."""
