@@ -150,6 +150,17 @@ def test_image_of_another_size_is_refused(machine):
         labelling.label(np.zeros((8, 12), np.uint8), np.zeros((8, 13), np.float32), machine=machine)
 
 
+def test_saved_weights_read_back_exactly(tmp_path):
+    # They were rounded to 5 decimals: a labeller fitted, saved and read back was not the one fitted.
+    shipped = labelling.default_labeller()
+    rng = np.random.default_rng(3)
+    fitted = LinearLabeller({key: (np.asarray(w, np.float64) + rng.normal(0, 1e-3, np.shape(w))).astype(np.float32)
+                             for key, w in shipped.weights.items()}, fitted_on=shipped.fitted_on)
+    again = LinearLabeller.load(fitted.save(tmp_path / "w.json"))
+    for key, w in fitted.weights.items():
+        np.testing.assert_array_equal(again.weights[key], w)
+
+
 def test_weights_round_trip_and_refuse_other_features(tmp_path):
     shipped = labelling.default_labeller()
     assert len(shipped.weights) == 16 and "stereo+motion+colour+texture" in shipped.weights

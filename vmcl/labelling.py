@@ -217,7 +217,9 @@ class LinearLabeller:
             The file written.
         """
         data = {"features": list(FEATURES), "classes": [c.name for c in CLASSES], "fitted_on": self.fitted_on,
-                "weights": {k: np.round(np.asarray(w, np.float64), 5).tolist() for k, w in self.weights.items()}}
+                # As they are (JSON keeps a float's shortest exact decimals): rounded, a labeller saved and read
+                # back labelled a little differently from the one that was fitted.
+                "weights": {k: np.asarray(w, np.float64).tolist() for k, w in self.weights.items()}}
         return write_fitted_json(path, data, with_data(self.fitted_on, provenance))
 
     @classmethod
