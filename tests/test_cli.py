@@ -631,3 +631,101 @@ def test_names_present_are_refused_shown_at_most_three(tmp_path):
                                                    "fields_000001.npz, fields_000002.npz and 2 more; write the "
                                                    "sequence into a new")):
         refuse_names_present(tmp_path, lambda name: name.startswith("fields_"), "the sequence")
+
+
+def _grey_png(path, image):
+    cv2.imwrite(str(path), np.round(np.clip(image, 0, 1) * 255).astype(np.uint8))
+    return path
+
+
+def test_learn_reads_a_mask_as_learn_does_and_names_one_that_marks_nothing(tmp_path, capsys):
+    # A 0/1 mask PNG, which learn takes, was read as empty (cut at half of 255), and the image blamed ("the
+    # example shows too little boundary ... 0 edge pixels").
+    from vmcl.recognize import learn, load_model
+
+    example = _grey_png(tmp_path / "ell.png", scenes.object_view("ell", shape=(160, 160))[0])
+    inside = np.zeros((160, 160), bool)
+    inside[20:140, 20:140] = True
+    expected = learn("ell", [read_image(example)], masks=[inside]).views[0]  # the API, on the file's pixels
+    on = inside.astype(np.uint8)
+    for name, mask in (("01.png", on), ("0255.png", on * 255), ("01_16.png", on.astype(np.uint16)),
+                       ("065535.png", on.astype(np.uint16) * 65535), ("colour.png", np.dstack([on * 255] * 3))):
+        cv2.imwrite(str(tmp_path / name), mask)
+        library = tmp_path / Path(name).stem
+        assert main(["learn", "ell", str(example), "--library", str(library), "--mask", str(tmp_path / name),
+                     "-q"]) == 0
+        view = load_model(library / "ell.vmodel.npz").views[0]
+        assert np.array_equal(view.points, expected.points) and np.array_equal(view.outline, expected.outline)
+    grey = on * 200
+    grey[20] = 100
+    corner = np.zeros_like(on)
+    corner[:4, :4] = 255
+    capsys.readouterr()
+    for name, mask, message in (
+            ("empty.png", np.zeros_like(on), "mask {path} marks no pixel as the object: it holds only 0"),
+            ("grey.png", grey, ("mask {path} must hold only 0 (off the object) and one other value (on it): 1 "
+                                "or 255, its type's full scale; it holds 100, 200 where it is not 0")),
+            ("red.png", np.dstack([np.zeros_like(on), np.zeros_like(on), on * 255]),
+             "mask {path} is in colour: a mask must be black and white"),
+            ("corner.png", corner, "images[0] (ell.png): the mask leaves 0 of the example's")):
+        path = tmp_path / name
+        cv2.imwrite(str(path), mask)
+        assert main(["learn", "ell", str(example), "--library", str(tmp_path / "refused"), "--mask", str(path),
+                     "-q"]) == 2
+        err = capsys.readouterr().err
+        assert message.format(path=path) in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "refused").exists()
+
+
+def test_learn_names_a_library_that_is_a_file_before_learning(tmp_path, capsys, monkeypatch):
+    # `--library afile` was refused only after the learning, as "folder must be a directory".
+    import vmcl.recognize
+
+    def learned(*args, **kwargs):
+        raise AssertionError("learned a model that cannot be written")
+
+    monkeypatch.setattr(vmcl.recognize, "learn", learned)
+    example = _grey_png(tmp_path / "ell.png", scenes.object_view("ell", shape=(96, 96))[0])
+    (tmp_path / "afile").write_bytes(b"")
+    for library in (tmp_path / "afile", tmp_path / "afile" / "sub"):
+        assert main(["learn", "ell", str(example), "--library", str(library), "-q"]) == 2
+        assert capsys.readouterr().err == (f"vmcl: error: --library must be a directory (a library of model files), "
+                                           f"but {tmp_path / 'afile'} is a file\n")
+
+
+def test_a_run_with_models_writes_what_it_recognised_for_programs(tmp_path, capsys):
+    # `vmcl run --models` kept the poses in no file a program reads: fields.npz has none, the report a box.
+    from vmcl.output_folder import MARKER
+    from vmcl.recognize import carry, load_model
+
+    examples = {name: scenes.object_view(name, shape=(160, 160)) for name in ("ell", "arrow")}
+    library = tmp_path / "library"
+    for name, (image, _) in examples.items():
+        assert main(["learn", name, str(_grey_png(tmp_path / f"{name}.png", image)), "--library", str(library),
+                     "-q"]) == 0
+    scene = scenes.recognition_scene((300, 400), seed=6, library=("ell", "arrow"), objects=2, occlusion=(0.0, 0.1),
+                                     clutter=2)
+    left = _grey_png(tmp_path / "scene.png", scene.image)
+    fast = _written(tmp_path / "fast.toml", '[mrf]\nmethod = "icm"\n')
+    out = tmp_path / "run"
+    assert main(["run", str(left), "--models", str(library), "--config", str(fast), "--out", str(out), "-q"]) == 0
+    found = json.loads((out / "recognition.json").read_text(encoding="utf-8"))["detections"]
+    assert sorted(d["name"] for d in found) == ["arrow", "ell"]
+    for detection in found:
+        # The oracle: the scene's exact corners, and the example's, of the same object.
+        truth = next(p for p in scene.placements if p.name == detection["name"])
+        example = examples[detection["name"]][1]
+        ids = [int(i) for i in truth.corner_ids if i in example.corner_ids]
+        at_example = example.corners[[list(example.corner_ids).index(i) for i in ids]]
+        at_scene = truth.corners[[list(truth.corner_ids).index(i) for i in ids]]
+        transform = np.array(detection["transform"])
+        assert transform.shape == (3, 3) and np.abs(carry(transform, at_example) - at_scene).max() < 3
+        view = load_model(library / f"{detection['name']}.vmodel.npz").views[detection["view"]]
+        boundary = carry(transform, view.points)
+        assert np.allclose(detection["box"], [*boundary.min(axis=0), *boundary.max(axis=0)])
+        assert np.allclose(detection["corners"], carry(transform, view.corners))
+        assert 0 < detection["score"] <= 1 and detection["significance"] >= 19
+    assert "recognition.json" in (out / MARKER).read_text().splitlines() and is_whole(out)
+    # Run again into the folder without models: the previous output's file goes with the rest of it.
+    assert main(["run", str(left), "--config", str(fast), "--out", str(out), "-q"]) == 0
+    assert not (out / "recognition.json").exists() and "recognition.json" not in (out / MARKER).read_text()

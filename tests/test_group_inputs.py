@@ -115,6 +115,43 @@ def test_the_image_is_checked_whatever_the_junctions():
             group(edges, image=image)
 
 
+def test_a_device_image_pairs_as_its_host_copy(machine):
+    # group took device edges and magnitude but refused a device image ("must be a NumPy array").
+    edges = _occlusion()
+    image = np.zeros(edges.shape, np.float32)
+    image[:30], image[30:] = 0.2, 0.8
+    image[10:50, 40:61] = 0.5
+    swapped = image.copy()  # the line's sides swapped on the rectangle's right: not one edge behind it
+    swapped[:30, 61:], swapped[30:, 61:] = 0.8, 0.2
+    for given, pairs in ((image, 1), (swapped, 0), ((image * 255).astype(np.uint8), 1)):
+        host = group(edges, image=given, machine=machine)
+        found = group(machine.to_device(edges.view(np.uint8)), image=machine.to_device(given), machine=machine)
+        assert found.pairs.tolist() == host.pairs.tolist() and len(host.pairs) == pairs
+        assert group_curves(host.junctions, image=machine.to_device(given))[0].tolist() == host.pairs.tolist()
+    with pytest.raises(InputValueError, match=r"image must have the edge map's height and width \(60, 100\)"):
+        group(edges, image=machine.to_device(image[:30]), machine=machine)
+
+
+@pytest.mark.parametrize("on_device", [False, True], ids=["host", "device"])
+def test_a_magnitude_that_overflows_the_saliency_is_named(on_device, machine):
+    # A magnitude of 3e38 was blamed on the default length_exponent 0.5 ("makes the longest curves' saliency
+    # overflow"): the magnitude, 3e38 times the 40 px line's 40**0.5, is what overflows.
+    magnitude = np.full(DRAWING.shape, 3e38, np.float32)
+    given = machine.to_device(magnitude) if on_device else magnitude
+    length = float(link_edges(DRAWING).length.max())
+    with pytest.raises(InputValueError, match=rf"^magnitude \(link_edges'\) up to 3e\+38 makes the curves' saliency "
+                                              rf"\(magnitude times length\*\*length_exponent, here up to "
+                                              rf"{length ** 0.5:.3g}\) overflow float32"):
+        group(DRAWING, magnitude=given, machine=machine)
+    # Where the length alone overflows, at a magnitude of 1, the exponent is to blame, as before.
+    with pytest.raises(InputValueError, match="^length_exponent 30 makes the longest curves' saliency overflow"):
+        group(DRAWING, magnitude=np.ones(DRAWING.shape, np.float32), length_exponent=30, machine=machine)
+    # A magnitude within range keeps its saliency: the mean magnitude times length**0.5.
+    largest = np.float32(np.finfo(np.float32).max / 2 / length ** 0.5)
+    saliency = group(DRAWING, magnitude=np.full(DRAWING.shape, largest, np.float32), machine=machine).saliency
+    assert np.allclose(saliency, float(largest) * length ** 0.5, rtol=1e-5)
+
+
 def test_an_image_of_the_edge_maps_shape_still_pairs(machine):
     edges = _occlusion()
     image = np.zeros(edges.shape, np.float32)

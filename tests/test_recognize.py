@@ -604,7 +604,7 @@ def test_masks_are_named_as_masks_and_may_hold_0_and_255(ell_model):
     by_bool = learn("ell", [image], masks=[mask])
     by_bytes = learn("ell", [image], masks=[mask.astype(np.uint8) * 255])
     assert np.array_equal(by_bool.views[0].points, by_bytes.views[0].points)
-    with pytest.raises(InputError, match=r"masks\[0\] must hold 0 and 1 only"):
+    with pytest.raises(InputError, match=r"masks\[0\] must hold only 0 .off the object. and one other value"):
         learn("ell", [image], masks=[mask.astype(np.uint8) * 7])
 
 

@@ -365,24 +365,24 @@ def _run(args) -> int:
 
 
 def _learn(args) -> int:
-    from vmcl.cm.core import full_scale
     from vmcl.recognize import learn, model_path, save_model
+    from vmcl.recognize.arguments import object_mask
 
+    try:  # said before the learning, not after it
+        target = model_path(args.library, args.name)
+    except InputError as error:  # model_path names its argument folder: here it is --library
+        message = str(error)
+        raise BadInput(f"--library{message[len('folder'):]}" if message.startswith("folder ") else message) from None
+    if target.exists() and not args.replace:
+        raise BadInput(f"{target} exists: give --replace to replace it with the model learned now")
     images = [_read(path, "example") for path in args.images]
     masks = None
     if args.mask:
         if len(args.mask) != len(images):
             raise BadInput(f"--mask given {len(args.mask)} times for {len(images)} images: give one mask per image")
-        masks = [_read(path, "mask") for path in args.mask]
-        for path, mask, image in zip(args.mask, masks, images):
-            if mask.shape[:2] != image.shape[:2]:
-                raise BadInput(f"mask {path} is {mask.shape[1]} x {mask.shape[0]}, its image "
-                               f"{image.shape[1]} x {image.shape[0]}: a mask must have its image's size")
-        # On above half the type's full scale: 128 of 255, 0.5 of a float mask's 1.
-        masks = [(m if m.ndim == 2 else m.mean(axis=2)) > full_scale(m.dtype) / 2 for m in masks]
-    target = model_path(args.library, args.name)
-    if target.exists() and not args.replace:  # said before the learning, not after it
-        raise BadInput(f"{target} exists: give --replace to replace it with the model learned now")
+        masks = [_mask(path, image) for path, image in zip(args.mask, images)]
+        # Read as learn reads a mask (0 off the object, 1 or the full scale on it), named by its file.
+        masks = [object_mask(mask, f"mask {path}") for path, mask in zip(args.mask, masks)]
     model = learn(args.name, images, masks=masks, sources=[Path(p).name for p in args.images])
     path = save_model(model, args.library, replace=args.replace)
     corners = sum(len(v.corners) for v in model.views)
@@ -392,6 +392,19 @@ def _learn(args) -> int:
     print(f"{model.name}: {len(model.views)} view{'s' * (len(model.views) != 1)}, {corners} corners, "
           f"{inner:.0%} of its boundary inner markings; wrote {path}")
     return 0
+
+
+def _mask(path: str, image: np.ndarray) -> np.ndarray:
+    """``vmcl learn --mask``'s image at ``path``, grey, of its example's size."""
+    mask = _read(path, "mask")
+    if mask.shape[:2] != image.shape[:2]:
+        raise BadInput(f"mask {path} is {mask.shape[1]} x {mask.shape[0]}, its image "
+                       f"{image.shape[1]} x {image.shape[0]}: a mask must have its image's size")
+    if mask.ndim == 3:  # a black and white mask saved in colour; a coloured one has no one reading
+        if not (mask == mask[..., :1]).all():
+            raise BadInput(f"mask {path} is in colour: a mask must be black and white (0 off the object)")
+        mask = mask[..., 0]
+    return mask
 
 
 def _frames(spec: str, what: str):
@@ -500,9 +513,10 @@ def _reading(source, what: str):
 
 
 def write_output(result, folder: str | os.PathLike, title: str) -> None:
-    """Write what ``vmcl run`` writes for a run into ``folder``: the report (HTML and PNGs), fields.npz and
-    the settings it ran with (:data:`SETTINGS_FILE`). Files of those names already in ``folder`` are never
-    overwritten: the call is refused (InputValueError) before anything is written.
+    """Write what ``vmcl run`` writes for a run into ``folder``: the report (HTML and PNGs), fields.npz,
+    the settings it ran with (:data:`SETTINGS_FILE`) and, where it recognised (``--models``), the objects
+    found (:data:`RECOGNITION_FILE`). Files of those names already in ``folder`` are never overwritten: the
+    call is refused (InputValueError) before anything is written.
 
     ``vmcl batch`` writes the same files for every item (on the worker that ran it), and runs an item again
     when the settings recorded in its folder are not the batch's.
@@ -513,12 +527,15 @@ def write_output(result, folder: str | os.PathLike, title: str) -> None:
         raise InputTypeError(f"folder must be a path, got {type(folder).__name__}")
     folder = Path(folder)
     # write_report refuses its own names; these are refused before it writes anything.
-    refuse_names_present(folder, {"fields.npz", SETTINGS_FILE}.__contains__, "the output")
+    refuse_names_present(folder, {"fields.npz", SETTINGS_FILE, RECOGNITION_FILE}.__contains__, "the output")
     settings = settings_text(result.config.to_dict())  # before anything is written: a failure leaves nothing
+    found = None if result.recognition is None else recognition_text(result.recognition)
     write_report(result, folder, title=title)
     # allow_pickle is NumPy's default; naming it tells the type checker that no field of the ** binds it.
     np.savez_compressed(folder / "fields.npz", allow_pickle=True, **result_fields(result))
     (folder / SETTINGS_FILE).write_text(settings, encoding="utf-8")
+    if found is not None:
+        (folder / RECOGNITION_FILE).write_text(found, encoding="utf-8")
 
 
 def recognised_text(detections) -> str:
@@ -526,6 +543,37 @@ def recognised_text(detections) -> str:
     its boundary points in the image, or "nothing"."""
     return ", ".join(f"{d.name} ({d.score:.2f}) at ({d.boundary[:, 0].mean():.0f}, {d.boundary[:, 1].mean():.0f})"
                      for d in detections) or "nothing"
+
+
+RECOGNITION_FILE = "recognition.json"
+"""The file of an output folder that holds the objects a run with ``--models`` recognised, for programs to read
+(:func:`recognition_text`), written by a run with models (``--models``, ``[recognition] models``) alone: one
+without them recognises nothing, and leaves none (a previous output's is removed with the rest of it)."""
+
+
+def recognition_text(detections) -> str:
+    """A run's recognised objects (:class:`vmcl.recognize.Detection`, best first) as the JSON text of
+    :data:`RECOGNITION_FILE`: ``{"detections": [...]}``, each an object of its model's ``name``, the model
+    ``view`` it was aligned from, its pose ``transform`` (the 3 x 3 homography, rows, taking the view's frame,
+    the pixels of the example it was learned from, to the image's), ``score``, ``significance``, ``votes``,
+    ``corners_found``, ``inner_found`` (null for a view with no inner markings in sight), ``corners`` (the
+    view's corners in the image, [x, y] each) and ``box`` (its boundary's box in the image, [x0, y0, x1, y1]);
+    ``[]`` where the run found none."""
+    import json
+
+    def box(points: np.ndarray) -> list[float] | None:
+        return [*map(float, points.min(axis=0)), *map(float, points.max(axis=0))] if len(points) else None
+
+    found = [{"name": d.name, "view": int(d.view), "transform": np.asarray(d.transform, float).tolist(),
+              "score": float(d.score), "significance": float(d.significance), "votes": int(d.votes),
+              "corners_found": float(d.corners_found),
+              "inner_found": None if np.isnan(d.inner_found) else float(d.inner_found),
+              "corners": np.asarray(d.corners, float).reshape(-1, 2).tolist(), "box": box(np.asarray(d.boundary))}
+             for d in detections]
+    # Strict JSON (no NaN or Infinity, which other readers refuse: a detection's numbers are finite), one
+    # detection a line.
+    lines = ",\n".join(f"  {json.dumps(one, allow_nan=False)}" for one in found)
+    return '{"detections": [\n' + lines + "\n]}\n" if found else '{"detections": []}\n'
 
 
 DEMO_SIZE = 256

@@ -54,7 +54,7 @@ class Grouping:
     groups: list[np.ndarray]
 
 
-def group(edges: ArrayLike, *, magnitude: ArrayLike | None = None, image: np.ndarray | None = None,
+def group(edges: ArrayLike, *, magnitude: ArrayLike | None = None, image: ArrayLike | None = None,
           threshold: float = 0.0, length_exponent: float = 0.5, curvature_scale: float = 0.5, gap: float = 6.0,
           alignment: float = 20.0, machine: Machine | None = None) -> Grouping:
     """Group an edge map: curves, local saliency, junctions, repairs and T-junction pairs.
@@ -62,9 +62,11 @@ def group(edges: ArrayLike, *, magnitude: ArrayLike | None = None, image: np.nda
     Parameters
     ----------
     edges : (H, W) bool or uint8 array, NumPy or device
-    magnitude : (H, W) float32 array, optional
-        The gradient magnitude behind the edges (each curve's strength; 1 without it).
-    image : (H, W) or (H, W, 3) array, optional
+    magnitude : (H, W) float32 array, NumPy or device, optional
+        The gradient magnitude behind the edges (each curve's strength; 1 without it); finite and >= 0, and
+        small enough that a curve's saliency (its mean magnitude times its length**length_exponent) stays
+        within float32's range.
+    image : (H, W) or (H, W, 3) array, NumPy or device, optional
         The image, for the pairing test of :func:`vmcl.group.junctions.group_curves`: of the edge map's
         (H, W), at least 16 x 16 pixels, as :func:`vmcl.pipeline.as_image` reads it; checked before the
         edges are linked.

@@ -491,14 +491,14 @@ def repair_edges(edges: ArrayLike, junctions: Junctions) -> np.ndarray:
     return mask
 
 
-def group_curves(junctions: Junctions, *, image: np.ndarray | None = None, alignment: float = 20.0,
+def group_curves(junctions: Junctions, *, image: ArrayLike | None = None, alignment: float = 20.0,
                  max_distance: float = math.inf, contrast: float = 0.1) -> tuple[np.ndarray, list[np.ndarray]]:
     """Pairs of T-junctions whose stems point at each other along one line, and the groups of curves they join.
 
     Parameters
     ----------
     junctions : Junctions
-    image : (H, W) or (H, W, 3) array, optional
+    image : (H, W) or (H, W, 3) array, NumPy or device, optional
         The image the junctions came from, of the edge map's (H, W) (``junctions.shape``) and at least
         16 x 16 pixels; uint8, uint16 or float (brightness in [0, 1]), as :func:`vmcl.pipeline.as_image`
         reads it, and checked so before anything else, however many T-junctions there are. With it, two
@@ -558,12 +558,13 @@ def group_curves(junctions: Junctions, *, image: np.ndarray | None = None, align
 
 
 def pairing_image(image: Any, shape: tuple[int, int] | None) -> np.ndarray:
-    """``image`` checked as :func:`vmcl.pipeline.as_image` checks it (16 x 16 pixels at least, masked
-    values refused), of the edge map's ``shape`` where known, as float32 grey in [0, 1]. Samples off a
-    smaller or larger image would be clamped to its border or read from the wrong place, silently."""
+    """``image`` (NumPy or device) checked as :func:`vmcl.pipeline.as_image` checks it (16 x 16 pixels at
+    least, masked values refused), of the edge map's ``shape`` where known, as float32 grey in [0, 1] on
+    the host, where the pairing samples it. Samples off a smaller or larger image would be clamped to its
+    border or read from the wrong place, silently."""
     from vmcl.pipeline import as_image
 
-    grey = as_image(image, "image")
+    grey = as_image(to_host(image, "image"), "image")
     if shape is not None and grey.shape[:2] != tuple(shape):
         raise InputValueError(f"image must have the edge map's height and width {tuple(shape)}, got shape "
                               f"{image.shape}")

@@ -55,9 +55,18 @@ def local_saliency(curves: Curves, *, length_exponent: float = 0.5, curvature_sc
     with np.errstate(over="ignore"):
         saliency = (strength * np.maximum(curves.length, 1.0) ** length_exponent
                     * np.exp(-curves.mean_curvature / curvature_scale))
-    if saliency.size and not np.all(np.abs(saliency) <= np.finfo(np.float32).max):
-        raise InputValueError(f"length_exponent {length_exponent:g} makes the longest curves' saliency overflow "
-                              f"float32 (curves up to {float(np.max(curves.length)):.0f} px long); use a smaller one")
+    largest = np.finfo(np.float32).max
+    if saliency.size and not np.all(np.abs(saliency) <= largest):
+        # Blamed on the length alone where it overflows at a strength of 1 (the saliency without a
+        # magnitude), else on the magnitude the curves were linked with.
+        with np.errstate(over="ignore"):
+            by_length = np.maximum(curves.length, 1.0) ** length_exponent
+        if not np.all(by_length <= largest):
+            raise InputValueError(f"length_exponent {length_exponent:g} makes the longest curves' saliency overflow "
+                                  f"float32 (curves up to {float(np.max(curves.length)):.0f} px long); use a smaller one")
+        raise InputValueError(f"magnitude (link_edges') up to {float(np.max(strength)):.3g} makes the curves' saliency "
+                              f"(magnitude times length**length_exponent, here up to {float(np.max(by_length)):.3g}) "
+                              "overflow float32; scale the magnitude down")
     return saliency
 
 

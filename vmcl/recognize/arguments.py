@@ -9,10 +9,10 @@ from typing import Any
 
 import numpy as np
 
-from vmcl.cm.core import check_unmasked
+from vmcl.cm.core import check_unmasked, full_scale, to_host
 from vmcl.errors import InputTypeError, InputValueError
 
-__all__ = ["angles", "edge_map", "index_pairs", "points", "real_map"]
+__all__ = ["angles", "edge_map", "index_pairs", "object_mask", "points", "real_map"]
 
 
 def _host(x: Any, name: str) -> np.ndarray:
@@ -78,6 +78,34 @@ def edge_map(x: Any, name: str) -> np.ndarray:
     if x.dtype == np.uint8 and x.max() > 1:
         raise InputValueError(f"{name} must hold 0 and 1 only")
     return x.astype(bool)
+
+
+def object_mask(x: Any, name: str) -> np.ndarray:
+    """``x``: an object mask, an (H, W) array of at least 2 x 2 pixels, NumPy or device: bool, or numbers (a
+    picture's uint8 or uint16, an integer or float map) holding 0 off the object and one other value on it,
+    1 or the type's full scale (255 for uint8, 65535 for uint16); not all 0. Returns bool.
+
+    Any other value is refused rather than thresholded: a grey or blurred edge, a JPEG's ringing, or a
+    mask of another scale has no one cut that is right for all of them."""
+    x = to_host(x, name)
+    if not isinstance(x, np.ndarray):
+        raise InputTypeError(f"{name} must be a NumPy or device array, got {type(x).__name__}")
+    check_unmasked(x, name)
+    if x.dtype.kind not in "biuf":
+        raise InputTypeError(f"{name} must be bool, integer or float, got dtype {x.dtype}")
+    if x.dtype != np.bool_:
+        on = x[x != 0]  # NaN among them: it is no value a mask may hold
+        full = full_scale(x.dtype)
+        if on.size and (on[0] not in (1, full) or not (on == on[0]).all()):
+            seen = np.unique(on)
+            raise InputValueError(
+                f"{name} must hold only 0 (off the object) and one other value (on it): 1"
+                + ("" if full == 1 else f" or {full:g}, its type's full scale")
+                + f"; it holds {', '.join(f'{v:g}' for v in seen[:4])}{' ...' if len(seen) > 4 else ''} where it is not 0")
+    mask = edge_map(x != 0, name)
+    if not mask.any():
+        raise InputValueError(f"{name} marks no pixel as the object: it holds only 0")
+    return mask
 
 
 def real_map(x: Any, name: str, shape: tuple[int, ...], of: str, *, unknown: bool = False) -> np.ndarray:

@@ -6,6 +6,12 @@ a few views around it (recognised at viewpoints between them by aligning the nea
 "Recognition"'s alignment, after Ullman and Basri). :func:`learn` builds a model from images of the
 object alone (or with a mask saying which pixels are the object's); a :class:`Library` is a folder of
 model files (``NAME.vmodel.npz``) any user can add to with ``vmcl learn``.
+
+A model is the object as its examples show it, not its mirror image: recognition searches rotations,
+scalings and shifts of its views, so a mirrored object (a print seen from behind, a left-handed part for
+a right-handed one's model) is not one of its poses, and may be matched as a rotation of it (box.png
+mirrored as box.png turned 180 degrees, its print matching less). Learn the mirror image as a model of its
+own where the two must be told apart.
 """
 
 from __future__ import annotations
@@ -27,7 +33,8 @@ from vmcl.cm.core import check_bool, check_int, machine_for
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.output_folder import replace_file
-from vmcl.recognize.arguments import edge_map
+from vmcl.recognize.arguments import angles, object_mask
+from vmcl.recognize.arguments import points as point_array
 from vmcl.recognize.features import Features, features_of
 
 __all__ = ["MODEL_SUFFIX", "Library", "Model", "View", "learn", "load_model", "model_path", "save_model", "view_of"]
@@ -42,6 +49,11 @@ _NAME = re.compile(r"[A-Za-z0-9](?:[A-Za-z0-9 _.+-]{0,62}[A-Za-z0-9_.+-])?")  # 
 # "box " would list as "box"
 _MAX_POINTS = 1500  # boundary points kept per view: enough to verify a pose, few enough to test many
 _LEAST_POINTS = 8  # boundary pixels an example needs to be learned from
+_TURN = 2 * math.pi  # radians: a view's directions (atan2's within pi of 0, a float32 tangent's a rounding past
+# it) lie within a turn of 0; one beyond is damage, and far beyond its cosine is noise
+_FARTHEST = 1e9  # px: no length in a view exceeds the coordinates recognition takes (arguments.points')
+_SLACK = 1e-6  # px: a centroid's rounding beyond its points' box
+_RADIUS_SLACK = 2.0  # a radius this far off its boundary's spread is not the view's (a damaged file)
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,15 +64,20 @@ class View:
     ----------
     corners : float64 (F, 2)
     bisector, opening : float64 (F,)
-        As :class:`vmcl.recognize.features.Features` holds them.
+        As :class:`vmcl.recognize.features.Features` holds them (the bisector in radians within
+        [-2 pi, 2 pi], the opening within [0, pi]).
     points : float64 (N, 2)
-        The boundary, thinned to one point per ``spacing`` x ``spacing`` cell.
+        The boundary, thinned to one point per ``spacing`` x ``spacing`` cell; N >= 1. Coordinates (these,
+        the corners' and the arcs') lie within 1e9 pixels, as :func:`vmcl.recognize.recognize` takes them.
     tangent : float64 (N,)
-        The boundary's tangent at each point (radians modulo pi, NaN where unknown).
+        The boundary's tangent at each point (radians modulo pi, within [-2 pi, 2 pi]; NaN where unknown).
+        Verification counts an edge in any direction as supporting a point of unknown tangent, so at
+        least one must be known: with none, a pose would be tested by position alone.
     centre : float64 (2,)
-        The boundary's centroid.
+        The boundary's centroid (within its points' box).
     radius : float
-        The boundary's rms distance from its centroid (the scale the pose search measures in).
+        The boundary's rms distance from its centroid, at least 1 (the scale the pose search measures in;
+        within a factor of 2 of it).
     shape : (int, int)
         The example image's (H, W).
     length : float
@@ -88,28 +105,43 @@ class View:
     outline: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
 
     def __post_init__(self) -> None:
-        # Checked whole: a view read from a damaged file, or made by hand, failed later in recognise
-        # without naming the model, or (a NaN radius) matched at a wrong pose.
-        features = len(np.asarray(self.bisector)) if np.ndim(self.bisector) == 1 else -1
-        points = len(np.asarray(self.points)) if np.ndim(self.points) == 2 else -1
-        arcs = len(np.asarray(self.arc_radius)) if np.ndim(self.arc_radius) == 1 else -1
-        for label, value, shape, finite in (
-                ("corners", self.corners, (features, 2), True), ("bisector", self.bisector, (features,), True),
-                ("opening", self.opening, (features,), True), ("points", self.points, (points, 2), True),
-                ("tangent", self.tangent, (points,), False), ("centre", self.centre, (2,), True),
-                ("arcs", self.arcs, (arcs, 2), True), ("arc_radius", self.arc_radius, (arcs,), True)):
-            array = np.asarray(value)
-            if array.dtype.kind not in "iuf" or array.shape != shape or -1 in shape:
-                raise InputValueError(f"a view's {label} must be a real array of shape {shape} (one row per "
-                                      f"feature, boundary point or arc), got {array.dtype} {array.shape}")
-            if finite and not np.isfinite(array).all():
-                raise InputValueError(f"a view's {label} must be finite")
-        if points < 1:
+        # Checked whole, with the ranges recognition's own checks apply: a view read from a damaged file, or
+        # made by hand, failed later in recognise naming an argument the user never gave, or (a NaN radius,
+        # tangents all unknown) matched at a wrong pose.
+        corners = point_array(np.asarray(self.corners), "a view's corners")
+        angles(np.asarray(self.bisector), "a view's bisector", len(corners), "its corners", low=-_TURN, high=_TURN)
+        angles(np.asarray(self.opening), "a view's opening", len(corners), "its corners", low=0.0, high=math.pi)
+        boundary = point_array(np.asarray(self.points), "a view's points")
+        if not len(boundary):
             raise InputValueError("a view must hold at least one boundary point")
-        if (np.asarray(self.arc_radius) <= 0).any():
+        tangent = angles(np.asarray(self.tangent), "a view's tangent", len(boundary), "its points", low=-_TURN,
+                         high=_TURN, unknown=True)
+        if np.isnan(tangent).all():
+            # Verification counts a point of unknown tangent as supported by an edge in any direction: with
+            # none known, a pose is tested by position alone, and clutter fits one.
+            raise InputValueError("a view's tangent must be known (not NaN) at one boundary point at least")
+        arcs = point_array(np.asarray(self.arcs), "a view's arcs")
+        # (a radius, not an angle; checked for its shape and range as recognition's indexing checks it)
+        arc_radius = angles(np.asarray(self.arc_radius), "a view's arc_radius", len(arcs), "its arcs",
+                            low=0.0, high=_FARTHEST)
+        if (arc_radius <= 0).any():
             raise InputValueError("a view's arc_radius must be > 0")
+        if np.shape(self.centre) != (2,):
+            raise InputValueError(f"a view's centre must be one point (x, y), got shape {np.shape(self.centre)}")
+        centre = point_array(np.asarray(self.centre).reshape(1, 2), "a view's centre")[0]
+        low, high = boundary.min(axis=0), boundary.max(axis=0)
+        if ((centre < low - _SLACK) | (centre > high + _SLACK)).any():
+            # The pose search measures in the frame the centre and radius give; one off the boundary (a
+            # damaged file) was searched in and found nothing, silently.
+            raise InputValueError("a view's centre must be its boundary's centroid, within its points' box "
+                                  f"({low[0]:.4g}, {low[1]:.4g}) to ({high[0]:.4g}, {high[1]:.4g}), got "
+                                  f"({centre[0]:.4g}, {centre[1]:.4g})")
         if not (isinstance(self.radius, Real) and math.isfinite(self.radius) and self.radius > 0):
             raise InputValueError(f"a view's radius must be a finite number > 0, got {self.radius!r}")
+        spread = max(float(np.sqrt(((boundary - centre) ** 2).sum(axis=1).mean())), 1.0)
+        if not spread / _RADIUS_SLACK <= self.radius <= spread * _RADIUS_SLACK:
+            raise InputValueError(f"a view's radius must be its boundary's rms distance from its centre (at least "
+                                  f"1 px), {spread:.4g}, within a factor of {_RADIUS_SLACK:g}, got {self.radius!r}")
         if not (isinstance(self.length, Real) and math.isfinite(self.length) and self.length >= 0):
             raise InputValueError(f"a view's length must be a finite number >= 0, got {self.length!r}")
         if (not isinstance(self.shape, tuple) or len(self.shape) != 2
@@ -153,8 +185,8 @@ def _check_name(name: Any) -> str:
     if not isinstance(name, str):
         raise InputTypeError(f"name must be a str, got {type(name).__name__}")
     if not _NAME.fullmatch(name):  # match's $ also matches before a final newline
-        raise InputValueError("name must be 1 to 64 letters, digits, spaces or _ . + - (starting with a letter "
-                              f"or digit, not ending with a space), got {name!r}")
+        raise InputValueError("name must be 1 to 64 ASCII letters (A to Z, a to z), digits, spaces or _ . + - "
+                              f"(starting with a letter or digit, not ending with a space), got {name!r}")
     return name
 
 
@@ -164,8 +196,9 @@ def view_of(features: Features, *, mask: np.ndarray | None = None, spacing: int 
     Parameters
     ----------
     features : Features
-    mask : bool (H, W) array, optional
-        The object's pixels; features outside it (dilated by 2 px) are left out, and its outer border is
+    mask : (H, W) array, optional
+        The object's pixels, as :func:`learn` takes a mask (bool, or 0 and 1 or the type's full scale;
+        NumPy or device); features outside it (dilated by 2 px) are left out, and its outer border is
         the object's outline. Default: every feature, and the outline is the outer border of the region
         the edges enclose (with no closed outline, every point is the outline's).
     spacing : int
@@ -183,7 +216,7 @@ def view_of(features: Features, *, mask: np.ndarray | None = None, spacing: int 
     points, tangent = features.points, features.tangent
     arcs, arc_radius = features.arcs, features.arc_radius
     if mask is not None:
-        mask = edge_map(mask, "mask")
+        mask = object_mask(mask, "mask")
         if mask.shape != features.shape:
             raise InputValueError(f"mask must have the image's shape {features.shape}, got {mask.shape}")
         grown = _dilate(mask, 2)
@@ -197,6 +230,10 @@ def view_of(features: Features, *, mask: np.ndarray | None = None, spacing: int 
         arcs, arc_radius = arcs[keep_a], arc_radius[keep_a]
     length = float(len(points))
     if len(points) < _LEAST_POINTS:
+        if mask is not None and len(features.points) >= _LEAST_POINTS:  # the mask's doing, not the example's
+            raise InputValueError(f"the mask leaves {len(points)} of the example's {len(features.points)} edge "
+                                  f"pixels, too few to learn from ({_LEAST_POINTS} at least): it must cover the "
+                                  "object, edges included")
         raise InputValueError(f"the example shows too little boundary to learn from ({len(points)} edge pixels)")
     while True:
         cells = np.unique((points // spacing).astype(np.int64) @ np.array([1, 1 << 32]), return_index=True)[1]
@@ -251,14 +288,17 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
     Parameters
     ----------
     name : str
-        1 to 64 letters, digits, spaces or ``_ . + -``.
-    images : sequence of (H, W) or (H, W, 3) arrays
+        1 to 64 ASCII letters, digits, spaces or ``_ . + -``.
+    images : sequence of (H, W) or (H, W, 3) arrays, NumPy or device
         The examples: one image of a 2-D object, or views around a 3-D object (at most a few degrees
         apart for the views between them to be recognised; 20 degrees apart is tested). Each shows the
         object alone, or with ``masks``. A 2-D bool array is an edge map (a line drawing), as
         :func:`vmcl.recognize.recognize` takes one (:func:`vmcl.recognize.features_of`).
     masks : sequence of (H, W) arrays, optional
-        The object's pixels in each image: bool, or uint8 of 0 and 1 or of 0 and 255.
+        The object's pixels in each image, NumPy or device: bool, or numbers holding 0 off the object and one
+        other value on it, 1 or the type's full scale (uint8 0 and 1 or 0 and 255, uint16 0 and 1 or 0 and
+        65535, float 0 and 1), as ``vmcl learn --mask`` reads a mask image; any other value (a grey edge) is
+        refused, not thresholded, and so is a mask of 0 alone.
     sigma, corner : float
         Canny's smoothing and the corner turn, as :func:`vmcl.recognize.image_features` takes them.
     sources : sequence of str, optional
@@ -279,9 +319,8 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
     if sources is not None and (isinstance(sources, str) or not isinstance(sources, Sequence)
                                 or len(sources) != len(images) or not all(isinstance(x, str) for x in sources)):
         raise InputValueError(f"sources must be a list of one str per image ({len(images)})")
-    if masks is not None:
-        # Named as masks, not as their images; a mask of 0 and 255 (as OpenCV writes one) is taken too.
-        masks = [edge_map(_zero_one(mask), f"masks[{i}]") for i, mask in enumerate(masks)]
+    if masks is not None:  # named as masks, not as their images
+        masks = [object_mask(mask, f"masks[{i}]") for i, mask in enumerate(masks)]
     views = []
     for i, image in enumerate(images):
         which = f"images[{i}]" + (f" ({sources[i]})" if sources is not None else "")
@@ -289,11 +328,14 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
             features = features_of(image, sigma=sigma, corner=corner, machine=machine)
             if len(features.points) < _LEAST_POINTS and not (isinstance(image, np.ndarray) and image.dtype == np.bool_):
                 # A picture's Canny thresholds come from its noise, estimated from its median gradient: a
-                # textured picture raises them over its edges (a 160 x 120 crop of fur kept 11 pixels).
+                # textured picture raises them over its edges (a 160 x 120 crop of fur kept 11 pixels); a
+                # blank, faint or tiny one has no edges to find.
                 raise InputValueError(
                     f"the example shows too little boundary to learn from ({len(features.points)} edge pixels at "
-                    "the Canny thresholds its noise estimate gives, which texture raises); give its edge map instead "
-                    "(a bool array, e.g. vmcl.early.canny(image, low_threshold=..., high_threshold=...))")
+                    "the Canny thresholds its noise estimate gives): a blank, faint or tiny picture shows too few "
+                    "edges, and texture raises the thresholds over an object's; give its edge map instead (a bool "
+                    "array, e.g. vmcl.early.canny(image, low_threshold=..., high_threshold=...)), or a picture that "
+                    "shows the object")
             view = view_of(features, mask=None if masks is None else masks[i])
             if len(view.corners) + len(view.arcs) < 2:
                 # Indexing looks pairs of them up: with fewer the view is never a candidate, in any image.
@@ -308,19 +350,18 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
     return Model(name, tuple(views), tuple(sources) if sources is not None else ("array",) * len(views))
 
 
-def _zero_one(mask: Any) -> Any:
-    """A uint8 mask of only 0 and 255 as 0 and 1; anything else as given (for :func:`edge_map` to check)."""
-    if isinstance(mask, np.ndarray) and mask.dtype == np.uint8 and mask.size and set(np.unique(mask)) <= {0, 255}:
-        return (mask == 255).astype(np.uint8)
-    return mask
-
-
 def model_path(folder: str | Path, name: str) -> Path:
     """The file :func:`save_model` writes a model of this name to in a library folder: ``NAME.vmodel.npz``
-    (the name checked as a model's is)."""
+    (the name checked as a model's is, and the folder as one it can write into: a directory, or none yet
+    and no file in its place or above it)."""
     if not isinstance(folder, (str, Path)):
         raise InputTypeError(f"folder must be a str or Path, got {type(folder).__name__}")
-    return Path(folder) / f"{_check_name(name)}{MODEL_SUFFIX}"
+    name = _check_name(name)
+    folder = Path(folder)
+    for above in (folder, *folder.parents):
+        if above.exists() and not above.is_dir():
+            raise InputValueError(f"folder must be a directory (a library of model files), but {above} is a file")
+    return folder / f"{name}{MODEL_SUFFIX}"
 
 
 def save_model(model: Model, folder: str | Path, *, replace: bool = False) -> Path:
@@ -346,9 +387,6 @@ def save_model(model: Model, folder: str | Path, *, replace: bool = False) -> Pa
     replace = check_bool(replace, "replace")
     path = model_path(folder, model.name)
     folder = path.parent
-    for above in (folder, *folder.parents):
-        if above.exists() and not above.is_dir():
-            raise InputValueError(f"folder must be a directory, but {above} is a file")
     if path.exists():
         if not replace:
             raise InputValueError(f"{path} exists; pass replace=True (vmcl learn --replace) to replace it")
@@ -393,7 +431,10 @@ def load_model(path: str | Path) -> Model:
     Raises
     ------
     vmcl.errors.InputValueError
-        The file is missing or not a vmcl model.
+        The file is missing or not a vmcl model, or (damaged or edited by hand) holds a header or a view that
+        is not one: a count of views that is not a whole number, or a view's array of the wrong shape or out
+        of the ranges :class:`View` states, named with the file and the view's arrays (``v0_*``), so that
+        it is refused here and not later in :func:`vmcl.recognize.recognize`.
     """
     if not isinstance(path, (str, Path)):
         raise InputTypeError(f"path must be a str or Path, got {type(path).__name__}")
@@ -410,24 +451,15 @@ def load_model(path: str | Path) -> Model:
             if type(meta.get("version")) is not int or meta["version"] not in range(1, _VERSION + 1):
                 raise InputValueError(f"{path} is a vmcl model of format version {meta.get('version')}; this vmcl "
                                       f"reads versions 1 to {_VERSION}")
-            views = []
-            for i in range(int(meta["views"])):
-                frame = data[f"v{i}_frame"]
-                arcs = data[f"v{i}_arcs"] if meta["version"] >= 2 else np.zeros((0, 3))
-                if (arcs.dtype.kind != "f" or arcs.ndim != 2 or arcs.shape[1] != 3 or not np.isfinite(arcs).all()
-                        or (arcs[:, 2] <= 0).any()):
-                    raise ValueError(f"view {i}'s arcs are not (A, 3) rows of a centre and a radius > 0")
-                # An older format holds no outline: the View takes every point as the outline's.
-                outline = data[f"v{i}_outline"] if meta["version"] >= 3 else np.zeros(0, bool)
-                if meta["version"] >= 3 and (outline.dtype != np.bool_
-                                             or outline.shape != (len(data[f"v{i}_points"]),)):
-                    raise ValueError(f"view {i}'s outline is not one bool per boundary point")
-                views.append(View(data[f"v{i}_corners"], data[f"v{i}_bisector"], data[f"v{i}_opening"],
-                                  data[f"v{i}_points"], data[f"v{i}_tangent"],
-                                  data[f"v{i}_centre"], float(frame[0]),
-                                  (int(frame[1]), int(frame[2])), float(frame[3]), arcs[:, :2].copy(),
-                                  arcs[:, 2].copy(), outline))
-            return Model(_check_name(meta["name"]), tuple(views), tuple(str(s) for s in meta["sources"]))
+            # Counts and names as save_model writes them: int("1") or int(1.7) read a hand-edited header as
+            # something it does not say.
+            if type(meta.get("views")) is not int or meta["views"] < 1:
+                raise ValueError(f"its header's views must be a whole number >= 1, got {meta.get('views')!r}")
+            sources = meta.get("sources")
+            if not isinstance(sources, list) or not all(isinstance(x, str) for x in sources):
+                raise ValueError(f"its header's sources must be a list of str, got {sources!r}")
+            views = [_view_in(data, i, meta["version"]) for i in range(meta["views"])]
+            return Model(_check_name(meta["name"]), tuple(views), tuple(sources))
     except InputError as error:  # the file's version, or a view or model it holds that is not one
         raise error if str(path) in str(error) else InputValueError(f"{path}: {error}") from None
     except (zipfile.BadZipFile, OSError, EOFError):  # not a whole .npz archive: damaged, cut short, another file
@@ -436,6 +468,27 @@ def load_model(path: str | Path) -> Model:
     except (ValueError, KeyError, IndexError, TypeError) as error:
         reason = "it holds Python objects" if "allow_pickle" in str(error) else str(error)
         raise InputValueError(f"{path} is not a vmcl model file ({reason})") from None
+
+
+def _view_in(data: Any, i: int, version: int) -> View:
+    """View ``i`` of an open model file (its arrays ``v{i}_*``), checked as a :class:`View` is."""
+    frame = data[f"v{i}_frame"]
+    if frame.dtype.kind not in "iuf" or frame.shape != (4,):
+        raise ValueError(f"v{i}_frame is not the 4 numbers (radius, H, W, length) of view {i}")
+    arcs = data[f"v{i}_arcs"] if version >= 2 else np.zeros((0, 3))
+    if arcs.ndim != 2 or arcs.shape[1] != 3:
+        raise ValueError(f"v{i}_arcs is not (A, 3) rows of a circle's centre and radius, shape {arcs.shape}")
+    # An older format holds no outline, which the View reads as every point the outline's; a file of this one
+    # whose outline is empty would be read so too.
+    outline = data[f"v{i}_outline"] if version >= 3 else np.zeros(0, bool)
+    if version >= 3 and not outline.size:
+        raise ValueError(f"v{i}_outline is empty")
+    try:
+        return View(data[f"v{i}_corners"], data[f"v{i}_bisector"], data[f"v{i}_opening"], data[f"v{i}_points"],
+                    data[f"v{i}_tangent"], data[f"v{i}_centre"], float(frame[0]), (int(frame[1]), int(frame[2])),
+                    float(frame[3]), arcs[:, :2].copy(), arcs[:, 2].copy(), outline)
+    except InputError as error:  # the View names its field; the file names it v{i}_<field>
+        raise type(error)(f"view {i} (its arrays v{i}_*): {error}") from None
 
 
 class Library:
@@ -462,7 +515,8 @@ class Library:
 
     @classmethod
     def load(cls, folder: str | Path) -> Library:
-        """Every model file in a folder (sorted by name)."""
+        """Every model file in a folder (sorted by name), each read by :func:`load_model` (which names a file
+        that is not a whole, valid model)."""
         if not isinstance(folder, (str, Path)):
             raise InputTypeError(f"folder must be a str or Path, got {type(folder).__name__}")
         folder = Path(folder)
