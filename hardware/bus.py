@@ -26,6 +26,7 @@ import serial
 from .arguments import check_number
 from .commands import FAULT_BIT, Cmd, Error
 from .errors import (
+    FAULT_ADVICE,
     BadLength,
     Busy,
     CorruptFrame,
@@ -120,13 +121,14 @@ def _port_failures(port: serial.SerialBase) -> Iterator[None]:
         ) from exc
 
 
-_DEVICE_ERRORS: dict[int, tuple[type[DeviceError], str]] = {
-    Error.BUSY: (Busy, "the axis is busy homing; wait for it, or stop it first"),
-    Error.UNKNOWN_COMMAND: (UnknownCommand, "unknown command; is the right kind of micro at this address?"),
-    Error.BAD_LENGTH: (BadLength, "bad payload length; host and firmware disagree on the protocol version"),
-    Error.OUT_OF_RANGE: (OutOfRange, "argument out of range (beyond the soft limits?); nothing moved"),
-    Error.NOT_HOMED: (NotHomed, "the axis is not homed; home it first"),
-    Error.FAULT: (Fault, "a fault is latched; clear it (Head.clear_faults) or home the axis"),
+# Each refusal: its class, what happened, and what to do next (the error's advice).
+_DEVICE_ERRORS: dict[int, tuple[type[DeviceError], str, str]] = {
+    Error.BUSY: (Busy, "the axis is busy homing", "wait for it, or stop it first"),
+    Error.UNKNOWN_COMMAND: (UnknownCommand, "unknown command", "is the right kind of micro at this address?"),
+    Error.BAD_LENGTH: (BadLength, "bad payload length", "host and firmware disagree on the protocol version"),
+    Error.OUT_OF_RANGE: (OutOfRange, "argument out of range (beyond the soft limits?); nothing moved", ""),
+    Error.NOT_HOMED: (NotHomed, "the axis is not homed", "home it first (Head.home)"),
+    Error.FAULT: (Fault, "a fault is latched", FAULT_ADVICE),
 }
 
 
@@ -282,11 +284,12 @@ class Bus:
         assert status is not None  # _await returns only replies, and every reply carries a status
         code = status & ~FAULT_BIT
         if code != Error.OK:
-            kind, advice = _DEVICE_ERRORS.get(code, (DeviceError, f"error code {code}"))
+            kind, what, advice = _DEVICE_ERRORS.get(code, (DeviceError, f"error code {code}", ""))
             raise kind(
-                f"{who} refused {_name(cmd)}: {advice}",
+                f"{who} refused {_name(cmd)}: {what}",
                 code=code,
                 fault_latched=bool(status & FAULT_BIT),
+                advice=advice,
             )
         return reply
 

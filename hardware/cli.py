@@ -6,10 +6,16 @@ session, so that a freshly powered head (or simulator) can be homed and moved in
     vmcl-head home move 30 -10 point left 5 2 lens left zoom=50 focus=2 iris=4 status
     vmcl-head --port /dev/ttyUSB0 estop
 
-Exit status: 0 done; 1 the head or the line failed (a fault, a timeout, a port that would not open);
-2 a usage or input error. Every number, gaze and lens setting is checked before the head is opened
-(nothing moved); a joint target beyond the travel the head reports is refused when that command comes
-(the commands before it have run).
+Exit statuses: 0 done; 2 a usage or input error, one line: a command, number, gaze or lens setting
+vmcl-head cannot run as written, and a joint target beyond the travel the head reports; 1 the head
+refused a command or failed, one line: a refusal by a micro (an axis not homed, a latched fault such as
+an emergency stop, busy), a reply that never came or came corrupted, a port that would not open (the
+driver's HardwareError); 130 interrupted (Ctrl-C), the head told to stop. A refusal by the head is 1,
+not 2: the line was valid, and it is the head's state (not homed, a fault latched) that must change,
+with home, before the same line can run. A defect in vmcl-head itself ends with a Python traceback
+(status 1 too). Every number, gaze and lens setting is checked before the head is opened (nothing
+moved); a joint target beyond the travel the head reports is refused when that command comes (the
+commands before it have run).
 """
 
 from __future__ import annotations
@@ -21,7 +27,7 @@ from collections.abc import Callable
 from typing import TextIO
 
 from .arguments import OneLineParser
-from .errors import HardwareError
+from .errors import DeviceError, Fault, HardwareError, NotHomed
 from .eye import focus_counts, iris_counts, mirror_angles, zoom_counts
 from .head import Head
 
@@ -34,6 +40,12 @@ USAGE = """commands (run in order):
   point EYE AZIMUTH ELEVATION     EYE is left or right; gaze angles, degrees
   lens EYE [zoom=MM] [focus=M] [iris=F]   focal length mm, focus distance m (or inf), f-number
   estop                           emergency stop of every micro (clear with home)"""
+
+# The driver's advice names its Python calls (Head.clear_faults); here it names the command that does it.
+_ADVICE: tuple[tuple[type[DeviceError], str], ...] = (
+    (Fault, "clear it with home (vmcl-head [--port URL] home ...)"),
+    (NotHomed, "home it first (vmcl-head [--port URL] home ...)"),
+)
 
 Step = Callable[[Head, TextIO], None]
 
@@ -60,6 +72,14 @@ def _checked(check: Callable[..., object], *values: float) -> None:
         check(*values)
     except (ValueError, TypeError) as error:
         raise UsageError(str(error)) from None
+
+
+def _said(error: HardwareError) -> str:
+    """The error's message, with the advice the command line can follow in place of the driver's."""
+    if not isinstance(error, DeviceError) or not error.args:
+        return str(error)
+    advice = next((text for kind, text in _ADVICE if isinstance(error, kind)), error.advice)
+    return f"{error.args[0]}; {advice}" if advice else str(error.args[0])
 
 
 def _eye(head: Head, name: str):
@@ -140,7 +160,7 @@ def parse_commands(words: list[str]) -> list[Step]:
 
             def estop(head: Head, out: TextIO) -> None:
                 head.estop()
-                print("emergency stop sent to every micro", file=out)
+                print("emergency stop sent to every micro (home clears it)", file=out)
 
             steps.append(estop)
         elif command.startswith("-"):
@@ -185,7 +205,7 @@ def main(argv: list[str] | None = None, *, out: TextIO | None = None) -> int:
     except (ValueError, TypeError) as exc:
         return fail(str(exc), 2)
     except HardwareError as exc:
-        return fail(str(exc), 1)
+        return fail(_said(exc), 1)
     except KeyboardInterrupt:  # leaving the Head's block has stopped every motor, if the head was open
         return fail("interrupted; the head was told to stop" if opened else "interrupted before the head was open",
                     130)

@@ -14,6 +14,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 __all__ = [
+    "FAULT_ADVICE",
     "BadLength",
     "Busy",
     "CommError",
@@ -62,12 +63,20 @@ class DeviceError(HardwareError):
         The error code from the reply's STATUS byte (bits 0..6).
     fault_latched : bool
         Bit 7 of the STATUS byte: the micro has a latched fault.
+    advice : str
+        What to do next, in the driver's own terms (``Head.home``), appended to the message by ``str``.
+        Kept apart so that a front end with other means words its own: vmcl-head names its commands.
     """
 
-    def __init__(self, message: str, *, code: int = 0, fault_latched: bool = False) -> None:
+    def __init__(self, message: str, *, code: int = 0, fault_latched: bool = False, advice: str = "") -> None:
         super().__init__(message)
         self.code = code
         self.fault_latched = fault_latched
+        self.advice = advice
+
+    def __str__(self) -> str:
+        said = super().__str__()
+        return f"{said}; {self.advice}" if self.advice else said
 
 
 class Busy(DeviceError):
@@ -93,6 +102,10 @@ class NotHomed(DeviceError):
     """The axis has not been calibrated since power-up: home it first."""
 
 
+FAULT_ADVICE = "clear it (Head.clear_faults) or home (Head.home)"
+"""What clears a latched fault, in the driver's terms: CLEAR_FAULT to its micro, or homing."""
+
+
 class Fault(DeviceError):
     """A latched fault (limit switch, stall, emergency stop, watchdog) refuses motion until cleared.
 
@@ -102,8 +115,9 @@ class Fault(DeviceError):
         The axis flags (see hardware.commands.Flag) that describe the fault, 0 when not known.
     """
 
-    def __init__(self, message: str, *, code: int = 0, fault_latched: bool = True, flags: int = 0) -> None:
-        super().__init__(message, code=code, fault_latched=fault_latched)
+    def __init__(self, message: str, *, code: int = 0, fault_latched: bool = True, flags: int = 0,
+                 advice: str = FAULT_ADVICE) -> None:
+        super().__init__(message, code=code, fault_latched=fault_latched, advice=advice)
         self.flags = flags
 
 
@@ -118,5 +132,6 @@ def naming(what: str) -> Iterator[None]:
     try:
         yield
     except DeviceError as exc:
-        exc.args = (f"{what}: {exc}", *exc.args[1:])
+        # The message alone: str() would fold the advice into it, where a front end could not replace it.
+        exc.args = (f"{what}: {exc.args[0] if exc.args else ''}", *exc.args[1:])
         raise

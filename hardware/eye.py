@@ -80,8 +80,8 @@ def mirror_angles(azimuth: float, elevation: float, *, tol: float = 1e-9) -> tup
         if not math.isfinite(real_value(value)):
             raise ValueError(f"{name} must be a finite number of degrees, got {real_value(value):g}")
     beyond = OutOfRange(
-        f"gaze (azimuth {azimuth:g}, elevation {elevation:g}) deg needs mirror angles beyond "
-        f"+-{MIRROR_RANGE:g} deg"
+        f"gaze (azimuth {azimuth:g}, elevation {elevation:g}) deg needs mirror angles beyond the mirror angle "
+        f"limit of +-{MIRROR_RANGE:g} deg"
     )
     # Two mirrors within +-MIRROR_RANGE turn the gaze by well under 4 * MIRROR_RANGE either way; from
     # further out, Newton's method would start where the mirrors no longer reflect forwards.
@@ -203,7 +203,7 @@ class Eye:
         with naming(f"{self.name} lens"):
             current = self.lens.get(self.index)
             if not current.flags & Flag.HOMED:
-                raise NotHomed("not homed; home it first (Head.home or Eye.home_lens)")
+                raise NotHomed("not homed", advice="home it first (Head.home or Eye.home_lens)")
             self.lens.set_counts(self.index, *(c if n is None else n for c, n in zip(current[:3], counts)))
 
     def status(self) -> EyeStatus:
@@ -224,5 +224,5 @@ class Eye:
         """True once mirrors and lens are at rest; raises Fault if a fault has latched."""
         flags = self.galvo.get(self.index).flags | self.lens.get(self.index).flags
         if flags & FAULT_FLAGS:
-            raise Fault(f"{self.name} eye: {describe(flags)}; clear_faults()", flags=int(flags))
+            raise Fault(f"{self.name} eye: {describe(flags)}", flags=int(flags))
         return not flags & (Flag.MOVING | Flag.HOMING)

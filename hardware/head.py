@@ -233,22 +233,27 @@ class Head:
 
     def fixate(self, distance: float, *, baseline: float = 0.3, wait: bool = True) -> None:
         """Converge both eyes symmetrically on a point straight ahead at `distance` metres, with the
-        eyes `baseline` metres apart. Nearer than the mirrors can turn each eye (about 0.41 m at the
-        default baseline) is refused (OutOfRange, naming the nearest distance) before anything moves."""
+        eyes `baseline` metres apart; ``math.inf`` looks at infinity: parallel gaze, vergence 0 (as a lens
+        focuses at inf). Nearer than the gaze limit lets each eye turn (about 0.41 m at the default
+        baseline) is refused (OutOfRange, naming the nearest distance) before anything moves."""
         for name, value in (("distance", distance), ("baseline", baseline)):
             number = isinstance(value, (int, float)) and not isinstance(value, bool)
-            if not number or not math.isfinite(real_value(value)) or value <= 0:
+            # An int too large for a float is as far as inf; only the distance may be infinite.
+            far = number and real_value(value) == math.inf and name == "distance"
+            if not number or not (math.isfinite(real_value(value)) or far) or value <= 0:
                 shown = f"{real_value(value):g}" if number else repr(value)
-                raise ValueError(f"{name} must be a positive number of metres, got {shown}")
-        half = math.degrees(math.atan2(baseline / 2.0, distance))
-        # The widest the mirrors turn a gaze sideways: nearer than that, the refusal would speak of a gaze
-        # the caller never gave.
+                also = " (or inf, parallel gaze)" if name == "distance" else ""
+                raise ValueError(f"{name} must be a positive number of metres{also}, got {shown}")
+        half = math.degrees(math.atan2(baseline / 2.0, real_value(distance)))
+        # The widest sideways gaze the mirrors give, at elevation 0 (the gaze limit; the mirror angle limit is
+        # MIRROR_RANGE): nearer than that, a refusal in mirror angles would speak of a gaze the caller never gave.
         widest = min(abs(line_of_sight(sign * MIRROR_RANGE, 0.0)[0]) for sign in (1.0, -1.0))
         if half > widest:
             nearest = baseline / 2.0 / math.tan(math.radians(widest))
             raise OutOfRange(f"distance {distance:g} m is nearer than the eyes can converge with a baseline of "
-                             f"{baseline:g} m (each would turn {half:.3g} deg; the mirrors reach {widest:.3g}): "
-                             f"the nearest is {nearest:.3g} m; nothing moved")
+                             f"{baseline:g} m (each gaze would turn {half:.3g} deg; the gaze limit is {widest:.3g} "
+                             f"deg, the mirror angles at their limit of +-{MIRROR_RANGE:g} deg): the nearest is "
+                             f"{nearest:.3g} m; nothing moved")
         self.left.point(half, 0.0)
         self.right.point(-half, 0.0)
         if wait:

@@ -124,5 +124,5 @@ class Joint:
         """True once the joint is at rest and not homing; raises Fault if a fault has latched."""
         flags = self.micro.axis_status(self.axis).flags
         if flags & FAULT_FLAGS:
-            raise Fault(f"{self.name}: {describe(flags)}; clear_faults() or home()", flags=int(flags))
+            raise Fault(f"{self.name}: {describe(flags)}", flags=int(flags))
         return not flags & (Flag.MOVING | Flag.HOMING)

@@ -2,7 +2,7 @@
 
 pyserial's ``serial.serial_for_url(url)`` looks for a module named ``protocol_<scheme>`` in each package
 listed in ``serial.protocol_handler_packages``. `hardware.bus.register_sim_handler` adds ``"hardware"``
-to that list, so that ``serial.serial_for_url("sim://?seed=1&drop=0.01", baudrate=115200)`` finds this
+to that list, so that ``serial.serial_for_url("sim://?seed=1&drop=0.001", baudrate=115200)`` finds this
 module and returns a `Serial` wrapped around a `hardware.simulator.World`. hardware.bus.open_port
 registers it, so code that goes through the Bus never needs to.
 

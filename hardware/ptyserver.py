@@ -7,7 +7,7 @@ open the USB-serial adapter of the real head, and nothing in it knows the differ
 
 Usage::
 
-    python -m hardware.ptyserver ['sim://?seed=1&drop=0.01'] [--rate 20]
+    python -m hardware.ptyserver ['sim://?seed=1&drop=0.001'] [--rate 20]
 
 prints the device path (e.g. ``/dev/pts/7``) on the first line of standard output, then serves until
 it is terminated or its parent process exits. The virtual clock follows the wall clock, `rate` times

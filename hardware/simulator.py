@@ -19,7 +19,7 @@ next transmission in one direction exactly, for tests that need one particular f
 The URL form, for ``serial.serial_for_url`` (see hardware.protocol_sim) and ``python -m
 hardware.ptyserver``::
 
-    sim://?seed=1&drop=0.01&corrupt=0.01&truncate=0&delay=0&lag=0.1&duplicate=0&absent=3&pan=10&tilt=-45
+    sim://?seed=1&drop=0.001&corrupt=0.001&truncate=0&delay=0&lag=0.1&duplicate=0&absent=3&pan=10&tilt=-45
 
 Reference for the fault model: the Modbus RTU specification (a slave ignores a frame with a bad CRC and
 the master retries on timeout) and Dynamixel Protocol 2.0 (status packets, broadcast without replies).

@@ -64,6 +64,14 @@ def test_demo_writes_the_report(tmp_path, images, capsys):
     assert not _leftovers(tmp_path)
 
 
+def test_demo_says_the_runs_notes_as_run_does(tmp_path, capsys):
+    # The notes were only in the report: a table of recalls of 0 in the terminal had no word beside it.
+    out = tmp_path / "demo"
+    assert main(["demo", "--data", "cues", "--out", str(out), "--size", "64", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert "vmcl: note: edges: Canny found no brightness edge" in err, err
+
+
 def test_run_on_files_writes_report_and_fields(tmp_path, images):
     out = tmp_path / "run"
     code = main(["run", str(images["left"]), str(images["right"]), "--next", str(images["next"]),

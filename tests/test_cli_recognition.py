@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -52,6 +53,22 @@ def test_learn_writes_models_and_run_recognises_them(tmp_path, files, capsys):
     assert len(boxes) == printed.split("recognised:")[1].count(" at ("), (boxes, printed)
     assert all(x0 < 400 and y0 < 300 and x1 > 0 and y1 > 0 and min(x1 - x0, y1 - y0) > 20
                for x0, y0, x1, y1 in boxes), boxes
+
+
+def test_models_keep_the_configs_other_recognition_keys(tmp_path, files):
+    # --models replaced the whole [recognition] section: the README's candidates = 4096 was dropped in silence.
+    import json
+
+    library = tmp_path / "library"
+    assert main(["learn", "ell", str(files["ell"]), "--library", str(library), "-q"]) == 0
+    config = tmp_path / "wide.toml"
+    config.write_text('[mrf]\nmethod = "icm"\n[recognition]\ncandidates = 4096\ntransform = "affine"\n')
+    out = tmp_path / "run"
+    assert main(["run", str(files["scene"]), "--models", str(library), "--config", str(config), "--out", str(out),
+                 "-q"]) == 0
+    recorded = json.loads((out / "settings.json").read_text())["recognition"]
+    assert recorded["candidates"] == 4096 and recorded["transform"] == "affine"
+    assert Path(recorded["models"]).resolve() == library.resolve()
 
 
 def test_a_sequence_run_with_models_reports_each_frames_objects(tmp_path, files):

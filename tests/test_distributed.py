@@ -9,6 +9,7 @@ restarts.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import os
@@ -644,3 +645,47 @@ def test_zarr_leaves_out_an_item_that_failed_whatever_its_folder_still_holds(cli
     rows, _ = _zarr_rows(out / "disparity.zarr")
     assert np.isnan(rows[1]).all() and not np.isnan(rows[0]).all()
     assert (out / folders[1].name / "notes.txt").read_text() == "mine"
+
+
+def test_map_sequence_equals_the_stream_with_time_disabled_one_result_per_pair(client):
+    """map_sequence runs each pair on its own: its Results are stream's with [time] enabled = false, frame
+    for frame, one per pair (n - 1 for n frames; stream adds the last frame's, without motion)."""
+    s = _scene(6)
+    frames = [np.ascontiguousarray(np.roll(s.left, shift, axis=1)) for shift in range(4)]
+    untimed = {**FAST, "time": {"enabled": False}}
+    streamed = list(VisionMachine(Config.from_dict(untimed), machine=Machine(profile=True)).stream(frames))
+    assert len(streamed) == 4 and streamed[-1].flow is None
+    for config in (untimed, FAST):  # the config's own [time] section is not used
+        results = stitch(client.gather(map_sequence(client, frames, config, chunk=2)))
+        assert len(results) == 3
+        for t, result in enumerate(results):
+            assert result.flow is not None
+            assert result.config.time.enabled == (config is FAST)  # the Config it was given, recorded
+            _same_result(dataclasses.replace(result, config=streamed[t].config), streamed[t])
+
+
+def test_a_local_cluster_leaves_no_scratch_space_in_the_temporary_folder(tmp_path, monkeypatch, capsys):
+    """Dask's scheduler and workers put dask-scratch-space (global.lock, purge.lock) in the temporary
+    folder and left it there after every local batch; vmcl gives the cluster a folder of its own and removes
+    it when the cluster closes, after a batch and after an error inside the block alike."""
+    import tempfile
+
+    from vmcl.distributed import cluster_client
+
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    monkeypatch.setenv("TMPDIR", str(scratch))
+    monkeypatch.setattr(tempfile, "tempdir", None)  # read TMPDIR again in this process too
+    assert tempfile.gettempdir() == str(scratch)
+    (tmp_path / "data").mkdir()
+    _png(tmp_path / "data" / "a.png", _scene(0).left)
+    assert main(["batch", str(tmp_path / "data"), "--config", str(_fast_toml(tmp_path)), "--out",
+                 str(tmp_path / "out"), "--workers", "1", "--threads", "1", "--quiet"]) == 0
+    assert (tmp_path / "out" / "a" / "fields.npz").is_file()
+    assert sorted(p.relative_to(scratch).as_posix() for p in scratch.rglob("*")) == []
+    used = []
+    with pytest.raises(RuntimeError, match="inside the block"), cluster_client(workers=1, threads=1):
+        used += list(scratch.rglob("dask-scratch-space"))  # while the cluster runs: under its own folder
+        raise RuntimeError("inside the block")
+    assert len(used) == 1 and used[0].parent.name.startswith("vmcl-dask-"), used
+    assert sorted(p.relative_to(scratch).as_posix() for p in scratch.rglob("*")) == []

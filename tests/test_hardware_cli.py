@@ -142,3 +142,33 @@ def test_an_interrupt_stops_the_head_and_exits_130_with_one_line(capsys, monkeyp
     err = capsys.readouterr().err
     assert status == 130 and err == "vmcl-head: error: interrupted; the head was told to stop\n", err
     assert stopped
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["home", "estop", "move", "10", "0"],
+         "pan: stepper micro refused MOVE_TO: a fault is latched; clear it with home (vmcl-head [--port URL] home ...)"),
+        (["home", "estop", "point", "left", "1", "1"],
+         ("left eye: galvo micro refused GALVO_SET: a fault is latched; clear it with home (vmcl-head [--port URL] "
+          "home ...)")),
+        (["move", "10", "0"],
+         "pan: stepper micro refused MOVE_TO: the axis is not homed; home it first (vmcl-head [--port URL] home ...)"),
+        (["lens", "left", "zoom=50"], "left lens: not homed; home it first (vmcl-head [--port URL] home ...)"),
+    ],
+)
+def test_a_refusal_by_the_head_names_the_command_that_clears_it_and_exits_1(capsys, argv, message):
+    """After estop the advice named Head.clear_faults, which the command line does not offer: it names home,
+    as its help does. A refusal by the head is exit status 1, as documented (the line itself was valid)."""
+    status, _ = run(argv)
+    err = capsys.readouterr().err
+    assert status == 1
+    assert err == f"vmcl-head: error: {message}\n"
+    assert "Head." not in err and "clear_faults" not in err
+
+
+def test_the_documented_exit_statuses_say_a_refusal_by_the_head_is_1():
+    import hardware.cli
+
+    doc = " ".join(hardware.cli.__doc__.split())
+    assert "1 the head refused a command or failed" in doc and "A refusal by the head is 1, not 2" in doc

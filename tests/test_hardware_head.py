@@ -143,7 +143,7 @@ def test_limit_hit_stops_the_axis_and_latches_until_cleared_or_homed():
         pan = world.stepper.axes[0]
         # A limit switch knocked 60 degrees inwards, as an obstacle would be.
         pan.mech.geometry = dataclasses.replace(PAN, switch_pos=round(30 * COUNTS_PER_DEGREE))
-        with pytest.raises(Fault, match=r"pan: .*FAULT: limit switch hit.*; clear_faults\(\) or home\(\)"):
+        with pytest.raises(Fault, match=r"pan: .*FAULT: limit switch hit.*; clear it \(Head.clear_faults\) or home \(Head.home\)"):
             head.move(pan=60.0)
         stopped = pan.mech.position
         assert 30 * COUNTS_PER_DEGREE <= stopped < 31 * COUNTS_PER_DEGREE
@@ -365,7 +365,7 @@ def test_fixate_sets_the_vergence(homed):
         (lambda h: h.move(pan=10**400), OutOfRange, "pan inf deg is outside its travel"),
         (lambda h: h.left.point(10**400, 0), ValueError, "azimuth must be a finite number of degrees, got inf"),
         (lambda h: h.left.point("1", 0), TypeError, "azimuth must be a finite number of degrees, got '1'"),
-        (lambda h: h.fixate(10**400), ValueError, "distance must be a positive number of metres, got inf"),
+        (lambda h: h.fixate(-(10**400)), ValueError, "distance must be a positive number of metres .*, got -inf"),
         (lambda h: h.wait(timeout=math.nan), OutOfRange, r"timeout must be in \[0, 86400\] seconds, got nan"),
         (lambda h: h.bus.sleep(math.inf), OutOfRange, "seconds must be in .* got inf"),
     ],
@@ -444,3 +444,37 @@ def test_a_stop_during_the_final_braking_never_carries_a_joint_past_its_target()
         assert status.encoder <= 90 * COUNTS_PER_DEGREE + 1e-6, (dt, status)
         assert status.encoder == round(status.target * COUNTS_PER_DEGREE), (dt, status)
     head.close()
+
+
+@pytest.mark.parametrize("far", [math.inf, 10**400], ids=["inf", "an int beyond float"])
+def test_fixating_at_infinity_is_parallel_gaze(homed, far):
+    """A fixation at infinity is meaningful (parallel eyes, vergence 0), as a lens focused at inf is: it was
+    refused as not a positive number of metres. An int too large for a float is as far."""
+    homed.fixate(1.0)
+    assert homed.vergence() > 10.0
+    homed.fixate(far)
+    assert homed.vergence() == pytest.approx(0.0, abs=1e-9)
+    for eye in homed.eyes:
+        status = eye.status()
+        assert (status.azimuth, status.elevation) == pytest.approx((0.0, 0.0), abs=1e-9)
+    for bad, shown in ((-math.inf, "-inf"), (math.nan, "nan"), (0.0, "0")):
+        with pytest.raises(ValueError, match=rf"distance must be a positive number of metres \(or inf, parallel "
+                                             rf"gaze\), got {shown}$"):
+            homed.fixate(bad)
+    with pytest.raises(ValueError, match="baseline must be a positive number of metres, got inf"):
+        homed.fixate(1.0, baseline=math.inf)
+
+
+def test_a_refused_fixation_names_the_gaze_limit_and_a_refused_gaze_the_mirror_angle_limit(homed):
+    """fixate said "the mirrors reach 20" (a gaze angle) where point said "mirror angles beyond +-10 deg" (a
+    mirror angle): each now says which limit it means, and gives its value."""
+    widest = min(abs(line_of_sight(sign * 10.0, 0.0)[0]) for sign in (1.0, -1.0))
+    with pytest.raises(OutOfRange) as fixation:
+        homed.fixate(0.01)
+    assert f"(each gaze would turn 86.2 deg; the gaze limit is {widest:.3g} deg, the mirror angles at their limit " \
+           "of +-10 deg): the nearest is 0.412 m" in str(fixation.value)
+    assert "mirrors reach" not in str(fixation.value)
+    with pytest.raises(OutOfRange) as gaze:
+        homed.left.point(20.0, 20.0)
+    assert str(gaze.value) == ("gaze (azimuth 20, elevation 20) deg needs mirror angles beyond the mirror angle limit "
+                               "of +-10 deg")

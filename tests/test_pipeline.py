@@ -626,3 +626,10 @@ def test_a_noise_rule_that_leaves_no_edge_is_said():
     assert given.edges.any() and not any("Canny found no brightness edge" in note for note in given.notes)
     blocks = scenes.render(scenes.preset("blocks", shape=(128, 128)), seed=0, noise=0.01)
     assert not any("Canny found no" in note for note in VisionMachine(Config()).run(blocks.left).notes)
+
+
+def test_quantile_thresholds_need_a_threshold():
+    # use_quantiles alone left the noise rule in charge and changed nothing, in silence.
+    with pytest.raises(InputError, match="edges.use_quantiles = true needs edges.low_threshold or"):
+        Config.from_dict({"edges": {"use_quantiles": True}})
+    Config.from_dict({"edges": {"use_quantiles": True, "high_threshold": 0.9}})

@@ -303,6 +303,8 @@ def _demo(args) -> int:
         for name, rows in tables.items():
             _print_table(name, rows)
         write_report(result, work, title=f"Vision Machine demo: {title}", evaluation=tables)
+    for note in result.notes:  # as vmcl run says them: what the scores above may owe to the inputs
+        print(f"vmcl: note: {note}", file=sys.stderr)
     print(f"report: {Path(args.out) / 'report.html'}")
     return 0
 
@@ -313,8 +315,6 @@ def _with_models(config, models: str | None):
     """The configuration with ``vmcl run --models`` as its recognition library (checked to be one)."""
     import dataclasses
 
-    from vmcl.pipeline import RecognitionConfig
-
     if models is None:
         return config
     from vmcl.recognize import MODEL_SUFFIX
@@ -322,7 +322,8 @@ def _with_models(config, models: str | None):
     if not Path(models).is_dir() or not any(Path(models).glob(f"*{MODEL_SUFFIX}")):
         raise BadInput(f"--models {models}: not a folder of models (make one with vmcl learn NAME IMAGES... "
                        f"--library {models})")
-    return dataclasses.replace(config, recognition=RecognitionConfig(models=str(models)))
+    # The section's other keys (--config's transform, candidates) are kept: only the library is the option's.
+    return dataclasses.replace(config, recognition=dataclasses.replace(config.recognition, models=str(models)))
 
 
 def _run(args) -> int:
@@ -911,7 +912,7 @@ def _info(args) -> int:
     except InputError as error:
         # A VMCL_DEVICE that names no device here: the list it points the user to is printed all the same.
         machine = None
-        print(f"vmcl: {error}", file=sys.stderr)
+        print(f"vmcl: error: {error}", file=sys.stderr)
     chosen = machine.device if machine is not None else None
     for index, device in enumerate(devices):
         mark = "*" if device == chosen else " "
@@ -920,7 +921,7 @@ def _info(args) -> int:
         print(f" {mark} {index}: {device.platform.name} / {device.name} ({kind}, {device.max_compute_units} "
                    f"compute units, {device.global_mem_size // 2**20} MiB)")
     print(f"chosen (*): VMCL_DEVICE={os.environ.get('VMCL_DEVICE', '')!r} (a device's index or a part of its name), "
-          "else the first (GPUs first)")
+          "else the first (GPUs first)" + ("" if machine is not None else "; none: VMCL_DEVICE names no device here"))
     if machine is not None:
         print(f"build options: {' '.join(machine.build_options) or 'none'} (and each kernel's -D defines)")
     print(f"kernel sources: {kernels_dir()}")

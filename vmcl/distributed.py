@@ -9,10 +9,12 @@ this module's per-process cache (:func:`worker_machine`); tasks carry NumPy arra
 dict, and return :class:`vmcl.result.Result` (NumPy fields and a Config dataclass, both picklable).
 
 - :func:`map_frames` runs the machine on each frame, pair or triple: futures of Results.
-- :func:`map_sequence` splits a video into chunks of frame pairs (t, t + 1), each chunk run in order on
-  one worker, starting ``overlap`` pairs before its own; :func:`stitch` puts the chunks' Results back in
-  order. The machine keeps no state from one pair to the next yet, so the overlap pairs are run and
-  dropped; they are there for warm starts across frames, which will start from them.
+- :func:`map_sequence` splits a video into chunks of frame pairs (t, t + 1), one task each, and
+  :func:`stitch` puts the chunks' Results back in order. Every pair is run on its own, as
+  :meth:`vmcl.pipeline.VisionMachine.run` runs it: the Results are those of
+  :meth:`~vmcl.pipeline.VisionMachine.stream` with ``[time] enabled = false``, one per pair. The temporal
+  terms (each cue's restoration carried from frame to frame, :mod:`vmcl.temporal`) need every earlier
+  frame's Result, so they come only from the sequential stream (``vmcl run`` on a sequence).
 - :func:`batch_items` and :func:`run_batch` are the ``vmcl batch`` command: every item an output folder
   written whole or not at all (:func:`vmcl.output_folder.output_folder`), finished items skipped on a
   rerun, failed items reported by name with their error while the rest complete.
@@ -194,7 +196,10 @@ def run_frame(left: np.ndarray, right: np.ndarray | None = None, next: np.ndarra
 
 def run_chunk(frames: Sequence[np.ndarray], first: int, skip: int, config: Mapping[str, Any] | None = None,
               rights: Sequence[np.ndarray] | None = None) -> list[tuple[int, Result]]:
-    """Run the pairs (frames[k], frames[k + 1]) of one chunk in order; the task of :func:`map_sequence`.
+    """Run the pairs (frames[k], frames[k + 1]) of one chunk, each on its own; the task of :func:`map_sequence`.
+
+    Each pair's Result is ``VisionMachine.run(frames[k], rights[k], frames[k + 1])``: nothing is carried
+    from one pair to the next (no temporal terms), so a skipped pair changes no other pair's Result.
 
     Parameters
     ----------
@@ -203,7 +208,7 @@ def run_chunk(frames: Sequence[np.ndarray], first: int, skip: int, config: Mappi
     first : int
         The video index of ``frames[0]``.
     skip : int
-        Leading pairs that are the chunk's overlap: run, not returned.
+        Leading pairs that are the chunk's overlap: run, not returned (they change no Result).
     config : mapping, optional
         :meth:`vmcl.pipeline.Config.to_dict`'s nested values.
     rights : sequence of ndarray, optional
@@ -343,13 +348,21 @@ def map_frames(client: Client, frames: Iterable[Any], config: Config | Mapping[s
 
 
 def map_sequence(client: Client, frames: Sequence[np.ndarray], config: Config | Mapping[str, Any] | None = None,
-                 *, chunk: int = 16, overlap: int = 1, rights: Sequence[np.ndarray] | None = None,
+                 *, chunk: int = 16, overlap: int = 0, rights: Sequence[np.ndarray] | None = None,
                  retries: int = 1) -> list[Future]:
-    """Run the machine on a video's frame pairs (t, t + 1), in chunks of ``chunk`` pairs, one per task.
+    """Run the machine on a video's frame pairs (t, t + 1), each pair on its own, ``chunk`` pairs per task.
 
-    Each chunk runs its pairs in order on one worker, starting ``overlap`` pairs before its first own
-    pair (the overlap's Results are dropped). :func:`stitch` of the gathered chunks gives the Results in
-    the video's order, the same as running the pairs one after the other.
+    Pair t's Result is ``VisionMachine.run(frames[t], rights[t], frames[t + 1])``: nothing is carried from
+    one pair to the next, so the Results equal, frame for frame, those of
+    :meth:`vmcl.pipeline.VisionMachine.stream` over the same frames with ``[time] enabled = false``
+    (``config``'s own ``[time]`` section is not used). With the temporal terms on (the default), stream
+    carries each cue's restoration along the flow from every earlier frame, which chunks run apart
+    cannot: for them run the sequence in one process (``vmcl run`` on a sequence, or ``stream``).
+
+    A video of n frames gives n - 1 Results, one per pair: a Result here is the machine on a frame and
+    the next, and the last frame has no next (stream also yields a last Result for it, without motion;
+    run it with :func:`map_frames` if it is wanted). :func:`stitch` of the gathered chunks puts them in
+    the video's order.
 
     Parameters
     ----------
@@ -360,7 +373,8 @@ def map_sequence(client: Client, frames: Sequence[np.ndarray], config: Config | 
     chunk : int
         Pairs each task returns (>= 1).
     overlap : int
-        Pairs each chunk runs before its own (>= 0).
+        Pairs before its own that each chunk also runs, and drops (>= 0). No pair depends on another,
+        so an overlap changes no Result and only costs its pairs' time: leave it 0.
     rights : sequence of ndarray, optional
         The right view of every frame (as many as ``frames``): each pair adds stereo.
     retries : int
@@ -368,7 +382,7 @@ def map_sequence(client: Client, frames: Sequence[np.ndarray], config: Config | 
     Returns
     -------
     list of distributed.Future
-        One per chunk, in order, each of a list of (t, Result).
+        One per chunk, in order, each of a list of (t, Result): n - 1 Results in all for n frames.
     """
     client = _check_client(client)
     values = _config_dict(config)
@@ -1128,7 +1142,9 @@ def cluster_client(scheduler: str | None = None, *, workers: int | None = None, 
 
     Yields the client and a line saying what it runs on (the workers, threads and dashboard). A local
     cluster's own log lines are kept from the terminal unless ``worker_logs``: a task's error is reported
-    with its item, and a worker that dies is restarted by its nanny and its tasks rerun elsewhere.
+    with its item, and a worker that dies is restarted by its nanny and its tasks rerun elsewhere. A local
+    cluster keeps Dask's scratch space in a temporary folder of its own, removed when the cluster closes
+    (on an error or an interrupt too), where Dask would leave it in the system's temporary folder.
     """
     import logging
 
@@ -1152,12 +1168,17 @@ def cluster_client(scheduler: str | None = None, *, workers: int | None = None, 
                      f"{sum(threads_there.values())} thread(s)")
         else:
             size = local_cluster_size(workers, threads)
+            # Dask's scheduler and workers keep their scratch (dask-scratch-space, its lock files) in the
+            # temporary folder itself, and leave it there when they close. The cluster gets a folder of its
+            # own, entered first so that it is removed after the cluster has closed, however the block ends.
+            scratch = stack.enter_context(tempfile.TemporaryDirectory(prefix="vmcl-dask-"))
             # The worker processes start with Ctrl-C ignored (the disposition carries over into them): a
             # terminal's Ctrl-C reaches the whole process group, and each worker printed its traceback.
             # This process stops on it and closes the cluster, which ends them.
             with _sigint_ignored():
                 cluster = stack.enter_context(LocalCluster(
                     n_workers=size.workers, threads_per_worker=size.threads, processes=True,
+                    local_directory=scratch, scheduler_kwargs={"local_directory": scratch},
                     silence_logs=logging.WARNING if worker_logs else logging.CRITICAL))
             client = stack.enter_context(Client(cluster))
             where = f"local Dask cluster: {size.workers} worker(s) x {size.threads} thread(s) ({size.reason})"

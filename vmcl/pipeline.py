@@ -182,6 +182,10 @@ class EdgesConfig:
         _check_field_types("edges", self)
         check_real(self.sigma, "edges.sigma", above=0)
         _check_thresholds("edges", self.low_threshold, self.high_threshold, self.use_quantiles)
+        if self.use_quantiles and self.low_threshold is None and self.high_threshold is None:
+            # Without either the noise rule sets the thresholds and the switch changes nothing, in silence.
+            raise InputValueError("edges.use_quantiles = true needs edges.low_threshold or edges.high_threshold (or "
+                                  "both): quantiles of the gradient magnitudes, in [0, 1]")
         check_choice(self.saliency, "edges.saliency", SALIENCY)
 
 
@@ -1348,8 +1352,8 @@ class _Run:
         self.notes.append("edges: Canny found no brightness edge: the noise rule's thresholds (from the median "
                           "gradient, which a texture filling the image raises) lie above every gradient, so the "
                           "cues' MRFs are coupled to no brightness edge; set [edges] low_threshold and "
-                          "high_threshold (gradient magnitudes, the image in [0, 1]), or use_quantiles = true "
-                          "with quantiles")
+                          "high_threshold (gradient magnitudes, the image in [0, 1]; or, with use_quantiles = "
+                          "true, quantiles of the gradient magnitudes, e.g. 0.7 and 0.9)")
 
     def _note_pruned_away(self, kept: np.ndarray, canny_edges: cl_array.Array, kind: str) -> None:
         """A note when the saliency pruning kept none of Canny's edges, which leaves the MRFs coupled to none."""
