@@ -1038,9 +1038,9 @@ def parser() -> argparse.ArgumentParser:
                                "such folders; edges: that folder (its bsds500/test images) or "
                                "any BSDS-layout folder (<id>/<id>.jpg + .mat, or images/ and groundTruth/)")
     evaluate.add_argument("--thresholds", type=int, default=30,
-                          help="edges: thresholds of each sweep (the BSDS benchmark's own count is 99; each "
-                               "costs one matching per image and annotator)")
-    evaluate.add_argument("--workers", type=int, default=1, help="edges: processes for the matching")
+                          help="edges: thresholds of each sweep (default 30; the BSDS benchmark's own count is "
+                               "99; each costs one matching per image and annotator)")
+    evaluate.add_argument("--workers", type=int, default=1, help="edges: processes for the matching (default 1)")
 
     fit = commands.add_parser("fit", parents=[quiet],
                               help="learn a cue's MRF parameters from a data set with ground truth, or the "

@@ -81,7 +81,8 @@ class Detection:
         The fraction of the view's corners (those inside the image) that an image corner matches: within
         3 px, its bisector within 30 degrees and its opening within 25 (evidence the significance counts).
     corners : float64 (C, 2)
-        The view's corners in the image.
+        The view's corners in the image, one per corner feature of the view: where more than two edges
+        meet, each pair of them is a corner, so one point can appear more than once.
     boundary : float64 (N, 2)
         The view's boundary points in the image.
     supported : bool (N,)
@@ -221,6 +222,13 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     -------
     list of Detection
         In the order they were kept: most significant first.
+
+    Notes
+    -----
+    The poses searched are rotations, scalings and shifts of the learned views (and their affine or
+    projective maps): a mirror image of an object is none of them, and may be found as a rotation of the
+    model that matches its outline but less of its markings (see :mod:`vmcl.recognize.models`). Learn the
+    mirror image as a model of its own where the two must be told apart.
     """
     machine = machine_for(machine)
     if not isinstance(library, Library):
