@@ -962,7 +962,9 @@ def _batch(args) -> int:
         print(f"{len(items)} item(s) on the {where}", file=sys.stderr)
         with _progress(args, len(items), "batch", unit="item") as step:
             statuses = distributed.run_batch(client, items, Path(args.out), config, progress=step)
-    rows: list[tuple[object, ...]] = [("item", "status", "ms", "error or note")]
+    # A done item's run notes are in its report, as a single run's are; the table says why an item failed or
+    # ran again.
+    rows: list[tuple[object, ...]] = [("item", "status", "ms", "error, or why it ran again")]
     rows += [(s.name, s.state, _fmt(s.total_ms, 0), s.detail) for s in statuses]
     counts = {state: sum(s.state == state for s in statuses) for state in ("done", "skipped", "failed")}
     _print_table(f"Batch into {args.out}: {counts['done']} done, {counts['skipped']} skipped (already there), "
