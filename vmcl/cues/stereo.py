@@ -23,6 +23,7 @@ from vmcl.cm import reduce as cm_reduce
 from vmcl.cues.base import CueModule, Measurement, RunInputs
 from vmcl.early import stereo
 from vmcl.early.disparity_range import estimate_range, with_given_ends
+from vmcl.early.filters import grey_field
 from vmcl.early.rectification import ROW_OFFSET_NOTE, row_alignment
 from vmcl.early.semiglobal import SemiGlobalMatch, match_semiglobal
 from vmcl.labels import Label
@@ -235,7 +236,9 @@ def _alignment_note(run: RunInputs, span: tuple[int, int], dense: _Dense | None)
     matchers search along rows, and their disparities then fail where the left-right check sees little. Each
     tracked corner starts at the dense matches' disparity (else the middle of the range)."""
     start = dense.disparity.get() if dense is not None else (span[0] + span[1]) / 2
-    found = row_alignment(run.left.get(), run.needed("right").get(), disparity=start)
+    # The views' grey read back, a third of their colour's bytes: the corners are tracked in grey.
+    views = [grey_field(run.machine, view).get() for view in (run.left, run.needed("right"))]
+    found = row_alignment(*views, disparity=start)
     if found is None or found.typical < ROW_OFFSET_NOTE:
         return None
     turned = (f"; the offset varies by {found.spread:.1f} px across the image (the views are turned or scaled "

@@ -36,6 +36,8 @@ rectification.md; the rule was set before the run). Real pairs come a little off
 
 CORNERS = 150
 """The most corners tracked."""
+HALVE_FROM = 256
+"""Views of at least this many pixels on their smaller side find their corners at half size."""
 WINDOW = 21
 """Lucas-Kanade's window, in pixels."""
 RETURN = 0.5
@@ -74,19 +76,29 @@ def _eight_bit_grey(image: np.ndarray, name: str) -> np.ndarray:
     real_host_array(image, name, ndims=(2, 3))
     if image.ndim == 3 and image.shape[2] != 3:
         raise InputValueError(f"{name} must be grey (H, W) or RGB (H, W, 3), got shape {image.shape}")
-    if image.dtype == np.uint16:
-        scaled = image / 257.0
+    if image.dtype == np.uint8:
+        eight = image
+    elif image.dtype == np.uint16:
+        eight = cv2.convertScaleAbs(image, alpha=1 / 257)  # levels / 257, rounded (non-negative: no sign lost)
     elif image.dtype.kind == "f":
         if not np.isfinite(image).all():
             raise InputValueError(f"{name} must not contain NaN or infinite values")
         check_unit_image(image, name)
-        scaled = image * 255.0
-    elif image.dtype == np.uint8:
-        scaled = image
+        # Clipped first: convertScaleAbs would fold the margin below 0 that check_unit_image allows upwards.
+        eight = cv2.convertScaleAbs(np.clip(image, 0, 1, dtype=np.float32), alpha=255)
     else:
         raise InputValueError(f"{name} must be uint8, uint16 or float brightness in [0, 1], got {image.dtype}")
-    eight = np.clip(np.round(scaled), 0, 255).astype(np.uint8)
     return cv2.cvtColor(eight, cv2.COLOR_RGB2GRAY) if eight.ndim == 3 else eight
+
+
+def _corners(grey: np.ndarray) -> np.ndarray | None:
+    """Up to :data:`CORNERS` of Shi and Tomasi's corners of an 8-bit view, float32 (N, 1, 2), or None. A view
+    of :data:`HALVE_FROM` or more on its smaller side is searched at half size (OpenCV's pyrDown, a quarter
+    of the work) and the corners scaled back: the tracker, which starts from them, places them at full size."""
+    if min(grey.shape) < HALVE_FROM:
+        return cv2.goodFeaturesToTrack(grey, CORNERS, 0.01, WINDOW // 3)
+    found = cv2.goodFeaturesToTrack(cv2.pyrDown(grey), CORNERS, 0.01, WINDOW // 6)
+    return None if found is None else (2 * found).astype(np.float32)
 
 
 def row_alignment(left: np.ndarray, right: np.ndarray, *, disparity: float | np.ndarray = 0.0
@@ -124,7 +136,7 @@ def row_alignment(left: np.ndarray, right: np.ndarray, *, disparity: float | np.
         disparity = check_real(disparity, "disparity")
     if min(height, width) < WINDOW:
         return None  # the window does not fit: nothing to track
-    corners = cv2.goodFeaturesToTrack(grey[0], CORNERS, 0.01, WINDOW // 3)
+    corners = _corners(grey[0])
     if corners is None or len(corners) < LEAST_TRACKS:
         return None
     levels = 0
