@@ -74,3 +74,15 @@ def test_the_machine_notes_rows_that_are_not_epipolar_lines(pair, machine, shift
     if noted:
         assert f"rows lie +{shift:.1f} px from the left's" in said[0]
     assert ROW_OFFSET_NOTE <= 3.0
+
+
+def test_a_stream_measures_the_rows_on_its_first_frame(machine):
+    # The rows' offset is the rig's: measured once a stream (its first frame), not at every frame's cost.
+    frames = scenes.render_sequence(scenes.preset("blocks", shape=(128, 128)), 3, seed=1, noise=0.01)
+    rights = [_moved(f.right, 3.0) for f in frames]
+    results = list(VisionMachine(Config.from_dict(DEPTH_ONLY), machine=machine).stream([f.left for f in frames], rights))
+    said = [any("rows lie" in note for note in r.notes) for r in results]
+    assert said == [True, False, False], [r.notes for r in results]
+    off = Config.from_dict({**DEPTH_ONLY, "time": {"enabled": False}})  # each frame then is run() on it
+    results = list(VisionMachine(off, machine=machine).stream([f.left for f in frames], rights))
+    assert all(any("rows lie" in note for note in r.notes) for r in results)

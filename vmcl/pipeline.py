@@ -1230,7 +1230,8 @@ class _Run:
         if self.carries and (self.c.time.predict_search or wants_prior) and "next" in others:
             carried = memory.carry("motion") if memory is not None else None
             prediction = carried.prediction if carried is not None else None
-        run = RunInputs(self.m, self.c, left, others_d.get("right"), others_d.get("next"), brightness, prediction)
+        run = RunInputs(self.m, self.c, left, others_d.get("right"), others_d.get("next"), brightness, prediction,
+                        new_view=not self.carries)
         measured = {}
         # A left image of one brightness holds nothing to match: the matchers' winners there are their scans'
         # first disparity or motion, confirmed by equally blind checks, which the MRF took as sure data.

@@ -41,6 +41,9 @@ class RunInputs:
         In a stream, the previous frame's flow carried to this one (NaN where time is broken), which
         predicts where the motion search looks (:attr:`vmcl.pipeline.TimeConfig.predict_search`) and
         pulls the variational refinement (:attr:`vmcl.pipeline.TimeConfig.flow_prior`).
+    new_view : bool
+        False in a stream whose frame carries the previous one's (one rig, the same view): what belongs to
+        the cameras rather than the scene (the stereo rows' alignment) was measured on an earlier frame.
     """
 
     machine: Machine
@@ -50,6 +53,7 @@ class RunInputs:
     next: cl_array.Array | None
     brightness: cl_array.Array
     motion_prediction: cl_array.Array | None = None
+    new_view: bool = True
 
     @property
     def width(self) -> int:

@@ -59,7 +59,9 @@ class StereoCue(CueModule):
     def measure(self, run: RunInputs) -> Measurement:
         span, note = _disparity_range(run)
         dense = _dense_match(run, span)
-        notes = tuple(n for n in (note, dense.note if dense else None, _alignment_note(run, span, dense)) if n)
+        # The rows' alignment is the rig's: a stream measures it on its first frame (and after a cut).
+        aligned = _alignment_note(run, span, dense) if run.new_view else None
+        notes = tuple(n for n in (note, dense.note if dense else None, aligned) if n)
         fields = {} if dense is None else dense.fields
         if not run.config.stereo.feature_matches:
             assert dense is not None  # the Config refuses a stereo section with neither matcher
