@@ -303,6 +303,27 @@ def motion_variational_fit_figures(f: ResultsFile) -> str:
             f"without the refinement (mean EPE {mean} against {mean_without}); off in the machine by default")
 
 
+def rectification_figures(f: ResultsFile) -> str:
+    table = f.table("shift", "mean bad-1")
+    rule = re.search(r"1\.5 times the aligned pairs' \([\d.]+\): ([\d.]+ px|none)", f.text)
+    if not rule:
+        raise LookupError("rectification.md states no threshold")
+    chosen = rule.group(1)
+    rising = " / ".join(table.cell({"shift": shift}, "mean bad-1") for shift in ("0", "1", "3"))
+    return (f"training pairs' mean bad-1 with the right view 0 / 1 / 3 px off: {rising}; the rows note's threshold "
+            f"chosen by the stated rule: {chosen}")
+
+
+def temporal_bound_figures(f: ResultsFile) -> str:
+    table = f.table("sequence", "previous pair carried")
+    cells = []
+    for row in table.rows:
+        name = row[table.index("sequence")]
+        cells.append(f"{name} {row[table.index('two frames (t, t + 1)')]} / {row[table.index('previous pair carried')]} "
+                     f"/ {row[table.index('best blend / two frames')]}x")
+    return "two-frame EPE / the previous pair's flow carried / the best blend's share: " + "; ".join(cells)
+
+
 def time_fit_figures(f: ResultsFile) -> str:
     chosen = re.search(r"Chosen \(lowest score\): (.*)\.", f.text)
     if not chosen:
@@ -683,6 +704,8 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
                 "and off; speed"), stereo_figures),
     ("disparity_range", "the disparity range found from the images, on rendered (training) and real (test) pairs",
      disparity_range_figures),
+    ("rectification", ("what a vertical offset between the views does to the depth machine on the training pairs, "
+                       "what vmcl.early.rectification measures, and its note's threshold"), rectification_figures),
     ("motion", ("the motion module's speed at 584x388; the defaults on every Middlebury, Yosemite and Sintel "
                 "sequence (two frames and streamed) beside DIS, Farneback and TV-L1; streaming's cost"),
      motion_figures),
@@ -694,6 +717,9 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
     ("motion_variational_fit", ("the motion cue's variational refinement (its iterations and smoothness weight) "
                                 "chosen on rendered scenes"), motion_variational_fit_figures),
     ("time_fit", "the temporal terms' defaults chosen on rendered sequences", time_fit_figures),
+    ("temporal_bound", ("how well the previous frame pair's flow, carried to the frame, predicts its motion on "
+                        "every real sequence with a past; the best any blend of the two could do"),
+     temporal_bound_figures),
     ("time_variational_fit", ("the variational refinement's pull towards the previous flow chosen on rendered "
                               "sequences"), time_variational_fit_figures),
     ("texture_fit", "the texture-edge candidates' noise factor chosen on rendered scenes; the photo mosaic",
