@@ -48,14 +48,13 @@ def carried(previous: np.ndarray, current: np.ndarray) -> np.ndarray:
 
 def closest_blend(first: np.ndarray, second: np.ndarray, truth: np.ndarray) -> np.ndarray:
     """Per pixel, the point of the segment from ``first`` to ``second`` nearest ``truth``: the best that any
-    blend of the two estimates with weights of its own at each pixel can do (``first`` where either is
-    unknown)."""
+    blend of the two estimates with weights of its own at each pixel can do (``first`` where they agree)."""
     step = second - first
     length = (step**2).sum(axis=-1)
     with np.errstate(invalid="ignore", divide="ignore"):
         share = np.clip(((truth - first) * step).sum(axis=-1) / length, 0, 1)
     share = np.where(np.isfinite(share), share, 0)[..., None]
-    return np.where(np.isfinite(second), first + share * step, first)
+    return first + share * step
 
 
 def main() -> None:
@@ -73,8 +72,11 @@ def main() -> None:
             continue  # no past
         frames = [read_image(path) for path in sequence.frames[t - 1:t + 2]]
         now = vm.run(frames[1], next=frames[2]).flow
+        # Where the carried flow has none (sampled outside the frame), the two-frame flow stands in for it, in
+        # every column alike: the columns then score the same pixels, none of them counted as no motion.
         before = carried(vm.run(frames[0], next=frames[1]).flow, now)
-        mean = np.where(np.isfinite(before), (now + before) / 2, now)
+        before = np.where(np.isfinite(before), before, now)
+        mean = (now + before) / 2
         fields = (now, before, mean, closest_blend(now, before, sequence.flow))
         rows.append((sequence.name, *(evaluate_flow(np.nan_to_num(flow), sequence.flow, mask=sequence.mask).epe
                                       for flow in fields)))
@@ -88,7 +90,8 @@ def main() -> None:
         ("Every sequence of the data sets with a frame before the ground truth's pair (t, t + 1). EPE (px) over "
          "the ground truth's pixels of: the machine's two-frame flow of the pair (its defaults, motion only); "
          "the two-frame flow of the pair before, (t - 1, t), carried to frame t (sampled where each pixel was, "
-         "x - u_t(x)): a prediction of constant velocity; and the mean of the two, the fusion of two equally "
+         "x - u_t(x); the two-frame flow where that lies outside the frame): a prediction of constant velocity; "
+         "and the mean of the two, the fusion of two equally "
          "trusted estimates (the two-frame flow alone where the carried one has none); and the best blend, at each "
          "pixel the point between the two nearest the truth, which no fusion of these two estimates (weights of "
          "its own at each pixel) can beat. A carried flow far worse than the two-frame one says the motion "

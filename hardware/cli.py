@@ -7,9 +7,10 @@ session, so that a freshly powered head (or simulator) can be homed and moved in
     vmcl-head --port /dev/ttyUSB0 estop
 
 Exit statuses: 0 done; 2 a usage or input error, one line: a command, number, gaze or lens setting
-vmcl-head cannot run as written, and a joint target beyond the travel the head reports; 1 the head
-refused a command or failed, one line: a refusal by a micro (an axis not homed, a latched fault such as
-an emergency stop, busy), a reply that never came or came corrupted, a port that would not open (the
+vmcl-head cannot run as written, and any target out of range, whether the host finds it beyond the travel
+the head reports or a micro answers OUT_OF_RANGE (an argument the caller can correct, hardware.errors.
+OutOfRange); 1 the head refused a command or failed, one line: a refusal by a micro for its state (an axis
+not homed, a latched fault such as an emergency stop, busy), a reply that never came or came corrupted, a port that would not open (the
 driver's HardwareError); 130 interrupted (Ctrl-C), the head told to stop. A refusal by the head is 1,
 not 2: the line was valid, and it is the head's state (not homed, a fault latched) that must change,
 with home, before the same line can run. A defect in vmcl-head itself ends with a Python traceback

@@ -639,6 +639,12 @@ def test_names_present_are_refused_shown_at_most_three(tmp_path):
                                                    "fields_000001.npz, fields_000002.npz and 2 more; write the "
                                                    "sequence into a new")):
         refuse_names_present(tmp_path, lambda name: name.startswith("fields_"), "the sequence")
+    # One of vmcl's names but for its case is that file where the file system ignores case: refused.
+    (tmp_path / "Report.HTML").write_bytes(b"")
+    with pytest.raises(InputError, match="already holds Report.HTML"):
+        refuse_names_present(tmp_path, {"report.html"}.__contains__, "the report")
+    with pytest.raises(InputError, match="folder must be a path"):
+        refuse_names_present(3, {"report.html"}.__contains__, "the report")
 
 
 def _grey_png(path, image):
@@ -697,8 +703,8 @@ def test_learn_names_a_library_that_is_a_file_before_learning(tmp_path, capsys, 
     (tmp_path / "afile").write_bytes(b"")
     for library in (tmp_path / "afile", tmp_path / "afile" / "sub"):
         assert main(["learn", "ell", str(example), "--library", str(library), "-q"]) == 2
-        assert capsys.readouterr().err == (f"vmcl: error: --library must be a directory (a library of model files), "
-                                           f"but {tmp_path / 'afile'} is a file\n")
+        assert capsys.readouterr().err == (f"vmcl: error: --library {library}: folder must be a directory (a library "
+                                           f"of model files), but {tmp_path / 'afile'} is a file\n")
 
 
 def test_a_run_with_models_writes_what_it_recognised_for_programs(tmp_path, capsys):

@@ -593,6 +593,9 @@ def test_a_setting_beyond_float32_is_refused_when_the_config_is_made(section, ke
     # Each reached the device as an infinity mid-run, with only NumPy's overflow warning.
     with pytest.raises(InputError, match=f"{section}.{key} must lie within float32's range"):
         Config.from_dict({section: {key: 1e308}})
+    # An integer too large for a float (TOML holds any): math.isfinite raised OverflowError on it.
+    with pytest.raises(InputError, match=f"{section}.{key} must lie within float32's range.*integer of 401 digits"):
+        Config.from_dict({section: {key: 10**400}})
 
 
 def test_the_recognition_section_sets_the_pose_and_the_candidate_budget(tmp_path, small_scene, monkeypatch):
@@ -626,6 +629,11 @@ def test_a_noise_rule_that_leaves_no_edge_is_said():
     assert given.edges.any() and not any("Canny found no brightness edge" in note for note in given.notes)
     blocks = scenes.render(scenes.preset("blocks", shape=(128, 128)), seed=0, noise=0.01)
     assert not any("Canny found no" in note for note in VisionMachine(Config()).run(blocks.left).notes)
+    # An image of one colour, or of colours of one brightness, has no brightness edge to find: no threshold
+    # is to blame.
+    red = np.zeros((64, 64, 3), np.float32)
+    red[..., 0] = 1.0
+    assert not any("Canny found no" in note for note in VisionMachine(Config()).run(red).notes)
 
 
 def test_quantile_thresholds_need_a_threshold():

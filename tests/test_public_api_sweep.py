@@ -564,6 +564,7 @@ TABLE: tuple[Entry, ...] = (
     _e("vmcl.report:strength_image", strength=arr((16, 16), "float32", "rand"), kinds={"strength": _A}),
     _e("vmcl.pictures:field_image", values=IMG, kinds={"values": _A}),
     _e("vmcl.pictures:to_uint8", rgb=arr((16, 16, 3)), kinds={"rgb": _A}),
+    _e("vmcl.pictures:eight_bits", image=arr((16, 16), "uint16"), kinds={"image": _A}),
     _e("vmcl.report:grouping_image", image=IMG, grouping=make("grouping"), kinds={"image": _A, "grouping": _O}),
     _e("vmcl.report:encode_png", rgb=arr((16, 16, 3), "uint8", "randint:256"), kinds={"rgb": _A}),
     _e("vmcl.report:images", result=make("result"), kinds={"result": _O}),

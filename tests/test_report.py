@@ -208,3 +208,14 @@ def test_a_cues_picture_names_are_plain_and_its_own(run, tmp_path, stem, match):
 def test_bad_pictures_are_refused_by_name(call, error, named):
     with pytest.raises(error, match=named):
         call()
+
+
+def test_eight_bits_takes_a_16_bit_picture_to_8_bits_rounded():
+    from vmcl.pictures import eight_bits
+
+    levels = np.array([[0, 128, 129, 257 * 100 + 128, 65535]], np.uint16)
+    np.testing.assert_array_equal(eight_bits(levels), np.round(levels / 257).astype(np.uint8))
+    eight = np.array([[3, 200]], np.uint8)
+    assert eight_bits(eight) is eight
+    with pytest.raises(InputError, match="image must be uint8 or uint16"):
+        eight_bits(np.zeros((2, 2), np.float32))

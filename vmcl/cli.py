@@ -369,11 +369,11 @@ def _learn(args) -> int:
     from vmcl.recognize import learn, model_path, save_model
     from vmcl.recognize.arguments import object_mask
 
-    try:  # said before the learning, not after it
+    try:  # said before the learning, not after it, of the option the user typed
         target = model_path(args.library, args.name)
-    except InputError as error:  # model_path names its argument folder: here it is --library
+    except InputError as error:  # model_path refuses the name, then the folder: the latter is --library
         message = str(error)
-        raise BadInput(f"--library{message[len('folder'):]}" if message.startswith("folder ") else message) from None
+        raise BadInput(f"--library {args.library}: {message}" if message.startswith("folder") else message) from None
     if target.exists() and not args.replace:
         raise BadInput(f"{target} exists: give --replace to replace it with the model learned now")
     images = [_read(path, "example") for path in args.images]

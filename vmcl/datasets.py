@@ -906,14 +906,19 @@ def _search_folders(root, depth: int, holds: Callable[[Path], bool]) -> tuple[li
     return sorted(found), level
 
 
+DEEPER_LEVELS = 4
+"""How many levels below a search's depth :func:`flow_folders_lacking` still looks for sequences to name."""
+
+
 def _found_deeper(tops: list[Path], holds: Callable[[Path], bool]) -> list[Path]:
-    """The folders below ``tops`` (at any depth, hidden ones skipped) that ``holds`` accepts; a folder
-    accepted is not searched further. Links to folders are not followed: a link to a folder above would
-    make the walk endless."""
+    """The folders below ``tops`` (at most :data:`DEEPER_LEVELS` levels, hidden ones skipped) that ``holds``
+    accepts; a folder accepted is not searched further. Bounded, so that a root high in a large tree is not
+    walked whole; links to folders are not followed (a link to a folder above would make the walk endless)."""
     found = []
     for top in tops:
         for here, subfolders, _ in os.walk(top):
-            subfolders[:] = sorted(name for name in subfolders if not name.startswith("."))
+            level = len(Path(here).relative_to(top).parts)
+            subfolders[:] = sorted(name for name in subfolders if not name.startswith(".")) if level < DEEPER_LEVELS else []
             if here != str(top) and holds(Path(here)):
                 found.append(Path(here))
                 subfolders.clear()
@@ -1312,8 +1317,8 @@ def flow_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
     sequences, each with what it lacks: a ground-truth flow and one numbered frame, not the two it joins, or
     numbered frames beside several flows, of which the truth cannot be told (folders of flows alone, such as
     Sintel's flow/ and gt/, are not sequences and are not listed); and the sequences that lie deeper than
-    the ``depth`` levels it searches, found by searching on below them, so that none is passed over in
-    silence. Sorted by folder.
+    the ``depth`` levels it searches (up to :data:`DEEPER_LEVELS` levels further), found by searching on below
+    them, so that none near is passed over in silence. Sorted by folder.
 
     Parameters
     ----------

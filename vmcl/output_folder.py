@@ -23,7 +23,7 @@ from glob import escape as glob_escape
 from pathlib import Path
 from typing import BinaryIO
 
-from vmcl.errors import InputValueError
+from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = ["MARKER", "is_whole", "output_folder", "refuse_names_present", "replace_file"]
 
@@ -144,8 +144,12 @@ def refuse_names_present(folder: Path, ours: Callable[[str], bool], what: str) -
     ``ours`` claims: vmcl never overwrites a file it did not write, and a link of such a name, even one to
     nothing, would be written through to its target. A folder that does not exist yet (or is no folder:
     the caller's own making of it says so) holds nothing."""
+    if not isinstance(folder, (str, os.PathLike)):
+        raise InputTypeError(f"folder must be a path, got {type(folder).__name__}")
+    # vmcl's names are lower case; a name that is one of them but for its case is the same file where the file
+    # system ignores case (macOS, Windows), and refused everywhere alike.
     try:
-        taken = sorted(entry.name for entry in Path(folder).iterdir() if ours(entry.name))
+        taken = sorted(entry.name for entry in Path(folder).iterdir() if ours(entry.name) or ours(entry.name.lower()))
     except (FileNotFoundError, NotADirectoryError):
         return
     if taken:

@@ -32,6 +32,17 @@ def to_uint8(rgb: np.ndarray) -> np.ndarray:
     return np.clip(np.round(rgb), 0, 255).astype(np.uint8)
 
 
+def eight_bits(image: np.ndarray) -> np.ndarray:
+    """A picture at 8 bits: a uint16 one's levels / 257, rounded (65535 becomes 255); a uint8 one as it is.
+    For what takes 8-bit images only (OpenCV's block matchers, its corner tracker)."""
+    real_host_array(image, "image", ndims=tuple(range(1, 4)), empty=True)
+    if image.dtype == np.uint8:
+        return image
+    if image.dtype != np.uint16:
+        raise InputValueError(f"image must be uint8 or uint16, got {image.dtype}")
+    return cv2.convertScaleAbs(image, alpha=1 / 257)  # rounded, as the levels are never negative
+
+
 def disparity_image(disparity: np.ndarray, *, vmin: float | None = None, vmax: float | None = None) -> np.ndarray:
     """Disparity colour-mapped (turbo: near is red, far is blue) with a labelled scale bar underneath.
 
@@ -141,4 +152,4 @@ def field_image(values: np.ndarray) -> np.ndarray:
     return np.repeat(to_uint8(scaled * 255)[..., None], 3, axis=2)
 
 
-__all__ = ["disparity_image", "field_image", "flow_image", "to_uint8"]
+__all__ = ["disparity_image", "eight_bits", "field_image", "flow_image", "to_uint8"]

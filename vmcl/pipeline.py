@@ -68,6 +68,7 @@ from vmcl.early import (
     variational,
     weighted_median,
 )
+from vmcl.early.filters import GREY_WEIGHTS
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.group import Grouping, group, saliency_strength, structural_saliency
 from vmcl.group.structural_saliency import MAX_ITERATIONS as MAX_SALIENCY_ITERATIONS
@@ -84,6 +85,7 @@ __all__ = [
     "FLOAT_MARGIN",
     "SALIENCY",
     "SMALL_RANGE",
+    "VIEW_RECHECK",
     "WARM_SCHEDULE",
     "ColourConfig",
     "Config",
@@ -118,6 +120,11 @@ _FIELD_TYPES = {"bool": ((bool, np.bool_), "true or false"),
                 "Mapping[str, Any]": ((Mapping,), "a table of keys")}
 
 
+VIEW_RECHECK = 30
+"""In a stream that carries time, the frames at which the cameras' own state (the stereo rows' alignment) is
+measured again: every this many (and the first, and after a cut)."""
+
+
 def _check_field_types(section: str, values: Any) -> None:
     """Refuse a section field of the wrong type, naming ``section.key``, when the Config is made."""
     for spec in dataclasses.fields(values):
@@ -132,12 +139,15 @@ def _check_field_types(section: str, values: Any) -> None:
         is_bool = isinstance(value, (bool, np.bool_))
         if any(isinstance(value, _FIELD_TYPES[kind][0]) and (kind == "bool" or not is_bool)
                for kind in kinds if kind != "None"):
+            # abs() before isfinite: an integer too large for a float (TOML holds any) compares exactly, where
+            # math.isfinite would raise OverflowError on it.
             if ("float" in kinds and not is_bool and isinstance(value, (int, float, np.integer, np.floating))
-                    and math.isfinite(value) and abs(value) > FLOAT32_MAX):
+                    and abs(value) > FLOAT32_MAX and not (isinstance(value, float) and math.isinf(value))):
                 # Every real setting reaches the device as a float32 (or meets one there): beyond its range it
                 # would become an infinity mid-run, with only NumPy's overflow warning.
+                shown = repr(value) if len(repr(value)) <= 24 else f"an integer of {len(str(abs(value)))} digits"
                 raise InputValueError(f"{section}.{spec.name} must lie within float32's range (magnitude at most "
-                                      f"{FLOAT32_MAX:.4g}), in which the device computes, got {value:g}")
+                                      f"{FLOAT32_MAX:.4g}), in which the device computes, got {shown}")
             continue
         expected = " or ".join("None" if kind == "None" else _FIELD_TYPES[kind][1] for kind in kinds)
         raise InputTypeError(f"{section}.{spec.name} must be {expected}, got {value!r} ({type(value).__name__})")
@@ -1230,8 +1240,11 @@ class _Run:
         if self.carries and (self.c.time.predict_search or wants_prior) and "next" in others:
             carried = memory.carry("motion") if memory is not None else None
             prediction = carried.prediction if carried is not None else None
+        # A stream's frames come from one rig: what belongs to the cameras is measured again every
+        # VIEW_RECHECK frames (a first frame too dark or blank to measure is not the stream's last word).
+        new_view = not self.carries or memory is None or memory.frame % VIEW_RECHECK == 0
         run = RunInputs(self.m, self.c, left, others_d.get("right"), others_d.get("next"), brightness, prediction,
-                        new_view=not self.carries)
+                        new_view=new_view)
         measured = {}
         # A left image of one brightness holds nothing to match: the matchers' winners there are their scans'
         # first disparity or motion, confirmed by equally blind checks, which the MRF took as sure data.
@@ -1348,7 +1361,10 @@ class _Run:
         """A note when the noise rule's thresholds left no edge in an image that is not of one brightness:
         they come from the median gradient, which a texture filling the image raises above every edge, and
         every MRF is then coupled to no brightness edge."""
-        if np.ptp(image) == 0 or int(cm_reduce.reduce(found, "sum", machine=self.m).get()):
+        # The grey the edges are found in: an image of one colour, or whose colour changes at one brightness,
+        # has no brightness edge to find, and no threshold is to blame.
+        grey = image @ np.asarray(GREY_WEIGHTS, np.float32) if image.ndim == 3 else image
+        if np.ptp(grey) < 1e-6 or int(cm_reduce.reduce(found, "sum", machine=self.m).get()):
             return
         self.notes.append("edges: Canny found no brightness edge: the noise rule's thresholds (from the median "
                           "gradient, which a texture filling the image raises) lie above every gradient, so the "

@@ -7,10 +7,10 @@ The folder (one that :func:`vmcl.output_folder.output_folder` prepared) receives
 - ``cartoon.mp4``, ``flow.mp4``, ``disparity.mp4``: the labelled cartoon (:func:`vmcl.report.labels_image`),
   the restored flow in the Middlebury colour wheel and the restored disparity (turbo), one video frame per
   frame, for the fields the run made: flow.mp4 has one frame fewer than cartoon.mp4, since the last frame
-  has no next frame to move to (a sequence of one frame has no flow.mp4). Colour scales are fixed by the first frame that has the field
-  (its largest speed, at least :data:`LEAST_FLOW_SCALE` px per frame so that a clip that starts still is
-  not drawn at full colour for its noise; its disparity range), so that colours mean the same speed or
-  depth throughout. A frame of odd width or height is padded with a black row or column (MPEG-4 frames
+  has no next frame to move to (a sequence of one frame has no flow.mp4). Colour scales are fixed by the
+  first frame that has the field (its largest speed, at least :data:`LEAST_FLOW_SCALE` px per frame so that
+  a clip that starts still is not drawn at full colour for its noise; its disparity range), so that colours
+  mean the same speed or depth throughout. A frame of odd width or height is padded with a black row or column (MPEG-4 frames
   have even sides; the writer would crop the last row and column);
 - ``sequence.md``: the videos with their frame rate and frame counts, the notes on the whole sequence (gaps
   in its numbering, the rate's source), then per frame (counted from 0), the file it came from, the time

@@ -50,6 +50,7 @@ from vmcl.early.disparity_range import estimate_range
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.metrics import evaluate_disparity
+from vmcl.pictures import eight_bits
 
 __all__ = [
     "BM_BLOCK",
@@ -329,15 +330,11 @@ def _refusing(reason: str) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
     return compute
 
 
-def _eight_bits(image: np.ndarray) -> np.ndarray:
-    """A 16-bit view at 8 bits (levels / 257, rounded); any other view as it is. Each view by its own type:
-    a pair may hold a 16-bit and an 8-bit view, both of which the machine takes."""
-    return np.round(image / 257.0).astype(np.uint8) if image.dtype == np.uint16 else image
-
-
 def _opencv_method(name: str, matcher: cv2.StereoMatcher, note: str) -> StereoMethod:
     def compute(left: np.ndarray, right: np.ndarray) -> np.ndarray:
-        return opencv_disparity(matcher, _eight_bits(left), _eight_bits(right))
+        # Each view by its own type: a pair may hold a 16-bit and an 8-bit view, both of which vmcl takes.
+        return opencv_disparity(matcher, *(eight_bits(view) if view.dtype == np.uint16 else view
+                                           for view in (left, right)))
 
     return StereoMethod(name, compute, baseline=True, note=note)
 

@@ -86,6 +86,7 @@ class Memory:
         self.broken_share = 0.0
         self.carried: dict[str, Carried] = {}
         self.previous_grey: cl_array.Array | None = None
+        self.frame = -1  # the index of the frame begun last in the stream
 
     def comparison_grey(self, image: cl_array.Array) -> cl_array.Array:
         """The smoothed grey brightness of a device image in [0, 1], as frames are compared."""
@@ -98,6 +99,7 @@ class Memory:
         Sets :attr:`broken` (uint8 (H, W), 1 where time is broken) and :attr:`broken_share`.
         """
         m = self.machine
+        self.frame += 1
         grey = self.comparison_grey(image)
         previous, self.grey = self.grey, grey
         self.next_fields, self.carried = {}, {}

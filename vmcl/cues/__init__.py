@@ -149,6 +149,8 @@ def refine_stage_of(cue: CueModule, config: Any) -> str | None:
     """``cue``'s refinement stage under ``config`` (:meth:`CueModule.refine_stage`), refused unless it is a
     stage name (a str) or None. Whether the name is free is the caller's to check: :func:`register` knows
     the registry, a :class:`vmcl.pipeline.VisionMachine` its own run's stages."""
+    if not isinstance(cue, CueModule):
+        raise InputTypeError(f"cue must be a vmcl.cues.CueModule, got {type(cue).__name__}")
     stage = cue.refine_stage(config)
     if stage is not None and not isinstance(stage, str):
         raise InputTypeError(f"cue {cue.name!r}: refine_stage() must return a stage name (str) or None, got "

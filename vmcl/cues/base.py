@@ -43,7 +43,9 @@ class RunInputs:
         pulls the variational refinement (:attr:`vmcl.pipeline.TimeConfig.flow_prior`).
     new_view : bool
         False in a stream whose frame carries the previous one's (one rig, the same view): what belongs to
-        the cameras rather than the scene (the stereo rows' alignment) was measured on an earlier frame.
+        the cameras rather than the scene (the stereo rows' alignment) was measured on an earlier frame. A
+        stream measures it on its first frame, after a cut, and every
+        :data:`vmcl.pipeline.VIEW_RECHECK` frames.
     """
 
     machine: Machine

@@ -25,6 +25,7 @@ import numpy as np
 
 from vmcl.cm.core import check_real, check_unit_image, real_host_array
 from vmcl.errors import InputValueError
+from vmcl.pictures import eight_bits
 
 __all__ = ["ROW_OFFSET_NOTE", "RowAlignment", "row_alignment"]
 
@@ -79,7 +80,7 @@ def _eight_bit_grey(image: np.ndarray, name: str) -> np.ndarray:
     if image.dtype == np.uint8:
         eight = image
     elif image.dtype == np.uint16:
-        eight = cv2.convertScaleAbs(image, alpha=1 / 257)  # levels / 257, rounded (non-negative: no sign lost)
+        eight = eight_bits(image)
     elif image.dtype.kind == "f":
         if not np.isfinite(image).all():
             raise InputValueError(f"{name} must not contain NaN or infinite values")
