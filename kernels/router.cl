@@ -17,6 +17,12 @@
 #define FOLD(acc, v) (v)
 #elif COMBINE_OP == OP_PLUS
 #define FOLD(acc, v) ((acc) + (v))
+/* Floats fold by fmax and fmin, which pass over NaN (as reduce.cl and scan.cl do): OpenCL's max and min
+ * leave NaN undefined, and on PoCL a NaN reset the fold, so the answer hung on the senders' order. */
+#elif COMBINE_OP == OP_MAX && T_IS_FLOAT
+#define FOLD(acc, v) fmax((acc), (v))
+#elif COMBINE_OP == OP_MIN && T_IS_FLOAT
+#define FOLD(acc, v) fmin((acc), (v))
 #elif COMBINE_OP == OP_MAX
 #define FOLD(acc, v) max((acc), (v))
 #elif COMBINE_OP == OP_MIN

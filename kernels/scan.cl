@@ -25,21 +25,30 @@
 #define MIN_OF min
 #endif
 
+/* IDENTITY starts every running state; EXCLUSIVE_START is what an exclusive scan writes where nothing
+ * precedes (the documented identity). */
 #if OP == OP_PLUS
 #define COMBINE(a, b) ((a) + (b))
 #define IDENTITY ((T)0)
+#define EXCLUSIVE_START ((T)0)
 /* Floats take fmax and fmin, which pass over NaN (as reduce.cl's max and min do): max and min return
- * their first operand when the comparison fails, so a NaN's effect depended on the scan's order. */
+ * their first operand when the comparison fails, so a NaN's effect depended on the scan's order. Their
+ * running state starts at NaN, which fmax and fmin pass over too: a state started at -inf made a line's
+ * leading NaN -inf, a value not in the input, where the Hillis-Steele scan (no starting state) gave NaN;
+ * now both give NumPy's fmax.accumulate. */
 #elif OP == OP_MAX
 #define COMBINE(a, b) MAX_OF((a), (b))
-#define IDENTITY (T_LOWEST)
+#define IDENTITY (T_IS_FLOAT ? (T)NAN : T_LOWEST)
+#define EXCLUSIVE_START (T_LOWEST)
 #elif OP == OP_MIN
 #define COMBINE(a, b) MIN_OF((a), (b))
-#define IDENTITY (T_HIGHEST)
+#define IDENTITY (T_IS_FLOAT ? (T)NAN : T_HIGHEST)
+#define EXCLUSIVE_START (T_HIGHEST)
 #elif OP == OP_COPY
 #define COMBINE(a, b) (a)
 /* Exclusive copy-scan gives 0 at each segment start, where nothing precedes. */
 #define IDENTITY ((T)0)
+#define EXCLUSIVE_START ((T)0)
 #endif
 
 #if SEGMENTED
@@ -66,7 +75,7 @@
         T v = x[i];                                                                        \
         int start = IS_START(K, i);                                                        \
         T next = start ? v : COMBINE(s##K, v);                                             \
-        if (WRITE) out[i] = EXCLUSIVE ? (start ? IDENTITY : s##K) : next;                  \
+        if (WRITE) out[i] = EXCLUSIVE ? (start || !h##K ? EXCLUSIVE_START : s##K) : next;  \
         f##K |= FLAG(flags, i);                                                            \
         s##K = next;                                                                       \
         h##K = 1;                                                                          \
@@ -187,7 +196,7 @@ __kernel void scan_cols(__global const T *x, __global const uchar *flags, __glob
 #endif
         VT next = select(COMBINE(s, v), v, start);
 #if EXCLUSIVE
-        VSTORE(select(s, (VT)IDENTITY, start), out + ((size_t)p * H) * W + col + off);
+        VSTORE(select(s, (VT)EXCLUSIVE_START, start), out + ((size_t)p * H) * W + col + off);
 #else
         VSTORE(next, out + ((size_t)p * H) * W + col + off);
 #endif
@@ -262,6 +271,6 @@ __kernel void shift_exclusive(__global const T *inclusive, __global const uchar 
     long i = get_global_id(0);
     if (i >= size) return;
     long pos = (i / stride) % n;
-    out[i] = (pos == 0 || FLAG(flags, i)) ? IDENTITY : inclusive[i - stride];
+    out[i] = (pos == 0 || FLAG(flags, i)) ? EXCLUSIVE_START : inclusive[i - stride];
 }
 #endif

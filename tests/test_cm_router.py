@@ -150,3 +150,14 @@ def test_a_float_fill_beyond_float32_names_what_may_be_given():
     with pytest.raises(InputError, match="within float32's range .* or be NaN or an infinity, got -1e"):
         send(np.array([3.0], np.float32), np.array([0], np.int32), size=2, fill=-1e39)
     assert np.isinf(send(np.array([3.0], np.float32), np.array([0], np.int32), size=2, fill=np.inf)[1])
+
+
+@pytest.mark.parametrize("values, largest, smallest", [([1, np.nan, 2], 2, 1), ([2, np.nan, 1], 2, 1),
+                                                       ([5, 3, np.nan], 5, 3), ([np.nan, 5, 3], 5, 3),
+                                                       ([np.nan, np.nan], np.nan, np.nan)])
+def test_float_max_and_min_pass_over_nan_whatever_the_senders_order(values, largest, smallest, machine):
+    # A NaN reset the fold: [1, nan, 2] gave min 2, and the answer hung on the senders' order.
+    values = np.array(values, np.float32)
+    to_one = np.zeros(len(values), np.int32)
+    np.testing.assert_array_equal(send(values, to_one, size=1, combine="max", machine=machine), [largest])
+    np.testing.assert_array_equal(send(values, to_one, size=1, combine="min", machine=machine), [smallest])

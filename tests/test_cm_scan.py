@@ -179,3 +179,21 @@ def test_the_shared_checks_refuse_huge_numbers_and_pass_empty_images():
     check_unit_image(np.zeros((0, 4), np.float32), "image")  # nothing to be on the wrong scale
     with pytest.raises(InputValueError, match="image: float images hold brightness in"):
         check_unit_image(np.full((2, 2), 255.0, np.float32), "image")
+
+
+@pytest.mark.parametrize("method", ["work_efficient", "hillis_steele"])
+def test_float_max_and_min_pass_over_nan_as_numpy_fmax_and_fmin(method, machine):
+    # A line's leading NaN came out -inf (the running state's start), a value not in the input, and the two
+    # methods disagreed.
+    rng = np.random.default_rng(5)
+    x = rng.random((6, 300)).astype(np.float32)
+    x[rng.random(x.shape) < 0.4] = np.nan
+    x[2] = np.nan
+    for op, accumulate in (("max", np.fmax.accumulate), ("min", np.fmin.accumulate)):
+        got = scan(x, op=op, method=method, machine=machine)
+        np.testing.assert_array_equal(got, accumulate(x, axis=1))
+        if method == "work_efficient":
+            np.testing.assert_array_equal(scan(x.T.copy(), op=op, axis=-2, machine=machine), accumulate(x.T, axis=0))
+        shifted = scan(x, op=op, exclusive=True, method=method, machine=machine)
+        assert (shifted[:, 0] == (-np.inf if op == "max" else np.inf)).all()
+        np.testing.assert_array_equal(shifted[:, 1:], accumulate(x, axis=1)[:, :-1])

@@ -111,8 +111,9 @@ def send(values: ArrayLike, address: ArrayLike, *, size: int | tuple[int, ...], 
     combine : {"overwrite", "sum", "max", "min", "and", "or"}
         How messages to one destination combine. "overwrite": the sender with the highest index wins.
         "sum": in ``values``' dtype, so integer sums wrap on overflow as the hardware's adds do (give wider
-        values, int32 for uint8 messages, where they may). "and" / "or": bitwise, integer types only
-        (logical on 0/1 fields).
+        values, int32 for uint8 messages, where they may). "max" / "min" of floats pass over NaN, as
+        NumPy's fmax and fmin (and :func:`vmcl.cm.reduce.reduce`) do: NaN only where every message is NaN.
+        "and" / "or": bitwise, integer types only (logical on 0/1 fields).
     fill : scalar
         What destinations that receive no message hold: an integer within the range of integer
         ``values``, a real number (or NaN, or an infinity) within float32's range for float32 ones.

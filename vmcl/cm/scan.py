@@ -111,6 +111,10 @@ def scan(x: ArrayLike, *, op: Op = "plus", axis: int = -1, exclusive: bool = Fal
 
     Notes
     -----
+    Float max and min pass over NaN, as NumPy's fmax and fmin do: an inclusive scan is
+    ``np.fmax.accumulate`` (``fmin``) within each segment, NaN only where every element so far is NaN, with
+    either method and along either axis; an exclusive scan's element after only NaNs is NaN.
+
     Float sums accumulate in float32 serially within each chunk, and chunk totals are added as carries,
     so the rounding differs from a serial loop's; it is no worse than ``np.cumsum``'s in float32
     (relative error against a float64 sum, on uniform values). Integer plus-scans wrap
