@@ -157,3 +157,14 @@ def test_a_value_that_does_not_vote_does_not_reach_the_result(lanes, machine):
     found = weighted_median(values, np.zeros((3, 21), np.float32), low=0, high=4, voters=voters, radius=1,
                             machine=machine)
     np.testing.assert_array_equal(found, 0)  # the infinite pixel itself too: its voters are its neighbours
+
+
+@pytest.mark.parametrize("value", [1e37, 1e39])
+def test_values_whose_weighted_sums_overflow_float32_are_refused(value, machine):
+    # A constant field of 1e37 came out as infinity everywhere (its weighted sums overflowed float32), and a
+    # float64 one beyond float32's range was cast to infinity with only NumPy's warning.
+    image = np.full((9, 12), 0.5, np.float32)
+    with pytest.raises(InputValueError, match="values reach .* they must stay within"):
+        weighted_median(np.full((9, 12), value), image, low=0, high=1, radius=3, machine=machine)
+    found = weighted_median(np.full((9, 12), 1e30), image, low=0, high=1, radius=3, machine=machine)
+    np.testing.assert_allclose(found, 1e30, rtol=1e-6)

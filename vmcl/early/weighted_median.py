@@ -76,7 +76,9 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
     Parameters
     ----------
     values : float32 (H, W) or (H, W, 2) array or device array
-        The field (e.g. a disparity map, or a flow's two components), NaN where it has no value; each
+        The field (e.g. a disparity map, or a flow's two components), NaN where it has no value; its values
+        times the voters a pixel must stay within float32's range (the kernels sum them in float32; a host
+        field is checked); each
         component takes its own median, with the same weights (found once for both).
     image : (H, W) or (H, W, 3) array or device array; uint8, uint16 or float
         The brightness the weights follow, grey or RGB, its levels scaled to [0, 1] by its type's range
@@ -125,8 +127,12 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
         ``low > high``, a parameter outside its range.
     """
     machine = machine_for(machine)
+    largest = None  # a host field's largest magnitude, checked once the window's voters are known
     if isinstance(values, np.ndarray) and values.dtype.kind == "f":
-        values = values.astype(np.float32, copy=False)
+        finite = np.isfinite(values)
+        largest = float(np.abs(values[finite]).max()) if finite.any() else 0.0
+        with np.errstate(over="ignore"):
+            values = values.astype(np.float32, copy=False)
     data, host = field(values, "values", machine, ndims=(2, 3), dtypes=(np.float32,))
     height, width = data.shape[:2]
     components = data.shape[2] if data.ndim == 3 else 1
@@ -172,6 +178,13 @@ def weighted_median(values: ArrayLike, image: ArrayLike, *, low: float, high: fl
               np.float32(1 / _LEVELS[picture.dtype]), np.float32(low - 0.5 * step), np.float32(step), np.int32(bins),
               np.int32(stride))
     steps = reach // stride
+    # The kernels sum each voter's weight (at most 1) times its value in float32: a field whose values times
+    # the voters overflow it came out as an infinity (a float64 one beyond float32 too).
+    limit = float(np.finfo(np.float32).max) / (2 * steps + 1) ** 2 / 2
+    if largest is not None and largest > limit:
+        raise InputValueError(f"values reach {largest:.3g}: with {(2 * steps + 1) ** 2} voters a pixel (radius "
+                              f"{radius}, stride {stride}) they must stay within {limit:.3g}, as their weighted sums "
+                              "are float32")
     if (2 * steps + 1) ** 2 <= MAX_KEPT_VOTERS:
         kernel = vector_kernel(machine, "weighted_median", "weighted_median_bisect", CHANNELS=channels,
                                COMPS=components, MAX_VOTERS=MAX_KEPT_VOTERS)
