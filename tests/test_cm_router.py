@@ -161,3 +161,13 @@ def test_float_max_and_min_pass_over_nan_whatever_the_senders_order(values, larg
     to_one = np.zeros(len(values), np.int32)
     np.testing.assert_array_equal(send(values, to_one, size=1, combine="max", machine=machine), [largest])
     np.testing.assert_array_equal(send(values, to_one, size=1, combine="min", machine=machine), [smallest])
+
+
+def test_numpy_and_device_arrays_are_not_mixed(machine):
+    # The result's kind silently followed the first argument's.
+    field = np.arange(4, dtype=np.float32)
+    address = np.array([3, 0], np.int32)
+    with pytest.raises(InputError, match="field and address must both be NumPy arrays or both device arrays"):
+        get(field, machine.to_device(address), machine=machine)
+    with pytest.raises(InputError, match="values and address must both be NumPy arrays or both device arrays"):
+        send(machine.to_device(field[:2]), address, size=4, machine=machine)

@@ -501,3 +501,9 @@ def test_canny_refuses_what_float32_or_the_device_cannot_hold(machine):
     side = max(32768, math.isqrt(machine.device.max_mem_alloc_size // 4) + 1)
     with pytest.raises(ValueError, match=f"canny of a {side} x {side} image needs"):
         canny(np.zeros((side, side), np.uint8), sigma=1.0, machine=machine)
+
+
+def test_interpolate_must_be_a_bool(machine):
+    # "no" was taken as True.
+    with pytest.raises(TypeError, match="interpolate"):
+        canny(np.zeros((16, 16), np.float32), interpolate="no", machine=machine)

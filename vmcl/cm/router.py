@@ -90,7 +90,8 @@ def get(field: ArrayLike, address: ArrayLike, *, machine: Machine | None = None)
     """
     machine = machine_for(machine)
     data, host = core.field(field, "field", machine, ndims=_ANY_NDIM, dtypes=_DTYPES)
-    where, _ = _addresses(address, data.size, machine, f"field has {data.size} elements")
+    where, address_host = _addresses(address, data.size, machine, f"field has {data.size} elements")
+    core.check_same_kind("field", host, "address", address_host)  # what comes back follows what went in
     out = machine.empty(where.shape, data.dtype)
     machine.launch(machine.kernel("router", "gather", COMBINE_OP=100, **type_defines(data.dtype)), (where.size,),
                    data, where, out, np.int64(where.size))
@@ -145,7 +146,8 @@ def send(values: ArrayLike, address: ArrayLike, *, size: int | tuple[int, ...], 
     machine.require_memory(f"router.send to {destinations} destinations",
                            destinations * (3 * int32 + data.dtype.itemsize) + data.size * int32,
                            max(destinations, data.size) * max(int32, data.dtype.itemsize))
-    where, _ = _addresses(address, destinations, machine, f"size gives {destinations} destinations")
+    where, address_host = _addresses(address, destinations, machine, f"size gives {destinations} destinations")
+    core.check_same_kind("values", host, "address", address_host)  # what comes back follows what went in
     if where.shape != data.shape:
         raise InputValueError(f"address must have the shape of values {data.shape}, got {where.shape}")
     n = data.size

@@ -409,6 +409,7 @@ def canny(image: ArrayLike, *, sigma: float = DEFAULT_SIGMA, low_threshold: floa
     check_choice(noise, "noise", ("global", "local"))
     return_gradient = check_bool(return_gradient, "return_gradient")
     use_quantiles = check_bool(use_quantiles, "use_quantiles")
+    interpolate = check_bool(interpolate, "interpolate")
     low = _threshold_value(low_threshold, "low_threshold", use_quantiles)
     high = _threshold_value(high_threshold, "high_threshold", use_quantiles)
     if low is not None and high is not None and low > high:
