@@ -171,3 +171,9 @@ def test_numpy_and_device_arrays_are_not_mixed(machine):
         get(field, machine.to_device(address), machine=machine)
     with pytest.raises(InputError, match="values and address must both be NumPy arrays or both device arrays"):
         send(machine.to_device(field[:2]), address, size=4, machine=machine)
+
+
+def test_a_run_of_dimension_counts_is_said_as_a_range(machine):
+    # The message listed "1 or 2 or 3 or ... or 32".
+    with pytest.raises(InputError, match=r"field must have 1 to 32 dimensions, got shape \(1, 1"):
+        get(np.zeros((1,) * 33, np.float32), np.zeros(1, np.int32), machine=machine)

@@ -139,8 +139,7 @@ def field(x: Any, name: str, machine: Machine, *, ndims: tuple[int, ...],
     else:
         raise InputTypeError(f"{name} must be a NumPy array or a pyopencl.array.Array, got {type(x).__name__}")
     if x.ndim not in ndims:
-        wanted = " or ".join(str(n) for n in ndims)
-        raise InputValueError(f"{name} must have {wanted} dimensions, got shape {x.shape}")
+        raise InputValueError(f"{name} must have {_dimensions(ndims)} dimensions, got shape {x.shape}")
     if x.size == 0:
         raise InputValueError(f"{name} must not be empty, got shape {x.shape}")
     if device is None:
@@ -322,6 +321,13 @@ def check_unmasked(x: Any, name: str) -> None:
                               "or pass its data")
 
 
+def _dimensions(ndims: tuple[int, ...]) -> str:
+    """The dimension counts allowed, as a message says them: "2 or 3", or "1 to 32" for a longer run."""
+    if len(ndims) > 3 and list(ndims) == list(range(ndims[0], ndims[-1] + 1)):
+        return f"{ndims[0]} to {ndims[-1]}"
+    return " or ".join(str(n) for n in ndims)
+
+
 def check_real_dtype(x: Any, name: str) -> np.ndarray:
     """``x`` checked as a NumPy array of real numbers (bool, integer or float); complex, object, string
     and other dtypes are refused, never converted."""
@@ -346,8 +352,7 @@ def real_host_array(x: Any, name: str, *, ndims: tuple[int, ...], empty: bool = 
     dimensions, and not empty unless ``empty``."""
     check_real_dtype(x, name)
     if x.ndim not in ndims:
-        wanted = " or ".join(str(n) for n in ndims)
-        raise InputValueError(f"{name} must have {wanted} dimensions, got shape {x.shape}")
+        raise InputValueError(f"{name} must have {_dimensions(ndims)} dimensions, got shape {x.shape}")
     if x.size == 0 and not empty:
         raise InputValueError(f"{name} must not be empty, got shape {x.shape}")
     return x
