@@ -212,3 +212,26 @@ def test_infinite_values_are_refused_not_taken_as_unknown(machine, where):
     beyond[0, 0] = 1e300  # an infinity in float32, where the sums are computed
     with pytest.raises(InputValueError, match="field must not hold infinities or values beyond float32's range"):
         fit_pseudolikelihood([Example(beyond)], machine=machine)
+
+
+def test_parameters_the_examples_say_nothing_of_are_not_fitted(machine):
+    """Edges given but none set, and lines that make no crossing or turn: edge_gain, crossing and turn were
+    "fitted" at 0 with the ridge's standard error (1 / sqrt(ridge * sites)); they are held, listed as
+    uninformed, and the model keeps its base's values. The fitted parameters are those of a fit that holds the
+    three itself (the pseudolikelihood does not depend on them)."""
+    rng = np.random.default_rng(0)
+    f = np.zeros((32, 32), np.float32)
+    f[:, 16:] = 5
+    g = f + 0.3 * rng.normal(size=f.shape).astype(np.float32)
+    example = Example(f, np.abs(np.diff(f, axis=1)) > 1, np.abs(np.diff(f, axis=0)) > 1, data=g,
+                      edges=np.zeros(f.shape))
+    fit = fit_pseudolikelihood([example], machine=machine)
+    assert set(fit.uninformed) == {"edge_gain", "turn", "crossing"}
+    assert not set(fit.uninformed) & (set(fit.fitted) | set(fit.standard_error))
+    held = fit_pseudolikelihood([example], fixed=dict.fromkeys(fit.uninformed, 0.0), machine=machine)
+    for name in held.fitted:
+        assert fit.theta[name] == pytest.approx(held.theta[name], rel=1e-6, abs=1e-9), name
+    base = mrf.EnergyModel(edge_gain=0.3, prior=mrf.LinePrior(turn=0.4, crossing=2.5))
+    model = fit.model(base)
+    assert (model.edge_gain, model.prior.turn, model.prior.crossing) == (0.3, 0.4, 2.5)
+    assert model.prior.end == pytest.approx(fit.theta["end"] / fit.theta["coupling"] / model.beta)

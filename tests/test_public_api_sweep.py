@@ -413,6 +413,7 @@ TABLE: tuple[Entry, ...] = (
        background=0.5, noise=0.0, seed=0, antialias=True, margin=2,
        kinds={"background": _N, "noise": _N, "antialias": _B}),
     _e("vmcl.fitted:check_writable", path=path("new"), kinds={"path": _P}),
+    _e("vmcl.fitted:config_sha256", settings={"edges": {"sigma": 1.0}}, kinds={"settings": _O}),
     _e("vmcl.fitted:check_fitted", values={"edges": {"sigma": 1.0}}, source="x.toml",
        kinds={"values": "mapping"}),
     _e("vmcl.mrf:restore", data=arr((12, 12)), confidence=None, edges=None, kind="smooth", method="icm",
@@ -701,7 +702,7 @@ EXEMPT = {
     # Hash and write what vmcl itself made (fit_cue's tables, the files it read); tests/test_learn_fit.py.
     "vmcl.fitted:parameters_sha256", "vmcl.fitted:files_sha256", "vmcl.fitted:code_sha256", "vmcl.fitted:write_fitted",
     "vmcl.fitted:fitted_record", "vmcl.fitted:write_fitted_json", "vmcl.fitted:check_fitted_json",
-    "vmcl.fitted:with_data",
+    "vmcl.fitted:with_data", "vmcl.fitted:FittedVersionWarning",
     # Records of vmcl.group and the scenes it is tested on, made by the calls above.
     "vmcl.group:Curve", "vmcl.group:Curves", "vmcl.group:Junctions", "vmcl.group:Grouping",
     "vmcl.group:StructuralSaliency", "vmcl.scenes:ClutterDisplay", "vmcl.scenes:Junction", "vmcl.scenes:OcclusionScene",

@@ -175,6 +175,23 @@ def _read(path: str, what: str) -> np.ndarray:
 
 
 def _config(path: str | None):
+    import warnings
+
+    from vmcl.fitted import FittedVersionWarning
+
+    # A fitted file's version warning is the command's word to its user, not Python's with a source line.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", FittedVersionWarning)
+        config = _loaded_config(path)
+    for warning in caught:
+        if issubclass(warning.category, FittedVersionWarning):
+            print(f"vmcl: warning: {warning.message}", file=sys.stderr)
+        else:
+            warnings.showwarning(warning.message, warning.category, warning.filename, warning.lineno)
+    return config
+
+
+def _loaded_config(path: str | None):
     from vmcl.pipeline import Config
 
     if path is None:
@@ -654,6 +671,9 @@ def _fit(args) -> int:
     for option, value in (("--seeds", args.seeds), ("--size", args.size)):
         if value is not None:
             raise BadInput(f"{option} is an option of vmcl fit labelling (its renderings); {args.cue} fits --data")
+    if args.jump is not None and args.cue not in ("stereo", "motion"):
+        raise BadInput(f"--jump is an option of the stereo and motion fits (their truth's discontinuities); "
+                       f"{args.cue}'s desired lines are its segmentation's boundaries")
     args.jump = 1.0 if args.jump is None else args.jump
     for root in args.data:
         if not Path(root).is_dir():
@@ -678,20 +698,29 @@ def _fit(args) -> int:
             fixed[name] = float(value)
         except ValueError:
             raise BadInput(f"--fix {item}: {value!r} is not a number") from None
+        if not math.isfinite(fixed[name]):  # 1e400 reads as inf, which the refusal would echo instead
+            raise BadInput(f"--fix {item}: {value!r} is not a finite number")
     vm = VisionMachine(_config(args.config))
     print(f"Fitting the {args.cue} MRF to the examples under {', '.join(args.data)} ...", file=sys.stderr)
     try:
         found = fit_cue(args.cue, args.data, vm=vm, jump=args.jump, fixed=fixed, refine=args.refine)
     except InputError as error:
-        held = re.match(r"fixed\['(\w+)'\]", str(error))  # a held value: the command's --fix, not fixed=
+        # The library's advice names its fixed= mapping; the command's user holds a parameter with --fix.
+        text = str(error).replace("fixed={'coupling': 1.0}", "--fix coupling=1, the default")
+        held = re.match(r"fixed\['(\w+)'\]", text)  # a held value: the command's --fix, not fixed=
         if held is None:
-            raise
-        raise BadInput(f"--fix {held.group(1)}={fixed[held.group(1)]:g}: {error}") from None
-    written = write_fitted(out, found.tables, found.provenance)
+            raise type(error)(text) from None
+        raise BadInput(f"--fix {held.group(1)}={fixed[held.group(1)]:g}: {text}") from None
+    for line in found.left_out:
+        print(f"vmcl: note: {line}", file=sys.stderr)
+    provenance = {**found.provenance, **({"config": args.config} if args.config else {})}
+    written = write_fitted(out, found.tables, provenance)
     fit = found.fit
     rows: list[tuple[object, ...]] = [("parameter", "natural (per T)", "standard error", "fitted")]
-    rows += [(name, f"{fit.theta[name]:.4g}", f"{fit.standard_error[name]:.2g}" if name in fit.standard_error else "",
-              "yes" if name in fit.fitted else "held") for name in PARAMETERS]
+    rows += [(name, f"{fit.theta[name]:.4g}" if name not in fit.uninformed else "",
+              f"{fit.standard_error[name]:.2g}" if name in fit.standard_error else "",
+              "yes" if name in fit.fitted else "no information: kept" if name in fit.uninformed else "held")
+             for name in PARAMETERS]
     _print_table(f"{args.cue}: {len(found.provenance['data'])} example(s), {fit.sites['pixels']} pixel and "
                  f"{fit.sites['lines']} line sites, {fit.iterations} Newton steps"
                  f"{'' if fit.converged else ' (not converged)'}", rows)
@@ -703,7 +732,16 @@ def _fit(args) -> int:
               f"{'' if found.provenance['restoration_converged'] else ' (not converged: the evaluations ran out)'}"
               f"; written: alpha {values['alpha']:.4g}, beta {values['beta']:.4g}, edge_gain "
               f"{values['edge_gain']:.4g}, prior " + ", ".join(f"{k} {v:.3g}" for k, v in values["prior"].items()))
-    print(f"Wrote {written}: [mrf.{args.cue}] at T = {fit.temperature:.4g}; load it with --config {written}")
+    if fit.uninformed:
+        values = found.tables["mrf"][args.cue]
+        kept = [f"{name} {values[name] if name in values else values['prior'][name]:.4g}" for name in fit.uninformed
+                if name in values or name in values.get("prior", {})]
+        print(f"No information in the examples on {', '.join(fit.uninformed)} (no brightness edge at a scored line "
+              f"site, no vertex of that kind, or no data): written as the configuration gave them"
+              f"{': ' + ', '.join(kept) if kept else ''}")
+    print(f"Wrote {written}: [mrf.{args.cue}] at T = {fit.temperature:.4g}"
+          f"{' with the measuring settings of ' + args.config if len(found.tables) > 1 else ''}; load it with "
+          f"--config {written}")
     return 0
 
 

@@ -7,9 +7,14 @@ a hash of the learning code, the method, the date, and the SHA-256 of the parame
 The fitted JSON artefacts vmcl ships (the labelling weights, the probability-of-boundary model) carry the
 same record as a ``"fitted"`` object (:func:`write_fitted_json`, :func:`check_fitted_json`), whose hash is
 checked the same way (their version is recorded, not warned about: they ship with the code they fit).
-Loading checks that hash (a file edited by hand, or damaged, is refused with a sentence saying so: drop
-the ``[fitted]`` table to keep the edit as one's own configuration) and warns when the file was fitted
-by another vmcl version.
+Loading checks that hash (a file whose parameters, every table but ``[fitted]``, were edited by hand or
+damaged is refused with a sentence saying so: drop the ``[fitted]`` table to keep the edit as one's own
+configuration) and warns (:class:`FittedVersionWarning`) when the file was fitted by another vmcl version or
+does not say by which. The record's ``text_sha256``, the SHA-256 of the text vmcl wrote (that entry left
+out), covers the record too: a file whose record (what, data, converged, fixed ...) was edited is refused
+likewise (files written before vmcl recorded it have their parameters checked alone). Comments are not
+entries, and load; but before replacing a file vmcl compares its whole text with what vmcl wrote
+(:func:`check_writable`), so a file with any edit (a comment, a key added to the record) is left as it is.
 """
 
 from __future__ import annotations
@@ -27,11 +32,19 @@ from typing import Any
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.output_folder import replace_file
 
-__all__ = ["FITTED_BY", "check_fitted", "check_fitted_json", "check_writable", "code_sha256", "files_sha256",
-           "fitted_record", "parameters_sha256", "with_data", "write_fitted", "write_fitted_json"]
+__all__ = ["FITTED_BY", "FittedVersionWarning", "check_fitted", "check_fitted_json", "check_writable", "code_sha256",
+           "config_sha256", "files_sha256", "fitted_record", "parameters_sha256", "with_data", "write_fitted",
+           "write_fitted_json"]
 
 FITTED_BY = "vmcl fit"
 """The ``[fitted]`` table's ``written_by``: the mark of a file vmcl wrote, which it may replace."""
+
+_HEADER = "# Parameters learned by `vmcl fit`; [fitted] says from what. Load with vmcl run --config."
+_TEXT_KEY = "text_sha256"
+
+
+class FittedVersionWarning(UserWarning):
+    """A fitted file was fitted by another vmcl version, or does not say by which."""
 
 
 def parameters_sha256(tables: Mapping[str, Any]) -> str:
@@ -48,6 +61,14 @@ def files_sha256(paths: Iterable[Path]) -> str:
         digest.update(Path(path).name.encode() + b"\0")
         digest.update(Path(path).read_bytes())
     return digest.hexdigest()
+
+
+def config_sha256(settings: Mapping[str, Any]) -> str:
+    """SHA-256 of a Config's settings (:meth:`vmcl.pipeline.Config.to_dict`, or part of it): values JSON
+    cannot hold are taken by their repr."""
+    if not isinstance(settings, Mapping):
+        raise InputTypeError(f"settings must be a mapping of a Config's sections, got {type(settings).__name__}")
+    return parameters_sha256(json.loads(json.dumps(settings, default=repr)))
 
 
 def code_sha256(*modules: Any) -> str:
@@ -80,9 +101,13 @@ def check_fitted(values: dict[str, Any], source: str) -> dict[str, Any]:
     if fitted is None:
         return rest
     _check_hash(rest, fitted, source, "the [fitted] table", "configuration")
-    if fitted.get("vmcl") != __version__:
-        warnings.warn(f"{source} was fitted by vmcl {fitted.get('vmcl')}, this is vmcl {__version__}: its "
-                      "parameters may not suit this version's modules", UserWarning, stacklevel=3)
+    _check_text(values, source, "the [fitted] table", "configuration", json_file=False)
+    version = fitted.get("vmcl")
+    if version != __version__:
+        by = (f"was fitted by vmcl {version}" if version is not None else
+              "does not say which vmcl version fitted it (its [fitted] table has no vmcl entry)")
+        warnings.warn(f"{source} {by}, this is vmcl {__version__}: its parameters may not suit this version's "
+                      "modules", FittedVersionWarning, stacklevel=3)
     return rest
 
 
@@ -104,10 +129,45 @@ def write_fitted(path: str | Path, tables: Mapping[str, Any], provenance: Mappin
         The file written (written beside it first, then moved into place).
     """
     target = check_writable(path)
-    lines = ["# Parameters learned by `vmcl fit`; [fitted] says from what. Load with vmcl run --config.", ""]
-    lines += _toml_tables({**tables, "fitted": fitted_record(tables, provenance)}, ())
-    replace_file(target, lambda stream: stream.write(("\n".join(lines) + "\n").encode("utf-8")))
+    text = _sealed_text({**tables, "fitted": fitted_record(tables, provenance)}, json_file=False)
+    replace_file(target, lambda stream: stream.write(text.encode("utf-8")))
     return target
+
+
+def _text(values: Mapping[str, Any], *, json_file: bool) -> str:
+    """The text vmcl writes for a fitted file's ``values``: so that one read back can be told unedited by
+    rendering it again."""
+    if json_file:
+        return json.dumps(values, indent=1, allow_nan=False) + "\n"
+    return "\n".join([_HEADER, "", *_toml_tables(values, ())]) + "\n"
+
+
+def _text_sha256(values: Mapping[str, Any], *, json_file: bool) -> str:
+    """SHA-256 of the text vmcl writes for ``values``, its record's ``text_sha256`` left out."""
+    record = {key: value for key, value in values["fitted"].items() if key != _TEXT_KEY}
+    return hashlib.sha256(_text({**values, "fitted": record}, json_file=json_file).encode("utf-8")).hexdigest()
+
+
+def _sealed_text(values: Mapping[str, Any], *, json_file: bool) -> str:
+    """The text of ``values`` with its record's ``text_sha256``, so that an edit to the record is seen too."""
+    record = {**values["fitted"], _TEXT_KEY: _text_sha256(values, json_file=json_file)}
+    return _text({**values, "fitted": record}, json_file=json_file)
+
+
+def _check_text(values: Mapping[str, Any], source: str, where: str, own: str, *, json_file: bool) -> None:
+    """Refuse a fitted file whose entries, record and all, are not those vmcl wrote (by its ``text_sha256``;
+    a file written before vmcl recorded one has its parameters checked alone)."""
+    recorded = values["fitted"].get(_TEXT_KEY)
+    if recorded is None:
+        return
+    try:
+        found = _text_sha256(values, json_file=json_file)
+    except (TypeError, ValueError):  # entries vmcl never writes (a TOML date, NaN): not what was written
+        found = None
+    if found != recorded:
+        raise InputValueError(f"{source}: its entries, {where} among them, differ from those `vmcl fit` wrote (their SHA-256 "
+                              f"does not match the {_TEXT_KEY} of {where}): edited or damaged since; remove "
+                              f"{where} to use it as your own {own}")
 
 
 def fitted_record(parameters: Mapping[str, Any], provenance: Mapping[str, Any]) -> dict[str, Any]:
@@ -158,12 +218,11 @@ def write_fitted_json(path: str | os.PathLike, parameters: Mapping[str, Any], pr
         raise InputValueError("parameters must not have a 'fitted' entry: the record is added here")
     target = check_writable(path)
     try:
-        text = json.dumps({**parameters, "fitted": fitted_record(parameters, provenance)}, indent=1,
-                          allow_nan=False)
+        text = _sealed_text({**parameters, "fitted": fitted_record(parameters, provenance)}, json_file=True)
     except (TypeError, ValueError) as error:
         raise InputValueError(f"parameters and provenance must be plain JSON values (numbers, strings, lists, "
                               f"mappings; no NaN): {error}") from None
-    replace_file(target, lambda stream: stream.write((text + "\n").encode("utf-8")))
+    replace_file(target, lambda stream: stream.write(text.encode("utf-8")))
     return target
 
 
@@ -183,6 +242,7 @@ def check_fitted_json(data: Mapping[str, Any], source: str) -> dict[str, Any] | 
         return None
     _check_hash({key: value for key, value in data.items() if key != "fitted"}, record, source,
                 "its 'fitted' record", "file")
+    _check_text(data, source, "its 'fitted' record", "file", json_file=True)
     return dict(record)
 
 
@@ -202,8 +262,9 @@ def _check_hash(rest: Mapping[str, Any], record: Any, source: str, where: str, o
 
 def check_writable(path: str | os.PathLike) -> Path:
     """``path`` as a Path, if :func:`write_fitted` or :func:`write_fitted_json` may write it: a new file in an
-    existing folder, or a plain, writable file ``vmcl fit`` wrote and nobody edited since (checked before any
-    fitting, so that a refusal costs no work).
+    existing folder, or a plain, writable file ``vmcl fit`` wrote and nobody edited since: its text exactly
+    what vmcl wrote, parameters, record, comments and all (checked before any fitting, so that a refusal
+    costs no work).
 
     Raises
     ------
@@ -233,8 +294,8 @@ def check_writable(path: str | os.PathLike) -> Path:
 
 
 def _written_by_vmcl(path: Path) -> bool | None:
-    """True for a file vmcl fit wrote whose record still matches its parameters, False for one edited since,
-    None for anyone else's."""
+    """True for a file vmcl fit wrote whose text is still the text vmcl wrote (its record matching its
+    parameters), False for one edited since, None for anyone else's."""
     from vmcl.pipeline import tomllib
 
     try:
@@ -253,7 +314,11 @@ def _written_by_vmcl(path: Path) -> bool | None:
             (check_fitted_json if path.suffix == ".json" else check_fitted)(dict(values), str(path))
     except (InputTypeError, InputValueError):
         return False
-    return True
+    # The hash covers the parameters alone: a note, a comment or a changed record would be lost in silence.
+    try:
+        return _text(values, json_file=path.suffix == ".json") == text
+    except (TypeError, ValueError):  # values vmcl never writes (TOML dates, NaN): not its text
+        return False
 
 
 def _toml_tables(tables: Mapping[str, Any], prefix: tuple[str, ...]) -> list[str]:

@@ -5,12 +5,17 @@ true disparity, a frame pair with its true flow) gives the cue's measurement as 
 (:meth:`vmcl.pipeline.VisionMachine.measure`) beside the truth (:func:`vmcl.learn.examples.truth_example`);
 :func:`vmcl.learn.fit_pseudolikelihood` fits the cue's MRF to all of them at once; the result is the
 ``[mrf.<cue>]`` table a Config loads, with what it was fitted on (:mod:`vmcl.fitted`).
+
+The fitted file is the whole machine the fit measured with: the measuring Config's settings that differ
+from the defaults (its ``[stereo]``, ``[edges]`` ... as given with ``vmcl fit --config``) beside the fitted
+table, so that loading it measures as the fit did; its parameters' hash covers them all.
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -19,8 +24,9 @@ import numpy as np
 from vmcl import datasets
 from vmcl.cm.core import check_bool, check_choice, check_real
 from vmcl.cues import registered
-from vmcl.errors import InputValueError
-from vmcl.fitted import code_sha256, files_sha256
+from vmcl.errors import InputTypeError, InputValueError
+from vmcl.fitted import code_sha256, config_sha256, files_sha256
+from vmcl.labels import CUES
 from vmcl.learn import examples as learn_examples
 from vmcl.learn import pseudolikelihood, restoration_fit
 from vmcl.learn.pseudolikelihood import (
@@ -49,17 +55,24 @@ class CueFit:
     cue : str
     fit : PseudolikelihoodFit
     tables : dict
-        ``{"mrf": {cue: {...}}}``: the fitted model as a Config's overrides (alpha, beta, edge_gain and the
-        prior's table), to write with :func:`vmcl.fitted.write_fitted`.
+        The Config to write with :func:`vmcl.fitted.write_fitted`: ``{"mrf": {cue: {...}}}``, the fitted model
+        as a Config's overrides (alpha, beta, edge_gain and the prior's table, beside any other override the
+        measuring Config gave the cue), and every other setting of the measuring Config that differs from
+        the defaults (its ``[stereo]``, ``[edges]`` ...), so that the file, loaded, measures as the fit did.
     provenance : dict
         The ``[fitted]`` entries: the examples' names, one SHA-256 over their files, the code's hash, the
-        method, the scored sites and the fitted natural parameters.
+        measuring Config's hash, the method, the scored sites, the parameters held and those the examples
+        carry no information on (``uninformed``: kept at the measuring Config's values).
+    left_out : tuple of str
+        The folders below the roots that look like examples but lack part of them (their ground truth), so
+        were not fitted: one line each, saying why.
     """
 
     cue: str
     fit: PseudolikelihoodFit
     tables: dict[str, Any]
     provenance: dict[str, Any]
+    left_out: tuple[str, ...] = field(default=())
 
 
 def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
@@ -69,7 +82,7 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
     Parameters
     ----------
     cue : {"stereo", "motion", "colour", "texture"}
-    roots : sequence of str or Path
+    roots : str, Path or a sequence of them
         Folders :func:`vmcl.datasets.find_stereo_folders` (stereo) or :func:`vmcl.datasets.find_flow_folders`
         (motion) searches, or BSDS-layout folders (colour, texture: :func:`vmcl.datasets.read_bsds_folder`,
         its training split in the distribution's layout), whose first annotator's segmentation is the
@@ -88,9 +101,14 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
     Raises
     ------
     InputValueError
-        No folder with ground truth for the cue below ``roots``.
+        A root that is not a folder; no folder with ground truth for the cue below ``roots``; a truth with no
+        known value, or a negative disparity.
+    InputTypeError
+        ``roots`` not paths, ``vm`` not a VisionMachine.
     """
     check_choice(cue, "cue", FITTABLE_CUES)
+    roots = _roots(roots)
+    _check_machine(vm)
     examples, names, files = [], [], []
     # Roots that overlap (a folder and one below it, or one given twice) would count an example twice, and
     # the standard errors would claim that much more certainty.
@@ -108,6 +126,7 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
             for folder in filter(new, datasets.find_stereo_folders(root)):
                 pair = datasets.read_stereo_folder(folder)
                 mask = pair.masks.get("nonocc", np.isfinite(pair.disparity))
+                _check_truth(folder, pair.disparity, mask, "disparity")
                 measured = _measured(vm, cue, pair.name, pair.left, pair.right)
                 examples.append(learn_examples.truth_example(pair.disparity, measured.data, measured.confidence,
                                                              measured.coupling, valid=mask, jump=jump))
@@ -129,6 +148,7 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
         else:
             for folder in filter(new, datasets.find_flow_folders(root)):
                 sequence = datasets.read_flow_folder(folder)
+                _check_truth(folder, sequence.flow, sequence.mask, "flow")
                 first = datasets.read_image(sequence.frames[sequence.index])
                 second = datasets.read_image(sequence.frames[sequence.index + 1])
                 measured = _measured(vm, cue, sequence.name, first, next=second)
@@ -139,8 +159,63 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
     if not examples:
         reader = {"stereo": "stereo folders (Middlebury layout)", "motion": "flow folders with ground truth"}.get(
             cue, "BSDS-layout images with segmentations")
-        raise InputValueError(f"no {reader} at or below {', '.join(map(str, roots))}: nothing to fit {cue} to")
+        lacking = "".join(f"; left out {folder}: {why}" for folder, why in _folders_left_out(cue, roots))
+        raise InputValueError(f"no {reader} at or below {', '.join(map(str, roots))}: nothing to fit {cue} to"
+                              f"{lacking}")
     return examples, names, files
+
+
+def _folders_left_out(cue: str, roots: str | Path | Sequence[str | Path]) -> list[tuple[Path, str]]:
+    """The folders at or below ``roots`` that look like ``cue``'s examples but lack part of them (their
+    ground truth, a layout's other files), which :func:`cue_examples` therefore passes over, each with what it
+    lacks (:func:`vmcl.datasets.stereo_folders_lacking`, :func:`vmcl.datasets.flow_folders_lacking`; none
+    for the BSDS-layout cues)."""
+    check_choice(cue, "cue", FITTABLE_CUES)
+    lacking = {"stereo": datasets.stereo_folders_lacking, "motion": datasets.flow_folders_lacking}.get(cue)
+    if lacking is None:
+        return []
+    found: dict[Path, tuple[Path, str]] = {}
+    for root in _roots(roots):
+        for folder, why in lacking(root):
+            found.setdefault(Path(folder).resolve(), (folder, why))
+    return list(found.values())
+
+
+def _roots(roots: Any) -> list[Path]:
+    """``roots`` as folders: one path, or a non-empty sequence of them, each an existing folder."""
+    if isinstance(roots, (str, os.PathLike)):
+        roots = [roots]
+    if not isinstance(roots, Sequence) or not all(isinstance(root, (str, os.PathLike)) for root in roots):
+        raise InputTypeError(f"roots must be a folder's path or a sequence of them, got {type(roots).__name__}")
+    if not roots:
+        raise InputValueError("roots is empty: give one or more folders of examples")
+    for root in roots:
+        if not Path(root).is_dir():
+            raise InputValueError(f"roots: {root} is not a folder")
+    return [Path(root) for root in roots]
+
+
+def _check_machine(vm: Any) -> None:
+    from vmcl.pipeline import VisionMachine
+
+    if not isinstance(vm, VisionMachine):
+        raise InputTypeError(f"vm must be a vmcl.pipeline.VisionMachine, got {type(vm).__name__}")
+
+
+def _check_truth(folder: Path, truth: np.ndarray, mask: np.ndarray | None, what: str) -> None:
+    """Refuse, by folder, a ground truth with nothing known (an example of no site), or a negative disparity
+    (vmcl's is the left view's, d >= 0, as :func:`vmcl.datasets.write_stereo_folder` holds: a negative one is
+    a map of the other view or of the other sign, whose fit would be of nothing the machine measures)."""
+    known = np.all(np.isfinite(truth.reshape(*truth.shape[:2], -1)), axis=2)
+    if mask is not None:
+        known &= np.asarray(mask) != 0
+    if not known.any():
+        raise InputValueError(f"{folder}: its ground-truth {what} has no known value (NaN, or outside its mask, "
+                              "everywhere): nothing to fit to")
+    if what == "disparity" and float(truth[known].min()) < 0:
+        raise InputValueError(f"{folder}: its ground-truth disparity goes down to {float(truth[known].min()):g}, "
+                              "and vmcl's disparity is the left view's, d >= 0 (I_left(x, y) = I_right(x - d, y)): "
+                              "a map of the right view, or of the other sign?")
 
 
 def _measured(vm: Any, cue: str, name: str, left: np.ndarray, right: np.ndarray | None = None,
@@ -163,7 +238,7 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
     Parameters
     ----------
     cue : {"stereo", "motion", "colour", "texture"}
-    roots : sequence of str or Path
+    roots : str, Path or a sequence of them
         Data set folders (see :func:`cue_examples`).
     vm : vmcl.pipeline.VisionMachine, optional
         Whose measurements are the data; default the default Config's machine on ``machine``.
@@ -187,12 +262,17 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
     Returns
     -------
     CueFit
+        Its parameters the examples carry no information on (``fit.uninformed``) keep the measuring Config's
+        values.
     """
     from vmcl.pipeline import VisionMachine
 
     check_choice(cue, "cue", FITTABLE_CUES)
     check_real(jump, "jump", above=0)
+    roots = _roots(roots)
     vm = VisionMachine(machine=machine) if vm is None else vm
+    _check_machine(vm)
+    _settings_tables(vm.config, cue, {})  # a Config the file cannot hold, refused before the work
     module = next(c for c in registered() if c.name == cue)
     if check_bool(refine, "refine") and module.kind != "smooth":
         raise InputValueError(f"refine: the {cue} cue's truth is a segmentation, with no scale in pixels to count "
@@ -214,6 +294,7 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
         model, error = refined.settings.model, (refined.start_error, refined.error, refined.evaluations,
                                                 refined.converged)
     table = model_overrides(model, kappa=module.kind == "constant")
+    tables = _settings_tables(vm.config, cue, table)
     provenance: dict[str, Any] = {
         "what": f"mrf.{cue}",
         "method": "maximum pseudolikelihood (vmcl.learn.fit_pseudolikelihood)" + (
@@ -225,6 +306,8 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
         "jump": float(jump) if module.kind == "smooth" else "segment boundaries (first annotator)",
         "ridge": float(ridge),
         "fixed": sorted(fixed),
+        "uninformed": list(fit.uninformed),
+        "config_sha256": config_sha256(vm.config.to_dict()),
         "sites": [fit.sites["pixels"], fit.sites["lines"]],
         "temperature": fit.temperature,
         "converged": fit.converged,
@@ -233,7 +316,54 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
         provenance["restoration_error"] = [float(error[0]), float(error[1])]
         provenance["restoration_settings_scored"] = int(error[2])
         provenance["restoration_converged"] = bool(error[3])
-    return CueFit(cue, fit, {"mrf": {cue: table}}, provenance)
+    left_out = tuple(f"left out {folder}: {why}" for folder, why in _folders_left_out(cue, roots))
+    return CueFit(cue, fit, tables, provenance, left_out)
+
+
+def _settings_tables(config: Any, cue: str, fitted: Mapping[str, Any]) -> dict[str, Any]:
+    """The tables of a fitted file: every setting of ``config`` (a :class:`vmcl.pipeline.Config`) that differs
+    from the defaults, and its ``[mrf.<cue>]`` overrides updated with ``fitted``, as plain TOML values.
+
+    A fitted file is loaded as the whole Config: without the measuring settings it would pair the fitted
+    MRF with the default early modules, whose measurements are not those it was fitted to.
+
+    Raises
+    ------
+    InputValueError
+        A setting TOML cannot hold (None where the default is not).
+    """
+    from vmcl.pipeline import Config
+
+    if not isinstance(config, Config):
+        raise InputTypeError(f"config must be a vmcl.pipeline.Config, got {type(config).__name__}")
+    check_choice(cue, "cue", FITTABLE_CUES)
+    default, given = Config().to_dict(), config.to_dict()
+    tables: dict[str, Any] = {}
+    for name, section in given.items():
+        changed = {key: value for key, value in section.items()
+                   if not (name == "mrf" and key in CUES) and value != default[name][key]}
+        if name == "mrf":
+            for other in CUES:
+                overrides = {**section[other], **fitted} if other == cue else section[other]
+                if overrides:
+                    changed[other] = overrides
+        if changed:
+            tables[name] = changed
+    return _plain(tables, "")
+
+
+def _plain(value: Any, where: str) -> Any:
+    """``value`` in the types a TOML file holds (NumPy scalars as Python's, tuples as lists)."""
+    if isinstance(value, Mapping):
+        return {key: _plain(item, f"{where}.{key}" if where else key) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(item, where) for item in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    if value is None:
+        raise InputValueError(f"config: {where} is None, which a TOML file cannot hold, so the fitted file could "
+                              "not give the machine it measured with; leave it at its default")
+    return value
 
 
 def _kernel_path() -> Path:

@@ -11,7 +11,6 @@ defaults (benchmarks/labelling.py writes them and measures them on seeds and pre
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -130,7 +129,7 @@ def labeller_provenance(*, presets: Sequence[str] = scenes.PRESETS, seeds: Seque
     its ``fitted_on`` and its ``"fitted"`` record's entries: the renderer's code (the examples' data), the
     fitting code, and the Config of the machine whose candidates and fields were fitted (default the
     default Config), each hashed; the rest of the machine is the record's vmcl version."""
-    from vmcl.fitted import parameters_sha256
+    from vmcl.fitted import config_sha256
     from vmcl.pipeline import Config
 
     config = Config() if config is None else config
@@ -146,7 +145,7 @@ def labeller_provenance(*, presets: Sequence[str] = scenes.PRESETS, seeds: Seque
                 for name, section in config.to_dict().items()}
     return fitted_on, {"data_sha256": code_sha256(*renderer), "code": "vmcl.learn.labelling_fit",
                        "code_sha256": code_sha256(Path(__file__), labelling),
-                       "config_sha256": parameters_sha256(json.loads(json.dumps(settings, default=repr)))}
+                       "config_sha256": config_sha256(settings)}
 
 
 def _sequence(values: Any, name: str) -> list:

@@ -113,9 +113,11 @@ class PseudolikelihoodFit:
     theta : dict of str to float
         Every natural parameter of :data:`PARAMETERS` (energy weight / T), fitted or held.
     standard_error : dict of str to float
-        For each fitted parameter, the square root of the diagonal of the inverse Hessian of the
-        negative log pseudolikelihood (the curvature, not the sandwich estimate: it understates the
-        spread, since neighbouring conditionals are not independent).
+        For each fitted parameter, the square root of the diagonal of the inverse Hessian of the objective
+        minimised at theta: the negative log pseudolikelihood plus the ridge, whose curvature
+        ``ridge * sites`` it adds to each diagonal entry (negligible beside an informed parameter's own; the
+        parameters the examples say nothing of are not fitted, see ``uninformed``). The curvature, not the
+        sandwich estimate: it understates the spread, since neighbouring conditionals are not independent.
     fitted : tuple of str
         The parameters that were fitted; the others were held.
     kind : {"smooth", "constant"}
@@ -133,6 +135,11 @@ class PseudolikelihoodFit:
         Whether the Newton decrement fell below the tolerance.
     history : list of float
         The objective per scored site (ridge included) at the start and after each Newton step.
+    uninformed : tuple of str
+        The held parameters the examples carry no information on (:attr:`Pseudolikelihood.uninformed`: no
+        data for alpha; no scored line site whose conditional depends on a line parameter, e.g. no brightness
+        edge for edge_gain, no vertex of the kind for a prior entry). Their theta is 0, which the
+        pseudolikelihood does not depend on; :meth:`model` takes them from its base.
     """
 
     theta: dict[str, float]
@@ -146,6 +153,7 @@ class PseudolikelihoodFit:
     iterations: int
     converged: bool
     history: list[float] = field(default_factory=list)
+    uninformed: tuple[str, ...] = ()
 
     @property
     def temperature(self) -> float:
@@ -161,7 +169,9 @@ class PseudolikelihoodFit:
         not touch (levels, require_edge, edge_radius, and kappa for the smooth kind) come from ``base``
         (default ``EnergyModel()``);
         the constant kind's levels are the fitted ones. A fit of the line sites alone takes alpha from
-        ``base``; one of the pixel sites alone takes beta, the prior and edge_gain from it.
+        ``base``; one of the pixel sites alone takes beta, the prior and edge_gain from it; and every fit takes
+        from it the parameters it has no information on (``uninformed``: edge_gain without brightness edges,
+        a prior entry without a vertex of its kind), so that they keep their values rather than become 0.
 
         Raises
         ------
@@ -176,19 +186,22 @@ class PseudolikelihoodFit:
         if not self.theta["coupling"] > 0:
             raise InputValueError(f"the fitted coupling is {self.theta['coupling']:.4g}, not > 0: the examples are "
                                   "rougher inside regions than across their lines, so no MRF of this kind fits them")
-        if self.scored != "lines" and not self.theta["alpha"] > 0:
+        kept = set(self.uninformed)
+        if self.scored != "lines" and "alpha" not in kept and not self.theta["alpha"] > 0:
             raise InputValueError(f"the fitted data weight is {self.theta['alpha']:.4g}: the desired fields are "
                                   "predicted by their neighbours better than by any share of the data (e.g. exactly "
                                   "planar ground truth, whose fitted coupling then grows without bound); hold the "
                                   "coupling (fixed={'coupling': 1.0}) to fit the data weight in the energy's units")
         line = self.theta["line"] / scale
-        beta = line if line > 0 else 1.0
-        prior = LinePrior(**{name: self.theta[name] / scale / beta for name in PRIOR_PARAMETERS})
+        beta = base.beta if "line" in kept else line if line > 0 else 1.0
+        prior = LinePrior(**{name: getattr(base.prior, name) if name in kept else self.theta[name] / scale / beta
+                             for name in PRIOR_PARAMETERS})
         changes: dict[str, Any] = {}
-        if self.scored != "lines":
+        if self.scored != "lines" and "alpha" not in kept:
             changes["alpha"] = self.theta["alpha"] / scale
         if self.scored != "pixels":
-            changes.update(beta=beta, prior=prior, edge_gain=self.theta["edge_gain"] / scale / beta)
+            changes.update(beta=beta, prior=prior, edge_gain=base.edge_gain if "edge_gain" in kept else
+                           self.theta["edge_gain"] / scale / beta)
         if self.kind == "constant":
             changes["kappa"] = self.theta["coupling"]
             if self.levels is not None:  # one set for every example (else each had its own: base's stay)
@@ -406,6 +419,12 @@ class Pseudolikelihood:
         Scored "pixels" and "lines".
     has_data, has_lines, has_edges : bool
         Whether any example gives data, a line process, brightness edges.
+    uninformed : tuple of str
+        The parameters the scored conditionals do not depend on, so the examples carry no information
+        on: alpha when no example gives data (pixels scored), and each line parameter but the coupling
+        (line, edge_gain, the prior's entries; lines scored) whose feature is 0 at every scored line site
+        (no brightness edge at any for edge_gain, no vertex that a line would make or unmake of the kind
+        for a prior entry; every one when no line site is scored).
     """
 
     def __init__(self, examples: Sequence[Example], *, kind: str = "smooth", levels: Sequence[float] | None = None,
@@ -430,6 +449,20 @@ class Pseudolikelihood:
         self.has_data = any(lat.data for lat in self._lattices)
         self.has_lines = any(lat.lines for lat in self._lattices)
         self.has_edges = any(lat.edges for lat in self._lattices)
+        self.uninformed = self._uninformed()
+
+    def _uninformed(self) -> tuple[str, ...]:
+        found = ["alpha"] if self.scored != "lines" and not self.has_data else []
+        if self.scored == "pixels":
+            return tuple(found)
+        # At theta = 0 every line site's two states are equally likely, so each parameter's curvature is a
+        # quarter of the sum of its feature's squares over the scored sites: 0 exactly where the feature is
+        # 0 at every one (the features are small whole numbers, so one site that has it gives at least 1/4).
+        hess = np.zeros((len(PARAMETERS), len(PARAMETERS)))
+        for lattice in self._lattices:
+            hess += lattice.terms(np.zeros(len(PARAMETERS)), pixels=False, lines=True)[2]
+        return tuple(found + [name for k, name in enumerate(PARAMETERS)
+                              if name in LINE_PARAMETERS[1:] and not hess[k, k] > 0.125])
 
     def terms(self, theta: Mapping[str, float] | np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
         """The value at ``theta`` (a mapping with every name of :data:`PARAMETERS`, or their vector in
@@ -471,8 +504,10 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
         The constant kind's levels; default the distinct values of the fields (2 to 64).
     fixed : mapping of str to float, optional
         Parameters of :data:`PARAMETERS` held at these natural values instead of fitted. Held by
-        default, at 0: ``alpha`` when no example has data, ``edge_gain`` when none has edges, and every
-        line parameter when none has lines; and those the scored ``sites`` do not depend on.
+        default, at 0: those the examples carry no information on (:attr:`Pseudolikelihood.uninformed`:
+        ``alpha`` when no example has data, ``edge_gain`` when no scored line site has a brightness edge, a
+        prior entry when none has a vertex of its kind, every line parameter when none has lines), listed
+        in the fit's ``uninformed``; and those the scored ``sites`` do not depend on.
     sites : {"all", "pixels", "lines"}
         The conditionals scored (:data:`SITES`). "lines" fits the line process given the examples'
         fields: give the fields the lines are to be decided on (e.g. the measurements themselves);
@@ -514,12 +549,14 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
     problem = Pseudolikelihood(examples, kind=kind, levels=levels, sites=sites, edge_radius=edge_radius,
                                machine=machine)
     held = dict(fixed)
-    if not problem.has_data or sites == "lines":
+    if sites == "lines":
         held.setdefault("alpha", 0.0)
-    if not problem.has_lines or sites == "pixels":
+    if sites == "pixels":
         held.update({name: fixed.get(name, 0.0) for name in LINE_PARAMETERS if name != "coupling"})
-    elif not problem.has_edges:
-        held.setdefault("edge_gain", 0.0)
+    # Fitted, such a parameter would take the value the ridge alone gives it (0), with a standard error of
+    # the ridge's own curvature: a number the examples never said.
+    uninformed = tuple(name for name in problem.uninformed if name not in fixed)
+    held.update({name: 0.0 for name in uninformed})
     free = [i for i, name in enumerate(PARAMETERS) if name not in held]
     if not free:
         raise InputValueError("every parameter is held: nothing to fit")
@@ -575,7 +612,7 @@ def fit_pseudolikelihood(examples: Sequence[Example], *, kind: str = "smooth",
                                fitted=tuple(PARAMETERS[i] for i in free), kind=kind, scored=sites,
                                levels=problem.levels,
                                value=plain / scored, sites=counts, iterations=iterations, converged=converged,
-                               history=history)
+                               history=history, uninformed=uninformed)
 
 
 # Where Newton starts: the hand-set presets' shape at T = 1 (any start converges; the objective is convex).
@@ -585,8 +622,8 @@ _START = {"alpha": 1.0, "coupling": 1.0, "line": 1.0, "edge_gain": 0.5, "end": 0
 
 def check_fixed(fixed: Mapping[str, float] | None, *, kind: str = "smooth", sites: str = "all") -> dict[str, float]:
     """:func:`fit_pseudolikelihood`'s ``fixed`` checked: names among :data:`PARAMETERS`, real values, each in
-    the model's domain (``alpha`` > 0, or 0 where only the lines are scored; ``coupling`` > 0 for the smooth
-    kind). A held value outside it was met as a pseudolikelihood "not finite at the start", blamed on the
+    the model's domain (``alpha`` > 0, or 0 where only the lines are scored; ``coupling`` > 0, which
+    :meth:`PseudolikelihoodFit.model` needs of either kind and the smooth kind's pixels' conditionals too). A held value outside it was met as a pseudolikelihood "not finite at the start", blamed on the
     examples, or as a "fitted" data weight of 0. Callers that measure examples first check here before."""
     check_choice(kind, "kind", KINDS)
     check_choice(sites, "sites", SITES)
@@ -600,9 +637,10 @@ def check_fixed(fixed: Mapping[str, float] | None, *, kind: str = "smooth", site
     if "alpha" in fixed and not (fixed["alpha"] > 0 or (fixed["alpha"] == 0 and sites == "lines")):
         raise InputValueError(f"fixed['alpha'] must be > 0 (the data term's weight: the model's fields answer to "
                               f"their data), got {fixed['alpha']}")
-    if kind == "smooth" and "coupling" in fixed and not fixed["coupling"] > 0:
-        raise InputValueError(f"fixed['coupling'] must be > 0 for the smooth kind (the pixels' conditionals are not "
-                              f"finite without it), got {fixed['coupling']}")
+    if "coupling" in fixed and not fixed["coupling"] > 0:
+        why = ("the pixels' conditionals are not finite without it" if kind == "smooth" else
+               "the Potts cost kappa: an energy that does not favour equal neighbours makes no model")
+        raise InputValueError(f"fixed['coupling'] must be > 0 for the {kind} kind ({why}), got {fixed['coupling']}")
     return fixed
 
 
