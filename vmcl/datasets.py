@@ -103,8 +103,8 @@ folder or a flow folder's numbered frames are taken from."""
 
 
 def read_image(path, *, picture: bool = False) -> np.ndarray:
-    """Read an 8- or 16-bit image (PNG, PPM/PGM, JPEG) as stored: (H, W) grey or (H, W, 3) RGB; a JPEG
-    turned upright as its EXIF orientation says (as viewers show it).
+    """Read an image as stored (PNG, PPM/PGM, JPEG, BMP, WebP, TIFF ..., what OpenCV reads): (H, W) grey or
+    (H, W, 3) RGB; a JPEG turned upright as its EXIF orientation says (as viewers show it).
 
     Parameters
     ----------
@@ -117,7 +117,8 @@ def read_image(path, *, picture: bool = False) -> np.ndarray:
     Returns
     -------
     ndarray
-        uint8 or uint16; colour images in RGB order (OpenCV's BGR is reversed).
+        uint8 or uint16 for 8- and 16-bit files; float32 for a float file (a TIFF or PFM of floats, as stored);
+        colour images in RGB order (OpenCV's BGR is reversed).
 
     Raises
     ------

@@ -964,10 +964,11 @@ class VisionMachine:
         left : (H, W) or (H, W, 3) array, uint8, uint16 or float
             The left view at t: integers on their type's full scale, floats in [0, 1] (floats on another
             scale, such as 0..255, are refused: divide them by their full scale first).
-        right : array of left's shape and type, optional
-            The right view at t, rectified (rows are epipolar lines): adds stereo.
-        next : array of left's shape and type, optional
-            The left view at t + 1: adds motion.
+        right : array of left's shape, optional
+            The right view at t, rectified (rows are epipolar lines): adds stereo. Its type may differ from
+            left's (each is read on its own type's scale, as ``left`` is).
+        next : array of left's shape, optional
+            The left view at t + 1: adds motion (its type may differ, as ``right``'s may).
         progress : callable, optional
             Called with each stage's name (see :meth:`stages`) when the stage ends.
 

@@ -137,7 +137,10 @@ def noise_thresholds(magnitude: ArrayLike, *, noise: Noise = "global", machine: 
     -----
     Medians come from :data:`BINS`-bin histograms over [0, max], with the values of a bin taken as
     spread evenly across it: within one bin width (max / 4096) of ``np.median``. Any finite scale works,
-    subnormal magnitudes included: the thresholds keep float32's precision at that scale.
+    subnormal magnitudes included: the thresholds keep float32's precision at that scale. A field (or a
+    tile) that is 0 everywhere has no scale of its own: its histogram spans [0, 1]
+    (:func:`vmcl.cm.reduce.histogram_to_top`'s fallback), so its thresholds are those of a median half a
+    bin of that span wide, small and positive, and no pixel of it is an edge.
 
     References
     ----------
