@@ -33,10 +33,11 @@ inline float3 rgb_at(__global const IN_T *rgb, size_t i)
 }
 
 /* isfinite on all three channels: a NaN or infinite channel would otherwise pass the sum test or turn
- * the quotient into NaN silently. */
+ * the quotient into NaN silently; and on the sum, which overflows float32 for channels near its largest
+ * (R / inf gave a hue of 0, marked valid). */
 inline int usable(float3 c, float denominator, float min_intensity)
 {
-    return isfinite(c.x) && isfinite(c.y) && isfinite(c.z) && denominator >= min_intensity;
+    return isfinite(c.x) && isfinite(c.y) && isfinite(c.z) && isfinite(denominator) && denominator >= min_intensity;
 }
 
 __kernel void hue(__global const IN_T *rgb, __global float *out, __global uchar *valid, float min_intensity,
@@ -86,7 +87,7 @@ inline void hue_and_gain16(__global const IN_T *p, float min_intensity, float16 
     float16 gr = (float16)(a.s147a, a.sd, b.s0369, b.scf, c.s258b, c.se);
     float16 bl = (float16)(a.s258b, a.se, b.s147a, b.sd, c.s0369, c.scf);
     float16 sum = r + gr;
-    *ok = isfinite(r) & isfinite(gr) & isfinite(bl) & (sum >= min_intensity);
+    *ok = isfinite(r) & isfinite(gr) & isfinite(bl) & isfinite(sum) & (sum >= min_intensity);
     *h = select((float16)NAN, r / sum, *ok);
     *g = sqrt(r * r + gr * gr) / (sum * sum);
 }

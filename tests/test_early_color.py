@@ -187,3 +187,13 @@ def test_chromaticity_must_be_a_bool(call, error, match, machine):
     """chromaticity="no" used to return the chromaticity pair (a non-empty string is true)."""
     with pytest.raises(error, match=match):
         call(machine)
+
+
+@pytest.mark.parametrize("shape", [(2, 2, 3), (8, 48, 3)])  # the scalar kernel and the 16-pixel one
+def test_a_sum_that_overflows_float32_gives_no_hue(shape, machine):
+    # R + G = inf gave a hue of 0 (R / inf), marked valid.
+    image = np.full(shape, 3e38, np.float32)
+    found = color.hue(image, machine=machine)
+    assert not found.valid.any() and np.isnan(found.hue).all()
+    assert not color.hue(image, chromaticity=True, machine=machine).valid.any()
+    assert np.isnan(color.albedo_edges(image, machine=machine).hue).all()

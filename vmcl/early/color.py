@@ -101,7 +101,8 @@ class Hue(NamedTuple):
     hue : float32 (H, W), or (H, W, 2) for the chromaticity pair
         NaN where the pixel is not valid.
     valid : bool (H, W); uint8 0/1 on the device
-        Pixels whose channels are finite and whose denominator reaches ``min_intensity``.
+        Pixels whose channels and denominator are finite (its sum overflows float32 only for channels near
+        its largest value) and whose denominator reaches ``min_intensity``.
     """
 
     hue: ArrayLike
