@@ -38,11 +38,19 @@
  * now both give NumPy's fmax.accumulate. */
 #elif OP == OP_MAX
 #define COMBINE(a, b) MAX_OF((a), (b))
-#define IDENTITY (T_IS_FLOAT ? (T)NAN : T_LOWEST)
+#if T_IS_FLOAT
+#define IDENTITY ((T)NAN)
+#else
+#define IDENTITY (T_LOWEST)
+#endif
 #define EXCLUSIVE_START (T_LOWEST)
 #elif OP == OP_MIN
 #define COMBINE(a, b) MIN_OF((a), (b))
-#define IDENTITY (T_IS_FLOAT ? (T)NAN : T_HIGHEST)
+#if T_IS_FLOAT
+#define IDENTITY ((T)NAN)
+#else
+#define IDENTITY (T_HIGHEST)
+#endif
 #define EXCLUSIVE_START (T_HIGHEST)
 #elif OP == OP_COPY
 #define COMBINE(a, b) (a)

@@ -163,7 +163,7 @@ def test_the_version_warning_is_a_vmcl_line(tmp_path, capsys, monkeypatch, recwa
     monkeypatch.undo()
     # One written before the record was sealed, its vmcl entry gone: a version it does not say.
     unsaid = tmp_path / "unsaid.toml"
-    unsaid.write_text(re.sub(r'\n(vmcl|text_sha256) = "[^"]*"', "", other.read_text()))
+    unsaid.write_text(re.sub(r'\n(vmcl|entries_sha256) = "[^"]*"', "", other.read_text()))
     (tmp_path / "empty").mkdir()
     for config, message in ((other, "other.toml was fitted by vmcl 0.0.1, this is vmcl"),
                             (unsaid, "unsaid.toml does not say which vmcl version fitted it")):
@@ -174,3 +174,22 @@ def test_the_version_warning_is_a_vmcl_line(tmp_path, capsys, monkeypatch, recwa
     assert not [w for w in recwarn if issubclass(w.category, fitted.FittedVersionWarning)]
 
 
+
+
+def test_a_fitted_file_with_its_entries_reordered_still_loads():
+    # The record's hash covered the text as written: two entries swapped were refused as an edit.
+    import tempfile
+    from pathlib import Path
+
+    from vmcl.fitted import check_fitted, write_fitted
+    from vmcl.pipeline import tomllib
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = write_fitted(Path(folder) / "f.toml", {"mrf": {"stereo": {"alpha": 2.0, "beta": 0.5}}},
+                            {"data": ["x"], "what": "mrf.stereo"})
+        text = path.read_text()
+        swapped = text.replace("alpha = 2.0\nbeta = 0.5", "beta = 0.5\nalpha = 2.0")
+        assert swapped != text
+        check_fitted(tomllib.loads(swapped), "f.toml")  # loads: the same entries
+        with pytest.raises(ValueError, match="edited or damaged since"):
+            check_fitted(tomllib.loads(swapped.replace("beta = 0.5", "beta = 0.6")), "f.toml")

@@ -81,7 +81,7 @@ def test_an_edited_fitted_file_is_refused(stereo_data, tmp_path, capsys):
 
 def test_another_version_warns(tmp_path, monkeypatch):
     # Written by another version (its record sealed by that version), not edited afterwards: the record's
-    # text_sha256 refuses an edited version entry as any other edit.
+    # entries_sha256 refuses an edited version entry as any other edit.
     monkeypatch.setattr("vmcl.__version__", "0.0.1")
     out = fitted.write_fitted(tmp_path / "a.toml", {"mrf": {"stereo": {"alpha": 0.5}}}, {"data": ["x"]})
     monkeypatch.undo()

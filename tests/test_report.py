@@ -219,3 +219,9 @@ def test_eight_bits_takes_a_16_bit_picture_to_8_bits_rounded():
     assert eight_bits(eight) is eight
     with pytest.raises(InputError, match="image must be uint8 or uint16"):
         eight_bits(np.zeros((2, 2), np.float32))
+
+
+def test_eight_bits_keeps_a_single_channel_axis():
+    from vmcl.pictures import eight_bits
+
+    assert eight_bits(np.full((4, 5, 1), 257 * 9, np.uint16)).shape == (4, 5, 1)

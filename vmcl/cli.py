@@ -736,11 +736,13 @@ def _fit(args) -> int:
         values = found.tables["mrf"][args.cue]
         kept = [f"{name} {values[name] if name in values else values['prior'][name]:.4g}" for name in fit.uninformed
                 if name in values or name in values.get("prior", {})]
+        # With --refine the restorations' error searches them further, from the configuration's values.
+        how = ("the restorations' error searched them from the configuration's values" if args.refine else
+               "written as the configuration gave them")
         print(f"No information in the examples on {', '.join(fit.uninformed)} (no brightness edge at a scored line "
-              f"site, no vertex of that kind, or no data): written as the configuration gave them"
-              f"{': ' + ', '.join(kept) if kept else ''}")
+              f"site, no vertex of that kind, or no data): {how}{': ' + ', '.join(kept) if kept else ''}")
     print(f"Wrote {written}: [mrf.{args.cue}] at T = {fit.temperature:.4g}"
-          f"{' with the measuring settings of ' + args.config if len(found.tables) > 1 else ''}; load it with "
+          f"{' with the measuring settings of ' + args.config if args.config else ''}; load it with "
           f"--config {written}")
     return 0
 

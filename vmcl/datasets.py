@@ -36,6 +36,7 @@ from vmcl.cm.core import check_bool, check_choice, check_int, check_real, check_
 from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = [
+    "DEEPER_LEVELS",
     "FLOW_SCENES",
     "FLO_TAG",
     "FLO_UNKNOWN_ABOVE",
@@ -117,8 +118,9 @@ def read_image(path, *, picture: bool = False) -> np.ndarray:
     Returns
     -------
     ndarray
-        uint8 or uint16 for 8- and 16-bit files; float32 for a float file (a TIFF or PFM of floats, as stored);
-        colour images in RGB order (OpenCV's BGR is reversed).
+        As stored: uint8 or uint16 for 8- and 16-bit files, float32 (or float64) for a TIFF or PFM of floats,
+        and a TIFF's other types (signed integers) as OpenCV gives them; colour images in RGB order (OpenCV's
+        BGR is reversed).
 
     Raises
     ------

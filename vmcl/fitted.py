@@ -10,8 +10,8 @@ checked the same way (their version is recorded, not warned about: they ship wit
 Loading checks that hash (a file whose parameters, every table but ``[fitted]``, were edited by hand or
 damaged is refused with a sentence saying so: drop the ``[fitted]`` table to keep the edit as one's own
 configuration) and warns (:class:`FittedVersionWarning`) when the file was fitted by another vmcl version or
-does not say by which. The record's ``text_sha256``, the SHA-256 of the text vmcl wrote (that entry left
-out), covers the record too: a file whose record (what, data, converged, fixed ...) was edited is refused
+does not say by which. The record's ``entries_sha256``, the SHA-256 of every entry vmcl wrote (that one left
+out; their order and layout do not count), covers the record too: a file whose record (what, data, converged, fixed ...) was edited is refused
 likewise (files written before vmcl recorded it have their parameters checked alone). Comments are not
 entries, and load; but before replacing a file vmcl compares its whole text with what vmcl wrote
 (:func:`check_writable`), so a file with any edit (a comment, a key added to the record) is left as it is.
@@ -40,7 +40,7 @@ FITTED_BY = "vmcl fit"
 """The ``[fitted]`` table's ``written_by``: the mark of a file vmcl wrote, which it may replace."""
 
 _HEADER = "# Parameters learned by `vmcl fit`; [fitted] says from what. Load with vmcl run --config."
-_TEXT_KEY = "text_sha256"
+_ENTRIES_KEY = "entries_sha256"
 
 
 class FittedVersionWarning(UserWarning):
@@ -90,7 +90,8 @@ def check_fitted(values: dict[str, Any], source: str) -> dict[str, Any]:
     Raises
     ------
     InputValueError
-        The table lacks its hash, or the parameters differ from those fitted.
+        The table lacks its hash, the parameters differ from those fitted, or (where the record holds its
+        ``entries_sha256``) any entry, the record's own included, differs from what vmcl wrote.
     """
     from vmcl import __version__
 
@@ -101,7 +102,7 @@ def check_fitted(values: dict[str, Any], source: str) -> dict[str, Any]:
     if fitted is None:
         return rest
     _check_hash(rest, fitted, source, "the [fitted] table", "configuration")
-    _check_text(values, source, "the [fitted] table", "configuration", json_file=False)
+    _check_entries(values, source, "the [fitted] table", "configuration")
     version = fitted.get("vmcl")
     if version != __version__:
         by = (f"was fitted by vmcl {version}" if version is not None else
@@ -142,31 +143,33 @@ def _text(values: Mapping[str, Any], *, json_file: bool) -> str:
     return "\n".join([_HEADER, "", *_toml_tables(values, ())]) + "\n"
 
 
-def _text_sha256(values: Mapping[str, Any], *, json_file: bool) -> str:
-    """SHA-256 of the text vmcl writes for ``values``, its record's ``text_sha256`` left out."""
-    record = {key: value for key, value in values["fitted"].items() if key != _TEXT_KEY}
-    return hashlib.sha256(_text({**values, "fitted": record}, json_file=json_file).encode("utf-8")).hexdigest()
+def _entries_sha256(values: Mapping[str, Any]) -> str:
+    """SHA-256 of every entry of ``values``, its record's ``entries_sha256`` left out, in the canonical form
+    of :func:`parameters_sha256`: the order of the entries and the way they are written do not count
+    (:func:`check_writable` compares the text itself)."""
+    record = {key: value for key, value in values["fitted"].items() if key != _ENTRIES_KEY}
+    return parameters_sha256({**values, "fitted": record})
 
 
 def _sealed_text(values: Mapping[str, Any], *, json_file: bool) -> str:
-    """The text of ``values`` with its record's ``text_sha256``, so that an edit to the record is seen too."""
-    record = {**values["fitted"], _TEXT_KEY: _text_sha256(values, json_file=json_file)}
+    """The text of ``values`` with its record's ``entries_sha256``, so that an edit to the record is seen too."""
+    record = {**values["fitted"], _ENTRIES_KEY: _entries_sha256(values)}
     return _text({**values, "fitted": record}, json_file=json_file)
 
 
-def _check_text(values: Mapping[str, Any], source: str, where: str, own: str, *, json_file: bool) -> None:
-    """Refuse a fitted file whose entries, record and all, are not those vmcl wrote (by its ``text_sha256``;
+def _check_entries(values: Mapping[str, Any], source: str, where: str, own: str) -> None:
+    """Refuse a fitted file whose entries, record and all, are not those vmcl wrote (by its ``entries_sha256``;
     a file written before vmcl recorded one has its parameters checked alone)."""
-    recorded = values["fitted"].get(_TEXT_KEY)
+    recorded = values["fitted"].get(_ENTRIES_KEY)
     if recorded is None:
         return
     try:
-        found = _text_sha256(values, json_file=json_file)
+        found = _entries_sha256(values)
     except (TypeError, ValueError):  # entries vmcl never writes (a TOML date, NaN): not what was written
         found = None
     if found != recorded:
         raise InputValueError(f"{source}: its entries, {where} among them, differ from those `vmcl fit` wrote (their SHA-256 "
-                              f"does not match the {_TEXT_KEY} of {where}): edited or damaged since; remove "
+                              f"does not match the {_ENTRIES_KEY} of {where}): edited or damaged since; remove "
                               f"{where} to use it as your own {own}")
 
 
@@ -242,7 +245,7 @@ def check_fitted_json(data: Mapping[str, Any], source: str) -> dict[str, Any] | 
         return None
     _check_hash({key: value for key, value in data.items() if key != "fitted"}, record, source,
                 "its 'fitted' record", "file")
-    _check_text(data, source, "its 'fitted' record", "file", json_file=True)
+    _check_entries(data, source, "its 'fitted' record", "file")
     return dict(record)
 
 

@@ -40,7 +40,8 @@ def eight_bits(image: np.ndarray) -> np.ndarray:
         return image
     if image.dtype != np.uint16:
         raise InputValueError(f"image must be uint8 or uint16, got {image.dtype}")
-    return cv2.convertScaleAbs(image, alpha=1 / 257)  # rounded, as the levels are never negative
+    # Rounded, as the levels are never negative; OpenCV drops a trailing axis of one channel: put back.
+    return cv2.convertScaleAbs(image, alpha=1 / 257).reshape(image.shape)
 
 
 def disparity_image(disparity: np.ndarray, *, vmin: float | None = None, vmax: float | None = None) -> np.ndarray:

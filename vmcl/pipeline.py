@@ -122,7 +122,7 @@ _FIELD_TYPES = {"bool": ((bool, np.bool_), "true or false"),
 
 VIEW_RECHECK = 30
 """In a stream that carries time, the frames at which the cameras' own state (the stereo rows' alignment) is
-measured again: every this many (and the first, and after a cut)."""
+measured again: the stream's frames 0, 30, 60 ... (counted from its start), and the frame after a cut."""
 
 
 def _check_field_types(section: str, values: Any) -> None:
@@ -810,12 +810,12 @@ class Config:
     def from_toml(cls, path: str | Path) -> Config:
         """Read a Config from a TOML file.
 
-        A file ``vmcl fit`` wrote carries a ``[fitted]`` table: its parameters are checked against the
-        hash recorded there (:func:`vmcl.fitted.check_fitted`), and a warning says when another vmcl
-        version fitted them.
+        A file ``vmcl fit`` wrote carries a ``[fitted]`` table: its parameters, and its entries the record's
+        included, are checked against the hashes recorded there (:func:`vmcl.fitted.check_fitted`), and a
+        warning (:class:`vmcl.fitted.FittedVersionWarning`) says when another vmcl version fitted them.
 
         Raises InputValueError (a ValueError) on a folder, bad TOML (or text that is not UTF-8), keys, or
-        fitted parameters edited since they were fitted; InputTypeError (a TypeError) on a ``path`` that is
+        a fitted file edited since it was fitted; InputTypeError (a TypeError) on a ``path`` that is
         not a str or an os.PathLike, or mistyped values; FileNotFoundError if the file does not exist, and
         another OSError if it cannot be read. A refusal about the file starts with its path.
         """
@@ -1365,7 +1365,7 @@ class _Run:
         # The grey the edges are found in: an image of one colour, or whose colour changes at one brightness,
         # has no brightness edge to find, and no threshold is to blame.
         grey = image @ np.asarray(GREY_WEIGHTS, np.float32) if image.ndim == 3 else image
-        if np.ptp(grey) < 1e-6 or int(cm_reduce.reduce(found, "sum", machine=self.m).get()):
+        if np.ptp(grey) < 1e-6 * full_scale(image.dtype) or int(cm_reduce.reduce(found, "sum", machine=self.m).get()):
             return
         self.notes.append("edges: Canny found no brightness edge: the noise rule's thresholds (from the median "
                           "gradient, which a texture filling the image raises) lie above every gradient, so the "

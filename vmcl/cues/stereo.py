@@ -59,7 +59,8 @@ class StereoCue(CueModule):
     def measure(self, run: RunInputs) -> Measurement:
         span, note = _disparity_range(run)
         dense = _dense_match(run, span)
-        # The rows' alignment is the rig's: a stream measures it on its first frame (and after a cut).
+        # The rows' alignment is the rig's: a stream measures it on its first frame, after a cut and every
+        # VIEW_RECHECK frames (RunInputs.new_view).
         aligned = _alignment_note(run, span, dense) if run.new_view else None
         notes = tuple(n for n in (note, dense.note if dense else None, aligned) if n)
         fields = {} if dense is None else dense.fields
