@@ -28,6 +28,7 @@ from vmcl.datasets import FlowSequence, read_image
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.metrics import evaluate_flow
+from vmcl.pictures import eight_bits
 
 __all__ = ["FlowRow", "baselines", "evaluate_sequence", "motion_only"]
 
@@ -73,9 +74,7 @@ def _grey(frame: np.ndarray) -> np.ndarray:
     import cv2
 
     grey = cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY) if frame.ndim == 3 else frame
-    if grey.dtype != np.uint8:  # 16-bit frames, to OpenCV's 8 bits
-        grey = np.round(grey / 257.0).astype(np.uint8)
-    return grey
+    return eight_bits(grey)  # OpenCV's and scikit-image's methods take 8 bits: a 16-bit frame's levels / 257
 
 
 def baselines() -> dict[str, Callable[[np.ndarray, np.ndarray], np.ndarray]]:

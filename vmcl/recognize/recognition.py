@@ -536,8 +536,8 @@ def _hidden(posed: np.ndarray, supported: np.ndarray, inside: np.ndarray, depth:
         return np.zeros(len(posed), bool)
     own = np.full(len(posed), np.median(here[known]))
     design = np.column_stack([x, y, np.ones(len(posed))]).astype(np.float64)
-    if known.sum() >= 3 and np.linalg.matrix_rank(design[known] - design[known].mean(axis=0)) == 2:
-        plane, *_ = np.linalg.lstsq(design[known], here[known].astype(np.float64), rcond=None)
+    plane, _, rank, _ = np.linalg.lstsq(design[known], here[known].astype(np.float64), rcond=None)
+    if rank == 3:  # three points or more, not on one line
         own = design @ plane
     return inside & ~supported & (here > own + _NEARER)
 
