@@ -1,22 +1,33 @@
 """Rows that are not epipolar lines: what a vertical offset does to the depth machine, and how well
-vmcl.early.rectification measures it; chooses its note's threshold on the training pairs.
+vmcl.early.rectification measures it; chooses its notes' thresholds on the training pairs.
 
 Run: python benchmarks/rectification.py [--out benchmarks/results/rectification.md]
 
 Training pairs only (benchmarks/stereo_training.py: the rendered scenes, sawtooth and map with their
-exposure variants). Each pair's right view is moved down by each of SHIFTS pixels (bilinearly, the border
-reflected), and the depth machine (its defaults, depth only) runs on it, the range found from the images.
-The rule, set before the first run: ROW_OFFSET_NOTE is the smallest shift whose mean bad-1 over the pairs
-reaches RISE times the aligned pairs' mean. The table also gives what row_alignment measures at each shift
-(the median of the tracks' vertical displacement; the real pairs are themselves a little off), and the
-share of the pixels the left-right check leaves unconfirmed, the machine's earlier sign of a pair not
-rectified.
+exposure variants). Each pair's right view is moved down by each of SHIFTS pixels, and turned about its
+centre by each of TURNS degrees (bilinearly, the border reflected), and the depth machine (its defaults,
+depth only) runs on it, the range found from the images. row_alignment measures each moved pair as the
+machine's note does, each track started at the semi-global matcher's disparity.
+
+The rules, set before the run:
+- the offset that matters is the smallest shift whose mean bad-1 over the pairs reaches RISE times the
+  aligned pairs' mean; ROW_OFFSET_NOTE is the smallest ``typical`` row_alignment measures on a training
+  pair at that shift, rounded down to STEP: every training pair moved that far is noted. (The threshold
+  is compared with what is measured, and the real pairs' own rows are a little off, so a shift does not
+  measure as itself: map's rows sit about 0.2 px up.)
+- likewise for a turn: the smallest turn whose mean bad-1 reaches RISE times the aligned pairs' mean;
+  ROW_SPREAD_NOTE is the smallest ``spread`` measured on a training pair at that turn, rounded down to
+  STEP. The largest spread of the pairs that are only shifted is reported beside it: it must lie below,
+  or a pair merely offset would be said to be turned.
+A turn moves the right view's columns too (by (y - centre) sin(angle)), so a turned pair's bad-1 is
+taken against its true disparity after the turn, not the data set's.
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import math
 import platform
 from pathlib import Path
 
@@ -26,21 +37,56 @@ from stereo_training import training_pairs
 
 import vmcl
 from vmcl import metrics
-from vmcl.early.rectification import ROW_OFFSET_NOTE, row_alignment
+from vmcl.early.rectification import ROW_OFFSET_NOTE, ROW_SPREAD_NOTE, row_alignment
 from vmcl.early.semiglobal import match_semiglobal
 from vmcl.pipeline import Config, VisionMachine
 from vmcl.stereo_evaluation import DEPTH_ONLY
 
 RESULTS = Path(__file__).resolve().parent / "results"
 SHIFTS = (0.0, 0.25, 0.5, 1.0, 2.0, 3.0)
+TURNS = (0.25, 0.5, 1.0)
 RISE = 1.5
+STEP = 0.05
 
 
-def shifted(view: np.ndarray, shift: float) -> np.ndarray:
-    """``view`` moved down by ``shift`` pixels, bilinearly, the border reflected."""
+def warp(shape: tuple[int, ...], shift: float = 0.0, degrees: float = 0.0) -> np.ndarray:
+    """The 2 x 3 map of a right view's pixels moved down by ``shift`` pixels and turned by ``degrees`` about
+    its centre."""
+    height, width = shape[:2]
+    matrix = cv2.getRotationMatrix2D((width / 2, height / 2), degrees, 1.0)
+    matrix[1, 2] += shift
+    return matrix
+
+
+def moved(view: np.ndarray, shift: float = 0.0, degrees: float = 0.0) -> np.ndarray:
+    """``view`` moved and turned by :func:`warp`, bilinearly, the border reflected."""
     height, width = view.shape[:2]
-    return cv2.warpAffine(view, np.float32([[1, 0, 0], [0, 1, shift]]), (width, height), flags=cv2.INTER_LINEAR,
+    return cv2.warpAffine(view, warp(view.shape, shift, degrees), (width, height), flags=cv2.INTER_LINEAR,
                           borderMode=cv2.BORDER_REFLECT)
+
+
+def moved_truth(disparity: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """The left view's disparity against a right view moved by ``matrix``: the left pixel (x, y) saw the right
+    one at (x - d, y), which now lies at matrix (x - d, y, 1); its column gives the disparity."""
+    rows, columns = np.indices(disparity.shape, dtype=np.float64)
+    seen = matrix[0, 0] * (columns - disparity) + matrix[0, 1] * rows + matrix[0, 2]
+    return (columns - seen).astype(np.float32)
+
+
+def measure(vm: VisionMachine, machine: vmcl.Machine, pair, shift: float = 0.0, degrees: float = 0.0
+            ) -> dict[str, float]:
+    """The depth machine's bad-1, the matcher's unconfirmed share, and row_alignment's figures on one pair
+    whose right view is moved by ``shift`` and ``degrees``."""
+    right = moved(pair.right, shift, degrees)
+    truth = moved_truth(pair.disparity, warp(pair.right.shape, shift, degrees))
+    result = vm.run(pair.left, right)
+    found = match_semiglobal(pair.left, right, machine=machine)
+    alignment = row_alignment(pair.left, right, disparity=found.filled)
+    none = alignment is None
+    return {"bad": metrics.evaluate_disparity(result.disparity, truth, mask=pair.mask).bad[1.0],
+            "unconfirmed": float((found.occluded | found.mismatched).mean()),
+            "offset": np.nan if none else alignment.offset, "typical": np.nan if none else alignment.typical,
+            "spread": np.nan if none else alignment.spread}
 
 
 def main() -> None:
@@ -50,21 +96,25 @@ def main() -> None:
     machine = vmcl.Machine()
     vm = VisionMachine(Config.from_dict(DEPTH_ONLY), machine=machine)
     pairs = training_pairs()
-    bad: dict[float, list[float]] = {s: [] for s in SHIFTS}
-    measured: dict[float, list[float]] = {s: [] for s in SHIFTS}
-    unconfirmed: dict[float, list[float]] = {s: [] for s in SHIFTS}
+    cases = [("shift", s) for s in SHIFTS] + [("turn", t) for t in TURNS]
+    got: dict[tuple[str, float], list[dict[str, float]]] = {case: [] for case in cases}
     for pair in pairs:
-        for shift in SHIFTS:
-            right = shifted(pair.right, shift)
-            result = vm.run(pair.left, right)
-            bad[shift].append(metrics.evaluate_disparity(result.disparity, pair.disparity, mask=pair.mask).bad[1.0])
-            found = match_semiglobal(pair.left, right, machine=machine)
-            unconfirmed[shift].append(float((found.occluded | found.mismatched).mean()))
-            alignment = row_alignment(pair.left, right, disparity=found.filled)
-            measured[shift].append(np.nan if alignment is None else alignment.offset)
-        print(pair.name, [f"{bad[s][-1]:.3f}" for s in SHIFTS], [f"{measured[s][-1]:+.2f}" for s in SHIFTS], flush=True)
-    aligned = float(np.mean(bad[0.0]))
-    chosen = next((s for s in SHIFTS[1:] if np.mean(bad[s]) >= RISE * aligned), None)
+        for kind, amount in cases:
+            move = {"shift": amount} if kind == "shift" else {"degrees": amount}
+            got[(kind, amount)].append(measure(vm, machine, pair, **move))
+        print(pair.name, [f"{got[c][-1]['bad']:.3f}/{got[c][-1]['typical']:.2f}" for c in cases], flush=True)
+
+    def mean(case, key):
+        return float(np.nanmean([m[key] for m in got[case]]))
+
+    aligned = mean(("shift", 0.0), "bad")
+    chosen = next((s for s in SHIFTS[1:] if mean(("shift", s), "bad") >= RISE * aligned), None)
+    offset_note = (None if chosen is None else
+                   math.floor(np.nanmin([m["typical"] for m in got[("shift", chosen)]]) / STEP) * STEP)
+    turn = next((t for t in TURNS if mean(("turn", t), "bad") >= RISE * aligned), None)
+    spread_note = (None if turn is None else
+                   math.floor(np.nanmin([m["spread"] for m in got[("turn", turn)]]) / STEP) * STEP)
+    shifted_spread = float(np.nanmax([m["spread"] for s in SHIFTS for m in got[("shift", s)]]))
     names = [pair.name for pair in pairs]
     lines = [
         "# Rows that are not epipolar lines",
@@ -72,26 +122,41 @@ def main() -> None:
         (f"Measured {datetime.datetime.now():%Y-%m-%d %H:%M} on {machine.device.name.strip()}, Python "
          f"{platform.python_version()}. Produced by `python benchmarks/rectification.py`."),
         "",
-        ("Training pairs (benchmarks/stereo_training.py), each with its right view moved down by a shift (px). "
-         "Bad-1: the depth machine's restored disparity (its defaults, depth only, the range found from the "
-         "images), share of the known pixels more than 1 px off. Unconfirmed: the semi-global matcher's pixels "
-         "the left-right check leaves half-occluded or mismatched. Measured: vmcl.early.rectification."
-         "row_alignment's offset (the median vertical displacement of the tracked corners, px), each started at "
-         "the semi-global matcher's disparity; the real pairs are themselves a little off at shift 0."),
+        ("Training pairs (benchmarks/stereo_training.py), each with its right view moved down by a shift (px), or "
+         "turned about its centre (degrees). Bad-1: the depth machine's restored disparity (its defaults, depth "
+         "only, the range found from the images), share of the known pixels more than 1 px off (a turned pair's "
+         "against its disparity after the turn, which moves the right view's columns as well as its rows). Unconfirmed: the "
+         "semi-global matcher's pixels the left-right check leaves half-occluded or mismatched. Measured: "
+         "vmcl.early.rectification.row_alignment, as the machine's note measures it (each track started at the "
+         "semi-global matcher's disparity): typical, the median of the tracks' absolute "
+         "vertical displacements (px), which the note compares with ROW_OFFSET_NOTE; spread, their median "
+         "distance from their median, compared with ROW_SPREAD_NOTE. The real pairs are themselves a little off "
+         "at shift 0."),
         "",
-        "| shift | mean bad-1 | mean unconfirmed | " + " | ".join(f"{name} bad-1 / measured" for name in names) + " |",
-        "|---|---|---|" + "---|" * len(names),
+        "| moved | mean bad-1 | mean unconfirmed | smallest typical | largest spread | "
+        + " | ".join(f"{name} bad-1 / typical / spread" for name in names) + " |",
+        "|---|---|---|---|---|" + "---|" * len(names),
     ]
-    for shift in SHIFTS:
-        cells = [f"{b:.3f} / {m:+.2f}" for b, m in zip(bad[shift], measured[shift])]
-        lines.append(f"| {shift:g} | {np.mean(bad[shift]):.3f} | {np.mean(unconfirmed[shift]):.3f} | "
-                     + " | ".join(cells) + " |")
-    lines += ["", (f"Rule (set before the run): the note's threshold is the smallest shift whose mean bad-1 reaches "
-                   f"{RISE} times the aligned pairs' ({aligned:.3f}): "
-                   + (f"{chosen:g} px." if chosen is not None else "none of the shifts reaches it.")
-                   + f" vmcl.early.rectification.ROW_OFFSET_NOTE is {ROW_OFFSET_NOTE:g} px.")]
+    for kind, amount in cases:
+        case = (kind, amount)
+        cells = [f"{m['bad']:.3f} / {m['typical']:.2f} / {m['spread']:.2f}" for m in got[case]]
+        label = f"{amount:g} px" if kind == "shift" else f"turned {amount:g} deg"
+        lines.append(f"| {label} | {mean(case, 'bad'):.3f} | {mean(case, 'unconfirmed'):.3f} | "
+                     f"{np.nanmin([m['typical'] for m in got[case]]):.2f} | "
+                     f"{np.nanmax([m['spread'] for m in got[case]]):.2f} | " + " | ".join(cells) + " |")
+    lines += ["",
+              (f"Rules (set before the run): the offset that matters is the smallest shift whose mean bad-1 reaches "
+               f"{RISE} times the aligned pairs' ({aligned:.3f}): "
+               + (f"{chosen:g} px; the smallest typical measured at it, rounded down to {STEP:g} px, is "
+                  f"{offset_note:.2f} px." if chosen is not None else "none of the shifts reaches it.")
+               + f" vmcl.early.rectification.ROW_OFFSET_NOTE is {ROW_OFFSET_NOTE:g} px. The smallest turn whose mean "
+               "bad-1 reaches it: "
+               + (f"{turn:g} degrees; the smallest spread measured at it, rounded down to {STEP:g} px, is "
+                  f"{spread_note:.2f} px" if turn is not None else "none of the turns")
+               + f" (the largest spread of a pair only shifted: {shifted_spread:.3f} px). "
+               f"vmcl.early.rectification.ROW_SPREAD_NOTE is {ROW_SPREAD_NOTE:g} px.")]
     args.out.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    print(f"wrote {args.out}; chosen {chosen}")
+    print(f"wrote {args.out}; offset note {offset_note}, spread note {spread_note} (shifted {shifted_spread:.3f})")
 
 
 if __name__ == "__main__":
