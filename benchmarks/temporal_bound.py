@@ -6,8 +6,10 @@ The sequence mode (vmcl.temporal) carries the previous frame's restored flow to 
 with the new measurement, a prediction of constant velocity. What such a prediction can add depends on
 whether the motion holds from one frame pair to the next, which this script measures on every real
 sequence with a past: for the pair (t, t + 1) whose ground truth is known, the machine's two-frame flow
-u_t; the two-frame flow of the pair before it, u_{t-1}, carried to frame t (sampled at x - u_t(x), where
-the pixel was); their mean, the fusion of two equally trusted estimates; and the best blend of the two
+u_t; the two-frame flow of the pair before it, u_{t-1}, carried to frame t as the sequence mode carries it
+(vmcl.temporal.Memory with the machine's [time] settings: along itself, pixel x reading u_{t-1} at
+x - u_{t-1}(x), and none where time is broken: that position outside the frame, or its brightness unlike
+frame t's there); their mean, the fusion of two equally trusted estimates; and the best blend of the two
 (per pixel, the point between them nearest the truth: an oracle, the bound of any fusion of these two
 fields). The sequence mode also searches around the prediction and restores the fused data with its MRF,
 so it is not held to the bound; but where the bound itself is close to u_t's error, what the past adds
@@ -22,28 +24,35 @@ import datetime
 import platform
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 import vmcl
 from vmcl.datasets import find_flow_folders, read_flow_folder, read_image
 from vmcl.flow_evaluation import motion_only
 from vmcl.metrics import evaluate_flow
-from vmcl.pipeline import Config, VisionMachine
+from vmcl.pipeline import Config, TimeConfig, VisionMachine, as_image
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
 SHARED = ROOT.parent / "shared" / "datasets"
 
 
-def carried(previous: np.ndarray, current: np.ndarray) -> np.ndarray:
-    """``previous`` sampled where each pixel of the current frame was one frame before (x - current(x)),
-    bilinearly; NaN outside the frame or where either flow has none."""
-    height, width = current.shape[:2]
-    rows, columns = np.mgrid[:height, :width].astype(np.float32)
-    where = np.nan_to_num(current, nan=np.float32(1e6))  # a pixel without flow samples outside: NaN
-    return cv2.remap(previous.astype(np.float32), columns - where[..., 0], rows - where[..., 1], cv2.INTER_LINEAR,
-                     borderMode=cv2.BORDER_CONSTANT, borderValue=(np.nan, np.nan))
+def carried(machine: vmcl.Machine, time: TimeConfig, frames: list[np.ndarray], previous: np.ndarray) -> np.ndarray:
+    """``previous``, the flow from ``frames[0]`` to ``frames[1]``, carried to ``frames[1]`` by the sequence mode's
+    own step (:meth:`vmcl.temporal.Memory.carry`, with ``time``'s settings): along itself, each pixel x reading
+    ``previous`` at x - previous(x); NaN where time is broken there (that position outside the frame, or the
+    brightness there unlike the new frame's) and everywhere when the frame starts cold (a scene cut)."""
+    memory = time.memory_of(machine)
+    # The images as the machine reads them (float32 in [0, 1]): the brightness test's tolerance is on that scale.
+    before, now = (machine.to_device(as_image(frame, "frame")) for frame in frames)
+    flow = machine.to_device(np.ascontiguousarray(previous, np.float32))
+    memory.begin(before)
+    # The information only weighs the carried flow in the fusion; the prediction does not depend on it.
+    memory.remember("motion", flow, machine.to_device(np.ones(previous.shape[:2], np.float32)), False)
+    memory.end(flow)
+    memory.begin(now)
+    prediction = memory.carry("motion")
+    return np.full_like(previous, np.nan) if prediction is None else prediction.prediction.get()
 
 
 def closest_blend(first: np.ndarray, second: np.ndarray, truth: np.ndarray) -> np.ndarray:
@@ -72,9 +81,10 @@ def main() -> None:
             continue  # no past
         frames = [read_image(path) for path in sequence.frames[t - 1:t + 2]]
         now = vm.run(frames[1], next=frames[2]).flow
-        # Where the carried flow has none (sampled outside the frame), the two-frame flow stands in for it, in
-        # every column alike: the columns then score the same pixels, none of them counted as no motion.
-        before = carried(vm.run(frames[0], next=frames[1]).flow, now)
+        # Where the carried flow has none (time broken), the two-frame flow stands in for it, as the machine's
+        # measurement stands alone there, in every column alike: the columns then score the same pixels, none
+        # of them counted as no motion.
+        before = carried(machine, vm.config.time, frames[:2], vm.run(frames[0], next=frames[1]).flow)
         before = np.where(np.isfinite(before), before, now)
         mean = (now + before) / 2
         fields = (now, before, mean, closest_blend(now, before, sequence.flow))
@@ -89,8 +99,10 @@ def main() -> None:
         "",
         ("Every sequence of the data sets with a frame before the ground truth's pair (t, t + 1). EPE (px) over "
          "the ground truth's pixels of: the machine's two-frame flow of the pair (its defaults, motion only); "
-         "the two-frame flow of the pair before, (t - 1, t), carried to frame t (sampled where each pixel was, "
-         "x - u_t(x); the two-frame flow where that lies outside the frame): a prediction of constant velocity; "
+         "the two-frame flow of the pair before, (t - 1, t), carried to frame t as the sequence mode carries it "
+         "(vmcl.temporal.Memory, the [time] defaults: along itself, pixel x reading u_{t-1} at x - u_{t-1}(x); the "
+         "two-frame flow where time is broken, that position outside the frame or its brightness unlike frame "
+         "t's): a prediction of constant velocity; "
          "and the mean of the two, the fusion of two equally "
          "trusted estimates (the two-frame flow alone where the carried one has none); and the best blend, at each "
          "pixel the point between the two nearest the truth, which no fusion of these two estimates (weights of "

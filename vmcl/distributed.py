@@ -47,7 +47,6 @@ import secrets
 import shutil
 import tempfile
 import threading
-import time
 import uuid
 import zipfile
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -200,7 +199,7 @@ def run_chunk(frames: Sequence[np.ndarray], first: int, skip: int, config: Mappi
     """Run the pairs (frames[k], frames[k + 1]) of one chunk, each on its own; the task of :func:`map_sequence`.
 
     Each pair's Result is ``VisionMachine.run(frames[k], rights[k], frames[k + 1])``: nothing is carried
-    from one pair to the next (no temporal terms), so a skipped pair changes no other pair's Result.
+    from one pair to the next (no temporal terms), so the skipped pairs are not run at all.
 
     Parameters
     ----------
@@ -209,7 +208,7 @@ def run_chunk(frames: Sequence[np.ndarray], first: int, skip: int, config: Mappi
     first : int
         The video index of ``frames[0]``.
     skip : int
-        Leading pairs that are the chunk's overlap: run, not returned (they change no Result).
+        Leading pairs not run and not returned (>= 0): no other pair's Result depends on them.
     config : mapping, optional
         :meth:`vmcl.pipeline.Config.to_dict`'s nested values.
     rights : sequence of ndarray, optional
@@ -221,12 +220,9 @@ def run_chunk(frames: Sequence[np.ndarray], first: int, skip: int, config: Mappi
         Each returned pair's video index t (the pair t, t + 1) and its Result.
     """
     vm = _vision_machine(config)
-    out = []
-    for k in range(len(frames) - 1):
-        result = vm.run(frames[k], None if rights is None else rights[k], frames[k + 1])
-        if k >= skip:
-            out.append((first + k, result))
-    return out
+    # Only the returned pairs run: a skipped pair's Result would be thrown away, and no pair reads another's.
+    return [(first + k, vm.run(frames[k], None if rights is None else rights[k], frames[k + 1]))
+            for k in range(max(skip, 0), len(frames) - 1)]
 
 
 @dataclass(frozen=True)
@@ -374,8 +370,8 @@ def map_sequence(client: Client, frames: Sequence[np.ndarray], config: Config | 
     chunk : int
         Pairs each task returns (>= 1).
     overlap : int
-        Pairs before its own that each chunk also runs, and drops (>= 0). No pair depends on another,
-        so an overlap changes no Result and only costs its pairs' time: leave it 0.
+        Pairs before its own that a chunk may see (>= 0). No pair depends on another, so a chunk neither
+        runs nor needs them: any overlap gives the same tasks and Results as 0, and costs nothing.
     rights : sequence of ndarray, optional
         The right view of every frame (as many as ``frames``): each pair adds stereo.
     retries : int
@@ -410,9 +406,10 @@ def map_sequence(client: Client, frames: Sequence[np.ndarray], config: Config | 
     futures = []
     for start in range(0, pairs, chunk):
         stop = min(start + chunk, pairs)
-        first = max(0, start - overlap)
-        chunk_rights = None if rights is None else list(rights[first:stop + 1])
-        futures.append(client.submit(run_chunk, list(frames[first:stop + 1]), first, start - first, values,
+        # The chunk's own frames only: its overlap's pairs would be run and dropped (no pair reads another's),
+        # so they are neither sent nor run.
+        chunk_rights = None if rights is None else list(rights[start:stop + 1])
+        futures.append(client.submit(run_chunk, list(frames[start:stop + 1]), start, 0, values,
                                      chunk_rights, key=f"vmcl-chunk-{batch}-{start}", retries=retries,
                                      pure=False))
     return futures
@@ -1120,20 +1117,10 @@ def _connected(scheduler: str) -> Client:
     made: dict[str, Any] = {}
 
     def connect() -> None:
-        # Once more after an AssertionError: distributed's loop runner asserts now and then that the event
-        # loop it started exists, a race with a loop another Client is closing in this process (seen in the
-        # test suite); a second attempt finds the loop.
-        for _ in range(2):
-            try:
-                made["client"] = Client(scheduler, timeout=f"{_CONNECT_SECONDS}s")
-                made.pop("error", None)
-                return
-            except AssertionError as error:
-                made["error"] = error
-                time.sleep(0.5)
-            except BaseException as error:  # noqa: BLE001 (handed to the caller's thread, whatever it is)
-                made["error"] = error
-                return
+        try:
+            made["client"] = Client(scheduler, timeout=f"{_CONNECT_SECONDS}s")
+        except BaseException as error:  # noqa: BLE001 (handed to the caller's thread, whatever it is)
+            made["error"] = error
 
     thread = threading.Thread(target=connect, name="vmcl-scheduler-connect", daemon=True)
     thread.start()
