@@ -66,6 +66,21 @@ def test_endpoint_and_angular_error_hand_computed():
     assert scores.density == 1.0
 
 
+def test_angular_error_of_huge_and_nearly_equal_flows():
+    # Squares of 1e200 px overflow float64: two equal such vectors gave NaN, not 0.
+    huge = np.full((1, 1, 2), 1e200)
+    assert metrics.angular_error(huge, huge)[0, 0] == 0.0
+    # Orthogonal in the image plane at that length: the directions (u, v, 1) are 90 degrees apart.
+    other = huge.copy()
+    other[..., 1] *= -1
+    assert metrics.angular_error(huge, other)[0, 0] == pytest.approx(90.0)
+    # A small angle: (1e-7, 0, 1) against (0, 0, 1) is atan(1e-7), which arccos of a cosine rounded to 1
+    # gave as 0 (or to about 1e-6 degrees).
+    tiny = np.zeros((1, 1, 2))
+    tiny[..., 0] = 1e-7
+    assert metrics.angular_error(tiny, np.zeros((1, 1, 2)))[0, 0] == pytest.approx(math.degrees(1e-7), rel=1e-6)
+
+
 def test_flow_missing_outputs_and_mask():
     truth = np.zeros((2, 2, 2))
     truth[1, 1] = NAN

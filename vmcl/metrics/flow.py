@@ -67,9 +67,16 @@ def angular_error(flow, ground_truth) -> np.ndarray:
     flow, truth = _flow_pair(flow, ground_truth)
     u, v = flow[..., 0], flow[..., 1]
     ug, vg = truth[..., 0], truth[..., 1]
-    cosine = (u * ug + v * vg + 1.0) / np.sqrt((u * u + v * v + 1.0) * (ug * ug + vg * vg + 1.0))
-    # Rounding can push the cosine of two equal vectors a few ulps above 1; arccos would give NaN.
-    return np.degrees(np.arccos(np.minimum(cosine, 1.0)))
+    # Each direction scaled to unit length by hypot, which does not square: the squares of flows past
+    # 1e154 px overflow to inf, and inf / inf gave NaN for two equal vectors.
+    a = [c / np.hypot(np.hypot(u, v), 1.0) for c in (u, v, np.ones_like(u))]
+    b = [c / np.hypot(np.hypot(ug, vg), 1.0) for c in (ug, vg, np.ones_like(ug))]
+    dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    cross = np.sqrt((a[1] * b[2] - a[2] * b[1]) ** 2 + (a[2] * b[0] - a[0] * b[2]) ** 2
+                    + (a[0] * b[1] - a[1] * b[0]) ** 2)
+    # atan2 of the sine and cosine: exact 0 for equal vectors, and accurate at small angles, where the
+    # arccos of a cosine rounded near 1 is not.
+    return np.degrees(np.arctan2(cross, dot))
 
 
 @dataclass(frozen=True)
