@@ -236,19 +236,16 @@ def _matcher_notes(run: RunInputs, found: SemiGlobalMatch) -> str | None:
 
 def _alignment_note(run: RunInputs, span: tuple[int, int], dense: _Dense | None) -> str | None:
     """A note when the views' rows are offset or turned against each other (vmcl.early.rectification): the
-    matchers search along rows, and their disparities then fail where the left-right check sees little. A
-    turn is noted by itself: a quarter of a degree leaves most rows a fraction of a pixel off, yet more than
-    doubles the training pairs' error (benchmarks/results/rectification.md). Each tracked corner starts at
-    the dense matches' disparity (else the middle of the range)."""
+    matchers search along rows, and their disparities then fail where the left-right check sees little.
+    Each tracked corner starts at the dense matches' disparity (else the middle of the range)."""
     start = dense.disparity.get() if dense is not None else (span[0] + span[1]) / 2
     # The views' grey read back, a third of their colour's bytes: the corners are tracked in grey.
     views = [grey_field(run.machine, view).get() for view in (run.left, run.needed("right"))]
     found = row_alignment(*views, disparity=start)
-    turned = found is not None and found.spread >= ROW_SPREAD_NOTE
-    if found is None or (found.typical < ROW_OFFSET_NOTE and not turned):
+    if found is None or found.typical < ROW_OFFSET_NOTE:
         return None
     varies = (f"; the offset varies by {found.spread:.2f} px across the image (the views are turned or scaled "
-              "against each other)") if turned else ""
+              "against each other)") if found.spread >= ROW_SPREAD_NOTE else ""
     return (f"stereo: the right view's rows lie {found.offset:+.1f} px from the left's (the median over {found.tracks} "
             f"corners tracked between the views; half are off by {found.typical:.1f} px or more){varies}: the pair is "
             "not rectified, its rows are not epipolar lines and the disparity is unreliable; rectify it first "

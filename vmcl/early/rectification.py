@@ -39,11 +39,12 @@ with what is measured, not with a shift: real pairs come a little off themselves
 measure as itself."""
 
 ROW_SPREAD_NOTE = 0.1
-"""The tracks' offsets spread at least this far (:attr:`RowAlignment.spread`), the machine's run notes that
-the views are turned or scaled against each other, whatever their offset: the smallest spread measured on
-a training pair turned by the smallest turn at which the depth machine's mean bad-1 reached 1.5 times the
-aligned pairs' (benchmarks/results/rectification.md, by the rule :data:`ROW_OFFSET_NOTE` follows). The
-training pairs that were only shifted spread less (at most 0.098 px), so none of them is said to be turned."""
+"""Where the note is made, it adds that the views are turned or scaled against each other when the tracks'
+offsets spread at least this far (:attr:`RowAlignment.spread`): more than on any training pair that was
+only shifted (benchmarks/results/rectification.md, their largest spread rounded up). The note itself
+follows :attr:`RowAlignment.typical` alone: a match is harmed by its own row's offset, whether the rows are
+offset as a whole or turned."""
+
 
 CORNERS = 150
 """The most corners tracked."""
