@@ -32,7 +32,15 @@ import cv2
 import numpy as np
 import scipy.io
 
-from vmcl.cm.core import check_bool, check_choice, check_int, check_real, check_real_dtype, real_host_array
+from vmcl.cm.core import (
+    check_bool,
+    check_choice,
+    check_int,
+    check_real,
+    check_real_dtype,
+    full_scale,
+    real_host_array,
+)
 from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = [
@@ -41,6 +49,7 @@ __all__ = [
     "FLO_TAG",
     "FLO_UNKNOWN_ABOVE",
     "IMAGE_SUFFIXES",
+    "PNG_SIGNATURE",
     "STEREO_SCENES",
     "BSDSImage",
     "BSDSSet",
@@ -51,6 +60,7 @@ __all__ = [
     "find_flow_folders",
     "find_stereo_folders",
     "flow_folders_lacking",
+    "grey_or_rgb",
     "load_bsds",
     "load_flow",
     "load_stereo",
@@ -103,7 +113,7 @@ IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".ppm", ".pgm", ".pbm", ".pnm", ".bmp
 folder or a flow folder's numbered frames are taken from."""
 
 
-def read_image(path, *, picture: bool = False) -> np.ndarray:
+def read_image(path, *, picture: bool = False, check: Callable[[Path, bytes], None] | None = None) -> np.ndarray:
     """Read an image as stored (PNG, PPM/PGM, JPEG, BMP, WebP, TIFF ..., what OpenCV reads): (H, W) grey or
     (H, W, 3) RGB; a JPEG turned upright as its EXIF orientation says (as viewers show it).
 
@@ -114,6 +124,10 @@ def read_image(path, *, picture: bool = False) -> np.ndarray:
         Read a picture's brightness: a PGM or PPM whose declared maximum (its header's maxval) lies below its
         type's full scale is scaled to that scale, as viewers show it (a 10-bit PGM's 1023 is white, not
         1/64 of it). False (the default): the values as stored, as maps of data (a disparity, a mask) need.
+    check : callable, optional
+        ``check(path, data)``, run on the file's bytes before they are decoded: a caller's own refusal
+        (raising), such as :mod:`vmcl.frame_sources`' of a frame file that holds several pages, which then
+        need not open the file again.
 
     Returns
     -------
@@ -130,18 +144,15 @@ def read_image(path, *, picture: bool = False) -> np.ndarray:
         If it is a folder, cannot be decoded as an image, is larger than OpenCV's limits, or is a PNG or
         JPEG cut short or corrupt (OpenCV would decode what it can and fill the rest with grey).
     """
+    if check is not None and not callable(check):
+        raise InputTypeError(f"check must be a callable (path, data) or None, got {type(check).__name__}")
     path = _existing(path, "an image file")
     data = path.read_bytes()
-    if not data:
-        raise InputValueError(f"{path} is empty, not an image")
-    if data.startswith(_PNG_SIGNATURE):
-        damage = _png_damage(data)
-    elif data.startswith(_JPEG_START):
-        damage = _jpeg_damage(data)
-    else:
-        damage = None
-    if damage is not None:
-        raise InputValueError(f"{path} is damaged: {damage}")
+    if check is not None:
+        check(path, data)
+    refusal = _refused_undecoded(data)
+    if refusal is not None:
+        raise InputValueError(f"{path} {refusal}")
     try:
         image, printed = _decode(data)
     except cv2.error as error:
@@ -158,17 +169,58 @@ def read_image(path, *, picture: bool = False) -> np.ndarray:
     if image is None:
         raise InputValueError(f"cannot decode an image from {path}")
     sys.stderr.write(printed)  # the decoders' other notes (e.g. libpng's about colour profiles) stay visible
-    if image.ndim == 3:
-        if image.shape[2] == 4:
-            raise InputValueError(f"{path} has an alpha channel; expected grey or RGB")
-        image = image[..., ::-1]
+    image = grey_or_rgb(image, str(path))
     if check_bool(picture, "picture") and (maxval := _pnm_maxval(data)) is not None:
         full = np.iinfo(image.dtype).max
         if int(image.max(initial=0)) > maxval:
             raise InputValueError(f"{path} holds values up to {int(image.max())} above its declared maximum {maxval}")
         if maxval < full:
             image = np.round(image.astype(np.float64) * (full / maxval)).astype(image.dtype)
+    return image
+
+
+_ALPHA_REFUSED = "has an alpha channel; expected grey or RGB"
+
+
+def grey_or_rgb(image: np.ndarray, name: str, *, opaque_alpha: bool = False) -> np.ndarray:
+    """An image as OpenCV decodes it, as vmcl returns one: grey, or colour in RGB order (OpenCV's BGR
+    reversed), contiguous. An alpha channel is refused, naming ``name``; with ``opaque_alpha`` it is dropped
+    where it is opaque at every pixel, as OpenCV gives an animation's frames one, and refused where it is not
+    (a transparent pixel has no colour to take)."""
+    real_host_array(image, "image", ndims=(2, 3))
+    if image.ndim == 3 and image.shape[2] not in (3, 4):
+        raise InputValueError(f"image must be (H, W), (H, W, 3) or (H, W, 4), got shape {image.shape}")
+    if not isinstance(name, str):
+        raise InputTypeError(f"name must be a str, got {type(name).__name__}")
+    if image.ndim == 3:
+        if image.shape[2] == 4:
+            if not opaque_alpha:
+                raise InputValueError(f"{name} {_ALPHA_REFUSED}")
+            if float(image[..., 3].min()) < full_scale(image.dtype):
+                raise InputValueError(f"{name} has transparent pixels; expected grey or RGB")
+            image = image[..., :3]
+        image = image[..., ::-1]
     return np.ascontiguousarray(image)
+
+
+def _refused_undecoded(data: bytes) -> str | None:
+    """Why :func:`read_image` refuses a file from its bytes alone, before decoding them, said after its name
+    ("is damaged: ..."): empty, a PNG or JPEG cut short or corrupt (OpenCV would decode what it can and fill
+    the rest with grey), or a PNG whose header declares an alpha channel; None where they pass."""
+    if not data:
+        return "is empty, not an image"
+    if data.startswith(PNG_SIGNATURE):
+        damage = _png_damage(data)
+    elif data.startswith(_JPEG_START):
+        damage = _jpeg_damage(data)
+    else:
+        damage = None
+    if damage is not None:
+        return f"is damaged: {damage}"
+    # IHDR comes first; its colour types 4 and 6 are grey and RGB with alpha.
+    if data.startswith(PNG_SIGNATURE) and data[12:16] == b"IHDR" and len(data) > 25 and data[25] in (4, 6):
+        return _ALPHA_REFUSED
+    return None
 
 
 def _pnm_maxval(data: bytes) -> int | None:
@@ -183,14 +235,15 @@ def _pnm_maxval(data: bytes) -> int | None:
     return None
 
 
-_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+"""The eight bytes a PNG file starts with."""
 _JPEG_START = b"\xff\xd8\xff"  # start of image, then the first segment's marker
 _LIBJPEG_DAMAGE = ("Corrupt JPEG data", "Premature end of JPEG file")  # libjpeg's warnings about bad data
 
 
 def _png_damage(data: bytes) -> str | None:
     """Why a PNG is damaged (a chunk cut short or failing its CRC, no IEND chunk), or None."""
-    at = len(_PNG_SIGNATURE)
+    at = len(PNG_SIGNATURE)
     while at + 12 <= len(data):
         length = int.from_bytes(data[at:at + 4], "big")
         kind = data[at + 4:at + 8].decode("latin-1")
@@ -885,47 +938,55 @@ def stereo_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
 def _find_folders(root, depth: int, holds: Callable[[Path], bool]) -> list[Path]:
     """The folders at or below ``root`` (``depth`` levels at most, hidden ones skipped) that ``holds``
     accepts, sorted; ``root`` alone when it does; a folder accepted is not searched further."""
-    return _search_folders(root, depth, holds)[0]
+    return _walk_folders(root, depth, [holds])[0]
 
 
-def _search_folders(root, depth: int, holds: Callable[[Path], bool]) -> tuple[list[Path], list[Path]]:
-    """:func:`_find_folders`'s folders, and the folders ``depth`` levels below ``root`` that it did not
-    accept, whose subfolders lie deeper than the search went."""
+def _walk_folders(root, depth: int, tests: list[Callable[[Path], bool]], *, deeper: int = 0) -> list[list[Path]]:
+    """For each of ``tests``, what :func:`_find_folders` finds with it, from one walk: each folder is listed
+    once and tried once by each test whose search has not stopped above it, so that searches for several
+    kinds of folder do not each walk the tree again.
+
+    The first test's search goes on ``deeper`` levels below ``depth``; there links to folders are not
+    followed and a folder that cannot be listed is passed over, as that part of the walk only looks for
+    what to mention, and a root high in a large tree must not be walked whole.
+    """
     root = _as_path(root, "root")
     check_int(depth, "depth", minimum=1)
     if not root.is_dir():
         raise FileNotFoundError(f"no such folder: {root}")
-    if holds(root):
-        return [root], []
-    found: list[Path] = []
-    level = [root]
-    for _ in range(depth):
-        if not level:  # nothing left to search, however deep the search may go
-            break
-        below = sorted(child for parent in level for child in parent.iterdir()
-                       if child.is_dir() and not child.name.startswith("."))
-        found += [child for child in below if holds(child)]
-        level = [child for child in below if not holds(child)]
-    return sorted(found), level
+    found: list[list[Path]] = [[] for _ in tests]
+    levels = [depth + deeper] + [depth] * (len(tests) - 1)  # how deep each test's search goes
+    here: list[tuple[Path, list[int]]] = [(root, list(range(len(tests))))]  # a level's folders, the tests for each
+    level = 0
+    while here:  # not up to the depth asked, which may be vast: to where no search goes on
+        below: list[tuple[Path, list[int]]] = []
+        for folder, searching in here:
+            on = []
+            for test in searching:
+                if tests[test](folder):
+                    found[test].append(folder)
+                elif level < levels[test]:
+                    on.append(test)
+            if on:
+                below += [(child, on) for child in _subfolders(folder, strict=level < depth)]
+        here, level = below, level + 1
+    return [sorted(folders) for folders in found]
+
+
+def _subfolders(folder: Path, *, strict: bool) -> list[Path]:
+    """The folders in ``folder`` but hidden ones; not ``strict``: none that is a link, and none where it
+    cannot be listed."""
+    try:
+        return [child for child in folder.iterdir()
+                if child.is_dir() and not child.name.startswith(".") and (strict or not child.is_symlink())]
+    except OSError:
+        if strict:
+            raise
+        return []
 
 
 DEEPER_LEVELS = 4
 """How many levels below a search's depth :func:`flow_folders_lacking` still looks for sequences to name."""
-
-
-def _found_deeper(tops: list[Path], holds: Callable[[Path], bool]) -> list[Path]:
-    """The folders below ``tops`` (at most :data:`DEEPER_LEVELS` levels, hidden ones skipped) that ``holds``
-    accepts; a folder accepted is not searched further. Bounded, so that a root high in a large tree is not
-    walked whole; links to folders are not followed (a link to a folder above would make the walk endless)."""
-    found = []
-    for top in tops:
-        for here, subfolders, _ in os.walk(top):
-            level = len(Path(here).relative_to(top).parts)
-            subfolders[:] = sorted(name for name in subfolders if not name.startswith(".")) if level < DEEPER_LEVELS else []
-            if here != str(top) and holds(Path(here)):
-                found.append(Path(here))
-                subfolders.clear()
-    return sorted(found)
 
 
 # name -> its folder under the data sets folder
@@ -1176,27 +1237,28 @@ def _described(shape: tuple[int, ...]) -> str:
 
 def _frames_around(frames: list[Path], numbers: list[int], index: int, shape: tuple[int, ...]) -> tuple[int, int]:
     """The span ``start, stop`` of ``frames`` (sorted by their ``numbers``) that is one sequence with the scored
-    pair ``index, index + 1``: frames numbered one after another, each number held by one file, each of the
-    scored frame's ``shape`` (size and colour kind). A gap, a number held by two files (frame08.png and
-    frame008.png: which comes first cannot be told) or another shape ends the past or the future there,
-    rather than join what does not follow. The past is streamed before the pair, so a past frame that cannot
-    be read is refused (by :func:`read_image`, naming it); the future is scored by nothing, so a frame there
-    that cannot be read (cut short, with alpha) only ends it."""
+    pair ``index, index + 1``: frames numbered one after another, each number held by one file. A gap or a
+    number held by two files (frame08.png and frame008.png: which comes first cannot be told) ends the past or
+    the future there, rather than join what does not follow. The past is streamed before the pair, so it is
+    read: a past frame of another ``shape`` (size and colour kind) than the scored frame's ends it too, and one
+    that cannot be read is refused (by :func:`read_image`, naming it). The future is read by nothing, so it is
+    not decoded: a frame there that :func:`read_image` refuses from its bytes alone (empty, cut short, a PNG
+    with alpha) only ends it."""
     count = Counter(numbers)
 
     def follows(earlier: int, later: int) -> bool:
         return numbers[later] == numbers[earlier] + 1 and count[numbers[earlier]] == count[numbers[later]] == 1
 
-    def future_shape(path: Path) -> tuple[int, ...] | None:
+    def undamaged(path: Path) -> bool:
         try:
-            return read_image(path).shape
-        except (InputValueError, OSError):
-            return None
+            return _refused_undecoded(path.read_bytes()) is None
+        except OSError:
+            return False
 
     start, stop = index, index + 2
     while start > 0 and follows(start - 1, start) and read_image(frames[start - 1]).shape == shape:
         start -= 1
-    while stop < len(frames) and follows(stop - 1, stop) and future_shape(frames[stop]) == shape:
+    while stop < len(frames) and follows(stop - 1, stop) and undamaged(frames[stop]):
         stop += 1
     return start, stop
 
@@ -1215,11 +1277,11 @@ def read_flow_folder(folder) -> FlowSequence:
         scored), or Yosemite's yos9.png, yos10.png and correct_yos.flo. The sequence is named by its folder,
         with its parent's name where the flow is not beside the frames (in gt/, flow/ or other-gt-flow/:
         "clean/alley_1", "other-data/Dimetrodon"). Its frames are those numbered one after another around the
-        scored pair and of its size and colour kind: a gap in the numbers, a number held by two files
-        (frame08.png and frame008.png), or a frame of another size or kind (grey among RGB) ends them there,
-        its past before it and its future after it. A past frame that cannot be read is refused by name (the
-        sequence mode streams it); a frame after the scored pair that cannot be read (cut short, with alpha)
-        ends the future there, since nothing scores it.
+        scored pair: a gap in the numbers or a number held by two files (frame08.png and frame008.png) ends
+        them there, its past before it and its future after it; so does a past frame of another size or kind
+        (grey among RGB) than the scored one. A past frame that cannot be read is refused by name (the
+        sequence mode streams it). The frames after the scored pair are read by nothing and not decoded: one
+        that is refused from its bytes alone (empty, cut short, a PNG with alpha) ends the future there.
 
     Returns
     -------
@@ -1273,19 +1335,18 @@ def read_flow_folder(folder) -> FlowSequence:
         raise InputValueError(f"{frames[index + 1]} is {_described(following)}, the frame {frames[index].name} "
                               f"{_described(scored)}")
     size = scored[:2]
-    # Every file scored with the pair has the frame's size: the flow and the masks.
-    sized = [(flo, flow.shape[:2])]
-    invalid_mask = read_mask(invalid) if invalid is not None else None
-    occluded = read_mask(occlusions) if occlusions is not None else None
-    sized += [(path, m.shape) for path, m in ((invalid, invalid_mask), (occlusions, occluded))
-              if path is not None and m is not None]
-    for path, shape in sized:
-        if tuple(shape) != size:
-            raise InputValueError(f"{path} is {shape[1]} x {shape[0]}, the frame {frames[index].name} "
+
+    def sized(path: Path, field: np.ndarray) -> np.ndarray:
+        # Every file scored with the pair has the frame's size: the flow and the masks.
+        if field.shape[:2] != size:
+            raise InputValueError(f"{path} is {field.shape[1]} x {field.shape[0]}, the frame {frames[index].name} "
                                   f"{size[1]} x {size[0]}")
-    mask = np.isfinite(flow).all(axis=-1)
-    if invalid_mask is not None:
-        mask &= ~invalid_mask
+        return field
+
+    mask = np.isfinite(sized(flo, flow)).all(axis=-1)
+    if invalid is not None:
+        mask &= ~sized(invalid, read_mask(invalid))
+    occluded = sized(occlusions, read_mask(occlusions)) if occlusions is not None else None
     if flo.name == "correct_yos.flo":  # Yosemite's sky is stored as exactly (1, 0), not measured
         mask &= ~((flow[..., 0] == 1.0) & (flow[..., 1] == 0.0))
     named = folder.resolve()  # "." or ".." has no name of its own
@@ -1345,8 +1406,10 @@ def flow_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
             return len(_flow_frames(folder)) >= 2
         return _flow_truth(folder) is not None and len(_flow_frames(folder)) == 1
 
+    # One walk finds the sequences (to the depth searched and below it) and the folders that lack a part.
+    sequences, lacks = _walk_folders(root, depth, [_is_flow_sequence, lacking], deeper=DEEPER_LEVELS)
     found = []
-    for folder in _find_folders(root, depth, lacking):
+    for folder in lacks:
         several = flows(folder)
         if len(several) > 1:
             lack = (f"it holds {len(several)} flows ({', '.join(p.name for p in several[:3])}"
@@ -1356,10 +1419,11 @@ def flow_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
             assert truth is not None  # lacking() found it
             lack = f"it holds the flow {truth[0].name} but one numbered frame (*NN.png), not the two it joins"
         found.append((folder, lack))
-    _, unsearched = _search_folders(root, depth, _is_flow_sequence)
     root = _as_path(root, "root")
-    for folder in _found_deeper(unsearched, _is_flow_sequence):
+    for folder in sequences:
         levels = len(folder.relative_to(root).parts)
+        if levels <= depth:  # find_flow_folders finds it
+            continue
         why = (f"it is a flow sequence {levels} levels below {root}, deeper than the {depth} levels searched "
                "(search from a folder nearer to it)")
         found.append((folder, why))
@@ -1446,10 +1510,6 @@ def _bsds_item(name: str, image_path: Path, truth: Path) -> BSDSImage:
     return BSDSImage(name, image, boundaries, segmentations, files=(image_path, truth))
 
 
-def _bsds_items(pairs: list[tuple[str, Path, Path]]) -> list[BSDSImage]:
-    return [_bsds_item(name, image, truth) for name, image, truth in pairs]
-
-
 def read_bsds_folder(folder, *, split: str = "test", left_out: list[tuple[Path, str]] | None = None
                      ) -> list[BSDSImage]:
     """The images of a BSDS-layout folder with their human boundaries and segmentations.
@@ -1465,6 +1525,7 @@ def read_bsds_folder(folder, *, split: str = "test", left_out: list[tuple[Path, 
     check_choice(split, "split", ("test", "train", "val"))
     if not folder.is_dir():
         raise FileNotFoundError(f"no such folder: {folder}")
+    truths: Path | None = None  # the distribution's ground-truth folder; else each image's .mat is beside it
     if (folder / "images").is_dir() and (folder / "groundTruth").is_dir():
         images, truths = folder / "images", folder / "groundTruth"
         if (images / split).is_dir() and (truths / split).is_dir():
@@ -1475,26 +1536,24 @@ def read_bsds_folder(folder, *, split: str = "test", left_out: list[tuple[Path, 
                 raise FileNotFoundError(f"{folder}: images/ and groundTruth/ hold no {split}/ split (images/ holds "
                                         f"{', '.join(splits)})")
         found = sorted(images.glob("*.jpg"))
-        pairs = [(p.stem, p, truths / f"{p.stem}.mat") for p in found]
     else:
         found = sorted(p / f"{p.name}.jpg" for p in folder.iterdir() if (p / f"{p.name}.jpg").is_file())
-        pairs = [(p.stem, p, p.with_suffix(".mat")) for p in found]
+    pairs = [(p.stem, p, (p if truths is None else truths / p.name).with_suffix(".mat")) for p in found]
     if not pairs:
         raise FileNotFoundError(f"{folder}: no BSDS images (<id>/<id>.jpg, or images/ and groundTruth/ folders)")
-    missing = [str(truth) for _, _, truth in pairs if not truth.is_file()]
-    if left_out is None:
-        if missing:
-            raise InputValueError(f"{folder}: images without their ground truth: {', '.join(missing[:3])}"
-                                  + (f" and {len(missing) - 3} more" if len(missing) > 3 else ""))
-        return _bsds_items(pairs)
+    missing = [truth for _, _, truth in pairs if not truth.is_file()]
+    if left_out is None and missing:  # refused before any image is read, naming the missing ones together
+        raise InputValueError(f"{folder}: images without their ground truth: {', '.join(map(str, missing[:3]))}"
+                              + (f" and {len(missing) - 3} more" if len(missing) > 3 else ""))
     items = []
     for name, image, truth in pairs:
-        if not truth.is_file():
-            left_out.append((image, f"no ground truth {truth}"))
-            continue
         try:
+            if truth in missing:
+                raise InputValueError(f"no ground truth {truth}")
             items.append(_bsds_item(name, image, truth))
         except InputValueError as error:
+            if left_out is None:
+                raise
             left_out.append((image, str(error)))
     return items
 

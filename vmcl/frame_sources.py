@@ -25,8 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vmcl.cm.core import full_scale
-from vmcl.datasets import IMAGE_SUFFIXES, read_image
+from vmcl.datasets import IMAGE_SUFFIXES, PNG_SIGNATURE, grey_or_rgb, read_image
 from vmcl.errors import InputTypeError, InputValueError
 
 __all__ = ["IMAGE_SUFFIXES", "VIDEO_SUFFIXES", "FrameSource", "frame_order", "is_sequence", "open_frames"]
@@ -39,7 +38,7 @@ _GLOB_CHARACTERS = set("*?[")
 _NUMBERS = re.compile(r"(\d+(?:\.\d+)?)")  # a run of digits, with its decimals where a point and digits follow
 # Formats that may hold several images in one file: TIFF pages, GIF, PNG (APNG) and WebP animations.
 _PAGED_SUFFIXES = (".tif", ".tiff", ".gif", ".png", ".webp")
-_PAGES_READ = 16  # pages read per imreadmulti call: an animation is decoded from its start on every call
+_PAGES_READ = 16  # a TIFF's pages read per imreadmulti call, so that a long stack is not held whole
 
 
 def _by_value(text: str) -> tuple:
@@ -105,10 +104,7 @@ class FrameSource:
             return
         if self.video is None:
             for path in self.paths:
-                if (pages := _page_count(path)) > 1:  # read_image would take its first alone, in silence
-                    raise InputValueError(f"{path} holds {pages} {_page_word(path)}s, and a frame of a folder or "
-                                          "pattern must be one image: run the file alone to take them as a sequence")
-                yield read_image(path, picture=True)
+                yield read_image(path, picture=True, check=_refuse_pages)
             return
         import cv2
 
@@ -161,32 +157,66 @@ def _page_count(path: Path) -> int:
         return max(int(cv2.imcount(str(path))), 1)
 
 
+def _refuse_pages(path: Path, data: bytes) -> None:
+    """Refuse a frame file of a folder or pattern that holds several images (read_image would take its first
+    alone, in silence), from the bytes read for its image: OpenCV counts them only from the file, which is
+    opened again just where its bytes say it may hold several."""
+    if _may_hold_several(path, data) and (pages := _page_count(path)) > 1:
+        raise InputValueError(f"{path} holds {pages} {_page_word(path)}s, and a frame of a folder or pattern must be "
+                              "one image: run the file alone to take them as a sequence")
+
+
+def _may_hold_several(path: Path, data: bytes) -> bool:
+    """Whether a file's bytes may hold several images: False where their header shows one (a PNG without an
+    animation control chunk before its image data, a TIFF whose first page links to no other, a WebP without
+    the animation flag), True where they do not tell."""
+    if path.suffix.lower() not in _PAGED_SUFFIXES:
+        return False
+    if data.startswith(PNG_SIGNATURE):
+        at = 8
+        while at + 8 <= len(data):
+            kind = data[at + 4:at + 8]
+            if kind in (b"acTL", b"IDAT"):  # an APNG declares its frames before the image data
+                return kind == b"acTL"
+            at += 12 + int.from_bytes(data[at:at + 4], "big")
+        return True
+    if data[:4] in (b"II*\x00", b"MM\x00*"):
+        def number(at: int, size: int) -> int | None:
+            field = data[at:at + size]
+            return int.from_bytes(field, "little" if data[:2] == b"II" else "big") if len(field) == size else None
+
+        first = number(4, 4) or 0
+        entries = number(first, 2) or 0
+        return number(first + 2 + 12 * entries, 4) != 0  # the offset of the first page's next page: 0 if none
+    if data[:4] == b"RIFF" and data[8:12] == b"WEBP":
+        # A simple WebP (VP8, VP8L) is one image; an extended one (VP8X) says in its flags whether it is animated.
+        return data[12:16] == b"VP8X" and (len(data) < 21 or bool(data[20] & 0x02))
+    return True
+
+
 def _page_word(path: Path) -> str:
     """What one image of a file of several is called: a TIFF's page, an animation's frame."""
     return "page" if path.suffix.lower() in (".tif", ".tiff") else "frame"
 
 
 def _read_pages(path: Path, count: int) -> Iterator[np.ndarray]:
-    """The ``count`` pages of ``path`` in order, as :func:`vmcl.datasets.read_image` returns an image: a few
-    at a time, so that a long stack is not held whole."""
+    """The ``count`` pages of ``path`` in order, as :func:`vmcl.datasets.read_image` returns an image (an alpha
+    channel dropped where it is opaque). A TIFF's pages are read a few at a time, so that a long stack is not
+    held whole: OpenCV finds a page by its offset. An animation's frames are read in one call: each is drawn
+    over the ones before it, so OpenCV decodes from the first frame on every call."""
     import cv2
 
-    for start in range(0, count, _PAGES_READ):
-        wanted = min(_PAGES_READ, count - start)
+    batch = _PAGES_READ if _page_word(path) == "page" else max(count, 1)
+    for start in range(0, count, batch):
+        wanted = min(batch, count - start)
         with _opencv_quiet():
             ok, pages = cv2.imreadmulti(str(path), start, wanted, flags=cv2.IMREAD_UNCHANGED)
         if not ok or len(pages) < wanted:  # damaged after the count was taken: the rest would be lost in silence
             raise InputValueError(f"{path}: OpenCV cannot read {_page_word(path)} {start + len(pages or ())} of its "
                                   f"{count} (damaged?)")
         for index, page in enumerate(pages, start):
-            if page.ndim == 3 and page.shape[2] == 4:
-                # OpenCV gives an animated GIF's frames an alpha channel, opaque but where a pixel is
-                # transparent: an opaque one is the picture.
-                if float(page[..., 3].min()) < full_scale(page.dtype):
-                    raise InputValueError(f"{path}: {_page_word(path)} {index} has transparent pixels; expected grey "
-                                          "or RGB")
-                page = page[..., :3]
-            yield np.ascontiguousarray(page[..., ::-1]) if page.ndim == 3 else page
+            # OpenCV gives an animated GIF's frames an alpha channel, opaque but where a pixel is transparent.
+            yield grey_or_rgb(page, f"{path}: {_page_word(path)} {index}", opaque_alpha=True)
 
 
 def _refuse_duplicates(paths: Sequence[Path]) -> None:
