@@ -18,7 +18,7 @@ import vmcl
 from vmcl import scenes
 from vmcl.cli import main
 from vmcl.datasets import read_image
-from vmcl.errors import InputError, InputTypeError
+from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.output_folder import is_whole, output_folder
 from vmcl.pipeline import Config, VisionMachine
 
@@ -705,6 +705,19 @@ def test_learn_names_a_library_that_is_a_file_before_learning(tmp_path, capsys, 
         assert main(["learn", "ell", str(example), "--library", str(library), "-q"]) == 2
         assert capsys.readouterr().err == (f"vmcl: error: --library {library}: folder must be a directory (a library "
                                            f"of model files), but {tmp_path / 'afile'} is a file\n")
+
+
+def test_model_path_names_a_refused_folder_as_its_caller_does(tmp_path):
+    # vmcl learn told a refused --library from a refused name by the message's first word.
+    from vmcl.recognize import model_path
+
+    (tmp_path / "afile").write_bytes(b"")
+    with pytest.raises(InputValueError, match=re.escape(f"--library {tmp_path / 'afile'}: folder must be a directory")):
+        model_path(tmp_path / "afile", "box", folder_name="--library")
+    with pytest.raises(InputValueError, match="^name must be"):  # the name is no folder's: no prefix
+        model_path(tmp_path / "afile", "../box", folder_name="--library")
+    with pytest.raises(InputValueError, match="^folder must be a directory"):
+        model_path(tmp_path / "afile", "box")
 
 
 def test_a_run_with_models_writes_what_it_recognised_for_programs(tmp_path, capsys):

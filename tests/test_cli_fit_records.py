@@ -11,7 +11,7 @@ import pytest
 from vmcl import datasets, fitted, scenes
 from vmcl.cli import main
 from vmcl.errors import InputTypeError, InputValueError
-from vmcl.learn.cue_fit import fit_cue
+from vmcl.learn.cue_fit import cue_examples, fit_cue
 from vmcl.mrf import preset
 from vmcl.pipeline import Config, VisionMachine, tomllib
 
@@ -124,6 +124,28 @@ def test_folders_without_truth_are_named(edgeless, tmp_path, capsys):
     code, _, err = _fit(capsys, "stereo", "--data", root, "--out", tmp_path / "s.toml")
     assert code == 0
     assert f"vmcl: note: left out {root / 'nogt'}: " in err and "disp0.pfm" in err
+
+
+def test_the_walk_that_finds_the_examples_names_the_folders_left_out(edgeless, tmp_path):
+    # cue_examples gave the examples alone, and fit_cue walked the roots again to name the rest.
+    root = tmp_path / "data"
+    shutil.copytree(edgeless / "a", root / "a")
+    shutil.copytree(edgeless / "a", root / "nogt")
+    (root / "nogt" / "disp0.pfm").unlink()
+    _, names, _, left_out = cue_examples("stereo", [root, root / "nogt"], VisionMachine())
+    assert names == ["a"]
+    assert len(left_out) == 1 and left_out[0].startswith(f"left out {root / 'nogt'}: ") and "disp0.pfm" in left_out[0]
+
+
+def test_fit_cue_names_a_refused_held_value_as_its_caller_does(tmp_path):
+    # The command matched the library's text to say which --fix was refused; the caller now gives the name.
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(InputValueError, match=re.escape("--fix coupling=0: fixed['coupling'] must be > 0")):
+        fit_cue("colour", tmp_path / "empty", fixed={"alpha": 1.0, "coupling": 0.0}, fixed_name="--fix")
+    with pytest.raises(InputValueError, match=r"^fixed\['alpha'\] must be > 0"):  # no name: the library's own
+        fit_cue("stereo", tmp_path / "empty", fixed={"alpha": -1.0})
+    with pytest.raises(InputTypeError, match="fixed_name must be a str"):
+        fit_cue("stereo", tmp_path / "empty", fixed_name=3)
 
 
 def test_fit_cue_refuses_bad_roots_and_machines_by_name(edgeless):

@@ -386,11 +386,8 @@ def _learn(args) -> int:
     from vmcl.recognize import learn, model_path, save_model
     from vmcl.recognize.arguments import object_mask
 
-    try:  # said before the learning, not after it, of the option the user typed
-        target = model_path(args.library, args.name)
-    except InputError as error:  # model_path refuses the name, then the folder: the latter is --library
-        message = str(error)
-        raise BadInput(f"--library {args.library}: {message}" if message.startswith("folder") else message) from None
+    # Said before the learning, not after it, of the option the user typed.
+    target = model_path(args.library, args.name, folder_name="--library")
     if target.exists() and not args.replace:
         raise BadInput(f"{target} exists: give --replace to replace it with the model learned now")
     images = [_read(path, "example") for path in args.images]
@@ -703,14 +700,12 @@ def _fit(args) -> int:
     vm = VisionMachine(_config(args.config))
     print(f"Fitting the {args.cue} MRF to the examples under {', '.join(args.data)} ...", file=sys.stderr)
     try:
-        found = fit_cue(args.cue, args.data, vm=vm, jump=args.jump, fixed=fixed, refine=args.refine)
+        found = fit_cue(args.cue, args.data, vm=vm, jump=args.jump, fixed=fixed, fixed_name="--fix",
+                        refine=args.refine)
     except InputError as error:
-        # The library's advice names its fixed= mapping; the command's user holds a parameter with --fix.
-        text = str(error).replace("fixed={'coupling': 1.0}", "--fix coupling=1, the default")
-        held = re.match(r"fixed\['(\w+)'\]", text)  # a held value: the command's --fix, not fixed=
-        if held is None:
-            raise type(error)(text) from None
-        raise BadInput(f"--fix {held.group(1)}={fixed[held.group(1)]:g}: {text}") from None
+        # The advice to hold the coupling comes from PseudolikelihoodFit.model, which takes no name for fixed=;
+        # the command's user holds a parameter with --fix.
+        raise type(error)(str(error).replace("fixed={'coupling': 1.0}", "--fix coupling=1, the default")) from None
     for line in found.left_out:
         print(f"vmcl: note: {line}", file=sys.stderr)
     provenance = {**found.provenance, **({"config": args.config} if args.config else {})}

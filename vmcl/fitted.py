@@ -29,12 +29,14 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.output_folder import replace_file
 
 __all__ = ["FITTED_BY", "FittedVersionWarning", "check_fitted", "check_fitted_json", "check_writable", "code_sha256",
-           "config_sha256", "files_sha256", "fitted_record", "parameters_sha256", "with_data", "write_fitted",
-           "write_fitted_json"]
+           "config_sha256", "files_sha256", "fitted_record", "parameters_sha256", "toml_values", "with_data",
+           "write_fitted", "write_fitted_json"]
 
 FITTED_BY = "vmcl fit"
 """The ``[fitted]`` table's ``written_by``: the mark of a file vmcl wrote, which it may replace."""
@@ -120,7 +122,8 @@ def write_fitted(path: str | Path, tables: Mapping[str, Any], provenance: Mappin
     path : str or Path
         A new file, or one an earlier ``vmcl fit`` wrote (anything else is refused, untouched).
     tables : mapping
-        Nested tables of numbers and strings (e.g. ``{"mrf": {"stereo": {...}}}``).
+        Nested tables of numbers and strings (e.g. ``{"mrf": {"stereo": {...}}}``; NumPy scalars and tuples
+        are written as :func:`toml_values` gives them).
     provenance : mapping
         The ``[fitted]`` entries besides those this adds (written_by, vmcl, date, parameters_sha256).
 
@@ -130,7 +133,9 @@ def write_fitted(path: str | Path, tables: Mapping[str, Any], provenance: Mappin
         The file written (written beside it first, then moved into place).
     """
     target = check_writable(path)
-    text = _sealed_text({**tables, "fitted": fitted_record(tables, provenance)}, json_file=False)
+    # Plain values first: the hashes are of what the file will hold, as TOML reads it back.
+    tables = toml_values(tables)
+    text = _sealed_text(toml_values({**tables, "fitted": fitted_record(tables, provenance)}), json_file=False)
     replace_file(target, lambda stream: stream.write(text.encode("utf-8")))
     return target
 
@@ -140,7 +145,40 @@ def _text(values: Mapping[str, Any], *, json_file: bool) -> str:
     rendering it again."""
     if json_file:
         return json.dumps(values, indent=1, allow_nan=False) + "\n"
-    return "\n".join([_HEADER, "", *_toml_tables(values, ())]) + "\n"
+    return "\n".join([_HEADER, "", *_toml_tables(toml_values(values), ())]) + "\n"
+
+
+def toml_values(value: Any, where: str = "") -> Any:
+    """``value`` in the types a fitted TOML file holds: mappings as dicts, tuples and lists as lists, NumPy
+    scalars as Python's, bools, ints, finite floats and strings as they are.
+
+    Parameters
+    ----------
+    value : Any
+        A fitted file's tables, or one of their values.
+    where : str
+        ``value``'s dotted key, which the refusal names ("" for a file's tables).
+
+    Raises
+    ------
+    InputValueError
+        A value TOML cannot hold (None, a float that is not finite, any other type), named by its key.
+    """
+    if not isinstance(where, str):
+        raise InputTypeError(f"where must be a str, got {type(where).__name__}")
+    if isinstance(value, Mapping):
+        return {key: toml_values(item, f"{where}.{key}" if where else str(key)) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [toml_values(item, where) for item in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if value is None:
+        raise InputValueError(f"{where or 'value'} is None, which a TOML file cannot hold")
+    if not isinstance(value, (bool, int, float, str)):
+        raise InputValueError(f"{where or 'value'} is {type(value).__name__} {value!r}, which a TOML file cannot hold")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise InputValueError(f"{where or 'value'} must be finite to be written as a fitted value, got {value}")
+    return value
 
 
 def _entries_sha256(values: Mapping[str, Any]) -> str:
@@ -338,16 +376,11 @@ def _toml_tables(tables: Mapping[str, Any], prefix: tuple[str, ...]) -> list[str
 
 
 def _toml_value(value: Any) -> str:
+    """A value :func:`toml_values` gave, in TOML's syntax (which values a file holds is decided there)."""
     if isinstance(value, bool):
         return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        if not math.isfinite(value):
-            raise InputValueError(f"a fitted value must be finite, got {value}")
-        return repr(value)
     if isinstance(value, str):
         return json.dumps(value)  # a TOML basic string: JSON's escapes are TOML's
-    if isinstance(value, (list, tuple)):
+    if isinstance(value, list):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
-    raise InputValueError(f"cannot write {type(value).__name__} {value!r} to TOML")
+    return repr(value)  # an int, or a finite float

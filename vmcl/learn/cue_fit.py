@@ -16,6 +16,7 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from numbers import Real
 from pathlib import Path
 from typing import Any
 
@@ -24,8 +25,8 @@ import numpy as np
 from vmcl import datasets
 from vmcl.cm.core import check_bool, check_choice, check_real
 from vmcl.cues import registered
-from vmcl.errors import InputTypeError, InputValueError
-from vmcl.fitted import code_sha256, config_sha256, files_sha256
+from vmcl.errors import InputError, InputTypeError, InputValueError
+from vmcl.fitted import code_sha256, config_sha256, files_sha256, toml_values
 from vmcl.labels import CUES
 from vmcl.learn import examples as learn_examples
 from vmcl.learn import pseudolikelihood, restoration_fit
@@ -39,7 +40,7 @@ from vmcl.learn.pseudolikelihood import (
 from vmcl.learn.restoration_fit import fit_restoration
 from vmcl.machine import Machine
 
-__all__ = ["FITTABLE_CUES", "CueFit", "cue_examples", "fit_cue"]
+__all__ = ["FITTABLE_CUES", "CueFit", "check_machine", "cue_examples", "fit_cue"]
 
 FITTABLE_CUES = ("stereo", "motion", "colour", "texture")
 """The cues whose ground truth the data set readers give: disparity (stereo), flow (motion), human
@@ -76,7 +77,7 @@ class CueFit:
 
 
 def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
-                 jump: float = learn_examples.DEFAULT_JUMP) -> tuple[list[Example], list[str], list[Path]]:
+                 jump: float = learn_examples.DEFAULT_JUMP) -> tuple[list[Example], list[str], list[Path], list[str]]:
     """The examples of every data set folder at or below ``roots`` for ``cue``.
 
     Parameters
@@ -95,8 +96,11 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
 
     Returns
     -------
-    (examples, names, files)
-        The examples, their folders' names, and the files read (for the data's hash).
+    (examples, names, files, left_out)
+        The examples, their folders' names, the files read (for the data's hash), and the folders below the
+        roots that look like examples but lack part of them (their ground truth, a layout's other files:
+        :func:`vmcl.datasets.stereo_folders_lacking`, :func:`vmcl.datasets.flow_folders_lacking`; none for
+        the BSDS-layout cues), one line each, saying why.
 
     Raises
     ------
@@ -108,8 +112,10 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
     """
     check_choice(cue, "cue", FITTABLE_CUES)
     roots = _roots(roots)
-    _check_machine(vm)
+    check_machine(vm)
     examples, names, files = [], [], []
+    lacking = {"stereo": datasets.stereo_folders_lacking, "motion": datasets.flow_folders_lacking}.get(cue)
+    passed_over: dict[Path, str] = {}  # by place, as the examples: overlapping roots name a folder once
     # Roots that overlap (a folder and one below it, or one given twice) would count an example twice, and
     # the standard errors would claim that much more certainty.
     seen: set[Path] = set()
@@ -122,6 +128,8 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
         return True
 
     for root in roots:
+        for folder, why in lacking(root) if lacking is not None else ():
+            passed_over.setdefault(Path(folder).resolve(), f"left out {folder}: {why}")
         if cue == "stereo":
             for folder in filter(new, datasets.find_stereo_folders(root)):
                 pair = datasets.read_stereo_folder(folder)
@@ -159,26 +167,9 @@ def cue_examples(cue: str, roots: Sequence[str | Path], vm: Any, *,
     if not examples:
         reader = {"stereo": "stereo folders (Middlebury layout)", "motion": "flow folders with ground truth"}.get(
             cue, "BSDS-layout images with segmentations")
-        lacking = "".join(f"; left out {folder}: {why}" for folder, why in _folders_left_out(cue, roots))
         raise InputValueError(f"no {reader} at or below {', '.join(map(str, roots))}: nothing to fit {cue} to"
-                              f"{lacking}")
-    return examples, names, files
-
-
-def _folders_left_out(cue: str, roots: str | Path | Sequence[str | Path]) -> list[tuple[Path, str]]:
-    """The folders at or below ``roots`` that look like ``cue``'s examples but lack part of them (their
-    ground truth, a layout's other files), which :func:`cue_examples` therefore passes over, each with what it
-    lacks (:func:`vmcl.datasets.stereo_folders_lacking`, :func:`vmcl.datasets.flow_folders_lacking`; none
-    for the BSDS-layout cues)."""
-    check_choice(cue, "cue", FITTABLE_CUES)
-    lacking = {"stereo": datasets.stereo_folders_lacking, "motion": datasets.flow_folders_lacking}.get(cue)
-    if lacking is None:
-        return []
-    found: dict[Path, tuple[Path, str]] = {}
-    for root in _roots(roots):
-        for folder, why in lacking(root):
-            found.setdefault(Path(folder).resolve(), (folder, why))
-    return list(found.values())
+                              + "".join(f"; {line}" for line in passed_over.values()))
+    return examples, names, files, list(passed_over.values())
 
 
 def _roots(roots: Any) -> list[Path]:
@@ -195,7 +186,9 @@ def _roots(roots: Any) -> list[Path]:
     return [Path(root) for root in roots]
 
 
-def _check_machine(vm: Any) -> None:
+def check_machine(vm: Any) -> None:
+    """Refuse a ``vm`` that is not a :class:`vmcl.pipeline.VisionMachine` (the machine a fit measures with or
+    runs), by name."""
     from vmcl.pipeline import VisionMachine
 
     if not isinstance(vm, VisionMachine):
@@ -230,8 +223,8 @@ def _measured(vm: Any, cue: str, name: str, left: np.ndarray, right: np.ndarray 
 
 
 def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: float = learn_examples.DEFAULT_JUMP,
-            fixed: Mapping[str, float] | None = None, ridge: float = 1e-6, refine: bool = False,
-            machine: Machine | None = None) -> CueFit:
+            fixed: Mapping[str, float] | None = None, fixed_name: str | None = None, ridge: float = 1e-6,
+            refine: bool = False, machine: Machine | None = None) -> CueFit:
     """Fit ``cue``'s MRF by maximum pseudolikelihood to every example below ``roots`` (and optionally then
     to its restorations' errors).
 
@@ -252,6 +245,9 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
         and takes the data weight to 0; held, the data weight and the line potentials are fitted in the
         energy's own units. ``{}`` fits everything (the default of the piecewise constant cues, whose
         Potts cost kappa is a parameter of the energy at T = 1).
+    fixed_name : str, optional
+        What the caller calls ``fixed`` (a command's option, e.g. "--fix"): a held value refused then begins
+        with it, as ``--fix coupling=0: ``, so that the message names what the caller's user gave.
     refine : bool
         Then move the fitted parameters to lower the errors of the machine's own restorations of the
         examples (:func:`vmcl.learn.fit_restoration`: pixels more than ``jump`` off, missed and false
@@ -271,15 +267,15 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
     check_real(jump, "jump", above=0)
     roots = _roots(roots)
     vm = VisionMachine(machine=machine) if vm is None else vm
-    _check_machine(vm)
-    _settings_tables(vm.config, cue, {})  # a Config the file cannot hold, refused before the work
+    check_machine(vm)
+    tables = _settings_tables(vm.config, cue)  # a Config the file cannot hold is refused before the work
     module = next(c for c in registered() if c.name == cue)
     if check_bool(refine, "refine") and module.kind != "smooth":
         raise InputValueError(f"refine: the {cue} cue's truth is a segmentation, with no scale in pixels to count "
                               "a restoration's wrong values by; refine fits the piecewise smooth cues (stereo, motion)")
     fixed = ({"coupling": 1.0} if module.kind == "smooth" else {}) if fixed is None else fixed
-    check_fixed(fixed, kind=module.kind)  # before the examples are measured, which takes the time
-    examples, names, files = cue_examples(cue, roots, vm, jump=jump)
+    _check_held(fixed, module.kind, fixed_name)  # before the examples are measured, which takes the time
+    examples, names, files, left_out = cue_examples(cue, roots, vm, jump=jump)
     base = vm.config.mrf.settings(cue, module.settings).model
     fit = fit_pseudolikelihood(examples, kind=module.kind, fixed=fixed, ridge=ridge,
                                edge_radius=base.edge_radius if module.candidates_only else None,
@@ -293,8 +289,7 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
                                   tolerance=jump, machine=vm.machine)
         model, error = refined.settings.model, (refined.start_error, refined.error, refined.evaluations,
                                                 refined.converged)
-    table = model_overrides(model, kappa=module.kind == "constant")
-    tables = _settings_tables(vm.config, cue, table)
+    tables["mrf"][cue].update(model_overrides(model, kappa=module.kind == "constant"))
     provenance: dict[str, Any] = {
         "what": f"mrf.{cue}",
         "method": "maximum pseudolikelihood (vmcl.learn.fit_pseudolikelihood)" + (
@@ -316,13 +311,28 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
         provenance["restoration_error"] = [float(error[0]), float(error[1])]
         provenance["restoration_settings_scored"] = int(error[2])
         provenance["restoration_converged"] = bool(error[3])
-    left_out = tuple(f"left out {folder}: {why}" for folder, why in _folders_left_out(cue, roots))
-    return CueFit(cue, fit, tables, provenance, left_out)
+    return CueFit(cue, fit, tables, provenance, tuple(left_out))
 
 
-def _settings_tables(config: Any, cue: str, fitted: Mapping[str, Any]) -> dict[str, Any]:
-    """The tables of a fitted file: every setting of ``config`` (a :class:`vmcl.pipeline.Config`) that differs
-    from the defaults, and its ``[mrf.<cue>]`` overrides updated with ``fitted``, as plain TOML values.
+def _check_held(fixed: Any, kind: str, fixed_name: str | None) -> None:
+    """:func:`vmcl.learn.pseudolikelihood.check_fixed` of ``fixed``; with ``fixed_name``, a refused held value
+    is said as the caller's user gave it (``--fix coupling=0: ...``), checked one at a time to know which."""
+    if fixed_name is not None and not isinstance(fixed_name, str):
+        raise InputTypeError(f"fixed_name must be a str or None, got {type(fixed_name).__name__}")
+    if fixed_name is not None and isinstance(fixed, Mapping):
+        for name, value in fixed.items():
+            try:
+                check_fixed({name: value}, kind=kind)
+            except InputError as error:
+                given = f"{value:g}" if isinstance(value, Real) else repr(value)
+                raise type(error)(f"{fixed_name} {name}={given}: {error}") from None
+    check_fixed(fixed, kind=kind)
+
+
+def _settings_tables(config: Any, cue: str) -> dict[str, Any]:
+    """The tables of a fitted file before the fit: every setting of ``config`` (a :class:`vmcl.pipeline.Config`)
+    that differs from the defaults, as plain TOML values, with its ``[mrf.<cue>]`` table (empty where the
+    Config overrides nothing) for the fitted values to update.
 
     A fitted file is loaded as the whole Config: without the measuring settings it would pair the fitted
     MRF with the default early modules, whose measurements are not those it was fitted to.
@@ -330,7 +340,7 @@ def _settings_tables(config: Any, cue: str, fitted: Mapping[str, Any]) -> dict[s
     Raises
     ------
     InputValueError
-        A setting TOML cannot hold (None where the default is not).
+        A setting TOML cannot hold (None where the default is not, a float that is not finite).
     """
     from vmcl.pipeline import Config
 
@@ -343,27 +353,14 @@ def _settings_tables(config: Any, cue: str, fitted: Mapping[str, Any]) -> dict[s
         changed = {key: value for key, value in section.items()
                    if not (name == "mrf" and key in CUES) and value != default[name][key]}
         if name == "mrf":
-            for other in CUES:
-                overrides = {**section[other], **fitted} if other == cue else section[other]
-                if overrides:
-                    changed[other] = overrides
+            changed.update({other: section[other] for other in CUES if section[other] or other == cue})
         if changed:
             tables[name] = changed
-    return _plain(tables, "")
-
-
-def _plain(value: Any, where: str) -> Any:
-    """``value`` in the types a TOML file holds (NumPy scalars as Python's, tuples as lists)."""
-    if isinstance(value, Mapping):
-        return {key: _plain(item, f"{where}.{key}" if where else key) for key, item in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(item, where) for item in value]
-    if isinstance(value, np.generic):
-        return value.item()
-    if value is None:
-        raise InputValueError(f"config: {where} is None, which a TOML file cannot hold, so the fitted file could "
-                              "not give the machine it measured with; leave it at its default")
-    return value
+    try:
+        return toml_values(tables)
+    except InputValueError as error:
+        raise InputValueError(f"config: {error}, so the fitted file could not give the machine it measured with; "
+                              "leave it at its default") from None
 
 
 def _kernel_path() -> Path:

@@ -21,6 +21,7 @@ from vmcl import labelling, scenes
 from vmcl.cm.core import check_int, check_real
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.fitted import code_sha256
+from vmcl.learn.cue_fit import check_machine
 
 __all__ = ["DEFAULT_SEEDS", "DEFAULT_SHAPE", "RenderedRun", "fit_labeller", "labeller_provenance", "labelling_fields",
            "rendered_runs"]
@@ -55,10 +56,7 @@ def rendered_runs(vm: Any, *, presets: Sequence[str] = scenes.PRESETS, seeds: Se
     dict
         (preset, specular, seed) -> :data:`RenderedRun`.
     """
-    from vmcl.pipeline import VisionMachine
-
-    if not isinstance(vm, VisionMachine):
-        raise InputTypeError(f"vm must be a vmcl.pipeline.VisionMachine, got {type(vm).__name__}")
+    check_machine(vm)
     if vm.config.labels.method != "rule":
         raise InputValueError("vm must label by rule (labels.method = \"rule\"): the classifier is fitted to "
                               "the candidates, not to an earlier classifier's labels")

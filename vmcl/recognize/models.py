@@ -350,17 +350,24 @@ def learn(name: str, images: Sequence[Any], *, masks: Sequence[Any] | None = Non
     return Model(name, tuple(views), tuple(sources) if sources is not None else ("array",) * len(views))
 
 
-def model_path(folder: str | Path, name: str) -> Path:
+def model_path(folder: str | Path, name: str, *, folder_name: str | None = None) -> Path:
     """The file :func:`save_model` writes a model of this name to in a library folder: ``NAME.vmodel.npz``
     (the name checked as a model's is, and the folder as one it can write into: a directory, or none yet
-    and no file in its place or above it)."""
+    and no file in its place or above it).
+
+    ``folder_name`` is what the caller calls ``folder`` (a command's option, e.g. "--library"): a refused
+    folder is then said as the caller's user gave it (``--library PATH: folder must be ...``)."""
+    if folder_name is not None and not isinstance(folder_name, str):
+        raise InputTypeError(f"folder_name must be a str or None, got {type(folder_name).__name__}")
     if not isinstance(folder, (str, Path)):
         raise InputTypeError(f"folder must be a str or Path, got {type(folder).__name__}")
     name = _check_name(name)
+    given = "" if folder_name is None else f"{folder_name} {folder}: "
     folder = Path(folder)
     for above in (folder, *folder.parents):
         if above.exists() and not above.is_dir():
-            raise InputValueError(f"folder must be a directory (a library of model files), but {above} is a file")
+            raise InputValueError(f"{given}folder must be a directory (a library of model files), but {above} is a "
+                                  "file")
     return folder / f"{name}{MODEL_SUFFIX}"
 
 
