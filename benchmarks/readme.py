@@ -613,6 +613,8 @@ def recognition_figures(f: ResultsFile) -> str:
     speed = f.table("step", "ms")
     grown = f.table("models", "vote ms", "ratio to 10 models")
     arcs = f.table("indexing", "flat, curved outlines")
+    stereo = f.table("disparity", "all", "false detections per image")
+    measured = {"disparity": "the depth machine's (vmcl defaults, depth only)"}
     false = re.search(r"^False detections per image: ([0-9.]+)", f.text, re.MULTILINE)
     if false is None:
         raise LookupError("recognition.md states no false detections")
@@ -623,7 +625,10 @@ def recognition_figures(f: ResultsFile) -> str:
     flat = "flat (2-D)"
     return (f"test scenes (30-50 % hidden, clutter): recognition rate {rate('all')} (flat {rate(flat)}, solid "
             f"{rate('solid (3-D, views between the learned ones)')}; bar 0.9), {false.group(1)} false detections "
-            f"per image (bar 0.1), flat objects' corners {scenes.cell({'objects': flat}, 'median px')} px "
+            f"per image (bar 0.1); the same scenes as stereo pairs, occlusion explained by the depth machine's "
+            f"disparity: {stereo.cell(measured, 'all')} (solid {stereo.cell(measured, 'solid')}), "
+            f"{stereo.cell(measured, 'false detections per image')} false detections per image; flat objects' corners "
+            f"{scenes.cell({'objects': flat}, 'median px')} px "
             f"(median) off; curved outlines {arcs.cell({'indexing': 'corners and arcs'}, 'flat, curved outlines')} "
             f"indexed with arcs against {arcs.cell({'indexing': 'corners only'}, 'flat, curved outlines')} by "
             f"corners alone; graf1 -> graf3 corner error "
@@ -762,6 +767,9 @@ BENCHMARKS: tuple[tuple[str, str, Callable[[ResultsFile], str]], ...] = (
                      "the vote as the library grows"), recognition_figures),
     ("recognition_fit", ("recognition's support tolerance, vote cutoff, pairing, alignment stretch, inner "
                          "markings' support and decision threshold chosen on rendered training scenes"),
+     recognition_fit_figures),
+    ("recognition_depth_fit", ("recognition's decision threshold where the depth machine's disparity explains "
+                               "occlusion, chosen on the training scenes rendered as stereo pairs"),
      recognition_fit_figures),
     ("ground_truth", "scene rendering; BSDS evaluation", ground_truth_figures),
     ("first_run", "a fresh install's first runs: time spent building kernels, at a first and a second size",

@@ -52,13 +52,14 @@ SHOWN = (0.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 40.0, 50.0)  # the thresholds 
 MAX_FALSE = 0.1
 
 
-def _tally(library, learned, scenes, solid, **kwargs) -> np.ndarray:
-    """Per threshold: flat objects found, solid objects found, flat objects, solid objects, false detections."""
+def tally(library, learned, scenes, solid, depths=None, **kwargs) -> np.ndarray:
+    """Per threshold: flat objects found, solid objects found, flat objects, solid objects, false detections;
+    ``depths``, one disparity map per scene (or None), explain occlusion."""
     rows = np.zeros((len(THRESHOLDS), 5))
-    for scene in scenes:
+    for scene, depth in zip(scenes, depths if depths is not None else [None] * len(scenes)):
         # Detections at a threshold are those at the lowest one whose significance reaches it: the greedy
         # explanation takes candidates most significant first, so lower ones never change higher ones.
-        found = recognize(scene.image, library, min_significance=min(THRESHOLDS), **kwargs)
+        found = recognize(scene.image, library, min_significance=min(THRESHOLDS), depth=depth, **kwargs)
         for t, threshold in enumerate(THRESHOLDS):
             scores = recognition_scores([d for d in found if d.significance >= threshold], scene.placements, learned)
             for placement, hit in zip(scene.placements, scores.found):
@@ -69,13 +70,13 @@ def _tally(library, learned, scenes, solid, **kwargs) -> np.ndarray:
     return rows
 
 
-def _chosen_threshold(rows: np.ndarray, scenes: int) -> int:
+def chosen_threshold(rows: np.ndarray, scenes: int) -> int:
     """The least threshold whose false detections per image are at most MAX_FALSE (the highest if none)."""
     allowed = np.flatnonzero(rows[:, 4] / scenes <= MAX_FALSE)
     return int(allowed[0]) if len(allowed) else len(THRESHOLDS) - 1
 
 
-def _rate(row: np.ndarray) -> float:
+def rate(row: np.ndarray) -> float:
     return float((row[0] + row[1]) / (row[2] + row[3]))
 
 
@@ -85,7 +86,7 @@ def _choice_rows(fits: dict, chosen: float, scenes: int) -> list[str]:
     for value, (r, t) in fits.items():
         row = r[t]
         mark = " (chosen)" if value == chosen else ""
-        lines.append(f"| {value:g}{mark} | {THRESHOLDS[t]:g} | {_rate(row):.3f} | {row[0] / row[2]:.3f} | "
+        lines.append(f"| {value:g}{mark} | {THRESHOLDS[t]:g} | {rate(row):.3f} | {row[0] / row[2]:.3f} | "
                      f"{row[1] / row[3]:.3f} | {row[4] / scenes:.3f} |")
     return lines
 
@@ -99,29 +100,29 @@ def main() -> int:
     for tolerance in TOLERANCES:
         for count in CANDIDATES:
             for neighbours in NEIGHBOURS:
-                counted = _tally(library, learned, scenes, solid, tolerance=tolerance, candidates=count,
+                counted = tally(library, learned, scenes, solid, tolerance=tolerance, candidates=count,
                                  neighbours=neighbours, stretch=GRID_STRETCH, min_inner=GRID_MIN_INNER)
-                fits[tolerance, count, neighbours] = (counted, _chosen_threshold(counted, len(scenes)))
-    best, candidates, neighbours = max(fits, key=lambda key: (round(_rate(fits[key][0][fits[key][1]]), 6), -key[0],
+                fits[tolerance, count, neighbours] = (counted, chosen_threshold(counted, len(scenes)))
+    best, candidates, neighbours = max(fits, key=lambda key: (round(rate(fits[key][0][fits[key][1]]), 6), -key[0],
                                                               -key[1], -key[2]))
     chosen = {"tolerance": best, "candidates": candidates, "neighbours": neighbours}
     stretches = {}
     for stretch in STRETCHES:
-        counted = fits[best, candidates, neighbours][0] if stretch == GRID_STRETCH else _tally(
+        counted = fits[best, candidates, neighbours][0] if stretch == GRID_STRETCH else tally(
             library, learned, scenes, solid, stretch=stretch, min_inner=GRID_MIN_INNER, **chosen)
-        stretches[stretch] = (counted, _chosen_threshold(counted, len(scenes)))
-    stretch = max(stretches, key=lambda s: (round(_rate(stretches[s][0][stretches[s][1]]), 6), -s))
+        stretches[stretch] = (counted, chosen_threshold(counted, len(scenes)))
+    stretch = max(stretches, key=lambda s: (round(rate(stretches[s][0][stretches[s][1]]), 6), -s))
     inners = {}
     for share in MIN_INNERS:
-        counted = stretches[stretch][0] if share == GRID_MIN_INNER else _tally(
+        counted = stretches[stretch][0] if share == GRID_MIN_INNER else tally(
             library, learned, scenes, solid, stretch=stretch, min_inner=share, **chosen)
-        inners[share] = (counted, _chosen_threshold(counted, len(scenes)))
-    min_inner = max(inners, key=lambda q: (round(_rate(inners[q][0][inners[q][1]]), 6),
+        inners[share] = (counted, chosen_threshold(counted, len(scenes)))
+    min_inner = max(inners, key=lambda q: (round(rate(inners[q][0][inners[q][1]]), 6),
                                            -inners[q][0][inners[q][1]][4], -q))
     rows, at = inners[min_inner]
     threshold = THRESHOLDS[at]
     # Selection's share: the same scenes with no region's corners paired within their regions.
-    alone = _tally(library, learned, scenes, solid, stretch=stretch, min_inner=min_inner, regions=0, **chosen)[at]
+    alone = tally(library, learned, scenes, solid, stretch=stretch, min_inner=min_inner, regions=0, **chosen)[at]
     seconds = time.perf_counter() - start
     n = len(scenes)
     lines = [("# Recognition: the support tolerance, the vote's cutoff, the pairing, the alignment stretch, the inner "
@@ -138,7 +139,7 @@ def main() -> int:
     for (tolerance, count, pairing), (r, t) in fits.items():
         row = r[t]
         mark = " (chosen)" if (tolerance, count, pairing) == (best, candidates, neighbours) else ""
-        lines.append(f"| {tolerance:g}{mark} | {count} | {pairing} | {THRESHOLDS[t]:g} | {_rate(row):.3f} | "
+        lines.append(f"| {tolerance:g}{mark} | {count} | {pairing} | {THRESHOLDS[t]:g} | {rate(row):.3f} | "
                      f"{row[0] / row[2]:.3f} | {row[1] / row[3]:.3f} | {row[4] / n:.3f} |")
     lines += ["", (f"At tolerance {best:g} px, {candidates} candidates and {neighbours} neighbours (the highest rate "
                    "above; a tie goes to the smaller tolerance, then to the fewer candidates, then to the fewer "
@@ -160,12 +161,12 @@ def main() -> int:
               "| min_significance | recognition rate | false detections per image |", "|---|---|---|"]
     for shown in SHOWN:
         row = rows[THRESHOLDS.index(shown)]
-        lines.append(f"| {shown:g} | {_rate(row):.3f} | {row[4] / n:.3f} |")
+        lines.append(f"| {shown:g} | {rate(row):.3f} | {row[4] / n:.3f} |")
     lines += ["", ("Selection at the chosen setting (each corner of the 8 most salient regions also paired with its "
                    f"{neighbours} nearest of its region, beside each feature's {neighbours} nearest):"), "",
               "| selection | recognition rate | false detections per image |", "|---|---|---|",
-              f"| on (regions = 8) | {_rate(rows[at]):.3f} | {rows[at][4] / n:.3f} |",
-              f"| off (regions = 0) | {_rate(alone):.3f} | {alone[4] / n:.3f} |", ""]
+              f"| on (regions = 8) | {rate(rows[at]):.3f} | {rows[at][4] / n:.3f} |",
+              f"| off (regions = 0) | {rate(alone):.3f} | {alone[4] / n:.3f} |", ""]
     RESULTS.write_text("\n".join(lines))
     print("\n".join(lines))
     return 0

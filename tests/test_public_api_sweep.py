@@ -395,8 +395,9 @@ TABLE: tuple[Entry, ...] = (
                                  "albedo": _N, "noise": _N, "seed": _I}),
     # How many objects a scene holds is its objects argument: tests/test_scenes_recognition.py checks the rest.
     _e("vmcl.scenes:recognition_scene", shape=tup(96, 96), objects=1, library=None, occlusion=tup(0.0, 0.9),
-       clutter=1, views=tup(-40.0, 40.0), size=tup(15.0, 20.0), noise=0.0, seed=0,
-       kinds={"library": _O, "occlusion": _T, "clutter": _I, "views": _T, "size": _T, "noise": _N, "seed": _I}),
+       clutter=1, views=tup(-40.0, 40.0), size=tup(15.0, 20.0), noise=0.0, stereo=False, seed=0,
+       kinds={"library": _O, "occlusion": _T, "clutter": _I, "views": _T, "size": _T, "noise": _N, "stereo": _B,
+              "seed": _I}),
     _e("vmcl.scenes:example_views", name="ell", shape=tup(48, 48), kinds={"name": _C, "shape": _T}),
     _e("vmcl.scenes:example_library", names=["ell"], kinds={"names": _O, "machine": _M}),
     _e("vmcl.metrics:recognition_scores", detections=[], placements=[make("placement")],

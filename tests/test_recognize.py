@@ -38,7 +38,9 @@ from vmcl.recognize import (
     vote,
     vote_numpy,
 )
+from vmcl.pipeline import Config, VisionMachine
 from vmcl.scenes import example_library, object_view, recognition_scene
+from vmcl.stereo_evaluation import DEPTH_ONLY
 
 
 @pytest.fixture(scope="module")
@@ -295,6 +297,34 @@ def test_a_large_model_in_the_library_does_not_crowd_the_others_out(seed):
     beside = recognition_scores(recognize(scene.image, crowded), scene.placements, learned)
     assert sum(alone.found) == 2
     assert list(beside.found) == list(alone.found)
+
+
+@pytest.mark.parametrize("seed, hidden", [(7, "quarter"), (19, "ramp")])
+def test_the_machines_disparity_explains_what_hides_an_object(machine, seed, hidden):
+    # Training scenes as stereo pairs: on the image alone the hidden part of each of these objects counts
+    # against it and it is lost (the quarter to a look-alike detected in its place); the depth machine's
+    # disparity says a nearer surface hides that part, and it is found, with no false detection.
+    library, learned = example_library()
+    scene = recognition_scene(seed=seed, stereo=True)
+    disparity = VisionMachine(Config.from_dict(DEPTH_ONLY), machine=machine).run(scene.image, scene.right).disparity
+    alone = recognition_scores(recognize(scene.image, library), scene.placements, learned)
+    explained = recognition_scores(recognize(scene.image, library, depth=disparity), scene.placements, learned)
+    names = [p.name for p in scene.placements]
+    assert not alone.found[names.index(hidden)]
+    assert all(explained.found) and explained.false == 0
+
+
+def test_a_disparity_map_has_a_threshold_of_its_own(monkeypatch):
+    from vmcl.recognize import recognition
+
+    library, _ = example_library()
+    scene = recognition_scene(seed=3, library=("ell", "arrow", "star", "house"), objects=2, occlusion=(0.0, 0.1),
+                              stereo=True)
+    assert recognize(scene.image, library, depth=scene.disparity)
+    monkeypatch.setattr(recognition, "MIN_SIGNIFICANCE_DEPTH", 1e9)
+    assert recognize(scene.image, library) and not recognize(scene.image, library, depth=scene.disparity)
+    # Given, the threshold is the caller's whatever the evidence.
+    assert recognize(scene.image, library, depth=scene.disparity, min_significance=19.5)
 
 
 @pytest.mark.parametrize("quarter_turns", [0, 1, 2, 3])

@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 from vmcl.errors import InputError
-from vmcl.scenes import OBJECTS, TILT, object_view, recognition_scene
+from scipy import ndimage
+
+from vmcl.scenes import LAYER_DISPARITIES, OBJECTS, TILT, object_view, recognition_scene
 
 
 def test_the_library_holds_twenty_objects_at_least_with_curved_and_solid_ones():
@@ -61,9 +63,34 @@ def test_scenes_hide_each_object_within_the_occlusion_range_and_are_reproducible
     assert np.array_equal(again.image, recognition_scene(seed=3).image)
 
 
+def test_a_stereo_scene_is_the_plain_scene_seen_by_a_second_camera():
+    plain, pair = recognition_scene(seed=5), recognition_scene(seed=5, stereo=True)
+    assert plain.right is None and plain.disparity is None
+    assert np.array_equal(plain.image, pair.image)
+    assert [(p.name, p.centre, p.occluded) for p in plain.placements] == \
+        [(p.name, p.centre, p.occluded) for p in pair.placements]
+    clean = recognition_scene(seed=5, stereo=True, noise=0.0)
+    layers = {LAYER_DISPARITIES["back"], LAYER_DISPARITIES["occluder"], LAYER_DISPARITIES["front"],
+              *(LAYER_DISPARITIES["object"] + k for k in range(len(clean.placements)))}
+    # Away from outlines (where a pixel's samples show two layers) every pixel holds its layer's disparity,
+    # and the right view shows it at x - d: all but where a nearer layer hides it from the right camera.
+    inside = ndimage.maximum_filter(clean.disparity, 5) == ndimage.minimum_filter(clean.disparity, 5)
+    assert set(np.unique(clean.disparity[inside])) <= layers and len(np.unique(clean.disparity[inside])) >= 4
+    ys, xs = np.nonzero(inside)
+    seen = xs >= clean.disparity[ys, xs]
+    ys, xs = ys[seen], xs[seen]
+    same = clean.image[ys, xs] == clean.right[ys, xs - clean.disparity[ys, xs].astype(int)]
+    assert same.mean() > 0.99
+    # The left views' centres of the objects lie at their layers (not hidden there in this scene).
+    for k, p in enumerate(clean.placements):
+        x, y = (round(c) for c in p.centre)
+        assert clean.disparity[y, x] in (LAYER_DISPARITIES["object"] + k, LAYER_DISPARITIES["occluder"],
+                                         LAYER_DISPARITIES["front"])
+
+
 @pytest.mark.parametrize("kwargs", [
     {"objects": 0}, {"objects": 7}, {"library": ("ell",), "objects": 2}, {"library": ("nothing",)},
-    {"occlusion": (0.5, 0.2)}, {"size": (0.0, 10.0)}, {"shape": (10, 10)}, {"seed": -1}])
+    {"occlusion": (0.5, 0.2)}, {"size": (0.0, 10.0)}, {"shape": (10, 10)}, {"seed": -1}, {"stereo": 1}])
 def test_bad_scene_arguments_are_refused_by_name(kwargs):
     name = next(iter(kwargs))
     with pytest.raises(InputError, match=name if name != "objects" or kwargs.get("library") is None else "library"):

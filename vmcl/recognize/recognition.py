@@ -39,7 +39,18 @@ from vmcl.recognize.models import Library, View
 from vmcl.recognize.selection import corner_regions, select_regions
 from vmcl.recognize.verification import TRANSFORMS, Transform, carry, distance_transform, refine, support
 
-__all__ = ["Detection", "recognize"]
+__all__ = ["MIN_SIGNIFICANCE", "MIN_SIGNIFICANCE_DEPTH", "Detection", "recognize"]
+
+MIN_SIGNIFICANCE = 19.0
+""":func:`recognize`'s default ``min_significance`` on the image alone: the least that kept false detections to
+at most 0.1 per image on rendered training scenes at the default ``tolerance`` (benchmarks/
+recognition_fit.py, results/recognition_fit.md)."""
+
+MIN_SIGNIFICANCE_DEPTH = 19.5
+""":func:`recognize`'s default ``min_significance`` where a disparity map explains occlusion (``depth``, or a
+Result's disparity): chosen by the same rule on the same training scenes rendered as stereo pairs, the
+depth machine's disparity given (benchmarks/recognition_depth_fit.py, results/recognition_depth_fit.md).
+Points a nearer surface hides leave an object's coverage, which raises every candidate's significance."""
 
 _CORNER_REACH = 3.0  # px: a view's corner and an image corner match this close,
 _CORNER_TURN = np.radians(30)  # their bisectors this close in direction
@@ -135,7 +146,7 @@ def _features(data: Any, sigma: float, machine: Machine) -> Features:
 
 
 def recognize(image: Any, library: Library, *, transform: Transform = "similarity", sigma: float = 1.5,
-              scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float = 19.0,
+              scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float | None = None,
               min_support: int = 40, min_inner: float = 0.0,
               candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 24, regions: int = 8,
               tolerance: float = 3.0, stretch: float = 1.1, arcs: bool = True, depth: np.ndarray | None = None,
@@ -163,12 +174,13 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     min_score : float
         The fraction of a model's boundary that must be supported, in (0, 1] (:attr:`Detection.score`:
         each edge pixel counted once, none that a detection kept before explains).
-    min_significance : float
+    min_significance : float, optional
         The least significance (-log10 of the number of false alarms, :attr:`Detection.significance`) a
         detection needs. The default is the least that kept false detections to at most 0.1 per image on
-        rendered training scenes at the default ``tolerance`` (benchmarks/recognition_fit.py,
-        results/recognition_fit.md); it depends on the tolerance, so fit the two together; 0 is the
-        a contrario criterion's own (one false alarm expected), which in clutter admits look-alikes.
+        rendered training scenes at the default ``tolerance``: :data:`MIN_SIGNIFICANCE` on the image alone,
+        :data:`MIN_SIGNIFICANCE_DEPTH` where a disparity map explains occlusion (``depth``); it depends on the
+        tolerance, so fit the two together; 0 is the a contrario criterion's own (one false alarm expected),
+        which in clutter admits look-alikes.
     min_support : int
         The fewest distinct image edge pixels a detection explains, >= 1.
     min_inner : float
@@ -236,7 +248,8 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     transform = check_choice(transform, "transform", TRANSFORMS)
     sigma = check_real(sigma, "sigma", above=0)
     min_score = check_real(min_score, "min_score", above=0, maximum=1)
-    min_significance = check_real(min_significance, "min_significance")
+    if min_significance is not None:
+        min_significance = check_real(min_significance, "min_significance")
     min_support = check_int(min_support, "min_support", minimum=1)
     min_inner = check_real(min_inner, "min_inner", minimum=0, maximum=1)
     candidates = check_int(candidates, "candidates", minimum=1, maximum=MAX_CANDIDATES)
@@ -262,8 +275,11 @@ def recognize(image: Any, library: Library, *, transform: Transform = "similarit
     index = index_for(library)
     found = vote(index, at, bisector, opening, pairs, radius=radius, scales=scales, candidates=candidates,
                  min_votes=min_votes, machine=machine)
+    depth = _depth(image, depth, features.shape)
+    if min_significance is None:
+        min_significance = MIN_SIGNIFICANCE if depth is None else MIN_SIGNIFICANCE_DEPTH
     return _verify(found, index.views, library, features, transform, min_score, min_significance, min_support,
-                   min_inner, tolerance, verify, stretch, _depth(image, depth, features.shape), machine)
+                   min_inner, tolerance, verify, stretch, depth, machine)
 
 
 def _gathered(found: Candidates, views: list[tuple[int, int, View]],

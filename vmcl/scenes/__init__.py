@@ -74,6 +74,7 @@ from vmcl.scenes.clutter import ClutterDisplay, clutter_display
 from vmcl.scenes.occlusion import Junction, OcclusionScene, occlusion_scene, render_occlusion
 from vmcl.scenes.presets import PRESETS, preset
 from vmcl.scenes.recognition import (
+                                     LAYER_DISPARITIES,
                                      LEARNED_YAWS,
                                      OBJECTS,
                                      TILT,
@@ -90,6 +91,7 @@ from vmcl.scenes.sequences import advance, render_sequence
 from vmcl.scenes.world import Body, Camera, Face, Light, Mark, Motion, Texture, World, box, fold
 
 __all__ = [
+                                     "LAYER_DISPARITIES",
                                      "LEARNED_YAWS",
                                      "OBJECTS",
                                      "PRESETS",

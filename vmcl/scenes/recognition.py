@@ -23,12 +23,12 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from vmcl.cm.core import check_int, check_real
+from vmcl.cm.core import check_bool, check_int, check_real
 from vmcl.errors import InputTypeError, InputValueError
 from vmcl.machine import Machine
 from vmcl.recognize import Library, learn
 
-__all__ = ["LEARNED_YAWS", "OBJECTS", "TILT", "Placement", "RecognitionScene", "SceneObject", "example_library",
+__all__ = ["LAYER_DISPARITIES", "LEARNED_YAWS", "OBJECTS", "TILT", "Placement", "RecognitionScene", "SceneObject", "example_library",
            "example_views", "object_view", "recognition_scene"]
 
 TILT = 25.0
@@ -165,13 +165,27 @@ class RecognitionScene:
     Attributes
     ----------
     image : float32 (H, W)
-        Greys in [0, 1] plus noise.
+        Greys in [0, 1] plus noise: the left view of a stereo scene.
     placements : tuple of Placement
         The library objects in the scene (not the clutter or occluders).
+    right : float32 (H, W) or None
+        A stereo scene's right view (its own noise), rows being epipolar lines; None otherwise.
+    disparity : float32 (H, W) or None
+        A stereo scene's true disparity of the left view (x_right = x_left - d), each layer at its
+        :data:`LAYER_DISPARITIES`' (a pixel on an outline holds the mean of the layers its samples show).
     """
 
     image: np.ndarray
     placements: tuple[Placement, ...]
+    right: np.ndarray | None = None
+    disparity: np.ndarray | None = None
+
+
+LAYER_DISPARITIES = {"back": 4.0, "object": 7.0, "occluder": 13.0, "front": 15.0}
+"""A stereo recognition scene's disparity of each layer, in pixels, far to near as they are painted: the
+background and the clutter behind everything, the library objects (the k-th at ``object + k``, nearer
+than those placed before it, which it may overlap), their occluders, and the clutter in front. Each layer
+is flat and parallel to the image: the right view is the same strokes moved left by their disparity."""
 
 
 def _rotate(vertices: np.ndarray, yaw: float) -> np.ndarray:
@@ -323,8 +337,10 @@ class _Canvas:
 
     def __init__(self, h: int, w: int, background: float) -> None:
         self.h, self.w = h, w
+        self.background = background
         self.grey = np.full((h * _SUPERSAMPLE, w * _SUPERSAMPLE), background, np.float32)
         self.owner = np.full(self.grey.shape, -1, np.int32)
+        self.strokes: list[tuple[np.ndarray, float, int]] = []  # (polygon, grey, owner), far to near
 
     def paint(self, polygon: np.ndarray, grey: float, owner: int) -> None:
         fine = (polygon + 0.5) * _SUPERSAMPLE - 0.5
@@ -336,6 +352,7 @@ class _Canvas:
         on = mask.astype(bool)
         self.grey[on] = grey
         self.owner[on] = owner
+        self.strokes.append((polygon, grey, owner))
 
     @staticmethod
     def whole_area(polygons: list[np.ndarray]) -> int:
@@ -358,7 +375,36 @@ class _Canvas:
         return mask.astype(bool)
 
     def image(self) -> np.ndarray:
-        return self.grey.reshape(self.h, _SUPERSAMPLE, self.w, _SUPERSAMPLE).mean(axis=(1, 3)).astype(np.float32)
+        return self._pixels(self.grey)
+
+    def _pixels(self, samples: np.ndarray) -> np.ndarray:
+        """A sample plane averaged over each pixel's samples."""
+        return samples.reshape(self.h, _SUPERSAMPLE, self.w, _SUPERSAMPLE).mean(axis=(1, 3)).astype(np.float32)
+
+    def stereo(self) -> tuple[np.ndarray, np.ndarray]:
+        """The right view of the strokes painted so far, each moved left by its layer's disparity
+        (:data:`LAYER_DISPARITIES`), and the left view's disparity."""
+        right = _Canvas(self.h, self.w, self.background)
+        disparity = np.full(self.grey.shape, LAYER_DISPARITIES["back"], np.float32)
+        for (polygon, grey, owner), d in zip(self.strokes, _layer_disparities(self.strokes)):
+            right.paint(polygon - np.array([d, 0.0]), grey, owner)
+            disparity[self.area(polygon)] = d
+        return right.image(), self._pixels(disparity)
+
+
+def _layer_disparities(strokes: list[tuple[np.ndarray, float, int]]) -> list[float]:
+    """Each stroke's disparity, by the layer :func:`_draw_scene` paints it in: clutter (owner -2) before the
+    occluders (-3) lies behind everything, after them in front; object k's faces are at ``object + k``."""
+    found, occluders_painted = [], False
+    for _, _, owner in strokes:
+        occluders_painted |= owner == -3
+        if owner >= 0:
+            found.append(LAYER_DISPARITIES["object"] + owner)
+        elif owner == -3:
+            found.append(LAYER_DISPARITIES["occluder"])
+        else:
+            found.append(LAYER_DISPARITIES["front" if occluders_painted else "back"])
+    return found
 
 
 def _check_shape(shape: object) -> tuple[int, int]:
@@ -499,7 +545,8 @@ def _grey(rng: np.random.Generator, avoid: list[float], contrast: float = 0.15) 
 
 def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, library: tuple[str, ...] | None = None,
                       occlusion: tuple[float, float] = (0.3, 0.5), clutter: int = 8, views: tuple[float, float] = (-40, 40),
-                      size: tuple[float, float] = (45, 60), noise: float = 0.01, seed: int = 0) -> RecognitionScene:
+                      size: tuple[float, float] = (45, 60), noise: float = 0.01, stereo: bool = False,
+                      seed: int = 0) -> RecognitionScene:
     """Library objects at random poses among clutter, each partly hidden behind an occluder.
 
     Parameters
@@ -524,6 +571,10 @@ def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, 
         Each object's scale (pixels per unit of its frame, its rms radius) is uniform in this range.
     noise : float
         Standard deviation of the Gaussian noise, >= 0.
+    stereo : bool
+        Also render the right view of a stereo pair and the true disparity: each layer flat at its
+        :data:`LAYER_DISPARITIES`', nearer as it is painted later, so that a stereo machine can tell what
+        hides each object. The left view and the placements are those of ``stereo=False``.
     seed : int
         >= 0; the same seed gives the same scene.
 
@@ -550,17 +601,22 @@ def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, 
     yaw_low, yaw_high = _pair(views, "views", -180.0, 180.0)
     small, large = _pair(size, "size", 1.0, float(min(h, w)))
     noise = check_real(noise, "noise", minimum=0)
+    stereo = check_bool(stereo, "stereo")
     seed = check_int(seed, "seed", minimum=0)
     rng = np.random.default_rng(seed)
     for _ in range(_SCENE_ATTEMPTS):  # the first draw is the scene unless an object left the range
         drawn = _draw_scene(rng, (h, w), count, names, (low, high), clutter, (yaw_low, yaw_high), (small, large))
         if drawn is None:
             continue
-        image, placements = drawn
+        canvas, placements = drawn
         if all(low <= p.occluded <= high for p in placements):
+            right, disparity = canvas.stereo() if stereo else (None, None)
+            # The left view's noise is drawn first, so that a stereo scene's left view is the plain scene's.
+            views = [canvas.image(), *([right] if stereo else [])]
             if noise > 0:
-                image += rng.normal(0, noise, image.shape).astype(np.float32)
-            return RecognitionScene(image, placements)
+                for view in views:
+                    view += rng.normal(0, noise, view.shape).astype(np.float32)
+            return RecognitionScene(views[0], placements, right, disparity)
     raise InputValueError(f"occlusion: no arrangement of {count} object(s) of size {small:g}..{large:g} px in "
                           f"{w} x {h} hid each within {low:g}..{high:g} in {_SCENE_ATTEMPTS} draws; widen the range, "
                           "enlarge the shape or place fewer or smaller objects")
@@ -571,8 +627,8 @@ _SCENE_ATTEMPTS = 20
 
 def _draw_scene(rng: np.random.Generator, shape: tuple[int, int], count: int, names: tuple[str, ...],
                 occlusion: tuple[float, float], clutter: int, views: tuple[float, float],
-                size: tuple[float, float]) -> tuple[np.ndarray, tuple[Placement, ...]] | None:
-    """One draw of :func:`recognition_scene` (its arguments checked), before noise: the image and the
+                size: tuple[float, float]) -> tuple[_Canvas, tuple[Placement, ...]] | None:
+    """One draw of :func:`recognition_scene` (its arguments checked), before noise: the canvas and the
     placements, each with the share of it hidden in the end; None where an occluder found no place."""
     (h, w), (low, high), (yaw_low, yaw_high), (small, large) = shape, occlusion, views, size
     background = float(rng.uniform(0.35, 0.65))
@@ -633,7 +689,7 @@ def _draw_scene(rng: np.random.Generator, shape: tuple[int, int], count: int, na
         hidden = float(((own & (canvas.owner != k)).sum() + total - int(own.sum())) / total)
         p = placements[k]
         placements[k] = Placement(p.name, p.yaw, p.scale, p.angle, p.centre, p.corners, p.corner_ids, hidden)
-    return canvas.image(), tuple(placements)
+    return canvas, tuple(placements)
 
 
 def _pair(value: object, name: str, lowest: float, highest: float) -> tuple[float, float]:
