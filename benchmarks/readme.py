@@ -306,8 +306,8 @@ def motion_variational_fit_figures(f: ResultsFile) -> str:
 def rectification_figures(f: ResultsFile) -> str:
     table = f.table("moved", "mean bad-1")
     offset = re.search(r"smallest typical measured at it, rounded down to [\d.]+ px, is ([\d.]+ px)", f.text)
-    spread = re.search(r"largest spread measured on a pair only shifted is [\d.]+ px, rounded up to [\d.]+ px "
-                       r"([\d.]+ px)", f.text)
+    spread = re.search(r"largest spread measured on a pair only shifted is [\d.]+ px, the next step of [\d.]+ px "
+                       r"above it ([\d.]+ px)", f.text)
     if not (offset and spread):
         raise LookupError("rectification.md states no thresholds")
     rising = " / ".join(table.cell({"moved": moved}, "mean bad-1") for moved in ("0 px", "1 px", "3 px"))

@@ -10,8 +10,9 @@ Run: python benchmarks/recognition.py [--data ../shared/datasets] [--out benchma
   benchmarks/recognition_fit.py chose on training scenes (the default of vmcl.recognize.recognize); and the
   same scenes indexed by corners alone (arcs=False), what the arcs add, and with the other choice of the
   support required of a view's inner markings (none, or 0.1 where the default requires none); and the same
-  scenes rendered as stereo pairs, occlusion explained by the depth machine's disparity (and, as a bound,
-  by the true one), at the threshold benchmarks/recognition_depth_fit.py chose on training scenes.
+  scenes rendered as stereo pairs, occlusion explained by the depth machine's disparity (and by the true
+  one, at the same threshold), at the threshold benchmarks/recognition_depth_fit.py chose on training
+  scenes.
 - OpenCV's samples: graf1 learned as a model and found in graf3 (a homography), its corners against the
   true homography H1to3p beside ORB + RANSAC and SIFT + RANSAC, configured as OpenCV's feature-homography
   tutorial does (ratio test 0.75, RANSAC reprojection threshold 5 px); box learned from box.png and found in
@@ -149,7 +150,7 @@ def scenes_section() -> list[str]:
 
 def _stereo_lines(library, learned, kinds, placed, false) -> list[str]:
     """The test scenes rendered as stereo pairs (their left views are the scenes above): occlusion explained
-    by the depth machine's disparity, and by the scenes' true disparity (a bound, not a method)."""
+    by the depth machine's disparity, and by the scenes' true disparity at the same threshold."""
     vm = VisionMachine(Config.from_dict(DEPTH_ONLY))
     measured, measured_false = _scene_tally(library, learned, lambda scene: vm.run(scene.image, scene.right).disparity)
     true, true_false = _scene_tally(library, learned, lambda scene: scene.disparity)
@@ -160,11 +161,11 @@ def _stereo_lines(library, learned, kinds, placed, false) -> list[str]:
               "occlusion (`recognize(..., depth=...)`): the model points a nearer surface hides leave an object's "
               "coverage, at the threshold benchmarks/recognition_depth_fit.py chose on the training scenes "
               f"(min_significance {MIN_SIGNIFICANCE_DEPTH:g}; {MIN_SIGNIFICANCE:g} on the image alone). The true "
-              "disparity is a bound on what a depth map can add, not a method."), "",
+              "disparity is not a method, and the threshold was chosen with the machine's, not with it."), "",
              "| disparity | flat | solid | all | false detections per image |", "|---|---|---|---|---|"]
     for label, tally, wrong in (("none (the image alone)", placed, false),
                                 ("the depth machine's (vmcl defaults, depth only)", measured, measured_false),
-                                ("the scene's true disparity (bound)", true, true_false)):
+                                ("the scene's true disparity (same threshold)", true, true_false)):
         lines.append(f"| {label} | {_rate(tally, kinds['flat']):.3f} | {_rate(tally, kinds['solid']):.3f} | "
                      f"{_rate(tally, every):.3f} | {wrong / len(TEST_SEEDS):.3f} |")
     return lines + ["", ("Bars (the depth machine's disparity): recognition rate at least 0.9: "

@@ -17,9 +17,9 @@ surface's disparity, so it could not choose):
   pair at that shift, rounded down to STEP: every training pair moved that far is noted. (The threshold
   is compared with what is measured, and the real pairs' own rows are a little off, so a shift does not
   measure as itself: map's rows sit about 0.2 px up.)
-- ROW_SPREAD_NOTE, above which the note adds that the offset varies across the image (the views turned
-  or scaled), is the largest ``spread`` measured on a training pair that is only shifted, rounded up to
-  STEP: no pair whose rows are merely offset is said to be turned.
+- ROW_SPREAD_NOTE, from which the note adds that the offset varies across the image (the views turned
+  or scaled), is the step of STEP above the largest ``spread`` measured on a training pair that is only
+  shifted: no pair whose rows are merely offset is said to be turned.
 The note itself follows ``typical`` alone, whether the rows are offset as a whole or turned: what harms a
 match is its own row's offset, and half the tracks off by the threshold is half the image.
 The turned pairs are reported, never used to choose. A turn moves the right view's columns too (by
@@ -117,7 +117,8 @@ def main() -> None:
     offset_note = (None if chosen is None else
                    math.floor(np.nanmin([m["typical"] for m in got[("shift", chosen)]]) / STEP) * STEP)
     shifted_spread = float(np.nanmax([m["spread"] for s in SHIFTS for m in got[("shift", s)]]))
-    spread_note = math.ceil(shifted_spread / STEP) * STEP
+    # The next step above the largest: the note's test is >=, which a shifted pair at a whole step would meet.
+    spread_note = (math.floor(shifted_spread / STEP) + 1) * STEP
     names = [pair.name for pair in pairs]
     lines = [
         "# Rows that are not epipolar lines",
@@ -153,7 +154,8 @@ def main() -> None:
                + (f"{chosen:g} px; the smallest typical measured at it, rounded down to {STEP:g} px, is "
                   f"{offset_note:.2f} px." if chosen is not None else "none of the shifts reaches it.")
                + f" vmcl.early.rectification.ROW_OFFSET_NOTE is {ROW_OFFSET_NOTE:g} px. The largest spread measured "
-               f"on a pair only shifted is {shifted_spread:.3f} px, rounded up to {STEP:g} px {spread_note:.2f} px; "
+               f"on a pair only shifted is {shifted_spread:.3f} px, the next step of {STEP:g} px above it "
+               f"{spread_note:.2f} px; "
                f"vmcl.early.rectification.ROW_SPREAD_NOTE is {ROW_SPREAD_NOTE:g} px. The turned pairs are "
                "reported, not used to choose; their bad-1 also counts the slant a turn gives every surface's "
                "disparity.")]

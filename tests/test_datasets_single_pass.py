@@ -110,3 +110,12 @@ def test_the_masks_are_applied_and_each_must_have_the_frames_size(tmp_path):
     cv2.imwrite(str(folder / "gt" / "occlusions" / "frame_0010.png"), occluded[:4])
     with pytest.raises(ValueError, match=r"occlusions/frame_0010.png is 10 x 4, the frame frame10.png 10 x 8"):
         datasets.read_flow_folder(folder)
+
+
+def test_a_check_refuses_by_raising_not_by_returning(tmp_path):
+    # A predicate's False refused nothing: the image was read as if the check had passed.
+    path = tmp_path / "one.png"
+    assert cv2.imwrite(str(path), np.zeros((4, 4), np.uint8))
+    with pytest.raises(TypeError, match="check must refuse by raising and return None, got False"):
+        datasets.read_image(path, check=lambda where, data: False)
+    assert datasets.read_image(path, check=lambda where, data: None).shape == (4, 4)

@@ -190,6 +190,9 @@ def test_a_chunk_runs_only_the_pairs_it_returns(client, monkeypatch):
     # run_chunk itself: its skipped leading pairs are not run either.
     assert vmcl_distributed.run_chunk(frames[2:], 2, 2, FAST) == [(4, (4, 5))]
     assert ran == [(4, 5)]
+    for skip in (-1, 5, True, 1.5):  # clipped, or beyond the chunk's pairs, in silence before
+        with pytest.raises((TypeError, ValueError), match="skip"):
+            vmcl_distributed.run_chunk(frames[2:], 2, skip, FAST)
 
 
 # ------------------------------------------------------------------------------------------------ vmcl batch

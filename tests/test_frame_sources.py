@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
-from vmcl import datasets
+from vmcl import datasets, frame_sources
 from vmcl.frame_sources import _PAGES_READ, open_frames
 
 
@@ -53,8 +53,14 @@ def test_an_animation_is_decoded_once_per_read(tmp_path, monkeypatch, suffix):
     assert cv2.imwriteanimation(str(path), animation)
     calls = _calls(monkeypatch, "imreadmulti")
     read = list(open_frames(path).frames())
-    assert len(calls) == 1 and len(read) == len(frames)
+    # One call for all the frames, after one for the first alone (its size, against ANIMATION_BYTES).
+    assert len(calls) == 2 and len(read) == len(frames)
     assert all(np.array_equal(a, b) for a, b in zip(read, frames))
+    # One too large to decode at once is refused, naming its size, before it is decoded.
+    monkeypatch.setattr(frame_sources, "ANIMATION_BYTES", 1000)
+    with pytest.raises(ValueError, match=re.escape(f"{path}: its {len(frames)} frames of")):
+        next(open_frames(path).frames())
+    assert len(calls) == 3
 
 
 def test_a_tiffs_pages_are_read_a_few_at_a_time_as_read_image_reads_an_image(tmp_path, monkeypatch):

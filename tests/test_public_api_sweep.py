@@ -519,7 +519,7 @@ TABLE: tuple[Entry, ...] = (
     # ------------------------------------------------------------------ datasets
     _e("vmcl.datasets:read_image", path=path("png"), picture=False, check=None,
        kinds={"path": _P, "picture": _B, "check": _O}),
-    _e("vmcl.datasets:grey_or_rgb", image=IMG, name="an image", opaque_alpha=False,
+    _e("vmcl.datasets:from_opencv", image=IMG, name="an image", opaque_alpha=False,
        kinds={"image": _A, "name": _O, "opaque_alpha": _B}),
     _e("vmcl.datasets:read_mask", path=path("png"), value=255, kinds={"path": _P, "value": _I}),
     _e("vmcl.datasets:read_pfm", path=path("pfm"), kinds={"path": _P}),

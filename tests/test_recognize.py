@@ -15,6 +15,7 @@ from scipy import ndimage
 from vmcl.early.edges import canny
 from vmcl.errors import InputError
 from vmcl.metrics import recognition_scores
+from vmcl.pipeline import Config, VisionMachine
 from vmcl.recognize import (
     Index,
     Library,
@@ -38,7 +39,6 @@ from vmcl.recognize import (
     vote,
     vote_numpy,
 )
-from vmcl.pipeline import Config, VisionMachine
 from vmcl.scenes import example_library, object_view, recognition_scene
 from vmcl.stereo_evaluation import DEPTH_ONLY
 

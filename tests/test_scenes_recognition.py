@@ -6,10 +6,9 @@ import math
 
 import numpy as np
 import pytest
-
-from vmcl.errors import InputError
 from scipy import ndimage
 
+from vmcl.errors import InputError
 from vmcl.scenes import LAYER_DISPARITIES, OBJECTS, TILT, object_view, recognition_scene
 
 

@@ -60,7 +60,7 @@ __all__ = [
     "find_flow_folders",
     "find_stereo_folders",
     "flow_folders_lacking",
-    "grey_or_rgb",
+    "from_opencv",
     "load_bsds",
     "load_flow",
     "load_stereo",
@@ -125,9 +125,10 @@ def read_image(path, *, picture: bool = False, check: Callable[[Path, bytes], No
         type's full scale is scaled to that scale, as viewers show it (a 10-bit PGM's 1023 is white, not
         1/64 of it). False (the default): the values as stored, as maps of data (a disparity, a mask) need.
     check : callable, optional
-        ``check(path, data)``, run on the file's bytes before they are decoded: a caller's own refusal
-        (raising), such as :mod:`vmcl.frame_sources`' of a frame file that holds several pages, which then
-        need not open the file again.
+        ``check(path, data)``, run on the file's bytes before they are decoded: a caller's own refusal, such
+        as :mod:`vmcl.frame_sources`' of a frame file that holds several pages, which then need not open the
+        file again. It refuses by raising and returns None; any other return is refused (a predicate's
+        False would otherwise refuse nothing).
 
     Returns
     -------
@@ -148,8 +149,8 @@ def read_image(path, *, picture: bool = False, check: Callable[[Path, bytes], No
         raise InputTypeError(f"check must be a callable (path, data) or None, got {type(check).__name__}")
     path = _existing(path, "an image file")
     data = path.read_bytes()
-    if check is not None:
-        check(path, data)
+    if check is not None and (returned := check(path, data)) is not None:
+        raise InputTypeError(f"check must refuse by raising and return None, got {returned!r}")
     refusal = _refused_undecoded(data)
     if refusal is not None:
         raise InputValueError(f"{path} {refusal}")
@@ -169,7 +170,7 @@ def read_image(path, *, picture: bool = False, check: Callable[[Path, bytes], No
     if image is None:
         raise InputValueError(f"cannot decode an image from {path}")
     sys.stderr.write(printed)  # the decoders' other notes (e.g. libpng's about colour profiles) stay visible
-    image = grey_or_rgb(image, str(path))
+    image = from_opencv(image, name=str(path))
     if check_bool(picture, "picture") and (maxval := _pnm_maxval(data)) is not None:
         full = np.iinfo(image.dtype).max
         if int(image.max(initial=0)) > maxval:
@@ -182,16 +183,17 @@ def read_image(path, *, picture: bool = False, check: Callable[[Path, bytes], No
 _ALPHA_REFUSED = "has an alpha channel; expected grey or RGB"
 
 
-def grey_or_rgb(image: np.ndarray, name: str, *, opaque_alpha: bool = False) -> np.ndarray:
-    """An image as OpenCV decodes it, as vmcl returns one: grey, or colour in RGB order (OpenCV's BGR
-    reversed), contiguous. An alpha channel is refused, naming ``name``; with ``opaque_alpha`` it is dropped
-    where it is opaque at every pixel, as OpenCV gives an animation's frames one, and refused where it is not
-    (a transparent pixel has no colour to take)."""
-    real_host_array(image, "image", ndims=(2, 3))
-    if image.ndim == 3 and image.shape[2] not in (3, 4):
-        raise InputValueError(f"image must be (H, W), (H, W, 3) or (H, W, 4), got shape {image.shape}")
+def from_opencv(image: np.ndarray, *, name: str = "image", opaque_alpha: bool = False) -> np.ndarray:
+    """An image as OpenCV decodes it (colour in BGR order), as vmcl returns one: grey, or colour in RGB order,
+    contiguous. An alpha channel is refused, naming ``name``; with ``opaque_alpha`` it is dropped where it is
+    opaque at every pixel, as OpenCV gives an animation's frames one, and refused where it is not (a
+    transparent pixel has no colour to take). Not for an image already in RGB order: its channels would be
+    reversed."""
     if not isinstance(name, str):
         raise InputTypeError(f"name must be a str, got {type(name).__name__}")
+    real_host_array(image, name, ndims=(2, 3))
+    if image.ndim == 3 and image.shape[2] not in (3, 4):
+        raise InputValueError(f"{name} must be (H, W), (H, W, 3) or (H, W, 4), got shape {image.shape}")
     if image.ndim == 3:
         if image.shape[2] == 4:
             if not opaque_alpha:
@@ -1144,7 +1146,9 @@ class FlowSequence:
         The folder's name, with its parent's where the flow is not beside the frames ("clean/alley_1",
         "other-data/Dimetrodon").
     frames : tuple of Path
-        The frames in the order of their numbers.
+        The frames in the order of their numbers. Those up to ``index + 1`` were read and checked; those
+        after it were checked as files (not empty, not cut short, no alpha) but not decoded, since nothing
+        scored reads them: one of another size, or one OpenCV cannot decode, is refused when it is read.
     index : int
         The frame the ground truth starts from: the flow is from ``frames[index]`` to
         ``frames[index + 1]``; the frames before it are the sequence's past.

@@ -61,6 +61,7 @@ try:
 except ImportError as _missing:  # an optional extra: say which one
     raise ImportError("vmcl.distributed needs Dask's distributed scheduler: pip install 'vmcl[dask]'") from _missing
 
+from vmcl.cm.core import check_int
 from vmcl.datasets import IMAGE_SUFFIXES
 from vmcl.errors import InputError, InputTypeError, InputValueError
 from vmcl.machine import Machine
@@ -219,10 +220,11 @@ def run_chunk(frames: Sequence[np.ndarray], first: int, skip: int, config: Mappi
     list of (int, Result)
         Each returned pair's video index t (the pair t, t + 1) and its Result.
     """
+    skip = check_int(skip, "skip", minimum=0, maximum=max(len(frames) - 1, 0))
     vm = _vision_machine(config)
     # Only the returned pairs run: a skipped pair's Result would be thrown away, and no pair reads another's.
     return [(first + k, vm.run(frames[k], None if rights is None else rights[k], frames[k + 1]))
-            for k in range(max(skip, 0), len(frames) - 1)]
+            for k in range(skip, len(frames) - 1)]
 
 
 @dataclass(frozen=True)
@@ -370,8 +372,9 @@ def map_sequence(client: Client, frames: Sequence[np.ndarray], config: Config | 
     chunk : int
         Pairs each task returns (>= 1).
     overlap : int
-        Pairs before its own that a chunk may see (>= 0). No pair depends on another, so a chunk neither
-        runs nor needs them: any overlap gives the same tasks and Results as 0, and costs nothing.
+        Ignored (>= 0), kept so that calls which give it still run: a chunk once also ran this many pairs
+        before its own and dropped them, but no pair depends on another, so a chunk is now sent and runs
+        its own pairs only, whatever the overlap.
     rights : sequence of ndarray, optional
         The right view of every frame (as many as ``frames``): each pair adds stereo.
     retries : int

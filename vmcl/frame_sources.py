@@ -25,10 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
-from vmcl.datasets import IMAGE_SUFFIXES, PNG_SIGNATURE, grey_or_rgb, read_image
+from vmcl.datasets import IMAGE_SUFFIXES, PNG_SIGNATURE, from_opencv, read_image
 from vmcl.errors import InputTypeError, InputValueError
 
-__all__ = ["IMAGE_SUFFIXES", "VIDEO_SUFFIXES", "FrameSource", "frame_order", "is_sequence", "open_frames"]
+__all__ = ["ANIMATION_BYTES", "IMAGE_SUFFIXES", "VIDEO_SUFFIXES", "FrameSource", "frame_order", "is_sequence", "open_frames"]
 
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mov", ".mkv", ".webm", ".m4v", ".mpg", ".mpeg", ".wmv")
 """The file suffixes (any case) read as videos."""
@@ -39,6 +39,10 @@ _NUMBERS = re.compile(r"(\d+(?:\.\d+)?)")  # a run of digits, with its decimals 
 # Formats that may hold several images in one file: TIFF pages, GIF, PNG (APNG) and WebP animations.
 _PAGED_SUFFIXES = (".tif", ".tiff", ".gif", ".png", ".webp")
 _PAGES_READ = 16  # a TIFF's pages read per imreadmulti call, so that a long stack is not held whole
+ANIMATION_BYTES = 2**31
+"""The most an animation's frames may take decoded: OpenCV decodes an animation's frames in one call (each
+is drawn over the ones before it, so a call from a later frame decodes from the first again), and a longer
+or larger one is refused, naming its size, rather than exhaust the memory."""
 
 
 def _by_value(text: str) -> tuple:
@@ -207,6 +211,14 @@ def _read_pages(path: Path, count: int) -> Iterator[np.ndarray]:
     import cv2
 
     batch = _PAGES_READ if _page_word(path) == "page" else max(count, 1)
+    if batch > _PAGES_READ:
+        with _opencv_quiet():
+            ok, first = cv2.imreadmulti(str(path), 0, 1, flags=cv2.IMREAD_UNCHANGED)
+        if ok and first and count * first[0].nbytes > ANIMATION_BYTES:
+            raise InputValueError(f"{path}: its {count} frames of {first[0].shape[1]} x {first[0].shape[0]} take "
+                                  f"{count * first[0].nbytes / 2**30:.1f} GiB decoded at once (OpenCV decodes an "
+                                  f"animation whole), over {ANIMATION_BYTES / 2**30:g} GiB: convert it to a video "
+                                  "or a folder of frames")
     for start in range(0, count, batch):
         wanted = min(batch, count - start)
         with _opencv_quiet():
@@ -216,7 +228,7 @@ def _read_pages(path: Path, count: int) -> Iterator[np.ndarray]:
                                   f"{count} (damaged?)")
         for index, page in enumerate(pages, start):
             # OpenCV gives an animated GIF's frames an alpha channel, opaque but where a pixel is transparent.
-            yield grey_or_rgb(page, f"{path}: {_page_word(path)} {index}", opaque_alpha=True)
+            yield from_opencv(page, name=f"{path}: {_page_word(path)} {index}", opaque_alpha=True)
 
 
 def _refuse_duplicates(paths: Sequence[Path]) -> None:

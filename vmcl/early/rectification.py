@@ -41,7 +41,7 @@ measure as itself."""
 ROW_SPREAD_NOTE = 0.1
 """Where the note is made, it adds that the views are turned or scaled against each other when the tracks'
 offsets spread at least this far (:attr:`RowAlignment.spread`): more than on any training pair that was
-only shifted (benchmarks/results/rectification.md, their largest spread rounded up). The note itself
+only shifted (benchmarks/results/rectification.md: the step of 0.05 px above their largest spread). The note itself
 follows :attr:`RowAlignment.typical` alone: a match is harmed by its own row's offset, whether the rows are
 offset as a whole or turned."""
 

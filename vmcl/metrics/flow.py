@@ -69,8 +69,9 @@ def angular_error(flow, ground_truth) -> np.ndarray:
     ug, vg = truth[..., 0], truth[..., 1]
     # Each direction scaled to unit length by hypot, which does not square: the squares of flows past
     # 1e154 px overflow to inf, and inf / inf gave NaN for two equal vectors.
-    a = [c / np.hypot(np.hypot(u, v), 1.0) for c in (u, v, np.ones_like(u))]
-    b = [c / np.hypot(np.hypot(ug, vg), 1.0) for c in (ug, vg, np.ones_like(ug))]
+    length, truth_length = np.hypot(np.hypot(u, v), 1.0), np.hypot(np.hypot(ug, vg), 1.0)
+    a = [u / length, v / length, 1.0 / length]
+    b = [ug / truth_length, vg / truth_length, 1.0 / truth_length]
     dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
     cross = np.sqrt((a[1] * b[2] - a[2] * b[1]) ** 2 + (a[2] * b[0] - a[0] * b[2]) ** 2
                     + (a[0] * b[1] - a[1] * b[0]) ** 2)

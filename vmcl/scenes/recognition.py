@@ -612,11 +612,11 @@ def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, 
         if all(low <= p.occluded <= high for p in placements):
             right, disparity = canvas.stereo() if stereo else (None, None)
             # The left view's noise is drawn first, so that a stereo scene's left view is the plain scene's.
-            views = [canvas.image(), *([right] if stereo else [])]
+            images = [canvas.image(), *([right] if stereo else [])]
             if noise > 0:
-                for view in views:
-                    view += rng.normal(0, noise, view.shape).astype(np.float32)
-            return RecognitionScene(views[0], placements, right, disparity)
+                for image in images:
+                    image += rng.normal(0, noise, image.shape).astype(np.float32)
+            return RecognitionScene(images[0], placements, right, disparity)
     raise InputValueError(f"occlusion: no arrangement of {count} object(s) of size {small:g}..{large:g} px in "
                           f"{w} x {h} hid each within {low:g}..{high:g} in {_SCENE_ATTEMPTS} draws; widen the range, "
                           "enlarge the shape or place fewer or smaller objects")
