@@ -612,7 +612,7 @@ def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, 
         if all(low <= p.occluded <= high for p in placements):
             right, disparity = canvas.stereo() if stereo else (None, None)
             # The left view's noise is drawn first, so that a stereo scene's left view is the plain scene's.
-            images = [canvas.image(), *([right] if stereo else [])]
+            images = [canvas.image()] + ([] if right is None else [right])
             if noise > 0:
                 for image in images:
                     image += rng.normal(0, noise, image.shape).astype(np.float32)
