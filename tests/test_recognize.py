@@ -314,6 +314,20 @@ def test_the_machines_disparity_explains_what_hides_an_object(machine, seed, hid
     assert all(explained.found) and explained.false == 0
 
 
+@pytest.mark.parametrize("name", ["lens", "crescent"])
+def test_matched_arcs_are_evidence_as_matched_corners_are(name):
+    # A curved outline has few corners: its arcs, which indexing finds it by, were not counted in its
+    # significance. Found at one pose both ways (by its two corners), it is the more significant with its
+    # arcs (measured 12.0 and 4.2 more; the two were equal before).
+    library, _ = example_library()
+    image, _ = object_view(name, shape=(200, 200), noise=0.01, seed=2)
+    with_arcs = recognize(image, library, min_significance=0)
+    without = recognize(image, library, min_significance=0, arcs=False)
+    assert with_arcs[0].name == without[0].name == name
+    assert np.abs(with_arcs[0].transform - without[0].transform).max() < 1e-6
+    assert with_arcs[0].significance > without[0].significance + 2
+
+
 def test_a_disparity_map_has_a_threshold_of_its_own(monkeypatch):
     from vmcl.recognize import recognition
 

@@ -8,7 +8,7 @@ machine's :class:`vmcl.result.Result` (its cartoon: the labelled discontinuities
 the view it was aligned from, its pose, its score and its boundary in the image.
 
 Each verified candidate's significance is judged a contrario: -log10 of its number of false alarms, the
-chance that its boundary support and its matched corners arise by accident among the image's edges
+chance that its boundary support and its matched corners and arcs arise by accident among the image's edges
 around it, times the candidates tested. Candidates are kept greedily, most significant first, each
 scored again on the edge pixels no kept object explains yet (so a second reading of an object's edges
 explains little), and one whose silhouette lies mostly on kept ones is dropped. A 3-D object's views are
@@ -46,7 +46,7 @@ MIN_SIGNIFICANCE = 19.0
 at most 0.1 per image on rendered training scenes at the default ``tolerance`` (benchmarks/
 recognition_fit.py, results/recognition_fit.md)."""
 
-MIN_SIGNIFICANCE_DEPTH = 19.5
+MIN_SIGNIFICANCE_DEPTH = 20.0
 """:func:`recognize`'s default ``min_significance`` where a disparity map explains occlusion (``depth``, or a
 Result's disparity): chosen by the same rule on the same training scenes rendered as stereo pairs, the
 depth machine's disparity given (benchmarks/recognition_depth_fit.py, results/recognition_depth_fit.md).
@@ -55,6 +55,8 @@ Points a nearer surface hides leave an object's coverage, which raises every can
 _CORNER_REACH = 3.0  # px: a view's corner and an image corner match this close,
 _CORNER_TURN = np.radians(30)  # their bisectors this close in direction
 _CORNER_OPENING = np.radians(25)  # and their openings this close
+_ARC_REACH = 0.1  # a view's arc and an image arc match where their centres lie this share of the radius apart
+_ARC_RADII = 1.15  # (at least _CORNER_REACH px: a short arc's centre is placed less surely) and radii this close
 _CORNER_ROUNDS = 3  # fits of a start from matched corners, each with the matches of the one before
 _CORNER_STARTS = 16  # the candidates (best scored as refined so far) given a start from matched corners
 _ANGLE = np.radians(25)  # the most a supporting edge's tangent may differ from the model's
@@ -85,8 +87,9 @@ class Detection:
     votes : int
         The indexing votes of the candidate it came from.
     significance : float
-        -log10 of its number of false alarms: how unlikely its support is by chance, given how many
-        candidates were tested and how crowded with edges the image is around it (kept where at least
+        -log10 of its number of false alarms: how unlikely its support, and the corners and arcs it matches,
+        are by chance, given how many candidates were tested and how crowded with edges the image is
+        around it (kept where at least
         :func:`recognize`'s ``min_significance``).
     corners_found : float
         The fraction of the view's corners (those inside the image) that an image corner matches: within
@@ -394,8 +397,10 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
         trials[c] = expected[c] / (2 * tolerance)
         matched, landed, corner_chance = _corner_matches(poses[c], view, features, tree)
         corners_found[c] = matched / max(landed, 1)
-        # The corners it matches are further evidence, independent of the boundary's.
-        corner_surprise[c] = _surprise(matched, landed, corner_chance)
+        # The corners and arcs it matches are further evidence, independent of the boundary's: a curved
+        # outline has few corners, and its arcs are what indexing found it by.
+        corner_surprise[c] = _surprise(matched, landed, corner_chance) + _surprise(*_arc_matches(poses[c], view,
+                                                                                                 features))
         significance[c] = _surprise(coverage[c] * trials[c], trials[c], chance[c]) + corner_surprise[c] - tests
         inner = ~view.outline & final.inside[start:stop] & ~hidden  # a nearer surface explains hidden ones
         if inner.any():
@@ -535,6 +540,33 @@ def _corner_matches(pose: np.ndarray, view: View, features: Features, tree: cKDT
     area = max(float(np.prod(high - low)), 1.0)
     chance = min(around * np.pi * _CORNER_REACH ** 2 / area, 1.0) * (_CORNER_TURN / np.pi) * (2 * _CORNER_OPENING / np.pi)
     return matched, int(inside.sum()), float(chance)
+
+
+def _arc_matches(pose: np.ndarray, view: View, features: Features) -> tuple[int, int, float]:
+    """How many of the view's arcs (of those whose centres land in the image) an image arc matches (centres
+    within :data:`_ARC_REACH` of the radius, radii within a factor :data:`_ARC_RADII`), how many land there,
+    and the chance that one is matched by accident (the image's arcs of a like radius around the pose, each
+    covering a disc of the reach, over the area around it), as :func:`_corner_matches` counts corners."""
+    h, w = features.shape
+    if not len(view.arcs) or not len(features.arcs):
+        return 0, 0, 0.0
+    at = carry(pose, view.arcs)
+    radius = view.arc_radius * _scale(pose)
+    # A pose that shrinks the view to a point leaves its arcs no radius to compare.
+    inside = (at[:, 0] >= 0) & (at[:, 1] >= 0) & (at[:, 0] <= w - 1) & (at[:, 1] <= h - 1) & (radius > 0)
+    if not inside.any():
+        return 0, 0, 0.0
+    reach = np.maximum(_CORNER_REACH, _ARC_REACH * radius)
+    posed = carry(pose, view.points)
+    low, high = posed.min(axis=0) - _MARGIN, posed.max(axis=0) + _MARGIN
+    area = max(float(np.prod(high - low)), 1.0)
+    around = np.all((features.arcs >= low) & (features.arcs <= high), axis=1)
+    matched, chances = 0, []
+    for k in np.flatnonzero(inside):
+        alike = np.abs(np.log(features.arc_radius / radius[k])) <= np.log(_ARC_RADII)
+        matched += bool(np.any(alike & (np.hypot(*(features.arcs - at[k]).T) <= reach[k])))
+        chances.append(min(np.count_nonzero(around & alike) * np.pi * reach[k] ** 2 / area, 1.0))
+    return matched, int(inside.sum()), float(np.mean(chances))
 
 
 def _hidden(posed: np.ndarray, supported: np.ndarray, inside: np.ndarray, depth: np.ndarray) -> np.ndarray:
