@@ -162,12 +162,19 @@ def _stereo_lines(library, learned, kinds, placed, false) -> list[str]:
               "coverage, at the threshold benchmarks/recognition_depth_fit.py chose on the training scenes "
               f"(min_significance {MIN_SIGNIFICANCE_DEPTH:g}; {MIN_SIGNIFICANCE:g} on the image alone). The true "
               "disparity is not a method, and the threshold was chosen with the machine's, not with it."), "",
-             "| disparity | flat | solid | all | false detections per image |", "|---|---|---|---|---|"]
+             ("| disparity | flat | solid | all | false detections per image | pose error at the corners, mean px: "
+              "flat | solid |"), "|---|---|---|---|---|---|---|"]
+
+    def mean_error(tally, names) -> float:
+        errors = [error for name, found, error in tally if found and name in names]
+        return float(np.mean(errors)) if errors else float("nan")
+
     for label, tally, wrong in (("none (the image alone)", placed, false),
                                 ("the depth machine's (vmcl defaults, depth only)", measured, measured_false),
                                 ("the scene's true disparity (same threshold)", true, true_false)):
         lines.append(f"| {label} | {_rate(tally, kinds['flat']):.3f} | {_rate(tally, kinds['solid']):.3f} | "
-                     f"{_rate(tally, every):.3f} | {wrong / len(TEST_SEEDS):.3f} |")
+                     f"{_rate(tally, every):.3f} | {wrong / len(TEST_SEEDS):.3f} | "
+                     f"{mean_error(tally, kinds['flat']):.2f} | {mean_error(tally, kinds['solid']):.2f} |")
     return lines + ["", ("Bars (the depth machine's disparity): recognition rate at least 0.9: "
                          f"{'met' if _rate(measured, every) >= 0.9 else 'NOT met'}; false detections per image at "
                          f"most 0.1: {'met' if measured_false / len(TEST_SEEDS) <= 0.1 else 'NOT met'}."), ""]
