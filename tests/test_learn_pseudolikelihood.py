@@ -1,6 +1,9 @@
 """Maximum pseudolikelihood (vmcl.learn): the device's sums against the energy's own conditionals, and
 parameters found again in fields drawn by vmcl's Gibbs sampler at known parameters."""
 
+import dataclasses
+import re
+
 import numpy as np
 import pytest
 from oracles import pseudolikelihood as oracle_pseudolikelihood
@@ -105,6 +108,18 @@ def test_line_process_potentials_recovered(machine, line_process_draws):
     assert (found.alpha, found.beta, found.edge_gain) == pytest.approx((1.0, 2.0, 0.5), rel=0.1)
     for name in ("end", "continuation", "turn", "junction", "crossing", "parallel"):
         assert getattr(found.prior, name) == pytest.approx(getattr(PRIOR, name), rel=0.1), name
+
+
+def test_a_refused_fit_advises_holding_the_coupling_as_its_caller_does(machine, line_process_draws):
+    # The advice named the library's fixed= mapping, which vmcl fit rewrote by matching its text.
+    fit = fit_pseudolikelihood(line_process_draws, machine=machine)
+    flat = dataclasses.replace(fit, theta={**fit.theta, "alpha": 0.0})
+    with pytest.raises(InputValueError, match=re.escape("hold the coupling (fixed={'coupling': 1.0})")):
+        flat.model()
+    with pytest.raises(InputValueError, match=re.escape("hold the coupling (--fix coupling=1)")):
+        flat.model(held_coupling="--fix coupling=1")
+    with pytest.raises(InputTypeError, match="held_coupling"):
+        fit.model(held_coupling=1)
 
 
 def test_one_kind_of_site_alone(machine, line_process_draws):

@@ -699,13 +699,7 @@ def _fit(args) -> int:
             raise BadInput(f"--fix {item}: {value!r} is not a finite number")
     vm = VisionMachine(_config(args.config))
     print(f"Fitting the {args.cue} MRF to the examples under {', '.join(args.data)} ...", file=sys.stderr)
-    try:
-        found = fit_cue(args.cue, args.data, vm=vm, jump=args.jump, fixed=fixed, fixed_name="--fix",
-                        refine=args.refine)
-    except InputError as error:
-        # The advice to hold the coupling comes from PseudolikelihoodFit.model, which takes no name for fixed=;
-        # the command's user holds a parameter with --fix.
-        raise type(error)(str(error).replace("fixed={'coupling': 1.0}", "--fix coupling=1, the default")) from None
+    found = fit_cue(args.cue, args.data, vm=vm, jump=args.jump, fixed=fixed, fixed_name="--fix", refine=args.refine)
     for line in found.left_out:
         print(f"vmcl: note: {line}", file=sys.stderr)
     provenance = {**found.provenance, **({"config": args.config} if args.config else {})}

@@ -247,7 +247,8 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
         Potts cost kappa is a parameter of the energy at T = 1).
     fixed_name : str, optional
         What the caller calls ``fixed`` (a command's option, e.g. "--fix"): a held value refused then begins
-        with it, as ``--fix coupling=0: ``, so that the message names what the caller's user gave.
+        with it, as ``--fix coupling=0: ``, and a fit refused for want of a held coupling advises
+        ``--fix coupling=1``, so that the messages name what the caller's user gives.
     refine : bool
         Then move the fitted parameters to lower the errors of the machine's own restorations of the
         examples (:func:`vmcl.learn.fit_restoration`: pixels more than ``jump`` off, missed and false
@@ -280,7 +281,8 @@ def fit_cue(cue: str, roots: Sequence[str | Path], *, vm: Any = None, jump: floa
     fit = fit_pseudolikelihood(examples, kind=module.kind, fixed=fixed, ridge=ridge,
                                edge_radius=base.edge_radius if module.candidates_only else None,
                                machine=vm.machine)
-    model = fit.model(base)
+    # The advice of a refused fit names how this caller holds the coupling.
+    model = fit.model(base, **({} if fixed_name is None else {"held_coupling": f"{fixed_name} coupling=1"}))
     error = None
     if refine:
         settings = vm.config.mrf.settings(cue, module.settings)

@@ -161,7 +161,7 @@ class PseudolikelihoodFit:
         is 1), 1 for the constant kind (whose Potts cost kappa is a parameter)."""
         return 1.0 / self.theta["coupling"] if self.kind == "smooth" else 1.0
 
-    def model(self, base: EnergyModel | None = None) -> EnergyModel:
+    def model(self, base: EnergyModel | None = None, *, held_coupling: str = "fixed={'coupling': 1.0}") -> EnergyModel:
         """The fitted energy as an :class:`vmcl.mrf.EnergyModel`, in the units of ``temperature``.
 
         beta is the line's cost (so the prior's ``line`` is 1), or 1 where the fitted line cost is not
@@ -172,6 +172,8 @@ class PseudolikelihoodFit:
         ``base``; one of the pixel sites alone takes beta, the prior and edge_gain from it; and every fit takes
         from it the parameters it has no information on (``uninformed``: edge_gain without brightness edges,
         a prior entry without a vertex of its kind), so that they keep their values rather than become 0.
+        ``held_coupling`` is how the caller holds the coupling at 1, which the advice of a refused fit names
+        (a command's option, e.g. "--fix coupling=1").
 
         Raises
         ------
@@ -182,6 +184,8 @@ class PseudolikelihoodFit:
         base = EnergyModel() if base is None else base
         if not isinstance(base, EnergyModel):
             raise InputTypeError(f"base must be a vmcl.mrf.EnergyModel or None, got {type(base).__name__}")
+        if not isinstance(held_coupling, str):
+            raise InputTypeError(f"held_coupling must be a str, got {type(held_coupling).__name__}")
         scale = self.theta["coupling"] if self.kind == "smooth" else 1.0
         if not self.theta["coupling"] > 0:
             raise InputValueError(f"the fitted coupling is {self.theta['coupling']:.4g}, not > 0: the examples are "
@@ -191,7 +195,7 @@ class PseudolikelihoodFit:
             raise InputValueError(f"the fitted data weight is {self.theta['alpha']:.4g}: the desired fields are "
                                   "predicted by their neighbours better than by any share of the data (e.g. exactly "
                                   "planar ground truth, whose fitted coupling then grows without bound); hold the "
-                                  "coupling (fixed={'coupling': 1.0}) to fit the data weight in the energy's units")
+                                  f"coupling ({held_coupling}) to fit the data weight in the energy's units")
         line = self.theta["line"] / scale
         beta = base.beta if "line" in kept else line if line > 0 else 1.0
         prior = LinePrior(**{name: getattr(base.prior, name) if name in kept else self.theta[name] / scale / beta
