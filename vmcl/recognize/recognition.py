@@ -55,8 +55,10 @@ Points a nearer surface hides leave an object's coverage, which raises every can
 _CORNER_REACH = 3.0  # px: a view's corner and an image corner match this close,
 _CORNER_TURN = np.radians(30)  # their bisectors this close in direction
 _CORNER_OPENING = np.radians(25)  # and their openings this close
-_ARC_REACH = 0.1  # a view's arc and an image arc match where their centres lie this share of the radius apart
-_ARC_RADII = 1.15  # (at least _CORNER_REACH px: a short arc's centre is placed less surely) and radii this close
+# A view's arc and an image arc match where their centres lie within this share of the radius (at least
+# _CORNER_REACH px: a large circle's centre is placed less surely) and their radii within this factor.
+_ARC_REACH = 0.1
+_ARC_RADII = 1.15
 _CORNER_ROUNDS = 3  # fits of a start from matched corners, each with the matches of the one before
 _CORNER_STARTS = 16  # the candidates (best scored as refined so far) given a start from matched corners
 _ANGLE = np.radians(25)  # the most a supporting edge's tangent may differ from the model's
@@ -372,7 +374,7 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
     chance_angle = 2 * _ANGLE / np.pi
     explained, coverage, significance = [], np.zeros(len(found)), np.zeros(len(found))
     expected, trials, chance = np.zeros(len(found)), np.zeros(len(found)), np.zeros(len(found))
-    corner_surprise = np.zeros(len(found))
+    feature_surprise = np.zeros(len(found))
     tests = np.log10(len(found))
     corners_found = np.zeros(len(found))
     inner_found = np.full(len(found), np.nan)
@@ -399,9 +401,9 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
         corners_found[c] = matched / max(landed, 1)
         # The corners and arcs it matches are further evidence, independent of the boundary's: a curved
         # outline has few corners, and its arcs are what indexing found it by.
-        corner_surprise[c] = _surprise(matched, landed, corner_chance) + _surprise(*_arc_matches(poses[c], view,
-                                                                                                 features))
-        significance[c] = _surprise(coverage[c] * trials[c], trials[c], chance[c]) + corner_surprise[c] - tests
+        feature_surprise[c] = (_surprise(matched, landed, corner_chance)
+                               + _surprise(*_arc_matches(poses[c], posed, view, features)))
+        significance[c] = _surprise(coverage[c] * trials[c], trials[c], chance[c]) + feature_surprise[c] - tests
         inner = ~view.outline & final.inside[start:stop] & ~hidden  # a nearer surface explains hidden ones
         if inner.any():
             inner_found[c] = np.count_nonzero(inner & ok[start:stop]) / np.count_nonzero(inner)
@@ -419,7 +421,7 @@ def _verify(found: Candidates, view_ids: np.ndarray, library: Library, features:
         _, pick = heapq.heappop(heap)
         fresh = explained[pick][~claimed[explained[pick]]]
         cover = min(len(fresh) / expected[pick], 1.0)
-        now = _surprise(cover * trials[pick], trials[pick], chance[pick]) + corner_surprise[pick] - tests
+        now = _surprise(cover * trials[pick], trials[pick], chance[pick]) + feature_surprise[pick] - tests
         if now < min_significance or cover < min_score or len(fresh) < min_support:
             continue
         if heap and now < -heap[0][0]:
@@ -542,11 +544,12 @@ def _corner_matches(pose: np.ndarray, view: View, features: Features, tree: cKDT
     return matched, int(inside.sum()), float(chance)
 
 
-def _arc_matches(pose: np.ndarray, view: View, features: Features) -> tuple[int, int, float]:
+def _arc_matches(pose: np.ndarray, posed: np.ndarray, view: View, features: Features) -> tuple[int, int, float]:
     """How many of the view's arcs (of those whose centres land in the image) an image arc matches (centres
     within :data:`_ARC_REACH` of the radius, radii within a factor :data:`_ARC_RADII`), how many land there,
     and the chance that one is matched by accident (the image's arcs of a like radius around the pose, each
-    covering a disc of the reach, over the area around it), as :func:`_corner_matches` counts corners."""
+    covering a disc of the reach, over the area around ``posed``, the view's points at the pose), as
+    :func:`_corner_matches` counts corners."""
     h, w = features.shape
     if not len(view.arcs) or not len(features.arcs):
         return 0, 0, 0.0
@@ -557,7 +560,6 @@ def _arc_matches(pose: np.ndarray, view: View, features: Features) -> tuple[int,
     if not inside.any():
         return 0, 0, 0.0
     reach = np.maximum(_CORNER_REACH, _ARC_REACH * radius)
-    posed = carry(pose, view.points)
     low, high = posed.min(axis=0) - _MARGIN, posed.max(axis=0) + _MARGIN
     area = max(float(np.prod(high - low)), 1.0)
     around = np.all((features.arcs >= low) & (features.arcs <= high), axis=1)
