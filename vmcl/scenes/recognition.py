@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import cv2
 import numpy as np
@@ -181,11 +182,12 @@ class RecognitionScene:
     disparity: np.ndarray | None = None
 
 
-LAYER_DISPARITIES = {"back": 4.0, "object": 7.0, "occluder": 13.0, "front": 15.0}
+LAYER_DISPARITIES = MappingProxyType({"back": 4.0, "object": 7.0, "occluder": 13.0, "front": 15.0})
 """A stereo recognition scene's disparity of each layer, in pixels, far to near as they are painted: the
 background and the clutter behind everything, the library objects (the k-th at ``object + k``, nearer
 than those placed before it, which it may overlap), their occluders, and the clutter in front. Each layer
-is flat and parallel to the image: the right view is the same strokes moved left by their disparity."""
+is flat and parallel to the image: the right view is the same strokes moved left by their disparity.
+Read-only: the scenes' ground truth is rendered from it."""
 
 
 def _rotate(vertices: np.ndarray, yaw: float) -> np.ndarray:
