@@ -878,3 +878,17 @@ def test_an_edge_map_in_an_integer_type_is_refused_with_the_way_to_pass_it(ell_m
     with pytest.raises(ValueError, match=r"an edge map must be a bool array \(image.astype\(bool\)\)"):
         recognize(edges.astype(np.uint8), Library([model]))
     assert [d.name for d in recognize(edges, Library([model]))] == ["ell"]
+
+
+def test_recognition_scores_judge_a_solid_at_the_corners_its_view_shows():
+    # Turned a degree past its learned view, a block shows a sliver of a face the view sees edge-on: that
+    # face's far corners are none of the view's, and were scored against the nearest corner, 20 px off.
+    from vmcl.recognize import Detection
+
+    _, learned = object_view("block", yaw=0.0, shape=(200, 200))
+    _, seen = object_view("block", yaw=-1.0, shape=(200, 200))
+    assert not np.isin(seen.corner_ids, learned.corner_ids).all()  # the sliver's corners
+    pose = np.vstack([seen.matrix(), [0, 0, 1]]) @ np.linalg.inv(np.vstack([learned.matrix(), [0, 0, 1]]))
+    detection = Detection("block", 0, pose, 0.8, 4, 40.0, 1.0, np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, bool))
+    scores = recognition_scores([detection], [seen], {"block": [learned]})
+    assert scores.found == (True,) and scores.pose_error[0] < 0.01 * seen.scale

@@ -3,10 +3,13 @@
 The figures model-based recognition reports (Grimson's and Huttenlocher's): the fraction of the objects
 present that are found, the false detections per image, and the pose's error at the model's corners. A
 detection finds an object when it names it and its pose carries the model's corners onto the object's:
-each of the object's visible corners lies, on average, within ``tolerance`` (a fraction of the object's
-size) of the nearest carried corner. Nearest, not the corner of the same index: a symmetric object (a
-star) has several right poses. The pose error is that mean distance in pixels; each object is found at
-most once (the detection with the smallest error), and every other detection is false.
+each of the object's visible corners that the detection's view shows lies, on average, within
+``tolerance`` (a fraction of the object's size) of the nearest carried corner. Nearest, not the corner of
+the same index: a symmetric object (a star) has several right poses. Only the corners the view shows: a
+3-D object seen a degree past its learned view shows a sliver of a face the view sees edge-on, and that
+face's far corners are none of the view's, so no pose of the view carries one there (it was scored
+against whichever corner lay nearest, 20 px off). The pose error is that mean distance in pixels; each
+object is found at most once (the detection with the smallest error), and every other detection is false.
 """
 
 from __future__ import annotations
@@ -46,7 +49,9 @@ class RecognitionScores:
 
 def _corner_error(detection: Detection, learned: Placement, truth: Placement) -> float:
     carried = detection.locate(learned.corners)
-    distance = np.hypot(truth.corners[:, None, 0] - carried[None, :, 0], truth.corners[:, None, 1] - carried[None, :, 1])
+    shown = np.isin(truth.corner_ids, learned.corner_ids)
+    corners = truth.corners[shown] if shown.any() else truth.corners  # (a view sharing none: all of them)
+    distance = np.hypot(corners[:, None, 0] - carried[None, :, 0], corners[:, None, 1] - carried[None, :, 1])
     return float(distance.min(axis=1).mean())
 
 
