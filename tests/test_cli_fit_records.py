@@ -215,3 +215,18 @@ def test_a_fitted_file_with_its_entries_reordered_still_loads():
         check_fitted(tomllib.loads(swapped), "f.toml")  # loads: the same entries
         with pytest.raises(ValueError, match="edited or damaged since"):
             check_fitted(tomllib.loads(swapped.replace("beta = 0.5", "beta = 0.6")), "f.toml")
+
+
+def test_the_users_warning_filters_decide_the_version_warning(tmp_path, capsys, monkeypatch):
+    # The command forced its "always" ahead of every filter: `python -W ignore::...` still printed the line.
+    import warnings
+
+    monkeypatch.setattr("vmcl.__version__", "0.0.1")
+    other = fitted.write_fitted(tmp_path / "other.toml", {"mrf": {"stereo": {"alpha": 0.5}}}, {"data": ["x"]})
+    monkeypatch.undo()
+    (tmp_path / "empty").mkdir()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", fitted.FittedVersionWarning)
+        code, _, err = _fit(capsys, "stereo", "--data", tmp_path / "empty", "--config", other, "--out",
+                            tmp_path / "x.toml")
+    assert code == 2 and "vmcl: warning" not in err, err

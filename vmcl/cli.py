@@ -180,8 +180,10 @@ def _config(path: str | None):
     from vmcl.fitted import FittedVersionWarning
 
     # A fitted file's version warning is the command's word to its user, not Python's with a source line.
+    # Appended, the "always" comes after the user's own filters (-W, PYTHONWARNINGS): one that ignores it or
+    # makes it an error still decides.
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", FittedVersionWarning)
+        warnings.simplefilter("always", FittedVersionWarning, append=True)
         config = _loaded_config(path)
     for warning in caught:
         if issubclass(warning.category, FittedVersionWarning):
