@@ -123,6 +123,26 @@ def test_bad_config_is_refused_naming_the_key(tmp_path, text, message):
 
 
 
+def test_a_toml_files_settings_are_read_beside_it(tmp_path, monkeypatch):
+    # Read from the working directory, a configuration kept with its weights and models failed (or read
+    # another folder's) when run from anywhere else.
+    from vmcl import labelling
+
+    kept = tmp_path / "experiment"
+    (kept / "models").mkdir(parents=True)
+    labelling.default_labeller().save(kept / "weights.json")
+    (kept / "c.toml").write_text('[labels]\nweights = "weights.json"\n[recognition]\nmodels = "models"\n')
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    config = Config.from_toml(Path("..") / "experiment" / "c.toml")
+    assert Path(config.labels.weights).resolve() == (kept / "weights.json").resolve()
+    assert Path(config.recognition.models).resolve() == (kept / "models").resolve()
+    absolute = tmp_path / "a.toml"
+    absolute.write_text(f'[labels]\nweights = "{(kept / "weights.json").as_posix()}"\n')
+    assert Config.from_toml(absolute).labels.weights == (kept / "weights.json").as_posix()
+
+
 def test_weights_can_be_switched_off_from_toml_and_bad_types_are_named(tmp_path):
     path = tmp_path / "c.toml"
     path.write_text("[motion]\nweigh_by_score = false\n[stereo]\nfeature_matches = true\nbackfill = false\n")

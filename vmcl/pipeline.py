@@ -82,6 +82,7 @@ from vmcl.recognize.indexing import MAX_CANDIDATES
 from vmcl.result import Result
 
 __all__ = [
+    "FILE_SETTINGS",
     "FLOAT_MARGIN",
     "SALIENCY",
     "SMALL_RANGE",
@@ -601,7 +602,8 @@ class RecognitionConfig:
     Parameters
     ----------
     models : str
-        A library folder of model files (``vmcl learn``); "" (the default) runs no recognition.
+        A library folder of model files (``vmcl learn``; relative to the working directory, in a TOML file
+        to its folder: :meth:`Config.from_toml`); "" (the default) runs no recognition.
     transform : {"similarity", "affine", "homography"}
         The pose a 2-D model is aligned by, as :func:`vmcl.recognize.recognize` takes it.
     candidates : int
@@ -634,7 +636,8 @@ class LabelsConfig:
         benchmarks/results/labelling.md compares them.
     weights : str or None
         A JSON file of :class:`vmcl.labelling.LinearLabeller` weights (relative to the working
-        directory), read and checked when the Config is made; None: the fitted ones shipped. Only
+        directory; in a TOML file, to its folder: :meth:`Config.from_toml`), read and checked when the
+        Config is made; None: the fitted ones shipped. Only
         "linear" uses them.
     boundary_probability : bool
         Run the stage "boundaries": the left image's probability of boundary
@@ -810,6 +813,10 @@ class Config:
     def from_toml(cls, path: str | Path) -> Config:
         """Read a Config from a TOML file.
 
+        The file settings it names (``[labels] weights``, ``[recognition] models``) are read relative to the
+        TOML file's folder where they are relative paths, as a configuration that travels with its files
+        means them.
+
         A file ``vmcl fit`` wrote carries a ``[fitted]`` table: its parameters, and its entries the record's
         included, are checked against the hashes recorded there (:func:`vmcl.fitted.check_fitted`), and a
         warning (:class:`vmcl.fitted.FittedVersionWarning`) says when another vmcl version fitted them.
@@ -831,7 +838,7 @@ class Config:
             raise InputValueError(f"{path}: not valid TOML ({error})") from None
         except RecursionError:
             raise InputValueError(f"{path}: not a configuration (its tables or arrays are nested too deeply)") from None
-        return cls.from_dict(fitted.check_fitted(values, str(path)))
+        return cls.from_dict(_files_beside(fitted.check_fitted(values, str(path)), path.parent))
 
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """The configuration as nested plain values (for the report)."""
@@ -842,6 +849,21 @@ class Config:
 FLOAT_MARGIN = UNIT_MARGIN
 """How far outside [0, 1] a float image's pixels may lie (noise) before :func:`as_image` refuses it
 (:data:`vmcl.cm.core.UNIT_MARGIN`)."""
+
+
+FILE_SETTINGS = (("labels", "weights"), ("recognition", "models"))
+"""The (section, key) of each setting that names a file or folder: :meth:`Config.from_toml` reads a relative
+one from the TOML file's folder."""
+
+
+def _files_beside(values: dict[str, Any], folder: Path) -> dict[str, Any]:
+    """``values`` with each relative file setting (:data:`FILE_SETTINGS`) joined to ``folder``."""
+    for section, key in FILE_SETTINGS:
+        entries = values.get(section)
+        if (isinstance(entries, dict) and isinstance(entries.get(key), str) and entries[key]
+                and not Path(entries[key]).is_absolute()):
+            values = {**values, section: {**entries, key: str(folder / entries[key])}}
+    return values
 
 
 def as_image(array: Any, name: str) -> np.ndarray:
