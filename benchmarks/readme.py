@@ -623,12 +623,15 @@ def recognition_figures(f: ResultsFile) -> str:
         return scenes.cell({"objects": kind}, "recognition rate")
 
     flat = "flat (2-D)"
+    mean_error = "pose error at the corners: mean px"
     return (f"test scenes (30-50 % hidden, clutter): recognition rate {rate('all')} (flat {rate(flat)}, solid "
             f"{rate('solid (3-D, views between the learned ones)')}; bar 0.9), {false.group(1)} false detections "
             f"per image (bar 0.1); the same scenes as stereo pairs, occlusion explained by the depth machine's "
             f"disparity: {stereo.cell(measured, 'all')} (solid {stereo.cell(measured, 'solid')}), "
-            f"{stereo.cell(measured, 'false detections per image')} false detections per image; flat objects' corners "
-            f"{scenes.cell({'objects': flat}, 'median px')} px "
+            f"{stereo.cell(measured, 'false detections per image')} false detections per image; pose error at the "
+            f"corners, mean: flat {scenes.cell({'objects': flat}, mean_error)} px, solid "
+            f"{scenes.cell({'objects': 'solid (3-D, views between the learned ones)'}, mean_error)} px (bar 2); "
+            f"flat objects' corners {scenes.cell({'objects': flat}, 'median px')} px "
             f"(median) off; curved outlines {arcs.cell({'indexing': 'corners and arcs'}, 'flat, curved outlines')} "
             f"indexed with arcs against {arcs.cell({'indexing': 'corners only'}, 'flat, curved outlines')} by "
             f"corners alone; graf1 -> graf3 corner error "
