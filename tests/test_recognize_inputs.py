@@ -67,6 +67,9 @@ def _set(key, value):
                  id="views-bool"),
     pytest.param(lambda arrays, meta: meta.__setitem__("sources", "ab"), "sources must be a list of str",
                  id="sources-str"),
+    # An infinite size ended in a traceback (OverflowError) and "vmcl: internal error".
+    pytest.param(_set("v0_frame", lambda a: np.array([a[0], np.inf, *a[2:]])),
+                 r"v0_frame is not the 4 finite numbers", id="frame-inf"),
 ])
 def test_a_damaged_model_file_is_refused_when_read_naming_the_file(tmp_path, ell, change, match):
     model, _ = ell
@@ -152,3 +155,32 @@ def test_a_valid_models_detections_are_unchanged_by_the_checks(tmp_path, ell):
     assert [d.name for d in found] == ["ell"]
     assert [(d.name, d.score, d.significance) for d in again] == [(d.name, d.score, d.significance) for d in found]
     assert np.array_equal(again[0].transform, found[0].transform)
+
+
+def test_a_model_file_damaged_inside_its_compression_or_header_is_refused_naming_it(tmp_path, ell):
+    # A flipped byte inside a compressed member fails in zlib, and a header nested past JSON's reader in
+    # RecursionError: both escaped as tracebacks.
+    model, _ = ell
+    path = save_model(model, tmp_path / "library")
+    data = path.read_bytes()
+    refused = 0
+    for offset in range(200, len(data) - 200, 97):
+        damaged = tmp_path / "damaged" / path.name
+        damaged.parent.mkdir(exist_ok=True)
+        flipped = bytearray(data)
+        flipped[offset] ^= 0xFF
+        damaged.write_bytes(bytes(flipped))
+        try:
+            load_model(damaged)
+        except InputError as error:
+            assert str(damaged) in str(error)
+            refused += 1
+    assert refused > 0
+    nested = tmp_path / "nested" / path.name
+    nested.parent.mkdir()
+    with np.load(path) as archive:
+        arrays = dict(archive)
+    arrays["meta"] = np.array("[" * 100000)
+    np.savez(nested, **arrays)
+    with pytest.raises(InputError, match=f"^{nested} is not a vmcl model file .its header is nested too deeply"):
+        load_model(nested)

@@ -20,6 +20,7 @@ import json
 import math
 import re
 import zipfile
+import zlib
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from numbers import Integral, Real
@@ -469,10 +470,14 @@ def load_model(path: str | Path) -> Model:
             return Model(_check_name(meta["name"]), tuple(views), tuple(sources))
     except InputError as error:  # the file's version, or a view or model it holds that is not one
         raise error if str(path) in str(error) else InputValueError(f"{path}: {error}") from None
-    except (zipfile.BadZipFile, OSError, EOFError):  # not a whole .npz archive: damaged, cut short, another file
+    except (zipfile.BadZipFile, zlib.error, OSError, EOFError):
+        # Not a whole .npz archive: damaged (a flipped byte inside a compressed member fails in zlib), cut
+        # short, or another kind of file.
         raise InputValueError(f"{path} is not a vmcl model file (it is not a whole NumPy .npz archive: damaged, "
                               "cut short or another kind of file)") from None
-    except (ValueError, KeyError, IndexError, TypeError) as error:
+    except RecursionError:  # a header nested deeper than JSON's reader goes
+        raise InputValueError(f"{path} is not a vmcl model file (its header is nested too deeply)") from None
+    except (ValueError, KeyError, IndexError, TypeError, OverflowError) as error:
         reason = "it holds Python objects" if "allow_pickle" in str(error) else str(error)
         raise InputValueError(f"{path} is not a vmcl model file ({reason})") from None
 
@@ -480,8 +485,8 @@ def load_model(path: str | Path) -> Model:
 def _view_in(data: Any, i: int, version: int) -> View:
     """View ``i`` of an open model file (its arrays ``v{i}_*``), checked as a :class:`View` is."""
     frame = data[f"v{i}_frame"]
-    if frame.dtype.kind not in "iuf" or frame.shape != (4,):
-        raise ValueError(f"v{i}_frame is not the 4 numbers (radius, H, W, length) of view {i}")
+    if frame.dtype.kind not in "iuf" or frame.shape != (4,) or not np.isfinite(frame).all():
+        raise ValueError(f"v{i}_frame is not the 4 finite numbers (radius, H, W, length) of view {i}")
     arcs = data[f"v{i}_arcs"] if version >= 2 else np.zeros((0, 3))
     if arcs.ndim != 2 or arcs.shape[1] != 3:
         raise ValueError(f"v{i}_arcs is not (A, 3) rows of a circle's centre and radius, shape {arcs.shape}")
