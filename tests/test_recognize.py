@@ -774,12 +774,20 @@ def test_recognition_scores_find_objects_by_their_corners():
     shifted = pose.copy()
     shifted[0, 2] += 0.3 * 50.0  # farther than a quarter of the object's scale
     scores = recognition_scores([detection("arrow", pose), detection("ell", shifted), detection("ell", pose)],
-                                [placement], {"ell": [learned], "arrow": [learned]})
+                                [placement], {"ell": [learned], "arrow": [object_view("arrow", shape=(160, 160))[1]]})
     assert scores.found == (True,) and scores.pose_error[0] < 1e-6 and scores.false == 2
     missed = recognition_scores([detection("ell", shifted)], [placement], {"ell": [learned]})
     assert missed.found == (False,) and np.isnan(missed.pose_error[0]) and missed.false == 1
     with pytest.raises(InputError, match="placements"):
         recognition_scores([], [3], {"ell": [learned]})
+    # One Placement for the list, or a str, ended in TypeError / AttributeError; another object's views
+    # scored the object as not found, silently.
+    for wrong in (learned, ["ell"]):
+        with pytest.raises(InputError, match=r"learned\['ell'\] must be a sequence of vmcl.scenes.Placement"):
+            recognition_scores([detection("ell", pose)], [placement], {"ell": wrong})
+    _, tee = object_view("tee", shape=(160, 160))
+    with pytest.raises(InputError, match=r"learned\['ell'\] holds a placement of 'tee'"):
+        recognition_scores([detection("ell", pose)], [placement], {"ell": [tee]})
 
 
 def test_depth_explains_occlusion(ell_model):
