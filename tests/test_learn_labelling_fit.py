@@ -14,8 +14,8 @@ ALL_INPUTS = "+".join(labelling.INPUTS)
 
 
 def test_the_shipped_weights_are_regenerated_from_what_they_name(machine):
-    """The renderings and seeds the shipped file names give, refitted, its weights for every input (to the
-    file's 5 decimals), and the same description and renderer hash as its record."""
+    """The renderings and seeds the shipped file names give, refitted, the shipped weights' class probabilities
+    at every candidate they were fitted on, and the same description and renderer hash as its record."""
     vm = VisionMachine(Config.from_dict({"labels": {"method": "rule"}}), machine=machine)
     shipped = labelling.default_labeller()
     fitted_on, provenance = labeller_provenance()
@@ -25,11 +25,28 @@ def test_the_shipped_weights_are_regenerated_from_what_they_name(machine):
     runs = rendered_runs(vm)
     assert len(runs) == 20  # five presets, with and without highlights, two seeds
     again = fit_labeller(runs.values(), input_sets=[labelling.INPUTS], machine=machine)
-    # The shipped weights were fitted on PoCL's CPU device, where they come back to the file's 5 decimals.
-    # Another OpenCL implementation rounds the machine's fields differently in their last bits, and the fit
-    # follows: NVIDIA's moved the weights by up to about 0.01.
+    # Compared by what they say, not weight by weight: the logistic fit is nearly flat along some directions
+    # (a constant added to every class's bias; the bias of a class no candidate has), and L-BFGS stops
+    # along them where the host's arithmetic leads it. Fitted on PoCL on two CPUs (an AMD EPYC and an Intel
+    # Xeon), the bias row moved by 0.3 while no probability moved by 2e-4. Another OpenCL implementation
+    # rounds the machine's fields differently in their last bits, and the fit follows (NVIDIA's moved the
+    # weights by up to about 0.01).
     exact = "Portable Computing Language" in machine.device.platform.name
-    np.testing.assert_allclose(again.weights[ALL_INPUTS], shipped.weights[ALL_INPUTS], atol=1e-5 if exact else 0.05)
+    np.testing.assert_allclose(_probabilities(again, runs, machine), _probabilities(shipped, runs, machine),
+                               atol=1e-3 if exact else 0.02)
+
+
+def _probabilities(labeller, runs, machine):
+    """Each class's probability at every candidate of the runs, by ``labeller``'s weights for all inputs."""
+    weights = labeller.weights[ALL_INPUTS].astype(np.float64)
+    found = []
+    for result, _, _ in runs.values():
+        features = labelling.features(result.support, result.image, machine=machine, **labelling_fields(result))
+        rows = np.moveaxis(features, 0, -1)[(result.support & labelling.CANDIDATE_BITS) != 0].astype(np.float64)
+        z = np.concatenate([np.ones((len(rows), 1)), rows], axis=1) @ weights
+        z -= z.max(axis=1, keepdims=True)
+        found.append(np.exp(z) / np.exp(z).sum(axis=1, keepdims=True))
+    return np.concatenate(found)
 
 
 def test_rendered_runs_refusals(machine):

@@ -38,6 +38,18 @@ def test_a_view_puts_the_corners_where_the_placement_says():
     assert image.dtype == np.float32 and 0 <= image.min() and image.max() <= 1
 
 
+def test_an_example_view_shows_the_whole_object_or_is_refused():
+    # Cut by the border, its placement said nothing was hidden; at 1e-9 px per unit it was a blank image.
+    fits = 0.22 * 200
+    _, placement = object_view("ell", scale=fits)
+    assert placement.corners.min() >= 0 and placement.corners.max() <= 199 and placement.occluded == 0.0
+    for scale, message in ((150.0, "scale must keep the 'ell' inside the 200 x 200 image"),
+                           (1e6, "scale must keep the 'ell' inside"),
+                           (1e-9, "scale must draw the 'ell' at least 8 px across")):
+        with pytest.raises(InputError, match=message):
+            object_view("ell", scale=scale)
+
+
 def test_a_solid_objects_view_shows_its_visible_vertices_projected():
     block = next(o for o in OBJECTS if o.name == "block")
     _, placement = object_view("block", yaw=30.0, shape=(100, 100), scale=20.0)

@@ -39,6 +39,7 @@ LEARNED_YAWS = (-40.0, -20.0, 0.0, 20.0, 40.0)
 """The views (yaw, degrees) a 3-D object is learned from by :func:`example_views`: five, 20 degrees apart,
 spanning the range :func:`recognition_scene` draws views from, so a scene's view lies at most 10 degrees
 from one of them."""
+_LEAST_EXTENT = 8  # px: an example's object is at least this wide or tall (smaller draws next to no edges)
 
 _SUPERSAMPLE = 4  # each pixel is the mean of 4 x 4 samples, so edge pixels carry their coverage
 _SHIFT = 4  # cv2.fillPoly's fractional bits: vertices placed to 1/16 of a fine pixel
@@ -430,7 +431,8 @@ def object_view(name: str, *, yaw: float = 0.0, shape: tuple[int, int] = (200, 2
     shape : (int, int)
         (H, W), each 32 to 8192.
     scale : float, optional
-        Pixels per unit of the object's frame (> 0); default 0.22 min(H, W).
+        Pixels per unit of the object's frame (> 0); default 0.22 min(H, W). The object must lie inside the
+        image, at least 8 px across.
     background, albedo : float
         The background's grey and the object's (a 3-D object's faces are shaded from it), in [0, 1].
     noise : float
@@ -451,8 +453,22 @@ def object_view(name: str, *, yaw: float = 0.0, shape: tuple[int, int] = (200, 2
     albedo = check_real(albedo, "albedo", minimum=0, maximum=1)
     noise = check_real(noise, "noise", minimum=0)
     seed = check_int(seed, "seed", minimum=0)
+    centre = ((w - 1) / 2, (h - 1) / 2)
+    _, faces = obj.projected(yaw if obj.solid else 0.0)
+    drawn = _apply(_similarity(scale, 0.0, centre), np.concatenate(faces))
+    low, high = drawn.min(axis=0), drawn.max(axis=0)
+    # An example shows the whole object: one cut by the image's border (its placement said nothing was
+    # hidden) or too small to draw an edge teaches a model of something else.
+    if (low < 0).any() or high[0] > w - 1 or high[1] > h - 1:
+        largest = scale * min((w - 1) / 2 / np.abs(drawn[:, 0] - centre[0]).max(),
+                              (h - 1) / 2 / np.abs(drawn[:, 1] - centre[1]).max())
+        raise InputValueError(f"scale must keep the {name!r} inside the {h} x {w} image (at most {largest:.4g} "
+                              f"here), got {scale:.4g}")
+    if (high - low).max() < _LEAST_EXTENT:
+        raise InputValueError(f"scale must draw the {name!r} at least {_LEAST_EXTENT} px across, got {scale:.4g} "
+                              f"({(high - low).max():.3g} px)")
     canvas = _Canvas(h, w, background)
-    placement = _draw(canvas, obj, 0, yaw if obj.solid else 0.0, scale, 0.0, ((w - 1) / 2, (h - 1) / 2), albedo)
+    placement = _draw(canvas, obj, 0, yaw if obj.solid else 0.0, scale, 0.0, centre, albedo)
     image = canvas.image()
     if noise > 0:
         image += np.random.default_rng(seed).normal(0, noise, image.shape).astype(np.float32)
