@@ -203,3 +203,22 @@ def test_learn_refuses_an_existing_model_before_learning(tmp_path, files, capsys
     capsys.readouterr()
     assert main(["learn", "ell", str(files["ell"]), "--library", str(library), "-q"]) == 2
     assert "give --replace to replace it" in capsys.readouterr().err
+
+
+def test_the_sizes_searched_are_set_in_the_config_and_said_when_nothing_is_found(tmp_path, files, capsys):
+    # The search took half to twice the learned size, fixed: box_in_scene.png shrunk by a tenth found nothing,
+    # said nothing, and no setting of `vmcl run` could widen it.
+    library = tmp_path / "library"
+    assert main(["learn", "ell", str(files["ell"]), "--library", str(library), "-q"]) == 0
+    small = _png(tmp_path / "small.png", object_view("ell", shape=(160, 160), scale=0.22 * 160 * 0.4)[0])
+    capsys.readouterr()
+    assert main(["run", str(small), "--models", str(library), "--config", str(files["fast"]), "--out",
+                 str(tmp_path / "default"), "-q"]) == 0
+    assert "recognised: nothing (sizes searched: 0.5 to 2 times the learned examples'" in capsys.readouterr().out
+    wide = tmp_path / "wide.toml"
+    wide.write_text(files["fast"].read_text() + "[recognition]\nmin_scale = 0.3\n")
+    assert main(["run", str(small), "--models", str(library), "--config", str(wide), "--out", str(tmp_path / "wide"),
+                 "-q"]) == 0
+    assert "recognised: ell" in capsys.readouterr().out
+    with pytest.raises(ValueError, match=r"recognition.max_scale must be a finite number >= 0.5 and <= 1000000.0, got 0.4"):
+        Config.from_dict({"recognition": {"max_scale": 0.4}})

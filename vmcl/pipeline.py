@@ -77,7 +77,7 @@ from vmcl.machine import Machine, on_device
 from vmcl.mrf import SOLVERS, NothingToRestore, Restoration, Settings, preset
 from vmcl.mrf.checks import FLOAT32_MAX
 from vmcl.mrf.data import check_unit_interval
-from vmcl.recognize import TRANSFORMS, Library, recognize
+from vmcl.recognize import SCALES, TRANSFORMS, Library, recognize
 from vmcl.recognize.indexing import MAX_CANDIDATES
 from vmcl.result import Result
 
@@ -610,16 +610,24 @@ class RecognitionConfig:
         The pose bins kept by the indexing, shared between the library's views (``recognize``'s
         ``candidates``): each view's share shrinks as the library grows, so an object in a cluttered
         photograph that a small library finds may need more beside a large one.
+    min_scale, max_scale : float
+        The sizes searched, as an object's size in the image over its size in the example it was learned
+        from (``recognize``'s ``scales``): half to twice by default. An object farther or nearer than that
+        is not found; widen the range for it (a wider one admits more small look-alikes among clutter).
     """
 
     models: str = ""
     transform: str = "similarity"
     candidates: int = 1024
+    min_scale: float = SCALES[0]
+    max_scale: float = SCALES[1]
 
     def __post_init__(self) -> None:
         _check_field_types("recognition", self)
         check_choice(self.transform, "recognition.transform", TRANSFORMS)
         check_int(self.candidates, "recognition.candidates", minimum=1, maximum=MAX_CANDIDATES)
+        check_real(self.min_scale, "recognition.min_scale", above=0, maximum=1e6)
+        check_real(self.max_scale, "recognition.max_scale", minimum=self.min_scale, maximum=1e6)
 
 
 @dataclass(frozen=True)
@@ -1353,7 +1361,9 @@ class _Run:
                 # transform: a str the Config checked against TRANSFORMS (a Config field cannot be a Literal).
                 self.result.recognition = recognize(image, vm.library,
                                                     transform=settings.transform,  # type: ignore[arg-type]
-                                                    candidates=settings.candidates, depth=self.result.disparity,
+                                                    candidates=settings.candidates,
+                                                    scales=(settings.min_scale, settings.max_scale),
+                                                    depth=self.result.disparity,
                                                     machine=self.m)
 
     def group(self, image: np.ndarray, canny: edges.CannyResult) -> tuple[Grouping, cl_array.Array]:

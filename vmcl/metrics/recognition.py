@@ -84,12 +84,12 @@ def recognition_scores(detections: Sequence[Detection], placements: Sequence[Pla
         raise InputTypeError("placements must hold vmcl.scenes.Placement")
     if not isinstance(learned, Mapping):
         raise InputTypeError(f"learned must be a mapping of model name to placements, got {type(learned).__name__}")
-    for name, views in learned.items():
-        if (isinstance(views, str) or not isinstance(views, Sequence)
-                or not all(isinstance(p, Placement) for p in views)):
+    for name, placed in learned.items():
+        if (isinstance(placed, str) or not isinstance(placed, Sequence)
+                or not all(isinstance(p, Placement) for p in placed)):
             raise InputTypeError(f"learned[{name!r}] must be a sequence of vmcl.scenes.Placement (one per view), got "
-                                 f"{type(views).__name__}")
-        other = next((p.name for p in views if p.name != name), None)
+                                 f"{type(placed).__name__}")
+        other = next((p.name for p in placed if p.name != name), None)
         if other is not None:  # another object's views scored every detection of this one as false
             raise InputValueError(f"learned[{name!r}] holds a placement of {other!r}: each model's views must be "
                                   "placements of that object")

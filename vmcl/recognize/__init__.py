@@ -29,7 +29,7 @@ from vmcl.recognize.models import (
                                          save_model,
                                          view_of,
 )
-from vmcl.recognize.recognition import Detection, recognize
+from vmcl.recognize.recognition import SCALES, Detection, recognize
 from vmcl.recognize.selection import Regions, corner_regions, select_regions
 from vmcl.recognize.verification import (
                                          TRANSFORMS,
@@ -44,7 +44,7 @@ from vmcl.recognize.verification import (
                                          support_numpy,
 )
 
-__all__ = ["MODEL_SUFFIX", "TRANSFORMS", "Candidates", "Detection", "Features", "Index", "Library", "Model",
+__all__ = ["MODEL_SUFFIX", "SCALES", "TRANSFORMS", "Candidates", "Detection", "Features", "Index", "Library", "Model",
            "NearestEdge", "Regions", "Support", "Verified", "View", "anchors_of", "arcs_of", "carry", "corner_pairs",
            "corner_regions", "distance_transform", "distance_transform_numpy", "edge_features", "features_of",
            "image_features", "index_for", "learn", "load_model", "model_path", "pair_keys", "recognize", "refine", "save_model", "select_regions", "support",

@@ -39,7 +39,7 @@ from vmcl.recognize.models import Library, View
 from vmcl.recognize.selection import corner_regions, select_regions
 from vmcl.recognize.verification import TRANSFORMS, Transform, carry, distance_transform, refine, support
 
-__all__ = ["MIN_SIGNIFICANCE", "MIN_SIGNIFICANCE_DEPTH", "Detection", "recognize"]
+__all__ = ["MIN_SIGNIFICANCE", "MIN_SIGNIFICANCE_DEPTH", "SCALES", "Detection", "recognize"]
 
 MIN_SIGNIFICANCE = 19.0
 """:func:`recognize`'s default ``min_significance`` on the image alone: the least that kept false detections to
@@ -51,6 +51,10 @@ MIN_SIGNIFICANCE_DEPTH = 20.0
 Result's disparity): chosen by the same rule on the same training scenes rendered as stereo pairs, the
 depth machine's disparity given (benchmarks/recognition_depth_fit.py, results/recognition_depth_fit.md).
 Points a nearer surface hides leave an object's coverage, which raises every candidate's significance."""
+
+SCALES = (0.5, 2.0)
+""":func:`recognize`'s default ``scales``: objects half to twice their size in the examples they were learned
+from."""
 
 _CORNER_REACH = 3.0  # px: a view's corner and an image corner match this close,
 _CORNER_TURN = np.radians(30)  # their bisectors this close in direction
@@ -151,7 +155,7 @@ def _features(data: Any, sigma: float, machine: Machine) -> Features:
 
 
 def recognize(image: Any, library: Library, *, transform: Transform = "similarity", sigma: float = 1.5,
-              scales: tuple[float, float] = (0.5, 2.0), min_score: float = 0.3, min_significance: float | None = None,
+              scales: tuple[float, float] = SCALES, min_score: float = 0.3, min_significance: float | None = None,
               min_support: int = 40, min_inner: float = 0.0,
               candidates: int = 1024, verify: int = 128, min_votes: int = 2, neighbours: int = 24, regions: int = 8,
               tolerance: float = 3.0, stretch: float = 1.1, arcs: bool = True, depth: np.ndarray | None = None,
