@@ -28,3 +28,36 @@ def test_a_link_to_nothing_is_a_name_taken_and_other_files_are_left_to_be(tmp_pa
     writer.close()  # no frame: only the summary
     assert (tmp_path / "sequence.md").read_text(encoding="utf-8").startswith("# t\n")
     assert not elsewhere.exists()
+
+
+def test_a_frame_without_flow_is_a_black_video_frame_and_the_videos_stay_in_step(tmp_path):
+    # flow.mp4 left out a frame with no flow (an all-black one): from there on its frame k was frame k + 1.
+    import cv2
+    import numpy as np
+
+    from vmcl.flow_evaluation import motion_only
+    from vmcl.pipeline import VisionMachine
+
+    rng = np.random.default_rng(0)
+    texture = cv2.GaussianBlur(rng.random((64, 64)).astype(np.float32), (0, 0), 1.5)
+    vm = VisionMachine(motion_only())
+    moving = vm.run(texture, next=np.roll(texture, 2, axis=1))
+    still = vm.run(texture)  # no next frame: no flow
+    assert moving.flow is not None and still.flow is None
+    writer = SequenceWriter(tmp_path, fps=5.0, title="t")
+    for result in (moving, still, moving, still):
+        writer.add(result)
+    writer.close()
+    frames = []
+    video = cv2.VideoCapture(str(tmp_path / "flow.mp4"))
+    while True:
+        ok, picture = video.read()
+        if not ok:
+            break
+        frames.append(picture)
+    video.release()
+    assert len(frames) == 3  # frames 0, 1 (black) and 2; the last has no next frame to move to
+    assert frames[1].max() < 20 < frames[0].max() and frames[2].max() > 20
+    summary = (tmp_path / "sequence.md").read_text(encoding="utf-8")
+    assert ("flow.mp4 (3 frames: the last frame has no next frame to move to; 1 black, for the frames without its "
+            "field: 1)") in summary

@@ -7,7 +7,8 @@ The folder (one that :func:`vmcl.output_folder.output_folder` prepared) receives
 - ``cartoon.mp4``, ``flow.mp4``, ``disparity.mp4``: the labelled cartoon (:func:`vmcl.report.labels_image`),
   the restored flow in the Middlebury colour wheel and the restored disparity (turbo), one video frame per
   frame, for the fields the run made: flow.mp4 has one frame fewer than cartoon.mp4, since the last frame
-  has no next frame to move to (a sequence of one frame has no flow.mp4). Colour scales are fixed by the
+  has no next frame to move to (a sequence of one frame has no flow.mp4), and a frame without the field
+  (no flow from an all-black frame) is a black video frame, so that video frame k is sequence frame k. Colour scales are fixed by the
   first frame that has the field (its largest speed, at least :data:`LEAST_FLOW_SCALE` px per frame so that
   a clip that starts still is not drawn at full colour for its noise; its disparity range), so that colours
   mean the same speed or depth throughout. A frame of odd width or height is padded with a black row or column (MPEG-4 frames
@@ -89,6 +90,7 @@ class SequenceWriter:
         self.notes: list[str] = []  # notes on the whole sequence, written under the summary's first line
         self.frames = 0
         self.written: dict[str, int] = {}  # the frames written to each video, by its stem
+        self.blank: dict[str, list[int]] = {}  # the frames each video shows black, having no field for them
 
     def add(self, result: Result, source: str = "") -> None:
         """Write the next frame's Result; ``source`` names where its frame came from (a file) in the summary."""
@@ -98,6 +100,12 @@ class SequenceWriter:
         np.savez_compressed(self.folder / f"fields_{index:06d}.npz", allow_pickle=True,
                             **result_fields(result))
         for stem, picture in self.pictures(result).items():
+            # Video frame k is sequence frame k: a frame without this field (a black frame has no flow) is
+            # shown black, once a later frame has one, so that the videos stay in step.
+            missing = list(range(self.written.get(stem, 0), index))
+            for _ in missing:
+                self.write(stem, np.zeros_like(picture))
+            self.blank.setdefault(stem, []).extend(missing)
             self.write(stem, picture)
         notes = "; ".join(result.notes) if result.notes else ""
         found = "" if result.recognition is None else recognised_text(result.recognition)
@@ -132,6 +140,10 @@ class SequenceWriter:
         if not self.written:
             return "videos: none"
         why = {"flow": ": the last frame has no next frame to move to"} if self.written.get("flow") == self.frames - 1 else {}
+        for stem, frames in self.blank.items():
+            if frames:
+                shown = ", ".join(map(str, frames[:10])) + (" ..." if len(frames) > 10 else "")
+                why[stem] = why.get(stem, "") + f"; {len(frames)} black, for the frames without its field: {shown}"
         return f"videos at {self.fps:.4g} fps: " + ", ".join(
             f"{stem}.mp4 ({frame_count(count)}{why.get(stem, '')})" for stem, count in sorted(self.written.items()))
 
