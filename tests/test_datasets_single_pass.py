@@ -119,3 +119,21 @@ def test_a_check_refuses_by_raising_not_by_returning(tmp_path):
     with pytest.raises(TypeError, match="check must refuse by raising and return None, got False"):
         datasets.read_image(path, check=lambda where, data: False)
     assert datasets.read_image(path, check=lambda where, data: None).shape == (4, 4)
+
+
+def test_sintels_own_folders_of_fields_are_not_read_as_passes(tmp_path):
+    # flow_viz, occlusions, invalid and disparities sit beside the passes, numbered as frames are: eval flow
+    # scored the masks as frames, and counted the folders of one picture fewer as failures.
+    training = tmp_path / "training"
+    frame = np.zeros((8, 10), np.uint8)
+    for part, count in (("clean", 4), ("final", 4), ("flow_viz", 3), ("occlusions", 3), ("invalid", 4),
+                        ("disparities", 4)):
+        (training / part / "alley_1").mkdir(parents=True)
+        for k in range(1, count + 1):
+            assert cv2.imwrite(str(training / part / "alley_1" / f"frame_{k:04d}.png"), frame + 40 * k)
+    (training / "flow" / "alley_1").mkdir(parents=True)
+    for k in range(1, 4):
+        datasets.write_flo(training / "flow" / "alley_1" / f"frame_{k:04d}.flo", np.zeros((8, 10, 2), np.float32))
+    assert datasets.find_flow_folders(tmp_path) == [training / "clean" / "alley_1", training / "final" / "alley_1"]
+    assert datasets.flow_folders_lacking(tmp_path) == []
+    assert datasets.read_flow_folder(training / "clean" / "alley_1").index == 2

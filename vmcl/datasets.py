@@ -50,6 +50,7 @@ __all__ = [
     "FLO_UNKNOWN_ABOVE",
     "IMAGE_SUFFIXES",
     "PNG_SIGNATURE",
+    "SINTEL_FIELD_FOLDERS",
     "STEREO_SCENES",
     "BSDSImage",
     "BSDSSet",
@@ -1176,6 +1177,12 @@ def _number(path: Path) -> int | None:
     return int(found.group(1)) if found else None
 
 
+SINTEL_FIELD_FOLDERS = frozenset({"flow", "flow_viz", "invalid", "occlusions", "disparities", "disparities_viz",
+                                  "depth", "depth_viz", "camdata_left"})
+"""The folders MPI-Sintel's training set holds beside its passes (clean, final, albedo), each of a field or
+a mask per frame: :func:`find_flow_folders` does not read one as a pass's frames."""
+
+
 def _flow_truth(folder: Path) -> tuple[Path, Path | None, Path | None] | None:
     """(the .flo, its invalid map, its occlusion map) of a flow folder, or None when it has none.
 
@@ -1194,7 +1201,9 @@ def _flow_truth(folder: Path) -> tuple[Path, Path | None, Path | None] | None:
         invalid, occlusions = gt / "invalid" / name, gt / "occlusions" / name
         return below[0], invalid if invalid.is_file() else None, occlusions if occlusions.is_file() else None
     beside = folder.parent.parent / "flow" / folder.name
-    flows = sorted(beside.glob("*.flo")) if beside.is_dir() else []
+    # Sintel's own folders beside its passes hold fields and masks of the frames, numbered as frames are.
+    sintel_field = folder.parent.name in SINTEL_FIELD_FOLDERS
+    flows = sorted(beside.glob("*.flo")) if beside.is_dir() and not sintel_field else []
     if flows:
         # Sintel's own layout has a flow for every frame but the last: the sequence ends at its last flow.
         name = flows[-1].with_suffix(".png").name
