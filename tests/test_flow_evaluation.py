@@ -140,6 +140,22 @@ def test_frames_of_another_image_type_are_read_and_a_second_flow_is_reported(tmp
     assert lacking == folder and "2 flows (flow12.flo, my_estimate.flo)" in why
 
 
+def test_frames_without_ground_truth_are_named_not_passed_over(tmp_path, rendered):
+    # Middlebury's download holds eval-data/ without ground truth: eval flow left it out without a word,
+    # where the README promises a note. Other numbered pictures (a folder of photographs) are no sequence.
+    root, _ = rendered
+    army = tmp_path / "eval-data" / "Army"
+    army.mkdir(parents=True)
+    for path in (root / "mine" / "Blocks").glob("frame*.png"):
+        shutil.copy(path, army / path.name)
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    for k in (1, 2, 3):
+        shutil.copy(root / "mine" / "Blocks" / "frame10.png", photos / f"IMG_{k:04d}.png")
+    [(lacking, why)] = datasets.flow_folders_lacking(tmp_path)
+    assert lacking == army and why.startswith("it holds 5 numbered frames (frame10.png ...) but no ground-truth flow")
+
+
 def test_the_evaluation_scores_every_method_against_the_truth(rendered, machine):
     root, frames = rendered
     sequence = datasets.read_flow_folder(root / "mine" / "Blocks")

@@ -1183,6 +1183,9 @@ SINTEL_FIELD_FOLDERS = frozenset({"flow", "flow_viz", "invalid", "occlusions", "
 a mask per frame: :func:`find_flow_folders` does not read one as a pass's frames."""
 
 
+_MIDDLEBURY_FRAMES = ("-data", "-data-gray")  # the endings of the folders Middlebury's download keeps frames in
+
+
 def _flow_truth(folder: Path) -> tuple[Path, Path | None, Path | None] | None:
     """(the .flo, its invalid map, its occlusion map) of a flow folder, or None when it has none.
 
@@ -1210,7 +1213,7 @@ def _flow_truth(folder: Path) -> tuple[Path, Path | None, Path | None] | None:
         invalid = folder.parent.parent / "invalid" / folder.name / name
         occlusions = folder.parent.parent / "occlusions" / folder.name / name
         return flows[-1], invalid if invalid.is_file() else None, occlusions if occlusions.is_file() else None
-    for frames in ("-data", "-data-gray"):  # Middlebury's download: other-data/<scene>, other-gt-flow/<scene>
+    for frames in _MIDDLEBURY_FRAMES:  # Middlebury's download: other-data/<scene>, other-gt-flow/<scene>
         if folder.parent.name.endswith(frames):
             truths = folder.parent.parent / (folder.parent.name[:-len(frames)] + "-gt-flow") / folder.name
             flows = sorted(truths.glob("*.flo")) if truths.is_dir() else []
@@ -1391,8 +1394,10 @@ def find_flow_folders(root, *, depth: int = 4) -> list[Path]:
 
 def flow_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
     """The folders at or below ``root`` that :func:`find_flow_folders` leaves out though they look like flow
-    sequences, each with what it lacks: a ground-truth flow and one numbered frame, not the two it joins, or
-    numbered frames beside several flows, of which the truth cannot be told (folders of flows alone, such as
+    sequences, each with what it lacks: a ground-truth flow and one numbered frame, not the two it joins;
+    numbered frames beside several flows, of which the truth cannot be told; or frames in Middlebury's layout
+    (eval-data/<scene>) without their ground truth, as Middlebury publishes its test sequences (folders of
+    flows alone, such as
     Sintel's flow/ and gt/, are not sequences and are not listed); and the sequences that lie deeper than
     the ``depth`` levels it searches (up to :data:`DEEPER_LEVELS` levels further), found by searching on below
     them, so that none near is passed over in silence. Sorted by folder.
@@ -1417,7 +1422,9 @@ def flow_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
             return False
         if len(flows(folder)) > 1:  # a user's own estimate beside the truth: which is the truth cannot be told
             return len(_flow_frames(folder)) >= 2
-        return _flow_truth(folder) is not None and len(_flow_frames(folder)) == 1
+        if _flow_truth(folder) is None:  # Middlebury's eval-data/<scene>: its frames, published without truth
+            return folder.parent.name.endswith(_MIDDLEBURY_FRAMES) and len(_flow_frames(folder)) >= 2
+        return len(_flow_frames(folder)) == 1
 
     # One walk finds the sequences (to the depth searched and below it) and the folders that lack a part.
     sequences, lacks = _walk_folders(root, depth, [_is_flow_sequence, lacking], deeper=DEEPER_LEVELS)
@@ -1427,9 +1434,11 @@ def flow_folders_lacking(root, *, depth: int = 4) -> list[tuple[Path, str]]:
         if len(several) > 1:
             lack = (f"it holds {len(several)} flows ({', '.join(p.name for p in several[:3])}"
                     f"{' ...' if len(several) > 3 else ''}): which is the ground truth cannot be told")
+        elif (truth := _flow_truth(folder)) is None:
+            frames = _flow_frames(folder)
+            lack = (f"it holds {len(frames)} numbered frames ({frames[0].name} ...) but no ground-truth flow (flowNN.flo, "
+                    "gt/*.flo, Sintel's flow/ or Middlebury's other-gt-flow/)")
         else:
-            truth = _flow_truth(folder)
-            assert truth is not None  # lacking() found it
             lack = f"it holds the flow {truth[0].name} but one numbered frame (*NN.png), not the two it joins"
         found.append((folder, lack))
     root = _as_path(root, "root")
