@@ -154,6 +154,16 @@ def test_a_frame_of_another_size_is_named_by_its_file(tmp_path, sequence, capsys
     assert f"frame 1 is left {folder / 'frame1.png'}; the next frame is left {folder / 'frame2.png'}" in err, err
 
 
+def test_a_page_of_another_size_is_named_by_its_file_and_page(tmp_path, sequence, capsys):
+    # Frames of one file (a multi-page TIFF, a video) were named by neither: "frame 0: next has shape ...".
+    first = cv2.imread(str(sequence / "left" / "frame_00.png"))
+    stack = tmp_path / "stack.tif"
+    assert cv2.imwritemulti(str(stack), [first, first[:-4], first])
+    assert main(["run", str(stack), "--out", str(tmp_path / "out"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "(frame 0 is left page 0 of stack.tif; the next frame is left page 1 of stack.tif)" in err, err
+
+
 def _video(path, frames, size=(64, 48)):
     """An MJPG AVI of `frames` frames (a moving bright square)."""
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter.fourcc(*"MJPG"), 5, size)

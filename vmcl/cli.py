@@ -512,14 +512,21 @@ def _naming_files(message: str, lefts, rights) -> str:
         return (f"{message} (left: {lefts.description}; right: {rights.description})" if rights is not None
                 else message)
     found = re.match(r"frame (\d+): ", message)
-    if found is None or not lefts.paths:
+    if found is None:
         return message
     index = int(found.group(1))
-    here = [f"left {path}" for path in lefts.paths[index:index + 1]]
+
+    def where(source, k: int) -> list[str]:
+        """Frame k's file, or its page of the file or frame of the video (none past a folder's last)."""
+        if source.paths:
+            return [str(path) for path in source.paths[k:k + 1]]
+        return [source.name(k) + (f" of {source.video}" if source.video is not None else "")]
+
+    here = [f"left {place}" for place in where(lefts, index)]
     if rights is not None:
-        here += [f"right {path}" for path in rights.paths[index:index + 1]]
+        here += [f"right {place}" for place in where(rights, index)]
     named = [f"frame {index} is {', '.join(here)}"] if here else []
-    named += [f"the next frame is left {path}" for path in lefts.paths[index + 1:index + 2]]
+    named += [f"the next frame is left {place}" for place in where(lefts, index + 1)]
     return f"{message} ({'; '.join(named)})" if named else message
 
 
