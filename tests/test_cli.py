@@ -377,13 +377,24 @@ def test_demo_refuses_a_size_for_the_photographed_pair(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
-@pytest.mark.parametrize("arguments, message", [(["--out", ""], "--out must name a folder"),
-                                                 (["--out", "{tmp}/out", "--fps", "-5"], "--fps sets a sequence")])
+@pytest.mark.parametrize("arguments, message", [
+    (["--out", ""], "--out must name a folder"),
+    (["--out", "{tmp}/out", "--fps", "-5"], "--fps sets a sequence"),
+    # An unset shell variable as the right view or the next frame: the run went on without stereo or motion.
+    (["", "--out", "{tmp}/out"], "right must name an image (or be left out), got an empty name"),
+    (["--next", " ", "--out", "{tmp}/out"], "--next must name an image (or be left out), got an empty name"),
+])
 def test_run_refuses_an_empty_out_and_a_frame_rate_for_one_image(tmp_path, images, capsys, arguments, message):
     # --out "" wrote into the working folder; --fps was ignored for one image (and checked for a sequence).
     arguments = [a.format(tmp=tmp_path) for a in arguments]
     assert main(["run", str(images["left"]), *arguments, "-q"]) == 2
     assert message in capsys.readouterr().err
+
+
+def test_eval_refuses_an_empty_data_folder(capsys):
+    # Path("") is the working directory: an unset variable searched wherever the command ran.
+    assert main(["eval", "flow", "--data", "", "-q"]) == 2
+    assert "--data must name a folder, got an empty name" in capsys.readouterr().err
 
 
 def test_a_killed_runs_partial_folder_is_removed_by_the_next_run_and_nothing_else(tmp_path):

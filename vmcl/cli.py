@@ -351,6 +351,9 @@ def _run(args) -> int:
 
     if not str(args.out).strip():
         raise BadInput("--out must name a folder, got an empty name")
+    for name, given in (("right", args.right), ("--next", args.next)):
+        if given is not None and not str(given).strip():  # an unset variable: the run dropped that view
+            raise BadInput(f"{name} must name an image (or be left out), got an empty name")
     if is_sequence(args.left):
         return _run_sequence(args)
     if args.fps is not None:
@@ -662,6 +665,8 @@ def result_fields(result) -> dict[str, np.ndarray]:
 # -- eval ----------------------------------------------------------------------------------------------
 
 def _eval(args) -> int:
+    if not str(args.data).strip():  # Path("") is the working directory: an unset variable searched it
+        raise BadInput("--data must name a folder, got an empty name")
     root = Path(args.data)
     if not root.is_dir():
         raise BadInput(f"--data {root}: no such folder (the layout of ../shared/datasets)")
