@@ -101,7 +101,9 @@ def test_a_stereo_scene_is_the_plain_scene_seen_by_a_second_camera():
 
 @pytest.mark.parametrize("kwargs", [
     {"objects": 0}, {"objects": 7}, {"library": ("ell",), "objects": 2}, {"library": ("nothing",)},
-    {"occlusion": (0.5, 0.2)}, {"size": (0.0, 10.0)}, {"shape": (10, 10)}, {"seed": -1}, {"stereo": 1}])
+    {"occlusion": (0.5, 0.2)}, {"size": (0.0, 10.0)}, {"shape": (10, 10)}, {"seed": -1}, {"stereo": 1},
+    # A shape the default size does not fit was refused as "size", which the caller never gave.
+    {"shape": (40, 48)}])
 def test_bad_scene_arguments_are_refused_by_name(kwargs):
     name = next(iter(kwargs))
     with pytest.raises(InputError, match=name if name != "objects" or kwargs.get("library") is None else "library"):

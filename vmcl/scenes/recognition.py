@@ -39,6 +39,7 @@ LEARNED_YAWS = (-40.0, -20.0, 0.0, 20.0, 40.0)
 """The views (yaw, degrees) a 3-D object is learned from by :func:`example_views`: five, 20 degrees apart,
 spanning the range :func:`recognition_scene` draws views from, so a scene's view lies at most 10 degrees
 from one of them."""
+_SIZE = (45, 60)  # recognition_scene's default objects' scale (px)
 _LEAST_EXTENT = 8  # px: an example's object is at least this wide or tall (smaller draws next to no edges)
 
 _SUPERSAMPLE = 4  # each pixel is the mean of 4 x 4 samples, so edge pixels carry their coverage
@@ -563,7 +564,7 @@ def _grey(rng: np.random.Generator, avoid: list[float], contrast: float = 0.15) 
 
 def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, library: tuple[str, ...] | None = None,
                       occlusion: tuple[float, float] = (0.3, 0.5), clutter: int = 8, views: tuple[float, float] = (-40, 40),
-                      size: tuple[float, float] = (45, 60), noise: float = 0.01, stereo: bool = False,
+                      size: tuple[float, float] = _SIZE, noise: float = 0.01, stereo: bool = False,
                       seed: int = 0) -> RecognitionScene:
     """Library objects at random poses among clutter, each partly hidden behind an occluder.
 
@@ -617,6 +618,9 @@ def recognition_scene(shape: tuple[int, int] = (384, 512), *, objects: int = 2, 
     low, high = _pair(occlusion, "occlusion", 0.0, 0.95)
     clutter = check_int(clutter, "clutter", minimum=0, maximum=1000)
     yaw_low, yaw_high = _pair(views, "views", -180.0, 180.0)
+    if size == _SIZE and _SIZE[1] > min(h, w):  # refused as "size", which the caller never gave
+        raise InputValueError(f"shape {h} x {w} is too small for the default size {_SIZE} (the objects' scale in px, "
+                              "at most the shape's smaller side): give a size within it")
     small, large = _pair(size, "size", 1.0, float(min(h, w)))
     noise = check_real(noise, "noise", minimum=0)
     stereo = check_bool(stereo, "stereo")
