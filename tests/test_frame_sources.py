@@ -81,3 +81,16 @@ def test_a_tiffs_pages_are_read_a_few_at_a_time_as_read_image_reads_an_image(tmp
         next(pages)
     with pytest.raises(ValueError, match="has an alpha channel; expected grey or RGB"):
         datasets.read_image(stack)
+
+
+def test_several_series_of_frames_in_one_folder_are_noted(tmp_path):
+    # left_07..09 and right_07..09 in one folder ran as six frames, the motion from left_09 to right_07
+    # among them, without a word.
+    for side in ("left", "right"):
+        for k in (7, 8, 9):
+            assert cv2.imwrite(str(tmp_path / f"{side}_{k:02d}.png"), np.zeros((8, 8), np.uint8))
+    source = open_frames(tmp_path)
+    assert source.count == 6
+    [note] = source.notes
+    assert "the frames are 2 series of numbered names (left_NN.png: 3, right_NN.png: 3)" in note
+    assert open_frames(str(tmp_path / "left_*.png")).notes == ()

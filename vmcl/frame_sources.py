@@ -279,13 +279,36 @@ def _numbering_gaps(paths: Sequence[Path]) -> tuple[str, ...]:
             "before each gap spans them"),
 
 
+def _several_series(paths: Sequence[Path]) -> tuple[str, ...]:
+    """A note when the frames are several series of numbered names (left_07.png ... beside right_07.png ...):
+    they are run one after another, and the motion between two series' frames means nothing."""
+    series: dict[tuple, list[Path]] = {}
+    for path in paths:
+        numbered = _numbered(path)
+        if numbered is not None:
+            series.setdefault(numbered[0], []).append(path)
+    if len(series) < 2:
+        return ()
+    named = [f"{_series_name(run[0])}: {len(run)}" for run in series.values()]
+    return (f"the frames are {len(series)} series of numbered names ({', '.join(named[:4])}"
+            f"{' ...' if len(named) > 4 else ''}), run one after another, so the motion from one series' last frame "
+            "to the next one's first means nothing: name one series with a glob pattern (e.g. left_*.png)"),
+
+
+def _series_name(path: Path) -> str:
+    """A frame file's name with its frame number (the stem's last number) shown as NN: left_NN.png."""
+    last = list(_NUMBERS.finditer(path.stem))[-1]
+    return f"{path.stem[:last.start()]}NN{path.stem[last.end():]}{path.suffix}"
+
+
 def _image_frames(paths: Sequence[Path], where: str) -> FrameSource:
     """The frame source of the image files of a folder or pattern (``where``: "in frames/"), in frame order."""
     ordered = tuple(sorted(paths, key=frame_order))
     _refuse_duplicates(ordered)
     description = f"{len(ordered)} images {where}"
     return FrameSource(description, len(ordered), ordered,
-                       notes=tuple(f"{description}: {note}" for note in _numbering_gaps(ordered)))
+                       notes=tuple(f"{description}: {note}"
+                                   for note in (*_several_series(ordered), *_numbering_gaps(ordered))))
 
 
 def _is_frame(path: Path) -> bool:
