@@ -359,12 +359,14 @@ def test_a_gap_in_the_numbering_is_said_naming_the_frames_either_side(tmp_path, 
     assert note in capsys.readouterr().err and note in (out / "sequence.md").read_text()
     (said,) = open_frames(gapped).notes
     assert said.startswith(f"3 images in {gapped}: ") and note in said
-    # No gap: frames numbered by tens, a time stamp's jitter, times in seconds, two series in one folder.
+    # No gap: frames numbered by tens, a time stamp's jitter, times in seconds.
     for k, names in enumerate([["f00.png", "f10.png", "f20.png", "f30.png"],
                                ["t0.png", "t33.png", "t67.png", "t100.png"],
-                               ["1.25.png", "1.5.png", "2.png", "4.png"],
-                               ["a1.png", "a2.png", "b7.png", "b8.png"]]):
+                               ["1.25.png", "1.5.png", "2.png", "4.png"]]):
         assert open_frames(_copies(tmp_path / f"even{k}", sequence, names)).notes == (), names
+    # Two series in one folder: no gap between them, but a note that they are two.
+    (series,) = open_frames(_copies(tmp_path / "series", sequence, ["a1.png", "a2.png", "b7.png", "b8.png"])).notes
+    assert "2 series of numbered names (aNN.png: 2, bNN.png: 2)" in series and "frames' numbering" not in series
     # Two gaps of a series that steps by 2: both named.
     notes = open_frames(_copies(tmp_path / "two", sequence, ["s0.png", "s2.png", "s8.png", "s10.png", "s14.png"])).notes
     assert "2 gaps" in notes[0] and "steps by 2: frame 1 (s2.png) to s8.png, 6 apart; frame 3 (s10.png) to s14.png, 4 apart" \
