@@ -123,6 +123,8 @@ def test_learn_refuses_to_replace_a_model_unless_asked(tmp_path, files, capsys):
     (["learn", "ell", "{tmp}/absent.png", "--library", "{tmp}/lib"], "no such file"),
     (["run", "{scene}", "--models", "{tmp}/absent", "--out", "{tmp}/out"], "--models"),
     (["run", "{scene}", "--models", "{tmp}", "--out", "{tmp}/out"], "not a folder of models"),
+    # An image given as the library: the advice was to learn into it, which learn refuses.
+    (["run", "{scene}", "--models", "{ell}", "--out", "{tmp}/out"], "--library DIR)"),
 ])
 def test_bad_recognition_commands_are_one_line_and_exit_2(tmp_path, files, capsys, arguments, message):
     argv = [a.format(ell=files["ell"], scene=files["scene"], tmp=tmp_path) for a in arguments]

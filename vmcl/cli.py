@@ -339,8 +339,10 @@ def _with_models(config, models: str | None):
     from vmcl.recognize import MODEL_SUFFIX
 
     if not Path(models).is_dir() or not any(Path(models).glob(f"*{MODEL_SUFFIX}")):
+        # A file is no folder to learn into (learn refuses it): the advice names a folder only where it can be one.
+        folder = "DIR" if Path(models).is_file() or not str(models).strip() else models
         raise BadInput(f"--models {models}: not a folder of models (make one with vmcl learn NAME IMAGES... "
-                       f"--library {models})")
+                       f"--library {folder})")
     # The section's other keys (--config's transform, candidates) are kept: only the library is the option's.
     return dataclasses.replace(config, recognition=dataclasses.replace(config.recognition, models=str(models)))
 
