@@ -216,7 +216,9 @@ def test_the_sizes_searched_are_set_in_the_config_and_said_when_nothing_is_found
     capsys.readouterr()
     assert main(["run", str(small), "--models", str(library), "--config", str(files["fast"]), "--out",
                  str(tmp_path / "default"), "-q"]) == 0
-    assert "recognised: nothing (sizes searched: 0.5 to 2 times the learned examples'" in capsys.readouterr().out
+    printed = capsys.readouterr()
+    assert "recognised: nothing" in printed.out
+    assert "recognition: no object found at the sizes searched, 0.5 to 2 times the learned examples'" in printed.err
     wide = tmp_path / "wide.toml"
     wide.write_text(files["fast"].read_text() + "[recognition]\nmin_scale = 0.3\n")
     assert main(["run", str(small), "--models", str(library), "--config", str(wide), "--out", str(tmp_path / "wide"),

@@ -384,11 +384,7 @@ def _run(args) -> int:
     for note in result.notes:  # what the run found out about its inputs: not only in the report
         print(f"vmcl: note: {note}", file=sys.stderr)
     if result.recognition is not None:
-        searched = result.config.recognition
-        # An object nearer or farther than when learned is outside the sizes searched: said where none is found.
-        print(f"recognised: {recognised_text(result.recognition)}" + (
-            "" if result.recognition else f" (sizes searched: {searched.min_scale:g} to {searched.max_scale:g} times "
-            "the learned examples'; [recognition] min_scale and max_scale widen them)"))
+        print(f"recognised: {recognised_text(result.recognition)}")
     print(f"{result.total_ms:.0f} ms; report: {Path(args.out) / 'report.html'}")
     return 0
 

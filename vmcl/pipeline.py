@@ -1365,6 +1365,12 @@ class _Run:
                                                     scales=(settings.min_scale, settings.max_scale),
                                                     depth=self.result.disparity,
                                                     machine=self.m)
+                if not self.result.recognition:
+                    # An object nearer or farther than when learned lies outside the sizes searched.
+                    self.result.notes.append(
+                        f"recognition: no object found at the sizes searched, {settings.min_scale:g} to "
+                        f"{settings.max_scale:g} times the learned examples' ([recognition] min_scale and "
+                        "max_scale widen them)")
 
     def group(self, image: np.ndarray, canny: edges.CannyResult) -> tuple[Grouping, cl_array.Array]:
         """The grouping of Canny's edges, and the edges the MRFs are coupled to (``edges.saliency``)."""
